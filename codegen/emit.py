@@ -1,0 +1,193 @@
+"""Print flattened programs as C99 and render them through the Jinja templates in templates/."""
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from importlib import resources
+
+import jinja2
+import sympy as sp
+from sympy.printing.c import C99CodePrinter
+
+from . import __version__
+from .flatten import Program
+from .ops import OpCount, count_ops
+from .scene import Scene
+
+
+class ChainCPrinter(C99CodePrinter):
+    """C99 printer for straight-line kernels.
+
+    Doubles are printed with 17 significant digits (round-trip exact), integer powers are
+    expanded into products, rationals become double literals, and a product is printed as
+    numerator / denominator, matching the counting rule of :mod:`codegen.ops`.
+    """
+
+    def _print_Float(self, expr):
+        return _double_literal(float(expr))
+
+    def _print_Integer(self, expr):
+        return f"{int(expr)}.0"
+
+    def _print_Rational(self, expr):
+        return _double_literal(float(expr))
+
+    def _print_Pow(self, expr):
+        base, exponent = expr.args
+        if exponent.is_Integer:
+            k = abs(int(exponent))
+            factor = self.parenthesize(base, 50)      # bases are atoms after flatten
+            product = "*".join([factor] * k)
+            return product if exponent > 0 else f"1.0/({product})"
+        if exponent == sp.Rational(1, 2):
+            return f"sqrt({self._print(base)})"
+        if exponent == sp.Rational(-1, 2):
+            return f"1.0/sqrt({self._print(base)})"
+        return f"pow({self._print(base)}, {self._print(exponent)})"
+
+    def _print_Mul(self, expr):
+        coefficient, factors = expr.as_coeff_mul()
+        sign = ""
+        if coefficient < 0:
+            sign, coefficient = "-", -coefficient
+        numerator, denominator = [], []
+        if coefficient != 1:
+            numerator.append(self._print(coefficient))
+        for factor in factors:
+            if factor.is_Pow and factor.exp.is_Number and factor.exp < 0:
+                denominator.append(sp.Pow(factor.base, -factor.exp))
+            else:
+                numerator.append(self._factor(factor))
+        text = "*".join(numerator) if numerator else "1.0"
+        if denominator:
+            parts = [self._factor(d) for d in denominator]
+            text += "/" + (parts[0] if len(parts) == 1 and denominator[0].is_Atom else f"({'*'.join(parts)})")
+        return sign + text
+
+    def _factor(self, expr):
+        text = self._print(expr)
+        return f"({text})" if (expr.is_Add or expr.is_Pow) else text
+
+    def _print_Add(self, expr):
+        terms = [self._print(term) for term in expr.args]
+        out = terms[0]
+        for term in terms[1:]:
+            out += f" - {term[1:]}" if term.startswith("-") else f" + {term}"
+        return out
+
+
+def _double_literal(value: float) -> str:
+    text = repr(value)
+    if "e" not in text and "." not in text and "inf" not in text and "nan" not in text:
+        text += ".0"
+    return text
+
+
+PRINTER = ChainCPrinter()
+
+
+def c_expression(expr: sp.Expr) -> str:
+    return PRINTER.doprint(expr)
+
+
+@dataclass
+class RenderedFunction:
+    """What the templates need of one kernel."""
+
+    name: str
+    summary: str
+    inputs: tuple[str, ...]
+    output: str
+    output_size: int
+    lines: list[str]
+    ops: OpCount
+
+
+INPUT_DOC = {"q": "generalised coordinates Theta (NQ)", "qd": "generalised velocities Theta_dot (NQ)",
+             "p": "parameters (NPARAM)"}
+
+
+def render_function(program: Program) -> RenderedFunction:
+    kernel = program.kernel
+    lines = [f"const double {symbol.name} = {c_expression(expr)};" for symbol, expr in program.assignments]
+    for i, expr in enumerate(program.outputs):
+        lines.append(f"{kernel.output}[{i}] = {c_expression(expr)};")
+    ops = count_ops([e for _, e in program.assignments] + list(program.outputs))
+    return RenderedFunction(kernel.name, kernel.summary, kernel.inputs, kernel.output, kernel.output_size,
+                            lines, ops)
+
+
+def scene_hash(scene: Scene) -> str:
+    """sha256 of a canonical JSON form of the scene (every field, floats by repr)."""
+    def canonical(value):
+        if isinstance(value, float):
+            return repr(value)
+        if isinstance(value, (list, tuple)):
+            return [canonical(v) for v in value]
+        if hasattr(value, "__dataclass_fields__"):
+            return {"type": type(value).__name__,
+                    **{k: canonical(getattr(value, k)) for k in value.__dataclass_fields__}}
+        return value
+    text = json.dumps(canonical(scene), sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _environment() -> jinja2.Environment:
+    loader = jinja2.FunctionLoader(lambda name: resources.files("templates").joinpath(name).read_text())
+    return jinja2.Environment(loader=loader, undefined=jinja2.StrictUndefined, keep_trailing_newline=True,
+                              trim_blocks=True, lstrip_blocks=True)
+
+
+@dataclass
+class GeneratedModel:
+    """The generated files of one scene, as text."""
+
+    name: str
+    header: str
+    source: str
+    cdef: str
+    functions: list[RenderedFunction]
+
+
+def render_model(scene: Scene, name: str, programs: list[Program], bake_params: bool) -> GeneratedModel:
+    functions = [render_function(p) for p in programs]
+    env = _environment()
+    params = list(zip(scene.parameter_names(), scene.parameter_vector().tolist()))
+    context = dict(
+        NAME=name.upper(), name=name, version=__version__, scene=scene, scene_hash=scene_hash(scene),
+        bake_params=bake_params, functions=functions, input_doc=INPUT_DOC,
+        params=[(i, pname, _param_doc(pname), _double_literal(value)) for i, (pname, value) in enumerate(params)],
+        contacts=[(c, point, wall) for c, (point, wall) in enumerate(scene.contacts())],
+        rows=scene.contact_rows(), twists=scene.all_twists,
+        row_of_contact=[scene.contact_rows().index((point, wall.axis)) for point, wall in scene.contacts()],
+        q0=[_double_literal(x) for x in scene.q0], qd0=[_double_literal(x) for x in scene.qd0],
+        total_ops=sum((f.ops for f in functions), OpCount()), literal=_double_literal,
+    )
+    header = env.get_template("model.h.j2").render(**context)
+    source = env.get_template("model.c.j2").render(**context)
+    cdef = env.get_template("cdef.h.j2").render(**context)
+    return GeneratedModel(name, header, source, cdef, functions)
+
+
+PARAM_DOC = {
+    "g": "gravity along -X2 (m/s^2)", "l": "length (m)", "mu": "mass per unit length (kg/m)",
+    "Jxx": "moment of inertia per unit length about x (kg m)",
+    "Jyy": "moment of inertia per unit length about y (kg m)",
+    "Jzz": "moment of inertia per unit length about z (kg m)",
+    "m": "mass (kg)", "cx": "centre of mass x (m)", "cy": "centre of mass y (m)", "cz": "centre of mass z (m)",
+    "Ixx": "inertia about the centre of mass, xx (kg m^2)", "Iyy": "inertia about the centre of mass, yy (kg m^2)",
+    "Izz": "inertia about the centre of mass, zz (kg m^2)", "Ixy": "inertia about the centre of mass, xy (kg m^2)",
+    "Ixz": "inertia about the centre of mass, xz (kg m^2)", "Iyz": "inertia about the centre of mass, yz (kg m^2)",
+}
+
+
+def _param_doc(pname: str) -> str:
+    if pname.startswith("wall_"):
+        return f"position of wall {pname[5:]} (m)"
+    if pname.startswith("e_"):
+        return f"restitution of wall {pname[2:]} (-)"
+    if pname == "g":
+        return PARAM_DOC["g"]
+    base, link = pname.rsplit("_", 1)
+    return f"link {link}: {PARAM_DOC[base]}"

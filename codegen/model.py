@@ -1,0 +1,176 @@
+"""The straight-line kernels of one scene: what each generated C function computes.
+
+Each kernel is derived on its own tape (so it carries only what it needs), then flattened and
+CSE'd by :mod:`codegen.flatten`.  The kernels and their C signatures:
+
+    mass_matrix(q, p, M)                 I_f, full and symmetric, row-major nq x nq   (Eq. 12)
+    bias(q, qd, p, R)                    R(Theta, Theta_dot)                            (Eq. 12, 38-41)
+    forward_dynamics(q, qd, p, qdd)      Theta_ddot = I_f^-1 R by a straight-line LDL^T
+    contact_points(q, p, r)              O_1..O_{n+1}, (n+1) x 3
+    contact_velocities(q, qd, p, v)      their velocities, (n+1) x 3                    (Eq. 42)
+    contact_jacobian(q, p, J)            rows of Eq. 42 that the walls need, nrow x nq
+    contact_gaps(q, p, gap)              signed distance of each (point, wall) pair, >= 0 inside
+    energy(q, qd, p, E)                  E[0] kinetic, E[1] potential
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import sympy as sp
+
+from . import gibbs_appell, kinematics
+from .kinematics import ChainSymbols
+from .linalg import ldlt_solve
+from .scene import Scene
+from .tape import Tape, add, cross, dot, mat_t_vec, matvec, scale, column, E_Y
+
+
+@dataclass
+class Kernel:
+    """A function to generate: its tape, and the outputs as (C array name, flat index, value)."""
+
+    name: str
+    summary: str
+    inputs: tuple[str, ...]                       # subset of ("q", "qd", "p")
+    output: str                                   # name of the output array
+    output_size: int
+    tape: Tape
+    values: list[sp.Expr] = field(default_factory=list)   # output[i] = values[i]
+
+
+def _new(chain: ChainSymbols, name: str, summary: str, inputs, output: str, size: int) -> Kernel:
+    return Kernel(name, summary, tuple(inputs), output, size, Tape())
+
+
+def mass_matrix_kernel(chain: ChainSymbols) -> Kernel:
+    k = _new(chain, "mass_matrix", "Flight inertia matrix I_f(Theta) (Eq. 12, Fig. 2), full, row-major.",
+             ("q", "p"), "M", chain.nq ** 2)
+    rotations = kinematics.joint_rotations(k.tape, chain)
+    moments = kinematics.link_moments_all(k.tape, chain)
+    lower = gibbs_appell.inertia_matrix(k.tape, chain, rotations, moments)
+    k.values = [lower[(max(i, j), min(i, j))] for i in range(chain.nq) for j in range(chain.nq)]
+    return k
+
+
+def bias_kernel(chain: ChainSymbols) -> Kernel:
+    k = _new(chain, "bias", "Right-hand side R(Theta, Theta_dot) of I_f Theta_ddot = R (Eq. 12, 38-41, Fig. 3).",
+             ("q", "qd", "p"), "R", chain.nq)
+    rotations = kinematics.joint_rotations(k.tape, chain)
+    moments = kinematics.link_moments_all(k.tape, chain)
+    motion = kinematics.velocity_products(k.tape, chain, rotations, moments)
+    k.values = gibbs_appell.right_hand_side(k.tape, chain, rotations, moments, motion)
+    return k
+
+
+def forward_dynamics_kernel(chain: ChainSymbols) -> Kernel:
+    k = _new(chain, "forward_dynamics", "Theta_ddot solving I_f Theta_ddot = R, by a straight-line LDL^T.",
+             ("q", "qd", "p"), "qdd", chain.nq)
+    rotations = kinematics.joint_rotations(k.tape, chain)
+    moments = kinematics.link_moments_all(k.tape, chain)
+    motion = kinematics.velocity_products(k.tape, chain, rotations, moments)
+    R = gibbs_appell.right_hand_side(k.tape, chain, rotations, moments, motion)
+    lower = gibbs_appell.inertia_matrix(k.tape, chain, rotations, moments)
+    n = chain.n
+    order = [n + 2, n + 3, n + 4] + list(range(n + 2))     # X1, X2, X3 first (Eq. II block)
+    k.values = ldlt_solve(k.tape, lower, R, order)
+    return k
+
+
+def contact_points_kernel(chain: ChainSymbols) -> Kernel:
+    k = _new(chain, "contact_points", "Positions of O_1..O_{n+1} in the reference frame, row i-1 = O_i.",
+             ("q", "p"), "r", 3 * (chain.n + 1))
+    points = _points(k.tape, chain)
+    k.values = [x for point in points for x in point]
+    return k
+
+
+def contact_velocities_kernel(chain: ChainSymbols) -> Kernel:
+    k = _new(chain, "contact_velocities", "Velocities of O_1..O_{n+1} in the reference frame (Eq. 42).",
+             ("q", "qd", "p"), "v", 3 * (chain.n + 1))
+    rotations = kinematics.joint_rotations(k.tape, chain)
+    moments = kinematics.link_moments_all(k.tape, chain)
+    frames = kinematics.reference_frames(k.tape, chain, rotations)
+    velocities, _ = kinematics.point_velocities(k.tape, chain, frames, moments)
+    k.values = [x for v in velocities for x in v]
+    return k
+
+
+def contact_jacobian_kernel(chain: ChainSymbols) -> Kernel:
+    rows = chain.scene.contact_rows()
+    k = _new(chain, "contact_jacobian",
+             "Rows d(O_i . X_a)/dTheta of the contact Jacobian (Eq. 42, Fig. 4) for the (point, axis) "
+             "pairs the walls need, row-major.", ("q", "p"), "J", len(rows) * chain.nq)
+    rotations = kinematics.joint_rotations(k.tape, chain)
+    moments = kinematics.link_moments_all(k.tape, chain)
+    frames = kinematics.reference_frames(k.tape, chain, rotations)
+    points = kinematics.point_positions(k.tape, chain, frames, moments)
+    n = chain.n
+    values = []
+    for point, axis in rows:
+        row = [sp.Integer(0)] * chain.nq
+        for j in range(-1, point):           # joints -1 .. point-1 move O_point
+            origin = points[max(j, 1) - 1]   # O_-1 = O_0 = O_1
+            arm = tuple(a - b for a, b in zip(points[point - 1], origin))
+            row[j + 1] = cross(column(frames[j], 2), arm)[axis]
+        row[n + 2 + axis] = sp.Integer(1)
+        values += row
+    k.values = values
+    return k
+
+
+def contact_gaps_kernel(chain: ChainSymbols) -> Kernel:
+    contacts = chain.scene.contacts()
+    k = _new(chain, "contact_gaps",
+             "Gap of each (point, wall) pair: distance of the point inside its wall (negative = beyond it).",
+             ("q", "p"), "gap", len(contacts))
+    points = _points(k.tape, chain)
+    values = []
+    for point, wall in contacts:
+        position = chain.param(f"wall_{wall.name}")
+        values.append(wall.normal_sign * (points[point - 1][wall.axis] - position))
+    k.values = values
+    return k
+
+
+def energy_kernel(chain: ChainSymbols) -> Kernel:
+    """Kinetic and potential energy from point velocities (a velocity-level path, independent of I_f)."""
+    k = _new(chain, "energy", "E[0] = kinetic energy T, E[1] = potential energy V (J).",
+             ("q", "qd", "p"), "E", 2)
+    tape = k.tape
+    rotations = kinematics.joint_rotations(tape, chain)
+    moments = kinematics.link_moments_all(tape, chain)
+    frames = kinematics.reference_frames(tape, chain, rotations)
+    points = kinematics.point_positions(tape, chain, frames, moments)
+    velocities, omega_ref = kinematics.point_velocities(tape, chain, frames, moments)
+    T = V = sp.Integer(0)
+    for i in range(1, chain.n + 1):
+        B, R = moments[i], frames[i]
+        v, w = velocities[i - 1], omega_ref[i]
+        h_ref = tape.let_vec(matvec(R, B.h), f"href_{i}")
+        w_loc = tape.let_vec(mat_t_vec(R, w), f"wloc_{i}")
+        T += B.B0 * dot(v, v) / 2 + dot(v, cross(w, h_ref)) + dot(w_loc, matvec(B.K, w_loc)) / 2
+        V += chain.gravity * (B.B0 * points[i - 1][1] + h_ref[1])
+    k.values = [T, V]
+    return k
+
+
+def _points(tape: Tape, chain: ChainSymbols):
+    rotations = kinematics.joint_rotations(tape, chain)
+    moments = kinematics.link_moments_all(tape, chain)
+    frames = kinematics.reference_frames(tape, chain, rotations)
+    return kinematics.point_positions(tape, chain, frames, moments)
+
+
+KERNEL_BUILDERS = (mass_matrix_kernel, bias_kernel, forward_dynamics_kernel, contact_points_kernel,
+                   contact_velocities_kernel, contact_jacobian_kernel, contact_gaps_kernel, energy_kernel)
+
+
+def build_kernels(scene: Scene, bake_params: bool = False, progress=None) -> list[Kernel]:
+    """Derive every kernel of the scene (symbolic, per-intermediate symbols; no CSE yet)."""
+    chain = ChainSymbols(scene, bake_params)
+    kernels = []
+    for builder in KERNEL_BUILDERS:
+        if progress:
+            progress(builder.__name__.removesuffix("_kernel"))
+        kernels.append(builder(chain))
+    return kernels

@@ -1,0 +1,574 @@
+"""Scene description: the chain, its parameters, the box and the initial state.
+
+A scene is everything the generator and the runtime need to know about one
+simulation set-up.  It is built from dataclasses (validated on construction)
+or loaded from a TOML or JSON file with :func:`load_scene`.  Every bad value is
+rejected with a :class:`SceneError` that names the field and the allowed range.
+
+State layout (Eq. 13 of the paper), used everywhere in this project::
+
+    q = [theta_-1, theta_0, theta_1, ..., theta_n, X1, X2, X3]      (n + 5)
+
+Units are SI: m, kg, s, rad.
+"""
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+try:  # Python >= 3.11
+    import tomllib
+except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
+
+WALL_NAMES = ("x1_min", "x1_max", "x2_min", "x2_max", "x3_min", "x3_max")
+DEFAULT_GRAVITY = 9.81
+# Table 1 and 2 of the paper: moment of inertia per unit length, kg m.
+PAPER_J = (5.89e-5, 2.94e-5, 2.94e-5)
+GIMBAL_MARGIN = 1e-6  # |cos(theta_0)| below this is the gimbal lock of the base chart
+
+
+class SceneError(ValueError):
+    """A scene field has a bad value; the message names the field and the allowed range."""
+
+
+# ---------------------------------------------------------------------------
+# small validators
+# ---------------------------------------------------------------------------
+def _number(value, fieldname: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise SceneError(f"{fieldname}: expected a number, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise SceneError(f"{fieldname}: must be a finite number, got {value!r}")
+    return value
+
+
+def _positive(value, fieldname: str) -> float:
+    value = _number(value, fieldname)
+    if not value > 0.0:
+        raise SceneError(f"{fieldname}: must be > 0, got {value!r}")
+    return value
+
+
+def _nonnegative(value, fieldname: str) -> float:
+    value = _number(value, fieldname)
+    if not value >= 0.0:
+        raise SceneError(f"{fieldname}: must be >= 0, got {value!r}")
+    return value
+
+
+def _vector(value, size: int, fieldname: str) -> tuple[float, ...]:
+    if not isinstance(value, (list, tuple)) or len(value) != size:
+        raise SceneError(f"{fieldname}: expected a list of {size} numbers, got {value!r}")
+    return tuple(_number(v, f"{fieldname}[{i}]") for i, v in enumerate(value))
+
+
+def _matrix3(value, fieldname: str) -> tuple[tuple[float, ...], ...]:
+    if not isinstance(value, (list, tuple)) or len(value) != 3:
+        raise SceneError(f"{fieldname}: expected a 3x3 matrix (list of 3 rows), got {value!r}")
+    return tuple(_vector(row, 3, f"{fieldname}[{i}]") for i, row in enumerate(value))
+
+
+def _check_keys(table: dict, allowed: tuple[str, ...], where: str) -> None:
+    if not isinstance(table, dict):
+        raise SceneError(f"{where}: expected a table, got {table!r}")
+    for key in table:
+        if key not in allowed:
+            raise SceneError(f"{where}: unknown key {key!r}; allowed keys: {', '.join(allowed)}")
+
+
+# ---------------------------------------------------------------------------
+# links
+# ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class LineLink:
+    """A uniform slender link as in the paper's Tables 1-2.
+
+    length  l > 0 (m); mu > 0 mass per unit length (kg/m);
+    J = (Jxx, Jyy, Jzz) >= 0, mass moment of inertia per unit length (kg m),
+    in the link frame (x along the link, z along the joint axis).
+    """
+
+    length: float
+    mu: float
+    J: tuple[float, float, float] = PAPER_J
+
+    def validate(self, where: str) -> None:
+        _positive(self.length, f"{where}.length")
+        _positive(self.mu, f"{where}.mu")
+        J = _vector(list(self.J), 3, f"{where}.J")
+        for axis, value in zip("xyz", J):
+            _nonnegative(value, f"{where}.J ({'J' + axis + axis})")
+
+    kind = "line"
+    param_names = ("l", "mu", "Jxx", "Jyy", "Jzz")
+
+    def param_values(self) -> tuple[float, ...]:
+        return (self.length, self.mu, *self.J)
+
+    @property
+    def mass(self) -> float:
+        return self.length * self.mu
+
+
+@dataclass(frozen=True)
+class RigidLink:
+    """A general rigid link: mass, centre of mass and inertia tensor about the centre of mass.
+
+    com is given in the link frame (m), inertia (kg m^2) is the 3x3 tensor about
+    the centre of mass in the link frame.  The link still spans O_i -> O_i + l x_i.
+    """
+
+    length: float
+    mass: float
+    com: tuple[float, float, float]
+    inertia: tuple[tuple[float, float, float], ...]
+
+    kind = "rigid"
+    param_names = ("l", "m", "cx", "cy", "cz", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
+
+    def validate(self, where: str) -> None:
+        _positive(self.length, f"{where}.length")
+        _positive(self.mass, f"{where}.mass")
+        _vector(list(self.com), 3, f"{where}.com")
+        inertia = np.array(_matrix3([list(r) for r in self.inertia], f"{where}.inertia"))
+        if not np.allclose(inertia, inertia.T, rtol=0, atol=1e-12 * max(1.0, np.abs(inertia).max())):
+            raise SceneError(f"{where}.inertia: must be symmetric")
+        eig = np.linalg.eigvalsh(inertia)
+        tol = 1e-12 * max(1.0, eig.max())
+        if eig.min() < -tol:
+            raise SceneError(f"{where}.inertia: must be positive semi-definite, eigenvalues {eig.tolist()}")
+        a, b, c = eig
+        if a + b < c - tol:
+            raise SceneError(
+                f"{where}.inertia: principal moments {eig.tolist()} violate the triangle inequality "
+                "(no real mass distribution has them)")
+
+    def param_values(self) -> tuple[float, ...]:
+        I = self.inertia
+        return (self.length, self.mass, *self.com, I[0][0], I[1][1], I[2][2], I[0][1], I[0][2], I[1][2])
+
+
+Link = LineLink | RigidLink
+
+
+# ---------------------------------------------------------------------------
+# walls
+# ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Wall:
+    """A plane wall X_axis = position.  side = -1 for a lower wall (x?_min), +1 for an upper one."""
+
+    name: str
+    position: float
+    restitution: float = 1.0
+    points: tuple[int, ...] = ()  # contact points O_i (1-based) that may touch it
+
+    @property
+    def axis(self) -> int:
+        """0, 1 or 2 for X1, X2, X3."""
+        return int(self.name[1]) - 1
+
+    @property
+    def side(self) -> int:
+        return -1 if self.name.endswith("_min") else +1
+
+    @property
+    def normal_sign(self) -> float:
+        """Sign of the inward normal along the axis: +1 for a lower wall, -1 for an upper one."""
+        return -float(self.side)
+
+
+# ---------------------------------------------------------------------------
+# twists
+# ---------------------------------------------------------------------------
+def rot_x(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def rot_z(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+# The frame convention (README "Frame convention"): ^{ref}R_{-1} = T_{-1} Rz(theta_-1),
+# ^{k-1}R_k = T_k Rz(theta_k).  These three are fixed; T_k = I for k >= 2 unless the scene says otherwise.
+T_MINUS1 = ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, -1.0, 0.0))   # Rx(-90 deg)
+T_0 = ((1.0, 0.0, 0.0), (0.0, 0.0, -1.0), (0.0, 1.0, 0.0))        # Rx(+90 deg)
+T_1 = ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+IDENTITY = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+SNAP = 1e-14  # twist entries within this of 0 or +-1 are taken as exactly 0 or +-1
+
+
+def _clean_rotation(matrix, fieldname: str) -> tuple[tuple[float, ...], ...]:
+    """Validate a rotation matrix and snap round-off (|x| < 1e-14, |x -+ 1| < 1e-14) to exact values."""
+    R = np.array(_matrix3([list(r) for r in matrix], fieldname), dtype=float)
+    if not np.allclose(R @ R.T, np.eye(3), rtol=0, atol=1e-9) or np.linalg.det(R) < 0:
+        raise SceneError(f"{fieldname}: must be a proper rotation matrix (orthonormal, det = +1)")
+    for target in (0.0, 1.0, -1.0):
+        R[np.abs(R - target) < SNAP] = target
+    return tuple(tuple(float(x) for x in row) for row in R)
+
+
+def twist_about_x(angle: float) -> tuple[tuple[float, ...], ...]:
+    """T_k = Rx(angle): the joint axis of link k tilted about the axis of link k-1 (a DH-like twist)."""
+    return _clean_rotation(rot_x(angle).tolist(), "twist")
+
+
+# ---------------------------------------------------------------------------
+# the scene
+# ---------------------------------------------------------------------------
+_NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,47}$")
+
+
+@dataclass(frozen=True)
+class Scene:
+    """One simulation set-up.  Construction validates every field.
+
+    links      real links 1..n (LineLink or RigidLink), n >= 1
+    twists     T_k for k = 2..n (n - 1 rotation matrices); () means all identity
+    gravity    g (m/s^2) acting along -X2 (the paper: the origin accelerates at +g along X2)
+    walls      the walls of the box that exist; an absent wall means no wall
+    q0, qd0    initial state, layout [theta_-1, theta_0, theta_1..theta_n, X1, X2, X3]
+    """
+
+    name: str
+    links: tuple[Link, ...]
+    walls: tuple[Wall, ...] = ()
+    twists: tuple = ()
+    gravity: float = DEFAULT_GRAVITY
+    q0: tuple[float, ...] = ()
+    qd0: tuple[float, ...] = ()
+    base_twists: tuple = (T_MINUS1, T_0, T_1)  # T_-1, T_0, T_1: the base chart
+    description: str = ""
+
+    def __post_init__(self):
+        if not isinstance(self.name, str) or not _NAME_RE.match(self.name):
+            raise SceneError(f"name: must be a C identifier of 1..48 characters "
+                             f"(letters, digits, _; not starting with a digit), got {self.name!r}")
+        links = tuple(self.links)
+        if len(links) < 1:
+            raise SceneError("links: a chain needs n >= 1 real links, got n = 0")
+        for i, link in enumerate(links, start=1):
+            if not isinstance(link, (LineLink, RigidLink)):
+                raise SceneError(f"links[{i}]: expected a LineLink or RigidLink, got {link!r}")
+            link.validate(f"links[{i}]")
+        object.__setattr__(self, "links", links)
+        n = len(links)
+        twists = tuple(self.twists) if self.twists else (IDENTITY,) * (n - 1)
+        if len(twists) != n - 1:
+            raise SceneError(f"twists: expected n - 1 = {n - 1} matrices (T_2..T_n), got {len(twists)}")
+        twists = tuple(_clean_rotation(T, f"links[{k}].twist") for k, T in enumerate(twists, start=2))
+        object.__setattr__(self, "twists", twists)
+        base = tuple(_clean_rotation(T, f"base_twists[{k}]") for k, T in enumerate(self.base_twists))
+        if len(base) != 3:
+            raise SceneError("base_twists: expected 3 matrices (T_-1, T_0, T_1)")
+        object.__setattr__(self, "base_twists", base)
+        object.__setattr__(self, "gravity", _number(self.gravity, "gravity"))
+        self._validate_walls()
+        self._validate_state()
+
+    # -- derived sizes -----------------------------------------------------
+    @property
+    def n(self) -> int:
+        return len(self.links)
+
+    @property
+    def nq(self) -> int:
+        return self.n + 5
+
+    @property
+    def all_twists(self) -> tuple:
+        """T_-1, T_0, T_1, T_2, ..., T_n (n + 2 matrices)."""
+        return tuple(self.base_twists) + tuple(self.twists)
+
+    def wall(self, name: str) -> Wall | None:
+        for w in self.walls:
+            if w.name == name:
+                return w
+        return None
+
+    # -- validation helpers --------------------------------------------------
+    def _validate_walls(self) -> None:
+        n = self.n
+        seen = set()
+        walls = []
+        for w in self.walls:
+            if w.name not in WALL_NAMES:
+                raise SceneError(f"walls: unknown wall {w.name!r}; allowed: {', '.join(WALL_NAMES)}")
+            if w.name in seen:
+                raise SceneError(f"walls.{w.name}: given twice")
+            seen.add(w.name)
+            _number(w.position, f"walls.{w.name}")
+            e = _number(w.restitution, f"restitution.{w.name}")
+            if not 0.0 <= e <= 1.0:
+                raise SceneError(f"restitution.{w.name}: must be in [0, 1], got {e!r}")
+            points = tuple(w.points) if w.points else tuple(range(1, n + 2))
+            for p in points:
+                if isinstance(p, bool) or not isinstance(p, int) or not 1 <= p <= n + 1:
+                    raise SceneError(f"contacts.{w.name}: point indices must be integers in 1..{n + 1} "
+                                     f"(O_1..O_{n + 1}), got {p!r}")
+            if len(set(points)) != len(points):
+                raise SceneError(f"contacts.{w.name}: repeated point index in {list(points)}")
+            walls.append(Wall(w.name, float(w.position), e, tuple(sorted(points))))
+        walls.sort(key=lambda w: WALL_NAMES.index(w.name))
+        for axis in range(3):
+            lo = self._find(walls, f"x{axis + 1}_min")
+            hi = self._find(walls, f"x{axis + 1}_max")
+            if lo and hi and not lo.position < hi.position:
+                raise SceneError(f"walls.x{axis + 1}_max: must be > x{axis + 1}_min = {lo.position}, "
+                                 f"got {hi.position}")
+        object.__setattr__(self, "walls", tuple(walls))
+
+    @staticmethod
+    def _find(walls, name):
+        return next((w for w in walls if w.name == name), None)
+
+    def _validate_state(self) -> None:
+        nq = self.nq
+        q0 = self.q0 if len(self.q0) else default_planar_state(self.n)
+        qd0 = self.qd0 if len(self.qd0) else (0.0,) * nq
+        q0 = _vector(list(q0), nq, "initial.q")
+        qd0 = _vector(list(qd0), nq, "initial.qd")
+        if abs(math.cos(q0[1])) < GIMBAL_MARGIN:
+            raise SceneError("initial.q[1] (theta_0): at the gimbal lock theta_0 = +-pi/2 of the base "
+                             "orientation chart; allowed |theta_0| < pi/2")
+        object.__setattr__(self, "q0", q0)
+        object.__setattr__(self, "qd0", qd0)
+        points = contact_points(self, np.array(q0))
+        for w in self.walls:
+            for p in w.points:
+                x = points[p - 1, w.axis]
+                inside = x >= w.position if w.side < 0 else x <= w.position
+                if not inside:
+                    raise SceneError(
+                        f"initial.q: contact point O_{p} has X{w.axis + 1} = {x:.6g}, outside the wall "
+                        f"{w.name} = {w.position:g}; allowed X{w.axis + 1} "
+                        f"{'>=' if w.side < 0 else '<='} {w.position:g}")
+
+    # -- parameters ----------------------------------------------------------
+    def parameter_names(self) -> list[str]:
+        """Names of the runtime parameter vector p (see the generated header for units)."""
+        names = ["g"]
+        for i, link in enumerate(self.links, start=1):
+            names += [f"{name}_{i}" for name in link.param_names]
+        names += [f"wall_{w.name}" for w in self.walls]
+        names += [f"e_{w.name}" for w in self.walls]
+        return names
+
+    def parameter_vector(self) -> np.ndarray:
+        values = [self.gravity]
+        for link in self.links:
+            values += list(link.param_values())
+        values += [w.position for w in self.walls]
+        values += [w.restitution for w in self.walls]
+        return np.array(values, dtype=float)
+
+    def contacts(self) -> list[tuple[int, Wall]]:
+        """The (point, wall) pairs with a gap function, wall-major then point order."""
+        return [(p, w) for w in self.walls for p in w.points]
+
+    def contact_rows(self) -> list[tuple[int, int]]:
+        """The (point, axis) pairs whose Jacobian row (Eq. 42) some wall needs, point-major."""
+        needed = {(p, w.axis) for w in self.walls for p in w.points}
+        return sorted(needed)
+
+
+# ---------------------------------------------------------------------------
+# numeric forward kinematics (for validating initial states and for plots)
+# ---------------------------------------------------------------------------
+def frames(scene: Scene, q: np.ndarray) -> list[np.ndarray]:
+    """^{ref}R_k for k = -1..n (n + 2 matrices), with the scene's twists."""
+    R = np.eye(3)
+    out = []
+    for k, T in enumerate(scene.all_twists):
+        R = R @ np.array(T) @ rot_z(q[k])
+        out.append(R)
+    return out
+
+
+def contact_points(scene: Scene, q: np.ndarray) -> np.ndarray:
+    """Positions of O_1..O_{n+1} in the reference frame, shape (n + 1, 3)."""
+    q = np.asarray(q, dtype=float)
+    Rs = frames(scene, q)
+    points = [q[scene.n + 2: scene.n + 5].copy()]
+    for i, link in enumerate(scene.links, start=1):
+        points.append(points[-1] + link.length * Rs[i + 1][:, 0])
+    return np.array(points)
+
+
+# ---------------------------------------------------------------------------
+# built-in scenes
+# ---------------------------------------------------------------------------
+def default_planar_state(n: int) -> tuple[float, ...]:
+    """A planar closed-polygon start: theta_-1 = -pi/2, theta_0 = 0, link 1 at pi - pi/n from +X1,
+    every later link turned by -2 pi / n.  For n = 4 this is the paper's case 1 square."""
+    thetas = [math.pi / 2 - math.pi / n] + [-2 * math.pi / n] * (n - 1)
+    return (-math.pi / 2, 0.0, *thetas, 0.0, 0.0, 0.0)
+
+
+def default_scene(n: int) -> Scene:
+    """The built-in scene for `--links N`: N links with Table 1 parameters (l = 1 m, mu = 1 kg/m),
+    planar, closed-polygon start at rest, in a rectangle that is the paper's 3 m x 2 m one for
+    N <= 4 and grows to hold longer chains.  For N = 4 it is the paper's case study 1."""
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise SceneError(f"links: n must be an integer >= 1, got {n!r}")
+    links = tuple(LineLink(1.0, 1.0, PAPER_J) for _ in range(n))
+    q = list(default_planar_state(n))
+    probe = Scene(name=f"chain{n}", links=links, q0=tuple(q))
+    pts = contact_points(probe, np.array(q))
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    width = max(3.0, hi[0] - lo[0] + 1.5)
+    height = max(2.0, hi[1] - lo[1] + 0.5)
+    q[n + 2] = round(width / 2 - (lo[0] + hi[0]) / 2, 12)   # rounding hides the polygon's round-off
+    q[n + 3] = round(0.3 - lo[1], 12)
+    walls = (Wall("x1_min", 0.0), Wall("x1_max", width), Wall("x2_min", 0.0), Wall("x2_max", height))
+    return Scene(name=f"chain{n}", links=links, walls=walls, q0=tuple(q),
+                 description=f"{n}-link planar chain, Table 1 parameters, closed-polygon start")
+
+
+def _shipped_scene_path(name: str) -> Path:
+    return Path(__file__).resolve().parent / "scenes" / f"{name}.toml"
+
+
+def shipped_scene_names() -> list[str]:
+    folder = Path(__file__).resolve().parent / "scenes"
+    return sorted(p.stem for p in folder.glob("*.toml"))
+
+
+# ---------------------------------------------------------------------------
+# loading from TOML / JSON
+# ---------------------------------------------------------------------------
+TOP_KEYS = ("name", "description", "gravity", "links", "walls", "restitution", "contacts", "initial")
+LINE_KEYS = ("length", "mu", "J", "twist", "twist_matrix", "count")
+RIGID_KEYS = ("length", "mass", "com", "inertia", "twist", "twist_matrix", "count")
+INITIAL_KEYS = ("q", "qd")
+
+
+def load_scene(source: str | Path) -> Scene:
+    """Load a scene from a .toml or .json file, or a shipped scene by name (e.g. 'paper-case1')."""
+    path = Path(source)
+    if not path.exists():
+        shipped = _shipped_scene_path(str(source))
+        if shipped.exists():
+            path = shipped
+        else:
+            raise SceneError(f"scene: no file {str(source)!r} and no shipped scene of that name; "
+                             f"shipped scenes: {', '.join(shipped_scene_names())}")
+    text = path.read_text()
+    try:
+        if path.suffix == ".json":
+            data = json.loads(text)
+        else:
+            data = tomllib.loads(text)
+    except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise SceneError(f"scene: cannot parse {path}: {exc}") from None
+    return scene_from_dict(data, default_name=path.stem.replace("-", "_"))
+
+
+def scene_from_dict(data: dict, default_name: str = "scene") -> Scene:
+    """Build a Scene from the plain-data form used by the TOML/JSON files (see README)."""
+    _check_keys(data, TOP_KEYS, "scene")
+    links, twists = _links_from_data(data.get("links"))
+    n = len(links)
+    walls = _walls_from_data(data.get("walls", {}), data.get("restitution", 1.0), data.get("contacts", {}))
+    initial = data.get("initial", {})
+    _check_keys(initial, INITIAL_KEYS, "initial")
+    return Scene(
+        name=data.get("name", default_name),
+        description=str(data.get("description", "")),
+        links=links,
+        twists=twists if n > 1 else (),
+        gravity=data.get("gravity", DEFAULT_GRAVITY),
+        walls=walls,
+        q0=tuple(initial["q"]) if "q" in initial else (),
+        qd0=tuple(initial["qd"]) if "qd" in initial else (),
+    )
+
+
+def _links_from_data(items) -> tuple[tuple[Link, ...], tuple]:
+    if not isinstance(items, list) or not items:
+        raise SceneError("links: a chain needs n >= 1 real links (a non-empty list of link tables), "
+                         f"got {items!r}")
+    links, twists = [], []
+    for j, item in enumerate(items):
+        where = f"links[{len(links) + 1}]"
+        if not isinstance(item, dict):
+            raise SceneError(f"{where}: expected a table, got {item!r}")
+        rigid = "mass" in item or "inertia" in item or "com" in item
+        _check_keys(item, RIGID_KEYS if rigid else LINE_KEYS, where)
+        count = item.get("count", 1)
+        if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+            raise SceneError(f"{where}.count: must be an integer >= 1, got {count!r}")
+        for _ in range(count):
+            where = f"links[{len(links) + 1}]"
+            if rigid:
+                for key in ("length", "mass", "com", "inertia"):
+                    if key not in item:
+                        raise SceneError(f"{where}.{key}: required for a rigid link (mass, com, inertia)")
+                link = RigidLink(item["length"], item["mass"], tuple(item["com"]),
+                                 tuple(tuple(r) for r in item["inertia"]))
+            else:
+                for key in ("length", "mu"):
+                    if key not in item:
+                        raise SceneError(f"{where}.{key}: required")
+                link = LineLink(item["length"], item["mu"], tuple(item.get("J", PAPER_J)))
+            link.validate(where)
+            index = len(links) + 1
+            if "twist" in item and "twist_matrix" in item:
+                raise SceneError(f"{where}: give either twist (angle about x, rad) or twist_matrix, not both")
+            if index == 1 and ("twist" in item or "twist_matrix" in item):
+                raise SceneError(f"{where}.twist: T_1 is fixed by the frame convention; "
+                                 "twists can be given for links 2..n")
+            if index > 1:
+                if "twist" in item:
+                    twists.append(twist_about_x(_number(item["twist"], f"{where}.twist")))
+                elif "twist_matrix" in item:
+                    twists.append(_clean_rotation(item["twist_matrix"], f"{where}.twist_matrix"))
+                else:
+                    twists.append(IDENTITY)
+            links.append(link)
+    return tuple(links), tuple(twists)
+
+
+def _walls_from_data(walls, restitution, contacts) -> tuple[Wall, ...]:
+    _check_keys(walls, WALL_NAMES, "walls")
+    if isinstance(restitution, dict):
+        _check_keys(restitution, WALL_NAMES + ("default",), "restitution")
+        for name in restitution:
+            if name != "default" and name not in walls:
+                raise SceneError(f"restitution.{name}: there is no such wall in [walls]")
+    _check_keys(contacts, WALL_NAMES, "contacts")
+    for name in contacts:
+        if name not in walls:
+            raise SceneError(f"contacts.{name}: there is no such wall in [walls]")
+    out = []
+    for name in WALL_NAMES:
+        if name not in walls:
+            continue
+        if isinstance(restitution, dict):
+            if name in restitution:
+                e = restitution[name]
+            elif "default" in restitution:
+                e = restitution["default"]
+            else:
+                raise SceneError(f"restitution.{name}: missing (give it, or a 'default')")
+        else:
+            e = restitution
+        e = _number(e, f"restitution.{name}" if isinstance(restitution, dict) else "restitution")
+        if not 0.0 <= e <= 1.0:
+            raise SceneError(f"restitution{'.' + name if isinstance(restitution, dict) else ''}: "
+                             f"must be in [0, 1], got {e!r}")
+        points = contacts.get(name, ())
+        if not isinstance(points, (list, tuple)) or (name in contacts and not points):
+            raise SceneError(f"contacts.{name}: expected a non-empty list of point indices "
+                             f"(O_1 is 1), got {points!r}")
+        out.append(Wall(name, _number(walls[name], f"walls.{name}"), e, tuple(points)))
+    return tuple(out)

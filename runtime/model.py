@@ -1,0 +1,152 @@
+"""A compiled model of one scene, with numpy-friendly access to every generated kernel.
+
+    from runtime import load_model
+    model = load_model("paper-case1")
+    qdd = model.forward_dynamics(model.q0, model.qd0)
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+import codegen
+from codegen.emit import GeneratedModel, scene_hash
+from codegen.scene import Scene, load_scene
+
+from .compile import cache_dir, compile_model
+
+
+class ImpactError(RuntimeError):
+    """The generated impact solver returned an error code (message from the C side)."""
+
+
+def _generator_fingerprint() -> str:
+    """Hash of the generator's own code and templates, so cached C never outlives a code change."""
+    digest = hashlib.sha256()
+    for package, pattern in (("codegen", "*.py"), ("templates", "*.j2")):
+        folder = resources.files(package)
+        for path in sorted(Path(str(folder)).glob(pattern)):
+            digest.update(path.name.encode())
+            digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def generate_cached(scene: Scene, bake_params: bool = False, progress=None) -> GeneratedModel:
+    """codegen.generate with an on-disk cache of the generated text (keyed by scene and generator)."""
+    key = hashlib.sha256(f"{scene_hash(scene)}|{bake_params}|{_generator_fingerprint()}".encode()).hexdigest()[:20]
+    path = cache_dir() / f"gen_{key}.json"
+    if path.exists():
+        data = json.loads(path.read_text())
+        model = GeneratedModel(data["name"], data["header"], data["source"], data["cdef"], [])
+        model.timings = {}
+        return model
+    model = codegen.generate(scene, bake_params=bake_params, progress=progress or (lambda m: None))
+    tmp = path.with_suffix(f".{id(model)}.tmp")
+    tmp.write_text(json.dumps({"name": model.name, "header": model.header, "source": model.source,
+                               "cdef": model.cdef}))
+    tmp.replace(path)
+    return model
+
+
+class CompiledModel:
+    """Calls into the compiled kernels of one scene.  Arrays in and out are float64 numpy arrays."""
+
+    def __init__(self, scene: Scene, generated: GeneratedModel, module):
+        self.scene = scene
+        self.generated = generated
+        self.ffi, self.lib = module.ffi, module.lib
+        self.name = generated.name
+        self.n, self.nq = scene.n, scene.nq
+        self.p = scene.parameter_vector()
+        self.q0, self.qd0 = np.array(scene.q0), np.array(scene.qd0)
+        self.contacts = scene.contacts()
+        self.contact_rows = scene.contact_rows()
+        self._fn = {name: getattr(self.lib, f"{self.name}_{name}") for name in (
+            "mass_matrix", "bias", "forward_dynamics", "contact_points", "contact_velocities",
+            "contact_jacobian", "contact_gaps", "energy", "rhs", "impact")}
+        self._work = np.zeros(self.nq * self.nq * 3 + len(self.contact_rows) * self.nq + self.nq)
+
+    # -- plumbing ---------------------------------------------------------------
+    def _ptr(self, array: np.ndarray):
+        return self.ffi.cast("double *", self.ffi.from_buffer(array))
+
+    def _vec(self, x, size: int, what: str) -> np.ndarray:
+        x = np.ascontiguousarray(x, dtype=float)
+        if x.shape != (size,):
+            raise ValueError(f"{what}: expected shape ({size},), got {x.shape}")
+        return x
+
+    def _params(self, p):
+        return self.p if p is None else self._vec(p, len(self.p), "p")
+
+    def _call(self, name: str, out_size: int, *inputs):
+        out = np.zeros(out_size)
+        self._fn[name](*(self._ptr(a) for a in inputs), self._ptr(out))
+        return out
+
+    # -- kernels ----------------------------------------------------------------
+    def mass_matrix(self, q, p=None) -> np.ndarray:
+        q = self._vec(q, self.nq, "q")
+        return self._call("mass_matrix", self.nq ** 2, q, self._params(p)).reshape(self.nq, self.nq)
+
+    def bias(self, q, qd, p=None) -> np.ndarray:
+        return self._call("bias", self.nq, self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd"),
+                          self._params(p))
+
+    def forward_dynamics(self, q, qd, p=None) -> np.ndarray:
+        return self._call("forward_dynamics", self.nq, self._vec(q, self.nq, "q"),
+                          self._vec(qd, self.nq, "qd"), self._params(p))
+
+    def rhs(self, t: float, x, p=None) -> np.ndarray:
+        x = self._vec(x, 2 * self.nq, "x")
+        out = np.zeros(2 * self.nq)
+        self._fn["rhs"](float(t), self._ptr(x), self._ptr(self._params(p)), self._ptr(out))
+        return out
+
+    def contact_points(self, q, p=None) -> np.ndarray:
+        return self._call("contact_points", 3 * (self.n + 1), self._vec(q, self.nq, "q"),
+                          self._params(p)).reshape(self.n + 1, 3)
+
+    def contact_velocities(self, q, qd, p=None) -> np.ndarray:
+        return self._call("contact_velocities", 3 * (self.n + 1), self._vec(q, self.nq, "q"),
+                          self._vec(qd, self.nq, "qd"), self._params(p)).reshape(self.n + 1, 3)
+
+    def contact_jacobian(self, q, p=None) -> np.ndarray:
+        rows = len(self.contact_rows)
+        return self._call("contact_jacobian", rows * self.nq, self._vec(q, self.nq, "q"),
+                          self._params(p)).reshape(rows, self.nq)
+
+    def contact_gaps(self, q, p=None) -> np.ndarray:
+        return self._call("contact_gaps", len(self.contacts), self._vec(q, self.nq, "q"), self._params(p))
+
+    def energy(self, q, qd, p=None) -> tuple[float, float]:
+        E = self._call("energy", 2, self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd"), self._params(p))
+        return float(E[0]), float(E[1])
+
+    def impact(self, q, qd, active, p=None) -> tuple[np.ndarray, np.ndarray]:
+        """Post-impact velocities and impulses (Eq. 48) for the contacts with indices ``active``."""
+        q, qd = self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd")
+        active = np.ascontiguousarray(active, dtype=np.int32)
+        qd_plus, impulse = np.zeros(self.nq), np.zeros(max(len(active), 1))
+        code = self._fn["impact"](self._ptr(q), self._ptr(qd), self._ptr(self._params(p)), len(active),
+                                  self.ffi.cast("int *", self.ffi.from_buffer(active)),
+                                  self._ptr(qd_plus), self._ptr(impulse), self._ptr(self._work))
+        if code != 0:
+            message = self.ffi.string(getattr(self.lib, f"{self.name}_error_message")(code)).decode()
+            raise ImpactError(f"impact with contacts {active.tolist()}: {message}")
+        return qd_plus, impulse[:len(active)]
+
+
+def load_model(scene: Scene | str, bake_params: bool = False, flags=None, progress=None) -> CompiledModel:
+    """Generate (cached) and compile (cached) the model of a scene or a shipped scene name/file."""
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
+    generated = generate_cached(scene, bake_params, progress)
+    kwargs = {} if flags is None else {"flags": flags}
+    module = compile_model(generated.name, generated.header, generated.source, generated.cdef,
+                           progress=progress, **kwargs)
+    return CompiledModel(scene, generated, module)

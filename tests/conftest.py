@@ -1,0 +1,97 @@
+"""Shared helpers: random scenes, their reference model, and compiled models (cached per session)."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))      # for `import reference`
+
+import reference  # noqa: E402
+from codegen.scene import LineLink, RigidLink, Scene, Wall, WALL_NAMES  # noqa: E402
+
+FAR = 50.0   # walls far away: every (point, wall) pair exists but no state is outside
+
+
+def random_link(rng, kind: str):
+    if kind == "line":
+        return LineLink(rng.uniform(0.2, 2.0), rng.uniform(0.1, 3.0), tuple(rng.uniform(0.0, 1e-2, size=3)))
+    l, m, h, K = reference.random_link(rng)
+    com = h / m
+    inertia = K - m * (com @ com * np.eye(3) - np.outer(com, com))   # back to the centre of mass
+    inertia = (inertia + inertia.T) / 2
+    return RigidLink(l, m, tuple(com), tuple(map(tuple, inertia)))
+
+
+def random_scene(n: int, seed: int, random_twists: bool = False, kinds=("line",), name=None,
+                 walls=True) -> Scene:
+    """A scene with random links (kinds cycled along the chain), random twists T_2..T_n if asked,
+    random gravity, and all six walls far away."""
+    rng = np.random.default_rng(seed)
+    links = tuple(random_link(rng, kinds[i % len(kinds)]) for i in range(n))
+    twists = tuple(map(lambda T: tuple(map(tuple, T)), (reference.random_rotation(rng) for _ in range(n - 1)))) \
+        if random_twists else ()
+    wall_list = tuple(Wall(w, -FAR if w.endswith("min") else FAR, rng.uniform(0, 1)) for w in WALL_NAMES) \
+        if walls else ()
+    q0 = (0.0,) * (n + 5)
+    return Scene(name=name or f"rand{n}_{seed}", links=links, twists=twists, gravity=rng.uniform(0, 12),
+                 walls=wall_list, q0=q0)
+
+
+def reference_of(scene: Scene, p=None) -> reference.ReferenceChain:
+    """The tests' independent numpy model of a scene (parameters from p if given)."""
+    if p is not None:
+        scene = with_parameters(scene, p)
+    links = []
+    for link in scene.links:
+        if isinstance(link, LineLink):
+            links.append(reference.line_link(link.length, link.mu, link.J))
+        else:
+            links.append(reference.rigid_link(link.length, link.mass, link.com, link.inertia))
+    return reference.ReferenceChain(links, [np.array(T) for T in scene.all_twists], scene.gravity)
+
+
+def with_parameters(scene: Scene, p) -> Scene:
+    """The scene with the link parameters and gravity of the parameter vector p."""
+    p = list(p)
+    g, k = p[0], 1
+    links = []
+    for link in scene.links:
+        values = p[k:k + len(link.param_names)]
+        k += len(link.param_names)
+        if isinstance(link, LineLink):
+            links.append(LineLink(values[0], values[1], tuple(values[2:5])))
+        else:
+            l, m, cx, cy, cz, ixx, iyy, izz, ixy, ixz, iyz = values
+            links.append(RigidLink(l, m, (cx, cy, cz), ((ixx, ixy, ixz), (ixy, iyy, iyz), (ixz, iyz, izz))))
+    return Scene(name=scene.name, links=tuple(links), twists=scene.twists, gravity=g, walls=scene.walls,
+                 q0=scene.q0, qd0=scene.qd0, base_twists=scene.base_twists)
+
+
+def random_parameters(scene: Scene, seed: int) -> np.ndarray:
+    """A new random parameter vector with the layout of ``scene`` (same link kinds)."""
+    rng = np.random.default_rng(seed)
+    other = random_scene(scene.n, seed, kinds=tuple(link.kind for link in scene.links), walls=False)
+    p = scene.parameter_vector().copy()
+    q = other.parameter_vector()
+    p[:len(q)] = q
+    p[0] = rng.uniform(0, 12)
+    return p
+
+
+_MODELS = {}
+
+
+@pytest.fixture(scope="session")
+def compiled():
+    """compiled(scene, bake_params=False) -> runtime.CompiledModel, built once per session."""
+    from runtime import load_model
+
+    def get(scene: Scene, bake_params: bool = False):
+        key = (scene, bake_params)
+        if key not in _MODELS:
+            _MODELS[key] = load_model(scene, bake_params=bake_params)
+        return _MODELS[key]
+    return get

@@ -1357,19 +1357,20 @@ static void paper_case1_ldlt_solve(int n, const double *LD, double *b)
     }
 }
 
-int paper_case1_impact(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p,
-                 int nactive, const int *PAPER_CASE1_RESTRICT active,
-                 double *PAPER_CASE1_RESTRICT qd_plus, double *PAPER_CASE1_RESTRICT impulse, double *PAPER_CASE1_RESTRICT work)
+/* Assemble the impact problem of the active contacts (Eq. 44-48 with the velocities eliminated):
+ *   Y_a = I_f^-1 n_a (n_a = signed Jacobian row of contact a),  A = N I_f^-1 N^T,  v_a = n_a . qd.
+ * work layout: M (NQ*NQ, factor of I_f) | J (NJROW*NQ) | Y (NQ*NQ) | A (NQ*NQ) | b (NQ). */
+static int paper_case1_impact_system(const double *q, const double *qd, const double *p, int nactive,
+                                   const int *active, double *work, double *v, double *e)
 {
     const int row_of[PAPER_CASE1_NCONTACT] = { 0, 2, 4, 6, 8, 0, 2, 4, 6, 8, 1, 3, 5, 7, 9, 1, 3, 5, 7, 9 };
     const double sign_of[PAPER_CASE1_NCONTACT] = { 1.0, 1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0, -1.0, 1.0, 1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0, -1.0 };
     const double e_of[PAPER_CASE1_NCONTACT] = { p[25], p[25], p[25], p[25], p[25], p[26], p[26], p[26], p[26], p[26], p[27], p[27], p[27], p[27], p[27], p[28], p[28], p[28], p[28], p[28] };
     const int nq = PAPER_CASE1_NQ;
-    double *M = work;                                  /* NQ x NQ: I_f, then its LDL^T factor */
-    double *J = M + PAPER_CASE1_NQ * PAPER_CASE1_NQ;     /* NJROW x NQ: contact Jacobian rows */
-    double *Y = J + PAPER_CASE1_NJROW * PAPER_CASE1_NQ;  /* nactive x NQ: rows of I_f^-1 J^T */
-    double *A = Y + PAPER_CASE1_NQ * PAPER_CASE1_NQ;     /* nactive x nactive: J I_f^-1 J^T */
-    double *b = A + PAPER_CASE1_NQ * PAPER_CASE1_NQ;     /* nactive: right-hand side, then impulses */
+    double *M = work;
+    double *J = M + PAPER_CASE1_NQ * PAPER_CASE1_NQ;
+    double *Y = J + PAPER_CASE1_NJROW * PAPER_CASE1_NQ;
+    double *A = Y + PAPER_CASE1_NQ * PAPER_CASE1_NQ;
     int a, c, i;
     if (nactive < 1 || nactive > PAPER_CASE1_NQ) return PAPER_CASE1_ERR_BAD_CONTACT;
     for (a = 0; a < nactive; ++a) {
@@ -1381,7 +1382,7 @@ int paper_case1_impact(const double *PAPER_CASE1_RESTRICT q, const double *PAPER
     paper_case1_mass_matrix(q, p, M);
     if (paper_case1_ldlt(nq, M, 1e-15) != 0) return PAPER_CASE1_ERR_SINGULAR_MASS;
     paper_case1_contact_jacobian(q, p, J);
-    for (a = 0; a < nactive; ++a) {               /* Y_a = I_f^-1 J_a^T, b_a = -(1 + e_a) J_a qd */
+    for (a = 0; a < nactive; ++a) {
         const double *row = J + row_of[active[a]] * nq;
         const double sign = sign_of[active[a]];
         double rate = 0.0;
@@ -1390,9 +1391,10 @@ int paper_case1_impact(const double *PAPER_CASE1_RESTRICT q, const double *PAPER
             rate += sign * row[i] * qd[i];
         }
         paper_case1_ldlt_solve(nq, M, Y + a*nq);
-        b[a] = -(1.0 + e_of[active[a]]) * rate;
+        v[a] = rate;
+        e[a] = e_of[active[a]];
     }
-    for (a = 0; a < nactive; ++a) {               /* A = J I_f^-1 J^T */
+    for (a = 0; a < nactive; ++a) {
         const double *row = J + row_of[active[a]] * nq;
         const double sign = sign_of[active[a]];
         for (c = 0; c < nactive; ++c) {
@@ -1401,15 +1403,84 @@ int paper_case1_impact(const double *PAPER_CASE1_RESTRICT q, const double *PAPER
             A[a*nactive + c] = sign * s;
         }
     }
-    if (paper_case1_ldlt(nactive, A, 1e-12) != 0) return PAPER_CASE1_ERR_SINGULAR_IMPACT;
-    paper_case1_ldlt_solve(nactive, A, b);
-    for (i = 0; i < nq; ++i) {
+    return PAPER_CASE1_OK;
+}
+
+/* qd_plus = qd + sum_a Y_a F_a. */
+static void paper_case1_apply_impulse(const double *qd, int nactive, const double *Y, const double *F, double *qd_plus)
+{
+    int a, i;
+    for (i = 0; i < PAPER_CASE1_NQ; ++i) {
         double v = qd[i];
-        for (a = 0; a < nactive; ++a) v += Y[a*nq + i] * b[a];
+        for (a = 0; a < nactive; ++a) v += Y[a*PAPER_CASE1_NQ + i] * F[a];
         qd_plus[i] = v;
     }
-    for (a = 0; a < nactive; ++a) impulse[a] = b[a];
+}
+
+int paper_case1_impact(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p,
+                 int nactive, const int *PAPER_CASE1_RESTRICT active,
+                 double *PAPER_CASE1_RESTRICT qd_plus, double *PAPER_CASE1_RESTRICT impulse, double *PAPER_CASE1_RESTRICT work)
+{
+    double v[PAPER_CASE1_NQ], e[PAPER_CASE1_NQ];
+    double *Y = work + PAPER_CASE1_NQ * PAPER_CASE1_NQ + PAPER_CASE1_NJROW * PAPER_CASE1_NQ;
+    double *A = Y + PAPER_CASE1_NQ * PAPER_CASE1_NQ;
+    int a;
+    int code = paper_case1_impact_system(q, qd, p, nactive, active, work, v, e);
+    if (code != PAPER_CASE1_OK) return code;
+    for (a = 0; a < nactive; ++a) impulse[a] = -(1.0 + e[a]) * v[a];     /* A F = -(1 + e) v  (Eq. 47) */
+    if (paper_case1_ldlt(nactive, A, 1e-12) != 0) return PAPER_CASE1_ERR_SINGULAR_IMPACT;
+    paper_case1_ldlt_solve(nactive, A, impulse);
+    paper_case1_apply_impulse(qd, nactive, Y, impulse, qd_plus);
     return PAPER_CASE1_OK;
+}
+
+int paper_case1_impact_complementarity(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p,
+                 int nactive, const int *PAPER_CASE1_RESTRICT active,
+                 double *PAPER_CASE1_RESTRICT qd_plus, double *PAPER_CASE1_RESTRICT impulse, double *PAPER_CASE1_RESTRICT work)
+{
+    double v[PAPER_CASE1_NQ], e[PAPER_CASE1_NQ], Asub[PAPER_CASE1_NQ * PAPER_CASE1_NQ], rhs[PAPER_CASE1_NQ];
+    double *Y = work + PAPER_CASE1_NQ * PAPER_CASE1_NQ + PAPER_CASE1_NJROW * PAPER_CASE1_NQ;
+    double *A = Y + PAPER_CASE1_NQ * PAPER_CASE1_NQ;
+    double scale = 0.0;
+    int a, c, code;
+    unsigned long mask, full;
+    code = paper_case1_impact_system(q, qd, p, nactive, active, work, v, e);
+    if (code != PAPER_CASE1_OK) return code;
+    if (nactive > PAPER_CASE1_MAX_LCP) return PAPER_CASE1_ERR_LCP;
+    for (a = 0; a < nactive; ++a) {
+        if (fabs(v[a]) > scale) scale = fabs(v[a]);
+    }
+    full = (1UL << nactive) - 1UL;
+    /* Enumerate the sets S of contacts that push (F_S > 0, w_S = 0).  A = N I_f^-1 N^T is positive
+     * (semi)definite, so the complementarity problem has one solution; largest sets are tried first. */
+    for (mask = full; ; --mask) {
+        int idx[PAPER_CASE1_NQ], k = 0, ok = 1;
+        for (a = 0; a < nactive; ++a) {
+            if (mask & (1UL << a)) idx[k++] = a;
+        }
+        for (a = 0; a < k; ++a) {
+            for (c = 0; c < k; ++c) Asub[a*k + c] = A[idx[a]*nactive + idx[c]];
+            rhs[a] = -(1.0 + e[idx[a]]) * v[idx[a]];
+        }
+        if (k > 0 && paper_case1_ldlt(k, Asub, 1e-12) != 0) ok = 0;
+        if (ok && k > 0) paper_case1_ldlt_solve(k, Asub, rhs);
+        for (a = 0; ok && a < nactive; ++a) impulse[a] = 0.0;
+        for (a = 0; ok && a < k; ++a) {
+            if (rhs[a] < -1e-12 * (scale + 1e-300)) ok = 0;
+            impulse[idx[a]] = rhs[a] > 0.0 ? rhs[a] : 0.0;
+        }
+        for (a = 0; ok && a < nactive; ++a) {          /* w = A F + (1 + e) v >= 0 */
+            double w = (1.0 + e[a]) * v[a];
+            for (c = 0; c < nactive; ++c) w += A[a*nactive + c] * impulse[c];
+            if (w < -1e-10 * (scale + 1e-300)) ok = 0;
+        }
+        if (ok) {
+            paper_case1_apply_impulse(qd, nactive, Y, impulse, qd_plus);
+            return PAPER_CASE1_OK;
+        }
+        if (mask == 0) break;
+    }
+    return PAPER_CASE1_ERR_LCP;
 }
 
 void paper_case1_contact_info(int c, int *point, int *axis, int *normal_sign)
@@ -1501,6 +1572,437 @@ const char *paper_case1_error_message(int code)
     case PAPER_CASE1_ERR_BAD_CONTACT: return "bad active-contact list: empty, longer than NQ, repeated, or index outside 0..NCONTACT-1";
     case PAPER_CASE1_ERR_SINGULAR_MASS: return "inertia matrix I_f is not positive definite (gimbal lock at theta_0 = +-pi/2?)";
     case PAPER_CASE1_ERR_SINGULAR_IMPACT: return "impact matrix J I_f^-1 J^T is singular: the active contact constraints are dependent";
+    case PAPER_CASE1_ERR_LCP: return "impact complementarity problem has no solution (too many or degenerate contacts)";
+    case PAPER_CASE1_ERR_BAD_OPTION: return "bad option or argument (method, dt > 0, rtol > 0, atol > 0, event_samples >= 1, t_end >= t)";
+    case PAPER_CASE1_ERR_MAX_STEPS: return "maximum number of steps reached";
+    case PAPER_CASE1_ERR_STEP_SIZE: return "step size underflow: the adaptive integrator cannot meet the tolerance";
+    case PAPER_CASE1_ERR_NONFINITE: return "the state became NaN or infinite";
+    case PAPER_CASE1_ERR_TOO_MANY_CONTACTS: return "more simultaneous approaching contacts than degrees of freedom";
     default: return "unknown error code";
     }
+}
+
+/* ------------------------------------------------------------------------------------------------
+ * Hybrid simulation: integrators with dense output, event location, impacts.
+ * ------------------------------------------------------------------------------------------------ */
+#define PAPER_CASE1_EPS 2.220446049250313e-16
+
+void paper_case1_default_options(paper_case1_options *opt)
+{
+    opt->method = PAPER_CASE1_METHOD_DOPRI5;
+    opt->dt = 0.0;
+    opt->rtol = 1e-8;
+    opt->atol = 1e-10;
+    opt->h_max = 0.0;
+    opt->event_samples = 4;
+    opt->event_tol = 1e-13;
+    opt->contact_tol = 1e-6;
+    opt->max_steps = 10000000L;
+}
+
+static int paper_case1_finite(const double *x, int n)
+{
+    int i;
+    for (i = 0; i < n; ++i) {
+        if (!(x[i] - x[i] == 0.0)) return 0;
+    }
+    return 1;
+}
+
+static void paper_case1_f(paper_case1_sim *s, double t, const double *x, double *f)
+{
+    paper_case1_rhs(t, x, s->p, f);
+    s->n_rhs++;
+}
+
+int paper_case1_sim_init(paper_case1_sim *s, double t0, const double *q, const double *qd, const double *p,
+                   const paper_case1_options *opt)
+{
+    int i;
+    if (opt->method != PAPER_CASE1_METHOD_RK4 && opt->method != PAPER_CASE1_METHOD_DOPRI5) return PAPER_CASE1_ERR_BAD_OPTION;
+    if (opt->method == PAPER_CASE1_METHOD_RK4 && !(opt->dt > 0.0 && opt->dt < 1e300)) return PAPER_CASE1_ERR_BAD_OPTION;
+    if (opt->method == PAPER_CASE1_METHOD_DOPRI5 && !(opt->rtol > 0.0 && opt->atol > 0.0 && opt->dt >= 0.0))
+        return PAPER_CASE1_ERR_BAD_OPTION;
+    if (opt->event_samples < 1 || !(opt->event_tol > 0.0) || !(opt->contact_tol >= 0.0) || !(opt->h_max >= 0.0)
+        || opt->max_steps < 0) return PAPER_CASE1_ERR_BAD_OPTION;
+    s->opt = *opt;
+    for (i = 0; i < PAPER_CASE1_NPARAM; ++i) s->p[i] = p[i];
+    for (i = 0; i < PAPER_CASE1_NQ; ++i) {
+        s->x[i] = q[i];
+        s->x[PAPER_CASE1_NQ + i] = qd[i];
+    }
+    if (!paper_case1_finite(s->x, PAPER_CASE1_NX) || !paper_case1_finite(&t0, 1)) return PAPER_CASE1_ERR_BAD_OPTION;
+    s->t = t0;
+    s->h = opt->method == PAPER_CASE1_METHOD_RK4 ? opt->dt : opt->dt;
+    s->f_valid = 0;
+    s->n_steps = s->n_rejected = s->n_rhs = s->n_impacts = 0;
+    paper_case1_contact_gaps(s->x, s->p, s->gaps);
+    return PAPER_CASE1_OK;
+}
+
+/* Weighted RMS norm of d with scale atol + rtol max(|y0|, |y1|). */
+static double paper_case1_norm(const paper_case1_sim *s, const double *d, const double *y0, const double *y1)
+{
+    int i;
+    double sum = 0.0;
+    for (i = 0; i < PAPER_CASE1_NX; ++i) {
+        double a = fabs(y0[i]), b = fabs(y1[i]);
+        double scale = s->opt.atol + s->opt.rtol * (a > b ? a : b);
+        sum += (d[i] / scale) * (d[i] / scale);
+    }
+    return sqrt(sum / PAPER_CASE1_NX);
+}
+
+/* Starting step for DOPRI5 (Hairer, Norsett & Wanner, Solving ODEs I, Sect. II.4). */
+static double paper_case1_initial_step(paper_case1_sim *s, double t_end)
+{
+    double d0, d1, d2, h0, h1, h;
+    int i;
+    d0 = paper_case1_norm(s, s->x, s->x, s->x);
+    d1 = paper_case1_norm(s, s->f, s->x, s->x);
+    h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
+    if (h0 > t_end - s->t) h0 = t_end - s->t;
+    for (i = 0; i < PAPER_CASE1_NX; ++i) s->xs[i] = s->x[i] + h0 * s->f[i];
+    paper_case1_f(s, s->t + h0, s->xs, s->k[1]);
+    for (i = 0; i < PAPER_CASE1_NX; ++i) s->k[1][i] -= s->f[i];
+    d2 = paper_case1_norm(s, s->k[1], s->x, s->x) / h0;
+    h1 = (d1 > d2 ? d1 : d2) <= 1e-15 ? (h0 * 1e-3 > 1e-6 ? h0 * 1e-3 : 1e-6) : pow(0.01 / (d1 > d2 ? d1 : d2), 0.2);
+    h = 100.0 * h0 < h1 ? 100.0 * h0 : h1;
+    return h;
+}
+
+/* One RK4 step of size h from (t, x, f): x1, its derivative k[4], and the Hermite dense output. */
+static void paper_case1_rk4_step(paper_case1_sim *s, double h)
+{
+    int i;
+    const int nx = PAPER_CASE1_NX;
+    double *k2 = s->k[1], *k3 = s->k[2], *k4 = s->k[3];
+    for (i = 0; i < nx; ++i) s->xs[i] = s->x[i] + 0.5 * h * s->f[i];
+    paper_case1_f(s, s->t + 0.5 * h, s->xs, k2);
+    for (i = 0; i < nx; ++i) s->xs[i] = s->x[i] + 0.5 * h * k2[i];
+    paper_case1_f(s, s->t + 0.5 * h, s->xs, k3);
+    for (i = 0; i < nx; ++i) s->xs[i] = s->x[i] + h * k3[i];
+    paper_case1_f(s, s->t + h, s->xs, k4);
+    for (i = 0; i < nx; ++i) s->x1[i] = s->x[i] + h / 6.0 * (s->f[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    paper_case1_f(s, s->t + h, s->x1, s->k[4]);        /* derivative at the end: Hermite and next step */
+}
+
+/* One Dormand-Prince 5(4) step of size h; returns the error norm; x1 and k[6] = f(t + h, x1). */
+static double paper_case1_dopri5_step(paper_case1_sim *s, double h)
+{
+    const double
+        a21 = 1.0 / 5.0,
+        a31 = 3.0 / 40.0, a32 = 9.0 / 40.0,
+        a41 = 44.0 / 45.0, a42 = -56.0 / 15.0, a43 = 32.0 / 9.0,
+        a51 = 19372.0 / 6561.0, a52 = -25360.0 / 2187.0, a53 = 64448.0 / 6561.0, a54 = -212.0 / 729.0,
+        a61 = 9017.0 / 3168.0, a62 = -355.0 / 33.0, a63 = 46732.0 / 5247.0, a64 = 49.0 / 176.0,
+        a65 = -5103.0 / 18656.0,
+        a71 = 35.0 / 384.0, a73 = 500.0 / 1113.0, a74 = 125.0 / 192.0, a75 = -2187.0 / 6784.0,
+        a76 = 11.0 / 84.0,
+        e1 = 71.0 / 57600.0, e3 = -71.0 / 16695.0, e4 = 71.0 / 1920.0, e5 = -17253.0 / 339200.0,
+        e6 = 22.0 / 525.0, e7 = -1.0 / 40.0;
+    int i;
+    const int nx = PAPER_CASE1_NX;
+    double *k1 = s->f, *k2 = s->k[1], *k3 = s->k[2], *k4 = s->k[3], *k5 = s->k[4], *k6 = s->k[5], *k7 = s->k[6];
+    const double t = s->t;
+    for (i = 0; i < nx; ++i) s->xs[i] = s->x[i] + h * a21 * k1[i];
+    paper_case1_f(s, t + h / 5.0, s->xs, k2);
+    for (i = 0; i < nx; ++i) s->xs[i] = s->x[i] + h * (a31 * k1[i] + a32 * k2[i]);
+    paper_case1_f(s, t + 0.3 * h, s->xs, k3);
+    for (i = 0; i < nx; ++i) s->xs[i] = s->x[i] + h * (a41 * k1[i] + a42 * k2[i] + a43 * k3[i]);
+    paper_case1_f(s, t + 0.8 * h, s->xs, k4);
+    for (i = 0; i < nx; ++i) s->xs[i] = s->x[i] + h * (a51 * k1[i] + a52 * k2[i] + a53 * k3[i] + a54 * k4[i]);
+    paper_case1_f(s, t + h * 8.0 / 9.0, s->xs, k5);
+    for (i = 0; i < nx; ++i)
+        s->xs[i] = s->x[i] + h * (a61 * k1[i] + a62 * k2[i] + a63 * k3[i] + a64 * k4[i] + a65 * k5[i]);
+    paper_case1_f(s, t + h, s->xs, k6);
+    for (i = 0; i < nx; ++i)
+        s->x1[i] = s->x[i] + h * (a71 * k1[i] + a73 * k3[i] + a74 * k4[i] + a75 * k5[i] + a76 * k6[i]);
+    paper_case1_f(s, t + h, s->x1, k7);
+    for (i = 0; i < nx; ++i)   /* the error estimate goes in xs */
+        s->xs[i] = h * (e1 * k1[i] + e3 * k3[i] + e4 * k4[i] + e5 * k5[i] + e6 * k6[i] + e7 * k7[i]);
+    return paper_case1_norm(s, s->xs, s->x, s->x1);
+}
+
+/* Dense output of the accepted step [t0_step, t0_step + h_step] (k[] as left by the step). */
+static void paper_case1_prepare_dense(paper_case1_sim *s, double h)
+{
+    int i;
+    const int nx = PAPER_CASE1_NX;
+    s->t0_step = s->t;
+    s->h_step = h;
+    if (s->opt.method == PAPER_CASE1_METHOD_RK4) {       /* cubic Hermite: x0, x1, f0, f1 */
+        for (i = 0; i < nx; ++i) {
+            s->cont[0][i] = s->x[i];
+            s->cont[1][i] = s->x1[i];
+            s->cont[2][i] = h * s->f[i];
+            s->cont[3][i] = h * s->k[4][i];
+        }
+    } else {                                           /* Hairer's contd5 coefficients */
+        const double
+            d1 = -12715105075.0 / 11282082432.0, d3 = 87487479700.0 / 32700410799.0,
+            d4 = -10690763975.0 / 1880347072.0, d5 = 701980252875.0 / 199316789632.0,
+            d6 = -1453857185.0 / 822651844.0, d7 = 69997945.0 / 29380423.0;
+        for (i = 0; i < nx; ++i) {
+            double dy = s->x1[i] - s->x[i];
+            double bspl = h * s->f[i] - dy;
+            s->cont[0][i] = s->x[i];
+            s->cont[1][i] = dy;
+            s->cont[2][i] = bspl;
+            s->cont[3][i] = dy - h * s->k[6][i] - bspl;
+            s->cont[4][i] = h * (d1 * s->f[i] + d3 * s->k[2][i] + d4 * s->k[3][i] + d5 * s->k[4][i]
+                                 + d6 * s->k[5][i] + d7 * s->k[6][i]);
+        }
+    }
+}
+
+/* State at time t inside the current step, into out. */
+static void paper_case1_dense(paper_case1_sim *s, double t, double *out)
+{
+    int i;
+    const double th = (t - s->t0_step) / s->h_step, th1 = 1.0 - th;
+    if (s->opt.method == PAPER_CASE1_METHOD_RK4) {
+        const double h00 = (1.0 + 2.0 * th) * th1 * th1, h01 = th * th * (3.0 - 2.0 * th);
+        const double h10 = th * th1 * th1, h11 = -th * th * th1;
+        for (i = 0; i < PAPER_CASE1_NX; ++i)
+            out[i] = h00 * s->cont[0][i] + h01 * s->cont[1][i] + h10 * s->cont[2][i] + h11 * s->cont[3][i];
+    } else {
+        for (i = 0; i < PAPER_CASE1_NX; ++i)
+            out[i] = s->cont[0][i] + th * (s->cont[1][i] + th1 * (s->cont[2][i]
+                     + th * (s->cont[3][i] + th1 * s->cont[4][i])));
+    }
+}
+
+static double paper_case1_gap_at(paper_case1_sim *s, int c, double t)
+{
+    paper_case1_dense(s, t, s->xs);
+    paper_case1_contact_gaps(s->xs, s->p, s->gs);
+    return s->gs[c];
+}
+
+/* Root of gap_c on the interpolant in (a, b], gap(a) > 0 >= gap(b): Illinois, then bisection. */
+static double paper_case1_locate(paper_case1_sim *s, int c, double a, double ga, double b, double gb)
+{
+    int side = 0, iter;
+    for (iter = 0; iter < 200; ++iter) {
+        double m, gm, tol = s->opt.event_tol + 4.0 * PAPER_CASE1_EPS * fabs(b);
+        if (b - a <= tol) break;
+        m = iter < 60 ? (a * gb - b * ga) / (gb - ga) : 0.5 * (a + b);
+        if (!(m > a && m < b)) m = 0.5 * (a + b);
+        gm = paper_case1_gap_at(s, c, m);
+        if (gm > 0.0) {
+            a = m; ga = gm;
+            if (side == 1) gb *= 0.5;
+            side = 1;
+        } else {
+            b = m; gb = gm;
+            if (side == -1) ga *= 0.5;
+            side = -1;
+        }
+    }
+    return b;
+}
+
+/* Search the accepted step for the first wall crossing (gap from > 0 to <= 0) at event_samples points
+ * of the interpolant, so that a dip through a wall and back inside one step is still seen.
+ * Returns 1 with *t_event and *c_event, or 0; s->gprev ends as the gaps at the step end. */
+static int paper_case1_find_event(paper_case1_sim *s, double t1, double *t_event, int *c_event)
+{
+    int j, c, found = 0;
+    const int m = s->opt.event_samples;
+    double t_prev = s->t;
+    for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) s->gprev[c] = s->gaps[c];
+    for (j = 1; j <= m && !found; ++j) {
+        double tj = j == m ? t1 : s->t + (t1 - s->t) * (double)j / (double)m;
+        double gj[PAPER_CASE1_NCONTACT1];
+        paper_case1_dense(s, tj, s->xs);
+        paper_case1_contact_gaps(s->xs, s->p, gj);
+        for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {
+            if (s->gprev[c] > 0.0 && gj[c] <= 0.0) {
+                double tc = paper_case1_locate(s, c, t_prev, s->gprev[c], tj, gj[c]);
+                if (!found || tc < *t_event) {
+                    *t_event = tc;
+                    *c_event = c;
+                }
+                found = 1;
+            }
+        }
+        for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) s->gprev[c] = gj[c];
+        t_prev = tj;
+    }
+    return found;
+}
+
+static double paper_case1_total_energy(const double *x, const double *p)
+{
+    double E[2];
+    paper_case1_energy(x, x + PAPER_CASE1_NQ, p, E);
+    return E[0] + E[1];
+}
+
+/* Normal velocities (along the inward normals) of all contacts at state x. */
+static void paper_case1_normal_velocities(const double *x, const double *p, double *vn)
+{
+    double v[3 * PAPER_CASE1_NPOINT];
+    int c, point, axis, sign;
+    paper_case1_contact_velocities(x, x + PAPER_CASE1_NQ, p, v);
+    for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {
+        paper_case1_contact_info(c, &point, &axis, &sign);
+        vn[c] = sign * v[3 * (point - 1) + axis];
+    }
+}
+
+/* Resolve the impact at state s->xs (time t): every contact within contact_tol of its wall that
+ * approaches it takes part; Eq. 48 (equality form) first, the complementarity form if a contact
+ * would pull.  Contacts that approach after the impact are added and the impact solved again. */
+static int paper_case1_resolve(paper_case1_sim *s, double t, int c_event, paper_case1_impact_record *r)
+{
+    const int nq = PAPER_CASE1_NQ;
+    double gaps[PAPER_CASE1_NCONTACT1], vn[PAPER_CASE1_NCONTACT1], qd_plus[PAPER_CASE1_NQ], scale = 0.0;
+    int in_set[PAPER_CASE1_NCONTACT1];
+    int c, i, round, code;
+    double *x = s->xs;
+    paper_case1_contact_gaps(x, s->p, gaps);
+    paper_case1_normal_velocities(x, s->p, vn);
+    r->ncontact = 0;
+    for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {
+        in_set[c] = (c == c_event || gaps[c] <= s->opt.contact_tol) && vn[c] < 0.0;
+        if (in_set[c]) {
+            if (r->ncontact == nq) return PAPER_CASE1_ERR_TOO_MANY_CONTACTS;
+            r->contact[r->ncontact++] = c;
+        }
+        if (fabs(vn[c]) > scale) scale = fabs(vn[c]);
+    }
+    if (r->ncontact == 0) return 0;                      /* grazing touch: nothing to resolve */
+    r->t = t;
+    r->energy_before = paper_case1_total_energy(x, s->p);
+    for (i = 0; i < nq; ++i) {
+        r->q[i] = x[i];
+        r->qd_before[i] = x[nq + i];
+    }
+    for (round = 0; round <= PAPER_CASE1_NCONTACT; ++round) {
+        int pulls = 0, added = 0;
+        r->complementarity = 0;
+        code = paper_case1_impact(x, x + nq, s->p, r->ncontact, r->contact, qd_plus, r->impulse, s->work);
+        if (code == PAPER_CASE1_OK) {
+            for (i = 0; i < r->ncontact; ++i) pulls |= r->impulse[i] < 0.0;
+        }
+        if (code == PAPER_CASE1_ERR_SINGULAR_IMPACT || (code == PAPER_CASE1_OK && pulls)) {
+            r->complementarity = 1;
+            code = paper_case1_impact_complementarity(x, x + nq, s->p, r->ncontact, r->contact, qd_plus,
+                                                    r->impulse, s->work);
+        }
+        if (code != PAPER_CASE1_OK) return code;
+        for (i = 0; i < nq; ++i) s->x1[i] = x[i];
+        for (i = 0; i < nq; ++i) s->x1[nq + i] = qd_plus[i];
+        paper_case1_normal_velocities(s->x1, s->p, vn);
+        for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {        /* a contact at its wall that now approaches */
+            if (!in_set[c] && gaps[c] <= s->opt.contact_tol && vn[c] < -1e-12 * scale) {
+                if (r->ncontact == nq) return PAPER_CASE1_ERR_TOO_MANY_CONTACTS;
+                in_set[c] = 1;
+                r->contact[r->ncontact++] = c;
+                added = 1;
+            }
+        }
+        if (!added) break;
+    }
+    for (i = 0; i < nq; ++i) r->qd_after[i] = qd_plus[i];
+    r->energy_after = paper_case1_total_energy(s->x1, s->p);
+    return 1;
+}
+
+/* Write the samples t_eval[*i_eval ..] that fall in (t_a, t_b] (state from the dense output). */
+static void paper_case1_emit(paper_case1_sim *s, double t_b, const double *t_eval, int n_eval, int *i_eval,
+                          double *x_eval)
+{
+    while (*i_eval < n_eval && t_eval[*i_eval] <= t_b) {
+        double *out = x_eval + (long)(*i_eval) * PAPER_CASE1_NX;
+        if (t_eval[*i_eval] > s->t0_step) {
+            paper_case1_dense(s, t_eval[*i_eval], out);
+        } else {
+            int i;
+            for (i = 0; i < PAPER_CASE1_NX; ++i) out[i] = s->x[i];
+        }
+        ++*i_eval;
+    }
+}
+
+int paper_case1_sim_advance(paper_case1_sim *s, double t_end, const double *t_eval, int n_eval, int *i_eval,
+                      double *x_eval, paper_case1_impact_record *record)
+{
+    long steps = 0;
+    double fac_max = 10.0;
+    int i;
+    if (!(t_end >= s->t) || record == 0 || (n_eval > 0 && (t_eval == 0 || x_eval == 0 || i_eval == 0)))
+        return PAPER_CASE1_ERR_BAD_OPTION;
+    while (s->t < t_end) {
+        double h, t1, t_event = 0.0, err = 0.0;
+        int c_event = -1, last;
+        if (!s->f_valid) {
+            paper_case1_f(s, s->t, s->x, s->f);
+            s->f_valid = 1;
+        }
+        if (s->opt.max_steps > 0 && steps >= s->opt.max_steps) return PAPER_CASE1_ERR_MAX_STEPS;
+        if (s->opt.method == PAPER_CASE1_METHOD_DOPRI5 && !(s->h > 0.0)) s->h = paper_case1_initial_step(s, t_end);
+        h = s->h;
+        if (s->opt.h_max > 0.0 && h > s->opt.h_max) h = s->opt.h_max;
+        last = s->t + h >= t_end * (1.0 - 4.0 * PAPER_CASE1_EPS) - 4.0 * PAPER_CASE1_EPS * fabs(t_end);
+        if (last) h = t_end - s->t;
+        if (!(h > 8.0 * PAPER_CASE1_EPS * fabs(s->t))) {
+            if (last) { s->t = t_end; break; }
+            return PAPER_CASE1_ERR_STEP_SIZE;
+        }
+        if (s->opt.method == PAPER_CASE1_METHOD_RK4) {
+            paper_case1_rk4_step(s, h);
+        } else {
+            double fac;
+            err = paper_case1_dopri5_step(s, h);
+            if (!(err == err)) err = 1e10;                   /* NaN: reject and shrink */
+            fac = err > 0.0 ? 0.9 * pow(err, -0.2) : fac_max;
+            if (fac > fac_max) fac = fac_max;
+            if (fac < 0.2) fac = 0.2;
+            if (err > 1.0) {                                 /* reject */
+                s->n_rejected++;
+                s->h = h * fac;
+                fac_max = 1.0;
+                steps++;
+                continue;
+            }
+            s->h = h * fac;
+            fac_max = 10.0;
+        }
+        steps++;
+        s->n_steps++;
+        if (!paper_case1_finite(s->x1, PAPER_CASE1_NX)) return PAPER_CASE1_ERR_NONFINITE;
+        t1 = last ? t_end : s->t + h;
+        paper_case1_prepare_dense(s, h);
+        if (paper_case1_find_event(s, t1, &t_event, &c_event)) {
+            int code;
+            paper_case1_emit(s, t_event, t_eval, n_eval, i_eval, x_eval);
+            paper_case1_dense(s, t_event, s->xs);
+            code = paper_case1_resolve(s, t_event, c_event, record);
+            if (code < 0) return code;
+            for (i = 0; i < PAPER_CASE1_NQ; ++i) s->x[i] = s->xs[i];
+            for (i = 0; i < PAPER_CASE1_NQ; ++i) s->x[PAPER_CASE1_NQ + i] = code == 1 ? record->qd_after[i] : s->xs[PAPER_CASE1_NQ + i];
+            s->t = t_event;
+            s->f_valid = 0;
+            paper_case1_contact_gaps(s->x, s->p, s->gaps);
+            if (s->opt.method == PAPER_CASE1_METHOD_RK4) s->h = s->opt.dt;
+            if (code == 1) {
+                s->n_impacts++;
+                return PAPER_CASE1_SIM_IMPACT;
+            }
+            continue;                                         /* grazing: carry on from the touch */
+        }
+        paper_case1_emit(s, t1, t_eval, n_eval, i_eval, x_eval);
+        for (i = 0; i < PAPER_CASE1_NX; ++i) s->x[i] = s->x1[i];
+        for (i = 0; i < PAPER_CASE1_NX; ++i) s->f[i] = s->opt.method == PAPER_CASE1_METHOD_RK4 ? s->k[4][i] : s->k[6][i];
+        for (i = 0; i < PAPER_CASE1_NCONTACT; ++i) s->gaps[i] = s->gprev[i];
+        s->t = t1;
+    }
+    while (n_eval > 0 && *i_eval < n_eval && t_eval[*i_eval] <= t_end) {   /* samples at t_end itself */
+        for (i = 0; i < PAPER_CASE1_NX; ++i) x_eval[(long)(*i_eval) * PAPER_CASE1_NX + i] = s->x[i];
+        ++*i_eval;
+    }
+    return PAPER_CASE1_SIM_END;
 }

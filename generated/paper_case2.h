@@ -94,6 +94,8 @@
 #define PAPER_CASE2_ERR_BAD_CONTACT     -1   /* active contact list empty, too long, repeated or out of range */
 #define PAPER_CASE2_ERR_SINGULAR_MASS   -2   /* I_f not positive definite (gimbal lock theta_0 = +-pi/2?) */
 #define PAPER_CASE2_ERR_SINGULAR_IMPACT -3   /* active contact rows linearly dependent */
+#define PAPER_CASE2_ERR_LCP             -4   /* complementarity impact has no solution / too many contacts */
+#define PAPER_CASE2_MAX_LCP             (PAPER_CASE2_NQ < 16 ? PAPER_CASE2_NQ : 16)   /* contacts the complementarity solve takes */
 
 #ifdef __cplusplus
 extern "C" {
@@ -164,6 +166,13 @@ int paper_case2_impact(const double *PAPER_CASE2_RESTRICT q, const double *PAPER
                  int nactive, const int *PAPER_CASE2_RESTRICT active,
                  double *PAPER_CASE2_RESTRICT qd_plus, double *PAPER_CASE2_RESTRICT impulse, double *PAPER_CASE2_RESTRICT work);
 
+/* The complementarity form of the impact law: impulses F >= 0, post-impact normal velocities
+ * v+ >= -e v-, F_i (v+_i + e_i v-_i) = 0 (no contact pulls).  Same arguments as _impact; at most
+ * MAX_LCP active contacts (solved exactly by enumerating the pushing sets). */
+int paper_case2_impact_complementarity(const double *PAPER_CASE2_RESTRICT q, const double *PAPER_CASE2_RESTRICT qd, const double *PAPER_CASE2_RESTRICT p,
+                 int nactive, const int *PAPER_CASE2_RESTRICT active,
+                 double *PAPER_CASE2_RESTRICT qd_plus, double *PAPER_CASE2_RESTRICT impulse, double *PAPER_CASE2_RESTRICT work);
+
 /* Contact c's point index (1-based, O_1 = 1), wall axis (0..2 for X1..X3) and inward normal sign (+1/-1). */
 void paper_case2_contact_info(int c, int *point, int *axis, int *normal_sign);
 
@@ -173,6 +182,82 @@ void paper_case2_initial_state(double *q, double *qd);
 
 /* Message for a return code. */
 const char *paper_case2_error_message(int code);
+
+/* ------------------------------------------------------------------------------------------------
+ * Hybrid simulation: flight integrated in C up to the next impact, impact law applied in C.
+ *
+ *   NAME_options opt; NAME_sim sim; NAME_impact_record rec;
+ *   NAME_default_options(&opt);                       edit opt.method, opt.rtol, ...
+ *   NAME_sim_init(&sim, 0.0, q0, qd0, p, &opt);
+ *   while ((code = NAME_sim_advance(&sim, t_end, t_eval, n_eval, &i_eval, x_eval, &rec)) == NAME_SIM_IMPACT)
+ *       ... rec holds the impact just applied ...
+ *   code is NAME_SIM_END (sim.t == t_end) or an error (< 0, see NAME_error_message).
+ *
+ * The caller owns all memory (the structs); no globals, no malloc; one NAME_sim per thread.
+ * ------------------------------------------------------------------------------------------------ */
+#define PAPER_CASE2_METHOD_RK4     0   /* classical fixed-step RK4 (opt.dt), cubic Hermite dense output */
+#define PAPER_CASE2_METHOD_DOPRI5  1   /* Dormand-Prince 5(4), adaptive (opt.rtol, opt.atol), 4th-order dense output */
+
+#define PAPER_CASE2_SIM_END       1    /* reached t_end */
+#define PAPER_CASE2_SIM_IMPACT    2    /* stopped at an impact, already applied; see the record */
+#define PAPER_CASE2_ERR_BAD_OPTION  -10   /* an option or argument is out of range */
+#define PAPER_CASE2_ERR_MAX_STEPS   -11   /* opt.max_steps reached in one advance call */
+#define PAPER_CASE2_ERR_STEP_SIZE   -12   /* adaptive step size fell below round-off */
+#define PAPER_CASE2_ERR_NONFINITE   -13   /* the state became NaN or infinite */
+#define PAPER_CASE2_ERR_TOO_MANY_CONTACTS -14 /* more approaching contacts at once than NQ */
+
+#define PAPER_CASE2_NCONTACT1 (PAPER_CASE2_NCONTACT > 0 ? PAPER_CASE2_NCONTACT : 1)
+
+typedef struct {
+    int method;            /* METHOD_RK4 or METHOD_DOPRI5 (default) */
+    double dt;             /* RK4 step (s); for DOPRI5 the first step, 0 = automatic */
+    double rtol, atol;     /* DOPRI5 relative and absolute tolerances (default 1e-8, 1e-10) */
+    double h_max;          /* largest step (s), 0 = unbounded */
+    int event_samples;     /* interpolant samples per step searched for wall crossings (default 4) */
+    double event_tol;      /* time tolerance of event location on the interpolant (default 1e-13 s) */
+    double contact_tol;    /* approaching contacts within this gap (m) join a simultaneous impact (1e-6) */
+    long max_steps;        /* steps allowed per advance call, 0 = unbounded (default 10^7) */
+} paper_case2_options;
+
+typedef struct {
+    double t;                                /* impact time (s) */
+    int ncontact;                            /* simultaneous contacts */
+    int contact[PAPER_CASE2_NQ];              /* their indices 0..NCONTACT-1 (see contact_info) */
+    double impulse[PAPER_CASE2_NQ];           /* impulse along the inward normal (N s), >= 0 */
+    double energy_before, energy_after;      /* T + V (J) */
+    double q[PAPER_CASE2_NQ];                 /* configuration at impact */
+    double qd_before[PAPER_CASE2_NQ], qd_after[PAPER_CASE2_NQ];
+    int complementarity;                     /* 1 if the complementarity form was needed */
+} paper_case2_impact_record;
+
+typedef struct {
+    paper_case2_options opt;
+    double p[PAPER_CASE2_NPARAM];
+    double t;                                 /* current time (s) */
+    double x[PAPER_CASE2_NX];                  /* current state [q, qd] */
+    long n_steps, n_rejected, n_rhs, n_impacts;
+    /* integrator state and scratch (private) */
+    double h;
+    int f_valid;
+    double f[PAPER_CASE2_NX], k[7][PAPER_CASE2_NX], x1[PAPER_CASE2_NX], xs[PAPER_CASE2_NX], cont[5][PAPER_CASE2_NX];
+    double t0_step, h_step;
+    double gaps[PAPER_CASE2_NCONTACT1], gs[PAPER_CASE2_NCONTACT1], gprev[PAPER_CASE2_NCONTACT1];
+    double work[PAPER_CASE2_IMPACT_NWORK];
+} paper_case2_sim;
+
+/* Default options (DOPRI5, rtol 1e-8, atol 1e-10). */
+void paper_case2_default_options(paper_case2_options *opt);
+
+/* Start a simulation at time t0 from (q, qd) with parameters p (copied).  Returns OK or ERR_BAD_OPTION. */
+int paper_case2_sim_init(paper_case2_sim *sim, double t0, const double *q, const double *qd, const double *p,
+                   const paper_case2_options *opt);
+
+/* Integrate until t_end or the first impact (which is located, resolved and applied; record filled).
+ * Samples: for each t_eval[i] (ascending) with i >= *i_eval that is passed, x_eval[i*NX ..] receives the
+ * state [q, qd] (pre-impact at an impact time) and *i_eval advances; t_eval may be NULL if n_eval = 0.
+ * Returns SIM_END, SIM_IMPACT or an error (< 0). */
+int paper_case2_sim_advance(paper_case2_sim *sim, double t_end, const double *t_eval, int n_eval, int *i_eval,
+                      double *x_eval, paper_case2_impact_record *record);
 
 #ifdef __cplusplus
 }

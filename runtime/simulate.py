@@ -1,0 +1,226 @@
+"""The hybrid simulation from Python, in the spirit of scipy.integrate.solve_ivp.
+
+    from runtime import simulate
+    result = simulate("paper-case1", t_end=1.5)
+    for impact in result.impacts:
+        print(impact.t, [(c.point, c.wall) for c in impact.contacts])
+
+Flight segments run in compiled code (``NAME_sim_advance``) up to the next impact, which is
+located, resolved and applied in C; Python talks to C once per flight segment, checks every
+impact (no contact still approaching its wall, no energy gain) and collects the result.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from codegen.scene import Scene, load_scene
+
+from .model import CompiledModel, load_model
+
+METHODS = ("dopri5", "rk4")
+
+
+@dataclass
+class Contact:
+    """One contact of an impact: point O_point (1-based, as in the paper) on a wall, and its impulse."""
+
+    point: int
+    wall: str
+    impulse: float        # N s along the wall's inward normal (>= 0: it pushes)
+
+
+@dataclass
+class Impact:
+    t: float
+    contacts: list[Contact]
+    energy_before: float
+    energy_after: float
+    complementarity: bool               # the complementarity form was needed (some contact would pull)
+    q: np.ndarray
+    qd_before: np.ndarray
+    qd_after: np.ndarray
+
+
+@dataclass
+class SimulationResult:
+    """What simulate() returns.  status 0: reached t_end; -1: stopped early (see message)."""
+
+    t: np.ndarray                 # sample times (s)
+    q: np.ndarray                 # (len(t), nq) configuration samples, layout of Eq. 13
+    qd: np.ndarray                # (len(t), nq) velocity samples (pre-impact at an impact time)
+    impacts: list[Impact]
+    t_final: float
+    q_final: np.ndarray
+    qd_final: np.ndarray
+    energy_initial: float
+    energy_final: float
+    n_steps: int
+    n_rejected: int
+    n_rhs: int
+    status: int
+    message: str
+    method: str
+    options: dict = field(default_factory=dict)
+
+    @property
+    def success(self) -> bool:
+        return self.status == 0
+
+    @property
+    def energy_drift(self) -> float:
+        """(E_final - E_initial) / |E_initial|."""
+        return (self.energy_final - self.energy_initial) / abs(self.energy_initial)
+
+    def impact_table(self) -> str:
+        lines = [f"{'#':>3} {'t (s)':>14}  contacts (point/wall: impulse N s)"]
+        for k, impact in enumerate(self.impacts, start=1):
+            contacts = ", ".join(f"O{c.point}/{c.wall}: {c.impulse:.6g}" for c in impact.contacts)
+            lines.append(f"{k:>3} {impact.t:14.9f}  {contacts}")
+        return "\n".join(lines)
+
+    def to_json(self) -> dict:
+        return {
+            "impacts": [{"t": i.t, "contacts": [{"point": c.point, "wall": c.wall, "impulse": c.impulse}
+                                                for c in i.contacts],
+                         "energy_before": i.energy_before, "energy_after": i.energy_after,
+                         "complementarity": i.complementarity} for i in self.impacts],
+            "t_final": self.t_final, "q_final": self.q_final.tolist(), "qd_final": self.qd_final.tolist(),
+            "energy_initial": self.energy_initial, "energy_final": self.energy_final,
+            "n_rhs": self.n_rhs, "n_steps": self.n_steps, "n_rejected": self.n_rejected,
+            "status": self.status, "message": self.message, "method": self.method, "options": self.options,
+        }
+
+
+def _check(condition: bool, field_name: str, message: str) -> None:
+    if not condition:
+        raise ValueError(f"{field_name}: {message}")
+
+
+def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "dopri5", rtol: float = 1e-8,
+             atol: float = 1e-10, dt: float | None = None, t_eval=None, h_max: float = 0.0,
+             contact_tol: float = 1e-6, event_samples: int = 4, event_tol: float = 1e-13,
+             max_impacts: int = 10000, max_steps: int = 10_000_000, p=None, q0=None, qd0=None) -> SimulationResult:
+    """Simulate the scene's hybrid dynamics from its initial state over [0, t_end].
+
+    method        'dopri5' (adaptive Dormand-Prince 5(4), rtol/atol) or 'rk4' (fixed step dt, as the paper)
+    t_eval        sample times (ascending, within [0, t_end]); default: every 1 ms and t_end
+    contact_tol   approaching contacts within this gap (m) of their wall join a simultaneous impact
+    event_samples interpolant samples per step searched for wall crossings
+    max_impacts   stop with status -1 beyond this many impacts (impact accumulation)
+    p, q0, qd0    override the scene's parameters and initial state
+    """
+    model = scene if isinstance(scene, CompiledModel) else load_model(scene)
+    ffi, lib, name = model.ffi, model.lib, model.name
+    _check(method in METHODS, "method", f"must be one of {METHODS}, got {method!r}")
+    _check(np.isfinite(t_end) and t_end >= 0, "t_end", f"must be a finite time >= 0 s, got {t_end!r}")
+    if method == "rk4":
+        _check(dt is not None and np.isfinite(dt) and dt > 0, "dt", f"rk4 needs a step dt > 0 s, got {dt!r}")
+    else:
+        _check(np.isfinite(rtol) and rtol > 0, "rtol", f"must be > 0, got {rtol!r}")
+        _check(np.isfinite(atol) and atol > 0, "atol", f"must be > 0, got {atol!r}")
+        _check(dt is None or (np.isfinite(dt) and dt > 0), "dt", f"first step must be > 0 s, got {dt!r}")
+    _check(contact_tol >= 0, "contact_tol", f"must be >= 0 m, got {contact_tol!r}")
+    _check(int(event_samples) >= 1, "event_samples", f"must be >= 1, got {event_samples!r}")
+    _check(event_tol > 0, "event_tol", f"must be > 0 s, got {event_tol!r}")
+    _check(h_max >= 0, "h_max", f"must be >= 0 s (0: unbounded), got {h_max!r}")
+
+    nq, nx = model.nq, 2 * model.nq
+    p = model.p if p is None else np.ascontiguousarray(p, dtype=float)
+    q = model.q0 if q0 is None else np.ascontiguousarray(q0, dtype=float)
+    qd = model.qd0 if qd0 is None else np.ascontiguousarray(qd0, dtype=float)
+    if t_eval is None:
+        t_eval = np.unique(np.r_[np.arange(0.0, t_end, 1e-3), t_end])
+    t_eval = np.ascontiguousarray(t_eval, dtype=float)
+    _check(t_eval.ndim == 1 and np.all(np.diff(t_eval) > 0), "t_eval", "must be a strictly increasing 1-D array")
+    _check(len(t_eval) == 0 or (t_eval[0] >= 0 and t_eval[-1] <= t_end), "t_eval",
+           f"must lie within [0, t_end] = [0, {t_end}]")
+
+    opt = ffi.new(f"{name}_options *")
+    getattr(lib, f"{name}_default_options")(opt)
+    opt.method = getattr(lib, f"{name.upper()}_METHOD_{method.upper()}")
+    opt.dt = dt if dt is not None else 0.0
+    opt.rtol, opt.atol, opt.h_max = rtol, atol, h_max
+    opt.event_samples, opt.event_tol, opt.contact_tol = int(event_samples), event_tol, contact_tol
+    opt.max_steps = int(max_steps)
+    sim = ffi.new(f"{name}_sim *")
+    ptr = model._ptr
+    code = getattr(lib, f"{name}_sim_init")(sim, 0.0, ptr(q), ptr(qd), ptr(p), opt)
+    if code < 0:
+        raise ValueError(f"simulate: {ffi.string(getattr(lib, f'{name}_error_message')(code)).decode()}")
+
+    x_eval = np.zeros((len(t_eval), nx))
+    i_eval = ffi.new("int *", 0)
+    while i_eval[0] < len(t_eval) and t_eval[i_eval[0]] <= 0.0:      # samples at the start
+        x_eval[i_eval[0]] = np.r_[q, qd]
+        i_eval[0] += 1
+    record = ffi.new(f"{name}_impact_record *")
+    advance = getattr(lib, f"{name}_sim_advance")
+    SIM_END, SIM_IMPACT = getattr(lib, f"{name.upper()}_SIM_END"), getattr(lib, f"{name.upper()}_SIM_IMPACT")
+    t_eval_ptr = ffi.cast("double *", ffi.from_buffer(t_eval))
+    x_eval_ptr = ffi.cast("double *", ffi.from_buffer(x_eval))
+    energy_initial = sum(model.energy(q, qd, p))
+    impacts: list[Impact] = []
+    status, message = 0, "reached t_end"
+    while True:
+        code = advance(sim, float(t_end), t_eval_ptr, len(t_eval), i_eval, x_eval_ptr, record)
+        if code == SIM_END:
+            break
+        if code != SIM_IMPACT:
+            status = -1
+            message = f"at t = {sim.t:.12g} s: {ffi.string(getattr(lib, f'{name}_error_message')(code)).decode()}"
+            break
+        impact = _read_impact(model, record)
+        impacts.append(impact)
+        problem = _impact_problem(model, impact, p, contact_tol)
+        if problem:
+            status, message = -1, f"impact at t = {impact.t:.12g} s: {problem}"
+            break
+        if len(impacts) >= max_impacts:
+            status = -1
+            message = (f"stopped after {len(impacts)} impacts at t = {impact.t:.12g} s (max_impacts): "
+                       "impacts accumulate (Zeno behaviour?)")
+            break
+    x_final = np.array(ffi.unpack(sim.x, nx))
+    n = i_eval[0]
+    return SimulationResult(
+        t=t_eval[:n].copy(), q=x_eval[:n, :nq].copy(), qd=x_eval[:n, nq:].copy(), impacts=impacts,
+        t_final=float(sim.t), q_final=x_final[:nq], qd_final=x_final[nq:],
+        energy_initial=energy_initial, energy_final=sum(model.energy(x_final[:nq], x_final[nq:], p)),
+        n_steps=int(sim.n_steps), n_rejected=int(sim.n_rejected), n_rhs=int(sim.n_rhs), status=status,
+        message=message, method=method,
+        options={"rtol": rtol, "atol": atol, "dt": dt, "contact_tol": contact_tol, "event_samples": event_samples,
+                 "event_tol": event_tol, "h_max": h_max, "t_end": t_end})
+
+
+def _read_impact(model: CompiledModel, r) -> Impact:
+    nq = model.nq
+    contacts = []
+    for k in range(r.ncontact):
+        point, wall = model.contacts[r.contact[k]]
+        contacts.append(Contact(point, wall.name, float(r.impulse[k])))
+    unpack = model.ffi.unpack
+    return Impact(float(r.t), contacts, float(r.energy_before), float(r.energy_after), bool(r.complementarity),
+                  np.array(unpack(r.q, nq)), np.array(unpack(r.qd_before, nq)), np.array(unpack(r.qd_after, nq)))
+
+
+def _impact_problem(model: CompiledModel, impact: Impact, p, contact_tol: float) -> str:
+    """The post-impact checks: no contact at its wall still approaching it; no energy gain
+    (and none lost when every wall involved has e = 1).  Returns '' when all hold."""
+    gaps = model.contact_gaps(impact.q, p)
+    velocities = model.contact_velocities(impact.q, impact.qd_after, p)
+    scale = max(np.abs(model.contact_velocities(impact.q, impact.qd_before, p)).max(), 1e-300)
+    for c, (point, wall) in enumerate(model.contacts):
+        vn = wall.normal_sign * velocities[point - 1, wall.axis]
+        if gaps[c] <= contact_tol and vn < -1e-9 * scale:
+            return f"O{point} still approaches {wall.name} after the impact (normal velocity {vn:.3g} m/s)"
+    E0, E1 = impact.energy_before, impact.energy_after
+    tol = 1e-10 * max(abs(E0), model.energy(impact.q, impact.qd_before, p)[0], 1e-300)
+    if E1 > E0 + tol:
+        return f"energy increased from {E0!r} J to {E1!r} J"
+    names = model.scene.parameter_names()
+    elastic = all(p[names.index(f"e_{c.wall}")] == 1.0 for c in impact.contacts)
+    if elastic and not impact.complementarity and abs(E1 - E0) > tol:
+        return f"elastic impact changed the energy from {E0!r} J to {E1!r} J"
+    return ""

@@ -67,7 +67,7 @@ class CompiledModel:
         self.contact_rows = scene.contact_rows()
         self._fn = {name: getattr(self.lib, f"{self.name}_{name}") for name in (
             "mass_matrix", "bias", "forward_dynamics", "contact_points", "contact_velocities",
-            "contact_jacobian", "contact_gaps", "energy", "rhs", "impact")}
+            "contact_jacobian", "contact_gaps", "energy", "rhs", "impact", "impact_complementarity")}
         self._work = np.zeros(self.nq * self.nq * 3 + len(self.contact_rows) * self.nq + self.nq)
 
     # -- plumbing ---------------------------------------------------------------
@@ -127,12 +127,16 @@ class CompiledModel:
         E = self._call("energy", 2, self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd"), self._params(p))
         return float(E[0]), float(E[1])
 
-    def impact(self, q, qd, active, p=None) -> tuple[np.ndarray, np.ndarray]:
-        """Post-impact velocities and impulses (Eq. 48) for the contacts with indices ``active``."""
+    def impact(self, q, qd, active, p=None, mode: str = "equality") -> tuple[np.ndarray, np.ndarray]:
+        """Post-impact velocities and impulses for the contacts with indices ``active``:
+        mode 'equality' is Eq. 48 as printed, 'complementarity' forbids pulling impulses."""
+        if mode not in ("equality", "complementarity"):
+            raise ValueError(f"mode: must be 'equality' or 'complementarity', got {mode!r}")
         q, qd = self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd")
         active = np.ascontiguousarray(active, dtype=np.int32)
         qd_plus, impulse = np.zeros(self.nq), np.zeros(max(len(active), 1))
-        code = self._fn["impact"](self._ptr(q), self._ptr(qd), self._ptr(self._params(p)), len(active),
+        solve = self._fn["impact"] if mode == "equality" else self._fn["impact_complementarity"]
+        code = solve(self._ptr(q), self._ptr(qd), self._ptr(self._params(p)), len(active),
                                   self.ffi.cast("int *", self.ffi.from_buffer(active)),
                                   self._ptr(qd_plus), self._ptr(impulse), self._ptr(self._work))
         if code != 0:

@@ -1908,6 +1908,11 @@ static int paper_case1_resolve(paper_case1_sim *s, double t, int c_event, paper_
     }
     for (i = 0; i < nq; ++i) r->qd_after[i] = qd_plus[i];
     r->energy_after = paper_case1_total_energy(s->x1, s->p);
+    r->approach_after = 0.0;                  /* fastest approach of a contact at its wall, afterwards */
+    for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {
+        if (gaps[c] <= s->opt.contact_tol && -vn[c] > r->approach_after) r->approach_after = -vn[c];
+    }
+    r->approach_before = scale;
     return 1;
 }
 

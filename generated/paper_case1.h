@@ -251,6 +251,8 @@ typedef struct {
     double q[PAPER_CASE1_NQ];                 /* configuration at impact */
     double qd_before[PAPER_CASE1_NQ], qd_after[PAPER_CASE1_NQ];
     int complementarity;                     /* 1 if the complementarity form was needed */
+    double approach_before;                  /* largest |normal velocity| of any contact before (m/s) */
+    double approach_after;                   /* fastest approach of a contact within contact_tol after (m/s) */
 } paper_case1_impact_record;
 
 typedef struct {

@@ -1033,6 +1033,11 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
     }
     for (i = 0; i < nq; ++i) r->qd_after[i] = qd_plus[i];
     r->energy_after = paper_case2_total_energy(s->x1, s->p);
+    r->approach_after = 0.0;                  /* fastest approach of a contact at its wall, afterwards */
+    for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {
+        if (gaps[c] <= s->opt.contact_tol && -vn[c] > r->approach_after) r->approach_after = -vn[c];
+    }
+    r->approach_before = scale;
     return 1;
 }
 

@@ -162,6 +162,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     x_eval_ptr = ffi.cast("double *", ffi.from_buffer(x_eval))
     energy_initial = sum(model.energy(q, qd, p))
     impacts: list[Impact] = []
+    names = model.scene.parameter_names()
+    elastic_walls = {w.name for w in model.scene.walls if p[names.index(f"e_{w.name}")] == 1.0}
     status, message = 0, "reached t_end"
     while True:
         code = advance(sim, float(t_end), t_eval_ptr, len(t_eval), i_eval, x_eval_ptr, record)
@@ -173,7 +175,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
             break
         impact = _read_impact(model, record)
         impacts.append(impact)
-        problem = _impact_problem(model, impact, p, contact_tol)
+        problem = _impact_problem(model, impact, record, elastic_walls)
         if problem:
             status, message = -1, f"impact at t = {impact.t:.12g} s: {problem}"
             break
@@ -205,22 +207,17 @@ def _read_impact(model: CompiledModel, r) -> Impact:
                   np.array(unpack(r.q, nq)), np.array(unpack(r.qd_before, nq)), np.array(unpack(r.qd_after, nq)))
 
 
-def _impact_problem(model: CompiledModel, impact: Impact, p, contact_tol: float) -> str:
-    """The post-impact checks: no contact at its wall still approaching it; no energy gain
-    (and none lost when every wall involved has e = 1).  Returns '' when all hold."""
-    gaps = model.contact_gaps(impact.q, p)
-    velocities = model.contact_velocities(impact.q, impact.qd_after, p)
-    scale = max(np.abs(model.contact_velocities(impact.q, impact.qd_before, p)).max(), 1e-300)
-    for c, (point, wall) in enumerate(model.contacts):
-        vn = wall.normal_sign * velocities[point - 1, wall.axis]
-        if gaps[c] <= contact_tol and vn < -1e-9 * scale:
-            return f"O{point} still approaches {wall.name} after the impact (normal velocity {vn:.3g} m/s)"
+def _impact_problem(model: CompiledModel, impact: Impact, record, elastic_walls: set) -> str:
+    """The post-impact checks: no contact at its wall still approaching it (measured in C with the
+    contact_velocities kernel, independent of the impact solve); no energy gain, and no loss when
+    every wall involved has e = 1.  Returns '' when all hold."""
+    if record.approach_after > 1e-9 * max(record.approach_before, 1e-300):
+        return f"a contact still approaches its wall after the impact ({record.approach_after:.3g} m/s)"
     E0, E1 = impact.energy_before, impact.energy_after
-    tol = 1e-10 * max(abs(E0), model.energy(impact.q, impact.qd_before, p)[0], 1e-300)
+    tol = 1e-10 * max(abs(E0), 1e-300)
     if E1 > E0 + tol:
         return f"energy increased from {E0!r} J to {E1!r} J"
-    names = model.scene.parameter_names()
-    elastic = all(p[names.index(f"e_{c.wall}")] == 1.0 for c in impact.contacts)
+    elastic = all(c.wall in elastic_walls for c in impact.contacts)
     if elastic and not impact.complementarity and abs(E1 - E0) > tol:
         return f"elastic impact changed the energy from {E0!r} J to {E1!r} J"
     return ""

@@ -1587,6 +1587,37 @@ const char *paper_case1_error_message(int code)
  * ------------------------------------------------------------------------------------------------ */
 #define PAPER_CASE1_EPS 2.220446049250313e-16
 
+/* Dormand-Prince 8(5,3) tableau with its 7th-order dense output (Hairer, Norsett & Wanner,
+ * Solving ODEs I, 2nd ed., and the published dop853 coefficients).  Stages 13-15 serve the dense output. */
+static const double paper_case1_dop853_c[16] = {0.0, 0.05260015195876773, 0.0789002279381516, 0.1183503419072274, 0.2816496580927726, 0.3333333333333333, 0.25, 0.3076923076923077, 0.6512820512820513, 0.6, 0.8571428571428571, 1.0, 1.0, 0.1, 0.2, 0.7777777777777778};
+static const double paper_case1_dop853_a[16][16] = {
+    {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},
+    {5.26001519587677318785587544488e-2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},
+    {1.97250569845378994544595329183e-2, 5.91751709536136983633785987549e-2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},
+    {2.95875854768068491816892993775e-2, 0.0, 8.87627564304205475450678981324e-2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},
+    {2.41365134159266685502369798665e-1, 0.0, -8.84549479328286085344864962717e-1, 9.24834003261792003115737966543e-1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},
+    {3.7037037037037037037037037037e-2, 0.0, 0.0, 1.70828608729473871279604482173e-1, 1.25467687566822425016691814123e-1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},
+    {3.7109375e-2, 0.0, 0.0, 1.70252211019544039314978060272e-1, 6.02165389804559606850219397283e-2, -1.7578125e-2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},
+    {3.70920001185047927108779319836e-2, 0.0, 0.0, 1.70383925712239993810214054705e-1, 1.07262030446373284651809199168e-1, -1.53194377486244017527936158236e-2, 8.27378916381402288758473766002e-3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},
+    {6.24110958716075717114429577812e-1, 0.0, 0.0, -3.36089262944694129406857109825, -8.68219346841726006818189891453e-1, 2.75920996994467083049415600797e1, 2.01540675504778934086186788979e1, -4.34898841810699588477366255144e1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},
+    {4.77662536438264365890433908527e-1, 0.0, 0.0, -2.48811461997166764192642586468, -5.90290826836842996371446475743e-1, 2.12300514481811942347288949897e1, 1.52792336328824235832596922938e1, -3.32882109689848629194453265587e1, -2.03312017085086261358222928593e-2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},
+    {-9.3714243008598732571704021658e-1, 0.0, 0.0, 5.18637242884406370830023853209, 1.09143734899672957818500254654, -8.14978701074692612513997267357, -1.85200656599969598641566180701e1, 2.27394870993505042818970056734e1, 2.49360555267965238987089396762, -3.0467644718982195003823669022, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},
+    {2.27331014751653820792359768449, 0.0, 0.0, -1.05344954667372501984066689879e1, -2.00087205822486249909675718444, -1.79589318631187989172765950534e1, 2.79488845294199600508499808837e1, -2.85899827713502369474065508674, -8.87285693353062954433549289258, 1.23605671757943030647266201528e1, 6.43392746015763530355970484046e-1, 0.0, 0.0, 0.0, 0.0, 0.0},
+    {5.42937341165687622380535766363e-2, 0.0, 0.0, 0.0, 0.0, 4.45031289275240888144113950566, 1.89151789931450038304281599044, -5.8012039600105847814672114227, 3.1116436695781989440891606237e-1, -1.52160949662516078556178806805e-1, 2.01365400804030348374776537501e-1, 4.47106157277725905176885569043e-2, 0.0, 0.0, 0.0, 0.0},
+    {5.61675022830479523392909219681e-2, 0.0, 0.0, 0.0, 0.0, 0.0, 2.53500210216624811088794765333e-1, -2.46239037470802489917441475441e-1, -1.24191423263816360469010140626e-1, 1.5329179827876569731206322685e-1, 8.20105229563468988491666602057e-3, 7.56789766054569976138603589584e-3, -8.298e-3, 0.0, 0.0, 0.0},
+    {3.18346481635021405060768473261e-2, 0.0, 0.0, 0.0, 0.0, 2.83009096723667755288322961402e-2, 5.35419883074385676223797384372e-2, -5.49237485713909884646569340306e-2, 0.0, 0.0, -1.08347328697249322858509316994e-4, 3.82571090835658412954920192323e-4, -3.40465008687404560802977114492e-4, 1.41312443674632500278074618366e-1, 0.0, 0.0},
+    {-4.28896301583791923408573538692e-1, 0.0, 0.0, 0.0, 0.0, -4.69762141536116384314449447206, 7.68342119606259904184240953878, 4.06898981839711007970213554331, 3.56727187455281109270669543021e-1, 0.0, 0.0, 0.0, -1.39902416515901462129418009734e-3, 2.9475147891527723389556272149, -9.15095847217987001081870187138, 0.0},
+};
+static const double paper_case1_dop853_e5[13] = {0.1312004499419488073250102996e-1, 0.0, 0.0, 0.0, 0.0, -0.1225156446376204440720569753e1, -0.4957589496572501915214079952, 0.1664377182454986536961530415e1, -0.3503288487499736816886487290, 0.3341791187130174790297318841, 0.8192320648511571246570742613e-1, -0.2235530786388629525884427845e-1, 0.0};
+/* e3 = b - bhh (bhh: the 3rd-order embedded weights, nonzero at stages 0, 8, 11) */
+static const double paper_case1_dop853_bhh[12] = {0.244094488188976377952755905512, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.733846688281611857341361741547, 0.0, 0.0, 0.220588235294117647058823529412e-1};
+static const double paper_case1_dop853_d[4][16] = {
+    {-0.84289382761090128651353491142e1, 0.0, 0.0, 0.0, 0.0, 0.56671495351937776962531783590, -0.30689499459498916912797304727e1, 0.23846676565120698287728149680e1, 0.21170345824450282767155149946e1, -0.87139158377797299206789907490, 0.22404374302607882758541771650e1, 0.63157877876946881815570249290, -0.88990336451333310820698117400e-1, 0.18148505520854727256656404962e2, -0.91946323924783554000451984436e1, -0.44360363875948939664310572000e1},
+    {0.10427508642579134603413151009e2, 0.0, 0.0, 0.0, 0.0, 0.24228349177525818288430175319e3, 0.16520045171727028198505394887e3, -0.37454675472269020279518312152e3, -0.22113666853125306036270938578e2, 0.77334326684722638389603898808e1, -0.30674084731089398182061213626e2, -0.93321305264302278729567221706e1, 0.15697238121770843886131091075e2, -0.31139403219565177677282850411e2, -0.93529243588444783865713862664e1, 0.35816841486394083752465898540e2},
+    {0.19985053242002433820987653617e2, 0.0, 0.0, 0.0, 0.0, -0.38703730874935176555105901742e3, -0.18917813819516756882830838328e3, 0.52780815920542364900561016686e3, -0.11573902539959630126141871134e2, 0.68812326946963000169666922661e1, -0.10006050966910838403183860980e1, 0.77771377980534432092869265740, -0.27782057523535084065932004339e1, -0.60196695231264120758267380846e2, 0.84320405506677161018159903784e2, 0.11992291136182789328035130030e2},
+    {-0.25693933462703749003312586129e2, 0.0, 0.0, 0.0, 0.0, -0.15418974869023643374053993627e3, -0.23152937917604549567536039109e3, 0.35763911791061412378285349910e3, 0.93405324183624310003907691704e2, -0.37458323136451633156875139351e2, 0.10409964950896230045147246184e3, 0.29840293426660503123344363579e2, -0.43533456590011143754432175058e2, 0.96324553959188282948394950600e2, -0.39177261675615439165231486172e2, -0.14972683625798562581422125276e3},
+};
+
 void paper_case1_default_options(paper_case1_options *opt)
 {
     opt->method = PAPER_CASE1_METHOD_DOPRI5;
@@ -1619,9 +1650,10 @@ int paper_case1_sim_init(paper_case1_sim *s, double t0, const double *q, const d
                    const paper_case1_options *opt)
 {
     int i;
-    if (opt->method != PAPER_CASE1_METHOD_RK4 && opt->method != PAPER_CASE1_METHOD_DOPRI5) return PAPER_CASE1_ERR_BAD_OPTION;
+    if (opt->method != PAPER_CASE1_METHOD_RK4 && opt->method != PAPER_CASE1_METHOD_DOPRI5
+        && opt->method != PAPER_CASE1_METHOD_DOP853) return PAPER_CASE1_ERR_BAD_OPTION;
     if (opt->method == PAPER_CASE1_METHOD_RK4 && !(opt->dt > 0.0 && opt->dt < 1e300)) return PAPER_CASE1_ERR_BAD_OPTION;
-    if (opt->method == PAPER_CASE1_METHOD_DOPRI5 && !(opt->rtol > 0.0 && opt->atol > 0.0 && opt->dt >= 0.0))
+    if (opt->method != PAPER_CASE1_METHOD_RK4 && !(opt->rtol > 0.0 && opt->atol > 0.0 && opt->dt >= 0.0))
         return PAPER_CASE1_ERR_BAD_OPTION;
     if (opt->event_samples < 1 || !(opt->event_tol > 0.0) || !(opt->contact_tol >= 0.0) || !(opt->h_max >= 0.0)
         || opt->max_steps < 0) return PAPER_CASE1_ERR_BAD_OPTION;
@@ -1666,7 +1698,8 @@ static double paper_case1_initial_step(paper_case1_sim *s, double t_end)
     paper_case1_f(s, s->t + h0, s->xs, s->k[1]);
     for (i = 0; i < PAPER_CASE1_NX; ++i) s->k[1][i] -= s->f[i];
     d2 = paper_case1_norm(s, s->k[1], s->x, s->x) / h0;
-    h1 = (d1 > d2 ? d1 : d2) <= 1e-15 ? (h0 * 1e-3 > 1e-6 ? h0 * 1e-3 : 1e-6) : pow(0.01 / (d1 > d2 ? d1 : d2), 0.2);
+    h1 = (d1 > d2 ? d1 : d2) <= 1e-15 ? (h0 * 1e-3 > 1e-6 ? h0 * 1e-3 : 1e-6)
+         : pow(0.01 / (d1 > d2 ? d1 : d2), s->opt.method == PAPER_CASE1_METHOD_DOP853 ? 0.125 : 0.2);
     h = 100.0 * h0 < h1 ? 100.0 * h0 : h1;
     return h;
 }
@@ -1724,6 +1757,45 @@ static double paper_case1_dopri5_step(paper_case1_sim *s, double h)
     return paper_case1_norm(s, s->xs, s->x, s->x1);
 }
 
+/* One Dormand-Prince 8(5,3) step of size h; returns the error norm (Hairer's combined 5th/3rd-order
+ * estimate); x1 and k[12] = f(t + h, x1).  Stage i is k[i] (k[0] is s->f). */
+static double paper_case1_dop853_step(paper_case1_sim *s, double h)
+{
+    const int nx = PAPER_CASE1_NX;
+    double *K[13];
+    double e5 = 0.0, e3 = 0.0;
+    int i, j, stage;
+    K[0] = s->f;
+    for (j = 1; j < 13; ++j) K[j] = s->k[j];
+    for (stage = 1; stage < 12; ++stage) {
+        const double *a = paper_case1_dop853_a[stage];
+        for (i = 0; i < nx; ++i) {
+            double sum = 0.0;
+            for (j = 0; j < stage; ++j) sum += a[j] * K[j][i];
+            s->xs[i] = s->x[i] + h * sum;
+        }
+        paper_case1_f(s, s->t + paper_case1_dop853_c[stage] * h, s->xs, K[stage]);
+    }
+    for (i = 0; i < nx; ++i) {                     /* 8th-order solution: weights are row 12 of a */
+        double sum = 0.0;
+        for (j = 0; j < 12; ++j) sum += paper_case1_dop853_a[12][j] * K[j][i];
+        s->x1[i] = s->x[i] + h * sum;
+    }
+    paper_case1_f(s, s->t + h, s->x1, K[12]);
+    for (i = 0; i < nx; ++i) {
+        double err5 = 0.0, err3 = 0.0, a = fabs(s->x[i]), b = fabs(s->x1[i]);
+        double scale = s->opt.atol + s->opt.rtol * (a > b ? a : b);
+        for (j = 0; j < 12; ++j) {
+            err5 += paper_case1_dop853_e5[j] * K[j][i];
+            err3 += (paper_case1_dop853_a[12][j] - paper_case1_dop853_bhh[j]) * K[j][i];
+        }
+        e5 += (err5 / scale) * (err5 / scale);
+        e3 += (err3 / scale) * (err3 / scale);
+    }
+    if (e5 == 0.0 && e3 == 0.0) return 0.0;
+    return fabs(h) * e5 / sqrt((e5 + 0.01 * e3) * nx);
+}
+
 /* Dense output of the accepted step [t0_step, t0_step + h_step] (k[] as left by the step). */
 static void paper_case1_prepare_dense(paper_case1_sim *s, double h)
 {
@@ -1737,6 +1809,32 @@ static void paper_case1_prepare_dense(paper_case1_sim *s, double h)
             s->cont[1][i] = s->x1[i];
             s->cont[2][i] = h * s->f[i];
             s->cont[3][i] = h * s->k[4][i];
+        }
+    } else if (s->opt.method == PAPER_CASE1_METHOD_DOP853) {   /* three more stages, then contd8 */
+        double *K[16];
+        int j, stage, r;
+        K[0] = s->f;
+        for (j = 1; j < 16; ++j) K[j] = s->k[j];
+        for (stage = 13; stage < 16; ++stage) {
+            const double *a = paper_case1_dop853_a[stage];
+            for (i = 0; i < nx; ++i) {
+                double sum = 0.0;
+                for (j = 0; j < stage; ++j) sum += a[j] * K[j][i];
+                s->xs[i] = s->x[i] + h * sum;
+            }
+            paper_case1_f(s, s->t + paper_case1_dop853_c[stage] * h, s->xs, K[stage]);
+        }
+        for (i = 0; i < nx; ++i) {
+            double dy = s->x1[i] - s->x[i];
+            s->cont[7][i] = s->x[i];
+            s->cont[0][i] = dy;
+            s->cont[1][i] = h * K[0][i] - dy;
+            s->cont[2][i] = 2.0 * dy - h * (K[12][i] + K[0][i]);
+            for (r = 0; r < 4; ++r) {
+                double sum = 0.0;
+                for (j = 0; j < 16; ++j) sum += paper_case1_dop853_d[r][j] * K[j][i];
+                s->cont[3 + r][i] = h * sum;
+            }
         }
     } else {                                           /* Hairer's contd5 coefficients */
         const double
@@ -1766,6 +1864,17 @@ static void paper_case1_dense(paper_case1_sim *s, double t, double *out)
         const double h10 = th * th1 * th1, h11 = -th * th * th1;
         for (i = 0; i < PAPER_CASE1_NX; ++i)
             out[i] = h00 * s->cont[0][i] + h01 * s->cont[1][i] + h10 * s->cont[2][i] + h11 * s->cont[3][i];
+    } else if (s->opt.method == PAPER_CASE1_METHOD_DOP853) {
+        for (i = 0; i < PAPER_CASE1_NX; ++i) {
+            double y = s->cont[6][i] * th;
+            y = (y + s->cont[5][i]) * th1;
+            y = (y + s->cont[4][i]) * th;
+            y = (y + s->cont[3][i]) * th1;
+            y = (y + s->cont[2][i]) * th;
+            y = (y + s->cont[1][i]) * th1;
+            y = (y + s->cont[0][i]) * th;
+            out[i] = s->cont[7][i] + y;
+        }
     } else {
         for (i = 0; i < PAPER_CASE1_NX; ++i)
             out[i] = s->cont[0][i] + th * (s->cont[1][i] + th1 * (s->cont[2][i]
@@ -1948,7 +2057,7 @@ int paper_case1_sim_advance(paper_case1_sim *s, double t_end, const double *t_ev
             s->f_valid = 1;
         }
         if (s->opt.max_steps > 0 && steps >= s->opt.max_steps) return PAPER_CASE1_ERR_MAX_STEPS;
-        if (s->opt.method == PAPER_CASE1_METHOD_DOPRI5 && !(s->h > 0.0)) s->h = paper_case1_initial_step(s, t_end);
+        if (s->opt.method != PAPER_CASE1_METHOD_RK4 && !(s->h > 0.0)) s->h = paper_case1_initial_step(s, t_end);
         h = s->h;
         if (s->opt.h_max > 0.0 && h > s->opt.h_max) h = s->opt.h_max;
         last = s->t + h >= t_end * (1.0 - 4.0 * PAPER_CASE1_EPS) - 4.0 * PAPER_CASE1_EPS * fabs(t_end);
@@ -1961,9 +2070,10 @@ int paper_case1_sim_advance(paper_case1_sim *s, double t_end, const double *t_ev
             paper_case1_rk4_step(s, h);
         } else {
             double fac;
-            err = paper_case1_dopri5_step(s, h);
+            const int eighth = s->opt.method == PAPER_CASE1_METHOD_DOP853;
+            err = eighth ? paper_case1_dop853_step(s, h) : paper_case1_dopri5_step(s, h);
             if (!(err == err)) err = 1e10;                   /* NaN: reject and shrink */
-            fac = err > 0.0 ? 0.9 * pow(err, -0.2) : fac_max;
+            fac = err > 0.0 ? 0.9 * pow(err, eighth ? -0.125 : -0.2) : fac_max;
             if (fac > fac_max) fac = fac_max;
             if (fac < 0.2) fac = 0.2;
             if (err > 1.0) {                                 /* reject */
@@ -2001,7 +2111,11 @@ int paper_case1_sim_advance(paper_case1_sim *s, double t_end, const double *t_ev
         }
         paper_case1_emit(s, t1, t_eval, n_eval, i_eval, x_eval);
         for (i = 0; i < PAPER_CASE1_NX; ++i) s->x[i] = s->x1[i];
-        for (i = 0; i < PAPER_CASE1_NX; ++i) s->f[i] = s->opt.method == PAPER_CASE1_METHOD_RK4 ? s->k[4][i] : s->k[6][i];
+        {
+            const double *f_end = s->opt.method == PAPER_CASE1_METHOD_RK4 ? s->k[4]
+                                : s->opt.method == PAPER_CASE1_METHOD_DOP853 ? s->k[12] : s->k[6];
+            for (i = 0; i < PAPER_CASE1_NX; ++i) s->f[i] = f_end[i];
+        }
         for (i = 0; i < PAPER_CASE1_NCONTACT; ++i) s->gaps[i] = s->gprev[i];
         s->t = t1;
     }

@@ -197,6 +197,7 @@ const char *paper_case2_error_message(int code);
  * ------------------------------------------------------------------------------------------------ */
 #define PAPER_CASE2_METHOD_RK4     0   /* classical fixed-step RK4 (opt.dt), cubic Hermite dense output */
 #define PAPER_CASE2_METHOD_DOPRI5  1   /* Dormand-Prince 5(4), adaptive (opt.rtol, opt.atol), 4th-order dense output */
+#define PAPER_CASE2_METHOD_DOP853  2   /* Dormand-Prince 8(5,3), adaptive, 7th-order dense output */
 
 #define PAPER_CASE2_SIM_END       1    /* reached t_end */
 #define PAPER_CASE2_SIM_IMPACT    2    /* stopped at an impact, already applied; see the record */
@@ -209,9 +210,9 @@ const char *paper_case2_error_message(int code);
 #define PAPER_CASE2_NCONTACT1 (PAPER_CASE2_NCONTACT > 0 ? PAPER_CASE2_NCONTACT : 1)
 
 typedef struct {
-    int method;            /* METHOD_RK4 or METHOD_DOPRI5 (default) */
-    double dt;             /* RK4 step (s); for DOPRI5 the first step, 0 = automatic */
-    double rtol, atol;     /* DOPRI5 relative and absolute tolerances (default 1e-8, 1e-10) */
+    int method;            /* METHOD_RK4, METHOD_DOPRI5 (default) or METHOD_DOP853 */
+    double dt;             /* RK4 step (s); for the adaptive methods the first step, 0 = automatic */
+    double rtol, atol;     /* adaptive methods: relative and absolute tolerances (default 1e-8, 1e-10) */
     double h_max;          /* largest step (s), 0 = unbounded */
     int event_samples;     /* interpolant samples per step searched for wall crossings (default 4) */
     double event_tol;      /* time tolerance of event location on the interpolant (default 1e-13 s) */
@@ -241,7 +242,7 @@ typedef struct {
     /* integrator state and scratch (private) */
     double h;
     int f_valid;
-    double f[PAPER_CASE2_NX], k[7][PAPER_CASE2_NX], x1[PAPER_CASE2_NX], xs[PAPER_CASE2_NX], cont[5][PAPER_CASE2_NX];
+    double f[PAPER_CASE2_NX], k[16][PAPER_CASE2_NX], x1[PAPER_CASE2_NX], xs[PAPER_CASE2_NX], cont[8][PAPER_CASE2_NX];
     double t0_step, h_step;
     double gaps[PAPER_CASE2_NCONTACT1], gs[PAPER_CASE2_NCONTACT1], gprev[PAPER_CASE2_NCONTACT1];
     double work[PAPER_CASE2_IMPACT_NWORK];

@@ -19,7 +19,7 @@ from codegen.scene import Scene, load_scene
 
 from .model import CompiledModel, load_model
 
-METHODS = ("dopri5", "rk4")
+METHODS = ("dopri5", "dop853", "rk4")
 
 
 @dataclass
@@ -104,7 +104,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
              max_impacts: int = 10000, max_steps: int = 10_000_000, p=None, q0=None, qd0=None) -> SimulationResult:
     """Simulate the scene's hybrid dynamics from its initial state over [0, t_end].
 
-    method        'dopri5' (adaptive Dormand-Prince 5(4), rtol/atol) or 'rk4' (fixed step dt, as the paper)
+    method        'dopri5' (adaptive Dormand-Prince 5(4), rtol/atol), 'dop853' (adaptive 8(5,3)),
+                  or 'rk4' (fixed step dt, as the paper)
     t_eval        sample times (ascending, within [0, t_end]); default: every 1 ms and t_end
     contact_tol   approaching contacts within this gap (m) of their wall join a simultaneous impact
     event_samples interpolant samples per step searched for wall crossings

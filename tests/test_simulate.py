@@ -23,10 +23,11 @@ def max_penetration(model, result):
     return worst
 
 
+@pytest.mark.parametrize("method", ["dopri5", "dop853"])
 @pytest.mark.parametrize("scene_name,t_end,n_impacts", [("paper-case1", 1.5, 7), ("paper-case2", 1.75, 11)])
-def test_paper_cases_conserve_energy_and_stay_inside(compiled, scene_name, t_end, n_impacts):
+def test_paper_cases_conserve_energy_and_stay_inside(compiled, scene_name, t_end, n_impacts, method):
     model = compiled(load_scene(scene_name))
-    result = simulate(model, t_end, rtol=1e-12, atol=1e-14)
+    result = simulate(model, t_end, method=method, rtol=1e-12, atol=1e-14)
     assert result.success, result.message
     assert len(result.impacts) == n_impacts
     assert abs(result.energy_drift) < 1e-10
@@ -60,6 +61,14 @@ def test_half_elastic_flat_drop_loses_three_quarters_of_the_energy(compiled):
     assert first.t == pytest.approx(math.sqrt(2 * h / g), abs=1e-12)
     assert first.energy_before == pytest.approx(m * g * h, rel=1e-12)
     assert first.energy_after == pytest.approx(0.25 * m * g * h, rel=1e-10)
+
+
+def test_dop853_and_dopri5_agree_on_impact_times(compiled):
+    model = compiled(load_scene("paper-case2"))
+    a = [i.t for i in simulate(model, 1.75, method="dopri5", rtol=1e-13, atol=1e-15).impacts]
+    b = [i.t for i in simulate(model, 1.75, method="dop853", rtol=1e-13, atol=1e-15).impacts]
+    assert len(a) == len(b) == 11
+    assert max(abs(x - y) for x, y in zip(a, b)) < 1e-10
 
 
 def test_rk4_impact_times_converge_to_dopri5(compiled):

@@ -5,7 +5,7 @@ import argparse
 import sys
 import time
 
-from .pipeline import generate, write_model
+from .pipeline import generate, write_model, write_standalone
 from .scene import SceneError, default_scene, load_scene, shipped_scene_names
 
 MAX_LINKS = 64
@@ -36,6 +36,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     parser.add_argument("--bake-params", action="store_true",
                         help="bake the scene's numeric parameters into the code as constants "
                              "(default: a runtime parameter array p)")
+    parser.add_argument("--standalone", action="store_true",
+                        help="also write NAME_example.c (simulates the scene and prints its impacts), a Makefile "
+                             "and a CMakeLists.txt: everything needed to build and embed it with no Python")
     parser.add_argument("--no-compile", action="store_true",
                         help="skip the cffi compile check/build of the generated code")
     return parser.parse_args(argv)
@@ -68,6 +71,8 @@ def main(argv=None) -> int:
              f"{len(scene.walls)} walls, {len(scene.contacts())} contacts")
     model = generate(scene, name=args.name, bake_params=args.bake_params, progress=progress)
     paths = write_model(model, args.out)
+    if args.standalone:
+        paths += write_standalone(model, scene, args.out)
     timings = dict(model.timings)
     if not args.no_compile:
         from runtime.compile import BuildError, CompilerNotFound, compile_model

@@ -191,3 +191,15 @@ def _param_doc(pname: str) -> str:
         return PARAM_DOC["g"]
     base, link = pname.rsplit("_", 1)
     return f"link {link}: {PARAM_DOC[base]}"
+
+
+STANDALONE_TEMPLATES = {"{name}_example.c": "example_main.c.j2", "Makefile": "Makefile.j2",
+                        "CMakeLists.txt": "CMakeLists.txt.j2"}
+
+
+def render_standalone(scene: Scene, name: str) -> dict[str, str]:
+    """The example program and build files that go beside NAME.h / NAME.c (``--standalone``)."""
+    env = _environment()
+    context = dict(NAME=name.upper(), name=name, version=__version__, scene=scene)
+    return {filename.format(name=name): env.get_template(template).render(**context)
+            for filename, template in STANDALONE_TEMPLATES.items()}

@@ -4,7 +4,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from .emit import GeneratedModel, render_model
+from .emit import GeneratedModel, render_model, render_standalone
 from .flatten import flatten
 from .model import build_kernels
 from .scene import Scene
@@ -49,4 +49,15 @@ def write_model(model: GeneratedModel, out_dir: str | Path) -> list[Path]:
     paths = [out / f"{model.name}.h", out / f"{model.name}.c"]
     for path, text in zip(paths, (model.header, model.source)):
         path.write_text(text)
+    return paths
+
+
+def write_standalone(model: GeneratedModel, scene: Scene, out_dir: str | Path) -> list[Path]:
+    """Write the example program, Makefile and CMakeLists.txt next to the model."""
+    out = Path(out_dir)
+    paths = []
+    for filename, text in render_standalone(scene, model.name).items():
+        path = out / filename
+        path.write_text(text)
+        paths.append(path)
     return paths

@@ -1672,6 +1672,16 @@ int paper_case1_sim_init(paper_case1_sim *s, double t0, const double *q, const d
     return PAPER_CASE1_OK;
 }
 
+void paper_case1_sim_state(const paper_case1_sim *s, double *t, double *q, double *qd)
+{
+    int i;
+    *t = s->t;
+    for (i = 0; i < PAPER_CASE1_NQ; ++i) {
+        q[i] = s->x[i];
+        qd[i] = s->x[PAPER_CASE1_NQ + i];
+    }
+}
+
 /* Weighted RMS norm of d with scale atol + rtol max(|y0|, |y1|). */
 static double paper_case1_norm(const paper_case1_sim *s, const double *d, const double *y0, const double *y1)
 {
@@ -2029,7 +2039,7 @@ static int paper_case1_resolve(paper_case1_sim *s, double t, int c_event, paper_
 static void paper_case1_emit(paper_case1_sim *s, double t_b, const double *t_eval, int n_eval, int *i_eval,
                           double *x_eval)
 {
-    while (*i_eval < n_eval && t_eval[*i_eval] <= t_b) {
+    while (n_eval > 0 && *i_eval < n_eval && t_eval[*i_eval] <= t_b) {
         double *out = x_eval + (long)(*i_eval) * PAPER_CASE1_NX;
         if (t_eval[*i_eval] > s->t0_step) {
             paper_case1_dense(s, t_eval[*i_eval], out);

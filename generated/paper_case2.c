@@ -797,6 +797,16 @@ int paper_case2_sim_init(paper_case2_sim *s, double t0, const double *q, const d
     return PAPER_CASE2_OK;
 }
 
+void paper_case2_sim_state(const paper_case2_sim *s, double *t, double *q, double *qd)
+{
+    int i;
+    *t = s->t;
+    for (i = 0; i < PAPER_CASE2_NQ; ++i) {
+        q[i] = s->x[i];
+        qd[i] = s->x[PAPER_CASE2_NQ + i];
+    }
+}
+
 /* Weighted RMS norm of d with scale atol + rtol max(|y0|, |y1|). */
 static double paper_case2_norm(const paper_case2_sim *s, const double *d, const double *y0, const double *y1)
 {
@@ -1154,7 +1164,7 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
 static void paper_case2_emit(paper_case2_sim *s, double t_b, const double *t_eval, int n_eval, int *i_eval,
                           double *x_eval)
 {
-    while (*i_eval < n_eval && t_eval[*i_eval] <= t_b) {
+    while (n_eval > 0 && *i_eval < n_eval && t_eval[*i_eval] <= t_b) {
         double *out = x_eval + (long)(*i_eval) * PAPER_CASE2_NX;
         if (t_eval[*i_eval] > s->t0_step) {
             paper_case2_dense(s, t_eval[*i_eval], out);

@@ -255,6 +255,9 @@ void paper_case2_default_options(paper_case2_options *opt);
 int paper_case2_sim_init(paper_case2_sim *sim, double t0, const double *q, const double *qd, const double *p,
                    const paper_case2_options *opt);
 
+/* The current time and state (the struct's t and x, copied out). */
+void paper_case2_sim_state(const paper_case2_sim *sim, double *t, double *q, double *qd);
+
 /* Integrate until t_end or the first impact (which is located, resolved and applied; record filled).
  * Samples: for each t_eval[i] (ascending) with i >= *i_eval that is passed, x_eval[i*NX ..] receives the
  * state [q, qd] (pre-impact at an impact time) and *i_eval advances; t_eval may be NULL if n_eval = 0.

@@ -1,0 +1,76 @@
+"""Figures of the embeddable C: object size, stack use per function, time per simulated second.
+
+    python -m codegen.embed_report --links 4,16 [--t-end 1.5] [--runs 50]
+
+For each n it writes the built-in N-link scene with --standalone into a temporary folder, compiles the
+model with gcc -O2 -fstack-usage, reads the sizes (`size`) and the .su files, and runs the example
+(DOPRI5 and DOP853 at rtol = 1e-10) to time one simulated second, with no Python in the loop.
+"""
+from __future__ import annotations
+
+import argparse
+import re
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from .pipeline import generate, write_model, write_standalone
+from .scene import default_scene
+
+
+def measure(n: int, t_end: float, runs: int, folder: Path) -> dict:
+    scene = default_scene(n)
+    model = generate(scene)
+    write_model(model, folder)
+    write_standalone(model, scene, folder)
+    name = model.name
+    subprocess.run(["gcc", "-std=c99", "-O2", "-fstack-usage", "-c", f"{name}.c", "-o", f"{name}.o"],
+                   cwd=folder, check=True)
+    text, data, bss = subprocess.run(["size", f"{name}.o"], cwd=folder, capture_output=True, text=True,
+                                     check=True).stdout.splitlines()[1].split()[:3]
+    stack = {}
+    for line in (folder / f"{name}.su").read_text().splitlines():
+        function, size, _ = line.split("\t")
+        stack[function.split(":")[-1]] = int(size)
+    subprocess.run(["make", "-s"], cwd=folder, check=True)
+    timing = {}
+    for method in ("dopri5", "dop853"):
+        out = subprocess.run([f"./{name}_example", str(t_end), method, "1e-10", "--time", str(runs)], cwd=folder,
+                             capture_output=True, text=True, check=True).stdout
+        timing[method] = float(re.search(r"time per simulated second: ([0-9.eE+-]+) ms", out).group(1))
+        timing[f"{method}_impacts"] = int(re.search(r"# impacts (\d+)", out).group(1))
+    return {"n": n, "name": name, "text": int(text), "data": int(data), "bss": int(bss), "stack": stack,
+            "timing": timing}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m codegen.embed_report", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--links", default="4,16")
+    parser.add_argument("--t-end", type=float, default=1.5)
+    parser.add_argument("--runs", type=int, default=50)
+    args = parser.parse_args(argv)
+    rows = []
+    for n in (int(x) for x in args.links.split(",")):
+        with tempfile.TemporaryDirectory() as tmp:
+            print(f"n = {n} ...", file=sys.stderr, flush=True)
+            rows.append(measure(n, args.t_end, args.runs, Path(tmp)))
+    print("| n | object code (text / data / bss bytes) | ms per simulated second, DOPRI5 / DOP853 (rtol 1e-10) "
+          "| impacts in the run |")
+    print("|---|---|---|---|")
+    for r in rows:
+        print(f"| {r['n']} | {r['text']:,} / {r['data']} / {r['bss']} | {r['timing']['dopri5']:.3f} / "
+              f"{r['timing']['dop853']:.3f} | {r['timing']['dopri5_impacts']} |")
+    functions = sorted({f for r in rows for f in r["stack"]}, key=lambda f: f.split("_", 1)[-1])
+    print()
+    print("| stack bytes (gcc -fstack-usage, -O2) | " + " | ".join(f"n = {r['n']}" for r in rows) + " |")
+    print("|---|" + "---|" * len(rows))
+    generic = sorted({f[len(r['name']) + 1:] for r in rows for f in r["stack"]})
+    for function in generic:
+        print(f"| {function} | " + " | ".join(str(r["stack"].get(f"{r['name']}_{function}", "")) for r in rows) + " |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,90 @@
+"""--standalone: the model, the hybrid loop in C, an example program and build files, with no Python."""
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from codegen.scene import load_scene
+from runtime import simulate
+
+ROOT = Path(__file__).resolve().parent.parent
+STRICT = "-std=c99 -O2 -Wall -Wextra -pedantic -Werror"
+
+
+@pytest.fixture(scope="module")
+def case1_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("standalone")
+    subprocess.run([sys.executable, "-m", "codegen", "--scene", "paper-case1", "--out", str(out), "--standalone",
+                    "--no-compile"], check=True, cwd=ROOT, capture_output=True)
+    return out
+
+
+def impact_times(stdout: str) -> list[float]:
+    return [float(line.split()[1]) for line in stdout.splitlines() if re.match(r"^\s*\d+ \d", line)]
+
+
+def test_standalone_files_are_written(case1_dir):
+    names = sorted(p.name for p in case1_dir.iterdir())
+    assert names == ["CMakeLists.txt", "Makefile", "paper_case1.c", "paper_case1.h", "paper_case1_example.c"]
+
+
+def test_example_builds_strictly_and_matches_the_python_runtime(case1_dir, compiled):
+    subprocess.run(["make", "-s", f"CFLAGS={STRICT}"], cwd=case1_dir, check=True)
+    result = subprocess.run(["./paper_case1_example", "1.5", "dopri5", "1e-10"], cwd=case1_dir,
+                            capture_output=True, text=True, check=True)
+    c_times = impact_times(result.stdout)
+    python = simulate(compiled(load_scene("paper-case1")), 1.5, rtol=1e-10, atol=1e-12, t_eval=[])
+    assert len(c_times) == len(python.impacts) == 7
+    assert max(abs(a - b.t) for a, b in zip(c_times, python.impacts)) < 1e-12
+    assert "O1/x2_min" in result.stdout and "O5/x2_min" in result.stdout
+
+
+def test_cmake_build(case1_dir, tmp_path):
+    cmake = shutil.which("cmake") or str(Path(sys.executable).parent / "cmake")
+    build = tmp_path / "build"
+    subprocess.run([cmake, "-S", str(case1_dir), "-B", str(build)], check=True, capture_output=True)
+    subprocess.run([cmake, "--build", str(build)], check=True, capture_output=True)
+    result = subprocess.run([str(build / "paper_case1_example"), "0.3"], capture_output=True, text=True, check=True)
+    assert len(impact_times(result.stdout)) == 1
+
+
+def test_header_compiles_as_cxx_and_links_from_cxx(case1_dir, tmp_path):
+    (tmp_path / "use.cpp").write_text(
+        '#include "paper_case1.h"\n#include <cstdio>\n'
+        'int main() { paper_case1_options opt; paper_case1_sim sim; paper_case1_impact_record rec;\n'
+        '  double p[PAPER_CASE1_NPARAM], q[PAPER_CASE1_NQ], qd[PAPER_CASE1_NQ];\n'
+        '  paper_case1_default_options(&opt); paper_case1_default_parameters(p); paper_case1_initial_state(q, qd);\n'
+        '  paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);\n'
+        '  int code = paper_case1_sim_advance(&sim, 0.3, 0, 0, 0, 0, &rec);\n'
+        '  std::printf("%d %.12f\\n", code, rec.t); return code == PAPER_CASE1_SIM_IMPACT ? 0 : 1; }\n')
+    subprocess.run(["gcc", *STRICT.split(), "-c", str(case1_dir / "paper_case1.c"), "-o", str(tmp_path / "m.o")],
+                   check=True)
+    subprocess.run(["g++", "-std=c++11", "-Wall", "-Wextra", "-pedantic", "-Werror", "-I", str(case1_dir),
+                    str(tmp_path / "use.cpp"), str(tmp_path / "m.o"), "-lm", "-o", str(tmp_path / "use")], check=True)
+    out = subprocess.run([str(tmp_path / "use")], capture_output=True, text=True, check=True).stdout
+    assert out.startswith("2 0.2473096834")
+
+
+def test_example_is_clean_under_sanitizers(case1_dir, tmp_path):
+    exe = tmp_path / "example_asan"
+    subprocess.run(["gcc", "-std=c99", "-g", "-O1", "-fsanitize=address,undefined", "-fno-sanitize-recover=all",
+                    "-fno-omit-frame-pointer", str(case1_dir / "paper_case1.c"),
+                    str(case1_dir / "paper_case1_example.c"), "-I", str(case1_dir), "-lm", "-o", str(exe)], check=True)
+    for method in ("dopri5", "dop853", "rk4"):
+        result = subprocess.run([str(exe), "1.5", method, "1e-3" if method == "rk4" else "1e-8"], capture_output=True,
+                                text=True, env=dict(os.environ, ASAN_OPTIONS="detect_leaks=1"))
+        assert result.returncode == 0, result.stderr
+        assert "runtime error" not in result.stderr and len(impact_times(result.stdout)) == 7
+
+
+@pytest.mark.skipif(shutil.which("valgrind") is None, reason="valgrind is not installed (the issue asks for it "
+                                                            "only where available)")
+def test_example_is_clean_under_valgrind(case1_dir):
+    subprocess.run(["make", "-s", f"CFLAGS={STRICT}"], cwd=case1_dir, check=True)
+    result = subprocess.run(["valgrind", "--error-exitcode=9", "--leak-check=full", "-q", "./paper_case1_example",
+                             "0.6"], cwd=case1_dir, capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr

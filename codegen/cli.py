@@ -7,6 +7,7 @@ import time
 
 from .pipeline import generate, write_model, write_standalone
 from .scene import SceneError, default_scene, load_scene, shipped_scene_names
+from .specialise import check_not_singular, layout_for
 
 MAX_LINKS = 64
 
@@ -36,6 +37,11 @@ def parse_args(argv=None) -> argparse.Namespace:
     parser.add_argument("--bake-params", action="store_true",
                         help="bake the scene's numeric parameters into the code as constants "
                              "(default: a runtime parameter array p)")
+    parser.add_argument("--general", action="store_true",
+                        help="generate the general model: no scene-driven specialisation (planar reduction, "
+                             "zero parameters built in)")
+    parser.add_argument("--explain", action="store_true",
+                        help="print what the model leaves out for this scene and why, then stop")
     parser.add_argument("--standalone", action="store_true",
                         help="also write NAME_example.c (simulates the scene and prints its impacts), a Makefile "
                              "and a CMakeLists.txt: everything needed to build and embed it with no Python")
@@ -67,9 +73,22 @@ def main(argv=None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
 
-    progress(f"scene {scene.name}: n = {scene.n} links, {scene.nq} coordinates, "
-             f"{len(scene.walls)} walls, {len(scene.contacts())} contacts")
-    model = generate(scene, name=args.name, bake_params=args.bake_params, progress=progress)
+    try:
+        layout = layout_for(scene, specialise=not args.general)
+        check_not_singular(scene, layout)
+    except SceneError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    if args.explain:
+        print(f"scene {scene.name}: n = {scene.n}; the model keeps {layout.nq} of {scene.nq} coordinates")
+        for note in layout.notes:
+            print(f"  - {note}")
+        print(f"  - parameters: {'baked in as constants' if args.bake_params else 'a runtime array p'}")
+        return 0
+    progress(f"scene {scene.name}: n = {scene.n} links, {layout.nq} of {scene.nq} coordinates, "
+             f"{len(scene.walls)} walls, {len(layout.contacts)} contacts")
+    model = generate(scene, name=args.name, bake_params=args.bake_params, progress=progress,
+                     specialise=not args.general)
     paths = write_model(model, args.out)
     if args.standalone:
         paths += write_standalone(model, scene, args.out)

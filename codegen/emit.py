@@ -14,6 +14,7 @@ from . import __version__
 from .flatten import Program
 from .ops import OpCount, count_ops
 from .scene import Scene
+from .specialise import coordinate_names
 
 
 class ChainCPrinter(C99CodePrinter):
@@ -150,24 +151,32 @@ class GeneratedModel:
     functions: list[RenderedFunction]
 
 
-def render_model(scene: Scene, name: str, programs: list[Program], bake_params: bool) -> GeneratedModel:
+def render_model(scene: Scene, name: str, programs: list[Program], bake_params: bool, layout) -> GeneratedModel:
     functions = [render_function(p) for p in programs]
     env = _environment()
     params = list(zip(scene.parameter_names(), scene.parameter_vector().tolist()))
+    names = coordinate_names(scene.n)
+    zeros = set(layout.zero_params)
     context = dict(
         NAME=name.upper(), name=name, version=__version__, scene=scene, scene_hash=scene_hash(scene),
-        bake_params=bake_params, functions=functions, input_doc=INPUT_DOC,
-        params=[(i, pname, _param_doc(pname), _double_literal(value)) for i, (pname, value) in enumerate(params)],
-        contacts=[(c, point, wall) for c, (point, wall) in enumerate(scene.contacts())],
-        rows=scene.contact_rows(), twists=scene.all_twists,
-        row_of_contact=[scene.contact_rows().index((point, wall.axis)) for point, wall in scene.contacts()],
-        q0=[_double_literal(x) for x in scene.q0], qd0=[_double_literal(x) for x in scene.qd0],
+        bake_params=bake_params, functions=functions, input_doc=INPUT_DOC, nq=layout.nq,
+        coordinates=[names[i] for i in layout.free], fixed=[(names[i], _double_literal(v)) for i, v in layout.fixed],
+        notes=layout.notes,
+        params=[(i, pname, _param_doc(pname) + (" [built in as 0]" if pname in zeros else ""), _double_literal(value))
+                for i, (pname, value) in enumerate(params)],
+        contacts=[(c, point, wall) for c, (point, wall) in enumerate(layout.contacts)],
+        rows=list(layout.contact_rows), twists=scene.all_twists,
+        row_of_contact=[layout.contact_rows.index((point, wall.axis)) for point, wall in layout.contacts],
+        q0=[_double_literal(float(x)) for x in layout.reduce(scene.q0)],
+        qd0=[_double_literal(float(x)) for x in layout.reduce(scene.qd0)],
         total_ops=sum((f.ops for f in functions), OpCount()), literal=_double_literal,
     )
     header = env.get_template("model.h.j2").render(**context)
     source = env.get_template("model.c.j2").render(**context)
     cdef = env.get_template("cdef.h.j2").render(**context)
-    return GeneratedModel(name, header, source, cdef, functions)
+    model = GeneratedModel(name, header, source, cdef, functions)
+    model.layout = layout
+    return model
 
 
 PARAM_DOC = {

@@ -8,11 +8,13 @@ Everything is expressed in the frame of the link it belongs to ("^k v" in the pa
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import sympy as sp
 
 from .scene import Scene
+from .specialise import Layout, layout_for
 from .tape import (E_X, E_Y, E_Z, ZERO, Tape, Vec, Mat, add, column, cross, index_name, matmul,
                    mat_t_vec, matvec, scale, to_exact)
 
@@ -32,20 +34,34 @@ class LinkSymbols:
 
 
 class ChainSymbols:
-    """Inputs (q, qd, p) of the generated functions, as sympy symbols named like the C arrays."""
+    """Inputs (q, qd, p) of the generated functions, as sympy symbols named like the C arrays.
 
-    def __init__(self, scene: Scene, bake_params: bool = False):
+    ``q`` and ``qd`` are indexed in the full layout of Eq. 13 (n + 5 entries); coordinates the layout
+    holds fixed are numbers (exact multiples of pi/2 for angles, zero velocity), the free ones are the
+    symbols q[j], qd[j] of the model's own (reduced) input arrays.
+    """
+
+    def __init__(self, scene: Scene, bake_params: bool = False, layout: Layout | None = None):
         self.scene = scene
+        self.layout = layout or layout_for(scene, specialise=False)
         self.n = scene.n
-        self.nq = scene.nq
-        self.q = [sp.Symbol(f"q[{i}]", real=True) for i in range(self.nq)]
-        self.qd = [sp.Symbol(f"qd[{i}]", real=True) for i in range(self.nq)]
+        self.nq = scene.nq                       # full layout size
+        self.q = [None] * self.nq
+        self.qd = [None] * self.nq
+        for j, i in enumerate(self.layout.free):
+            self.q[i] = sp.Symbol(f"q[{j}]", real=True)
+            self.qd[i] = sp.Symbol(f"qd[{j}]", real=True)
+        for i, value in self.layout.fixed:
+            self.q[i] = sp.Integer(round(value / (math.pi / 2))) * sp.pi / 2 if i < 2 else _number(value)
+            self.qd[i] = sp.Integer(0)
         names = scene.parameter_names()
         values = scene.parameter_vector()
+        zeros = set(self.layout.zero_params)
         if bake_params:
-            self.p = [sp.Float(repr(float(v)), 17) if v != int(v) else sp.Integer(int(v)) for v in values]
+            self.p = [_number(v) for v in values]
         else:
-            self.p = [sp.Symbol(f"p[{i}]", real=True) for i in range(len(names))]
+            self.p = [sp.Integer(0) if name in zeros else sp.Symbol(f"p[{i}]", real=True)
+                      for i, name in enumerate(names)]
         self.param_index = {name: i for i, name in enumerate(names)}
         self.twists = [to_exact(T) for T in scene.all_twists]
 
@@ -67,6 +83,11 @@ class ChainSymbols:
 
     def base_velocity(self) -> Vec:
         return tuple(self.qd[self.n + 2: self.n + 5])
+
+
+def _number(value: float) -> sp.Expr:
+    value = float(value)
+    return sp.Integer(int(value)) if value == int(value) else sp.Float(repr(value), 17)
 
 
 def link_moments(tape: Tape, chain: ChainSymbols, i: int) -> LinkSymbols:

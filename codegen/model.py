@@ -43,36 +43,44 @@ def _new(chain: ChainSymbols, name: str, summary: str, inputs, output: str, size
 
 
 def mass_matrix_kernel(chain: ChainSymbols) -> Kernel:
+    free = chain.layout.free
     k = _new(chain, "mass_matrix", "Flight inertia matrix I_f(Theta) (Eq. 12, Fig. 2), full, row-major.",
-             ("q", "p"), "M", chain.nq ** 2)
+             ("q", "p"), "M", len(free) ** 2)
     rotations = kinematics.joint_rotations(k.tape, chain)
     moments = kinematics.link_moments_all(k.tape, chain)
     lower = gibbs_appell.inertia_matrix(k.tape, chain, rotations, moments)
-    k.values = [lower[(max(i, j), min(i, j))] for i in range(chain.nq) for j in range(chain.nq)]
+    k.values = [lower[(max(i, j), min(i, j))] for i in free for j in free]
     return k
 
 
 def bias_kernel(chain: ChainSymbols) -> Kernel:
+    free = chain.layout.free
     k = _new(chain, "bias", "Right-hand side R(Theta, Theta_dot) of I_f Theta_ddot = R (Eq. 12, 38-41, Fig. 3).",
-             ("q", "qd", "p"), "R", chain.nq)
+             ("q", "qd", "p"), "R", len(free))
     rotations = kinematics.joint_rotations(k.tape, chain)
     moments = kinematics.link_moments_all(k.tape, chain)
     motion = kinematics.velocity_products(k.tape, chain, rotations, moments)
-    k.values = gibbs_appell.right_hand_side(k.tape, chain, rotations, moments, motion)
+    R = gibbs_appell.right_hand_side(k.tape, chain, rotations, moments, motion)
+    k.values = [R[i] for i in free]
     return k
 
 
 def forward_dynamics_kernel(chain: ChainSymbols) -> Kernel:
+    free = chain.layout.free
     k = _new(chain, "forward_dynamics", "Theta_ddot solving I_f Theta_ddot = R, by a straight-line LDL^T.",
-             ("q", "qd", "p"), "qdd", chain.nq)
+             ("q", "qd", "p"), "qdd", len(free))
     rotations = kinematics.joint_rotations(k.tape, chain)
     moments = kinematics.link_moments_all(k.tape, chain)
     motion = kinematics.velocity_products(k.tape, chain, rotations, moments)
     R = gibbs_appell.right_hand_side(k.tape, chain, rotations, moments, motion)
     lower = gibbs_appell.inertia_matrix(k.tape, chain, rotations, moments)
+    # the model's own (reduced) system: rows and columns of the free coordinates
+    reduced = {(a, b): lower[(max(free[a], free[b]), min(free[a], free[b]))]
+               for a in range(len(free)) for b in range(a + 1)}
     n = chain.n
-    order = [n + 2, n + 3, n + 4] + list(range(n + 2))     # X1, X2, X3 first (Eq. II block)
-    k.values = ldlt_solve(k.tape, lower, R, order)
+    translations = [a for a, i in enumerate(free) if i >= n + 2]
+    order = translations + [a for a in range(len(free)) if a not in translations]   # X first (Eq. II block)
+    k.values = ldlt_solve(k.tape, reduced, [R[i] for i in free], order)
     return k
 
 
@@ -96,10 +104,11 @@ def contact_velocities_kernel(chain: ChainSymbols) -> Kernel:
 
 
 def contact_jacobian_kernel(chain: ChainSymbols) -> Kernel:
-    rows = chain.scene.contact_rows()
+    rows = chain.layout.contact_rows
+    free = chain.layout.free
     k = _new(chain, "contact_jacobian",
              "Rows d(O_i . X_a)/dTheta of the contact Jacobian (Eq. 42, Fig. 4) for the (point, axis) "
-             "pairs the walls need, row-major.", ("q", "p"), "J", len(rows) * chain.nq)
+             "pairs the walls need, row-major.", ("q", "p"), "J", len(rows) * len(free))
     rotations = kinematics.joint_rotations(k.tape, chain)
     moments = kinematics.link_moments_all(k.tape, chain)
     frames = kinematics.reference_frames(k.tape, chain, rotations)
@@ -113,13 +122,13 @@ def contact_jacobian_kernel(chain: ChainSymbols) -> Kernel:
             arm = tuple(a - b for a, b in zip(points[point - 1], origin))
             row[j + 1] = cross(column(frames[j], 2), arm)[axis]
         row[n + 2 + axis] = sp.Integer(1)
-        values += row
+        values += [row[i] for i in free]
     k.values = values
     return k
 
 
 def contact_gaps_kernel(chain: ChainSymbols) -> Kernel:
-    contacts = chain.scene.contacts()
+    contacts = chain.layout.contacts
     k = _new(chain, "contact_gaps",
              "Gap of each (point, wall) pair: distance of the point inside its wall (negative = beyond it).",
              ("q", "p"), "gap", len(contacts))
@@ -165,9 +174,9 @@ KERNEL_BUILDERS = (mass_matrix_kernel, bias_kernel, forward_dynamics_kernel, con
                    contact_velocities_kernel, contact_jacobian_kernel, contact_gaps_kernel, energy_kernel)
 
 
-def build_kernels(scene: Scene, bake_params: bool = False, progress=None) -> list[Kernel]:
+def build_kernels(scene: Scene, bake_params: bool = False, progress=None, layout=None) -> list[Kernel]:
     """Derive every kernel of the scene (symbolic, per-intermediate symbols; no CSE yet)."""
-    chain = ChainSymbols(scene, bake_params)
+    chain = ChainSymbols(scene, bake_params, layout)
     kernels = []
     for builder in KERNEL_BUILDERS:
         if progress:

@@ -8,6 +8,7 @@ from .emit import GeneratedModel, render_model, render_standalone
 from .flatten import flatten
 from .model import build_kernels
 from .scene import Scene
+from .specialise import check_not_singular, layout_for
 
 
 def _quiet(message: str) -> None:
@@ -15,16 +16,19 @@ def _quiet(message: str) -> None:
 
 
 def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
-             progress=_quiet) -> GeneratedModel:
+             progress=_quiet, specialise: bool = True) -> GeneratedModel:
     """Generate the C model of ``scene``.  ``progress(message)`` is called as stages advance.
 
-    The returned model has .header, .source, .cdef, .functions (with op counts) and
-    .timings (seconds per stage: derive, cse, render).
+    ``specialise`` (default) leaves out what the scene does not need (see codegen.specialise);
+    False gives the general model.  The returned model has .header, .source, .cdef, .functions
+    (with op counts), .layout and .timings (seconds per stage: derive, cse, render).
     """
     name = name or scene.name
+    layout = layout_for(scene, specialise)
+    check_not_singular(scene, layout)
     timings = {}
     start = time.perf_counter()
-    kernels = build_kernels(scene, bake_params, progress=lambda k: progress(f"derive {k}"))
+    kernels = build_kernels(scene, bake_params, progress=lambda k: progress(f"derive {k}"), layout=layout)
     timings["derive"] = time.perf_counter() - start
 
     start = time.perf_counter()
@@ -36,7 +40,7 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
 
     start = time.perf_counter()
     progress("render")
-    model = render_model(scene, name, programs, bake_params)
+    model = render_model(scene, name, programs, bake_params, layout)
     timings["render"] = time.perf_counter() - start
     model.timings = timings
     return model

@@ -9,9 +9,14 @@
  *                common-subexpression-eliminated; I_f is factorised numerically (LDL^T), never inverted.
  *
  * CONVENTIONS (all SI: m, kg, s, rad, N, J)
- *   State (Eq. 13), NQ = n + 5 = 9:
- *     q  = [theta_-1, theta_0, theta_1 .. theta_4, X1, X2, X3]
+ *   Coordinates, NQ = 6 (the full layout of Eq. 13 is [theta_-1, theta_0, theta_1..theta_n, X1, X2, X3]):
+ *     q  = [theta_1, theta_2, theta_3, theta_4, X1, X2]
+ *     held fixed by this model: theta_-1 = -1.5707963267948966, theta_0 = 0.0, X3 = 0.0 (velocities 0)
  *     qd = time derivative of q, same layout.   x = [q, qd] (NX = 2 NQ) for the ODE right-hand side.
+ *   What this model leaves out (python -m codegen --explain):
+ *     - planar: every real joint axis is parallel to X3 and nothing starts out of the plane, so theta_-1, theta_0, X3 are held at -1.57079632679, 0, 0: 6 coordinates instead of 9 (results are mapped back to the full layout)
+ *     - contacts: 20 (point, wall) gap functions and 10 Jacobian rows, only for the walls and points of the scene
+ *     - no parameter is zero: all stay in the runtime array p
  *   Frames: ^ref R_-1 = T_-1 Rz(theta_-1), ^(k-1) R_k = T_k Rz(theta_k); (X1, X2, X3) = O_1.
  *   Gravity acts along -X2.  The base-orientation chart is singular at theta_0 = +-pi/2.
  *   Matrices are row-major: element (i, j) of an R x C matrix is at [i*C + j].
@@ -83,14 +88,14 @@
  *     8:(O_5,X1) 9:(O_5,X2)
  *
  * OPERATION COUNTS (after CSE; rule in codegen/ops.py: adds incl. subtractions, muls, divs, calls)
- *   mass_matrix             290 = 97 add + 181 mul + 0 div + 12 calls
- *   bias                    448 = 159 add + 277 mul + 0 div + 12 calls
- *   forward_dynamics       1030 = 400 add + 611 mul + 7 div + 12 calls
- *   contact_points           97 = 31 add + 54 mul + 0 div + 12 calls
- *   contact_velocities      165 = 55 add + 98 mul + 0 div + 12 calls
- *   contact_jacobian        205 = 85 add + 108 mul + 0 div + 12 calls
- *   contact_gaps            103 = 40 add + 51 mul + 0 div + 12 calls
- *   energy                  436 = 141 add + 283 mul + 0 div + 12 calls
+ *   mass_matrix             137 = 46 add + 83 mul + 0 div + 8 calls
+ *   bias                    119 = 36 add + 75 mul + 0 div + 8 calls
+ *   forward_dynamics        373 = 140 add + 220 mul + 5 div + 8 calls
+ *   contact_points           42 = 14 add + 20 mul + 0 div + 8 calls
+ *   contact_velocities       49 = 17 add + 24 mul + 0 div + 8 calls
+ *   contact_jacobian         62 = 34 add + 20 mul + 0 div + 8 calls
+ *   contact_gaps             78 = 34 add + 36 mul + 0 div + 8 calls
+ *   energy                  176 = 48 add + 120 mul + 0 div + 8 calls
  *
  * All functions are reentrant: no globals, no malloc.  Inputs are const; outputs must not alias inputs.
  */
@@ -104,8 +109,8 @@
 #endif
 
 #define PAPER_CASE1_N          4    /* real links */
-#define PAPER_CASE1_NQ         9    /* generalised coordinates */
-#define PAPER_CASE1_NX         18    /* ODE state [q, qd] */
+#define PAPER_CASE1_NQ         6    /* generalised coordinates */
+#define PAPER_CASE1_NX         12    /* ODE state [q, qd] */
 #define PAPER_CASE1_NPARAM     29
 #define PAPER_CASE1_NPOINT     5
 #define PAPER_CASE1_NCONTACT   20
@@ -127,53 +132,53 @@ extern "C" {
 /* Flight inertia matrix I_f(Theta) (Eq. 12, Fig. 2), full, row-major.
  *   q   in:  generalised coordinates Theta (NQ)
  *   p   in:  parameters (NPARAM)
- *   M   out: 81 doubles.   290 ops (97 add, 181 mul, 0 div, 12 calls) */
+ *   M   out: 36 doubles.   137 ops (46 add, 83 mul, 0 div, 8 calls) */
 void paper_case1_mass_matrix(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT M);
 
 /* Right-hand side R(Theta, Theta_dot) of I_f Theta_ddot = R (Eq. 12, 38-41, Fig. 3).
  *   q   in:  generalised coordinates Theta (NQ)
  *   qd  in:  generalised velocities Theta_dot (NQ)
  *   p   in:  parameters (NPARAM)
- *   R   out: 9 doubles.   448 ops (159 add, 277 mul, 0 div, 12 calls) */
+ *   R   out: 6 doubles.   119 ops (36 add, 75 mul, 0 div, 8 calls) */
 void paper_case1_bias(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT R);
 
 /* Theta_ddot solving I_f Theta_ddot = R, by a straight-line LDL^T.
  *   q   in:  generalised coordinates Theta (NQ)
  *   qd  in:  generalised velocities Theta_dot (NQ)
  *   p   in:  parameters (NPARAM)
- *   qdd out: 9 doubles.   1030 ops (400 add, 611 mul, 7 div, 12 calls) */
+ *   qdd out: 6 doubles.   373 ops (140 add, 220 mul, 5 div, 8 calls) */
 void paper_case1_forward_dynamics(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT qdd);
 
 /* Positions of O_1..O_{n+1} in the reference frame, row i-1 = O_i.
  *   q   in:  generalised coordinates Theta (NQ)
  *   p   in:  parameters (NPARAM)
- *   r   out: 15 doubles.   97 ops (31 add, 54 mul, 0 div, 12 calls) */
+ *   r   out: 15 doubles.   42 ops (14 add, 20 mul, 0 div, 8 calls) */
 void paper_case1_contact_points(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT r);
 
 /* Velocities of O_1..O_{n+1} in the reference frame (Eq. 42).
  *   q   in:  generalised coordinates Theta (NQ)
  *   qd  in:  generalised velocities Theta_dot (NQ)
  *   p   in:  parameters (NPARAM)
- *   v   out: 15 doubles.   165 ops (55 add, 98 mul, 0 div, 12 calls) */
+ *   v   out: 15 doubles.   49 ops (17 add, 24 mul, 0 div, 8 calls) */
 void paper_case1_contact_velocities(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT v);
 
 /* Rows d(O_i . X_a)/dTheta of the contact Jacobian (Eq. 42, Fig. 4) for the (point, axis) pairs the walls need, row-major.
  *   q   in:  generalised coordinates Theta (NQ)
  *   p   in:  parameters (NPARAM)
- *   J   out: 90 doubles.   205 ops (85 add, 108 mul, 0 div, 12 calls) */
+ *   J   out: 60 doubles.   62 ops (34 add, 20 mul, 0 div, 8 calls) */
 void paper_case1_contact_jacobian(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT J);
 
 /* Gap of each (point, wall) pair: distance of the point inside its wall (negative = beyond it).
  *   q   in:  generalised coordinates Theta (NQ)
  *   p   in:  parameters (NPARAM)
- *   gap out: 20 doubles.   103 ops (40 add, 51 mul, 0 div, 12 calls) */
+ *   gap out: 20 doubles.   78 ops (34 add, 36 mul, 0 div, 8 calls) */
 void paper_case1_contact_gaps(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT gap);
 
 /* E[0] = kinetic energy T, E[1] = potential energy V (J).
  *   q   in:  generalised coordinates Theta (NQ)
  *   qd  in:  generalised velocities Theta_dot (NQ)
  *   p   in:  parameters (NPARAM)
- *   E   out: 2 doubles.   436 ops (141 add, 283 mul, 0 div, 12 calls) */
+ *   E   out: 2 doubles.   176 ops (48 add, 120 mul, 0 div, 8 calls) */
 void paper_case1_energy(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT E);
 
 /* ODE right-hand side of the flight phase: x = [q, qd] (NX), xdot = [qd, qdd].  t is unused. */

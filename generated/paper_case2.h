@@ -9,9 +9,13 @@
  *                common-subexpression-eliminated; I_f is factorised numerically (LDL^T), never inverted.
  *
  * CONVENTIONS (all SI: m, kg, s, rad, N, J)
- *   State (Eq. 13), NQ = n + 5 = 6:
- *     q  = [theta_-1, theta_0, theta_1 .. theta_1, X1, X2, X3]
+ *   Coordinates, NQ = 6 (the full layout of Eq. 13 is [theta_-1, theta_0, theta_1..theta_n, X1, X2, X3]):
+ *     q  = [theta_-1, theta_0, theta_1, X1, X2, X3]
  *     qd = time derivative of q, same layout.   x = [q, qd] (NX = 2 NQ) for the ODE right-hand side.
+ *   What this model leaves out (python -m codegen --explain):
+ *     - kept all 6 coordinates: not planar (theta_-1 = 0.523599 is not a multiple of pi/2)
+ *     - contacts: 12 (point, wall) gap functions and 6 Jacobian rows, only for the walls and points of the scene
+ *     - no parameter is zero: all stay in the runtime array p
  *   Frames: ^ref R_-1 = T_-1 Rz(theta_-1), ^(k-1) R_k = T_k Rz(theta_k); (X1, X2, X3) = O_1.
  *   Gravity acts along -X2.  The base-orientation chart is singular at theta_0 = +-pi/2.
  *   Matrices are row-major: element (i, j) of an R x C matrix is at [i*C + j].

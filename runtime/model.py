@@ -16,6 +16,7 @@ import numpy as np
 import codegen
 from codegen.emit import GeneratedModel, scene_hash
 from codegen.scene import Scene, load_scene
+from codegen.specialise import layout_for
 
 from .compile import cache_dir, compile_model
 
@@ -35,16 +36,19 @@ def _generator_fingerprint() -> str:
     return digest.hexdigest()[:16]
 
 
-def generate_cached(scene: Scene, bake_params: bool = False, progress=None) -> GeneratedModel:
+def generate_cached(scene: Scene, bake_params: bool = False, progress=None, specialise: bool = True) -> GeneratedModel:
     """codegen.generate with an on-disk cache of the generated text (keyed by scene and generator)."""
-    key = hashlib.sha256(f"{scene_hash(scene)}|{bake_params}|{_generator_fingerprint()}".encode()).hexdigest()[:20]
+    key = hashlib.sha256(f"{scene_hash(scene)}|{bake_params}|{specialise}|{_generator_fingerprint()}".encode()
+                         ).hexdigest()[:20]
     path = cache_dir() / f"gen_{key}.json"
     if path.exists():
         data = json.loads(path.read_text())
         model = GeneratedModel(data["name"], data["header"], data["source"], data["cdef"], [])
         model.timings = {}
+        model.layout = layout_for(scene, specialise)
         return model
-    model = codegen.generate(scene, bake_params=bake_params, progress=progress or (lambda m: None))
+    model = codegen.generate(scene, bake_params=bake_params, progress=progress or (lambda m: None),
+                             specialise=specialise)
     tmp = path.with_suffix(f".{id(model)}.tmp")
     tmp.write_text(json.dumps({"name": model.name, "header": model.header, "source": model.source,
                                "cdef": model.cdef}))
@@ -53,18 +57,21 @@ def generate_cached(scene: Scene, bake_params: bool = False, progress=None) -> G
 
 
 class CompiledModel:
-    """Calls into the compiled kernels of one scene.  Arrays in and out are float64 numpy arrays."""
+    """Calls into the compiled kernels of one scene.  Arrays in and out are float64 numpy arrays, in
+    the model's own coordinates: ``layout.free`` of the full layout of Eq. 13 (all of it for the general
+    model; ``layout.reduce`` / ``layout.expand`` convert)."""
 
     def __init__(self, scene: Scene, generated: GeneratedModel, module):
         self.scene = scene
         self.generated = generated
+        self.layout = generated.layout
         self.ffi, self.lib = module.ffi, module.lib
         self.name = generated.name
-        self.n, self.nq = scene.n, scene.nq
+        self.n, self.nq = scene.n, self.layout.nq          # nq: the model's own coordinates
         self.p = scene.parameter_vector()
-        self.q0, self.qd0 = np.array(scene.q0), np.array(scene.qd0)
-        self.contacts = scene.contacts()
-        self.contact_rows = scene.contact_rows()
+        self.q0, self.qd0 = self.layout.reduce(scene.q0), self.layout.reduce(scene.qd0)
+        self.contacts = list(self.layout.contacts)
+        self.contact_rows = list(self.layout.contact_rows)
         self._fn = {name: getattr(self.lib, f"{self.name}_{name}") for name in (
             "mass_matrix", "bias", "forward_dynamics", "contact_points", "contact_velocities",
             "contact_jacobian", "contact_gaps", "energy", "rhs", "impact", "impact_complementarity")}
@@ -145,11 +152,13 @@ class CompiledModel:
         return qd_plus, impulse[:len(active)]
 
 
-def load_model(scene: Scene | str, bake_params: bool = False, flags=None, progress=None) -> CompiledModel:
-    """Generate (cached) and compile (cached) the model of a scene or a shipped scene name/file."""
+def load_model(scene: Scene | str, bake_params: bool = False, flags=None, progress=None,
+               specialise: bool = True) -> CompiledModel:
+    """Generate (cached) and compile (cached) the model of a scene or a shipped scene name/file.
+    ``specialise`` (default) leaves out what the scene does not need; False gives the general model."""
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
-    generated = generate_cached(scene, bake_params, progress)
+    generated = generate_cached(scene, bake_params, progress, specialise)
     kwargs = {} if flags is None else {"flags": flags}
     module = compile_model(generated.name, generated.header, generated.source, generated.cdef,
                            progress=progress, **kwargs)

@@ -23,8 +23,9 @@ def _pyplot():
 
 def point_histories(model: CompiledModel, result: SimulationResult) -> tuple[np.ndarray, np.ndarray]:
     """Positions and velocities of O_1..O_{n+1} at every sample: arrays (samples, n+1, 3)."""
-    positions = np.array([model.contact_points(q) for q in result.q])
-    velocities = np.array([model.contact_velocities(q, qd) for q, qd in zip(result.q, result.qd)])
+    reduce = model.layout.reduce
+    positions = np.array([model.contact_points(reduce(q)) for q in result.q])
+    velocities = np.array([model.contact_velocities(reduce(q), reduce(qd)) for q, qd in zip(result.q, result.qd)])
     return positions, velocities
 
 
@@ -67,7 +68,8 @@ def _is_planar(positions: np.ndarray) -> bool:
 
 def plot_impact_configurations(model: CompiledModel, result: SimulationResult, out_dir: Path) -> Path:
     plt = _pyplot()
-    shapes = [model.contact_points(model.q0)] + [model.contact_points(i.q) for i in result.impacts]
+    shapes = [model.contact_points(model.q0)] + [model.contact_points(model.layout.reduce(i.q))
+                                                 for i in result.impacts]
     labels = ["t = 0"] + [f"#{k} t = {i.t:.4f} s" for k, i in enumerate(result.impacts, start=1)]
     walls = {w.name: w.position for w in model.scene.walls}
     planar = _is_planar(np.array(shapes))

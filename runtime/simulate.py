@@ -110,7 +110,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     contact_tol   approaching contacts within this gap (m) of their wall join a simultaneous impact
     event_samples interpolant samples per step searched for wall crossings
     max_impacts   stop with status -1 beyond this many impacts (impact accumulation)
-    p, q0, qd0    override the scene's parameters and initial state
+    p, q0, qd0    override the scene's parameters and initial state (q0, qd0 in the full layout of Eq. 13)
+    Samples, final state and impact states are returned in the full layout of Eq. 13 whatever the model.
     """
     model = scene if isinstance(scene, CompiledModel) else load_model(scene)
     ffi, lib, name = model.ffi, model.lib, model.name
@@ -128,9 +129,10 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     _check(h_max >= 0, "h_max", f"must be >= 0 s (0: unbounded), got {h_max!r}")
 
     nq, nx = model.nq, 2 * model.nq
+    layout = model.layout
     p = model.p if p is None else np.ascontiguousarray(p, dtype=float)
-    q = model.q0 if q0 is None else np.ascontiguousarray(q0, dtype=float)
-    qd = model.qd0 if qd0 is None else np.ascontiguousarray(qd0, dtype=float)
+    q = model.q0 if q0 is None else _reduce(layout, q0, "q0", velocity=False)
+    qd = model.qd0 if qd0 is None else _reduce(layout, qd0, "qd0", velocity=True)
     if t_eval is None:
         t_eval = np.unique(np.r_[np.arange(0.0, t_end, 1e-3), t_end])
     t_eval = np.ascontiguousarray(t_eval, dtype=float)
@@ -188,8 +190,9 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     x_final = np.array(ffi.unpack(sim.x, nx))
     n = i_eval[0]
     return SimulationResult(
-        t=t_eval[:n].copy(), q=x_eval[:n, :nq].copy(), qd=x_eval[:n, nq:].copy(), impacts=impacts,
-        t_final=float(sim.t), q_final=x_final[:nq], qd_final=x_final[nq:],
+        t=t_eval[:n].copy(), q=layout.expand(x_eval[:n, :nq]), qd=layout.expand(x_eval[:n, nq:], velocity=True),
+        impacts=impacts, t_final=float(sim.t), q_final=layout.expand(x_final[:nq]),
+        qd_final=layout.expand(x_final[nq:], velocity=True),
         energy_initial=energy_initial, energy_final=sum(model.energy(x_final[:nq], x_final[nq:], p)),
         n_steps=int(sim.n_steps), n_rejected=int(sim.n_rejected), n_rhs=int(sim.n_rhs), status=status,
         message=message, method=method,
@@ -203,9 +206,23 @@ def _read_impact(model: CompiledModel, r) -> Impact:
     for k in range(r.ncontact):
         point, wall = model.contacts[r.contact[k]]
         contacts.append(Contact(point, wall.name, float(r.impulse[k])))
-    unpack = model.ffi.unpack
+    unpack, layout = model.ffi.unpack, model.layout
     return Impact(float(r.t), contacts, float(r.energy_before), float(r.energy_after), bool(r.complementarity),
-                  np.array(unpack(r.q, nq)), np.array(unpack(r.qd_before, nq)), np.array(unpack(r.qd_after, nq)))
+                  layout.expand(unpack(r.q, nq)), layout.expand(unpack(r.qd_before, nq), velocity=True),
+                  layout.expand(unpack(r.qd_after, nq), velocity=True))
+
+
+def _reduce(layout, full, name: str, velocity: bool) -> np.ndarray:
+    """A user's full-layout state (Eq. 13) -> the model's coordinates, refusing what the model cannot do."""
+    full = np.asarray(full, dtype=float)
+    if full.shape != (layout.nq_full,):
+        raise ValueError(f"{name}: expected {layout.nq_full} values (the layout of Eq. 13), got shape {full.shape}")
+    for index, value in layout.fixed:
+        target = 0.0 if velocity else value
+        if abs(full[index] - target) > 1e-12 * max(1.0, abs(target)):
+            raise ValueError(f"{name}[{index}]: this specialised (planar) model holds it at {target!r}, got "
+                             f"{full[index]!r}; load the general model (specialise=False) for other states")
+    return np.ascontiguousarray(layout.reduce(full))
 
 
 def _impact_problem(model: CompiledModel, impact: Impact, record, elastic_walls: set) -> str:

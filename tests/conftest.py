@@ -86,12 +86,13 @@ _MODELS = {}
 
 @pytest.fixture(scope="session")
 def compiled():
-    """compiled(scene, bake_params=False) -> runtime.CompiledModel, built once per session."""
+    """compiled(scene, bake_params=False, specialise=False) -> runtime.CompiledModel, built once per
+    session.  Tests get the general model unless they ask for the specialised one."""
     from runtime import load_model
 
-    def get(scene: Scene, bake_params: bool = False):
-        key = (scene, bake_params)
+    def get(scene: Scene, bake_params: bool = False, specialise: bool = False):
+        key = (scene, bake_params, specialise)
         if key not in _MODELS:
-            _MODELS[key] = load_model(scene, bake_params=bake_params)
+            _MODELS[key] = load_model(scene, bake_params=bake_params, specialise=specialise)
         return _MODELS[key]
     return get

@@ -19,7 +19,7 @@ def contacts_of(impact):
 def max_penetration(model, result):
     worst = 0.0
     for q in result.q:
-        worst = max(worst, -model.contact_gaps(q).min())
+        worst = max(worst, -model.contact_gaps(model.layout.reduce(q)).min())
     return worst
 
 

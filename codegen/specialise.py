@@ -1,0 +1,153 @@
+"""Leave out what a scene does not need: the layout of a generated model, decided from the scene.
+
+A :class:`Layout` says which generalised coordinates the model keeps (the rest are held at fixed
+values), which (point, wall) contacts and Jacobian rows it has, and which parameters are built in as
+zeros.  ``layout_for(scene, specialise=False)`` is the general model: all n + 5 coordinates, every
+wall of the scene, every parameter at run time.  With ``specialise=True``:
+
+* **planar scenes** -- every real joint axis parallel to the same box axis X1 or X3 (theta_0 = 0 and
+  theta_-1 a multiple of pi/2 with the default base twists; T_2..T_n rotations about z), no link with a
+  centre of mass off the plane or a product of inertia coupling the plane to its normal, and no
+  out-of-plane velocity at the start (as in the paper's case 1): theta_-1, theta_0 and the out-of-plane
+  translation are held fixed, n + 2 coordinates instead of n + 5, and walls across the normal are
+  dropped (no point ever reaches them);
+* **zero parameters** -- g, J components, centre-of-mass offsets or products of inertia that are
+  exactly 0 in the scene are built in as 0, so their terms vanish symbolically;
+* **walls and points** -- only the (point, wall) pairs of the scene get gap functions and rows.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .scene import RigidLink, Scene, SceneError, frames
+
+ANGLE_SNAP = 1e-12       # an angle within this of a multiple of pi/2 counts as exactly that multiple
+
+
+@dataclass(frozen=True)
+class Layout:
+    free: tuple[int, ...]                       # full-state indices (Eq. 13) kept as coordinates
+    fixed: tuple[tuple[int, float], ...]        # (full-state index, value) held constant
+    contacts: tuple                             # (point, Wall) pairs with a gap function
+    contact_rows: tuple                         # (point, axis) Jacobian rows the contacts need
+    zero_params: tuple[str, ...]                # parameters built in as 0
+    notes: tuple[str, ...]                      # what was left out and why (--explain)
+    planar_normal: int | None = None            # 0 or 2 for a planar model, else None
+
+    @property
+    def nq(self) -> int:
+        return len(self.free)
+
+    @property
+    def specialised(self) -> bool:
+        return self.planar_normal is not None or bool(self.zero_params) or self.nq_full != self.nq
+
+    @property
+    def nq_full(self) -> int:
+        return len(self.free) + len(self.fixed)
+
+    def reduce(self, full) -> np.ndarray:
+        """Full-layout vector (n + 5) -> the model's coordinates."""
+        return np.asarray(full, dtype=float)[list(self.free)]
+
+    def expand(self, reduced, velocity: bool = False) -> np.ndarray:
+        """The model's coordinates -> full layout; fixed entries get their value (0 for velocities)."""
+        reduced = np.asarray(reduced, dtype=float)
+        full = np.zeros(reduced.shape[:-1] + (self.nq_full,))
+        full[..., list(self.free)] = reduced
+        for index, value in self.fixed:
+            full[..., index] = 0.0 if velocity else value
+        return full
+
+
+def coordinate_names(n: int) -> list[str]:
+    """Names of the full state of Eq. 13."""
+    return ["theta_-1", "theta_0"] + [f"theta_{k}" for k in range(1, n + 1)] + ["X1", "X2", "X3"]
+
+
+def layout_for(scene: Scene, specialise: bool = True) -> Layout:
+    if not specialise:
+        return Layout(tuple(range(scene.nq)), (), tuple(scene.contacts()), tuple(scene.contact_rows()), (),
+                      ("general model: no specialisation asked for (all n + 5 coordinates, all walls, "
+                       "every parameter at run time)",))
+    notes = []
+    normal, reason = planar_normal(scene)
+    n = scene.n
+    if normal is None:
+        free, fixed = tuple(range(scene.nq)), ()
+        notes.append(f"kept all {scene.nq} coordinates: not planar ({reason})")
+        walls = scene.walls
+    else:
+        fixed_index = (0, 1, n + 2 + normal)
+        fixed = tuple((i, snap_angle(scene.q0[i]) if i < 2 else scene.q0[i]) for i in fixed_index)
+        free = tuple(i for i in range(scene.nq) if i not in fixed_index)
+        names = coordinate_names(n)
+        notes.append(f"planar: every real joint axis is parallel to X{normal + 1} and nothing starts out of the "
+                     f"plane, so {', '.join(names[i] for i in fixed_index)} are held at "
+                     f"{', '.join(f'{v:.12g}' for _, v in fixed)}: {len(free)} coordinates instead of {scene.nq} "
+                     "(results are mapped back to the full layout)")
+        across = [w for w in scene.walls if w.axis == normal]
+        walls = tuple(w for w in scene.walls if w.axis != normal)
+        if across:
+            notes.append(f"walls {', '.join(w.name for w in across)} dropped: every point stays at "
+                         f"X{normal + 1} = {scene.q0[n + 2 + normal]:g}, inside them")
+    contacts = tuple((p, w) for w in walls for p in w.points)
+    rows = tuple(sorted({(p, w.axis) for p, w in contacts}))
+    notes.append(f"contacts: {len(contacts)} (point, wall) gap functions and {len(rows)} Jacobian rows, only "
+                 "for the walls and points of the scene")
+    zero_params = tuple(name for name, value in zip(scene.parameter_names(), scene.parameter_vector())
+                        if value == 0.0 and not name.startswith(("wall_", "e_")))
+    if zero_params:
+        notes.append(f"zero parameters built in (their terms vanish; they cannot be changed at run time): "
+                     f"{', '.join(zero_params)}")
+    else:
+        notes.append("no parameter is zero: all stay in the runtime array p")
+    return Layout(free, fixed, contacts, rows, zero_params, tuple(notes), normal)
+
+
+def snap_angle(value: float) -> float:
+    quarter = round(value / (math.pi / 2))
+    if abs(value - quarter * math.pi / 2) > ANGLE_SNAP:
+        raise ValueError(f"angle {value!r} is not a multiple of pi/2")
+    return quarter * math.pi / 2
+
+
+def planar_normal(scene: Scene) -> tuple[int | None, str]:
+    """The box axis (0 for X1, 2 for X3) normal to the plane the chain stays in, or (None, reason)."""
+    q, qd, n = np.array(scene.q0), np.array(scene.qd0), scene.n
+    for k, T in enumerate(scene.twists, start=2):
+        if tuple(T[i][2] for i in range(3)) != (0.0, 0.0, 1.0):
+            return None, f"the twist T_{k} tilts joint {k} out of the plane"
+    for i in (0, 1):
+        try:
+            snap_angle(q[i])
+        except ValueError:
+            return None, f"theta_{i - 1} = {q[i]:.6g} is not a multiple of pi/2"
+    q_snapped = q.copy()
+    q_snapped[:2] = [snap_angle(q[0]), snap_angle(q[1])]
+    axis = frames(scene, q_snapped)[2][:, 2]                 # z_1 in the reference frame
+    normal = int(np.argmax(np.abs(axis)))
+    if abs(abs(axis[normal]) - 1.0) > 1e-12 or normal == 1:
+        return None, "the joint axes are not parallel to X1 or X3"
+    if qd[0] != 0.0 or qd[1] != 0.0 or qd[n + 2 + normal] != 0.0:
+        return None, f"theta_-1, theta_0 or X{normal + 1} has a non-zero initial velocity"
+    for i, link in enumerate(scene.links, start=1):
+        if isinstance(link, RigidLink):
+            I = link.inertia
+            if link.com[2] != 0.0 or I[0][2] != 0.0 or I[1][2] != 0.0:
+                return None, f"link {i} has its centre of mass or a product of inertia off the plane"
+    return normal, ""
+
+
+def check_not_singular(scene: Scene, layout: Layout) -> None:
+    """A clear error for models whose inertia matrix is singular by construction (zero inertia)."""
+    if layout.planar_normal is not None:
+        return                                              # rotation about the links is not a coordinate
+    for i, link in enumerate(scene.links, start=1):
+        if link.kind == "line" and link.J[0] == 0.0 and scene.n == 1:
+            raise SceneError(f"links[{i}].J: Jxx = 0 leaves the spatial single link's rotation about its own "
+                             "axis with no inertia (the inertia matrix is singular); give Jxx > 0 or make the "
+                             "scene planar")

@@ -1,4 +1,5 @@
-"""How the generator scales with n: stage timings and operation counts, as a Markdown table.
+"""How the generator scales with n: stage timings and operation counts, as a Markdown table
+(general n + 5 coordinate models of the built-in N-link scene unless --specialise).
 
     python -m codegen.scaling --links 1,2,4,8,16,32
 """
@@ -13,9 +14,9 @@ from .pipeline import generate
 from .scene import default_scene
 
 
-def measure(n: int, compile_code: bool = True, progress=print) -> dict:
+def measure(n: int, compile_code: bool = True, progress=print, specialise: bool = False) -> dict:
     scene = default_scene(n)
-    model = generate(scene, progress=lambda m: progress(f"  n={n}: {m}"))
+    model = generate(scene, progress=lambda m: progress(f"  n={n}: {m}"), specialise=specialise)
     row = {"n": n, **model.timings}
     if compile_code:
         from runtime.compile import compile_model
@@ -50,6 +51,9 @@ def main(argv=None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--links", default="1,2,4,8,16,32", help="comma-separated n values")
     parser.add_argument("--no-compile", action="store_true", help="skip the (fresh) cffi compile")
+    parser.add_argument("--specialise", action="store_true",
+                        help="measure the scene-specialised (planar, n + 2 coordinates) models instead of the "
+                             "general n + 5 coordinate ones")
     args = parser.parse_args(argv)
     try:
         ns = [int(x) for x in args.links.split(",")]
@@ -59,7 +63,8 @@ def main(argv=None) -> int:
     rows = []
     for n in ns:
         print(f"n = {n} ...", file=sys.stderr, flush=True)
-        rows.append(measure(n, not args.no_compile, progress=lambda m: print(m, file=sys.stderr, flush=True)))
+        rows.append(measure(n, not args.no_compile, progress=lambda m: print(m, file=sys.stderr, flush=True),
+                            specialise=args.specialise))
     print(f"Machine: {platform.machine()}, {platform.processor() or 'cpu'}, Python {platform.python_version()}")
     print(markdown(rows))
     return 0

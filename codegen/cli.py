@@ -6,7 +6,7 @@ import sys
 import time
 
 from .pipeline import generate, write_model, write_standalone
-from .scene import SceneError, default_scene, load_scene, shipped_scene_names
+from .scene import SceneError, default_scene, is_c_identifier, load_scene, shipped_scene_names
 from .specialise import check_not_singular, layout_for
 
 MAX_LINKS = 64
@@ -66,8 +66,7 @@ def main(argv=None) -> int:
                 raise SceneError(f"--links: must be in 1..{MAX_LINKS}, got {n}")
             scene = default_scene(n)
         if args.name is not None:
-            from .scene import _NAME_RE
-            if not _NAME_RE.match(args.name):
+            if not is_c_identifier(args.name):
                 raise SceneError(f"--name: must be a C identifier of 1..48 characters, got {args.name!r}")
     except SceneError as exc:
         print(f"error: {exc}", file=sys.stderr)

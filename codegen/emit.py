@@ -169,7 +169,7 @@ def render_model(scene: Scene, name: str, programs: list[Program], bake_params: 
         row_of_contact=[layout.contact_rows.index((point, wall.axis)) for point, wall in layout.contacts],
         q0=[_double_literal(float(x)) for x in layout.reduce(scene.q0)],
         qd0=[_double_literal(float(x)) for x in layout.reduce(scene.qd0)],
-        total_ops=sum((f.ops for f in functions), OpCount()), literal=_double_literal,
+        literal=_double_literal,
     )
     header = env.get_template("model.h.j2").render(**context)
     source = env.get_template("model.c.j2").render(**context)

@@ -228,6 +228,11 @@ def twist_about_x(angle: float) -> tuple[tuple[float, ...], ...]:
 _NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,47}$")
 
 
+def is_c_identifier(name) -> bool:
+    """Whether ``name`` can prefix generated C symbols (1..48 characters)."""
+    return isinstance(name, str) and bool(_NAME_RE.match(name))
+
+
 @dataclass(frozen=True)
 class Scene:
     """One simulation set-up.  Construction validates every field.

@@ -42,10 +42,6 @@ class Layout:
         return len(self.free)
 
     @property
-    def specialised(self) -> bool:
-        return self.planar_normal is not None or bool(self.zero_params) or self.nq_full != self.nq
-
-    @property
     def nq_full(self) -> int:
         return len(self.free) + len(self.fixed)
 

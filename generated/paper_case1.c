@@ -1040,7 +1040,7 @@ int paper_case1_sim_init(paper_case1_sim *s, double t0, const double *q, const d
     }
     if (!paper_case1_finite(s->x, PAPER_CASE1_NX) || !paper_case1_finite(&t0, 1)) return PAPER_CASE1_ERR_BAD_OPTION;
     s->t = t0;
-    s->h = opt->method == PAPER_CASE1_METHOD_RK4 ? opt->dt : opt->dt;
+    s->h = opt->dt;                               /* RK4 step, or the first adaptive step (0: automatic) */
     s->f_valid = 0;
     s->n_steps = s->n_rejected = s->n_rhs = s->n_impacts = 0;
     paper_case1_contact_gaps(s->x, s->p, s->gaps);

@@ -790,7 +790,7 @@ int paper_case2_sim_init(paper_case2_sim *s, double t0, const double *q, const d
     }
     if (!paper_case2_finite(s->x, PAPER_CASE2_NX) || !paper_case2_finite(&t0, 1)) return PAPER_CASE2_ERR_BAD_OPTION;
     s->t = t0;
-    s->h = opt->method == PAPER_CASE2_METHOD_RK4 ? opt->dt : opt->dt;
+    s->h = opt->dt;                               /* RK4 step, or the first adaptive step (0: automatic) */
     s->f_valid = 0;
     s->n_steps = s->n_rejected = s->n_rhs = s->n_impacts = 0;
     paper_case2_contact_gaps(s->x, s->p, s->gaps);

@@ -53,7 +53,6 @@ def scipy_hybrid(model: CompiledModel, t_end: float, rtol: float, atol: float, c
                   if gaps[c] <= contact_tol and wall.normal_sign * v[point - 1, wall.axis] < 0]
         if not active:
             # scipy stops on the crossing of a point that is not approaching: step past it
-            active = []
             x = solve_ivp(model.rhs, (t, min(t + 1e-9, t_end)), x, rtol=rtol, atol=atol).y[:, -1]
             t = min(t + 1e-9, t_end)
             continue

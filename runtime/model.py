@@ -75,7 +75,7 @@ class CompiledModel:
         self._fn = {name: getattr(self.lib, f"{self.name}_{name}") for name in (
             "mass_matrix", "bias", "forward_dynamics", "contact_points", "contact_velocities",
             "contact_jacobian", "contact_gaps", "energy", "rhs", "impact", "impact_complementarity")}
-        self._work = np.zeros(self.nq * self.nq * 3 + len(self.contact_rows) * self.nq + self.nq)
+        self._work = np.zeros(getattr(self.lib, f"{self.name.upper()}_IMPACT_NWORK"))
 
     # -- plumbing ---------------------------------------------------------------
     def _ptr(self, array: np.ndarray):

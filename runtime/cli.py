@@ -12,6 +12,7 @@ from codegen.scene import SceneError, load_scene, shipped_scene_names
 
 from .compile import BuildError, CompilerNotFound
 from .model import load_model
+from .precision import STATE_TOL, TIME_TOL
 from .simulate import METHODS, simulate
 
 
@@ -34,6 +35,22 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--samples-dt", type=float, default=1e-3, help="output sample spacing in s (default 1e-3)")
     sim.add_argument("--json", metavar="FILE", help="write the result (impacts, final state, energies) as JSON")
     sim.add_argument("--plot", metavar="DIR", help="write PNG plots (time histories, impact configurations)")
+    prec = commands.add_parser("precision", help="work-precision study: error against CPU time of every integrator",
+                               description="Error against CPU time for RK4, DOPRI5, DOP853 and scipy's RK45, "
+                                           "DOP853, Radau, against a confirmed DOP853 reference (runtime/precision.py).",
+                               epilog=f"Shipped scenes: {', '.join(shipped_scene_names())}.")
+    prec.add_argument("--scene", default="paper-case1", help="shipped scene name or .toml/.json file")
+    prec.add_argument("--t-end", type=float, default=None,
+                      help="end time in s (default: 1.5 for paper-case1, 1.75 for paper-case2, else 1.0)")
+    prec.add_argument("--out", default="precision", metavar="DIR",
+                      help="folder for precision-SCENE.md/.json/.png (default ./precision)")
+    prec.add_argument("--quick", action="store_true", help="a few runs only (for tests)")
+    prec.add_argument("--time-tol", type=float, default=TIME_TOL,
+                      help=f"s; the confirming runs' impact times must agree with the reference to this "
+                           f"(default {TIME_TOL:g})")
+    prec.add_argument("--state-tol", type=float, default=STATE_TOL,
+                      help=f"the confirming runs' final states (max |x - x_ref|) must agree with the reference "
+                           f"to this (default {STATE_TOL:g})")
     return parser
 
 
@@ -42,6 +59,9 @@ DEFAULT_T_END = {"paper_case1": 1.5, "paper_case2": 1.75}
 
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
+    if args.command == "precision":
+        from .precision import main as precision_main
+        return precision_main(args)
     try:
         scene = load_scene(args.scene)
     except SceneError as exc:

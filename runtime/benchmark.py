@@ -19,6 +19,7 @@ import numpy as np
 
 from codegen.scene import load_scene
 
+from . import baseline
 from .model import CompiledModel, load_model
 from .simulate import simulate
 
@@ -28,38 +29,10 @@ SCIPY_METHOD = {"dopri5": "RK45", "dop853": "DOP853"}
 
 def scipy_hybrid(model: CompiledModel, t_end: float, rtol: float, atol: float, contact_tol: float = 1e-6,
                  method: str = "RK45"):
-    """The outside baseline: solve_ivp + events, impacts by the compiled Eq. 48 (equality form)."""
-    from scipy.integrate import solve_ivp
-    nq = model.nq
-    p = model.p
-    events = []
-    for c in range(len(model.contacts)):
-        def gap(t, x, c=c):
-            return model.contact_gaps(x[:nq], p)[c]
-        gap.terminal, gap.direction = True, -1
-        events.append(gap)
-    t, x = 0.0, np.r_[model.q0, model.qd0]
-    times, n_rhs = [], 0
-    while t < t_end:
-        solution = solve_ivp(model.rhs, (t, t_end), x, method=method, rtol=rtol, atol=atol, events=events)
-        n_rhs += solution.nfev
-        t, x = solution.t[-1], solution.y[:, -1].copy()
-        if solution.status != 1:
-            break
-        q, qd = x[:nq], x[nq:]
-        gaps = model.contact_gaps(q, p)
-        v = model.contact_velocities(q, qd, p)
-        active = [c for c, (point, wall) in enumerate(model.contacts)
-                  if gaps[c] <= contact_tol and wall.normal_sign * v[point - 1, wall.axis] < 0]
-        if not active:
-            # scipy stops on the crossing of a point that is not approaching: step past it
-            x = solve_ivp(model.rhs, (t, min(t + 1e-9, t_end)), x, rtol=rtol, atol=atol).y[:, -1]
-            t = min(t + 1e-9, t_end)
-            continue
-        qd_plus, _ = model.impact(q, qd, active)
-        x[nq:] = qd_plus
-        times.append(t)
-    return np.array(times), n_rhs
+    """The outside baseline (runtime.baseline): solve_ivp + events, impacts by the compiled Eq. 48.
+    Returns the impact times and the number of rhs evaluations."""
+    run = baseline.scipy_hybrid(model, t_end, rtol, atol, method=method, contact_tol=contact_tol)
+    return run.times, run.n_rhs
 
 
 def median_time(function, repeat: int) -> float:

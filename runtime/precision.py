@@ -375,6 +375,12 @@ def main(args) -> int:
         if not (math.isfinite(value) and value > 0):
             print(f"error: {name}: must be a finite number > 0, got {value}", file=sys.stderr)
             return 2
+    out = Path(args.out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        print(f"error: --out: cannot create {out}: {exc.strerror}", file=sys.stderr)
+        return 2
     try:
         model = load_model(scene, progress=lambda m: progress(f"  {m}"))
     except (CompilerNotFound, BuildError) as exc:
@@ -390,8 +396,6 @@ def main(args) -> int:
     text = markdown(scene.name, t_end, reference, rows)
     text += f"\nMachine: {machine()}. Study took {time.perf_counter() - start:.1f} s.\n"
     print(text)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     stem = f"precision-{scene.name.replace('_', '-')}"
     (out / f"{stem}.md").write_text(text)
     (out / f"{stem}.json").write_text(json.dumps(to_json(scene.name, t_end, reference, rows), indent=1))

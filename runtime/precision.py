@@ -302,6 +302,8 @@ def plot(scene_name: str, t_end: float, reference: Reference, rows: list[Row], p
     panels = ((axes[0], "impact_time_error", "largest impact-time error (s)", reference.time_floor),
               (axes[1], "state_error", "final-state error max |x − x_ref|", reference.state_floor))
     for ax, attr, ylabel, floor in panels:
+        ax.set_xscale("log")
+        ax.set_yscale("log")
         for family in FAMILIES:
             mine = [r for r in rows if r.family == family]
             if not mine:
@@ -319,14 +321,17 @@ def plot(scene_name: str, t_end: float, reference: Reference, rows: list[Row], p
             paper = [r for r in mine if family == "RK4" and math.isclose(r.value, PAPER_DT)]
             if paper:
                 value = getattr(paper[0].errors, attr)
-                ax.annotate("RK4, the paper's dt = 1e-5 s", (paper[0].cpu_s, max(value, 1e-16)),
-                            textcoords="offset points", xytext=(-40, 14), fontsize=8)
+                ax.annotate("RK4 at the paper's\ndt = 1e-5 s", (paper[0].cpu_s, max(value, 1e-16)),
+                            textcoords="offset points", xytext=(-30, 45), fontsize=8, ha="center",
+                            arrowprops={"arrowstyle": "->", "color": "tab:red"})
         if floor > 0:
             ax.axhline(floor, color="grey", linestyle=":", linewidth=1)
-            ax.annotate("reference uncertainty", (ax.get_xlim()[0], floor), textcoords="offset points",
-                        xytext=(4, 3), fontsize=8, color="grey")
-        ax.set_xscale("log")
-        ax.set_yscale("log")
+            ax.annotate("reference uncertainty", (0.01, floor), xycoords=("axes fraction", "data"),
+                        textcoords="offset points", xytext=(0, 3), fontsize=8, color="grey")
+        if attr == "impact_time_error" and any(r.errors.diverged for r in rows):
+            ax.set_ylim(top=100.0)
+            ax.annotate("× impact sequence diverged", (0.5, 1.0), xycoords=("axes fraction", "data"),
+                        textcoords="offset points", xytext=(0, 9), fontsize=8, ha="center")
         ax.set_xlabel("CPU time per run (s)")
         ax.set_ylabel(ylabel)
         ax.grid(True, which="major", alpha=0.3)

@@ -38,7 +38,8 @@ def _generator_fingerprint() -> str:
 
 def generate_cached(scene: Scene, bake_params: bool = False, progress=None, specialise: bool = True) -> GeneratedModel:
     """codegen.generate with an on-disk cache of the generated text (keyed by scene and generator)."""
-    key = hashlib.sha256(f"{scene_hash(scene)}|{bake_params}|{specialise}|{_generator_fingerprint()}".encode()
+    fingerprint = _generator_fingerprint()
+    key = hashlib.sha256(f"{scene_hash(scene)}|{bake_params}|{specialise}|{fingerprint}".encode()
                          ).hexdigest()[:20]
     path = cache_dir() / f"gen_{key}.json"
     if path.exists():
@@ -49,6 +50,8 @@ def generate_cached(scene: Scene, bake_params: bool = False, progress=None, spec
         return model
     model = codegen.generate(scene, bake_params=bake_params, progress=progress or (lambda m: None),
                              specialise=specialise)
+    if _generator_fingerprint() != fingerprint:     # the generator changed while it ran: do not cache
+        return model
     tmp = path.with_suffix(f".{id(model)}.tmp")
     tmp.write_text(json.dumps({"name": model.name, "header": model.header, "source": model.source,
                                "cdef": model.cdef}))
@@ -74,7 +77,8 @@ class CompiledModel:
         self.contact_rows = list(self.layout.contact_rows)
         self._fn = {name: getattr(self.lib, f"{self.name}_{name}") for name in (
             "mass_matrix", "bias", "forward_dynamics", "contact_points", "contact_velocities",
-            "contact_jacobian", "contact_gaps", "energy", "rhs", "impact", "impact_complementarity")}
+            "contact_jacobian", "contact_gaps", "energy", "rhs", "impact", "impact_complementarity",
+            "contact_bias")}
         self._work = np.zeros(getattr(self.lib, f"{self.name.upper()}_IMPACT_NWORK"))
 
     # -- plumbing ---------------------------------------------------------------
@@ -126,6 +130,11 @@ class CompiledModel:
         rows = len(self.contact_rows)
         return self._call("contact_jacobian", rows * self.nq, self._vec(q, self.nq, "q"),
                           self._params(p)).reshape(rows, self.nq)
+
+    def contact_bias(self, q, qd, p=None) -> np.ndarray:
+        """J_dot qd: the contact Jacobian rows' accelerations at qdd = 0 (row order of contact_jacobian)."""
+        return self._call("contact_bias", len(self.contact_rows), self._vec(q, self.nq, "q"),
+                          self._vec(qd, self.nq, "qd"), self._params(p))
 
     def contact_gaps(self, q, p=None) -> np.ndarray:
         return self._call("contact_gaps", len(self.contacts), self._vec(q, self.nq, "q"), self._params(p))

@@ -77,8 +77,7 @@ class CompiledModel:
         self.contact_rows = list(self.layout.contact_rows)
         self._fn = {name: getattr(self.lib, f"{self.name}_{name}") for name in (
             "mass_matrix", "bias", "forward_dynamics", "contact_points", "contact_velocities",
-            "contact_jacobian", "contact_gaps", "energy", "rhs", "impact", "impact_complementarity",
-            "contact_bias")}
+            "contact_jacobian", "contact_gaps", "energy", "rhs", "impact", "impact_complementarity")}
         self._work = np.zeros(getattr(self.lib, f"{self.name.upper()}_IMPACT_NWORK"))
 
     # -- plumbing ---------------------------------------------------------------
@@ -130,11 +129,6 @@ class CompiledModel:
         rows = len(self.contact_rows)
         return self._call("contact_jacobian", rows * self.nq, self._vec(q, self.nq, "q"),
                           self._params(p)).reshape(rows, self.nq)
-
-    def contact_bias(self, q, qd, p=None) -> np.ndarray:
-        """J_dot qd: the contact Jacobian rows' accelerations at qdd = 0 (row order of contact_jacobian)."""
-        return self._call("contact_bias", len(self.contact_rows), self._vec(q, self.nq, "q"),
-                          self._vec(qd, self.nq, "qd"), self._params(p))
 
     def contact_gaps(self, q, p=None) -> np.ndarray:
         return self._call("contact_gaps", len(self.contacts), self._vec(q, self.nq, "q"), self._params(p))

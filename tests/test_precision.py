@@ -134,20 +134,28 @@ def test_energy_drift_leaves_out_what_the_impacts_remove():
     assert energy_drift(outcome([], energy_final=10.0 - 2e-9)) == pytest.approx(2e-10)
 
 
-def test_unconfirmed_reference_fails_loudly(tmp_path):
-    result = run("--scene", "paper-case1", "--t-end", "0.5", "--time-tol", "1e-18", "--out", str(tmp_path))
-    assert result.returncode == 1
-    assert "error: the reference is not confirmed: DOPRI5 rtol = 1e-13: impact times differ by" in result.stderr
-    assert "Traceback" not in result.stderr
+def in_process(capsys, *args):
+    """The command in this process (faster than a subprocess; an uncaught exception fails the test)."""
+    from runtime.cli import main
+    code = main(["precision", *args])
+    return code, capsys.readouterr()
 
 
-def test_bad_options_are_named():
-    result = run("--scene", "paper-case1", "--t-end", "-1")
-    assert result.returncode == 2 and "--t-end: must be a finite number > 0, got -1.0" in result.stderr
-    result = run("--scene", "no-such-scene")
-    assert result.returncode == 2 and "shipped scenes" in result.stderr and "Traceback" not in result.stderr
-    result = run("--scene", "paper-case1", "--out", "/dev/null/precision")
-    assert result.returncode == 2 and "--out: cannot create /dev/null/precision" in result.stderr
+def test_unconfirmed_reference_fails_loudly(tmp_path, capsys):
+    code, output = in_process(capsys, "--scene", "paper-case1", "--t-end", "0.5", "--time-tol", "1e-18",
+                              "--out", str(tmp_path))
+    assert code == 1
+    assert "error: the reference is not confirmed: DOPRI5 rtol = 1e-13: impact times differ by" in output.err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_bad_options_are_named(capsys):
+    code, output = in_process(capsys, "--scene", "paper-case1", "--t-end", "-1")
+    assert code == 2 and "--t-end: must be a finite number > 0, got -1.0" in output.err
+    code, output = in_process(capsys, "--scene", "no-such-scene")
+    assert code == 2 and "shipped scenes" in output.err
+    code, output = in_process(capsys, "--scene", "paper-case1", "--out", "/dev/null/precision")
+    assert code == 2 and "--out: cannot create /dev/null/precision" in output.err
 
 
 @pytest.mark.slow

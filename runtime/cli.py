@@ -14,6 +14,7 @@ from .compile import BuildError, CompilerNotFound
 from .model import load_model
 from .precision import STATE_TOL, TIME_TOL
 from .simulate import METHODS, simulate
+from . import stress as stress_suite
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -51,6 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
     prec.add_argument("--state-tol", type=float, default=STATE_TOL,
                       help=f"the confirming runs' final states (max |x - x_ref|) must agree with the reference "
                            f"to this (default {STATE_TOL:g})")
+    stress_suite.add_parser(commands)
     return parser
 
 
@@ -62,6 +64,8 @@ def main(argv=None) -> int:
     if args.command == "precision":
         from .precision import main as precision_main
         return precision_main(args)
+    if args.command == "stress":
+        return stress_suite.main(args)
     try:
         scene = load_scene(args.scene)
     except SceneError as exc:

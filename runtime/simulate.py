@@ -131,8 +131,10 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     nq, nx = model.nq, 2 * model.nq
     layout = model.layout
     p = model.p if p is None else np.ascontiguousarray(p, dtype=float)
+    _check_parameters(model, p)
     q = model.q0 if q0 is None else _reduce(layout, q0, "q0", velocity=False)
     qd = model.qd0 if qd0 is None else _reduce(layout, qd0, "qd0", velocity=True)
+    _check_inside(model, q, p, "q0" if q0 is not None else "initial.q")
     if t_eval is None:
         t_eval = np.unique(np.r_[np.arange(0.0, t_end, 1e-3), t_end])
     t_eval = np.ascontiguousarray(t_eval, dtype=float)
@@ -217,12 +219,41 @@ def _reduce(layout, full, name: str, velocity: bool) -> np.ndarray:
     full = np.asarray(full, dtype=float)
     if full.shape != (layout.nq_full,):
         raise ValueError(f"{name}: expected {layout.nq_full} values (the layout of Eq. 13), got shape {full.shape}")
+    if not np.all(np.isfinite(full)):
+        raise ValueError(f"{name}: must be finite, got {full.tolist()}")
     for index, value in layout.fixed:
         target = 0.0 if velocity else value
         if abs(full[index] - target) > 1e-12 * max(1.0, abs(target)):
             raise ValueError(f"{name}[{index}]: this specialised (planar) model holds it at {target!r}, got "
                              f"{full[index]!r}; load the general model (specialise=False) for other states")
     return np.ascontiguousarray(layout.reduce(full))
+
+
+def _check_parameters(model: CompiledModel, p: np.ndarray) -> None:
+    """A parameter vector given to simulate(): the scene's layout, finite, physical ranges."""
+    names = model.scene.parameter_names()
+    _check(p.shape == model.p.shape and bool(np.all(np.isfinite(p))), "p",
+           f"expected {len(names)} finite values ({', '.join(names)}), got {np.asarray(p).tolist()}")
+    for name, value in zip(names, p):
+        if name.startswith("e_"):
+            _check(0.0 <= value <= 1.0, f"p[{name}]", f"restitution must be in [0, 1], got {float(value)!r}")
+        elif name.split("_")[0] in ("l", "mu", "m"):
+            _check(value > 0.0, f"p[{name}]", f"must be > 0, got {float(value)!r}")
+
+
+def _check_inside(model: CompiledModel, q: np.ndarray, p: np.ndarray, name: str) -> None:
+    """Refuse a start with a contact point outside its wall (beyond round-off): no impact can fix it."""
+    if not model.contacts:
+        return
+    gaps = model.contact_gaps(q, p)
+    points = model.contact_points(q, p)
+    for c in np.flatnonzero(gaps < -1e-12 * max(1.0, float(np.abs(points).max()))):
+        point, wall = model.contacts[c]
+        axis = f"X{wall.axis + 1}"
+        position = p[model.scene.parameter_names().index(f"wall_{wall.name}")]
+        raise ValueError(f"{name}: contact point O_{point} is outside the wall {wall.name}: {axis} = "
+                         f"{points[point - 1, wall.axis]:.6g} m, allowed {axis} {'>=' if wall.side < 0 else '<='} "
+                         f"{position:g} (gap {gaps[c]:.3g} m)")
 
 
 def _impact_problem(model: CompiledModel, impact: Impact, record, elastic_walls: set) -> str:

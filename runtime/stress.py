@@ -29,7 +29,8 @@ Registering a case (this module's own cases live in ``runtime/stress_cases.py``;
         expect=Expect.ok(),                  # or Expect.status("impacts accumulate"), Expect.raises("O_1")
         checks=(energy_conserved(1e-9), converged()),   # extra checks: fn(run) -> Check or [Check]
         slow=False,                          # True: left out of --quick and of the default test run
-    ))
+        known_issue="",                      # a FAIL the runtime has today (the expectation stays the
+    ))                                       # correct behaviour; tests mark it xfail, strict)
 
 An extra check receives the ``CaseRun`` (scene, model, result, p, samples and energies already
 evaluated) and returns ``Check(ok, note)`` objects; the notes are printed under the table.
@@ -104,6 +105,7 @@ class Case:
     samples_dt: float = SAMPLES_DT
     pen_tol: float = PEN_TOL
     energy_tol: float = ENERGY_TOL
+    known_issue: str = ""                          # a FAIL expected today and why; tests mark it xfail(strict)
 
 
 CASES: list[Case] = []
@@ -420,7 +422,9 @@ def table_rows(outcomes: list[CaseOutcome]) -> list[list[str]]:
         r = o.row
         t = "-" if r["t_final"] is None else f"{r['t_final']:.4g}/{r['t_end']:g}"
         status = "raised" if r["status"] == "raised" else _fmt(r["status"], "d")
-        verdict = r["result"] + ("" if o.passed else ": " + "; ".join(o.reasons))
+        verdict = r["result"] + (" (known issue)" if o.case.known_issue and not o.passed else "")
+        verdict += " (known issue no longer seen)" if o.case.known_issue and o.passed else ""
+        verdict += "" if o.passed else ": " + "; ".join(o.reasons)
         rows.append([r["case"], _fmt(r["n"], "d"), r["method"], _fmt(r["impacts"], "d"), t,
                      _fmt(r["energy_drift"], ".1e"), _fmt(r["max_gain"], ".1e"), _fmt(r["max_penetration"], ".1e"),
                      _fmt(r["max_cond_If"], ".1e"), status, verdict])
@@ -435,6 +439,8 @@ def format_table(outcomes: list[CaseOutcome]) -> str:
     for o in outcomes:
         lines.append(f"{o.case.name}: {o.case.description}")
         lines.append(f"    expected {o.case.expect.describe()}; got: {o.row['message']}")
+        if o.case.known_issue:
+            lines.append(f"    known issue: {o.case.known_issue}")
         lines += [f"    - {note}" for note in o.notes]
     return "\n".join(lines)
 

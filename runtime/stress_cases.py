@@ -380,6 +380,23 @@ register(Case(
     checks=(impacts_are(_graze_first_hit(_SHALLOW)), _graze_hit_speed(_SHALLOW), energy_conserved(1e-9),
             impulse_momentum(1e-9))))
 
+# Shallow hits the event search misses today: it samples each step's interpolant at event_samples points
+# and only sees a sign change of the gap between two samples, so a dip shorter than the sample spacing
+# (about step / 4) is missed.  DOP853 takes 30 ms steps here and misses the 4 ms dip of the 1e-4 m hit;
+# DOPRI5 misses a 1e-7 m hit (0.13 ms, approach speed 3 mm/s).  Measured with DOPRI5 at rtol 1e-10:
+# found down to 1e-6 m, missed from 1e-7 m (also with event_samples = 16).
+_DIP_MISSED = ("the event search only sees gap sign changes between interpolant samples; a dip shorter than "
+               "the sample spacing is missed (a fix: also locate the minimum of the gap where the normal "
+               "velocity changes sign between samples)")
+for _depth, _method in ((1e-4, "dop853"), (1e-7, "dopri5")):
+    register(Case(
+        name=f"graze-shallow-{_depth:.0e}-{_method}".replace("e-0", "e-"), scene="stress-graze",
+        params={"wall_x2_min": _depth}, known_issue=_DIP_MISSED,
+        description=f"the graze with the floor raised {_depth:g} m ({_method}): a real hit at "
+                    f"{GRAZE_OMEGA * math.sqrt(2 * GRAZE_R * _depth):.2g} m/s",
+        simulate={"t_end": 0.2, "method": _method, "rtol": 1e-10, "atol": 1e-12}, samples_dt=1e-5,
+        checks=(impacts_are(_graze_first_hit(_depth)), energy_conserved(1e-9))))
+
 register(Case(
     name="graze-miss", scene="stress-graze", params={"wall_x2_min": -1e-6},
     description="the graze with the floor lowered 1e-6 m: a near miss, no impact",
@@ -414,7 +431,8 @@ register(Case(
     description="straight 3-link chain at rest on the floor (gaps 0) under gravity, e = 0.5",
     simulate={"t_end": 1.0, **ACCURATE},
     expect=Expect.ok() if PERSISTENT_CONTACT else Expect.status(r"O_1\b.*x2_min.*(rest|persistent)"),
-    checks=(stays_at_rest(), energy_conserved(1e-12)) if PERSISTENT_CONTACT else ()))
+    checks=(stays_at_rest(), energy_conserved(1e-12)) if PERSISTENT_CONTACT else (),
+    known_issue="" if PERSISTENT_CONTACT else "no persistent contact: the chain sinks through the floor, status 0"))
 
 
 def _outside_scene() -> Scene:

@@ -14,7 +14,6 @@ import pytest
 from runtime import stress
 from runtime.cli import main as cli_main
 from runtime.stress import Case, Expect, evaluate, run_case
-from runtime.stress_cases import PERSISTENT_CONTACT
 
 ROOT = Path(__file__).resolve().parent.parent
 CASES = {case.name: case for case in stress.load_cases()}
@@ -23,9 +22,8 @@ CASES = {case.name: case for case in stress.load_cases()}
 def marks(case):
     if case.slow:
         return [pytest.mark.slow]
-    if case.name == "rest-on-floor" and not PERSISTENT_CONTACT:
-        return [pytest.mark.xfail(reason="without persistent contact a chain resting on the floor sinks through "
-                                         "it with status 0", strict=True)]
+    if case.known_issue:
+        return [pytest.mark.xfail(reason=case.known_issue, strict=True)]
     return []
 
 

@@ -242,25 +242,53 @@ class ChartSwitch:
 
 @dataclass
 class ChartResult(SimulationResult):
-    """A SimulationResult whose q, qd (samples, impacts, final state) are in chart A's coordinates (the
-    scene's own), plus: ``chart`` (0 = A, 1 = B, per sample: the chart integrated there),
-    ``q_native``/``qd_native`` (the samples in that chart), ``impact_chart``, ``switches`` (every chart
-    switch, in order), ``chart_twists`` (T_-1, T_0, T_1 of A and B) and ``chart_b_name``."""
+    """A SimulationResult (status, message, samples, impacts, energies) from simulate_with_charts.
+
+    ``t``, ``q``, ``qd``, the impacts' states and ``q_final``/``qd_final`` are in chart A's coordinates,
+    the scene's own layout of Eq. 13, whichever chart was integrated.  Chart A's rates grow like 1/mu_A
+    near its own lock (``measure_a``), so physical quantities are best evaluated from the integrated
+    coordinates: ``chart`` (0 = A, 1 = B per sample), ``q_native``/``qd_native``; ``contact_points()``,
+    ``contact_gaps()`` and ``energies()`` do that.  ``switches`` lists every chart switch in order;
+    ``impact_chart`` the chart of each impact."""
 
     chart: np.ndarray = None
     q_native: np.ndarray = None
     qd_native: np.ndarray = None
+    measure_a: np.ndarray = None      # mu_A per sample (1: far from chart A's lock, 0: at it)
     impact_chart: list = field(default_factory=list)
     switches: list = field(default_factory=list)
-    chart_twists: tuple = ()
+    chart_twists: tuple = ()          # (T_-1, T_0, T_1) of chart A and of chart B
     chart_b_name: str = ""
     min_measure: float = 1.0          # smallest mu of the integrated chart at any monitor sample
+    models: "ChartModels" = field(default=None, repr=False)
+
+    def _per_sample(self, kernel: str, p=None, *velocity) -> np.ndarray:
+        out = []
+        for k in range(len(self.t)):
+            model = self.models.models[self.chart[k]]
+            args = [model.layout.reduce(self.q_native[k])]
+            if velocity:
+                args.append(model.layout.reduce(self.qd_native[k]))
+            out.append(getattr(model, kernel)(*args, p))
+        return np.array(out)
+
+    def contact_points(self, p=None) -> np.ndarray:
+        """O_1..O_{n+1} at every sample, (len(t), n + 1, 3), from the integrated chart's coordinates."""
+        return self._per_sample("contact_points", p)
+
+    def contact_gaps(self, p=None) -> np.ndarray:
+        """Every (point, wall) gap at every sample, from the integrated chart's coordinates."""
+        return self._per_sample("contact_gaps", p)
+
+    def energies(self, p=None) -> np.ndarray:
+        """Total energy T + V at every sample, from the integrated chart's coordinates."""
+        return self._per_sample("energy", p, True).sum(axis=1)
 
     def switch_table(self) -> str:
-        lines = [f"{'#':>3} {'t (s)':>14}  from -> to   mu(from)   mu(to)   reason"]
+        lines = [f"{'#':>3} {'t (s)':>14}  from -> to  mu(from)  mu(to)  reason"]
         for k, s in enumerate(self.switches, start=1):
-            lines.append(f"{k:>3} {s.t:14.9f}  {s.source} -> {s.target}     {s.measure_source:8.4f}  "
-                         f"{s.measure_target:8.4f}   {s.reason}")
+            lines.append(f"{k:>3} {s.t:14.9f}  {s.source} -> {s.target}    {s.measure_source:7.4f}  "
+                         f"{s.measure_target:6.4f}  {s.reason}")
         return "\n".join(lines)
 
     def to_json(self) -> dict:
@@ -360,6 +388,7 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
     impact_chart: list[int] = []
     switches: list[ChartSwitch] = []
     totals = {"n_steps": 0, "n_rejected": 0, "n_rhs": 0}
+    events, persistent = [], []
 
     t = 0.0
     q, qd = np.array(scene.q0, dtype=float), np.array(scene.qd0, dtype=float)
@@ -435,6 +464,10 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
             if cut is None or imp.t < run.t[cut]:
                 impacts.append(_impact_in_a(imp, t, current, charts, out.last_a))
                 impact_chart.append(current)
+        for event in getattr(run, "contact_events", ()):      # persistent contact (if the runtime has it)
+            if cut is None or event.t < run.t[cut]:
+                events.append(dataclasses.replace(event, t=t + event.t))
+        persistent = getattr(run, "persistent_final", [])
         if cut is None:
             q, qd = run.q_final.copy(), run.qd_final.copy()
             if status != 0 or run.status != 0:
@@ -467,15 +500,18 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
                 monitor_dt=monitor_dt, t_end=t_end)
     if status == 0:
         message = f"{message}; {len(switches)} chart switch(es)"
+    extra = {"contact_events": events, "persistent_final": persistent} \
+        if "contact_events" in {f.name for f in dataclasses.fields(SimulationResult)} else {}
     return ChartResult(
-        t=user[:n_done].copy(), q=out.q[:n_done], qd=out.qd[:n_done], impacts=impacts, t_final=float(t),
+        **extra, t=user[:n_done].copy(), q=out.q[:n_done], qd=out.qd[:n_done], impacts=impacts, t_final=float(t),
         q_final=q_final, qd_final=qd_final, energy_initial=energy_initial,
         energy_final=_energy(compiled[current], q, qd, p_vec),
         n_steps=totals["n_steps"], n_rejected=totals["n_rejected"], n_rhs=totals["n_rhs"], status=status,
         message=message, method=options.get("method", "dopri5"), options=opts,
         chart=out.chart[:n_done], q_native=out.q_native[:n_done], qd_native=out.qd_native[:n_done],
         impact_chart=impact_chart, switches=switches, chart_twists=(charts[0].twists, charts[1].twists),
-        chart_b_name=models.name_b, min_measure=min_measure)
+        measure_a=charts[0].measure(out.q[:n_done, 1]), chart_b_name=models.name_b, min_measure=min_measure,
+        models=models)
 
 
 class _Output:

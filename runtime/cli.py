@@ -36,6 +36,8 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--samples-dt", type=float, default=1e-3, help="output sample spacing in s (default 1e-3)")
     sim.add_argument("--json", metavar="FILE", help="write the result (impacts, final state, energies) as JSON")
     sim.add_argument("--plot", metavar="DIR", help="write PNG plots (time histories, impact configurations)")
+    sim.add_argument("--charts", action="store_true", help="switch to a second base-orientation chart near the "
+                     "gimbal lock theta_0 = +-pi/2 and back (runtime/charts.py); prints every switch")
     prec = commands.add_parser("precision", help="work-precision study: error against CPU time of every integrator",
                                description="Error against CPU time for RK4, DOPRI5, DOP853 and scipy's RK45, "
                                            "DOP853, Radau, against a confirmed DOP853 reference (runtime/precision.py).",
@@ -74,7 +76,13 @@ def main(argv=None) -> int:
     t_end = args.t_end if args.t_end is not None else DEFAULT_T_END.get(scene.name, 1.0)
     start = time.perf_counter()
     try:
-        model = load_model(scene, progress=lambda m: print(f"  {m}", file=sys.stderr, flush=True))
+        progress = lambda m: print(f"  {m}", file=sys.stderr, flush=True)  # noqa: E731
+        if args.charts:
+            from .charts import ChartModels, simulate_with_charts
+            charts = ChartModels(scene, progress=progress)
+            model = charts.models[0]
+        else:
+            model = load_model(scene, progress=progress)
     except (CompilerNotFound, BuildError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 3
@@ -86,8 +94,12 @@ def main(argv=None) -> int:
     t_eval = np.unique(np.r_[np.arange(0.0, t_end, args.samples_dt), t_end]) if t_end > 0 else np.array([0.0])
     try:
         start = time.perf_counter()
-        result = simulate(model, t_end, method=args.method, rtol=args.rtol, atol=args.atol, dt=args.dt,
-                          t_eval=t_eval)
+        if args.charts:
+            result = simulate_with_charts(scene, t_end, method=args.method, rtol=args.rtol, atol=args.atol,
+                                          dt=args.dt, t_eval=t_eval, models=charts)
+        else:
+            result = simulate(model, t_end, method=args.method, rtol=args.rtol, atol=args.atol, dt=args.dt,
+                              t_eval=t_eval)
         elapsed = time.perf_counter() - start
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -95,7 +107,12 @@ def main(argv=None) -> int:
     print(f"scene {scene.name}: n = {scene.n}, t_end = {t_end} s, method {args.method}"
           + (f" dt = {args.dt}" if args.method == "rk4" else f" rtol = {args.rtol} atol = {args.atol}"))
     print(result.impact_table())
+    if args.charts:
+        print(f"chart switches (mu = |cos theta_0| of a chart; B = {result.chart_b_name}):")
+        print(result.switch_table())
     print(f"status {result.status}: {result.message}")
+    if result.status != 0 and not args.charts and abs(float(np.cos(result.q_final[1]))) < 1e-3:
+        print("hint: theta_0 is at the gimbal lock of the base chart; --charts continues on a second chart")
     print(f"energy: initial {result.energy_initial:.12g} J, final {result.energy_final:.12g} J, "
           f"relative drift {result.energy_drift:.3e}")
     print(f"steps {result.n_steps} (rejected {result.n_rejected}), rhs evaluations {result.n_rhs}, "

@@ -277,3 +277,14 @@ def test_case2_switches_and_agrees_with_simulate():
     assert [[(c.point, c.wall) for c in i.contacts] for i in charted.impacts] == \
         [[(c.point, c.wall) for c in i.contacts] for i in plain.impacts]
     assert np.abs(charted.q_final - plain.q_final).max() < 1e-9
+
+
+def test_command_line_reports_the_switches(capsys, models):
+    from runtime.cli import main
+    code = main(["simulate", "--scene", "gimbal-lock", "--t-end", "0.4", "--charts"])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert "chart switches" in out and "A -> B" in out and "1 chart switch(es)" in out
+    code = main(["simulate", "--scene", "gimbal-lock", "--t-end", "0.4"])
+    out = capsys.readouterr().out
+    assert code == 1 and "at t = 0.2499" in out and "hint: theta_0 is at the gimbal lock" in out

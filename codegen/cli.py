@@ -21,6 +21,7 @@ def parse_args(argv=None) -> argparse.Namespace:
                "  python -m codegen --links 4                 # built-in 4-link scene -> generated/chain4.{h,c}\n"
                "  python -m codegen --scene paper-case2       # a shipped scene\n"
                "  python -m codegen --scene my.toml --out build --name robot --bake-params\n"
+               "  python -m codegen ops --links 1-8 --out DIR  # operation counts: Gibbs-Appell against Lagrange\n"
                f"Shipped scenes: {', '.join(shipped_scene_names())}.",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     source = parser.add_mutually_exclusive_group()
@@ -51,6 +52,10 @@ def parse_args(argv=None) -> argparse.Namespace:
 
 
 def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ["ops"]:                      # python -m codegen ops ...: operation-count report
+        from .opscount import main as ops_main
+        return ops_main(argv[1:])
     args = parse_args(argv)
     t0 = time.perf_counter()
 

@@ -1,0 +1,357 @@
+"""Operation counts and timings of the recursive Gibbs-Appell model against a Lagrangian expansion.
+
+    python -m codegen ops --links 1-8 [--out DIR] [--specialise] [--timeout S] [--lagrange-max N]
+
+For every n and both formulations (codegen.model's Gibbs-Appell kernels, codegen.lagrange's expansion)
+it generates the model of the built-in n-link scene (the general n + 5 coordinate model unless
+--specialise) and reports: the derivation and CSE times (all kernels of the model), the operation counts
+after CSE of I_f (mass_matrix), R (bias) and the forward dynamics (rule in codegen.ops), sympy's raw
+``count_ops`` of I_f and R before CSE, the lines of C, the compile time (``gcc -std=c99 -O2 -c`` of the
+model's .c, which also holds the impact solver and the integrators) and the time per right-hand-side evaluation from a C timing loop
+(codegen.ctiming; no Python in the loop).  Output: a Markdown table on stdout and in DIR/ops.md, the rows
+as DIR/ops.json, and PNG plots in DIR.
+
+Every (n, formulation) runs in its own process with a time limit (--timeout); a formulation that runs
+out of time is reported as such and, being slower still for larger n, not tried again for larger n.
+--lagrange-max skips the Lagrangian path beyond some n.  Nothing is dropped silently: the table says so.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+FORMULATIONS = ("gibbs_appell", "lagrange")
+LABELS = {"gibbs_appell": "Gibbs–Appell", "lagrange": "Lagrange"}
+MAX_LINKS = 64
+
+# The bar to beat (issue 4): forward dynamics of this very chain (same coordinates and inertias) by
+# Pinocchio's articulated-body algorithm traced by CasADi into C, gcc -O2.  n -> (operations, us per call).
+BAR_TO_BEAT = {4: (1123, 0.27), 8: (1939, 0.50), 16: (3571, 1.20), 32: (6835, 1.84)}
+BAR_TO_BEAT_SOURCE = ("Pinocchio's articulated-body algorithm traced by CasADi into C (gcc -O2), for this "
+                      "chain with the same coordinates and inertias; measured by the issue author on this "
+                      "machine (issue 4, 'The bar to beat')")
+
+# Published operation counts of numeric O(n) algorithms, drawn on the operations plot when present.
+# label -> {"ops": {n: count} or a function n -> count, "source": citation, "convention": counting rule}.
+REFERENCE_LINES: dict[str, dict] = {}
+
+
+# ---------------------------------------------------------------------------
+# one measurement (runs in a child process)
+# ---------------------------------------------------------------------------
+def measure(n: int, formulation: str, specialise: bool = False, progress=None) -> dict:
+    """Generate, count, compile and time one model; returns a JSON-able row."""
+    from .ctiming import time_rhs
+    from .pipeline import generate
+    from .scene import default_scene
+
+    say = progress or (lambda message: None)
+    scene = default_scene(n)
+    start = time.perf_counter()
+    model = generate(scene, specialise=specialise, formulation=formulation, raw_ops=True, progress=say)
+    generation = time.perf_counter() - start
+    ops = {f.name: f.ops for f in model.functions}
+    say("compile (gcc -std=c99 -O2 -c)")
+    compile_seconds = _compile_seconds(model)
+    fd_ops = ops["forward_dynamics"].total
+    calls = max(200, min(100000, int(2e8 / max(fd_ops, 1))))     # about 0.2 s per timing batch
+    say(f"time rhs in C ({calls} calls x 7 batches)")
+    ns = time_rhs(model, calls=calls)
+    return {
+        "n": n, "formulation": formulation, "status": "ok", "nq": model.layout.nq,
+        "derive_s": model.timings["derive"], "cse_s": model.timings["cse"], "render_s": model.timings["render"],
+        "generation_s": generation,
+        "ops": {name: _op_dict(ops[name]) for name in ("mass_matrix", "bias", "forward_dynamics")},
+        "raw_ops": dict(model.raw_ops), "c_lines": len(model.source.splitlines()),
+        "compile_s": compile_seconds, "ns_per_rhs": ns, "timing_calls": calls,
+    }
+
+
+def _op_dict(count) -> dict:
+    return {"add": count.add, "mul": count.mul, "div": count.div, "sqrt": count.sqrt, "sincos": count.trig,
+            "other": count.other_calls, "total": count.total}
+
+
+def _compile_seconds(model) -> float:
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        (folder / f"{model.name}.h").write_text(model.header)
+        (folder / f"{model.name}.c").write_text(model.source)
+        start = time.perf_counter()
+        subprocess.run(["gcc", "-std=c99", "-O2", "-c", f"{model.name}.c", "-o", "model.o"], cwd=folder, check=True)
+        return time.perf_counter() - start
+
+
+def run_child(n: int, formulation: str, specialise: bool, timeout: float, say) -> dict:
+    """measure() in a child process with a time limit; a row with status 'timeout'/'error' otherwise."""
+    command = [sys.executable, "-m", "codegen.opscount", "--one", str(n), "--formulation", formulation]
+    if specialise:
+        command.append("--specialise")
+    env = dict(os.environ)
+    root = str(Path(__file__).resolve().parent.parent)
+    env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    start = time.perf_counter()
+    child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=None, text=True, env=env,
+                             start_new_session=True)
+    try:
+        out, _ = child.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(child.pid, signal.SIGKILL)                     # the child and the compilers it started
+        child.communicate()
+        say(f"n={n} {formulation}: timed out after {timeout:g} s")
+        return {"n": n, "formulation": formulation, "status": "timeout", "note": f"timed out (> {timeout:g} s)"}
+    if child.returncode != 0:
+        return {"n": n, "formulation": formulation, "status": "error",
+                "note": f"failed (exit {child.returncode}, see stderr)"}
+    row = json.loads(out.strip().splitlines()[-1])
+    say(f"n={n} {formulation}: done in {time.perf_counter() - start:.1f} s")
+    return row
+
+
+def run_all(ns, specialise: bool, timeout: float, lagrange_max: int | None, say) -> list[dict]:
+    rows = []
+    gave_up = {}                                                 # formulation -> n where it timed out
+    for n in ns:
+        for formulation in FORMULATIONS:
+            if formulation in gave_up:
+                rows.append({"n": n, "formulation": formulation, "status": "skipped",
+                             "note": f"skipped (timed out at n = {gave_up[formulation]})"})
+            elif formulation == "lagrange" and lagrange_max is not None and n > lagrange_max:
+                rows.append({"n": n, "formulation": formulation, "status": "skipped",
+                             "note": f"skipped (n > --lagrange-max {lagrange_max})"})
+            else:
+                say(f"n={n} {formulation} ...")
+                row = run_child(n, formulation, specialise, timeout, say)
+                if row["status"] == "timeout":
+                    gave_up[formulation] = n
+                rows.append(row)
+    return rows
+
+
+# ---------------------------------------------------------------------------
+# report
+# ---------------------------------------------------------------------------
+def _ops_cell(o: dict) -> str:
+    return f"{o['total']:,} ({o['add']}/{o['mul']}/{o['div']}/{o['sqrt']}/{o['sincos']}/{o['other']})"
+
+
+def markdown(rows, specialise: bool = False) -> str:
+    layout = "specialised (planar, n + 2 coordinates)" if specialise else "general (n + 5 coordinates)"
+    lines = [
+        f"Built-in n-link scene, {layout}.  Operations after CSE as "
+        "total (add/mul/div/sqrt/sincos/other), rule in `codegen/ops.py`; raw = sympy `count_ops` before CSE; "
+        "derive and CSE times are for all kernels of the model; compile = `gcc -O2` of the model's .c; "
+        "rhs = one `NAME_rhs` call in a C loop.  Ratios are ours / Pinocchio+CasADi (forward dynamics "
+        "operations; rhs time against its forward-dynamics call).",
+        "",
+        "| n | formulation | derive s | CSE s | I_f ops | R ops | forward dynamics ops | raw I_f / R "
+        "| lines of C | compile s | ns per rhs | ops / Pinocchio | time / Pinocchio |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        label = LABELS[r["formulation"]]
+        if r["status"] != "ok":
+            lines.append(f"| {r['n']} | {label} | {r['note']} |  |  |  |  |  |  |  |  |  |  |")
+            continue
+        ops, raw = r["ops"], r["raw_ops"]
+        bar = BAR_TO_BEAT.get(r["n"])
+        ratio_ops = f"{ops['forward_dynamics']['total'] / bar[0]:.2f}" if bar else ""
+        ratio_time = f"{r['ns_per_rhs'] / (bar[1] * 1e3):.2f}" if bar else ""
+        lines.append(
+            f"| {r['n']} | {label} | {r['derive_s']:.2f} | {r['cse_s']:.2f} | {_ops_cell(ops['mass_matrix'])} | "
+            f"{_ops_cell(ops['bias'])} | {_ops_cell(ops['forward_dynamics'])} | "
+            f"{raw['mass_matrix']:,} / {raw['bias']:,} | {r['c_lines']:,} | {r['compile_s']:.2f} | "
+            f"{r['ns_per_rhs']:,.0f} | {ratio_ops} | {ratio_time} |")
+    lines += ["", "The bar to beat: " + BAR_TO_BEAT_SOURCE + ".", "",
+              "| n | Pinocchio+CasADi operations | µs per call | Gibbs–Appell forward dynamics operations "
+              "| µs per rhs | ratio operations | ratio time |",
+              "|---|---|---|---|---|---|---|"]
+    measured = {r["n"]: r for r in rows if r["formulation"] == "gibbs_appell" and r["status"] == "ok"}
+    for n, (bar_ops, bar_us) in BAR_TO_BEAT.items():
+        r = measured.get(n)
+        if r is None:
+            lines.append(f"| {n} | {bar_ops:,} | {bar_us:.2f} | not measured |  |  |  |")
+            continue
+        fd, us = r["ops"]["forward_dynamics"]["total"], r["ns_per_rhs"] / 1e3
+        lines.append(f"| {n} | {bar_ops:,} | {bar_us:.2f} | {fd:,} | {us:.2f} | {fd / bar_ops:.2f} | "
+                     f"{us / bar_us:.2f} |")
+    for label, line in REFERENCE_LINES.items():
+        lines.append(f"\nReference line '{label}': {line.get('source', '')}; counting: {line.get('convention', '')}")
+    return "\n".join(lines)
+
+
+def machine() -> str:
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    try:
+        gcc = subprocess.run(["gcc", "--version"], capture_output=True, text=True).stdout.splitlines()[0]
+    except (OSError, IndexError):
+        gcc = "gcc ?"
+    import sympy
+    return (f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, sympy {sympy.__version__}, "
+            f"{gcc}")
+
+
+def _reference_ops(line: dict, ns) -> list[tuple[int, float]]:
+    ops = line["ops"]
+    if callable(ops):
+        return [(n, float(ops(n))) for n in ns]
+    return sorted((int(n), float(v)) for n, v in ops.items())
+
+
+def plots(rows, out: Path) -> list[Path]:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ok = {f: [r for r in rows if r["formulation"] == f and r["status"] == "ok"] for f in FORMULATIONS}
+    ns = sorted({r["n"] for r in rows})
+    style = {"gibbs_appell": "tab:blue", "lagrange": "tab:red"}
+    paths = []
+
+    def finish(ax, ylabel, title, path):
+        ax.set_xscale("log", base=2)
+        if any(len(line.get_ydata()) for line in ax.lines):
+            ax.set_yscale("log")
+        else:
+            ax.text(0.5, 0.5, "no successful measurement", transform=ax.transAxes, ha="center")
+        ax.set_xticks(ns if ns else [1])
+        ax.set_xticklabels([str(n) for n in ns] if ns else ["1"])
+        ax.set_xlabel("links n")
+        ax.set_ylabel(ylabel)
+        ax.set_title(title)
+        ax.grid(True, which="both", alpha=0.3)
+        if ax.lines:
+            ax.legend(fontsize=7)
+        ax.figure.tight_layout()
+        ax.figure.savefig(path, dpi=120)
+        plt.close(ax.figure)
+        paths.append(path)
+
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for f, rs in ok.items():
+        x = [r["n"] for r in rs]
+        ax.plot(x, [r["ops"]["forward_dynamics"]["total"] for r in rs], "o-", color=style[f],
+                label=f"{LABELS[f]}: forward dynamics (after CSE)")
+        ax.plot(x, [r["ops"]["mass_matrix"]["total"] + r["ops"]["bias"]["total"] for r in rs], "s--",
+                color=style[f], label=f"{LABELS[f]}: I_f + R (after CSE)")
+        ax.plot(x, [r["raw_ops"]["mass_matrix"] + r["raw_ops"]["bias"] for r in rs], "^:", color=style[f],
+                label=f"{LABELS[f]}: I_f + R, raw count_ops before CSE")
+    ax.plot(list(BAR_TO_BEAT), [v[0] for v in BAR_TO_BEAT.values()], "k*", markersize=10,
+            label="Pinocchio ABA + CasADi (issue 4)")
+    for label, line in REFERENCE_LINES.items():
+        points = _reference_ops(line, ns)
+        ax.plot([p[0] for p in points], [p[1] for p in points], "-", color="gray", alpha=0.7, label=label)
+    finish(ax, "operations", "Operations against n", out / "ops_vs_n.png")
+
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for f, rs in ok.items():
+        ax.plot([r["n"] for r in rs], [r["ns_per_rhs"] / 1e3 for r in rs], "o-", color=style[f],
+                label=f"{LABELS[f]}: one rhs (C loop, gcc -O2)")
+    ax.plot(list(BAR_TO_BEAT), [v[1] for v in BAR_TO_BEAT.values()], "k*", markersize=10,
+            label="Pinocchio ABA + CasADi, one call (issue 4)")
+    finish(ax, "µs per call", "Time per right-hand side against n", out / "rhs_time_vs_n.png")
+
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for f, rs in ok.items():
+        x = [r["n"] for r in rs]
+        ax.plot(x, [r["derive_s"] for r in rs], "o-", color=style[f], label=f"{LABELS[f]}: derive")
+        ax.plot(x, [r["cse_s"] for r in rs], "s--", color=style[f], label=f"{LABELS[f]}: CSE")
+        ax.plot(x, [r["compile_s"] for r in rs], "^:", color=style[f], label=f"{LABELS[f]}: gcc -O2")
+    finish(ax, "seconds", "Generation time against n (all kernels)", out / "generation_time_vs_n.png")
+    return paths
+
+
+# ---------------------------------------------------------------------------
+# command line
+# ---------------------------------------------------------------------------
+def parse_links(text: str) -> list[int]:
+    """'1-8', '1,2,4', '1-4,8,16' -> sorted distinct n, each in 1..MAX_LINKS."""
+    ns = set()
+    try:
+        for part in text.split(","):
+            part = part.strip()
+            if "-" in part:
+                lo, hi = (int(x) for x in part.split("-", 1))
+                if lo > hi:
+                    raise ValueError
+                ns.update(range(lo, hi + 1))
+            else:
+                ns.add(int(part))
+    except ValueError:
+        raise ValueError(f"--links: expected a range like 1-8 or a list like 1,2,4, got {text!r}") from None
+    bad = [n for n in ns if not 1 <= n <= MAX_LINKS]
+    if bad or not ns:
+        raise ValueError(f"--links: every n must be in 1..{MAX_LINKS}, got {text!r}")
+    return sorted(ns)
+
+
+def parse_args(argv):
+    parser = argparse.ArgumentParser(prog="python -m codegen ops", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--links", default="1-8", help="n values: a range 1-8, a list 1,2,4 or both (default 1-8)")
+    parser.add_argument("--out", metavar="DIR", help="write ops.md, ops.json and the PNG plots here")
+    parser.add_argument("--specialise", action="store_true",
+                        help="measure the scene-specialised models (planar: n + 2 coordinates) instead of the "
+                             "general n + 5 coordinate ones")
+    parser.add_argument("--timeout", type=float, default=1800.0, metavar="S",
+                        help="time limit per (n, formulation) in seconds (default 1800); a formulation that "
+                             "exceeds it is reported and not tried for larger n")
+    parser.add_argument("--lagrange-max", type=int, metavar="N",
+                        help="skip the Lagrangian expansion for n > N (reported in the table)")
+    parser.add_argument("--one", type=int, help=argparse.SUPPRESS)            # child process: one measurement
+    parser.add_argument("--formulation", choices=FORMULATIONS, help=argparse.SUPPRESS)
+    return parser.parse_args(argv)
+
+
+def main(argv=None) -> int:
+    args = parse_args(sys.argv[1:] if argv is None else argv)
+    t0 = time.perf_counter()
+
+    def say(message: str) -> None:
+        print(f"[{time.perf_counter() - t0:8.1f} s] {message}", file=sys.stderr, flush=True)
+
+    if args.one is not None:                                     # child: one row of JSON on stdout
+        row = measure(args.one, args.formulation, args.specialise,
+                      progress=lambda m: say(f"n={args.one} {args.formulation}: {m}"))
+        print(json.dumps(row))
+        return 0
+    try:
+        ns = parse_links(args.links)
+        if args.timeout <= 0:
+            raise ValueError(f"--timeout: must be > 0 seconds, got {args.timeout:g}")
+        if args.lagrange_max is not None and args.lagrange_max < 0:
+            raise ValueError(f"--lagrange-max: must be >= 0, got {args.lagrange_max}")
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    rows = run_all(ns, args.specialise, args.timeout, args.lagrange_max, say)
+    text = f"Machine: {machine()}.\n\n" + markdown(rows, args.specialise)
+    print(text)
+    if args.out:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "ops.md").write_text(text + "\n")
+        (out / "ops.json").write_text(json.dumps({"machine": machine(), "specialise": args.specialise,
+                                                  "rows": rows}, indent=1) + "\n")
+        written = plots(rows, out)
+        say(f"wrote {out / 'ops.md'}, {out / 'ops.json'}, " + ", ".join(str(p) for p in written))
+    return 0 if all(r["status"] in ("ok", "skipped", "timeout") for r in rows) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

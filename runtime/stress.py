@@ -386,23 +386,41 @@ def converged(method: str = "dop853", rtol: float = 1e-12, atol: float = 1e-14, 
     time (chaotic scenes amplify any integration error; beyond their horizon sequences part)."""
     def check(run: CaseRun):
         other = run.simulate_again(method=method, rtol=rtol, atol=atol, dt=None)
-        label = f"{method} rtol {rtol:g}"
-        if other.status != run.result.status:
-            return Check(False, f"{label} ends with status {other.status} ({other.message})")
-        horizon = float("inf") if until is None else until
-        mine = [i for i in run.result.impacts if i.t <= horizon]
-        theirs = [i for i in other.impacts if i.t <= horizon]
-        within = "" if until is None else f" up to t = {until:g} s"
-        if len(mine) != len(theirs):
-            return Check(False, f"{len(mine)} impacts{within}, {label} finds {len(theirs)}")
-        for k, (a, b) in enumerate(zip(mine, theirs), start=1):
-            if {(c.point, c.wall) for c in a.contacts} != {(c.point, c.wall) for c in b.contacts}:
-                return Check(False, f"impact {k} at {a.t:.9g} s: contacts differ from {label}")
-        dt = max([abs(a.t - b.t) for a, b in zip(mine, theirs)] + [0.0])
-        return Check(dt <= time_tol, f"{len(mine)} impacts{within} agree with {label} in contacts and to "
-                                     f"{dt:.1e} s in time (tol {time_tol:g})")
+        return same_impacts(run.result, other, f"{method} rtol {rtol:g}", time_tol, until)
     check.__name__ = "converged"
     return check
+
+
+def same_motion_with(params: dict, label: str, time_tol: float = 1e-7, until: float | None = None):
+    """Run again with other parameters that cannot change the motion of the contact points (e.g. the
+    axial inertia of a link that is not spinning about its axis): the same impacts at the same times."""
+    def check(run: CaseRun):
+        p = run.p.copy()
+        names = run.scene.parameter_names()
+        for name, value in params.items():
+            p[names.index(name)] = value
+        other = run.simulate_again(p=p)
+        return same_impacts(run.result, other, label, time_tol, until)
+    check.__name__ = "same_motion_with"
+    return check
+
+
+def same_impacts(mine, other, label: str, time_tol: float, until: float | None = None) -> Check:
+    """Compare two results' impact sequences (contact sets exactly, times within time_tol)."""
+    if other.status != mine.status:
+        return Check(False, f"{label} ends with status {other.status} ({other.message})")
+    horizon = float("inf") if until is None else until
+    a_list = [i for i in mine.impacts if i.t <= horizon]
+    b_list = [i for i in other.impacts if i.t <= horizon]
+    within = "" if until is None else f" up to t = {until:g} s"
+    if len(a_list) != len(b_list):
+        return Check(False, f"{len(a_list)} impacts{within}, {label} finds {len(b_list)}")
+    for k, (a, b) in enumerate(zip(a_list, b_list), start=1):
+        if {(c.point, c.wall) for c in a.contacts} != {(c.point, c.wall) for c in b.contacts}:
+            return Check(False, f"impact {k} at {a.t:.9g} s: contacts differ from {label}")
+    dt = max([abs(a.t - b.t) for a, b in zip(a_list, b_list)] + [0.0])
+    return Check(dt <= time_tol, f"{len(a_list)} impacts{within} agree with {label} in contacts and to "
+                                 f"{dt:.1e} s in time (tol {time_tol:g})")
 
 
 # ---------------------------------------------------------------------------

@@ -1007,11 +1007,12 @@ const char *paper_case1_error_message(int code)
     case PAPER_CASE1_ERR_SINGULAR_MASS: return "inertia matrix I_f is not positive definite (gimbal lock at theta_0 = +-pi/2?)";
     case PAPER_CASE1_ERR_SINGULAR_IMPACT: return "impact matrix J I_f^-1 J^T is singular: the active contact constraints are dependent";
     case PAPER_CASE1_ERR_LCP: return "impact complementarity problem has no solution (too many or degenerate contacts)";
-    case PAPER_CASE1_ERR_BAD_OPTION: return "bad option or argument (method, dt > 0, rtol > 0, atol > 0, event_samples >= 1, t_end >= t)";
+    case PAPER_CASE1_ERR_BAD_OPTION: return "bad option or argument (method, dt > 0, rtol > 0, atol > 0, event_samples >= 1, rest_height finite, zeno_impacts >= 0, t_end >= t)";
     case PAPER_CASE1_ERR_MAX_STEPS: return "maximum number of steps reached";
     case PAPER_CASE1_ERR_STEP_SIZE: return "step size underflow: the adaptive integrator cannot meet the tolerance";
     case PAPER_CASE1_ERR_NONFINITE: return "the state became NaN or infinite";
     case PAPER_CASE1_ERR_TOO_MANY_CONTACTS: return "more simultaneous approaching contacts than degrees of freedom";
+    case PAPER_CASE1_ERR_SINGULAR_CONTACT: return "the persistent contact constraints are dependent (N I_f^-1 N^T is singular)";
     default: return "unknown error code";
     }
 }
@@ -1020,6 +1021,7 @@ const char *paper_case1_error_message(int code)
  * Hybrid simulation: integrators with dense output, event location, impacts.
  * ------------------------------------------------------------------------------------------------ */
 #define PAPER_CASE1_EPS 2.220446049250313e-16
+#define PAPER_CASE1_NJROW1 (PAPER_CASE1_NJROW > 0 ? PAPER_CASE1_NJROW : 1)
 
 /* Dormand-Prince 8(5,3) tableau with its 7th-order dense output (Hairer, Norsett & Wanner,
  * Solving ODEs I, 2nd ed., and the published dop853 coefficients).  Stages 13-15 serve the dense output. */
@@ -1063,6 +1065,8 @@ void paper_case1_default_options(paper_case1_options *opt)
     opt->event_tol = 1e-13;
     opt->contact_tol = 1e-6;
     opt->max_steps = 10000000L;
+    opt->rest_height = -1.0;
+    opt->zeno_impacts = 20;
 }
 
 static int paper_case1_finite(const double *x, int n)
@@ -1074,11 +1078,83 @@ static int paper_case1_finite(const double *x, int n)
     return 1;
 }
 
+/* Jacobian row and inward-normal sign of contact c. */
+static void paper_case1_contact_row(int c, int *row, double *sign)
+{
+    const int row_of[PAPER_CASE1_NCONTACT] = { 0, 2, 4, 6, 8, 0, 2, 4, 6, 8, 1, 3, 5, 7, 9, 1, 3, 5, 7, 9 };
+    const double sign_of[PAPER_CASE1_NCONTACT] = { 1.0, 1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0, -1.0, 1.0, 1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0, -1.0 };
+    *row = row_of[c];
+    *sign = sign_of[c];
+}
+
+/* Restitution coefficient of contact c's wall. */
+static double paper_case1_restitution(const double *p, int c)
+{
+    const double e_of[PAPER_CASE1_NCONTACT] = { p[25], p[25], p[25], p[25], p[25], p[26], p[26], p[26], p[26], p[26], p[27], p[27], p[27], p[27], p[27], p[28], p[28], p[28], p[28], p[28] };
+    return e_of[c];
+}
+
+int paper_case1_constrained_dynamics(const double *q, const double *qd, const double *p, int nactive,
+                               const int *active, double *qdd, double *lambda, double *work)
+{
+    const int nq = PAPER_CASE1_NQ;
+    double v[PAPER_CASE1_NQ], e[PAPER_CASE1_NQ], bias[PAPER_CASE1_NJROW1];
+    double *J = work + PAPER_CASE1_NQ * PAPER_CASE1_NQ;
+    double *Y = J + PAPER_CASE1_NJROW * PAPER_CASE1_NQ;
+    double *A = Y + PAPER_CASE1_NQ * PAPER_CASE1_NQ;
+    int a, i, code;
+    paper_case1_forward_dynamics(q, qd, p, qdd);
+    if (nactive == 0) return PAPER_CASE1_OK;
+    code = paper_case1_impact_system(q, qd, p, nactive, active, work, v, e);
+    if (code != PAPER_CASE1_OK) return code;
+    paper_case1_contact_bias(q, qd, p, bias);
+    for (a = 0; a < nactive; ++a) {              /* lambda = -(N qdd_free + Ndot qd) */
+        int row;
+        double sign, acc;
+        paper_case1_contact_row(active[a], &row, &sign);
+        acc = bias[row];
+        for (i = 0; i < nq; ++i) acc += J[row*nq + i] * qdd[i];
+        lambda[a] = -sign * acc;
+    }
+    if (paper_case1_ldlt(nactive, A, 1e-12) != 0) return PAPER_CASE1_ERR_SINGULAR_CONTACT;
+    paper_case1_ldlt_solve(nactive, A, lambda);
+    for (i = 0; i < nq; ++i) {
+        for (a = 0; a < nactive; ++a) qdd[i] += Y[a*nq + i] * lambda[a];
+    }
+    return PAPER_CASE1_OK;
+}
+
+/* The flight right-hand side: free, or with the persistent contacts held (an error is kept in s->fail). */
 static void paper_case1_f(paper_case1_sim *s, double t, const double *x, double *f)
 {
-    paper_case1_rhs(t, x, s->p, f);
     s->n_rhs++;
+    if (s->nactive == 0) {
+        paper_case1_rhs(t, x, s->p, f);
+    } else {
+        double lambda[PAPER_CASE1_NQ];
+        int i, code;
+        for (i = 0; i < PAPER_CASE1_NQ; ++i) f[i] = x[PAPER_CASE1_NQ + i];
+        code = paper_case1_constrained_dynamics(x, x + PAPER_CASE1_NQ, s->p, s->nactive, s->active, f + PAPER_CASE1_NQ,
+                                          lambda, s->work);
+        if (code != PAPER_CASE1_OK && s->fail == 0) s->fail = code;
+    }
 }
+
+/* Event value of every contact at x: its gap, or for a persistent contact its force lambda.  An event is
+ * a value falling from > 0 to <= 0: a wall crossing, or a persistent contact that would pull. */
+static void paper_case1_events(paper_case1_sim *s, const double *x, double *ev)
+{
+    paper_case1_contact_gaps(x, s->p, ev);
+    if (s->nactive > 0) {
+        double qdd[PAPER_CASE1_NQ], lambda[PAPER_CASE1_NQ] = {0.0};
+        int a, code = paper_case1_constrained_dynamics(x, x + PAPER_CASE1_NQ, s->p, s->nactive, s->active, qdd, lambda,
+                                                 s->work);
+        if (code != PAPER_CASE1_OK && s->fail == 0) s->fail = code;
+        for (a = 0; a < s->nactive; ++a) ev[s->active[a]] = lambda[a];
+    }
+}
+
+static int paper_case1_rest_at_start(paper_case1_sim *s);
 
 int paper_case1_sim_init(paper_case1_sim *s, double t0, const double *q, const double *qd, const double *p,
                    const paper_case1_options *opt)
@@ -1090,7 +1166,8 @@ int paper_case1_sim_init(paper_case1_sim *s, double t0, const double *q, const d
     if (opt->method != PAPER_CASE1_METHOD_RK4 && !(opt->rtol > 0.0 && opt->atol > 0.0 && opt->dt >= 0.0))
         return PAPER_CASE1_ERR_BAD_OPTION;
     if (opt->event_samples < 1 || !(opt->event_tol > 0.0) || !(opt->contact_tol >= 0.0) || !(opt->h_max >= 0.0)
-        || opt->max_steps < 0) return PAPER_CASE1_ERR_BAD_OPTION;
+        || opt->max_steps < 0 || !(opt->rest_height < 1e300) || opt->zeno_impacts < 0)
+        return PAPER_CASE1_ERR_BAD_OPTION;
     s->opt = *opt;
     for (i = 0; i < PAPER_CASE1_NPARAM; ++i) s->p[i] = p[i];
     for (i = 0; i < PAPER_CASE1_NQ; ++i) {
@@ -1102,8 +1179,22 @@ int paper_case1_sim_init(paper_case1_sim *s, double t0, const double *q, const d
     s->h = opt->dt;                               /* RK4 step, or the first adaptive step (0: automatic) */
     s->f_valid = 0;
     s->n_steps = s->n_rejected = s->n_rhs = s->n_impacts = 0;
-    paper_case1_contact_gaps(s->x, s->p, s->gaps);
-    return PAPER_CASE1_OK;
+    s->nactive = 0;
+    s->n_activations = s->n_releases = 0;
+    s->pending = s->fail = 0;
+    s->rest_height = opt->rest_height < 0.0 ? 10.0 * opt->contact_tol : opt->rest_height;
+    for (i = 0; i < PAPER_CASE1_NCONTACT1; ++i) {
+        s->is_active[i] = 0;
+        s->n_shrink[i] = 0;
+        s->t_last[i] = t0;
+        s->dt_last[i] = -2.0;                     /* -2: no impact of this contact yet, -1: one */
+    }
+    if (s->rest_height > 0.0) {
+        int code = paper_case1_rest_at_start(s);
+        if (code < 0) return code;
+    }
+    paper_case1_events(s, s->x, s->ev);
+    return s->fail < 0 ? s->fail : PAPER_CASE1_OK;
 }
 
 void paper_case1_sim_state(const paper_case1_sim *s, double *t, double *q, double *qd)
@@ -1326,15 +1417,23 @@ static void paper_case1_dense(paper_case1_sim *s, double t, double *out)
     }
 }
 
-static double paper_case1_gap_at(paper_case1_sim *s, int c, double t)
+static void paper_case1_normal_velocities(const double *x, const double *p, double *vn);
+
+/* Event value (what = 0) or normal velocity (what = 1) of contact c at time t inside the step. */
+static double paper_case1_value_at(paper_case1_sim *s, int what, int c, double t)
 {
     paper_case1_dense(s, t, s->xs);
-    paper_case1_contact_gaps(s->xs, s->p, s->gs);
-    return s->gs[c];
+    if (what == 1) {
+        paper_case1_normal_velocities(s->xs, s->p, s->es);
+    } else {
+        paper_case1_events(s, s->xs, s->es);
+    }
+    return s->es[c];
 }
 
-/* Root of gap_c on the interpolant in (a, b], gap(a) > 0 >= gap(b): Illinois, then bisection. */
-static double paper_case1_locate(paper_case1_sim *s, int c, double a, double ga, double b, double gb)
+/* Root in (a, b] of contact c's event value (what = 0) or normal velocity (what = 1) on the interpolant,
+ * value(a) > 0 >= value(b): Illinois, then bisection. */
+static double paper_case1_locate(paper_case1_sim *s, int what, int c, double a, double ga, double b, double gb)
 {
     int side = 0, iter;
     for (iter = 0; iter < 200; ++iter) {
@@ -1342,7 +1441,7 @@ static double paper_case1_locate(paper_case1_sim *s, int c, double a, double ga,
         if (b - a <= tol) break;
         m = iter < 60 ? (a * gb - b * ga) / (gb - ga) : 0.5 * (a + b);
         if (!(m > a && m < b)) m = 0.5 * (a + b);
-        gm = paper_case1_gap_at(s, c, m);
+        gm = paper_case1_value_at(s, what, c, m);
         if (gm > 0.0) {
             a = m; ga = gm;
             if (side == 1) gb *= 0.5;
@@ -1356,31 +1455,59 @@ static double paper_case1_locate(paper_case1_sim *s, int c, double a, double ga,
     return b;
 }
 
-/* Search the accepted step for the first wall crossing (gap from > 0 to <= 0) at event_samples points
- * of the interpolant, so that a dip through a wall and back inside one step is still seen.
- * Returns 1 with *t_event and *c_event, or 0; s->gprev ends as the gaps at the step end. */
+/* A contact that starts the interval [t_a, t_b] at or beyond its wall (gap <= 0, just after an impact or
+ * a release) and is approaching it at t_b with gap(t_b) <= 0 has come back: if it was leaving at t_a, the
+ * crossing follows the apex (root of the normal velocity), or is the apex itself when the bounce is too
+ * small to open a positive gap; if it was not leaving, at t_a. */
+static double paper_case1_locate_return(paper_case1_sim *s, int c, double t_a, double t_b, double g_b)
+{
+    double v_a = paper_case1_value_at(s, 1, c, t_a), v_b, t_apex, g_apex;
+    if (!(v_a > 0.0)) return t_a;
+    v_b = paper_case1_value_at(s, 1, c, t_b);
+    t_apex = paper_case1_locate(s, 1, c, t_a, v_a, t_b, v_b);
+    g_apex = paper_case1_value_at(s, 0, c, t_apex);
+    return g_apex > 0.0 ? paper_case1_locate(s, 0, c, t_apex, g_apex, t_b, g_b) : t_apex;
+}
+
+/* Search the accepted step for the first event at event_samples points of the interpolant, so that a dip
+ * through a wall and back inside one step is still seen.  Events: a wall crossing (gap from > 0 to <= 0);
+ * a contact that left its wall from gap <= 0 and is back at gap <= 0, approaching (a small bounce);
+ * a persistent contact's force from > 0 to <= 0.
+ * Returns 1 with *t_event and *c_event, or 0; s->eprev ends as the event values at the step end. */
 static int paper_case1_find_event(paper_case1_sim *s, double t1, double *t_event, int *c_event)
 {
     int j, c, found = 0;
     const int m = s->opt.event_samples;
     double t_prev = s->t;
-    for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) s->gprev[c] = s->gaps[c];
+    for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) s->eprev[c] = s->ev[c];
     for (j = 1; j <= m && !found; ++j) {
         double tj = j == m ? t1 : s->t + (t1 - s->t) * (double)j / (double)m;
-        double gj[PAPER_CASE1_NCONTACT1];
+        double gj[PAPER_CASE1_NCONTACT1], vj[PAPER_CASE1_NCONTACT1];
+        int have_v = 0;
         paper_case1_dense(s, tj, s->xs);
-        paper_case1_contact_gaps(s->xs, s->p, gj);
+        paper_case1_events(s, s->xs, gj);
         for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {
-            if (s->gprev[c] > 0.0 && gj[c] <= 0.0) {
-                double tc = paper_case1_locate(s, c, t_prev, s->gprev[c], tj, gj[c]);
-                if (!found || tc < *t_event) {
-                    *t_event = tc;
-                    *c_event = c;
+            double tc;
+            if (gj[c] > 0.0) continue;
+            if (s->eprev[c] > 0.0) {
+                tc = paper_case1_locate(s, 0, c, t_prev, s->eprev[c], tj, gj[c]);
+            } else {
+                if (s->is_active[c]) continue;
+                if (!have_v) {
+                    paper_case1_dense(s, tj, s->xs);
+                    paper_case1_normal_velocities(s->xs, s->p, vj);
+                    have_v = 1;
                 }
-                found = 1;
+                if (!(vj[c] < 0.0)) continue;
+                tc = paper_case1_locate_return(s, c, t_prev, tj, gj[c]);
             }
+            if (!found || tc < *t_event) {
+                *t_event = tc;
+                *c_event = c;
+            }
+            found = 1;
         }
-        for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) s->gprev[c] = gj[c];
+        for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) s->eprev[c] = gj[c];
         t_prev = tj;
     }
     return found;
@@ -1405,33 +1532,220 @@ static void paper_case1_normal_velocities(const double *x, const double *p, doub
     }
 }
 
+/* Normal accelerations (along the inward normals) of all contacts at state x, with the contacts
+ * set[0..n-1] held (n = 0: free flight). */
+static int paper_case1_normal_accelerations(paper_case1_sim *s, const double *x, int n, const int *set, double *an)
+{
+    const int nq = PAPER_CASE1_NQ;
+    double qdd[PAPER_CASE1_NQ], lambda[PAPER_CASE1_NQ], bias[PAPER_CASE1_NJROW1];
+    double *J = s->work + PAPER_CASE1_NQ * PAPER_CASE1_NQ;
+    int c, i, code = paper_case1_constrained_dynamics(x, x + nq, s->p, n, set, qdd, lambda, s->work);
+    if (code != PAPER_CASE1_OK) return code;
+    paper_case1_contact_jacobian(x, s->p, J);
+    paper_case1_contact_bias(x, x + nq, s->p, bias);
+    for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {
+        int row;
+        double sign, acc;
+        paper_case1_contact_row(c, &row, &sign);
+        acc = bias[row];
+        for (i = 0; i < nq; ++i) acc += J[row*nq + i] * qdd[i];
+        an[c] = sign * acc;
+    }
+    return PAPER_CASE1_OK;
+}
+
+/* Project the state x onto the contacts set[0..n-1] held at their walls: the gaps to 0 by Newton steps
+ * dq = -Y (N Y)^-1 g (Y = I_f^-1 N^T, the smallest correction in the mass metric), then the normal
+ * velocities to 0, qd -= Y (N Y)^-1 N qd: a plastic impact, so the kinetic energy cannot grow.  mu (if
+ * not NULL) receives the impulses of the velocity projection (N s, along the inward normals). */
+static int paper_case1_project(paper_case1_sim *s, double *x, int n, const int *set, double *mu)
+{
+    const int nq = PAPER_CASE1_NQ;
+    double v[PAPER_CASE1_NQ], e[PAPER_CASE1_NQ], g[PAPER_CASE1_NCONTACT1] = {0.0}, corr[PAPER_CASE1_NQ];
+    double *Y = s->work + PAPER_CASE1_NQ * PAPER_CASE1_NQ + PAPER_CASE1_NJROW * PAPER_CASE1_NQ;
+    double *A = Y + PAPER_CASE1_NQ * PAPER_CASE1_NQ;
+    int a, i, it, code;
+    if (n == 0) return PAPER_CASE1_OK;
+    for (it = 0; it < 4; ++it) {
+        double gmax = 0.0;
+        paper_case1_contact_gaps(x, s->p, g);
+        for (a = 0; a < n; ++a) {
+            if (fabs(g[set[a]]) > gmax) gmax = fabs(g[set[a]]);
+        }
+        if (gmax <= 1e-6 * s->opt.contact_tol + 1e-15) break;
+        code = paper_case1_impact_system(x, x + nq, s->p, n, set, s->work, v, e);
+        if (code != PAPER_CASE1_OK) return code;
+        if (paper_case1_ldlt(n, A, 1e-12) != 0) return PAPER_CASE1_ERR_SINGULAR_CONTACT;
+        for (a = 0; a < n; ++a) corr[a] = -g[set[a]];
+        paper_case1_ldlt_solve(n, A, corr);
+        for (i = 0; i < nq; ++i) {
+            for (a = 0; a < n; ++a) x[i] += Y[a*nq + i] * corr[a];
+        }
+    }
+    code = paper_case1_impact_system(x, x + nq, s->p, n, set, s->work, v, e);
+    if (code != PAPER_CASE1_OK) return code;
+    if (paper_case1_ldlt(n, A, 1e-12) != 0) return PAPER_CASE1_ERR_SINGULAR_CONTACT;
+    for (a = 0; a < n; ++a) corr[a] = -v[a];
+    paper_case1_ldlt_solve(n, A, corr);
+    for (i = 0; i < nq; ++i) {
+        for (a = 0; a < n; ++a) x[nq + i] += Y[a*nq + i] * corr[a];
+    }
+    if (mu) {
+        for (a = 0; a < n; ++a) mu[a] = corr[a];
+    }
+    return PAPER_CASE1_OK;
+}
+
+/* Of the contacts set[0..*n-1] (at their walls, normal velocities 0), keep those that push in the
+ * acceleration-level complementarity problem: lambda >= 0, normal acceleration w = A lambda + c >= 0,
+ * lambda_i w_i = 0, with A = N I_f^-1 N^T and c = N qdd_free + Ndot qd.  Solved exactly by enumerating the
+ * pushing sets, as the impact's complementarity form.  The set is reduced in place. */
+static int paper_case1_settle(paper_case1_sim *s, const double *x, int *n, int *set)
+{
+    const int nq = PAPER_CASE1_NQ, m = *n;
+    double v[PAPER_CASE1_NQ], e[PAPER_CASE1_NQ], c[PAPER_CASE1_NQ], qdd[PAPER_CASE1_NQ], bias[PAPER_CASE1_NJROW1];
+    double Asub[PAPER_CASE1_NQ * PAPER_CASE1_NQ], rhs[PAPER_CASE1_NQ], scale = 0.0;
+    double *J = s->work + PAPER_CASE1_NQ * PAPER_CASE1_NQ;
+    double *A = J + PAPER_CASE1_NJROW * PAPER_CASE1_NQ + PAPER_CASE1_NQ * PAPER_CASE1_NQ;
+    int a, b, code;
+    unsigned long mask, full;
+    if (m == 0) return PAPER_CASE1_OK;
+    if (m > PAPER_CASE1_MAX_LCP) return PAPER_CASE1_ERR_LCP;
+    paper_case1_forward_dynamics(x, x + nq, s->p, qdd);
+    code = paper_case1_impact_system(x, x + nq, s->p, m, set, s->work, v, e);
+    if (code != PAPER_CASE1_OK) return code;
+    paper_case1_contact_bias(x, x + nq, s->p, bias);
+    for (a = 0; a < m; ++a) {
+        int row, i;
+        double sign, acc;
+        paper_case1_contact_row(set[a], &row, &sign);
+        acc = bias[row];
+        for (i = 0; i < nq; ++i) acc += J[row*nq + i] * qdd[i];
+        c[a] = sign * acc;
+        if (fabs(c[a]) > scale) scale = fabs(c[a]);
+    }
+    full = (1UL << m) - 1UL;
+    for (mask = full; ; --mask) {
+        int idx[PAPER_CASE1_NQ], k = 0, ok = 1;
+        for (a = 0; a < m; ++a) {
+            if (mask & (1UL << a)) idx[k++] = a;
+        }
+        for (a = 0; a < k; ++a) {
+            for (b = 0; b < k; ++b) Asub[a*k + b] = A[idx[a]*m + idx[b]];
+            rhs[a] = -c[idx[a]];
+        }
+        if (k > 0 && paper_case1_ldlt(k, Asub, 1e-12) != 0) ok = 0;
+        if (ok && k > 0) paper_case1_ldlt_solve(k, Asub, rhs);
+        for (a = 0; ok && a < k; ++a) {
+            if (rhs[a] < -1e-12 * (scale + 1e-300)) ok = 0;
+        }
+        for (a = 0; ok && a < m; ++a) {               /* w = A lambda + c >= 0 for the others */
+            double w = c[a];
+            if (mask & (1UL << a)) continue;
+            for (b = 0; b < k; ++b) w += A[a*m + idx[b]] * rhs[b];
+            if (w < -1e-10 * (scale + 1e-300)) ok = 0;
+        }
+        if (ok) {
+            for (a = 0; a < k; ++a) set[a] = set[idx[a]];
+            *n = k;
+            return PAPER_CASE1_OK;
+        }
+        if (mask == 0) break;
+    }
+    return PAPER_CASE1_ERR_LCP;
+}
+
+/* Make set[0..n-1] the persistent contacts; record (if not NULL) lists the activations and releases. */
+static void paper_case1_set_active(paper_case1_sim *s, int n, const int *set, paper_case1_impact_record *r)
+{
+    int now[PAPER_CASE1_NCONTACT1], a, c;
+    for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) now[c] = 0;
+    for (a = 0; a < n; ++a) now[set[a]] = 1;
+    if (r) {
+        r->nactivated = r->nreleased = 0;
+        for (a = 0; a < n; ++a) {
+            if (!s->is_active[set[a]]) r->activated[r->nactivated++] = set[a];
+        }
+        for (a = 0; a < s->nactive; ++a) {
+            if (!now[s->active[a]]) r->released[r->nreleased++] = s->active[a];
+        }
+        s->n_activations += r->nactivated;
+        s->n_releases += r->nreleased;
+    }
+    for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) s->is_active[c] = now[c];
+    for (a = 0; a < n; ++a) s->active[a] = set[a];
+    s->nactive = n;
+}
+
+/* sim_init: contacts that start at their wall (|gap| <= contact_tol), pressed towards it, with a normal
+ * velocity whose bounce would rise less than rest_height, become persistent (positions and velocities
+ * projected; only those with a pushing force kept). */
+static int paper_case1_rest_at_start(paper_case1_sim *s)
+{
+    double gaps[PAPER_CASE1_NCONTACT1], vn[PAPER_CASE1_NCONTACT1], an[PAPER_CASE1_NCONTACT1];
+    int set[PAPER_CASE1_NQ], n = 0, c, code;
+    paper_case1_contact_gaps(s->x, s->p, gaps);
+    paper_case1_normal_velocities(s->x, s->p, vn);
+    code = paper_case1_normal_accelerations(s, s->x, 0, 0, an);
+    if (code != PAPER_CASE1_OK) return code;
+    for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {
+        if (fabs(gaps[c]) <= s->opt.contact_tol && an[c] < 0.0
+            && vn[c] * vn[c] <= 2.0 * (-an[c]) * s->rest_height) {
+            if (n == PAPER_CASE1_NQ) return PAPER_CASE1_ERR_TOO_MANY_CONTACTS;
+            set[n++] = c;
+        }
+    }
+    if (n == 0) return PAPER_CASE1_OK;
+    code = paper_case1_project(s, s->x, n, set, 0);
+    if (code == PAPER_CASE1_OK) code = paper_case1_settle(s, s->x, &n, set);
+    if (code != PAPER_CASE1_OK) return code;
+    s->n_activations += n;
+    paper_case1_set_active(s, n, set, 0);
+    s->pending = n > 0;
+    return PAPER_CASE1_OK;
+}
+
 /* Resolve the impact at state s->xs (time t): every contact within contact_tol of its wall that
- * approaches it takes part; Eq. 48 (equality form) first, the complementarity form if a contact
- * would pull.  Contacts that approach after the impact are added and the impact solved again. */
+ * approaches it takes part, with the persistent contacts; Eq. 48 (equality form) first, the
+ * complementarity form if a contact would pull.  Contacts that approach after the impact are added and
+ * the impact solved again.  Then the persistent set is updated: a persistent contact that the impact
+ * lifts off is released; a contact of a wall with e < 1 whose bounce would rise less than rest_height
+ * (v+^2 <= 2 a rest_height, a = its normal acceleration towards the wall with the other persistent
+ * contacts held), or that has had zeno_impacts impacts at shrinking intervals, becomes persistent (its
+ * normal velocity projected to 0); only contacts that push are kept.  The state after the impact is in
+ * s->x1.  Returns 1 (impact applied), 0 (grazing touch, nothing to do) or an error. */
 static int paper_case1_resolve(paper_case1_sim *s, double t, int c_event, paper_case1_impact_record *r)
 {
     const int nq = PAPER_CASE1_NQ;
-    double gaps[PAPER_CASE1_NCONTACT1], vn[PAPER_CASE1_NCONTACT1], qd_plus[PAPER_CASE1_NQ], scale = 0.0;
-    int in_set[PAPER_CASE1_NCONTACT1];
-    int c, i, round, code;
+    double gaps[PAPER_CASE1_NCONTACT1], vn[PAPER_CASE1_NCONTACT1], vn0[PAPER_CASE1_NCONTACT1], an[PAPER_CASE1_NCONTACT1];
+    double qd_plus[PAPER_CASE1_NQ], mu[PAPER_CASE1_NQ], scale = 0.0;
+    int in_set[PAPER_CASE1_NCONTACT1], shrinking[PAPER_CASE1_NCONTACT1], set[PAPER_CASE1_NQ];
+    int c, i, k, round, code, nnew = 0, nset = 0;
     double *x = s->xs;
     paper_case1_contact_gaps(x, s->p, gaps);
     paper_case1_normal_velocities(x, s->p, vn);
     r->ncontact = 0;
+    r->nactivated = r->nreleased = 0;
     for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {
-        in_set[c] = (c == c_event || gaps[c] <= s->opt.contact_tol) && vn[c] < 0.0;
+        vn0[c] = vn[c];
+        in_set[c] = s->is_active[c] || ((c == c_event || gaps[c] <= s->opt.contact_tol) && vn[c] < 0.0)
+                    || (c == c_event && gaps[c] <= 0.0 && vn[c] <= 0.0);      /* came back at the apex */
         if (in_set[c]) {
             if (r->ncontact == nq) return PAPER_CASE1_ERR_TOO_MANY_CONTACTS;
             r->contact[r->ncontact++] = c;
+            nnew += !s->is_active[c];
         }
         if (fabs(vn[c]) > scale) scale = fabs(vn[c]);
     }
-    if (r->ncontact == 0) return 0;                      /* grazing touch: nothing to resolve */
+    if (nnew == 0) return 0;                             /* grazing touch: nothing to resolve */
     r->t = t;
     r->energy_before = paper_case1_total_energy(x, s->p);
     for (i = 0; i < nq; ++i) {
         r->q[i] = x[i];
         r->qd_before[i] = x[nq + i];
+    }
+    for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {          /* impacts of c at shrinking intervals */
+        shrinking[c] = s->dt_last[c] >= 0.0 && t - s->t_last[c] < s->dt_last[c];
     }
     for (round = 0; round <= PAPER_CASE1_NCONTACT; ++round) {
         int pulls = 0, added = 0;
@@ -1457,16 +1771,95 @@ static int paper_case1_resolve(paper_case1_sim *s, double t, int c_event, paper_
                 added = 1;
             }
         }
+        if (added) continue;
+        /* the persistent set: persistent contacts the impact left at rest (a bounce lower than rest_height
+         * with their free-flight acceleration), then the new contacts at rest */
+        code = paper_case1_normal_accelerations(s, s->x1, 0, 0, an);
+        if (code != PAPER_CASE1_OK) return code;
+        nset = 0;
+        for (k = 0; k < r->ncontact; ++k) {
+            c = r->contact[k];
+            if (s->is_active[c] && (vn[c] <= 1e-6 * scale || vn[c] * vn[c] <= 2.0 * fabs(an[c]) * s->rest_height))
+                set[nset++] = c;
+        }
+        if (s->rest_height > 0.0 || s->opt.zeno_impacts > 0) {
+            int nkept = nset;
+            code = paper_case1_normal_accelerations(s, s->x1, nkept, set, an);
+            if (code != PAPER_CASE1_OK) return code;
+            for (k = 0; k < r->ncontact; ++k) {
+                double v, reach;
+                int rests, zeno;
+                c = r->contact[k];
+                if (s->is_active[c]) continue;
+                reach = 2.0 * (-an[c]) * s->rest_height;   /* v^2 of a bounce that rises rest_height */
+                v = vn[c] > 0.0 ? vn[c] : 0.0;
+                rests = an[c] < 0.0 && v * v <= reach;
+                /* e = 1 keeps every bounce; only a contact that arrived at rest already is held */
+                if (!(paper_case1_restitution(s->p, c) < 1.0) && !(rests && vn0[c] * vn0[c] <= reach)) continue;
+                zeno = s->opt.zeno_impacts > 0 && s->n_shrink[c] + shrinking[c] >= s->opt.zeno_impacts
+                       && shrinking[c];
+                if (rests || zeno) set[nset++] = c;
+            }
+        }
+        code = paper_case1_project(s, s->x1, nset, set, mu);
+        if (code != PAPER_CASE1_OK) return code;
+        for (i = 0; i < nset; ++i) {                       /* impulses of the projection */
+            for (k = 0; k < r->ncontact; ++k) {
+                if (r->contact[k] == set[i]) r->impulse[k] += mu[i];
+            }
+        }
+        code = paper_case1_settle(s, s->x1, &nset, set);
+        if (code != PAPER_CASE1_OK) return code;
+        paper_case1_normal_velocities(s->x1, s->p, vn);
+        for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {        /* the projection made a contact approach */
+            if (!in_set[c] && gaps[c] <= s->opt.contact_tol && vn[c] < -1e-12 * scale) {
+                if (r->ncontact == nq) return PAPER_CASE1_ERR_TOO_MANY_CONTACTS;
+                in_set[c] = 1;
+                r->contact[r->ncontact++] = c;
+                added = 1;
+            }
+        }
         if (!added) break;
     }
-    for (i = 0; i < nq; ++i) r->qd_after[i] = qd_plus[i];
+    for (i = 0; i < nq; ++i) r->qd_after[i] = s->x1[nq + i];
     r->energy_after = paper_case1_total_energy(s->x1, s->p);
     r->approach_after = 0.0;                  /* fastest approach of a contact at its wall, afterwards */
     for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {
         if (gaps[c] <= s->opt.contact_tol && -vn[c] > r->approach_after) r->approach_after = -vn[c];
     }
     r->approach_before = scale;
+    for (k = 0; k < r->ncontact; ++k) {                    /* impact history of each new contact */
+        c = r->contact[k];
+        if (s->is_active[c]) continue;
+        s->n_shrink[c] = shrinking[c] ? s->n_shrink[c] + 1 : 0;
+        s->dt_last[c] = s->dt_last[c] < -1.5 ? -1.0 : t - s->t_last[c];
+        s->t_last[c] = t;
+    }
+    paper_case1_set_active(s, nset, set, r);
     return 1;
+}
+
+/* Release the persistent contact c_event, whose force fell to 0 at state s->xs (time t); any other
+ * persistent contact that would then pull goes too.  Fills the record (no impact: ncontact = 0). */
+static int paper_case1_release(paper_case1_sim *s, double t, int c_event, paper_case1_impact_record *r)
+{
+    int set[PAPER_CASE1_NQ], n = 0, a, i, code;
+    for (a = 0; a < s->nactive; ++a) {
+        if (s->active[a] != c_event) set[n++] = s->active[a];
+    }
+    code = paper_case1_settle(s, s->xs, &n, set);
+    if (code != PAPER_CASE1_OK) return code;
+    r->t = t;
+    r->ncontact = 0;
+    r->complementarity = 0;
+    r->energy_before = r->energy_after = paper_case1_total_energy(s->xs, s->p);
+    for (i = 0; i < PAPER_CASE1_NQ; ++i) {
+        r->q[i] = s->xs[i];
+        r->qd_before[i] = r->qd_after[i] = s->xs[PAPER_CASE1_NQ + i];
+    }
+    r->approach_before = r->approach_after = 0.0;
+    paper_case1_set_active(s, n, set, r);
+    return PAPER_CASE1_OK;
 }
 
 /* Write the samples t_eval[*i_eval ..] that fall in (t_a, t_b] (state from the dense output). */
@@ -1493,6 +1886,22 @@ int paper_case1_sim_advance(paper_case1_sim *s, double t_end, const double *t_ev
     int i;
     if (!(t_end >= s->t) || record == 0 || (n_eval > 0 && (t_eval == 0 || x_eval == 0 || i_eval == 0)))
         return PAPER_CASE1_ERR_BAD_OPTION;
+    if (s->pending) {                                        /* the activations of sim_init */
+        s->pending = 0;
+        record->t = s->t;
+        record->ncontact = 0;
+        record->complementarity = 0;
+        record->energy_before = record->energy_after = paper_case1_total_energy(s->x, s->p);
+        for (i = 0; i < PAPER_CASE1_NQ; ++i) {
+            record->q[i] = s->x[i];
+            record->qd_before[i] = record->qd_after[i] = s->x[PAPER_CASE1_NQ + i];
+        }
+        record->approach_before = record->approach_after = 0.0;
+        record->nactivated = s->nactive;
+        record->nreleased = 0;
+        for (i = 0; i < s->nactive; ++i) record->activated[i] = s->active[i];
+        return PAPER_CASE1_SIM_CONTACT;
+    }
     while (s->t < t_end) {
         double h, t1, t_event = 0.0, err = 0.0;
         int c_event = -1, last;
@@ -1500,6 +1909,7 @@ int paper_case1_sim_advance(paper_case1_sim *s, double t_end, const double *t_ev
             paper_case1_f(s, s->t, s->x, s->f);
             s->f_valid = 1;
         }
+        if (s->fail) return s->fail;
         if (s->opt.max_steps > 0 && steps >= s->opt.max_steps) return PAPER_CASE1_ERR_MAX_STEPS;
         if (s->opt.method != PAPER_CASE1_METHOD_RK4 && !(s->h > 0.0)) s->h = paper_case1_initial_step(s, t_end);
         h = s->h;
@@ -1516,6 +1926,7 @@ int paper_case1_sim_advance(paper_case1_sim *s, double t_end, const double *t_ev
             double fac;
             const int eighth = s->opt.method == PAPER_CASE1_METHOD_DOP853;
             err = eighth ? paper_case1_dop853_step(s, h) : paper_case1_dopri5_step(s, h);
+            if (s->fail) return s->fail;
             if (!(err == err)) err = 1e10;                   /* NaN: reject and shrink */
             fac = err > 0.0 ? 0.9 * pow(err, eighth ? -0.125 : -0.2) : fac_max;
             if (fac > fac_max) fac = fac_max;
@@ -1532,21 +1943,30 @@ int paper_case1_sim_advance(paper_case1_sim *s, double t_end, const double *t_ev
         }
         steps++;
         s->n_steps++;
+        if (s->fail) return s->fail;
         if (!paper_case1_finite(s->x1, PAPER_CASE1_NX)) return PAPER_CASE1_ERR_NONFINITE;
         t1 = last ? t_end : s->t + h;
         paper_case1_prepare_dense(s, h);
         if (paper_case1_find_event(s, t1, &t_event, &c_event)) {
-            int code;
+            int code, released = s->is_active[c_event];
+            if (s->fail) return s->fail;
             paper_case1_emit(s, t_event, t_eval, n_eval, i_eval, x_eval);
             paper_case1_dense(s, t_event, s->xs);
-            code = paper_case1_resolve(s, t_event, c_event, record);
+            code = released ? paper_case1_release(s, t_event, c_event, record)
+                            : paper_case1_resolve(s, t_event, c_event, record);
             if (code < 0) return code;
-            for (i = 0; i < PAPER_CASE1_NQ; ++i) s->x[i] = s->xs[i];
-            for (i = 0; i < PAPER_CASE1_NQ; ++i) s->x[PAPER_CASE1_NQ + i] = code == 1 ? record->qd_after[i] : s->xs[PAPER_CASE1_NQ + i];
+            for (i = 0; i < PAPER_CASE1_NX; ++i) s->x[i] = code == 1 ? s->x1[i] : s->xs[i];
             s->t = t_event;
             s->f_valid = 0;
-            paper_case1_contact_gaps(s->x, s->p, s->gaps);
+            paper_case1_events(s, s->x, s->ev);
+            if (s->fail) return s->fail;
+            if (released) {                       /* a wall crossing counts once the gap has opened again */
+                for (i = 0; i < record->nreleased; ++i) {
+                    if (s->ev[record->released[i]] > 0.0) s->ev[record->released[i]] = 0.0;
+                }
+            }
             if (s->opt.method == PAPER_CASE1_METHOD_RK4) s->h = s->opt.dt;
+            if (released) return PAPER_CASE1_SIM_CONTACT;
             if (code == 1) {
                 s->n_impacts++;
                 return PAPER_CASE1_SIM_IMPACT;
@@ -1560,8 +1980,15 @@ int paper_case1_sim_advance(paper_case1_sim *s, double t_end, const double *t_ev
                                 : s->opt.method == PAPER_CASE1_METHOD_DOP853 ? s->k[12] : s->k[6];
             for (i = 0; i < PAPER_CASE1_NX; ++i) s->f[i] = f_end[i];
         }
-        for (i = 0; i < PAPER_CASE1_NCONTACT; ++i) s->gaps[i] = s->gprev[i];
+        for (i = 0; i < PAPER_CASE1_NCONTACT; ++i) s->ev[i] = s->eprev[i];
         s->t = t1;
+        if (s->nactive > 0) {                     /* back onto the persistent constraints */
+            int code = paper_case1_project(s, s->x, s->nactive, s->active, 0);
+            if (code != PAPER_CASE1_OK) return code;
+            s->f_valid = 0;
+            paper_case1_events(s, s->x, s->ev);
+            if (s->fail) return s->fail;
+        }
     }
     while (n_eval > 0 && *i_eval < n_eval && t_eval[*i_eval] <= t_end) {   /* samples at t_end itself */
         for (i = 0; i < PAPER_CASE1_NX; ++i) x_eval[(long)(*i_eval) * PAPER_CASE1_NX + i] = s->x[i];

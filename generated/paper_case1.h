@@ -228,6 +228,22 @@ const char *paper_case1_error_message(int code);
  *   while ((code = NAME_sim_advance(&sim, t_end, t_eval, n_eval, &i_eval, x_eval, &rec)) == NAME_SIM_IMPACT)
  *       ... rec holds the impact just applied ...
  *   code is NAME_SIM_END (sim.t == t_end) or an error (< 0, see NAME_error_message).
+ *   A loop that also follows resting contact continues on NAME_SIM_CONTACT too (see below).
+ *
+ * Resting contact (Zeno behaviour).  With e < 1 and gravity, impacts of a point on a wall accumulate
+ * (the bounces shrink geometrically).  At an impact on a wall with e < 1, a contact whose bounce would rise
+ * less than opt.rest_height (v+^2 <= 2 a rest_height, a = its normal acceleration towards the wall), or
+ * that has had opt.zeno_impacts impacts at shrinking intervals, is made PERSISTENT: its normal velocity is
+ * set to 0 (a mass-weighted projection, a plastic impact: energy cannot grow) and it becomes a bilateral,
+ * frictionless constraint of the flight equations,
+ *     I_f qdd = R + N_a^T lambda,    N_a qdd = -Ndot_a qd     (N_a: signed Jacobian rows of the active set),
+ * with positions and velocities projected back onto the constraint (gap = 0, normal velocity = 0, mass
+ * metric) after every accepted step.  A persistent contact is released when its force lambda (along the
+ * inward normal) falls through 0: that crossing is located on the dense output like a wall crossing.
+ * Only forces lambda > 0 are kept (an acceleration-level complementarity solve when the set changes).
+ * sim_init also makes persistent the contacts that start at their wall (gap <= contact_tol) with a normal
+ * velocity under the same bound and a positive force (a chain started at rest on the floor).
+ * Every activation and release is reported in the record (activated[], released[]).
  *
  * The caller owns all memory (the structs); no globals, no malloc; one NAME_sim per thread.
  * ------------------------------------------------------------------------------------------------ */
@@ -236,12 +252,17 @@ const char *paper_case1_error_message(int code);
 #define PAPER_CASE1_METHOD_DOP853  2   /* Dormand-Prince 8(5,3), adaptive, 7th-order dense output */
 
 #define PAPER_CASE1_SIM_END       1    /* reached t_end */
-#define PAPER_CASE1_SIM_IMPACT    2    /* stopped at an impact, already applied; see the record */
+#define PAPER_CASE1_SIM_IMPACT    2    /* stopped at an impact, already applied; see the record (which may
+                                         also list contacts made persistent or released by the impact) */
+#define PAPER_CASE1_SIM_CONTACT   3    /* stopped where the persistent set changed without an impact: a contact
+                                         released (its force reached 0), or the activations of sim_init;
+                                         record.t, activated[], released[] are filled, ncontact = 0 */
 #define PAPER_CASE1_ERR_BAD_OPTION  -10   /* an option or argument is out of range */
 #define PAPER_CASE1_ERR_MAX_STEPS   -11   /* opt.max_steps reached in one advance call */
 #define PAPER_CASE1_ERR_STEP_SIZE   -12   /* adaptive step size fell below round-off */
 #define PAPER_CASE1_ERR_NONFINITE   -13   /* the state became NaN or infinite */
 #define PAPER_CASE1_ERR_TOO_MANY_CONTACTS -14 /* more approaching contacts at once than NQ */
+#define PAPER_CASE1_ERR_SINGULAR_CONTACT -15  /* the persistent contact constraints are dependent */
 
 #define PAPER_CASE1_NCONTACT1 (PAPER_CASE1_NCONTACT > 0 ? PAPER_CASE1_NCONTACT : 1)
 
@@ -254,6 +275,10 @@ typedef struct {
     double event_tol;      /* time tolerance of event location on the interpolant (default 1e-13 s) */
     double contact_tol;    /* approaching contacts within this gap (m) join a simultaneous impact (1e-6) */
     long max_steps;        /* steps allowed per advance call, 0 = unbounded (default 10^7) */
+    double rest_height;    /* m: a bounce rising less than this ends in persistent contact; < 0 (default):
+                              10 contact_tol; 0: never by this rule */
+    int zeno_impacts;      /* persistent after this many impacts of one contact at shrinking intervals
+                              (default 20; 0: never by this rule) */
 } paper_case1_options;
 
 typedef struct {
@@ -267,6 +292,8 @@ typedef struct {
     int complementarity;                     /* 1 if the complementarity form was needed */
     double approach_before;                  /* largest |normal velocity| of any contact before (m/s) */
     double approach_after;                   /* fastest approach of a contact within contact_tol after (m/s) */
+    int nactivated, activated[PAPER_CASE1_NQ];     /* contacts made persistent at this event */
+    int nreleased, released[PAPER_CASE1_NQ];       /* persistent contacts released at this event */
 } paper_case1_impact_record;
 
 typedef struct {
@@ -275,31 +302,48 @@ typedef struct {
     double t;                                 /* current time (s) */
     double x[PAPER_CASE1_NX];                  /* current state [q, qd] */
     long n_steps, n_rejected, n_rhs, n_impacts;
+    int nactive;                              /* persistent contacts: their indices active[0..nactive-1] */
+    int active[PAPER_CASE1_NQ];
+    long n_activations, n_releases;
     /* integrator state and scratch (private) */
     double h;
     int f_valid;
     double f[PAPER_CASE1_NX], k[16][PAPER_CASE1_NX], x1[PAPER_CASE1_NX], xs[PAPER_CASE1_NX], cont[8][PAPER_CASE1_NX];
     double t0_step, h_step;
-    double gaps[PAPER_CASE1_NCONTACT1], gs[PAPER_CASE1_NCONTACT1], gprev[PAPER_CASE1_NCONTACT1];
+    double ev[PAPER_CASE1_NCONTACT1], es[PAPER_CASE1_NCONTACT1], eprev[PAPER_CASE1_NCONTACT1];   /* event values */
     double work[PAPER_CASE1_IMPACT_NWORK];
+    double rest_height;                       /* resolved opt.rest_height */
+    int is_active[PAPER_CASE1_NCONTACT1], pending, fail;
+    int n_shrink[PAPER_CASE1_NCONTACT1];           /* impacts of each contact at shrinking intervals */
+    double t_last[PAPER_CASE1_NCONTACT1], dt_last[PAPER_CASE1_NCONTACT1];
 } paper_case1_sim;
 
-/* Default options (DOPRI5, rtol 1e-8, atol 1e-10). */
+/* Default options (DOPRI5, rtol 1e-8, atol 1e-10, persistent contact on). */
 void paper_case1_default_options(paper_case1_options *opt);
 
-/* Start a simulation at time t0 from (q, qd) with parameters p (copied).  Returns OK or ERR_BAD_OPTION. */
+/* Start a simulation at time t0 from (q, qd) with parameters p (copied).  Contacts resting at their wall
+ * become persistent (reported by the first sim_advance, SIM_CONTACT).  Returns OK or an error (< 0). */
 int paper_case1_sim_init(paper_case1_sim *sim, double t0, const double *q, const double *qd, const double *p,
                    const paper_case1_options *opt);
 
 /* The current time and state (the struct's t and x, copied out). */
 void paper_case1_sim_state(const paper_case1_sim *sim, double *t, double *q, double *qd);
 
-/* Integrate until t_end or the first impact (which is located, resolved and applied; record filled).
+/* Integrate until t_end, the first impact (which is located, resolved and applied; record filled) or the
+ * first release of a persistent contact.
  * Samples: for each t_eval[i] (ascending) with i >= *i_eval that is passed, x_eval[i*NX ..] receives the
  * state [q, qd] (pre-impact at an impact time) and *i_eval advances; t_eval may be NULL if n_eval = 0.
- * Returns SIM_END, SIM_IMPACT or an error (< 0). */
+ * Returns SIM_END, SIM_IMPACT, SIM_CONTACT or an error (< 0). */
 int paper_case1_sim_advance(paper_case1_sim *sim, double t_end, const double *t_eval, int n_eval, int *i_eval,
                       double *x_eval, paper_case1_impact_record *record);
+
+/* Generalised accelerations with the contacts active[0..nactive-1] held as bilateral frictionless
+ * constraints: I_f qdd = R + N^T lambda, N qdd = -Ndot qd (N: Jacobian rows signed along the inward normal),
+ * solved as qdd = qdd_free + I_f^-1 N^T lambda with (N I_f^-1 N^T) lambda = -(N qdd_free + Ndot qd).
+ * lambda[k] (N) is the force of contact active[k] along its inward normal (> 0 pushes).  work: IMPACT_NWORK
+ * doubles.  nactive = 0 gives forward_dynamics.  Returns OK or an error (< 0). */
+int paper_case1_constrained_dynamics(const double *q, const double *qd, const double *p, int nactive,
+                               const int *active, double *qdd, double *lambda, double *work);
 
 #ifdef __cplusplus
 }

@@ -77,7 +77,8 @@ class CompiledModel:
         self.contact_rows = list(self.layout.contact_rows)
         self._fn = {name: getattr(self.lib, f"{self.name}_{name}") for name in (
             "mass_matrix", "bias", "forward_dynamics", "contact_points", "contact_velocities",
-            "contact_jacobian", "contact_gaps", "energy", "rhs", "impact", "impact_complementarity")}
+            "contact_jacobian", "contact_gaps", "energy", "rhs", "impact", "impact_complementarity",
+            "contact_bias", "constrained_dynamics")}
         self._work = np.zeros(getattr(self.lib, f"{self.name.upper()}_IMPACT_NWORK"))
 
     # -- plumbing ---------------------------------------------------------------
@@ -130,6 +131,11 @@ class CompiledModel:
         return self._call("contact_jacobian", rows * self.nq, self._vec(q, self.nq, "q"),
                           self._params(p)).reshape(rows, self.nq)
 
+    def contact_bias(self, q, qd, p=None) -> np.ndarray:
+        """J_dot qd: the contact Jacobian rows' accelerations at qdd = 0 (row order of contact_jacobian)."""
+        return self._call("contact_bias", len(self.contact_rows), self._vec(q, self.nq, "q"),
+                          self._vec(qd, self.nq, "qd"), self._params(p))
+
     def contact_gaps(self, q, p=None) -> np.ndarray:
         return self._call("contact_gaps", len(self.contacts), self._vec(q, self.nq, "q"), self._params(p))
 
@@ -153,6 +159,21 @@ class CompiledModel:
             message = self.ffi.string(getattr(self.lib, f"{self.name}_error_message")(code)).decode()
             raise ImpactError(f"impact with contacts {active.tolist()}: {message}")
         return qd_plus, impulse[:len(active)]
+
+
+    def constrained_dynamics(self, q, qd, active, p=None) -> tuple[np.ndarray, np.ndarray]:
+        """Accelerations and contact forces with the contacts ``active`` held at their walls (bilateral,
+        frictionless): I_f qdd = R + N^T lambda, N qdd = -Ndot qd (the runtime's persistent contact)."""
+        q, qd = self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd")
+        active = np.ascontiguousarray(active, dtype=np.int32)
+        qdd, lam = np.zeros(self.nq), np.zeros(max(len(active), 1))
+        code = self._fn["constrained_dynamics"](self._ptr(q), self._ptr(qd), self._ptr(self._params(p)), len(active),
+                                                self.ffi.cast("int *", self.ffi.from_buffer(active)),
+                                                self._ptr(qdd), self._ptr(lam), self._ptr(self._work))
+        if code != 0:
+            message = self.ffi.string(getattr(self.lib, f"{self.name}_error_message")(code)).decode()
+            raise ImpactError(f"constrained dynamics with contacts {active.tolist()}: {message}")
+        return qdd, lam[:len(active)]
 
 
 def load_model(scene: Scene | str, bake_params: bool = False, flags=None, progress=None,

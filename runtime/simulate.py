@@ -44,6 +44,17 @@ class Impact:
 
 
 @dataclass
+class ContactEvent:
+    """A change of the persistent (resting) contact set: point O_point (1-based) on a wall became
+    persistent ('persist') or was released ('release') at time t."""
+
+    t: float
+    point: int
+    wall: str
+    kind: str             # 'persist' | 'release'
+
+
+@dataclass
 class SimulationResult:
     """What simulate() returns.  status 0: reached t_end; -1: stopped early (see message)."""
 
@@ -63,6 +74,8 @@ class SimulationResult:
     message: str
     method: str
     options: dict = field(default_factory=dict)
+    contact_events: list = field(default_factory=list)   # ContactEvent, in time order
+    persistent_final: list = field(default_factory=list)  # (point, wall) of the contacts resting at t_final
 
     @property
     def success(self) -> bool:
@@ -90,6 +103,9 @@ class SimulationResult:
             "energy_initial": self.energy_initial, "energy_final": self.energy_final,
             "n_rhs": self.n_rhs, "n_steps": self.n_steps, "n_rejected": self.n_rejected,
             "status": self.status, "message": self.message, "method": self.method, "options": self.options,
+            "contact_events": [{"t": e.t, "point": e.point, "wall": e.wall, "kind": e.kind}
+                               for e in self.contact_events],
+            "persistent_final": [{"point": point, "wall": wall} for point, wall in self.persistent_final],
         }
 
 
@@ -101,7 +117,8 @@ def _check(condition: bool, field_name: str, message: str) -> None:
 def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "dopri5", rtol: float = 1e-8,
              atol: float = 1e-10, dt: float | None = None, t_eval=None, h_max: float = 0.0,
              contact_tol: float = 1e-6, event_samples: int = 4, event_tol: float = 1e-13,
-             max_impacts: int = 10000, max_steps: int = 10_000_000, p=None, q0=None, qd0=None) -> SimulationResult:
+             max_impacts: int = 10000, max_steps: int = 10_000_000, rest_height: float | None = None,
+             zeno_impacts: int = 20, p=None, q0=None, qd0=None) -> SimulationResult:
     """Simulate the scene's hybrid dynamics from its initial state over [0, t_end].
 
     method        'dopri5' (adaptive Dormand-Prince 5(4), rtol/atol), 'dop853' (adaptive 8(5,3)),
@@ -110,6 +127,11 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     contact_tol   approaching contacts within this gap (m) of their wall join a simultaneous impact
     event_samples interpolant samples per step searched for wall crossings
     max_impacts   stop with status -1 beyond this many impacts (impact accumulation)
+    rest_height   m: at an impact on a wall with e < 1, a contact whose bounce would rise less than this
+                  (v+^2 <= 2 a rest_height, a its normal acceleration towards the wall) rests on the wall:
+                  persistent frictionless contact, released when its force would pull.
+                  None (default): 10 contact_tol; 0: never by this rule
+    zeno_impacts  a contact becomes persistent after this many impacts at shrinking intervals (0: never)
     p, q0, qd0    override the scene's parameters and initial state (q0, qd0 in the full layout of Eq. 13)
     Samples, final state and impact states are returned in the full layout of Eq. 13 whatever the model.
     """
@@ -127,6 +149,10 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     _check(int(event_samples) >= 1, "event_samples", f"must be >= 1, got {event_samples!r}")
     _check(event_tol > 0, "event_tol", f"must be > 0 s, got {event_tol!r}")
     _check(h_max >= 0, "h_max", f"must be >= 0 s (0: unbounded), got {h_max!r}")
+    _check(rest_height is None or (np.isfinite(rest_height) and rest_height >= 0), "rest_height",
+           f"must be a finite height >= 0 m (or None: 10 contact_tol), got {rest_height!r}")
+    _check(int(zeno_impacts) == zeno_impacts and zeno_impacts >= 0, "zeno_impacts",
+           f"must be an integer >= 0 (0: off), got {zeno_impacts!r}")
 
     nq, nx = model.nq, 2 * model.nq
     layout = model.layout
@@ -149,6 +175,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     opt.rtol, opt.atol, opt.h_max = rtol, atol, h_max
     opt.event_samples, opt.event_tol, opt.contact_tol = int(event_samples), event_tol, contact_tol
     opt.max_steps = int(max_steps)
+    opt.rest_height = -1.0 if rest_height is None else float(rest_height)
+    opt.zeno_impacts = int(zeno_impacts)
     sim = ffi.new(f"{name}_sim *")
     ptr = model._ptr
     code = getattr(lib, f"{name}_sim_init")(sim, 0.0, ptr(q), ptr(qd), ptr(p), opt)
@@ -157,12 +185,14 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
 
     x_eval = np.zeros((len(t_eval), nx))
     i_eval = ffi.new("int *", 0)
-    while i_eval[0] < len(t_eval) and t_eval[i_eval[0]] <= 0.0:      # samples at the start
-        x_eval[i_eval[0]] = np.r_[q, qd]
+    while i_eval[0] < len(t_eval) and t_eval[i_eval[0]] <= 0.0:      # samples at the start (as sim_init left it)
+        x_eval[i_eval[0]] = ffi.unpack(sim.x, nx)
         i_eval[0] += 1
     record = ffi.new(f"{name}_impact_record *")
     advance = getattr(lib, f"{name}_sim_advance")
     SIM_END, SIM_IMPACT = getattr(lib, f"{name.upper()}_SIM_END"), getattr(lib, f"{name.upper()}_SIM_IMPACT")
+    SIM_CONTACT = getattr(lib, f"{name.upper()}_SIM_CONTACT")
+    contact_events: list[ContactEvent] = []
     t_eval_ptr = ffi.cast("double *", ffi.from_buffer(t_eval))
     x_eval_ptr = ffi.cast("double *", ffi.from_buffer(x_eval))
     energy_initial = sum(model.energy(q, qd, p))
@@ -174,6 +204,10 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         code = advance(sim, float(t_end), t_eval_ptr, len(t_eval), i_eval, x_eval_ptr, record)
         if code == SIM_END:
             break
+        if code in (SIM_IMPACT, SIM_CONTACT):
+            contact_events += _read_contact_events(model, record)
+        if code == SIM_CONTACT:
+            continue
         if code != SIM_IMPACT:
             status = -1
             message = f"at t = {sim.t:.12g} s: {ffi.string(getattr(lib, f'{name}_error_message')(code)).decode()}"
@@ -197,9 +231,12 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         qd_final=layout.expand(x_final[nq:], velocity=True),
         energy_initial=energy_initial, energy_final=sum(model.energy(x_final[:nq], x_final[nq:], p)),
         n_steps=int(sim.n_steps), n_rejected=int(sim.n_rejected), n_rhs=int(sim.n_rhs), status=status,
-        message=message, method=method,
+        message=message, method=method, contact_events=contact_events,
+        persistent_final=[(model.contacts[sim.active[k]][0], model.contacts[sim.active[k]][1].name)
+                          for k in range(sim.nactive)],
         options={"rtol": rtol, "atol": atol, "dt": dt, "contact_tol": contact_tol, "event_samples": event_samples,
-                 "event_tol": event_tol, "h_max": h_max, "t_end": t_end})
+                 "event_tol": event_tol, "h_max": h_max, "t_end": t_end, "rest_height": rest_height,
+                 "zeno_impacts": zeno_impacts})
 
 
 def _read_impact(model: CompiledModel, r) -> Impact:
@@ -212,6 +249,15 @@ def _read_impact(model: CompiledModel, r) -> Impact:
     return Impact(float(r.t), contacts, float(r.energy_before), float(r.energy_after), bool(r.complementarity),
                   layout.expand(unpack(r.q, nq)), layout.expand(unpack(r.qd_before, nq), velocity=True),
                   layout.expand(unpack(r.qd_after, nq), velocity=True))
+
+
+def _read_contact_events(model: CompiledModel, r) -> list[ContactEvent]:
+    events = []
+    for kind, count, indices in (("persist", r.nactivated, r.activated), ("release", r.nreleased, r.released)):
+        for k in range(count):
+            point, wall = model.contacts[indices[k]]
+            events.append(ContactEvent(float(r.t), point, wall.name, kind))
+    return events
 
 
 def _reduce(layout, full, name: str, velocity: bool) -> np.ndarray:
@@ -266,7 +312,7 @@ def _impact_problem(model: CompiledModel, impact: Impact, record, elastic_walls:
     tol = 1e-10 * max(abs(E0), 1e-300)
     if E1 > E0 + tol:
         return f"energy increased from {E0!r} J to {E1!r} J"
-    elastic = all(c.wall in elastic_walls for c in impact.contacts)
+    elastic = all(c.wall in elastic_walls for c in impact.contacts) and not record.nactivated
     if elastic and not impact.complementarity and abs(E1 - E0) > tol:
         return f"elastic impact changed the energy from {E0!r} J to {E1!r} J"
     return ""

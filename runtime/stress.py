@@ -109,6 +109,7 @@ class Case:
 
 
 CASES: list[Case] = []
+LOAD_ERRORS: list[str] = []          # stress_* modules that failed to import (reported, exit code 1)
 
 
 def register(case: Case) -> Case:
@@ -123,10 +124,15 @@ def register(case: Case) -> Case:
 
 def load_cases() -> list[Case]:
     """Import every ``runtime.stress_*`` module (each registers its cases) and return CASES."""
-    package = Path(__file__).resolve().parent
+    package = Path(__file__).parent
     for info in sorted(pkgutil.iter_modules([str(package)]), key=lambda m: m.name):
         if info.name.startswith("stress_"):
-            importlib.import_module(f"runtime.{info.name}")
+            try:
+                importlib.import_module(f"runtime.{info.name}")
+            except Exception as exc:              # a broken module must not hide the other cases
+                message = f"runtime.{info.name}: cannot be imported ({type(exc).__name__}: {exc})"
+                if message not in LOAD_ERRORS:
+                    LOAD_ERRORS.append(message)
     return CASES
 
 
@@ -509,6 +515,8 @@ def main(args) -> int:
               + ("" if outcome.passed else " -- " + "; ".join(outcome.reasons)), file=sys.stderr, flush=True)
         outcomes.append(outcome)
     failed = sum(not o.passed for o in outcomes)
+    for error in LOAD_ERRORS:
+        print(f"error: {error}", file=sys.stderr)
     if args.json:
         text = json.dumps([{**o.row, "description": o.case.description, "expect": o.case.expect.describe()}
                            for o in outcomes], indent=1, default=float)
@@ -519,7 +527,8 @@ def main(args) -> int:
     if args.json != "-":
         print(tolerances_line())
         print(format_table(outcomes))
-        print(f"{len(outcomes) - failed} passed, {failed} failed")
+        print(f"{len(outcomes) - failed} passed, {failed} failed"
+              + (f"; {len(LOAD_ERRORS)} case module(s) could not be imported" if LOAD_ERRORS else ""))
         if args.json:
             print(f"wrote {args.json}")
-    return 1 if failed else 0
+    return 1 if failed or LOAD_ERRORS else 0

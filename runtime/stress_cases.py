@@ -232,7 +232,7 @@ for _n in (16, 32):
         description=f"built-in {_n}-link chain (python -m codegen --links {_n}), closed polygon dropped in its "
                     "box, e = 1, 1 s",
         simulate={"t_end": 1.0, **ACCURATE},
-        checks=(energy_conserved(1e-8), impulse_momentum(1e-8))))
+        checks=(energy_conserved(1e-8), impulse_momentum(1e-8), converged(time_tol=1e-6))))
 
 
 # ---------------------------------------------------------------------------

@@ -47,8 +47,9 @@ REFERENCE_LINES: dict[str, dict] = {}
 # ---------------------------------------------------------------------------
 # one measurement (runs in a child process)
 # ---------------------------------------------------------------------------
-def measure(n: int, formulation: str, specialise: bool = False, progress=None) -> dict:
-    """Generate, count, compile and time one model; returns a JSON-able row."""
+def measure(n: int, formulation: str, specialise: bool = False, progress=None, calls: int | None = None) -> dict:
+    """Generate, count, compile and time one model; returns a JSON-able row.  ``calls`` per timing batch
+    (default: about 0.2 s per batch, from the operation count)."""
     from .ctiming import time_rhs
     from .pipeline import generate
     from .scene import default_scene
@@ -62,7 +63,7 @@ def measure(n: int, formulation: str, specialise: bool = False, progress=None) -
     say("compile (gcc -std=c99 -O2 -c)")
     compile_seconds = _compile_seconds(model)
     fd_ops = ops["forward_dynamics"].total
-    calls = max(200, min(100000, int(2e8 / max(fd_ops, 1))))     # about 0.2 s per timing batch
+    calls = calls or max(200, min(100000, int(2e8 / max(fd_ops, 1))))     # about 0.2 s per timing batch
     say(f"time rhs in C ({calls} calls x 7 batches)")
     ns = time_rhs(model, calls=calls)
     return {
@@ -90,11 +91,13 @@ def _compile_seconds(model) -> float:
         return time.perf_counter() - start
 
 
-def run_child(n: int, formulation: str, specialise: bool, timeout: float, say) -> dict:
+def run_child(n: int, formulation: str, specialise: bool, timeout: float, say, calls: int | None = None) -> dict:
     """measure() in a child process with a time limit; a row with status 'timeout'/'error' otherwise."""
     command = [sys.executable, "-m", "codegen.opscount", "--one", str(n), "--formulation", formulation]
     if specialise:
         command.append("--specialise")
+    if calls:
+        command += ["--calls", str(calls)]
     env = dict(os.environ)
     root = str(Path(__file__).resolve().parent.parent)
     env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
@@ -116,7 +119,8 @@ def run_child(n: int, formulation: str, specialise: bool, timeout: float, say) -
     return row
 
 
-def run_all(ns, specialise: bool, timeout: float, lagrange_max: int | None, say) -> list[dict]:
+def run_all(ns, specialise: bool, timeout: float, lagrange_max: int | None, say, calls: int | None = None
+            ) -> list[dict]:
     rows = []
     gave_up = {}                                                 # formulation -> n where it timed out
     for n in ns:
@@ -129,7 +133,7 @@ def run_all(ns, specialise: bool, timeout: float, lagrange_max: int | None, say)
                              "note": f"skipped (n > --lagrange-max {lagrange_max})"})
             else:
                 say(f"n={n} {formulation} ...")
-                row = run_child(n, formulation, specialise, timeout, say)
+                row = run_child(n, formulation, specialise, timeout, say, calls)
                 if row["status"] == "timeout":
                     gave_up[formulation] = n
                 rows.append(row)
@@ -313,6 +317,8 @@ def parse_args(argv):
                              "exceeds it is reported and not tried for larger n")
     parser.add_argument("--lagrange-max", type=int, metavar="N",
                         help="skip the Lagrangian expansion for n > N (reported in the table)")
+    parser.add_argument("--calls", type=int, metavar="K",
+                        help="rhs calls per timing batch (7 batches, median; default: about 0.2 s per batch)")
     parser.add_argument("--one", type=int, help=argparse.SUPPRESS)            # child process: one measurement
     parser.add_argument("--formulation", choices=FORMULATIONS, help=argparse.SUPPRESS)
     return parser.parse_args(argv)
@@ -327,19 +333,21 @@ def main(argv=None) -> int:
 
     if args.one is not None:                                     # child: one row of JSON on stdout
         row = measure(args.one, args.formulation, args.specialise,
-                      progress=lambda m: say(f"n={args.one} {args.formulation}: {m}"))
+                      progress=lambda m: say(f"n={args.one} {args.formulation}: {m}"), calls=args.calls)
         print(json.dumps(row))
         return 0
     try:
         ns = parse_links(args.links)
         if args.timeout <= 0:
             raise ValueError(f"--timeout: must be > 0 seconds, got {args.timeout:g}")
+        if args.calls is not None and args.calls < 1:
+            raise ValueError(f"--calls: must be >= 1, got {args.calls}")
         if args.lagrange_max is not None and args.lagrange_max < 0:
             raise ValueError(f"--lagrange-max: must be >= 0, got {args.lagrange_max}")
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    rows = run_all(ns, args.specialise, args.timeout, args.lagrange_max, say)
+    rows = run_all(ns, args.specialise, args.timeout, args.lagrange_max, say, args.calls)
     text = f"Machine: {machine()}.\n\n" + markdown(rows, args.specialise)
     print(text)
     if args.out:

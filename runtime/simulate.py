@@ -11,6 +11,7 @@ impact (no contact still approaching its wall, no energy gain) and collects the 
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -201,6 +202,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     elastic_walls = {w.name for w in model.scene.walls if p[names.index(f"e_{w.name}")] == 1.0}
     status, message = 0, "reached t_end"
     while True:
+        t_call = float(sim.t)
         code = advance(sim, float(t_end), t_eval_ptr, len(t_eval), i_eval, x_eval_ptr, record)
         if code == SIM_END:
             break
@@ -211,6 +213,9 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         if code != SIM_IMPACT:
             status = -1
             message = f"at t = {sim.t:.12g} s: {ffi.string(getattr(lib, f'{name}_error_message')(code)).decode()}"
+            if code == _header_constant(model, "ERR_MAX_STEPS"):
+                message += (f" ({int(max_steps)} steps since t = {t_call:.6g} s, {(sim.t - t_call) / max_steps:.2g} s "
+                            "per step: raise max_steps, or loosen rtol/atol if the step size collapsed)")
             break
         impact = _read_impact(model, record)
         impacts.append(impact)
@@ -237,6 +242,12 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         options={"rtol": rtol, "atol": atol, "dt": dt, "contact_tol": contact_tol, "event_samples": event_samples,
                  "event_tol": event_tol, "h_max": h_max, "t_end": t_end, "rest_height": rest_height,
                  "zeno_impacts": zeno_impacts})
+
+
+def _header_constant(model: CompiledModel, suffix: str) -> int | None:
+    """An integer #define NAME_<suffix> of the generated header (error codes are not in the cffi cdef)."""
+    match = re.search(rf"#define\s+{model.name.upper()}_{suffix}\s+(-?\d+)", model.generated.header)
+    return int(match.group(1)) if match else None
 
 
 def _read_impact(model: CompiledModel, r) -> Impact:

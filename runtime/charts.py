@@ -45,6 +45,8 @@ CHART_NAMES = ("A", "B")
 EZ = np.array([0.0, 0.0, 1.0])
 RECOMPOSE_TOL = 1e-11     # max |R(angles) - R| accepted from the closed-form extraction
 LOCK_TOL = 1e-12          # mu below this: at the chart's lock, theta_-1 is taken from the previous value
+MIN_MONITOR_DT = 1e-6     # s: the finest monitor grid (a base turning faster than ~1e5 rad/s is not followed)
+MAX_MONITOR_SAMPLES = 2000  # a chunk is shortened so that its monitor grid has at most this many samples
 
 
 class ChartError(ValueError):
@@ -347,8 +349,9 @@ def _monitor_grid(t0: float, t1: float, monitor_dt: float, user: np.ndarray) -> 
 
 
 def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.3, switch_back: float = 0.6,
-                         hard_limit: float = 0.05, chunk: float = 0.1, monitor_dt: float = 5e-4, t_eval=None,
-                         p=None, q0=None, qd0=None, max_impacts: int = 10000, models: ChartModels | None = None,
+                         hard_limit: float = 0.05, chunk: float = 0.1, monitor_dt: float = 5e-4,
+                         chunk_steps: int = 20000, t_eval=None, p=None, q0=None, qd0=None,
+                         max_impacts: int = 10000, max_steps: int = 10_000_000, models: ChartModels | None = None,
                          progress=None, **options) -> ChartResult:
     """Simulate like ``runtime.simulate`` while switching the base-orientation chart near the gimbal lock.
 
@@ -358,9 +361,13 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
     hard_limit   if a monitor sample first sees mu below this (it fell past threshold between samples),
                  the stretch from the previous sample is redone on the other chart
     chunk        s of integration per simulate() call (bounds the work thrown away at a switch)
-    monitor_dt   s between monitor samples (the measure is checked there, not between)
-    t_eval, p, q0, qd0, max_impacts and ``options`` (method, rtol, atol, dt, ...) as for simulate();
-    q0/qd0 are in chart A's coordinates (the scene's layout).
+    monitor_dt   s between monitor samples (the measure is checked there); made finer when the base turns
+                 fast, so that mu cannot move by more than (threshold - hard_limit) between two samples
+    chunk_steps  a chunk first runs with this step budget: integrating into a lock makes the steps
+                 collapse, and the budget ends that quickly (the chunk is then redone from its last
+                 good sample on the other chart, or, far from the lock, again with max_steps)
+    t_eval, p, q0, qd0, max_impacts, max_steps (per chunk) and ``options`` (method, rtol, atol, dt, ...)
+    as for simulate(); q0/qd0 are in chart A's coordinates (the scene's layout).
     """
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
@@ -371,6 +378,8 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
     _check(np.isfinite(chunk) and chunk > 0, "chunk", f"must be > 0 s, got {chunk!r}")
     _check(np.isfinite(monitor_dt) and 0 < monitor_dt <= chunk, "monitor_dt",
            f"must be in (0, chunk = {chunk}] s, got {monitor_dt!r}")
+    _check(int(chunk_steps) == chunk_steps and chunk_steps >= 1, "chunk_steps",
+           f"must be an integer >= 1, got {chunk_steps!r}")
     if q0 is not None or qd0 is not None:
         scene = dataclasses.replace(scene, q0=tuple(scene.q0 if q0 is None else np.asarray(q0, dtype=float)),
                                     qd0=tuple(scene.qd0 if qd0 is None else np.asarray(qd0, dtype=float)))
@@ -387,8 +396,15 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
     impacts: list[Impact] = []
     impact_chart: list[int] = []
     switches: list[ChartSwitch] = []
-    totals = {"n_steps": 0, "n_rejected": 0, "n_rhs": 0}
     events, persistent = [], []
+    totals = {"n_steps": 0, "n_rejected": 0, "n_rhs": 0}
+
+    def run_chunk(model, duration, times, q, qd, steps):
+        run = simulate(model, duration, t_eval=times, p=p_vec, q0=q, qd0=qd, max_steps=steps,
+                       max_impacts=max(1, max_impacts - len(impacts)), **options)
+        for key in totals:
+            totals[key] += getattr(run, key)
+        return run
 
     t = 0.0
     q, qd = np.array(scene.q0, dtype=float), np.array(scene.qd0, dtype=float)
@@ -401,17 +417,26 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
                                     float(charts[1].measure(q[1])), "start: mu_A < threshold"))
         current = 1
     min_measure = float(charts[current].measure(q[1]))
+    speed = float(np.linalg.norm(charts[current].axes(q[:3]) @ qd[:3]))    # |omega_1| (rad/s)
     status, message = 0, "reached t_end"
     last_redo = None                                      # (t, chart) of the last redo: no ping-pong
+    full_budget = False                                   # retry the chunk with max_steps
 
     while t < t_end:
-        t1 = t_end if t_end - (t + chunk) < 1e-12 else t + chunk
-        times, index = _monitor_grid(t, t1, monitor_dt, user)
         chart, model = charts[current], compiled[current]
-        run = simulate(model, t1 - t, t_eval=times, p=p_vec, q0=q, qd0=qd,
-                       max_impacts=max(1, max_impacts - len(impacts)), **options)
-        for key in totals:
-            totals[key] += getattr(run, key)
+        spacing = max(min(monitor_dt, 0.5 * (threshold - hard_limit) / max(speed, 1e-300)), MIN_MONITOR_DT)
+        t1 = min(t + chunk, t + MAX_MONITOR_SAMPLES * spacing)
+        t1 = t_end if t_end - t1 < 1e-12 else t1
+        times, index = _monitor_grid(t, t1, spacing, user)
+        budget = max_steps if full_budget else min(int(chunk_steps), max_steps)
+        run = run_chunk(model, t1 - t, times, q, qd, budget)
+        if len(run.t) > 1:
+            omega = np.einsum("nij,nj->ni", chart.axes(run.q[:, :3]), run.qd[:, :3])
+            fastest = float(np.linalg.norm(omega, axis=1).max())
+            if fastest * np.diff(run.t).max() > threshold - hard_limit and spacing > MIN_MONITOR_DT:
+                speed = fastest                           # the base turns too fast for the grid: finer
+                continue
+            speed = fastest
         mu = chart.measure(run.q[:, 1])
         mu_a = charts[0].measure_of(chart.rotation(run.q[:, :3])) if current == 1 else mu
         impact_times = {imp.t for imp in run.impacts}
@@ -435,6 +460,10 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
             if mu_fail < threshold:                       # failed near the singular set: redo on the other chart
                 cut, redo = len(run.t), True
                 reason = f"failed at mu_{CHART_NAMES[current]} = {mu_fail:.3g}: redo ({run.message})"
+            elif run.n_steps >= budget and budget < max_steps:
+                full_budget = True                        # a hard stretch far from the lock: full budget
+                continue
+        full_budget = False
         if redo:                                          # back to the last good sample before the cut
             cut -= 1
             while cut > 0 and not restartable(cut):
@@ -442,17 +471,14 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
             if cut < 0 or last_redo == (t + run.t[cut], current):
                 status = -1
                 message = (f"at t = {t + (run.t[max(cut, 0)] if len(run.t) else 0.0):.12g} s: neither chart "
-                           f"can continue ({reason}); lower monitor_dt")
+                           f"can continue ({reason})")
                 cut = None
             else:
                 last_redo = (t + run.t[cut], 1 - current)
         if cut is not None and cut > 0:
             # integrate once more from the chunk's start to the cut, so that the next chart starts from an
             # integrator state (a step end) rather than from the dense-output interpolant
-            again = simulate(model, run.t[cut], t_eval=times[:cut + 1], p=p_vec, q0=q, qd0=qd,
-                             max_impacts=max(1, max_impacts - len(impacts)), **options)
-            for key in totals:
-                totals[key] += getattr(again, key)
+            again = run_chunk(model, run.t[cut], times[:cut + 1], q, qd, max_steps)
             if again.status == 0 and len(again.t) == cut + 1:
                 run = again
                 run.q[cut], run.qd[cut] = again.q_final, again.qd_final
@@ -497,14 +523,14 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
     q_final, qd_final = (q, qd) if current == 0 else convert_state(q, qd, charts[1], charts[0], near=out.last_a)
     n_done = out.count()
     opts = dict(options, threshold=threshold, switch_back=switch_back, hard_limit=hard_limit, chunk=chunk,
-                monitor_dt=monitor_dt, t_end=t_end)
+                monitor_dt=monitor_dt, chunk_steps=chunk_steps, max_steps=max_steps, t_end=t_end)
     if status == 0:
         message = f"{message}; {len(switches)} chart switch(es)"
     extra = {"contact_events": events, "persistent_final": persistent} \
         if "contact_events" in {f.name for f in dataclasses.fields(SimulationResult)} else {}
     return ChartResult(
-        **extra, t=user[:n_done].copy(), q=out.q[:n_done], qd=out.qd[:n_done], impacts=impacts, t_final=float(t),
-        q_final=q_final, qd_final=qd_final, energy_initial=energy_initial,
+        **extra, t=user[:n_done].copy(), q=out.q[:n_done], qd=out.qd[:n_done], impacts=impacts,
+        t_final=float(t), q_final=q_final, qd_final=qd_final, energy_initial=energy_initial,
         energy_final=_energy(compiled[current], q, qd, p_vec),
         n_steps=totals["n_steps"], n_rejected=totals["n_rejected"], n_rhs=totals["n_rhs"], status=status,
         message=message, method=options.get("method", "dopri5"), options=opts,

@@ -212,12 +212,26 @@ def test_world_trajectory_agrees_with_an_independent_integration(through_lock, s
     assert error < 1e-8, error
 
 
-def test_hard_limit_and_failure_redo_on_the_other_chart(scene, models):
-    """A coarse monitor grid (samples every 0.1 s, the chunk length): the measure is first seen below
-    hard_limit, or the chunk fails at the lock, and the stretch is redone on chart B; still right."""
+def test_coarse_monitor_grid_is_refined_for_the_rotation_rate(scene, models):
+    """monitor_dt = 0.1 s is far too coarse for a base turning at ~4 rad/s: the grid is refined so that
+    mu cannot fall from threshold past hard_limit between two samples, and the switch is a normal one."""
+    te = np.linspace(0.0, 0.5, 6)
+    r = simulate_with_charts(scene, 0.5, threshold=0.2, hard_limit=0.15, chunk=0.1, monitor_dt=0.1, t_eval=te,
+                             models=models, **ACCURATE)
+    assert r.status == 0 and [s.reason for s in r.switches] == ["mu_A < threshold"]
+    assert 0.15 <= r.switches[0].measure_source < 0.2
+    assert np.abs(r.contact_points() - integrate_reference(scene, te)).max() < 1e-8
+
+
+def test_hard_limit_and_failure_redo_on_the_other_chart(scene, models, monkeypatch):
+    """The backstops, with the grid refinement capped at 0.1 s (one sample per chunk): the measure is
+    first seen below hard_limit, or the chunk fails at the lock (step budget), and the stretch is redone
+    from the last good sample on chart B; the result is still right."""
+    import runtime.charts
+    monkeypatch.setattr(runtime.charts, "MIN_MONITOR_DT", 0.1)
     te = np.linspace(0.0, 0.5, 6)
     expected = integrate_reference(scene, te)
-    coarse = {"chunk": 0.1, "monitor_dt": 0.1, "t_eval": te, "max_steps": 20000, "models": models, **ACCURATE}
+    coarse = {"chunk": 0.1, "monitor_dt": 0.1, "t_eval": te, "models": models, **ACCURATE}
     hard = simulate_with_charts(scene, 0.5, threshold=0.2, hard_limit=0.15, **coarse)
     failed = simulate_with_charts(scene, 0.5, threshold=0.06, hard_limit=0.05, **coarse)
     assert any("hard_limit" in s.reason for s in hard.switches), hard.switch_table()
@@ -225,6 +239,13 @@ def test_hard_limit_and_failure_redo_on_the_other_chart(scene, models):
     for r in (hard, failed):
         assert r.status == 0, r.message
         assert np.abs(r.contact_points() - expected).max() < 1e-8
+
+
+def test_step_budget_far_from_the_lock_retries_with_max_steps(through_lock, scene, models):
+    """A chunk that exhausts chunk_steps while its chart is fine is run again with max_steps."""
+    r = simulate_with_charts(scene, 0.1, chunk_steps=3, models=models, t_eval=through_lock.t[:101], **ACCURATE)
+    assert r.status == 0 and not r.switches
+    assert np.abs(r.contact_points() - through_lock.contact_points()[:101]).max() < 1e-9
 
 
 def test_start_near_the_lock_begins_on_chart_b(through_lock, scene, models):

@@ -1,0 +1,96 @@
+"""Figures for README "Near gimbal lock: chart switching":  python -m runtime.charts_report
+
+1. The gimbal-lock scene over its first 0.5 s (free flight through the lock at t = 0.25 s): one chart
+   against chart switching, for DOPRI5 and DOP853 at several tolerances: how far each gets, its steps,
+   energy drift and largest error of the points O_1..O_3 against an independent integration (the tests'
+   numpy model with the base orientation as a rotation matrix, scipy DOP853 at rtol = 1e-12;
+   tests/test_charts.py).  Needs a source checkout (it imports the tests' reference).
+2. Long runs with impacts: the gimbal-lock scene for 10 s, case 2 for 20 s, with and without charts.
+"""
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from codegen.scene import load_scene
+
+from .charts import ChartModels, simulate_with_charts
+from .simulate import simulate
+
+TESTS = Path(__file__).resolve().parent.parent / "tests"
+
+
+def _reference():
+    if not (TESTS / "test_charts.py").exists():
+        raise SystemExit("runtime.charts_report needs the tests/ folder of a source checkout")
+    sys.path.insert(0, str(TESTS))
+    from test_charts import integrate_reference
+    return integrate_reference
+
+
+def _timed(fn, repeat: int = 3):
+    best, result = float("inf"), None
+    for _ in range(repeat):
+        start = time.perf_counter()
+        result = fn()
+        best = min(best, time.perf_counter() - start)
+    return result, best
+
+
+def lock_table(max_steps: int = 20000) -> str:
+    scene = load_scene("gimbal-lock")
+    models = ChartModels(scene)
+    model = models.models[0]
+    t_end = 0.5
+    te = np.linspace(0.0, t_end, 101)
+    print("independent reference ...", file=sys.stderr, flush=True)
+    expected = _reference()(scene, te)
+    lines = ["| method | rtol | run | reaches t (s) | steps | energy drift | max point error (m) | ms |",
+             "|---|---|---|---|---|---|---|---|"]
+    for method in ("dopri5", "dop853"):
+        for rtol in (1e-6, 1e-8, 1e-10, 1e-12):
+            opts = {"method": method, "rtol": rtol, "atol": rtol / 100, "t_eval": te}
+            plain, t_plain = _timed(lambda: simulate(model, t_end, max_steps=max_steps, **opts), 1)
+            charts, t_charts = _timed(lambda: simulate_with_charts(scene, t_end, models=models, **opts))
+            n = len(plain.t)
+            err_plain = np.abs(np.array([model.contact_points(q) for q in plain.q]) - expected[:n]).max()
+            err_charts = np.abs(charts.contact_points() - expected).max()
+            lines.append(f"| {method} | {rtol:g} | one chart | {plain.t_final:.6f} | {plain.n_steps} | "
+                         f"{plain.energy_drift:.1e} | {err_plain:.1e} | {t_plain * 1e3:.0f} |")
+            lines.append(f"| | | charts ({len(charts.switches)} switch) | {charts.t_final:g} | {charts.n_steps} | "
+                         f"{charts.energy_drift:.1e} | {err_charts:.1e} | {t_charts * 1e3:.1f} |")
+            print(lines[-2] + "\n" + lines[-1], file=sys.stderr, flush=True)
+    return "\n".join(lines)
+
+
+def long_table() -> str:
+    lines = ["| scene | t_end (s) | run | status | impacts | switches | min mu_A on samples | energy drift | "
+             "steps | ms |", "|---|---|---|---|---|---|---|---|---|---|"]
+    opts = {"method": "dop853", "rtol": 1e-10, "atol": 1e-12}
+    for name, t_end in (("gimbal-lock", 10.0), ("paper-case2", 20.0)):
+        scene = load_scene(name)
+        models = ChartModels(scene)
+        A = models.charts[0]
+        plain, t_plain = _timed(lambda: simulate(models.models[0], t_end, max_steps=200000, **opts))
+        charts, t_charts = _timed(lambda: simulate_with_charts(scene, t_end, models=models, **opts))
+        for label, r, seconds in (("one chart", plain, t_plain), ("charts", charts, t_charts)):
+            switches = len(r.switches) if label == "charts" else "-"
+            mu = A.measure(r.q[:, 1]).min()
+            lines.append(f"| {name} | {t_end:g} | {label} | {r.status} (t = {r.t_final:.4g} s) | {len(r.impacts)} | "
+                         f"{switches} | {mu:.1e} | {r.energy_drift:.1e} | {r.n_steps} | {seconds * 1e3:.0f} |")
+        print("\n".join(lines[-2:]), file=sys.stderr, flush=True)
+    return "\n".join(lines)
+
+
+def main() -> int:
+    print(lock_table())
+    print()
+    print(long_table())
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1431,20 +1431,23 @@ static void paper_case2_set_active(paper_case2_sim *s, int n, const int *set, pa
     s->nactive = n;
 }
 
-/* sim_init: contacts that start at their wall (|gap| <= contact_tol), pressed towards it, with a normal
- * velocity whose bounce would rise less than rest_height, become persistent (positions and velocities
- * projected; only those with a pushing force kept). */
+/* sim_init: contacts that start at their wall (|gap| <= contact_tol) with a normal velocity whose bounce
+ * would rise less than rest_height (under the largest free-flight normal acceleration of any contact, so
+ * that a contact pressed only through the others, like the top of a ladder, counts) become persistent:
+ * positions and velocities projected, then only those with a pushing force kept. */
 static int paper_case2_rest_at_start(paper_case2_sim *s)
 {
-    double gaps[PAPER_CASE2_NCONTACT1], vn[PAPER_CASE2_NCONTACT1], an[PAPER_CASE2_NCONTACT1];
+    double gaps[PAPER_CASE2_NCONTACT1], vn[PAPER_CASE2_NCONTACT1], an[PAPER_CASE2_NCONTACT1], a = 0.0;
     int set[PAPER_CASE2_NQ], n = 0, c, code;
     paper_case2_contact_gaps(s->x, s->p, gaps);
     paper_case2_normal_velocities(s->x, s->p, vn);
     code = paper_case2_normal_accelerations(s, s->x, 0, 0, an);
     if (code != PAPER_CASE2_OK) return code;
     for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {
-        if (fabs(gaps[c]) <= s->opt.contact_tol && an[c] < 0.0
-            && vn[c] * vn[c] <= 2.0 * (-an[c]) * s->rest_height) {
+        if (fabs(an[c]) > a) a = fabs(an[c]);
+    }
+    for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {
+        if (fabs(gaps[c]) <= s->opt.contact_tol && vn[c] * vn[c] <= 2.0 * a * s->rest_height) {
             if (n == PAPER_CASE2_NQ) return PAPER_CASE2_ERR_TOO_MANY_CONTACTS;
             set[n++] = c;
         }

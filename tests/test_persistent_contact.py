@@ -232,6 +232,32 @@ def test_swinging_link_lifts_the_resting_points_off(compiled, e):
     assert sorted(result.persistent_final) == [(1, "x2_min"), (2, "x2_min"), (3, "x2_min")]
 
 
+def test_sliding_ladder_leaves_the_wall_at_two_thirds_of_its_height(compiled):
+    """A uniform rod leaning at 60 degrees on a frictionless wall and floor, from rest: both ends rest,
+    the rod slides down, and the top leaves the wall when its height is 2/3 of the initial one, at the
+    time of the closed form t = (2 / sqrt(3 g / L)) int_0^w dw / cos(phi), sin(phi) = sin(phi0) - w^2."""
+    from scipy.integrate import quad
+    phi0, length = math.radians(60.0), 1.0
+    scene = Scene(name="ladder", links=(LineLink(length, 1.0, (0.0, 0.0, 0.0)),),
+                  walls=(Wall("x1_min", 0.0, 0.5), Wall("x2_min", 0.0, 0.5)),
+                  q0=(-math.pi / 2, 0.0, math.pi / 2 - phi0, length * math.cos(phi0) + 2e-16, 0.0, 0.0))
+    model = compiled(scene, specialise=True)
+    result = run(model, 0.5, rtol=1e-12, atol=1e-14)
+    assert result.success, result.message
+    events = [(ev.point, ev.wall, ev.kind) for ev in result.contact_events]
+    assert sorted(events[:2]) == [(1, "x2_min", "persist"), (2, "x1_min", "persist")]
+    assert events[2] == (2, "x1_min", "release")
+    w_release = math.sqrt(math.sin(phi0) / 3.0)
+    integral = quad(lambda w: 1.0 / math.cos(math.asin(math.sin(phi0) - w * w)), 0.0, w_release, epsabs=1e-15)[0]
+    t_release = 2.0 / math.sqrt(3.0 * G / length) * integral
+    assert result.contact_events[2].t == pytest.approx(t_release, abs=1e-11)
+    at_release = run(model, result.contact_events[2].t, rtol=1e-12, atol=1e-14, t_eval=[])
+    top = model.contact_points(model.layout.reduce(at_release.q_final))[1]
+    assert top[1] == pytest.approx(2.0 / 3.0 * length * math.sin(phi0), abs=1e-11)
+    assert abs(top[0]) < 1e-12                                   # still on the wall until then
+    assert np.diff(energies(model, result)).max() <= 1e-10 * sum(model.energy(model.q0, model.qd0))
+
+
 # --- bounded time, options, the backstop ----------------------------------------------------------
 def test_at_rest_the_integrator_takes_large_steps(compiled):
     model = compiled(planar_drop(3, 0.5), specialise=True)

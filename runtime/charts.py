@@ -8,8 +8,8 @@ and the map from their rates to the angular velocity, omega = E(theta) thetadot 
 the three joint axes u_{-1}, u_0, u_1 in the reference frame, is singular when the three axes are
 coplanar.  With T_0 and T_1 turning each axis a right angle from the previous one (the default twists)
 |det E| = |u_{-1} x u_1| = |cos theta_0|: the chart is singular when link 1's joint axis z_1 lies
-along the fixed first axis u_{-1} = T_{-1} e_z (X2 for the default twists), and I_f = E'^T M E' (E'
-the full Jacobian) has a smallest eigenvalue that falls like det(E)^2.
+along the fixed first axis u_{-1} = T_{-1} e_z (X2 for the default twists); I_f contains E through
+the link Jacobians, and its smallest eigenvalue falls like det(E)^2 (tests/test_charts.py).
 
 Chart A is the scene's own parametrisation.  Chart B is the same scene with T_{-1} replaced by
 C T_{-1}, C a constant right-angle rotation that turns the first axis u_{-1} into a perpendicular
@@ -19,14 +19,17 @@ in both charts and only (theta_-1, theta_0, theta_1) and their rates change.  Be
 within 45 degrees of two perpendicular axes, max(mu_A, mu_B) >= sin 45 deg everywhere.
 
 ``simulate_with_charts`` integrates on the current chart in chunks (each one an ordinary
-``runtime.simulate`` call from the chunk's state, so every feature of the hybrid loop carries over; a
-restart costs one initial-step estimate), watches the conditioning measure mu = |det E| at a fine
-monitor grid, and at the first monitor sample where mu falls below ``threshold`` continues from that
-sample on the other chart.  It returns to chart A when mu_A exceeds ``switch_back`` (hysteresis).  If mu
-fell below ``hard_limit`` before a monitor sample saw it cross ``threshold``, or the chunk failed with
-mu below ``threshold``, the stretch is redone from the last good sample on the other chart.  Samples
-and impacts are reported in chart A's coordinates (the scene's layout of Eq. 13); ``chart`` says, per
-sample, which chart was integrated, and ``q_native``/``qd_native`` hold those coordinates.
+``runtime.simulate`` call from the chunk's state, so the hybrid loop is reused as it is; a restart costs
+one initial-step estimate), watches the conditioning measure mu = |det E| (one sine per sample) on a
+monitor grid fine enough for the base's rotation rate, and at the first monitor sample where mu falls
+below ``threshold`` integrates once more from the chunk's start to that sample (so the next chart
+starts from an integrator state, not from the dense output) and continues on the other chart.  It
+returns to chart A when mu_A exceeds ``switch_back`` (hysteresis).  Backstops: a chunk first runs with
+a step budget (integrating into a lock makes the steps collapse), and if mu was first seen below
+``hard_limit``, or the chunk failed with mu below ``threshold``, the stretch is redone from the last
+good sample on the other chart.  Samples and impacts are reported in chart A's coordinates (the
+scene's layout of Eq. 13); ``chart`` says, per sample, which chart was integrated, ``q_native`` /
+``qd_native`` hold those coordinates (chart A's rates grow like 1/mu_A near its own lock).
 """
 from __future__ import annotations
 
@@ -152,22 +155,22 @@ class Chart:
             a = np.where(lock, 0.0, np.arctan2(t[:, 1], t[:, 0]) - np.arctan2(g[:, 1], g[:, 0]))
             branches.append(np.stack([a, b, self._third(R, a, b)], axis=-1))
         out = np.empty_like(branches[0])
-        prev = None if near is None else np.asarray(near, dtype=float)
-        for k in range(len(R)):
-            if prev is None:
-                choice = np.array([_wrap(x) for x in branches[0][k]])
-            else:
-                best_cost = math.inf
-                for branch in branches:
-                    x = branch[k].copy()
-                    if lock[k]:                                   # theta_-1 from the previous value
-                        x[0] = prev[0]
-                        x[2] = float(self._third(R[k:k + 1], x[:1], x[1:2])[0])
-                    x += 2.0 * math.pi * np.round((prev - x) / (2.0 * math.pi))
-                    cost = float(np.abs(x - prev).sum())
-                    if cost < best_cost:
-                        choice, best_cost = x, cost
-            out[k] = prev = choice
+        if near is None:
+            out[0] = [_wrap(x) for x in branches[0][0]]
+        candidates = [b.tolist() for b in branches]               # plain floats: a fast sequential pass
+        prev = out[0].tolist() if near is None else [float(x) for x in near]
+        two_pi = 2.0 * math.pi
+        for k in range(0 if near is not None else 1, len(R)):
+            best, best_cost = None, math.inf
+            for branch in candidates:
+                x = branch[k]
+                if lock[k]:                                       # theta_-1 from the previous value
+                    x = [prev[0], x[1], float(self._third(R[k:k + 1], [prev[0]], [x[1]])[0])]
+                x = [v + two_pi * round((p - v) / two_pi) for v, p in zip(x, prev)]
+                cost = abs(x[0] - prev[0]) + abs(x[1] - prev[1]) + abs(x[2] - prev[2])
+                if cost < best_cost:
+                    best, best_cost = x, cost
+            out[k] = prev = best
         error = np.abs(self.rotation(out) - R).max(initial=0.0)
         if not error <= RECOMPOSE_TOL:
             raise ChartError(f"chart conversion: recomposed orientation differs by {error:.3g} from the target")
@@ -335,16 +338,17 @@ def _monitor_grid(t0: float, t1: float, monitor_dt: float, user: np.ndarray) -> 
     monitor = np.linspace(0.0, t1 - t0, n + 1)
     inside = np.flatnonzero((user >= t0) & (user <= t1))
     local_user = user[inside] - t0
-    times = np.concatenate([monitor, local_user])
-    index = np.concatenate([np.full(len(monitor), -1), inside])
-    order = np.lexsort((-index, times))          # user samples first at equal times
-    times, index = times[order], index[order]
-    keep = np.ones(len(times), dtype=bool)
-    for k in range(1, len(times)):               # drop monitor samples that coincide with a kept sample
-        if keep[k - 1] and times[k] - times[k - 1] <= 1e-12 and index[k] < 0:
-            keep[k] = False
-    times, index = times[keep], index[keep]
-    times = np.clip(times, 0.0, t1 - t0)
+    keep = np.ones(len(monitor), dtype=bool)                # drop monitor samples on top of a user sample
+    if len(local_user):
+        j = np.searchsorted(local_user, monitor)
+        below = local_user[np.maximum(j - 1, 0)]
+        above = local_user[np.minimum(j, len(local_user) - 1)]
+        keep = np.minimum(np.abs(monitor - below), np.abs(monitor - above)) > 1e-12
+    times = np.concatenate([monitor[keep], local_user])
+    index = np.concatenate([np.full(int(keep.sum()), -1), inside])
+    order = np.argsort(times, kind="stable")
+    times = np.clip(times[order], 0.0, t1 - t0)
+    index = index[order]
     return times, index
 
 
@@ -417,7 +421,7 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
                                     float(charts[1].measure(q[1])), "start: mu_A < threshold"))
         current = 1
     min_measure = float(charts[current].measure(q[1]))
-    speed = float(np.linalg.norm(charts[current].axes(q[:3]) @ qd[:3]))    # |omega_1| (rad/s)
+    speed = float(np.abs(qd[:3]).sum())                   # >= |omega_1| (rad/s): the axes are unit vectors
     status, message = 0, "reached t_end"
     last_redo = None                                      # (t, chart) of the last redo: no ping-pong
     full_budget = False                                   # retry the chunk with max_steps
@@ -431,8 +435,7 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
         budget = max_steps if full_budget else min(int(chunk_steps), max_steps)
         run = run_chunk(model, t1 - t, times, q, qd, budget)
         if len(run.t) > 1:
-            omega = np.einsum("nij,nj->ni", chart.axes(run.q[:, :3]), run.qd[:, :3])
-            fastest = float(np.linalg.norm(omega, axis=1).max())
+            fastest = float(np.abs(run.qd[:, :3]).sum(axis=1).max())     # >= |omega_1| (unit axes)
             if fastest * np.diff(run.t).max() > threshold - hard_limit and spacing > MIN_MONITOR_DT:
                 speed = fastest                           # the base turns too fast for the grid: finer
                 continue

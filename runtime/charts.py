@@ -400,7 +400,7 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
     impacts: list[Impact] = []
     impact_chart: list[int] = []
     switches: list[ChartSwitch] = []
-    events, persistent = [], []
+    events, persistent, resting = [], [], set()      # contact events, and the contacts resting now
     totals = {"n_steps": 0, "n_rejected": 0, "n_rhs": 0}
 
     def run_chunk(model, duration, times, q, qd, steps):
@@ -494,8 +494,16 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
                 impacts.append(_impact_in_a(imp, t, current, charts, out.last_a))
                 impact_chart.append(current)
         for event in getattr(run, "contact_events", ()):      # persistent contact (if the runtime has it)
-            if cut is None or event.t < run.t[cut]:
-                events.append(dataclasses.replace(event, t=t + event.t))
+            key = (event.point, event.wall)
+            if cut is not None and event.t >= run.t[cut]:
+                continue
+            if event.t == 0.0 and event.kind == "persist" and key in resting:
+                continue                                  # still resting from before the restart
+            events.append(dataclasses.replace(event, t=t + event.t))
+            if event.kind == "persist":
+                resting.add(key)
+            else:
+                resting.discard(key)
         persistent = getattr(run, "persistent_final", [])
         if cut is None:
             q, qd = run.q_final.copy(), run.qd_final.copy()

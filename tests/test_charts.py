@@ -9,7 +9,7 @@ from scipy.integrate import solve_ivp
 import reference
 from conftest import reference_of
 from codegen.scene import load_scene
-from runtime import simulate
+from runtime import SimulationResult, simulate
 from runtime.charts import (Chart, ChartError, ChartModels, chart_b_twists, convert_state,
                             simulate_with_charts)
 
@@ -309,3 +309,23 @@ def test_command_line_reports_the_switches(capsys, models):
     code = main(["simulate", "--scene", "gimbal-lock", "--t-end", "0.4"])
     out = capsys.readouterr().out
     assert code == 1 and "at t = 0.2499" in out and "hint: theta_0 is at the gimbal lock" in out
+
+
+@pytest.mark.skipif("contact_events" not in {f.name for f in dataclasses.fields(SimulationResult)},
+                    reason="the runtime has no persistent contact")
+def test_resting_contact_survives_the_chunk_restarts():
+    """A chain coming to rest on the floor (e = 0.5): the restarted chunks find the resting contacts again,
+    the same impacts and contact events as simulate(), no spurious events at the chunk boundaries."""
+    scene = load_scene("stress-zeno")
+    p = scene.parameter_vector()
+    p[scene.parameter_names().index("e_x2_min")] = 0.5
+    charts = ChartModels(scene)
+    plain = simulate(charts.models[0], 4.0, p=p, **ACCURATE)
+    charted = simulate_with_charts(scene, 4.0, p=p, models=charts, **ACCURATE)
+    assert charted.status == 0 and not charted.switches
+    assert len(charted.impacts) == len(plain.impacts)
+    assert [(e.point, e.wall, e.kind) for e in charted.contact_events] == \
+        [(e.point, e.wall, e.kind) for e in plain.contact_events]
+    assert max(abs(a.t - b.t) for a, b in zip(charted.contact_events, plain.contact_events)) < 1e-8
+    assert sorted(charted.persistent_final) == sorted(plain.persistent_final)
+    assert charted.contact_gaps(p).min() > -1e-9

@@ -31,6 +31,7 @@ from pathlib import Path
 FORMULATIONS = ("gibbs_appell", "lagrange")
 LABELS = {"gibbs_appell": "Gibbs–Appell", "lagrange": "Lagrange"}
 MAX_LINKS = 64
+START_VARIABLE = "CODEGEN_OPS_T0"
 
 # The bar to beat (issue 4): forward dynamics of this very chain (same coordinates and inertias) by
 # Pinocchio's articulated-body algorithm traced by CasADi into C, gcc -O2.  n -> (operations, us per call).
@@ -221,6 +222,7 @@ def plots(rows, out: Path) -> list[Path]:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
 
     ok = {f: [r for r in rows if r["formulation"] == f and r["status"] == "ok"] for f in FORMULATIONS}
     ns = sorted({r["n"] for r in rows})
@@ -228,13 +230,15 @@ def plots(rows, out: Path) -> list[Path]:
     paths = []
 
     def finish(ax, ylabel, title, path):
+        ticks = sorted({int(x) for line in ax.lines for x in line.get_xdata()} | set(ns))
         ax.set_xscale("log", base=2)
         if any(len(line.get_ydata()) for line in ax.lines):
             ax.set_yscale("log")
         else:
             ax.text(0.5, 0.5, "no successful measurement", transform=ax.transAxes, ha="center")
-        ax.set_xticks(ns if ns else [1])
-        ax.set_xticklabels([str(n) for n in ns] if ns else ["1"])
+        ax.set_xticks(ticks or [1])
+        ax.set_xticklabels([str(n) for n in ticks] or ["1"])
+        ax.xaxis.set_minor_locator(matplotlib.ticker.NullLocator())
         ax.set_xlabel("links n")
         ax.set_ylabel(ylabel)
         ax.set_title(title)
@@ -326,10 +330,11 @@ def parse_args(argv):
 
 def main(argv=None) -> int:
     args = parse_args(sys.argv[1:] if argv is None else argv)
-    t0 = time.perf_counter()
+    os.environ.setdefault(START_VARIABLE, repr(time.time()))     # children time from the parent's start
+    t0 = float(os.environ[START_VARIABLE])
 
     def say(message: str) -> None:
-        print(f"[{time.perf_counter() - t0:8.1f} s] {message}", file=sys.stderr, flush=True)
+        print(f"[{time.time() - t0:8.1f} s] {message}", file=sys.stderr, flush=True)
 
     if args.one is not None:                                     # child: one row of JSON on stdout
         row = measure(args.one, args.formulation, args.specialise,

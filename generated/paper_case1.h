@@ -313,7 +313,7 @@ typedef struct {
     double ev[PAPER_CASE1_NCONTACT1], es[PAPER_CASE1_NCONTACT1], eprev[PAPER_CASE1_NCONTACT1];   /* event values */
     double work[PAPER_CASE1_IMPACT_NWORK];
     double rest_height;                       /* resolved opt.rest_height */
-    int is_active[PAPER_CASE1_NCONTACT1], pending, fail;
+    int is_active[PAPER_CASE1_NCONTACT1], pending, fail, fail_seen;
     int n_shrink[PAPER_CASE1_NCONTACT1];           /* impacts of each contact at shrinking intervals */
     double t_last[PAPER_CASE1_NCONTACT1], dt_last[PAPER_CASE1_NCONTACT1];
 } paper_case1_sim;

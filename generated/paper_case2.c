@@ -878,7 +878,8 @@ int paper_case2_constrained_dynamics(const double *q, const double *qd, const do
     return PAPER_CASE2_OK;
 }
 
-/* The flight right-hand side: free, or with the persistent contacts held (an error is kept in s->fail). */
+/* The flight right-hand side: free, or with the persistent contacts held (an error is kept in s->fail;
+ * in a trial stage of an adaptive step it only rejects the step). */
 static void paper_case2_f(paper_case2_sim *s, double t, const double *x, double *f)
 {
     s->n_rhs++;
@@ -935,7 +936,7 @@ int paper_case2_sim_init(paper_case2_sim *s, double t0, const double *q, const d
     s->n_steps = s->n_rejected = s->n_rhs = s->n_impacts = 0;
     s->nactive = 0;
     s->n_activations = s->n_releases = 0;
-    s->pending = s->fail = 0;
+    s->pending = s->fail = s->fail_seen = 0;
     s->rest_height = opt->rest_height < 0.0 ? 10.0 * opt->contact_tol : opt->rest_height;
     for (i = 0; i < PAPER_CASE2_NCONTACT1; ++i) {
         s->is_active[i] = 0;
@@ -1675,7 +1676,7 @@ int paper_case2_sim_advance(paper_case2_sim *s, double t_end, const double *t_ev
         if (last) h = t_end - s->t;
         if (!(h > 8.0 * PAPER_CASE2_EPS * fabs(s->t))) {
             if (last) { s->t = t_end; break; }
-            return PAPER_CASE2_ERR_STEP_SIZE;
+            return s->fail_seen ? s->fail_seen : PAPER_CASE2_ERR_STEP_SIZE;
         }
         if (s->opt.method == PAPER_CASE2_METHOD_RK4) {
             paper_case2_rk4_step(s, h);
@@ -1683,7 +1684,11 @@ int paper_case2_sim_advance(paper_case2_sim *s, double t_end, const double *t_ev
             double fac;
             const int eighth = s->opt.method == PAPER_CASE2_METHOD_DOP853;
             err = eighth ? paper_case2_dop853_step(s, h) : paper_case2_dopri5_step(s, h);
-            if (s->fail) return s->fail;
+            if (s->fail) {                  /* a trial stage the constraints cannot hold: reject and shrink */
+                s->fail_seen = s->fail;
+                s->fail = 0;
+                err = 1e10;
+            }
             if (!(err == err)) err = 1e10;                   /* NaN: reject and shrink */
             fac = err > 0.0 ? 0.9 * pow(err, eighth ? -0.125 : -0.2) : fac_max;
             if (fac > fac_max) fac = fac_max;
@@ -1697,6 +1702,7 @@ int paper_case2_sim_advance(paper_case2_sim *s, double t_end, const double *t_ev
             }
             s->h = h * fac;
             fac_max = 10.0;
+            s->fail_seen = 0;
         }
         steps++;
         s->n_steps++;

@@ -384,10 +384,10 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
            f"must be in (0, chunk = {chunk}] s, got {monitor_dt!r}")
     _check(int(chunk_steps) == chunk_steps and chunk_steps >= 1, "chunk_steps",
            f"must be an integer >= 1, got {chunk_steps!r}")
-    if q0 is not None or qd0 is not None:
+    models = models or ChartModels(scene, progress=progress)      # compiled for the scene's own start
+    if q0 is not None or qd0 is not None:                           # validated like a scene's start
         scene = dataclasses.replace(scene, q0=tuple(scene.q0 if q0 is None else np.asarray(q0, dtype=float)),
                                     qd0=tuple(scene.qd0 if qd0 is None else np.asarray(qd0, dtype=float)))
-    models = models or ChartModels(scene, progress=progress)
     charts, compiled = models.charts, models.models
     if t_eval is None:
         t_eval = np.unique(np.r_[np.arange(0.0, t_end, 1e-3), t_end])

@@ -42,7 +42,21 @@ BAR_TO_BEAT_SOURCE = ("Pinocchio's articulated-body algorithm traced by CasADi i
 
 # Published operation counts of numeric O(n) algorithms, drawn on the operations plot when present.
 # label -> {"ops": {n: count} or a function n -> count, "source": citation, "convention": counting rule}.
-REFERENCE_LINES: dict[str, dict] = {}
+_FEATHERSTONE_ORIN = ("R. Featherstone and D. Orin, 'Robot dynamics: equations and algorithms', Proc. IEEE ICRA 2000, "
+                      "pp. 826-834, Table 1 (figures also in R. Featherstone, Rigid Body Dynamics Algorithms, "
+                      "Springer 2008); quoted as we recall them: the printed table could not be consulted from "
+                      "this workspace, so check it before citing these lines further")
+_CONVENTION = ("multiplications + additions of the numeric algorithm for an unbranched chain of N = n + 5 "
+               "one-degree-of-freedom joints (our n + 2 revolute angles and 3 translations; prismatic joints "
+               "are cheaper, so this is an upper line), sines and cosines not counted")
+REFERENCE_LINES: dict[str, dict] = {
+    "ABA, published (N = n + 5)": {
+        "ops": lambda n: (224 * (n + 5) - 165) + (205 * (n + 5) - 176),
+        "source": _FEATHERSTONE_ORIN, "convention": _CONVENTION},
+    "CRBA, I_f only, published (N = n + 5)": {
+        "ops": lambda n: (10 * (n + 5) ** 2 + 22 * (n + 5) - 32) + (6 * (n + 5) ** 2 + 37 * (n + 5) - 43),
+        "source": _FEATHERSTONE_ORIN, "convention": _CONVENTION},
+}
 
 
 # ---------------------------------------------------------------------------

@@ -1022,6 +1022,7 @@ const char *paper_case1_error_message(int code)
  * ------------------------------------------------------------------------------------------------ */
 #define PAPER_CASE1_EPS 2.220446049250313e-16
 #define PAPER_CASE1_NJROW1 (PAPER_CASE1_NJROW > 0 ? PAPER_CASE1_NJROW : 1)
+#define PAPER_CASE1_V_FLOOR 1e-12   /* m/s: a contact at its wall approaching slower than this is round-off */
 
 /* Dormand-Prince 8(5,3) tableau with its 7th-order dense output (Hairer, Norsett & Wanner,
  * Solving ODEs I, 2nd ed., and the published dop853 coefficients).  Stages 13-15 serve the dense output. */
@@ -1094,6 +1095,35 @@ static double paper_case1_restitution(const double *p, int c)
     return e_of[c];
 }
 
+/* LDL^T of the n x n constraint matrix N I_f^-1 N^T (as _ldlt), where a pivot not above tol * max|A_ii|
+ * (a constraint dependent on the earlier ones, which hold it already) is replaced by 1e300: its multiplier
+ * comes out 0 and it drops out.  Returns the number of such constraints, or -1 if A has no positive
+ * diagonal. */
+static int paper_case1_ldlt_drop(int n, double *A, double tol)
+{
+    int i, j, k, dropped = 0;
+    double scale = 0.0;
+    for (i = 0; i < n; ++i) {
+        if (fabs(A[i*n + i]) > scale) scale = fabs(A[i*n + i]);
+    }
+    if (!(scale > 0.0)) return -1;
+    for (j = 0; j < n; ++j) {
+        double d = A[j*n + j];
+        for (k = 0; k < j; ++k) d -= A[j*n + k] * A[j*n + k] * A[k*n + k];
+        if (!(d > tol * scale)) {
+            d = 1e300;
+            ++dropped;
+        }
+        A[j*n + j] = d;
+        for (i = j + 1; i < n; ++i) {
+            double sum = A[i*n + j];
+            for (k = 0; k < j; ++k) sum -= A[i*n + k] * A[j*n + k] * A[k*n + k];
+            A[i*n + j] = sum / d;
+        }
+    }
+    return dropped;
+}
+
 int paper_case1_constrained_dynamics(const double *q, const double *qd, const double *p, int nactive,
                                const int *active, double *qdd, double *lambda, double *work)
 {
@@ -1116,7 +1146,7 @@ int paper_case1_constrained_dynamics(const double *q, const double *qd, const do
         for (i = 0; i < nq; ++i) acc += J[row*nq + i] * qdd[i];
         lambda[a] = -sign * acc;
     }
-    if (paper_case1_ldlt(nactive, A, 1e-12) != 0) return PAPER_CASE1_ERR_SINGULAR_CONTACT;
+    if (paper_case1_ldlt_drop(nactive, A, 1e-12) < 0) return PAPER_CASE1_ERR_SINGULAR_CONTACT;
     paper_case1_ldlt_solve(nactive, A, lambda);
     for (i = 0; i < nq; ++i) {
         for (a = 0; a < nactive; ++a) qdd[i] += Y[a*nq + i] * lambda[a];
@@ -1420,20 +1450,21 @@ static void paper_case1_dense(paper_case1_sim *s, double t, double *out)
 
 static void paper_case1_normal_velocities(const double *x, const double *p, double *vn);
 
-/* Event value (what = 0) or normal velocity (what = 1) of contact c at time t inside the step. */
+/* Event value (what = 0), normal velocity (what = 1) or normal velocity + V_FLOOR (what = 2) of contact c
+ * at time t inside the step. */
 static double paper_case1_value_at(paper_case1_sim *s, int what, int c, double t)
 {
     paper_case1_dense(s, t, s->xs);
-    if (what == 1) {
-        paper_case1_normal_velocities(s->xs, s->p, s->es);
-    } else {
+    if (what == 0) {
         paper_case1_events(s, s->xs, s->es);
+        return s->es[c];
     }
-    return s->es[c];
+    paper_case1_normal_velocities(s->xs, s->p, s->es);
+    return s->es[c] + (what == 2 ? PAPER_CASE1_V_FLOOR : 0.0);
 }
 
-/* Root in (a, b] of contact c's event value (what = 0) or normal velocity (what = 1) on the interpolant,
- * value(a) > 0 >= value(b): Illinois, then bisection. */
+/* Root in (a, b] of contact c's value_at(what) on the interpolant, value(a) > 0 >= value(b): Illinois,
+ * then bisection. */
 static double paper_case1_locate(paper_case1_sim *s, int what, int c, double a, double ga, double b, double gb)
 {
     int side = 0, iter;
@@ -1457,13 +1488,18 @@ static double paper_case1_locate(paper_case1_sim *s, int what, int c, double a, 
 }
 
 /* A contact that starts the interval [t_a, t_b] at or beyond its wall (gap <= 0, just after an impact or
- * a release) and is approaching it at t_b with gap(t_b) <= 0 has come back: if it was leaving at t_a, the
- * crossing follows the apex (root of the normal velocity), or is the apex itself when the bounce is too
- * small to open a positive gap; if it was not leaving, at t_a. */
+ * a release) and is approaching it at t_b (faster than V_FLOOR) with gap(t_b) <= 0 has come back: if it
+ * was leaving at t_a, the crossing follows the apex (root of the normal velocity), or is the apex itself
+ * when the bounce is too small to open a positive gap; if it was not leaving, where its approach exceeds
+ * V_FLOOR. */
 static double paper_case1_locate_return(paper_case1_sim *s, int c, double t_a, double t_b, double g_b)
 {
     double v_a = paper_case1_value_at(s, 1, c, t_a), v_b, t_apex, g_apex;
-    if (!(v_a > 0.0)) return t_a;
+    if (!(v_a > 0.0)) {
+        if (!(v_a + PAPER_CASE1_V_FLOOR > 0.0)) return t_a;
+        return paper_case1_locate(s, 2, c, t_a, v_a + PAPER_CASE1_V_FLOOR, t_b,
+                                 paper_case1_value_at(s, 2, c, t_b));
+    }
     v_b = paper_case1_value_at(s, 1, c, t_b);
     t_apex = paper_case1_locate(s, 1, c, t_a, v_a, t_b, v_b);
     g_apex = paper_case1_value_at(s, 0, c, t_apex);
@@ -1499,7 +1535,7 @@ static int paper_case1_find_event(paper_case1_sim *s, double t1, double *t_event
                     paper_case1_normal_velocities(s->xs, s->p, vj);
                     have_v = 1;
                 }
-                if (!(vj[c] < 0.0)) continue;
+                if (!(vj[c] < -PAPER_CASE1_V_FLOOR)) continue;
                 tc = paper_case1_locate_return(s, c, t_prev, tj, gj[c]);
             }
             if (!found || tc < *t_event) {
@@ -1555,6 +1591,21 @@ static int paper_case1_normal_accelerations(paper_case1_sim *s, const double *x,
     return PAPER_CASE1_OK;
 }
 
+/* Add contact c to set[0..*n-1] if its constraint row is independent of theirs (N I_f^-1 N^T stays
+ * positive definite): a dependent contact is held by the others already.  Returns OK or an error. */
+static int paper_case1_add_independent(paper_case1_sim *s, const double *x, int *n, int *set, int c)
+{
+    double v[PAPER_CASE1_NQ], e[PAPER_CASE1_NQ];
+    double *A = s->work + PAPER_CASE1_NQ * PAPER_CASE1_NQ + PAPER_CASE1_NJROW * PAPER_CASE1_NQ + PAPER_CASE1_NQ * PAPER_CASE1_NQ;
+    int code;
+    if (*n == PAPER_CASE1_NQ) return PAPER_CASE1_OK;
+    set[*n] = c;
+    code = paper_case1_impact_system(x, x + PAPER_CASE1_NQ, s->p, *n + 1, set, s->work, v, e);
+    if (code != PAPER_CASE1_OK) return code;
+    if (paper_case1_ldlt(*n + 1, A, 1e-12) == 0) ++*n;
+    return PAPER_CASE1_OK;
+}
+
 /* Project the state x onto the contacts set[0..n-1] held at their walls: the gaps to 0 by Newton steps
  * dq = -Y (N Y)^-1 g (Y = I_f^-1 N^T, the smallest correction in the mass metric), then the normal
  * velocities to 0, qd -= Y (N Y)^-1 N qd: a plastic impact, so the kinetic energy cannot grow.  mu (if
@@ -1576,7 +1627,7 @@ static int paper_case1_project(paper_case1_sim *s, double *x, int n, const int *
         if (gmax <= 1e-6 * s->opt.contact_tol + 1e-15) break;
         code = paper_case1_impact_system(x, x + nq, s->p, n, set, s->work, v, e);
         if (code != PAPER_CASE1_OK) return code;
-        if (paper_case1_ldlt(n, A, 1e-12) != 0) return PAPER_CASE1_ERR_SINGULAR_CONTACT;
+        if (paper_case1_ldlt_drop(n, A, 1e-12) < 0) return PAPER_CASE1_ERR_SINGULAR_CONTACT;
         for (a = 0; a < n; ++a) corr[a] = -g[set[a]];
         paper_case1_ldlt_solve(n, A, corr);
         for (i = 0; i < nq; ++i) {
@@ -1585,7 +1636,7 @@ static int paper_case1_project(paper_case1_sim *s, double *x, int n, const int *
     }
     code = paper_case1_impact_system(x, x + nq, s->p, n, set, s->work, v, e);
     if (code != PAPER_CASE1_OK) return code;
-    if (paper_case1_ldlt(n, A, 1e-12) != 0) return PAPER_CASE1_ERR_SINGULAR_CONTACT;
+    if (paper_case1_ldlt_drop(n, A, 1e-12) < 0) return PAPER_CASE1_ERR_SINGULAR_CONTACT;
     for (a = 0; a < n; ++a) corr[a] = -v[a];
     paper_case1_ldlt_solve(n, A, corr);
     for (i = 0; i < nq; ++i) {
@@ -1695,8 +1746,8 @@ static int paper_case1_rest_at_start(paper_case1_sim *s)
     }
     for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {
         if (fabs(gaps[c]) <= s->opt.contact_tol && vn[c] * vn[c] <= 2.0 * a * s->rest_height) {
-            if (n == PAPER_CASE1_NQ) return PAPER_CASE1_ERR_TOO_MANY_CONTACTS;
-            set[n++] = c;
+            code = paper_case1_add_independent(s, s->x, &n, set, c);
+            if (code != PAPER_CASE1_OK) return code;
         }
     }
     if (n == 0) return PAPER_CASE1_OK;
@@ -1709,9 +1760,65 @@ static int paper_case1_rest_at_start(paper_case1_sim *s)
     return PAPER_CASE1_OK;
 }
 
+/* The impact with the contacts list[0..nbil-1] held (bilateral: post-impact normal velocity 0, impulse of
+ * either sign, the plastic impact of the resting contacts) and list[nbil..n-1] by the complementarity form
+ * of Eq. 48 (impulse >= 0, v+ >= -e v-, complementary), from the velocities x[NQ..]; qd_plus and the
+ * impulses F (list order, along the inward normals).  Exact: the pushing sets are enumerated. */
+static int paper_case1_mixed_impact(paper_case1_sim *s, const double *x, int n, const int *list, int nbil,
+                                  double *qd_plus, double *F)
+{
+    const int nq = PAPER_CASE1_NQ, m = n - nbil;
+    double v[PAPER_CASE1_NQ], e[PAPER_CASE1_NQ], Asub[PAPER_CASE1_NQ * PAPER_CASE1_NQ], rhs[PAPER_CASE1_NQ], scale = 0.0;
+    double *Y = s->work + PAPER_CASE1_NQ * PAPER_CASE1_NQ + PAPER_CASE1_NJROW * PAPER_CASE1_NQ;
+    double *A = Y + PAPER_CASE1_NQ * PAPER_CASE1_NQ;
+    int a, b, i, code;
+    unsigned long mask, full;
+    code = paper_case1_impact_system(x, x + nq, s->p, n, list, s->work, v, e);
+    if (code != PAPER_CASE1_OK) return code;
+    if (m > PAPER_CASE1_MAX_LCP) return PAPER_CASE1_ERR_LCP;
+    for (a = 0; a < nbil; ++a) e[a] = 0.0;
+    for (a = 0; a < n; ++a) {
+        if (fabs(v[a]) > scale) scale = fabs(v[a]);
+    }
+    full = (1UL << m) - 1UL;
+    for (mask = full; ; --mask) {
+        int idx[PAPER_CASE1_NQ], k = 0, ok = 1;
+        for (a = 0; a < nbil; ++a) idx[k++] = a;
+        for (a = 0; a < m; ++a) {
+            if (mask & (1UL << a)) idx[k++] = nbil + a;
+        }
+        for (a = 0; a < k; ++a) {
+            for (b = 0; b < k; ++b) Asub[a*k + b] = A[idx[a]*n + idx[b]];
+            rhs[a] = -(1.0 + e[idx[a]]) * v[idx[a]];
+        }
+        if (k > 0 && paper_case1_ldlt(k, Asub, 1e-12) != 0) ok = 0;
+        if (ok && k > 0) paper_case1_ldlt_solve(k, Asub, rhs);
+        for (a = 0; ok && a < n; ++a) F[a] = 0.0;
+        for (a = 0; ok && a < k; ++a) {
+            if (idx[a] >= nbil && rhs[a] < -1e-12 * (scale + 1e-300)) ok = 0;
+            F[idx[a]] = idx[a] >= nbil && rhs[a] < 0.0 ? 0.0 : rhs[a];
+        }
+        for (a = nbil; ok && a < n; ++a) {             /* w = A F + (1 + e) v >= 0 */
+            double w = (1.0 + e[a]) * v[a];
+            for (b = 0; b < n; ++b) w += A[a*n + b] * F[b];
+            if (w < -1e-10 * (scale + 1e-300)) ok = 0;
+        }
+        if (ok) {
+            for (i = 0; i < nq; ++i) {
+                double value = x[nq + i];
+                for (a = 0; a < n; ++a) value += Y[a*nq + i] * F[a];
+                qd_plus[i] = value;
+            }
+            return PAPER_CASE1_OK;
+        }
+        if (mask == 0) break;
+    }
+    return PAPER_CASE1_ERR_LCP;
+}
+
 /* Resolve the impact at state s->xs (time t): every contact within contact_tol of its wall that
- * approaches it takes part, with the persistent contacts; Eq. 48 (equality form) first, the
- * complementarity form if a contact would pull.  Contacts that approach after the impact are added and
+ * approaches it takes part; Eq. 48 (equality form) first, the complementarity form if a contact would
+ * pull.  Contacts at their wall that approach after the impact (persistent ones included) are added and
  * the impact solved again.  Then the persistent set is updated: a persistent contact that the impact
  * lifts off is released; a contact of a wall with e < 1 whose bounce would rise less than rest_height
  * (v+^2 <= 2 a rest_height, a = its normal acceleration towards the wall with the other persistent
@@ -1722,9 +1829,9 @@ static int paper_case1_resolve(paper_case1_sim *s, double t, int c_event, paper_
 {
     const int nq = PAPER_CASE1_NQ;
     double gaps[PAPER_CASE1_NCONTACT1], vn[PAPER_CASE1_NCONTACT1], vn0[PAPER_CASE1_NCONTACT1], an[PAPER_CASE1_NCONTACT1];
-    double qd_plus[PAPER_CASE1_NQ], mu[PAPER_CASE1_NQ], scale = 0.0;
-    int in_set[PAPER_CASE1_NCONTACT1], shrinking[PAPER_CASE1_NCONTACT1], set[PAPER_CASE1_NQ];
-    int c, i, k, round, code, nnew = 0, nset = 0;
+    double qd_plus[PAPER_CASE1_NQ], F[PAPER_CASE1_NQ], scale = 0.0;
+    int in_set[PAPER_CASE1_NCONTACT1], shrinking[PAPER_CASE1_NCONTACT1], set[PAPER_CASE1_NQ], list[PAPER_CASE1_NQ];
+    int c, i, k, round, code, nset = 0, nlist = 0;
     double *x = s->xs;
     paper_case1_contact_gaps(x, s->p, gaps);
     paper_case1_normal_velocities(x, s->p, vn);
@@ -1732,16 +1839,15 @@ static int paper_case1_resolve(paper_case1_sim *s, double t, int c_event, paper_
     r->nactivated = r->nreleased = 0;
     for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {
         vn0[c] = vn[c];
-        in_set[c] = s->is_active[c] || ((c == c_event || gaps[c] <= s->opt.contact_tol) && vn[c] < 0.0)
-                    || (c == c_event && gaps[c] <= 0.0 && vn[c] <= 0.0);      /* came back at the apex */
+        in_set[c] = !s->is_active[c] && (((c == c_event || gaps[c] <= s->opt.contact_tol) && vn[c] < 0.0)
+                    || (c == c_event && gaps[c] <= 0.0 && vn[c] <= 0.0));     /* came back at the apex */
         if (in_set[c]) {
             if (r->ncontact == nq) return PAPER_CASE1_ERR_TOO_MANY_CONTACTS;
             r->contact[r->ncontact++] = c;
-            nnew += !s->is_active[c];
         }
         if (fabs(vn[c]) > scale) scale = fabs(vn[c]);
     }
-    if (nnew == 0) return 0;                             /* grazing touch: nothing to resolve */
+    if (r->ncontact == 0) return 0;                      /* grazing touch: nothing to resolve */
     r->t = t;
     r->energy_before = paper_case1_total_energy(x, s->p);
     for (i = 0; i < nq; ++i) {
@@ -1781,10 +1887,12 @@ static int paper_case1_resolve(paper_case1_sim *s, double t, int c_event, paper_
         code = paper_case1_normal_accelerations(s, s->x1, 0, 0, an);
         if (code != PAPER_CASE1_OK) return code;
         nset = 0;
-        for (k = 0; k < r->ncontact; ++k) {
-            c = r->contact[k];
-            if (s->is_active[c] && (vn[c] <= 1e-6 * scale || vn[c] * vn[c] <= 2.0 * fabs(an[c]) * s->rest_height))
-                set[nset++] = c;
+        for (k = 0; k < s->nactive; ++k) {
+            c = s->active[k];
+            if (vn[c] <= 1e-6 * scale || vn[c] * vn[c] <= 2.0 * fabs(an[c]) * s->rest_height) {
+                code = paper_case1_add_independent(s, s->x1, &nset, set, c);
+                if (code != PAPER_CASE1_OK) return code;
+            }
         }
         if (s->rest_height > 0.0 || s->opt.zeno_impacts > 0) {
             int nkept = nset;
@@ -1802,28 +1910,55 @@ static int paper_case1_resolve(paper_case1_sim *s, double t, int c_event, paper_
                 if (!(paper_case1_restitution(s->p, c) < 1.0) && !(rests && vn0[c] * vn0[c] <= reach)) continue;
                 zeno = s->opt.zeno_impacts > 0 && s->n_shrink[c] + shrinking[c] >= s->opt.zeno_impacts
                        && shrinking[c];
-                if (rests || zeno) set[nset++] = c;
+                if (rests || zeno) {
+                    code = paper_case1_add_independent(s, s->x1, &nset, set, c);
+                    if (code != PAPER_CASE1_OK) return code;
+                }
             }
         }
-        code = paper_case1_project(s, s->x1, nset, set, mu);
-        if (code != PAPER_CASE1_OK) return code;
-        for (i = 0; i < nset; ++i) {                       /* impulses of the projection */
-            for (k = 0; k < r->ncontact; ++k) {
-                if (r->contact[k] == set[i]) r->impulse[k] += mu[i];
-            }
+        /* the impact again from qd-: the resting set held (post-impact normal velocity 0, a plastic impact
+         * that may pull a bounce below rest_height back), the other contacts of the impact unilateral */
+        nlist = 0;
+        for (k = 0; k < nset; ++k) list[nlist++] = set[k];
+        for (k = 0; k < r->ncontact; ++k) {
+            int held = 0;
+            for (i = 0; i < nset; ++i) held |= set[i] == r->contact[k];
+            if (held) continue;
+            code = paper_case1_add_independent(s, x, &nlist, list, r->contact[k]);
+            if (code != PAPER_CASE1_OK) return code;
         }
-        code = paper_case1_settle(s, s->x1, &nset, set);
-        if (code != PAPER_CASE1_OK) return code;
-        paper_case1_normal_velocities(s->x1, s->p, vn);
-        for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {        /* the projection made a contact approach */
-            if (!in_set[c] && gaps[c] <= s->opt.contact_tol && vn[c] < -1e-12 * scale) {
-                if (r->ncontact == nq) return PAPER_CASE1_ERR_TOO_MANY_CONTACTS;
-                in_set[c] = 1;
-                r->contact[r->ncontact++] = c;
-                added = 1;
+        if (nset > 0) {
+            code = paper_case1_mixed_impact(s, x, nlist, list, nset, qd_plus, F);
+            if (code != PAPER_CASE1_OK) return code;
+            for (i = 0; i < nq; ++i) s->x1[nq + i] = qd_plus[i];
+            paper_case1_normal_velocities(s->x1, s->p, vn);
+            for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {    /* then a contact at its wall may approach */
+                if (!in_set[c] && gaps[c] <= s->opt.contact_tol && vn[c] < -1e-12 * scale) {
+                    int listed = 0;
+                    for (k = 0; k < nlist; ++k) listed |= list[k] == c;
+                    if (listed) continue;
+                    if (r->ncontact == nq) return PAPER_CASE1_ERR_TOO_MANY_CONTACTS;
+                    in_set[c] = 1;
+                    r->contact[r->ncontact++] = c;
+                    added = 1;
+                }
             }
         }
         if (!added) break;
+    }
+    if (nset > 0) {                   /* the record: impulses of the final solve, resting contacts included */
+        for (k = 0; k < nlist; ++k) {
+            for (i = 0; i < r->ncontact && r->contact[i] != list[k]; ++i) {}
+            if (i == r->ncontact) {
+                if (r->ncontact == nq) continue;
+                r->contact[r->ncontact++] = list[k];
+            }
+            r->impulse[i] = F[k];
+        }
+        code = paper_case1_project(s, s->x1, nset, set, 0);      /* positions onto the walls */
+        if (code == PAPER_CASE1_OK) code = paper_case1_settle(s, s->x1, &nset, set);
+        if (code != PAPER_CASE1_OK) return code;
+        paper_case1_normal_velocities(s->x1, s->p, vn);
     }
     for (i = 0; i < nq; ++i) r->qd_after[i] = s->x1[nq + i];
     r->energy_after = paper_case1_total_energy(s->x1, s->p);

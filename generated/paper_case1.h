@@ -340,7 +340,8 @@ int paper_case1_sim_advance(paper_case1_sim *sim, double t_end, const double *t_
 /* Generalised accelerations with the contacts active[0..nactive-1] held as bilateral frictionless
  * constraints: I_f qdd = R + N^T lambda, N qdd = -Ndot qd (N: Jacobian rows signed along the inward normal),
  * solved as qdd = qdd_free + I_f^-1 N^T lambda with (N I_f^-1 N^T) lambda = -(N qdd_free + Ndot qd).
- * lambda[k] (N) is the force of contact active[k] along its inward normal (> 0 pushes).  work: IMPACT_NWORK
+ * lambda[k] (N) is the force of contact active[k] along its inward normal (> 0 pushes); a contact whose
+ * row depends on the earlier ones' (held by them already) gets lambda = 0.  work: IMPACT_NWORK
  * doubles.  nactive = 0 gives forward_dynamics.  Returns OK or an error (< 0). */
 int paper_case1_constrained_dynamics(const double *q, const double *qd, const double *p, int nactive,
                                const int *active, double *qdd, double *lambda, double *work);

@@ -225,22 +225,26 @@ const char *paper_case1_error_message(int code);
  *   NAME_options opt; NAME_sim sim; NAME_impact_record rec;
  *   NAME_default_options(&opt);                       edit opt.method, opt.rtol, ...
  *   NAME_sim_init(&sim, 0.0, q0, qd0, p, &opt);
- *   while ((code = NAME_sim_advance(&sim, t_end, t_eval, n_eval, &i_eval, x_eval, &rec)) == NAME_SIM_IMPACT)
- *       ... rec holds the impact just applied ...
+ *   while ((code = NAME_sim_advance(&sim, t_end, t_eval, n_eval, &i_eval, x_eval, &rec)) == NAME_SIM_IMPACT
+ *          || code == NAME_SIM_CONTACT)
+ *       ... rec holds the impact just applied, or (SIM_CONTACT) a change of the resting contacts ...
  *   code is NAME_SIM_END (sim.t == t_end) or an error (< 0, see NAME_error_message).
- *   A loop that also follows resting contact continues on NAME_SIM_CONTACT too (see below).
  *
  * Resting contact (Zeno behaviour).  With e < 1 and gravity, impacts of a point on a wall accumulate
  * (the bounces shrink geometrically).  At an impact on a wall with e < 1, a contact whose bounce would rise
  * less than opt.rest_height (v+^2 <= 2 a rest_height, a = its normal acceleration towards the wall), or
- * that has had opt.zeno_impacts impacts at shrinking intervals, is made PERSISTENT: its normal velocity is
- * set to 0 (a mass-weighted projection, a plastic impact: energy cannot grow) and it becomes a bilateral,
- * frictionless constraint of the flight equations,
+ * that has had opt.zeno_impacts impacts at shrinking intervals, is made PERSISTENT: the impact is solved
+ * again with the persistent contacts held at normal velocity 0 (a plastic impact: energy cannot grow), the
+ * others by the complementarity form, and it becomes a bilateral, frictionless constraint of the flight
+ * equations,
  *     I_f qdd = R + N_a^T lambda,    N_a qdd = -Ndot_a qd     (N_a: signed Jacobian rows of the active set),
  * with positions and velocities projected back onto the constraint (gap = 0, normal velocity = 0, mass
  * metric) after every accepted step.  A persistent contact is released when its force lambda (along the
  * inward normal) falls through 0: that crossing is located on the dense output like a wall crossing.
- * Only forces lambda > 0 are kept (an acceleration-level complementarity solve when the set changes).
+ * Only forces lambda > 0 are kept (an acceleration-level complementarity solve when the set changes), and
+ * only contacts with independent rows (a dependent one is held by the others; one that becomes dependent
+ * in flight gets lambda = 0 and is released).  A persistent contact joins another impact only when that
+ * impact would drive it into its wall.
  * sim_init also makes persistent the contacts that start at their wall (gap <= contact_tol) with a normal
  * velocity under the same bound and a positive force (a chain started at rest on the floor).
  * Every activation and release is reported in the record (activated[], released[]).

@@ -1082,8 +1082,8 @@ static int paper_case1_finite(const double *x, int n)
 /* Jacobian row and inward-normal sign of contact c. */
 static void paper_case1_contact_row(int c, int *row, double *sign)
 {
-    const int row_of[PAPER_CASE1_NCONTACT] = { 0, 2, 4, 6, 8, 0, 2, 4, 6, 8, 1, 3, 5, 7, 9, 1, 3, 5, 7, 9 };
-    const double sign_of[PAPER_CASE1_NCONTACT] = { 1.0, 1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0, -1.0, 1.0, 1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0, -1.0 };
+    static const int row_of[PAPER_CASE1_NCONTACT] = { 0, 2, 4, 6, 8, 0, 2, 4, 6, 8, 1, 3, 5, 7, 9, 1, 3, 5, 7, 9 };
+    static const double sign_of[PAPER_CASE1_NCONTACT] = { 1.0, 1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0, -1.0, 1.0, 1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0, -1.0 };
     *row = row_of[c];
     *sign = sign_of[c];
 }

@@ -836,8 +836,8 @@ static int paper_case2_finite(const double *x, int n)
 /* Jacobian row and inward-normal sign of contact c. */
 static void paper_case2_contact_row(int c, int *row, double *sign)
 {
-    const int row_of[PAPER_CASE2_NCONTACT] = { 0, 3, 0, 3, 1, 4, 1, 4, 2, 5, 2, 5 };
-    const double sign_of[PAPER_CASE2_NCONTACT] = { 1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0, -1.0 };
+    static const int row_of[PAPER_CASE2_NCONTACT] = { 0, 3, 0, 3, 1, 4, 1, 4, 2, 5, 2, 5 };
+    static const double sign_of[PAPER_CASE2_NCONTACT] = { 1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0, -1.0 };
     *row = row_of[c];
     *sign = sign_of[c];
 }

@@ -107,6 +107,8 @@ def main(argv=None) -> int:
     print(f"scene {scene.name}: n = {scene.n}, t_end = {t_end} s, method {args.method}"
           + (f" dt = {args.dt}" if args.method == "rk4" else f" rtol = {args.rtol} atol = {args.atol}"))
     print(result.impact_table())
+    if getattr(result, "contact_events", None):
+        print(result.contact_event_table())
     if args.charts:
         print(f"chart switches (mu = |cos theta_0| of a chart; B = {result.chart_b_name}):")
         print(result.switch_table())

@@ -94,6 +94,14 @@ class SimulationResult:
             lines.append(f"{k:>3} {impact.t:14.9f}  {contacts}")
         return "\n".join(lines)
 
+    def contact_event_table(self) -> str:
+        """The resting-contact events, one line each ('' when there are none)."""
+        if not self.contact_events:
+            return ""
+        lines = [f"resting contact: {'t (s)':>14}  point/wall"]
+        lines += [f"{e.kind:>15} {e.t:14.9f}  O{e.point}/{e.wall}" for e in self.contact_events]
+        return "\n".join(lines)
+
     def to_json(self) -> dict:
         return {
             "impacts": [{"t": i.t, "contacts": [{"point": c.point, "wall": c.wall, "impulse": c.impulse}

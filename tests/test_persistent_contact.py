@@ -153,6 +153,8 @@ def test_drop_ends_at_rest_with_energy_falling(compiled, label, make, specialise
     assert abs(E[-1]) < 1e-9 * E[0]                    # V = 0 flat on the floor, T = 0
     kinds = {ev.kind for ev in result.contact_events}
     assert "persist" in kinds
+    table = result.contact_event_table().splitlines()           # what python -m runtime simulate prints
+    assert len(table) == 1 + len(result.contact_events) and table[1].split()[0] in kinds
 
 
 @pytest.mark.parametrize("e", [0.0, 0.5])

@@ -1,6 +1,5 @@
 """Chart switching near the gimbal lock (runtime/charts.py): the state conversion between the two base
 charts, the conditioning measure, and the gimbal-lock scene against an independent integration."""
-import dataclasses
 
 import numpy as np
 import pytest
@@ -9,7 +8,7 @@ from scipy.integrate import solve_ivp
 import reference
 from conftest import reference_of
 from codegen.scene import load_scene
-from runtime import SimulationResult, simulate
+from runtime import simulate
 from runtime.charts import (Chart, ChartError, ChartModels, chart_b_twists, convert_state,
                             simulate_with_charts)
 
@@ -311,8 +310,6 @@ def test_command_line_reports_the_switches(capsys, models):
     assert code == 1 and "at t = 0.2499" in out and "hint: theta_0 is at the gimbal lock" in out
 
 
-@pytest.mark.skipif("contact_events" not in {f.name for f in dataclasses.fields(SimulationResult)},
-                    reason="the runtime has no persistent contact")
 def test_resting_contact_survives_the_chunk_restarts():
     """A chain coming to rest on the floor (e = 0.5): the restarted chunks find the resting contacts again,
     the same impacts and contact events as simulate(), no spurious events at the chunk boundaries."""

@@ -1450,7 +1450,8 @@ static void paper_case1_dense(paper_case1_sim *s, double t, double *out)
 
 static void paper_case1_normal_velocities(const double *x, const double *p, double *vn);
 
-/* Event value (what = 0), normal velocity (what = 1) or normal velocity + V_FLOOR (what = 2) of contact c
+/* Event value (what = 0), normal velocity (what = 1), normal velocity + V_FLOOR (what = 2) or minus the
+ * normal velocity (what = 3, the gap rate falling through 0 from > 0 is the gap's minimum) of contact c
  * at time t inside the step. */
 static double paper_case1_value_at(paper_case1_sim *s, int what, int c, double t)
 {
@@ -1460,7 +1461,7 @@ static double paper_case1_value_at(paper_case1_sim *s, int what, int c, double t
         return s->es[c];
     }
     paper_case1_normal_velocities(s->xs, s->p, s->es);
-    return s->es[c] + (what == 2 ? PAPER_CASE1_V_FLOOR : 0.0);
+    return what == 3 ? -s->es[c] : s->es[c] + (what == 2 ? PAPER_CASE1_V_FLOOR : 0.0);
 }
 
 /* Root in (a, b] of contact c's value_at(what) on the interpolant, value(a) > 0 >= value(b): Illinois,
@@ -1506,36 +1507,72 @@ static double paper_case1_locate_return(paper_case1_sim *s, int c, double t_a, d
     return g_apex > 0.0 ? paper_case1_locate(s, 0, c, t_apex, g_apex, t_b, g_b) : t_apex;
 }
 
-/* Search the accepted step for the first event at event_samples points of the interpolant, so that a dip
- * through a wall and back inside one step is still seen.  Events: a wall crossing (gap from > 0 to <= 0);
- * a contact that left its wall from gap <= 0 and is back at gap <= 0, approaching (a small bounce);
- * a persistent contact's force from > 0 to <= 0.
+/* Depth (m) below which a gap minimum found between samples is a graze: the integrator's tolerance on
+ * a position, atol + rtol l with l the largest |coordinate| of the contact points at state x (positions
+ * are integrated to this, so a shallower dip cannot be told from a tangential touch); 0 for RK4, which has
+ * no tolerance. */
+static double paper_case1_graze_depth(const paper_case1_sim *s, const double *x)
+{
+    double r[3 * PAPER_CASE1_NPOINT], l = 0.0;
+    int i;
+    if (s->opt.method == PAPER_CASE1_METHOD_RK4) return 0.0;
+    paper_case1_contact_points(x, s->p, r);
+    for (i = 0; i < 3 * PAPER_CASE1_NPOINT; ++i) {
+        if (fabs(r[i]) > l) l = fabs(r[i]);
+    }
+    return s->opt.atol + s->opt.rtol * l;
+}
+
+/* A dip of contact c through its wall and back between two samples t_a < t_b at which its gap is > 0
+ * (g_a, g_b) and its normal velocity (the gap rate, from the interpolated qd) goes from v_a < 0 to
+ * v_b > 0: the gap's minimum is the root of the rate, located like a crossing; if the gap there is below
+ * -graze_depth the wall crossing before it is the event.  A shallower minimum (a touch with normal
+ * velocity 0 at gap >= 0, or within the integration error of one) is a graze: no event.
+ * Skipped, without evaluating anything, when the sampled rates cannot carry the gap to 0 inside the
+ * interval: unless the rate overshoots its end values (it is nearly linear over a sample interval), the
+ * minimum is at least max(g_a - |v_a| dt, g_b - v_b dt), and the test keeps a factor 2 on the speeds.
+ * Returns 1 with the crossing in *t_cross, or 0. */
+static int paper_case1_dip(paper_case1_sim *s, int c, double t_a, double g_a, double v_a, double t_b, double g_b,
+                        double v_b, double *t_cross)
+{
+    double t_min, g_min, dt = t_b - t_a;
+    if (!(v_a < 0.0 && v_b > 0.0 && g_a > 0.0 && g_b > 0.0)) return 0;
+    if (g_a >= -2.0 * v_a * dt || g_b >= 2.0 * v_b * dt) return 0;
+    t_min = paper_case1_locate(s, 3, c, t_a, -v_a, t_b, -v_b);
+    g_min = paper_case1_value_at(s, 0, c, t_min);                  /* leaves the state at t_min in s->xs */
+    if (!(g_min < -paper_case1_graze_depth(s, s->xs))) return 0;
+    *t_cross = paper_case1_locate(s, 0, c, t_a, g_a, t_min, g_min);
+    return 1;
+}
+
+/* Search the accepted step for the first event at event_samples points of the interpolant (the step ends
+ * included), so that a dip through a wall and back inside one step is still seen.  Events: a wall
+ * crossing (gap from > 0 to <= 0 between samples, or below 0 at a gap minimum between two samples where
+ * it is > 0: a dip shorter than the sample spacing); a contact that left its wall from gap <= 0 and is
+ * back at gap <= 0, approaching (a small bounce); a persistent contact's force from > 0 to <= 0.
  * Returns 1 with *t_event and *c_event, or 0; s->eprev ends as the event values at the step end. */
 static int paper_case1_find_event(paper_case1_sim *s, double t1, double *t_event, int *c_event)
 {
     int j, c, found = 0;
     const int m = s->opt.event_samples;
-    double t_prev = s->t;
+    double t_prev = s->t, vprev[PAPER_CASE1_NCONTACT1];
     for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) s->eprev[c] = s->ev[c];
+    paper_case1_normal_velocities(s->x, s->p, vprev);
     for (j = 1; j <= m && !found; ++j) {
         double tj = j == m ? t1 : s->t + (t1 - s->t) * (double)j / (double)m;
         double gj[PAPER_CASE1_NCONTACT1], vj[PAPER_CASE1_NCONTACT1];
-        int have_v = 0;
         paper_case1_dense(s, tj, s->xs);
         paper_case1_events(s, s->xs, gj);
+        paper_case1_normal_velocities(s->xs, s->p, vj);
         for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {
             double tc;
-            if (gj[c] > 0.0) continue;
-            if (s->eprev[c] > 0.0) {
+            if (gj[c] > 0.0) {
+                if (s->is_active[c]
+                    || !paper_case1_dip(s, c, t_prev, s->eprev[c], vprev[c], tj, gj[c], vj[c], &tc)) continue;
+            } else if (s->eprev[c] > 0.0) {
                 tc = paper_case1_locate(s, 0, c, t_prev, s->eprev[c], tj, gj[c]);
             } else {
-                if (s->is_active[c]) continue;
-                if (!have_v) {
-                    paper_case1_dense(s, tj, s->xs);
-                    paper_case1_normal_velocities(s->xs, s->p, vj);
-                    have_v = 1;
-                }
-                if (!(vj[c] < -PAPER_CASE1_V_FLOOR)) continue;
+                if (s->is_active[c] || !(vj[c] < -PAPER_CASE1_V_FLOOR)) continue;
                 tc = paper_case1_locate_return(s, c, t_prev, tj, gj[c]);
             }
             if (!found || tc < *t_event) {
@@ -1544,7 +1581,10 @@ static int paper_case1_find_event(paper_case1_sim *s, double t1, double *t_event
             }
             found = 1;
         }
-        for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) s->eprev[c] = gj[c];
+        for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {
+            s->eprev[c] = gj[c];
+            vprev[c] = vj[c];
+        }
         t_prev = tj;
     }
     return found;

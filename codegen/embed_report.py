@@ -62,7 +62,6 @@ def main(argv=None) -> int:
     for r in rows:
         print(f"| {r['n']} | {r['text']:,} / {r['data']} / {r['bss']} | {r['timing']['dopri5']:.3f} / "
               f"{r['timing']['dop853']:.3f} | {r['timing']['dopri5_impacts']} |")
-    functions = sorted({f for r in rows for f in r["stack"]}, key=lambda f: f.split("_", 1)[-1])
     print()
     print("| stack bytes (gcc -fstack-usage, -O2) | " + " | ".join(f"n = {r['n']}" for r in rows) + " |")
     print("|---|" + "---|" * len(rows))

@@ -35,11 +35,11 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from . import kinematics, model
+from . import model
 from .kinematics import ChainSymbols
 from .linalg import ldlt_solve
 from .scene import Scene
-from .tape import Tape, cross, dot, mat_t_vec, matvec
+from .tape import Tape
 
 
 class InlineTape(Tape):
@@ -51,22 +51,8 @@ class InlineTape(Tape):
 
 
 def energies(chain: ChainSymbols) -> tuple[sp.Expr, sp.Expr]:
-    """Kinetic and potential energy T, V as explicit expressions (the formulas of model.energy_kernel)."""
-    tape = InlineTape()
-    rotations = kinematics.joint_rotations(tape, chain)
-    moments = kinematics.link_moments_all(tape, chain)
-    frames = kinematics.reference_frames(tape, chain, rotations)
-    points = kinematics.point_positions(tape, chain, frames, moments)
-    velocities, omega_ref = kinematics.point_velocities(tape, chain, frames, moments)
-    T = V = sp.Integer(0)
-    for i in range(1, chain.n + 1):
-        B, R = moments[i], frames[i]
-        v, w = velocities[i - 1], omega_ref[i]
-        h_ref = matvec(R, B.h)
-        w_loc = mat_t_vec(R, w)
-        T += B.B0 * dot(v, v) / 2 + dot(v, cross(w, h_ref)) + dot(w_loc, matvec(B.K, w_loc)) / 2
-        V += chain.gravity * (B.B0 * points[i - 1][1] + h_ref[1])
-    return T, V
+    """Kinetic and potential energy T, V as explicit expressions (model.energy_expressions on an InlineTape)."""
+    return model.energy_expressions(InlineTape(), chain)
 
 
 class Differentiator:

@@ -23,7 +23,7 @@ from . import articulated, gibbs_appell, kinematics
 from .kinematics import ChainSymbols
 from .linalg import ldlt_solve
 from .scene import Scene
-from .tape import Tape, add, cross, dot, mat_t_vec, matvec, scale, column, E_Y
+from .tape import Tape, add, cross, dot, mat_t_vec, matvec, scale, column
 
 
 @dataclass
@@ -181,11 +181,9 @@ def contact_gaps_kernel(chain: ChainSymbols) -> Kernel:
     return k
 
 
-def energy_kernel(chain: ChainSymbols) -> Kernel:
-    """Kinetic and potential energy from point velocities (a velocity-level path, independent of I_f)."""
-    k = _new(chain, "energy", "E[0] = kinetic energy T, E[1] = potential energy V (J).",
-             ("q", "qd", "p"), "E", 2)
-    tape = k.tape
+def energy_expressions(tape, chain: ChainSymbols):
+    """Kinetic and potential energy (T, V) from point velocities, a velocity-level path independent of I_f.
+    With a tape that records nothing (codegen.lagrange.InlineTape) they come out as explicit expressions."""
     rotations = kinematics.joint_rotations(tape, chain)
     moments = kinematics.link_moments_all(tape, chain)
     frames = kinematics.reference_frames(tape, chain, rotations)
@@ -199,7 +197,13 @@ def energy_kernel(chain: ChainSymbols) -> Kernel:
         w_loc = tape.let_vec(mat_t_vec(R, w), f"wloc_{i}")
         T += B.B0 * dot(v, v) / 2 + dot(v, cross(w, h_ref)) + dot(w_loc, matvec(B.K, w_loc)) / 2
         V += chain.gravity * (B.B0 * points[i - 1][1] + h_ref[1])
-    k.values = [T, V]
+    return T, V
+
+
+def energy_kernel(chain: ChainSymbols) -> Kernel:
+    k = _new(chain, "energy", "E[0] = kinetic energy T, E[1] = potential energy V (J).",
+             ("q", "qd", "p"), "E", 2)
+    k.values = list(energy_expressions(k.tape, chain))
     return k
 
 

@@ -20,13 +20,14 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import signal
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from .machine import describe
 
 FORMULATIONS = ("gibbs_appell", "lagrange")
 LABELS = {"gibbs_appell": "Gibbs–Appell", "lagrange": "Lagrange"}
@@ -208,21 +209,12 @@ def markdown(rows, specialise: bool = False) -> str:
 
 
 def machine() -> str:
-    cpu = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
     try:
         gcc = subprocess.run(["gcc", "--version"], capture_output=True, text=True).stdout.splitlines()[0]
     except (OSError, IndexError):
         gcc = "gcc ?"
     import sympy
-    return (f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, sympy {sympy.__version__}, "
-            f"{gcc}")
+    return describe(f"sympy {sympy.__version__}", gcc)
 
 
 def _reference_ops(line: dict, ns) -> list[tuple[int, float]]:

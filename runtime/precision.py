@@ -28,8 +28,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import platform
 import statistics
 import sys
 import time
@@ -38,6 +36,8 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
+
+from codegen.machine import describe
 
 from .baseline import scipy_hybrid
 from .model import CompiledModel
@@ -247,17 +247,8 @@ def run_study(model: CompiledModel, t_end: float, quick: bool = False, budget: f
 # -- output -------------------------------------------------------------------------------------------
 
 def machine() -> str:
-    cpu = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
     import scipy
-    return (f"{cpu}, {os.cpu_count()} cores visible, Python {platform.python_version()}, numpy {np.__version__}, "
-            f"scipy {scipy.__version__}")
+    return describe(f"numpy {np.__version__}", f"scipy {scipy.__version__}")
 
 
 def _e(x: float) -> str:

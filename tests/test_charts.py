@@ -9,7 +9,7 @@ import reference
 from conftest import reference_of
 from codegen.scene import load_scene
 from runtime import simulate
-from runtime.charts import (Chart, ChartError, ChartModels, chart_b_twists, convert_state,
+from runtime.charts import (Chart, ChartError, ChartModels, convert_state,
                             simulate_with_charts)
 
 ACCURATE = {"method": "dop853", "rtol": 1e-10, "atol": 1e-12}

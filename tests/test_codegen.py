@@ -1,6 +1,5 @@
 """The generated C: strict C99, C++-clean header, deterministic, committed copies up to date,
 operation counts that match the emitted code, baked parameters, the CLI and the cffi build cache."""
-import hashlib
 import math
 import os
 import re

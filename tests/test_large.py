@@ -4,7 +4,6 @@ import subprocess
 import numpy as np
 import pytest
 
-import codegen
 import reference
 from codegen.scene import default_scene
 from conftest import reference_of

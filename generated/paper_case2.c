@@ -967,7 +967,17 @@ int paper_case2_sim_init(paper_case2_sim *s, double t0, const double *q, const d
     s->nactive = 0;
     s->n_activations = s->n_releases = 0;
     s->pending = s->fail = s->fail_seen = 0;
+    s->vn_valid = 0;
     s->rest_height = opt->rest_height < 0.0 ? 10.0 * opt->contact_tol : opt->rest_height;
+    {
+        double r[3 * PAPER_CASE2_NPOINT], length = 0.0;   /* the chain's length: sum of |O_k+1 - O_k| */
+        paper_case2_contact_points(s->x, s->p, r);
+        for (i = 3; i < 3 * PAPER_CASE2_NPOINT; i += 3) {
+            length += sqrt((r[i] - r[i - 3]) * (r[i] - r[i - 3]) + (r[i + 1] - r[i - 2]) * (r[i + 1] - r[i - 2])
+                           + (r[i + 2] - r[i - 1]) * (r[i + 2] - r[i - 1]));
+        }
+        s->lever = length > 1.0 ? length : 1.0;
+    }
     for (i = 0; i < PAPER_CASE2_NCONTACT1; ++i) {
         s->is_active[i] = 0;
         s->n_shrink[i] = 0;
@@ -1279,9 +1289,12 @@ static double paper_case2_graze_depth(const paper_case2_sim *s, const double *x)
 
 /* A dip of contact c through its wall and back between two samples t_a < t_b at which its gap is > 0
  * (g_a, g_b) and its normal velocity (the gap rate, from the interpolated qd) goes from v_a < 0 to
- * v_b > 0: the gap's minimum is the root of the rate, located like a crossing; if the gap there is below
- * -graze_depth the wall crossing before it is the event.  A shallower minimum (a touch with normal
- * velocity 0 at gap >= 0, or within the integration error of one) is a graze: no event.
+ * v_b > 0: the gap's minimum is the root of the rate, searched like a crossing (Illinois, then bisection,
+ * to event_tol).  As soon as the gap at an iterate is below -graze_depth, the wall crossing before it is
+ * the event; as soon as it exceeds 2 (|v(a)| + |v(b)|) (b - a) - graze_depth on the rate's bracket [a, b],
+ * the minimum cannot reach -graze_depth and there is none (so a minimum far from the wall costs a few
+ * evaluations).  A minimum at gap >= -graze_depth (a touch with normal velocity 0, or within the
+ * integration error of one) is a graze: no event.
  * Skipped, without evaluating anything, when the sampled rates cannot carry the gap to 0 inside the
  * interval: unless the rate overshoots its end values (it is nearly linear over a sample interval), the
  * minimum is at least max(g_a - |v_a| dt, g_b - v_b dt), and the test keeps a factor 2 on the speeds.
@@ -1289,44 +1302,104 @@ static double paper_case2_graze_depth(const paper_case2_sim *s, const double *x)
 static int paper_case2_dip(paper_case2_sim *s, int c, double t_a, double g_a, double v_a, double t_b, double g_b,
                         double v_b, double *t_cross)
 {
-    double t_min, g_min, dt = t_b - t_a;
+    double a = t_a, b = t_b, va = v_a, vb = v_b, fa = v_a, fb = v_b, depth = -1.0;
+    int side = 0, iter;
     if (!(v_a < 0.0 && v_b > 0.0 && g_a > 0.0 && g_b > 0.0)) return 0;
-    if (g_a >= -2.0 * v_a * dt || g_b >= 2.0 * v_b * dt) return 0;
-    t_min = paper_case2_locate(s, 3, c, t_a, -v_a, t_b, -v_b);
-    g_min = paper_case2_value_at(s, 0, c, t_min);                  /* leaves the state at t_min in s->xs */
-    if (!(g_min < -paper_case2_graze_depth(s, s->xs))) return 0;
-    *t_cross = paper_case2_locate(s, 0, c, t_a, g_a, t_min, g_min);
-    return 1;
+    if (g_a >= -2.0 * v_a * (t_b - t_a) || g_b >= 2.0 * v_b * (t_b - t_a)) return 0;
+    for (iter = 0; iter < 200; ++iter) {
+        double m, gm, vm;
+        if (b - a <= s->opt.event_tol + 4.0 * PAPER_CASE2_EPS * fabs(b)) break;
+        m = iter < 60 ? (a * fb - b * fa) / (fb - fa) : 0.5 * (a + b);
+        if (!(m > a && m < b)) m = 0.5 * (a + b);
+        paper_case2_dense(s, m, s->xs);
+        paper_case2_contact_gaps(s->xs, s->p, s->es);
+        gm = s->es[c];
+        paper_case2_normal_velocities(s->xs, s->p, s->es);
+        vm = s->es[c];
+        if (depth < 0.0) depth = paper_case2_graze_depth(s, s->xs);
+        if (gm < -depth) {
+            *t_cross = paper_case2_locate(s, 0, c, t_a, g_a, m, gm);
+            return 1;
+        }
+        if (vm < 0.0) {
+            a = m; va = fa = vm;
+            if (side == 1) fb *= 0.5;
+            side = 1;
+        } else {
+            b = m; vb = fb = vm;
+            if (side == -1) fa *= 0.5;
+            side = -1;
+        }
+        if (gm + depth >= 2.0 * (fabs(va) + fabs(vb)) * (b - a)) break;
+    }
+    return 0;
+}
+
+/* The contacts that may dip through their wall inside the step [s->t, t1] (not persistent, gap at the
+ * step start below speed x the step, speed = 2 (|v(t0)| + |v(t1)|) from their normal velocities at the
+ * step ends): cand[0..return-1], their speeds, and the normal velocities at the step start (v0).
+ * Cheap when the chain is far from every wall: nothing is evaluated when every gap at the step start
+ * exceeds 2 lever sum|qd| x the step (qd at both ends), because no point moves faster than lever sum|qd|
+ * (lever = max(1 m, the chain's length): |dO/dq| is 1 for a translation and at most the chain's length for
+ * a rotation).  The normal velocities at the step end are kept for the next step (s->vn). */
+static int paper_case2_dip_candidates(paper_case2_sim *s, double t1, int *cand, double *speed, double *v0)
+{
+    int c, i, n = 0, nearby = 0;
+    double bound = 0.0;
+    for (i = 0; i < PAPER_CASE2_NQ; ++i) bound += fabs(s->x[PAPER_CASE2_NQ + i]) + fabs(s->x1[PAPER_CASE2_NQ + i]);
+    bound *= 2.0 * s->lever * (t1 - s->t);
+    for (c = 0; c < PAPER_CASE2_NCONTACT && !nearby; ++c) nearby = !s->is_active[c] && s->ev[c] < bound;
+    if (!nearby) {
+        s->vn_valid = 0;
+        return 0;
+    }
+    if (!s->vn_valid) paper_case2_normal_velocities(s->x, s->p, s->vn);
+    for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) v0[c] = s->vn[c];
+    paper_case2_normal_velocities(s->x1, s->p, s->vn);
+    s->vn_valid = 1;                             /* (sim_advance clears it if x becomes anything else) */
+    for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {
+        speed[c] = 2.0 * (fabs(v0[c]) + fabs(s->vn[c]));
+        if (!s->is_active[c] && s->ev[c] < speed[c] * (t1 - s->t)) cand[n++] = c;
+    }
+    return n;
 }
 
 /* Search the accepted step for the first event at event_samples points of the interpolant (the step ends
  * included), so that a dip through a wall and back inside one step is still seen.  Events: a wall
  * crossing (gap from > 0 to <= 0 between samples, or below 0 at a gap minimum between two samples where
- * it is > 0: a dip shorter than the sample spacing); a contact that left its wall from gap <= 0 and is
- * back at gap <= 0, approaching (a small bounce); a persistent contact's force from > 0 to <= 0.
+ * it is > 0: a dip shorter than the sample spacing, see _dip); a contact that left its wall from gap <= 0
+ * and is back at gap <= 0, approaching (a small bounce); a persistent contact's force from > 0 to <= 0.
+ * Dips are looked for only for the step's candidates (_dip_candidates) in intervals whose gaps are both
+ * below reach = speed x the interval (a contact farther from its wall cannot dip to it unless its normal
+ * speed inside the step exceeds twice the sum of those at the step ends); only there are the normal
+ * velocities at the samples evaluated.
  * Returns 1 with *t_event and *c_event, or 0; s->eprev ends as the event values at the step end. */
 static int paper_case2_find_event(paper_case2_sim *s, double t1, double *t_event, int *c_event)
 {
-    int j, c, found = 0;
+    int j, k, c, found = 0, have_prev = 1, ncand, cand[PAPER_CASE2_NCONTACT1];
     const int m = s->opt.event_samples;
-    double t_prev = s->t, vprev[PAPER_CASE2_NCONTACT1];
+    double t_prev = s->t, vprev[PAPER_CASE2_NCONTACT1], speed[PAPER_CASE2_NCONTACT1];
     for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) s->eprev[c] = s->ev[c];
-    paper_case2_normal_velocities(s->x, s->p, vprev);
+    ncand = paper_case2_dip_candidates(s, t1, cand, speed, vprev);
     for (j = 1; j <= m && !found; ++j) {
         double tj = j == m ? t1 : s->t + (t1 - s->t) * (double)j / (double)m;
         double gj[PAPER_CASE2_NCONTACT1], vj[PAPER_CASE2_NCONTACT1];
+        int have_v = 0;
         paper_case2_dense(s, tj, s->xs);
         paper_case2_events(s, s->xs, gj);
-        paper_case2_normal_velocities(s->xs, s->p, vj);
-        for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {
+        for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {           /* crossings and returns at the samples */
             double tc;
-            if (gj[c] > 0.0) {
-                if (s->is_active[c]
-                    || !paper_case2_dip(s, c, t_prev, s->eprev[c], vprev[c], tj, gj[c], vj[c], &tc)) continue;
-            } else if (s->eprev[c] > 0.0) {
+            if (gj[c] > 0.0) continue;
+            if (s->eprev[c] > 0.0) {
                 tc = paper_case2_locate(s, 0, c, t_prev, s->eprev[c], tj, gj[c]);
             } else {
-                if (s->is_active[c] || !(vj[c] < -PAPER_CASE2_V_FLOOR)) continue;
+                if (s->is_active[c]) continue;
+                if (!have_v) {
+                    paper_case2_dense(s, tj, s->xs);
+                    paper_case2_normal_velocities(s->xs, s->p, vj);
+                    have_v = 1;
+                }
+                if (!(vj[c] < -PAPER_CASE2_V_FLOOR)) continue;
                 tc = paper_case2_locate_return(s, c, t_prev, tj, gj[c]);
             }
             if (!found || tc < *t_event) {
@@ -1335,10 +1408,33 @@ static int paper_case2_find_event(paper_case2_sim *s, double t1, double *t_event
             }
             found = 1;
         }
-        for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {
-            s->eprev[c] = gj[c];
-            vprev[c] = vj[c];
+        for (k = 0; k < ncand; ++k) {                         /* dips between the samples */
+            const double reach = speed[cand[k]] * (tj - t_prev);
+            double tc;
+            c = cand[k];
+            if (!(s->eprev[c] > 0.0 && gj[c] > 0.0 && s->eprev[c] < reach && gj[c] < reach)) continue;
+            if (!have_prev) {
+                paper_case2_dense(s, t_prev, s->xs);
+                paper_case2_normal_velocities(s->xs, s->p, vprev);
+                have_prev = 1;
+            }
+            if (!have_v) {
+                paper_case2_dense(s, tj, s->xs);
+                paper_case2_normal_velocities(s->xs, s->p, vj);
+                have_v = 1;
+            }
+            if (!paper_case2_dip(s, c, t_prev, s->eprev[c], vprev[c], tj, gj[c], vj[c], &tc)) continue;
+            if (!found || tc < *t_event) {
+                *t_event = tc;
+                *c_event = c;
+            }
+            found = 1;
         }
+        for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) s->eprev[c] = gj[c];
+        if (have_v) {
+            for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) vprev[c] = vj[c];
+        }
+        have_prev = have_v;
         t_prev = tj;
     }
     return found;
@@ -1354,13 +1450,12 @@ static double paper_case2_total_energy(const double *x, const double *p)
 /* Normal velocities (along the inward normals) of all contacts at state x. */
 static void paper_case2_normal_velocities(const double *x, const double *p, double *vn)
 {
+    static const int index_of[PAPER_CASE2_NCONTACT] = { 0, 3, 0, 3, 1, 4, 1, 4, 2, 5, 2, 5 };
+    static const double sign_of[PAPER_CASE2_NCONTACT] = { 1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0, -1.0 };
     double v[3 * PAPER_CASE2_NPOINT];
-    int c, point, axis, sign;
+    int c;
     paper_case2_contact_velocities(x, x + PAPER_CASE2_NQ, p, v);
-    for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {
-        paper_case2_contact_info(c, &point, &axis, &sign);
-        vn[c] = sign * v[3 * (point - 1) + axis];
-    }
+    for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) vn[c] = sign_of[c] * v[index_of[c]];
 }
 
 /* Normal accelerations (along the inward normals) of all contacts at state x, with the contacts
@@ -1895,7 +1990,7 @@ int paper_case2_sim_advance(paper_case2_sim *s, double t_end, const double *t_ev
             if (code < 0) return code;
             for (i = 0; i < PAPER_CASE2_NX; ++i) s->x[i] = code == 1 ? s->x1[i] : s->xs[i];
             s->t = t_event;
-            s->f_valid = 0;
+            s->f_valid = s->vn_valid = 0;
             paper_case2_events(s, s->x, s->ev);
             if (s->fail) return s->fail;
             if (released) {                       /* a wall crossing counts once the gap has opened again */
@@ -1923,7 +2018,7 @@ int paper_case2_sim_advance(paper_case2_sim *s, double t_end, const double *t_ev
         if (s->nactive > 0) {                     /* back onto the persistent constraints */
             int code = paper_case2_project(s, s->x, s->nactive, s->active, 0);
             if (code != PAPER_CASE2_OK) return code;
-            s->f_valid = 0;
+            s->f_valid = s->vn_valid = 0;
             paper_case2_events(s, s->x, s->ev);
             if (s->fail) return s->fail;
         }

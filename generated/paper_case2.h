@@ -291,8 +291,11 @@ typedef struct {
     double f[PAPER_CASE2_NX], k[16][PAPER_CASE2_NX], x1[PAPER_CASE2_NX], xs[PAPER_CASE2_NX], cont[8][PAPER_CASE2_NX];
     double t0_step, h_step;
     double ev[PAPER_CASE2_NCONTACT1], es[PAPER_CASE2_NCONTACT1], eprev[PAPER_CASE2_NCONTACT1];   /* event values */
+    double vn[PAPER_CASE2_NCONTACT1];          /* normal velocities at x, if vn_valid (event search) */
+    int vn_valid;
     double work[PAPER_CASE2_IMPACT_NWORK];
     double rest_height;                       /* resolved opt.rest_height */
+    double lever;                             /* max(1 m, the chain's length): |dO/dq| bound */
     int is_active[PAPER_CASE2_NCONTACT1], pending, fail, fail_seen;
     int n_shrink[PAPER_CASE2_NCONTACT1];           /* impacts of each contact at shrinking intervals */
     double t_last[PAPER_CASE2_NCONTACT1], dt_last[PAPER_CASE2_NCONTACT1];

@@ -230,6 +230,13 @@ const char *paper_case1_error_message(int code);
  *       ... rec holds the impact just applied, or (SIM_CONTACT) a change of the resting contacts ...
  *   code is NAME_SIM_END (sim.t == t_end) or an error (< 0, see NAME_error_message).
  *
+ * Events.  Each accepted step's interpolant is sampled at opt.event_samples points; an impact is a gap
+ * crossing zero with the point approaching its wall, located to opt.event_tol.  A dip through the wall and
+ * back between two samples (gap > 0 at both) is found where the gap's rate, the normal velocity, changes
+ * sign: if the gap at that minimum is below -(atol + rtol l) (l: the largest |coordinate| of the points;
+ * 0 for RK4) the crossing before it is the impact; a shallower minimum, a touch with normal velocity 0
+ * within the integration error, is a graze and no impact.
+ *
  * Resting contact (Zeno behaviour).  With e < 1 and gravity, impacts of a point on a wall accumulate
  * (the bounces shrink geometrically).  At an impact on a wall with e < 1, a contact whose bounce would rise
  * less than opt.rest_height (v+^2 <= 2 a rest_height, a = its normal acceleration towards the wall), or
@@ -275,7 +282,8 @@ typedef struct {
     double dt;             /* RK4 step (s); for the adaptive methods the first step, 0 = automatic */
     double rtol, atol;     /* adaptive methods: relative and absolute tolerances (default 1e-8, 1e-10) */
     double h_max;          /* largest step (s), 0 = unbounded */
-    int event_samples;     /* interpolant samples per step searched for wall crossings (default 4) */
+    int event_samples;     /* interpolant samples per step searched for wall crossings (default 4); a dip
+                              through a wall between two samples is found at the gap's minimum */
     double event_tol;      /* time tolerance of event location on the interpolant (default 1e-13 s) */
     double contact_tol;    /* approaching contacts within this gap (m) join a simultaneous impact (1e-6) */
     long max_steps;        /* steps allowed per advance call, 0 = unbounded (default 10^7) */

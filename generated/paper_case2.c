@@ -1214,8 +1214,7 @@ static void paper_case2_dense(paper_case2_sim *s, double t, double *out)
 
 static void paper_case2_normal_velocities(const double *x, const double *p, double *vn);
 
-/* Event value (what = 0), normal velocity (what = 1), normal velocity + V_FLOOR (what = 2) or minus the
- * normal velocity (what = 3, the gap rate falling through 0 from > 0 is the gap's minimum) of contact c
+/* Event value (what = 0), normal velocity (what = 1) or normal velocity + V_FLOOR (what = 2) of contact c
  * at time t inside the step. */
 static double paper_case2_value_at(paper_case2_sim *s, int what, int c, double t)
 {
@@ -1225,7 +1224,7 @@ static double paper_case2_value_at(paper_case2_sim *s, int what, int c, double t
         return s->es[c];
     }
     paper_case2_normal_velocities(s->xs, s->p, s->es);
-    return what == 3 ? -s->es[c] : s->es[c] + (what == 2 ? PAPER_CASE2_V_FLOOR : 0.0);
+    return s->es[c] + (what == 2 ? PAPER_CASE2_V_FLOOR : 0.0);
 }
 
 /* Root in (a, b] of contact c's value_at(what) on the interpolant, value(a) > 0 >= value(b): Illinois,

@@ -165,11 +165,14 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
 
     nq, nx = model.nq, 2 * model.nq
     layout = model.layout
+    overridden = p is not None or q0 is not None      # the scene's own values were checked when it was loaded
     p = model.p if p is None else np.ascontiguousarray(p, dtype=float)
-    _check_parameters(model, p)
+    if overridden:
+        _check_parameters(model, p)
     q = model.q0 if q0 is None else _reduce(layout, q0, "q0", velocity=False)
     qd = model.qd0 if qd0 is None else _reduce(layout, qd0, "qd0", velocity=True)
-    _check_inside(model, q, p, "q0" if q0 is not None else "initial.q")
+    if overridden:
+        _check_inside(model, q, p, "q0" if q0 is not None else "initial.q")
     if t_eval is None:
         t_eval = np.unique(np.r_[np.arange(0.0, t_end, 1e-3), t_end])
     t_eval = np.ascontiguousarray(t_eval, dtype=float)

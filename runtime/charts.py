@@ -42,7 +42,7 @@ import numpy as np
 from codegen.scene import Scene, load_scene
 
 from .model import CompiledModel, load_model
-from .simulate import Impact, SimulationResult, simulate
+from .simulate import Impact, SimulationResult, sample_times, simulate
 
 CHART_NAMES = ("A", "B")
 EZ = np.array([0.0, 0.0, 1.0])
@@ -389,12 +389,7 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
         scene = dataclasses.replace(scene, q0=tuple(scene.q0 if q0 is None else np.asarray(q0, dtype=float)),
                                     qd0=tuple(scene.qd0 if qd0 is None else np.asarray(qd0, dtype=float)))
     charts, compiled = models.charts, models.models
-    if t_eval is None:
-        t_eval = np.unique(np.r_[np.arange(0.0, t_end, 1e-3), t_end])
-    user = np.ascontiguousarray(t_eval, dtype=float)
-    _check(user.ndim == 1 and np.all(np.diff(user) > 0), "t_eval", "must be a strictly increasing 1-D array")
-    _check(len(user) == 0 or (user[0] >= 0 and user[-1] <= t_end), "t_eval",
-           f"must lie within [0, t_end] = [0, {t_end}]")
+    user = sample_times(t_eval, t_end)
     p_vec = compiled[0].p if p is None else np.asarray(p, dtype=float)
     out = _Output(len(user), scene.nq)
     impacts: list[Impact] = []

@@ -61,6 +61,17 @@ def build_parser() -> argparse.ArgumentParser:
 DEFAULT_T_END = {"paper_case1": 1.5, "paper_case2": 1.75}
 
 
+def scene_and_horizon(args):
+    """The scene named by --scene and the run's horizon (--t-end, else the scene's usual one), or None
+    after printing why the scene cannot be loaded."""
+    try:
+        scene = load_scene(args.scene)
+    except SceneError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return None
+    return scene, (args.t_end if args.t_end is not None else DEFAULT_T_END.get(scene.name, 1.0))
+
+
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     if args.command == "precision":
@@ -68,12 +79,10 @@ def main(argv=None) -> int:
         return precision_main(args)
     if args.command == "stress":
         return stress_suite.main(args)
-    try:
-        scene = load_scene(args.scene)
-    except SceneError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+    loaded = scene_and_horizon(args)
+    if loaded is None:
         return 2
-    t_end = args.t_end if args.t_end is not None else DEFAULT_T_END.get(scene.name, 1.0)
+    scene, t_end = loaded
     start = time.perf_counter()
     try:
         progress = lambda m: print(f"  {m}", file=sys.stderr, flush=True)  # noqa: E731

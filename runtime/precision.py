@@ -352,21 +352,17 @@ def to_json(scene_name: str, t_end: float, reference: Reference, rows: list[Row]
 
 def main(args) -> int:
     """The `python -m runtime precision` command (args from runtime.cli)."""
-    from codegen.scene import SceneError, load_scene
-
-    from .cli import DEFAULT_T_END
+    from .cli import scene_and_horizon
     from .compile import BuildError, CompilerNotFound
     from .model import load_model
 
     def progress(message: str) -> None:
         print(message, file=sys.stderr, flush=True)
 
-    try:
-        scene = load_scene(args.scene)
-    except SceneError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+    loaded = scene_and_horizon(args)
+    if loaded is None:
         return 2
-    t_end = args.t_end if args.t_end is not None else DEFAULT_T_END.get(scene.name, 1.0)
+    scene, t_end = loaded
     for name, value in (("--t-end", t_end), ("--time-tol", args.time_tol), ("--state-tol", args.state_tol)):
         if not (math.isfinite(value) and value > 0):
             print(f"error: {name}: must be a finite number > 0, got {value}", file=sys.stderr)

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from codegen.scene import Scene, load_scene
+from codegen.scene import Scene
 
 from .model import CompiledModel, load_model
 
@@ -173,12 +173,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     qd = model.qd0 if qd0 is None else _reduce(layout, qd0, "qd0", velocity=True)
     if overridden:
         _check_inside(model, q, p, "q0" if q0 is not None else "initial.q")
-    if t_eval is None:
-        t_eval = np.unique(np.r_[np.arange(0.0, t_end, 1e-3), t_end])
-    t_eval = np.ascontiguousarray(t_eval, dtype=float)
-    _check(t_eval.ndim == 1 and np.all(np.diff(t_eval) > 0), "t_eval", "must be a strictly increasing 1-D array")
-    _check(len(t_eval) == 0 or (t_eval[0] >= 0 and t_eval[-1] <= t_end), "t_eval",
-           f"must lie within [0, t_end] = [0, {t_end}]")
+    t_eval = sample_times(t_eval, t_end)
 
     opt = ffi.new(f"{name}_options *")
     getattr(lib, f"{name}_default_options")(opt)
@@ -298,6 +293,18 @@ def _reduce(layout, full, name: str, velocity: bool) -> np.ndarray:
             raise ValueError(f"{name}[{index}]: this specialised (planar) model holds it at {target!r}, got "
                              f"{full[index]!r}; load the general model (specialise=False) for other states")
     return np.ascontiguousarray(layout.reduce(full))
+
+
+def sample_times(t_eval, t_end: float) -> np.ndarray:
+    """The sample times of a run: ``t_eval`` checked (strictly increasing, within [0, t_end]), or by
+    default every 1 ms and t_end."""
+    if t_eval is None:
+        t_eval = np.unique(np.r_[np.arange(0.0, t_end, 1e-3), t_end])
+    t_eval = np.ascontiguousarray(t_eval, dtype=float)
+    _check(t_eval.ndim == 1 and np.all(np.diff(t_eval) > 0), "t_eval", "must be a strictly increasing 1-D array")
+    _check(len(t_eval) == 0 or (t_eval[0] >= 0 and t_eval[-1] <= t_end), "t_eval",
+           f"must lie within [0, t_end] = [0, {t_end}]")
+    return t_eval
 
 
 def _check_parameters(model: CompiledModel, p: np.ndarray) -> None:

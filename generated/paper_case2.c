@@ -647,53 +647,137 @@ int paper_case2_impact(const double *PAPER_CASE2_RESTRICT q, const double *PAPER
     return PAPER_CASE2_OK;
 }
 
+/* The linear complementarity problem  0 <= F  _|_  w = A F + q >= 0  for an m x m symmetric positive
+ * (semi)definite A (row-major): F is the impulse of each contact along its inward normal, w its normal
+ * velocity after (or its excess over the law's bound).  Solved exactly by enumerating the sets S of pushing
+ * contacts (A_SS F_S = -q_S, F_S >= 0, w >= 0 elsewhere): first S = {q_a < 0}, then every set, largest
+ * first.  A set whose A_SS is singular is skipped (a solution on independent rows exists).  Round-off
+ * floors: F_S >= -1e-10 max|F_S| (then clipped to 0), w >= -w_tol.  Returns OK or ERR_LCP. */
+static int paper_case2_lcp(int m, const double *A, const double *q, double w_tol, double *F)
+{
+    double Asub[PAPER_CASE2_NQ * PAPER_CASE2_NQ], rhs[PAPER_CASE2_NQ];
+    unsigned long mask, guess = 0UL, full;
+    int a, b, tries;
+    if (m > PAPER_CASE2_MAX_LCP) return PAPER_CASE2_ERR_LCP;
+    full = (1UL << m) - 1UL;
+    for (a = 0; a < m; ++a) {
+        if (q[a] < 0.0) guess |= 1UL << a;
+    }
+    for (tries = 0, mask = full; ; ++tries) {
+        const unsigned long set = tries == 0 ? guess : mask;
+        int idx[PAPER_CASE2_NQ], k = 0, ok = 1;
+        double fmax = 0.0;
+        for (a = 0; a < m; ++a) {
+            if (set & (1UL << a)) idx[k++] = a;
+        }
+        for (a = 0; a < k; ++a) {
+            for (b = 0; b < k; ++b) Asub[a*k + b] = A[idx[a]*m + idx[b]];
+            rhs[a] = -q[idx[a]];
+        }
+        if (k > 0 && paper_case2_ldlt(k, Asub, 1e-12) != 0) ok = 0;
+        if (ok && k > 0) paper_case2_ldlt_solve(k, Asub, rhs);
+        for (a = 0; ok && a < k; ++a) {
+            if (fabs(rhs[a]) > fmax) fmax = fabs(rhs[a]);
+        }
+        for (a = 0; ok && a < k; ++a) {
+            if (rhs[a] < -1e-10 * fmax) ok = 0;
+        }
+        if (ok) {
+            for (a = 0; a < m; ++a) F[a] = 0.0;
+            for (a = 0; a < k; ++a) F[idx[a]] = rhs[a] > 0.0 ? rhs[a] : 0.0;
+            for (a = 0; ok && a < m; ++a) {
+                double w = q[a];
+                if (set & (1UL << a)) continue;
+                for (b = 0; b < m; ++b) w += A[a*m + b] * F[b];
+                if (w < -w_tol) ok = 0;
+            }
+        }
+        if (ok) return PAPER_CASE2_OK;
+        if (tries > 0) {
+            if (mask == 0) break;
+            --mask;
+        }
+    }
+    return PAPER_CASE2_ERR_LCP;
+}
+
+/* The impact law for the contacts list[0..n-1] (at their walls), from the velocities qd, with restitution
+ * e[a] for contact list[a].  Newton's law (Eq. 47) with complementarity, in rounds:
+ *   round: the contacts that approach their wall (v_a < 0) or rest on it (v_a = 0) take part;
+ *          0 <= F  _|_  v+ + e v- >= 0 on them (e = 0 for a resting one), the others untouched;
+ *          then the velocities are updated, v += A F.
+ * until no contact approaches.  A contact separating from its wall takes no impulse unless the impulses
+ * of the others drive it into the wall; then it is struck in the next round by its own law.  One round is
+ * Eq. 47 when every approaching contact pushes.  Each round changes the kinetic energy by
+ *   dT = 1/2 sum_a F_a (v-_a + v+_a) = 1/2 sum_a (1 - e_a) F_a v-_a <= 0   (v-_a <= 0 where F_a > 0),
+ * so no round gains energy and a round with e = 1 keeps it exactly.  After MAX_ROUNDS rounds the
+ * remaining approach is removed by one plastic round over every listed contact (the projection of qd onto
+ * {N qd >= 0} in the mass metric, which cannot gain energy either); *plastic is then 1.
+ * Contact list[first] (first >= 0), the one whose crossing was located, is struck in the first round
+ * whenever it approaches, however slowly.
+ * Returns qd_plus, the total impulses F (>= 0, N s along the inward normals) and the number of rounds. */
+static int paper_case2_impact_rounds(const double *q, const double *qd, const double *p, int n, const int *list,
+                                   const double *e, int first, double *qd_plus, double *F, double *work,
+                                   int *rounds, int *plastic)
+{
+    const int nq = PAPER_CASE2_NQ;
+    double v[PAPER_CASE2_NQ], e_wall[PAPER_CASE2_NQ], scale = 0.0, v_tol;
+    double *Y = work + PAPER_CASE2_NQ * PAPER_CASE2_NQ + PAPER_CASE2_NJROW * PAPER_CASE2_NQ;
+    double *A = Y + PAPER_CASE2_NQ * PAPER_CASE2_NQ;
+    int a, b, i, round, code;
+    *rounds = *plastic = 0;
+    code = paper_case2_impact_system(q, qd, p, n, list, work, v, e_wall);
+    if (code != PAPER_CASE2_OK) return code;
+    for (a = 0; a < n; ++a) {
+        F[a] = 0.0;
+        if (fabs(v[a]) > scale) scale = fabs(v[a]);
+    }
+    v_tol = 1e-11 * scale;                 /* a normal velocity below this is round-off: at rest */
+    for (round = 0; ; ++round) {
+        double Asub[PAPER_CASE2_NQ * PAPER_CASE2_NQ], qsub[PAPER_CASE2_NQ], Fsub[PAPER_CASE2_NQ];
+        int idx[PAPER_CASE2_NQ], k = 0, approaching = 0;
+        const int last = round >= PAPER_CASE2_MAX_ROUNDS;
+        for (a = 0; a < n; ++a) {
+            const int struck = v[a] < -v_tol || (round == 0 && a == first && v[a] < 0.0);
+            if (struck) approaching = 1;
+            if (last || struck || v[a] <= v_tol) {
+                qsub[k] = !last && struck ? (1.0 + e[a]) * v[a] : v[a];
+                idx[k++] = a;
+            }
+        }
+        if (!approaching) break;
+        for (a = 0; a < k; ++a) {
+            for (b = 0; b < k; ++b) Asub[a*k + b] = A[idx[a]*n + idx[b]];
+        }
+        code = paper_case2_lcp(k, Asub, qsub, 1e-10 * scale, Fsub);
+        if (code != PAPER_CASE2_OK) return code;
+        for (a = 0; a < k; ++a) F[idx[a]] += Fsub[a];
+        for (a = 0; a < n; ++a) {
+            for (b = 0; b < k; ++b) v[a] += A[a*n + idx[b]] * Fsub[b];
+        }
+        *rounds = round + 1;
+        if (last) {
+            *plastic = 1;
+            break;
+        }
+    }
+    for (i = 0; i < nq; ++i) {
+        double value = qd[i];
+        for (a = 0; a < n; ++a) value += Y[a*nq + i] * F[a];
+        qd_plus[i] = value;
+    }
+    return PAPER_CASE2_OK;
+}
+
 int paper_case2_impact_complementarity(const double *PAPER_CASE2_RESTRICT q, const double *PAPER_CASE2_RESTRICT qd, const double *PAPER_CASE2_RESTRICT p,
                  int nactive, const int *PAPER_CASE2_RESTRICT active,
                  double *PAPER_CASE2_RESTRICT qd_plus, double *PAPER_CASE2_RESTRICT impulse, double *PAPER_CASE2_RESTRICT work)
 {
-    double v[PAPER_CASE2_NQ], e[PAPER_CASE2_NQ], Asub[PAPER_CASE2_NQ * PAPER_CASE2_NQ], rhs[PAPER_CASE2_NQ];
-    double *Y = work + PAPER_CASE2_NQ * PAPER_CASE2_NQ + PAPER_CASE2_NJROW * PAPER_CASE2_NQ;
-    double *A = Y + PAPER_CASE2_NQ * PAPER_CASE2_NQ;
-    double scale = 0.0;
-    int a, c, code;
-    unsigned long mask, full;
-    code = paper_case2_impact_system(q, qd, p, nactive, active, work, v, e);
+    double v[PAPER_CASE2_NQ], e[PAPER_CASE2_NQ];
+    int rounds, plastic;
+    int code = paper_case2_impact_system(q, qd, p, nactive, active, work, v, e);
     if (code != PAPER_CASE2_OK) return code;
-    if (nactive > PAPER_CASE2_MAX_LCP) return PAPER_CASE2_ERR_LCP;
-    for (a = 0; a < nactive; ++a) {
-        if (fabs(v[a]) > scale) scale = fabs(v[a]);
-    }
-    full = (1UL << nactive) - 1UL;
-    /* Enumerate the sets S of contacts that push (F_S > 0, w_S = 0).  A = N I_f^-1 N^T is positive
-     * (semi)definite, so the complementarity problem has one solution; largest sets are tried first. */
-    for (mask = full; ; --mask) {
-        int idx[PAPER_CASE2_NQ], k = 0, ok = 1;
-        for (a = 0; a < nactive; ++a) {
-            if (mask & (1UL << a)) idx[k++] = a;
-        }
-        for (a = 0; a < k; ++a) {
-            for (c = 0; c < k; ++c) Asub[a*k + c] = A[idx[a]*nactive + idx[c]];
-            rhs[a] = -(1.0 + e[idx[a]]) * v[idx[a]];
-        }
-        if (k > 0 && paper_case2_ldlt(k, Asub, 1e-12) != 0) ok = 0;
-        if (ok && k > 0) paper_case2_ldlt_solve(k, Asub, rhs);
-        for (a = 0; ok && a < nactive; ++a) impulse[a] = 0.0;
-        for (a = 0; ok && a < k; ++a) {
-            if (rhs[a] < -1e-12 * (scale + 1e-300)) ok = 0;
-            impulse[idx[a]] = rhs[a] > 0.0 ? rhs[a] : 0.0;
-        }
-        for (a = 0; ok && a < nactive; ++a) {          /* w = A F + (1 + e) v >= 0 */
-            double w = (1.0 + e[a]) * v[a];
-            for (c = 0; c < nactive; ++c) w += A[a*nactive + c] * impulse[c];
-            if (w < -1e-10 * (scale + 1e-300)) ok = 0;
-        }
-        if (ok) {
-            paper_case2_apply_impulse(qd, nactive, Y, impulse, qd_plus);
-            return PAPER_CASE2_OK;
-        }
-        if (mask == 0) break;
-    }
-    return PAPER_CASE2_ERR_LCP;
+    return paper_case2_impact_rounds(q, qd, p, nactive, active, e, -1, qd_plus, impulse, work, &rounds, &plastic);
 }
 
 void paper_case2_contact_info(int c, int *point, int *axis, int *normal_sign)
@@ -767,6 +851,7 @@ const char *paper_case2_error_message(int code)
     case PAPER_CASE2_ERR_NONFINITE: return "the state became NaN or infinite";
     case PAPER_CASE2_ERR_TOO_MANY_CONTACTS: return "more simultaneous approaching contacts than degrees of freedom";
     case PAPER_CASE2_ERR_SINGULAR_CONTACT: return "the persistent contact constraints are dependent (N I_f^-1 N^T is singular)";
+    case PAPER_CASE2_ERR_IMPACT_ACCURACY: return "the impact law could not be solved to round-off (an impulse < 0, a contact still approaching, an energy gain or an elastic energy change): the impact system is ill-conditioned";
     default: return "unknown error code";
     }
 }
@@ -968,6 +1053,7 @@ int paper_case2_sim_init(paper_case2_sim *s, double t0, const double *q, const d
     s->n_activations = s->n_releases = 0;
     s->pending = s->fail = s->fail_seen = 0;
     s->vn_valid = 0;
+    s->err_index = 0;
     s->rest_height = opt->rest_height < 0.0 ? 10.0 * opt->contact_tol : opt->rest_height;
     {
         double r[3 * PAPER_CASE2_NPOINT], length = 0.0;   /* the chain's length: sum of |O_k+1 - O_k| */
@@ -983,6 +1069,7 @@ int paper_case2_sim_init(paper_case2_sim *s, double t0, const double *q, const d
         s->n_shrink[i] = 0;
         s->t_last[i] = t0;
         s->dt_last[i] = -2.0;                     /* -2: no impact of this contact yet, -1: one */
+        s->gap_held[i] = 0.0;
     }
     if (s->rest_height > 0.0) {
         int code = paper_case2_rest_at_start(s);
@@ -1003,14 +1090,19 @@ void paper_case2_sim_state(const paper_case2_sim *s, double *t, double *q, doubl
 }
 
 /* Weighted RMS norm of d with scale atol + rtol max(|y0|, |y1|). */
-static double paper_case2_norm(const paper_case2_sim *s, const double *d, const double *y0, const double *y1)
+static double paper_case2_norm(paper_case2_sim *s, const double *d, const double *y0, const double *y1)
 {
     int i;
-    double sum = 0.0;
+    double sum = 0.0, largest = -1.0;
     for (i = 0; i < PAPER_CASE2_NX; ++i) {
         double a = fabs(y0[i]), b = fabs(y1[i]);
         double scale = s->opt.atol + s->opt.rtol * (a > b ? a : b);
-        sum += (d[i] / scale) * (d[i] / scale);
+        double r = (d[i] / scale) * (d[i] / scale);
+        sum += r;
+        if (r > largest) {
+            largest = r;
+            s->err_index = i;
+        }
     }
     return sqrt(sum / PAPER_CASE2_NX);
 }
@@ -1093,7 +1185,7 @@ static double paper_case2_dop853_step(paper_case2_sim *s, double h)
 {
     const int nx = PAPER_CASE2_NX;
     double *K[13];
-    double e5 = 0.0, e3 = 0.0;
+    double e5 = 0.0, e3 = 0.0, largest = -1.0;
     int i, j, stage;
     K[0] = s->f;
     for (j = 1; j < 13; ++j) K[j] = s->k[j];
@@ -1121,6 +1213,10 @@ static double paper_case2_dop853_step(paper_case2_sim *s, double h)
         }
         e5 += (err5 / scale) * (err5 / scale);
         e3 += (err3 / scale) * (err3 / scale);
+        if ((err5 / scale) * (err5 / scale) > largest) {
+            largest = (err5 / scale) * (err5 / scale);
+            s->err_index = i;
+        }
     }
     if (e5 == 0.0 && e3 == 0.0) return 0.0;
     return fabs(h) * e5 / sqrt((e5 + 0.01 * e3) * nx);
@@ -1270,20 +1366,26 @@ static double paper_case2_locate_return(paper_case2_sim *s, int c, double t_a, d
     return g_apex > 0.0 ? paper_case2_locate(s, 0, c, t_apex, g_apex, t_b, g_b) : t_apex;
 }
 
+/* The largest |coordinate| of the contact points at state x (m). */
+static double paper_case2_extent(const paper_case2_sim *s, const double *x)
+{
+    double r[3 * PAPER_CASE2_NPOINT], l = 0.0;
+    int i;
+    paper_case2_contact_points(x, s->p, r);
+    for (i = 0; i < 3 * PAPER_CASE2_NPOINT; ++i) {
+        if (fabs(r[i]) > l) l = fabs(r[i]);
+    }
+    return l;
+}
+
 /* Depth (m) below which a gap minimum found between samples is a graze: the integrator's tolerance on
  * a position, atol + rtol l with l the largest |coordinate| of the contact points at state x (positions
  * are integrated to this, so a shallower dip cannot be told from a tangential touch); 0 for RK4, which has
  * no tolerance. */
 static double paper_case2_graze_depth(const paper_case2_sim *s, const double *x)
 {
-    double r[3 * PAPER_CASE2_NPOINT], l = 0.0;
-    int i;
     if (s->opt.method == PAPER_CASE2_METHOD_RK4) return 0.0;
-    paper_case2_contact_points(x, s->p, r);
-    for (i = 0; i < 3 * PAPER_CASE2_NPOINT; ++i) {
-        if (fabs(r[i]) > l) l = fabs(r[i]);
-    }
-    return s->opt.atol + s->opt.rtol * l;
+    return s->opt.atol + s->opt.rtol * paper_case2_extent(s, x);
 }
 
 /* A dip of contact c through its wall and back between two samples t_a < t_b at which its gap is > 0
@@ -1496,30 +1598,49 @@ static int paper_case2_add_independent(paper_case2_sim *s, const double *x, int 
 
 /* Project the state x onto the contacts set[0..n-1] held at their walls: the gaps to 0 by Newton steps
  * dq = -Y (N Y)^-1 g (Y = I_f^-1 N^T, the smallest correction in the mass metric), then the normal
- * velocities to 0, qd -= Y (N Y)^-1 N qd: a plastic impact, so the kinetic energy cannot grow.  mu (if
- * not NULL) receives the impulses of the velocity projection (N s, along the inward normals). */
+ * velocities to 0, qd -= Y (N Y)^-1 N qd: a plastic impact, so the kinetic energy cannot grow.  Each gap
+ * goes to s->gap_held (its gap when it landed, within contact_tol: moving the configuration also moves the
+ * kinetic energy, so nothing is moved that the tolerance does not ask for).  A contact outside the set that the position correction would push through its wall is held at its wall during
+ * the correction (the projection onto gap_set = 0, gap_other >= 0 by an active set).  mu (if not NULL)
+ * receives the impulses of the velocity projection (N s, along the inward normals). */
 static int paper_case2_project(paper_case2_sim *s, double *x, int n, const int *set, double *mu)
 {
     const int nq = PAPER_CASE2_NQ;
+    const double floor = 1e-6 * s->opt.contact_tol + 1e-15;
     double v[PAPER_CASE2_NQ], e[PAPER_CASE2_NQ], g[PAPER_CASE2_NCONTACT1] = {0.0}, corr[PAPER_CASE2_NQ];
     double *Y = s->work + PAPER_CASE2_NQ * PAPER_CASE2_NQ + PAPER_CASE2_NJROW * PAPER_CASE2_NQ;
     double *A = Y + PAPER_CASE2_NQ * PAPER_CASE2_NQ;
-    int a, i, it, code;
+    int held[PAPER_CASE2_NQ], in_set[PAPER_CASE2_NCONTACT1], a, c, i, it, code, m = n;
     if (n == 0) return PAPER_CASE2_OK;
-    for (it = 0; it < 4; ++it) {
+    for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) in_set[c] = 0;
+    for (a = 0; a < n; ++a) {
+        held[a] = set[a];
+        in_set[set[a]] = 1;
+    }
+    for (it = 0; it < 4 + PAPER_CASE2_NCONTACT; ++it) {
         double gmax = 0.0;
+        int added = 0;
         paper_case2_contact_gaps(x, s->p, g);
-        for (a = 0; a < n; ++a) {
-            if (fabs(g[set[a]]) > gmax) gmax = fabs(g[set[a]]);
+        for (c = 0; c < PAPER_CASE2_NCONTACT && it > 0; ++c) {      /* pushed through its wall: hold it */
+            if (!in_set[c] && g[c] < -floor && m < nq) {
+                in_set[c] = 1;
+                held[m++] = c;
+                added = 1;
+            }
         }
-        if (gmax <= 1e-6 * s->opt.contact_tol + 1e-15) break;
-        code = paper_case2_impact_system(x, x + nq, s->p, n, set, s->work, v, e);
+        for (a = 0; a < m; ++a) {
+            g[held[a]] -= a < n ? s->gap_held[held[a]] : 0.0;
+            if (fabs(g[held[a]]) > gmax) gmax = fabs(g[held[a]]);
+        }
+        if (gmax <= floor && !added) break;
+        if (it >= 4 && !added) break;
+        code = paper_case2_impact_system(x, x + nq, s->p, m, held, s->work, v, e);
         if (code != PAPER_CASE2_OK) return code;
-        if (paper_case2_ldlt_drop(n, A, 1e-12) < 0) return PAPER_CASE2_ERR_SINGULAR_CONTACT;
-        for (a = 0; a < n; ++a) corr[a] = -g[set[a]];
-        paper_case2_ldlt_solve(n, A, corr);
+        if (paper_case2_ldlt_drop(m, A, 1e-12) < 0) return PAPER_CASE2_ERR_SINGULAR_CONTACT;
+        for (a = 0; a < m; ++a) corr[a] = -g[held[a]];
+        paper_case2_ldlt_solve(m, A, corr);
         for (i = 0; i < nq; ++i) {
-            for (a = 0; a < n; ++a) x[i] += Y[a*nq + i] * corr[a];
+            for (a = 0; a < m; ++a) x[i] += Y[a*nq + i] * corr[a];
         }
     }
     code = paper_case2_impact_system(x, x + nq, s->p, n, set, s->work, v, e);
@@ -1639,6 +1760,7 @@ static int paper_case2_rest_at_start(paper_case2_sim *s)
         }
     }
     if (n == 0) return PAPER_CASE2_OK;
+    for (c = 0; c < n; ++c) s->gap_held[set[c]] = gaps[set[c]] > 0.0 ? gaps[set[c]] : 0.0;
     code = paper_case2_project(s, s->x, n, set, 0);
     if (code == PAPER_CASE2_OK) code = paper_case2_settle(s, s->x, &n, set);
     if (code != PAPER_CASE2_OK) return code;
@@ -1648,205 +1770,230 @@ static int paper_case2_rest_at_start(paper_case2_sim *s)
     return PAPER_CASE2_OK;
 }
 
-/* The impact with the contacts list[0..nbil-1] held (bilateral: post-impact normal velocity 0, impulse of
- * either sign, the plastic impact of the resting contacts) and list[nbil..n-1] by the complementarity form
- * of Eq. 48 (impulse >= 0, v+ >= -e v-, complementary), from the velocities x[NQ..]; qd_plus and the
- * impulses F (list order, along the inward normals).  Exact: the pushing sets are enumerated. */
-static int paper_case2_mixed_impact(paper_case2_sim *s, const double *x, int n, const int *list, int nbil,
-                                  double *qd_plus, double *F)
+/* The round-off bound of the impact law on the energy, relative: max(1e-10, 64 eps sqrt(kappa)), kappa the
+ * 2-norm condition number of I_f, estimated by 8 power iterations on I_f and on I_f^-1 with its LDL^T
+ * factor (work as left by _impact_system).  The kinetic energy after an impact carries the backward error
+ * of the solve, eps |I_f| |qd| |I_f^-1 N^T F|, which relative to T grows like eps sqrt(kappa) (a slender
+ * link with a tiny axial inertia, a state near the gimbal lock). */
+static double paper_case2_impact_roundoff(const double *work)
 {
-    const int nq = PAPER_CASE2_NQ, m = n - nbil;
-    double v[PAPER_CASE2_NQ], e[PAPER_CASE2_NQ], Asub[PAPER_CASE2_NQ * PAPER_CASE2_NQ], rhs[PAPER_CASE2_NQ], scale = 0.0;
-    double *Y = s->work + PAPER_CASE2_NQ * PAPER_CASE2_NQ + PAPER_CASE2_NJROW * PAPER_CASE2_NQ;
-    double *A = Y + PAPER_CASE2_NQ * PAPER_CASE2_NQ;
-    int a, b, i, code;
-    unsigned long mask, full;
-    code = paper_case2_impact_system(x, x + nq, s->p, n, list, s->work, v, e);
-    if (code != PAPER_CASE2_OK) return code;
-    if (m > PAPER_CASE2_MAX_LCP) return PAPER_CASE2_ERR_LCP;
-    for (a = 0; a < nbil; ++a) e[a] = 0.0;
-    for (a = 0; a < n; ++a) {
-        if (fabs(v[a]) > scale) scale = fabs(v[a]);
-    }
-    full = (1UL << m) - 1UL;
-    for (mask = full; ; --mask) {
-        int idx[PAPER_CASE2_NQ], k = 0, ok = 1;
-        for (a = 0; a < nbil; ++a) idx[k++] = a;
-        for (a = 0; a < m; ++a) {
-            if (mask & (1UL << a)) idx[k++] = nbil + a;
-        }
-        for (a = 0; a < k; ++a) {
-            for (b = 0; b < k; ++b) Asub[a*k + b] = A[idx[a]*n + idx[b]];
-            rhs[a] = -(1.0 + e[idx[a]]) * v[idx[a]];
-        }
-        if (k > 0 && paper_case2_ldlt(k, Asub, 1e-12) != 0) ok = 0;
-        if (ok && k > 0) paper_case2_ldlt_solve(k, Asub, rhs);
-        for (a = 0; ok && a < n; ++a) F[a] = 0.0;
-        for (a = 0; ok && a < k; ++a) {
-            if (idx[a] >= nbil && rhs[a] < -1e-12 * (scale + 1e-300)) ok = 0;
-            F[idx[a]] = idx[a] >= nbil && rhs[a] < 0.0 ? 0.0 : rhs[a];
-        }
-        for (a = nbil; ok && a < n; ++a) {             /* w = A F + (1 + e) v >= 0 */
-            double w = (1.0 + e[a]) * v[a];
-            for (b = 0; b < n; ++b) w += A[a*n + b] * F[b];
-            if (w < -1e-10 * (scale + 1e-300)) ok = 0;
-        }
-        if (ok) {
-            for (i = 0; i < nq; ++i) {
-                double value = x[nq + i];
-                for (a = 0; a < n; ++a) value += Y[a*nq + i] * F[a];
-                qd_plus[i] = value;
+    const int nq = PAPER_CASE2_NQ;
+    double x[PAPER_CASE2_NQ], y[PAPER_CASE2_NQ], norm_M = 0.0, norm_inv = 0.0, b;
+    int i, k, it, inverse;
+    for (inverse = 0; inverse < 2; ++inverse) {
+        double norm = 0.0;
+        for (i = 0; i < nq; ++i) x[i] = 1.0 + 0.1 * i * (i % 2 ? -1.0 : 1.0);   /* a fixed, generic start */
+        for (it = 0; it < 8; ++it) {
+            double sum = 0.0;
+            for (i = 0; i < nq; ++i) sum += x[i] * x[i];
+            sum = sqrt(sum);
+            if (!(sum > 0.0)) break;
+            for (i = 0; i < nq; ++i) y[i] = x[i] / sum;
+            if (inverse) {
+                paper_case2_ldlt_solve(nq, work, y);
+            } else {                                            /* y = L D L^T y */
+                for (i = 0; i < nq; ++i) {
+                    for (k = i + 1; k < nq; ++k) y[i] += work[k*nq + i] * y[k];
+                }
+                for (i = 0; i < nq; ++i) y[i] *= work[i*nq + i];
+                for (i = nq - 1; i >= 0; --i) {
+                    for (k = 0; k < i; ++k) y[i] += work[i*nq + k] * y[k];
+                }
             }
-            return PAPER_CASE2_OK;
+            norm = 0.0;
+            for (i = 0; i < nq; ++i) {
+                norm += y[i] * y[i];
+                x[i] = y[i];
+            }
+            norm = sqrt(norm);
         }
-        if (mask == 0) break;
+        if (inverse) norm_inv = norm; else norm_M = norm;
     }
-    return PAPER_CASE2_ERR_LCP;
+    b = 64.0 * PAPER_CASE2_EPS * sqrt(norm_M * norm_inv);
+    return b > 1e-10 ? b : 1e-10;
 }
 
-/* Resolve the impact at state s->xs (time t): every contact within contact_tol of its wall that
- * approaches it takes part; Eq. 48 (equality form) first, the complementarity form if a contact would
- * pull.  Contacts at their wall that approach after the impact (persistent ones included) are added and
- * the impact solved again.  Then the persistent set is updated: a persistent contact that the impact
- * lifts off is released; a contact of a wall with e < 1 whose bounce would rise less than rest_height
- * (v+^2 <= 2 a rest_height, a = its normal acceleration towards the wall with the other persistent
- * contacts held), or that has had zeno_impacts impacts at shrinking intervals, becomes persistent (its
- * normal velocity projected to 0); only contacts that push are kept.  The state after the impact is in
- * s->x1.  Returns 1 (impact applied), 0 (grazing touch, nothing to do) or an error. */
+/* Gap (m) within which an approaching contact joins an impact located on another contact: contact_tol, or
+ * for the adaptive methods 100 times their position tolerance (atol + rtol l, l the largest |coordinate|
+ * of the contact points) if larger.  Impacts that the exact motion makes simultaneous (a symmetric pair)
+ * arrive split by the integration error, which accumulates over the steps to about this much. */
+static double paper_case2_simultaneity_window(const paper_case2_sim *s, const double *x)
+{
+    const double w = 100.0 * paper_case2_graze_depth(s, x);
+    return w > s->opt.contact_tol ? w : s->opt.contact_tol;
+}
+
+/* Resolve the impact at state s->xs (time t).
+ * Who takes part: every contact within contact_tol of its wall (c_event whatever its gap), every
+ * approaching contact within the simultaneity window, and every persistent contact, approaching ones
+ * first (at most NQ).  It is an impact when a contact that is not
+ * persistent approaches its wall there faster than V_FLOOR (or c_event came back to it at its apex) and
+ * either an impulse is applied or the persistent set changes; else a graze (returns 0).
+ * The law: _impact_rounds (Newton's law, Eq. 47, with complementarity, in rounds until no contact
+ * approaches; a contact that rests or separates takes an impulse only when the others drive it into its
+ * wall).
+ * Resting contact: a contact that approaches a wall with e < 1 and whose bounce would rise less than h
+ * ((e v-)^2 <= 2 a h, a = its normal acceleration towards the wall with the persistent contacts held;
+ * h = rest_height, but never below the resolution of the positions, graze_depth + 16 eps l, unless both
+ * rules are off), or that has had zeno_impacts impacts at shrinking intervals, lands: it is
+ * struck with e = 0 (a plastic impact: F >= 0, no pull); r->energy_rest is the kinetic energy the landings
+ * take (the law with every contact's own e minus the law with the landings plastic).  On a wall with e = 1
+ * a contact lands only if it arrives at rest: v-^2 <= 2 a h and its landing takes no more than
+ * the round-off bound of the energy, so that an elastic chain keeps its energy.  Persistent contacts take part with e = 0.  Landing and
+ * persistent contacts that end at rest (normal velocity below round-off) form the new persistent set
+ * (independent rows only, positions projected onto the walls, only those that push kept); a persistent
+ * contact the impact lifts off is released.
+ * Post-conditions, checked here (ERR_IMPACT_ACCURACY if one fails), to the law's round-off bound b
+ * (_impact_roundoff, 1e-10 for a well-conditioned I_f): every impulse >= 0; no contact within contact_tol
+ * of its wall approaches it faster than 10 b max|v-| + 1e-15 m/s; the kinetic energy does not grow by
+ * more than b T and, when every contact that takes an impulse has e = 1 (persistent ones aside), changes
+ * by at most b T.  The state after the impact is in s->x1.  Returns 1 (impact applied), 0 (graze) or an
+ * error. */
 static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_case2_impact_record *r)
 {
     const int nq = PAPER_CASE2_NQ;
-    double gaps[PAPER_CASE2_NCONTACT1], vn[PAPER_CASE2_NCONTACT1], vn0[PAPER_CASE2_NCONTACT1], an[PAPER_CASE2_NCONTACT1];
-    double qd_plus[PAPER_CASE2_NQ], F[PAPER_CASE2_NQ], scale = 0.0;
-    int in_set[PAPER_CASE2_NCONTACT1], shrinking[PAPER_CASE2_NCONTACT1], set[PAPER_CASE2_NQ], list[PAPER_CASE2_NQ];
-    int c, i, k, round, code, nset = 0, nlist = 0;
+    double gaps[PAPER_CASE2_NCONTACT1], vn[PAPER_CASE2_NCONTACT1], an[PAPER_CASE2_NCONTACT1];
+    double e[PAPER_CASE2_NQ], e_law[PAPER_CASE2_NQ], qd_plus[PAPER_CASE2_NQ], F[PAPER_CASE2_NQ], E[2];
+    double scale = 0.0, v_hold, approach_tol, T_before, T_after, T_law, bound, height = 0.0, window;
+    int list[PAPER_CASE2_NQ], landing[PAPER_CASE2_NQ], shrinking[PAPER_CASE2_NCONTACT1], set[PAPER_CASE2_NQ];
+    int c, i, k, pass, n = 0, nset = 0, impact = 0, elastic = 1, changed = 0, first = -1, code, rounds, plastic;
     double *x = s->xs;
     paper_case2_contact_gaps(x, s->p, gaps);
     paper_case2_normal_velocities(x, s->p, vn);
     r->ncontact = 0;
     r->nactivated = r->nreleased = 0;
+    r->rounds = r->plastic = 0;
+    r->energy_rest = 0.0;
+    r->roundoff = 1e-10;
     for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {
-        vn0[c] = vn[c];
-        in_set[c] = !s->is_active[c] && (((c == c_event || gaps[c] <= s->opt.contact_tol) && vn[c] < 0.0)
-                    || (c == c_event && gaps[c] <= 0.0 && vn[c] <= 0.0));     /* came back at the apex */
-        if (in_set[c]) {
-            if (r->ncontact == nq) return PAPER_CASE2_ERR_TOO_MANY_CONTACTS;
-            r->contact[r->ncontact++] = c;
-        }
         if (fabs(vn[c]) > scale) scale = fabs(vn[c]);
+        if (!s->is_active[c] && (((c == c_event || gaps[c] <= s->opt.contact_tol) && vn[c] < -PAPER_CASE2_V_FLOOR)
+                                 || (c == c_event && gaps[c] <= 0.0 && vn[c] <= 0.0)))   /* back at the apex */
+            impact = 1;
     }
-    if (r->ncontact == 0) return 0;                      /* grazing touch: nothing to resolve */
+    if (!impact) return 0;                               /* grazing touch: nothing to resolve */
+    window = paper_case2_simultaneity_window(s, x);
+    for (pass = 0; pass < 3; ++pass) {                   /* approaching, then at rest, then separating */
+        for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {
+            const int near = s->is_active[c] || c == c_event || gaps[c] <= s->opt.contact_tol
+                             || (vn[c] < -PAPER_CASE2_V_FLOOR && gaps[c] <= window);
+            const int kind = vn[c] < 0.0 ? 0 : vn[c] == 0.0 ? 1 : 2;
+            if (!near || kind != pass) continue;
+            if (n == nq) {
+                if (pass == 0) return PAPER_CASE2_ERR_TOO_MANY_CONTACTS;
+                continue;                                /* resting or leaving: the others hold it */
+            }
+            if (c == c_event) first = n;
+            list[n++] = c;
+        }
+    }
     r->t = t;
-    r->energy_before = paper_case2_total_energy(x, s->p);
+    paper_case2_energy(x, x + nq, s->p, E);
+    T_before = E[0];
+    r->energy_before = E[0] + E[1];
     for (i = 0; i < nq; ++i) {
         r->q[i] = x[i];
         r->qd_before[i] = x[nq + i];
     }
-    for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {          /* impacts of c at shrinking intervals */
-        shrinking[c] = s->dt_last[c] >= 0.0 && t - s->t_last[c] < s->dt_last[c];
+    /* who lands */
+    for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {
+        an[c] = 0.0;
+        shrinking[c] = s->dt_last[c] >= 0.0 && t - s->t_last[c] <= s->dt_last[c];   /* impacts of c at shrinking intervals */
     }
-    for (round = 0; round <= PAPER_CASE2_NCONTACT; ++round) {
-        int pulls = 0, added = 0;
-        r->complementarity = 0;
-        code = paper_case2_impact(x, x + nq, s->p, r->ncontact, r->contact, qd_plus, r->impulse, s->work);
-        if (code == PAPER_CASE2_OK) {
-            for (i = 0; i < r->ncontact; ++i) pulls |= r->impulse[i] < 0.0;
-        }
-        if (code == PAPER_CASE2_ERR_SINGULAR_IMPACT || (code == PAPER_CASE2_OK && pulls)) {
-            r->complementarity = 1;
-            code = paper_case2_impact_complementarity(x, x + nq, s->p, r->ncontact, r->contact, qd_plus,
-                                                    r->impulse, s->work);
-        }
+    if (s->rest_height > 0.0 || s->opt.zeno_impacts > 0) {
+        const double floor = paper_case2_graze_depth(s, x) + 16.0 * PAPER_CASE2_EPS * paper_case2_extent(s, x);
+        height = s->rest_height > floor ? s->rest_height : floor;
+        code = paper_case2_normal_accelerations(s, x, s->nactive, s->active, an);
         if (code != PAPER_CASE2_OK) return code;
-        for (i = 0; i < nq; ++i) s->x1[i] = x[i];
-        for (i = 0; i < nq; ++i) s->x1[nq + i] = qd_plus[i];
-        paper_case2_normal_velocities(s->x1, s->p, vn);
-        for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {        /* a contact at its wall that now approaches */
-            if (!in_set[c] && gaps[c] <= s->opt.contact_tol && vn[c] < -1e-12 * scale) {
-                if (r->ncontact == nq) return PAPER_CASE2_ERR_TOO_MANY_CONTACTS;
-                in_set[c] = 1;
-                r->contact[r->ncontact++] = c;
-                added = 1;
-            }
-        }
-        if (added) continue;
-        /* the persistent set: persistent contacts the impact left at rest (a bounce lower than rest_height
-         * with their free-flight acceleration), then the new contacts at rest */
-        code = paper_case2_normal_accelerations(s, s->x1, 0, 0, an);
-        if (code != PAPER_CASE2_OK) return code;
-        nset = 0;
-        for (k = 0; k < s->nactive; ++k) {
-            c = s->active[k];
-            if (vn[c] <= 1e-6 * scale || vn[c] * vn[c] <= 2.0 * fabs(an[c]) * s->rest_height) {
-                code = paper_case2_add_independent(s, s->x1, &nset, set, c);
-                if (code != PAPER_CASE2_OK) return code;
-            }
-        }
-        if (s->rest_height > 0.0 || s->opt.zeno_impacts > 0) {
-            int nkept = nset;
-            code = paper_case2_normal_accelerations(s, s->x1, nkept, set, an);
-            if (code != PAPER_CASE2_OK) return code;
-            for (k = 0; k < r->ncontact; ++k) {
-                double v, reach;
-                int rests, zeno;
-                c = r->contact[k];
-                if (s->is_active[c]) continue;
-                reach = 2.0 * (-an[c]) * s->rest_height;   /* v^2 of a bounce that rises rest_height */
-                v = vn[c] > 0.0 ? vn[c] : 0.0;
-                rests = an[c] < 0.0 && v * v <= reach;
-                /* e = 1 keeps every bounce; only a contact that arrived at rest already is held */
-                if (!(paper_case2_restitution(s->p, c) < 1.0) && !(rests && vn0[c] * vn0[c] <= reach)) continue;
-                zeno = s->opt.zeno_impacts > 0 && s->n_shrink[c] + shrinking[c] >= s->opt.zeno_impacts
-                       && shrinking[c];
-                if (rests || zeno) {
-                    code = paper_case2_add_independent(s, s->x1, &nset, set, c);
-                    if (code != PAPER_CASE2_OK) return code;
-                }
-            }
-        }
-        /* the impact again from qd-: the resting set held (post-impact normal velocity 0, a plastic impact
-         * that may pull a bounce below rest_height back), the other contacts of the impact unilateral */
-        nlist = 0;
-        for (k = 0; k < nset; ++k) list[nlist++] = set[k];
-        for (k = 0; k < r->ncontact; ++k) {
-            int held = 0;
-            for (i = 0; i < nset; ++i) held |= set[i] == r->contact[k];
-            if (held) continue;
-            code = paper_case2_add_independent(s, x, &nlist, list, r->contact[k]);
-            if (code != PAPER_CASE2_OK) return code;
-        }
-        if (nset > 0) {
-            code = paper_case2_mixed_impact(s, x, nlist, list, nset, qd_plus, F);
-            if (code != PAPER_CASE2_OK) return code;
-            for (i = 0; i < nq; ++i) s->x1[nq + i] = qd_plus[i];
-            paper_case2_normal_velocities(s->x1, s->p, vn);
-            for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {    /* then a contact at its wall may approach */
-                if (!in_set[c] && gaps[c] <= s->opt.contact_tol && vn[c] < -1e-12 * scale) {
-                    int listed = 0;
-                    for (k = 0; k < nlist; ++k) listed |= list[k] == c;
-                    if (listed) continue;
-                    if (r->ncontact == nq) return PAPER_CASE2_ERR_TOO_MANY_CONTACTS;
-                    in_set[c] = 1;
-                    r->contact[r->ncontact++] = c;
-                    added = 1;
-                }
-            }
-        }
-        if (!added) break;
     }
-    if (nset > 0) {                   /* the record: impulses of the final solve, resting contacts included */
-        for (k = 0; k < nlist; ++k) {
-            for (i = 0; i < r->ncontact && r->contact[i] != list[k]; ++i) {}
-            if (i == r->ncontact) {
-                if (r->ncontact == nq) continue;
-                r->contact[r->ncontact++] = list[k];
+    for (k = 0; k < n; ++k) {
+        c = list[k];
+        e_law[k] = e[k] = paper_case2_restitution(s->p, c);
+        landing[k] = s->is_active[c];
+        if (s->is_active[c]) {
+            e[k] = 0.0;
+        } else if (vn[c] <= 0.0 && gaps[c] <= s->opt.contact_tol) {
+            const double reach = 2.0 * (-an[c]) * height;   /* v^2 of a bounce that rises that high */
+            const double bounce = e_law[k] < 1.0 ? e_law[k] * vn[c] : vn[c];   /* e = 1: arrived at rest */
+            const int rests = an[c] < 0.0 && bounce * bounce <= reach;
+            const int zeno = e_law[k] < 1.0 && s->opt.zeno_impacts > 0 && shrinking[c]
+                             && s->n_shrink[c] + 1 >= s->opt.zeno_impacts;
+            if (rests || zeno) {
+                landing[k] = 1;
+                e[k] = 0.0;
             }
-            r->impulse[i] = F[k];
         }
-        code = paper_case2_project(s, s->x1, nset, set, 0);      /* positions onto the walls */
+    }
+    /* the law with every contact's own e, then (if some contact lands) with the landings plastic; a landing
+     * on a wall with e = 1 is kept only if it takes no more than round-off energy (it arrived at rest) */
+    code = paper_case2_impact_rounds(x, x + nq, s->p, n, list, e_law, first, qd_plus, F, s->work, &rounds,
+                                   &plastic);
+    if (code != PAPER_CASE2_OK) return code;
+    bound = r->roundoff = paper_case2_impact_roundoff(s->work);
+    paper_case2_energy(x, qd_plus, s->p, E);
+    T_law = E[0];
+    for (k = 0; k < n; ++k) changed |= e[k] != e_law[k];
+    for (pass = 0; changed && pass < 2; ++pass) {
+        int elastic_landing = 0;
+        code = paper_case2_impact_rounds(x, x + nq, s->p, n, list, e, first, qd_plus, F, s->work, &rounds,
+                                       &plastic);
+        if (code != PAPER_CASE2_OK) return code;
+        paper_case2_energy(x, qd_plus, s->p, E);
+        for (k = 0; k < n; ++k) {
+            if (landing[k] && !s->is_active[list[k]] && e_law[k] == 1.0 && T_law - E[0] > bound * T_before) {
+                landing[k] = 0;
+                e[k] = 1.0;
+                elastic_landing = 1;
+            }
+        }
+        if (!elastic_landing) break;
+    }
+    r->rounds = rounds;
+    r->plastic = plastic;
+    for (i = 0; i < nq; ++i) {
+        s->x1[i] = x[i];
+        s->x1[nq + i] = qd_plus[i];
+    }
+    paper_case2_energy(s->x1, s->x1 + nq, s->p, E);
+    T_after = E[0];
+    r->energy_rest = T_law - T_after;
+    /* the record: the contacts that approached or took an impulse */
+    r->complementarity = rounds > 1;
+    for (k = 0; k < n; ++k) {
+        c = list[k];
+        if (F[k] > 0.0 || (!s->is_active[c] && vn[c] < 0.0)) {
+            r->contact[r->ncontact] = c;
+            r->impulse[r->ncontact++] = F[k];
+            if (!(F[k] > 0.0) || !(vn[c] < 0.0)) r->complementarity = 1;
+            if (F[k] > 0.0 && !s->is_active[c] && e[k] != 1.0) elastic = 0;
+        }
+        if (F[k] < 0.0) return PAPER_CASE2_ERR_IMPACT_ACCURACY;
+    }
+    /* post-conditions of the law (kinetic energy at the impact configuration), to its round-off bound */
+    if (T_after > T_before * (1.0 + bound) + 1e-300) return PAPER_CASE2_ERR_IMPACT_ACCURACY;
+    if (elastic && !plastic && fabs(T_after - T_before) > bound * T_before) return PAPER_CASE2_ERR_IMPACT_ACCURACY;
+    /* the persistent set: landing and persistent contacts that end at rest */
+    paper_case2_normal_velocities(s->x1, s->p, vn);
+    v_hold = 1e-9 * scale;
+    for (k = 0; k < n; ++k) {
+        if (landing[k] && vn[list[k]] <= v_hold) {
+            code = paper_case2_add_independent(s, s->x1, &nset, set, list[k]);
+            if (code != PAPER_CASE2_OK) return code;
+        }
+    }
+    if (nset > 0) {
+        for (k = 0; k < nset; ++k) {                   /* a landing contact is held at its gap (>= 0) */
+            if (!s->is_active[set[k]]) s->gap_held[set[k]] = gaps[set[k]] > 0.0 ? gaps[set[k]] : 0.0;
+        }
+        code = paper_case2_project(s, s->x1, nset, set, 0);      /* onto the walls */
         if (code == PAPER_CASE2_OK) code = paper_case2_settle(s, s->x1, &nset, set);
         if (code != PAPER_CASE2_OK) return code;
         paper_case2_normal_velocities(s->x1, s->p, vn);
+    }
+    if (rounds == 0) {                               /* no impulse: an impact only if a contact lands */
+        int same = nset == s->nactive;
+        for (k = 0; same && k < nset; ++k) same = s->is_active[set[k]];
+        if (same) return 0;
     }
     for (i = 0; i < nq; ++i) r->qd_after[i] = s->x1[nq + i];
     r->energy_after = paper_case2_total_energy(s->x1, s->p);
@@ -1855,6 +2002,8 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
         if (gaps[c] <= s->opt.contact_tol && -vn[c] > r->approach_after) r->approach_after = -vn[c];
     }
     r->approach_before = scale;
+    approach_tol = 10.0 * bound * scale + 1e-15;
+    if (r->approach_after > approach_tol) return PAPER_CASE2_ERR_IMPACT_ACCURACY;
     for (k = 0; k < r->ncontact; ++k) {                    /* impact history of each new contact */
         c = r->contact[k];
         if (s->is_active[c]) continue;

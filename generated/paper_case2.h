@@ -101,6 +101,7 @@
 #define PAPER_CASE2_ERR_SINGULAR_IMPACT -3   /* active contact rows linearly dependent */
 #define PAPER_CASE2_ERR_LCP             -4   /* complementarity impact has no solution / too many contacts */
 #define PAPER_CASE2_MAX_LCP             (PAPER_CASE2_NQ < 16 ? PAPER_CASE2_NQ : 16)   /* contacts the complementarity solve takes */
+#define PAPER_CASE2_MAX_ROUNDS          256  /* rounds of the impact law before its plastic closing round */
 
 #ifdef __cplusplus
 extern "C" {
@@ -178,9 +179,17 @@ int paper_case2_impact(const double *PAPER_CASE2_RESTRICT q, const double *PAPER
                  int nactive, const int *PAPER_CASE2_RESTRICT active,
                  double *PAPER_CASE2_RESTRICT qd_plus, double *PAPER_CASE2_RESTRICT impulse, double *PAPER_CASE2_RESTRICT work);
 
-/* The complementarity form of the impact law: impulses F >= 0, post-impact normal velocities
- * v+ >= -e v-, F_i (v+_i + e_i v-_i) = 0 (no contact pulls).  Same arguments as _impact; at most
- * MAX_LCP active contacts (solved exactly by enumerating the pushing sets). */
+/* The impact law with complementarity, for contacts at their walls that may approach, rest or separate:
+ * impulses F >= 0 (no contact pulls), no contact approaches its wall afterwards, and the kinetic energy
+ * never grows (it is kept exactly when every contact that takes an impulse has e = 1).  Solved in rounds:
+ * in each, the contacts that approach (v < 0) or rest (v = 0) take part with
+ *     0 <= F  _|_  v+ + e v- >= 0         (Newton's law, Eq. 47, with complementarity; e = 0 at rest),
+ * until none approaches; a separating contact takes no impulse unless the others drive it into its wall,
+ * and is then struck by its own law in the next round.  When every approaching contact pushes, one round
+ * is Eq. 47 exactly (same result as _impact).  After MAX_ROUNDS rounds a plastic round over all contacts
+ * ends the sequence.  impulse[k]: total impulse of contact active[k] (N s, >= 0).  Same arguments as
+ * _impact; at most MAX_LCP contacts take part in one round (solved exactly by enumerating the pushing
+ * sets). */
 int paper_case2_impact_complementarity(const double *PAPER_CASE2_RESTRICT q, const double *PAPER_CASE2_RESTRICT qd, const double *PAPER_CASE2_RESTRICT p,
                  int nactive, const int *PAPER_CASE2_RESTRICT active,
                  double *PAPER_CASE2_RESTRICT qd_plus, double *PAPER_CASE2_RESTRICT impulse, double *PAPER_CASE2_RESTRICT work);
@@ -250,6 +259,8 @@ const char *paper_case2_error_message(int code);
 #define PAPER_CASE2_ERR_NONFINITE   -13   /* the state became NaN or infinite */
 #define PAPER_CASE2_ERR_TOO_MANY_CONTACTS -14 /* more approaching contacts at once than NQ */
 #define PAPER_CASE2_ERR_SINGULAR_CONTACT -15  /* the persistent contact constraints are dependent */
+#define PAPER_CASE2_ERR_IMPACT_ACCURACY -16  /* an impact failed its post-conditions (F >= 0, no approach, no energy
+                                              gain, e = 1 energy kept) beyond round-off: ill-conditioned */
 
 #define PAPER_CASE2_NCONTACT1 (PAPER_CASE2_NCONTACT > 0 ? PAPER_CASE2_NCONTACT : 1)
 
@@ -277,7 +288,15 @@ typedef struct {
     double energy_before, energy_after;      /* T + V (J) */
     double q[PAPER_CASE2_NQ];                 /* configuration at impact */
     double qd_before[PAPER_CASE2_NQ], qd_after[PAPER_CASE2_NQ];
-    int complementarity;                     /* 1 if the complementarity form was needed */
+    int complementarity;                     /* 1 if the result is not Eq. 47 over the approaching contacts
+                                                (a contact took no impulse, or more than one round) */
+    int rounds;                              /* rounds of the impact law (1 for Eq. 47 with complementarity) */
+    int plastic;                             /* 1 if MAX_ROUNDS rounds ended in a plastic round */
+    double energy_rest;                      /* kinetic energy (J) the landings took: the law with each landing
+                                                contact's own e minus the law with e = 0 (dropped bounces that
+                                                would rise less than rest_height) */
+    double roundoff;                         /* the law's relative round-off bound on the energy (>= 1e-10), the
+                                                tolerance of its post-conditions (grows with cond(I_f)) */
     double approach_before;                  /* largest |normal velocity| of any contact before (m/s) */
     double approach_after;                   /* fastest approach of a contact within contact_tol after (m/s) */
     int nactivated, activated[PAPER_CASE2_NQ];     /* contacts made persistent at this event */
@@ -293,6 +312,8 @@ typedef struct {
     int nactive;                              /* persistent contacts: their indices active[0..nactive-1] */
     int active[PAPER_CASE2_NQ];
     long n_activations, n_releases;
+    int err_index;                            /* state component (0..NX-1) that dominated the error estimate of
+                                                 the last adaptive step: what limits the step size */
     /* integrator state and scratch (private) */
     double h;
     int f_valid;
@@ -307,6 +328,8 @@ typedef struct {
     int is_active[PAPER_CASE2_NCONTACT1], pending, fail, fail_seen;
     int n_shrink[PAPER_CASE2_NCONTACT1];           /* impacts of each contact at shrinking intervals */
     double t_last[PAPER_CASE2_NCONTACT1], dt_last[PAPER_CASE2_NCONTACT1];
+    double gap_held[PAPER_CASE2_NCONTACT1];        /* gap (m) a persistent contact is held at: its gap when it
+                                                     landed, >= 0 and within contact_tol */
 } paper_case2_sim;
 
 /* Default options (DOPRI5, rtol 1e-8, atol 1e-10, persistent contact on). */

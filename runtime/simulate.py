@@ -12,15 +12,19 @@ impact (no contact still approaching its wall, no energy gain) and collects the 
 from __future__ import annotations
 
 import re
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from codegen.scene import Scene
+from codegen.specialise import coordinate_names
 
 from .model import CompiledModel, load_model
 
 METHODS = ("dopri5", "dop853", "rk4")
+CHUNK_STEPS = 20000     # steps per call into the C loop between two looks at the wall-time budget
+RK4_STABLE = 2.5        # RK4 is stable for h |lambda| < 2.78 on the imaginary and negative real axes
 
 
 @dataclass
@@ -38,10 +42,13 @@ class Impact:
     contacts: list[Contact]
     energy_before: float
     energy_after: float
-    complementarity: bool               # the complementarity form was needed (some contact would pull)
+    complementarity: bool               # not plain Eq. 47: a contact took no impulse, or several rounds
     q: np.ndarray
     qd_before: np.ndarray
     qd_after: np.ndarray
+    rounds: int = 1                     # rounds of the impact law (Newton's law with complementarity)
+    plastic: bool = False               # the rounds were closed by a plastic round (energy lost, also at e = 1)
+    energy_rest: float = 0.0            # J: kinetic energy taken by contacts that landed (made persistent)
 
 
 @dataclass
@@ -127,7 +134,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
              atol: float = 1e-10, dt: float | None = None, t_eval=None, h_max: float = 0.0,
              contact_tol: float = 1e-6, event_samples: int = 4, event_tol: float = 1e-13,
              max_impacts: int = 10000, max_steps: int = 10_000_000, rest_height: float | None = None,
-             zeno_impacts: int = 20, p=None, q0=None, qd0=None) -> SimulationResult:
+             zeno_impacts: int = 20, p=None, q0=None, qd0=None,
+             max_wall_time: float | None = None) -> SimulationResult:
     """Simulate the scene's hybrid dynamics from its initial state over [0, t_end].
 
     method        'dopri5' (adaptive Dormand-Prince 5(4), rtol/atol), 'dop853' (adaptive 8(5,3)),
@@ -141,6 +149,9 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                   persistent frictionless contact, released when its force would pull.
                   None (default): 10 contact_tol; 0: never by this rule
     zeno_impacts  a contact becomes persistent after this many impacts at shrinking intervals (0: never)
+    max_steps     integrator steps allowed between two events (impacts, contact changes); 0: unbounded
+    max_wall_time s: stop with status -1 once the run has taken this long (None: unbounded); the message
+                  says where the time went (mean step, the coordinate that limits the step)
     p, q0, qd0    override the scene's parameters and initial state (q0, qd0 in the full layout of Eq. 13)
     Samples, final state and impact states are returned in the full layout of Eq. 13 whatever the model.
     """
@@ -155,6 +166,10 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         _check(np.isfinite(atol) and atol > 0, "atol", f"must be > 0, got {atol!r}")
         _check(dt is None or (np.isfinite(dt) and dt > 0), "dt", f"first step must be > 0 s, got {dt!r}")
     _check(contact_tol >= 0, "contact_tol", f"must be >= 0 m, got {contact_tol!r}")
+    _check(int(max_steps) == max_steps and max_steps >= 0, "max_steps",
+           f"must be an integer >= 0 (0: unbounded), got {max_steps!r}")
+    _check(max_wall_time is None or (np.isfinite(max_wall_time) and max_wall_time > 0), "max_wall_time",
+           f"must be a time > 0 s (or None: unbounded), got {max_wall_time!r}")
     _check(int(event_samples) >= 1, "event_samples", f"must be >= 1, got {event_samples!r}")
     _check(event_tol > 0, "event_tol", f"must be > 0 s, got {event_tol!r}")
     _check(h_max >= 0, "h_max", f"must be >= 0 s (0: unbounded), got {h_max!r}")
@@ -209,12 +224,37 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     # energy scale of lifting the whole chain by its own length: round-off floor of the impact energy checks
     energy_ref = sum(link.mass for link in model.scene.links) * max(abs(p[0]), 1.0) * sum(
         link.length for link in model.scene.links)
+    if method == "rk4":
+        _check_rk4_step(model, q, qd, p, dt)
+    ERR_MAX_STEPS = _header_constant(model, "ERR_MAX_STEPS")
+    # The C loop runs in chunks of at most CHUNK_STEPS steps so that the wall-time budget is looked at
+    # regularly; max_steps (per flight segment) is counted across the chunks.
+    chunk = CHUNK_STEPS if max_steps == 0 else min(CHUNK_STEPS, int(max_steps))
+    start = time.perf_counter()
+    segment_t, segment_steps = float(sim.t), int(sim.n_steps) + int(sim.n_rejected)
     status, message = 0, "reached t_end"
     while True:
-        t_call = float(sim.t)
+        opt_steps = chunk
+        if max_steps:
+            opt_steps = max(1, min(chunk, int(max_steps) - (int(sim.n_steps) + int(sim.n_rejected) - segment_steps)))
+        sim.opt.max_steps = opt_steps
         code = advance(sim, float(t_end), t_eval_ptr, len(t_eval), i_eval, x_eval_ptr, record)
         if code == SIM_END:
             break
+        if code == ERR_MAX_STEPS:
+            taken = int(sim.n_steps) + int(sim.n_rejected) - segment_steps
+            if max_steps and taken >= max_steps:
+                status = -1
+                message = (f"at t = {sim.t:.12g} s: maximum number of steps reached ({int(max_steps)} steps since "
+                           f"t = {segment_t:.6g} s, the last event): {_step_diagnosis(model, sim, segment_t, taken)}")
+                break
+            if max_wall_time is not None and time.perf_counter() - start > max_wall_time:
+                status = -1
+                message = (f"at t = {sim.t:.12g} s: wall-time budget of {max_wall_time:g} s used up "
+                           f"({int(sim.n_steps)} steps): {_step_diagnosis(model, sim, segment_t, taken)}")
+                break
+            continue
+        segment_t, segment_steps = float(sim.t), int(sim.n_steps) + int(sim.n_rejected)
         if code in (SIM_IMPACT, SIM_CONTACT):
             contact_events += _read_contact_events(model, record)
         if code == SIM_CONTACT:
@@ -222,9 +262,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         if code != SIM_IMPACT:
             status = -1
             message = f"at t = {sim.t:.12g} s: {ffi.string(getattr(lib, f'{name}_error_message')(code)).decode()}"
-            if code == _header_constant(model, "ERR_MAX_STEPS"):
-                message += (f" ({int(max_steps)} steps since t = {t_call:.6g} s, {(sim.t - t_call) / max_steps:.2g} s "
-                            "per step: raise max_steps, or loosen rtol/atol if the step size collapsed)")
+            if method == "rk4" and code == _header_constant(model, "ERR_NONFINITE"):
+                message += f" (rk4 with dt = {dt:g} s: {_rk4_stability(model, q, qd, p, dt)[1]})"
             break
         impact = _read_impact(model, record)
         impacts.append(impact)
@@ -234,8 +273,13 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
             break
         if len(impacts) >= max_impacts:
             status = -1
-            message = (f"stopped after {len(impacts)} impacts at t = {impact.t:.12g} s (max_impacts): "
-                       "impacts accumulate (Zeno behaviour?)")
+            message = (f"stopped after {len(impacts)} impacts at t = {impact.t:.12g} s: the max_impacts limit")
+            break
+        if max_wall_time is not None and time.perf_counter() - start > max_wall_time:
+            status = -1
+            message = (f"at t = {sim.t:.12g} s: wall-time budget of {max_wall_time:g} s used up after "
+                       f"{len(impacts)} impacts ({impacts[-1].t - impacts[max(0, len(impacts) - 100)].t:.3g} s "
+                       f"of simulated time for the last {min(len(impacts), 100)})")
             break
     x_final = np.array(ffi.unpack(sim.x, nx))
     n = i_eval[0]
@@ -250,7 +294,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                           for k in range(sim.nactive)],
         options={"rtol": rtol, "atol": atol, "dt": dt, "contact_tol": contact_tol, "event_samples": event_samples,
                  "event_tol": event_tol, "h_max": h_max, "t_end": t_end, "rest_height": rest_height,
-                 "zeno_impacts": zeno_impacts})
+                 "zeno_impacts": zeno_impacts, "max_steps": max_steps, "max_impacts": max_impacts,
+                 "max_wall_time": max_wall_time})
 
 
 def _header_constant(model: CompiledModel, suffix: str) -> int | None:
@@ -268,7 +313,8 @@ def _read_impact(model: CompiledModel, r) -> Impact:
     unpack, layout = model.ffi.unpack, model.layout
     return Impact(float(r.t), contacts, float(r.energy_before), float(r.energy_after), bool(r.complementarity),
                   layout.expand(unpack(r.q, nq)), layout.expand(unpack(r.qd_before, nq), velocity=True),
-                  layout.expand(unpack(r.qd_after, nq), velocity=True))
+                  layout.expand(unpack(r.qd_after, nq), velocity=True), int(r.rounds), bool(r.plastic),
+                  float(r.energy_rest))
 
 
 def _read_contact_events(model: CompiledModel, r) -> list[ContactEvent]:
@@ -339,16 +385,67 @@ APPROACH_FLOOR = 1e-6   # m/s: below 1e-9 of this (1e-15 m/s) an approach is rou
 
 
 def _impact_problem(model: CompiledModel, impact: Impact, record, elastic_walls: set, energy_ref: float) -> str:
-    """The post-impact checks: no contact at its wall still approaching it (measured in C with the
-    contact_velocities kernel, independent of the impact solve); no energy gain, and no loss when
-    every wall involved has e = 1.  Returns '' when all hold."""
-    if record.approach_after > 1e-9 * max(record.approach_before, APPROACH_FLOOR):
+    """The post-impact checks, repeated from the record with independent kernels: no negative impulse;
+    no contact at its wall still approaching it (measured in C with the contact_velocities kernel); no
+    energy gain; and, when every contact that took an impulse is on a wall with e = 1 and the law was not
+    closed by a plastic round, no energy change other than what landings took (energy_rest).
+    Returns '' when all hold."""
+    if any(c.impulse < 0.0 for c in impact.contacts):
+        return f"an impulse is negative ({min(c.impulse for c in impact.contacts):.3g} N s)"
+    bound = max(float(record.roundoff), 1e-10)  # the law's round-off bound (grows with the condition of I_f)
+    if record.approach_after > 10 * bound * max(record.approach_before, APPROACH_FLOOR):
         return f"a contact still approaches its wall after the impact ({record.approach_after:.3g} m/s)"
     E0, E1 = impact.energy_before, impact.energy_after
-    tol = 1e-10 * max(abs(E0), energy_ref)      # energy_ref: a floor for a chain at rest near V = 0
+    tol = bound * max(abs(E0), energy_ref)      # energy_ref: a floor for a chain at rest near V = 0
     if E1 > E0 + tol:
         return f"energy increased from {E0!r} J to {E1!r} J"
-    elastic = all(c.wall in elastic_walls for c in impact.contacts) and not record.nactivated
-    if elastic and not impact.complementarity and abs(E1 - E0) > tol:
-        return f"elastic impact changed the energy from {E0!r} J to {E1!r} J"
+    elastic = all(c.wall in elastic_walls for c in impact.contacts if c.impulse > 0.0) and not impact.plastic
+    if elastic and abs(E1 + impact.energy_rest - E0) > tol:
+        return (f"elastic impact changed the energy from {E0!r} J to {E1!r} J "
+                f"({impact.energy_rest!r} J taken by landings)")
     return ""
+
+
+def _step_diagnosis(model: CompiledModel, sim, t_from: float, steps: int) -> str:
+    """Where the steps go: their mean size since t_from and the state component that dominated the error
+    estimate of the last step (the fastest mode), with its rate."""
+    h_mean = (float(sim.t) - t_from) / max(steps, 1)
+    nq = model.nq
+    names = [coordinate_names(model.scene.n)[i] for i in model.layout.free]
+    index = int(sim.err_index)
+    x = np.array(model.ffi.unpack(sim.x, 2 * nq))
+    what = f"{names[index]}" if index < nq else f"the rate of {names[index - nq]}"
+    rate = x[nq + index] if index < nq else None
+    detail = f" (d{names[index]}/dt = {rate:.3g})" if rate is not None else ""
+    return (f"mean step {h_mean:.3g} s; the step is limited by {what}{detail}, the fastest mode of the chain "
+            f"(largest |qd|: {names[int(np.argmax(np.abs(x[nq:])))]} at {np.abs(x[nq:]).max():.3g}); raise "
+            "max_steps / max_wall_time or loosen rtol/atol")
+
+
+def _rk4_stability(model: CompiledModel, q, qd, p, dt: float) -> tuple[float, str]:
+    """The spectral radius of the flight Jacobian d(qd, qdd)/d(q, qd) at (q, qd), estimated by power
+    iteration on finite-difference Jacobian-vector products, and a sentence comparing dt with RK4's
+    stability bound RK4_STABLE / radius."""
+    x0 = np.r_[q, qd]
+    f0 = model.rhs(0.0, x0, p)
+    rng = np.random.default_rng(0)
+    v = rng.normal(size=x0.size)
+    radius = 0.0
+    for _ in range(30):
+        v /= np.linalg.norm(v)
+        h = 1e-7 * max(1.0, np.linalg.norm(x0))
+        w = (model.rhs(0.0, x0 + h * v, p) - f0) / h
+        radius = float(np.linalg.norm(w))
+        if not np.isfinite(radius) or radius == 0.0:
+            break
+        v = w
+    radius = max(radius, float(np.abs(qd).max()))
+    limit = RK4_STABLE / radius if radius > 0 else np.inf
+    return limit, (f"the fastest mode of the chain at the start has rate {radius:.3g} 1/s, so RK4 needs "
+                   f"dt below about {limit:.3g} s")
+
+
+def _check_rk4_step(model: CompiledModel, q, qd, p, dt: float) -> None:
+    """Refuse an RK4 step that the scene's fastest mode at the start makes unstable."""
+    limit, sentence = _rk4_stability(model, q, qd, p, dt)
+    _check(dt <= limit, "dt", f"{dt:g} s is too large for RK4 on this scene: {sentence}")

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from importlib import resources
 
 import jinja2
+import numpy as np
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
@@ -167,6 +168,7 @@ def render_model(scene: Scene, name: str, programs: list[Program], bake_params: 
         contacts=[(c, point, wall) for c, (point, wall) in enumerate(layout.contacts)],
         rows=list(layout.contact_rows), twists=scene.all_twists,
         row_of_contact=[layout.contact_rows.index((point, wall.axis)) for point, wall in layout.contacts],
+        chart=_chart_context(scene, layout),
         q0=[_double_literal(float(x)) for x in layout.reduce(scene.q0)],
         qd0=[_double_literal(float(x)) for x in layout.reduce(scene.qd0)],
         literal=_double_literal,
@@ -189,6 +191,17 @@ PARAM_DOC = {
     "Izz": "inertia about the centre of mass, zz (kg m^2)", "Ixy": "inertia about the centre of mass, xy (kg m^2)",
     "Ixz": "inertia about the centre of mass, xz (kg m^2)", "Iyz": "inertia about the centre of mass, yz (kg m^2)",
 }
+
+
+def _chart_context(scene: Scene, layout) -> dict:
+    """What the C loop needs for the base chart's measure |det E| = |a . (e_z x Rz(theta_0) b)|, a = T_0^T e_z,
+    b = T_1 e_z (the three base joint axes' triple product): a, b, and where theta_0 is (an index into q, or
+    its fixed value)."""
+    T0, T1 = (np.array(T, dtype=float) for T in scene.base_twists[1:])
+    fixed = dict(layout.fixed)
+    return {"a": [_double_literal(float(x)) for x in T0[2, :]], "b": [_double_literal(float(x)) for x in T1[:, 2]],
+            "index": layout.free.index(1) if 1 in layout.free else -1,
+            "value": _double_literal(float(fixed.get(1, 0.0)))}
 
 
 def _param_doc(pname: str) -> str:

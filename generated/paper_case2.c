@@ -570,6 +570,18 @@ static void paper_case2_ldlt_solve(int n, const double *LD, double *b)
     }
 }
 
+/* The base chart's measure |det E| at configuration q: the triple product of the three base joint axes,
+ * |a . (e_z x Rz(theta_0) b)| with a = T_0^T e_z, b = T_1 e_z (only their x, y enter; |cos theta_0| for the
+ * default twists).  The
+ * chart is singular (gimbal lock) where it is 0; I_f's smallest eigenvalue falls like its square. */
+static double paper_case2_chart_measure(const double *q)
+{
+    const double a[2] = { 0.0, 1.0 }, b[2] = { 1.0, 0.0 };
+    const double theta0 = q[1];
+    const double c = cos(theta0), s = sin(theta0);
+    return fabs(-a[0] * (s * b[0] + c * b[1]) + a[1] * (c * b[0] - s * b[1]));
+}
+
 /* Assemble the impact problem of the active contacts (Eq. 44-48 with the velocities eliminated):
  *   Y_a = I_f^-1 n_a (n_a = signed Jacobian row of contact a),  A = N I_f^-1 N^T,  v_a = n_a . qd.
  * work layout: M (NQ*NQ, factor of I_f) | J (NJROW*NQ) | Y (NQ*NQ) | A (NQ*NQ) | b (NQ). */
@@ -592,6 +604,7 @@ static int paper_case2_impact_system(const double *q, const double *qd, const do
             if (active[c] == active[a]) return PAPER_CASE2_ERR_BAD_CONTACT;
         }
     }
+    if (paper_case2_chart_measure(q) < PAPER_CASE2_CHART_FLOOR) return PAPER_CASE2_ERR_GIMBAL_LOCK;
     paper_case2_mass_matrix(q, p, M);
     if (paper_case2_ldlt(nq, M, 1e-15) != 0) return PAPER_CASE2_ERR_SINGULAR_MASS;
     paper_case2_contact_jacobian(q, p, J);
@@ -845,6 +858,7 @@ const char *paper_case2_error_message(int code)
     case PAPER_CASE2_ERR_SINGULAR_MASS: return "inertia matrix I_f is not positive definite (gimbal lock at theta_0 = +-pi/2?)";
     case PAPER_CASE2_ERR_SINGULAR_IMPACT: return "impact matrix J I_f^-1 J^T is singular: the active contact constraints are dependent";
     case PAPER_CASE2_ERR_LCP: return "impact complementarity problem has no solution (too many or degenerate contacts)";
+    case PAPER_CASE2_ERR_GIMBAL_LOCK: return "gimbal lock: theta_0 is too close to the singularity of the base chart (|det E| below sqrt(16 eps / tol)) for results to the tolerance; continue on a second chart";
     case PAPER_CASE2_ERR_BAD_OPTION: return "bad option or argument (method, dt > 0, rtol > 0, atol > 0, event_samples >= 1, rest_height finite, zeno_impacts >= 0, t_end >= t)";
     case PAPER_CASE2_ERR_MAX_STEPS: return "maximum number of steps reached";
     case PAPER_CASE2_ERR_STEP_SIZE: return "step size underflow: the adaptive integrator cannot meet the tolerance";
@@ -1813,6 +1827,16 @@ static double paper_case2_impact_roundoff(const double *work)
     return b > 1e-10 ? b : 1e-10;
 }
 
+/* The smallest chart measure at which the run's results keep its tolerance: impacts and accelerations
+ * computed with I_f carry a relative error of about 16 eps / mu^2 from the chart alone, so
+ * mu_min = sqrt(16 eps / tol), tol = rtol (adaptive) or 1e-10 (RK4).  Below it the loop stops with
+ * ERR_GIMBAL_LOCK (continue on another chart). */
+static double paper_case2_chart_floor(const paper_case2_sim *s)
+{
+    const double tol = s->opt.method == PAPER_CASE2_METHOD_RK4 || s->opt.rtol > 1e-6 ? 1e-10 : s->opt.rtol;
+    return sqrt(16.0 * PAPER_CASE2_EPS / (tol < 1e-12 ? 1e-12 : tol));
+}
+
 /* Gap (m) within which an approaching contact joins an impact located on another contact: contact_tol, or
  * for the adaptive methods 100 times their position tolerance (atol + rtol l, l the largest |coordinate|
  * of the contact points) if larger.  Impacts that the exact motion makes simultaneous (a symmetric pair)
@@ -1872,6 +1896,7 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
             impact = 1;
     }
     if (!impact) return 0;                               /* grazing touch: nothing to resolve */
+    if (paper_case2_chart_measure(x) < paper_case2_chart_floor(s)) return PAPER_CASE2_ERR_GIMBAL_LOCK;
     window = paper_case2_simultaneity_window(s, x);
     for (pass = 0; pass < 3; ++pass) {                   /* approaching, then at rest, then separating */
         for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {
@@ -2126,6 +2151,7 @@ int paper_case2_sim_advance(paper_case2_sim *s, double t_end, const double *t_ev
         s->n_steps++;
         if (s->fail) return s->fail;
         if (!paper_case2_finite(s->x1, PAPER_CASE2_NX)) return PAPER_CASE2_ERR_NONFINITE;
+        if (paper_case2_chart_measure(s->x1) < paper_case2_chart_floor(s)) return PAPER_CASE2_ERR_GIMBAL_LOCK;
         t1 = last ? t_end : s->t + h;
         paper_case2_prepare_dense(s, h);
         if (paper_case2_find_event(s, t1, &t_event, &c_event)) {

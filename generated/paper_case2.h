@@ -100,6 +100,12 @@
 #define PAPER_CASE2_ERR_SINGULAR_MASS   -2   /* I_f not positive definite (gimbal lock theta_0 = +-pi/2?) */
 #define PAPER_CASE2_ERR_SINGULAR_IMPACT -3   /* active contact rows linearly dependent */
 #define PAPER_CASE2_ERR_LCP             -4   /* complementarity impact has no solution / too many contacts */
+#define PAPER_CASE2_ERR_GIMBAL_LOCK     -5   /* theta_0 too close to the gimbal lock of the base chart: the base
+                                               chart's measure mu = |det E| (|cos theta_0| for the default twists)
+                                               is below CHART_FLOOR, where I_f's solves lose 1e-6 (16 eps / mu^2);
+                                               the hybrid loop stops earlier, below sqrt(16 eps / rtol).  Continue
+                                               on a second chart (README, "Near gimbal lock") */
+#define PAPER_CASE2_CHART_FLOOR         5.96e-5   /* sqrt(16 eps / 1e-6) */
 #define PAPER_CASE2_MAX_LCP             (PAPER_CASE2_NQ < 16 ? PAPER_CASE2_NQ : 16)   /* contacts the complementarity solve takes */
 #define PAPER_CASE2_MAX_ROUNDS          256  /* rounds of the impact law before its plastic closing round */
 

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -370,8 +371,9 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
     chunk_steps  a chunk first runs with this step budget: integrating into a lock makes the steps
                  collapse, and the budget ends that quickly (the chunk is then redone from its last
                  good sample on the other chart, or, far from the lock, again with max_steps)
-    t_eval, p, q0, qd0, max_impacts, max_steps (per chunk) and ``options`` (method, rtol, atol, dt, ...)
-    as for simulate(); q0/qd0 are in chart A's coordinates (the scene's layout).
+    t_eval, p, q0, qd0, max_impacts, max_steps (per chunk) and ``options`` (method, rtol, atol, dt,
+    max_wall_time (for the whole run), ...) as for simulate(); q0/qd0 are in chart A's coordinates (the
+    scene's layout).
     """
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
@@ -398,9 +400,14 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
     events, persistent, resting = [], [], set()      # contact events, and the contacts resting now
     totals = {"n_steps": 0, "n_rejected": 0, "n_rhs": 0}
 
+    budget = options.pop("max_wall_time", None)       # one wall-time budget for the whole run
+    started = time.perf_counter()
+
     def run_chunk(model, duration, times, q, qd, steps):
+        remaining = None if budget is None else max(budget - (time.perf_counter() - started), 1e-3)
         run = simulate(model, duration, t_eval=times, p=p_vec, q0=q, qd0=qd, max_steps=steps,
-                       max_impacts=max(1, max_impacts - len(impacts)), **options)
+                       max_impacts=max(1, max_impacts - len(impacts)), charts=False, max_wall_time=remaining,
+                       **options)
         for key in totals:
             totals[key] += getattr(run, key)
         return run

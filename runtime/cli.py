@@ -36,8 +36,12 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--samples-dt", type=float, default=1e-3, help="output sample spacing in s (default 1e-3)")
     sim.add_argument("--json", metavar="FILE", help="write the result (impacts, final state, energies) as JSON")
     sim.add_argument("--plot", metavar="DIR", help="write PNG plots (time histories, impact configurations)")
-    sim.add_argument("--charts", action="store_true", help="switch to a second base-orientation chart near the "
-                     "gimbal lock theta_0 = +-pi/2 and back (runtime/charts.py); prints every switch")
+    sim.add_argument("--charts", action="store_true", help="run with chart switching from the start and print "
+                     "every switch (by default a run that comes near the gimbal lock theta_0 = +-pi/2 is run "
+                     "again with chart switching; runtime/charts.py)")
+    sim.add_argument("--no-charts", action="store_true", help="stop at the gimbal lock of the base chart instead")
+    sim.add_argument("--max-wall-time", type=float, default=None, metavar="S",
+                     help="stop the run after S seconds of wall time, saying where the time went")
     prec = commands.add_parser("precision", help="work-precision study: error against CPU time of every integrator",
                                description="Error against CPU time for RK4, DOPRI5, DOP853 and scipy's RK45, "
                                            "DOP853, Radau, against a confirmed DOP853 reference (runtime/precision.py).",
@@ -105,10 +109,10 @@ def main(argv=None) -> int:
         start = time.perf_counter()
         if args.charts:
             result = simulate_with_charts(scene, t_end, method=args.method, rtol=args.rtol, atol=args.atol,
-                                          dt=args.dt, t_eval=t_eval, models=charts)
+                                          dt=args.dt, t_eval=t_eval, models=charts, max_wall_time=args.max_wall_time)
         else:
             result = simulate(model, t_end, method=args.method, rtol=args.rtol, atol=args.atol, dt=args.dt,
-                              t_eval=t_eval)
+                              t_eval=t_eval, charts=not args.no_charts, max_wall_time=args.max_wall_time)
         elapsed = time.perf_counter() - start
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -118,12 +122,12 @@ def main(argv=None) -> int:
     print(result.impact_table())
     if getattr(result, "contact_events", None):
         print(result.contact_event_table())
-    if args.charts:
+    if hasattr(result, "switch_table"):
         print(f"chart switches (mu = |cos theta_0| of a chart; B = {result.chart_b_name}):")
         print(result.switch_table())
     print(f"status {result.status}: {result.message}")
-    if result.status != 0 and not args.charts and abs(float(np.cos(result.q_final[1]))) < 1e-3:
-        print("hint: theta_0 is at the gimbal lock of the base chart; --charts continues on a second chart")
+    if result.status != 0 and args.no_charts and "gimbal lock" in result.message:
+        print("hint: without --no-charts the run continues on a second chart")
     print(f"energy: initial {result.energy_initial:.12g} J, final {result.energy_final:.12g} J, "
           f"relative drift {result.energy_drift:.3e}")
     print(f"steps {result.n_steps} (rejected {result.n_rejected}), rhs evaluations {result.n_rhs}, "

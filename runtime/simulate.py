@@ -135,7 +135,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
              contact_tol: float = 1e-6, event_samples: int = 4, event_tol: float = 1e-13,
              max_impacts: int = 10000, max_steps: int = 10_000_000, rest_height: float | None = None,
              zeno_impacts: int = 20, p=None, q0=None, qd0=None,
-             max_wall_time: float | None = None) -> SimulationResult:
+             max_wall_time: float | None = None, charts: bool = True) -> SimulationResult:
     """Simulate the scene's hybrid dynamics from its initial state over [0, t_end].
 
     method        'dopri5' (adaptive Dormand-Prince 5(4), rtol/atol), 'dop853' (adaptive 8(5,3)),
@@ -152,6 +152,9 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     max_steps     integrator steps allowed between two events (impacts, contact changes); 0: unbounded
     max_wall_time s: stop with status -1 once the run has taken this long (None: unbounded); the message
                   says where the time went (mean step, the coordinate that limits the step)
+    charts        a run that comes near the gimbal lock of the base chart (the C loop stops with
+                  ERR_GIMBAL_LOCK before it) is run again with chart switching (runtime.charts) and that
+                  result returned (a ChartResult, samples in the scene's coordinates); False: stop there
     p, q0, qd0    override the scene's parameters and initial state (q0, qd0 in the full layout of Eq. 13)
     Samples, final state and impact states are returned in the full layout of Eq. 13 whatever the model.
     """
@@ -263,10 +266,18 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
             status = -1
             message = f"at t = {sim.t:.12g} s: {ffi.string(getattr(lib, f'{name}_error_message')(code)).decode()}"
             if method == "rk4" and code == _header_constant(model, "ERR_NONFINITE"):
-                message += f" (rk4 with dt = {dt:g} s: {_rk4_stability(model, q, qd, p, dt)[1]})"
+                message += (f" (rk4 with dt = {dt:g} s is unstable on this motion: reduce dt, or use an adaptive "
+                            "method)")
             break
         impact = _read_impact(model, record)
         impacts.append(impact)
+        if method == "rk4":                  # an impact may spin the chain up past RK4's stability
+            q_after, qd_after = layout.reduce(impact.q), layout.reduce(impact.qd_after)
+            limit, sentence = _rk4_stability(model, q_after, qd_after, p, dt)
+            if dt > limit:
+                status, message = -1, (f"impact at t = {impact.t:.12g} s: after it, dt = {dt:g} s is too large "
+                                       f"for RK4: {sentence.replace('at the start', 'now')}")
+                break
         problem = _impact_problem(model, impact, record, elastic_walls, energy_ref)
         if problem:
             status, message = -1, f"impact at t = {impact.t:.12g} s: {problem}"
@@ -281,6 +292,14 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                        f"{len(impacts)} impacts ({impacts[-1].t - impacts[max(0, len(impacts) - 100)].t:.3g} s "
                        f"of simulated time for the last {min(len(impacts), 100)})")
             break
+    if charts and code == _header_constant(model, "ERR_GIMBAL_LOCK"):
+        from .charts import simulate_with_charts
+        return simulate_with_charts(
+            model.scene, t_end, t_eval=t_eval, p=None if p is model.p else p,
+            q0=None if q0 is None else layout.expand(q), qd0=None if qd0 is None else layout.expand(qd, velocity=True),
+            max_impacts=max_impacts, max_steps=max_steps, method=method, rtol=rtol, atol=atol, dt=dt,
+            h_max=h_max, contact_tol=contact_tol, event_samples=event_samples, event_tol=event_tol,
+            rest_height=rest_height, zeno_impacts=zeno_impacts, max_wall_time=max_wall_time)
     x_final = np.array(ffi.unpack(sim.x, nx))
     n = i_eval[0]
     return SimulationResult(

@@ -866,6 +866,7 @@ const char *paper_case2_error_message(int code)
     case PAPER_CASE2_ERR_TOO_MANY_CONTACTS: return "more simultaneous approaching contacts than degrees of freedom";
     case PAPER_CASE2_ERR_SINGULAR_CONTACT: return "the persistent contact constraints are dependent (N I_f^-1 N^T is singular)";
     case PAPER_CASE2_ERR_IMPACT_ACCURACY: return "the impact law could not be solved to round-off (an impulse < 0, a contact still approaching, an energy gain or an elastic energy change): the impact system is ill-conditioned";
+    case PAPER_CASE2_ERR_UNSTABLE: return "RK4 is unstable at this step: the chain's fastest mode needs dt below about 2.8 / its rate; reduce dt or use an adaptive method";
     default: return "unknown error code";
     }
 }
@@ -1067,7 +1068,7 @@ int paper_case2_sim_init(paper_case2_sim *s, double t0, const double *q, const d
     s->n_activations = s->n_releases = 0;
     s->pending = s->fail = s->fail_seen = 0;
     s->vn_valid = 0;
-    s->err_index = 0;
+    s->err_index = s->n_unstable = 0;
     s->rest_height = opt->rest_height < 0.0 ? 10.0 * opt->contact_tol : opt->rest_height;
     {
         double r[3 * PAPER_CASE2_NPOINT], length = 0.0;   /* the chain's length: sum of |O_k+1 - O_k| */
@@ -1140,20 +1141,29 @@ static double paper_case2_initial_step(paper_case2_sim *s, double t_end)
     return h;
 }
 
-/* One RK4 step of size h from (t, x, f): x1, its derivative k[4], and the Hermite dense output. */
-static void paper_case2_rk4_step(paper_case2_sim *s, double h)
+/* One RK4 step of size h from (t, x, f): x1, its derivative k[4], and the Hermite dense output.  Returns
+ * h rho, rho = |k4 - k3| / |Y4 - Y3| the rate of the chain's fastest mode seen between the last two stages
+ * (Y3 = x + h/2 k2, Y4 = x + h k3; Hairer & Wanner's stiffness detection): RK4 is stable for h rho below
+ * about 2.8. */
+static double paper_case2_rk4_step(paper_case2_sim *s, double h)
 {
     int i;
     const int nx = PAPER_CASE2_NX;
-    double *k2 = s->k[1], *k3 = s->k[2], *k4 = s->k[3];
+    double *k2 = s->k[1], *k3 = s->k[2], *k4 = s->k[3], dk = 0.0, dy = 0.0;
     for (i = 0; i < nx; ++i) s->xs[i] = s->x[i] + 0.5 * h * s->f[i];
     paper_case2_f(s, s->t + 0.5 * h, s->xs, k2);
     for (i = 0; i < nx; ++i) s->xs[i] = s->x[i] + 0.5 * h * k2[i];
     paper_case2_f(s, s->t + 0.5 * h, s->xs, k3);
     for (i = 0; i < nx; ++i) s->xs[i] = s->x[i] + h * k3[i];
     paper_case2_f(s, s->t + h, s->xs, k4);
-    for (i = 0; i < nx; ++i) s->x1[i] = s->x[i] + h / 6.0 * (s->f[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    for (i = 0; i < nx; ++i) {
+        const double d = h * k3[i] - 0.5 * h * k2[i];
+        dk += (k4[i] - k3[i]) * (k4[i] - k3[i]);
+        dy += d * d;
+        s->x1[i] = s->x[i] + h / 6.0 * (s->f[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    }
     paper_case2_f(s, s->t + h, s->x1, s->k[4]);        /* derivative at the end: Hermite and next step */
+    return dy > 0.0 ? h * sqrt(dk / dy) : 0.0;
 }
 
 /* One Dormand-Prince 5(4) step of size h; returns the error norm; x1 and k[6] = f(t + h, x1). */
@@ -1610,40 +1620,43 @@ static int paper_case2_add_independent(paper_case2_sim *s, const double *x, int 
     return PAPER_CASE2_OK;
 }
 
-/* Project the state x onto the contacts set[0..n-1] held at their walls: the gaps to 0 by Newton steps
- * dq = -Y (N Y)^-1 g (Y = I_f^-1 N^T, the smallest correction in the mass metric), then the normal
- * velocities to 0, qd -= Y (N Y)^-1 N qd: a plastic impact, so the kinetic energy cannot grow.  Each gap
- * goes to s->gap_held (its gap when it landed, within contact_tol: moving the configuration also moves the
- * kinetic energy, so nothing is moved that the tolerance does not ask for).  A contact outside the set that the position correction would push through its wall is held at its wall during
- * the correction (the projection onto gap_set = 0, gap_other >= 0 by an active set).  mu (if not NULL)
- * receives the impulses of the velocity projection (N s, along the inward normals). */
-static int paper_case2_project(paper_case2_sim *s, double *x, int n, const int *set, double *mu)
+/* Project the state x onto the contacts set[0..n-1] held at their walls: (positions = 1) the gaps to
+ * s->gap_held (the gap each had when it landed) by Newton steps dq = -Y (N Y)^-1 (g - g_held)
+ * (Y = I_f^-1 N^T, the smallest correction in the mass metric), a contact outside the set that the
+ * correction would push deeper into its wall being held where it is (an active set); then the normal
+ * velocities to 0, qd -= Y (N Y)^-1 N qd: a plastic impact, so the kinetic energy cannot grow. */
+static int paper_case2_project(paper_case2_sim *s, double *x, int n, const int *set, int positions)
 {
     const int nq = PAPER_CASE2_NQ;
     const double floor = 1e-6 * s->opt.contact_tol + 1e-15;
-    double v[PAPER_CASE2_NQ], e[PAPER_CASE2_NQ], g[PAPER_CASE2_NCONTACT1] = {0.0}, corr[PAPER_CASE2_NQ];
+    double v[PAPER_CASE2_NQ], e[PAPER_CASE2_NQ], g[PAPER_CASE2_NCONTACT1] = {0.0}, g0[PAPER_CASE2_NCONTACT1] = {0.0};
+    double corr[PAPER_CASE2_NQ], target[PAPER_CASE2_NQ];
     double *Y = s->work + PAPER_CASE2_NQ * PAPER_CASE2_NQ + PAPER_CASE2_NJROW * PAPER_CASE2_NQ;
     double *A = Y + PAPER_CASE2_NQ * PAPER_CASE2_NQ;
     int held[PAPER_CASE2_NQ], in_set[PAPER_CASE2_NCONTACT1], a, c, i, it, code, m = n;
     if (n == 0) return PAPER_CASE2_OK;
+    paper_case2_contact_gaps(x, s->p, g0);
     for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) in_set[c] = 0;
     for (a = 0; a < n; ++a) {
         held[a] = set[a];
         in_set[set[a]] = 1;
+        target[a] = s->gap_held[set[a]];
     }
-    for (it = 0; it < 4 + PAPER_CASE2_NCONTACT; ++it) {
+    for (it = 0; positions && it < 4 + PAPER_CASE2_NCONTACT; ++it) {
         double gmax = 0.0;
         int added = 0;
         paper_case2_contact_gaps(x, s->p, g);
-        for (c = 0; c < PAPER_CASE2_NCONTACT && it > 0; ++c) {      /* pushed through its wall: hold it */
-            if (!in_set[c] && g[c] < -floor && m < nq) {
+        for (c = 0; c < PAPER_CASE2_NCONTACT && it > 0; ++c) {      /* pushed deeper: hold it */
+            const double stay = g0[c] < 0.0 ? g0[c] : 0.0;
+            if (!in_set[c] && g[c] < stay - floor && m < nq) {
                 in_set[c] = 1;
+                target[m] = stay;
                 held[m++] = c;
                 added = 1;
             }
         }
         for (a = 0; a < m; ++a) {
-            g[held[a]] -= a < n ? s->gap_held[held[a]] : 0.0;
+            g[held[a]] -= target[a];
             if (fabs(g[held[a]]) > gmax) gmax = fabs(g[held[a]]);
         }
         if (gmax <= floor && !added) break;
@@ -1664,9 +1677,6 @@ static int paper_case2_project(paper_case2_sim *s, double *x, int n, const int *
     paper_case2_ldlt_solve(n, A, corr);
     for (i = 0; i < nq; ++i) {
         for (a = 0; a < n; ++a) x[nq + i] += Y[a*nq + i] * corr[a];
-    }
-    if (mu) {
-        for (a = 0; a < n; ++a) mu[a] = corr[a];
     }
     return PAPER_CASE2_OK;
 }
@@ -1730,6 +1740,69 @@ static int paper_case2_settle(paper_case2_sim *s, const double *x, int *n, int *
     return PAPER_CASE2_ERR_LCP;
 }
 
+/* Bring the contacts set[0..nset-1] to rest (normal velocity 0: bilateral, impulse of either sign, the
+ * resting constraint) while no other contact of list[0..n-1] is driven into its wall (impulse >= 0,
+ * complementary to its normal velocity >= 0): the projection of qd onto that convex set in the mass
+ * metric, so the kinetic energy cannot grow.  Solved exactly by enumerating the pushing sets of the others
+ * (as _lcp).  Only the others whose rows are independent of the set's take part (a dependent one moves
+ * with them). */
+static int paper_case2_hold(paper_case2_sim *s, double *x, int nset, const int *set, int n, const int *list)
+{
+    const int nq = PAPER_CASE2_NQ;
+    double v[PAPER_CASE2_NQ], e[PAPER_CASE2_NQ], Asub[PAPER_CASE2_NQ * PAPER_CASE2_NQ], rhs[PAPER_CASE2_NQ], F[PAPER_CASE2_NQ];
+    double *Y = s->work + PAPER_CASE2_NQ * PAPER_CASE2_NQ + PAPER_CASE2_NJROW * PAPER_CASE2_NQ;
+    double *A = Y + PAPER_CASE2_NQ * PAPER_CASE2_NQ;
+    double scale = 0.0;
+    int all[PAPER_CASE2_NQ], m = nset, a, b, i, k, code, uni;
+    unsigned long mask;
+    for (a = 0; a < nset; ++a) all[a] = set[a];
+    for (k = 0; k < n; ++k) {                  /* the others, independent ones only */
+        int member = 0;
+        for (a = 0; a < nset; ++a) member |= set[a] == list[k];
+        if (member) continue;
+        code = paper_case2_add_independent(s, x, &m, all, list[k]);
+        if (code != PAPER_CASE2_OK) return code;
+    }
+    uni = m - nset;
+    if (uni > PAPER_CASE2_MAX_LCP) return PAPER_CASE2_ERR_LCP;
+    code = paper_case2_impact_system(x, x + nq, s->p, m, all, s->work, v, e);
+    if (code != PAPER_CASE2_OK) return code;
+    for (a = 0; a < m; ++a) {
+        if (fabs(v[a]) > scale) scale = fabs(v[a]);
+    }
+    for (mask = (1UL << uni) - 1UL; ; --mask) {        /* the others that push, largest sets first */
+        int idx[PAPER_CASE2_NQ], kk = 0, ok = 1;
+        for (a = 0; a < nset; ++a) idx[kk++] = a;
+        for (a = 0; a < uni; ++a) {
+            if (mask & (1UL << a)) idx[kk++] = nset + a;
+        }
+        for (a = 0; a < kk; ++a) {
+            for (b = 0; b < kk; ++b) Asub[a*kk + b] = A[idx[a]*m + idx[b]];
+            rhs[a] = -v[idx[a]];
+        }
+        if (kk > 0 && paper_case2_ldlt(kk, Asub, 1e-12) != 0) ok = 0;
+        if (ok && kk > 0) paper_case2_ldlt_solve(kk, Asub, rhs);
+        for (a = 0; ok && a < m; ++a) F[a] = 0.0;
+        for (a = 0; ok && a < kk; ++a) {
+            if (idx[a] >= nset && rhs[a] < 0.0) ok = 0;
+            F[idx[a]] = rhs[a];
+        }
+        for (a = nset; ok && a < m; ++a) {             /* the others' normal velocities afterwards >= 0 */
+            double w = v[a];
+            for (b = 0; b < m; ++b) w += A[a*m + b] * F[b];
+            if (w < -1e-10 * (scale + 1e-300)) ok = 0;
+        }
+        if (ok) {
+            for (i = 0; i < nq; ++i) {
+                for (a = 0; a < m; ++a) x[nq + i] += Y[a*nq + i] * F[a];
+            }
+            return PAPER_CASE2_OK;
+        }
+        if (mask == 0) break;
+    }
+    return PAPER_CASE2_ERR_LCP;
+}
+
 /* Make set[0..n-1] the persistent contacts; record (if not NULL) lists the activations and releases. */
 static void paper_case2_set_active(paper_case2_sim *s, int n, const int *set, paper_case2_impact_record *r)
 {
@@ -1774,7 +1847,7 @@ static int paper_case2_rest_at_start(paper_case2_sim *s)
         }
     }
     if (n == 0) return PAPER_CASE2_OK;
-    for (c = 0; c < n; ++c) s->gap_held[set[c]] = gaps[set[c]] > 0.0 ? gaps[set[c]] : 0.0;
+    for (c = 0; c < n; ++c) s->gap_held[set[c]] = gaps[set[c]];         /* held where they start */
     code = paper_case2_project(s, s->x, n, set, 0);
     if (code == PAPER_CASE2_OK) code = paper_case2_settle(s, s->x, &n, set);
     if (code != PAPER_CASE2_OK) return code;
@@ -1859,19 +1932,22 @@ static double paper_case2_simultaneity_window(const paper_case2_sim *s, const do
  * Resting contact: a contact that approaches a wall with e < 1 and whose bounce would rise less than h
  * ((e v-)^2 <= 2 a h, a = its normal acceleration towards the wall with the persistent contacts held;
  * h = rest_height, but never below the resolution of the positions, graze_depth + 16 eps l, unless both
- * rules are off), or that has had zeno_impacts impacts at shrinking intervals, lands: it is
- * struck with e = 0 (a plastic impact: F >= 0, no pull); r->energy_rest is the kinetic energy the landings
- * take (the law with every contact's own e minus the law with the landings plastic).  On a wall with e = 1
- * a contact lands only if it arrives at rest: v-^2 <= 2 a h and its landing takes no more than
- * the round-off bound of the energy, so that an elastic chain keeps its energy.  Persistent contacts take part with e = 0.  Landing and
- * persistent contacts that end at rest (normal velocity below round-off) form the new persistent set
- * (independent rows only, positions projected onto the walls, only those that push kept); a persistent
- * contact the impact lifts off is released.
+ * rules are off), or that has had zeno_impacts impacts at shrinking intervals, lands: it is struck with
+ * e = 0 (a plastic impact: F >= 0, no pull); r->energy_rest is the kinetic energy the landings take (the
+ * law with every contact's own e minus the law with the landings plastic).  On a wall with e = 1 a
+ * contact lands only if it arrives at rest: v-^2 <= 2 a h and its landing takes no more than the
+ * round-off bound of the energy, so that an elastic chain keeps its energy.  Persistent contacts take part
+ * with their own e (at rest it does not matter; one driven into its wall in a later round bounces).
+ * Landing and persistent contacts that end at rest (normal velocity below round-off) form the new
+ * persistent set (independent rows only, held at their landing gap, only those that push kept), and so
+ * does a persistent contact of a wall with e < 1 that the impact lifts by less than h (a bounce the rest
+ * rule would end: its lift velocity is removed with the others' round-off, a bilateral resting
+ * constraint, not an impact impulse; the energy it takes is in energy_rest); one lifted higher is
+ * released.  The set is brought to rest by _hold, which drives no other contact into its wall.
  * Post-conditions, checked here (ERR_IMPACT_ACCURACY if one fails), to the law's round-off bound b
  * (_impact_roundoff, 1e-10 for a well-conditioned I_f): every impulse >= 0; no contact within contact_tol
  * of its wall approaches it faster than 10 b max|v-| + 1e-15 m/s; the kinetic energy does not grow by
- * more than b T and, when every contact that takes an impulse has e = 1 (persistent ones aside), changes
- * by at most b T.  The state after the impact is in s->x1.  Returns 1 (impact applied), 0 (graze) or an
+ * more than b T and, when every contact that takes an impulse has e = 1, changes by at most b T.  The state after the impact is in s->x1.  Returns 1 (impact applied), 0 (graze) or an
  * error. */
 static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_case2_impact_record *r)
 {
@@ -1915,6 +1991,7 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
     r->t = t;
     paper_case2_energy(x, x + nq, s->p, E);
     T_before = E[0];
+    if (!paper_case2_finite(E, 2)) return PAPER_CASE2_ERR_NONFINITE;
     r->energy_before = E[0] + E[1];
     for (i = 0; i < nq; ++i) {
         r->q[i] = x[i];
@@ -1934,9 +2011,9 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
     for (k = 0; k < n; ++k) {
         c = list[k];
         e_law[k] = e[k] = paper_case2_restitution(s->p, c);
-        landing[k] = s->is_active[c];
+        landing[k] = s->is_active[c];                 /* a persistent contact stays if it ends at rest */
         if (s->is_active[c]) {
-            e[k] = 0.0;
+            /* its own e: at rest (v = 0) e does not matter; driven into its wall in a later round, it bounces */
         } else if (vn[c] <= 0.0 && gaps[c] <= s->opt.contact_tol) {
             const double reach = 2.0 * (-an[c]) * height;   /* v^2 of a bounce that rises that high */
             const double bounce = e_law[k] < 1.0 ? e_law[k] * vn[c] : vn[c];   /* e = 1: arrived at rest */
@@ -1990,7 +2067,7 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
             r->contact[r->ncontact] = c;
             r->impulse[r->ncontact++] = F[k];
             if (!(F[k] > 0.0) || !(vn[c] < 0.0)) r->complementarity = 1;
-            if (F[k] > 0.0 && !s->is_active[c] && e[k] != 1.0) elastic = 0;
+            if (F[k] > 0.0 && e[k] != 1.0) elastic = 0;
         }
         if (F[k] < 0.0) return PAPER_CASE2_ERR_IMPACT_ACCURACY;
     }
@@ -1999,18 +2076,33 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
     if (elastic && !plastic && fabs(T_after - T_before) > bound * T_before) return PAPER_CASE2_ERR_IMPACT_ACCURACY;
     /* the persistent set: landing and persistent contacts that end at rest */
     paper_case2_normal_velocities(s->x1, s->p, vn);
-    v_hold = 1e-9 * scale;
+    v_hold = 1e-9 * scale;                          /* at rest, to the law's round-off */
     for (k = 0; k < n; ++k) {
-        if (landing[k] && vn[list[k]] <= v_hold) {
+        c = list[k];
+        /* a persistent contact that the impact lifts by less than h stays (its small lift velocity, what the
+         * bounces of the accumulation it stands for would carry, is removed with the others') */
+        int held_lift = 0;
+        if (s->is_active[c] && vn[c] > v_hold && e_law[k] < 1.0 && height > 0.0) {
+            /* its acceleration towards the wall with the other persistent contacts held */
+            double a_free[PAPER_CASE2_NCONTACT1];
+            int others[PAPER_CASE2_NQ], m = 0, a;
+            for (a = 0; a < s->nactive; ++a) {
+                if (s->active[a] != c) others[m++] = s->active[a];
+            }
+            code = paper_case2_normal_accelerations(s, s->x1, m, others, a_free);
+            if (code != PAPER_CASE2_OK) return code;
+            held_lift = a_free[c] < 0.0 && vn[c] * vn[c] <= 2.0 * (-a_free[c]) * height;
+        }
+        if ((landing[k] && vn[c] <= v_hold) || held_lift) {
             code = paper_case2_add_independent(s, s->x1, &nset, set, list[k]);
             if (code != PAPER_CASE2_OK) return code;
         }
     }
     if (nset > 0) {
-        for (k = 0; k < nset; ++k) {                   /* a landing contact is held at its gap (>= 0) */
-            if (!s->is_active[set[k]]) s->gap_held[set[k]] = gaps[set[k]] > 0.0 ? gaps[set[k]] : 0.0;
+        for (k = 0; k < nset; ++k) {  /* a landing contact is held at the gap it landed at: the configuration */
+            if (!s->is_active[set[k]]) s->gap_held[set[k]] = gaps[set[k]];   /* stays, so V does too */
         }
-        code = paper_case2_project(s, s->x1, nset, set, 0);      /* onto the walls */
+        code = paper_case2_hold(s, s->x1, nset, set, n, list);   /* held at rest, the others not pushed in */
         if (code == PAPER_CASE2_OK) code = paper_case2_settle(s, s->x1, &nset, set);
         if (code != PAPER_CASE2_OK) return code;
         paper_case2_normal_velocities(s->x1, s->p, vn);
@@ -2021,6 +2113,8 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
         if (same) return 0;
     }
     for (i = 0; i < nq; ++i) r->qd_after[i] = s->x1[nq + i];
+    paper_case2_energy(x, s->x1 + nq, s->p, E);          /* at the impact configuration, as T_law */
+    r->energy_rest = T_law - E[0];
     r->energy_after = paper_case2_total_energy(s->x1, s->p);
     r->approach_after = 0.0;                  /* fastest approach of a contact at its wall, afterwards */
     for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {
@@ -2122,7 +2216,9 @@ int paper_case2_sim_advance(paper_case2_sim *s, double t_end, const double *t_ev
             return s->fail_seen ? s->fail_seen : PAPER_CASE2_ERR_STEP_SIZE;
         }
         if (s->opt.method == PAPER_CASE2_METHOD_RK4) {
-            paper_case2_rk4_step(s, h);
+            /* RK4 has no error control: 3 steps in a row at h rho > 2.5 mean the step is past its stability */
+            s->n_unstable = paper_case2_rk4_step(s, h) > 2.5 ? s->n_unstable + 1 : 0;
+            if (s->n_unstable >= 3) return PAPER_CASE2_ERR_UNSTABLE;
         } else {
             double fac;
             const int eighth = s->opt.method == PAPER_CASE2_METHOD_DOP853;
@@ -2190,7 +2286,7 @@ int paper_case2_sim_advance(paper_case2_sim *s, double t_end, const double *t_ev
         for (i = 0; i < PAPER_CASE2_NCONTACT; ++i) s->ev[i] = s->eprev[i];
         s->t = t1;
         if (s->nactive > 0) {                     /* back onto the persistent constraints */
-            int code = paper_case2_project(s, s->x, s->nactive, s->active, 0);
+            int code = paper_case2_project(s, s->x, s->nactive, s->active, 1);
             if (code != PAPER_CASE2_OK) return code;
             s->f_valid = s->vn_valid = 0;
             paper_case2_events(s, s->x, s->ev);

@@ -265,6 +265,9 @@ const char *paper_case2_error_message(int code);
 #define PAPER_CASE2_ERR_NONFINITE   -13   /* the state became NaN or infinite */
 #define PAPER_CASE2_ERR_TOO_MANY_CONTACTS -14 /* more approaching contacts at once than NQ */
 #define PAPER_CASE2_ERR_SINGULAR_CONTACT -15  /* the persistent contact constraints are dependent */
+#define PAPER_CASE2_ERR_UNSTABLE   -17     /* RK4: 3 steps in a row at h rho > 2.5, rho the rate of the chain's
+                                              fastest mode between the last two stages: dt is past RK4's
+                                              stability (about 2.8 / rho); the state is the last step's */
 #define PAPER_CASE2_ERR_IMPACT_ACCURACY -16  /* an impact failed its post-conditions (F >= 0, no approach, no energy
                                               gain, e = 1 energy kept) beyond round-off: ill-conditioned */
 
@@ -331,11 +334,12 @@ typedef struct {
     double work[PAPER_CASE2_IMPACT_NWORK];
     double rest_height;                       /* resolved opt.rest_height */
     double lever;                             /* max(1 m, the chain's length): |dO/dq| bound */
-    int is_active[PAPER_CASE2_NCONTACT1], pending, fail, fail_seen;
+    int is_active[PAPER_CASE2_NCONTACT1], pending, fail, fail_seen, n_unstable;
     int n_shrink[PAPER_CASE2_NCONTACT1];           /* impacts of each contact at shrinking intervals */
     double t_last[PAPER_CASE2_NCONTACT1], dt_last[PAPER_CASE2_NCONTACT1];
     double gap_held[PAPER_CASE2_NCONTACT1];        /* gap (m) a persistent contact is held at: its gap when it
-                                                     landed, >= 0 and within contact_tol */
+                                                     landed (within contact_tol, or the integration's position
+                                                     error below its wall) */
 } paper_case2_sim;
 
 /* Default options (DOPRI5, rtol 1e-8, atol 1e-10, persistent contact on). */

@@ -407,6 +407,7 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
         remaining = None if budget is None else max(budget - (time.perf_counter() - started), 1e-3)
         run = simulate(model, duration, t_eval=times, p=p_vec, q0=q, qd0=qd, max_steps=steps,
                        max_impacts=max(1, max_impacts - len(impacts)), charts=False, max_wall_time=remaining,
+                       check_start=False,
                        **options)
         for key in totals:
             totals[key] += getattr(run, key)

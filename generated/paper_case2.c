@@ -876,7 +876,8 @@ const char *paper_case2_error_message(int code)
  * ------------------------------------------------------------------------------------------------ */
 #define PAPER_CASE2_EPS 2.220446049250313e-16
 #define PAPER_CASE2_NJROW1 (PAPER_CASE2_NJROW > 0 ? PAPER_CASE2_NJROW : 1)
-#define PAPER_CASE2_V_FLOOR 1e-12   /* m/s: a contact at its wall approaching slower than this is round-off */
+#define PAPER_CASE2_V_FLOOR 1e-12   /* m/s: a contact at its wall approaching slower than this, or than 1e-10 of
+                                      the fastest contact's normal speed (_v_round), is at rest: round-off */
 
 /* Dormand-Prince 8(5,3) tableau with its 7th-order dense output (Hairer, Norsett & Wanner,
  * Solving ODEs I, 2nd ed., and the published dop853 coefficients).  Stages 13-15 serve the dense output. */
@@ -1334,7 +1335,19 @@ static void paper_case2_dense(paper_case2_sim *s, double t, double *out)
 
 static void paper_case2_normal_velocities(const double *x, const double *p, double *vn);
 
-/* Event value (what = 0), normal velocity (what = 1) or normal velocity + V_FLOOR (what = 2) of contact c
+/* The normal speed below which an approach is round-off, given every contact's normal velocity vn:
+ * V_FLOOR + 1e-10 max|vn| (the law's round-off floor on the chain's own speeds). */
+static double paper_case2_v_round(const double *vn)
+{
+    double scale = 0.0;
+    int c;
+    for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {
+        if (fabs(vn[c]) > scale) scale = fabs(vn[c]);
+    }
+    return PAPER_CASE2_V_FLOOR + 1e-10 * scale;
+}
+
+/* Event value (what = 0), normal velocity (what = 1) or normal velocity + _v_round (what = 2) of contact c
  * at time t inside the step. */
 static double paper_case2_value_at(paper_case2_sim *s, int what, int c, double t)
 {
@@ -1344,7 +1357,7 @@ static double paper_case2_value_at(paper_case2_sim *s, int what, int c, double t
         return s->es[c];
     }
     paper_case2_normal_velocities(s->xs, s->p, s->es);
-    return s->es[c] + (what == 2 ? PAPER_CASE2_V_FLOOR : 0.0);
+    return s->es[c] + (what == 2 ? paper_case2_v_round(s->es) : 0.0);
 }
 
 /* Root in (a, b] of contact c's value_at(what) on the interpolant, value(a) > 0 >= value(b): Illinois,
@@ -1372,17 +1385,17 @@ static double paper_case2_locate(paper_case2_sim *s, int what, int c, double a, 
 }
 
 /* A contact that starts the interval [t_a, t_b] at or beyond its wall (gap <= 0, just after an impact or
- * a release) and is approaching it at t_b (faster than V_FLOOR) with gap(t_b) <= 0 has come back: if it
+ * a release) and is approaching it at t_b (faster than _v_round) with gap(t_b) <= 0 has come back: if it
  * was leaving at t_a, the crossing follows the apex (root of the normal velocity), or is the apex itself
  * when the bounce is too small to open a positive gap; if it was not leaving, where its approach exceeds
- * V_FLOOR. */
+ * _v_round. */
 static double paper_case2_locate_return(paper_case2_sim *s, int c, double t_a, double t_b, double g_b)
 {
     double v_a = paper_case2_value_at(s, 1, c, t_a), v_b, t_apex, g_apex;
     if (!(v_a > 0.0)) {
-        if (!(v_a + PAPER_CASE2_V_FLOOR > 0.0)) return t_a;
-        return paper_case2_locate(s, 2, c, t_a, v_a + PAPER_CASE2_V_FLOOR, t_b,
-                                 paper_case2_value_at(s, 2, c, t_b));
+        const double w_a = paper_case2_value_at(s, 2, c, t_a);
+        if (!(w_a > 0.0)) return t_a;
+        return paper_case2_locate(s, 2, c, t_a, w_a, t_b, paper_case2_value_at(s, 2, c, t_b));
     }
     v_b = paper_case2_value_at(s, 1, c, t_b);
     t_apex = paper_case2_locate(s, 1, c, t_a, v_a, t_b, v_b);
@@ -1524,7 +1537,7 @@ static int paper_case2_find_event(paper_case2_sim *s, double t1, double *t_event
                     paper_case2_normal_velocities(s->xs, s->p, vj);
                     have_v = 1;
                 }
-                if (!(vj[c] < -PAPER_CASE2_V_FLOOR)) continue;
+                if (!(vj[c] < -paper_case2_v_round(vj))) continue;
                 tc = paper_case2_locate_return(s, c, t_prev, tj, gj[c]);
             }
             if (!found || tc < *t_event) {
@@ -1924,7 +1937,7 @@ static double paper_case2_simultaneity_window(const paper_case2_sim *s, const do
  * Who takes part: every contact within contact_tol of its wall (c_event whatever its gap), every
  * approaching contact within the simultaneity window, and every persistent contact, approaching ones
  * first (at most NQ).  It is an impact when a contact that is not
- * persistent approaches its wall there faster than V_FLOOR (or c_event came back to it at its apex) and
+ * persistent approaches its wall there faster than _v_round (or c_event came back to it at its apex) and
  * either an impulse is applied or the persistent set changes; else a graze (returns 0).
  * The law: _impact_rounds (Newton's law, Eq. 47, with complementarity, in rounds until no contact
  * approaches; a contact that rests or separates takes an impulse only when the others drive it into its
@@ -1954,7 +1967,7 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
     const int nq = PAPER_CASE2_NQ;
     double gaps[PAPER_CASE2_NCONTACT1], vn[PAPER_CASE2_NCONTACT1], an[PAPER_CASE2_NCONTACT1];
     double e[PAPER_CASE2_NQ], e_law[PAPER_CASE2_NQ], qd_plus[PAPER_CASE2_NQ], F[PAPER_CASE2_NQ], E[2];
-    double scale = 0.0, v_hold, approach_tol, T_before, T_after, T_law, bound, height = 0.0, window;
+    double scale = 0.0, v_hold, v_rest, approach_tol, T_before, T_after, T_law, bound, height = 0.0, window;
     int list[PAPER_CASE2_NQ], landing[PAPER_CASE2_NQ], shrinking[PAPER_CASE2_NCONTACT1], set[PAPER_CASE2_NQ];
     int c, i, k, pass, n = 0, nset = 0, impact = 0, elastic = 1, changed = 0, first = -1, code, rounds, plastic;
     double *x = s->xs;
@@ -1965,9 +1978,10 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
     r->rounds = r->plastic = 0;
     r->energy_rest = 0.0;
     r->roundoff = 1e-10;
+    v_rest = paper_case2_v_round(vn);
     for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {
         if (fabs(vn[c]) > scale) scale = fabs(vn[c]);
-        if (!s->is_active[c] && (((c == c_event || gaps[c] <= s->opt.contact_tol) && vn[c] < -PAPER_CASE2_V_FLOOR)
+        if (!s->is_active[c] && (((c == c_event || gaps[c] <= s->opt.contact_tol) && vn[c] < -v_rest)
                                  || (c == c_event && gaps[c] <= 0.0 && vn[c] <= 0.0)))   /* back at the apex */
             impact = 1;
     }
@@ -1977,7 +1991,7 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
     for (pass = 0; pass < 3; ++pass) {                   /* approaching, then at rest, then separating */
         for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {
             const int near = s->is_active[c] || c == c_event || gaps[c] <= s->opt.contact_tol
-                             || (vn[c] < -PAPER_CASE2_V_FLOOR && gaps[c] <= window);
+                             || (vn[c] < -v_rest && gaps[c] <= window);
             const int kind = vn[c] < 0.0 ? 0 : vn[c] == 0.0 ? 1 : 2;
             if (!near || kind != pass) continue;
             if (n == nq) {
@@ -2104,7 +2118,18 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
         }
         code = paper_case2_hold(s, s->x1, nset, set, n, list);   /* held at rest, the others not pushed in */
         if (code == PAPER_CASE2_OK) code = paper_case2_settle(s, s->x1, &nset, set);
-        if (code != PAPER_CASE2_OK) return code;
+        if (code != PAPER_CASE2_OK && code != PAPER_CASE2_ERR_LCP) return code;
+        paper_case2_normal_velocities(s->x1, s->p, vn);
+        for (k = 0; k < n; ++k) {
+            /* a contact whose row is (nearly) dependent on the held ones' moves with them: if holding them
+             * drives it into its wall, or the contacts are too degenerate to say which push, nothing is
+             * held this time (the law's velocities stand) */
+            if (code == PAPER_CASE2_ERR_LCP || vn[list[k]] < -(10.0 * bound * scale + 1e-15)) {
+                for (i = 0; i < nq; ++i) s->x1[nq + i] = qd_plus[i];
+                nset = 0;
+                break;
+            }
+        }
         paper_case2_normal_velocities(s->x1, s->p, vn);
     }
     if (rounds == 0) {                               /* no impulse: an impact only if a contact lands */
@@ -2216,9 +2241,11 @@ int paper_case2_sim_advance(paper_case2_sim *s, double t_end, const double *t_ev
             return s->fail_seen ? s->fail_seen : PAPER_CASE2_ERR_STEP_SIZE;
         }
         if (s->opt.method == PAPER_CASE2_METHOD_RK4) {
-            /* RK4 has no error control: 3 steps in a row at h rho > 2.5 mean the step is past its stability */
-            s->n_unstable = paper_case2_rk4_step(s, h) > 2.5 ? s->n_unstable + 1 : 0;
-            if (s->n_unstable >= 3) return PAPER_CASE2_ERR_UNSTABLE;
+            /* RK4 has no error control: 3 steps in a row at h rho > 2.5, or one far past it, mean the step is
+             * beyond its stability */
+            const double h_rho = paper_case2_rk4_step(s, h);
+            s->n_unstable = h_rho > 2.5 ? s->n_unstable + 1 : 0;
+            if (s->n_unstable >= 3 || !(h_rho < 10.0)) return PAPER_CASE2_ERR_UNSTABLE;
         } else {
             double fac;
             const int eighth = s->opt.method == PAPER_CASE2_METHOD_DOP853;

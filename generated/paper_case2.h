@@ -265,7 +265,7 @@ const char *paper_case2_error_message(int code);
 #define PAPER_CASE2_ERR_NONFINITE   -13   /* the state became NaN or infinite */
 #define PAPER_CASE2_ERR_TOO_MANY_CONTACTS -14 /* more approaching contacts at once than NQ */
 #define PAPER_CASE2_ERR_SINGULAR_CONTACT -15  /* the persistent contact constraints are dependent */
-#define PAPER_CASE2_ERR_UNSTABLE   -17     /* RK4: 3 steps in a row at h rho > 2.5, rho the rate of the chain's
+#define PAPER_CASE2_ERR_UNSTABLE   -17     /* RK4: 3 steps in a row at h rho > 2.5 (or one > 10), rho the rate of the chain's
                                               fastest mode between the last two stages: dt is past RK4's
                                               stability (about 2.8 / rho); the state is the last step's */
 #define PAPER_CASE2_ERR_IMPACT_ACCURACY -16  /* an impact failed its post-conditions (F >= 0, no approach, no energy

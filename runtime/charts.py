@@ -518,7 +518,7 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
             t = t1
             if len(impacts) >= max_impacts and t < t_end:
                 status, message = -1, (f"stopped after {len(impacts)} impacts at t = {t:.12g} s (max_impacts): "
-                                       "impacts accumulate (Zeno behaviour?)")
+                                       "the max_impacts limit")
                 break
             continue
         # continue from sample `cut` on the other chart

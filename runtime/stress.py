@@ -26,7 +26,7 @@ Registering a case (this module's own cases live in ``runtime/stress_cases.py``;
         scene="stress-my-scene",             # shipped scene name / file, a Scene, or a callable -> Scene
         simulate={"t_end": 1.0, "rtol": 1e-10, "atol": 1e-12},   # keyword arguments of simulate()
         params={"e_x2_min": 0.5},            # optional overrides of the parameter vector, by name
-        expect=Expect.ok(),                  # or Expect.status("impacts accumulate"), Expect.raises("O_1")
+        expect=Expect.ok(),                  # or Expect.status("max_impacts limit"), Expect.raises("O_1")
         checks=(energy_conserved(1e-9), converged()),   # extra checks: fn(run) -> Check or [Check]
         slow=False,                          # True: left out of --quick and of the default test run
         known_issue="",                      # a FAIL the runtime has today (the expectation stays the

@@ -101,7 +101,7 @@ def test_expected_outcomes_are_enforced():
     outcome = run_case(replace(CASES["corner"], expect=Expect.raises("anything")))
     assert not outcome.passed and "expected an error" in outcome.reasons[0]
     stopped = replace(CASES["flat-drop"], checks=(), simulate={**CASES["flat-drop"].simulate, "max_impacts": 2})
-    assert run_case(replace(stopped, expect=Expect.status("impacts accumulate"))).passed
+    assert run_case(replace(stopped, expect=Expect.status("max_impacts limit"))).passed
     outcome = run_case(replace(stopped, expect=Expect.status("no such message")))
     assert not outcome.passed and "does not match" in outcome.reasons[0]
     outcome = run_case(replace(stopped, expect=Expect.ok()))

@@ -1870,46 +1870,46 @@ static int paper_case2_rest_at_start(paper_case2_sim *s)
     return PAPER_CASE2_OK;
 }
 
-/* The round-off bound of the impact law on the energy, relative: max(1e-10, 64 eps sqrt(kappa)), kappa the
- * 2-norm condition number of I_f, estimated by 8 power iterations on I_f and on I_f^-1 with its LDL^T
- * factor (work as left by _impact_system).  The kinetic energy after an impact carries the backward error
- * of the solve, eps |I_f| |qd| |I_f^-1 N^T F|, which relative to T grows like eps sqrt(kappa) (a slender
- * link with a tiny axial inertia, a state near the gimbal lock). */
-static double paper_case2_impact_roundoff(const double *work)
+/* The round-off bound of the impact law on the kinetic energy, relative to T (the velocities qd -> qd_plus
+ * at T = T(qd); work holds I_f's LDL^T as left by _impact_system).  The law's solves are backward stable:
+ * they are exact for I_f + dI_f with |dI_f| <= 4 (NQ + 1) eps |I_f|, and the energy they leave differs from
+ * the law's by dI_f's work on the velocities, |qd^T dI_f dqd| + |dqd^T dI_f dqd| / 2 (dqd = qd_plus - qd).
+ * So b = max(1e-10, 4 (NQ + 1) eps |I_f| (|qd| |dqd| + |dqd|^2 / 2) / T), |I_f| (2-norm) by 16 power
+ * iterations on the factor.  b grows where a large velocity change meets a soft direction of I_f (a
+ * slender link with a tiny axial inertia, a state near the gimbal lock). */
+static double paper_case2_impact_roundoff(const double *work, const double *qd, const double *qd_plus, double T)
 {
     const int nq = PAPER_CASE2_NQ;
-    double x[PAPER_CASE2_NQ], y[PAPER_CASE2_NQ], norm_M = 0.0, norm_inv = 0.0, b;
-    int i, k, it, inverse;
-    for (inverse = 0; inverse < 2; ++inverse) {
-        double norm = 0.0;
-        for (i = 0; i < nq; ++i) x[i] = 1.0 + 0.1 * i * (i % 2 ? -1.0 : 1.0);   /* a fixed, generic start */
-        for (it = 0; it < 8; ++it) {
-            double sum = 0.0;
-            for (i = 0; i < nq; ++i) sum += x[i] * x[i];
-            sum = sqrt(sum);
-            if (!(sum > 0.0)) break;
-            for (i = 0; i < nq; ++i) y[i] = x[i] / sum;
-            if (inverse) {
-                paper_case2_ldlt_solve(nq, work, y);
-            } else {                                            /* y = L D L^T y */
-                for (i = 0; i < nq; ++i) {
-                    for (k = i + 1; k < nq; ++k) y[i] += work[k*nq + i] * y[k];
-                }
-                for (i = 0; i < nq; ++i) y[i] *= work[i*nq + i];
-                for (i = nq - 1; i >= 0; --i) {
-                    for (k = 0; k < i; ++k) y[i] += work[i*nq + k] * y[k];
-                }
-            }
-            norm = 0.0;
-            for (i = 0; i < nq; ++i) {
-                norm += y[i] * y[i];
-                x[i] = y[i];
-            }
-            norm = sqrt(norm);
-        }
-        if (inverse) norm_inv = norm; else norm_M = norm;
+    double x[PAPER_CASE2_NQ], y[PAPER_CASE2_NQ], norm_M = 0.0, size = 0.0, change = 0.0, b;
+    int i, k, it;
+    for (i = 0; i < nq; ++i) {
+        x[i] = 1.0 + 0.1 * i * (i % 2 ? -1.0 : 1.0);      /* a fixed, generic start */
+        size += qd[i] * qd[i];
+        change += (qd_plus[i] - qd[i]) * (qd_plus[i] - qd[i]);
     }
-    b = 64.0 * PAPER_CASE2_EPS * sqrt(norm_M * norm_inv);
+    for (it = 0; it < 16; ++it) {                        /* |I_f| = |L D L^T| by power iteration */
+        double sum = 0.0;
+        for (i = 0; i < nq; ++i) sum += x[i] * x[i];
+        sum = sqrt(sum);
+        if (!(sum > 0.0)) break;
+        for (i = 0; i < nq; ++i) y[i] = x[i] / sum;
+        for (i = 0; i < nq; ++i) {                       /* y = L^T y, D y, L y in place */
+            for (k = i + 1; k < nq; ++k) y[i] += work[k*nq + i] * y[k];
+        }
+        for (i = 0; i < nq; ++i) y[i] *= work[i*nq + i];
+        for (i = nq - 1; i >= 0; --i) {
+            for (k = 0; k < i; ++k) y[i] += work[i*nq + k] * y[k];
+        }
+        norm_M = 0.0;
+        for (i = 0; i < nq; ++i) {
+            norm_M += y[i] * y[i];
+            x[i] = y[i];
+        }
+        norm_M = sqrt(norm_M);
+    }
+    size = sqrt(size);
+    change = sqrt(change);
+    b = 4.0 * (nq + 1) * PAPER_CASE2_EPS * norm_M * (size * change + 0.5 * change * change) / (T > 0.0 ? T : 1e-300);
     return b > 1e-10 ? b : 1e-10;
 }
 
@@ -2045,7 +2045,7 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
     code = paper_case2_impact_rounds(x, x + nq, s->p, n, list, e_law, first, qd_plus, F, s->work, &rounds,
                                    &plastic);
     if (code != PAPER_CASE2_OK) return code;
-    bound = r->roundoff = paper_case2_impact_roundoff(s->work);
+    bound = r->roundoff = paper_case2_impact_roundoff(s->work, x + nq, qd_plus, T_before);
     paper_case2_energy(x, qd_plus, s->p, E);
     T_law = E[0];
     for (k = 0; k < n; ++k) changed |= e[k] != e_law[k];

@@ -14,6 +14,7 @@ from .compile import BuildError, CompilerNotFound
 from .model import load_model
 from .precision import STATE_TOL, TIME_TOL
 from .simulate import METHODS, simulate
+from . import fuzz as fuzz_study
 from . import stress as stress_suite
 
 
@@ -59,6 +60,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help=f"the confirming runs' final states (max |x - x_ref|) must agree with the reference "
                            f"to this (default {STATE_TOL:g})")
     stress_suite.add_parser(commands)
+    fuzz_study.add_parser(commands)
     return parser
 
 
@@ -83,6 +85,8 @@ def main(argv=None) -> int:
         return precision_main(args)
     if args.command == "stress":
         return stress_suite.main(args)
+    if args.command == "fuzz":
+        return fuzz_study.main(args)
     loaded = scene_and_horizon(args)
     if loaded is None:
         return 2

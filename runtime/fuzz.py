@@ -1,0 +1,349 @@
+"""Fuzz study: random admissible scenes through the hybrid loop, each run checked independently.
+
+    python -m runtime fuzz [--runs N] [--per-structure K] [--seed S] [--jobs J] [--budget SECONDS]
+                           [--json FILE] [--case ID]
+
+The distribution (``random_structure`` and ``random_run``): n = 1 ... 8 links; lengths 1e-3 ... 1e2 m and
+masses 1e-4 ... 1e4 kg (log-uniform, per link, so ratios of 1e5 within a chain occur); slender line links
+(cross-section radius 1e-3 ... 1e-1 of the length, the axial inertia sometimes 1e-8 of that) and thick
+rigid bodies (a random box, centre of mass off the axis, principal axes turned); planar chains (parallel
+joint axes, start in the X1-X2 plane) and spatial ones with random twists; gravity 0 or 9.81; a box around
+the start, often cramped (margins 1e-3 ... 1 of the chain's extent, so that a side can be shorter than the
+chain); restitution per wall 0, 1 or uniform in [0, 1]; rates up to 20 rad/s; DOPRI5 and DOP853 at
+rtol 1e-11 ... 1e-6 (atol = rtol x the shortest link, at least 1e-16) and RK4 at dt 1e-5 ... 1e-3 s.  A
+*structure* (n, link kinds, twists, planar or not) is compiled once; its runs draw new lengths, masses,
+inertias, walls, restitutions, start and integrator through the parameter vector and the start override.
+
+Every run is checked independently of the engine's own checks (``check_run``):
+  * no NaN in the samples, the impact states and the final state;
+  * penetration: the compiled gap kernel on every sample and impact state >= -PEN_TOL (relative to the
+    chain's extent, plus the simultaneity window of the adaptive methods);
+  * no energy gain at an impact: T from the recorded velocities at the impact configuration, after <=
+    before (1 + ENERGY_TOL);
+  * e = 1 kept: where every contact that took an impulse is on a wall with e = 1, |T_after + energy taken
+    by landings - T_before| <= ENERGY_TOL T_before;
+  * the run ends within its wall-time budget (the ``max_wall_time`` it was given, plus slack).
+Outcomes are classed by message (numbers stripped).  A run *fails* on a violated check, an exception,
+or a stop from the engine's own post-impact checks or a non-finite state (FAILURE_PATTERNS); a stop with
+a physical reason (an RK4 step past stability, the wall-time budget, max_impacts) is a clean end.
+"""
+from __future__ import annotations
+
+import json
+import math
+import multiprocessing
+import re
+import sys
+import time
+import traceback
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from codegen.scene import LineLink, RigidLink, Scene, Wall, WALL_NAMES
+
+PEN_TOL = 1e-9            # m per m of the chain's extent (at least 1e-9 m), see check_run
+ENERGY_TOL = 1e-7         # relative energy change allowed at an impact (round-off of ill-conditioned laws)
+BUDGET = 20.0             # s of wall time per run
+BUDGET_SLACK = 5.0        # s beyond the budget before a run counts as over it
+T_END_MAX = 2.0           # s
+
+# Stops that are failures of the engine: its own post-impact checks and non-finite states.
+FAILURE_PATTERNS = (
+    "still approaches", "energy increased", "elastic impact changed", "could not be solved to round-off",
+    "NaN or infinite", "complementarity problem has no solution", "not positive definite",
+)
+
+
+# ---------------------------------------------------------------------------
+# the distribution
+# ---------------------------------------------------------------------------
+def _log_uniform(rng, lo: float, hi: float) -> float:
+    return float(10 ** rng.uniform(math.log10(lo), math.log10(hi)))
+
+
+def _rotation(rng) -> np.ndarray:
+    q = rng.normal(size=4)
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def _random_link(rng, kind: str, planar: bool):
+    length, mass = _log_uniform(rng, 1e-3, 1e2), _log_uniform(rng, 1e-4, 1e4)
+    if kind == "line":
+        mu = mass / length
+        r = length * _log_uniform(rng, 1e-3, 1e-1)
+        axial = mu * r * r / 2 * (_log_uniform(rng, 1e-8, 1.0) if rng.uniform() < 0.3 else 1.0)
+        return LineLink(length, mu, (axial, mu * r * r / 4, mu * r * r / 4))
+    a, b, c = length, length * rng.uniform(0.05, 1.0), length * rng.uniform(0.05, 1.0)
+    moments = mass / 12 * np.array([b * b + c * c, a * a + c * c, a * a + b * b])
+    R = np.eye(3) if planar else _rotation(rng)
+    inertia = R @ np.diag(moments) @ R.T
+    inertia = (inertia + inertia.T) / 2
+    com = (length * rng.uniform(0.1, 0.9), 0.0 if planar else length * rng.uniform(-0.2, 0.2),
+           0.0 if planar else length * rng.uniform(-0.2, 0.2))
+    return RigidLink(length, mass, com, tuple(map(tuple, inertia)))
+
+
+def random_structure(rng, index: int, n_max: int = 8) -> Scene:
+    """A compiled model's worth of randomness: n, link kinds, twists, planar or spatial, gravity.  The
+    numbers (lengths, masses, walls, start) are redrawn per run."""
+    n = int(rng.integers(1, n_max + 1))
+    planar = rng.uniform() < 0.35
+    kinds = [str(rng.choice(["line", "rigid"])) for _ in range(n)]
+    links = tuple(_random_link(rng, kind, planar) for kind in kinds)
+    twists = ()
+    if not planar and n > 1:
+        twists = tuple(tuple(map(tuple, np.eye(3) if rng.uniform() < 0.3 else _rotation(rng))) for _ in range(n - 1))
+    gravity = float(rng.choice([0.0, 9.81]))
+    walls = tuple(Wall(name, -1e3 if name.endswith("min") else 1e3, 1.0) for name in WALL_NAMES
+                  if not (planar and name.startswith("x3")))
+    q0 = [-math.pi / 2, 0.0] + [0.0] * n + [0.0, 0.0, 0.0]
+    return Scene(name=f"fuzz{index}", links=links, twists=twists, gravity=gravity, walls=walls, q0=tuple(q0))
+
+
+@dataclass
+class Run:
+    """One run of a structure: everything simulate() is given."""
+
+    p: np.ndarray
+    q0: np.ndarray
+    qd0: np.ndarray
+    t_end: float
+    options: dict
+    extent: float
+
+
+def random_run(rng, scene: Scene, model) -> Run:
+    """New lengths, masses, inertias (same link kinds), a box around a random start, restitutions,
+    rates and an integrator."""
+    planar = scene.walls and not any(w.name.startswith("x3") for w in scene.walls)
+    links = tuple(_random_link(rng, link.kind, planar) for link in scene.links)
+    names = scene.parameter_names()
+    p = model.p.copy()
+    values = [v for link in links for v in link.param_values()]
+    p[1:1 + len(values)] = values
+    p[0] = scene.gravity
+    n = scene.n
+    q = np.zeros(scene.nq)
+    q[2:2 + n] = rng.uniform(-math.pi, math.pi, n)
+    if planar:
+        q[0] = -math.pi / 2
+    else:
+        q[0] = rng.uniform(-math.pi, math.pi)
+        q[1] = rng.uniform(-1.2, 1.2)
+    q_model = model.layout.reduce(q)
+    points = model.contact_points(q_model, p)
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    extent = float(max((hi - lo).max(), min(link.length for link in links)))
+    for name in names:
+        if name.startswith("wall_"):
+            axis, side = int(name[6]) - 1, name.endswith("max")
+            margin = extent * _log_uniform(rng, 1e-3, 1.0)
+            p[names.index(name)] = hi[axis] + margin if side else lo[axis] - margin
+        elif name.startswith("e_"):
+            p[names.index(name)] = float(rng.choice([0.0, 1.0, rng.uniform()]))
+    omega = _log_uniform(rng, 0.1, 20.0)
+    qd = np.zeros(scene.nq)
+    qd[:2 + n] = rng.uniform(-omega, omega, 2 + n)
+    qd[2 + n:] = rng.uniform(-1.0, 1.0, 3) * omega * extent
+    if planar:
+        qd[0] = qd[1] = qd[-1] = 0.0
+    speed = max(float(np.abs(model.contact_velocities(q_model, model.layout.reduce(qd), p)).max()), 1e-6)
+    t_end = float(min(T_END_MAX, max(0.05, 5.0 * extent / speed)))
+    kind = rng.uniform()
+    if kind < 0.4:
+        method = "dopri5"
+    elif kind < 0.8:
+        method = "dop853"
+    else:
+        method = "rk4"
+    if method == "rk4":
+        options = {"method": "rk4", "dt": _log_uniform(rng, 1e-5, 1e-3)}
+    else:
+        rtol = _log_uniform(rng, 1e-11, 1e-6)
+        options = {"method": method, "rtol": rtol,
+                   "atol": max(rtol * min(link.length for link in links), 1e-16)}
+    return Run(p, q, qd, t_end, options, extent)
+
+
+# ---------------------------------------------------------------------------
+# the checks
+# ---------------------------------------------------------------------------
+@dataclass
+class Outcome:
+    case: str                 # "structure-seed/run": rerun with --case
+    n: int
+    planar: bool
+    method: str
+    status: int
+    outcome: str              # 'ok', the stop message with numbers stripped, or 'exception: ...'
+    failed: bool
+    violations: list = field(default_factory=list)
+    impacts: int = 0
+    seconds: float = 0.0
+    message: str = ""
+
+
+def classify(message: str) -> str:
+    return re.sub(r"[-+]?\d[\d.]*(e[-+]?\d+)?", "#", message)[:120]
+
+
+def check_run(model, run: Run, result, seconds: float, budget: float) -> list[str]:
+    """The independent checks (module docstring); returns the violations."""
+    p, layout, violations = run.p, model.layout, []
+    arrays = [result.q, result.qd, result.q_final, result.qd_final] + \
+             [a for i in result.impacts for a in (i.qd_before, i.qd_after)]
+    if not all(np.all(np.isfinite(a)) for a in arrays):
+        return ["non-finite state"]
+    method = run.options["method"]
+    window = 0.0 if method == "rk4" else 100 * (run.options["atol"] + run.options["rtol"] * run.extent)
+    pen_tol = PEN_TOL * max(1.0, run.extent) + window + (1e-6 * run.extent if method == "rk4" else 0.0)
+    states = [layout.reduce(q) for q in result.q] + [layout.reduce(i.q) for i in result.impacts]
+    if states and model.contacts:
+        deepest = min(float(model.contact_gaps(q, p).min()) for q in states)
+        if deepest < -pen_tol:
+            violations.append(f"penetration {-deepest:.3g} m > {pen_tol:.3g} m")
+    names = model.scene.parameter_names()
+    elastic_walls = {w.name for w in model.scene.walls if p[names.index(f"e_{w.name}")] == 1.0}
+    for impact in result.impacts:
+        q = layout.reduce(impact.q)
+        T0 = model.energy(q, layout.reduce(impact.qd_before), p)[0]
+        T1 = model.energy(q, layout.reduce(impact.qd_after), p)[0]
+        if T1 > T0 * (1 + ENERGY_TOL) + 1e-300:
+            violations.append(f"energy gain at t = {impact.t:.6g} s: {T0!r} -> {T1!r} J")
+            break
+        if all(c.wall in elastic_walls for c in impact.contacts if c.impulse > 0) and not impact.plastic:
+            if abs(T1 + impact.energy_rest - T0) > ENERGY_TOL * T0:
+                violations.append(f"elastic impact at t = {impact.t:.6g} s changed T: {T0!r} -> {T1!r} J")
+                break
+    if seconds > budget + BUDGET_SLACK:
+        violations.append(f"over budget: {seconds:.1f} s")
+    return violations
+
+
+def run_structure(args) -> list[Outcome]:
+    """Compile one structure and run its runs (one worker's job)."""
+    seed, index, runs, budget, n_max = args
+    from .model import load_model
+    from .simulate import simulate
+    rng = np.random.default_rng([seed, index])
+    scene = random_structure(rng, index, n_max)
+    outcomes = []
+    try:
+        model = load_model(scene, specialise=False)
+    except Exception as exc:                           # noqa: BLE001 - reported as an outcome
+        return [Outcome(f"{seed}-{index}/{k}", scene.n, False, "-", -1, f"exception: {classify(str(exc))}", True,
+                        message=str(exc)) for k in range(runs)]
+    planar = not any(w.name.startswith("x3") for w in scene.walls)
+    for k in range(runs):
+        run = random_run(rng, scene, model)
+        case = f"{seed}-{index}/{k}"
+        start = time.perf_counter()
+        try:
+            result = simulate(model, run.t_end, p=run.p, q0=run.q0, qd0=run.qd0, max_wall_time=budget,
+                              t_eval=np.linspace(0.0, run.t_end, 201), **run.options)
+        except ValueError as exc:                      # a refused setting (an RK4 step past stability)
+            seconds = time.perf_counter() - start
+            outcomes.append(Outcome(case, scene.n, planar, run.options["method"], -1,
+                                    f"refused: {classify(str(exc))}", False, seconds=seconds, message=str(exc)))
+            continue
+        except Exception:                              # noqa: BLE001 - a traceback is a failure
+            outcomes.append(Outcome(case, scene.n, planar, run.options["method"], -1, "exception", True,
+                                    message=traceback.format_exc()[-400:]))
+            continue
+        seconds = time.perf_counter() - start
+        violations = check_run(model, run, result, seconds, budget)
+        text = "ok" if result.status == 0 else classify(result.message)
+        failed = bool(violations) or any(pattern in result.message for pattern in FAILURE_PATTERNS)
+        outcomes.append(Outcome(case, scene.n, planar, run.options["method"], result.status, text, failed,
+                                violations, len(result.impacts), seconds, result.message))
+    return outcomes
+
+
+def fuzz(runs: int = 1000, per_structure: int = 10, seed: int = 0, jobs: int | None = None,
+         budget: float = BUDGET, n_max: int = 8, progress=None) -> list[Outcome]:
+    """Run ``runs`` random runs (``per_structure`` per compiled structure) on ``jobs`` processes."""
+    structures = max(1, math.ceil(runs / per_structure))
+    tasks = [(seed, index, min(per_structure, runs - index * per_structure), budget, n_max)
+             for index in range(structures)]
+    outcomes: list[Outcome] = []
+    start = time.perf_counter()
+    jobs = jobs or multiprocessing.cpu_count()
+    with multiprocessing.get_context("spawn").Pool(jobs) as pool:
+        for done, batch in enumerate(pool.imap_unordered(run_structure, tasks), start=1):
+            outcomes += batch
+            if progress:
+                failed = sum(o.failed for o in outcomes)
+                progress(f"[{done}/{structures}] {len(outcomes)} runs, {failed} failed, "
+                         f"{time.perf_counter() - start:.0f} s")
+    return sorted(outcomes, key=lambda o: [int(x) for x in re.split(r"[-/]", o.case)])
+
+
+def table(outcomes: list[Outcome]) -> str:
+    counts: dict[tuple[bool, str], int] = {}
+    for o in outcomes:
+        key = (o.failed, o.outcome if not o.violations else "check: " + classify(o.violations[0]))
+        counts[key] = counts.get(key, 0) + 1
+    lines = ["| outcome | runs | failure |", "|---|---|---|"]
+    for (failed, text), count in sorted(counts.items(), key=lambda kv: (-kv[1], kv[0][1])):
+        lines.append(f"| {text} | {count} | {'yes' if failed else ''} |")
+    return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------
+# the command
+# ---------------------------------------------------------------------------
+def add_parser(commands) -> None:
+    parser = commands.add_parser("fuzz", help="random admissible scenes through the hybrid loop, checked",
+                                 description=__doc__.split("\n\n")[0])
+    parser.add_argument("--runs", type=int, default=1000, help="runs in all (default 1000)")
+    parser.add_argument("--per-structure", type=int, default=10, help="runs per compiled structure (default 10)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the study (default 0)")
+    parser.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
+    parser.add_argument("--budget", type=float, default=BUDGET, help=f"s of wall time per run (default {BUDGET:g})")
+    parser.add_argument("--n-max", type=int, default=8, help="largest number of links (default 8)")
+    parser.add_argument("--json", metavar="FILE", help="write every outcome as JSON")
+    parser.add_argument("--case", metavar="SEED-STRUCTURE/RUN", help="rerun one case and print its scene and call")
+
+
+def _rerun(case: str, budget: float, n_max: int) -> int:
+    match = re.fullmatch(r"(\d+)-(\d+)/(\d+)", case)
+    if not match:
+        print(f"error: --case: expected SEED-STRUCTURE/RUN (e.g. 0-12/3), got {case!r}", file=sys.stderr)
+        return 2
+    seed, index, k = map(int, match.groups())
+    from .model import load_model
+    rng = np.random.default_rng([seed, index])
+    scene = random_structure(rng, index, n_max)
+    model = load_model(scene, specialise=False)
+    for _ in range(k + 1):
+        run = random_run(rng, scene, model)
+    print(f"scene: {scene}")
+    print(f"simulate(model, {run.t_end!r}, p={run.p.tolist()!r}, q0={run.q0.tolist()!r}, "
+          f"qd0={run.qd0.tolist()!r}, **{run.options!r})")
+    outcome = next(o for o in run_structure((seed, index, k + 1, budget, n_max)) if o.case == case)
+    print(json.dumps(asdict(outcome), indent=1, default=str))
+    return 1 if outcome.failed else 0
+
+
+def main(args) -> int:
+    if args.case:
+        return _rerun(args.case, args.budget, args.n_max)
+    if not (args.runs >= 1 and args.per_structure >= 1 and 1 <= args.n_max <= 8 and args.budget > 0):
+        print("error: --runs and --per-structure must be >= 1, --n-max in 1..8, --budget > 0", file=sys.stderr)
+        return 2
+    start = time.perf_counter()
+    outcomes = fuzz(args.runs, args.per_structure, args.seed, args.jobs, args.budget, args.n_max,
+                    progress=lambda m: print(m, file=sys.stderr, flush=True))
+    print(f"## Fuzz: {len(outcomes)} runs, seed {args.seed}, {time.perf_counter() - start:.0f} s\n")
+    print(table(outcomes))
+    failed = [o for o in outcomes if o.failed]
+    for o in failed[:50]:
+        print(f"FAILED {o.case} ({o.method}, n = {o.n}): {o.violations or o.message[:200]}")
+    if args.json:
+        with open(args.json, "w") as handle:
+            json.dump([asdict(o) for o in outcomes], handle, indent=1, default=str)
+    return 1 if failed else 0

@@ -1102,7 +1102,7 @@ const char *paper_case1_error_message(int code)
     switch (code) {
     case PAPER_CASE1_OK: return "ok";
     case PAPER_CASE1_ERR_BAD_CONTACT: return "bad active-contact list: empty, longer than NQ, repeated, or index outside 0..NCONTACT-1";
-    case PAPER_CASE1_ERR_SINGULAR_MASS: return "inertia matrix I_f is not positive definite (gimbal lock at theta_0 = +-pi/2?)";
+    case PAPER_CASE1_ERR_SINGULAR_MASS: return "inertia matrix I_f is singular to double precision (a pivot of its LDL^T below 1e-15 of its largest diagonal): the chain's ratios of masses, lengths and inertias span more than 15 digits at this state";
     case PAPER_CASE1_ERR_SINGULAR_IMPACT: return "impact matrix J I_f^-1 J^T is singular: the active contact constraints are dependent";
     case PAPER_CASE1_ERR_LCP: return "impact complementarity problem has no solution (too many or degenerate contacts)";
     case PAPER_CASE1_ERR_GIMBAL_LOCK: return "gimbal lock: theta_0 is too close to the singularity of the base chart (|det E| below sqrt(16 eps / tol)) for results to the tolerance; continue on a second chart";
@@ -1114,6 +1114,7 @@ const char *paper_case1_error_message(int code)
     case PAPER_CASE1_ERR_SINGULAR_CONTACT: return "the persistent contact constraints are dependent (N I_f^-1 N^T is singular)";
     case PAPER_CASE1_ERR_IMPACT_ACCURACY: return "the impact law could not be solved to round-off (an impulse < 0, a contact still approaching, an energy gain or an elastic energy change): the impact system is ill-conditioned";
     case PAPER_CASE1_ERR_UNSTABLE: return "RK4 is unstable at this step: the chain's fastest mode needs dt below about 2.8 / its rate; reduce dt or use an adaptive method";
+    case PAPER_CASE1_ERR_LOST_CONTACT: return "a point lies beyond its wall at an impact: a wall crossing was missed, the motion is too fast or I_f too ill-conditioned (extreme mass, length or inertia ratios) for the tolerance";
     default: return "unknown error code";
     }
 }
@@ -2233,6 +2234,13 @@ static int paper_case1_resolve(paper_case1_sim *s, double t, int c_event, paper_
             impact = 1;
     }
     if (!impact) return 0;                               /* grazing touch: nothing to resolve */
+    {
+        /* every other point must be on the right side of its wall, to the event search's tolerance */
+        const double depth = s->opt.contact_tol + paper_case1_simultaneity_window(s, x);
+        for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {
+            if (gaps[c] < -depth) return PAPER_CASE1_ERR_LOST_CONTACT;
+        }
+    }
     if (paper_case1_chart_measure(x) < paper_case1_chart_floor(s)) return PAPER_CASE1_ERR_GIMBAL_LOCK;
     window = paper_case1_simultaneity_window(s, x);
     for (pass = 0; pass < 3; ++pass) {                   /* approaching, then at rest, then separating */

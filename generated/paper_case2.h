@@ -97,7 +97,8 @@
 /* return codes */
 #define PAPER_CASE2_OK                   0
 #define PAPER_CASE2_ERR_BAD_CONTACT     -1   /* active contact list empty, too long, repeated or out of range */
-#define PAPER_CASE2_ERR_SINGULAR_MASS   -2   /* I_f not positive definite (gimbal lock theta_0 = +-pi/2?) */
+#define PAPER_CASE2_ERR_SINGULAR_MASS   -2   /* I_f singular to double precision (pivot < 1e-15 of its largest
+                                               diagonal: mass, length and inertia ratios beyond 15 digits) */
 #define PAPER_CASE2_ERR_SINGULAR_IMPACT -3   /* active contact rows linearly dependent */
 #define PAPER_CASE2_ERR_LCP             -4   /* complementarity impact has no solution / too many contacts */
 #define PAPER_CASE2_ERR_GIMBAL_LOCK     -5   /* theta_0 too close to the gimbal lock of the base chart: the base
@@ -268,6 +269,9 @@ const char *paper_case2_error_message(int code);
 #define PAPER_CASE2_ERR_UNSTABLE   -17     /* RK4: 3 steps in a row at h rho > 2.5 (or one > 10), rho the rate of the chain's
                                               fastest mode between the last two stages: dt is past RK4's
                                               stability (about 2.8 / rho); the state is the last step's */
+#define PAPER_CASE2_ERR_LOST_CONTACT -18    /* at an impact a point lay beyond its wall by more than contact_tol
+                                              plus the simultaneity window: a crossing was missed because the
+                                              motion is too fast or I_f too ill-conditioned for the tolerance */
 #define PAPER_CASE2_ERR_IMPACT_ACCURACY -16  /* an impact failed its post-conditions (F >= 0, no approach, no energy
                                               gain, e = 1 energy kept) beyond round-off: ill-conditioned */
 

@@ -43,7 +43,7 @@ import numpy as np
 from codegen.scene import Scene, load_scene
 
 from .model import CompiledModel, load_model
-from .simulate import Impact, SimulationResult, sample_times, simulate
+from .simulate import Impact, SimulationResult, impact_warnings, sample_times, simulate
 
 CHART_NAMES = ("A", "B")
 EZ = np.array([0.0, 0.0, 1.0])
@@ -400,11 +400,11 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
     events, persistent, resting = [], [], set()      # contact events, and the contacts resting now
     totals = {"n_steps": 0, "n_rejected": 0, "n_rhs": 0}
 
-    budget = options.pop("max_wall_time", None)       # one wall-time budget for the whole run
+    wall_budget = options.pop("max_wall_time", None)  # one wall-time budget for the whole run
     started = time.perf_counter()
 
     def run_chunk(model, duration, times, q, qd, steps):
-        remaining = None if budget is None else max(budget - (time.perf_counter() - started), 1e-3)
+        remaining = None if wall_budget is None else max(wall_budget - (time.perf_counter() - started), 1e-3)
         run = simulate(model, duration, t_eval=times, p=p_vec, q0=q, qd0=qd, max_steps=steps,
                        max_impacts=max(1, max_impacts - len(impacts)), charts=False, max_wall_time=remaining,
                        check_start=False,
@@ -430,6 +430,10 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
     full_budget = False                                   # retry the chunk with max_steps
 
     while t < t_end:
+        if wall_budget is not None and time.perf_counter() - started > wall_budget:
+            status, message = -1, (f"at t = {t:.12g} s: wall-time budget of {wall_budget:g} s used up "
+                                   f"({totals['n_steps']} steps, {len(switches)} chart switches)")
+            break
         chart, model = charts[current], compiled[current]
         spacing = max(min(monitor_dt, 0.5 * (threshold - hard_limit) / max(speed, 1e-300)), MIN_MONITOR_DT)
         t1 = min(t + chunk, t + MAX_MONITOR_SAMPLES * spacing)
@@ -542,12 +546,14 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
         message = f"{message}; {len(switches)} chart switch(es)"
     extra = {"contact_events": events, "persistent_final": persistent} \
         if "contact_events" in {f.name for f in dataclasses.fields(SimulationResult)} else {}
+    warnings = impact_warnings(impacts)
     return ChartResult(
         **extra, t=user[:n_done].copy(), q=out.q[:n_done], qd=out.qd[:n_done], impacts=impacts,
         t_final=float(t), q_final=q_final, qd_final=qd_final, energy_initial=energy_initial,
         energy_final=_energy(compiled[current], q, qd, p_vec),
         n_steps=totals["n_steps"], n_rejected=totals["n_rejected"], n_rhs=totals["n_rhs"], status=status,
-        message=message, method=options.get("method", "dopri5"), options=opts,
+        message=message + (f"; {len(warnings)} impact(s) of limited accuracy (see warnings)" if warnings else ""),
+        method=options.get("method", "dopri5"), options=opts, warnings=warnings,
         chart=out.chart[:n_done], q_native=out.q_native[:n_done], qd_native=out.qd_native[:n_done],
         impact_chart=impact_chart, switches=switches, chart_twists=(charts[0].twists, charts[1].twists),
         measure_a=charts[0].measure(out.q[:n_done, 1]), chart_b_name=models.name_b, min_measure=min_measure,

@@ -24,6 +24,7 @@ from .model import CompiledModel, load_model
 
 METHODS = ("dopri5", "dop853", "rk4")
 CHUNK_STEPS = 20000     # steps per call into the C loop between two looks at the wall-time budget
+ROUNDOFF_WARN = 1e-6    # an impact whose energy round-off bound exceeds this is named in result.warnings
 RK4_STABLE = 1.0        # RK4 is stable for h |lambda| < 2.78 on the imaginary and negative real axes; the
                         # estimate is of the largest mode at one state, so a factor 2.8 is kept in hand
 
@@ -50,6 +51,7 @@ class Impact:
     rounds: int = 1                     # rounds of the impact law (Newton's law with complementarity)
     plastic: bool = False               # the rounds were closed by a plastic round (energy lost, also at e = 1)
     energy_rest: float = 0.0            # J: kinetic energy taken by contacts that landed (made persistent)
+    roundoff: float = 1e-10             # the law's relative round-off bound on the energy (grows with cond(I_f))
 
 
 @dataclass
@@ -85,6 +87,7 @@ class SimulationResult:
     options: dict = field(default_factory=dict)
     contact_events: list = field(default_factory=list)   # ContactEvent, in time order
     persistent_final: list = field(default_factory=list)  # (point, wall) of the contacts resting at t_final
+    warnings: list = field(default_factory=list)          # results of limited accuracy, one sentence each
 
     @property
     def success(self) -> bool:
@@ -123,6 +126,7 @@ class SimulationResult:
             "contact_events": [{"t": e.t, "point": e.point, "wall": e.wall, "kind": e.kind}
                                for e in self.contact_events],
             "persistent_final": [{"point": point, "wall": wall} for point, wall in self.persistent_final],
+            "warnings": list(self.warnings),
         }
 
 
@@ -307,22 +311,32 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
             q0=None if q0 is None else layout.expand(q), qd0=None if qd0 is None else layout.expand(qd, velocity=True),
             max_impacts=max_impacts, max_steps=max_steps, method=method, rtol=rtol, atol=atol, dt=dt,
             h_max=h_max, contact_tol=contact_tol, event_samples=event_samples, event_tol=event_tol,
-            rest_height=rest_height, zeno_impacts=zeno_impacts, max_wall_time=max_wall_time)
+            rest_height=rest_height, zeno_impacts=zeno_impacts,
+            max_wall_time=None if max_wall_time is None else max(max_wall_time - (time.perf_counter() - start), 1e-3))
     x_final = np.array(ffi.unpack(sim.x, nx))
     n = i_eval[0]
+    warnings = impact_warnings(impacts)
     return SimulationResult(
         t=t_eval[:n].copy(), q=layout.expand(x_eval[:n, :nq]), qd=layout.expand(x_eval[:n, nq:], velocity=True),
         impacts=impacts, t_final=float(sim.t), q_final=layout.expand(x_final[:nq]),
         qd_final=layout.expand(x_final[nq:], velocity=True),
         energy_initial=energy_initial, energy_final=sum(model.energy(x_final[:nq], x_final[nq:], p)),
         n_steps=int(sim.n_steps), n_rejected=int(sim.n_rejected), n_rhs=int(sim.n_rhs), status=status,
-        message=message, method=method, contact_events=contact_events,
+        message=message + (f"; {len(warnings)} impact(s) of limited accuracy (see warnings)" if warnings else ""),
+        method=method, contact_events=contact_events, warnings=warnings,
         persistent_final=[(model.contacts[sim.active[k]][0], model.contacts[sim.active[k]][1].name)
                           for k in range(sim.nactive)],
         options={"rtol": rtol, "atol": atol, "dt": dt, "contact_tol": contact_tol, "event_samples": event_samples,
                  "event_tol": event_tol, "h_max": h_max, "t_end": t_end, "rest_height": rest_height,
                  "zeno_impacts": zeno_impacts, "max_steps": max_steps, "max_impacts": max_impacts,
                  "max_wall_time": max_wall_time})
+
+
+def impact_warnings(impacts: list[Impact]) -> list[str]:
+    """One sentence for each impact whose energy round-off bound exceeds ROUNDOFF_WARN."""
+    return [f"impact at t = {i.t:.9g} s: its energy is accurate only to {i.roundoff:.2g} (relative; I_f is "
+            "ill-conditioned there: extreme mass, length or inertia ratios)" for i in impacts
+            if i.roundoff > ROUNDOFF_WARN]
 
 
 def _header_constant(model: CompiledModel, suffix: str) -> int | None:
@@ -341,7 +355,7 @@ def _read_impact(model: CompiledModel, r) -> Impact:
     return Impact(float(r.t), contacts, float(r.energy_before), float(r.energy_after), bool(r.complementarity),
                   layout.expand(unpack(r.q, nq)), layout.expand(unpack(r.qd_before, nq), velocity=True),
                   layout.expand(unpack(r.qd_after, nq), velocity=True), int(r.rounds), bool(r.plastic),
-                  float(r.energy_rest))
+                  float(r.energy_rest), float(r.roundoff))
 
 
 def _read_contact_events(model: CompiledModel, r) -> list[ContactEvent]:

@@ -1,0 +1,109 @@
+"""The fuzz study (runtime/fuzz.py): its distribution, its independent checks (each one shown to fail on a
+doctored result), a fast sample in the default run and 1,000 runs in the slow one."""
+from dataclasses import dataclass, field
+
+import numpy as np
+import pytest
+
+from runtime import fuzz
+from runtime.simulate import Contact, Impact
+
+
+def test_structures_are_deterministic_valid_and_cover_the_distribution():
+    """200 structures (no compilation): the same seed gives the same scenes, every scene passes the scene
+    validation (done by the Scene constructor), and the draw covers n = 1 ... 8, planar and spatial chains,
+    line and rigid links, lengths and masses over 1e-3 ... 1e2 m and 1e-4 ... 1e4 kg, gravity on and off."""
+    scenes = [fuzz.random_structure(np.random.default_rng([7, i]), i) for i in range(200)]
+    again = [fuzz.random_structure(np.random.default_rng([7, i]), i) for i in range(200)]
+    assert scenes == again
+    assert {s.n for s in scenes} == set(range(1, 9))
+    planar = [not any(w.name.startswith("x3") for w in s.walls) for s in scenes]
+    assert 0.2 < np.mean(planar) < 0.5
+    kinds = {link.kind for s in scenes for link in s.links}
+    assert kinds == {"line", "rigid"}
+    lengths = [link.length for s in scenes for link in s.links]
+    masses = [link.mass for s in scenes for link in s.links]
+    assert min(lengths) < 3e-3 and max(lengths) > 30 and min(masses) < 1e-3 and max(masses) > 1e3
+    assert {s.gravity for s in scenes} == {0.0, 9.81}
+
+
+def test_runs_start_strictly_inside_their_box_with_every_restitution_kind(compiled):
+    """Runs of one compiled structure: new numbers each time, every contact point strictly inside its
+    box, restitutions 0, 1 and in between, all three integrators."""
+    rng = np.random.default_rng(3)
+    scene = fuzz.random_structure(rng, 0, n_max=3)
+    model = compiled(scene)
+    runs = [fuzz.random_run(rng, scene, model) for _ in range(60)]
+    names = scene.parameter_names()
+    restitutions = set()
+    for run in runs:
+        assert model.contact_gaps(model.layout.reduce(run.q0), run.p).min() > 0.0
+        restitutions |= {float(run.p[i]) for i, name in enumerate(names) if name.startswith("e_")}
+        assert 0.05 <= run.t_end <= fuzz.T_END_MAX
+    assert {0.0, 1.0} <= restitutions and any(0.0 < e < 1.0 for e in restitutions)
+    assert {run.options["method"] for run in runs} == {"dopri5", "dop853", "rk4"}
+    assert len({tuple(run.p) for run in runs}) == len(runs)
+
+
+@dataclass
+class FakeResult:
+    q: np.ndarray
+    qd: np.ndarray
+    q_final: np.ndarray
+    qd_final: np.ndarray
+    impacts: list = field(default_factory=list)
+
+
+def test_each_independent_check_can_fail(compiled):
+    """Doctored results: a sample beyond a wall, a NaN, an impact that gains energy, an elastic impact that
+    loses it, a run over its budget: check_run reports each; the untouched result passes."""
+    rng = np.random.default_rng(5)
+    scene = fuzz.random_structure(rng, 0, n_max=2)
+    model = compiled(scene)
+    run = fuzz.random_run(rng, scene, model)
+    run.options = {"method": "dopri5", "rtol": 1e-10, "atol": 1e-12}
+    names = scene.parameter_names()
+    for i, name in enumerate(names):
+        if name.startswith("e_"):
+            run.p[i] = 1.0
+    q, qd = run.q0, run.qd0
+    clean = FakeResult(np.array([q]), np.array([qd]), q, qd)
+    assert fuzz.check_run(model, run, clean, 0.1, 20.0) == []
+    # a point pushed 1 mm through the lowest wall
+    sunk = q.copy()
+    wall = names.index("wall_x2_min")
+    run_sunk = fuzz.Run(run.p.copy(), q, qd, run.t_end, run.options, run.extent)
+    points = model.contact_points(model.layout.reduce(q), run.p)
+    run_sunk.p[wall] = points[:, 1].min() + 1e-3
+    assert "penetration" in fuzz.check_run(model, run_sunk, FakeResult(np.array([sunk]), np.array([qd]), q, qd),
+                                           0.1, 20.0)[0]
+    nan = qd.copy()
+    nan[0] = np.nan
+    assert fuzz.check_run(model, run, FakeResult(np.array([q]), np.array([nan]), q, qd), 0.1, 20.0) == \
+        ["non-finite state"]
+    point, wall_of = model.contacts[0]
+    gain = Impact(0.1, [Contact(point, wall_of.name, 1.0)], 0.0, 0.0, False, q, qd, 1.1 * qd)
+    assert "energy gain" in fuzz.check_run(model, run, FakeResult(np.array([q]), np.array([qd]), q, qd, [gain]),
+                                           0.1, 20.0)[0]
+    loss = Impact(0.1, [Contact(point, wall_of.name, 1.0)], 0.0, 0.0, False, q, qd, 0.9 * qd)
+    assert "elastic impact" in fuzz.check_run(model, run, FakeResult(np.array([q]), np.array([qd]), q, qd, [loss]),
+                                              0.1, 20.0)[0]
+    assert "over budget" in fuzz.check_run(model, run, clean, 30.0, 20.0)[0]
+
+
+def test_fast_sample_has_no_failure():
+    """16 runs on 4 structures of up to 4 links (about a minute on 2 cores): every run ends at t_end or with
+    a physical stop, and passes the independent checks."""
+    outcomes = fuzz.fuzz(runs=16, per_structure=4, seed=11, n_max=4, jobs=2)
+    assert len(outcomes) == 16
+    assert [o for o in outcomes if o.failed] == []
+    assert sum(o.outcome == "ok" for o in outcomes) >= 10
+
+
+@pytest.mark.slow
+def test_thousand_runs_have_no_failure():
+    """The study of record: 1,000 runs (100 structures of up to 8 links x 10)."""
+    outcomes = fuzz.fuzz(runs=1000, per_structure=10, seed=0, jobs=None)
+    assert len(outcomes) == 1000
+    failed = [(o.case, o.violations or o.message[:160]) for o in outcomes if o.failed]
+    assert failed == []

@@ -1876,17 +1876,25 @@ static int paper_case2_rest_at_start(paper_case2_sim *s)
  * they are exact for I_f + dI_f with |dI_f| <= 4 (NQ + 1) eps |I_f|, and the energy they leave differs from
  * the law's by dI_f's work on the velocities, |qd^T dI_f dqd| + |dqd^T dI_f dqd| / 2 (dqd = qd_plus - qd).
  * So b = max(1e-10, 4 (NQ + 1) eps |I_f| (|qd| |dqd| + |dqd|^2 / 2) / T), |I_f| (2-norm) by 16 power
- * iterations on the factor.  b grows where a large velocity change meets a soft direction of I_f (a
+ * iterations on the factor, with |dqd| taken as sum_a |F_a| |I_f^-1 n_a| when the contacts' changes
+ * cancel (nearly dependent contacts pushing against each other).  b grows where a large velocity change meets a soft direction of I_f (a
  * slender link with a tiny axial inertia, a state near the gimbal lock). */
-static double paper_case2_impact_roundoff(const double *work, const double *qd, const double *qd_plus, double T)
+static double paper_case2_impact_roundoff(const double *work, int n, const double *F, const double *qd,
+                                        const double *qd_plus, double T)
 {
     const int nq = PAPER_CASE2_NQ;
-    double x[PAPER_CASE2_NQ], y[PAPER_CASE2_NQ], norm_M = 0.0, size = 0.0, change = 0.0, b;
-    int i, k, it;
+    const double *Y = work + PAPER_CASE2_NQ * PAPER_CASE2_NQ + PAPER_CASE2_NJROW * PAPER_CASE2_NQ;
+    double x[PAPER_CASE2_NQ], y[PAPER_CASE2_NQ], norm_M = 0.0, size = 0.0, change = 0.0, parts = 0.0, b;
+    int a, i, k, it;
     for (i = 0; i < nq; ++i) {
         x[i] = 1.0 + 0.1 * i * (i % 2 ? -1.0 : 1.0);      /* a fixed, generic start */
         size += qd[i] * qd[i];
         change += (qd_plus[i] - qd[i]) * (qd_plus[i] - qd[i]);
+    }
+    for (a = 0; a < n; ++a) {                            /* sum |F_a| |Y_a|: the changes before they cancel */
+        double column = 0.0;
+        for (i = 0; i < nq; ++i) column += Y[a*nq + i] * Y[a*nq + i];
+        parts += fabs(F[a]) * sqrt(column);
     }
     for (it = 0; it < 16; ++it) {                        /* |I_f| = |L D L^T| by power iteration */
         double sum = 0.0;
@@ -1909,7 +1917,7 @@ static double paper_case2_impact_roundoff(const double *work, const double *qd, 
         norm_M = sqrt(norm_M);
     }
     size = sqrt(size);
-    change = sqrt(change);
+    change = sqrt(change) > parts ? sqrt(change) : parts;
     b = 4.0 * (nq + 1) * PAPER_CASE2_EPS * norm_M * (size * change + 0.5 * change * change) / (T > 0.0 ? T : 1e-300);
     return b > 1e-10 ? b : 1e-10;
 }
@@ -2053,7 +2061,7 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
     code = paper_case2_impact_rounds(x, x + nq, s->p, n, list, e_law, first, qd_plus, F, s->work, &rounds,
                                    &plastic);
     if (code != PAPER_CASE2_OK) return code;
-    bound = r->roundoff = paper_case2_impact_roundoff(s->work, x + nq, qd_plus, T_before);
+    bound = r->roundoff = paper_case2_impact_roundoff(s->work, n, F, x + nq, qd_plus, T_before);
     paper_case2_energy(x, qd_plus, s->p, E);
     T_law = E[0];
     for (k = 0; k < n; ++k) changed |= e[k] != e_law[k];

@@ -253,24 +253,36 @@ const char *paper_case1_error_message(int code);
  * 0 for RK4) the crossing before it is the impact; a shallower minimum, a touch with normal velocity 0
  * within the integration error, is a graze and no impact.
  *
+ * Impacts.  Every contact within contact_tol of its wall, every approaching one within the simultaneity
+ * window (100 x the adaptive method's position tolerance, or contact_tol if larger) and every persistent
+ * one take part.  The law (NAME_impact_complementarity) is Newton's law, Eq. 47, with complementarity, in
+ * rounds until no contact approaches: F >= 0, no energy gain, e = 1 keeps the energy exactly; a contact
+ * that separates takes an impulse only if the others drive it into its wall.  Its post-conditions are
+ * checked to the law's round-off bound (record.roundoff; ERR_IMPACT_ACCURACY otherwise).
+ *
  * Resting contact (Zeno behaviour).  With e < 1 and gravity, impacts of a point on a wall accumulate
  * (the bounces shrink geometrically).  At an impact on a wall with e < 1, a contact whose bounce would rise
  * less than opt.rest_height (v+^2 <= 2 a rest_height, a = its normal acceleration towards the wall), or
- * that has had opt.zeno_impacts impacts at shrinking intervals, is made PERSISTENT: the impact is solved
- * again with the persistent contacts held at normal velocity 0 (a plastic impact: energy cannot grow), the
- * others by the complementarity form, and it becomes a bilateral, frictionless constraint of the flight
- * equations,
+ * that has had opt.zeno_impacts impacts at shrinking intervals, LANDS: it is struck with e = 0 (a plastic
+ * impact, still F >= 0), and if it ends at rest it becomes PERSISTENT, held at the gap it landed at (no
+ * position moves at an impact), a bilateral, frictionless constraint of the flight equations,
  *     I_f qdd = R + N_a^T lambda,    N_a qdd = -Ndot_a qd     (N_a: signed Jacobian rows of the active set),
- * with positions and velocities projected back onto the constraint (gap = 0, normal velocity = 0, mass
- * metric) after every accepted step.  A persistent contact is released when its force lambda (along the
- * inward normal) falls through 0: that crossing is located on the dense output like a wall crossing.
+ * with positions and velocities projected back onto the constraint (gaps to their held values, normal
+ * velocity = 0, mass metric; no free contact pushed deeper into its wall) after every accepted step.
+ * record.energy_rest is the kinetic energy the landings took.  On a wall with e = 1 a contact lands only
+ * if that energy is round-off.  A persistent contact is released when its force lambda (along the inward
+ * normal) falls through 0: that crossing is located on the dense output like a wall crossing.
  * Only forces lambda > 0 are kept (an acceleration-level complementarity solve when the set changes), and
  * only contacts with independent rows (a dependent one is held by the others; one that becomes dependent
- * in flight gets lambda = 0 and is released).  A persistent contact joins another impact only when that
- * impact would drive it into its wall.
+ * in flight gets lambda = 0 and is released).  A persistent contact takes part in another impact with its
+ * own e; one the impact lifts by less than rest_height stays, one lifted higher is released.
  * sim_init also makes persistent the contacts that start at their wall (gap <= contact_tol) with a normal
  * velocity under the same bound and a positive force (a chain started at rest on the floor).
  * Every activation and release is reported in the record (activated[], released[]).
+ *
+ * Stops before trouble: ERR_GIMBAL_LOCK (the base chart's measure below sqrt(16 eps / rtol): continue on a
+ * second chart, README "Near gimbal lock"), ERR_UNSTABLE (RK4 past its stability), ERR_LOST_CONTACT,
+ * ERR_MAX_STEPS (sim.err_index names the state component that limits the step).
  *
  * The caller owns all memory (the structs); no globals, no malloc; one NAME_sim per thread.
  * ------------------------------------------------------------------------------------------------ */

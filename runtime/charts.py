@@ -386,6 +386,7 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
            f"must be in (0, chunk = {chunk}] s, got {monitor_dt!r}")
     _check(int(chunk_steps) == chunk_steps and chunk_steps >= 1, "chunk_steps",
            f"must be an integer >= 1, got {chunk_steps!r}")
+    started = time.perf_counter()                     # the wall-time budget counts compiling chart B too
     models = models or ChartModels(scene, progress=progress)      # compiled for the scene's own start
     if q0 is not None or qd0 is not None:                           # validated like a scene's start
         scene = dataclasses.replace(scene, q0=tuple(scene.q0 if q0 is None else np.asarray(q0, dtype=float)),
@@ -401,7 +402,6 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
     totals = {"n_steps": 0, "n_rejected": 0, "n_rhs": 0}
 
     wall_budget = options.pop("max_wall_time", None)  # one wall-time budget for the whole run
-    started = time.perf_counter()
 
     def run_chunk(model, duration, times, q, qd, steps):
         remaining = None if wall_budget is None else max(wall_budget - (time.perf_counter() - started), 1e-3)

@@ -2155,7 +2155,7 @@ static int paper_case2_resolve(paper_case2_sim *s, double t, int c_event, paper_
     }
     for (i = 0; i < nq; ++i) r->qd_after[i] = s->x1[nq + i];
     paper_case2_energy(x, s->x1 + nq, s->p, E);          /* at the impact configuration, as T_law */
-    r->energy_rest = T_law - E[0];
+    r->energy_rest = T_law > E[0] ? T_law - E[0] : 0.0; /* (a landing may also leave more than the law) */
     r->energy_after = paper_case2_total_energy(s->x1, s->p);
     r->approach_after = 0.0;                  /* fastest approach of a contact at its wall, afterwards */
     for (c = 0; c < PAPER_CASE2_NCONTACT; ++c) {

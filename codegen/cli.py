@@ -4,12 +4,14 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 
-from .pipeline import generate, write_model, write_standalone
-from .scene import SceneError, default_scene, is_c_identifier, load_scene, shipped_scene_names
+from .cache import CacheError, cache_dir, generate_cached
+from .outputs import output_dir_problem
+from .pipeline import write_model, write_standalone
+from .scene import MAX_LINKS, MAX_LINKS_REASON, SceneError, default_scene, is_c_identifier, load_scene, shipped_scene_names
 from .specialise import check_not_singular, layout_for
 
-MAX_LINKS = 64
 
 
 def parse_args(argv=None) -> argparse.Namespace:
@@ -19,10 +21,13 @@ def parse_args(argv=None) -> argparse.Namespace:
                     "(recursive Gibbs-Appell; sympy -> CSE -> Jinja templates), then compile it with cffi.",
         epilog="Examples:\n"
                "  python -m codegen --links 4                 # built-in 4-link scene -> generated/chain4.{h,c}\n"
-               "  python -m codegen --scene paper-case2       # a shipped scene\n"
-               "  python -m codegen --scene my.toml --out build --name robot --bake-params\n"
+               "  python -m codegen --scene paper-case2       # a shipped scene -> generated/paper_case2.{h,c}\n"
+               "  python -m codegen --scene my.toml --name robot --bake-params   # -> build/robot.{h,c}\n"
                "  python -m codegen ops --links 1-8 --out DIR  # operation counts: Gibbs-Appell against Lagrange\n"
-               f"Shipped scenes: {', '.join(shipped_scene_names())}.",
+               f"Shipped scenes: {', '.join(shipped_scene_names())}.\n"
+               "The generated text and the compiled module go to the cache that runtime.load_model reads "
+               "($GIBBS_APPELL_CACHE, else ~/.cache/gibbs-appell-chains), so loading the same scene with "
+               "the same options afterwards derives and compiles nothing.",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     source = parser.add_mutually_exclusive_group()
     source.add_argument("--links", type=int, metavar="N",
@@ -31,8 +36,10 @@ def parse_args(argv=None) -> argparse.Namespace:
                              "N = 4 is the paper's case study 1 (default: 4)")
     source.add_argument("--scene", metavar="FILE",
                         help="a scene file (.toml or .json, see README) or a shipped scene name")
-    parser.add_argument("--out", default="generated", metavar="DIR",
-                        help="directory for NAME.h and NAME.c (default: generated/)")
+    parser.add_argument("--out", metavar="DIR",
+                        help="directory for NAME.h and NAME.c, created if missing (default: generated/ for "
+                             "--links and shipped scenes, build/ for a scene file; both relative to the "
+                             "current directory)")
     parser.add_argument("--name", metavar="NAME",
                         help="C prefix and file name of the model (default: the scene's name)")
     parser.add_argument("--bake-params", action="store_true",
@@ -49,6 +56,17 @@ def parse_args(argv=None) -> argparse.Namespace:
     parser.add_argument("--no-compile", action="store_true",
                         help="skip the cffi compile check/build of the generated code")
     return parser.parse_args(argv)
+
+
+def out_dir_problem(value: str) -> str:
+    """'' when --out can be created (with its parents) and written, else what is wrong and what to do."""
+    problem = output_dir_problem("--out", value)
+    return f"{problem}; give a directory that exists or can be created" if problem else ""
+
+
+def default_out(args: argparse.Namespace) -> str:
+    """build/ for a scene file, generated/ for a shipped scene or --links."""
+    return "build" if args.scene is not None and Path(args.scene).exists() else "generated"
 
 
 def main(argv=None) -> int:
@@ -68,7 +86,7 @@ def main(argv=None) -> int:
         else:
             n = 4 if args.links is None else args.links
             if not 1 <= n <= MAX_LINKS:
-                raise SceneError(f"--links: must be in 1..{MAX_LINKS}, got {n}")
+                raise SceneError(f"--links: must be in 1..{MAX_LINKS}, got {n} ({MAX_LINKS_REASON})")
             scene = default_scene(n)
         if args.name is not None:
             if not is_c_identifier(args.name):
@@ -89,20 +107,36 @@ def main(argv=None) -> int:
             print(f"  - {note}")
         print(f"  - parameters: {'baked in as constants' if args.bake_params else 'a runtime array p'}")
         return 0
+
+    out = args.out if args.out is not None else default_out(args)
+    problem = out_dir_problem(out)
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
+        return 2
+    try:
+        cache_dir()
+    except CacheError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+
     progress(f"scene {scene.name}: n = {scene.n} links, {layout.nq} of {scene.nq} coordinates, "
              f"{len(scene.walls)} walls, {len(layout.contacts)} contacts")
-    model = generate(scene, name=args.name, bake_params=args.bake_params, progress=progress,
-                     specialise=not args.general)
-    paths = write_model(model, args.out)
-    if args.standalone:
-        paths += write_standalone(model, scene, args.out)
+    model = generate_cached(scene, name=args.name, bake_params=args.bake_params, specialise=not args.general,
+                            progress=progress, refresh=True)
+    try:
+        paths = write_model(model, out)
+        if args.standalone:
+            paths += write_standalone(model, scene, out)
+    except OSError as exc:
+        print(f"error: --out: cannot write into {out}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
     timings = dict(model.timings)
     if not args.no_compile:
         from runtime.compile import BuildError, CompilerNotFound, compile_model
         start = time.perf_counter()
         try:
             compile_model(model.name, model.header, model.source, model.cdef, progress=progress)
-        except (CompilerNotFound, BuildError) as exc:
+        except (CompilerNotFound, BuildError, CacheError) as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 3
         timings["compile"] = time.perf_counter() - start

@@ -28,36 +28,18 @@ import time
 from pathlib import Path
 
 from .machine import describe
+from .outputs import output_dir_problem
+from .scene import MAX_LINKS
 
 FORMULATIONS = ("gibbs_appell", "lagrange")
 LABELS = {"gibbs_appell": "Gibbs–Appell", "lagrange": "Lagrange"}
-MAX_LINKS = 64
 START_VARIABLE = "CODEGEN_OPS_T0"
 
-# The bar to beat (issue 4): forward dynamics of this very chain (same coordinates and inertias) by
-# Pinocchio's articulated-body algorithm traced by CasADi into C, gcc -O2.  n -> (operations, us per call).
+# The bar to beat: forward dynamics of this very chain (same coordinates and inertias) by Pinocchio's
+# articulated-body algorithm traced by CasADi into C, gcc -O2.  n -> (operations, us per call).
 BAR_TO_BEAT = {4: (1123, 0.27), 8: (1939, 0.50), 16: (3571, 1.20), 32: (6835, 1.84)}
 BAR_TO_BEAT_SOURCE = ("Pinocchio's articulated-body algorithm traced by CasADi into C (gcc -O2), for this "
-                      "chain with the same coordinates and inertias; measured by the issue author on this "
-                      "machine (issue 4, 'The bar to beat')")
-
-# Published operation counts of numeric O(n) algorithms, drawn on the operations plot when present.
-# label -> {"ops": {n: count} or a function n -> count, "source": citation, "convention": counting rule}.
-_FEATHERSTONE_ORIN = ("R. Featherstone and D. Orin, 'Robot dynamics: equations and algorithms', Proc. IEEE ICRA 2000, "
-                      "pp. 826-834, Table 1 (figures also in R. Featherstone, Rigid Body Dynamics Algorithms, "
-                      "Springer 2008); quoted as we recall them: the printed table could not be consulted from "
-                      "this workspace, so check it before citing these lines further")
-_CONVENTION = ("multiplications + additions of the numeric algorithm for an unbranched chain of N = n + 5 "
-               "one-degree-of-freedom joints (our n + 2 revolute angles and 3 translations; prismatic joints "
-               "are cheaper, so this is an upper line), sines and cosines not counted")
-REFERENCE_LINES: dict[str, dict] = {
-    "ABA, published (N = n + 5)": {
-        "ops": lambda n: (224 * (n + 5) - 165) + (205 * (n + 5) - 176),
-        "source": _FEATHERSTONE_ORIN, "convention": _CONVENTION},
-    "CRBA, I_f only, published (N = n + 5)": {
-        "ops": lambda n: (10 * (n + 5) ** 2 + 22 * (n + 5) - 32) + (6 * (n + 5) ** 2 + 37 * (n + 5) - 43),
-        "source": _FEATHERSTONE_ORIN, "convention": _CONVENTION},
-}
+                      "chain with the same coordinates and inertias, timed on the same 2-core machine")
 
 
 # ---------------------------------------------------------------------------
@@ -203,8 +185,6 @@ def markdown(rows, specialise: bool = False) -> str:
         fd, us = r["ops"]["forward_dynamics"]["total"], r["ns_per_rhs"] / 1e3
         lines.append(f"| {n} | {bar_ops:,} | {bar_us:.2f} | {fd:,} | {us:.2f} | {fd / bar_ops:.2f} | "
                      f"{us / bar_us:.2f} |")
-    for label, line in REFERENCE_LINES.items():
-        lines.append(f"\nReference line '{label}': {line.get('source', '')}; counting: {line.get('convention', '')}")
     return "\n".join(lines)
 
 
@@ -215,13 +195,6 @@ def machine() -> str:
         gcc = "gcc ?"
     import sympy
     return describe(f"sympy {sympy.__version__}", gcc)
-
-
-def _reference_ops(line: dict, ns) -> list[tuple[int, float]]:
-    ops = line["ops"]
-    if callable(ops):
-        return [(n, float(ops(n))) for n in ns]
-    return sorted((int(n), float(v)) for n, v in ops.items())
 
 
 def plots(rows, out: Path) -> list[Path]:
@@ -266,10 +239,7 @@ def plots(rows, out: Path) -> list[Path]:
         ax.plot(x, [r["raw_ops"]["mass_matrix"] + r["raw_ops"]["bias"] for r in rs], "^:", color=style[f],
                 label=f"{LABELS[f]}: I_f + R, raw count_ops before CSE")
     ax.plot(list(BAR_TO_BEAT), [v[0] for v in BAR_TO_BEAT.values()], "k*", markersize=10,
-            label="Pinocchio ABA + CasADi (issue 4)")
-    for label, line in REFERENCE_LINES.items():
-        points = _reference_ops(line, ns)
-        ax.plot([p[0] for p in points], [p[1] for p in points], "-", color="gray", alpha=0.7, label=label)
+            label="Pinocchio ABA + CasADi")
     finish(ax, "operations", "Operations against n", out / "ops_vs_n.png")
 
     fig, ax = plt.subplots(figsize=(7, 5))
@@ -277,7 +247,7 @@ def plots(rows, out: Path) -> list[Path]:
         ax.plot([r["n"] for r in rs], [r["ns_per_rhs"] / 1e3 for r in rs], "o-", color=style[f],
                 label=f"{LABELS[f]}: one rhs (C loop, gcc -O2)")
     ax.plot(list(BAR_TO_BEAT), [v[1] for v in BAR_TO_BEAT.values()], "k*", markersize=10,
-            label="Pinocchio ABA + CasADi, one call (issue 4)")
+            label="Pinocchio ABA + CasADi, one call")
     finish(ax, "µs per call", "Time per right-hand side against n", out / "rhs_time_vs_n.png")
 
     fig, ax = plt.subplots(figsize=(7, 5))
@@ -358,6 +328,14 @@ def main(argv=None) -> int:
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    if args.out:
+        import importlib.util
+        problem = output_dir_problem("--out", args.out) or ("" if importlib.util.find_spec("matplotlib") else
+                                                            "--out: the plots need matplotlib, which is not installed "
+                                                            "(pip install -e \".[study]\")")
+        if problem:
+            print(f"error: {problem}", file=sys.stderr)
+            return 2
     rows = run_all(ns, args.specialise, args.timeout, args.lagrange_max, say, args.calls)
     text = f"Machine: {machine()}.\n\n" + markdown(rows, args.specialise)
     print(text)

@@ -1,6 +1,7 @@
 """derive -> flatten (DCE + CSE) -> render: the whole generator for one scene, with timings."""
 from __future__ import annotations
 
+import os
 import time
 from pathlib import Path
 
@@ -76,20 +77,28 @@ def raw_kernel_ops(kernel) -> int:
 
 def write_model(model: GeneratedModel, out_dir: str | Path) -> list[Path]:
     """Write NAME.h and NAME.c into out_dir (created if needed); returns the paths."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = [out / f"{model.name}.h", out / f"{model.name}.c"]
-    for path, text in zip(paths, (model.header, model.source)):
-        path.write_text(text)
-    return paths
+    return _write_files(out_dir, {f"{model.name}.h": model.header, f"{model.name}.c": model.source})
 
 
 def write_standalone(model: GeneratedModel, scene: Scene, out_dir: str | Path) -> list[Path]:
     """Write the example program, Makefile and CMakeLists.txt next to the model."""
+    return _write_files(out_dir, render_standalone(scene, model.name))
+
+
+def _write_files(out_dir: str | Path, files: dict[str, str]) -> list[Path]:
+    """Write every file to a temporary name first, then rename them all into place: a failure
+    (disk full, permissions) leaves no half-written file behind."""
     out = Path(out_dir)
-    paths = []
-    for filename, text in render_standalone(scene, model.name).items():
-        path = out / filename
-        path.write_text(text)
-        paths.append(path)
-    return paths
+    out.mkdir(parents=True, exist_ok=True)
+    staged = []
+    try:
+        for filename, text in files.items():
+            tmp = out / f".{filename}.{os.getpid()}.tmp"
+            staged.append((tmp, out / filename))
+            tmp.write_text(text)
+        for tmp, path in staged:
+            tmp.replace(path)
+    finally:
+        for tmp, _ in staged:
+            tmp.unlink(missing_ok=True)
+    return [path for _, path in staged]

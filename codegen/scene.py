@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import math
 import re
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -32,6 +33,20 @@ DEFAULT_GRAVITY = 9.81
 PAPER_J = (5.89e-5, 2.94e-5, 2.94e-5)
 GIMBAL_MARGIN = 1e-6  # |cos(theta_0)| below this is the gimbal lock of the base chart
 
+# Longest chain a scene may have.  Generation and compilation grow faster than n (a 64-link model takes
+# about a minute to derive and compile on a 2-core machine), so a longer chain is refused up front
+# instead of leaving the user waiting on a build that does not end.
+MAX_LINKS = 64
+MAX_LINKS_REASON = (f"at most {MAX_LINKS} links: generating and compiling the model grows faster than n "
+                    "(n = 64 takes about a minute)")
+
+# Ranges of the physical numbers: wide enough for ratios of 1e6 and more within one chain, narrow enough
+# that the products the kernels form (masses times squared lengths and rates) stay normal doubles.
+LENGTH_RANGE = (1e-9, 1e9)        # m
+MASS_RANGE = (1e-12, 1e12)        # kg, and kg/m for mu
+INERTIA_MAX = 1e100               # |J| (kg m), |I| (kg m^2): 0 or at least the smallest normal double
+COORDINATE_MAX = 1e9              # |wall position| (m), |gravity| (m/s^2), |initial state entry|
+
 
 class SceneError(ValueError):
     """A scene field has a bad value; the message names the field and the allowed range."""
@@ -40,39 +55,49 @@ class SceneError(ValueError):
 # ---------------------------------------------------------------------------
 # small validators
 # ---------------------------------------------------------------------------
-def _number(value, fieldname: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+def _number(value, fieldname: str, largest: float = COORDINATE_MAX) -> float:
+    """A finite number of magnitude 0 or within [smallest normal double, largest]."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise SceneError(f"{fieldname}: expected a number, got {value!r}")
     value = float(value)
     if not math.isfinite(value):
         raise SceneError(f"{fieldname}: must be a finite number, got {value!r}")
+    if abs(value) > largest:
+        raise SceneError(f"{fieldname}: must be within [-{largest:g}, {largest:g}], got {value!r}")
+    if value != 0.0 and abs(value) < sys.float_info.min:
+        raise SceneError(f"{fieldname}: {value!r} is below the smallest normal double "
+                         f"({sys.float_info.min:.3g}); give 0 or a larger magnitude")
     return value
 
 
-def _positive(value, fieldname: str) -> float:
-    value = _number(value, fieldname)
-    if not value > 0.0:
-        raise SceneError(f"{fieldname}: must be > 0, got {value!r}")
+def _in_range(value, fieldname: str, bounds: tuple[float, float], unit: str) -> float:
+    """A positive number within bounds (a physical length or mass)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise SceneError(f"{fieldname}: expected a number, got {value!r}")
+    value = float(value)
+    lo, hi = bounds
+    if not lo <= value <= hi:
+        raise SceneError(f"{fieldname}: must be in [{lo:g}, {hi:g}] {unit}, got {value!r}")
     return value
 
 
-def _nonnegative(value, fieldname: str) -> float:
-    value = _number(value, fieldname)
+def _nonnegative(value, fieldname: str, largest: float = INERTIA_MAX) -> float:
+    value = _number(value, fieldname, largest)
     if not value >= 0.0:
         raise SceneError(f"{fieldname}: must be >= 0, got {value!r}")
     return value
 
 
-def _vector(value, size: int, fieldname: str) -> tuple[float, ...]:
+def _vector(value, size: int, fieldname: str, largest: float = COORDINATE_MAX) -> tuple[float, ...]:
     if not isinstance(value, (list, tuple)) or len(value) != size:
         raise SceneError(f"{fieldname}: expected a list of {size} numbers, got {value!r}")
-    return tuple(_number(v, f"{fieldname}[{i}]") for i, v in enumerate(value))
+    return tuple(_number(v, f"{fieldname}[{i}]", largest) for i, v in enumerate(value))
 
 
-def _matrix3(value, fieldname: str) -> tuple[tuple[float, ...], ...]:
+def _matrix3(value, fieldname: str, largest: float = COORDINATE_MAX) -> tuple[tuple[float, ...], ...]:
     if not isinstance(value, (list, tuple)) or len(value) != 3:
         raise SceneError(f"{fieldname}: expected a 3x3 matrix (list of 3 rows), got {value!r}")
-    return tuple(_vector(row, 3, f"{fieldname}[{i}]") for i, row in enumerate(value))
+    return tuple(_vector(row, 3, f"{fieldname}[{i}]", largest) for i, row in enumerate(value))
 
 
 def _check_keys(table: dict, allowed: tuple[str, ...], where: str) -> None:
@@ -100,9 +125,9 @@ class LineLink:
     J: tuple[float, float, float] = PAPER_J
 
     def validate(self, where: str) -> None:
-        _positive(self.length, f"{where}.length")
-        _positive(self.mu, f"{where}.mu")
-        J = _vector(list(self.J), 3, f"{where}.J")
+        _in_range(self.length, f"{where}.length", LENGTH_RANGE, "m")
+        _in_range(self.mu, f"{where}.mu", MASS_RANGE, "kg/m")
+        J = _vector(list(self.J), 3, f"{where}.J", INERTIA_MAX)
         for axis, value in zip("xyz", J):
             _nonnegative(value, f"{where}.J ({'J' + axis + axis})")
 
@@ -134,10 +159,10 @@ class RigidLink:
     param_names = ("l", "m", "cx", "cy", "cz", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 
     def validate(self, where: str) -> None:
-        _positive(self.length, f"{where}.length")
-        _positive(self.mass, f"{where}.mass")
+        _in_range(self.length, f"{where}.length", LENGTH_RANGE, "m")
+        _in_range(self.mass, f"{where}.mass", MASS_RANGE, "kg")
         _vector(list(self.com), 3, f"{where}.com")
-        inertia = np.array(_matrix3([list(r) for r in self.inertia], f"{where}.inertia"))
+        inertia = np.array(_matrix3([list(r) for r in self.inertia], f"{where}.inertia", INERTIA_MAX))
         if not np.allclose(inertia, inertia.T, rtol=0, atol=1e-12 * max(1.0, np.abs(inertia).max())):
             raise SceneError(f"{where}.inertia: must be symmetric")
         eig = np.linalg.eigvalsh(inertia)
@@ -261,6 +286,8 @@ class Scene:
         links = tuple(self.links)
         if len(links) < 1:
             raise SceneError("links: a chain needs n >= 1 real links, got n = 0")
+        if len(links) > MAX_LINKS:
+            raise SceneError(f"links: {MAX_LINKS_REASON}; got n = {len(links)}")
         for i, link in enumerate(links, start=1):
             if not isinstance(link, (LineLink, RigidLink)):
                 raise SceneError(f"links[{i}]: expected a LineLink or RigidLink, got {link!r}")
@@ -277,6 +304,8 @@ class Scene:
             raise SceneError("base_twists: expected 3 matrices (T_-1, T_0, T_1)")
         object.__setattr__(self, "base_twists", base)
         object.__setattr__(self, "gravity", _number(self.gravity, "gravity"))
+        if abs(self.gravity) > 1e6:
+            raise SceneError(f"gravity: must be within [-1e6, 1e6] m/s^2, got {self.gravity!r}")
         self._validate_walls()
         self._validate_state()
 
@@ -376,6 +405,28 @@ class Scene:
         values += [w.restitution for w in self.walls]
         return np.array(values, dtype=float)
 
+    def check_parameters(self, p) -> None:
+        """Refuse a parameter vector p (layout of parameter_names()) that a scene file could not give:
+        every value in its range, rigid links' inertias physical, each wall pair ordered (min < max).
+        (Whether the start lies inside the walls is the caller's check: it depends on the state too.)"""
+        names = self.parameter_names()
+        p = np.asarray(p)
+        if p.shape != (len(names),):
+            raise SceneError(f"p: expected {len(names)} values ({', '.join(names)}), got shape {p.shape}")
+        value = {name: check_parameter(name, v) for name, v in zip(names, p.tolist())}
+        for i, link in enumerate(self.links, start=1):
+            if link.kind == "rigid":
+                l, m, cx, cy, cz, Ixx, Iyy, Izz, Ixy, Ixz, Iyz = (value[f"{key}_{i}"] for key in link.param_names)
+                try:
+                    RigidLink(l, m, (cx, cy, cz), ((Ixx, Ixy, Ixz), (Ixy, Iyy, Iyz), (Ixz, Iyz, Izz))).validate("")
+                except SceneError as exc:
+                    raise SceneError(f"p[Ixx_{i} .. Iyz_{i}]: the inertia of link {i}{str(exc)[len('.inertia'):]}") \
+                        from None
+        for axis in (1, 2, 3):
+            lo, hi = value.get(f"wall_x{axis}_min"), value.get(f"wall_x{axis}_max")
+            if lo is not None and hi is not None and not lo < hi:
+                raise SceneError(f"p[wall_x{axis}_max]: must be > p[wall_x{axis}_min] = {lo!r}, got {hi!r}")
+
     def contacts(self) -> list[tuple[int, Wall]]:
         """The (point, wall) pairs with a gap function, wall-major then point order."""
         return [(p, w) for w in self.walls for p in w.points]
@@ -384,6 +435,33 @@ class Scene:
         """The (point, axis) pairs whose Jacobian row (Eq. 42) some wall needs, point-major."""
         needed = {(p, w.axis) for w in self.walls for p in w.points}
         return sorted(needed)
+
+
+def check_parameter(name: str, value: float) -> float:
+    """One entry of a parameter vector (named as in Scene.parameter_names()) in its allowed range."""
+    field = f"p[{name}]"
+    kind = name.rsplit("_", 1)[0] if name[-1].isdigit() else name
+    if kind == "g":
+        value = _number(value, field)
+        if abs(value) > 1e6:
+            raise SceneError(f"{field}: must be within [-1e6, 1e6] m/s^2, got {value!r}")
+    elif kind == "l":
+        value = _in_range(value, field, LENGTH_RANGE, "m")
+    elif kind == "mu":
+        value = _in_range(value, field, MASS_RANGE, "kg/m")
+    elif kind == "m":
+        value = _in_range(value, field, MASS_RANGE, "kg")
+    elif kind in ("Jxx", "Jyy", "Jzz", "Ixx", "Iyy", "Izz"):
+        value = _nonnegative(value, field)
+    elif kind in ("Ixy", "Ixz", "Iyz"):
+        value = _number(value, field, INERTIA_MAX)
+    elif name.startswith("e_"):
+        value = _number(value, field)
+        if not 0.0 <= value <= 1.0:
+            raise SceneError(f"{field}: restitution must be in [0, 1], got {value!r}")
+    else:                                   # centre of mass offsets and wall positions (m)
+        value = _number(value, field)
+    return value
 
 
 # ---------------------------------------------------------------------------
@@ -459,23 +537,75 @@ INITIAL_KEYS = ("q", "qd")
 
 def load_scene(source: str | Path) -> Scene:
     """Load a scene from a .toml or .json file, or a shipped scene by name (e.g. 'paper-case1')."""
+    if not isinstance(source, (str, Path)):
+        raise SceneError(f"scene: expected a shipped scene name or a path to a .toml/.json file, got "
+                         f"{source!r} ({type(source).__name__})")
     path = Path(source)
     if not path.exists():
-        shipped = _shipped_scene_path(str(source))
-        if shipped.exists():
+        shipped = _shipped_scene_path(str(source)) if re.fullmatch(r"[A-Za-z0-9_-]+", str(source)) else None
+        if shipped is not None and shipped.exists():
             path = shipped
         else:
             raise SceneError(f"scene: no file {str(source)!r} and no shipped scene of that name; "
                              f"shipped scenes: {', '.join(shipped_scene_names())}")
-    text = path.read_text()
+    if path.is_dir():
+        raise SceneError(f"scene: {path} is a directory; give a .toml or .json scene file")
     try:
-        if path.suffix == ".json":
-            data = json.loads(text)
-        else:
-            data = tomllib.loads(text)
-    except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise SceneError(f"scene: cannot parse {path}: {exc}") from None
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise SceneError(f"scene: cannot read {path}: {exc.strerror or exc}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise SceneError(f"scene: {path} is not UTF-8 text (byte {exc.start}: {raw[exc.start:exc.start + 1]!r}); "
+                         "a scene file is TOML or JSON text") from None
+    if path.suffix == ".json":
+        data = _parse_json(text, path)
+    else:
+        data = _parse_toml(text, path)
     return scene_from_dict(data, default_name=path.stem.replace("-", "_"))
+
+
+def _parse_json(text: str, path: Path) -> dict:
+    """JSON with every key given once (json.loads would keep the last of repeated keys silently)."""
+    def unique(pairs):
+        table = {}
+        for key, value in pairs:
+            if key in table:
+                raise SceneError(f"scene: {path}: key {key!r} is given twice in one object; give it once")
+            table[key] = value
+        return table
+    try:
+        return json.loads(text, object_pairs_hook=unique)
+    except json.JSONDecodeError as exc:
+        raise SceneError(f"scene: cannot parse {path} as JSON: {exc}") from None
+
+
+def _parse_toml(text: str, path: Path) -> dict:
+    """TOML, with a repeated key named by its dotted field name and line."""
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        message = str(exc)
+        where = re.search(r"at line (\d+)", message)
+        if where and "overwrite" in message:
+            line = int(where.group(1))
+            field = _toml_field_at(text, line)
+            raise SceneError(f"scene: {path} line {line}: {field} is given twice; "
+                             "TOML allows each key once per table") from None
+        raise SceneError(f"scene: cannot parse {path} as TOML: {message}") from None
+
+
+def _toml_field_at(text: str, line: int) -> str:
+    """The dotted name of the key assigned on ``line`` (1-based) of a TOML text: [table] or [[array]]
+    headers above it give the prefix."""
+    lines = text.splitlines()
+    key = lines[line - 1].split("=", 1)[0].strip().strip('"') if line <= len(lines) else "a key"
+    for previous in reversed(lines[:line - 1]):
+        header = re.match(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?", previous)
+        if header:
+            return f"{header.group(1)}.{key}"
+    return key
 
 
 def scene_from_dict(data: dict, default_name: str = "scene") -> Scene:
@@ -502,6 +632,9 @@ def _links_from_data(items) -> tuple[tuple[Link, ...], tuple]:
     if not isinstance(items, list) or not items:
         raise SceneError("links: a chain needs n >= 1 real links (a non-empty list of link tables), "
                          f"got {items!r}")
+    counts = [item.get("count", 1) if isinstance(item, dict) else 1 for item in items]
+    if all(isinstance(c, int) and not isinstance(c, bool) for c in counts) and sum(counts) > MAX_LINKS:
+        raise SceneError(f"links: {MAX_LINKS_REASON}; got n = {sum(counts)}")
     links, twists = [], []
     for j, item in enumerate(items):
         where = f"links[{len(links) + 1}]"

@@ -1106,7 +1106,9 @@ const char *paper_case1_error_message(int code)
     case PAPER_CASE1_ERR_SINGULAR_IMPACT: return "impact matrix J I_f^-1 J^T is singular: the active contact constraints are dependent";
     case PAPER_CASE1_ERR_LCP: return "impact complementarity problem has no solution (too many or degenerate contacts)";
     case PAPER_CASE1_ERR_GIMBAL_LOCK: return "gimbal lock: theta_0 is too close to the singularity of the base chart (|det E| below sqrt(16 eps / tol)) for results to the tolerance; continue on a second chart";
-    case PAPER_CASE1_ERR_BAD_OPTION: return "bad option or argument (method, dt > 0, rtol > 0, atol > 0, event_samples >= 1, rest_height finite, zeno_impacts >= 0, t_end >= t)";
+    case PAPER_CASE1_ERR_BAD_OPTION: return "bad option or argument: allowed are method RK4, DOPRI5 or DOP853; RK4: 0 < dt < 1e300; DOPRI5, DOP853: rtol > 0, atol > 0, dt >= 0; h_max >= 0, event_samples >= 1, event_tol > 0, contact_tol >= 0, max_steps >= 0, rest_height < 1e300 (not NaN), zeno_impacts >= 0; t0, q and qd finite; sim_advance: t_end finite and >= the current time, n_eval >= 0, 0 <= *i_eval <= n_eval";
+    case PAPER_CASE1_ERR_START_OUTSIDE: return "the start state has a contact point beyond its wall: allowed is a gap >= -(contact_tol + the simultaneity window + 1e-12 max(1 m, the largest |point coordinate|)), a point inside the box or on its wall";
+    case PAPER_CASE1_ERR_NULL_ARGUMENT: return "a required pointer argument is NULL: sim_init needs sim, q and qd (opt and p may be NULL: the defaults); sim_advance needs sim and record, and t_eval, i_eval and x_eval when n_eval > 0";
     case PAPER_CASE1_ERR_MAX_STEPS: return "maximum number of steps reached";
     case PAPER_CASE1_ERR_STEP_SIZE: return "step size underflow: the adaptive integrator cannot meet the tolerance";
     case PAPER_CASE1_ERR_NONFINITE: return "the state became NaN or infinite";
@@ -1160,6 +1162,7 @@ static const double paper_case1_dop853_d[4][16] = {
 
 void paper_case1_default_options(paper_case1_options *opt)
 {
+    if (opt == 0) return;
     opt->method = PAPER_CASE1_METHOD_DOPRI5;
     opt->dt = 0.0;
     opt->rtol = 1e-8;
@@ -1293,7 +1296,14 @@ static int paper_case1_rest_at_start(paper_case1_sim *s);
 int paper_case1_sim_init(paper_case1_sim *s, double t0, const double *q, const double *qd, const double *p,
                    const paper_case1_options *opt)
 {
+    paper_case1_options defaults;
+    double x[PAPER_CASE1_NX], pv[PAPER_CASE1_NPARAM];
     int i;
+    if (s == 0 || q == 0 || qd == 0) return PAPER_CASE1_ERR_NULL_ARGUMENT;
+    if (opt == 0) {                                /* NULL: the default options */
+        paper_case1_default_options(&defaults);
+        opt = &defaults;
+    }
     if (opt->method != PAPER_CASE1_METHOD_RK4 && opt->method != PAPER_CASE1_METHOD_DOPRI5
         && opt->method != PAPER_CASE1_METHOD_DOP853) return PAPER_CASE1_ERR_BAD_OPTION;
     if (opt->method == PAPER_CASE1_METHOD_RK4 && !(opt->dt > 0.0 && opt->dt < 1e300)) return PAPER_CASE1_ERR_BAD_OPTION;
@@ -1302,13 +1312,38 @@ int paper_case1_sim_init(paper_case1_sim *s, double t0, const double *q, const d
     if (opt->event_samples < 1 || !(opt->event_tol > 0.0) || !(opt->contact_tol >= 0.0) || !(opt->h_max >= 0.0)
         || opt->max_steps < 0 || !(opt->rest_height < 1e300) || opt->zeno_impacts < 0)
         return PAPER_CASE1_ERR_BAD_OPTION;
-    s->opt = *opt;
-    for (i = 0; i < PAPER_CASE1_NPARAM; ++i) s->p[i] = p[i];
-    for (i = 0; i < PAPER_CASE1_NQ; ++i) {
-        s->x[i] = q[i];
-        s->x[PAPER_CASE1_NQ + i] = qd[i];
+    if (p == 0) {
+        paper_case1_default_parameters(pv);         /* NULL: the scene's parameters */
+    } else {
+        for (i = 0; i < PAPER_CASE1_NPARAM; ++i) pv[i] = p[i];
     }
-    if (!paper_case1_finite(s->x, PAPER_CASE1_NX) || !paper_case1_finite(&t0, 1)) return PAPER_CASE1_ERR_BAD_OPTION;
+    for (i = 0; i < PAPER_CASE1_NQ; ++i) {
+        x[i] = q[i];
+        x[PAPER_CASE1_NQ + i] = qd[i];
+    }
+    if (!paper_case1_finite(x, PAPER_CASE1_NX) || !paper_case1_finite(&t0, 1)) return PAPER_CASE1_ERR_BAD_OPTION;
+    {
+        /* every point on the right side of its wall, to the depth at which the loop itself reports a lost
+         * contact (ERR_LOST_CONTACT): contact_tol plus the simultaneity window (contact_tol, or 100 times an
+         * adaptive method's position tolerance atol + rtol l if larger), plus round-off 1e-12 max(1 m, l),
+         * l the largest |point coordinate|.  So the states the loop leaves (a resting contact held at its
+         * landing gap) restart, and a point really outside is refused. */
+        double gaps[PAPER_CASE1_NCONTACT1], r[3 * PAPER_CASE1_NPOINT], size = 1.0, window, depth;
+        paper_case1_contact_points(x, pv, r);
+        for (i = 0; i < 3 * PAPER_CASE1_NPOINT; ++i) {
+            if (fabs(r[i]) > size) size = fabs(r[i]);
+        }
+        paper_case1_contact_gaps(x, pv, gaps);
+        window = opt->method == PAPER_CASE1_METHOD_RK4 ? 0.0 : 100.0 * (opt->atol + opt->rtol * size);
+        if (window < opt->contact_tol) window = opt->contact_tol;
+        depth = opt->contact_tol + window + 1e-12 * size;
+        for (i = 0; i < PAPER_CASE1_NCONTACT; ++i) {
+            if (gaps[i] < -depth) return PAPER_CASE1_ERR_START_OUTSIDE;
+        }
+    }
+    s->opt = *opt;
+    for (i = 0; i < PAPER_CASE1_NPARAM; ++i) s->p[i] = pv[i];
+    for (i = 0; i < PAPER_CASE1_NX; ++i) s->x[i] = x[i];
     s->t = t0;
     s->h = opt->dt;                               /* RK4 step, or the first adaptive step (0: automatic) */
     s->f_valid = 0;
@@ -1346,10 +1381,11 @@ int paper_case1_sim_init(paper_case1_sim *s, double t0, const double *q, const d
 void paper_case1_sim_state(const paper_case1_sim *s, double *t, double *q, double *qd)
 {
     int i;
-    *t = s->t;
+    if (s == 0) return;
+    if (t != 0) *t = s->t;
     for (i = 0; i < PAPER_CASE1_NQ; ++i) {
-        q[i] = s->x[i];
-        qd[i] = s->x[PAPER_CASE1_NQ + i];
+        if (q != 0) q[i] = s->x[i];
+        if (qd != 0) qd[i] = s->x[PAPER_CASE1_NQ + i];
     }
 }
 
@@ -2467,8 +2503,11 @@ int paper_case1_sim_advance(paper_case1_sim *s, double t_end, const double *t_ev
     long steps = 0;
     double fac_max = 10.0;
     int i;
-    if (!(t_end >= s->t) || record == 0 || (n_eval > 0 && (t_eval == 0 || x_eval == 0 || i_eval == 0)))
-        return PAPER_CASE1_ERR_BAD_OPTION;
+    if (s == 0 || record == 0 || (n_eval > 0 && (t_eval == 0 || x_eval == 0 || i_eval == 0)))
+        return PAPER_CASE1_ERR_NULL_ARGUMENT;
+    if (!(t_end >= s->t) || !(t_end - t_end == 0.0) || n_eval < 0
+        || (n_eval > 0 && (*i_eval < 0 || *i_eval > n_eval)))
+        return PAPER_CASE1_ERR_BAD_OPTION;                /* t_end NaN, infinite or before t; bad sample index */
     if (s->pending) {                                        /* the activations of sim_init */
         s->pending = 0;
         record->t = s->t;

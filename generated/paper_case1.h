@@ -239,8 +239,8 @@ const char *paper_case1_error_message(int code);
  * Hybrid simulation: flight integrated in C up to the next impact, impact law applied in C.
  *
  *   NAME_options opt; NAME_sim sim; NAME_impact_record rec;
- *   NAME_default_options(&opt);                       edit opt.method, opt.rtol, ...
- *   NAME_sim_init(&sim, 0.0, q0, qd0, p, &opt);
+ *   NAME_default_options(&opt);                       edit opt.method, opt.rtol, ... (or pass opt NULL)
+ *   NAME_sim_init(&sim, 0.0, q0, qd0, p, &opt);      p NULL: the scene's parameters
  *   while ((code = NAME_sim_advance(&sim, t_end, t_eval, n_eval, &i_eval, x_eval, &rec)) == NAME_SIM_IMPACT
  *          || code == NAME_SIM_CONTACT)
  *       ... rec holds the impact just applied, or (SIM_CONTACT) a change of the resting contacts ...
@@ -296,7 +296,7 @@ const char *paper_case1_error_message(int code);
 #define PAPER_CASE1_SIM_CONTACT   3    /* stopped where the persistent set changed without an impact: a contact
                                          released (its force reached 0), or the activations of sim_init;
                                          record.t, activated[], released[] are filled, ncontact = 0 */
-#define PAPER_CASE1_ERR_BAD_OPTION  -10   /* an option or argument is out of range */
+#define PAPER_CASE1_ERR_BAD_OPTION  -10   /* an option or argument is out of range (the ranges: error_message) */
 #define PAPER_CASE1_ERR_MAX_STEPS   -11   /* opt.max_steps reached in one advance call */
 #define PAPER_CASE1_ERR_STEP_SIZE   -12   /* adaptive step size fell below round-off */
 #define PAPER_CASE1_ERR_NONFINITE   -13   /* the state became NaN or infinite */
@@ -310,6 +310,9 @@ const char *paper_case1_error_message(int code);
                                               motion is too fast or I_f too ill-conditioned for the tolerance */
 #define PAPER_CASE1_ERR_IMPACT_ACCURACY -16  /* an impact failed its post-conditions (F >= 0, no approach, no energy
                                               gain, e = 1 energy kept) beyond round-off: ill-conditioned */
+#define PAPER_CASE1_ERR_START_OUTSIDE -19  /* sim_init: a contact point starts beyond its wall, deeper than the
+                                              loop's own lost-contact depth (contact_tol + the simultaneity window) */
+#define PAPER_CASE1_ERR_NULL_ARGUMENT -20  /* a pointer argument that must not be NULL is NULL (see each function) */
 
 #define PAPER_CASE1_NCONTACT1 (PAPER_CASE1_NCONTACT > 0 ? PAPER_CASE1_NCONTACT : 1)
 
@@ -382,21 +385,34 @@ typedef struct {
                                                      error below its wall) */
 } paper_case1_sim;
 
-/* Default options (DOPRI5, rtol 1e-8, atol 1e-10, persistent contact on). */
+/* Default options (DOPRI5, rtol 1e-8, atol 1e-10, persistent contact on).  opt NULL: nothing is done. */
 void paper_case1_default_options(paper_case1_options *opt);
 
 /* Start a simulation at time t0 from (q, qd) with parameters p (copied).  Contacts resting at their wall
- * become persistent (reported by the first sim_advance, SIM_CONTACT).  Returns OK or an error (< 0). */
+ * become persistent (reported by the first sim_advance, SIM_CONTACT).
+ * Pointers: sim, q and qd must not be NULL (ERR_NULL_ARGUMENT); opt NULL means the default options
+ * (default_options), p NULL the scene's parameters (default_parameters).
+ * Refused: options out of range, t0, q or qd not finite (ERR_BAD_OPTION); a contact point beyond its wall,
+ * gap < -(contact_tol + w + 1e-12 max(1 m, l)) (ERR_START_OUTSIDE), w the simultaneity window (contact_tol, or
+ * for the adaptive methods 100 (atol + rtol l) if larger; l the largest |point coordinate|): the depth at
+ * which the loop itself reports a lost contact.  A start on or inside the walls is accepted, and so is a
+ * state the loop itself left (its resting contacts held at their landing gaps).  On any of these errors *sim is left unchanged; it must have
+ * been initialised with OK before it is passed to sim_advance.  Returns OK or an error (< 0). */
 int paper_case1_sim_init(paper_case1_sim *sim, double t0, const double *q, const double *qd, const double *p,
                    const paper_case1_options *opt);
 
-/* The current time and state (the struct's t and x, copied out). */
+/* The current time and state (the struct's t and x, copied out).  sim NULL: nothing is written; an
+ * output that is NULL (t, q or qd) is skipped. */
 void paper_case1_sim_state(const paper_case1_sim *sim, double *t, double *q, double *qd);
 
 /* Integrate until t_end, the first impact (which is located, resolved and applied; record filled) or the
  * first release of a persistent contact.
  * Samples: for each t_eval[i] (ascending) with i >= *i_eval that is passed, x_eval[i*NX ..] receives the
- * state [q, qd] (pre-impact at an impact time) and *i_eval advances; t_eval may be NULL if n_eval = 0.
+ * state [q, qd] (pre-impact at an impact time) and *i_eval advances.
+ * Pointers: sim and record must not be NULL, nor t_eval, i_eval and x_eval (n_eval doubles, n_eval NX
+ * doubles) when n_eval > 0 (ERR_NULL_ARGUMENT); with n_eval = 0 they may be NULL and are not used.
+ * Ranges (ERR_BAD_OPTION): t_end finite and >= sim->t, n_eval >= 0, 0 <= *i_eval <= n_eval.  A call
+ * refused for its arguments changes nothing.
  * Returns SIM_END, SIM_IMPACT, SIM_CONTACT or an error (< 0). */
 int paper_case1_sim_advance(paper_case1_sim *sim, double t_end, const double *t_eval, int n_eval, int *i_eval,
                       double *x_eval, paper_case1_impact_record *record);

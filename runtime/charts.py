@@ -1,4 +1,4 @@
-"""Near gimbal lock: integrate on a second chart of the base orientation and switch back (issue 6).
+"""Near gimbal lock: integrate on a second chart of the base orientation and switch back.
 
 The orientation of link 1 is parametrised by three angles (README, "Frame convention")::
 
@@ -43,7 +43,7 @@ import numpy as np
 from codegen.scene import Scene, load_scene
 
 from .model import CompiledModel, load_model
-from .simulate import Impact, SimulationResult, impact_warnings, sample_times, simulate
+from .simulate import Impact, SimulationResult, energy_scale, impact_warnings, sample_times, simulate
 
 CHART_NAMES = ("A", "B")
 EZ = np.array([0.0, 0.0, 1.0])
@@ -416,6 +416,7 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
     t = 0.0
     q, qd = np.array(scene.q0, dtype=float), np.array(scene.qd0, dtype=float)
     energy_initial = _energy(compiled[0], q, qd, p_vec)
+    T0, V0 = compiled[0].energy(compiled[0].layout.reduce(q), compiled[0].layout.reduce(qd), p_vec)
     current = 0
     out.last_a = q[:3].copy()
     if charts[0].measure(q[1]) < threshold:               # start on B when A is already poor
@@ -521,8 +522,8 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
                 break
             t = t1
             if len(impacts) >= max_impacts and t < t_end:
-                status, message = -1, (f"stopped after {len(impacts)} impacts at t = {t:.12g} s (max_impacts): "
-                                       "the max_impacts limit")
+                status, message = -1, (f"stopped after {len(impacts)} impacts at t = {t:.12g} s: the "
+                                       f"max_impacts limit of {max_impacts} (raise max_impacts to go on)")
                 break
             continue
         # continue from sample `cut` on the other chart
@@ -554,6 +555,7 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
         n_steps=totals["n_steps"], n_rejected=totals["n_rejected"], n_rhs=totals["n_rhs"], status=status,
         message=message + (f"; {len(warnings)} impact(s) of limited accuracy (see warnings)" if warnings else ""),
         method=options.get("method", "dopri5"), options=opts, warnings=warnings,
+        energy_scale=energy_scale(scene, p_vec, T0, V0),
         chart=out.chart[:n_done], q_native=out.q_native[:n_done], qd_native=out.qd_native[:n_done],
         impact_chart=impact_chart, switches=switches, chart_twists=(charts[0].twists, charts[1].twists),
         measure_a=charts[0].measure(out.q[:n_done, 1]), chart_b_name=models.name_b, min_measure=min_measure,

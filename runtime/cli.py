@@ -10,10 +10,11 @@ from pathlib import Path
 
 from codegen.scene import SceneError, load_scene, shipped_scene_names
 
-from .compile import BuildError, CompilerNotFound
+from .compile import BuildError, CacheError, CompilerNotFound
 from .model import load_model
+from codegen.outputs import output_dir_problem, output_file_problem
 from .precision import STATE_TOL, TIME_TOL
-from .simulate import METHODS, simulate
+from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, METHODS, simulate
 from . import fuzz as fuzz_study
 from . import stress as stress_suite
 
@@ -31,10 +32,13 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--t-end", type=float, default=None,
                      help="end time in s (default: 1.5 for paper-case1, 1.75 for paper-case2, else 1.0)")
     sim.add_argument("--method", choices=METHODS, default="dopri5", help="integrator (default dopri5)")
-    sim.add_argument("--rtol", type=float, default=1e-10, help="dopri5 relative tolerance (default 1e-10)")
-    sim.add_argument("--atol", type=float, default=1e-12, help="dopri5 absolute tolerance (default 1e-12)")
+    sim.add_argument("--rtol", type=float, default=DEFAULT_RTOL,
+                     help=f"dopri5/dop853 relative tolerance (default {DEFAULT_RTOL:g})")
+    sim.add_argument("--atol", type=float, default=DEFAULT_ATOL,
+                     help=f"dopri5/dop853 absolute tolerance (default {DEFAULT_ATOL:g})")
     sim.add_argument("--dt", type=float, default=None, help="rk4 step in s (required for rk4; the paper used 1e-5)")
-    sim.add_argument("--samples-dt", type=float, default=1e-3, help="output sample spacing in s (default 1e-3)")
+    sim.add_argument("--samples-dt", type=float, default=1e-3,
+                     help=f"output sample spacing in s (default 1e-3; at most {MAX_SAMPLES:,} samples)")
     sim.add_argument("--json", metavar="FILE", help="write the result (impacts, final state, energies) as JSON")
     sim.add_argument("--plot", metavar="DIR", help="write PNG plots (time histories, impact configurations)")
     sim.add_argument("--charts", action="store_true", help="run with chart switching from the start and print "
@@ -65,6 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 DEFAULT_T_END = {"paper_case1": 1.5, "paper_case2": 1.75}
+MAX_SAMPLES = 10_000_000     # output samples of one run (each 2 nq doubles): 1 GB for a 4-link chain
 
 
 def scene_and_horizon(args):
@@ -76,6 +81,41 @@ def scene_and_horizon(args):
         print(f"error: {exc}", file=sys.stderr)
         return None
     return scene, (args.t_end if args.t_end is not None else DEFAULT_T_END.get(scene.name, 1.0))
+
+
+def simulate_arguments_problem(args, t_end: float) -> str:
+    """What is wrong with the simulate command's numbers and output paths ('' when nothing is), checked
+    before the model is built so that a bad argument costs nothing and writes nothing."""
+    import math
+    if not (math.isfinite(t_end) and t_end >= 0):
+        return f"--t-end: must be a finite time >= 0 s, got {t_end}"
+    if not (math.isfinite(args.samples_dt) and args.samples_dt > 0):
+        return f"--samples-dt: must be a finite spacing > 0 s, got {args.samples_dt}"
+    samples = t_end / args.samples_dt + 1
+    if samples > MAX_SAMPLES:
+        return (f"--samples-dt: {args.samples_dt:g} s over t_end = {t_end:g} s asks for {samples:.3g} samples; at most "
+                f"{MAX_SAMPLES:,} (give --samples-dt >= {t_end / (MAX_SAMPLES - 1):.3g} s)")
+    for option, value in (("--rtol", args.rtol), ("--atol", args.atol)):
+        if not (math.isfinite(value) and value > 0):
+            return f"{option}: must be a finite tolerance > 0, got {value}"
+    if args.dt is not None and not (math.isfinite(args.dt) and args.dt > 0):
+        return f"--dt: must be a finite step > 0 s, got {args.dt}"
+    if args.method == "rk4" and args.dt is None:
+        return "--dt: rk4 needs a step (e.g. --dt 1e-5, the paper's)"
+    if args.max_wall_time is not None and not (math.isfinite(args.max_wall_time) and args.max_wall_time > 0):
+        return f"--max-wall-time: must be a finite time > 0 s, got {args.max_wall_time}"
+    if args.charts and args.no_charts:
+        return "--charts and --no-charts: give at most one"
+    if args.json:
+        problem = output_file_problem("--json", args.json)
+        if problem:
+            return problem
+    if args.plot:
+        import importlib.util
+        if importlib.util.find_spec("matplotlib") is None:
+            return "--plot: needs matplotlib, which is not installed (pip install -e \".[plot]\")"
+        return output_dir_problem("--plot", args.plot)
+    return ""
 
 
 def main(argv=None) -> int:
@@ -91,6 +131,10 @@ def main(argv=None) -> int:
     if loaded is None:
         return 2
     scene, t_end = loaded
+    problem = simulate_arguments_problem(args, t_end)
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
+        return 2
     start = time.perf_counter()
     try:
         progress = lambda m: print(f"  {m}", file=sys.stderr, flush=True)  # noqa: E731
@@ -100,14 +144,11 @@ def main(argv=None) -> int:
             model = charts.models[0]
         else:
             model = load_model(scene, progress=progress)
-    except (CompilerNotFound, BuildError) as exc:
+    except (CompilerNotFound, BuildError, CacheError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 3
     prepared = time.perf_counter() - start
     import numpy as np
-    if not (args.samples_dt > 0):
-        print(f"error: --samples-dt: must be > 0 s, got {args.samples_dt}", file=sys.stderr)
-        return 2
     t_eval = np.unique(np.r_[np.arange(0.0, t_end, args.samples_dt), t_end]) if t_end > 0 else np.array([0.0])
     try:
         start = time.perf_counter()
@@ -132,12 +173,15 @@ def main(argv=None) -> int:
     print(f"status {result.status}: {result.message}")
     if result.status != 0 and args.no_charts and "gimbal lock" in result.message:
         print("hint: without --no-charts the run continues on a second chart")
-    print(f"energy: initial {result.energy_initial:.12g} J, final {result.energy_final:.12g} J, "
-          f"relative drift {result.energy_drift:.3e}")
+    print(result.energy_summary())
     print(f"steps {result.n_steps} (rejected {result.n_rejected}), rhs evaluations {result.n_rhs}, "
           f"simulation {elapsed * 1e3:.2f} ms, model ready in {prepared:.2f} s")
     if args.json:
-        Path(args.json).write_text(json.dumps(result.to_json(), indent=1))
+        try:
+            Path(args.json).write_text(json.dumps(result.to_json(), indent=1))
+        except OSError as exc:
+            print(f"error: --json: cannot write {args.json}: {exc.strerror or exc}", file=sys.stderr)
+            return 2
         print(f"wrote {args.json}")
     if args.plot:
         from .plots import plot_all

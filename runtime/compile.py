@@ -1,17 +1,22 @@
 """Compile generated C with cffi (API mode) and cache the extension module.
 
-Builds are cached in a user cache directory (``$GIBBS_APPELL_CACHE``, else
-``$XDG_CACHE_HOME/gibbs-appell-chains``, else ``~/.cache/gibbs-appell-chains``), keyed by a hash
-of the C source, the header, the cffi declarations, the compiler flags, the Python version and the
-cffi version; each hash gets its own module name, so different models never clash in one process.
-A build happens in a private temporary directory and the finished module is moved into place with
-an atomic rename, so concurrent builds of the same model both succeed.
+Modules live in the shared cache directory (``codegen.cache.cache_dir``) as ``_gac_KEY<ext>``, KEY a
+hash of the C source, the header, the cffi declarations, the compiler flags, the Python version and
+the cffi version; each hash gets its own module name, so different models never clash in one
+process.  Beside each module, ``sha256_gac_KEY.txt`` holds its sha256 (``sha256sum`` format).
+
+A cached module is imported only after its sha256 matches the sidecar.  A module that fails the
+check or fails to import is corrupted: one line ``cache: rebuilding corrupted entry FILE (REASON)``
+is reported and the module is rebuilt.  A build happens in a private temporary directory, under an
+exclusive lock on the entry, and the finished module is moved into place with an atomic rename, so
+concurrent builds of the same model all succeed.
 """
 from __future__ import annotations
 
 import hashlib
 import importlib.util
 import os
+import re
 import shlex
 import shutil
 import sys
@@ -22,7 +27,10 @@ from pathlib import Path
 
 import cffi
 
+from codegen.cache import CacheError, cache_dir, entry_lock, report_corrupted, sha256_of, write_atomic  # noqa: F401
+
 DEFAULT_FLAGS = ("-O2",)
+SUFFIX = sysconfig.get_config_var("EXT_SUFFIX") or ".so"
 
 
 class CompilerNotFound(RuntimeError):
@@ -31,15 +39,6 @@ class CompilerNotFound(RuntimeError):
 
 class BuildError(RuntimeError):
     """The C compiler rejected the generated code."""
-
-
-def cache_dir() -> Path:
-    if os.environ.get("GIBBS_APPELL_CACHE"):
-        base = Path(os.environ["GIBBS_APPELL_CACHE"])
-    else:
-        base = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "gibbs-appell-chains"
-    base.mkdir(parents=True, exist_ok=True)
-    return base
 
 
 def build_key(header: str, source: str, cdef: str, flags) -> str:
@@ -61,24 +60,70 @@ def find_compiler() -> str:
     return program
 
 
+def module_files(folder: Path, module_name: str) -> tuple[Path, Path]:
+    """The module file and its sha256 sidecar in ``folder``."""
+    return folder / f"{module_name}{SUFFIX}", folder / f"sha256{module_name}.txt"
+
+
+def verify_module(target: Path, sidecar: Path) -> str | None:
+    """None if ``target`` matches the sha256 in ``sidecar``, else the reason it does not."""
+    try:
+        recorded = sidecar.read_text().split()
+    except FileNotFoundError:
+        return "sha256 sidecar missing"
+    except (OSError, UnicodeDecodeError):
+        return "sha256 sidecar unreadable"
+    if len(recorded) != 2 or recorded[1] != target.name or not re.fullmatch(r"[0-9a-f]{64}", recorded[0]):
+        return "sha256 sidecar malformed"
+    try:
+        data = target.read_bytes()
+    except OSError as exc:
+        return f"unreadable: {exc.strerror or exc}"
+    return None if sha256_of(data) == recorded[0] else "sha256 mismatch"
+
+
 def compile_model(name: str, header: str, source: str, cdef: str, flags=DEFAULT_FLAGS,
                   progress=None):
     """Return the compiled cffi module (with .ffi and .lib) for this generated model.
 
-    ``progress(message)`` is told whether the build was cached or how long it took.
+    ``progress(message)`` is told whether the build was cached or how long it took, and about a
+    corrupted entry that is rebuilt (stderr without ``progress``).
     """
     flags = tuple(flags)
-    key = build_key(header, source, cdef, flags)
-    module_name = f"_gac_{key}"
-    suffix = sysconfig.get_config_var("EXT_SUFFIX") or ".so"
-    target = cache_dir() / f"{module_name}{suffix}"
-    if target.exists():
+    module_name = f"_gac_{build_key(header, source, cdef, flags)}"
+    if module_name in _LOADED:                     # imported (after its check) earlier in this process
         if progress:
-            progress(f"compile: cached {target.name}")
-        return _load(module_name, target)
+            progress(f"compile: cached {module_name}{SUFFIX}")
+        return _LOADED[module_name]
+    folder = cache_dir()
+    target, sidecar = module_files(folder, module_name)
+    with entry_lock(folder, module_name):
+        if target.exists():
+            problem = verify_module(target, sidecar)
+            if problem is None:
+                try:
+                    module = _import(module_name, target)
+                except Exception as exc:  # noqa: BLE001 - any failure to import means a bad file
+                    problem = f"import failed: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}"
+                else:
+                    if progress:
+                        progress(f"compile: cached {target.name}")
+                    return module
+            report_corrupted(target.name, problem, progress)
+        seconds = _build(name, header, source, cdef, flags, module_name, target, sidecar)
+        if progress:
+            progress(f"compile: built {target.name} in {seconds:.2f} s")
+        try:
+            return _import(module_name, target)
+        except Exception as exc:  # noqa: BLE001
+            raise BuildError(f"the freshly built module {target} cannot be imported: {exc}") from exc
+
+
+def _build(name, header, source, cdef, flags, module_name: str, target: Path, sidecar: Path) -> float:
+    """Build the module in a temporary directory, move it to ``target``, then write its sidecar."""
     find_compiler()
     start = time.perf_counter()
-    workdir = Path(tempfile.mkdtemp(prefix=f"{module_name}-", dir=cache_dir()))
+    workdir = Path(tempfile.mkdtemp(prefix=f"{module_name}-", dir=target.parent))
     try:
         (workdir / f"{name}.h").write_text(header)
         (workdir / f"{name}.c").write_text(source)
@@ -90,22 +135,38 @@ def compile_model(name: str, header: str, source: str, cdef: str, flags=DEFAULT_
             built = Path(ffi.compile(tmpdir=str(workdir), verbose=False))
         except Exception as exc:  # setuptools raises CompileError / LinkError / VerificationError
             raise BuildError(f"compiling the generated model {name!r} failed: {exc}") from exc
-        os.replace(built, target)          # atomic: a concurrent build of the same key is harmless
+        digest = sha256_of(built.read_bytes())
+        os.replace(built, target)
+        write_atomic(sidecar, f"{digest}  {target.name}\n".encode())
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
-    if progress:
-        progress(f"compile: built {target.name} in {time.perf_counter() - start:.2f} s")
-    return _load(module_name, target)
+    return time.perf_counter() - start
 
 
-_LOADED = {}
+_LOADED = {}          # module name -> module imported in this process
+_FAILED = set()       # module files whose import failed in this process
 
 
-def _load(module_name: str, path: Path):
-    if module_name in _LOADED:
-        return _LOADED[module_name]
+def _import(module_name: str, path: Path):
+    """Import the module file ``path`` as ``module_name``.  A path whose import failed before in this
+    process is imported from a fresh copy: the dynamic loader may still hold the old file by name."""
+    if path in _FAILED:
+        with tempfile.TemporaryDirectory(prefix=".import-", dir=path.parent) as tmp:
+            copy = Path(tmp) / path.name
+            shutil.copyfile(path, copy)
+            module = _exec(module_name, copy)
+    else:
+        try:
+            module = _exec(module_name, path)
+        except Exception:
+            _FAILED.add(path)
+            raise
+    _LOADED[module_name] = module
+    return module
+
+
+def _exec(module_name: str, path: Path):
     spec = importlib.util.spec_from_file_location(module_name, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    _LOADED[module_name] = module
     return module

@@ -345,9 +345,20 @@ def _rerun(case: str, budget: float, n_max: int) -> int:
 def main(args) -> int:
     if args.case:
         return _rerun(args.case, args.budget, args.n_max)
-    if not (args.runs >= 1 and args.per_structure >= 1 and 1 <= args.n_max <= 8 and args.budget > 0):
-        print("error: --runs and --per-structure must be >= 1, --n-max in 1..8, --budget > 0", file=sys.stderr)
-        return 2
+    for option, good, allowed in (("--runs", args.runs >= 1, ">= 1"), ("--per-structure", args.per_structure >= 1, ">= 1"),
+                                  ("--n-max", 1 <= args.n_max <= 8, "in 1..8"),
+                                  ("--budget", math.isfinite(args.budget) and args.budget > 0, "a finite time > 0 s"),
+                                  ("--jobs", args.jobs is None or args.jobs >= 1, ">= 1")):
+        if not good:
+            print(f"error: {option}: must be {allowed}, got {getattr(args, option[2:].replace('-', '_'))}",
+                  file=sys.stderr)
+            return 2
+    if args.json:
+        from codegen.outputs import output_file_problem
+        problem = output_file_problem("--json", args.json)
+        if problem:
+            print(f"error: {problem}", file=sys.stderr)
+            return 2
     start = time.perf_counter()
     outcomes = fuzz(args.runs, args.per_structure, args.seed, args.jobs, args.budget, args.n_max,
                     progress=lambda m: print(m, file=sys.stderr, flush=True))

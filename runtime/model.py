@@ -6,57 +6,22 @@
 """
 from __future__ import annotations
 
-import hashlib
-import json
-from importlib import resources
+import os
+import reprlib
+from stat import S_ISDIR as stat_is_dir
 from pathlib import Path
 
 import numpy as np
 
-import codegen
-from codegen.emit import GeneratedModel, scene_hash
-from codegen.scene import Scene, load_scene
-from codegen.specialise import layout_for
+from codegen.cache import cache_dir, generate_cached  # noqa: F401
+from codegen.emit import GeneratedModel
+from codegen.scene import Scene, SceneError, _shipped_scene_path, load_scene
 
-from .compile import cache_dir, compile_model
+from .compile import DEFAULT_FLAGS, compile_model
 
 
 class ImpactError(RuntimeError):
     """The generated impact solver returned an error code (message from the C side)."""
-
-
-def _generator_fingerprint() -> str:
-    """Hash of the generator's own code and templates, so cached C never outlives a code change."""
-    digest = hashlib.sha256()
-    for package, pattern in (("codegen", "*.py"), ("templates", "*.j2")):
-        folder = resources.files(package)
-        for path in sorted(Path(str(folder)).glob(pattern)):
-            digest.update(path.name.encode())
-            digest.update(path.read_bytes())
-    return digest.hexdigest()[:16]
-
-
-def generate_cached(scene: Scene, bake_params: bool = False, progress=None, specialise: bool = True) -> GeneratedModel:
-    """codegen.generate with an on-disk cache of the generated text (keyed by scene and generator)."""
-    fingerprint = _generator_fingerprint()
-    key = hashlib.sha256(f"{scene_hash(scene)}|{bake_params}|{specialise}|{fingerprint}".encode()
-                         ).hexdigest()[:20]
-    path = cache_dir() / f"gen_{key}.json"
-    if path.exists():
-        data = json.loads(path.read_text())
-        model = GeneratedModel(data["name"], data["header"], data["source"], data["cdef"], [])
-        model.timings = {}
-        model.layout = layout_for(scene, specialise)
-        return model
-    model = codegen.generate(scene, bake_params=bake_params, progress=progress or (lambda m: None),
-                             specialise=specialise)
-    if _generator_fingerprint() != fingerprint:     # the generator changed while it ran: do not cache
-        return model
-    tmp = path.with_suffix(f".{id(model)}.tmp")
-    tmp.write_text(json.dumps({"name": model.name, "header": model.header, "source": model.source,
-                               "cdef": model.cdef}))
-    tmp.replace(path)
-    return model
 
 
 class CompiledModel:
@@ -176,14 +141,53 @@ class CompiledModel:
         return qdd, lam[:len(active)]
 
 
-def load_model(scene: Scene | str, bake_params: bool = False, flags=None, progress=None,
+def load_model(scene: Scene | str | Path, bake_params: bool = False, flags=None, progress=None,
                specialise: bool = True) -> CompiledModel:
-    """Generate (cached) and compile (cached) the model of a scene or a shipped scene name/file.
-    ``specialise`` (default) leaves out what the scene does not need; False gives the general model."""
-    if not isinstance(scene, Scene):
-        scene = load_scene(scene)
-    generated = generate_cached(scene, bake_params, progress, specialise)
-    kwargs = {} if flags is None else {"flags": flags}
+    """Generate (cached) and compile (cached) the model of a scene, a shipped scene name or a scene
+    file.  ``specialise`` (default) leaves out what the scene does not need; False gives the general
+    model.  For a name or a file, the same model object is returned again while the file is unchanged
+    (same path, modification time and size) and the options are the same."""
+    flags = DEFAULT_FLAGS if flags is None else tuple(flags)
+    if isinstance(scene, Scene):
+        return _build_model(scene, bake_params, flags, progress, specialise)
+    if not isinstance(scene, (str, os.PathLike)):
+        raise TypeError("scene: expected a Scene, a shipped scene name or a path to a .toml/.json scene "
+                        f"file, got {reprlib.repr(scene)} ({type(scene).__name__})")
+    path, stat = _scene_file(scene)
+    key = (path, stat.st_mtime_ns, stat.st_size, bool(bake_params), flags, bool(specialise))
+    model = _MODELS.get(key)
+    if model is None:
+        model = _build_model(load_scene(scene), bake_params, flags, progress, specialise)
+        _MODELS[key] = model
+    return model
+
+
+_MODELS: dict[tuple, CompiledModel] = {}      # (scene file, mtime, size, options) -> model
+
+
+def _scene_file(source: str | os.PathLike) -> tuple[str, os.stat_result]:
+    """The absolute path and stat of the file ``load_scene(source)`` reads: the path itself, else the
+    shipped scene of that name."""
+    if not str(source).strip():
+        raise SceneError("scene: empty name; expected a .toml/.json scene file or a shipped scene name")
+    for path in (os.fspath(source), os.path.join(_SHIPPED_SCENES, f"{source}.toml")):
+        try:
+            stat = os.stat(path)
+        except (OSError, ValueError):
+            continue
+        if stat_is_dir(stat.st_mode):
+            raise SceneError(f"scene: {str(source)!r} is a directory; expected a .toml/.json scene file "
+                             "or a shipped scene name")
+        return os.path.abspath(path), stat
+    load_scene(source)                       # raises the SceneError that names the shipped scenes
+    raise SceneError(f"scene: cannot read {str(source)!r}")
+
+
+_SHIPPED_SCENES = str(_shipped_scene_path("name").parent)
+
+
+def _build_model(scene: Scene, bake_params: bool, flags: tuple, progress, specialise: bool) -> CompiledModel:
+    generated = generate_cached(scene, bake_params=bake_params, specialise=specialise, progress=progress)
     module = compile_model(generated.name, generated.header, generated.source, generated.cdef,
-                           progress=progress, **kwargs)
+                           flags=flags, progress=progress)
     return CompiledModel(scene, generated, module)

@@ -26,6 +26,7 @@ DOP853 and Radau (scipy's finite-difference Jacobian) on the same compiled right
 """
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import statistics
@@ -353,12 +354,18 @@ def to_json(scene_name: str, t_end: float, reference: Reference, rows: list[Row]
 def main(args) -> int:
     """The `python -m runtime precision` command (args from runtime.cli)."""
     from .cli import scene_and_horizon
-    from .compile import BuildError, CompilerNotFound
+    from codegen.outputs import output_dir_problem
+    from .compile import BuildError, CacheError, CompilerNotFound
     from .model import load_model
 
     def progress(message: str) -> None:
         print(message, file=sys.stderr, flush=True)
 
+    missing = [m for m in ("scipy", "matplotlib") if importlib.util.find_spec(m) is None]
+    if missing:
+        print(f"error: python -m runtime precision needs {' and '.join(missing)} (its scipy baseline and its plot), "
+              "which the 'study' extra installs: pip install -e \".[study]\"", file=sys.stderr)
+        return 2
     loaded = scene_and_horizon(args)
     if loaded is None:
         return 2
@@ -368,14 +375,14 @@ def main(args) -> int:
             print(f"error: {name}: must be a finite number > 0, got {value}", file=sys.stderr)
             return 2
     out = Path(args.out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        print(f"error: --out: cannot create {out}: {exc.strerror}", file=sys.stderr)
+    problem = output_dir_problem("--out", args.out)
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
         return 2
+    out.mkdir(parents=True, exist_ok=True)
     try:
         model = load_model(scene, progress=lambda m: progress(f"  {m}"))
-    except (CompilerNotFound, BuildError) as exc:
+    except (CompilerNotFound, BuildError, CacheError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 3
     start = time.perf_counter()

@@ -17,12 +17,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from codegen.scene import Scene
+from codegen.scene import Scene, SceneError
 from codegen.specialise import coordinate_names
 
 from .model import CompiledModel, load_model
 
 METHODS = ("dopri5", "dop853", "rk4")
+DEFAULT_RTOL, DEFAULT_ATOL = 1e-8, 1e-10   # the adaptive methods' tolerances, here, in the CLI and in C
 CHUNK_STEPS = 20000     # steps per call into the C loop between two looks at the wall-time budget
 ROUNDOFF_WARN = 1e-6    # an impact whose energy round-off bound exceeds this is named in result.warnings
 RK4_STABLE = 1.0        # RK4 is stable for h |lambda| < 2.78 on the imaginary and negative real axes; the
@@ -88,15 +89,35 @@ class SimulationResult:
     contact_events: list = field(default_factory=list)   # ContactEvent, in time order
     persistent_final: list = field(default_factory=list)  # (point, wall) of the contacts resting at t_final
     warnings: list = field(default_factory=list)          # results of limited accuracy, one sentence each
+    energy_scale: float = 1.0     # J: max(T0 + |V0|, M g L), the scale energy_drift is measured on
 
     @property
     def success(self) -> bool:
         return self.status == 0
 
     @property
+    def energy_impact_loss(self) -> float:
+        """J: the energy the impacts took, sum of (E before - E after) over the impacts (>= 0; it includes
+        what landings on a wall took, Impact.energy_rest)."""
+        return float(sum(i.energy_before - i.energy_after for i in self.impacts))
+
+    @property
+    def energy_residual(self) -> float:
+        """J: what the energy balance leaves, E_final - E_initial + energy_impact_loss.  Flight conserves
+        T + V (no input, no damping), so this is the integration error of the flight phases."""
+        return self.energy_final - self.energy_initial + self.energy_impact_loss
+
+    @property
     def energy_drift(self) -> float:
-        """(E_final - E_initial) / |E_initial|."""
-        return (self.energy_final - self.energy_initial) / abs(self.energy_initial)
+        """energy_residual / energy_scale: the relative error of the energy balance, on a scale that does
+        not vanish for a chain at rest (M g L) or whose energy happens to be near 0 (T0 + |V0|)."""
+        return self.energy_residual / self.energy_scale
+
+    def energy_summary(self) -> str:
+        """One line: initial and final energy, losses at impacts, and the balance's residual."""
+        return (f"energy: initial {self.energy_initial:.12g} J, final {self.energy_final:.12g} J, lost at impacts "
+                f"{self.energy_impact_loss:.6g} J; balance residual {self.energy_residual:.3e} J = "
+                f"{self.energy_drift:.3e} of {self.energy_scale:.6g} J (max(T0 + |V0|, M g L))")
 
     def impact_table(self) -> str:
         lines = [f"{'#':>3} {'t (s)':>14}  contacts (point/wall: impulse N s)"]
@@ -121,6 +142,8 @@ class SimulationResult:
                          "complementarity": i.complementarity} for i in self.impacts],
             "t_final": self.t_final, "q_final": self.q_final.tolist(), "qd_final": self.qd_final.tolist(),
             "energy_initial": self.energy_initial, "energy_final": self.energy_final,
+            "energy_impact_loss": self.energy_impact_loss, "energy_residual": self.energy_residual,
+            "energy_scale": self.energy_scale, "energy_drift": self.energy_drift,
             "n_rhs": self.n_rhs, "n_steps": self.n_steps, "n_rejected": self.n_rejected,
             "status": self.status, "message": self.message, "method": self.method, "options": self.options,
             "contact_events": [{"t": e.t, "point": e.point, "wall": e.wall, "kind": e.kind}
@@ -135,8 +158,23 @@ def _check(condition: bool, field_name: str, message: str) -> None:
         raise ValueError(f"{field_name}: {message}")
 
 
-def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "dopri5", rtol: float = 1e-8,
-             atol: float = 1e-10, dt: float | None = None, t_eval=None, h_max: float = 0.0,
+def _real(value, field_name: str) -> float:
+    """A real number argument (NaN and infinities pass here; the range checks refuse them)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{field_name}: expected a number, got {value!r} ({type(value).__name__})")
+    return float(value)
+
+
+def _integer(value, field_name: str, lowest: int, meaning: str) -> int:
+    """An integer argument >= lowest."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer, float, np.floating)) \
+            or not np.isfinite(value) or int(value) != value or value < lowest:
+        raise ValueError(f"{field_name}: must be an integer >= {lowest} ({meaning}), got {value!r}")
+    return int(value)
+
+
+def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "dopri5", rtol: float = DEFAULT_RTOL,
+             atol: float = DEFAULT_ATOL, dt: float | None = None, t_eval=None, h_max: float = 0.0,
              contact_tol: float = 1e-6, event_samples: int = 4, event_tol: float = 1e-13,
              max_impacts: int = 10000, max_steps: int = 10_000_000, rest_height: float | None = None,
              zeno_impacts: int = 20, p=None, q0=None, qd0=None,
@@ -169,30 +207,40 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     model = scene if isinstance(scene, CompiledModel) else load_model(scene)
     ffi, lib, name = model.ffi, model.lib, model.name
     _check(method in METHODS, "method", f"must be one of {METHODS}, got {method!r}")
+    t_end = _real(t_end, "t_end")
     _check(np.isfinite(t_end) and t_end >= 0, "t_end", f"must be a finite time >= 0 s, got {t_end!r}")
     if method == "rk4":
+        dt = None if dt is None else _real(dt, "dt")
         _check(dt is not None and np.isfinite(dt) and dt > 0, "dt", f"rk4 needs a step dt > 0 s, got {dt!r}")
     else:
+        rtol, atol = _real(rtol, "rtol"), _real(atol, "atol")
         _check(np.isfinite(rtol) and rtol > 0, "rtol", f"must be > 0, got {rtol!r}")
         _check(np.isfinite(atol) and atol > 0, "atol", f"must be > 0, got {atol!r}")
+        dt = None if dt is None else _real(dt, "dt")
         _check(dt is None or (np.isfinite(dt) and dt > 0), "dt", f"first step must be > 0 s, got {dt!r}")
-    _check(contact_tol >= 0, "contact_tol", f"must be >= 0 m, got {contact_tol!r}")
-    _check(int(max_steps) == max_steps and max_steps >= 0, "max_steps",
-           f"must be an integer >= 0 (0: unbounded), got {max_steps!r}")
+    contact_tol, event_tol, h_max = _real(contact_tol, "contact_tol"), _real(event_tol, "event_tol"), _real(h_max, "h_max")
+    _check(np.isfinite(contact_tol) and contact_tol >= 0, "contact_tol", f"must be a finite gap >= 0 m, got {contact_tol!r}")
+    max_steps = _integer(max_steps, "max_steps", 0, "0: unbounded")
+    max_impacts = _integer(max_impacts, "max_impacts", 1, "a run stops with status -1 after this many impacts")
+    max_wall_time = None if max_wall_time is None else _real(max_wall_time, "max_wall_time")
     _check(max_wall_time is None or (np.isfinite(max_wall_time) and max_wall_time > 0), "max_wall_time",
            f"must be a time > 0 s (or None: unbounded), got {max_wall_time!r}")
-    _check(int(event_samples) >= 1, "event_samples", f"must be >= 1, got {event_samples!r}")
-    _check(event_tol > 0, "event_tol", f"must be > 0 s, got {event_tol!r}")
+    event_samples = _integer(event_samples, "event_samples", 1, "interpolant samples searched per step")
+    _check(np.isfinite(event_tol) and event_tol > 0, "event_tol", f"must be a finite time > 0 s, got {event_tol!r}")
     _check(h_max >= 0, "h_max", f"must be >= 0 s (0: unbounded), got {h_max!r}")
+    rest_height = None if rest_height is None else _real(rest_height, "rest_height")
     _check(rest_height is None or (np.isfinite(rest_height) and rest_height >= 0), "rest_height",
            f"must be a finite height >= 0 m (or None: 10 contact_tol), got {rest_height!r}")
-    _check(int(zeno_impacts) == zeno_impacts and zeno_impacts >= 0, "zeno_impacts",
-           f"must be an integer >= 0 (0: off), got {zeno_impacts!r}")
+    zeno_impacts = _integer(zeno_impacts, "zeno_impacts", 0, "0: off")
 
     nq, nx = model.nq, 2 * model.nq
     layout = model.layout
     overridden = p is not None or q0 is not None      # the scene's own values were checked when it was loaded
-    p = model.p if p is None else np.ascontiguousarray(p, dtype=float)
+    try:
+        p = model.p if p is None else np.ascontiguousarray(p, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"p: expected {len(model.p)} numbers ({', '.join(model.scene.parameter_names())}), "
+                         f"got {p!r}") from None
     if overridden:
         _check_parameters(model, p)
     q = model.q0 if q0 is None else _reduce(layout, q0, "q0", velocity=False)
@@ -228,7 +276,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     contact_events: list[ContactEvent] = []
     t_eval_ptr = ffi.cast("double *", ffi.from_buffer(t_eval))
     x_eval_ptr = ffi.cast("double *", ffi.from_buffer(x_eval))
-    energy_initial = sum(model.energy(q, qd, p))
+    T0, V0 = model.energy(q, qd, p)
+    energy_initial = T0 + V0
     impacts: list[Impact] = []
     names = model.scene.parameter_names()
     elastic_walls = {w.name for w in model.scene.walls if p[names.index(f"e_{w.name}")] == 1.0}
@@ -296,7 +345,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
             break
         if len(impacts) >= max_impacts:
             status = -1
-            message = (f"stopped after {len(impacts)} impacts at t = {impact.t:.12g} s: the max_impacts limit")
+            message = (f"stopped after {len(impacts)} impacts at t = {impact.t:.12g} s: the max_impacts limit of "
+                       f"{max_impacts} (raise max_impacts to go on)")
             break
         if max_wall_time is not None and time.perf_counter() - start > max_wall_time:
             status = -1
@@ -324,12 +374,30 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         n_steps=int(sim.n_steps), n_rejected=int(sim.n_rejected), n_rhs=int(sim.n_rhs), status=status,
         message=message + (f"; {len(warnings)} impact(s) of limited accuracy (see warnings)" if warnings else ""),
         method=method, contact_events=contact_events, warnings=warnings,
+        energy_scale=energy_scale(model.scene, p, T0, V0),
         persistent_final=[(model.contacts[sim.active[k]][0], model.contacts[sim.active[k]][1].name)
                           for k in range(sim.nactive)],
         options={"rtol": rtol, "atol": atol, "dt": dt, "contact_tol": contact_tol, "event_samples": event_samples,
                  "event_tol": event_tol, "h_max": h_max, "t_end": t_end, "rest_height": rest_height,
                  "zeno_impacts": zeno_impacts, "max_steps": max_steps, "max_impacts": max_impacts,
                  "max_wall_time": max_wall_time})
+
+
+def weight_scale(scene: Scene, p: np.ndarray) -> float:
+    """M g L: the work to lift the whole chain by its own length (an energy scale that is not 0 for a
+    chain at rest on the floor, where T + V can be exactly 0)."""
+    names = scene.parameter_names()
+    mass = length = 0.0
+    for i, link in enumerate(scene.links, start=1):
+        l = p[names.index(f"l_{i}")]
+        mass += p[names.index(f"mu_{i}")] * l if link.kind == "line" else p[names.index(f"m_{i}")]
+        length += l
+    return float(mass * abs(p[names.index("g")]) * length)
+
+
+def energy_scale(scene: Scene, p: np.ndarray, T0: float, V0: float) -> float:
+    """max(T0 + |V0|, M g L): the scale of a run's energy balance (> 0 unless nothing can move)."""
+    return max(T0 + abs(V0), weight_scale(scene, p), 1e-300)
 
 
 def impact_warnings(impacts: list[Impact]) -> list[str]:
@@ -395,15 +463,26 @@ def sample_times(t_eval, t_end: float) -> np.ndarray:
 
 
 def _check_parameters(model: CompiledModel, p: np.ndarray) -> None:
-    """A parameter vector given to simulate(): the scene's layout, finite, physical ranges."""
+    """A parameter vector given to simulate(): the scene's layout, finite, in the ranges a scene file allows,
+    and equal to the model's own value wherever the model has that parameter built in as a constant."""
     names = model.scene.parameter_names()
     _check(p.shape == model.p.shape and bool(np.all(np.isfinite(p))), "p",
            f"expected {len(names)} finite values ({', '.join(names)}), got {np.asarray(p).tolist()}")
-    for name, value in zip(names, p):
-        if name.startswith("e_"):
-            _check(0.0 <= value <= 1.0, f"p[{name}]", f"restitution must be in [0, 1], got {float(value)!r}")
-        elif name.split("_")[0] in ("l", "mu", "m"):
-            _check(value > 0.0, f"p[{name}]", f"must be > 0, got {float(value)!r}")
+    try:
+        model.scene.check_parameters(p)
+    except SceneError as exc:
+        raise ValueError(str(exc)) from None
+    baked = "baked in as constants" in model.generated.header      # generated with bake_params=True
+    for k, name in enumerate(names):
+        if baked and p[k] != model.p[k]:
+            raise ValueError(f"p[{name}]: this model has every parameter built in as a constant (bake_params=True), "
+                             f"so {float(p[k])!r} instead of {float(model.p[k])!r} would be ignored; load the "
+                             "model with bake_params=False to change parameters at run time")
+        if name in model.layout.zero_params and p[k] != 0.0:
+            raise ValueError(f"p[{name}]: this model has {name} = 0 built in (the scene's value is 0, so its "
+                             f"terms were left out), so {float(p[k])!r} would be ignored; to vary it, load the "
+                             f"general model (load_model(scene, specialise=False)) or give {name} a non-zero value "
+                             "in the scene")
 
 
 def _check_inside(model: CompiledModel, q: np.ndarray, p: np.ndarray, name: str) -> None:

@@ -297,6 +297,7 @@ def _sample_requirements(run: CaseRun, row: dict, reasons: list[str]) -> None:
     total = energies.sum(axis=1) if len(q) else np.zeros(0)
     run.energy = total
     E0 = result.energy_initial
+    from .simulate import weight_scale
     scale = max([abs(E0), weight_scale(run.scene, p)] + list(np.abs(energies).sum(axis=1)) + [1e-300])
     run.energy_scale = scale
     after = [i.energy_after for i in result.impacts] + [result.energy_final]
@@ -309,18 +310,6 @@ def _sample_requirements(run: CaseRun, row: dict, reasons: list[str]) -> None:
     if len(q):
         picks = q[np.unique(np.linspace(0, len(q) - 1, min(len(q), COND_SAMPLES)).astype(int))]
         row["max_cond_If"] = max(float(np.linalg.cond(model.mass_matrix(s, p))) for s in picks)
-
-
-def weight_scale(scene: Scene, p: np.ndarray) -> float:
-    """M g L: the work to lift the whole chain by its own length (an energy scale that is not 0 for a
-    chain at rest on the floor, where T + V can be exactly 0)."""
-    names = scene.parameter_names()
-    mass = length = 0.0
-    for i, link in enumerate(scene.links, start=1):
-        l = p[names.index(f"l_{i}")]
-        mass += p[names.index(f"mu_{i}")] * l if isinstance(link, LineLink) else p[names.index(f"m_{i}")]
-        length += l
-    return float(mass * abs(p[names.index("g")]) * length)
 
 
 # ---------------------------------------------------------------------------
@@ -513,6 +502,12 @@ def main(args) -> int:
         cases = [c for c in cases if c.name in args.only]
     elif args.quick:
         cases = [c for c in cases if not c.slow]
+    if args.json and args.json != "-":
+        from codegen.outputs import output_file_problem
+        problem = output_file_problem("--json", args.json)
+        if problem:
+            print(f"error: {problem}", file=sys.stderr)
+            return 2
     if args.list:
         for c in load_cases():
             print(f"{c.name:28s} {'slow  ' if c.slow else '      '}{c.description}")

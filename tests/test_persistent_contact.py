@@ -1,4 +1,4 @@
-"""Resting contact and Zeno behaviour (issue 6): impacts that accumulate end in persistent frictionless
+"""Resting contact and Zeno behaviour: impacts that accumulate end in persistent frictionless
 contact, a bilateral constraint of the flight equations released when its force would pull.
 
 Independent checks: the contact bias J_dot qd against finite differences of the Jacobian and of the point
@@ -291,7 +291,7 @@ def random_box_chain(n: int) -> Scene:
 
 def test_random_spatial_drops_into_a_box_end_cleanly(compiled):
     """Random throws of 1-3 spatial links into a box (walls, floor and corners; e in {0, 0.3, 0.7}): each run
-    finishes (or stops at the base chart's gimbal lock, another issue), T + V never rises, nothing sinks
+    finishes (or stops at the base chart's gimbal lock, a separate limit), T + V never rises, nothing sinks
     below a wall, and every impact leaves no contact approaching its wall."""
     rng = np.random.default_rng(8)
     finished = 0

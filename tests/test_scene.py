@@ -99,7 +99,7 @@ def test_zero_links_is_rejected():
 
 
 def test_dataclass_construction_validates_too():
-    with pytest.raises(SceneError, match=r"links\[1\].length: must be > 0"):
+    with pytest.raises(SceneError, match=r"links\[1\].length: must be in \[1e-09, 1e\+09\] m"):
         Scene(name="x", links=(LineLink(-1.0, 1.0),))
     with pytest.raises(SceneError, match=r"restitution.x2_min: must be in \[0, 1\]"):
         Scene(name="x", links=(LineLink(1.0, 1.0),), walls=(Wall("x2_min", -1.0, 1.2),))

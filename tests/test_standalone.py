@@ -81,8 +81,8 @@ def test_example_is_clean_under_sanitizers(case1_dir, tmp_path):
         assert "runtime error" not in result.stderr and len(impact_times(result.stdout)) == 7
 
 
-@pytest.mark.skipif(shutil.which("valgrind") is None, reason="valgrind is not installed (the issue asks for it "
-                                                            "only where available)")
+@pytest.mark.skipif(shutil.which("valgrind") is None, reason="valgrind is not installed: the memory check "
+                                                            "runs only where it is")
 def test_example_is_clean_under_valgrind(case1_dir):
     subprocess.run(["make", "-s", f"CFLAGS={STRICT}"], cwd=case1_dir, check=True)
     result = subprocess.run(["valgrind", "--error-exitcode=9", "--leak-check=full", "-q", "./paper_case1_example",

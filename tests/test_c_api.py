@@ -1,0 +1,319 @@
+"""The C API of the generated hybrid loop: NULL pointers, out-of-range arguments and starts beyond a wall
+are refused with the documented codes (never a crash), and the example program parses its arguments."""
+import re
+import subprocess
+
+import pytest
+
+from codegen.pipeline import generate, write_model, write_standalone
+from codegen.scene import load_scene
+from runtime import simulate
+
+STRICT = ["-std=c99", "-O1", "-g", "-Wall", "-Wextra", "-pedantic", "-Werror"]
+SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
+
+# One case per run of the driver (a crash fails only that case).  Each prints "code=<n>" and, where it
+# checks more, "same=<0|1>" (a result compared with another run) or "msg=<error message>".
+DRIVER = r"""
+#include "paper_case1.h"
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef paper_case1_sim sim_t;
+
+/* Run to t_end from an initialised sim; the number of impacts, or an error code (< 0). */
+static long run_to(sim_t *sim, double t_end)
+{
+    paper_case1_impact_record rec;
+    long impacts = 0;
+    int code;
+    while ((code = paper_case1_sim_advance(sim, t_end, NULL, 0, NULL, NULL, &rec)) == PAPER_CASE1_SIM_IMPACT
+           || code == PAPER_CASE1_SIM_CONTACT) {
+        if (code == PAPER_CASE1_SIM_IMPACT) ++impacts;
+    }
+    return code == PAPER_CASE1_SIM_END ? impacts : code;
+}
+
+/* 1 if two sims reached bitwise the same state with the same impacts. */
+static int same_run(sim_t *a, sim_t *b, double t_end)
+{
+    long na = run_to(a, t_end), nb = run_to(b, t_end);
+    return na == nb && na > 0 && a->t == b->t && memcmp(a->x, b->x, sizeof a->x) == 0;
+}
+
+/* q moved along X2 so that the lowest point on the floor x2_min has the gap -depth. */
+static void lower_to(double *q, const double *p, double depth)
+{
+    double gaps[PAPER_CASE1_NCONTACT], lowest = 1e300;
+    int c, point, axis, sign;
+    paper_case1_contact_gaps(q, p, gaps);
+    for (c = 0; c < PAPER_CASE1_NCONTACT; ++c) {
+        paper_case1_contact_info(c, &point, &axis, &sign);
+        if (axis == 1 && sign > 0 && gaps[c] < lowest) lowest = gaps[c];
+    }
+    q[X2_INDEX] -= lowest + depth;
+}
+
+int main(int argc, char **argv)
+{
+    static sim_t sim, other;
+    paper_case1_options opt;
+    paper_case1_impact_record rec;
+    double p[PAPER_CASE1_NPARAM], q[PAPER_CASE1_NQ], qd[PAPER_CASE1_NQ];
+    double t_eval[2] = {0.1, 0.2}, x_eval[2 * PAPER_CASE1_NX];
+    int i_eval = 0, code = 0;
+    const char *c = argc > 1 ? argv[1] : "";
+    paper_case1_default_options(&opt);
+    paper_case1_default_parameters(p);
+    paper_case1_initial_state(q, qd);
+    if (strcmp(c, "init_null_sim") == 0) code = paper_case1_sim_init(NULL, 0.0, q, qd, p, &opt);
+    else if (strcmp(c, "init_null_q") == 0) code = paper_case1_sim_init(&sim, 0.0, NULL, qd, p, &opt);
+    else if (strcmp(c, "init_null_qd") == 0) code = paper_case1_sim_init(&sim, 0.0, q, NULL, p, &opt);
+    else if (strcmp(c, "init_nan_q") == 0) {
+        q[0] = NAN;
+        code = paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);
+    } else if (strcmp(c, "init_bad_method") == 0) {
+        opt.method = 7;
+        code = paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);
+    } else if (strcmp(c, "init_null_opt") == 0 || strcmp(c, "init_null_p") == 0) {
+        const int null_opt = strcmp(c, "init_null_opt") == 0;
+        code = paper_case1_sim_init(&sim, 0.0, q, qd, null_opt ? p : NULL, null_opt ? NULL : &opt);
+        if (paper_case1_sim_init(&other, 0.0, q, qd, p, &opt) != PAPER_CASE1_OK) return 3;
+        printf("same=%d\n", code == PAPER_CASE1_OK && same_run(&sim, &other, 1.5));
+    } else if (strcmp(c, "floor") == 0 && argc == 4) {   /* floor <depth below x2_min> <contact_tol> */
+        opt.contact_tol = strtod(argv[3], NULL);
+        lower_to(q, p, strtod(argv[2], NULL));
+        code = paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);
+        if (code == PAPER_CASE1_OK) {                    /* and the loop runs from there */
+            long n = run_to(&sim, 0.5);
+            if (n < 0) code = (int)n;
+        }
+        printf("msg=%s\n", paper_case1_error_message(code));
+    } else if (strcmp(c, "init_error_leaves_sim") == 0) {
+        memset(&sim, 0xab, sizeof sim);
+        memset(&other, 0xab, sizeof other);
+        lower_to(q, p, 1e-3);
+        code = paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);
+        printf("same=%d\n", memcmp(&sim, &other, sizeof sim) == 0);
+    } else if (strcmp(c, "state_null") == 0) {
+        double t = -1.0, v[PAPER_CASE1_NQ];
+        code = paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);
+        paper_case1_default_options(NULL);
+        paper_case1_sim_state(NULL, &t, q, qd);
+        paper_case1_sim_state(&sim, NULL, NULL, NULL);
+        paper_case1_sim_state(&sim, &t, NULL, v);
+        printf("same=%d\n", t == 0.0 && memcmp(v, qd, sizeof v) == 0);
+    } else if (strncmp(c, "adv_", 4) == 0) {
+        double t_end = 1.0;
+        int n_eval = 2;
+        const double *te = t_eval;
+        double *xe = x_eval;
+        int *ie = &i_eval;
+        paper_case1_impact_record *r = &rec;
+        sim_t *s = &sim;
+        if (paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt) != PAPER_CASE1_OK) return 3;
+        if (strcmp(c, "adv_null_sim") == 0) s = NULL;
+        else if (strcmp(c, "adv_null_record") == 0) r = NULL;
+        else if (strcmp(c, "adv_null_t_eval") == 0) te = NULL;
+        else if (strcmp(c, "adv_null_x_eval") == 0) xe = NULL;
+        else if (strcmp(c, "adv_null_i_eval") == 0) ie = NULL;
+        else if (strcmp(c, "adv_n_eval_negative") == 0) n_eval = -1;
+        else if (strcmp(c, "adv_i_eval_negative") == 0) i_eval = -1;
+        else if (strcmp(c, "adv_i_eval_past_n_eval") == 0) i_eval = 3;
+        else if (strcmp(c, "adv_t_end_inf") == 0) t_end = INFINITY;
+        else if (strcmp(c, "adv_t_end_nan") == 0) t_end = NAN;
+        else if (strcmp(c, "adv_t_end_before_t") == 0) {
+            if (paper_case1_sim_advance(&sim, 0.1, NULL, 0, NULL, NULL, &rec) != PAPER_CASE1_SIM_END) return 3;
+            t_end = 0.05;
+        } else if (strcmp(c, "adv_no_samples_null") == 0) {
+            n_eval = 0;
+            te = NULL;
+            xe = NULL;
+            ie = NULL;
+        } else if (strcmp(c, "adv_ok") != 0) return 4;
+        code = paper_case1_sim_advance(s, t_end, te, n_eval, ie, xe, r);
+        if (code < 0) {          /* a refused call changes nothing: a valid one carries on as from the start */
+            i_eval = 0;
+            if (paper_case1_sim_init(&other, 0.0, q, qd, p, &opt) != PAPER_CASE1_OK) return 3;
+            printf("same=%d\n", same_run(&sim, &other, 1.5) || strcmp(c, "adv_t_end_before_t") == 0);
+        }
+        printf("msg=%s\n", paper_case1_error_message(code));
+    } else return 4;
+    printf("code=%d\n", code);
+    return 0;
+}
+"""
+
+
+def header_constant(header: str, suffix: str) -> int:
+    match = re.search(rf"#define\s+PAPER_CASE1_{suffix}\s+(-?\d+)", header)
+    assert match, f"PAPER_CASE1_{suffix} is not defined"
+    return int(match.group(1))
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    """paper-case1 generated with its standalone example; the API driver and the example compiled."""
+    out = tmp_path_factory.mktemp("c_api")
+    scene = load_scene("paper-case1")
+    model = generate(scene)
+    write_model(model, out)
+    write_standalone(model, scene, out)
+    coordinates = re.search(r"\*\s+q  = \[([^\]]*)\]", model.header).group(1).split(", ")
+    (out / "driver.c").write_text(DRIVER)
+    subprocess.run(["gcc", *STRICT, *SANITIZE, f"-DX2_INDEX={coordinates.index('X2')}", "-I", str(out),
+                    str(out / "paper_case1.c"), str(out / "driver.c"), "-lm", "-o", str(out / "driver")], check=True)
+    subprocess.run(["gcc", *STRICT, *SANITIZE, "-I", str(out), str(out / "paper_case1.c"),
+                    str(out / "paper_case1_example.c"), "-lm", "-o", str(out / "example")], check=True)
+    return out, model.header
+
+
+def drive(built, *args) -> dict:
+    out, _ = built
+    result = subprocess.run([str(out / "driver"), *map(str, args)], capture_output=True, text=True)
+    assert result.returncode == 0, f"driver {args} crashed or failed ({result.returncode}): {result.stderr}"
+    return dict(line.split("=", 1) for line in result.stdout.splitlines())
+
+
+@pytest.mark.parametrize("case,expected", [
+    ("init_null_sim", "ERR_NULL_ARGUMENT"),
+    ("init_null_q", "ERR_NULL_ARGUMENT"),
+    ("init_null_qd", "ERR_NULL_ARGUMENT"),
+    ("init_nan_q", "ERR_BAD_OPTION"),
+    ("init_bad_method", "ERR_BAD_OPTION"),
+])
+def test_sim_init_refuses_bad_arguments(built, case, expected):
+    assert int(drive(built, case)["code"]) == header_constant(built[1], expected)
+
+
+@pytest.mark.parametrize("case", ["init_null_opt", "init_null_p"])
+def test_sim_init_null_opt_and_p_mean_the_defaults(built, case):
+    """opt NULL: default_options; p NULL: default_parameters; the run is bitwise the explicit one."""
+    result = drive(built, case)
+    assert int(result["code"]) == 0
+    assert result["same"] == "1"
+
+
+@pytest.mark.parametrize("depth,contact_tol,expected", [
+    # DOPRI5 at the default rtol 1e-8, atol 1e-10 with points up to about 2.7 m: the simultaneity window is
+    # 100 (atol + rtol l) = 2.7e-6 m, so the loop reports a lost contact below -(contact_tol + 2.7e-6 m)
+    (0.0, 1e-6, "OK"),                       # on the floor
+    (-1e-3, 1e-6, "OK"),                     # above it
+    (0.5e-6, 1e-6, "OK"),                    # below it within contact_tol: a resting contact the loop holds
+    (3e-6, 1e-6, "OK"),                      # within contact_tol + the window: a landing gap the loop can leave
+    (1e-5, 1e-6, "ERR_START_OUTSIDE"),
+    (1e-3, 1e-6, "ERR_START_OUTSIDE"),
+    (1e-13, 0.0, "OK"),
+    (1e-4, 0.0, "ERR_START_OUTSIDE"),
+])
+def test_sim_init_refuses_a_point_beyond_its_wall(built, depth, contact_tol, expected):
+    result = drive(built, "floor", repr(depth), repr(contact_tol))
+    code = 0 if expected == "OK" else header_constant(built[1], expected)
+    assert int(result["code"]) == code, result["msg"]
+    if expected == "ERR_START_OUTSIDE":
+        assert "beyond its wall" in result["msg"] and "contact_tol" in result["msg"]
+        assert result["msg"] != drive(built, "adv_t_end_inf")["msg"]      # not the bad-option message
+
+
+def test_start_outside_is_a_new_code(built):
+    header = built[1]
+    codes = [int(v) for v in re.findall(r"#define\s+PAPER_CASE1_(?:ERR_\w+|OK)\s+(-?\d+)", header)]
+    assert len(codes) == len(set(codes))
+    assert header_constant(header, "ERR_START_OUTSIDE") < 0 and header_constant(header, "ERR_NULL_ARGUMENT") < 0
+
+
+def test_sim_init_error_leaves_the_sim_unchanged(built):
+    result = drive(built, "init_error_leaves_sim")
+    assert int(result["code"]) == header_constant(built[1], "ERR_START_OUTSIDE")
+    assert result["same"] == "1"
+
+
+def test_sim_state_and_default_options_ignore_null(built):
+    result = drive(built, "state_null")
+    assert int(result["code"]) == 0 and result["same"] == "1"
+
+
+@pytest.mark.parametrize("case,expected", [
+    ("adv_ok", "SIM_IMPACT"),
+    ("adv_no_samples_null", "SIM_IMPACT"),  # n_eval = 0: t_eval, i_eval, x_eval may be NULL
+    ("adv_null_sim", "ERR_NULL_ARGUMENT"),
+    ("adv_null_record", "ERR_NULL_ARGUMENT"),
+    ("adv_null_t_eval", "ERR_NULL_ARGUMENT"),
+    ("adv_null_x_eval", "ERR_NULL_ARGUMENT"),
+    ("adv_null_i_eval", "ERR_NULL_ARGUMENT"),
+    ("adv_n_eval_negative", "ERR_BAD_OPTION"),
+    ("adv_i_eval_negative", "ERR_BAD_OPTION"),
+    ("adv_i_eval_past_n_eval", "ERR_BAD_OPTION"),
+    ("adv_t_end_inf", "ERR_BAD_OPTION"),
+    ("adv_t_end_nan", "ERR_BAD_OPTION"),
+    ("adv_t_end_before_t", "ERR_BAD_OPTION"),
+])
+def test_sim_advance_refuses_bad_arguments(built, case, expected):
+    result = drive(built, case)
+    assert int(result["code"]) == header_constant(built[1], expected), result["msg"]
+    if expected.startswith("ERR_"):
+        assert result["same"] == "1"                   # the refused call left the sim as it was
+    if expected == "ERR_BAD_OPTION":
+        assert "t_end finite" in result["msg"] and "n_eval >= 0" in result["msg"]
+    if expected == "ERR_NULL_ARGUMENT":
+        assert "NULL" in result["msg"] and "record" in result["msg"]
+
+
+def example(built, *args):
+    return subprocess.run([str(built[0] / "example"), *args], capture_output=True, text=True, timeout=120)
+
+
+@pytest.mark.parametrize("flag", ["--help", "-h"])
+def test_example_help(built, flag):
+    result = example(built, flag)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.startswith("usage: ") and "# paper_case1" not in result.stdout     # nothing simulated
+    for text in ("t_end", "tol_or_dt", "dopri5", "dop853", "rk4", "--time N", "rtol 1e-8", "atol 1e-10"):
+        assert text in result.stdout
+
+
+@pytest.mark.parametrize("args,named", [
+    (["abc"], "t_end"),
+    (["-1"], "t_end"),
+    (["inf"], "t_end"),
+    (["nan"], "t_end"),
+    (["1.5x"], "t_end"),
+    (["1", "euler"], "method"),
+    (["1", "dopri5", "abc"], "tol_or_dt"),
+    (["1", "dopri5", "0"], "tol_or_dt"),
+    (["1", "dop853", "2"], "tol_or_dt"),
+    (["1", "rk4", "-1e-3"], "tol_or_dt"),
+    (["1", "dopri5", "1e-8", "extra"], "unexpected argument"),
+    (["--frobnicate"], "unknown option"),
+    (["1", "--time"], "--time"),
+    (["1", "--time", "0"], "--time"),
+    (["1", "--time", "two"], "--time"),
+])
+def test_example_refuses_bad_arguments(built, args, named):
+    result = example(built, *args)
+    assert result.returncode == 2, (result.stdout, result.stderr)
+    assert result.stdout == ""                                           # nothing simulated
+    first, usage = result.stderr.splitlines()[:2]
+    shown = "(nothing)" if args == ["1", "--time"] else args[-1]         # the value refused, quoted
+    assert f": {named}" in first and f": got '{shown}', allowed " in first
+    assert usage.startswith("usage: ")
+
+
+def test_example_defaults_match_the_python_runtime(built, compiled):
+    """No tolerance given: the library defaults (rtol 1e-8, atol 1e-10), as runtime.simulate's."""
+    result = example(built, "1.5")
+    assert result.returncode == 0, result.stderr
+    c_times = [float(line.split()[1]) for line in result.stdout.splitlines() if re.match(r"^\s*\d+ \d", line)]
+    python = simulate(compiled(load_scene("paper-case1"), specialise=True), 1.5, t_eval=[])
+    assert len(c_times) == len(python.impacts) == 7
+    assert max(abs(a - b.t) for a, b in zip(c_times, python.impacts)) < 1e-12
+
+
+def test_example_keeps_its_positional_form_and_timing_option(built):
+    result = example(built, "0.3", "dopri5", "1e-10", "--time", "2")
+    assert result.returncode == 0, result.stderr
+    assert "(2 runs)" in result.stdout and "# impacts 1," in result.stdout
+    rk4 = example(built, "0.3", "rk4", "1e-4")
+    assert rk4.returncode == 0 and "# impacts 1," in rk4.stdout

@@ -1,0 +1,102 @@
+"""`python -m codegen`: the output folder is checked before any work, scene files default to build/,
+and an unusable cache directory is a clear error."""
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+FIX = "give a directory that exists or can be created"
+
+SCENE_FILE = """name = "tiny"
+[[links]]
+length = 1.0
+mu = 1.0
+[walls]
+x2_min = -5.0
+"""
+
+
+def run_cli(*args, cwd, cache):
+    env = dict(os.environ, GIBBS_APPELL_CACHE=str(cache), PYTHONPATH=str(ROOT))
+    return subprocess.run([sys.executable, "-m", "codegen", *args], capture_output=True, text=True, cwd=cwd,
+                          env=env)
+
+
+def assert_refused(result, message: str, cache: Path) -> None:
+    assert result.returncode == 2
+    assert result.stderr == f"error: {message}\n"          # one line, no traceback, no progress
+    assert result.stdout == ""
+    assert not cache.exists()                              # no generation work was done
+
+
+def test_out_that_is_an_existing_file_is_refused(tmp_path):
+    target = tmp_path / "out.txt"
+    target.write_text("keep me")
+    result = run_cli("--links", "1", "--out", str(target), cwd=tmp_path, cache=tmp_path / "cache")
+    assert_refused(result, f"--out: {target} exists and is not a directory; {FIX}", tmp_path / "cache")
+    assert target.read_text() == "keep me"
+
+
+def test_out_under_a_file_is_refused(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    target = blocker / "sub" / "dir"
+    result = run_cli("--links", "1", "--out", str(target), cwd=tmp_path, cache=tmp_path / "cache")
+    assert_refused(result, f"--out: cannot create {target}: {blocker} is a file, not a directory; {FIX}",
+                   tmp_path / "cache")
+
+
+@pytest.mark.skipif(hasattr(os, "geteuid") and os.geteuid() == 0,
+                    reason="root writes into a read-only directory, so permissions cannot make --out unusable")
+def test_out_without_write_permission_is_refused(tmp_path):
+    folder = tmp_path / "read-only"
+    folder.mkdir()
+    folder.chmod(0o500)
+    try:
+        result = run_cli("--links", "1", "--out", str(folder / "models"), cwd=tmp_path, cache=tmp_path / "cache")
+        assert_refused(result, f"--out: cannot create {folder / 'models'}: the directory {folder} is not writable; "
+                               f"{FIX}", tmp_path / "cache")
+        assert list(folder.iterdir()) == []
+    finally:
+        folder.chmod(0o700)
+
+
+def test_unusable_cache_directory_is_refused_before_writing(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    result = run_cli("--links", "1", "--out", str(tmp_path / "out"), cwd=tmp_path, cache=blocker / "cache")
+    assert result.returncode == 2
+    assert result.stderr == (f"error: cache directory {str(blocker / 'cache')!r} (from GIBBS_APPELL_CACHE) cannot "
+                             f"be created ({blocker} is a file, not a directory); set GIBBS_APPELL_CACHE to a "
+                             "writable directory\n")
+    assert not (tmp_path / "out").exists()
+
+
+def test_scene_file_defaults_to_build_and_links_to_generated(tmp_path):
+    (tmp_path / "tiny.toml").write_text(SCENE_FILE)
+    result = run_cli("--scene", "tiny.toml", "--no-compile", cwd=tmp_path, cache=tmp_path / "cache")
+    assert result.returncode == 0, result.stderr
+    assert sorted(p.name for p in (tmp_path / "build").iterdir()) == ["tiny.c", "tiny.h"]
+    assert not (tmp_path / "generated").exists()
+    result = run_cli("--links", "1", "--no-compile", cwd=tmp_path, cache=tmp_path / "cache")
+    assert result.returncode == 0, result.stderr
+    assert sorted(p.name for p in (tmp_path / "generated").iterdir()) == ["chain1.c", "chain1.h"]
+
+
+def test_help_states_the_default_folders(tmp_path):
+    result = run_cli("--help", cwd=tmp_path, cache=tmp_path / "cache")
+    assert result.returncode == 0
+    text = " ".join(result.stdout.split())
+    assert "default: generated/ for --links and shipped scenes, build/ for a scene file" in text
+
+
+def test_unwritable_out_message_when_permissions_apply(tmp_path, monkeypatch):
+    """The same check as above, run by any user: os.access reports no write permission."""
+    from codegen.cli import out_dir_problem
+    monkeypatch.setattr(os, "access", lambda path, mode: False)
+    assert out_dir_problem(str(tmp_path)) == f"--out: the directory {tmp_path} is not writable; {FIX}"
+    assert out_dir_problem(str(tmp_path / "new")) == \
+        f"--out: cannot create {tmp_path / 'new'}: the directory {tmp_path} is not writable; {FIX}"

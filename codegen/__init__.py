@@ -7,4 +7,13 @@
 __version__ = "0.1.0"
 
 from .scene import Scene, SceneError, load_scene, default_scene  # noqa: E402,F401
-from .pipeline import generate, GeneratedModel  # noqa: E402,F401
+from .artifact import GeneratedModel  # noqa: E402,F401
+
+
+def __getattr__(name):
+    """``codegen.generate`` is imported on first use: the computer algebra (sympy, jinja2) loads only
+    when something is generated, not when a program merely reads scenes or cached models."""
+    if name == "generate":
+        from .pipeline import generate
+        return generate
+    raise AttributeError(f"module 'codegen' has no attribute {name!r}")

@@ -26,9 +26,7 @@ from contextlib import contextmanager
 from importlib import resources
 from pathlib import Path
 
-from .emit import GeneratedModel, RenderedFunction, scene_hash
-from .ops import OpCount
-from .pipeline import generate
+from .artifact import GeneratedModel, OpCount, RenderedFunction, scene_hash
 from .scene import Scene
 from .specialise import layout_for
 
@@ -228,6 +226,7 @@ def generate_cached(scene: Scene, *, name: str | None = None, bake_params: bool 
                 return _model_from_payload(payload, scene, specialise)
             if problem:
                 report_corrupted(path.name, problem, progress)
+        from .pipeline import generate          # the computer algebra loads only when a model is generated
         model = generate(scene, name=name, bake_params=bake_params, progress=progress or (lambda m: None),
                          specialise=specialise)
         if _hash_generator_sources() == generator_fingerprint():   # the generator did not change meanwhile

@@ -1,9 +1,6 @@
 """Print flattened programs as C99 and render them through the Jinja templates in templates/."""
 from __future__ import annotations
 
-import hashlib
-import json
-from dataclasses import dataclass
 from importlib import resources
 
 import jinja2
@@ -13,7 +10,8 @@ from sympy.printing.c import C99CodePrinter
 
 from . import __version__
 from .flatten import Program
-from .ops import OpCount, count_ops
+from .artifact import GeneratedModel, RenderedFunction, scene_hash  # noqa: F401
+from .ops import count_ops
 from .scene import Scene
 from .specialise import coordinate_names
 
@@ -93,17 +91,7 @@ def c_expression(expr: sp.Expr) -> str:
     return PRINTER.doprint(expr)
 
 
-@dataclass
-class RenderedFunction:
-    """What the templates need of one kernel."""
 
-    name: str
-    summary: str
-    inputs: tuple[str, ...]
-    output: str
-    output_size: int
-    lines: list[str]
-    ops: OpCount
 
 
 INPUT_DOC = {"q": "generalised coordinates Theta (NQ)", "qd": "generalised velocities Theta_dot (NQ)",
@@ -120,19 +108,7 @@ def render_function(program: Program) -> RenderedFunction:
                             lines, ops)
 
 
-def scene_hash(scene: Scene) -> str:
-    """sha256 of a canonical JSON form of the scene (every field, floats by repr)."""
-    def canonical(value):
-        if isinstance(value, float):
-            return repr(value)
-        if isinstance(value, (list, tuple)):
-            return [canonical(v) for v in value]
-        if hasattr(value, "__dataclass_fields__"):
-            return {"type": type(value).__name__,
-                    **{k: canonical(getattr(value, k)) for k in value.__dataclass_fields__}}
-        return value
-    text = json.dumps(canonical(scene), sort_keys=True)
-    return hashlib.sha256(text.encode()).hexdigest()
+
 
 
 def _environment() -> jinja2.Environment:
@@ -141,15 +117,7 @@ def _environment() -> jinja2.Environment:
                               trim_blocks=True, lstrip_blocks=True)
 
 
-@dataclass
-class GeneratedModel:
-    """The generated files of one scene, as text."""
 
-    name: str
-    header: str
-    source: str
-    cdef: str
-    functions: list[RenderedFunction]
 
 
 def render_model(scene: Scene, name: str, programs: list[Program], bake_params: bool, layout) -> GeneratedModel:

@@ -22,41 +22,15 @@ from __future__ import annotations
 
 import sys
 from collections import Counter
-from dataclasses import dataclass
 
 import sympy as sp
 from sympy.core.function import _coeff_isneg
 from sympy.simplify.radsimp import fraction
 
+from .artifact import OpCount  # noqa: F401  (the count type lives with the generated text)
 
-@dataclass(frozen=True)
-class OpCount:
-    add: int = 0
-    mul: int = 0
-    div: int = 0
-    sqrt: int = 0
-    trig: int = 0
-    other_calls: int = 0
 
-    @property
-    def calls(self) -> int:
-        return self.sqrt + self.trig + self.other_calls
 
-    @property
-    def total(self) -> int:
-        return self.add + self.mul + self.div + self.calls
-
-    def __add__(self, other: "OpCount") -> "OpCount":
-        return OpCount(*(a + b for a, b in zip(self.as_tuple(), other.as_tuple())))
-
-    def as_tuple(self):
-        return (self.add, self.mul, self.div, self.sqrt, self.trig, self.other_calls)
-
-    def as_dict(self) -> dict:
-        return {"add": self.add, "mul": self.mul, "div": self.div, "calls": self.calls, "total": self.total}
-
-    def __str__(self) -> str:
-        return f"{self.total} ops ({self.add} add, {self.mul} mul, {self.div} div, {self.calls} calls)"
 
 
 def count_expr(expr: sp.Expr, tally: Counter) -> None:

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from codegen.cache import cache_dir, generate_cached  # noqa: F401
-from codegen.emit import GeneratedModel
+from codegen.artifact import GeneratedModel
 from codegen.scene import Scene, SceneError, _shipped_scene_path, load_scene
 
 from .compile import DEFAULT_FLAGS, compile_model

@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 import codegen.cache
+import codegen.pipeline
 import runtime.compile
 import runtime.model
 from codegen.cache import CacheError, generation_key
@@ -119,7 +120,7 @@ def test_notice_goes_to_progress_when_given(cache, capsys):
 
 
 def test_good_entries_load_silently_without_derivation_or_build(cache, capsys, monkeypatch):
-    monkeypatch.setattr(codegen.cache, "generate", _forbidden)
+    monkeypatch.setattr(codegen.pipeline, "generate", _forbidden)
     monkeypatch.setattr(runtime.compile, "_build", _forbidden)
     capsys.readouterr()
     load_model(SCENE)
@@ -259,7 +260,7 @@ def test_reused_model_is_a_real_model(tmp_path, monkeypatch):
     path = tmp_path / "memo.toml"
     path.write_text(SCENE_FILE.format(g="9.81"))
     model = load_model(path)
-    monkeypatch.setattr(codegen.cache, "generate", _forbidden)
+    monkeypatch.setattr(codegen.pipeline, "generate", _forbidden)
     monkeypatch.setattr(runtime.compile, "compile_model", _forbidden)
     assert load_model(path) is model
     assert model.forward_dynamics(model.q0, model.qd0)[-1] == pytest.approx(-9.81)
@@ -276,7 +277,7 @@ def test_codegen_cli_fills_the_cache_load_model_reads(tmp_path, monkeypatch):
     assert_valid(folder)
     monkeypatch.setenv("GIBBS_APPELL_CACHE", str(folder))
     monkeypatch.setattr(runtime.compile, "_LOADED", {})            # the module must come from the disk cache
-    monkeypatch.setattr(codegen.cache, "generate", _forbidden)
+    monkeypatch.setattr(codegen.pipeline, "generate", _forbidden)
     monkeypatch.setattr(runtime.compile, "_build", _forbidden)
     model = load_model(default_scene(1))
     assert model.forward_dynamics(model.q0, model.qd0)[-1] == pytest.approx(-9.81)

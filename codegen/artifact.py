@@ -1,0 +1,81 @@
+"""What the generator hands on, in plain data: the C text of one model with its functions' summaries and
+operation counts, and the scene hash that keys it.  Light on purpose (no sympy, no jinja2): the runtime
+reads cached models through it without loading the computer algebra."""
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .scene import Scene
+
+
+@dataclass(frozen=True)
+class OpCount:
+    add: int = 0
+    mul: int = 0
+    div: int = 0
+    sqrt: int = 0
+    trig: int = 0
+    other_calls: int = 0
+
+    @property
+    def calls(self) -> int:
+        return self.sqrt + self.trig + self.other_calls
+
+    @property
+    def total(self) -> int:
+        return self.add + self.mul + self.div + self.calls
+
+    def __add__(self, other: "OpCount") -> "OpCount":
+        return OpCount(*(a + b for a, b in zip(self.as_tuple(), other.as_tuple())))
+
+    def as_tuple(self):
+        return (self.add, self.mul, self.div, self.sqrt, self.trig, self.other_calls)
+
+    def as_dict(self) -> dict:
+        return {"add": self.add, "mul": self.mul, "div": self.div, "calls": self.calls, "total": self.total}
+
+    def __str__(self) -> str:
+        return f"{self.total} ops ({self.add} add, {self.mul} mul, {self.div} div, {self.calls} calls)"
+
+
+@dataclass
+class RenderedFunction:
+    """What the templates need of one kernel."""
+
+    name: str
+    summary: str
+    inputs: tuple[str, ...]
+    output: str
+    output_size: int
+    lines: list[str]
+    ops: OpCount
+
+
+@dataclass
+class GeneratedModel:
+    """The generated files of one scene, as text."""
+
+    name: str
+    header: str
+    source: str
+    cdef: str
+    functions: list[RenderedFunction]
+
+
+def scene_hash(scene: Scene) -> str:
+    """sha256 of a canonical JSON form of the scene (every field, floats by repr)."""
+    def canonical(value):
+        if isinstance(value, float):
+            return repr(value)
+        if isinstance(value, (list, tuple)):
+            return [canonical(v) for v in value]
+        if hasattr(value, "__dataclass_fields__"):
+            return {"type": type(value).__name__,
+                    **{k: canonical(getattr(value, k)) for k in value.__dataclass_fields__}}
+        return value
+    text = json.dumps(canonical(scene), sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()

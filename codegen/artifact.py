@@ -64,6 +64,7 @@ class GeneratedModel:
     source: str
     cdef: str
     functions: list[RenderedFunction]
+    bake_params: bool = False         # the parameters are constants in the code (p is ignored)
 
 
 def scene_hash(scene: Scene) -> str:

@@ -196,10 +196,11 @@ def _read_generated(path: Path, key: str, name: str) -> tuple[dict | None, str |
     return payload, None
 
 
-def _model_from_payload(payload: dict, scene: Scene, specialise: bool) -> GeneratedModel:
+def _model_from_payload(payload: dict, scene: Scene, bake_params: bool, specialise: bool) -> GeneratedModel:
     functions = [RenderedFunction(f["name"], f["summary"], tuple(f["inputs"]), f["output"], f["output_size"],
                                   [], OpCount(*f["ops"])) for f in payload["functions"]]
-    model = GeneratedModel(payload["name"], payload["header"], payload["source"], payload["cdef"], functions)
+    model = GeneratedModel(payload["name"], payload["header"], payload["source"], payload["cdef"], functions,
+                           bake_params)
     model.layout = layout_for(scene, specialise)
     model.timings = {}
     model.formulation = "gibbs_appell"
@@ -223,7 +224,7 @@ def generate_cached(scene: Scene, *, name: str | None = None, bake_params: bool 
         if not refresh:
             payload, problem = _read_generated(path, key, name)
             if payload is not None:
-                return _model_from_payload(payload, scene, specialise)
+                return _model_from_payload(payload, scene, bake_params, specialise)
             if problem:
                 report_corrupted(path.name, problem, progress)
         from .pipeline import generate          # the computer algebra loads only when a model is generated

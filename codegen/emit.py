@@ -144,7 +144,7 @@ def render_model(scene: Scene, name: str, programs: list[Program], bake_params: 
     header = env.get_template("model.h.j2").render(**context)
     source = env.get_template("model.c.j2").render(**context)
     cdef = env.get_template("cdef.h.j2").render(**context)
-    model = GeneratedModel(name, header, source, cdef, functions)
+    model = GeneratedModel(name, header, source, cdef, functions, bake_params)
     model.layout = layout
     return model
 

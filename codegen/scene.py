@@ -55,11 +55,15 @@ class SceneError(ValueError):
 # ---------------------------------------------------------------------------
 # small validators
 # ---------------------------------------------------------------------------
-def _number(value, fieldname: str, largest: float = COORDINATE_MAX) -> float:
-    """A finite number of magnitude 0 or within [smallest normal double, largest]."""
+def _real(value, fieldname: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise SceneError(f"{fieldname}: expected a number, got {value!r}")
-    value = float(value)
+    return float(value)
+
+
+def _number(value, fieldname: str, largest: float = COORDINATE_MAX) -> float:
+    """A finite number of magnitude 0 or within [smallest normal double, largest]."""
+    value = _real(value, fieldname)
     if not math.isfinite(value):
         raise SceneError(f"{fieldname}: must be a finite number, got {value!r}")
     if abs(value) > largest:
@@ -72,9 +76,7 @@ def _number(value, fieldname: str, largest: float = COORDINATE_MAX) -> float:
 
 def _in_range(value, fieldname: str, bounds: tuple[float, float], unit: str) -> float:
     """A positive number within bounds (a physical length or mass)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise SceneError(f"{fieldname}: expected a number, got {value!r}")
-    value = float(value)
+    value = _real(value, fieldname)
     lo, hi = bounds
     if not lo <= value <= hi:
         raise SceneError(f"{fieldname}: must be in [{lo:g}, {hi:g}] {unit}, got {value!r}")
@@ -535,11 +537,13 @@ RIGID_KEYS = ("length", "mass", "com", "inertia", "twist", "twist_matrix", "coun
 INITIAL_KEYS = ("q", "qd")
 
 
-def load_scene(source: str | Path) -> Scene:
-    """Load a scene from a .toml or .json file, or a shipped scene by name (e.g. 'paper-case1')."""
+def scene_file(source: str | Path) -> Path:
+    """The absolute path of the file a scene source names: a .toml/.json path, else a shipped scene."""
     if not isinstance(source, (str, Path)):
         raise SceneError(f"scene: expected a shipped scene name or a path to a .toml/.json file, got "
                          f"{source!r} ({type(source).__name__})")
+    if not str(source).strip():
+        raise SceneError("scene: empty name; expected a .toml/.json scene file or a shipped scene name")
     path = Path(source)
     if not path.exists():
         shipped = _shipped_scene_path(str(source)) if re.fullmatch(r"[A-Za-z0-9_-]+", str(source)) else None
@@ -550,6 +554,12 @@ def load_scene(source: str | Path) -> Scene:
                              f"shipped scenes: {', '.join(shipped_scene_names())}")
     if path.is_dir():
         raise SceneError(f"scene: {path} is a directory; give a .toml or .json scene file")
+    return path.absolute()
+
+
+def load_scene(source: str | Path) -> Scene:
+    """Load a scene from a .toml or .json file, or a shipped scene by name (e.g. 'paper-case1')."""
+    path = scene_file(source)
     try:
         raw = path.read_bytes()
     except OSError as exc:

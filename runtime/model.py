@@ -8,14 +8,13 @@ from __future__ import annotations
 
 import os
 import reprlib
-from stat import S_ISDIR as stat_is_dir
 from pathlib import Path
 
 import numpy as np
 
-from codegen.cache import cache_dir, generate_cached  # noqa: F401
+from codegen.cache import generate_cached
 from codegen.artifact import GeneratedModel
-from codegen.scene import Scene, SceneError, _shipped_scene_path, load_scene
+from codegen.scene import Scene, load_scene, scene_file
 
 from .compile import DEFAULT_FLAGS, compile_model
 
@@ -153,37 +152,17 @@ def load_model(scene: Scene | str | Path, bake_params: bool = False, flags=None,
     if not isinstance(scene, (str, os.PathLike)):
         raise TypeError("scene: expected a Scene, a shipped scene name or a path to a .toml/.json scene "
                         f"file, got {reprlib.repr(scene)} ({type(scene).__name__})")
-    path, stat = _scene_file(scene)
+    path = scene_file(scene)
+    stat = path.stat()
     key = (path, stat.st_mtime_ns, stat.st_size, bool(bake_params), flags, bool(specialise))
     model = _MODELS.get(key)
     if model is None:
-        model = _build_model(load_scene(scene), bake_params, flags, progress, specialise)
+        model = _build_model(load_scene(path), bake_params, flags, progress, specialise)
         _MODELS[key] = model
     return model
 
 
 _MODELS: dict[tuple, CompiledModel] = {}      # (scene file, mtime, size, options) -> model
-
-
-def _scene_file(source: str | os.PathLike) -> tuple[str, os.stat_result]:
-    """The absolute path and stat of the file ``load_scene(source)`` reads: the path itself, else the
-    shipped scene of that name."""
-    if not str(source).strip():
-        raise SceneError("scene: empty name; expected a .toml/.json scene file or a shipped scene name")
-    for path in (os.fspath(source), os.path.join(_SHIPPED_SCENES, f"{source}.toml")):
-        try:
-            stat = os.stat(path)
-        except (OSError, ValueError):
-            continue
-        if stat_is_dir(stat.st_mode):
-            raise SceneError(f"scene: {str(source)!r} is a directory; expected a .toml/.json scene file "
-                             "or a shipped scene name")
-        return os.path.abspath(path), stat
-    load_scene(source)                       # raises the SceneError that names the shipped scenes
-    raise SceneError(f"scene: cannot read {str(source)!r}")
-
-
-_SHIPPED_SCENES = str(_shipped_scene_path("name").parent)
 
 
 def _build_model(scene: Scene, bake_params: bool, flags: tuple, progress, specialise: bool) -> CompiledModel:

@@ -468,13 +468,14 @@ def _check_parameters(model: CompiledModel, p: np.ndarray) -> None:
     names = model.scene.parameter_names()
     _check(p.shape == model.p.shape and bool(np.all(np.isfinite(p))), "p",
            f"expected {len(names)} finite values ({', '.join(names)}), got {np.asarray(p).tolist()}")
+    if np.array_equal(p, model.p):              # the scene's own values, checked when it was loaded
+        return
     try:
         model.scene.check_parameters(p)
     except SceneError as exc:
         raise ValueError(str(exc)) from None
-    baked = "baked in as constants" in model.generated.header      # generated with bake_params=True
     for k, name in enumerate(names):
-        if baked and p[k] != model.p[k]:
+        if model.generated.bake_params and p[k] != model.p[k]:
             raise ValueError(f"p[{name}]: this model has every parameter built in as a constant (bake_params=True), "
                              f"so {float(p[k])!r} instead of {float(model.p[k])!r} would be ignored; load the "
                              "model with bake_params=False to change parameters at run time")

@@ -95,18 +95,18 @@ class JointTransform:
         self.r = link_offset(chain, moments, k - 1) if k >= 0 else ZERO3
         self.tag = index_name(k)
 
-    def vec_up(self, v: Vec) -> Vec:
+    def vec_to_parent(self, v: Vec) -> Vec:
         """A vector of frame k in frame k - 1."""
         v = matvec(self.Rz, v)
         return matvec(self.T, v) if self.twisted else v
 
-    def vec_down(self, v: Vec) -> Vec:
+    def vec_to_child(self, v: Vec) -> Vec:
         """A vector of frame k - 1 in frame k."""
         if self.twisted:
             v = mat_t_vec(self.T, v)
         return mat_t_vec(self.Rz, v)
 
-    def inertia_up(self, tape: Tape, inertia) -> tuple[Mat, Mat, Mat]:
+    def inertia_to_parent(self, tape: Tape, inertia) -> tuple[Mat, Mat, Mat]:
         """(A, B, C) about O_k in frame k -> about O_{k-1} in frame k - 1."""
         A, B, C = inertia
         tag = self.tag
@@ -133,22 +133,22 @@ class JointTransform:
             B = B_new
         return A, B, C
 
-    def force_up(self, tape: Tape, force) -> tuple[Vec, Vec]:
+    def force_to_parent(self, tape: Tape, force) -> tuple[Vec, Vec]:
         """(N, F) about O_k in frame k -> about O_{k-1} in frame k - 1."""
         N, F = force
-        F = tape.let_vec(self.vec_up(F), f"pF_{self.tag}")
-        N = self.vec_up(N)
+        F = tape.let_vec(self.vec_to_parent(F), f"pF_{self.tag}")
+        N = self.vec_to_parent(N)
         if any(x != 0 for x in self.r):
             N = add(N, cross(self.r, F))
         return tape.let_vec(N, f"pN_{self.tag}"), F
 
-    def motion_down(self, tape: Tape, motion) -> tuple[Vec, Vec]:
+    def motion_to_child(self, tape: Tape, motion) -> tuple[Vec, Vec]:
         """(alpha, a) of O_{k-1} in frame k - 1 -> of O_k in frame k (rigid transport)."""
         alpha, a = motion
         if any(x != 0 for x in self.r):
             a = add(a, cross(alpha, self.r))
-        return (tape.let_vec(self.vec_down(alpha), f"alpha_{self.tag}"),
-                tape.let_vec(self.vec_down(a), f"acc_{self.tag}"))
+        return (tape.let_vec(self.vec_to_child(alpha), f"alpha_{self.tag}"),
+                tape.let_vec(self.vec_to_child(a), f"acc_{self.tag}"))
 
 
 # --- the recursion --------------------------------------------------------------------------------
@@ -220,9 +220,9 @@ def forward_dynamics(tape: Tape, chain: ChainSymbols, moments: dict[int, LinkSym
         else:
             p_k = (ZERO3, ZERO3)
         if inertia is not None:
-            I_k = _add_inertia(I_k, joints[k + 1].inertia_up(tape, inertia))
-            N_up, F_up = joints[k + 1].force_up(tape, force)
-            p_k = (add(p_k[0], N_up), add(p_k[1], F_up))
+            I_k = _add_inertia(I_k, joints[k + 1].inertia_to_parent(tape, inertia))
+            N_parent, F_parent = joints[k + 1].force_to_parent(tape, force)
+            p_k = (add(p_k[0], N_parent), add(p_k[1], F_parent))
         if k + 1 in free:
             inertia, force, W, ud = _pivot(tape, I_k, p_k, tag)
             pivots[k] = (W, ud)
@@ -234,7 +234,7 @@ def forward_dynamics(tape: Tape, chain: ChainSymbols, moments: dict[int, LinkSym
         qdd[n + 2 + a] = X_ddot[a]
     motion = (ZERO3, X_ddot)        # of the reference frame at O_1
     for k in range(-1, n + 1):      # forward: base to tip
-        alpha, acc = joints[k].motion_down(tape, motion)
+        alpha, acc = joints[k].motion_to_child(tape, motion)
         if k in pivots:
             W, ud = pivots[k]
             value = ud - sum((w * m for w, m in zip(W, alpha + acc)), ZERO)
@@ -257,7 +257,7 @@ def _root_translations(tape: Tape, chain: ChainSymbols, joint: JointTransform, i
     if len(kept) == 3:              # solve in frame -1, rotate the answer
         lower = {(i, j): C[i][j] for i in range(3) for j in range(i + 1)}
         y = ldlt_solve(tape, lower, [-x for x in F], [0, 1, 2])
-        return tuple(tape.let(x, f"Xdd_{a}") for a, x in enumerate(joint.vec_up(tuple(y))))
+        return tuple(tape.let(x, f"Xdd_{a}") for a, x in enumerate(joint.vec_to_parent(tuple(y))))
     # some translations fixed: solve the kept rows of the reference-frame block
     R_ref = _mm(joint.T, joint.Rz)
     C_ref = _rotate(R_ref, C, True)

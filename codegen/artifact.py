@@ -4,8 +4,10 @@ reads cached models through it without loading the computer algebra."""
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import json
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -80,3 +82,17 @@ def scene_hash(scene: Scene) -> str:
         return value
     text = json.dumps(canonical(scene), sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()
+
+
+def library_dir() -> Path:
+    """runtime/c: the plain C library (gac.h, gac_*.c) that every model is built with, found without importing
+    the runtime package."""
+    spec = importlib.util.find_spec("runtime")
+    return Path(next(iter(spec.submodule_search_locations))) / "c"
+
+
+def library_files(folder: Path | None = None) -> list[Path]:
+    """The library's headers and sources (gac*.h, gac*.c) in ``folder`` (default library_dir()), by name."""
+    folder = library_dir() if folder is None else Path(folder)
+    return sorted(path for path in folder.iterdir()
+                  if path.name.startswith("gac") and path.suffix in (".c", ".h") and path.is_file())

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 import time
 from pathlib import Path
@@ -23,7 +24,6 @@ def parse_args(argv=None) -> argparse.Namespace:
                "  python -m codegen --links 4                 # built-in 4-link scene -> generated/chain4.{h,c}\n"
                "  python -m codegen --scene paper-case2       # a shipped scene -> generated/paper_case2.{h,c}\n"
                "  python -m codegen --scene my.toml --name robot --bake-params   # -> build/robot.{h,c}\n"
-               "  python -m codegen ops --links 1-8 --out DIR  # operation counts: Gibbs-Appell against Lagrange\n"
                f"Shipped scenes: {', '.join(shipped_scene_names())}.\n"
                "The generated text and the compiled module go to the cache that runtime.load_model reads "
                "($GIBBS_APPELL_CACHE, else ~/.cache/gibbs-appell-chains), so loading the same scene with "
@@ -71,9 +71,9 @@ def default_out(args: argparse.Namespace) -> str:
 
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    if argv[:1] == ["ops"]:                      # python -m codegen ops ...: operation-count report
-        from .opscount import main as ops_main
-        return ops_main(argv[1:])
+    if argv[:1] == ["ops"]:                      # a study, not a generation: python -m studies ops
+        print(f"error: 'ops' is a study: run {shlex.join(['python', '-m', 'studies', *argv])}", file=sys.stderr)
+        return 2
     args = parse_args(argv)
     t0 = time.perf_counter()
 

@@ -8,7 +8,7 @@ import numpy as np
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
-from . import __version__
+from . import __version__, interface
 from .flatten import Program
 from .artifact import GeneratedModel, RenderedFunction, scene_hash  # noqa: F401
 from .ops import count_ops
@@ -91,13 +91,6 @@ def c_expression(expr: sp.Expr) -> str:
     return PRINTER.doprint(expr)
 
 
-
-
-
-INPUT_DOC = {"q": "generalised coordinates Theta (NQ)", "qd": "generalised velocities Theta_dot (NQ)",
-             "p": "parameters (NPARAM)"}
-
-
 def render_function(program: Program) -> RenderedFunction:
     kernel = program.kernel
     lines = [f"const double {symbol.name} = {c_expression(expr)};" for symbol, expr in program.assignments]
@@ -108,27 +101,25 @@ def render_function(program: Program) -> RenderedFunction:
                             lines, ops)
 
 
-
-
-
 def _environment() -> jinja2.Environment:
     loader = jinja2.FunctionLoader(lambda name: resources.files("templates").joinpath(name).read_text())
     return jinja2.Environment(loader=loader, undefined=jinja2.StrictUndefined, keep_trailing_newline=True,
                               trim_blocks=True, lstrip_blocks=True)
 
 
-
-
-
 def render_model(scene: Scene, name: str, programs: list[Program], bake_params: bool, layout) -> GeneratedModel:
     functions = [render_function(p) for p in programs]
+    _check_kernels(functions)
     env = _environment()
     params = list(zip(scene.parameter_names(), scene.parameter_vector().tolist()))
+    pnames = [pname for pname, _ in params]
     names = coordinate_names(scene.n)
     zeros = set(layout.zero_params)
+    sizes = interface.size_values(n=scene.n, nq=layout.nq, nparam=len(params), npoint=scene.n + 1,
+                                  ncontact=len(layout.contacts), njrow=len(layout.contact_rows))
     context = dict(
         NAME=name.upper(), name=name, version=__version__, scene=scene, scene_hash=scene_hash(scene),
-        bake_params=bake_params, functions=functions, input_doc=INPUT_DOC, nq=layout.nq,
+        bake_params=bake_params, functions=functions, nq=layout.nq,
         coordinates=[names[i] for i in layout.free], fixed=[(names[i], _double_literal(v)) for i, v in layout.fixed],
         notes=layout.notes,
         params=[(i, pname, _param_doc(pname) + (" [built in as 0]" if pname in zeros else ""), _double_literal(value))
@@ -140,6 +131,10 @@ def render_model(scene: Scene, name: str, programs: list[Program], bake_params: 
         q0=[_double_literal(float(x)) for x in layout.reduce(scene.q0)],
         qd0=[_double_literal(float(x)) for x in layout.reduce(scene.qd0)],
         literal=_double_literal,
+        e_index=[-1 if bake_params else pnames.index(f"e_{wall.name}") for _, wall in layout.contacts],
+        sizes=interface.SIZES, size_values=sizes, constants=interface.CONSTANTS, structs=interface.STRUCTS,
+        kernels=list(zip(interface.KERNELS, functions)), all_functions=interface.ALL_FUNCTIONS,
+        library_functions=interface.LIBRARY_FUNCTIONS, api_functions=interface.FUNCTIONS,
     )
     header = env.get_template("model.h.j2").render(**context)
     source = env.get_template("model.c.j2").render(**context)
@@ -159,6 +154,14 @@ PARAM_DOC = {
     "Izz": "inertia about the centre of mass, zz (kg m^2)", "Ixy": "inertia about the centre of mass, xy (kg m^2)",
     "Ixz": "inertia about the centre of mass, xz (kg m^2)", "Iyz": "inertia about the centre of mass, yz (kg m^2)",
 }
+
+
+def _check_kernels(functions: list[RenderedFunction]) -> None:
+    """The generated kernels are those codegen.interface declares: same names, order, inputs and output."""
+    declared = [(f.name, tuple(a.name for a in f.args[:-1]), f.args[-1].name) for f in interface.KERNELS]
+    generated = [(f.name, tuple(f.inputs), f.output) for f in functions]
+    if declared != generated:
+        raise AssertionError(f"kernels {generated} differ from codegen.interface.KERNELS {declared}")
 
 
 def _chart_context(scene: Scene, layout) -> dict:
@@ -187,9 +190,10 @@ STANDALONE_TEMPLATES = {"{name}_example.c": "example_main.c.j2", "Makefile": "Ma
                         "CMakeLists.txt": "CMakeLists.txt.j2"}
 
 
-def render_standalone(scene: Scene, name: str) -> dict[str, str]:
-    """The example program and build files that go beside NAME.h / NAME.c (``--standalone``)."""
+def render_standalone(scene: Scene, name: str, library_sources: list[str]) -> dict[str, str]:
+    """The example program and build files that go beside NAME.h / NAME.c and the library's files
+    (``--standalone``); ``library_sources``: the library's .c file names."""
     env = _environment()
-    context = dict(NAME=name.upper(), name=name, version=__version__, scene=scene)
+    context = dict(NAME=name.upper(), name=name, version=__version__, scene=scene, library_sources=library_sources)
     return {filename.format(name=name): env.get_template(template).render(**context)
             for filename, template in STANDALONE_TEMPLATES.items()}

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .kinematics import ChainSymbols, LinkSymbols, Motion, link_offset, rotate_down
+from .kinematics import ChainSymbols, LinkSymbols, Motion, link_offset, to_parent
 from .tape import E_Z, ZERO, Tape, Vec, add, cross, index_name, matvec, scale
 
 
@@ -68,13 +68,13 @@ def right_hand_side(tape: Tape, chain: ChainSymbols, rotations, moments, motion:
         else:
             S = T = (ZERO, ZERO, ZERO)
         if F is not None:
-            F_down = tape.let_vec(rotate_down(rotations[k + 1], F), f"Fd_{tag}")
-            N_down = rotate_down(rotations[k + 1], N)
-            S = add(S, F_down)
-            T = add(T, add(N_down, cross(link_offset(chain, moments, k), F_down)))
+            F_parent = tape.let_vec(to_parent(rotations[k + 1], F), f"Fd_{tag}")
+            N_parent = to_parent(rotations[k + 1], N)
+            S = add(S, F_parent)
+            T = add(T, add(N_parent, cross(link_offset(chain, moments, k), F_parent)))
         F, N = tape.let_vec(S, f"F_{tag}"), tape.let_vec(T, f"N_{tag}")
         R[k + 1] = -N[2]                                               # Eq. 38
-    F_ref = rotate_down(rotations[-1], F)
+    F_ref = to_parent(rotations[-1], F)
     for a in range(3):
         R[n + 2 + a] = -F_ref[a]                                       # Eq. 41
     return R
@@ -141,11 +141,11 @@ def inertia_matrix(tape: Tape, chain: ChainSymbols, rotations, moments) -> dict[
         M[(col, col)] = nvec[2]
         for j in range(k - 1, -2, -1):               # carry the load down to frame j
             R = rotations[j + 1]
-            fvec = tape.let_vec(rotate_down(R, fvec), f"f_{tag}_{index_name(j)}")
-            nvec = add(rotate_down(R, nvec), cross(link_offset(chain, moments, j), fvec))
+            fvec = tape.let_vec(to_parent(R, fvec), f"f_{tag}_{index_name(j)}")
+            nvec = add(to_parent(R, nvec), cross(link_offset(chain, moments, j), fvec))
             nvec = tape.let_vec(nvec, f"n_{tag}_{index_name(j)}")
             M[(col, j + 1)] = nvec[2]                # psi, U terms (Eq. 25-26)
-        f_ref = rotate_down(rotations[-1], fvec)
+        f_ref = to_parent(rotations[-1], fvec)
         for a in range(3):
             M[(n + 2 + a, col)] = tape.let(f_ref[a], f"M_X{a + 1}_{tag}")
     for a in range(3):                               # Eq. II: M_tot I

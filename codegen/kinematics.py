@@ -214,6 +214,6 @@ def point_velocities(tape: Tape, chain: ChainSymbols, frames: dict[int, Mat],
     return velocities, omega_ref
 
 
-def rotate_down(R: Mat, v: Vec) -> Vec:
+def to_parent(R: Mat, v: Vec) -> Vec:
     """^{k-1}R_k v: a vector of frame k expressed in frame k-1."""
     return matvec(R, v)

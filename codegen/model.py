@@ -5,7 +5,8 @@ CSE'd by :mod:`codegen.flatten`.  The kernels and their C signatures:
 
     mass_matrix(q, p, M)                 I_f, full and symmetric, row-major nq x nq   (Eq. 12)
     bias(q, qd, p, R)                    R(Theta, Theta_dot)                            (Eq. 12, 38-41)
-    forward_dynamics(q, qd, p, qdd)      Theta_ddot = I_f^-1 R by a straight-line LDL^T
+    forward_dynamics(q, qd, p, qdd)      Theta_ddot = I_f^-1 R by the O(n) articulated-body recursion
+                                         (codegen.articulated; I_f is never formed)
     contact_points(q, p, r)              O_1..O_{n+1}, (n+1) x 3
     contact_velocities(q, qd, p, v)      their velocities, (n+1) x 3                    (Eq. 42)
     contact_jacobian(q, p, J)            rows of Eq. 42 that the walls need, nrow x nq

@@ -5,6 +5,7 @@ import os
 import time
 from pathlib import Path
 
+from .artifact import library_files
 from .emit import GeneratedModel, render_model, render_standalone
 from .flatten import flatten, live_assignments
 from .ops import raw_count_ops
@@ -76,13 +77,17 @@ def raw_kernel_ops(kernel) -> int:
 
 
 def write_model(model: GeneratedModel, out_dir: str | Path) -> list[Path]:
-    """Write NAME.h and NAME.c into out_dir (created if needed); returns the paths."""
-    return _write_files(out_dir, {f"{model.name}.h": model.header, f"{model.name}.c": model.source})
+    """Write NAME.h and NAME.c into out_dir (created if needed), with a copy of the C library they build
+    with (gac.h, gac_internal.h, gac_*.c from runtime/c); returns the paths."""
+    files = {f"{model.name}.h": model.header, f"{model.name}.c": model.source}
+    files.update((path.name, path.read_text()) for path in library_files())
+    return _write_files(out_dir, files)
 
 
 def write_standalone(model: GeneratedModel, scene: Scene, out_dir: str | Path) -> list[Path]:
-    """Write the example program, Makefile and CMakeLists.txt next to the model."""
-    return _write_files(out_dir, render_standalone(scene, model.name))
+    """Write the example program, Makefile and CMakeLists.txt next to the model (and its library copy)."""
+    sources = [path.name for path in library_files() if path.suffix == ".c"]
+    return _write_files(out_dir, render_standalone(scene, model.name, sources))
 
 
 def _write_files(out_dir: str | Path, files: dict[str, str]) -> list[Path]:

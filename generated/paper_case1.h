@@ -7,6 +7,9 @@
  * Parameters     runtime array p (layout below)
  * Method         recursive Gibbs-Appell (Korayem-style, Eq. 1-48 of the paper), straight-line,
  *                common-subexpression-eliminated; I_f is factorised numerically (LDL^T), never inverted.
+ * Library        the hybrid loop (integrators, events, impact law, resting contact) is the plain C99
+ *                library gac (gac.h, gac_*.c beside this file); paper_case1.c holds the kernels and the
+ *                descriptor paper_case1_model that the library runs.  Build: cc -std=c99 paper_case1.c gac_*.c -lm
  *
  * CONVENTIONS (all SI: m, kg, s, rad, N, J)
  *   Coordinates, NQ = 6 (the full layout of Eq. 13 is [theta_-1, theta_0, theta_1..theta_n, X1, X2, X3]):
@@ -98,333 +101,255 @@
  *   energy                  176 = 48 add + 120 mul + 0 div + 8 calls
  *   contact_bias             51 = 15 add + 28 mul + 0 div + 8 calls
  *
+ * USING IT
+ *   paper_case1_options opt;  paper_case1_sim sim;  paper_case1_impact_record rec;  int code;
+ *   paper_case1_default_options(&opt);                 edit opt.method, opt.rtol, ... (or pass NULL)
+ *   paper_case1_sim_init(&sim, 0.0, q0, qd0, p, &opt); p NULL: the scene's parameters
+ *   while ((code = paper_case1_sim_advance(&sim, t_end, NULL, 0, NULL, NULL, &rec)) == GAC_SIM_IMPACT
+ *          || code == GAC_SIM_CONTACT)
+ *       ... rec holds the impact just applied, or (GAC_SIM_CONTACT) a change of the resting contacts ...
+ *   code is GAC_SIM_END or an error (< 0, paper_case1_error_message(code)).  Codes, options and the loop's
+ *   behaviour: gac.h.
+ * Reading the state: sim.base.t (s), sim.base.x[0..NX-1] = [q, qd], sim.base.n_steps, .n_rejected,
+ *   .n_rhs, .n_impacts, .nactive and .active[0..nactive-1] (the resting contacts), sim.base.opt; or
+ *   paper_case1_sim_state.  The record: rec.base.t, .ncontact, .contact[k], .impulse[k] (N s), .q[i],
+ *   .qd_before[i], .qd_after[i], .energy_before, .energy_after (J), .nactivated, .activated[k], .nreleased,
+ *   .released[k], ... (gac_impact_record).
+ * Storage: the arrays of sim.base and rec.base point into the struct's own dwork / iwork; every
+ *   paper_case1_sim_* call points them there again.  A struct copied by assignment or memcpy points at the
+ *   original's storage until that next call: copy with paper_case1_sim_copy / paper_case1_impact_record_copy.
+ *
  * All functions are reentrant: no globals, no malloc.  Inputs are const; outputs must not alias inputs.
  */
 #ifndef PAPER_CASE1_H
 #define PAPER_CASE1_H
 
-#if defined(__cplusplus)
-#  define PAPER_CASE1_RESTRICT
-#else
-#  define PAPER_CASE1_RESTRICT restrict
-#endif
+#include "gac.h"
 
-#define PAPER_CASE1_N          4    /* real links */
-#define PAPER_CASE1_NQ         6    /* generalised coordinates */
-#define PAPER_CASE1_NX         12    /* ODE state [q, qd] */
-#define PAPER_CASE1_NPARAM     29
-#define PAPER_CASE1_NPOINT     5
-#define PAPER_CASE1_NCONTACT   20
-#define PAPER_CASE1_NJROW      10
-#define PAPER_CASE1_IMPACT_NWORK (PAPER_CASE1_NQ*PAPER_CASE1_NQ + PAPER_CASE1_NJROW*PAPER_CASE1_NQ + 2*PAPER_CASE1_NQ*PAPER_CASE1_NQ + PAPER_CASE1_NQ)
-
-/* return codes */
-#define PAPER_CASE1_OK                   0
-#define PAPER_CASE1_ERR_BAD_CONTACT     -1   /* active contact list empty, too long, repeated or out of range */
-#define PAPER_CASE1_ERR_SINGULAR_MASS   -2   /* I_f singular to double precision (pivot < 1e-15 of its largest
-                                               diagonal: mass, length and inertia ratios beyond 15 digits) */
-#define PAPER_CASE1_ERR_SINGULAR_IMPACT -3   /* active contact rows linearly dependent */
-#define PAPER_CASE1_ERR_LCP             -4   /* complementarity impact has no solution / too many contacts */
-#define PAPER_CASE1_ERR_GIMBAL_LOCK     -5   /* theta_0 too close to the gimbal lock of the base chart: the base
-                                               chart's measure mu = |det E| (|cos theta_0| for the default twists)
-                                               is below CHART_FLOOR, where I_f's solves lose 1e-6 (16 eps / mu^2);
-                                               the hybrid loop stops earlier, below sqrt(16 eps / rtol).  Continue
-                                               on a second chart (README, "Near gimbal lock") */
-#define PAPER_CASE1_CHART_FLOOR         5.96e-5   /* sqrt(16 eps / 1e-6) */
-#define PAPER_CASE1_MAX_LCP             (PAPER_CASE1_NQ < 16 ? PAPER_CASE1_NQ : 16)   /* contacts the complementarity solve takes */
-#define PAPER_CASE1_MAX_ROUNDS          256  /* rounds of the impact law before its plastic closing round */
+#define PAPER_CASE1_N                4      /* real links */
+#define PAPER_CASE1_NQ               6      /* generalised coordinates */
+#define PAPER_CASE1_NX               12     /* ODE state [q, qd] */
+#define PAPER_CASE1_NPARAM           29     /* parameters */
+#define PAPER_CASE1_NPOINT           5      /* contact points O_1..O_NPOINT */
+#define PAPER_CASE1_NCONTACT         20     /* contacts (point, wall) */
+#define PAPER_CASE1_NJROW            10     /* contact Jacobian rows */
+#define PAPER_CASE1_IMPACT_NWORK     174    /* doubles of the work array of impact, impact_complementarity, constrained_dynamics */
+#define PAPER_CASE1_SIM_NDOUBLE      715    /* doubles of a simulation's storage (gac_sim_ndouble) */
+#define PAPER_CASE1_SIM_NINT         46     /* ints of a simulation's storage (gac_sim_nint) */
+#define PAPER_CASE1_RECORD_NDOUBLE   24     /* doubles of an impact record's storage (gac_record_ndouble) */
+#define PAPER_CASE1_RECORD_NINT      18     /* ints of an impact record's storage (gac_record_nint) */
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* Flight inertia matrix I_f(Theta) (Eq. 12, Fig. 2), full, row-major.
- *   q   in:  generalised coordinates Theta (NQ)
- *   p   in:  parameters (NPARAM)
- *   M   out: 36 doubles.   137 ops (46 add, 83 mul, 0 div, 8 calls) */
-void paper_case1_mass_matrix(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT M);
+/* The model as the library sees it: sizes, contact table, base chart, defaults and kernels (gac_model). */
+extern const gac_model paper_case1_model;
 
-/* Right-hand side R(Theta, Theta_dot) of I_f Theta_ddot = R (Eq. 12, 38-41, Fig. 3).
- *   q   in:  generalised coordinates Theta (NQ)
- *   qd  in:  generalised velocities Theta_dot (NQ)
- *   p   in:  parameters (NPARAM)
- *   R   out: 6 doubles.   119 ops (36 add, 75 mul, 0 div, 8 calls) */
-void paper_case1_bias(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT R);
+typedef gac_options paper_case1_options;
 
-/* Theta_ddot solving I_f Theta_ddot = R, by an O(n) articulated-body recursion.
- *   q   in:  generalised coordinates Theta (NQ)
- *   qd  in:  generalised velocities Theta_dot (NQ)
- *   p   in:  parameters (NPARAM)
- *   qdd out: 6 doubles.   336 ops (115 add, 207 mul, 6 div, 8 calls) */
-void paper_case1_forward_dynamics(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT qdd);
-
-/* Positions of O_1..O_{n+1} in the reference frame, row i-1 = O_i.
- *   q   in:  generalised coordinates Theta (NQ)
- *   p   in:  parameters (NPARAM)
- *   r   out: 15 doubles.   42 ops (14 add, 20 mul, 0 div, 8 calls) */
-void paper_case1_contact_points(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT r);
-
-/* Velocities of O_1..O_{n+1} in the reference frame (Eq. 42).
- *   q   in:  generalised coordinates Theta (NQ)
- *   qd  in:  generalised velocities Theta_dot (NQ)
- *   p   in:  parameters (NPARAM)
- *   v   out: 15 doubles.   49 ops (17 add, 24 mul, 0 div, 8 calls) */
-void paper_case1_contact_velocities(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT v);
-
-/* Rows d(O_i . X_a)/dTheta of the contact Jacobian (Eq. 42, Fig. 4) for the (point, axis) pairs the walls need, row-major.
- *   q   in:  generalised coordinates Theta (NQ)
- *   p   in:  parameters (NPARAM)
- *   J   out: 60 doubles.   62 ops (34 add, 20 mul, 0 div, 8 calls) */
-void paper_case1_contact_jacobian(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT J);
-
-/* Gap of each (point, wall) pair: distance of the point inside its wall (negative = beyond it).
- *   q   in:  generalised coordinates Theta (NQ)
- *   p   in:  parameters (NPARAM)
- *   gap out: 20 doubles.   78 ops (34 add, 36 mul, 0 div, 8 calls) */
-void paper_case1_contact_gaps(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT gap);
-
-/* E[0] = kinetic energy T, E[1] = potential energy V (J).
- *   q   in:  generalised coordinates Theta (NQ)
- *   qd  in:  generalised velocities Theta_dot (NQ)
- *   p   in:  parameters (NPARAM)
- *   E   out: 2 doubles.   176 ops (48 add, 120 mul, 0 div, 8 calls) */
-void paper_case1_energy(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT E);
-
-/* J_dot qd: accelerations of the contact Jacobian rows' (point, axis) at Theta_ddot = 0, row order of contact_jacobian.
- *   q   in:  generalised coordinates Theta (NQ)
- *   qd  in:  generalised velocities Theta_dot (NQ)
- *   p   in:  parameters (NPARAM)
- *   a   out: 10 doubles.   51 ops (15 add, 28 mul, 0 div, 8 calls) */
-void paper_case1_contact_bias(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT a);
-
-/* ODE right-hand side of the flight phase: x = [q, qd] (NX), xdot = [qd, qdd].  t is unused. */
-void paper_case1_rhs(double t, const double *PAPER_CASE1_RESTRICT x, const double *PAPER_CASE1_RESTRICT p, double *PAPER_CASE1_RESTRICT xdot);
-
-/* Impact law, Eq. 44-48: all `nactive` contacts in `active` (indices 0..NCONTACT-1) together,
- * Newton restitution e of each contact's wall, configuration unchanged.  Solved as
- *   (J I_f^-1 J^T) F = -(1 + e) J qd,   qd_plus = qd + I_f^-1 J^T F,
- * which is Eq. 48 with the velocity unknowns eliminated.  J rows are signed along the inward normal,
- * so impulse[k] > 0 pushes contact active[k] away from its wall (a negative value pulls).
- * work: IMPACT_NWORK doubles.  Returns OK or ERR_*. */
-int paper_case1_impact(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p,
-                 int nactive, const int *PAPER_CASE1_RESTRICT active,
-                 double *PAPER_CASE1_RESTRICT qd_plus, double *PAPER_CASE1_RESTRICT impulse, double *PAPER_CASE1_RESTRICT work);
-
-/* The impact law with complementarity, for contacts at their walls that may approach, rest or separate:
- * impulses F >= 0 (no contact pulls), no contact approaches its wall afterwards, and the kinetic energy
- * never grows (it is kept exactly when every contact that takes an impulse has e = 1).  Solved in rounds:
- * in each, the contacts that approach (v < 0) or rest (v = 0) take part with
- *     0 <= F  _|_  v+ + e v- >= 0         (Newton's law, Eq. 47, with complementarity; e = 0 at rest),
- * until none approaches; a separating contact takes no impulse unless the others drive it into its wall,
- * and is then struck by its own law in the next round.  When every approaching contact pushes, one round
- * is Eq. 47 exactly (same result as _impact).  After MAX_ROUNDS rounds a plastic round over all contacts
- * ends the sequence.  impulse[k]: total impulse of contact active[k] (N s, >= 0).  Same arguments as
- * _impact; at most MAX_LCP contacts take part in one round (solved exactly by enumerating the pushing
- * sets). */
-int paper_case1_impact_complementarity(const double *PAPER_CASE1_RESTRICT q, const double *PAPER_CASE1_RESTRICT qd, const double *PAPER_CASE1_RESTRICT p,
-                 int nactive, const int *PAPER_CASE1_RESTRICT active,
-                 double *PAPER_CASE1_RESTRICT qd_plus, double *PAPER_CASE1_RESTRICT impulse, double *PAPER_CASE1_RESTRICT work);
-
-/* Contact c's point index (1-based, O_1 = 1), wall axis (0..2 for X1..X3) and inward normal sign (+1/-1). */
-void paper_case1_contact_info(int c, int *point, int *axis, int *normal_sign);
-
-/* The scene's parameter vector p (NPARAM) and initial state q0, qd0 (NQ each). */
-void paper_case1_default_parameters(double *p);
-void paper_case1_initial_state(double *q, double *qd);
-
-/* Message for a return code. */
-const char *paper_case1_error_message(int code);
-
-/* ------------------------------------------------------------------------------------------------
- * Hybrid simulation: flight integrated in C up to the next impact, impact law applied in C.
- *
- *   NAME_options opt; NAME_sim sim; NAME_impact_record rec;
- *   NAME_default_options(&opt);                       edit opt.method, opt.rtol, ... (or pass opt NULL)
- *   NAME_sim_init(&sim, 0.0, q0, qd0, p, &opt);      p NULL: the scene's parameters
- *   while ((code = NAME_sim_advance(&sim, t_end, t_eval, n_eval, &i_eval, x_eval, &rec)) == NAME_SIM_IMPACT
- *          || code == NAME_SIM_CONTACT)
- *       ... rec holds the impact just applied, or (SIM_CONTACT) a change of the resting contacts ...
- *   code is NAME_SIM_END (sim.t == t_end) or an error (< 0, see NAME_error_message).
- *
- * Events.  Each accepted step's interpolant is sampled at opt.event_samples points; an impact is a gap
- * crossing zero with the point approaching its wall, located to opt.event_tol.  A dip through the wall and
- * back between two samples (gap > 0 at both) is found where the gap's rate, the normal velocity, changes
- * sign: if the gap at that minimum is below -(atol + rtol l) (l: the largest |coordinate| of the points;
- * 0 for RK4) the crossing before it is the impact; a shallower minimum, a touch with normal velocity 0
- * within the integration error, is a graze and no impact.
- *
- * Impacts.  Every contact within contact_tol of its wall, every approaching one within the simultaneity
- * window (100 x the adaptive method's position tolerance, or contact_tol if larger) and every persistent
- * one take part.  The law (NAME_impact_complementarity) is Newton's law, Eq. 47, with complementarity, in
- * rounds until no contact approaches: F >= 0, no energy gain, e = 1 keeps the energy exactly; a contact
- * that separates takes an impulse only if the others drive it into its wall.  Its post-conditions are
- * checked to the law's round-off bound (record.roundoff; ERR_IMPACT_ACCURACY otherwise).
- *
- * Resting contact (Zeno behaviour).  With e < 1 and gravity, impacts of a point on a wall accumulate
- * (the bounces shrink geometrically).  At an impact on a wall with e < 1, a contact whose bounce would rise
- * less than opt.rest_height (v+^2 <= 2 a rest_height, a = its normal acceleration towards the wall), or
- * that has had opt.zeno_impacts impacts at shrinking intervals, LANDS: it is struck with e = 0 (a plastic
- * impact, still F >= 0), and if it ends at rest it becomes PERSISTENT, held at the gap it landed at (no
- * position moves at an impact), a bilateral, frictionless constraint of the flight equations,
- *     I_f qdd = R + N_a^T lambda,    N_a qdd = -Ndot_a qd     (N_a: signed Jacobian rows of the active set),
- * with positions and velocities projected back onto the constraint (gaps to their held values, normal
- * velocity = 0, mass metric; no free contact pushed deeper into its wall) after every accepted step.
- * record.energy_rest is the kinetic energy the landings took.  On a wall with e = 1 a contact lands only
- * if that energy is round-off.  A persistent contact is released when its force lambda (along the inward
- * normal) falls through 0: that crossing is located on the dense output like a wall crossing.
- * Only forces lambda > 0 are kept (an acceleration-level complementarity solve when the set changes), and
- * only contacts with independent rows (a dependent one is held by the others; one that becomes dependent
- * in flight gets lambda = 0 and is released).  A persistent contact takes part in another impact with its
- * own e; one the impact lifts by less than rest_height stays, one lifted higher is released.
- * sim_init also makes persistent the contacts that start at their wall (gap <= contact_tol) with a normal
- * velocity under the same bound and a positive force (a chain started at rest on the floor).
- * Every activation and release is reported in the record (activated[], released[]).
- *
- * Stops before trouble: ERR_GIMBAL_LOCK (the base chart's measure below sqrt(16 eps / rtol): continue on a
- * second chart, README "Near gimbal lock"), ERR_UNSTABLE (RK4 past its stability), ERR_LOST_CONTACT,
- * ERR_MAX_STEPS (sim.err_index names the state component that limits the step).
- *
- * The caller owns all memory (the structs); no globals, no malloc; one NAME_sim per thread.
- * ------------------------------------------------------------------------------------------------ */
-#define PAPER_CASE1_METHOD_RK4     0   /* classical fixed-step RK4 (opt.dt), cubic Hermite dense output */
-#define PAPER_CASE1_METHOD_DOPRI5  1   /* Dormand-Prince 5(4), adaptive (opt.rtol, opt.atol), 4th-order dense output */
-#define PAPER_CASE1_METHOD_DOP853  2   /* Dormand-Prince 8(5,3), adaptive, 7th-order dense output */
-
-#define PAPER_CASE1_SIM_END       1    /* reached t_end */
-#define PAPER_CASE1_SIM_IMPACT    2    /* stopped at an impact, already applied; see the record (which may
-                                         also list contacts made persistent or released by the impact) */
-#define PAPER_CASE1_SIM_CONTACT   3    /* stopped where the persistent set changed without an impact: a contact
-                                         released (its force reached 0), or the activations of sim_init;
-                                         record.t, activated[], released[] are filled, ncontact = 0 */
-#define PAPER_CASE1_ERR_BAD_OPTION  -10   /* an option or argument is out of range (the ranges: error_message) */
-#define PAPER_CASE1_ERR_MAX_STEPS   -11   /* opt.max_steps reached in one advance call */
-#define PAPER_CASE1_ERR_STEP_SIZE   -12   /* adaptive step size fell below round-off */
-#define PAPER_CASE1_ERR_NONFINITE   -13   /* the state became NaN or infinite */
-#define PAPER_CASE1_ERR_TOO_MANY_CONTACTS -14 /* more approaching contacts at once than NQ */
-#define PAPER_CASE1_ERR_SINGULAR_CONTACT -15  /* the persistent contact constraints are dependent */
-#define PAPER_CASE1_ERR_UNSTABLE   -17     /* RK4: 3 steps in a row at h rho > 2.5 (or one > 10), rho the rate of the chain's
-                                              fastest mode between the last two stages: dt is past RK4's
-                                              stability (about 2.8 / rho); the state is the last step's */
-#define PAPER_CASE1_ERR_LOST_CONTACT -18    /* at an impact a point lay beyond its wall by more than contact_tol
-                                              plus the simultaneity window: a crossing was missed because the
-                                              motion is too fast or I_f too ill-conditioned for the tolerance */
-#define PAPER_CASE1_ERR_IMPACT_ACCURACY -16  /* an impact failed its post-conditions (F >= 0, no approach, no energy
-                                              gain, e = 1 energy kept) beyond round-off: ill-conditioned */
-#define PAPER_CASE1_ERR_START_OUTSIDE -19  /* sim_init: a contact point starts beyond its wall, deeper than the
-                                              loop's own lost-contact depth (contact_tol + the simultaneity window) */
-#define PAPER_CASE1_ERR_NULL_ARGUMENT -20  /* a pointer argument that must not be NULL is NULL (see each function) */
-
-#define PAPER_CASE1_NCONTACT1 (PAPER_CASE1_NCONTACT > 0 ? PAPER_CASE1_NCONTACT : 1)
-
+/* One simulation: the library state and its storage (see "Storage" above). */
 typedef struct {
-    int method;            /* METHOD_RK4, METHOD_DOPRI5 (default) or METHOD_DOP853 */
-    double dt;             /* RK4 step (s); for the adaptive methods the first step, 0 = automatic */
-    double rtol, atol;     /* adaptive methods: relative and absolute tolerances (default 1e-8, 1e-10) */
-    double h_max;          /* largest step (s), 0 = unbounded */
-    int event_samples;     /* interpolant samples per step searched for wall crossings (default 4); a dip
-                              through a wall between two samples is found at the gap's minimum */
-    double event_tol;      /* time tolerance of event location on the interpolant (default 1e-13 s) */
-    double contact_tol;    /* approaching contacts within this gap (m) join a simultaneous impact (1e-6) */
-    long max_steps;        /* steps allowed per advance call, 0 = unbounded (default 10^7) */
-    double rest_height;    /* m: a bounce rising less than this ends in persistent contact; < 0 (default):
-                              10 contact_tol; 0: never by this rule */
-    int zeno_impacts;      /* persistent after this many impacts of one contact at shrinking intervals
-                              (default 20; 0: never by this rule) */
-} paper_case1_options;
-
-typedef struct {
-    double t;                                /* impact time (s) */
-    int ncontact;                            /* simultaneous contacts */
-    int contact[PAPER_CASE1_NQ];              /* their indices 0..NCONTACT-1 (see contact_info) */
-    double impulse[PAPER_CASE1_NQ];           /* impulse along the inward normal (N s), >= 0 */
-    double energy_before, energy_after;      /* T + V (J) */
-    double q[PAPER_CASE1_NQ];                 /* configuration at impact */
-    double qd_before[PAPER_CASE1_NQ], qd_after[PAPER_CASE1_NQ];
-    int complementarity;                     /* 1 if the result is not Eq. 47 over the approaching contacts
-                                                (a contact took no impulse, or more than one round) */
-    int rounds;                              /* rounds of the impact law (1 for Eq. 47 with complementarity) */
-    int plastic;                             /* 1 if MAX_ROUNDS rounds ended in a plastic round */
-    double energy_rest;                      /* kinetic energy (J) the landings took: the law with each landing
-                                                contact's own e minus the law with e = 0 (dropped bounces that
-                                                would rise less than rest_height) */
-    double roundoff;                         /* the law's relative round-off bound on the energy (>= 1e-10), the
-                                                tolerance of its post-conditions (grows with cond(I_f)) */
-    double approach_before;                  /* largest |normal velocity| of any contact before (m/s) */
-    double approach_after;                   /* fastest approach of a contact within contact_tol after (m/s) */
-    int nactivated, activated[PAPER_CASE1_NQ];     /* contacts made persistent at this event */
-    int nreleased, released[PAPER_CASE1_NQ];       /* persistent contacts released at this event */
-} paper_case1_impact_record;
-
-typedef struct {
-    paper_case1_options opt;
-    double p[PAPER_CASE1_NPARAM];
-    double t;                                 /* current time (s) */
-    double x[PAPER_CASE1_NX];                  /* current state [q, qd] */
-    long n_steps, n_rejected, n_rhs, n_impacts;
-    int nactive;                              /* persistent contacts: their indices active[0..nactive-1] */
-    int active[PAPER_CASE1_NQ];
-    long n_activations, n_releases;
-    int err_index;                            /* state component (0..NX-1) that dominated the error estimate of
-                                                 the last adaptive step: what limits the step size */
-    /* integrator state and scratch (private) */
-    double h;
-    int f_valid;
-    double f[PAPER_CASE1_NX], k[16][PAPER_CASE1_NX], x1[PAPER_CASE1_NX], xs[PAPER_CASE1_NX], cont[8][PAPER_CASE1_NX];
-    double t0_step, h_step;
-    double ev[PAPER_CASE1_NCONTACT1], es[PAPER_CASE1_NCONTACT1], eprev[PAPER_CASE1_NCONTACT1];   /* event values */
-    double vn[PAPER_CASE1_NCONTACT1];          /* normal velocities at x, if vn_valid (event search) */
-    int vn_valid;
-    double work[PAPER_CASE1_IMPACT_NWORK];
-    double rest_height;                       /* resolved opt.rest_height */
-    double lever;                             /* max(1 m, the chain's length): |dO/dq| bound */
-    int is_active[PAPER_CASE1_NCONTACT1], pending, fail, fail_seen, n_unstable;
-    int n_shrink[PAPER_CASE1_NCONTACT1];           /* impacts of each contact at shrinking intervals */
-    double t_last[PAPER_CASE1_NCONTACT1], dt_last[PAPER_CASE1_NCONTACT1];
-    double gap_held[PAPER_CASE1_NCONTACT1];        /* gap (m) a persistent contact is held at: its gap when it
-                                                     landed (within contact_tol, or the integration's position
-                                                     error below its wall) */
+    gac_sim base;
+    double dwork[PAPER_CASE1_SIM_NDOUBLE];
+    int iwork[PAPER_CASE1_SIM_NINT];
 } paper_case1_sim;
 
-/* Default options (DOPRI5, rtol 1e-8, atol 1e-10, persistent contact on).  opt NULL: nothing is done. */
+/* One impact record: the library record and its storage (see "Storage" above). */
+typedef struct {
+    gac_impact_record base;
+    double dwork[PAPER_CASE1_RECORD_NDOUBLE];
+    int iwork[PAPER_CASE1_RECORD_NINT];
+} paper_case1_impact_record;
+
+/* Flight inertia matrix I_f(Theta) (Eq. 12, Fig. 2), full, row-major.
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   M    out: I_f, NQ x NQ row-major, symmetric
+ *   36 outputs.   137 ops (46 add, 83 mul, 0 div, 8 calls) */
+void paper_case1_mass_matrix(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT M);
+
+/* Right-hand side R(Theta, Theta_dot) of I_f Theta_ddot = R (Eq. 12, 38-41, Fig. 3).
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   R    out: R (NQ): I_f qdd = R in flight
+ *   6 outputs.   119 ops (36 add, 75 mul, 0 div, 8 calls) */
+void paper_case1_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT R);
+
+/* Theta_ddot solving I_f Theta_ddot = R, by an O(n) articulated-body recursion.
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   qdd  out: qdd (NQ; rad/s^2, m/s^2)
+ *   6 outputs.   336 ops (115 add, 207 mul, 6 div, 8 calls) */
+void paper_case1_forward_dynamics(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT qdd);
+
+/* Positions of O_1..O_{n+1} in the reference frame, row i-1 = O_i.
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   r    out: O_1..O_NPOINT, NPOINT x 3 (m)
+ *   15 outputs.   42 ops (14 add, 20 mul, 0 div, 8 calls) */
+void paper_case1_contact_points(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT r);
+
+/* Velocities of O_1..O_{n+1} in the reference frame (Eq. 42).
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   v    out: their velocities, NPOINT x 3 (m/s)
+ *   15 outputs.   49 ops (17 add, 24 mul, 0 div, 8 calls) */
+void paper_case1_contact_velocities(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT v);
+
+/* Rows d(O_i . X_a)/dTheta of the contact Jacobian (Eq. 42, Fig. 4) for the (point, axis) pairs the walls need, row-major.
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   J    out: NJROW x NQ, row r = d(O_i . X_a)/dq
+ *   60 outputs.   62 ops (34 add, 20 mul, 0 div, 8 calls) */
+void paper_case1_contact_jacobian(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT J);
+
+/* Gap of each (point, wall) pair: distance of the point inside its wall (negative = beyond it).
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   gap  out: NCONTACT gaps (m), >= 0 inside the box
+ *   20 outputs.   78 ops (34 add, 36 mul, 0 div, 8 calls) */
+void paper_case1_contact_gaps(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT gap);
+
+/* E[0] = kinetic energy T, E[1] = potential energy V (J).
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   E    out: E[0] kinetic, E[1] potential energy (J)
+ *   2 outputs.   176 ops (48 add, 120 mul, 0 div, 8 calls) */
+void paper_case1_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT E);
+
+/* J_dot qd: accelerations of the contact Jacobian rows' (point, axis) at Theta_ddot = 0, row order of contact_jacobian.
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   a    out: Jdot qd (NJROW; m/s^2): the rows' accelerations at qdd = 0
+ *   10 outputs.   51 ops (15 add, 28 mul, 0 div, 8 calls) */
+void paper_case1_contact_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT a);
+
+/* ODE right-hand side of the flight phase.
+ *   t            time (s), unused
+ *   x            state [q, qd] (NX)
+ *   p            parameters (NPARAM, layout in the header)
+ *   xdot         [qd, qdd] (NX)
+ */
+void paper_case1_rhs(double t, const double *GAC_RESTRICT x, const double *GAC_RESTRICT p, double *GAC_RESTRICT xdot);
+
+/* Impact law, Eq. 44-48, all active contacts together (gac_impact).  Solved as (J I_f^-1 J^T) F = -(1 + e)
+ * J qd, qd_plus = qd + I_f^-1 J^T F (Eq. 48 with the velocity unknowns eliminated); impulse[k] > 0 pushes
+ * contact active[k] away from its wall. Returns GAC_OK or GAC_ERR_*.
+ *   q            generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd           generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   p            parameters (NPARAM, layout in the header)
+ *   nactive      number of contacts
+ *   active       their indices 0..NCONTACT-1
+ *   qd_plus      velocities after (NQ)
+ *   impulse      impulse of each active contact along its inward normal (nactive; N s)
+ *   work         scratch, PAPER_CASE1_IMPACT_NWORK doubles
+ */
+int paper_case1_impact(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, int nactive, const int *GAC_RESTRICT active, double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse, double *GAC_RESTRICT work);
+
+/* Newton's law (Eq. 47) with complementarity, in rounds (gac_impact_complementarity).  No contact pulls or
+ * approaches its wall afterwards, the kinetic energy never grows; the law the hybrid loop applies.
+ * Returns GAC_OK or GAC_ERR_*.
+ *   q            generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd           generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   p            parameters (NPARAM, layout in the header)
+ *   nactive      number of contacts
+ *   active       their indices 0..NCONTACT-1
+ *   qd_plus      velocities after (NQ)
+ *   impulse      total impulse of each active contact (nactive; N s, >= 0)
+ *   work         scratch, PAPER_CASE1_IMPACT_NWORK doubles
+ */
+int paper_case1_impact_complementarity(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, int nactive, const int *GAC_RESTRICT active, double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse, double *GAC_RESTRICT work);
+
+/* Accelerations with the active contacts held at their walls (gac_constrained_dynamics).  I_f qdd = R +
+ * N^T lambda, N qdd = -Ndot qd; nactive = 0 gives forward_dynamics.  Returns GAC_OK or GAC_ERR_*.
+ *   q            generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd           generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   p            parameters (NPARAM, layout in the header)
+ *   nactive      number of contacts
+ *   active       their indices 0..NCONTACT-1
+ *   qdd          accelerations (NQ)
+ *   lambda       force of each active contact along its inward normal (nactive; N)
+ *   work         scratch, PAPER_CASE1_IMPACT_NWORK doubles
+ */
+int paper_case1_constrained_dynamics(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, int nactive, const int *GAC_RESTRICT active, double *GAC_RESTRICT qdd, double *GAC_RESTRICT lambda, double *GAC_RESTRICT work);
+
+/* Point, wall axis and inward normal of contact c (0, -1, 0 outside the range).
+ *   c            contact index 0..NCONTACT-1
+ *   point        out: point index, 1-based (O_1 = 1)
+ *   axis         out: wall axis, 0..2 for X1..X3
+ *   normal_sign  out: inward normal sign, +1 or -1
+ */
+void paper_case1_contact_info(int c, int *point, int *axis, int *normal_sign);
+
+/* The scene's parameter vector.
+ *   p            out: the scene's parameters (NPARAM)
+ */
+void paper_case1_default_parameters(double *p);
+
+/* The scene's initial state.
+ *   q            out: the scene's initial coordinates (NQ)
+ *   qd           out: the scene's initial velocities (NQ)
+ */
+void paper_case1_initial_state(double *q, double *qd);
+
+/* Message for a return code (gac_error_message).
+ *   code         a return code
+ */
+const char *paper_case1_error_message(int code);
+
+/* Default options: DOPRI5, rtol 1e-8, atol 1e-10, persistent contact on.
+ *   opt          out (NULL: nothing is done)
+ */
 void paper_case1_default_options(paper_case1_options *opt);
 
-/* Start a simulation at time t0 from (q, qd) with parameters p (copied).  Contacts resting at their wall
- * become persistent (reported by the first sim_advance, SIM_CONTACT).
- * Pointers: sim, q and qd must not be NULL (ERR_NULL_ARGUMENT); opt NULL means the default options
- * (default_options), p NULL the scene's parameters (default_parameters).
- * Refused: options out of range, t0, q or qd not finite (ERR_BAD_OPTION); a contact point beyond its wall,
- * gap < -(contact_tol + w + 1e-12 max(1 m, l)) (ERR_START_OUTSIDE), w the simultaneity window (contact_tol, or
- * for the adaptive methods 100 (atol + rtol l) if larger; l the largest |point coordinate|): the depth at
- * which the loop itself reports a lost contact.  A start on or inside the walls is accepted, and so is a
- * state the loop itself left (its resting contacts held at their landing gaps).  On any of these errors *sim is left unchanged; it must have
- * been initialised with OK before it is passed to sim_advance.  Returns OK or an error (< 0). */
-int paper_case1_sim_init(paper_case1_sim *sim, double t0, const double *q, const double *qd, const double *p,
-                   const paper_case1_options *opt);
+/* Start a simulation (gac_sim_init); on an error *sim is left unchanged.  Returns GAC_OK,
+ * GAC_ERR_NULL_ARGUMENT, GAC_ERR_BAD_OPTION, GAC_ERR_START_OUTSIDE or another error.
+ *   sim          the simulation (not NULL)
+ *   t0           start time (s)
+ *   q            start coordinates (NQ; not NULL)
+ *   qd           start velocities (NQ; not NULL)
+ *   p            parameters (NPARAM, copied; NULL: the scene's)
+ *   opt          options (copied; NULL: the defaults)
+ */
+int paper_case1_sim_init(paper_case1_sim *sim, double t0, const double *q, const double *qd, const double *p, const paper_case1_options *opt);
 
-/* The current time and state (the struct's t and x, copied out).  sim NULL: nothing is written; an
- * output that is NULL (t, q or qd) is skipped. */
+/* Integrate until t_end, the next impact or the next contact release (gac_sim_advance).  Returns
+ * GAC_SIM_END, GAC_SIM_IMPACT, GAC_SIM_CONTACT or an error (< 0).
+ *   sim          an initialised simulation
+ *   t_end        integrate up to this time (s), finite, >= sim->base.t
+ *   t_eval       ascending sample times (n_eval; may be NULL if n_eval = 0)
+ *   n_eval       number of samples, >= 0
+ *   i_eval       in/out: the next sample, 0 <= *i_eval <= n_eval
+ *   x_eval       out: state [q, qd] at each sample passed (n_eval x NX)
+ *   record       out: the impact or contact change (not NULL)
+ */
+int paper_case1_sim_advance(paper_case1_sim *sim, double t_end, const double *t_eval, int n_eval, int *i_eval, double *x_eval, paper_case1_impact_record *record);
+
+/* The current time and state (gac_sim_state).
+ *   sim          the simulation (NULL: nothing is written)
+ *   t            out: current time (s), or NULL
+ *   q            out: current coordinates (NQ), or NULL
+ *   qd           out: current velocities (NQ), or NULL
+ */
 void paper_case1_sim_state(const paper_case1_sim *sim, double *t, double *q, double *qd);
 
-/* Integrate until t_end, the first impact (which is located, resolved and applied; record filled) or the
- * first release of a persistent contact.
- * Samples: for each t_eval[i] (ascending) with i >= *i_eval that is passed, x_eval[i*NX ..] receives the
- * state [q, qd] (pre-impact at an impact time) and *i_eval advances.
- * Pointers: sim and record must not be NULL, nor t_eval, i_eval and x_eval (n_eval doubles, n_eval NX
- * doubles) when n_eval > 0 (ERR_NULL_ARGUMENT); with n_eval = 0 they may be NULL and are not used.
- * Ranges (ERR_BAD_OPTION): t_end finite and >= sim->t, n_eval >= 0, 0 <= *i_eval <= n_eval.  A call
- * refused for its arguments changes nothing.
- * Returns SIM_END, SIM_IMPACT, SIM_CONTACT or an error (< 0). */
-int paper_case1_sim_advance(paper_case1_sim *sim, double t_end, const double *t_eval, int n_eval, int *i_eval,
-                      double *x_eval, paper_case1_impact_record *record);
+/* Copy a simulation, its arrays bound to the copy's own storage.
+ *   dst          the copy
+ *   src          an initialised simulation
+ */
+void paper_case1_sim_copy(paper_case1_sim *dst, const paper_case1_sim *src);
 
-/* Generalised accelerations with the contacts active[0..nactive-1] held as bilateral frictionless
- * constraints: I_f qdd = R + N^T lambda, N qdd = -Ndot qd (N: Jacobian rows signed along the inward normal),
- * solved as qdd = qdd_free + I_f^-1 N^T lambda with (N I_f^-1 N^T) lambda = -(N qdd_free + Ndot qd).
- * lambda[k] (N) is the force of contact active[k] along its inward normal (> 0 pushes); a contact whose
- * row depends on the earlier ones' (held by them already) gets lambda = 0.  work: IMPACT_NWORK
- * doubles.  nactive = 0 gives forward_dynamics.  Returns OK or an error (< 0). */
-int paper_case1_constrained_dynamics(const double *q, const double *qd, const double *p, int nactive,
-                               const int *active, double *qdd, double *lambda, double *work);
+/* Copy an impact record, its arrays bound to the copy's own storage.
+ *   dst          the copy
+ *   src          a record filled by sim_advance
+ */
+void paper_case1_impact_record_copy(paper_case1_impact_record *dst, const paper_case1_impact_record *src);
 
 #ifdef __cplusplus
 }

@@ -4,19 +4,20 @@ from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import sys
 import time
 from pathlib import Path
 
-from codegen.scene import SceneError, load_scene, shipped_scene_names
+from codegen.scene import shipped_scene_names
 
 from .compile import BuildError, CacheError, CompilerNotFound
 from .model import load_model
 from codegen.outputs import output_dir_problem, output_file_problem
-from .precision import STATE_TOL, TIME_TOL
+from .horizon import scene_and_horizon
 from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, METHODS, simulate
-from . import fuzz as fuzz_study
-from . import stress as stress_suite
+
+STUDIES = ("precision", "stress", "fuzz")     # studies: python -m studies STUDY
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -47,40 +48,10 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--no-charts", action="store_true", help="stop at the gimbal lock of the base chart instead")
     sim.add_argument("--max-wall-time", type=float, default=None, metavar="S",
                      help="stop the run after S seconds of wall time, saying where the time went")
-    prec = commands.add_parser("precision", help="work-precision study: error against CPU time of every integrator",
-                               description="Error against CPU time for RK4, DOPRI5, DOP853 and scipy's RK45, "
-                                           "DOP853, Radau, against a confirmed DOP853 reference (runtime/precision.py).",
-                               epilog=f"Shipped scenes: {', '.join(shipped_scene_names())}.")
-    prec.add_argument("--scene", default="paper-case1", help="shipped scene name or .toml/.json file")
-    prec.add_argument("--t-end", type=float, default=None,
-                      help="end time in s (default: 1.5 for paper-case1, 1.75 for paper-case2, else 1.0)")
-    prec.add_argument("--out", default="precision", metavar="DIR",
-                      help="folder for precision-SCENE.md/.json/.png (default ./precision)")
-    prec.add_argument("--quick", action="store_true", help="a few runs only (for tests)")
-    prec.add_argument("--time-tol", type=float, default=TIME_TOL,
-                      help=f"s; the confirming runs' impact times must agree with the reference to this "
-                           f"(default {TIME_TOL:g})")
-    prec.add_argument("--state-tol", type=float, default=STATE_TOL,
-                      help=f"the confirming runs' final states (max |x - x_ref|) must agree with the reference "
-                           f"to this (default {STATE_TOL:g})")
-    stress_suite.add_parser(commands)
-    fuzz_study.add_parser(commands)
     return parser
 
 
-DEFAULT_T_END = {"paper_case1": 1.5, "paper_case2": 1.75}
 MAX_SAMPLES = 10_000_000     # output samples of one run (each 2 nq doubles): 1 GB for a 4-link chain
-
-
-def scene_and_horizon(args):
-    """The scene named by --scene and the run's horizon (--t-end, else the scene's usual one), or None
-    after printing why the scene cannot be loaded."""
-    try:
-        scene = load_scene(args.scene)
-    except SceneError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return None
-    return scene, (args.t_end if args.t_end is not None else DEFAULT_T_END.get(scene.name, 1.0))
 
 
 def simulate_arguments_problem(args, t_end: float) -> str:
@@ -119,14 +90,11 @@ def simulate_arguments_problem(args, t_end: float) -> str:
 
 
 def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] and argv[0] in STUDIES:
+        print(f"error: {argv[0]!r} is a study: run {shlex.join(['python', '-m', 'studies', *argv])}", file=sys.stderr)
+        return 2
     args = build_parser().parse_args(argv)
-    if args.command == "precision":
-        from .precision import main as precision_main
-        return precision_main(args)
-    if args.command == "stress":
-        return stress_suite.main(args)
-    if args.command == "fuzz":
-        return fuzz_study.main(args)
     loaded = scene_and_horizon(args)
     if loaded is None:
         return 2

@@ -1,9 +1,11 @@
 """Compile generated C with cffi (API mode) and cache the extension module.
 
-Modules live in the shared cache directory (``codegen.cache.cache_dir``) as ``_gac_KEY<ext>``, KEY a
-hash of the C source, the header, the cffi declarations, the compiler flags, the Python version and
-the cffi version; each hash gets its own module name, so different models never clash in one
-process.  Beside each module, ``sha256_gac_KEY.txt`` holds its sha256 (``sha256sum`` format).
+A module is the model's NAME.c compiled together with the library in ``runtime/c`` (``gac.h`` and
+``gac_*.c``: the hybrid loop for any model descriptor).  Modules live in the shared cache directory
+(``codegen.cache.cache_dir``) as ``_gac_KEY<ext>``, KEY a hash of the C source, the header, the cffi
+declarations, the library's text, the compiler flags, the Python version and the cffi version; each hash
+gets its own module name, so different models never clash in one process.  Beside each module,
+``sha256_gac_KEY.txt`` holds its sha256 (``sha256sum`` format).
 
 A cached module is imported only after its sha256 matches the sidecar.  A module that fails the
 check or fails to import is corrupted: one line ``cache: rebuilding corrupted entry FILE (REASON)``
@@ -27,10 +29,22 @@ from pathlib import Path
 
 import cffi
 
+from codegen.artifact import library_files
 from codegen.cache import CacheError, cache_dir, entry_lock, report_corrupted, sha256_of, write_atomic  # noqa: F401
 
 DEFAULT_FLAGS = ("-O2",)
 SUFFIX = sysconfig.get_config_var("EXT_SUFFIX") or ".so"
+LIBRARY_DIR = Path(__file__).resolve().parent / "c"      # the C library every model is compiled with
+
+
+def library_sources() -> list[Path]:
+    """The library's C sources (gac_*.c), compiled beside each model's NAME.c."""
+    return [path for path in library_files(LIBRARY_DIR) if path.suffix == ".c"]
+
+
+def library_text() -> str:
+    """Every library file's name and text, in one string (part of the build key)."""
+    return "".join(f"{path.name}\0{path.read_text()}\0" for path in library_files(LIBRARY_DIR))
 
 
 class CompilerNotFound(RuntimeError):
@@ -43,7 +57,7 @@ class BuildError(RuntimeError):
 
 def build_key(header: str, source: str, cdef: str, flags) -> str:
     digest = hashlib.sha256()
-    for part in (header, source, cdef, " ".join(flags), sys.version, cffi.__version__):
+    for part in (header, source, cdef, library_text(), " ".join(flags), sys.version, cffi.__version__):
         digest.update(part.encode())
         digest.update(b"\0")
     return digest.hexdigest()[:20]
@@ -129,8 +143,9 @@ def _build(name, header, source, cdef, flags, module_name: str, target: Path, si
         (workdir / f"{name}.c").write_text(source)
         ffi = cffi.FFI()
         ffi.cdef(cdef)
-        ffi.set_source(module_name, f'#include "{name}.h"', sources=[str(workdir / f"{name}.c")],
-                       include_dirs=[str(workdir)], extra_compile_args=list(flags), libraries=["m"])
+        ffi.set_source(module_name, f'#include "{name}.h"',
+                       sources=[str(workdir / f"{name}.c"), *map(str, library_sources())],
+                       include_dirs=[str(workdir), str(LIBRARY_DIR)], extra_compile_args=list(flags), libraries=["m"])
         try:
             built = Path(ffi.compile(tmpdir=str(workdir), verbose=False))
         except Exception as exc:  # setuptools raises CompileError / LinkError / VerificationError

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from codegen import interface
 from codegen.cache import generate_cached
 from codegen.artifact import GeneratedModel
 from codegen.scene import Scene, load_scene, scene_file
@@ -39,11 +40,16 @@ class CompiledModel:
         self.q0, self.qd0 = self.layout.reduce(scene.q0), self.layout.reduce(scene.qd0)
         self.contacts = list(self.layout.contacts)
         self.contact_rows = list(self.layout.contact_rows)
-        self._fn = {name: getattr(self.lib, f"{self.name}_{name}") for name in (
-            "mass_matrix", "bias", "forward_dynamics", "contact_points", "contact_velocities",
-            "contact_jacobian", "contact_gaps", "energy", "rhs", "impact", "impact_complementarity",
-            "contact_bias", "constrained_dynamics")}
-        self._work = np.zeros(getattr(self.lib, f"{self.name.upper()}_IMPACT_NWORK"))
+        self._fn = {f.name: getattr(self.lib, f"{self.name}_{f.name}") for f in interface.ALL_FUNCTIONS}
+        self._work = np.zeros(self.size("IMPACT_NWORK"))
+
+    def size(self, suffix: str) -> int:
+        """The model's size NAME_<suffix> (codegen.interface.SIZES), read from the compiled module."""
+        return int(getattr(self.lib, f"{self.name.upper()}_{suffix}"))
+
+    def error_message(self, code: int) -> str:
+        """The C library's message for a return code."""
+        return self.ffi.string(self._fn["error_message"](code)).decode()
 
     # -- plumbing ---------------------------------------------------------------
     def _ptr(self, array: np.ndarray):
@@ -119,9 +125,8 @@ class CompiledModel:
         code = solve(self._ptr(q), self._ptr(qd), self._ptr(self._params(p)), len(active),
                                   self.ffi.cast("int *", self.ffi.from_buffer(active)),
                                   self._ptr(qd_plus), self._ptr(impulse), self._ptr(self._work))
-        if code != 0:
-            message = self.ffi.string(getattr(self.lib, f"{self.name}_error_message")(code)).decode()
-            raise ImpactError(f"impact with contacts {active.tolist()}: {message}")
+        if code != self.lib.GAC_OK:
+            raise ImpactError(f"impact with contacts {active.tolist()}: {self.error_message(code)}")
         return qd_plus, impulse[:len(active)]
 
 
@@ -134,9 +139,8 @@ class CompiledModel:
         code = self._fn["constrained_dynamics"](self._ptr(q), self._ptr(qd), self._ptr(self._params(p)), len(active),
                                                 self.ffi.cast("int *", self.ffi.from_buffer(active)),
                                                 self._ptr(qdd), self._ptr(lam), self._ptr(self._work))
-        if code != 0:
-            message = self.ffi.string(getattr(self.lib, f"{self.name}_error_message")(code)).decode()
-            raise ImpactError(f"constrained dynamics with contacts {active.tolist()}: {message}")
+        if code != self.lib.GAC_OK:
+            raise ImpactError(f"constrained dynamics with contacts {active.tolist()}: {self.error_message(code)}")
         return qdd, lam[:len(active)]
 
 

@@ -5,13 +5,13 @@
     for impact in result.impacts:
         print(impact.t, [(c.point, c.wall) for c in impact.contacts])
 
-Flight segments run in compiled code (``NAME_sim_advance``) up to the next impact, which is
-located, resolved and applied in C; Python talks to C once per flight segment, checks every
-impact (no contact still approaching its wall, no energy gain) and collects the result.
+Flight segments run in compiled code (``NAME_sim_advance``, the C library in ``runtime/c``) up to the
+next impact, which is located, resolved and applied in C; Python talks to C once per flight segment,
+checks every impact (no contact still approaching its wall, no energy gain) and collects the result.
+Codes and sizes come from the compiled module (``lib.GAC_...``), never from header text.
 """
 from __future__ import annotations
 
-import re
 import time
 from dataclasses import dataclass, field
 
@@ -196,7 +196,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     max_wall_time s: stop with status -1 once the run has taken this long (None: unbounded); the message
                   says where the time went (mean step, the coordinate that limits the step)
     charts        a run that comes near the gimbal lock of the base chart (the C loop stops with
-                  ERR_GIMBAL_LOCK before it) is run again with chart switching (runtime.charts) and that
+                  GAC_ERR_GIMBAL_LOCK before it) is run again with chart switching (runtime.charts) and that
                   result returned (a ChartResult, samples in the scene's coordinates); False: stop there
     check_start   refuse q0/p overrides that put a contact point outside its wall beyond round-off (False:
                   a restart from a state the loop itself produced, with its resting contacts held at
@@ -251,7 +251,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
 
     opt = ffi.new(f"{name}_options *")
     getattr(lib, f"{name}_default_options")(opt)
-    opt.method = getattr(lib, f"{name.upper()}_METHOD_{method.upper()}")
+    opt.method = getattr(lib, f"GAC_METHOD_{method.upper()}")
     opt.dt = dt if dt is not None else 0.0
     opt.rtol, opt.atol, opt.h_max = rtol, atol, h_max
     opt.event_samples, opt.event_tol, opt.contact_tol = int(event_samples), event_tol, contact_tol
@@ -259,20 +259,21 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     opt.rest_height = -1.0 if rest_height is None else float(rest_height)
     opt.zeno_impacts = int(zeno_impacts)
     sim = ffi.new(f"{name}_sim *")
+    state = sim.base          # the library's state (gac_sim): t, x, counters; its arrays live in *sim
     ptr = model._ptr
     code = getattr(lib, f"{name}_sim_init")(sim, 0.0, ptr(q), ptr(qd), ptr(p), opt)
     if code < 0:
-        raise ValueError(f"simulate: {ffi.string(getattr(lib, f'{name}_error_message')(code)).decode()}")
+        raise ValueError(f"simulate: {model.error_message(code)}")
 
     x_eval = np.zeros((len(t_eval), nx))
     i_eval = ffi.new("int *", 0)
     while i_eval[0] < len(t_eval) and t_eval[i_eval[0]] <= 0.0:      # samples at the start (as sim_init left it)
-        x_eval[i_eval[0]] = ffi.unpack(sim.x, nx)
+        x_eval[i_eval[0]] = ffi.unpack(state.x, nx)
         i_eval[0] += 1
     record = ffi.new(f"{name}_impact_record *")
+    rec = record.base         # the library's record (gac_impact_record); its arrays live in *record
     advance = getattr(lib, f"{name}_sim_advance")
-    SIM_END, SIM_IMPACT = getattr(lib, f"{name.upper()}_SIM_END"), getattr(lib, f"{name.upper()}_SIM_IMPACT")
-    SIM_CONTACT = getattr(lib, f"{name.upper()}_SIM_CONTACT")
+    SIM_END, SIM_IMPACT, SIM_CONTACT = lib.GAC_SIM_END, lib.GAC_SIM_IMPACT, lib.GAC_SIM_CONTACT
     contact_events: list[ContactEvent] = []
     t_eval_ptr = ffi.cast("double *", ffi.from_buffer(t_eval))
     x_eval_ptr = ffi.cast("double *", ffi.from_buffer(x_eval))
@@ -286,51 +287,51 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         link.length for link in model.scene.links)
     if method == "rk4":
         _check_rk4_step(model, q, qd, p, dt)
-    ERR_MAX_STEPS = _header_constant(model, "ERR_MAX_STEPS")
+    ERR_MAX_STEPS = lib.GAC_ERR_MAX_STEPS
     # The C loop runs in chunks of at most CHUNK_STEPS steps so that the wall-time budget is looked at
     # regularly; max_steps (per flight segment) is counted across the chunks.
     chunk = CHUNK_STEPS if max_steps == 0 else min(CHUNK_STEPS, int(max_steps))
     start = time.perf_counter()
-    segment_t, segment_steps = float(sim.t), int(sim.n_steps) + int(sim.n_rejected)
+    segment_t, segment_steps = float(state.t), int(state.n_steps) + int(state.n_rejected)
     status, message = 0, "reached t_end"
     while True:
         opt_steps = chunk
         if max_steps:
-            opt_steps = max(1, min(chunk, int(max_steps) - (int(sim.n_steps) + int(sim.n_rejected) - segment_steps)))
-        sim.opt.max_steps = opt_steps
+            opt_steps = max(1, min(chunk, int(max_steps) - (int(state.n_steps) + int(state.n_rejected) - segment_steps)))
+        state.opt.max_steps = opt_steps
         code = advance(sim, float(t_end), t_eval_ptr, len(t_eval), i_eval, x_eval_ptr, record)
         if code == SIM_END:
             break
         if code == ERR_MAX_STEPS:
-            taken = int(sim.n_steps) + int(sim.n_rejected) - segment_steps
+            taken = int(state.n_steps) + int(state.n_rejected) - segment_steps
             if max_steps and taken >= max_steps:
                 status = -1
-                message = (f"at t = {sim.t:.12g} s: maximum number of steps reached ({int(max_steps)} steps since "
-                           f"t = {segment_t:.6g} s, the last event): {_step_diagnosis(model, sim, segment_t, taken)}")
+                message = (f"at t = {state.t:.12g} s: maximum number of steps reached ({int(max_steps)} steps since "
+                           f"t = {segment_t:.6g} s, the last event): {_step_diagnosis(model, state, segment_t, taken)}")
                 break
             if max_wall_time is not None and time.perf_counter() - start > max_wall_time:
                 status = -1
-                message = (f"at t = {sim.t:.12g} s: wall-time budget of {max_wall_time:g} s used up "
-                           f"({int(sim.n_steps)} steps): {_step_diagnosis(model, sim, segment_t, taken)}")
+                message = (f"at t = {state.t:.12g} s: wall-time budget of {max_wall_time:g} s used up "
+                           f"({int(state.n_steps)} steps): {_step_diagnosis(model, state, segment_t, taken)}")
                 break
             continue
-        segment_t, segment_steps = float(sim.t), int(sim.n_steps) + int(sim.n_rejected)
+        segment_t, segment_steps = float(state.t), int(state.n_steps) + int(state.n_rejected)
         if code in (SIM_IMPACT, SIM_CONTACT):
-            contact_events += _read_contact_events(model, record)
+            contact_events += _read_contact_events(model, rec)
         if code == SIM_CONTACT:
             continue
         if code != SIM_IMPACT:
             status = -1
-            message = f"at t = {sim.t:.12g} s: {ffi.string(getattr(lib, f'{name}_error_message')(code)).decode()}"
-            if code == _header_constant(model, "ERR_UNSTABLE"):
-                x_now = np.array(ffi.unpack(sim.x, nx))
+            message = f"at t = {state.t:.12g} s: {model.error_message(code)}"
+            if code == lib.GAC_ERR_UNSTABLE:
+                x_now = np.array(ffi.unpack(state.x, nx))
                 sentence = _rk4_stability(model, x_now[:nq], x_now[nq:], p, dt)[1]
                 message += f" (dt = {dt:g} s; {sentence.replace('at the start', 'now')})"
-            if method == "rk4" and code == _header_constant(model, "ERR_NONFINITE"):
+            if method == "rk4" and code == lib.GAC_ERR_NONFINITE:
                 message += (f" (rk4 with dt = {dt:g} s is unstable on this motion: reduce dt, or use an adaptive "
                             "method)")
             break
-        impact = _read_impact(model, record)
+        impact = _read_impact(model, rec)
         impacts.append(impact)
         if method == "rk4":                  # an impact may spin the chain up past RK4's stability
             q_after, qd_after = layout.reduce(impact.q), layout.reduce(impact.qd_after)
@@ -339,7 +340,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                 status, message = -1, (f"impact at t = {impact.t:.12g} s: after it, dt = {dt:g} s is too large "
                                        f"for RK4: {sentence.replace('at the start', 'now')}")
                 break
-        problem = _impact_problem(model, impact, record, elastic_walls, energy_ref)
+        problem = _impact_problem(model, impact, rec, elastic_walls, energy_ref)
         if problem:
             status, message = -1, f"impact at t = {impact.t:.12g} s: {problem}"
             break
@@ -350,11 +351,11 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
             break
         if max_wall_time is not None and time.perf_counter() - start > max_wall_time:
             status = -1
-            message = (f"at t = {sim.t:.12g} s: wall-time budget of {max_wall_time:g} s used up after "
+            message = (f"at t = {state.t:.12g} s: wall-time budget of {max_wall_time:g} s used up after "
                        f"{len(impacts)} impacts ({impacts[-1].t - impacts[max(0, len(impacts) - 100)].t:.3g} s "
                        f"of simulated time for the last {min(len(impacts), 100)})")
             break
-    if charts and code == _header_constant(model, "ERR_GIMBAL_LOCK"):
+    if charts and code == lib.GAC_ERR_GIMBAL_LOCK:
         from .charts import simulate_with_charts
         return simulate_with_charts(
             model.scene, t_end, t_eval=t_eval, p=None if p is model.p else p,
@@ -363,20 +364,20 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
             h_max=h_max, contact_tol=contact_tol, event_samples=event_samples, event_tol=event_tol,
             rest_height=rest_height, zeno_impacts=zeno_impacts,
             max_wall_time=None if max_wall_time is None else max(max_wall_time - (time.perf_counter() - start), 1e-3))
-    x_final = np.array(ffi.unpack(sim.x, nx))
+    x_final = np.array(ffi.unpack(state.x, nx))
     n = i_eval[0]
     warnings = impact_warnings(impacts)
     return SimulationResult(
         t=t_eval[:n].copy(), q=layout.expand(x_eval[:n, :nq]), qd=layout.expand(x_eval[:n, nq:], velocity=True),
-        impacts=impacts, t_final=float(sim.t), q_final=layout.expand(x_final[:nq]),
+        impacts=impacts, t_final=float(state.t), q_final=layout.expand(x_final[:nq]),
         qd_final=layout.expand(x_final[nq:], velocity=True),
         energy_initial=energy_initial, energy_final=sum(model.energy(x_final[:nq], x_final[nq:], p)),
-        n_steps=int(sim.n_steps), n_rejected=int(sim.n_rejected), n_rhs=int(sim.n_rhs), status=status,
+        n_steps=int(state.n_steps), n_rejected=int(state.n_rejected), n_rhs=int(state.n_rhs), status=status,
         message=message + (f"; {len(warnings)} impact(s) of limited accuracy (see warnings)" if warnings else ""),
         method=method, contact_events=contact_events, warnings=warnings,
         energy_scale=energy_scale(model.scene, p, T0, V0),
-        persistent_final=[(model.contacts[sim.active[k]][0], model.contacts[sim.active[k]][1].name)
-                          for k in range(sim.nactive)],
+        persistent_final=[(model.contacts[state.active[k]][0], model.contacts[state.active[k]][1].name)
+                          for k in range(state.nactive)],
         options={"rtol": rtol, "atol": atol, "dt": dt, "contact_tol": contact_tol, "event_samples": event_samples,
                  "event_tol": event_tol, "h_max": h_max, "t_end": t_end, "rest_height": rest_height,
                  "zeno_impacts": zeno_impacts, "max_steps": max_steps, "max_impacts": max_impacts,
@@ -405,12 +406,6 @@ def impact_warnings(impacts: list[Impact]) -> list[str]:
     return [f"impact at t = {i.t:.9g} s: its energy is accurate only to {i.roundoff:.2g} (relative; I_f is "
             "ill-conditioned there: extreme mass, length or inertia ratios)" for i in impacts
             if i.roundoff > ROUNDOFF_WARN]
-
-
-def _header_constant(model: CompiledModel, suffix: str) -> int | None:
-    """An integer #define NAME_<suffix> of the generated header (error codes are not in the cffi cdef)."""
-    match = re.search(rf"#define\s+{model.name.upper()}_{suffix}\s+(-?\d+)", model.generated.header)
-    return int(match.group(1)) if match else None
 
 
 def _read_impact(model: CompiledModel, r) -> Impact:

@@ -7,10 +7,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))      # for `import reference`
+sys.path.insert(0, str(Path(__file__).resolve().parent))      # for `from conftest import ...`
 
-import reference  # noqa: E402
 from codegen.scene import LineLink, RigidLink, Scene, Wall, WALL_NAMES  # noqa: E402
+from studies import reference  # noqa: E402
+from studies.reference import reference_of, with_parameters  # noqa: E402,F401
 
 FAR = 50.0   # walls far away: every (point, wall) pair exists but no state is outside
 
@@ -38,36 +39,6 @@ def random_scene(n: int, seed: int, random_twists: bool = False, kinds=("line",)
     q0 = (0.0,) * (n + 5)
     return Scene(name=name or f"rand{n}_{seed}", links=links, twists=twists, gravity=rng.uniform(0, 12),
                  walls=wall_list, q0=q0)
-
-
-def reference_of(scene: Scene, p=None) -> reference.ReferenceChain:
-    """The tests' independent numpy model of a scene (parameters from p if given)."""
-    if p is not None:
-        scene = with_parameters(scene, p)
-    links = []
-    for link in scene.links:
-        if isinstance(link, LineLink):
-            links.append(reference.line_link(link.length, link.mu, link.J))
-        else:
-            links.append(reference.rigid_link(link.length, link.mass, link.com, link.inertia))
-    return reference.ReferenceChain(links, [np.array(T) for T in scene.all_twists], scene.gravity)
-
-
-def with_parameters(scene: Scene, p) -> Scene:
-    """The scene with the link parameters and gravity of the parameter vector p."""
-    p = list(p)
-    g, k = p[0], 1
-    links = []
-    for link in scene.links:
-        values = p[k:k + len(link.param_names)]
-        k += len(link.param_names)
-        if isinstance(link, LineLink):
-            links.append(LineLink(values[0], values[1], tuple(values[2:5])))
-        else:
-            l, m, cx, cy, cz, ixx, iyy, izz, ixy, ixz, iyz = values
-            links.append(RigidLink(l, m, (cx, cy, cz), ((ixx, ixy, ixz), (ixy, iyy, iyz), (ixz, iyz, izz))))
-    return Scene(name=scene.name, links=tuple(links), twists=scene.twists, gravity=g, walls=scene.walls,
-                 q0=scene.q0, qd0=scene.qd0, base_twists=scene.base_twists)
 
 
 def random_parameters(scene: Scene, seed: int) -> np.ndarray:

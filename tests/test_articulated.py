@@ -10,7 +10,7 @@ import pytest
 import sympy as sp
 from sympy.printing.pycode import pycode
 
-import reference
+from studies import reference
 from conftest import random_parameters, random_scene, reference_of
 from codegen.flatten import flatten
 from codegen.kinematics import ChainSymbols

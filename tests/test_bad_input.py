@@ -289,7 +289,8 @@ def test_precision_without_scipy_names_the_extra_before_any_work(monkeypatch, ca
     import importlib.util
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "scipy" else real(name, *a))
-    code = runtime_cli.main(["precision", "--scene", "paper-case1", "--quick", "--out", str(tmp_path / "p")])
+    from studies import cli as studies_cli
+    code = studies_cli.main(["precision", "--scene", "paper-case1", "--quick", "--out", str(tmp_path / "p")])
     err = capsys.readouterr().err
     assert code == 2 and "needs scipy" in err and '.[study]' in err
     assert not (tmp_path / "p").exists()

@@ -5,6 +5,7 @@ import subprocess
 
 import pytest
 
+from codegen import interface
 from codegen.pipeline import generate, write_model, write_standalone
 from codegen.scene import load_scene
 from runtime import simulate
@@ -29,18 +30,19 @@ static long run_to(sim_t *sim, double t_end)
     paper_case1_impact_record rec;
     long impacts = 0;
     int code;
-    while ((code = paper_case1_sim_advance(sim, t_end, NULL, 0, NULL, NULL, &rec)) == PAPER_CASE1_SIM_IMPACT
-           || code == PAPER_CASE1_SIM_CONTACT) {
-        if (code == PAPER_CASE1_SIM_IMPACT) ++impacts;
+    while ((code = paper_case1_sim_advance(sim, t_end, NULL, 0, NULL, NULL, &rec)) == GAC_SIM_IMPACT
+           || code == GAC_SIM_CONTACT) {
+        if (code == GAC_SIM_IMPACT) ++impacts;
     }
-    return code == PAPER_CASE1_SIM_END ? impacts : code;
+    return code == GAC_SIM_END ? impacts : code;
 }
 
 /* 1 if two sims reached bitwise the same state with the same impacts. */
 static int same_run(sim_t *a, sim_t *b, double t_end)
 {
     long na = run_to(a, t_end), nb = run_to(b, t_end);
-    return na == nb && na > 0 && a->t == b->t && memcmp(a->x, b->x, sizeof a->x) == 0;
+    return na == nb && na > 0 && a->base.t == b->base.t
+           && memcmp(a->base.x, b->base.x, PAPER_CASE1_NX * sizeof(double)) == 0;
 }
 
 /* q moved along X2 so that the lowest point on the floor x2_min has the gap -depth. */
@@ -80,13 +82,13 @@ int main(int argc, char **argv)
     } else if (strcmp(c, "init_null_opt") == 0 || strcmp(c, "init_null_p") == 0) {
         const int null_opt = strcmp(c, "init_null_opt") == 0;
         code = paper_case1_sim_init(&sim, 0.0, q, qd, null_opt ? p : NULL, null_opt ? NULL : &opt);
-        if (paper_case1_sim_init(&other, 0.0, q, qd, p, &opt) != PAPER_CASE1_OK) return 3;
-        printf("same=%d\n", code == PAPER_CASE1_OK && same_run(&sim, &other, 1.5));
+        if (paper_case1_sim_init(&other, 0.0, q, qd, p, &opt) != GAC_OK) return 3;
+        printf("same=%d\n", code == GAC_OK && same_run(&sim, &other, 1.5));
     } else if (strcmp(c, "floor") == 0 && argc == 4) {   /* floor <depth below x2_min> <contact_tol> */
         opt.contact_tol = strtod(argv[3], NULL);
         lower_to(q, p, strtod(argv[2], NULL));
         code = paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);
-        if (code == PAPER_CASE1_OK) {                    /* and the loop runs from there */
+        if (code == GAC_OK) {                    /* and the loop runs from there */
             long n = run_to(&sim, 0.5);
             if (n < 0) code = (int)n;
         }
@@ -97,6 +99,20 @@ int main(int argc, char **argv)
         lower_to(q, p, 1e-3);
         code = paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);
         printf("same=%d\n", memcmp(&sim, &other, sizeof sim) == 0);
+    } else if (strcmp(c, "copy") == 0) {            /* copies bound to their own storage run on alone */
+        static paper_case1_impact_record copy;
+        int bound, equal;
+        code = paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);
+        if (paper_case1_sim_advance(&sim, 1.0, NULL, 0, NULL, NULL, &rec) != GAC_SIM_IMPACT) return 3;
+        paper_case1_sim_copy(&other, &sim);
+        paper_case1_impact_record_copy(&copy, &rec);
+        bound = other.base.x == other.dwork && other.base.x != sim.base.x && copy.base.impulse != rec.base.impulse
+                && copy.base.contact == copy.iwork;
+        equal = copy.base.t == rec.base.t && copy.base.ncontact == rec.base.ncontact
+                && copy.base.impulse[0] == rec.base.impulse[0] && copy.base.contact[0] == rec.base.contact[0];
+        memset(&rec, 0, sizeof rec);                  /* the original record gone: the copy keeps its data */
+        equal = equal && copy.base.impulse[0] != 0.0;
+        printf("same=%d\n", bound && equal && same_run(&sim, &other, 1.5));
     } else if (strcmp(c, "state_null") == 0) {
         double t = -1.0, v[PAPER_CASE1_NQ];
         code = paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);
@@ -113,7 +129,7 @@ int main(int argc, char **argv)
         int *ie = &i_eval;
         paper_case1_impact_record *r = &rec;
         sim_t *s = &sim;
-        if (paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt) != PAPER_CASE1_OK) return 3;
+        if (paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt) != GAC_OK) return 3;
         if (strcmp(c, "adv_null_sim") == 0) s = NULL;
         else if (strcmp(c, "adv_null_record") == 0) r = NULL;
         else if (strcmp(c, "adv_null_t_eval") == 0) te = NULL;
@@ -125,7 +141,7 @@ int main(int argc, char **argv)
         else if (strcmp(c, "adv_t_end_inf") == 0) t_end = INFINITY;
         else if (strcmp(c, "adv_t_end_nan") == 0) t_end = NAN;
         else if (strcmp(c, "adv_t_end_before_t") == 0) {
-            if (paper_case1_sim_advance(&sim, 0.1, NULL, 0, NULL, NULL, &rec) != PAPER_CASE1_SIM_END) return 3;
+            if (paper_case1_sim_advance(&sim, 0.1, NULL, 0, NULL, NULL, &rec) != GAC_SIM_END) return 3;
             t_end = 0.05;
         } else if (strcmp(c, "adv_no_samples_null") == 0) {
             n_eval = 0;
@@ -136,7 +152,7 @@ int main(int argc, char **argv)
         code = paper_case1_sim_advance(s, t_end, te, n_eval, ie, xe, r);
         if (code < 0) {          /* a refused call changes nothing: a valid one carries on as from the start */
             i_eval = 0;
-            if (paper_case1_sim_init(&other, 0.0, q, qd, p, &opt) != PAPER_CASE1_OK) return 3;
+            if (paper_case1_sim_init(&other, 0.0, q, qd, p, &opt) != GAC_OK) return 3;
             printf("same=%d\n", same_run(&sim, &other, 1.5) || strcmp(c, "adv_t_end_before_t") == 0);
         }
         printf("msg=%s\n", paper_case1_error_message(code));
@@ -147,27 +163,29 @@ int main(int argc, char **argv)
 """
 
 
-def header_constant(header: str, suffix: str) -> int:
-    match = re.search(rf"#define\s+PAPER_CASE1_{suffix}\s+(-?\d+)", header)
-    assert match, f"PAPER_CASE1_{suffix} is not defined"
-    return int(match.group(1))
+def code_of(built, suffix: str) -> int:
+    """The value of GAC_<suffix>, read from the compiled library (not from header text)."""
+    return int(getattr(built[1].lib, f"GAC_{suffix}"))
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    """paper-case1 generated with its standalone example; the API driver and the example compiled."""
+def built(tmp_path_factory, compiled):
+    """paper-case1 generated with its standalone example; the API driver and the example compiled with the
+    library; and the compiled Python module of the same model."""
     out = tmp_path_factory.mktemp("c_api")
     scene = load_scene("paper-case1")
     model = generate(scene)
     write_model(model, out)
     write_standalone(model, scene, out)
+    library = sorted(str(path) for path in out.glob("gac_*.c"))
     coordinates = re.search(r"\*\s+q  = \[([^\]]*)\]", model.header).group(1).split(", ")
     (out / "driver.c").write_text(DRIVER)
     subprocess.run(["gcc", *STRICT, *SANITIZE, f"-DX2_INDEX={coordinates.index('X2')}", "-I", str(out),
-                    str(out / "paper_case1.c"), str(out / "driver.c"), "-lm", "-o", str(out / "driver")], check=True)
-    subprocess.run(["gcc", *STRICT, *SANITIZE, "-I", str(out), str(out / "paper_case1.c"),
+                    str(out / "paper_case1.c"), *library, str(out / "driver.c"), "-lm", "-o", str(out / "driver")],
+                   check=True)
+    subprocess.run(["gcc", *STRICT, *SANITIZE, "-I", str(out), str(out / "paper_case1.c"), *library,
                     str(out / "paper_case1_example.c"), "-lm", "-o", str(out / "example")], check=True)
-    return out, model.header
+    return out, compiled(scene, specialise=True)
 
 
 def drive(built, *args) -> dict:
@@ -185,7 +203,7 @@ def drive(built, *args) -> dict:
     ("init_bad_method", "ERR_BAD_OPTION"),
 ])
 def test_sim_init_refuses_bad_arguments(built, case, expected):
-    assert int(drive(built, case)["code"]) == header_constant(built[1], expected)
+    assert int(drive(built, case)["code"]) == code_of(built, expected)
 
 
 @pytest.mark.parametrize("case", ["init_null_opt", "init_null_p"])
@@ -210,7 +228,7 @@ def test_sim_init_null_opt_and_p_mean_the_defaults(built, case):
 ])
 def test_sim_init_refuses_a_point_beyond_its_wall(built, depth, contact_tol, expected):
     result = drive(built, "floor", repr(depth), repr(contact_tol))
-    code = 0 if expected == "OK" else header_constant(built[1], expected)
+    code = 0 if expected == "OK" else code_of(built, expected)
     assert int(result["code"]) == code, result["msg"]
     if expected == "ERR_START_OUTSIDE":
         assert "beyond its wall" in result["msg"] and "contact_tol" in result["msg"]
@@ -218,16 +236,36 @@ def test_sim_init_refuses_a_point_beyond_its_wall(built, depth, contact_tol, exp
 
 
 def test_start_outside_is_a_new_code(built):
-    header = built[1]
-    codes = [int(v) for v in re.findall(r"#define\s+PAPER_CASE1_(?:ERR_\w+|OK)\s+(-?\d+)", header)]
-    assert len(codes) == len(set(codes))
-    assert header_constant(header, "ERR_START_OUTSIDE") < 0 and header_constant(header, "ERR_NULL_ARGUMENT") < 0
+    codes = [int(getattr(built[1].lib, name)) for name in interface.CODES]
+    assert len(codes) == len(set(codes)) == len(interface.CODES)
+    assert code_of(built, "ERR_START_OUTSIDE") < 0 and code_of(built, "ERR_NULL_ARGUMENT") < 0
 
 
 def test_sim_init_error_leaves_the_sim_unchanged(built):
     result = drive(built, "init_error_leaves_sim")
-    assert int(result["code"]) == header_constant(built[1], "ERR_START_OUTSIDE")
+    assert int(result["code"]) == code_of(built, "ERR_START_OUTSIDE")
     assert result["same"] == "1"
+
+
+def test_copies_are_bound_to_their_own_storage(built):
+    result = drive(built, "copy")
+    assert int(result["code"]) == 0 and result["same"] == "1"
+
+
+def test_header_sizes_are_the_library_formulas(built):
+    """NAME_<size> (from codegen.interface's formulas) equals what the library computes for the descriptor."""
+    model = built[1]
+    lib, ffi = model.lib, model.ffi
+    descriptor = ffi.addressof(lib.paper_case1_model)            # the const descriptor itself
+    assert lib.gac_model_check(descriptor) == lib.GAC_OK
+    assert descriptor.nq == lib.PAPER_CASE1_NQ == model.nq and descriptor.ncontact == lib.PAPER_CASE1_NCONTACT
+    for suffix, formula in (("IMPACT_NWORK", lib.gac_impact_nwork), ("SIM_NDOUBLE", lib.gac_sim_ndouble),
+                            ("SIM_NINT", lib.gac_sim_nint), ("RECORD_NDOUBLE", lib.gac_record_ndouble),
+                            ("RECORD_NINT", lib.gac_record_nint)):
+        assert formula(descriptor) == getattr(lib, f"PAPER_CASE1_{suffix}") == model.size(suffix), suffix
+    sizes = interface.size_values(n=4, nq=model.nq, nparam=len(model.p), npoint=5, ncontact=len(model.contacts),
+                                  njrow=len(model.contact_rows))
+    assert sizes == {s.suffix: model.size(s.suffix) for s in interface.SIZES}
 
 
 def test_sim_state_and_default_options_ignore_null(built):
@@ -252,7 +290,7 @@ def test_sim_state_and_default_options_ignore_null(built):
 ])
 def test_sim_advance_refuses_bad_arguments(built, case, expected):
     result = drive(built, case)
-    assert int(result["code"]) == header_constant(built[1], expected), result["msg"]
+    assert int(result["code"]) == code_of(built, expected), result["msg"]
     if expected.startswith("ERR_"):
         assert result["same"] == "1"                   # the refused call left the sim as it was
     if expected == "ERR_BAD_OPTION":

@@ -3,14 +3,12 @@ charts, the conditioning measure, and the gimbal-lock scene against an independe
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
-import reference
-from conftest import reference_of
 from codegen.scene import load_scene
 from runtime import simulate
 from runtime.charts import (Chart, ChartError, ChartModels, convert_state,
                             simulate_with_charts)
+from studies.reference import integrate_reference
 
 ACCURATE = {"method": "dop853", "rtol": 1e-10, "atol": 1e-12}
 LOCK_TIME = 0.25        # the gimbal-lock scene's z_1 is vertical (theta_0 = pi/2) here, by construction
@@ -179,37 +177,6 @@ def test_samples_in_chart_a_are_the_integrated_states(through_lock, models):
     far = r.measure_a > 1e-6
     E_a = np.array([sum(model_a.energy(q, qd)) for q, qd in zip(r.q[far], r.qd[far])])
     assert np.abs(E_a - r.energies()[far]).max() < 1e-10 * abs(r.energy_initial)
-
-
-def integrate_reference(scene, t_eval, rtol=1e-12, atol=1e-12):
-    """The tests' numpy model (tests/reference.py) with the base orientation as a rotation matrix:
-    at every right-hand side the chart is re-centred (T_-1 chosen so the base angles are 0, where the
-    chart is perfectly conditioned), omega_1 is integrated instead of the angle rates, and scipy's
-    DOP853 does the integration.  Returns the points O_1..O_{n+1} at t_eval."""
-    chain = reference_of(scene)
-    T0, T1 = (np.array(T) for T in scene.base_twists[1:])
-    q0, qd0 = np.array(scene.q0), np.array(scene.qd0)
-    axes0 = np.stack(chain.joint_axes(q0)[:3], axis=1)
-    y0 = np.r_[chain.frames(q0)[2].ravel(), axes0 @ qd0[:3], q0[3:], qd0[3:]]
-    m = scene.nq - 3
-
-    def centred(y):
-        chain.T[0] = y[:9].reshape(3, 3) @ T1.T @ T0.T           # R_1 = T_-1 T_0 T_1 at zero angles
-        return np.r_[0.0, 0.0, 0.0, y[12:12 + m]]
-
-    def rhs(t, y):
-        q, omega = centred(y), y[9:12]
-        u = chain.joint_axes(q)[:3]
-        thd = np.linalg.solve(np.stack(u, axis=1), omega)
-        qdd = chain.forward_dynamics(q, np.r_[thd, y[12 + m:]])
-        a, b, c = thd
-        omega_dot = np.stack(u, axis=1) @ qdd[:3] + np.cross(u[0] * a, u[1]) * b \
-            + np.cross(u[0] * a + u[1] * b, u[2]) * c
-        return np.r_[(reference.skew(omega) @ y[:9].reshape(3, 3)).ravel(), omega_dot, y[12 + m:], qdd[3:]]
-
-    sol = solve_ivp(rhs, (t_eval[0], t_eval[-1]), y0, method="DOP853", rtol=rtol, atol=atol, t_eval=t_eval)
-    assert sol.status == 0
-    return np.array([chain.points(centred(y)) for y in sol.y.T])
 
 
 def test_world_trajectory_agrees_with_an_independent_integration(through_lock, scene):

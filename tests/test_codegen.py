@@ -12,7 +12,9 @@ import pytest
 import sympy as sp
 
 import codegen
+from codegen.artifact import library_files
 from codegen.emit import c_expression
+from codegen.pipeline import write_model
 from codegen.ops import count_ops
 from codegen.scene import Scene, LineLink, load_scene
 from conftest import random_scene
@@ -22,9 +24,13 @@ STRICT = ["-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 
 
 def write(model, folder: Path) -> Path:
-    (folder / f"{model.name}.h").write_text(model.header)
-    (folder / f"{model.name}.c").write_text(model.source)
+    """NAME.h, NAME.c and the library's files in folder; the path of NAME.c."""
+    write_model(model, folder)
     return folder / f"{model.name}.c"
+
+
+def library_sources(folder: Path) -> list[str]:
+    return sorted(str(path) for path in folder.glob("gac_*.c"))
 
 
 SCENES = {
@@ -41,6 +47,8 @@ def test_generated_c_is_strict_c99_and_header_is_cxx(tmp_path, which, bake):
     model = codegen.generate(SCENES[which](), bake_params=bake)
     source = write(model, tmp_path)
     subprocess.run(["gcc", *STRICT, "-O1", "-c", str(source), "-o", str(tmp_path / "m.o")], check=True)
+    for library in library_sources(tmp_path):
+        subprocess.run(["gcc", *STRICT, "-O2", "-c", library, "-o", str(tmp_path / "lib.o")], check=True)
     cxx = tmp_path / "use.cpp"
     cxx.write_text(f'#include "{model.name}.h"\nint main() {{ double p[{model.name.upper()}_NPARAM]; '
                    f'{model.name}_default_parameters(p); return p[0] > 0 ? 0 : 1; }}\n')
@@ -49,17 +57,37 @@ def test_generated_c_is_strict_c99_and_header_is_cxx(tmp_path, which, bake):
 
 
 def test_no_globals_and_no_malloc_in_generated_code(tmp_path):
-    """The object file defines only code (and read-only constants), and calls only libm."""
+    """The model's and the library's object files define only code and read-only data (the descriptor, whose
+    pointers are relocated, sits in .data.rel.ro), and call only libm and the library."""
     model = codegen.generate(load_scene("paper-case1"))
     source = write(model, tmp_path)
-    subprocess.run(["gcc", "-std=c99", "-O2", "-c", str(source), "-o", str(tmp_path / "m.o")], check=True)
-    symbols = subprocess.run(["nm", str(tmp_path / "m.o")], capture_output=True, text=True, check=True).stdout
-    for line in symbols.splitlines():
-        kind, symbol = line.split()[-2:]
-        assert kind in "TtRrU", f"writable global in generated code: {line}"
-        if kind == "U":
-            # libm, plus the memset/memcpy/memmove gcc itself emits for array copies (freestanding C requires them)
-            assert symbol in {"sin", "cos", "sincos", "sqrt", "pow", "fabs", "memset", "memcpy", "memmove"}, f"unexpected call: {symbol}"
+    objects = []
+    for path in [str(source), *library_sources(tmp_path)]:
+        objects.append(tmp_path / (Path(path).stem + ".o"))
+        subprocess.run(["gcc", "-std=c99", "-O2", "-c", path, "-o", str(objects[-1])], check=True)
+    defined = set()
+    for obj in objects:
+        symbols = subprocess.run(["nm", str(obj)], capture_output=True, text=True, check=True).stdout
+        sections = subprocess.run(["objdump", "-t", str(obj)], capture_output=True, text=True, check=True).stdout
+        for line in symbols.splitlines():
+            kind, symbol = line.split()[-2:]
+            if kind in "Dd":                        # a const object with pointers: read-only after relocation
+                section = next(row.split()[-3] for row in sections.splitlines() if row.endswith(f" {symbol}"))
+                assert section.startswith(".data.rel.ro"), f"writable global in generated code: {line} ({section})"
+                assert symbol == f"{model.name}_model", line
+                continue
+            assert kind in "TtRrU", f"writable global in generated code: {line}"
+            if kind == "U":
+                # libm, the library, and the memset/memcpy/memmove gcc itself emits for array copies
+                assert symbol.startswith("gac_") or symbol in {
+                    "sin", "cos", "sincos", "sqrt", "pow", "fabs", "memset", "memcpy", "memmove"}, \
+                    f"unexpected call: {symbol}"
+            elif kind in "TR":
+                defined.add(symbol)
+    undefined_library = {line.split()[-1] for obj in objects for line in subprocess.run(
+        ["nm", "-u", str(obj)], capture_output=True, text=True, check=True).stdout.splitlines()
+        if line.split()[-1].startswith("gac_")}
+    assert undefined_library <= defined                      # the library defines everything it is asked for
 
 
 GENERATE_AND_HASH = (
@@ -87,6 +115,17 @@ def test_committed_generated_code_is_up_to_date(scene, name):
     assert (committed / f"{name}.h").read_text() == model.header, \
         f"generated/{name}.h is stale: run python -m codegen --scene {scene}"
     assert (committed / f"{name}.c").read_text() == model.source
+
+
+def test_committed_library_copies_are_up_to_date():
+    """generated/ holds the library (runtime/c) beside the models, byte for byte, and nothing else of it."""
+    committed = ROOT / "generated"
+    library = library_files()
+    assert [p.name for p in library_files(committed)] == [p.name for p in library], \
+        "generated/ has other library files than runtime/c: run python -m codegen --scene paper-case1"
+    for path in library:
+        assert (committed / path.name).read_text() == path.read_text(), \
+            f"generated/{path.name} is stale: run python -m codegen --scene paper-case1 --no-compile"
 
 
 LITERAL = re.compile(r"(?<![\w\]])\d+\.\d*(?:e[-+]?\d+)?|(?<![\w\]])\d+e[-+]?\d+")
@@ -189,3 +228,20 @@ def test_missing_compiler_is_reported_clearly(tmp_path):
     result = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
     assert result.returncode != 0
     assert "CompilerNotFound: no C compiler found: tried '/nonexistent/cc'" in result.stderr
+
+
+def test_interface_is_plain_data_and_matches_the_kernels():
+    """codegen.interface loads neither sympy, jinja2 nor the runtime, and declares the kernels the generator
+    emits (names, inputs and output, in order) and every per-model function the runtime's table calls."""
+    code = ("import sys, codegen.interface\n"
+            "print(sorted(m for m in sys.modules if m in ('sympy', 'jinja2', 'runtime')))")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
+                            env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    assert result.returncode == 0 and result.stdout.strip() == "[]", result.stdout + result.stderr
+    from codegen import interface
+    model = codegen.generate(SCENES["nowalls"]())
+    assert [(f.name, tuple(f.inputs), f.output) for f in model.functions] == \
+        [(f.name, tuple(a.name for a in f.args[:-1]), f.args[-1].name) for f in interface.KERNELS]
+    for function in interface.ALL_FUNCTIONS:               # declared in the header and defined in the source
+        assert function.declaration(model.name, "GAC_RESTRICT") + ";" in model.header, function.name
+        assert f"{model.name}_{function.name}(" in model.source, function.name

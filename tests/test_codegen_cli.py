@@ -7,6 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from codegen.artifact import library_files
+
 ROOT = Path(__file__).resolve().parent.parent
 FIX = "give a directory that exists or can be created"
 
@@ -79,11 +81,12 @@ def test_scene_file_defaults_to_build_and_links_to_generated(tmp_path):
     (tmp_path / "tiny.toml").write_text(SCENE_FILE)
     result = run_cli("--scene", "tiny.toml", "--no-compile", cwd=tmp_path, cache=tmp_path / "cache")
     assert result.returncode == 0, result.stderr
-    assert sorted(p.name for p in (tmp_path / "build").iterdir()) == ["tiny.c", "tiny.h"]
+    library = [p.name for p in library_files()]          # the C library is written beside the model
+    assert sorted(p.name for p in (tmp_path / "build").iterdir()) == sorted(["tiny.c", "tiny.h", *library])
     assert not (tmp_path / "generated").exists()
     result = run_cli("--links", "1", "--no-compile", cwd=tmp_path, cache=tmp_path / "cache")
     assert result.returncode == 0, result.stderr
-    assert sorted(p.name for p in (tmp_path / "generated").iterdir()) == ["chain1.c", "chain1.h"]
+    assert sorted(p.name for p in (tmp_path / "generated").iterdir()) == sorted(["chain1.c", "chain1.h", *library])
 
 
 def test_help_states_the_default_folders(tmp_path):
@@ -100,3 +103,9 @@ def test_unwritable_out_message_when_permissions_apply(tmp_path, monkeypatch):
     assert out_dir_problem(str(tmp_path)) == f"--out: the directory {tmp_path} is not writable; {FIX}"
     assert out_dir_problem(str(tmp_path / "new")) == \
         f"--out: cannot create {tmp_path / 'new'}: the directory {tmp_path} is not writable; {FIX}"
+
+
+def test_ops_is_a_study(tmp_path):
+    """The operation-count study is python -m studies ops; the old form says so in one line, before any work."""
+    result = run_cli("ops", "--links", "1-2", cwd=tmp_path, cache=tmp_path / "cache")
+    assert_refused(result, "'ops' is a study: run python -m studies ops --links 1-2", tmp_path / "cache")

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-import reference
+from studies import reference
 from codegen.scene import load_scene
 from conftest import random_scene, reference_of
 

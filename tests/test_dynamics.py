@@ -1,9 +1,9 @@
-"""The generated flight kernels against the independent numpy model (tests/reference.py):
+"""The generated flight kernels against the independent numpy model (studies/reference.py):
 Jacobian-assembled mass matrix and world-frame recursive Newton-Euler bias."""
 import numpy as np
 import pytest
 
-import reference
+from studies import reference
 from conftest import random_parameters, random_scene, reference_of
 
 CASES = [(n, twists, kinds) for n in range(1, 6) for twists, kinds in

@@ -1,11 +1,11 @@
-"""The fuzz study (runtime/fuzz.py): its distribution, its independent checks (each one shown to fail on a
+"""The fuzz study (studies/fuzz.py): its distribution, its independent checks (each one shown to fail on a
 doctored result), a fast sample in the default run and 1,000 runs in the slow one."""
 from dataclasses import dataclass, field
 
 import numpy as np
 import pytest
 
-from runtime import fuzz
+from studies import fuzz
 from runtime.simulate import Contact, Impact
 
 

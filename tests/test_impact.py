@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-import reference
+from studies import reference
 from codegen.scene import load_scene
 from conftest import random_scene
 from runtime import ImpactError

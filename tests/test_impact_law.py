@@ -10,7 +10,7 @@ from itertools import combinations
 import numpy as np
 import pytest
 
-import reference
+from studies import reference
 from conftest import random_scene, reference_of
 
 

@@ -1,5 +1,5 @@
 """The Lagrangian expansion (codegen.lagrange) against the Gibbs-Appell kernels and the independent numpy
-model (tests/reference.py), for the general and the scene-specialised layouts, slender and rigid links."""
+model (studies/reference.py), for the general and the scene-specialised layouts, slender and rigid links."""
 import subprocess
 
 import numpy as np
@@ -7,12 +7,13 @@ import pytest
 import sympy as sp
 
 import codegen
-import reference
+from studies import reference
 from codegen.kinematics import ChainSymbols
 from codegen.lagrange import Differentiator, energies
 from codegen.scene import LineLink, RigidLink, Scene
 from conftest import random_parameters, random_scene, reference_of
 from test_specialise import random_planar_scene
+from runtime.compile import LIBRARY_DIR
 
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 _MODELS = {}
@@ -132,7 +133,8 @@ def test_lagrangian_c_is_strict_c99(tmp_path):
     model = lagrangian(general_scene(2, True, ("rigid", "line"))).generated
     (tmp_path / f"{model.name}.h").write_text(model.header)
     (tmp_path / f"{model.name}.c").write_text(model.source)
-    subprocess.run(["gcc", *STRICT, "-O1", "-c", f"{model.name}.c", "-o", "m.o"], cwd=tmp_path, check=True)
+    subprocess.run(["gcc", *STRICT, "-O1", "-I", str(LIBRARY_DIR), "-c", f"{model.name}.c", "-o", "m.o"],
+                   cwd=tmp_path, check=True)
     assert "Lagrangian expansion" in model.header
 
 

@@ -403,7 +403,8 @@ def zeno_c(tmp_path_factory):
     (out / "zeno.toml").write_text(ZENO_TOML)
     subprocess.run([sys.executable, "-m", "codegen", "--scene", str(out / "zeno.toml"), "--out", str(out),
                     "--standalone", "--no-compile"], check=True, cwd=root, capture_output=True)
-    sources = [str(out / "zeno_c.c"), str(out / "zeno_c_example.c"), "-I", str(out), "-lm"]
+    sources = [str(out / "zeno_c.c"), *sorted(str(p) for p in out.glob("gac_*.c")), str(out / "zeno_c_example.c"),
+               "-I", str(out), "-lm"]
     subprocess.run(["gcc", "-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror", "-g", "-O1",
                     "-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer",
                     *sources, "-o", str(out / "asan")], check=True)

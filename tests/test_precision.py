@@ -1,4 +1,4 @@
-"""python -m runtime precision: the work-precision study (reference, error measures, table, plot)."""
+"""python -m studies precision: the work-precision study (reference, error measures, table, plot)."""
 import json
 import math
 import subprocess
@@ -8,14 +8,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from runtime.precision import Outcome, compare, energy_drift
+from studies.precision import Outcome, compare, energy_drift
 
 ROOT = Path(__file__).resolve().parent.parent
 CASE1_FREE_FALL = math.sqrt(2 * 0.3 / 9.81)       # first impact of case 1: O1, O5 fall 0.3 m from rest
 
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "runtime", "precision", *args], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "studies", "precision", *args], capture_output=True, text=True,
                           cwd=ROOT)
 
 
@@ -142,7 +142,7 @@ def test_energy_drift_leaves_out_what_the_impacts_remove():
 
 def in_process(capsys, *args):
     """The command in this process (faster than a subprocess; an uncaught exception fails the test)."""
-    from runtime.cli import main
+    from studies.cli import main
     code = main(["precision", *args])
     return code, capsys.readouterr()
 

@@ -1,4 +1,4 @@
-"""Self-consistency tests of the reference model in tests/reference.py.
+"""Self-consistency tests of the reference model in studies/reference.py.
 
 Each test checks one physical property through a code path different from the
 one that produced the quantity, so that a convention slip in reference.py
@@ -10,7 +10,7 @@ import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
 
-from reference import (
+from studies.reference import (
     ReferenceChain,
     Rx,
     Ry,

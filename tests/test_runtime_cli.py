@@ -36,3 +36,14 @@ def test_rk4_needs_dt_and_bad_scene_is_named(tmp_path):
     result = run("simulate", "--scene", "no-such-scene")
     assert result.returncode == 2 and "shipped scenes: " in result.stderr and "paper-case1" in result.stderr
     assert "Traceback" not in result.stderr
+
+
+def test_studies_are_not_runtime_commands():
+    """precision, stress and fuzz are studies (python -m studies ...): the old form says so in one line."""
+    for study in ("precision", "stress", "fuzz"):
+        result = run(study, "--quick")
+        assert result.returncode == 2 and result.stdout == ""
+        assert result.stderr == f"error: '{study}' is a study: run python -m studies {study} --quick\n"
+    result = run("--help")
+    assert result.returncode == 0 and "simulate" in result.stdout
+    assert not any(study in result.stdout for study in ("precision", "stress", "fuzz"))

@@ -1,4 +1,5 @@
-"""--standalone: the model, the hybrid loop in C, an example program and build files, with no Python."""
+"""--standalone: the model, the C library (the hybrid loop), an example program and build files, with no
+Python."""
 import os
 import re
 import shutil
@@ -8,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from codegen.artifact import library_files
 from codegen.scene import load_scene
 from runtime import simulate
 
@@ -27,9 +29,19 @@ def impact_times(stdout: str) -> list[float]:
     return [float(line.split()[1]) for line in stdout.splitlines() if re.match(r"^\s*\d+ \d", line)]
 
 
+def library(folder: Path) -> list[str]:
+    """The library's sources copied beside the model."""
+    return sorted(str(path) for path in folder.glob("gac_*.c"))
+
+
 def test_standalone_files_are_written(case1_dir):
     names = sorted(p.name for p in case1_dir.iterdir())
-    assert names == ["CMakeLists.txt", "Makefile", "paper_case1.c", "paper_case1.h", "paper_case1_example.c"]
+    copies = sorted(p.name for p in library_files())
+    assert names == sorted(["CMakeLists.txt", "Makefile", "paper_case1.c", "paper_case1.h", "paper_case1_example.c",
+                            *copies])
+    assert {"gac.h", "gac_sim.c"} <= set(copies)
+    for path in library_files():
+        assert (case1_dir / path.name).read_text() == path.read_text()
 
 
 def test_example_builds_strictly_and_matches_the_python_runtime(case1_dir, compiled):
@@ -60,11 +72,13 @@ def test_header_compiles_as_cxx_and_links_from_cxx(case1_dir, tmp_path):
         '  paper_case1_default_options(&opt); paper_case1_default_parameters(p); paper_case1_initial_state(q, qd);\n'
         '  paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);\n'
         '  int code = paper_case1_sim_advance(&sim, 0.3, 0, 0, 0, 0, &rec);\n'
-        '  std::printf("%d %.12f\\n", code, rec.t); return code == PAPER_CASE1_SIM_IMPACT ? 0 : 1; }\n')
-    subprocess.run(["gcc", *STRICT.split(), "-c", str(case1_dir / "paper_case1.c"), "-o", str(tmp_path / "m.o")],
-                   check=True)
+        '  std::printf("%d %.12f\\n", code, rec.base.t); return code == GAC_SIM_IMPACT ? 0 : 1; }\n')
+    objects = []
+    for source in [str(case1_dir / "paper_case1.c"), *library(case1_dir)]:
+        objects.append(str(tmp_path / (Path(source).stem + ".o")))
+        subprocess.run(["gcc", *STRICT.split(), "-c", source, "-o", objects[-1]], check=True)
     subprocess.run(["g++", "-std=c++11", "-Wall", "-Wextra", "-pedantic", "-Werror", "-I", str(case1_dir),
-                    str(tmp_path / "use.cpp"), str(tmp_path / "m.o"), "-lm", "-o", str(tmp_path / "use")], check=True)
+                    str(tmp_path / "use.cpp"), *objects, "-lm", "-o", str(tmp_path / "use")], check=True)
     out = subprocess.run([str(tmp_path / "use")], capture_output=True, text=True, check=True).stdout
     assert out.startswith("2 0.2473096834")
 
@@ -72,7 +86,7 @@ def test_header_compiles_as_cxx_and_links_from_cxx(case1_dir, tmp_path):
 def test_example_is_clean_under_sanitizers(case1_dir, tmp_path):
     exe = tmp_path / "example_asan"
     subprocess.run(["gcc", "-std=c99", "-g", "-O1", "-fsanitize=address,undefined", "-fno-sanitize-recover=all",
-                    "-fno-omit-frame-pointer", str(case1_dir / "paper_case1.c"),
+                    "-fno-omit-frame-pointer", str(case1_dir / "paper_case1.c"), *library(case1_dir),
                     str(case1_dir / "paper_case1_example.c"), "-I", str(case1_dir), "-lm", "-o", str(exe)], check=True)
     for method in ("dopri5", "dop853", "rk4"):
         result = subprocess.run([str(exe), "1.5", method, "1e-3" if method == "rk4" else "1e-8"], capture_output=True,

@@ -1,5 +1,5 @@
-"""The stress suite (runtime/stress.py, runtime/stress_cases.py): every fast case passes, the
-requirement checks can fail, and python -m runtime stress prints the table and sets the exit code."""
+"""The stress suite (studies/stress.py, studies/stress_cases.py): every fast case passes, the
+requirement checks can fail, and python -m studies stress prints the table and sets the exit code."""
 import copy
 import json
 import math
@@ -11,12 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from runtime import stress
-from runtime.cli import main as cli_main
-from runtime.stress import Case, Expect, evaluate, run_case
+from studies import stress, stress_cases
+from studies.cli import main as cli_main
+from studies.stress import Case, Expect, evaluate, run_case
 
 ROOT = Path(__file__).resolve().parent.parent
-CASES = {case.name: case for case in stress.load_cases()}
+CASES = {case.name: case for case in stress_cases.CASES}
 
 
 def marks(case):
@@ -27,14 +27,14 @@ def marks(case):
     return []
 
 
-@pytest.mark.parametrize("name", [pytest.param(name, marks=marks(case)) for name, case in CASES.items()])
-def test_case_passes(name):
-    outcome = run_case(CASES[name])
+@pytest.mark.parametrize("case", [pytest.param(case, id=case.name, marks=marks(case)) for case in stress_cases.CASES])
+def test_case_passes(case):
+    outcome = run_case(case)
     assert outcome.passed, outcome.reasons
     assert outcome.row["result"] == "PASS"
 
 
-def test_every_kind_of_case_is_registered():
+def test_every_kind_of_case_is_in_the_suite():
     names = set(CASES)
     for required in ("mass-ratio-light", "mass-ratio-heavy", "length-ratio-short", "length-ratio-long",
                      "tiny-axial-1e-6", "spin-axial-200", "spin-across-200", "chain-16", "chain-32", "corner",
@@ -43,8 +43,8 @@ def test_every_kind_of_case_is_registered():
                      "outside-box", "outside-box-q0", "bad-option"):
         assert required in names
     assert CASES["chain-32"].slow
-    with pytest.raises(ValueError, match="registered twice"):
-        stress.register(copy.copy(CASES["corner"]))
+    with pytest.raises(ValueError, match="appears twice"):
+        stress.check_cases([*stress_cases.CASES, copy.copy(CASES["corner"])])
 
 
 def _coarse_case():
@@ -109,7 +109,7 @@ def test_expected_outcomes_are_enforced():
 
 
 def test_cli_table_json_and_exit_codes(monkeypatch, capsys):
-    result = subprocess.run([sys.executable, "-m", "runtime", "stress", "--only", "corner", "graze-miss", "--json"],
+    result = subprocess.run([sys.executable, "-m", "studies", "stress", "--only", "corner", "graze-miss", "--json"],
                             capture_output=True, text=True, cwd=ROOT)
     assert result.returncode == 0, result.stderr
     rows = json.loads(result.stdout)
@@ -117,7 +117,7 @@ def test_cli_table_json_and_exit_codes(monkeypatch, capsys):
     assert rows[0]["impacts"] == 1 and rows[0]["max_penetration"] < 1e-12 and rows[0]["notes"]
     assert "[1/2] corner ..." in result.stderr
     # the table, and exit code 1 when a case fails
-    monkeypatch.setattr(stress, "CASES", [CASES["corner"], _coarse_case()])
+    monkeypatch.setattr(stress_cases, "CASES", (CASES["corner"], _coarse_case()))
     assert cli_main(["stress"]) == 1
     out = capsys.readouterr().out
     assert "| case | n | method | impacts | t_final/t_end | energy drift |" in out

@@ -1,6 +1,6 @@
 """The outside baseline: scipy's solve_ivp on the same compiled right-hand side, with events and impacts.
 
-    from runtime.baseline import scipy_hybrid
+    from studies.baseline import scipy_hybrid
     run = scipy_hybrid(model, t_end=1.5, rtol=1e-10, atol=1e-12, method="DOP853")
     run.impacts[0].t, run.impacts[0].contacts, run.x_final, run.n_rhs
 
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .model import CompiledModel
+from runtime.model import CompiledModel
 
 
 @dataclass

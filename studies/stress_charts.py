@@ -1,4 +1,4 @@
-"""Stress case "gimbal-lock" (registered on import; see runtime/stress.py for the registry).
+"""Stress case "gimbal-lock" (``CASES``, taken into studies.stress_cases.CASES; see studies/stress.py).
 
 The gimbal-lock scene drives theta_0 through pi/2 at t = 0.25 s.  The suite's run is a single-chart
 ``simulate`` (charts=False): it must stop before the lock with a clear message (status -1, never a silent
@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .charts import ChartModels, simulate_with_charts
-from .stress import Case, CaseRun, Check, Expect, register
+from runtime.charts import ChartModels, simulate_with_charts
+
+from .stress import Case, CaseRun, Check, Expect
 
 GIMBAL_T_END = 3.0
 GIMBAL_RUN = {"method": "dop853", "rtol": 1e-10, "atol": 1e-12}
@@ -47,12 +48,14 @@ def charts_complete(energy_tol: float = 1e-9):
     return check
 
 
-register(Case(
-    name="gimbal-lock",
-    description="theta_0 reaches pi/2 at t = 0.25 s: one chart stops before it with a clear message; "
-                "switching to a second base chart and back completes 3 s (runtime/charts.py)",
-    scene="gimbal-lock",
-    simulate={"t_end": GIMBAL_T_END, **GIMBAL_RUN, "max_steps": 20000, "charts": False},
-    expect=Expect.status(r"at t = 0\.24\d* s: gimbal lock"),
-    checks=(charts_complete(1e-9),),
-))
+CASES = (
+    Case(
+        name="gimbal-lock",
+        description="theta_0 reaches pi/2 at t = 0.25 s: one chart stops before it with a clear message; "
+                    "switching to a second base chart and back completes 3 s (runtime/charts.py)",
+        scene="gimbal-lock",
+        simulate={"t_end": GIMBAL_T_END, **GIMBAL_RUN, "max_steps": 20000, "charts": False},
+        expect=Expect.status(r"at t = 0\.24\d* s: gimbal lock"),
+        checks=(charts_complete(1e-9),),
+    ),
+)

@@ -1,7 +1,10 @@
-"""Independent numerical reference model of a floating open chain (tests only).
+"""Independent numerical reference model of a floating open chain: the yardstick of the tests and of the
+chart-switching report (studies.charts_report).
 
 Plain numpy, written to be read top to bottom.  Nothing here is generated; it
-is the yardstick the generated code is compared against.
+is the yardstick the generated code is compared against.  At the end: the model
+of a scene (``reference_of``) and an integration of it through the gimbal lock
+(``integrate_reference``).
 
 The system
 ----------
@@ -406,3 +409,72 @@ def random_state(n, rng):
     q = np.concatenate([th, X])
     qd = rng.normal(size=n + 5)
     return q, qd
+
+
+# ---------------------------------------------------------------------------
+# The model of a scene, and an integration of it through the gimbal lock
+# ---------------------------------------------------------------------------
+
+def reference_of(scene, p=None) -> ReferenceChain:
+    """The independent numpy model of a codegen Scene (parameters from the vector p if given)."""
+    from codegen.scene import LineLink
+    if p is not None:
+        scene = with_parameters(scene, p)
+    links = []
+    for link in scene.links:
+        if isinstance(link, LineLink):
+            links.append(line_link(link.length, link.mu, link.J))
+        else:
+            links.append(rigid_link(link.length, link.mass, link.com, link.inertia))
+    return ReferenceChain(links, [np.array(T) for T in scene.all_twists], scene.gravity)
+
+
+def with_parameters(scene, p):
+    """The scene with the link parameters and gravity of the parameter vector p."""
+    from codegen.scene import LineLink, RigidLink, Scene
+    p = list(p)
+    g, k = p[0], 1
+    links = []
+    for link in scene.links:
+        values = p[k:k + len(link.param_names)]
+        k += len(link.param_names)
+        if isinstance(link, LineLink):
+            links.append(LineLink(values[0], values[1], tuple(values[2:5])))
+        else:
+            l, m, cx, cy, cz, ixx, iyy, izz, ixy, ixz, iyz = values
+            links.append(RigidLink(l, m, (cx, cy, cz), ((ixx, ixy, ixz), (ixy, iyy, iyz), (ixz, iyz, izz))))
+    return Scene(name=scene.name, links=tuple(links), twists=scene.twists, gravity=g, walls=scene.walls,
+                 q0=scene.q0, qd0=scene.qd0, base_twists=scene.base_twists)
+
+
+def integrate_reference(scene, t_eval, rtol=1e-12, atol=1e-12):
+    """The numpy model of ``scene`` with the base orientation as a rotation matrix: at every right-hand
+    side the chart is re-centred (T_-1 chosen so the base angles are 0, where the chart is perfectly
+    conditioned), omega_1 is integrated instead of the angle rates, and scipy's DOP853 does the
+    integration.  Returns the points O_1..O_{n+1} at t_eval."""
+    from scipy.integrate import solve_ivp
+    chain = reference_of(scene)
+    T0, T1 = (np.array(T) for T in scene.base_twists[1:])
+    q0, qd0 = np.array(scene.q0), np.array(scene.qd0)
+    axes0 = np.stack(chain.joint_axes(q0)[:3], axis=1)
+    y0 = np.r_[chain.frames(q0)[2].ravel(), axes0 @ qd0[:3], q0[3:], qd0[3:]]
+    m = scene.nq - 3
+
+    def centred(y):
+        chain.T[0] = y[:9].reshape(3, 3) @ T1.T @ T0.T           # R_1 = T_-1 T_0 T_1 at zero angles
+        return np.r_[0.0, 0.0, 0.0, y[12:12 + m]]
+
+    def rhs(t, y):
+        q, omega = centred(y), y[9:12]
+        u = chain.joint_axes(q)[:3]
+        thd = np.linalg.solve(np.stack(u, axis=1), omega)
+        qdd = chain.forward_dynamics(q, np.r_[thd, y[12 + m:]])
+        a, b, c = thd
+        omega_dot = np.stack(u, axis=1) @ qdd[:3] + np.cross(u[0] * a, u[1]) * b \
+            + np.cross(u[0] * a + u[1] * b, u[2]) * c
+        return np.r_[(skew(omega) @ y[:9].reshape(3, 3)).ravel(), omega_dot, y[12 + m:], qdd[3:]]
+
+    sol = solve_ivp(rhs, (t_eval[0], t_eval[-1]), y0, method="DOP853", rtol=rtol, atol=atol, t_eval=t_eval)
+    if sol.status != 0:
+        raise RuntimeError(f"integrate_reference: solve_ivp failed: {sol.message}")
+    return np.array([chain.points(centred(y)) for y in sol.y.T])

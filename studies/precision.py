@@ -1,6 +1,6 @@
 """Work-precision study: error against CPU time for every integrator, on one scene with all its impacts.
 
-    python -m runtime precision --scene paper-case1 [--t-end T] [--out DIR] [--quick]
+    python -m studies precision --scene paper-case1 [--t-end T] [--out DIR] [--quick]
 
 Reference: DOP853 (the highest order we have) at rtol = 1e-13, atol = 1e-15.  It is confirmed by two
 other methods, DOPRI5 at rtol = 1e-13 and RK4 at the paper's dt = 1e-5 s: both must give the same impact
@@ -10,7 +10,7 @@ uncertainty; errors below it are not resolved.
 
 Runs: our RK4 over dt, our DOPRI5 and DOP853 over rtol (atol = rtol/100), and scipy's solve_ivp RK45,
 DOP853 and Radau (scipy's finite-difference Jacobian) on the same compiled right-hand side
-(runtime.baseline).  For each run:
+(studies.baseline).  For each run:
 
 * CPU time: ``time.process_time`` of the whole run (integration, events, impacts, Python glue), median
   of repeated runs (as many as fit in ``budget`` seconds, 3 to 21; a run longer than that is timed once);
@@ -26,10 +26,10 @@ DOP853 and Radau (scipy's finite-difference Jacobian) on the same compiled right
 """
 from __future__ import annotations
 
+import argparse
 import importlib.util
 import json
 import math
-import statistics
 import sys
 import time
 from dataclasses import asdict, dataclass, field
@@ -38,11 +38,13 @@ from typing import Callable
 
 import numpy as np
 
-from codegen.machine import describe
+from codegen.scene import shipped_scene_names
+from runtime.model import CompiledModel
+from runtime.simulate import simulate
 
 from .baseline import scipy_hybrid
-from .model import CompiledModel
-from .simulate import simulate
+from .machine import describe
+from .timing import time_call
 
 REFERENCE = {"method": "dop853", "rtol": 1e-13, "atol": 1e-15}
 CONFIRM = (("DOPRI5 rtol = 1e-13", {"method": "dopri5", "rtol": 1e-13, "atol": 1e-15}),
@@ -86,7 +88,7 @@ class Outcome:
 
 
 def outcome_of(result) -> Outcome:
-    """A runtime.simulate result or a runtime.baseline run -> Outcome."""
+    """A runtime.simulate result or a studies.baseline run -> Outcome."""
     impacts = []
     for impact in result.impacts:
         contacts = impact.contacts if isinstance(impact.contacts, frozenset) else \
@@ -173,18 +175,10 @@ class Reference:
 
 
 def cpu_time(run: Callable[[], object], budget: float) -> tuple[object, float, int]:
-    """(result of a first run, median CPU seconds, number of timed runs)."""
-    start = time.process_time()
-    result = run()
-    first = time.process_time() - start
-    if first >= budget:
-        return result, first, 1
-    samples = []
-    for _ in range(int(min(21, max(3, budget / max(first, 1e-6))))):
-        start = time.process_time()
-        run()
-        samples.append(time.process_time() - start)
-    return result, statistics.median(samples), len(samples)
+    """(result of a first run, median CPU seconds, number of timed runs): studies.timing.time_call on
+    ``time.process_time``, as many runs as fit in ``budget`` (3 to 21; one when the first run takes it)."""
+    timing = time_call(run, budget=budget, clock=time.process_time)
+    return timing.result, timing.median, timing.runs
 
 
 def runner(model: CompiledModel, t_end: float, family: str, value: float) -> Callable[[], Outcome]:
@@ -351,19 +345,42 @@ def to_json(scene_name: str, t_end: float, reference: Reference, rows: list[Row]
                       **{k: clean(v) for k, v in asdict(r.errors).items()}} for r in rows]}
 
 
-def main(args) -> int:
-    """The `python -m runtime precision` command (args from runtime.cli)."""
-    from .cli import scene_and_horizon
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="python -m studies precision",
+        description="Error against CPU time for RK4, DOPRI5, DOP853 and scipy's RK45, DOP853, Radau, against a "
+                    "confirmed DOP853 reference (studies/precision.py).",
+        epilog=f"Shipped scenes: {', '.join(shipped_scene_names())}.")
+    parser.add_argument("--scene", default="paper-case1", help="shipped scene name or .toml/.json file")
+    parser.add_argument("--t-end", type=float, default=None,
+                        help="end time in s (default: 1.5 for paper-case1, 1.75 for paper-case2, else 1.0)")
+    parser.add_argument("--out", default="precision", metavar="DIR",
+                        help="folder for precision-SCENE.md/.json/.png (default ./precision)")
+    parser.add_argument("--quick", action="store_true", help="a few runs only (for tests)")
+    parser.add_argument("--time-tol", type=float, default=TIME_TOL,
+                        help=f"s; the confirming runs' impact times must agree with the reference to this "
+                             f"(default {TIME_TOL:g})")
+    parser.add_argument("--state-tol", type=float, default=STATE_TOL,
+                        help=f"the confirming runs' final states (max |x - x_ref|) must agree with the reference "
+                             f"to this (default {STATE_TOL:g})")
+    return parser
+
+
+def main(argv=None) -> int:
+    """The `python -m studies precision` command."""
     from codegen.outputs import output_dir_problem
-    from .compile import BuildError, CacheError, CompilerNotFound
-    from .model import load_model
+    from runtime.compile import BuildError, CacheError, CompilerNotFound
+    from runtime.horizon import scene_and_horizon
+    from runtime.model import load_model
+
+    args = build_parser().parse_args(argv)
 
     def progress(message: str) -> None:
         print(message, file=sys.stderr, flush=True)
 
     missing = [m for m in ("scipy", "matplotlib") if importlib.util.find_spec(m) is None]
     if missing:
-        print(f"error: python -m runtime precision needs {' and '.join(missing)} (its scipy baseline and its plot), "
+        print(f"error: python -m studies precision needs {' and '.join(missing)} (its scipy baseline and its plot), "
               "which the 'study' extra installs: pip install -e \".[study]\"", file=sys.stderr)
         return 2
     loaded = scene_and_horizon(args)
@@ -401,3 +418,7 @@ def main(args) -> int:
     plot(scene.name, t_end, reference, rows, out / f"{stem}.png")
     print(f"wrote {out / stem}.md, .json, .png", file=sys.stderr)
     return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

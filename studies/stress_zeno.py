@@ -1,12 +1,12 @@
-"""Stress cases for impact accumulation (Zeno behaviour) and resting contact (registered on import; see
-runtime/stress.py).  A chain dropped onto the floor with e = 0 and e = 0.5 must finish within a bounded
-number of impacts, with T + V never rising over the samples, and end flat on the floor at rest: every
-point in persistent contact, gaps 0, speeds 0, energy 0 (V = 0 on the floor)."""
+"""Stress cases for impact accumulation (Zeno behaviour) and resting contact (``CASES``, taken into
+studies.stress_cases.CASES; see studies/stress.py).  A chain dropped onto the floor with e = 0 and e = 0.5
+must finish within a bounded number of impacts, with T + V never rising over the samples, and end flat on
+the floor at rest: every point in persistent contact, gaps 0, speeds 0, energy 0 (V = 0 on the floor)."""
 from __future__ import annotations
 
 import numpy as np
 
-from .stress import Case, CaseRun, Check, register
+from .stress import Case, CaseRun, Check
 
 ACCURATE = {"method": "dopri5", "rtol": 1e-10, "atol": 1e-12}
 MAX_IMPACTS = 200         # the cascade must end well before the max_impacts backstop
@@ -38,9 +38,9 @@ def ends_at_rest(speed_tol: float = 1e-6, gap_tol: float = 1e-9):
     return check
 
 
-for _name, _e in (("zeno-e0", 0.0), ("zeno-e05", 0.5)):
-    register(Case(
-        name=_name, scene="stress-zeno", params={"e_x2_min": _e},
-        description=f"3-link chain dropped onto the floor, e = {_e:g}: impacts accumulate, resting contact",
-        simulate={"t_end": 4.0, "max_impacts": MAX_IMPACTS, **ACCURATE},
-        checks=(energy_monotone(), ends_at_rest())))
+CASES = tuple(
+    Case(name=name, scene="stress-zeno", params={"e_x2_min": e},
+         description=f"3-link chain dropped onto the floor, e = {e:g}: impacts accumulate, resting contact",
+         simulate={"t_end": 4.0, "max_impacts": MAX_IMPACTS, **ACCURATE},
+         checks=(energy_monotone(), ends_at_rest()))
+    for name, e in (("zeno-e0", 0.0), ("zeno-e05", 0.5)))

@@ -1,6 +1,6 @@
 """Fuzz study: random admissible scenes through the hybrid loop, each run checked independently.
 
-    python -m runtime fuzz [--runs N] [--per-structure K] [--seed S] [--jobs J] [--budget SECONDS]
+    python -m studies fuzz [--runs N] [--per-structure K] [--seed S] [--jobs J] [--budget SECONDS]
                            [--json FILE] [--case ID]
 
 The distribution (``random_structure`` and ``random_run``): n = 1 ... 8 links; lengths 1e-3 ... 1e2 m and
@@ -30,6 +30,7 @@ a physical reason (an RK4 step past stability, the wall-time budget, max_impacts
 """
 from __future__ import annotations
 
+import argparse
 import json
 import math
 import multiprocessing
@@ -234,8 +235,8 @@ def check_run(model, run: Run, result, seconds: float, budget: float) -> list[st
 def run_structure(args) -> list[Outcome]:
     """Compile one structure and run its runs (one worker's job)."""
     seed, index, runs, budget, n_max = args
-    from .model import load_model
-    from .simulate import simulate
+    from runtime.model import load_model
+    from runtime.simulate import simulate
     rng = np.random.default_rng([seed, index])
     scene = random_structure(rng, index, n_max)
     outcomes = []
@@ -246,7 +247,7 @@ def run_structure(args) -> list[Outcome]:
                         message=str(exc)) for k in range(runs)]
     planar = not any(w.name.startswith("x3") for w in scene.walls)
     if not planar:                  # the second chart's model, compiled once (cached) as a user's would be
-        from .charts import ChartModels
+        from runtime.charts import ChartModels
         try:
             ChartModels(scene)
         except Exception:                              # noqa: BLE001 - a run that needs it will say so
@@ -309,9 +310,8 @@ def table(outcomes: list[Outcome]) -> str:
 # ---------------------------------------------------------------------------
 # the command
 # ---------------------------------------------------------------------------
-def add_parser(commands) -> None:
-    parser = commands.add_parser("fuzz", help="random admissible scenes through the hybrid loop, checked",
-                                 description=__doc__.split("\n\n")[0])
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="python -m studies fuzz", description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=1000, help="runs in all (default 1000)")
     parser.add_argument("--per-structure", type=int, default=10, help="runs per compiled structure (default 10)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the study (default 0)")
@@ -320,6 +320,7 @@ def add_parser(commands) -> None:
     parser.add_argument("--n-max", type=int, default=8, help="largest number of links (default 8)")
     parser.add_argument("--json", metavar="FILE", help="write every outcome as JSON")
     parser.add_argument("--case", metavar="SEED-STRUCTURE/RUN", help="rerun one case and print its scene and call")
+    return parser
 
 
 def _rerun(case: str, budget: float, n_max: int) -> int:
@@ -328,7 +329,7 @@ def _rerun(case: str, budget: float, n_max: int) -> int:
         print(f"error: --case: expected SEED-STRUCTURE/RUN (e.g. 0-12/3), got {case!r}", file=sys.stderr)
         return 2
     seed, index, k = map(int, match.groups())
-    from .model import load_model
+    from runtime.model import load_model
     rng = np.random.default_rng([seed, index])
     scene = random_structure(rng, index, n_max)
     model = load_model(scene, specialise=False)
@@ -342,7 +343,8 @@ def _rerun(case: str, budget: float, n_max: int) -> int:
     return 1 if outcome.failed else 0
 
 
-def main(args) -> int:
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
     if args.case:
         return _rerun(args.case, args.budget, args.n_max)
     for option, good, allowed in (("--runs", args.runs >= 1, ">= 1"), ("--per-structure", args.per_structure >= 1, ">= 1"),
@@ -371,3 +373,7 @@ def main(args) -> int:
         with open(args.json, "w") as handle:
             json.dump([asdict(o) for o in outcomes], handle, indent=1, default=str)
     return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

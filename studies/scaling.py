@@ -1,17 +1,18 @@
 """How the generator scales with n: stage timings and operation counts, as a Markdown table
 (general n + 5 coordinate models of the built-in N-link scene unless --specialise).
 
-    python -m codegen.scaling --links 1,2,4,8,16,32
+    python -m studies scaling --links 1,2,4,8,16,32
 """
 from __future__ import annotations
 
 import argparse
-import platform
 import sys
 import time
 
-from .pipeline import generate
-from .scene import default_scene
+from codegen.pipeline import generate
+from codegen.scene import default_scene
+
+from .machine import describe
 
 
 def measure(n: int, compile_code: bool = True, progress=print, specialise: bool = False) -> dict:
@@ -47,7 +48,7 @@ def markdown(rows) -> str:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m codegen.scaling", description=__doc__,
+    parser = argparse.ArgumentParser(prog="python -m studies scaling", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--links", default="1,2,4,8,16,32", help="comma-separated n values")
     parser.add_argument("--no-compile", action="store_true", help="skip the (fresh) cffi compile")
@@ -65,7 +66,7 @@ def main(argv=None) -> int:
         print(f"n = {n} ...", file=sys.stderr, flush=True)
         rows.append(measure(n, not args.no_compile, progress=lambda m: print(m, file=sys.stderr, flush=True),
                             specialise=args.specialise))
-    print(f"Machine: {platform.machine()}, {platform.processor() or 'cpu'}, Python {platform.python_version()}")
+    print(f"Machine: {describe()}")
     print(markdown(rows))
     return 0
 

@@ -1,43 +1,31 @@
-"""Figures for README "Near gimbal lock: chart switching":  python -m runtime.charts_report
+"""Figures for README "Near gimbal lock: chart switching":  python -m studies charts
 
 1. The gimbal-lock scene over its first 0.5 s (free flight through the lock at t = 0.25 s): one chart
    against chart switching, for DOPRI5 and DOP853 at several tolerances: how far each gets, its steps,
-   energy drift and largest error of the points O_1..O_3 against an independent integration (the tests'
-   numpy model with the base orientation as a rotation matrix, scipy DOP853 at rtol = 1e-12;
-   tests/test_charts.py).  Needs a source checkout (it imports the tests' reference).
+   energy drift and largest error of the points O_1..O_3 against an independent integration (the numpy
+   reference model with the base orientation as a rotation matrix, scipy DOP853 at rtol = 1e-12;
+   studies.reference.integrate_reference, which tests/test_charts.py checks the runtime against too).
 2. Long runs with impacts: the gimbal-lock scene for 10 s, case 2 for 20 s, with and without charts.
 """
 from __future__ import annotations
 
+import argparse
 import sys
-import time
-from pathlib import Path
 
 import numpy as np
 
 from codegen.scene import load_scene
+from runtime.charts import ChartModels, simulate_with_charts
+from runtime.simulate import simulate
 
-from .charts import ChartModels, simulate_with_charts
-from .simulate import simulate
-
-TESTS = Path(__file__).resolve().parent.parent / "tests"
-
-
-def _reference():
-    if not (TESTS / "test_charts.py").exists():
-        raise SystemExit("runtime.charts_report needs the tests/ folder of a source checkout")
-    sys.path.insert(0, str(TESTS))
-    from test_charts import integrate_reference
-    return integrate_reference
+from .reference import integrate_reference
+from .timing import time_call
 
 
 def _timed(fn, repeat: int = 3):
-    best, result = float("inf"), None
-    for _ in range(repeat):
-        start = time.perf_counter()
-        result = fn()
-        best = min(best, time.perf_counter() - start)
-    return result, best
+    """(result, median wall time in s) of ``repeat`` runs after a first one (studies.timing)."""
+    timing = time_call(fn, repeat)
+    return timing.result, timing.median
 
 
 def lock_table(max_steps: int = 20000) -> str:
@@ -47,7 +35,7 @@ def lock_table(max_steps: int = 20000) -> str:
     t_end = 0.5
     te = np.linspace(0.0, t_end, 101)
     print("independent reference ...", file=sys.stderr, flush=True)
-    expected = _reference()(scene, te)
+    expected = integrate_reference(scene, te)
     lines = ["| method | rtol | run | reaches t (s) | steps | energy drift | max point error (m) | ms |",
              "|---|---|---|---|---|---|---|---|"]
     for method in ("dopri5", "dop853"):
@@ -85,7 +73,9 @@ def long_table() -> str:
     return "\n".join(lines)
 
 
-def main() -> int:
+def main(argv=None) -> int:
+    argparse.ArgumentParser(prog="python -m studies charts", description=__doc__,
+                            formatter_class=argparse.RawDescriptionHelpFormatter).parse_args(argv)
     print(lock_table())
     print()
     print(long_table())
@@ -93,4 +83,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    sys.exit(main())

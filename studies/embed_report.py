@@ -1,10 +1,11 @@
 """Figures of the embeddable C: object size, stack use per function, time per simulated second.
 
-    python -m codegen.embed_report --links 4,16 [--t-end 1.5] [--runs 50]
+    python -m studies embed --links 4,16 [--t-end 1.5] [--runs 50]
 
 For each n it writes the built-in N-link scene with --standalone into a temporary folder, compiles the
-model with gcc -O2 -fstack-usage, reads the sizes (`size`) and the .su files, and runs the example
-(DOPRI5 and DOP853 at rtol = 1e-10) to time one simulated second, with no Python in the loop.
+model and the runtime's C library with -O2 -fstack-usage (studies.toolchain), reads the sizes (`size`,
+summed over the objects) and the .su files, and runs the example (DOPRI5 and DOP853 at rtol = 1e-10) to
+time one simulated second, with no Python in the loop.
 """
 from __future__ import annotations
 
@@ -15,24 +16,31 @@ import sys
 import tempfile
 from pathlib import Path
 
-from .pipeline import generate, write_model, write_standalone
-from .scene import default_scene
+from codegen.pipeline import generate, write_model, write_standalone
+from codegen.scene import default_scene
+
+from .toolchain import compile_c
 
 
 def measure(n: int, t_end: float, runs: int, folder: Path) -> dict:
+    from runtime.compile import LIBRARY_DIR, library_sources
     scene = default_scene(n)
     model = generate(scene)
     write_model(model, folder)
     write_standalone(model, scene, folder)
     name = model.name
-    subprocess.run(["gcc", "-std=c99", "-O2", "-fstack-usage", "-c", f"{name}.c", "-o", f"{name}.o"],
-                   cwd=folder, check=True)
-    text, data, bss = subprocess.run(["size", f"{name}.o"], cwd=folder, capture_output=True, text=True,
-                                     check=True).stdout.splitlines()[1].split()[:3]
-    stack = {}
-    for line in (folder / f"{name}.su").read_text().splitlines():
-        function, size, _ = line.split("\t")
-        stack[function.split(":")[-1]] = int(size)
+    objects = folder / "objects"
+    compile_c([folder / f"{name}.c", *library_sources()], objects, flags=("-O2", "-fstack-usage"),
+              include_dirs=[folder, LIBRARY_DIR], link=False)
+    lines = subprocess.run(["size", *sorted(str(o) for o in objects.glob("*.o"))], capture_output=True, text=True,
+                           check=True).stdout.splitlines()[1:]
+    text, data, bss = (sum(int(line.split()[k]) for line in lines) for k in range(3))
+    stack = {}                                   # function without the model's prefix -> bytes
+    for su in sorted(objects.glob("*.su")):
+        for line in su.read_text().splitlines():
+            function, size, _ = line.split("\t")
+            function = function.split(":")[-1]
+            stack[function[len(name) + 1:] if function.startswith(name + "_") else function] = int(size)
     subprocess.run(["make", "-s"], cwd=folder, check=True)
     timing = {}
     for method in ("dopri5", "dop853"):
@@ -45,7 +53,7 @@ def measure(n: int, t_end: float, runs: int, folder: Path) -> dict:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m codegen.embed_report", description=__doc__,
+    parser = argparse.ArgumentParser(prog="python -m studies embed", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--links", default="4,16")
     parser.add_argument("--t-end", type=float, default=1.5)
@@ -63,11 +71,10 @@ def main(argv=None) -> int:
         print(f"| {r['n']} | {r['text']:,} / {r['data']} / {r['bss']} | {r['timing']['dopri5']:.3f} / "
               f"{r['timing']['dop853']:.3f} | {r['timing']['dopri5_impacts']} |")
     print()
-    print("| stack bytes (gcc -fstack-usage, -O2) | " + " | ".join(f"n = {r['n']}" for r in rows) + " |")
+    print("| stack bytes (-fstack-usage, -O2) | " + " | ".join(f"n = {r['n']}" for r in rows) + " |")
     print("|---|" + "---|" * len(rows))
-    generic = sorted({f[len(r['name']) + 1:] for r in rows for f in r["stack"]})
-    for function in generic:
-        print(f"| {function} | " + " | ".join(str(r["stack"].get(f"{r['name']}_{function}", "")) for r in rows) + " |")
+    for function in sorted({f for r in rows for f in r["stack"]}):
+        print(f"| {function} | " + " | ".join(str(r["stack"].get(function, "")) for r in rows) + " |")
     return 0
 
 

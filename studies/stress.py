@@ -1,7 +1,7 @@
 """The stress suite: stiff and extreme scenes, each checked against the four requirements of the
 hybrid runtime, plus the physical laws that give each scene an independent answer.
 
-    python -m runtime stress [--only NAME ...] [--quick] [--list] [--json [FILE]]
+    python -m studies stress [--only NAME ...] [--quick] [--list] [--json [FILE]]
 
 Every case runs ``simulate`` on one scene and must pass the four requirements:
 
@@ -15,12 +15,12 @@ Every case runs ``simulate`` on one scene and must pass the four requirements:
    SceneError, whose message matches a pattern).  Anything else -- an unexpected status -1, a
    traceback, a wrong message -- fails.
 
-Registering a case (this module's own cases live in ``runtime/stress_cases.py``; any module
-``runtime/stress_*.py`` is imported by ``load_cases()`` and may register more)::
+The cases are plain data: the tuple ``CASES`` of ``studies/stress_cases.py`` (which takes in the cases of
+``studies/stress_charts.py`` and ``studies/stress_zeno.py``).  A case::
 
-    from runtime.stress import Case, Expect, register, energy_conserved, converged
+    from studies.stress import Case, Expect, energy_conserved, converged
 
-    register(Case(
+    Case(
         name="my-case",                      # unique; --only my-case
         description="what it stresses",
         scene="stress-my-scene",             # shipped scene name / file, a Scene, or a callable -> Scene
@@ -30,16 +30,15 @@ Registering a case (this module's own cases live in ``runtime/stress_cases.py``;
         checks=(energy_conserved(1e-9), converged()),   # extra checks: fn(run) -> Check or [Check]
         slow=False,                          # True: left out of --quick and of the default test run
         known_issue="",                      # a FAIL the runtime has today (the expectation stays the
-    ))                                       # correct behaviour; tests mark it xfail, strict)
+    )                                        # correct behaviour; tests mark it xfail, strict)
 
 An extra check receives the ``CaseRun`` (scene, model, result, p, samples and energies already
 evaluated) and returns ``Check(ok, note)`` objects; the notes are printed under the table.
 """
 from __future__ import annotations
 
-import importlib
+import argparse
 import json
-import pkgutil
 import re
 import sys
 import time
@@ -58,7 +57,7 @@ COND_SAMPLES = 100    # I_f condition numbers are evaluated on at most this many
 
 
 # ---------------------------------------------------------------------------
-# the registry
+# the cases
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Expect:
@@ -107,32 +106,16 @@ class Case:
     known_issue: str = ""                          # a FAIL expected today and why; tests mark it xfail(strict)
 
 
-CASES: list[Case] = []
-LOAD_ERRORS: list[str] = []          # stress_* modules that failed to import (reported, exit code 1)
-
-
-def register(case: Case) -> Case:
-    """Add a case to the suite (names must be unique).  Returns the case."""
-    if any(c.name == case.name for c in CASES):
-        raise ValueError(f"stress case {case.name!r} is registered twice")
-    if case.expect.kind not in ("ok", "status", "raises"):
-        raise ValueError(f"{case.name}: expect.kind must be 'ok', 'status' or 'raises', got {case.expect.kind!r}")
-    CASES.append(case)
-    return case
-
-
-def load_cases() -> list[Case]:
-    """Import every ``runtime.stress_*`` module (each registers its cases) and return CASES."""
-    package = Path(__file__).parent
-    for info in sorted(pkgutil.iter_modules([str(package)]), key=lambda m: m.name):
-        if info.name.startswith("stress_"):
-            try:
-                importlib.import_module(f"runtime.{info.name}")
-            except Exception as exc:              # a broken module must not hide the other cases
-                message = f"runtime.{info.name}: cannot be imported ({type(exc).__name__}: {exc})"
-                if message not in LOAD_ERRORS:
-                    LOAD_ERRORS.append(message)
-    return CASES
+def check_cases(cases) -> tuple:
+    """The cases as a tuple, after checking that every name is unique and every expectation is known."""
+    seen = set()
+    for case in cases:
+        if case.name in seen:
+            raise ValueError(f"stress case {case.name!r} appears twice")
+        if case.expect.kind not in ("ok", "status", "raises"):
+            raise ValueError(f"{case.name}: expect.kind must be 'ok', 'status' or 'raises', got {case.expect.kind!r}")
+        seen.add(case.name)
+    return tuple(cases)
 
 
 # ---------------------------------------------------------------------------
@@ -158,7 +141,7 @@ class CaseRun:
 
     def simulate_again(self, **overrides):
         """The same run with other simulate() options (for convergence checks)."""
-        from .simulate import simulate
+        from runtime.simulate import simulate
         kwargs = {**self.case.simulate, "p": self.p, **overrides}
         return simulate(self.model, **kwargs)
 
@@ -192,8 +175,8 @@ def parameter_vector(scene: Scene, model, overrides: dict) -> np.ndarray:
 
 def run_case(case: Case, progress=None) -> CaseOutcome:
     """Build the scene and model, simulate, check the four requirements and the case's own checks."""
-    from .model import load_model
-    from .simulate import simulate
+    from runtime.model import load_model
+    from runtime.simulate import simulate
 
     run = CaseRun(case)
     started = start = time.perf_counter()
@@ -297,7 +280,7 @@ def _sample_requirements(run: CaseRun, row: dict, reasons: list[str]) -> None:
     total = energies.sum(axis=1) if len(q) else np.zeros(0)
     run.energy = total
     E0 = result.energy_initial
-    from .simulate import weight_scale
+    from runtime.simulate import weight_scale
     scale = max([abs(E0), weight_scale(run.scene, p)] + list(np.abs(energies).sum(axis=1)) + [1e-300])
     run.energy_scale = scale
     after = [i.energy_after for i in result.impacts] + [result.energy_final]
@@ -476,11 +459,11 @@ def tolerances_line() -> str:
 
 
 # ---------------------------------------------------------------------------
-# command line (python -m runtime stress)
+# command line (python -m studies stress)
 # ---------------------------------------------------------------------------
-def add_parser(commands) -> None:
-    parser = commands.add_parser(
-        "stress", help="run the stress suite and print a pass/fail table",
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="python -m studies stress",
         description="Run the stiff and extreme scenes of the stress suite; each must show no NaN, no "
                     "penetration, no energy gain and the expected status/message. Exit code 1 if any fails.")
     parser.add_argument("--only", nargs="+", metavar="NAME", help="run only these cases")
@@ -488,10 +471,13 @@ def add_parser(commands) -> None:
     parser.add_argument("--list", action="store_true", help="list the cases and stop")
     parser.add_argument("--json", nargs="?", const="-", metavar="FILE",
                         help="write the rows as JSON to FILE (or to stdout instead of the table)")
+    return parser
 
 
-def main(args) -> int:
-    cases = load_cases()
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    from . import stress_cases                  # read at call time: the suite is stress_cases.CASES
+    cases = list(stress_cases.CASES)
     names = [c.name for c in cases]
     if args.only:
         unknown = [name for name in args.only if name not in names]
@@ -509,7 +495,7 @@ def main(args) -> int:
             print(f"error: {problem}", file=sys.stderr)
             return 2
     if args.list:
-        for c in load_cases():
+        for c in stress_cases.CASES:
             print(f"{c.name:28s} {'slow  ' if c.slow else '      '}{c.description}")
         return 0
     outcomes = []
@@ -521,8 +507,6 @@ def main(args) -> int:
               + ("" if outcome.passed else " -- " + "; ".join(outcome.reasons)), file=sys.stderr, flush=True)
         outcomes.append(outcome)
     failed = sum(not o.passed for o in outcomes)
-    for error in LOAD_ERRORS:
-        print(f"error: {error}", file=sys.stderr)
     if args.json:
         text = json.dumps([{**o.row, "description": o.case.description, "expect": o.case.expect.describe()}
                            for o in outcomes], indent=1, default=float)
@@ -533,8 +517,12 @@ def main(args) -> int:
     if args.json != "-":
         print(tolerances_line())
         print(format_table(outcomes))
-        print(f"{len(outcomes) - failed} passed, {failed} failed"
-              + (f"; {len(LOAD_ERRORS)} case module(s) could not be imported" if LOAD_ERRORS else ""))
+        print(f"{len(outcomes) - failed} passed, {failed} failed")
         if args.json:
             print(f"wrote {args.json}")
-    return 1 if failed or LOAD_ERRORS else 0
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    from studies import stress            # the cases' checks use studies.stress's classes, not __main__'s
+    sys.exit(stress.main())

@@ -1,15 +1,15 @@
 """Operation counts and timings of the recursive Gibbs-Appell model against a Lagrangian expansion.
 
-    python -m codegen ops --links 1-8 [--out DIR] [--specialise] [--timeout S] [--lagrange-max N]
+    python -m studies ops --links 1-8 [--out DIR] [--specialise] [--timeout S] [--lagrange-max N]
 
 For every n and both formulations (codegen.model's Gibbs-Appell kernels, codegen.lagrange's expansion)
 it generates the model of the built-in n-link scene (the general n + 5 coordinate model unless
 --specialise) and reports: the derivation and CSE times (all kernels of the model), the operation counts
 after CSE of I_f (mass_matrix), R (bias) and the forward dynamics (rule in codegen.ops), sympy's raw
-``count_ops`` of I_f and R before CSE, the lines of C, the compile time (``gcc -std=c99 -O2 -c`` of the
-model's .c, which also holds the impact solver and the integrators) and the time per right-hand-side evaluation from a C timing loop
-(codegen.ctiming; no Python in the loop).  Output: a Markdown table on stdout and in DIR/ops.md, the rows
-as DIR/ops.json, and PNG plots in DIR.
+``count_ops`` of I_f and R before CSE, the lines of C, the compile time (``cc -std=c99 -O2 -c`` of the
+model's .c, studies.toolchain) and the time per right-hand-side evaluation from a C timing loop
+(studies.timing.time_rhs; no Python in the loop).  Output: a Markdown table on stdout and in DIR/ops.md,
+the rows as DIR/ops.json, and PNG plots in DIR.
 
 Every (n, formulation) runs in its own process with a time limit (--timeout); a formulation that runs
 out of time is reported as such and, being slower still for larger n, not tried again for larger n.
@@ -27,9 +27,11 @@ import tempfile
 import time
 from pathlib import Path
 
+from codegen.outputs import output_dir_problem
+from codegen.scene import MAX_LINKS
+
 from .machine import describe
-from .outputs import output_dir_problem
-from .scene import MAX_LINKS
+from .toolchain import compile_c, compiler_version
 
 FORMULATIONS = ("gibbs_appell", "lagrange")
 LABELS = {"gibbs_appell": "Gibbs–Appell", "lagrange": "Lagrange"}
@@ -48,9 +50,10 @@ BAR_TO_BEAT_SOURCE = ("Pinocchio's articulated-body algorithm traced by CasADi i
 def measure(n: int, formulation: str, specialise: bool = False, progress=None, calls: int | None = None) -> dict:
     """Generate, count, compile and time one model; returns a JSON-able row.  ``calls`` per timing batch
     (default: about 0.2 s per batch, from the operation count)."""
-    from .ctiming import time_rhs
-    from .pipeline import generate
-    from .scene import default_scene
+    from codegen.pipeline import generate
+    from codegen.scene import default_scene
+
+    from .timing import time_rhs
 
     say = progress or (lambda message: None)
     scene = default_scene(n)
@@ -58,12 +61,12 @@ def measure(n: int, formulation: str, specialise: bool = False, progress=None, c
     model = generate(scene, specialise=specialise, formulation=formulation, raw_ops=True, progress=say)
     generation = time.perf_counter() - start
     ops = {f.name: f.ops for f in model.functions}
-    say("compile (gcc -std=c99 -O2 -c)")
+    say("compile (cc -std=c99 -O2 -c)")
     compile_seconds = _compile_seconds(model)
     fd_ops = ops["forward_dynamics"].total
     calls = calls or max(200, min(100000, int(2e8 / max(fd_ops, 1))))     # about 0.2 s per timing batch
     say(f"time rhs in C ({calls} calls x 7 batches)")
-    ns = time_rhs(model, calls=calls)
+    ns = time_rhs(model, calls=calls).median
     return {
         "n": n, "formulation": formulation, "status": "ok", "nq": model.layout.nq,
         "derive_s": model.timings["derive"], "cse_s": model.timings["cse"], "render_s": model.timings["render"],
@@ -80,18 +83,18 @@ def _op_dict(count) -> dict:
 
 
 def _compile_seconds(model) -> float:
+    from runtime.compile import LIBRARY_DIR
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         (folder / f"{model.name}.h").write_text(model.header)
         (folder / f"{model.name}.c").write_text(model.source)
-        start = time.perf_counter()
-        subprocess.run(["gcc", "-std=c99", "-O2", "-c", f"{model.name}.c", "-o", "model.o"], cwd=folder, check=True)
-        return time.perf_counter() - start
+        return compile_c([folder / f"{model.name}.c"], folder, flags=("-O2",), include_dirs=[folder, LIBRARY_DIR],
+                         link=False)
 
 
 def run_child(n: int, formulation: str, specialise: bool, timeout: float, say, calls: int | None = None) -> dict:
     """measure() in a child process with a time limit; a row with status 'timeout'/'error' otherwise."""
-    command = [sys.executable, "-m", "codegen.opscount", "--one", str(n), "--formulation", formulation]
+    command = [sys.executable, "-m", "studies.opscount", "--one", str(n), "--formulation", formulation]
     if specialise:
         command.append("--specialise")
     if calls:
@@ -189,12 +192,8 @@ def markdown(rows, specialise: bool = False) -> str:
 
 
 def machine() -> str:
-    try:
-        gcc = subprocess.run(["gcc", "--version"], capture_output=True, text=True).stdout.splitlines()[0]
-    except (OSError, IndexError):
-        gcc = "gcc ?"
     import sympy
-    return describe(f"sympy {sympy.__version__}", gcc)
+    return describe(f"sympy {sympy.__version__}", compiler_version())
 
 
 def plots(rows, out: Path) -> list[Path]:
@@ -285,7 +284,7 @@ def parse_links(text: str) -> list[int]:
 
 
 def parse_args(argv):
-    parser = argparse.ArgumentParser(prog="python -m codegen ops", description=__doc__,
+    parser = argparse.ArgumentParser(prog="python -m studies ops", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--links", default="1-8", help="n values: a range 1-8, a list 1,2,4 or both (default 1-8)")
     parser.add_argument("--out", metavar="DIR", help="write ops.md, ops.json and the PNG plots here")

@@ -1,6 +1,6 @@
 """Benchmark: the compiled hybrid loop against scipy's solve_ivp on the same compiled right-hand side.
 
-    python -m runtime.benchmark [--scene paper-case1] [--t-end 1.5] [--repeat 21]
+    python -m studies benchmark [--scene paper-case1] [--t-end 1.5] [--repeat 21]
 
 For each method and tolerance both pipelines simulate the scene with every impact; the table gives the median
 wall time, the largest impact-time error against a tight reference run (DOPRI5 at rtol = 1e-13,
@@ -11,17 +11,16 @@ from __future__ import annotations
 
 import argparse
 import platform
-import statistics
 import sys
-import time
 
 import numpy as np
 
 from codegen.scene import load_scene
+from runtime.model import CompiledModel, load_model
+from runtime.simulate import simulate
 
 from . import baseline
-from .model import CompiledModel, load_model
-from .simulate import simulate
+from .timing import time_call
 
 
 SCIPY_METHOD = {"dopri5": "RK45", "dop853": "DOP853"}
@@ -29,19 +28,10 @@ SCIPY_METHOD = {"dopri5": "RK45", "dop853": "DOP853"}
 
 def scipy_hybrid(model: CompiledModel, t_end: float, rtol: float, atol: float, contact_tol: float = 1e-6,
                  method: str = "RK45"):
-    """The outside baseline (runtime.baseline): solve_ivp + events, impacts by the compiled Eq. 48.
+    """The outside baseline (studies.baseline): solve_ivp + events, impacts by the compiled Eq. 48.
     Returns the impact times and the number of rhs evaluations."""
     run = baseline.scipy_hybrid(model, t_end, rtol, atol, method=method, contact_tol=contact_tol)
     return run.times, run.n_rhs
-
-
-def median_time(function, repeat: int) -> float:
-    samples = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        function()
-        samples.append(time.perf_counter() - start)
-    return statistics.median(samples)
 
 
 def reference_times(model: CompiledModel, t_end: float) -> np.ndarray:
@@ -59,7 +49,7 @@ def error(times: np.ndarray, reference: np.ndarray) -> float:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m runtime.benchmark", description=__doc__,
+    parser = argparse.ArgumentParser(prog="python -m studies benchmark", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--scene", default="paper-case1")
     parser.add_argument("--t-end", type=float, default=1.5)
@@ -76,13 +66,12 @@ def main(argv=None) -> int:
     for method in ("dopri5", "dop853"):
         for rtol in (float(x) for x in args.rtols.split(",")):
             atol = rtol / 100
-            run = lambda: simulate(model, args.t_end, method=method, rtol=rtol, atol=atol, t_eval=[])
-            ours = run()
-            ours_ms = median_time(run, args.repeat)
-            theirs, their_rhs = scipy_hybrid(model, args.t_end, rtol, atol, method=SCIPY_METHOD[method])
-            repeat = max(3, args.repeat // 7)
-            theirs_ms = median_time(lambda: scipy_hybrid(model, args.t_end, rtol, atol,
-                                                         method=SCIPY_METHOD[method]), repeat)
+            timing = time_call(lambda: simulate(model, args.t_end, method=method, rtol=rtol, atol=atol, t_eval=[]),
+                               args.repeat)
+            ours, ours_ms = timing.result, timing.median
+            timing = time_call(lambda: scipy_hybrid(model, args.t_end, rtol, atol, method=SCIPY_METHOD[method]),
+                               max(3, args.repeat // 7))
+            (theirs, their_rhs), theirs_ms = timing.result, timing.median
             ours_err = error(np.array([i.t for i in ours.impacts]), reference)
             print(f"| {method} / {SCIPY_METHOD[method]} | {rtol:.0e} | {ours_ms * 1e3:.3f} | {ours_err:.1e} | "
                   f"{ours.n_rhs} | {theirs_ms * 1e3:.1f} | {error(theirs, reference):.1e} | {their_rhs} | "

@@ -1,4 +1,6 @@
-"""The stress suite's cases (registered on import; see runtime/stress.py for the registry).
+"""The stress suite's cases, as data: ``CASES``, a tuple of ``studies.stress.Case`` (the engine, the four
+requirements and the reusable checks are in studies/stress.py).  It ends with the chart-switching case
+(studies/stress_charts.py) and the Zeno cases (studies/stress_zeno.py).
 
 Scenes are shipped as codegen/scenes/stress-*.toml (each file says what it stresses and what the exact
 answer is); the long chains are the built-in scenes of ``python -m codegen --links N``.  Beyond the four
@@ -15,8 +17,10 @@ import numpy as np
 
 from codegen.scene import LineLink, Scene, Wall, contact_points, default_scene
 
-from .stress import (Case, CaseRun, Check, Expect, converged, energy_conserved, energy_never_rises, link_motion,
-                     momenta, register, same_motion_with)
+from .stress import (Case, CaseRun, Check, Expect, check_cases, converged, energy_conserved, energy_never_rises,
+                     link_motion, momenta, same_motion_with)
+from .stress_charts import CASES as CHART_CASES
+from .stress_zeno import CASES as ZENO_CASES
 
 G = 9.81
 ACCURATE = {"method": "dopri5", "rtol": 1e-10, "atol": 1e-12}
@@ -150,57 +154,6 @@ def param(run: CaseRun, name: str) -> float:
 # ---------------------------------------------------------------------------
 # extreme parameters
 # ---------------------------------------------------------------------------
-for _name, _scene, _what in (
-        ("mass-ratio-light", "stress-mass-ratio-light", "middle link 1e-6 of its neighbours' mass"),
-        ("length-ratio-short", "stress-length-ratio-short", "1e-6 m middle link between 1 m links"),
-        ("length-ratio-long", "stress-length-ratio-long", "1 m middle link between 1e-6 m links")):
-    register(Case(
-        name=_name, scene=_scene, description=f"3-link chain, {_what}; e = 1 in a box, 2 s",
-        simulate={"t_end": 2.0, **ACCURATE},
-        checks=(energy_conserved(1e-8), impulse_momentum(1e-8), converged(time_tol=1e-6))))
-
-# The light end links of this chain get trapped between the heavy middle link and the walls and rattle:
-# about 4300 impacts in 2 s, the end links spinning at up to 1200 rad/s.  At rtol = 1e-10 DOPRI5 gains
-# 1.4e-6 of the energy (measured; a FAIL of requirement 3), so the case runs at 1e-12.  The rattling is
-# chaotic: the sequence agrees with DOP853 up to 1.36 s (2145 impacts), then the two part.
-register(Case(
-    name="mass-ratio-heavy", scene="stress-mass-ratio-heavy",
-    description="3-link chain, middle link 1e6 times its neighbours' mass; e = 1 in a box, 2 s (~4300 impacts)",
-    simulate={"t_end": 2.0, "method": "dopri5", "rtol": 1e-12, "atol": 1e-14},
-    checks=(energy_conserved(1e-7), impulse_momentum(1e-8),
-            converged(rtol=1e-12, atol=1e-14, time_tol=1e-6, until=1.36))))
-
-# Jxx = 1e-9 Jyy: I_f's condition number is 1e14.  The axial acceleration is a round-off difference
-# amplified by that condition, so the adaptive step shrinks: with the articulated-body forward dynamics
-# DOPRI5 at rtol = 1e-10 takes 3.5e5 steps (0.7 s; 422 at 1e-6 Jyy), DOP853 1.1e7 steps (60 s), and
-# DOPRI5 at rtol = 1e-12 stops at max_steps (measured).  The independent check: the link does not spin
-# about its axis, so its axial inertia cannot change where its points go -- the run must match the same
-# scene with the paper's Jxx = Jyy.
-for _ratio in (1e-6, 1e-9):
-    register(Case(
-        name=f"tiny-axial-{_ratio:.0e}".replace("e-0", "e-"), scene="stress-tiny-axial",
-        params={"Jxx_1": 2.94e-5 * _ratio},
-        description=f"3D link with Jxx = {_ratio:.0e} Jyy tumbling in the unit cube, e = 1, 1 s",
-        simulate={"t_end": 1.0, **ACCURATE},
-        checks=(energy_conserved(1e-8), axial_spin_constant(1e-8), impulse_momentum(1e-8), gimbal_margin(),
-                same_motion_with({"Jxx_1": 2.94e-5}, "the same link with Jxx = Jyy", time_tol=1e-8))))
-
-register(Case(
-    name="tiny-axial-1e-9-tight", scene="stress-tiny-axial", params={"Jxx_1": 2.94e-14},
-    description="Jxx = 1e-9 Jyy at rtol = 1e-12 with max_steps = 20000: the step collapses, a clear stop",
-    simulate={"t_end": 1.0, "method": "dopri5", "rtol": 1e-12, "atol": 1e-14, "max_steps": 20000},
-    expect=Expect.status(r"maximum number of steps reached \(20000 steps since t = [0-9.e-]+ s, the last event\): "
-                         r"mean step [0-9.e-]+ s; the step is limited by .*theta_1.*raise max_steps")))
-
-# 200 rad of rotation in 1 s: at rtol = 1e-10 the momenta drift 4e-8 and 9e-8 (relative; consistent with
-# that tolerance), so the case runs at 1e-12 to make the conservation checks sharp.
-register(Case(
-    name="spin-axial-200", scene="stress-spin-axial",
-    description="3D link spinning at 200 rad/s about its own axis (+0.05 rad/s across), free space, 1 s",
-    simulate={"t_end": 1.0, "method": "dopri5", "rtol": 1e-12, "atol": 1e-14},
-    checks=(energy_conserved(1e-8), momenta_conserved(1e-8), axial_spin_constant(1e-8), gimbal_margin())))
-
-
 def _uniform_spin(run: CaseRun, t: float) -> np.ndarray:
     """Rotation at the constant omega(0) about the centre of mass, which falls freely."""
     scene = run.scene
@@ -214,31 +167,82 @@ def _uniform_spin(run: CaseRun, t: float) -> np.ndarray:
     return com + (contact_points(scene, q0) - link.com) @ rotation.T
 
 
-register(Case(
-    name="spin-across-200", scene="stress-spin-across",
-    description="3D link spinning at 200 rad/s about a transverse axis, falling freely, 1 s (closed form)",
-    simulate={"t_end": 1.0, **ACCURATE},
-    checks=(energy_conserved(1e-8), rigid_motion_matches(_uniform_spin, 1e-7), gimbal_margin())))
 
-register(Case(
-    name="spin-box-200", scene="stress-spin-box",
-    description="planar link spinning at 200 rad/s in a 1 m square (tips at 50 m/s), e = 1, 0.5 s",
-    simulate={"t_end": 0.5, **ACCURATE},
-    checks=(energy_conserved(1e-8), impulse_momentum(1e-8), converged(time_tol=1e-6, until=0.35))))
-# (The bouncing rod is chaotic: impact-time differences grow about 1e4-fold over its 20 impacts, so the
-# rtol = 1e-10 run is compared with DOP853 at 1e-12 over the first 0.35 s, 10 impacts.)
+EXTREME_PARAMETERS = (
+    *(Case(name=name, scene=scene, description=f"3-link chain, {what}; e = 1 in a box, 2 s",
+           simulate={"t_end": 2.0, **ACCURATE},
+           checks=(energy_conserved(1e-8), impulse_momentum(1e-8), converged(time_tol=1e-6)))
+      for name, scene, what in (
+          ("mass-ratio-light", "stress-mass-ratio-light", "middle link 1e-6 of its neighbours' mass"),
+          ("length-ratio-short", "stress-length-ratio-short", "1e-6 m middle link between 1 m links"),
+          ("length-ratio-long", "stress-length-ratio-long", "1 m middle link between 1e-6 m links"))),
+
+    # The light end links of this chain get trapped between the heavy middle link and the walls and rattle:
+    # about 4300 impacts in 2 s, the end links spinning at up to 1200 rad/s.  At rtol = 1e-10 DOPRI5 gains
+    # 1.4e-6 of the energy (measured; a FAIL of requirement 3), so the case runs at 1e-12.  The rattling is
+    # chaotic: the sequence agrees with DOP853 up to 1.36 s (2145 impacts), then the two part.
+    Case(
+        name="mass-ratio-heavy", scene="stress-mass-ratio-heavy",
+        description="3-link chain, middle link 1e6 times its neighbours' mass; e = 1 in a box, 2 s (~4300 impacts)",
+        simulate={"t_end": 2.0, "method": "dopri5", "rtol": 1e-12, "atol": 1e-14},
+        checks=(energy_conserved(1e-7), impulse_momentum(1e-8),
+                converged(rtol=1e-12, atol=1e-14, time_tol=1e-6, until=1.36))),
+
+    # Jxx = 1e-9 Jyy: I_f's condition number is 1e14.  The axial acceleration is a round-off difference
+    # amplified by that condition, so the adaptive step shrinks: with the articulated-body forward dynamics
+    # DOPRI5 at rtol = 1e-10 takes 3.5e5 steps (0.7 s; 422 at 1e-6 Jyy), DOP853 1.1e7 steps (60 s), and
+    # DOPRI5 at rtol = 1e-12 stops at max_steps (measured).  The independent check: the link does not spin
+    # about its axis, so its axial inertia cannot change where its points go -- the run must match the same
+    # scene with the paper's Jxx = Jyy.
+    *(Case(name=f"tiny-axial-{ratio:.0e}".replace("e-0", "e-"), scene="stress-tiny-axial",
+           params={"Jxx_1": 2.94e-5 * ratio},
+           description=f"3D link with Jxx = {ratio:.0e} Jyy tumbling in the unit cube, e = 1, 1 s",
+           simulate={"t_end": 1.0, **ACCURATE},
+           checks=(energy_conserved(1e-8), axial_spin_constant(1e-8), impulse_momentum(1e-8), gimbal_margin(),
+                   same_motion_with({"Jxx_1": 2.94e-5}, "the same link with Jxx = Jyy", time_tol=1e-8)))
+      for ratio in (1e-6, 1e-9)),
+
+    Case(
+        name="tiny-axial-1e-9-tight", scene="stress-tiny-axial", params={"Jxx_1": 2.94e-14},
+        description="Jxx = 1e-9 Jyy at rtol = 1e-12 with max_steps = 20000: the step collapses, a clear stop",
+        simulate={"t_end": 1.0, "method": "dopri5", "rtol": 1e-12, "atol": 1e-14, "max_steps": 20000},
+        expect=Expect.status(r"maximum number of steps reached \(20000 steps since t = [0-9.e-]+ s, the last "
+                             r"event\): mean step [0-9.e-]+ s; the step is limited by .*theta_1.*raise max_steps")),
+
+    # 200 rad of rotation in 1 s: at rtol = 1e-10 the momenta drift 4e-8 and 9e-8 (relative; consistent with
+    # that tolerance), so the case runs at 1e-12 to make the conservation checks sharp.
+    Case(
+        name="spin-axial-200", scene="stress-spin-axial",
+        description="3D link spinning at 200 rad/s about its own axis (+0.05 rad/s across), free space, 1 s",
+        simulate={"t_end": 1.0, "method": "dopri5", "rtol": 1e-12, "atol": 1e-14},
+        checks=(energy_conserved(1e-8), momenta_conserved(1e-8), axial_spin_constant(1e-8), gimbal_margin())),
+
+    Case(
+        name="spin-across-200", scene="stress-spin-across",
+        description="3D link spinning at 200 rad/s about a transverse axis, falling freely, 1 s (closed form)",
+        simulate={"t_end": 1.0, **ACCURATE},
+        checks=(energy_conserved(1e-8), rigid_motion_matches(_uniform_spin, 1e-7), gimbal_margin())),
+
+    # (The bouncing rod is chaotic: impact-time differences grow about 1e4-fold over its 20 impacts, so the
+    # rtol = 1e-10 run is compared with DOP853 at 1e-12 over the first 0.35 s, 10 impacts.)
+    Case(
+        name="spin-box-200", scene="stress-spin-box",
+        description="planar link spinning at 200 rad/s in a 1 m square (tips at 50 m/s), e = 1, 0.5 s",
+        simulate={"t_end": 0.5, **ACCURATE},
+        checks=(energy_conserved(1e-8), impulse_momentum(1e-8), converged(time_tol=1e-6, until=0.35))),
+)
 
 
 # ---------------------------------------------------------------------------
 # long chains
 # ---------------------------------------------------------------------------
-for _n in (16, 32):
-    register(Case(
-        name=f"chain-{_n}", scene=lambda n=_n: default_scene(n), slow=True,
-        description=f"built-in {_n}-link chain (python -m codegen --links {_n}), closed polygon dropped in its "
-                    "box, e = 1, 1 s",
-        simulate={"t_end": 1.0, **ACCURATE},
-        checks=(energy_conserved(1e-8), impulse_momentum(1e-8), converged(time_tol=1e-6))))
+LONG_CHAINS = tuple(
+    Case(name=f"chain-{n}", scene=lambda n=n: default_scene(n), slow=True,
+         description=f"built-in {n}-link chain (python -m codegen --links {n}), closed polygon dropped in its "
+                     "box, e = 1, 1 s",
+         simulate={"t_end": 1.0, **ACCURATE},
+         checks=(energy_conserved(1e-8), impulse_momentum(1e-8), converged(time_tol=1e-6)))
+    for n in (16, 32))
 
 
 # ---------------------------------------------------------------------------
@@ -259,13 +263,6 @@ def _corner_after(run: CaseRun):
             Check(ferr <= 1e-9, f"both walls push with 2 m |v| = {2 * m * 2.0:g} N s (error {ferr:.1e})")]
 
 
-register(Case(
-    name="corner", scene="stress-corner",
-    description="O_1 hits two walls at the same instant (t = 0.2 s), e = 1",
-    simulate={"t_end": 0.5, **ACCURATE},
-    checks=(impacts_are(lambda run: [(0.2, {(1, "x1_min"), (1, "x2_min")})]),
-            _corner_after, energy_conserved(1e-8), impulse_momentum(1e-9))))
-
 
 def _corner3d_after(run: CaseRun):
     impact = run.result.impacts[0]
@@ -276,13 +273,6 @@ def _corner3d_after(run: CaseRun):
     return Check(error <= 1e-9, f"O_1's velocity {before.tolist()} -> {after.round(12).tolist()} m/s: each "
                                 f"component reversed and scaled by its wall's e = {e.tolist()} (error {error:.1e})")
 
-
-register(Case(
-    name="corner-3d", scene="stress-corner-3d",
-    description="O_1 hits three walls at the same instant (t = 0.2 s), e = 1, 0.5, 0.8, g = 0",
-    simulate={"t_end": 0.3, **ACCURATE},
-    checks=(impacts_are(lambda run: [(0.2, {(1, "x1_min"), (1, "x2_min"), (1, "x3_min")})]), all_impulses_push(),
-            _corner3d_after, impulse_momentum(1e-9), gimbal_margin())))
 
 
 def _flat_drop_times(run: CaseRun):
@@ -308,20 +298,37 @@ def _flat_drop_energy(run: CaseRun):
     return Check(worst <= 1e-9, f"energy after impact k is e^2k m g h to {worst:.1e} (relative)")
 
 
-register(Case(
-    name="flat-drop", scene="stress-flat-drop",
-    description="straight 5-link chain dropped flat: six points hit at once, three bounces, e = 1",
-    simulate={"t_end": 2.0, **ACCURATE},
-    checks=(impacts_are(_flat_drop_times), chain_stays_straight(), _flat_drop_energy, energy_conserved(1e-8),
-            impulse_momentum(1e-9))))
 
-register(Case(
-    name="flat-drop-e0.5", scene="stress-flat-drop", params={"e_x2_min": 0.5},
-    description="the flat drop with e = 0.5: bounce times T (1 + 2e + 2e^2 + ...) up to 0.97 of the "
-                "accumulation time 3T",
-    simulate={"t_end": 0.93, **ACCURATE},
-    checks=(impacts_are(_flat_drop_times), chain_stays_straight(), _flat_drop_energy, energy_never_rises(),
-            impulse_momentum(1e-9))))
+SEVERAL_CONTACTS = (
+    Case(
+        name="corner", scene="stress-corner",
+        description="O_1 hits two walls at the same instant (t = 0.2 s), e = 1",
+        simulate={"t_end": 0.5, **ACCURATE},
+        checks=(impacts_are(lambda run: [(0.2, {(1, "x1_min"), (1, "x2_min")})]),
+                _corner_after, energy_conserved(1e-8), impulse_momentum(1e-9))),
+
+    Case(
+        name="corner-3d", scene="stress-corner-3d",
+        description="O_1 hits three walls at the same instant (t = 0.2 s), e = 1, 0.5, 0.8, g = 0",
+        simulate={"t_end": 0.3, **ACCURATE},
+        checks=(impacts_are(lambda run: [(0.2, {(1, "x1_min"), (1, "x2_min"), (1, "x3_min")})]), all_impulses_push(),
+                _corner3d_after, impulse_momentum(1e-9), gimbal_margin())),
+
+    Case(
+        name="flat-drop", scene="stress-flat-drop",
+        description="straight 5-link chain dropped flat: six points hit at once, three bounces, e = 1",
+        simulate={"t_end": 2.0, **ACCURATE},
+        checks=(impacts_are(_flat_drop_times), chain_stays_straight(), _flat_drop_energy, energy_conserved(1e-8),
+                impulse_momentum(1e-9))),
+
+    Case(
+        name="flat-drop-e0.5", scene="stress-flat-drop", params={"e_x2_min": 0.5},
+        description="the flat drop with e = 0.5: bounce times T (1 + 2e + 2e^2 + ...) up to 0.97 of the "
+                    "accumulation time 3T",
+        simulate={"t_end": 0.93, **ACCURATE},
+        checks=(impacts_are(_flat_drop_times), chain_stays_straight(), _flat_drop_energy, energy_never_rises(),
+                impulse_momentum(1e-9))),
+)
 
 
 # The grazing contact.  Behaviour (decided here, documented in the README): an impact is registered
@@ -374,43 +381,47 @@ def _graze_hit_speed(depth: float):
     return check
 
 
-register(Case(
-    name="graze", scene="stress-graze",
-    description="spinning link whose tips touch the floor tangentially (normal velocity 0) three times, g = 0",
-    simulate={"t_end": 1.0, **ACCURATE}, samples_dt=1e-4,
-    checks=(_graze_approach_speeds, rigid_motion_matches(_spin_about_fixed_centre, 1e-8), energy_conserved(1e-9))))
 
 _SHALLOW = 1e-4
-register(Case(
-    name="graze-shallow", scene="stress-graze", params={"wall_x2_min": _SHALLOW},
-    description=f"the graze with the floor raised {_SHALLOW:g} m: a real, shallow hit at "
-                f"{GRAZE_OMEGA * math.sqrt(2 * GRAZE_R * _SHALLOW):.2g} m/s",
-    simulate={"t_end": 0.2, **ACCURATE}, samples_dt=1e-4,
-    checks=(impacts_are(_graze_first_hit(_SHALLOW)), _graze_hit_speed(_SHALLOW), energy_conserved(1e-9),
-            impulse_momentum(1e-9))))
 
-# Shallow hits whose dip is shorter than the event search's sample spacing (about step / event_samples):
-# DOP853 takes 30 ms steps here around the 4 ms dip of the 1e-4 m hit, DOPRI5 6.5 ms steps around the
-# 0.13 ms dip of a 1e-7 m hit.  No sample is below the floor; the dip is found where the gap's rate (the
-# normal velocity) changes sign between two samples and the gap at that minimum is below 0 (before the
-# gap-minimum search both were missed).  The hit time is as exact as the positions: DOPRI5 at rtol 1e-10
-# puts the tip 7e-12 m off the exact circle here, so at 3.2 mm/s the time is 2e-9 s off (1.9e-11 s at
-# rtol 1e-12): the time tolerance is 1e-10 m over the approach speed.
-for _depth, _method in ((1e-4, "dop853"), (1e-7, "dopri5")):
-    _speed = GRAZE_OMEGA * math.sqrt(2 * GRAZE_R * _depth)
-    register(Case(
-        name=f"graze-shallow-{_depth:.0e}-{_method}".replace("e-0", "e-"), scene="stress-graze",
-        params={"wall_x2_min": _depth},
-        description=f"the graze with the floor raised {_depth:g} m ({_method}): a real hit at {_speed:.2g} m/s, "
-                    f"its dip shorter than the sample spacing",
-        simulate={"t_end": 0.2, "method": _method, "rtol": 1e-10, "atol": 1e-12}, samples_dt=1e-5,
-        checks=(impacts_are(_graze_first_hit(_depth), time_tol=1e-10 / _speed), energy_conserved(1e-9))))
+GRAZING = (
+    Case(
+        name="graze", scene="stress-graze",
+        description="spinning link whose tips touch the floor tangentially (normal velocity 0) three times, g = 0",
+        simulate={"t_end": 1.0, **ACCURATE}, samples_dt=1e-4,
+        checks=(_graze_approach_speeds, rigid_motion_matches(_spin_about_fixed_centre, 1e-8),
+                energy_conserved(1e-9))),
 
-register(Case(
-    name="graze-miss", scene="stress-graze", params={"wall_x2_min": -1e-6},
-    description="the graze with the floor lowered 1e-6 m: a near miss, no impact",
-    simulate={"t_end": 1.0, **ACCURATE}, samples_dt=1e-4,
-    checks=(impacts_are(lambda run: []), rigid_motion_matches(_spin_about_fixed_centre, 1e-8))))
+    Case(
+        name="graze-shallow", scene="stress-graze", params={"wall_x2_min": _SHALLOW},
+        description=f"the graze with the floor raised {_SHALLOW:g} m: a real, shallow hit at "
+                    f"{GRAZE_OMEGA * math.sqrt(2 * GRAZE_R * _SHALLOW):.2g} m/s",
+        simulate={"t_end": 0.2, **ACCURATE}, samples_dt=1e-4,
+        checks=(impacts_are(_graze_first_hit(_SHALLOW)), _graze_hit_speed(_SHALLOW), energy_conserved(1e-9),
+                impulse_momentum(1e-9))),
+
+    # Shallow hits whose dip is shorter than the event search's sample spacing (about step / event_samples):
+    # DOP853 takes 30 ms steps here around the 4 ms dip of the 1e-4 m hit, DOPRI5 6.5 ms steps around the
+    # 0.13 ms dip of a 1e-7 m hit.  No sample is below the floor; the dip is found where the gap's rate (the
+    # normal velocity) changes sign between two samples and the gap at that minimum is below 0 (before the
+    # gap-minimum search both were missed).  The hit time is as exact as the positions: DOPRI5 at rtol 1e-10
+    # puts the tip 7e-12 m off the exact circle here, so at 3.2 mm/s the time is 2e-9 s off (1.9e-11 s at
+    # rtol 1e-12): the time tolerance is 1e-10 m over the approach speed.
+    *(Case(name=f"graze-shallow-{depth:.0e}-{method}".replace("e-0", "e-"), scene="stress-graze",
+           params={"wall_x2_min": depth},
+           description=f"the graze with the floor raised {depth:g} m ({method}): a real hit at {speed:.2g} m/s, "
+                       f"its dip shorter than the sample spacing",
+           simulate={"t_end": 0.2, "method": method, "rtol": 1e-10, "atol": 1e-12}, samples_dt=1e-5,
+           checks=(impacts_are(_graze_first_hit(depth), time_tol=1e-10 / speed), energy_conserved(1e-9)))
+      for depth, method in ((1e-4, "dop853"), (1e-7, "dopri5"))
+      for speed in (GRAZE_OMEGA * math.sqrt(2 * GRAZE_R * depth),)),
+
+    Case(
+        name="graze-miss", scene="stress-graze", params={"wall_x2_min": -1e-6},
+        description="the graze with the floor lowered 1e-6 m: a near miss, no impact",
+        simulate={"t_end": 1.0, **ACCURATE}, samples_dt=1e-4,
+        checks=(impacts_are(lambda run: []), rigid_motion_matches(_spin_about_fixed_centre, 1e-8))),
+)
 
 
 # ---------------------------------------------------------------------------
@@ -432,12 +443,6 @@ def stays_at_rest(tol: float = 1e-9):
     return check
 
 
-register(Case(
-    name="rest-on-floor", scene="stress-rest",
-    description="straight 3-link chain at rest on the floor (gaps 0) under gravity, e = 0.5",
-    simulate={"t_end": 1.0, **ACCURATE},
-    checks=(stays_at_rest(), energy_conserved(1e-12))))
-
 
 def _outside_scene() -> Scene:
     """A 2-link chain whose second link dips through the floor: O_3 at X2 = 0.5 - 0.7 = -0.2."""
@@ -446,19 +451,35 @@ def _outside_scene() -> Scene:
                  q0=(-math.pi / 2, 0.0, -math.pi / 2, -math.asin(0.7), 0.0, 0.5, 0.0))
 
 
-register(Case(
-    name="outside-box", scene=_outside_scene,
-    description="a scene whose initial state has O_3 below the floor",
-    expect=Expect.raises(r"initial\.q: contact point O_3 has X2 = -0\.2, outside the wall x2_min")))
 
-register(Case(
-    name="outside-box-q0", scene="stress-corner",
-    description="simulate() from a state (q0 argument) with O_1 beyond the wall x1_min",
-    simulate={"t_end": 0.1, "q0": [-math.pi / 2, 0.0, -math.pi / 4, -0.01, 0.3, 0.0]},
-    expect=Expect.raises(r"q0: contact point O_1 is outside the wall x1_min")))
+REST_AND_BAD_INPUT = (
+    Case(
+        name="rest-on-floor", scene="stress-rest",
+        description="straight 3-link chain at rest on the floor (gaps 0) under gravity, e = 0.5",
+        simulate={"t_end": 1.0, **ACCURATE},
+        checks=(stays_at_rest(), energy_conserved(1e-12))),
 
-register(Case(
-    name="bad-option", scene="stress-corner",
-    description="simulate() with rk4 and no step",
-    simulate={"t_end": 0.1, "method": "rk4"},
-    expect=Expect.raises(r"^dt: rk4 needs a step dt > 0 s")))
+    Case(
+        name="outside-box", scene=_outside_scene,
+        description="a scene whose initial state has O_3 below the floor",
+        expect=Expect.raises(r"initial\.q: contact point O_3 has X2 = -0\.2, outside the wall x2_min")),
+
+    Case(
+        name="outside-box-q0", scene="stress-corner",
+        description="simulate() from a state (q0 argument) with O_1 beyond the wall x1_min",
+        simulate={"t_end": 0.1, "q0": [-math.pi / 2, 0.0, -math.pi / 4, -0.01, 0.3, 0.0]},
+        expect=Expect.raises(r"q0: contact point O_1 is outside the wall x1_min")),
+
+    Case(
+        name="bad-option", scene="stress-corner",
+        description="simulate() with rk4 and no step",
+        simulate={"t_end": 0.1, "method": "rk4"},
+        expect=Expect.raises(r"^dt: rk4 needs a step dt > 0 s")),
+)
+
+
+# ---------------------------------------------------------------------------
+# the suite: these cases, then the chart-switching and Zeno cases
+# ---------------------------------------------------------------------------
+CASES = check_cases((*EXTREME_PARAMETERS, *LONG_CHAINS, *SEVERAL_CONTACTS, *GRAZING, *REST_AND_BAD_INPUT,
+                     *CHART_CASES, *ZENO_CASES))

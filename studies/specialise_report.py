@@ -1,6 +1,6 @@
 """General against specialised models on the paper's two scenes, as a Markdown table.
 
-    python -m runtime.specialise_report [--repeat 21]
+    python -m studies specialise [--repeat 21]
 
 Columns: operation counts of the forward dynamics and of all kernels, nanoseconds per right-hand side
 (a C timing loop), the end-to-end simulation time from Python (DOP853, rtol = 1e-10, every impact),
@@ -10,24 +10,22 @@ integration error does not hide the comparison).
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
-import time
 
 import numpy as np
 
 import codegen
-from codegen.ctiming import time_rhs
 from codegen.scene import load_scene
+from runtime.model import load_model
+from runtime.simulate import simulate
 
-from .model import load_model
-from .simulate import simulate
+from .timing import time_call, time_rhs
 
 T_END = {"paper-case1": 1.5, "paper-case2": 1.75}
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m runtime.specialise_report", description=__doc__,
+    parser = argparse.ArgumentParser(prog="python -m studies specialise", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeat", type=int, default=21)
     args = parser.parse_args(argv)
@@ -40,15 +38,11 @@ def main(argv=None) -> int:
         for label, specialise in (("general", False), ("specialised", True)):
             generated = codegen.generate(scene, specialise=specialise)
             ops = {f.name: f.ops.total for f in generated.functions}
-            ns = time_rhs(generated)
+            ns = time_rhs(generated).median
             model = load_model(scene, specialise=specialise)
-            run = lambda: simulate(model, t_end, method="dop853", rtol=1e-10, atol=1e-12, t_eval=[])
-            result = run()
-            samples = []
-            for _ in range(args.repeat):
-                start = time.perf_counter()
-                run()
-                samples.append(time.perf_counter() - start)
+            timing = time_call(lambda: simulate(model, t_end, method="dop853", rtol=1e-10, atol=1e-12, t_eval=[]),
+                               args.repeat)
+            result = timing.result
             tight = simulate(model, t_end, method="dop853", rtol=1e-13, atol=1e-15, t_eval=[])
             times[label] = np.array([i.t for i in tight.impacts])
             diff = ""
@@ -56,7 +50,7 @@ def main(argv=None) -> int:
                 a, b = times["general"], times["specialised"]
                 diff = f"{np.abs(a - b).max():.1e}" if len(a) == len(b) else "different count"
             print(f"| {name} | {label} | {generated.layout.nq} | {ops['forward_dynamics']:,} | {sum(ops.values()):,} | "
-                  f"{ns:.0f} | {statistics.median(samples) * 1e3:.3f} | {len(result.impacts)} | {diff} |")
+                  f"{ns:.0f} | {timing.median * 1e3:.3f} | {len(result.impacts)} | {diff} |")
     return 0
 
 

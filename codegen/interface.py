@@ -1,0 +1,292 @@
+"""The C interface of a generated model, described once as plain data.
+
+Every generated model NAME has the same functions: its kernels (straight-line code, generated per scene)
+and thin wrappers around the hand-written library in ``runtime/c`` (``gac.h``), which does the hybrid loop
+for any model through the const descriptor ``NAME_model``.  This module lists them, with their C types and
+the meaning and size of every argument, and the constants a model exports.  From it come the declarations
+of ``NAME.h`` (templates/model.h.j2), the cffi declarations (templates/cdef.h.j2) and the function table of
+``runtime.model.CompiledModel``.  Plain data: no sympy, no jinja2, no runtime import.
+
+In C types, ``{name}`` stands for the model's name (``paper_case1``) and ``{NAME}`` for it in capitals.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Arg:
+    """One argument: its name, its C type (without restrict) and what it holds (size, units)."""
+
+    name: str
+    ctype: str
+    doc: str
+    restrict: bool = False          # declared restrict in C (its memory is not reached through another)
+
+
+@dataclass(frozen=True)
+class Function:
+    """One function NAME_<name>."""
+
+    name: str
+    returns: str
+    args: tuple[Arg, ...]
+    summary: str                    # what it does, one line
+    doc: str = ""                   # more, for the header comment (lines joined by spaces)
+    kernel: bool = False            # a generated kernel (its body is the scene's straight-line code)
+
+    def c_type(self, arg: Arg, name: str, restrict: str = "") -> str:
+        ctype = arg.ctype.format(name=name, NAME=name.upper())
+        if arg.restrict and restrict:
+            return f"{ctype}{restrict} {arg.name}" if ctype.endswith("*") else f"{ctype} {restrict} {arg.name}"
+        return f"{ctype}{arg.name}" if ctype.endswith("*") else f"{ctype} {arg.name}"
+
+    def declaration(self, name: str, restrict: str = "") -> str:
+        """``returns name_fn(args)`` for model ``name``; ``restrict``: the macro that spells restrict
+        (the header's), or '' (cffi's declarations)."""
+        args = ", ".join(self.c_type(a, name, restrict) for a in self.args) or "void"
+        returns = self.returns.format(name=name, NAME=name.upper())
+        space = "" if returns.endswith("*") else " "
+        return f"{returns}{space}{name}_{self.name}({args})"
+
+
+def _q(doc="generalised coordinates Theta (NQ; rad for angles, m for X1..X3)"):
+    return Arg("q", "const double *", doc, restrict=True)
+
+
+def _qd(doc="generalised velocities Theta_dot (NQ; rad/s, m/s)"):
+    return Arg("qd", "const double *", doc, restrict=True)
+
+
+def _p(doc="parameters (NPARAM, layout in the header)"):
+    return Arg("p", "const double *", doc, restrict=True)
+
+
+def _out(name, doc):
+    return Arg(name, "double *", doc, restrict=True)
+
+
+# ---------------------------------------------------------------------------------------------------
+# kernels: generated per scene (codegen.model builds them in this order; codegen.emit checks it)
+# ---------------------------------------------------------------------------------------------------
+KERNELS = (
+    Function("mass_matrix", "void", (_q(), _p(), _out("M", "I_f, NQ x NQ row-major, symmetric")),
+             "Flight inertia matrix I_f (Eq. 12).", kernel=True),
+    Function("bias", "void", (_q(), _qd(), _p(), _out("R", "R (NQ): I_f qdd = R in flight")),
+             "Right-hand side R of I_f qdd = R (Eq. 12, 38-41).", kernel=True),
+    Function("forward_dynamics", "void", (_q(), _qd(), _p(), _out("qdd", "qdd (NQ; rad/s^2, m/s^2)")),
+             "Accelerations solving I_f qdd = R.", kernel=True),
+    Function("contact_points", "void", (_q(), _p(), _out("r", "O_1..O_NPOINT, NPOINT x 3 (m)")),
+             "Contact points O_1..O_(n+1) in the reference frame.", kernel=True),
+    Function("contact_velocities", "void",
+             (_q(), _qd(), _p(), _out("v", "their velocities, NPOINT x 3 (m/s)")),
+             "Velocities of the contact points (Eq. 42).", kernel=True),
+    Function("contact_jacobian", "void", (_q(), _p(), _out("J", "NJROW x NQ, row r = d(O_i . X_a)/dq")),
+             "Rows of the contact Jacobian (Eq. 42) that the walls need.", kernel=True),
+    Function("contact_gaps", "void", (_q(), _p(), _out("gap", "NCONTACT gaps (m), >= 0 inside the box")),
+             "Gap of each contact (point, wall).", kernel=True),
+    Function("energy", "void", (_q(), _qd(), _p(), _out("E", "E[0] kinetic, E[1] potential energy (J)")),
+             "Kinetic and potential energy.", kernel=True),
+    Function("contact_bias", "void",
+             (_q(), _qd(), _p(), _out("a", "Jdot qd (NJROW; m/s^2): the rows' accelerations at qdd = 0")),
+             "Contact row accelerations at qdd = 0.", kernel=True),
+)
+
+_WORK = Arg("work", "double *", "scratch, {NAME}_IMPACT_NWORK doubles", restrict=True)
+_ACTIVE = (Arg("nactive", "int", "number of contacts"),
+           Arg("active", "const int *", "their indices 0..NCONTACT-1", restrict=True))
+
+# ---------------------------------------------------------------------------------------------------
+# the rest of the per-model API: NAME_rhs and the wrappers of the library (runtime/c/gac.h)
+# ---------------------------------------------------------------------------------------------------
+FUNCTIONS = (
+    Function("rhs", "void",
+             (Arg("t", "double", "time (s), unused"), Arg("x", "const double *", "state [q, qd] (NX)", True),
+              _p(), _out("xdot", "[qd, qdd] (NX)")),
+             "ODE right-hand side of the flight phase."),
+    Function("impact", "int",
+             (_q(), _qd(), _p(), *_ACTIVE, _out("qd_plus", "velocities after (NQ)"),
+              _out("impulse", "impulse of each active contact along its inward normal (nactive; N s)"), _WORK),
+             "Impact law, Eq. 44-48, all active contacts together (gac_impact).",
+             "Solved as (J I_f^-1 J^T) F = -(1 + e) J qd, qd_plus = qd + I_f^-1 J^T F (Eq. 48 with the "
+             "velocity unknowns eliminated); impulse[k] > 0 pushes contact active[k] away from its wall. "
+             "Returns GAC_OK or GAC_ERR_*."),
+    Function("impact_complementarity", "int",
+             (_q(), _qd(), _p(), *_ACTIVE, _out("qd_plus", "velocities after (NQ)"),
+              _out("impulse", "total impulse of each active contact (nactive; N s, >= 0)"), _WORK),
+             "Newton's law (Eq. 47) with complementarity, in rounds (gac_impact_complementarity).",
+             "No contact pulls or approaches its wall afterwards, the kinetic energy never grows; the law the "
+             "hybrid loop applies.  Returns GAC_OK or GAC_ERR_*."),
+    Function("constrained_dynamics", "int",
+             (_q(), _qd(), _p(), *_ACTIVE, _out("qdd", "accelerations (NQ)"),
+              _out("lambda", "force of each active contact along its inward normal (nactive; N)"), _WORK),
+             "Accelerations with the active contacts held at their walls (gac_constrained_dynamics).",
+             "I_f qdd = R + N^T lambda, N qdd = -Ndot qd; nactive = 0 gives forward_dynamics.  Returns GAC_OK or "
+             "GAC_ERR_*."),
+    Function("contact_info", "void",
+             (Arg("c", "int", "contact index 0..NCONTACT-1"),
+              Arg("point", "int *", "out: point index, 1-based (O_1 = 1)"),
+              Arg("axis", "int *", "out: wall axis, 0..2 for X1..X3"),
+              Arg("normal_sign", "int *", "out: inward normal sign, +1 or -1")),
+             "Point, wall axis and inward normal of contact c (0, -1, 0 outside the range)."),
+    Function("default_parameters", "void", (Arg("p", "double *", "out: the scene's parameters (NPARAM)"),),
+             "The scene's parameter vector."),
+    Function("initial_state", "void",
+             (Arg("q", "double *", "out: the scene's initial coordinates (NQ)"),
+              Arg("qd", "double *", "out: the scene's initial velocities (NQ)")),
+             "The scene's initial state."),
+    Function("error_message", "const char *", (Arg("code", "int", "a return code"),),
+             "Message for a return code (gac_error_message)."),
+    Function("default_options", "void", (Arg("opt", "{name}_options *", "out (NULL: nothing is done)"),),
+             "Default options: DOPRI5, rtol 1e-8, atol 1e-10, persistent contact on."),
+    Function("sim_init", "int",
+             (Arg("sim", "{name}_sim *", "the simulation (not NULL)"),
+              Arg("t0", "double", "start time (s)"),
+              Arg("q", "const double *", "start coordinates (NQ; not NULL)"),
+              Arg("qd", "const double *", "start velocities (NQ; not NULL)"),
+              Arg("p", "const double *", "parameters (NPARAM, copied; NULL: the scene's)"),
+              Arg("opt", "const {name}_options *", "options (copied; NULL: the defaults)")),
+             "Start a simulation (gac_sim_init); on an error *sim is left unchanged.",
+             "Returns GAC_OK, GAC_ERR_NULL_ARGUMENT, GAC_ERR_BAD_OPTION, GAC_ERR_START_OUTSIDE or another error."),
+    Function("sim_advance", "int",
+             (Arg("sim", "{name}_sim *", "an initialised simulation"),
+              Arg("t_end", "double", "integrate up to this time (s), finite, >= sim->base.t"),
+              Arg("t_eval", "const double *", "ascending sample times (n_eval; may be NULL if n_eval = 0)"),
+              Arg("n_eval", "int", "number of samples, >= 0"),
+              Arg("i_eval", "int *", "in/out: the next sample, 0 <= *i_eval <= n_eval"),
+              Arg("x_eval", "double *", "out: state [q, qd] at each sample passed (n_eval x NX)"),
+              Arg("record", "{name}_impact_record *", "out: the impact or contact change (not NULL)")),
+             "Integrate until t_end, the next impact or the next contact release (gac_sim_advance).",
+             "Returns GAC_SIM_END, GAC_SIM_IMPACT, GAC_SIM_CONTACT or an error (< 0)."),
+    Function("sim_state", "void",
+             (Arg("sim", "const {name}_sim *", "the simulation (NULL: nothing is written)"),
+              Arg("t", "double *", "out: current time (s), or NULL"),
+              Arg("q", "double *", "out: current coordinates (NQ), or NULL"),
+              Arg("qd", "double *", "out: current velocities (NQ), or NULL")),
+             "The current time and state (gac_sim_state)."),
+    Function("sim_copy", "void",
+             (Arg("dst", "{name}_sim *", "the copy"), Arg("src", "const {name}_sim *", "an initialised simulation")),
+             "Copy a simulation, its arrays bound to the copy's own storage."),
+    Function("impact_record_copy", "void",
+             (Arg("dst", "{name}_impact_record *", "the copy"),
+              Arg("src", "const {name}_impact_record *", "a record filled by sim_advance")),
+             "Copy an impact record, its arrays bound to the copy's own storage."),
+)
+
+ALL_FUNCTIONS = KERNELS + FUNCTIONS
+
+
+# ---------------------------------------------------------------------------------------------------
+# per-model size macros NAME_<suffix>: one formula each (the library's gac_* functions compute the same;
+# the wrappers refuse to run if they ever differ)
+# ---------------------------------------------------------------------------------------------------
+def impact_nwork(nq: int, njrow: int) -> int:
+    """gac_impact_nwork: M | J | Y | A | b = 3 nq^2 + njrow nq + nq."""
+    return 3 * nq * nq + njrow * nq + nq
+
+
+def sim_ndouble(nq: int, nparam: int, ncontact: int, njrow: int) -> int:
+    """gac_sim_ndouble: x, p, f, 16 stages, x1, xs, 8 dense-output rows, 7 per-contact arrays, the impact work
+    and an nq x nq scratch."""
+    return 28 * 2 * nq + nparam + 7 * max(ncontact, 1) + impact_nwork(nq, njrow) + nq * nq
+
+
+def sim_nint(nq: int, ncontact: int) -> int:
+    """gac_sim_nint: active (nq), is_active and n_shrink (per contact)."""
+    return nq + 2 * max(ncontact, 1)
+
+
+def record_ndouble(nq: int) -> int:
+    """gac_record_ndouble: impulse, q, qd_before, qd_after."""
+    return 4 * nq
+
+
+def record_nint(nq: int) -> int:
+    """gac_record_nint: contact, activated, released."""
+    return 3 * nq
+
+
+@dataclass(frozen=True)
+class Size:
+    suffix: str
+    doc: str
+
+
+SIZES = (
+    Size("N", "real links"),
+    Size("NQ", "generalised coordinates"),
+    Size("NX", "ODE state [q, qd]"),
+    Size("NPARAM", "parameters"),
+    Size("NPOINT", "contact points O_1..O_NPOINT"),
+    Size("NCONTACT", "contacts (point, wall)"),
+    Size("NJROW", "contact Jacobian rows"),
+    Size("IMPACT_NWORK", "doubles of the work array of impact, impact_complementarity, constrained_dynamics"),
+    Size("SIM_NDOUBLE", "doubles of a simulation's storage (gac_sim_ndouble)"),
+    Size("SIM_NINT", "ints of a simulation's storage (gac_sim_nint)"),
+    Size("RECORD_NDOUBLE", "doubles of an impact record's storage (gac_record_ndouble)"),
+    Size("RECORD_NINT", "ints of an impact record's storage (gac_record_nint)"),
+)
+
+
+def size_values(n: int, nq: int, nparam: int, npoint: int, ncontact: int, njrow: int) -> dict[str, int]:
+    """The value of every NAME_<suffix> of SIZES for a model of these sizes."""
+    values = {"N": n, "NQ": nq, "NX": 2 * nq, "NPARAM": nparam, "NPOINT": npoint, "NCONTACT": ncontact,
+              "NJROW": njrow, "IMPACT_NWORK": impact_nwork(nq, njrow),
+              "SIM_NDOUBLE": sim_ndouble(nq, nparam, ncontact, njrow), "SIM_NINT": sim_nint(nq, ncontact),
+              "RECORD_NDOUBLE": record_ndouble(nq), "RECORD_NINT": record_nint(nq)}
+    assert list(values) == [s.suffix for s in SIZES]
+    return values
+
+
+# ---------------------------------------------------------------------------------------------------
+# the library's constants, read by Python from the compiled module (lib.GAC_...); values live in gac.h
+# ---------------------------------------------------------------------------------------------------
+CODES = ("GAC_OK", "GAC_ERR_BAD_CONTACT", "GAC_ERR_SINGULAR_MASS", "GAC_ERR_SINGULAR_IMPACT", "GAC_ERR_LCP",
+         "GAC_ERR_GIMBAL_LOCK", "GAC_ERR_BAD_OPTION", "GAC_ERR_MAX_STEPS", "GAC_ERR_STEP_SIZE",
+         "GAC_ERR_NONFINITE", "GAC_ERR_TOO_MANY_CONTACTS", "GAC_ERR_SINGULAR_CONTACT", "GAC_ERR_IMPACT_ACCURACY",
+         "GAC_ERR_UNSTABLE", "GAC_ERR_LOST_CONTACT", "GAC_ERR_START_OUTSIDE", "GAC_ERR_NULL_ARGUMENT",
+         "GAC_ERR_BAD_MODEL")
+STOPS = ("GAC_SIM_END", "GAC_SIM_IMPACT", "GAC_SIM_CONTACT")
+METHODS = ("GAC_METHOD_RK4", "GAC_METHOD_DOPRI5", "GAC_METHOD_DOP853")
+LIMITS = ("GAC_LCP_CAP", "GAC_MAX_ROUNDS")
+CONSTANTS = CODES + STOPS + METHODS + LIMITS
+
+
+# ---------------------------------------------------------------------------------------------------
+# the library's types and functions as cffi sees them (fields cffi checks against gac.h when it builds)
+# ---------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Struct:
+    name: str
+    fields: tuple[str, ...]         # C declarations, e.g. "double t"
+    partial: bool = True            # more fields in C than listed (cffi: "...;")
+
+
+STRUCTS = (
+    Struct("gac_options", ("int method", "double dt", "double rtol", "double atol", "double h_max",
+                           "int event_samples", "double event_tol", "double contact_tol", "long max_steps",
+                           "double rest_height", "int zeno_impacts"), partial=False),
+    Struct("gac_impact_record", ("double t", "int ncontact", "int *contact", "double *impulse",
+                                 "double energy_before", "double energy_after", "double *q", "double *qd_before",
+                                 "double *qd_after", "int complementarity", "int rounds", "int plastic",
+                                 "double energy_rest", "double roundoff", "double approach_before",
+                                 "double approach_after", "int nactivated", "int *activated", "int nreleased",
+                                 "int *released"), partial=False),
+    Struct("gac_sim", ("gac_options opt", "double t", "double *x", "double *p", "long n_steps", "long n_rejected",
+                       "long n_rhs", "long n_impacts", "int nactive", "int *active", "long n_activations",
+                       "long n_releases", "int err_index")),
+    Struct("gac_model", ("const char *name", "int n", "int nq", "int nx", "int nparam", "int npoint",
+                         "int ncontact", "int njrow")),
+)
+
+_MODEL = Arg("m", "const gac_model *", "a model descriptor")
+LIBRARY_FUNCTIONS = (
+    Function("model_check", "int", (_MODEL,), "GAC_OK if the descriptor is consistent."),
+    Function("impact_nwork", "long", (_MODEL,), "Doubles of the impact work array."),
+    Function("sim_ndouble", "long", (_MODEL,), "Doubles of a simulation's storage."),
+    Function("sim_nint", "long", (_MODEL,), "Ints of a simulation's storage."),
+    Function("record_ndouble", "long", (_MODEL,), "Doubles of an impact record's storage."),
+    Function("record_nint", "long", (_MODEL,), "Ints of an impact record's storage."),
+    Function("chart_measure", "double", (_MODEL, _q()), "The base chart's measure |det E| at q."),
+    Function("error_message", "const char *", (Arg("code", "int", "a return code"),), "Message for a code."),
+)

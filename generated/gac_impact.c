@@ -1,0 +1,297 @@
+/*
+ * gac_impact.c -- the impact phase (Eq. 42-48 of the paper): the impact system of the active contacts,
+ * Newton's law (Eq. 47) solved as in Eq. 48, its complementarity form in rounds with an exact LCP solve,
+ * and the constrained dynamics of contacts held at their walls.
+ */
+#include "gac_internal.h"
+
+#include <math.h>
+
+/* Jacobian row and inward-normal sign (+1.0 / -1.0) of contact c. */
+void gac_contact_row(const gac_model *m, int c, int *row, double *sign)
+{
+    *row = m->contacts[c].row;
+    *sign = (double)m->contacts[c].normal_sign;
+}
+
+/* Restitution coefficient of contact c's wall: p[e_index], or the model's constant. */
+double gac_restitution(const gac_model *m, const double *p, int c)
+{
+    const gac_contact *contact = &m->contacts[c];
+    return contact->e_index >= 0 ? p[contact->e_index] : contact->e_value;
+}
+
+/* The base chart's measure |det E| at configuration q: the triple product of the three base joint axes,
+ * |a . (e_z x Rz(theta_0) b)| with a = T_0^T e_z, b = T_1 e_z (only their x, y enter; |cos theta_0| for the
+ * default twists).  The chart is singular (gimbal lock) where it is 0; I_f's smallest eigenvalue falls like
+ * its square. */
+double gac_chart_measure(const gac_model *m, const double *q)
+{
+    const double *a = m->chart.a, *b = m->chart.b;
+    const double theta0 = m->chart.theta0_index >= 0 ? q[m->chart.theta0_index] : m->chart.theta0_value;
+    const double c = cos(theta0), s = sin(theta0);
+    return fabs(-a[0] * (s * b[0] + c * b[1]) + a[1] * (c * b[0] - s * b[1]));
+}
+
+/* Assemble the impact problem of the active contacts (Eq. 44-48 with the velocities eliminated):
+ *   Y_a = I_f^-1 n_a (n_a = signed Jacobian row of contact a),  A = N I_f^-1 N^T,  v_a = n_a . qd.
+ * work layout: M (nq*nq, factor of I_f) | J (njrow*nq) | Y (nq*nq) | A (nq*nq) | b (nq).
+ * v[a] (m/s) and e[a] receive the normal velocity and the restitution of contact active[a]. */
+int gac_impact_system(const gac_model *m, const double *q, const double *qd, const double *p, int nactive,
+                      const int *active, double *work, double *v, double *e)
+{
+    const int nq = m->nq;
+    double *M = work;
+    double *J = M + nq * nq;
+    double *Y = J + m->njrow * nq;
+    double *A = Y + nq * nq;
+    int a, c, i;
+    if (m->ncontact == 0) return GAC_ERR_BAD_CONTACT;   /* the scene has no walls */
+    if (nactive < 1 || nactive > nq) return GAC_ERR_BAD_CONTACT;
+    for (a = 0; a < nactive; ++a) {
+        if (active[a] < 0 || active[a] >= m->ncontact) return GAC_ERR_BAD_CONTACT;
+        for (c = 0; c < a; ++c) {
+            if (active[c] == active[a]) return GAC_ERR_BAD_CONTACT;
+        }
+    }
+    if (gac_chart_measure(m, q) < GAC_CHART_FLOOR) return GAC_ERR_GIMBAL_LOCK;
+    m->mass_matrix(q, p, M);
+    if (gac_ldlt(nq, M, 1e-15) != 0) return GAC_ERR_SINGULAR_MASS;
+    m->contact_jacobian(q, p, J);
+    for (a = 0; a < nactive; ++a) {
+        int r;
+        double sign, rate = 0.0;
+        const double *row;
+        gac_contact_row(m, active[a], &r, &sign);
+        row = J + r * nq;
+        for (i = 0; i < nq; ++i) {
+            Y[a*nq + i] = sign * row[i];
+            rate += sign * row[i] * qd[i];
+        }
+        gac_ldlt_solve(nq, M, Y + a*nq);
+        v[a] = rate;
+        e[a] = gac_restitution(m, p, active[a]);
+    }
+    for (a = 0; a < nactive; ++a) {
+        int r;
+        double sign;
+        const double *row;
+        gac_contact_row(m, active[a], &r, &sign);
+        row = J + r * nq;
+        for (c = 0; c < nactive; ++c) {
+            double s = 0.0;
+            for (i = 0; i < nq; ++i) s += row[i] * Y[c*nq + i];
+            A[a*nactive + c] = sign * s;
+        }
+    }
+    return GAC_OK;
+}
+
+/* qd_plus = qd + sum_a Y_a F_a. */
+static void gac_apply_impulse(int nq, const double *qd, int nactive, const double *Y, const double *F,
+                              double *qd_plus)
+{
+    int a, i;
+    for (i = 0; i < nq; ++i) {
+        double v = qd[i];
+        for (a = 0; a < nactive; ++a) v += Y[a*nq + i] * F[a];
+        qd_plus[i] = v;
+    }
+}
+
+int gac_impact(const gac_model *m, const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd,
+               const double *GAC_RESTRICT p, int nactive, const int *GAC_RESTRICT active,
+               double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse, double *GAC_RESTRICT work)
+{
+    const int nq = m->nq;
+    double v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)];
+    double *Y = work + nq * nq + m->njrow * nq;
+    double *A = Y + nq * nq;
+    int a;
+    int code = gac_impact_system(m, q, qd, p, nactive, active, work, v, e);
+    if (code != GAC_OK) return code;
+    for (a = 0; a < nactive; ++a) impulse[a] = -(1.0 + e[a]) * v[a];     /* A F = -(1 + e) v  (Eq. 47) */
+    if (gac_ldlt(nactive, A, 1e-12) != 0) return GAC_ERR_SINGULAR_IMPACT;
+    gac_ldlt_solve(nactive, A, impulse);
+    gac_apply_impulse(nq, qd, nactive, Y, impulse, qd_plus);
+    return GAC_OK;
+}
+
+/* The linear complementarity problem  0 <= F  _|_  w = A F + q >= 0  for an n x n symmetric positive
+ * (semi)definite A (row-major), n <= max_lcp (<= GAC_LCP_CAP): F is the impulse of each contact along its
+ * inward normal, w its normal velocity after (or its excess over the law's bound).  Solved exactly by
+ * enumerating the sets S of pushing contacts (A_SS F_S = -q_S, F_S >= 0, w >= 0 elsewhere): first
+ * S = {q_a < 0}, then every set, largest first.  A set whose A_SS is singular is skipped (a solution on
+ * independent rows exists).  Round-off floors: F_S >= -1e-10 max|F_S| (then clipped to 0), w >= -w_tol.
+ * Returns GAC_OK or GAC_ERR_LCP. */
+static int gac_lcp(int max_lcp, int n, const double *A, const double *q, double w_tol, double *F)
+{
+    double Asub[GAC_LCP_CAP * GAC_LCP_CAP], rhs[GAC_LCP_CAP];
+    unsigned long mask, guess = 0UL, full;
+    int a, b, tries;
+    if (n > max_lcp) return GAC_ERR_LCP;
+    full = (1UL << n) - 1UL;
+    for (a = 0; a < n; ++a) {
+        if (q[a] < 0.0) guess |= 1UL << a;
+    }
+    for (tries = 0, mask = full; ; ++tries) {
+        const unsigned long set = tries == 0 ? guess : mask;
+        int idx[GAC_LCP_CAP], k = 0, ok = 1;
+        double fmax = 0.0;
+        for (a = 0; a < n; ++a) {
+            if (set & (1UL << a)) idx[k++] = a;
+        }
+        for (a = 0; a < k; ++a) {
+            for (b = 0; b < k; ++b) Asub[a*k + b] = A[idx[a]*n + idx[b]];
+            rhs[a] = -q[idx[a]];
+        }
+        if (k > 0 && gac_ldlt(k, Asub, 1e-12) != 0) ok = 0;
+        if (ok && k > 0) gac_ldlt_solve(k, Asub, rhs);
+        for (a = 0; ok && a < k; ++a) {
+            if (fabs(rhs[a]) > fmax) fmax = fabs(rhs[a]);
+        }
+        for (a = 0; ok && a < k; ++a) {
+            if (rhs[a] < -1e-10 * fmax) ok = 0;
+        }
+        if (ok) {
+            for (a = 0; a < n; ++a) F[a] = 0.0;
+            for (a = 0; a < k; ++a) F[idx[a]] = rhs[a] > 0.0 ? rhs[a] : 0.0;
+            for (a = 0; ok && a < n; ++a) {
+                double w = q[a];
+                if (set & (1UL << a)) continue;
+                for (b = 0; b < n; ++b) w += A[a*n + b] * F[b];
+                if (w < -w_tol) ok = 0;
+            }
+        }
+        if (ok) return GAC_OK;
+        if (tries > 0) {
+            if (mask == 0) break;
+            --mask;
+        }
+    }
+    return GAC_ERR_LCP;
+}
+
+/* The impact law for the contacts list[0..n-1] (at their walls), from the velocities qd, with restitution
+ * e[a] for contact list[a].  Newton's law (Eq. 47) with complementarity, in rounds:
+ *   round: the contacts that approach their wall (v_a < 0) or rest on it (v_a = 0) take part;
+ *          0 <= F  _|_  v+ + e v- >= 0 on them (e = 0 for a resting one), the others untouched;
+ *          then the velocities are updated, v += A F.
+ * until no contact approaches.  A contact separating from its wall takes no impulse unless the impulses
+ * of the others drive it into the wall; then it is struck in the next round by its own law.  One round is
+ * Eq. 47 when every approaching contact pushes.  Each round changes the kinetic energy by
+ *   dT = 1/2 sum_a F_a (v-_a + v+_a) = 1/2 sum_a (1 - e_a) F_a v-_a <= 0   (v-_a <= 0 where F_a > 0),
+ * so no round gains energy and a round with e = 1 keeps it exactly.  After GAC_MAX_ROUNDS rounds the
+ * remaining approach is removed by one plastic round over every listed contact (the projection of qd onto
+ * {N qd >= 0} in the mass metric, which cannot gain energy either); *plastic is then 1.
+ * Contact list[first] (first >= 0), the one whose crossing was located, is struck in the first round
+ * whenever it approaches, however slowly.
+ * Returns qd_plus, the total impulses F (>= 0, N s along the inward normals) and the number of rounds. */
+int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                      const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
+                      int *rounds, int *plastic)
+{
+    const int nq = m->nq, max_lcp = GAC_MAX_LCP(m);
+    double v[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)], scale = 0.0, v_tol;
+    double *Y = work + nq * nq + m->njrow * nq;
+    double *A = Y + nq * nq;
+    int a, b, i, round, code;
+    *rounds = *plastic = 0;
+    code = gac_impact_system(m, q, qd, p, n, list, work, v, e_wall);
+    if (code != GAC_OK) return code;
+    for (a = 0; a < n; ++a) {
+        F[a] = 0.0;
+        if (fabs(v[a]) > scale) scale = fabs(v[a]);
+    }
+    v_tol = 1e-11 * scale;                 /* a normal velocity below this is round-off: at rest */
+    for (round = 0; ; ++round) {
+        double Asub[GAC_LCP_CAP * GAC_LCP_CAP], qsub[GAC_AT_LEAST_1(nq)], Fsub[GAC_LCP_CAP];
+        int idx[GAC_AT_LEAST_1(nq)], k = 0, approaching = 0;
+        const int last = round >= GAC_MAX_ROUNDS;
+        for (a = 0; a < n; ++a) {
+            const int struck = v[a] < -v_tol || (round == 0 && a == first && v[a] < 0.0);
+            if (struck) approaching = 1;
+            if (last || struck || v[a] <= v_tol) {
+                qsub[k] = !last && struck ? (1.0 + e[a]) * v[a] : v[a];
+                idx[k++] = a;
+            }
+        }
+        if (!approaching) break;
+        if (k > max_lcp) return GAC_ERR_LCP;          /* more than one solve takes */
+        for (a = 0; a < k; ++a) {
+            for (b = 0; b < k; ++b) Asub[a*k + b] = A[idx[a]*n + idx[b]];
+        }
+        code = gac_lcp(max_lcp, k, Asub, qsub, 1e-10 * scale, Fsub);
+        if (code != GAC_OK) return code;
+        for (a = 0; a < k; ++a) F[idx[a]] += Fsub[a];
+        for (a = 0; a < n; ++a) {
+            for (b = 0; b < k; ++b) v[a] += A[a*n + idx[b]] * Fsub[b];
+        }
+        *rounds = round + 1;
+        if (last) {
+            *plastic = 1;
+            break;
+        }
+    }
+    for (i = 0; i < nq; ++i) {
+        double value = qd[i];
+        for (a = 0; a < n; ++a) value += Y[a*nq + i] * F[a];
+        qd_plus[i] = value;
+    }
+    return GAC_OK;
+}
+
+int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd,
+                               const double *GAC_RESTRICT p, int nactive, const int *GAC_RESTRICT active,
+                               double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse,
+                               double *GAC_RESTRICT work)
+{
+    double v[GAC_AT_LEAST_1(m->nq)], e[GAC_AT_LEAST_1(m->nq)];
+    int rounds, plastic;
+    int code = gac_impact_system(m, q, qd, p, nactive, active, work, v, e);
+    if (code != GAC_OK) return code;
+    return gac_impact_rounds(m, q, qd, p, nactive, active, e, -1, qd_plus, impulse, work, &rounds, &plastic);
+}
+
+int gac_constrained_dynamics(const gac_model *m, const double *q, const double *qd, const double *p,
+                             int nactive, const int *active, double *qdd, double *lambda, double *work)
+{
+    const int nq = m->nq;
+    double v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)], bias[GAC_AT_LEAST_1(m->njrow)];
+    double *J = work + nq * nq;
+    double *Y = J + m->njrow * nq;
+    double *A = Y + nq * nq;
+    int a, i, code;
+    m->forward_dynamics(q, qd, p, qdd);
+    if (nactive == 0) return GAC_OK;
+    code = gac_impact_system(m, q, qd, p, nactive, active, work, v, e);
+    if (code != GAC_OK) return code;
+    m->contact_bias(q, qd, p, bias);
+    for (a = 0; a < nactive; ++a) {              /* lambda = -(N qdd_free + Ndot qd) */
+        int row;
+        double sign, acc;
+        gac_contact_row(m, active[a], &row, &sign);
+        acc = bias[row];
+        for (i = 0; i < nq; ++i) acc += J[row*nq + i] * qdd[i];
+        lambda[a] = -sign * acc;
+    }
+    if (gac_ldlt_drop(nactive, A, 1e-12) < 0) return GAC_ERR_SINGULAR_CONTACT;
+    gac_ldlt_solve(nactive, A, lambda);
+    for (i = 0; i < nq; ++i) {
+        for (a = 0; a < nactive; ++a) qdd[i] += Y[a*nq + i] * lambda[a];
+    }
+    return GAC_OK;
+}
+
+void gac_contact_info(const gac_model *m, int c, int *point, int *axis, int *normal_sign)
+{
+    if (m == 0 || c < 0 || c >= m->ncontact) {
+        *point = 0;
+        *axis = -1;
+        *normal_sign = 0;
+        return;
+    }
+    *point = m->contacts[c].point;
+    *axis = m->contacts[c].axis;
+    *normal_sign = m->contacts[c].normal_sign;
+}

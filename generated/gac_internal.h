@@ -1,0 +1,31 @@
+/*
+ * gac_internal.h -- functions shared between the library's source files (not part of the API).
+ */
+#ifndef GAC_INTERNAL_H
+#define GAC_INTERNAL_H
+
+#include "gac.h"
+
+#define GAC_EPS 2.220446049250313e-16
+
+/* Contacts one complementarity solve takes: min(nq, GAC_LCP_CAP). */
+#define GAC_MAX_LCP(m) ((m)->nq < GAC_LCP_CAP ? (m)->nq : GAC_LCP_CAP)
+
+/* max(n, 1): the length of an array with one entry per contact or per Jacobian row, never 0. */
+#define GAC_AT_LEAST_1(n) ((n) > 0 ? (n) : 1)
+
+/* gac_linalg.c */
+int gac_ldlt(int n, double *A, double tol);
+void gac_ldlt_solve(int n, const double *LD, double *b);
+int gac_ldlt_drop(int n, double *A, double tol);
+
+/* gac_impact.c */
+void gac_contact_row(const gac_model *m, int c, int *row, double *sign);
+double gac_restitution(const gac_model *m, const double *p, int c);
+int gac_impact_system(const gac_model *m, const double *q, const double *qd, const double *p, int nactive,
+                      const int *active, double *work, double *v, double *e);
+int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                      const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
+                      int *rounds, int *plastic);
+
+#endif /* GAC_INTERNAL_H */

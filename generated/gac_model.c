@@ -1,0 +1,80 @@
+/*
+ * gac_model.c -- the model descriptor's check, the workspace sizes and the error messages.
+ */
+#include "gac_internal.h"
+
+int gac_model_check(const gac_model *m)
+{
+    int c;
+    if (m == 0) return GAC_ERR_NULL_ARGUMENT;
+    if (m->nq < 1 || m->nx != 2 * m->nq || m->nparam < 0 || m->npoint < 1 || m->ncontact < 0 || m->njrow < 0)
+        return GAC_ERR_BAD_MODEL;
+    if ((m->ncontact > 0 && m->contacts == 0) || (m->nparam > 0 && m->default_parameters == 0)
+        || m->q0 == 0 || m->qd0 == 0)
+        return GAC_ERR_BAD_MODEL;
+    if (m->mass_matrix == 0 || m->bias == 0 || m->forward_dynamics == 0 || m->contact_points == 0
+        || m->contact_velocities == 0 || m->contact_jacobian == 0 || m->contact_gaps == 0
+        || m->contact_bias == 0 || m->energy == 0 || m->rhs == 0)
+        return GAC_ERR_BAD_MODEL;
+    if (m->chart.theta0_index >= m->nq) return GAC_ERR_BAD_MODEL;
+    for (c = 0; c < m->ncontact; ++c) {
+        const gac_contact *k = &m->contacts[c];
+        if (k->point < 1 || k->point > m->npoint || k->axis < 0 || k->axis > 2
+            || (k->normal_sign != 1 && k->normal_sign != -1) || k->row < 0 || k->row >= m->njrow
+            || k->e_index >= m->nparam)
+            return GAC_ERR_BAD_MODEL;
+    }
+    return GAC_OK;
+}
+
+long gac_impact_nwork(const gac_model *m)
+{
+    const long nq = m->nq;
+    return 3 * nq * nq + (long)m->njrow * nq + nq;
+}
+
+long gac_sim_ndouble(const gac_model *m)
+{
+    const long nq = m->nq;
+    return 28L * m->nx + m->nparam + 7L * GAC_AT_LEAST_1(m->ncontact) + gac_impact_nwork(m) + nq * nq;
+}
+
+long gac_sim_nint(const gac_model *m)
+{
+    return (long)m->nq + 2L * GAC_AT_LEAST_1(m->ncontact);
+}
+
+long gac_record_ndouble(const gac_model *m)
+{
+    return 4L * m->nq;
+}
+
+long gac_record_nint(const gac_model *m)
+{
+    return 3L * m->nq;
+}
+
+const char *gac_error_message(int code)
+{
+    switch (code) {
+    case GAC_OK: return "ok";
+    case GAC_ERR_BAD_CONTACT: return "bad active-contact list: empty, longer than NQ, repeated, or index outside 0..NCONTACT-1";
+    case GAC_ERR_SINGULAR_MASS: return "inertia matrix I_f is singular to double precision (a pivot of its LDL^T below 1e-15 of its largest diagonal): the chain's ratios of masses, lengths and inertias span more than 15 digits at this state";
+    case GAC_ERR_SINGULAR_IMPACT: return "impact matrix J I_f^-1 J^T is singular: the active contact constraints are dependent";
+    case GAC_ERR_LCP: return "impact complementarity problem has no solution (too many or degenerate contacts)";
+    case GAC_ERR_GIMBAL_LOCK: return "gimbal lock: theta_0 is too close to the singularity of the base chart (|det E| below sqrt(16 eps / tol)) for results to the tolerance; continue on a second chart";
+    case GAC_ERR_BAD_OPTION: return "bad option or argument: allowed are method RK4, DOPRI5 or DOP853; RK4: 0 < dt < 1e300; DOPRI5, DOP853: rtol > 0, atol > 0, dt >= 0; h_max >= 0, event_samples >= 1, event_tol > 0, contact_tol >= 0, max_steps >= 0, rest_height < 1e300 (not NaN), zeno_impacts >= 0; t0, q and qd finite; sim_advance: t_end finite and >= the current time, n_eval >= 0, 0 <= *i_eval <= n_eval";
+    case GAC_ERR_START_OUTSIDE: return "the start state has a contact point beyond its wall: allowed is a gap >= -(contact_tol + the simultaneity window + 1e-12 max(1 m, the largest |point coordinate|)), a point inside the box or on its wall";
+    case GAC_ERR_NULL_ARGUMENT: return "a required pointer argument is NULL: sim_init needs sim, q and qd (and, in the library, the model and its work arrays; opt and p may be NULL: the defaults); sim_advance needs sim and record, and t_eval, i_eval and x_eval when n_eval > 0";
+    case GAC_ERR_MAX_STEPS: return "maximum number of steps reached";
+    case GAC_ERR_STEP_SIZE: return "step size underflow: the adaptive integrator cannot meet the tolerance";
+    case GAC_ERR_NONFINITE: return "the state became NaN or infinite";
+    case GAC_ERR_TOO_MANY_CONTACTS: return "more simultaneous approaching contacts than degrees of freedom";
+    case GAC_ERR_SINGULAR_CONTACT: return "the persistent contact constraints are dependent (N I_f^-1 N^T is singular)";
+    case GAC_ERR_IMPACT_ACCURACY: return "the impact law could not be solved to round-off (an impulse < 0, a contact still approaching, an energy gain or an elastic energy change): the impact system is ill-conditioned";
+    case GAC_ERR_UNSTABLE: return "RK4 is unstable at this step: the chain's fastest mode needs dt below about 2.8 / its rate; reduce dt or use an adaptive method";
+    case GAC_ERR_LOST_CONTACT: return "a point lies beyond its wall at an impact: a wall crossing was missed, the motion is too fast or I_f too ill-conditioned (extreme mass, length or inertia ratios) for the tolerance";
+    case GAC_ERR_BAD_MODEL: return "the model descriptor is inconsistent: nq >= 1, nx = 2 nq, npoint >= 1, ncontact, njrow, nparam >= 0, every table and kernel present, each contact's point, axis, normal sign, Jacobian row and restitution index in range";
+    default: return "unknown error code";
+    }
+}

@@ -1,0 +1,379 @@
+/*
+ * gac.h -- the hybrid (flight + impact) simulation of an open chain of rigid links confined in a box,
+ * for any model described by a const gac_model (sizes, contact tables, kernels).  Plain C99.
+ *
+ * The library holds everything that does not depend on the scene: the LDL^T solves, the impact law of
+ * Eq. 44-48 with complementarity (and its LCP), the constrained dynamics of resting contacts, the
+ * integrators RK4, DOPRI5 and DOP853 with dense output, event location, resting (persistent) contact and
+ * the floor on the base chart's measure.  A model (NAME.c, written by the generator, or written by hand)
+ * supplies the kernels and tables through a gac_model.
+ *
+ *   const gac_model *m = &NAME_model;                     (or a model filled by hand)
+ *   double dwork[...gac_sim_ndouble(m)], rdwork[...gac_record_ndouble(m)];
+ *   int iwork[...gac_sim_nint(m)], riwork[...gac_record_nint(m)];
+ *   gac_sim sim; gac_impact_record rec; gac_options opt;
+ *   gac_default_options(&opt);                            edit opt.method, opt.rtol, ...
+ *   gac_sim_init(&sim, m, dwork, iwork, 0.0, q0, qd0, p, &opt);
+ *   gac_record_bind(&rec, m, rdwork, riwork);
+ *   while ((code = gac_sim_advance(&sim, t_end, t_eval, n_eval, &i_eval, x_eval, &rec)) == GAC_SIM_IMPACT
+ *          || code == GAC_SIM_CONTACT)
+ *       ... rec holds the impact just applied, or (GAC_SIM_CONTACT) a change of the resting contacts ...
+ *   code is GAC_SIM_END (sim.t == t_end) or an error (< 0, see gac_error_message).
+ *
+ * Memory.  The model is const and shared; the caller owns every state struct and every array; the library
+ * has no globals (only static const tables) and never allocates.  One gac_sim per thread.  The arrays of
+ * gac_sim and gac_impact_record are pointers into the caller's dwork / iwork arrays (layouts below); after a
+ * struct is copied or moved, bind it again to its own arrays (gac_sim_bind, gac_record_bind).
+ *
+ * Conventions.  SI units (m, kg, s, rad, N, J).  q: the model's generalised coordinates (nq), qd: their
+ * time derivatives, x = [q, qd] (nx = 2 nq) the ODE state, p: the parameter vector (nparam).  Matrices are
+ * row-major: element (i, j) of an R x C matrix is at [i*C + j].  A contact is a (point, wall) pair with a
+ * gap >= 0 inside the box; its normal points into the box, and an impulse or force along it pushes the
+ * point away from the wall.
+ */
+#ifndef GAC_H
+#define GAC_H
+
+#if defined(__cplusplus)
+#  define GAC_RESTRICT
+#else
+#  define GAC_RESTRICT restrict
+#endif
+
+/* ---- return codes ------------------------------------------------------------------------------ */
+#define GAC_OK                     0
+#define GAC_ERR_BAD_CONTACT       -1   /* active contact list empty, too long, repeated or out of range */
+#define GAC_ERR_SINGULAR_MASS     -2   /* I_f singular to double precision (pivot < 1e-15 of its largest
+                                          diagonal: mass, length and inertia ratios beyond 15 digits) */
+#define GAC_ERR_SINGULAR_IMPACT   -3   /* active contact rows linearly dependent */
+#define GAC_ERR_LCP               -4   /* complementarity impact has no solution / too many contacts */
+#define GAC_ERR_GIMBAL_LOCK       -5   /* theta_0 too close to the gimbal lock of the base chart: the base
+                                          chart's measure mu = |det E| (|cos theta_0| for the default twists)
+                                          is below GAC_CHART_FLOOR, where I_f's solves lose 1e-6 (16 eps / mu^2);
+                                          the hybrid loop stops earlier, below sqrt(16 eps / rtol).  Continue
+                                          on a second chart */
+#define GAC_ERR_BAD_OPTION       -10   /* an option or argument is out of range (the ranges: gac_error_message) */
+#define GAC_ERR_MAX_STEPS        -11   /* opt.max_steps reached in one advance call */
+#define GAC_ERR_STEP_SIZE        -12   /* adaptive step size fell below round-off */
+#define GAC_ERR_NONFINITE        -13   /* the state became NaN or infinite */
+#define GAC_ERR_TOO_MANY_CONTACTS -14  /* more approaching contacts at once than nq */
+#define GAC_ERR_SINGULAR_CONTACT -15   /* the persistent contact constraints are dependent */
+#define GAC_ERR_IMPACT_ACCURACY  -16   /* an impact failed its post-conditions (F >= 0, no approach, no energy
+                                          gain, e = 1 energy kept) beyond round-off: ill-conditioned */
+#define GAC_ERR_UNSTABLE         -17   /* RK4: 3 steps in a row at h rho > 2.5 (or one > 10), rho the rate of the
+                                          chain's fastest mode between the last two stages: dt is past RK4's
+                                          stability (about 2.8 / rho); the state is the last step's */
+#define GAC_ERR_LOST_CONTACT     -18   /* at an impact a point lay beyond its wall by more than contact_tol
+                                          plus the simultaneity window: a crossing was missed because the
+                                          motion is too fast or I_f too ill-conditioned for the tolerance */
+#define GAC_ERR_START_OUTSIDE    -19   /* gac_sim_init: a contact point starts beyond its wall, deeper than the
+                                          loop's own lost-contact depth (contact_tol + the simultaneity window) */
+#define GAC_ERR_NULL_ARGUMENT    -20   /* a pointer argument that must not be NULL is NULL (see each function) */
+#define GAC_ERR_BAD_MODEL        -21   /* the model descriptor is inconsistent (gac_model_check) */
+
+/* ---- what gac_sim_advance stops at (> 0) ------------------------------------------------------ */
+#define GAC_SIM_END      1    /* reached t_end */
+#define GAC_SIM_IMPACT   2    /* stopped at an impact, already applied; see the record (which may also list
+                                 contacts made persistent or released by the impact) */
+#define GAC_SIM_CONTACT  3    /* stopped where the persistent set changed without an impact: a contact
+                                 released (its force reached 0), or the activations of gac_sim_init;
+                                 record.t, activated[], released[] are filled, ncontact = 0 */
+
+/* ---- integrators (gac_options.method) -------------------------------------------------------- */
+#define GAC_METHOD_RK4     0   /* classical fixed-step RK4 (opt.dt), cubic Hermite dense output */
+#define GAC_METHOD_DOPRI5  1   /* Dormand-Prince 5(4), adaptive (opt.rtol, opt.atol), 4th-order dense output */
+#define GAC_METHOD_DOP853  2   /* Dormand-Prince 8(5,3), adaptive, 7th-order dense output */
+
+/* ---- limits ----------------------------------------------------------------------------------- */
+#define GAC_CHART_FLOOR  5.96e-5   /* sqrt(16 eps / 1e-6): gac_impact refuses a base chart measure below it */
+#define GAC_LCP_CAP      16        /* contacts one complementarity solve takes at most: min(nq, 16) */
+#define GAC_MAX_ROUNDS   256       /* rounds of the impact law before its plastic closing round */
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- the model -------------------------------------------------------------------------------- */
+
+/* Kernels: pure functions of their inputs, outputs not aliasing inputs.
+ *   q (nq), qd (nq), p (nparam) in; out as documented per kernel in gac_model. */
+typedef void (*gac_kernel_q)(const double *q, const double *p, double *out);
+typedef void (*gac_kernel_qqd)(const double *q, const double *qd, const double *p, double *out);
+typedef void (*gac_kernel_rhs)(double t, const double *x, const double *p, double *xdot);
+
+/* One contact: a point of the chain and a wall. */
+typedef struct {
+    int point;            /* the point O_point, 1-based (1..npoint); its coordinates are
+                             contact_points[3*(point-1) .. 3*(point-1)+2] */
+    int axis;             /* the wall's normal axis, 0..2 for X1..X3 */
+    int normal_sign;      /* +1: the inward normal is +X_axis (a *_min wall), -1: -X_axis (a *_max wall) */
+    int row;              /* the row of contact_jacobian / contact_bias for (point, axis), 0..njrow-1 */
+    int e_index;          /* restitution e of the wall (Newton's law, Eq. 47): p[e_index], or e_value when
+                             e_index < 0 (a constant of the model) */
+    double e_value;
+} gac_contact;
+
+/* The base chart's measure mu(q) = |a . (e_z x Rz(theta_0) b)| (|det E|; |cos theta_0| for the default
+ * twists): a = T_0^T e_z, b = T_1 e_z, only their first two components enter.  mu = 0 is the gimbal lock. */
+typedef struct {
+    double a[2], b[2];
+    int theta0_index;     /* theta_0 = q[theta0_index], or theta0_value when theta0_index < 0 */
+    double theta0_value;  /* rad */
+} gac_chart;
+
+typedef struct {
+    const char *name;     /* the model's name (NAME) */
+    int n;                /* real links (information only) */
+    int nq;               /* generalised coordinates, >= 1 */
+    int nx;               /* ODE state size, 2 nq */
+    int nparam;           /* parameters */
+    int npoint;           /* contact points O_1..O_npoint (contact_points gives 3 npoint numbers) */
+    int ncontact;         /* contacts (rows of contacts[]), >= 0 */
+    int njrow;            /* rows of contact_jacobian and contact_bias */
+    const gac_contact *contacts;       /* [ncontact] */
+    gac_chart chart;
+    const double *default_parameters;  /* [nparam] */
+    const double *q0, *qd0;            /* [nq] each: the scene's initial state */
+    /* kernels */
+    gac_kernel_q   mass_matrix;        /* q, p -> I_f (nq x nq, row-major, symmetric positive definite) */
+    gac_kernel_qqd bias;               /* q, qd, p -> R (nq): I_f qdd = R in flight (Eq. 12) */
+    gac_kernel_qqd forward_dynamics;   /* q, qd, p -> qdd (nq) solving I_f qdd = R */
+    gac_kernel_q   contact_points;     /* q, p -> O_1..O_npoint (npoint x 3, m) */
+    gac_kernel_qqd contact_velocities; /* q, qd, p -> their velocities (npoint x 3, m/s) (Eq. 42) */
+    gac_kernel_q   contact_jacobian;   /* q, p -> rows d(O_i . X_a)/dq (njrow x nq) (Eq. 42) */
+    gac_kernel_q   contact_gaps;       /* q, p -> gap of each contact (ncontact, m; >= 0 inside) */
+    gac_kernel_qqd contact_bias;       /* q, qd, p -> Jdot qd (njrow, m/s^2): the rows' accelerations at qdd = 0 */
+    gac_kernel_qqd energy;             /* q, qd, p -> E[0] kinetic, E[1] potential energy (J) */
+    gac_kernel_rhs rhs;                /* t, x, p -> xdot = [qd, qdd] (nx); t unused */
+} gac_model;
+
+/* GAC_OK if the descriptor is consistent (sizes > 0 where needed, nx = 2 nq, tables and kernels present,
+ * contact entries in range), else GAC_ERR_BAD_MODEL (m NULL: GAC_ERR_NULL_ARGUMENT). */
+int gac_model_check(const gac_model *m);
+
+/* ---- workspace sizes (one formula each; the generated NAME.h has them as macros) ---------------- */
+
+/* Doubles of the work array of gac_impact, gac_impact_complementarity and gac_constrained_dynamics:
+ * 3 nq^2 + njrow nq + nq, laid out as M (nq*nq, the factor of I_f) | J (njrow*nq) | Y (nq*nq) | A (nq*nq) | nq. */
+long gac_impact_nwork(const gac_model *m);
+/* Doubles and ints of one simulation (gac_sim_init): dwork = x (nx) | p (nparam) | private;
+ * iwork = active (nq) | private.
+ *   ndouble = 28 nx + nparam + 7 max(ncontact, 1) + gac_impact_nwork + nq^2,   nint = nq + 2 max(ncontact, 1) */
+long gac_sim_ndouble(const gac_model *m);
+long gac_sim_nint(const gac_model *m);
+/* Doubles and ints of one impact record (gac_record_bind): dwork = impulse | q | qd_before | qd_after
+ * (nq each), iwork = contact | activated | released (nq each). */
+long gac_record_ndouble(const gac_model *m);
+long gac_record_nint(const gac_model *m);
+
+/* ---- kernels of the impact phase (no simulation state) ----------------------------------------- */
+
+/* Impact law, Eq. 44-48: all `nactive` contacts in `active` (indices 0..ncontact-1) together, Newton
+ * restitution e of each contact's wall, configuration unchanged.  Solved as
+ *   (J I_f^-1 J^T) F = -(1 + e) J qd,   qd_plus = qd + I_f^-1 J^T F,
+ * which is Eq. 48 with the velocity unknowns eliminated.  J rows are signed along the inward normal, so
+ * impulse[k] > 0 (N s) pushes contact active[k] away from its wall (a negative value pulls).
+ * q, qd, p in; qd_plus (nq) and impulse (nactive) out; work: gac_impact_nwork(m) doubles.
+ * Returns GAC_OK or GAC_ERR_BAD_CONTACT, _SINGULAR_MASS, _SINGULAR_IMPACT, _GIMBAL_LOCK. */
+int gac_impact(const gac_model *m, const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd,
+               const double *GAC_RESTRICT p, int nactive, const int *GAC_RESTRICT active,
+               double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse, double *GAC_RESTRICT work);
+
+/* The impact law with complementarity, for contacts at their walls that may approach, rest or separate:
+ * impulses F >= 0 (no contact pulls), no contact approaches its wall afterwards, and the kinetic energy
+ * never grows (it is kept exactly when every contact that takes an impulse has e = 1).  Solved in rounds:
+ * in each, the contacts that approach (v < 0) or rest (v = 0) take part with
+ *     0 <= F  _|_  v+ + e v- >= 0         (Newton's law, Eq. 47, with complementarity; e = 0 at rest),
+ * until none approaches; a separating contact takes no impulse unless the others drive it into its wall,
+ * and is then struck by its own law in the next round.  When every approaching contact pushes, one round
+ * is Eq. 47 exactly (same result as gac_impact).  After GAC_MAX_ROUNDS rounds a plastic round over all
+ * contacts ends the sequence.  impulse[k]: total impulse of contact active[k] (N s, >= 0).  Same arguments
+ * as gac_impact; at most min(nq, GAC_LCP_CAP) contacts take part in one round (solved exactly by
+ * enumerating the pushing sets; more: GAC_ERR_LCP). */
+int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd,
+                               const double *GAC_RESTRICT p, int nactive, const int *GAC_RESTRICT active,
+                               double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse,
+                               double *GAC_RESTRICT work);
+
+/* Generalised accelerations with the contacts active[0..nactive-1] held as bilateral frictionless
+ * constraints: I_f qdd = R + N^T lambda, N qdd = -Ndot qd (N: Jacobian rows signed along the inward normal),
+ * solved as qdd = qdd_free + I_f^-1 N^T lambda with (N I_f^-1 N^T) lambda = -(N qdd_free + Ndot qd).
+ * qdd (nq, rad/s^2 or m/s^2 by coordinate) and lambda (nactive) out; lambda[k] (N) is the force of contact
+ * active[k] along its inward normal (> 0 pushes); a contact whose row depends on the earlier ones' (held
+ * by them already) gets lambda = 0.  work: gac_impact_nwork(m) doubles.  nactive = 0 gives
+ * forward_dynamics.  Returns GAC_OK or an error (< 0). */
+int gac_constrained_dynamics(const gac_model *m, const double *q, const double *qd, const double *p,
+                             int nactive, const int *active, double *qdd, double *lambda, double *work);
+
+/* Contact c's point index (1-based, O_1 = 1), wall axis (0..2 for X1..X3) and inward normal sign (+1/-1);
+ * c outside 0..ncontact-1: 0, -1, 0. */
+void gac_contact_info(const gac_model *m, int c, int *point, int *axis, int *normal_sign);
+
+/* The base chart's measure mu(q) (gac_chart), in [0, 1] for the default twists. */
+double gac_chart_measure(const gac_model *m, const double *q);
+
+/* Message for a return code (a static string). */
+const char *gac_error_message(int code);
+
+/* ---- the hybrid simulation -------------------------------------------------------------------- */
+/*
+ * Events.  Each accepted step's interpolant is sampled at opt.event_samples points; an impact is a gap
+ * crossing zero with the point approaching its wall, located to opt.event_tol.  A dip through the wall and
+ * back between two samples (gap > 0 at both) is found where the gap's rate, the normal velocity, changes
+ * sign: if the gap at that minimum is below -(atol + rtol l) (l: the largest |coordinate| of the points;
+ * 0 for RK4) the crossing before it is the impact; a shallower minimum, a touch with normal velocity 0
+ * within the integration error, is a graze and no impact.
+ *
+ * Impacts.  Every contact within contact_tol of its wall, every approaching one within the simultaneity
+ * window (100 x the adaptive method's position tolerance, or contact_tol if larger) and every persistent
+ * one take part.  The law (gac_impact_complementarity) is Newton's law, Eq. 47, with complementarity, in
+ * rounds until no contact approaches: F >= 0, no energy gain, e = 1 keeps the energy exactly; a contact
+ * that separates takes an impulse only if the others drive it into its wall.  Its post-conditions are
+ * checked to the law's round-off bound (record.roundoff; GAC_ERR_IMPACT_ACCURACY otherwise).
+ *
+ * Resting contact (Zeno behaviour).  With e < 1 and gravity, impacts of a point on a wall accumulate
+ * (the bounces shrink geometrically).  At an impact on a wall with e < 1, a contact whose bounce would rise
+ * less than opt.rest_height (v+^2 <= 2 a rest_height, a = its normal acceleration towards the wall), or
+ * that has had opt.zeno_impacts impacts at shrinking intervals, LANDS: it is struck with e = 0 (a plastic
+ * impact, still F >= 0), and if it ends at rest it becomes PERSISTENT, held at the gap it landed at (no
+ * position moves at an impact), a bilateral, frictionless constraint of the flight equations,
+ *     I_f qdd = R + N_a^T lambda,    N_a qdd = -Ndot_a qd     (N_a: signed Jacobian rows of the active set),
+ * with positions and velocities projected back onto the constraint (gaps to their held values, normal
+ * velocity = 0, mass metric; no free contact pushed deeper into its wall) after every accepted step.
+ * record.energy_rest is the kinetic energy the landings took.  On a wall with e = 1 a contact lands only
+ * if that energy is round-off.  A persistent contact is released when its force lambda (along the inward
+ * normal) falls through 0: that crossing is located on the dense output like a wall crossing.
+ * Only forces lambda > 0 are kept (an acceleration-level complementarity solve when the set changes), and
+ * only contacts with independent rows (a dependent one is held by the others; one that becomes dependent
+ * in flight gets lambda = 0 and is released).  A persistent contact takes part in another impact with its
+ * own e; one the impact lifts by less than rest_height stays, one lifted higher is released.
+ * gac_sim_init also makes persistent the contacts that start at their wall (gap <= contact_tol) with a normal
+ * velocity under the same bound and a positive force (a chain started at rest on the floor).
+ * Every activation and release is reported in the record (activated[], released[]).
+ *
+ * Stops before trouble: GAC_ERR_GIMBAL_LOCK (the base chart's measure below sqrt(16 eps / rtol): continue on
+ * a second chart), GAC_ERR_UNSTABLE (RK4 past its stability), GAC_ERR_LOST_CONTACT, GAC_ERR_MAX_STEPS
+ * (sim.err_index names the state component that limits the step).
+ */
+
+typedef struct {
+    int method;            /* GAC_METHOD_RK4, GAC_METHOD_DOPRI5 (default) or GAC_METHOD_DOP853 */
+    double dt;             /* RK4 step (s); for the adaptive methods the first step, 0 = automatic */
+    double rtol, atol;     /* adaptive methods: relative and absolute tolerances (default 1e-8, 1e-10) */
+    double h_max;          /* largest step (s), 0 = unbounded */
+    int event_samples;     /* interpolant samples per step searched for wall crossings (default 4); a dip
+                              through a wall between two samples is found at the gap's minimum */
+    double event_tol;      /* time tolerance of event location on the interpolant (default 1e-13 s) */
+    double contact_tol;    /* approaching contacts within this gap (m) join a simultaneous impact (1e-6) */
+    long max_steps;        /* steps allowed per advance call, 0 = unbounded (default 10^7) */
+    double rest_height;    /* m: a bounce rising less than this ends in persistent contact; < 0 (default):
+                              10 contact_tol; 0: never by this rule */
+    int zeno_impacts;      /* persistent after this many impacts of one contact at shrinking intervals
+                              (default 20; 0: never by this rule) */
+} gac_options;
+
+/* What gac_sim_advance reports.  Scalars are fields; the arrays (nq entries each) point into the arrays
+ * given to gac_record_bind. */
+typedef struct {
+    double t;                    /* impact time (s) */
+    int ncontact;                /* simultaneous contacts */
+    int *contact;                /* their indices 0..ncontact-1 of the model (see gac_contact_info) */
+    double *impulse;             /* impulse along the inward normal (N s), >= 0 */
+    double energy_before, energy_after;   /* T + V (J) */
+    double *q;                   /* configuration at impact */
+    double *qd_before, *qd_after;
+    int complementarity;         /* 1 if the result is not Eq. 47 over the approaching contacts (a contact
+                                    took no impulse, or more than one round) */
+    int rounds;                  /* rounds of the impact law (1 for Eq. 47 with complementarity) */
+    int plastic;                 /* 1 if GAC_MAX_ROUNDS rounds ended in a plastic round */
+    double energy_rest;          /* kinetic energy (J) the landings took: the law with each landing contact's
+                                    own e minus the law with e = 0 (dropped bounces that would rise less
+                                    than rest_height) */
+    double roundoff;             /* the law's relative round-off bound on the energy (>= 1e-10), the tolerance
+                                    of its post-conditions (grows with cond(I_f)) */
+    double approach_before;      /* largest |normal velocity| of any contact before (m/s) */
+    double approach_after;       /* fastest approach of a contact within contact_tol after (m/s) */
+    int nactivated, *activated;  /* contacts made persistent at this event */
+    int nreleased, *released;    /* persistent contacts released at this event */
+} gac_impact_record;
+
+/* The state of one simulation.  Read t, x, the counters and the persistent set; write nothing but
+ * opt.max_steps between gac_sim_advance calls.  x and p point into dwork, active into iwork. */
+typedef struct {
+    gac_options opt;
+    double t;                    /* current time (s) */
+    double *x;                   /* current state [q, qd] (nx) */
+    double *p;                   /* the parameters (nparam, a copy) */
+    long n_steps, n_rejected, n_rhs, n_impacts;
+    int nactive;                 /* persistent contacts: their indices active[0..nactive-1] */
+    int *active;
+    long n_activations, n_releases;
+    int err_index;               /* state component (0..nx-1) that dominated the error estimate of the last
+                                    adaptive step: what limits the step size */
+    /* private: the model, integrator state and scratch (pointers into dwork / iwork) */
+    const gac_model *model;
+    double h;
+    int f_valid;
+    double *f, *k[16], *x1, *xs, *cont[8];
+    double t0_step, h_step;
+    double *ev, *es, *eprev;     /* event values */
+    double *vn;                  /* normal velocities at x, if vn_valid (event search) */
+    int vn_valid;
+    double *work;                /* gac_impact_nwork doubles */
+    double *sub;                 /* nq*nq doubles: sub-problems of the resting contacts */
+    double rest_height;          /* resolved opt.rest_height */
+    double lever;                /* max(1 m, the chain's length): |dO/dq| bound */
+    int *is_active, pending, fail, fail_seen, n_unstable;
+    int *n_shrink;               /* impacts of each contact at shrinking intervals */
+    double *t_last, *dt_last;
+    double *gap_held;            /* gap (m) a persistent contact is held at: its gap when it landed (within
+                                    contact_tol, or the integration's position error below its wall) */
+} gac_sim;
+
+/* Default options (DOPRI5, rtol 1e-8, atol 1e-10, persistent contact on).  opt NULL: nothing is done. */
+void gac_default_options(gac_options *opt);
+
+/* Start a simulation of model m at time t0 from (q, qd) with parameters p (copied into dwork).  Contacts
+ * resting at their wall become persistent (reported by the first gac_sim_advance, GAC_SIM_CONTACT).
+ * dwork: gac_sim_ndouble(m) doubles, iwork: gac_sim_nint(m) ints, owned by the caller for the life of sim.
+ * Pointers: sim, m, dwork, iwork, q and qd must not be NULL (GAC_ERR_NULL_ARGUMENT); opt NULL means the
+ * default options (gac_default_options), p NULL the model's default_parameters.
+ * Refused: an inconsistent model (GAC_ERR_BAD_MODEL); options out of range, t0, q or qd not finite
+ * (GAC_ERR_BAD_OPTION); a contact point beyond its wall, gap < -(contact_tol + w + 1e-12 max(1 m, l))
+ * (GAC_ERR_START_OUTSIDE), w the simultaneity window (contact_tol, or for the adaptive methods
+ * 100 (atol + rtol l) if larger; l the largest |point coordinate|): the depth at which the loop itself
+ * reports a lost contact.  A start on or inside the walls is accepted, and so is a state the loop itself
+ * left (its resting contacts held at their landing gaps).  On any of these errors *sim, dwork and iwork
+ * are left unchanged; sim must have been initialised with GAC_OK before it is passed to gac_sim_advance.
+ * Returns GAC_OK or an error (< 0). */
+int gac_sim_init(gac_sim *sim, const gac_model *m, double *dwork, int *iwork, double t0, const double *q,
+                 const double *qd, const double *p, const gac_options *opt);
+
+/* Bind sim to model m and point its arrays at dwork / iwork (laid out as gac_sim_init does), e.g. after the
+ * struct and its arrays were copied elsewhere.  Changes nothing else (the arrays' contents stay). */
+void gac_sim_bind(gac_sim *sim, const gac_model *m, double *dwork, int *iwork);
+
+/* Point the arrays of record at dwork (gac_record_ndouble(m) doubles) and iwork (gac_record_nint(m) ints). */
+void gac_record_bind(gac_impact_record *record, const gac_model *m, double *dwork, int *iwork);
+
+/* The current time and state (sim->t and sim->x, copied out).  sim NULL: nothing is written; an output
+ * that is NULL (t, q or qd) is skipped. */
+void gac_sim_state(const gac_sim *sim, double *t, double *q, double *qd);
+
+/* Integrate until t_end, the first impact (which is located, resolved and applied; record filled) or the
+ * first release of a persistent contact.
+ * Samples: for each t_eval[i] (ascending) with i >= *i_eval that is passed, x_eval[i*nx ..] receives the
+ * state [q, qd] (pre-impact at an impact time) and *i_eval advances.
+ * Pointers: sim and record (bound) must not be NULL, nor t_eval, i_eval and x_eval (n_eval doubles,
+ * n_eval nx doubles) when n_eval > 0 (GAC_ERR_NULL_ARGUMENT); with n_eval = 0 they may be NULL and are
+ * not used.  Ranges (GAC_ERR_BAD_OPTION): t_end finite and >= sim->t, n_eval >= 0, 0 <= *i_eval <= n_eval.
+ * A call refused for its arguments changes nothing.
+ * Returns GAC_SIM_END, GAC_SIM_IMPACT, GAC_SIM_CONTACT or an error (< 0). */
+int gac_sim_advance(gac_sim *sim, double t_end, const double *t_eval, int n_eval, int *i_eval,
+                    double *x_eval, gac_impact_record *record);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* GAC_H */

@@ -1,0 +1,41 @@
+"""python -m studies STUDY [options]: one entry point for every study; each study parses its own options
+(``python -m studies STUDY --help``)."""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+# study -> (module, one line for --help); each module has main(argv) -> exit code
+STUDIES = {
+    "ops": ("studies.opscount", "operation counts and rhs times, Gibbs-Appell against Lagrange"),
+    "scaling": ("studies.scaling", "generator stage times and operation counts against n"),
+    "embed": ("studies.embed_report", "the embeddable C: object size, stack use, ms per simulated second"),
+    "precision": ("studies.precision", "work-precision: error against CPU time of every integrator"),
+    "stress": ("studies.stress", "the stress suite: stiff and extreme scenes, pass/fail table"),
+    "fuzz": ("studies.fuzz", "random admissible scenes through the hybrid loop, each run checked"),
+    "benchmark": ("studies.benchmark", "the compiled hybrid loop against scipy's solve_ivp with events"),
+    "charts": ("studies.charts_report", "chart switching near the gimbal lock, against an independent run"),
+    "specialise": ("studies.specialise_report", "general against specialised models on the paper's scenes"),
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    width = max(map(len, STUDIES)) + 2
+    parser = argparse.ArgumentParser(
+        prog="python -m studies", usage="python -m studies [-h] STUDY [options]",
+        description="Studies and reports on the generated models (the 'study' extra: pip install -e \".[study]\").",
+        epilog="studies:\n" + "".join(f"  {name:{width}}{summary}\n" for name, (_, summary) in STUDIES.items())
+               + "\nOptions of a study: python -m studies STUDY --help",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    commands = parser.add_subparsers(dest="study", metavar="STUDY", required=True, help=argparse.SUPPRESS)
+    for name in STUDIES:
+        commands.add_parser(name, add_help=False)                   # the study's own parser takes the rest
+    return parser
+
+
+def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = build_parser().parse_args(argv[:1])                     # the study's name (or --help)
+    module = importlib.import_module(STUDIES[args.study][0])
+    return module.main(argv[1:])

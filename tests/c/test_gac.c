@@ -1,0 +1,340 @@
+/*
+ * test_gac.c -- the library gac (runtime/c) on hand-written models, with no Python and no generated code.
+ *
+ *   gcc -std=c99 -Wall -Wextra -pedantic -Werror -O2 -I runtime/c tests/c/test_gac.c runtime/c/gac_*.c -lm \
+ *       -o test_gac && ./test_gac            (or: make -C tests/c)
+ *
+ * Models:
+ *   ball  a point mass m on a floor under gravity g, q = [y]; restitution e from p.  Dropped from rest at
+ *         height h it strikes the floor at t_1 = sqrt(2 h / g) with speed u_1 = g t_1, and after impact k at
+ *         speed u_k leaves at e u_k: u_k = e^(k-1) u_1, t_(k+1) = t_k + 2 e u_k / g.  Every integrator is
+ *         exact on this motion (a quadratic), so the loop must match these closed forms to round-off.
+ *   box   a point mass in the square [0, 2] x [0, 2] under gravity, q = [x, y], e = 1 on every wall: x moves
+ *         at constant speed between the side walls (closed-form impact times), y bounces on the floor, and
+ *         the energy is kept.
+ * Exit status 0 if every check holds; with the argument --break one expected value is made wrong on
+ * purpose, and the program must fail (the checks can fail).
+ */
+#include "gac.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+static int checks = 0, failures = 0, broken = 0;
+
+#define CHECK(cond, ...)                                                      \
+    do {                                                                      \
+        ++checks;                                                             \
+        if (!(cond)) {                                                        \
+            ++failures;                                                       \
+            printf("FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond);            \
+            printf(__VA_ARGS__);                                              \
+            printf("\n");                                                     \
+        }                                                                     \
+    } while (0)
+
+#define NEAR(a, b, tol) (fabs((a) - (b)) <= (tol))
+
+/* ---- ball: p = [g, m, e] ------------------------------------------------------------------------ */
+static void ball_mass(const double *q, const double *p, double *M) { (void)q; M[0] = p[1]; }
+static void ball_bias(const double *q, const double *qd, const double *p, double *R)
+{
+    (void)q; (void)qd;
+    R[0] = -p[1] * p[0];
+}
+static void ball_fd(const double *q, const double *qd, const double *p, double *qdd)
+{
+    (void)q; (void)qd;
+    qdd[0] = -p[0];
+}
+static void ball_points(const double *q, const double *p, double *r)
+{
+    (void)p;
+    r[0] = 0.0; r[1] = q[0]; r[2] = 0.0;
+}
+static void ball_velocities(const double *q, const double *qd, const double *p, double *v)
+{
+    (void)q; (void)p;
+    v[0] = 0.0; v[1] = qd[0]; v[2] = 0.0;
+}
+static void ball_jacobian(const double *q, const double *p, double *J) { (void)q; (void)p; J[0] = 1.0; }
+static void ball_gaps(const double *q, const double *p, double *gap) { (void)p; gap[0] = q[0]; }
+static void ball_jbias(const double *q, const double *qd, const double *p, double *a)
+{
+    (void)q; (void)qd; (void)p;
+    a[0] = 0.0;
+}
+static void ball_energy(const double *q, const double *qd, const double *p, double *E)
+{
+    E[0] = 0.5 * p[1] * qd[0] * qd[0];
+    E[1] = p[1] * p[0] * q[0];
+}
+static void ball_rhs(double t, const double *x, const double *p, double *xdot)
+{
+    (void)t;
+    xdot[0] = x[1];
+    ball_fd(x, x + 1, p, xdot + 1);
+}
+
+static const gac_contact ball_contacts[1] = {{1, 1, +1, 0, 2, 0.0}};   /* O_1 on the floor, e = p[2] */
+static const double ball_p[3] = {9.81, 2.0, 0.8};
+static const double ball_q0[1] = {1.0}, ball_qd0[1] = {0.0};
+
+static const gac_model ball = {
+    .name = "ball", .n = 0, .nq = 1, .nx = 2, .nparam = 3, .npoint = 1, .ncontact = 1, .njrow = 1,
+    .contacts = ball_contacts,
+    .chart = {.a = {0.0, 1.0}, .b = {1.0, 0.0}, .theta0_index = -1, .theta0_value = 0.0},   /* measure 1 */
+    .default_parameters = ball_p, .q0 = ball_q0, .qd0 = ball_qd0,
+    .mass_matrix = ball_mass, .bias = ball_bias, .forward_dynamics = ball_fd, .contact_points = ball_points,
+    .contact_velocities = ball_velocities, .contact_jacobian = ball_jacobian, .contact_gaps = ball_gaps,
+    .contact_bias = ball_jbias, .energy = ball_energy, .rhs = ball_rhs
+};
+
+/* ---- box: p = [g, m, e], walls x = 0, x = 2, y = 0, y = 2 ---------------------------------------- */
+static void box_mass(const double *q, const double *p, double *M)
+{
+    (void)q;
+    M[0] = p[1]; M[1] = 0.0; M[2] = 0.0; M[3] = p[1];
+}
+static void box_bias(const double *q, const double *qd, const double *p, double *R)
+{
+    (void)q; (void)qd;
+    R[0] = 0.0; R[1] = -p[1] * p[0];
+}
+static void box_fd(const double *q, const double *qd, const double *p, double *qdd)
+{
+    (void)q; (void)qd;
+    qdd[0] = 0.0; qdd[1] = -p[0];
+}
+static void box_points(const double *q, const double *p, double *r)
+{
+    (void)p;
+    r[0] = q[0]; r[1] = q[1]; r[2] = 0.0;
+}
+static void box_velocities(const double *q, const double *qd, const double *p, double *v)
+{
+    (void)q; (void)p;
+    v[0] = qd[0]; v[1] = qd[1]; v[2] = 0.0;
+}
+static void box_jacobian(const double *q, const double *p, double *J)
+{
+    (void)q; (void)p;
+    J[0] = 1.0; J[1] = 0.0; J[2] = 0.0; J[3] = 1.0;
+}
+static void box_gaps(const double *q, const double *p, double *gap)
+{
+    (void)p;
+    gap[0] = q[0]; gap[1] = 2.0 - q[0]; gap[2] = q[1]; gap[3] = 2.0 - q[1];
+}
+static void box_jbias(const double *q, const double *qd, const double *p, double *a)
+{
+    (void)q; (void)qd; (void)p;
+    a[0] = 0.0; a[1] = 0.0;
+}
+static void box_energy(const double *q, const double *qd, const double *p, double *E)
+{
+    E[0] = 0.5 * p[1] * (qd[0] * qd[0] + qd[1] * qd[1]);
+    E[1] = p[1] * p[0] * q[1];
+}
+static void box_rhs(double t, const double *x, const double *p, double *xdot)
+{
+    (void)t;
+    xdot[0] = x[2]; xdot[1] = x[3];
+    box_fd(x, x + 2, p, xdot + 2);
+}
+
+static const gac_contact box_contacts[4] = {
+    {1, 0, +1, 0, 2, 0.0}, {1, 0, -1, 0, 2, 0.0}, {1, 1, +1, 1, 2, 0.0}, {1, 1, -1, 1, 2, 0.0}
+};
+static const double box_p[3] = {9.81, 0.5, 1.0};
+static const double box_q0[2] = {1.0, 1.0}, box_qd0[2] = {1.3, 2.0};
+
+static const gac_model box = {
+    .name = "box", .n = 0, .nq = 2, .nx = 4, .nparam = 3, .npoint = 1, .ncontact = 4, .njrow = 2,
+    .contacts = box_contacts,
+    .chart = {.a = {0.0, 1.0}, .b = {1.0, 0.0}, .theta0_index = -1, .theta0_value = 0.0},
+    .default_parameters = box_p, .q0 = box_q0, .qd0 = box_qd0,
+    .mass_matrix = box_mass, .bias = box_bias, .forward_dynamics = box_fd, .contact_points = box_points,
+    .contact_velocities = box_velocities, .contact_jacobian = box_jacobian, .contact_gaps = box_gaps,
+    .contact_bias = box_jbias, .energy = box_energy, .rhs = box_rhs
+};
+
+/* ---- caller-owned memory, large enough for both models ------------------------------------------ */
+#define NDOUBLE 2048
+#define NINT 256
+static double dwork[NDOUBLE], rdwork[64], work[256];
+static int iwork[NINT], riwork[64];
+
+static void test_sizes(void)
+{
+    CHECK(gac_model_check(&ball) == GAC_OK && gac_model_check(&box) == GAC_OK, "models consistent");
+    CHECK(gac_impact_nwork(&box) == 3 * 4 + 2 * 2 + 2, "impact work %ld", gac_impact_nwork(&box));
+    CHECK(gac_sim_ndouble(&box) == 28 * 4 + 3 + 7 * 4 + gac_impact_nwork(&box) + 4, "sim doubles %ld",
+          gac_sim_ndouble(&box));
+    CHECK(gac_sim_nint(&box) == 2 + 2 * 4 && gac_record_ndouble(&box) == 8 && gac_record_nint(&box) == 6, "ints");
+    CHECK(gac_sim_ndouble(&box) <= NDOUBLE && gac_sim_nint(&box) <= NINT, "test arrays large enough");
+    CHECK(NEAR(gac_chart_measure(&box, box_q0), 1.0, 0.0), "chart measure 1");
+}
+
+/* The impact law at one state, without the loop: Eq. 47 for one contact is qd+ = -e qd-, F = m (1 + e) |qd-|. */
+static void test_impact_kernels(void)
+{
+    const double q[1] = {0.0}, down[1] = {-3.0}, up[1] = {1.0}, rest[1] = {0.0};
+    const int active[1] = {0}, bad[2] = {0, 0};
+    double qd_plus[1], F[2], qdd[1], lambda[1];
+    int code = gac_impact(&ball, q, down, ball_p, 1, active, qd_plus, F, work);
+    CHECK(code == GAC_OK && NEAR(qd_plus[0], 2.4, 1e-15) && NEAR(F[0], 2.0 * 1.8 * 3.0, 1e-14),
+          "impact: code %d, qd+ %.17g, F %.17g", code, qd_plus[0], F[0]);
+    code = gac_impact_complementarity(&ball, q, up, ball_p, 1, active, qd_plus, F, work);
+    CHECK(code == GAC_OK && qd_plus[0] == 1.0 && F[0] == 0.0, "separating: no impulse (F %g)", F[0]);
+    code = gac_impact_complementarity(&ball, q, down, ball_p, 1, active, qd_plus, F, work);
+    CHECK(code == GAC_OK && NEAR(qd_plus[0], 2.4, 1e-15), "complementarity = Eq. 47 here (%.17g)", qd_plus[0]);
+    CHECK(gac_impact(&ball, q, down, ball_p, 2, bad, qd_plus, F, work) == GAC_ERR_BAD_CONTACT, "repeated contact");
+    CHECK(gac_impact(&ball, q, down, ball_p, 0, active, qd_plus, F, work) == GAC_ERR_BAD_CONTACT, "no contact");
+    code = gac_constrained_dynamics(&ball, q, rest, ball_p, 1, active, qdd, lambda, work);
+    CHECK(code == GAC_OK && NEAR(qdd[0], 0.0, 1e-15) && NEAR(lambda[0], 2.0 * 9.81, 1e-13),
+          "resting: qdd %g, lambda %.17g (m g)", qdd[0], lambda[0]);
+}
+
+/* The bouncing ball against its closed form, for each integrator. */
+static void test_ball(int method)
+{
+    const double g = ball_p[0], m = ball_p[1], e = ball_p[2], h = 1.0;
+    const double t1 = sqrt(2.0 * h / g) + (broken && method == GAC_METHOD_DOPRI5 ? 1e-9 : 0.0);
+    double t_eval[3] = {0.1, 0.2, 0.3}, x_eval[6], t_expect = t1, u = g * sqrt(2.0 * h / g);
+    gac_options opt;
+    gac_sim sim;
+    gac_impact_record rec;
+    int code, k = 0, i_eval = 0, rested = 0, i;
+    gac_default_options(&opt);
+    opt.method = method;
+    if (method == GAC_METHOD_RK4) opt.dt = 1e-3;
+    code = gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt);
+    CHECK(code == GAC_OK, "init %d", code);
+    gac_record_bind(&rec, &ball, rdwork, riwork);
+    while ((code = gac_sim_advance(&sim, 10.0, t_eval, 3, &i_eval, x_eval, &rec)) == GAC_SIM_IMPACT
+           || code == GAC_SIM_CONTACT) {
+        if (rec.nactivated > 0) rested = 1;
+        if (code != GAC_SIM_IMPACT) continue;
+        ++k;
+        if (k <= 8) {                                     /* well above the resting threshold */
+            CHECK(NEAR(rec.t, t_expect, 1e-10), "method %d impact %d at %.17g, expected %.17g", method, k, rec.t,
+                  t_expect);
+            CHECK(NEAR(rec.qd_before[0], -u, 1e-10 * u) && NEAR(rec.qd_after[0], e * u, 1e-10 * u),
+                  "impact %d: v- %.17g v+ %.17g, expected -+%.17g", k, rec.qd_before[0], rec.qd_after[0], u);
+            CHECK(rec.ncontact == 1 && rec.contact[0] == 0 && NEAR(rec.impulse[0], m * (1.0 + e) * u, 1e-10 * u),
+                  "impact %d: impulse %.17g", k, rec.impulse[0]);
+            CHECK(NEAR(rec.energy_before - rec.energy_after, 0.5 * m * u * u * (1.0 - e * e), 1e-9),
+                  "impact %d: energy lost %.17g", k, rec.energy_before - rec.energy_after);
+            CHECK(rec.rounds == 1 && !rec.plastic && !rec.complementarity, "plain Eq. 47");
+        }
+        t_expect += 2.0 * e * u / g;
+        u *= e;
+    }
+    CHECK(code == GAC_SIM_END && sim.t == 10.0, "method %d ends at t_end: code %d (%s)", method, code,
+          gac_error_message(code));
+    CHECK(k >= 10 && rested && sim.nactive == 1 && sim.active[0] == 0, "accumulation ends resting (%d impacts)", k);
+    CHECK(fabs(sim.x[0]) <= 1e-5 && fabs(sim.x[1]) < 1e-12, "at rest on the floor: y %g, v %g", sim.x[0],
+          sim.x[1]);
+    CHECK(i_eval == 3, "samples %d", i_eval);
+    for (i = 0; i < 3; ++i) {                              /* before the first impact: y = h - g t^2 / 2 */
+        CHECK(NEAR(x_eval[2 * i], h - 0.5 * g * t_eval[i] * t_eval[i], 1e-12)
+              && NEAR(x_eval[2 * i + 1], -g * t_eval[i], 1e-12), "sample %d: %.17g %.17g", i, x_eval[2 * i],
+              x_eval[2 * i + 1]);
+    }
+}
+
+/* The point in the box with e = 1: side-wall impacts at closed-form times, energy kept. */
+static void test_box(void)
+{
+    const double g = box_p[0], vx = box_qd0[0], vy = box_qd0[1];
+    const double t_floor = (vy + sqrt(vy * vy + 2.0 * g * box_q0[1])) / g;     /* first floor impact */
+    const double v_floor = sqrt(vy * vy + 2.0 * g * box_q0[1]), period = 2.0 * v_floor / g;
+    double E0[2], E1[2], t_side = (2.0 - box_q0[0]) / vx, t_down = t_floor;
+    gac_sim sim;
+    gac_impact_record rec;
+    int code, sides = 0, floors = 0;
+    code = gac_sim_init(&sim, &box, dwork, iwork, 0.0, box_q0, box_qd0, 0, 0);    /* default options */
+    CHECK(code == GAC_OK, "init %d", code);
+    gac_record_bind(&rec, &box, rdwork, riwork);
+    box_energy(sim.x, sim.x + 2, sim.p, E0);
+    while ((code = gac_sim_advance(&sim, 5.0, 0, 0, 0, 0, &rec)) == GAC_SIM_IMPACT) {
+        int c = rec.contact[0];
+        CHECK(rec.ncontact == 1 && NEAR(rec.energy_after, rec.energy_before, 1e-12 * fabs(rec.energy_before)),
+              "elastic impact at %.17g: %.17g -> %.17g", rec.t, rec.energy_before, rec.energy_after);
+        if (c <= 1) {                                        /* side walls: x = 1 + vx t, reflected */
+            CHECK(c == (sides % 2 == 0 ? 1 : 0) && NEAR(rec.t, t_side, 1e-10), "side impact %d (contact %d) at "
+                  "%.17g, expected %.17g", sides, c, rec.t, t_side);
+            CHECK(NEAR(rec.qd_after[0], -rec.qd_before[0], 1e-12), "reflected");
+            t_side += 2.0 / vx;
+            ++sides;
+        } else {
+            CHECK(c == 2 && NEAR(rec.t, t_down, 1e-10), "floor impact %d at %.17g, expected %.17g", floors, rec.t,
+                  t_down);
+            t_down += period;
+            ++floors;
+        }
+    }
+    CHECK(code == GAC_SIM_END && sides == 3 && floors == 5, "end: code %d, %d side and %d floor impacts", code, sides,
+          floors);
+    box_energy(sim.x, sim.x + 2, sim.p, E1);
+    CHECK(NEAR(E1[0] + E1[1], E0[0] + E0[1], 1e-12 * (E0[0] + E0[1])), "energy %.17g -> %.17g", E0[0] + E0[1],
+          E1[0] + E1[1]);
+    CHECK(sim.x[0] > 0.0 && sim.x[0] < 2.0 && sim.x[1] > 0.0 && sim.x[1] < 2.0 && sim.nactive == 0, "inside");
+}
+
+/* Refusals: NULL pointers, bad options, an inconsistent model, a start beyond a wall (sim unchanged). */
+static void test_errors(void)
+{
+    gac_options opt;
+    gac_sim sim, before;
+    gac_impact_record rec;
+    gac_model bad = box;
+    gac_contact wrong[4];
+    const double below[1] = {-0.01};
+    double t = -1.0;
+    gac_default_options(&opt);
+    CHECK(gac_sim_init(0, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, 0) == GAC_ERR_NULL_ARGUMENT, "sim NULL");
+    CHECK(gac_sim_init(&sim, 0, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, 0) == GAC_ERR_NULL_ARGUMENT, "model NULL");
+    CHECK(gac_sim_init(&sim, &ball, 0, iwork, 0.0, ball_q0, ball_qd0, 0, 0) == GAC_ERR_NULL_ARGUMENT, "dwork NULL");
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, 0, ball_qd0, 0, 0) == GAC_ERR_NULL_ARGUMENT, "q NULL");
+    opt.method = 7;
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt) == GAC_ERR_BAD_OPTION, "method");
+    bad.nx = 3;
+    CHECK(gac_sim_init(&sim, &bad, dwork, iwork, 0.0, box_q0, box_qd0, 0, 0) == GAC_ERR_BAD_MODEL, "nx != 2 nq");
+    memcpy(wrong, box_contacts, sizeof wrong);
+    wrong[3].row = 2;                                       /* njrow is 2 */
+    bad = box;
+    bad.contacts = wrong;
+    CHECK(gac_model_check(&bad) == GAC_ERR_BAD_MODEL, "Jacobian row out of range");
+    memset(&sim, 0xab, sizeof sim);
+    memcpy(&before, &sim, sizeof sim);
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, below, ball_qd0, 0, 0) == GAC_ERR_START_OUTSIDE,
+          "start 1 cm below the floor");
+    CHECK(memcmp(&sim, &before, sizeof sim) == 0, "a refused start leaves sim unchanged");
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, 0) == GAC_OK, "init");
+    gac_record_bind(&rec, &ball, rdwork, riwork);
+    CHECK(gac_sim_advance(&sim, 1.0, 0, 0, 0, 0, 0) == GAC_ERR_NULL_ARGUMENT, "record NULL");
+    CHECK(gac_sim_advance(0, 1.0, 0, 0, 0, 0, &rec) == GAC_ERR_NULL_ARGUMENT, "sim NULL");
+    CHECK(gac_sim_advance(&sim, -1.0, 0, 0, 0, 0, &rec) == GAC_ERR_BAD_OPTION, "t_end before t");
+    CHECK(gac_sim_advance(&sim, NAN, 0, 0, 0, 0, &rec) == GAC_ERR_BAD_OPTION, "t_end NaN");
+    gac_sim_state(&sim, &t, 0, 0);
+    CHECK(t == 0.0, "refused calls change nothing (t %g)", t);
+    CHECK(strcmp(gac_error_message(GAC_ERR_START_OUTSIDE), gac_error_message(GAC_ERR_BAD_OPTION)) != 0
+          && strcmp(gac_error_message(12345), "unknown error code") == 0, "messages");
+}
+
+int main(int argc, char **argv)
+{
+    broken = argc > 1 && strcmp(argv[1], "--break") == 0;
+    test_sizes();
+    test_impact_kernels();
+    test_ball(GAC_METHOD_DOPRI5);
+    test_ball(GAC_METHOD_DOP853);
+    test_ball(GAC_METHOD_RK4);
+    test_box();
+    test_errors();
+    printf("%d checks, %d failed\n", checks, failures);
+    return failures == 0 ? 0 : 1;
+}

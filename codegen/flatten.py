@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from .model import Kernel
+from .kernels import Kernel
 
 
 @dataclass

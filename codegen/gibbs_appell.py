@@ -68,7 +68,7 @@ def right_hand_side(tape: Tape, chain: ChainSymbols, rotations, moments, motion:
         else:
             S = T = (ZERO, ZERO, ZERO)
         if F is not None:
-            F_parent = tape.let_vec(to_parent(rotations[k + 1], F), f"Fd_{tag}")
+            F_parent = tape.let_vec(to_parent(rotations[k + 1], F), f"Fp_{tag}")
             N_parent = to_parent(rotations[k + 1], N)
             S = add(S, F_parent)
             T = add(T, add(N_parent, cross(link_offset(chain, moments, k), F_parent)))

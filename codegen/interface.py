@@ -67,7 +67,7 @@ def _out(name, doc):
 
 
 # ---------------------------------------------------------------------------------------------------
-# kernels: generated per scene (codegen.model builds them in this order; codegen.emit checks it)
+# kernels: generated per scene (codegen.kernels builds them in this order; codegen.emit checks it)
 # ---------------------------------------------------------------------------------------------------
 KERNELS = (
     Function("mass_matrix", "void", (_q(), _p(), _out("M", "I_f, NQ x NQ row-major, symmetric")),

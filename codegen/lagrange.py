@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from . import model
+from . import kernels
 from .kinematics import ChainSymbols
 from .linalg import ldlt_solve
 from .scene import Scene
@@ -51,8 +51,8 @@ class InlineTape(Tape):
 
 
 def energies(chain: ChainSymbols) -> tuple[sp.Expr, sp.Expr]:
-    """Kinetic and potential energy T, V as explicit expressions (model.energy_expressions on an InlineTape)."""
-    return model.energy_expressions(InlineTape(), chain)
+    """Kinetic and potential energy T, V as explicit expressions (kernels.energy_expressions on an InlineTape)."""
+    return kernels.energy_expressions(InlineTape(), chain)
 
 
 class Differentiator:
@@ -132,28 +132,28 @@ def euler_lagrange(chain: ChainSymbols, progress=None) -> Expansion:
 
 
 # ---------------------------------------------------------------------------
-# kernels (same names, inputs and outputs as codegen.model's)
+# kernels (same names, inputs and outputs as codegen.kernels's)
 # ---------------------------------------------------------------------------
-def mass_matrix_kernel(chain: ChainSymbols, expansion: Expansion) -> model.Kernel:
+def mass_matrix_kernel(chain: ChainSymbols, expansion: Expansion) -> kernels.Kernel:
     N = chain.layout.nq
-    k = model.Kernel("mass_matrix", "Flight inertia matrix I_f(Theta), full, row-major (Lagrangian expansion: "
+    k = kernels.Kernel("mass_matrix", "Flight inertia matrix I_f(Theta), full, row-major (Lagrangian expansion: "
                      "d2T/dqd_i dqd_j).", ("q", "p"), "M", N * N, Tape())
     k.values = [expansion.inertia(i, j) for i in range(N) for j in range(N)]
     return k
 
 
-def bias_kernel(chain: ChainSymbols, expansion: Expansion) -> model.Kernel:
+def bias_kernel(chain: ChainSymbols, expansion: Expansion) -> kernels.Kernel:
     N = chain.layout.nq
-    k = model.Kernel("bias", "Right-hand side R(Theta, Theta_dot) of I_f Theta_ddot = R (Lagrangian expansion: "
+    k = kernels.Kernel("bias", "Right-hand side R(Theta, Theta_dot) of I_f Theta_ddot = R (Lagrangian expansion: "
                      "-(d2T/dqd dq qd - dT/dq + dV/dq)).", ("q", "qd", "p"), "R", N, Tape())
     k.values = list(expansion.R)
     return k
 
 
-def forward_dynamics_kernel(chain: ChainSymbols, expansion: Expansion) -> model.Kernel:
+def forward_dynamics_kernel(chain: ChainSymbols, expansion: Expansion) -> kernels.Kernel:
     free = chain.layout.free
     N = len(free)
-    k = model.Kernel("forward_dynamics", "Theta_ddot solving I_f Theta_ddot = R (Lagrangian expansion), by a "
+    k = kernels.Kernel("forward_dynamics", "Theta_ddot solving I_f Theta_ddot = R (Lagrangian expansion), by a "
                      "dense straight-line LDL^T.", ("q", "qd", "p"), "qdd", N, Tape())
     lower = {(i, j): k.tape.let(e, f"M_{i}_{j}") for (i, j), e in expansion.lower.items()}
     R = [k.tape.let(e, f"R_{i}") for i, e in enumerate(expansion.R)]
@@ -166,21 +166,21 @@ def forward_dynamics_kernel(chain: ChainSymbols, expansion: Expansion) -> model.
 DYNAMICS = {"mass_matrix": mass_matrix_kernel, "bias": bias_kernel, "forward_dynamics": forward_dynamics_kernel}
 
 
-def build_kernels(scene: Scene, bake_params: bool = False, progress=None, layout=None) -> list[model.Kernel]:
+def build_kernels(scene: Scene, bake_params: bool = False, progress=None, layout=None) -> list[kernels.Kernel]:
     """Every kernel of the scene, with the dynamics (mass_matrix, bias, forward_dynamics) from the
-    Lagrangian expansion and the others (contacts, energy) from codegen.model, in the model's order."""
+    Lagrangian expansion and the others (contacts, energy) from codegen.kernels, in the model's order."""
     chain = ChainSymbols(scene, bake_params, layout)
     if progress:
         progress("lagrange expansion")
     expansion = euler_lagrange(chain, progress)
-    kernels = []
-    for builder in model.KERNEL_BUILDERS:
+    built = []
+    for builder in kernels.KERNEL_BUILDERS:
         name = builder.__name__.removesuffix("_kernel")
         if progress:
             progress(name)
-        kernels.append(DYNAMICS[name](chain, expansion) if name in DYNAMICS else builder(chain))
-    missing = set(DYNAMICS) - {k.name for k in kernels}
+        built.append(DYNAMICS[name](chain, expansion) if name in DYNAMICS else builder(chain))
+    missing = set(DYNAMICS) - {k.name for k in built}
     if missing:
-        raise RuntimeError(f"codegen.model has no kernel builder for {sorted(missing)}: cannot substitute "
+        raise RuntimeError(f"codegen.kernels has no kernel builder for {sorted(missing)}: cannot substitute "
                            "the Lagrangian dynamics")
-    return kernels
+    return built

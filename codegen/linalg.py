@@ -42,7 +42,7 @@ def ldlt_solve(tape: Tape, lower: dict[tuple[int, int], sp.Expr], rhs: list[sp.E
     x = [None] * N
     for i in reversed(range(N)):  # D L^T x = z
         value = z[i] * dinv[i] - sum((L[(k, i)] * x[k] for k in range(i + 1, N)), sp.Integer(0))
-        x[i] = tape.let(value, f"x_{i}")
+        x[i] = tape.let(value, f"sol_{i}")
     solution = [None] * N
     for i, original in enumerate(order):
         solution[original] = x[i]

@@ -9,12 +9,12 @@ from .artifact import library_files
 from .emit import GeneratedModel, render_model, render_standalone
 from .flatten import flatten, live_assignments
 from .ops import raw_count_ops
-from . import lagrange, model as gibbs_appell_model
+from . import kernels, lagrange
 from .scene import Scene
 from .specialise import check_not_singular, layout_for
 
 
-FORMULATIONS = {"gibbs_appell": gibbs_appell_model.build_kernels, "lagrange": lagrange.build_kernels}
+FORMULATIONS = {"gibbs_appell": kernels.build_kernels, "lagrange": lagrange.build_kernels}
 DYNAMICS_KERNELS = ("mass_matrix", "bias", "forward_dynamics")
 
 
@@ -32,7 +32,7 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
     (with op counts), .layout and .timings (seconds per stage: derive, cse, render).
 
     ``formulation`` chooses how the dynamics kernels (mass_matrix, bias, forward_dynamics) are derived:
-    "gibbs_appell" (the paper's recursion, codegen.model) or "lagrange" (an explicit Euler-Lagrange
+    "gibbs_appell" (the paper's recursion, codegen.kernels) or "lagrange" (an explicit Euler-Lagrange
     expansion, codegen.lagrange, for comparison); the other kernels are the same.  ``raw_ops`` also
     records sympy's ``count_ops`` of each dynamics kernel before CSE in ``.raw_ops`` (name -> int).
     """
@@ -43,19 +43,19 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
     check_not_singular(scene, layout)
     timings = {}
     start = time.perf_counter()
-    kernels = FORMULATIONS[formulation](scene, bake_params, progress=lambda k: progress(f"derive {k}"),
+    derived = FORMULATIONS[formulation](scene, bake_params, progress=lambda k: progress(f"derive {k}"),
                                         layout=layout)
     timings["derive"] = time.perf_counter() - start
     raw = {}
     if raw_ops:
-        for kernel in kernels:
+        for kernel in derived:
             if kernel.name in DYNAMICS_KERNELS:
                 progress(f"raw count_ops {kernel.name}")
                 raw[kernel.name] = raw_kernel_ops(kernel)
 
     start = time.perf_counter()
     programs = []
-    for kernel in kernels:
+    for kernel in derived:
         progress(f"cse {kernel.name} ({len(kernel.tape.assignments)} tape entries)")
         programs.append(flatten(kernel))
     timings["cse"] = time.perf_counter() - start

@@ -6,7 +6,8 @@
  * Scene hash     sha256 0ab6f7afe1af46e91ce4c6597b54a3bd1512a5b479cea17dfad143ec21ae07d3
  * Parameters     runtime array p (layout below)
  * Method         recursive Gibbs-Appell (Korayem-style, Eq. 1-48 of the paper), straight-line,
- *                common-subexpression-eliminated; I_f is factorised numerically (LDL^T), never inverted.
+ *                common-subexpression-eliminated.  forward_dynamics solves I_f Theta_ddot = R by an O(n)
+ *                articulated-body recursion (I_f never formed); the impact law factorises I_f (LDL^T).
  * Library        the hybrid loop (integrators, events, impact law, resting contact) is the plain C99
  *                library gac (gac.h, gac_*.c beside this file); paper_case1.c holds the kernels and the
  *                descriptor paper_case1_model that the library runs.  Build: cc -std=c99 paper_case1.c gac_*.c -lm

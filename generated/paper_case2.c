@@ -125,19 +125,19 @@ void paper_case2_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT q
     const double T_1_x = K_1_xx*wdv_1_x + Kw_1_z*wp_1_y - Kw_1_y*w_1_z;
     const double T_1_y = K_1_yy*wdv_1_y + Kw_1_x*w_1_z - Kw_1_z*wp_1_x - av_0_x*h_1_x;
     const double T_1_z = K_1_zz*wdv_0_x + Kw_1_y*wp_1_x + av_1_y*h_1_x - Kw_1_x*wp_1_y;
-    const double Fd_0_y = S_1_x*c_1 - S_1_y*s_1;
-    const double Fd_0_z = S_1_x*s_1 + S_1_y*c_1;
+    const double Fp_0_y = S_1_x*c_1 - S_1_y*s_1;
+    const double Fp_0_z = S_1_x*s_1 + S_1_y*c_1;
     const double N_0_y = T_1_x*c_1 - T_1_y*s_1;
     const double N_0_z = T_1_x*s_1 + T_1_y*c_1;
-    const double Fd_m1_x = S_1_z*c_0 - Fd_0_y*s_0;
-    const double Fd_m1_z = Fd_0_y*c_0 + S_1_z*s_0;
+    const double Fp_m1_x = S_1_z*c_0 - Fp_0_y*s_0;
+    const double Fp_m1_z = Fp_0_y*c_0 + S_1_z*s_0;
     const double N_m1_z = N_0_y*c_0 + T_1_z*s_0;
     R[0] = -N_m1_z;
     R[1] = -N_0_z;
     R[2] = -T_1_z;
-    R[3] = -Fd_0_z*s_m1 - Fd_m1_x*c_m1;
-    R[4] = -Fd_m1_z;
-    R[5] = Fd_m1_x*s_m1 - Fd_0_z*c_m1;
+    R[3] = -Fp_0_z*s_m1 - Fp_m1_x*c_m1;
+    R[4] = -Fp_m1_z;
+    R[5] = Fp_m1_x*s_m1 - Fp_0_z*c_m1;
 }
 
 /* Theta_ddot solving I_f Theta_ddot = R, by an O(n) articulated-body recursion.  236 ops (71 add, 153 mul, 6 div, 6 calls) */
@@ -245,18 +245,18 @@ void paper_case2_forward_dynamics(const double *GAC_RESTRICT q, const double *GA
     const double Dinv_2 = 1.0/(D_2);
     const double z_1 = pF_1_z + L_1_0*paF_m1_x;
     const double z_2 = -paF_m1_z + L_2_0*paF_m1_x - L_2_1*z_1;
-    const double x_2 = Dinv_2*z_2;
-    const double x_1 = Dinv_1_2*z_1 - L_2_1*x_2;
-    const double x_0 = -Dinv_0_2*paF_m1_x - L_1_0*x_1 - L_2_0*x_2;
-    const double Xdd_0 = c_m1*x_0 - s_m1*x_1;
-    const double Xdd_2 = -c_m1*x_1 - s_m1*x_0;
+    const double sol_2 = Dinv_2*z_2;
+    const double sol_1 = Dinv_1_2*z_1 - L_2_1*sol_2;
+    const double sol_0 = -Dinv_0_2*paF_m1_x - L_1_0*sol_1 - L_2_0*sol_2;
+    const double Xdd_0 = c_m1*sol_0 - s_m1*sol_1;
+    const double Xdd_2 = -c_m1*sol_1 - s_m1*sol_0;
     const double acc_m1_x = Xdd_0*c_m1 - Xdd_2*s_m1;
     const double acc_m1_y = -Xdd_0*s_m1 - Xdd_2*c_m1;
-    const double qdd_m1 = ud_m1 - W_m1_3*acc_m1_x - W_m1_5*x_2;
+    const double qdd_m1 = ud_m1 - W_m1_3*acc_m1_x - W_m1_5*sol_2;
     const double alpha_0_x = qdd_m1*s_0;
     const double alpha_0_y = c_0*qdd_m1;
-    const double acc_0_x = acc_m1_x*c_0 + s_0*x_2;
-    const double acc_0_y = c_0*x_2 - acc_m1_x*s_0;
+    const double acc_0_x = acc_m1_x*c_0 + s_0*sol_2;
+    const double acc_0_y = c_0*sol_2 - acc_m1_x*s_0;
     const double qdd_0 = ud_0 - W_0_1*alpha_0_y - W_0_3*acc_0_x;
     const double acc_1_y = -acc_0_y*s_1 - acc_m1_y*c_1;
     const double qdd_1 = ud_1 - alpha_0_x - W_1_4*acc_1_y;
@@ -264,7 +264,7 @@ void paper_case2_forward_dynamics(const double *GAC_RESTRICT q, const double *GA
     qdd[1] = qdd_0;
     qdd[2] = qdd_1;
     qdd[3] = Xdd_0;
-    qdd[4] = x_2;
+    qdd[4] = sol_2;
     qdd[5] = Xdd_2;
 }
 

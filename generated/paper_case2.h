@@ -6,7 +6,8 @@
  * Scene hash     sha256 a5bc02f7b5d523835ac79623ca01f989a9626876e836508f4e91909a1de1dea6
  * Parameters     runtime array p (layout below)
  * Method         recursive Gibbs-Appell (Korayem-style, Eq. 1-48 of the paper), straight-line,
- *                common-subexpression-eliminated; I_f is factorised numerically (LDL^T), never inverted.
+ *                common-subexpression-eliminated.  forward_dynamics solves I_f Theta_ddot = R by an O(n)
+ *                articulated-body recursion (I_f never formed); the impact law factorises I_f (LDL^T).
  * Library        the hybrid loop (integrators, events, impact law, resting contact) is the plain C99
  *                library gac (gac.h, gac_*.c beside this file); paper_case2.c holds the kernels and the
  *                descriptor paper_case2_model that the library runs.  Build: cc -std=c99 paper_case2.c gac_*.c -lm

@@ -2,7 +2,7 @@
 
     python -m studies ops --links 1-8 [--out DIR] [--specialise] [--timeout S] [--lagrange-max N]
 
-For every n and both formulations (codegen.model's Gibbs-Appell kernels, codegen.lagrange's expansion)
+For every n and both formulations (codegen.kernels's Gibbs-Appell kernels, codegen.lagrange's expansion)
 it generates the model of the built-in n-link scene (the general n + 5 coordinate model unless
 --specialise) and reports: the derivation and CSE times (all kernels of the model), the operation counts
 after CSE of I_f (mass_matrix), R (bias) and the forward dynamics (rule in codegen.ops), sympy's raw

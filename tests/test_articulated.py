@@ -14,7 +14,7 @@ from studies import reference
 from conftest import random_parameters, random_scene, reference_of
 from codegen.flatten import flatten
 from codegen.kinematics import ChainSymbols
-from codegen.model import forward_dynamics_kernel
+from codegen.kernels import forward_dynamics_kernel
 from codegen.ops import count_ops
 from codegen.scene import default_scene
 from codegen.specialise import layout_for

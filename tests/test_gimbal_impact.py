@@ -12,7 +12,7 @@ import pytest
 import sympy as sp
 
 from codegen.kinematics import ChainSymbols
-from codegen.model import contact_jacobian_kernel, mass_matrix_kernel
+from codegen.kernels import contact_jacobian_kernel, mass_matrix_kernel
 from codegen.scene import load_scene
 from runtime import ImpactError, simulate
 

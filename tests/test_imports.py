@@ -37,7 +37,7 @@ def test_generating_loads_sympy_on_demand():
 
 def test_the_generator_never_imports_the_runtime():
     modules = ["codegen", "codegen.scene", "codegen.pipeline", "codegen.cache", "codegen.cli", "codegen.emit",
-               "codegen.model", "codegen.articulated", "codegen.lagrange", "codegen.specialise"]
+               "codegen.kernels", "codegen.articulated", "codegen.lagrange", "codegen.specialise"]
     loaded = run_python(
         f"import importlib, sys\n"
         f"for name in {modules!r}: importlib.import_module(name)\n"

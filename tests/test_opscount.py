@@ -11,7 +11,7 @@ import sympy as sp
 import codegen
 from codegen.flatten import live_assignments
 from codegen.lagrange import build_kernels as lagrange_kernels
-from codegen.model import build_kernels as gibbs_appell_kernels
+from codegen.kernels import build_kernels as gibbs_appell_kernels
 from codegen.ops import raw_count_ops
 from codegen.scene import default_scene
 from conftest import random_scene

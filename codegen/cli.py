@@ -15,7 +15,7 @@ from .specialise import check_not_singular, layout_for
 
 
 
-def parse_args(argv=None) -> argparse.Namespace:
+def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="python -m codegen",
         description="Generate C99 for the flight and impact dynamics of an n-link chain confined in a box "
@@ -55,7 +55,11 @@ def parse_args(argv=None) -> argparse.Namespace:
                              "and a CMakeLists.txt: everything needed to build and embed it with no Python")
     parser.add_argument("--no-compile", action="store_true",
                         help="skip the cffi compile check/build of the generated code")
-    return parser.parse_args(argv)
+    return parser
+
+
+def parse_args(argv=None) -> argparse.Namespace:
+    return build_parser().parse_args(argv)
 
 
 def out_dir_problem(value: str) -> str:

@@ -1,6 +1,6 @@
 """Symbols of a scene and the recursive kinematics of the chain (paper Sect. 2 and Eq. 15-23).
 
-Frame convention (README, "Frame convention"): ^{ref}R_{-1} = T_{-1} Rz(theta_-1) and
+Frame convention (docs/model.md, "Frame convention"): ^{ref}R_{-1} = T_{-1} Rz(theta_-1) and
 ^{k-1}R_k = T_k Rz(theta_k) for k = 0..n.  Links -1 and 0 are massless and of zero length;
 link k spans O_k -> O_{k+1} = O_k + l_k x_{k,1}, and O_{-1} = O_0 = O_1 = (X1, X2, X3).
 

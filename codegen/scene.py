@@ -225,7 +225,7 @@ def rot_z(a: float) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-# The frame convention (README "Frame convention"): ^{ref}R_{-1} = T_{-1} Rz(theta_-1),
+# The frame convention (docs/model.md, "Frame convention"): ^{ref}R_{-1} = T_{-1} Rz(theta_-1),
 # ^{k-1}R_k = T_k Rz(theta_k).  These three are fixed; T_k = I for k >= 2 unless the scene says otherwise.
 T_MINUS1 = ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, -1.0, 0.0))   # Rx(-90 deg)
 T_0 = ((1.0, 0.0, 0.0), (0.0, 0.0, -1.0), (0.0, 1.0, 0.0))        # Rx(+90 deg)
@@ -619,7 +619,7 @@ def _toml_field_at(text: str, line: int) -> str:
 
 
 def scene_from_dict(data: dict, default_name: str = "scene") -> Scene:
-    """Build a Scene from the plain-data form used by the TOML/JSON files (see README)."""
+    """Build a Scene from the plain-data form used by the TOML/JSON files (see docs/scenes.md)."""
     _check_keys(data, TOP_KEYS, "scene")
     links, twists = _links_from_data(data.get("links"))
     n = len(links)

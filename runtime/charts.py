@@ -1,6 +1,6 @@
 """Near gimbal lock: integrate on a second chart of the base orientation and switch back.
 
-The orientation of link 1 is parametrised by three angles (README, "Frame convention")::
+The orientation of link 1 is parametrised by three angles (docs/model.md, "Frame convention")::
 
     ^{ref}R_1 = T_{-1} Rz(theta_-1) T_0 Rz(theta_0) T_1 Rz(theta_1)
 

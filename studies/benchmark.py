@@ -48,14 +48,18 @@ def error(times: np.ndarray, reference: np.ndarray) -> float:
     return float(np.abs(times - reference).max())
 
 
-def main(argv=None) -> int:
+def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m studies benchmark", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--scene", default="paper-case1")
     parser.add_argument("--t-end", type=float, default=1.5)
     parser.add_argument("--repeat", type=int, default=21, help="runs per measurement (median reported)")
     parser.add_argument("--rtols", default="1e-6,1e-8,1e-10,1e-12")
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
     model = load_model(load_scene(args.scene))
     reference = reference_times(model, args.t_end)
     print(f"{args.scene}, t_end = {args.t_end} s, {len(reference)} impacts; machine {platform.machine()}, "

@@ -1,4 +1,4 @@
-"""Figures for README "Near gimbal lock: chart switching":  python -m studies charts
+"""Figures for docs/simulation.md, "Near gimbal lock: chart switching":  python -m studies charts
 
 1. The gimbal-lock scene over its first 0.5 s (free flight through the lock at t = 0.25 s): one chart
    against chart switching, for DOPRI5 and DOP853 at several tolerances: how far each gets, its steps,
@@ -73,9 +73,13 @@ def long_table() -> str:
     return "\n".join(lines)
 
 
+def build_parser() -> argparse.ArgumentParser:
+    return argparse.ArgumentParser(prog="python -m studies charts", description=__doc__,
+                                   formatter_class=argparse.RawDescriptionHelpFormatter)
+
+
 def main(argv=None) -> int:
-    argparse.ArgumentParser(prog="python -m studies charts", description=__doc__,
-                            formatter_class=argparse.RawDescriptionHelpFormatter).parse_args(argv)
+    build_parser().parse_args(argv)
     print(lock_table())
     print()
     print(long_table())

@@ -52,13 +52,17 @@ def measure(n: int, t_end: float, runs: int, folder: Path) -> dict:
             "timing": timing}
 
 
-def main(argv=None) -> int:
+def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m studies embed", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--links", default="4,16")
     parser.add_argument("--t-end", type=float, default=1.5)
     parser.add_argument("--runs", type=int, default=50)
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
     rows = []
     for n in (int(x) for x in args.links.split(",")):
         with tempfile.TemporaryDirectory() as tmp:

@@ -283,7 +283,7 @@ def parse_links(text: str) -> list[int]:
     return sorted(ns)
 
 
-def parse_args(argv):
+def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m studies ops", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--links", default="1-8", help="n values: a range 1-8, a list 1,2,4 or both (default 1-8)")
@@ -300,7 +300,11 @@ def parse_args(argv):
                         help="rhs calls per timing batch (7 batches, median; default: about 0.2 s per batch)")
     parser.add_argument("--one", type=int, help=argparse.SUPPRESS)            # child process: one measurement
     parser.add_argument("--formulation", choices=FORMULATIONS, help=argparse.SUPPRESS)
-    return parser.parse_args(argv)
+    return parser
+
+
+def parse_args(argv=None) -> argparse.Namespace:
+    return build_parser().parse_args(argv)
 
 
 def main(argv=None) -> int:

@@ -47,7 +47,7 @@ def markdown(rows) -> str:
     return "\n".join(lines)
 
 
-def main(argv=None) -> int:
+def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m studies scaling", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--links", default="1,2,4,8,16,32", help="comma-separated n values")
@@ -55,7 +55,11 @@ def main(argv=None) -> int:
     parser.add_argument("--specialise", action="store_true",
                         help="measure the scene-specialised (planar, n + 2 coordinates) models instead of the "
                              "general n + 5 coordinate ones")
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
     try:
         ns = [int(x) for x in args.links.split(",")]
     except ValueError:

@@ -24,11 +24,15 @@ from .timing import time_call, time_rhs
 T_END = {"paper-case1": 1.5, "paper-case2": 1.75}
 
 
-def main(argv=None) -> int:
+def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m studies specialise", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeat", type=int, default=21)
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
     print("| scene | model | coordinates | forward dynamics ops | all kernels ops | ns per rhs (C loop) "
           "| simulation ms (DOP853, rtol 1e-10) | impacts | max impact-time difference s (rtol 1e-13) |")
     print("|---|---|---|---|---|---|---|---|---|")

@@ -331,7 +331,7 @@ SEVERAL_CONTACTS = (
 )
 
 
-# The grazing contact.  Behaviour (decided here, documented in the README): an impact is registered
+# The grazing contact.  Behaviour (decided here, documented in docs/simulation.md): an impact is registered
 # only where a gap crosses zero with the point approaching its wall (normal velocity < 0); a touch
 # with normal velocity exactly 0 is not an impact.  Numerically the tangency lands within the
 # integration error of the wall: either no crossing at all, or a crossing with an approach speed of

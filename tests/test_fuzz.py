@@ -102,7 +102,7 @@ def test_fast_sample_has_no_failure():
 
 @pytest.mark.slow
 def test_thousand_runs_have_no_failure():
-    """The study of record (README): 1,000 runs, 50 structures of up to 8 links x 20, a 5 s budget each."""
+    """The study of record (docs/validation.md): 1,000 runs, 50 structures of up to 8 links x 20, a 5 s budget each."""
     outcomes = fuzz.fuzz(runs=1000, per_structure=20, seed=0, budget=5.0, jobs=None)
     assert len(outcomes) == 1000
     failed = [(o.case, o.violations or o.message[:160]) for o in outcomes if o.failed]

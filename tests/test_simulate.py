@@ -136,7 +136,7 @@ def test_case1_matches_all_seven_paper_times(compiled):
 
 def test_case2_matches_the_paper_except_its_fifth_impact(compiled):
     """Impacts 1-4 and 6 agree with the paper (time, point and wall); the paper's fifth impact
-    (O1 on the floor at 0.863 s) comes 5 ms later here (0.868 s): see the README."""
+    (O1 on the floor at 0.863 s) comes 5 ms later here (0.868 s): see docs/simulation.md."""
     result = simulate(compiled(load_scene("paper-case2")), 0.9, rtol=1e-12, atol=1e-14)
     for k, (impact, (printed, point, wall)) in enumerate(zip(result.impacts, PAPER_CASE2), start=1):
         assert contacts_of(impact) == {(point, wall)}

@@ -6,11 +6,13 @@
 
 #include <math.h>
 
-/* In-place LDL^T of a symmetric positive definite n x n row-major matrix (lower triangle read;
- * L below the diagonal, D on it).  Returns 0, or -1 when a pivot is not above tol * max|A_ii|. */
-int gac_ldlt(int n, double *A, double tol)
+/* In-place LDL^T of a symmetric n x n row-major matrix (lower triangle read; L below the diagonal, D on
+ * it).  A pivot not above tol * max|A_ii| stops the factorisation (drop = 0: returns -1) or, with drop = 1,
+ * is replaced by 1e300 so that its unknown comes out 0 (returns the number replaced).  -1 also when A has
+ * no positive diagonal. */
+static int gac_ldlt_factor(int n, double *A, double tol, int drop)
 {
-    int i, j, k;
+    int i, j, k, dropped = 0;
     double scale = 0.0;
     for (i = 0; i < n; ++i) {
         if (fabs(A[i*n + i]) > scale) scale = fabs(A[i*n + i]);
@@ -19,15 +21,26 @@ int gac_ldlt(int n, double *A, double tol)
     for (j = 0; j < n; ++j) {
         double d = A[j*n + j];
         for (k = 0; k < j; ++k) d -= A[j*n + k] * A[j*n + k] * A[k*n + k];
-        if (!(d > tol * scale)) return -1;
+        if (!(d > tol * scale)) {
+            if (!drop) return -1;
+            d = 1e300;
+            ++dropped;
+        }
         A[j*n + j] = d;
         for (i = j + 1; i < n; ++i) {
-            double s = A[i*n + j];
-            for (k = 0; k < j; ++k) s -= A[i*n + k] * A[j*n + k] * A[k*n + k];
-            A[i*n + j] = s / d;
+            double sum = A[i*n + j];
+            for (k = 0; k < j; ++k) sum -= A[i*n + k] * A[j*n + k] * A[k*n + k];
+            A[i*n + j] = sum / d;
         }
     }
-    return 0;
+    return dropped;
+}
+
+/* In-place LDL^T of a symmetric positive definite matrix.  Returns 0, or -1 when a pivot is not above
+ * tol * max|A_ii|. */
+int gac_ldlt(int n, double *A, double tol)
+{
+    return gac_ldlt_factor(n, A, tol, 0);
 }
 
 /* Solve (L D L^T) x = b in place, with the factor of gac_ldlt. */
@@ -43,31 +56,10 @@ void gac_ldlt_solve(int n, const double *LD, double *b)
     }
 }
 
-/* LDL^T of the n x n constraint matrix N I_f^-1 N^T (as gac_ldlt), where a pivot not above tol * max|A_ii|
- * (a constraint dependent on the earlier ones, which hold it already) is replaced by 1e300: its multiplier
- * comes out 0 and it drops out.  Returns the number of such constraints, or -1 if A has no positive
- * diagonal. */
+/* LDL^T of the n x n constraint matrix N I_f^-1 N^T, where a pivot not above tol * max|A_ii| (a constraint
+ * dependent on the earlier ones, which hold it already) is replaced by 1e300: its multiplier comes out 0
+ * and it drops out.  Returns the number of such constraints, or -1 if A has no positive diagonal. */
 int gac_ldlt_drop(int n, double *A, double tol)
 {
-    int i, j, k, dropped = 0;
-    double scale = 0.0;
-    for (i = 0; i < n; ++i) {
-        if (fabs(A[i*n + i]) > scale) scale = fabs(A[i*n + i]);
-    }
-    if (!(scale > 0.0)) return -1;
-    for (j = 0; j < n; ++j) {
-        double d = A[j*n + j];
-        for (k = 0; k < j; ++k) d -= A[j*n + k] * A[j*n + k] * A[k*n + k];
-        if (!(d > tol * scale)) {
-            d = 1e300;
-            ++dropped;
-        }
-        A[j*n + j] = d;
-        for (i = j + 1; i < n; ++i) {
-            double sum = A[i*n + j];
-            for (k = 0; k < j; ++k) sum -= A[i*n + k] * A[j*n + k] * A[k*n + k];
-            A[i*n + j] = sum / d;
-        }
-    }
-    return dropped;
+    return gac_ldlt_factor(n, A, tol, 1);
 }

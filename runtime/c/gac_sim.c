@@ -419,18 +419,12 @@ static double gac_dopri5_step(gac_sim *s, double h)
     return gac_norm(s, s->xs, s->x, s->x1);
 }
 
-/* One Dormand-Prince 8(5,3) step of size h; returns the error norm (Hairer's combined 5th/3rd-order
- * estimate); x1 and k[12] = f(t + h, x1).  Stage i is k[i] (k[0] is s->f). */
-static double gac_dop853_step(gac_sim *s, double h)
+/* DOP853 stages first..last-1: K[stage] = f(t + c[stage] h, x + h sum_j a[stage][j] K[j]). */
+static void gac_dop853_stages(gac_sim *s, double h, double *const *K, int first, int last)
 {
-    const gac_model *md = s->model;
-    const int nx = md->nx;
-    double *K[13];
-    double e5 = 0.0, e3 = 0.0, largest = -1.0;
+    const int nx = s->model->nx;
     int i, j, stage;
-    K[0] = s->f;
-    for (j = 1; j < 13; ++j) K[j] = s->k[j];
-    for (stage = 1; stage < 12; ++stage) {
+    for (stage = first; stage < last; ++stage) {
         const double *a = gac_dop853_a[stage];
         for (i = 0; i < nx; ++i) {
             double sum = 0.0;
@@ -439,6 +433,20 @@ static double gac_dop853_step(gac_sim *s, double h)
         }
         gac_f(s, s->t + gac_dop853_c[stage] * h, s->xs, K[stage]);
     }
+}
+
+/* One Dormand-Prince 8(5,3) step of size h; returns the error norm (Hairer's combined 5th/3rd-order
+ * estimate); x1 and k[12] = f(t + h, x1).  Stage i is k[i] (k[0] is s->f). */
+static double gac_dop853_step(gac_sim *s, double h)
+{
+    const gac_model *md = s->model;
+    const int nx = md->nx;
+    double *K[13];
+    double e5 = 0.0, e3 = 0.0, largest = -1.0;
+    int i, j;
+    K[0] = s->f;
+    for (j = 1; j < 13; ++j) K[j] = s->k[j];
+    gac_dop853_stages(s, h, K, 1, 12);
     for (i = 0; i < nx; ++i) {                     /* 8th-order solution: weights are row 12 of a */
         double sum = 0.0;
         for (j = 0; j < 12; ++j) sum += gac_dop853_a[12][j] * K[j][i];
@@ -545,18 +553,10 @@ static void gac_prepare_dense(gac_sim *s, double h)
         }
     } else if (s->opt.method == GAC_METHOD_DOP853) {   /* three more stages, then contd8 */
         double *K[16];
-        int j, stage, r;
+        int j, r;
         K[0] = s->f;
         for (j = 1; j < 16; ++j) K[j] = s->k[j];
-        for (stage = 13; stage < 16; ++stage) {
-            const double *a = gac_dop853_a[stage];
-            for (i = 0; i < nx; ++i) {
-                double sum = 0.0;
-                for (j = 0; j < stage; ++j) sum += a[j] * K[j][i];
-                s->xs[i] = s->x[i] + h * sum;
-            }
-            gac_f(s, s->t + gac_dop853_c[stage] * h, s->xs, K[stage]);
-        }
+        gac_dop853_stages(s, h, K, 13, 16);
         for (i = 0; i < nx; ++i) {
             double dy = s->x1[i] - s->x[i];
             s->cont[7][i] = s->x[i];

@@ -165,8 +165,9 @@ def _add_inertia(P, Q):
     return tuple(_madd(x, y) for x, y in zip(P, Q))
 
 
-def _pivot(tape: Tape, inertia, force, tag: str):
-    """Take joint k's pivot out: U = I s, D = s^T U, u = tau - s^T p with tau = 0 (every load is in p);
+def _pivot(tape: Tape, inertia, force, tag: str, tau=ZERO):
+    """Take joint k's pivot out: U = I s, D = s^T U, u = tau - s^T p with tau the joint's generalised force
+    Q_k (inputs, spring, damper; every other load is in p);
     returns the reduced inertia and force handed to the parent, and (W = U / D, u / D) for the
     forward pass."""
     A, B, C = inertia
@@ -174,7 +175,7 @@ def _pivot(tape: Tape, inertia, force, tag: str):
     U = (A[0][2], A[1][2], A[2][2], B[2][0], B[2][1], B[2][2])
     Dinv = tape.let(1 / A[2][2], f"Dinv_{tag}")
     W = tuple(sp.Integer(1) if i == 2 else tape.let(x * Dinv, f"W_{tag}_{i}") for i, x in enumerate(U))
-    u = -N[2]                                                      # = R_k of Eq. 38
+    u = tau - N[2]                                                 # = R_k of Eq. 38
     ud = tape.let(u * Dinv, f"ud_{tag}")
     # I^a = I - W U^T; its angular z row and column vanish exactly
     A_red = [[ZERO] * 3 for _ in range(3)]
@@ -191,8 +192,8 @@ def _pivot(tape: Tape, inertia, force, tag: str):
             C_red[i][j] = C_red[j][i] = C[i][j] - W[3 + i] * U[3 + j]
     inertia = (_let_sym(tape, A_red, f"IaA_{tag}"), tape.let_mat(B_red, f"IaB_{tag}"),
                _let_sym(tape, C_red, f"IaC_{tag}"))
-    # p^a = p + W u; its z moment becomes tau = 0 exactly
-    N_red = (N[0] + W[0] * u, N[1] + W[1] * u, ZERO)
+    # p^a = p + W u; its z moment becomes N_z + u = tau exactly (0 for a joint with no generalised force)
+    N_red = (N[0] + W[0] * u, N[1] + W[1] * u, tau)
     F_red = tuple(F[i] + W[3 + i] * u for i in range(3))
     force = (tape.let_vec(N_red, f"paN_{tag}"), tape.let_vec(F_red, f"paF_{tag}"))
     return inertia, force, W, ud
@@ -224,7 +225,7 @@ def forward_dynamics(tape: Tape, chain: ChainSymbols, moments: dict[int, LinkSym
             N_parent, F_parent = joints[k + 1].force_to_parent(tape, force)
             p_k = (add(p_k[0], N_parent), add(p_k[1], F_parent))
         if k + 1 in free:
-            inertia, force, W, ud = _pivot(tape, I_k, p_k, tag)
+            inertia, force, W, ud = _pivot(tape, I_k, p_k, tag, chain.generalized_force(k + 1))
             pivots[k] = (W, ud)
         else:                       # a locked joint passes everything on
             inertia, force = I_k, p_k
@@ -248,11 +249,15 @@ def _root_translations(tape: Tape, chain: ChainSymbols, joint: JointTransform, i
     """X_ddot (reference frame) from the articulated 3 x 3 block of the whole chain at O_1.
 
     With the chain's articulated inertia (A, B, C) and force (N, F) in frame -1, the translation
-    rows of I_f Theta_ddot = R read  ^{ref}R_{-1} (C y + F) = 0  with y = ^{-1}X_ddot (Eq. 41).
+    rows of I_f Theta_ddot = R read  ^{ref}R_{-1} (C y + F) = Q_X  with y = ^{-1}X_ddot (Eq. 41),
+    Q_X the inputs acting on X1..X3 (reference frame).
     """
     n = chain.n
     _, _, C = inertia
     _, F = force
+    Q_X = tuple(chain.generalized_force(n + 2 + a) for a in range(3))
+    if any(x != 0 for x in Q_X):                    # C y = R_{-1}^T Q_X - F
+        F = tuple(tape.let(f - q, f"FQ_{a}") for a, (f, q) in enumerate(zip(F, joint.vec_to_child(Q_X))))
     kept = [a for a in range(3) if n + 2 + a in free]
     if len(kept) == 3:              # solve in frame -1, rotate the answer
         lower = {(i, j): C[i][j] for i in range(3) for j in range(i + 1)}

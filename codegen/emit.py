@@ -115,7 +115,7 @@ def render_model(scene: Scene, name: str, programs: list[Program], bake_params: 
     pnames = [pname for pname, _ in params]
     names = coordinate_names(scene.n)
     zeros = set(layout.zero_params)
-    sizes = interface.size_values(n=scene.n, nq=layout.nq, nparam=len(params), npoint=scene.n + 1,
+    sizes = interface.size_values(n=scene.n, nq=layout.nq, nparam=len(params), nu=scene.nu, npoint=scene.n + 1,
                                   ncontact=len(layout.contacts), njrow=len(layout.contact_rows))
     context = dict(
         NAME=name.upper(), name=name, version=__version__, scene=scene, scene_hash=scene_hash(scene),
@@ -132,6 +132,10 @@ def render_model(scene: Scene, name: str, programs: list[Program], bake_params: 
         qd0=[_double_literal(float(x)) for x in layout.reduce(scene.qd0)],
         literal=_double_literal,
         e_index=[-1 if bake_params else pnames.index(f"e_{wall.name}") for _, wall in layout.contacts],
+        inputs=[(i, coordinate, macro_name(coordinate), "N m" if coordinate.startswith("theta") else "N")
+                for i, coordinate in enumerate(scene.inputs)],
+        param_macros=[(i, macro_name(pname)) for i, pname in enumerate(pnames)],
+        has_power=scene.driven,
         sizes=interface.SIZES, size_values=sizes, constants=interface.CONSTANTS, structs=interface.STRUCTS,
         kernels=list(zip(interface.KERNELS, functions)), all_functions=interface.ALL_FUNCTIONS,
         library_functions=interface.LIBRARY_FUNCTIONS, api_functions=interface.FUNCTIONS,
@@ -156,6 +160,10 @@ PARAM_DOC = {
 }
 
 
+JOINT_DOC = {"stiffness": "spring stiffness K (N m/rad)", "rest_angle": "spring rest angle (rad)",
+             "damping": "damper coefficient C (N m s/rad)"}
+
+
 def _check_kernels(functions: list[RenderedFunction]) -> None:
     """The generated kernels are those codegen.interface declares: same names, order, inputs and output."""
     declared = [(f.name, tuple(a.name for a in f.args[:-1]), f.args[-1].name) for f in interface.KERNELS]
@@ -175,7 +183,15 @@ def _chart_context(scene: Scene, layout) -> dict:
             "value": _double_literal(float(fixed.get(1, 0.0)))}
 
 
+def macro_name(name: str) -> str:
+    """A parameter or coordinate name as part of a C macro name: 'e_x2_min' -> 'E_X2_MIN', 'theta_-1' -> 'THETA_M1'."""
+    return name.replace("-", "M").upper()
+
+
 def _param_doc(pname: str) -> str:
+    if pname.startswith(("stiffness_", "rest_angle_", "damping_")):
+        base, joint = pname.rsplit("_", 1)
+        return f"joint {joint}: {JOINT_DOC[base]}"
     if pname.startswith("wall_"):
         return f"position of wall {pname[5:]} (m)"
     if pname.startswith("e_"):

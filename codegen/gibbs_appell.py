@@ -16,7 +16,10 @@ da_i/dX_ddot_j = ^iR_ref X_j.
 
 Right-hand side (Eq. 38-41).  With S_i, T_i of Eq. 39-40 and z_j . (r x S) = (z_j x r) . S,
 
-    R_theta_j = - z_j . sum_{i >= j} (T_i + r_{O_i/O_j} x S_i),     R_X = - sum_i ^{ref}R_i S_i.
+    R_theta_j = - z_j . sum_{i >= j} (T_i + r_{O_i/O_j} x S_i) + Q_j,     R_X = - sum_i ^{ref}R_i S_i + Q_X,
+
+with Q the generalised forces other than gravity (inputs, joint springs and dampers): by Eq. 10-11 the
+Gibbs-Appell equations read dS/dq_ddot_j = Q_j, so Q adds to R as it is.
 
 The sums over i >= j are accumulated from the tip (the change of summation order of
 Eq. 31-36): F_j = S_j + ^jR_{j+1} F_{j+1},  N_j = T_j + ^jR_{j+1} N_{j+1} + r_j x ^jR_{j+1} F_{j+1}.
@@ -73,10 +76,10 @@ def right_hand_side(tape: Tape, chain: ChainSymbols, rotations, moments, motion:
             S = add(S, F_parent)
             T = add(T, add(N_parent, cross(link_offset(chain, moments, k), F_parent)))
         F, N = tape.let_vec(S, f"F_{tag}"), tape.let_vec(T, f"N_{tag}")
-        R[k + 1] = -N[2]                                               # Eq. 38
+        R[k + 1] = -N[2] + chain.generalized_force(k + 1)              # Eq. 38 (+ Q_k, Eq. 10-11)
     F_ref = to_parent(rotations[-1], F)
     for a in range(3):
-        R[n + 2 + a] = -F_ref[a]                                       # Eq. 41
+        R[n + 2 + a] = -F_ref[a] + chain.generalized_force(n + 2 + a)  # Eq. 41 (+ Q_X)
     return R
 
 

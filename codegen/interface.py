@@ -62,6 +62,10 @@ def _p(doc="parameters (NPARAM, layout in the header)"):
     return Arg("p", "const double *", doc, restrict=True)
 
 
+def _u(doc="inputs (NU, layout in the header; N m on an angle, N on a translation; NULL when NU = 0)"):
+    return Arg("u", "const double *", doc, restrict=True)
+
+
 def _out(name, doc):
     return Arg(name, "double *", doc, restrict=True)
 
@@ -72,9 +76,9 @@ def _out(name, doc):
 KERNELS = (
     Function("mass_matrix", "void", (_q(), _p(), _out("M", "I_f, NQ x NQ row-major, symmetric")),
              "Flight inertia matrix I_f (Eq. 12).", kernel=True),
-    Function("bias", "void", (_q(), _qd(), _p(), _out("R", "R (NQ): I_f qdd = R in flight")),
-             "Right-hand side R of I_f qdd = R (Eq. 12, 38-41).", kernel=True),
-    Function("forward_dynamics", "void", (_q(), _qd(), _p(), _out("qdd", "qdd (NQ; rad/s^2, m/s^2)")),
+    Function("bias", "void", (_q(), _qd(), _u(), _p(), _out("R", "R (NQ): I_f qdd = R in flight")),
+             "Right-hand side R of I_f qdd = R (Eq. 12, 38-41), inputs, springs and dampers included.", kernel=True),
+    Function("forward_dynamics", "void", (_q(), _qd(), _u(), _p(), _out("qdd", "qdd (NQ; rad/s^2, m/s^2)")),
              "Accelerations solving I_f qdd = R.", kernel=True),
     Function("contact_points", "void", (_q(), _p(), _out("r", "O_1..O_NPOINT, NPOINT x 3 (m)")),
              "Contact points O_1..O_(n+1) in the reference frame.", kernel=True),
@@ -90,6 +94,9 @@ KERNELS = (
     Function("contact_bias", "void",
              (_q(), _qd(), _p(), _out("a", "Jdot qd (NJROW; m/s^2): the rows' accelerations at qdd = 0")),
              "Contact row accelerations at qdd = 0.", kernel=True),
+    Function("power", "void",
+             (_q(), _qd(), _u(), _p(), _out("P", "P[0] power of the inputs, P[1] dissipation of the dampers (W)")),
+             "Rates of the energy balance: dE/dt = P[0] - P[1] in flight.", kernel=True),
 )
 
 _WORK = Arg("work", "double *", "scratch, {NAME}_IMPACT_NWORK doubles", restrict=True)
@@ -102,7 +109,7 @@ _ACTIVE = (Arg("nactive", "int", "number of contacts"),
 FUNCTIONS = (
     Function("rhs", "void",
              (Arg("t", "double", "time (s), unused"), Arg("x", "const double *", "state [q, qd] (NX)", True),
-              _p(), _out("xdot", "[qd, qdd] (NX)")),
+              _u(), _p(), _out("xdot", "[qd, qdd] (NX)")),
              "ODE right-hand side of the flight phase."),
     Function("impact", "int",
              (_q(), _qd(), _p(), *_ACTIVE, _out("qd_plus", "velocities after (NQ)"),
@@ -118,7 +125,7 @@ FUNCTIONS = (
              "No contact pulls or approaches its wall afterwards, the kinetic energy never grows; the law the "
              "hybrid loop applies.  Returns GAC_OK or GAC_ERR_*."),
     Function("constrained_dynamics", "int",
-             (_q(), _qd(), _p(), *_ACTIVE, _out("qdd", "accelerations (NQ)"),
+             (_q(), _qd(), _u(), _p(), *_ACTIVE, _out("qdd", "accelerations (NQ)"),
               _out("lambda", "force of each active contact along its inward normal (nactive; N)"), _WORK),
              "Accelerations with the active contacts held at their walls (gac_constrained_dynamics).",
              "I_f qdd = R + N^T lambda, N qdd = -Ndot qd; nactive = 0 gives forward_dynamics.  Returns GAC_OK or "
@@ -158,6 +165,17 @@ FUNCTIONS = (
               Arg("record", "{name}_impact_record *", "out: the impact or contact change (not NULL)")),
              "Integrate until t_end, the next impact or the next contact release (gac_sim_advance).",
              "Returns GAC_SIM_END, GAC_SIM_IMPACT, GAC_SIM_CONTACT or an error (< 0)."),
+    Function("sim_set_input", "int",
+             (Arg("sim", "{name}_sim *", "an initialised simulation"),
+              Arg("u", "const double *", "the inputs (NU, copied; finite; may be NULL when NU = 0)")),
+             "Hold the inputs u from now on (gac_sim_set_input): a zero-order hold over the next sim_advance calls.",
+             "Returns GAC_OK, GAC_ERR_NULL_ARGUMENT or GAC_ERR_BAD_INPUT."),
+    Function("sim_set_controller", "int",
+             (Arg("sim", "{name}_sim *", "an initialised simulation"),
+              Arg("controller", "gac_controller", "controller(t, q, qd, u, user) writes u (NU); NULL: the held inputs"),
+              Arg("user", "void *", "passed to the controller as it is")),
+             "Let a controller give the inputs at every stage (gac_sim_set_controller).",
+             "Returns GAC_OK or GAC_ERR_NULL_ARGUMENT."),
     Function("sim_state", "void",
              (Arg("sim", "const {name}_sim *", "the simulation (NULL: nothing is written)"),
               Arg("t", "double *", "out: current time (s), or NULL"),
@@ -185,10 +203,10 @@ def impact_nwork(nq: int, njrow: int) -> int:
     return 3 * nq * nq + njrow * nq + nq
 
 
-def sim_ndouble(nq: int, nparam: int, ncontact: int, njrow: int) -> int:
-    """gac_sim_ndouble: x, p, f, 16 stages, x1, xs, 8 dense-output rows, 7 per-contact arrays, the impact work
-    and an nq x nq scratch."""
-    return 28 * 2 * nq + nparam + 7 * max(ncontact, 1) + impact_nwork(nq, njrow) + nq * nq
+def sim_ndouble(nq: int, nparam: int, nu: int, ncontact: int, njrow: int) -> int:
+    """gac_sim_ndouble: x, p, u and the controller's u, f, 16 stages, x1, xs, 8 dense-output rows, 7 per-contact
+    arrays, the impact work and an nq x nq scratch."""
+    return 28 * 2 * nq + nparam + 2 * nu + 7 * max(ncontact, 1) + impact_nwork(nq, njrow) + nq * nq
 
 
 def sim_nint(nq: int, ncontact: int) -> int:
@@ -217,6 +235,7 @@ SIZES = (
     Size("NQ", "generalised coordinates"),
     Size("NX", "ODE state [q, qd]"),
     Size("NPARAM", "parameters"),
+    Size("NU", "inputs"),
     Size("NPOINT", "contact points O_1..O_NPOINT"),
     Size("NCONTACT", "contacts (point, wall)"),
     Size("NJROW", "contact Jacobian rows"),
@@ -228,11 +247,11 @@ SIZES = (
 )
 
 
-def size_values(n: int, nq: int, nparam: int, npoint: int, ncontact: int, njrow: int) -> dict[str, int]:
+def size_values(n: int, nq: int, nparam: int, nu: int, npoint: int, ncontact: int, njrow: int) -> dict[str, int]:
     """The value of every NAME_<suffix> of SIZES for a model of these sizes."""
-    values = {"N": n, "NQ": nq, "NX": 2 * nq, "NPARAM": nparam, "NPOINT": npoint, "NCONTACT": ncontact,
+    values = {"N": n, "NQ": nq, "NX": 2 * nq, "NPARAM": nparam, "NU": nu, "NPOINT": npoint, "NCONTACT": ncontact,
               "NJROW": njrow, "IMPACT_NWORK": impact_nwork(nq, njrow),
-              "SIM_NDOUBLE": sim_ndouble(nq, nparam, ncontact, njrow), "SIM_NINT": sim_nint(nq, ncontact),
+              "SIM_NDOUBLE": sim_ndouble(nq, nparam, nu, ncontact, njrow), "SIM_NINT": sim_nint(nq, ncontact),
               "RECORD_NDOUBLE": record_ndouble(nq), "RECORD_NINT": record_nint(nq)}
     assert list(values) == [s.suffix for s in SIZES]
     return values
@@ -245,7 +264,7 @@ CODES = ("GAC_OK", "GAC_ERR_BAD_CONTACT", "GAC_ERR_SINGULAR_MASS", "GAC_ERR_SING
          "GAC_ERR_GIMBAL_LOCK", "GAC_ERR_BAD_OPTION", "GAC_ERR_MAX_STEPS", "GAC_ERR_STEP_SIZE",
          "GAC_ERR_NONFINITE", "GAC_ERR_TOO_MANY_CONTACTS", "GAC_ERR_SINGULAR_CONTACT", "GAC_ERR_IMPACT_ACCURACY",
          "GAC_ERR_UNSTABLE", "GAC_ERR_LOST_CONTACT", "GAC_ERR_START_OUTSIDE", "GAC_ERR_NULL_ARGUMENT",
-         "GAC_ERR_BAD_MODEL")
+         "GAC_ERR_BAD_MODEL", "GAC_ERR_BAD_INPUT")
 STOPS = ("GAC_SIM_END", "GAC_SIM_IMPACT", "GAC_SIM_CONTACT")
 METHODS = ("GAC_METHOD_RK4", "GAC_METHOD_DOPRI5", "GAC_METHOD_DOP853")
 LIMITS = ("GAC_LCP_CAP", "GAC_MAX_ROUNDS")
@@ -274,8 +293,9 @@ STRUCTS = (
                                  "int *released"), partial=False),
     Struct("gac_sim", ("gac_options opt", "double t", "double *x", "double *p", "long n_steps", "long n_rejected",
                        "long n_rhs", "long n_impacts", "int nactive", "int *active", "long n_activations",
-                       "long n_releases", "int err_index")),
-    Struct("gac_model", ("const char *name", "int n", "int nq", "int nx", "int nparam", "int npoint",
+                       "long n_releases", "int err_index", "double *u", "double work_input", "double work_damping")),
+    Struct("gac_schedule", ("int n", "int nu", "const double *t", "const double *u", "int linear"), partial=False),
+    Struct("gac_model", ("const char *name", "int n", "int nq", "int nx", "int nparam", "int nu", "int npoint",
                          "int ncontact", "int njrow")),
 )
 
@@ -289,4 +309,9 @@ LIBRARY_FUNCTIONS = (
     Function("record_nint", "long", (_MODEL,), "Ints of an impact record's storage."),
     Function("chart_measure", "double", (_MODEL, _q()), "The base chart's measure |det E| at q."),
     Function("error_message", "const char *", (Arg("code", "int", "a return code"),), "Message for a code."),
+    Function("schedule_check", "int", (Arg("s", "const gac_schedule *", "a schedule"),), "GAC_OK if usable."),
+    Function("schedule_input", "void",
+             (Arg("t", "double", "time (s)"), Arg("q", "const double *", "unused"),
+              Arg("qd", "const double *", "unused"), Arg("u", "double *", "out: the inputs (nu)"),
+              Arg("schedule", "void *", "a const gac_schedule *")), "The schedule's value at t (a gac_controller)."),
 )

@@ -4,15 +4,17 @@ Each kernel is derived on its own tape (so it carries only what it needs), then 
 CSE'd by :mod:`codegen.flatten`.  The kernels and their C signatures:
 
     mass_matrix(q, p, M)                 I_f, full and symmetric, row-major nq x nq   (Eq. 12)
-    bias(q, qd, p, R)                    R(Theta, Theta_dot)                            (Eq. 12, 38-41)
-    forward_dynamics(q, qd, p, qdd)      Theta_ddot = I_f^-1 R by the O(n) articulated-body recursion
+    bias(q, qd, u, p, R)                 R(Theta, Theta_dot) + Q (inputs u, joint springs and dampers)
+                                                                                        (Eq. 10-12, 38-41)
+    forward_dynamics(q, qd, u, p, qdd)   Theta_ddot = I_f^-1 R by the O(n) articulated-body recursion
                                          (codegen.articulated; I_f is never formed)
     contact_points(q, p, r)              O_1..O_{n+1}, (n+1) x 3
     contact_velocities(q, qd, p, v)      their velocities, (n+1) x 3                    (Eq. 42)
     contact_jacobian(q, p, J)            rows of Eq. 42 that the walls need, nrow x nq
     contact_gaps(q, p, gap)              signed distance of each (point, wall) pair, >= 0 inside
     contact_bias(q, qd, p, a)            J_dot qd: contact row accelerations at Theta_ddot = 0
-    energy(q, qd, p, E)                  E[0] kinetic, E[1] potential
+    energy(q, qd, p, E)                  E[0] kinetic, E[1] potential (gravity and joint springs)
+    power(q, qd, u, p, P)                P[0] power of the inputs, P[1] dissipation of the dampers (>= 0)
 """
 from __future__ import annotations
 
@@ -33,7 +35,7 @@ class Kernel:
 
     name: str
     summary: str
-    inputs: tuple[str, ...]                       # subset of ("q", "qd", "p")
+    inputs: tuple[str, ...]                       # subset of ("q", "qd", "u", "p"), in that order
     output: str                                   # name of the output array
     output_size: int
     tape: Tape
@@ -57,8 +59,8 @@ def mass_matrix_kernel(chain: ChainSymbols) -> Kernel:
 
 def bias_kernel(chain: ChainSymbols) -> Kernel:
     free = chain.layout.free
-    k = _new(chain, "bias", "Right-hand side R(Theta, Theta_dot) of I_f Theta_ddot = R (Eq. 12, 38-41, Fig. 3).",
-             ("q", "qd", "p"), "R", len(free))
+    k = _new(chain, "bias", "Right-hand side R(Theta, Theta_dot) of I_f Theta_ddot = R (Eq. 12, 38-41, Fig. 3), "
+             "generalised forces of inputs, springs and dampers included.", ("q", "qd", "u", "p"), "R", len(free))
     rotations = kinematics.joint_rotations(k.tape, chain)
     moments = kinematics.link_moments_all(k.tape, chain)
     motion = kinematics.velocity_products(k.tape, chain, rotations, moments)
@@ -74,7 +76,7 @@ def forward_dynamics_kernel(chain: ChainSymbols, solver: str = "articulated") ->
     free = chain.layout.free
     how = {"articulated": "an O(n) articulated-body recursion", "dense": "a straight-line LDL^T of I_f"}
     k = _new(chain, "forward_dynamics", f"Theta_ddot solving I_f Theta_ddot = R, by {how[solver]}.",
-             ("q", "qd", "p"), "qdd", len(free))
+             ("q", "qd", "u", "p"), "qdd", len(free))
     rotations = kinematics.joint_rotations(k.tape, chain)
     moments = kinematics.link_moments_all(k.tape, chain)
     motion = kinematics.velocity_products(k.tape, chain, rotations, moments)
@@ -198,13 +200,21 @@ def energy_expressions(tape, chain: ChainSymbols):
         w_loc = tape.let_vec(mat_t_vec(R, w), f"wloc_{i}")
         T += B.B0 * dot(v, v) / 2 + dot(v, cross(w, h_ref)) + dot(w_loc, matvec(B.K, w_loc)) / 2
         V += chain.gravity * (B.B0 * points[i - 1][1] + h_ref[1])
-    return T, V
+    return T, V + chain.spring_potential()
 
 
 def energy_kernel(chain: ChainSymbols) -> Kernel:
-    k = _new(chain, "energy", "E[0] = kinetic energy T, E[1] = potential energy V (J).",
+    k = _new(chain, "energy", "E[0] = kinetic energy T, E[1] = potential energy V, gravity and joint springs (J).",
              ("q", "qd", "p"), "E", 2)
     k.values = list(energy_expressions(k.tape, chain))
+    return k
+
+
+def power_kernel(chain: ChainSymbols) -> Kernel:
+    """The rates of the energy balance that are not potential: dE/dt = P_in - P_damp in flight."""
+    k = _new(chain, "power", "P[0] = power of the inputs sum u_i qd_(c_i), P[1] = dissipation of the joint "
+             "dampers sum C_k theta_dot_k^2 >= 0 (W).", ("q", "qd", "u", "p"), "P", 2)
+    k.values = list(chain.power())
     return k
 
 
@@ -217,7 +227,7 @@ def _points(tape: Tape, chain: ChainSymbols):
 
 KERNEL_BUILDERS = (mass_matrix_kernel, bias_kernel, forward_dynamics_kernel, contact_points_kernel,
                    contact_velocities_kernel, contact_jacobian_kernel, contact_gaps_kernel, energy_kernel,
-                   contact_bias_kernel)
+                   contact_bias_kernel, power_kernel)
 
 
 def build_kernels(scene: Scene, bake_params: bool = False, progress=None, layout=None) -> list[Kernel]:

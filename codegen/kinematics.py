@@ -64,6 +64,49 @@ class ChainSymbols:
                       for i, name in enumerate(names)]
         self.param_index = {name: i for i, name in enumerate(names)}
         self.twists = [to_exact(T) for T in scene.all_twists]
+        self.u = [sp.Symbol(f"u[{i}]", real=True) for i in range(scene.nu)]    # inputs, scene.inputs order
+        self.input_coordinate = scene.input_coordinates()                      # full-layout index of each
+
+    # -- generalised forces (Eq. 10-11: dS/dq_ddot_j = Q_j) -------------------------------------------
+    def spring_torque(self, k: int) -> sp.Expr:
+        """-K_k (theta_k - rest_k): the torque of joint k's spring (0 without one)."""
+        if k < 2 or self.scene.joints[k - 2].stiffness is None:
+            return sp.Integer(0)
+        return -self.param(f"stiffness_{k}") * (self.theta(k) - self.param(f"rest_angle_{k}"))
+
+    def damper_torque(self, k: int) -> sp.Expr:
+        """-C_k theta_dot_k: the torque of joint k's damper (0 without one)."""
+        if k < 2 or self.scene.joints[k - 2].damping is None:
+            return sp.Integer(0)
+        return -self.param(f"damping_{k}") * self.theta_dot(k)
+
+    def input_force(self, index: int) -> sp.Expr:
+        """The inputs acting on coordinate ``index`` (full layout): u_i for inputs[i] naming it."""
+        return sp.Add(*[u for u, c in zip(self.u, self.input_coordinate) if c == index])
+
+    def generalized_force(self, index: int, springs: bool = True) -> sp.Expr:
+        """Q of coordinate ``index`` (full layout): inputs, damper and (springs=True) spring torques.  A
+        Lagrangian derivation takes the springs from their potential instead (springs=False)."""
+        Q = self.input_force(index)
+        k = index - 1                                   # theta_k is q[k + 1]
+        if 2 <= k <= self.n:
+            Q += self.damper_torque(k) + (self.spring_torque(k) if springs else 0)
+        return Q
+
+    def spring_potential(self) -> sp.Expr:
+        """sum_k 1/2 K_k (theta_k - rest_k)^2 over the joints with a spring (J)."""
+        V = sp.Integer(0)
+        for k in range(2, self.n + 1):
+            if self.scene.joints[k - 2].stiffness is not None:
+                stretch = self.theta(k) - self.param(f"rest_angle_{k}")
+                V += self.param(f"stiffness_{k}") * stretch * stretch / 2
+        return V
+
+    def power(self) -> tuple[sp.Expr, sp.Expr]:
+        """(input power sum_i u_i qd_(c_i), damper dissipation sum_k C_k theta_dot_k^2 >= 0), W."""
+        P_in = sp.Add(*[u * self.qd[c] for u, c in zip(self.u, self.input_coordinate)])
+        P_damp = sp.Add(*[-self.damper_torque(k) * self.theta_dot(k) for k in range(2, self.n + 1)])
+        return P_in, P_damp
 
     def param(self, name: str) -> sp.Expr:
         return self.p[self.param_index[name]]

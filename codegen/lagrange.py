@@ -126,7 +126,7 @@ def euler_lagrange(chain: ChainSymbols, progress=None) -> Expansion:
         for j in range(i + 1):
             lower[(i, j)] = diff(p_i, qd[j])                      # coefficient of qdd_j in d/dt p_i
         dp_dt = sp.Add(*[diff(p_i, q[j]) * qd[j] for j in range(N)])   # the rest of d/dt p_i
-        R.append(-(dp_dt - diff(T, q[i]) + diff(V, q[i])))
+        R.append(-(dp_dt - diff(T, q[i]) + diff(V, q[i])) + chain.generalized_force(free[i], springs=False))
         say(f"lagrange: equation {i + 1}/{N} expanded ({time.perf_counter() - start:.1f} s)")
     return Expansion(lower, R, T, V, time.perf_counter() - start)
 
@@ -145,7 +145,7 @@ def mass_matrix_kernel(chain: ChainSymbols, expansion: Expansion) -> kernels.Ker
 def bias_kernel(chain: ChainSymbols, expansion: Expansion) -> kernels.Kernel:
     N = chain.layout.nq
     k = kernels.Kernel("bias", "Right-hand side R(Theta, Theta_dot) of I_f Theta_ddot = R (Lagrangian expansion: "
-                     "-(d2T/dqd dq qd - dT/dq + dV/dq)).", ("q", "qd", "p"), "R", N, Tape())
+                     "-(d2T/dqd dq qd - dT/dq + dV/dq) + Q, springs in V).", ("q", "qd", "u", "p"), "R", N, Tape())
     k.values = list(expansion.R)
     return k
 
@@ -154,7 +154,7 @@ def forward_dynamics_kernel(chain: ChainSymbols, expansion: Expansion) -> kernel
     free = chain.layout.free
     N = len(free)
     k = kernels.Kernel("forward_dynamics", "Theta_ddot solving I_f Theta_ddot = R (Lagrangian expansion), by a "
-                     "dense straight-line LDL^T.", ("q", "qd", "p"), "qdd", N, Tape())
+                     "dense straight-line LDL^T.", ("q", "qd", "u", "p"), "qdd", N, Tape())
     lower = {(i, j): k.tape.let(e, f"M_{i}_{j}") for (i, j), e in expansion.lower.items()}
     R = [k.tape.let(e, f"R_{i}") for i, e in enumerate(expansion.R)]
     translations = [a for a, i in enumerate(free) if i >= chain.n + 2]

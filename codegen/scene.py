@@ -186,6 +186,50 @@ Link = LineLink | RigidLink
 
 
 # ---------------------------------------------------------------------------
+# joints and inputs
+# ---------------------------------------------------------------------------
+STIFFNESS_MAX = 1e12      # N m/rad, and N m s/rad for damping
+
+
+def coordinate_names(n: int) -> list[str]:
+    """Names of the full state of Eq. 13: theta_-1, theta_0, theta_1..theta_n, X1, X2, X3."""
+    return ["theta_-1", "theta_0"] + [f"theta_{k}" for k in range(1, n + 1)] + ["X1", "X2", "X3"]
+
+
+@dataclass(frozen=True)
+class Joint:
+    """Joint k (2..n), between link k-1 and link k, turning about its z axis by theta_k.
+
+    stiffness  K >= 0 (N m/rad) of a linear torsional spring, torque -K (theta_k - rest_angle);
+               None: no spring
+    rest_angle theta_k at which the spring is relaxed (rad)
+    damping    C >= 0 (N m s/rad) of a viscous damper, torque -C theta_dot_k; None: no damper
+    Both enter the flight equations as the generalised force of theta_k (Eq. 10-11: dS/dtheta_ddot_k = Q_k);
+    the spring's potential 1/2 K (theta_k - rest_angle)^2 is part of the energy.
+    """
+
+    stiffness: float | None = None
+    rest_angle: float = 0.0
+    damping: float | None = None
+
+    def validate(self, where: str) -> None:
+        if self.stiffness is not None:
+            _nonnegative(self.stiffness, f"{where}.stiffness", STIFFNESS_MAX)
+        elif self.rest_angle != 0.0:
+            raise SceneError(f"{where}.rest_angle: given without a stiffness; a rest angle belongs to a spring")
+        _number(self.rest_angle, f"{where}.rest_angle")
+        if self.damping is not None:
+            _nonnegative(self.damping, f"{where}.damping", STIFFNESS_MAX)
+
+    @property
+    def is_free(self) -> bool:
+        return self.stiffness is None and self.damping is None
+
+
+FREE_JOINT = Joint()
+
+
+# ---------------------------------------------------------------------------
 # walls
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
@@ -269,6 +313,9 @@ class Scene:
     gravity    g (m/s^2) acting along -X2 (the paper: the origin accelerates at +g along X2)
     walls      the walls of the box that exist; an absent wall means no wall
     q0, qd0    initial state, layout [theta_-1, theta_0, theta_1..theta_n, X1, X2, X3]
+    joints     springs and dampers of the joints 2..n (Joint; n - 1 entries, or () for none)
+    inputs     the actuated coordinates by name ("theta_2", "X2", ...): input u_i is the generalised force
+               of inputs[i] (N m on an angle, N on a translation), added to the flight equations
     """
 
     name: str
@@ -280,6 +327,8 @@ class Scene:
     qd0: tuple[float, ...] = ()
     base_twists: tuple = (T_MINUS1, T_0, T_1)  # T_-1, T_0, T_1: the base chart
     description: str = ""
+    joints: tuple = ()          # Joint of joints 2..n (n - 1 entries); () means no springs or dampers
+    inputs: tuple = ()          # names of the actuated coordinates (coordinate_names), one input u_i each
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not _NAME_RE.match(self.name):
@@ -309,6 +358,7 @@ class Scene:
         if abs(self.gravity) > 1e6:
             raise SceneError(f"gravity: must be within [-1e6, 1e6] m/s^2, got {self.gravity!r}")
         self._validate_walls()
+        self._validate_joints()
         self._validate_state()
 
     # -- derived sizes -----------------------------------------------------
@@ -363,6 +413,41 @@ class Scene:
                                  f"got {hi.position}")
         object.__setattr__(self, "walls", tuple(walls))
 
+    def _validate_joints(self) -> None:
+        n = self.n
+        joints = tuple(self.joints) if self.joints else (FREE_JOINT,) * (n - 1)
+        if len(joints) != n - 1:
+            raise SceneError(f"joints: expected n - 1 = {n - 1} joints (2..n), got {len(joints)}")
+        for k, joint in enumerate(joints, start=2):
+            if not isinstance(joint, Joint):
+                raise SceneError(f"links[{k}]: expected a Joint for joint {k}, got {joint!r}")
+            joint.validate(f"links[{k}]")
+        object.__setattr__(self, "joints", joints)
+        names = coordinate_names(n)
+        inputs = self.inputs
+        if isinstance(inputs, str) or not isinstance(inputs, (list, tuple)):
+            raise SceneError(f"inputs: expected a list of coordinate names, got {inputs!r}")
+        for name in inputs:
+            if name not in names:
+                raise SceneError(f"inputs: unknown coordinate {name!r}; allowed: {', '.join(names)}")
+        if len(set(inputs)) != len(inputs):
+            raise SceneError(f"inputs: a coordinate is named twice in {list(inputs)}")
+        object.__setattr__(self, "inputs", tuple(inputs))
+
+    @property
+    def nu(self) -> int:
+        return len(self.inputs)
+
+    @property
+    def driven(self) -> bool:
+        """Whether anything but gravity acts in flight: inputs, springs or dampers."""
+        return bool(self.inputs) or any(not j.is_free for j in self.joints)
+
+    def input_coordinates(self) -> list[int]:
+        """The full-layout index (Eq. 13) of each input's coordinate."""
+        names = coordinate_names(self.n)
+        return [names.index(name) for name in self.inputs]
+
     @staticmethod
     def _find(walls, name):
         return next((w for w in walls if w.name == name), None)
@@ -397,6 +482,11 @@ class Scene:
             names += [f"{name}_{i}" for name in link.param_names]
         names += [f"wall_{w.name}" for w in self.walls]
         names += [f"e_{w.name}" for w in self.walls]
+        for k, joint in enumerate(self.joints, start=2):
+            if joint.stiffness is not None:
+                names += [f"stiffness_{k}", f"rest_angle_{k}"]
+            if joint.damping is not None:
+                names.append(f"damping_{k}")
         return names
 
     def parameter_vector(self) -> np.ndarray:
@@ -405,6 +495,11 @@ class Scene:
             values += list(link.param_values())
         values += [w.position for w in self.walls]
         values += [w.restitution for w in self.walls]
+        for joint in self.joints:
+            if joint.stiffness is not None:
+                values += [joint.stiffness, joint.rest_angle]
+            if joint.damping is not None:
+                values.append(joint.damping)
         return np.array(values, dtype=float)
 
     def check_parameters(self, p) -> None:
@@ -457,11 +552,13 @@ def check_parameter(name: str, value: float) -> float:
         value = _nonnegative(value, field)
     elif kind in ("Ixy", "Ixz", "Iyz"):
         value = _number(value, field, INERTIA_MAX)
+    elif kind in ("stiffness", "damping"):
+        value = _nonnegative(value, field, STIFFNESS_MAX)
     elif name.startswith("e_"):
         value = _number(value, field)
         if not 0.0 <= value <= 1.0:
             raise SceneError(f"{field}: restitution must be in [0, 1], got {value!r}")
-    else:                                   # centre of mass offsets and wall positions (m)
+    else:                                   # centre of mass offsets, wall positions (m), rest angles (rad)
         value = _number(value, field)
     return value
 
@@ -531,9 +628,10 @@ def shipped_scene_names() -> list[str]:
 # ---------------------------------------------------------------------------
 # loading from TOML / JSON
 # ---------------------------------------------------------------------------
-TOP_KEYS = ("name", "description", "gravity", "links", "walls", "restitution", "contacts", "initial")
-LINE_KEYS = ("length", "mu", "J", "twist", "twist_matrix", "count")
-RIGID_KEYS = ("length", "mass", "com", "inertia", "twist", "twist_matrix", "count")
+TOP_KEYS = ("name", "description", "gravity", "links", "walls", "restitution", "contacts", "initial", "inputs")
+JOINT_KEYS = ("stiffness", "rest_angle", "damping")
+LINE_KEYS = ("length", "mu", "J", "twist", "twist_matrix", "count") + JOINT_KEYS
+RIGID_KEYS = ("length", "mass", "com", "inertia", "twist", "twist_matrix", "count") + JOINT_KEYS
 INITIAL_KEYS = ("q", "qd")
 
 
@@ -621,7 +719,7 @@ def _toml_field_at(text: str, line: int) -> str:
 def scene_from_dict(data: dict, default_name: str = "scene") -> Scene:
     """Build a Scene from the plain-data form used by the TOML/JSON files (see docs/scenes.md)."""
     _check_keys(data, TOP_KEYS, "scene")
-    links, twists = _links_from_data(data.get("links"))
+    links, twists, joints = _links_from_data(data.get("links"))
     n = len(links)
     walls = _walls_from_data(data.get("walls", {}), data.get("restitution", 1.0), data.get("contacts", {}))
     initial = data.get("initial", {})
@@ -635,17 +733,19 @@ def scene_from_dict(data: dict, default_name: str = "scene") -> Scene:
         walls=walls,
         q0=tuple(initial["q"]) if "q" in initial else (),
         qd0=tuple(initial["qd"]) if "qd" in initial else (),
+        joints=joints if n > 1 else (),
+        inputs=data.get("inputs", ()),
     )
 
 
-def _links_from_data(items) -> tuple[tuple[Link, ...], tuple]:
+def _links_from_data(items) -> tuple[tuple[Link, ...], tuple, tuple]:
     if not isinstance(items, list) or not items:
         raise SceneError("links: a chain needs n >= 1 real links (a non-empty list of link tables), "
                          f"got {items!r}")
     counts = [item.get("count", 1) if isinstance(item, dict) else 1 for item in items]
     if all(isinstance(c, int) and not isinstance(c, bool) for c in counts) and sum(counts) > MAX_LINKS:
         raise SceneError(f"links: {MAX_LINKS_REASON}; got n = {sum(counts)}")
-    links, twists = [], []
+    links, twists, joints = [], [], []
     for j, item in enumerate(items):
         where = f"links[{len(links) + 1}]"
         if not isinstance(item, dict):
@@ -675,7 +775,14 @@ def _links_from_data(items) -> tuple[tuple[Link, ...], tuple]:
             if index == 1 and ("twist" in item or "twist_matrix" in item):
                 raise SceneError(f"{where}.twist: T_1 is fixed by the frame convention; "
                                  "twists can be given for links 2..n")
+            if index == 1 and any(key in item for key in JOINT_KEYS):
+                key = next(key for key in JOINT_KEYS if key in item)
+                raise SceneError(f"{where}.{key}: theta_1 orients the base (link 1 has no parent link), so "
+                                 "springs and dampers can be given for the joints of links 2..n")
             if index > 1:
+                joint = Joint(item.get("stiffness"), item.get("rest_angle", 0.0), item.get("damping"))
+                joint.validate(where)
+                joints.append(joint)
                 if "twist" in item:
                     twists.append(twist_about_x(_number(item["twist"], f"{where}.twist")))
                 elif "twist_matrix" in item:
@@ -683,7 +790,7 @@ def _links_from_data(items) -> tuple[tuple[Link, ...], tuple]:
                 else:
                     twists.append(IDENTITY)
             links.append(link)
-    return tuple(links), tuple(twists)
+    return tuple(links), tuple(twists), tuple(joints)
 
 
 def _walls_from_data(walls, restitution, contacts) -> tuple[Wall, ...]:

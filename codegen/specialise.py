@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scene import RigidLink, Scene, SceneError, frames
+from .scene import RigidLink, Scene, SceneError, coordinate_names, frames
 
 ANGLE_SNAP = 1e-12       # an angle within this of a multiple of pi/2 counts as exactly that multiple
 
@@ -57,11 +57,6 @@ class Layout:
         for index, value in self.fixed:
             full[..., index] = 0.0 if velocity else value
         return full
-
-
-def coordinate_names(n: int) -> list[str]:
-    """Names of the full state of Eq. 13."""
-    return ["theta_-1", "theta_0"] + [f"theta_{k}" for k in range(1, n + 1)] + ["X1", "X2", "X3"]
 
 
 def layout_for(scene: Scene, specialise: bool = True) -> Layout:
@@ -130,6 +125,9 @@ def planar_normal(scene: Scene) -> tuple[int | None, str]:
         return None, "the joint axes are not parallel to X1 or X3"
     if qd[0] != 0.0 or qd[1] != 0.0 or qd[n + 2 + normal] != 0.0:
         return None, f"theta_-1, theta_0 or X{normal + 1} has a non-zero initial velocity"
+    out_of_plane = {"theta_-1", "theta_0", f"X{normal + 1}"} & set(scene.inputs)
+    if out_of_plane:
+        return None, f"an input drives {', '.join(sorted(out_of_plane))} out of the plane"
     for i, link in enumerate(scene.links, start=1):
         if isinstance(link, RigidLink):
             I = link.inertia

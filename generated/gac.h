@@ -26,7 +26,8 @@
  * struct is copied or moved, bind it again to its own arrays (gac_sim_bind, gac_record_bind).
  *
  * Conventions.  SI units (m, kg, s, rad, N, J).  q: the model's generalised coordinates (nq), qd: their
- * time derivatives, x = [q, qd] (nx = 2 nq) the ODE state, p: the parameter vector (nparam).  Matrices are
+ * time derivatives, x = [q, qd] (nx = 2 nq) the ODE state, p: the parameter vector (nparam), u: the inputs
+ * (nu), each the generalised force of one actuated coordinate (N m on an angle, N on a translation).  Matrices are
  * row-major: element (i, j) of an R x C matrix is at [i*C + j].  A contact is a (point, wall) pair with a
  * gap >= 0 inside the box; its normal points into the box, and an impulse or force along it pushes the
  * point away from the wall.
@@ -70,6 +71,8 @@
                                           loop's own lost-contact depth (contact_tol + the simultaneity window) */
 #define GAC_ERR_NULL_ARGUMENT    -20   /* a pointer argument that must not be NULL is NULL (see each function) */
 #define GAC_ERR_BAD_MODEL        -21   /* the model descriptor is inconsistent (gac_model_check) */
+#define GAC_ERR_BAD_INPUT        -22   /* an input u (set by gac_sim_set_input, or written by the controller)
+                                          is NaN or infinite */
 
 /* ---- what gac_sim_advance stops at (> 0) ------------------------------------------------------ */
 #define GAC_SIM_END      1    /* reached t_end */
@@ -96,10 +99,17 @@ extern "C" {
 /* ---- the model -------------------------------------------------------------------------------- */
 
 /* Kernels: pure functions of their inputs, outputs not aliasing inputs.
- *   q (nq), qd (nq), p (nparam) in; out as documented per kernel in gac_model. */
+ *   q (nq), qd (nq), u (nu; may be NULL when nu = 0), p (nparam) in; out as documented per kernel in gac_model. */
 typedef void (*gac_kernel_q)(const double *q, const double *p, double *out);
 typedef void (*gac_kernel_qqd)(const double *q, const double *qd, const double *p, double *out);
-typedef void (*gac_kernel_rhs)(double t, const double *x, const double *p, double *xdot);
+typedef void (*gac_kernel_qqdu)(const double *q, const double *qd, const double *u, const double *p, double *out);
+typedef void (*gac_kernel_rhs)(double t, const double *x, const double *u, const double *p, double *xdot);
+
+/* A controller: writes the inputs u (nu) for time t (s) and state (q, qd).  On entry u holds the inputs
+ * last given to gac_sim_set_input.  Called at every stage of the integrators and wherever the loop needs
+ * the flight dynamics (events, impacts, resting contact), so it must be a function of (t, q, qd) and of what
+ * user points to, not of how often it is called.  user: the caller's pointer, passed through. */
+typedef void (*gac_controller)(double t, const double *q, const double *qd, double *u, void *user);
 
 /* One contact: a point of the chain and a wall. */
 typedef struct {
@@ -127,6 +137,7 @@ typedef struct {
     int nq;               /* generalised coordinates, >= 1 */
     int nx;               /* ODE state size, 2 nq */
     int nparam;           /* parameters */
+    int nu;               /* inputs: generalised forces of the actuated coordinates, >= 0 */
     int npoint;           /* contact points O_1..O_npoint (contact_points gives 3 npoint numbers) */
     int ncontact;         /* contacts (rows of contacts[]), >= 0 */
     int njrow;            /* rows of contact_jacobian and contact_bias */
@@ -136,15 +147,19 @@ typedef struct {
     const double *q0, *qd0;            /* [nq] each: the scene's initial state */
     /* kernels */
     gac_kernel_q   mass_matrix;        /* q, p -> I_f (nq x nq, row-major, symmetric positive definite) */
-    gac_kernel_qqd bias;               /* q, qd, p -> R (nq): I_f qdd = R in flight (Eq. 12) */
-    gac_kernel_qqd forward_dynamics;   /* q, qd, p -> qdd (nq) solving I_f qdd = R */
+    gac_kernel_qqdu bias;              /* q, qd, u, p -> R (nq): I_f qdd = R in flight (Eq. 12), the generalised
+                                          forces of inputs, joint springs and dampers included */
+    gac_kernel_qqdu forward_dynamics;  /* q, qd, u, p -> qdd (nq) solving I_f qdd = R */
     gac_kernel_q   contact_points;     /* q, p -> O_1..O_npoint (npoint x 3, m) */
     gac_kernel_qqd contact_velocities; /* q, qd, p -> their velocities (npoint x 3, m/s) (Eq. 42) */
     gac_kernel_q   contact_jacobian;   /* q, p -> rows d(O_i . X_a)/dq (njrow x nq) (Eq. 42) */
     gac_kernel_q   contact_gaps;       /* q, p -> gap of each contact (ncontact, m; >= 0 inside) */
     gac_kernel_qqd contact_bias;       /* q, qd, p -> Jdot qd (njrow, m/s^2): the rows' accelerations at qdd = 0 */
-    gac_kernel_qqd energy;             /* q, qd, p -> E[0] kinetic, E[1] potential energy (J) */
-    gac_kernel_rhs rhs;                /* t, x, p -> xdot = [qd, qdd] (nx); t unused */
+    gac_kernel_qqd energy;             /* q, qd, p -> E[0] kinetic, E[1] potential energy (J), joint springs
+                                          included */
+    gac_kernel_rhs rhs;                /* t, x, u, p -> xdot = [qd, qdd] (nx); t unused */
+    gac_kernel_qqdu power;             /* q, qd, u, p -> P[0] power of the inputs, P[1] dissipation of the
+                                          dampers (W, >= 0); NULL: nothing in flight does work but gravity */
 } gac_model;
 
 /* GAC_OK if the descriptor is consistent (sizes > 0 where needed, nx = 2 nq, tables and kernels present,
@@ -156,9 +171,10 @@ int gac_model_check(const gac_model *m);
 /* Doubles of the work array of gac_impact, gac_impact_complementarity and gac_constrained_dynamics:
  * 3 nq^2 + njrow nq + nq, laid out as M (nq*nq, the factor of I_f) | J (njrow*nq) | Y (nq*nq) | A (nq*nq) | nq. */
 long gac_impact_nwork(const gac_model *m);
-/* Doubles and ints of one simulation (gac_sim_init): dwork = x (nx) | p (nparam) | private;
+/* Doubles and ints of one simulation (gac_sim_init): dwork = x (nx) | p (nparam) | u (nu) | private;
  * iwork = active (nq) | private.
- *   ndouble = 28 nx + nparam + 7 max(ncontact, 1) + gac_impact_nwork + nq^2,   nint = nq + 2 max(ncontact, 1) */
+ *   ndouble = 28 nx + nparam + 2 nu + 7 max(ncontact, 1) + gac_impact_nwork + nq^2,
+ *   nint = nq + 2 max(ncontact, 1) */
 long gac_sim_ndouble(const gac_model *m);
 long gac_sim_nint(const gac_model *m);
 /* Doubles and ints of one impact record (gac_record_bind): dwork = impulse | q | qd_before | qd_after
@@ -201,9 +217,10 @@ int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q,
  * qdd (nq, rad/s^2 or m/s^2 by coordinate) and lambda (nactive) out; lambda[k] (N) is the force of contact
  * active[k] along its inward normal (> 0 pushes); a contact whose row depends on the earlier ones' (held
  * by them already) gets lambda = 0.  work: gac_impact_nwork(m) doubles.  nactive = 0 gives
- * forward_dynamics.  Returns GAC_OK or an error (< 0). */
-int gac_constrained_dynamics(const gac_model *m, const double *q, const double *qd, const double *p,
-                             int nactive, const int *active, double *qdd, double *lambda, double *work);
+ * forward_dynamics.  u: the inputs (nu; may be NULL when nu = 0).  Returns GAC_OK or an error (< 0). */
+int gac_constrained_dynamics(const gac_model *m, const double *q, const double *qd, const double *u,
+                             const double *p, int nactive, const int *active, double *qdd, double *lambda,
+                             double *work);
 
 /* Contact c's point index (1-based, O_1 = 1), wall axis (0..2 for X1..X3) and inward normal sign (+1/-1);
  * c outside 0..ncontact-1: 0, -1, 0. */
@@ -250,6 +267,13 @@ const char *gac_error_message(int code);
  * gac_sim_init also makes persistent the contacts that start at their wall (gap <= contact_tol) with a normal
  * velocity under the same bound and a positive force (a chain started at rest on the floor).
  * Every activation and release is reported in the record (activated[], released[]).
+ *
+ * Inputs.  The inputs u (nu) are held over each gac_sim_advance call (a zero-order hold, the convention of
+ * FMI co-simulation): change them between calls with gac_sim_set_input, so that a change falls on a step
+ * boundary.  Or give a controller (gac_sim_set_controller): the loop then asks it for u at every stage.
+ * The energy the inputs put in and the dampers take out is integrated over every step on the dense output
+ * (5-point Gauss-Legendre on the step's interpolant): sim.work_input, sim.work_damping; with the impacts'
+ * losses they close the energy balance E(t) - E(0) = work_input - work_damping - (impact losses).
  *
  * Stops before trouble: GAC_ERR_GIMBAL_LOCK (the base chart's measure below sqrt(16 eps / rtol): continue on
  * a second chart), GAC_ERR_UNSTABLE (RK4 past its stability), GAC_ERR_LOST_CONTACT, GAC_ERR_MAX_STEPS
@@ -310,8 +334,15 @@ typedef struct {
     long n_activations, n_releases;
     int err_index;               /* state component (0..nx-1) that dominated the error estimate of the last
                                     adaptive step: what limits the step size */
+    double *u;                   /* the inputs held over the next advance call (nu; gac_sim_set_input) */
+    double work_input;           /* J: work of the inputs since gac_sim_init, int u . qd_actuated dt */
+    double work_damping;         /* J: energy the joint dampers took since gac_sim_init, int C theta_dot^2 dt */
     /* private: the model, integrator state and scratch (pointers into dwork / iwork) */
     const gac_model *model;
+    gac_controller controller;   /* NULL: the held inputs u */
+    void *controller_data;
+    double *u_eval;              /* nu: the controller's output at the current evaluation */
+    int input_changed;           /* gac_sim_set_input since the last advance: resting contacts re-checked */
     double h;
     int f_valid;
     double *f, *k[16], *x1, *xs, *cont[8];
@@ -333,7 +364,8 @@ typedef struct {
 /* Default options (DOPRI5, rtol 1e-8, atol 1e-10, persistent contact on).  opt NULL: nothing is done. */
 void gac_default_options(gac_options *opt);
 
-/* Start a simulation of model m at time t0 from (q, qd) with parameters p (copied into dwork).  Contacts
+/* Start a simulation of model m at time t0 from (q, qd) with parameters p (copied into dwork), inputs 0 and
+ * no controller.  Contacts
  * resting at their wall become persistent (reported by the first gac_sim_advance, GAC_SIM_CONTACT).
  * dwork: gac_sim_ndouble(m) doubles, iwork: gac_sim_nint(m) ints, owned by the caller for the life of sim.
  * Pointers: sim, m, dwork, iwork, q and qd must not be NULL (GAC_ERR_NULL_ARGUMENT); opt NULL means the
@@ -348,6 +380,37 @@ void gac_default_options(gac_options *opt);
  * Returns GAC_OK or an error (< 0). */
 int gac_sim_init(gac_sim *sim, const gac_model *m, double *dwork, int *iwork, double t0, const double *q,
                  const double *qd, const double *p, const gac_options *opt);
+
+/* Set the inputs u (nu values, copied) held from now on: the next gac_sim_advance integrates with them.  The
+ * flight derivative is re-evaluated and resting contacts that the new inputs pull off their walls are
+ * released at the start of the next advance (GAC_SIM_CONTACT).  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT (sim
+ * NULL, or u NULL with nu > 0) or GAC_ERR_BAD_INPUT (a value not finite; nothing changed). */
+int gac_sim_set_input(gac_sim *sim, const double *u);
+
+/* Let controller(t, q, qd, u, user) give the inputs from now on (NULL: back to the held inputs).  Its output
+ * must be finite (GAC_ERR_BAD_INPUT otherwise, at the next call that evaluates it).  Returns GAC_OK or
+ * GAC_ERR_NULL_ARGUMENT (sim NULL). */
+int gac_sim_set_controller(gac_sim *sim, gac_controller controller, void *user);
+
+/* An input schedule: values u_k (nu each) at times t_k (n >= 1, strictly increasing), held (linear = 0: u(t) =
+ * u_k for t_k <= t < t_k+1) or interpolated linearly between the times (linear = 1); u_0 before t_0 and
+ * u_(n-1) after t_(n-1).  The caller owns both arrays. */
+typedef struct {
+    int n;                /* number of times */
+    int nu;               /* inputs per time */
+    const double *t;      /* [n] times (s) */
+    const double *u;      /* [n * nu] values, row k at u + k nu */
+    int linear;           /* 0: held, 1: linear between the times */
+} gac_schedule;
+
+/* A gac_controller giving the schedule's value at t (user: a const gac_schedule *).  For exact results give
+ * it with gac_sim_set_controller and end each gac_sim_advance at the schedule's times, so that a jump or a
+ * kink falls on a step boundary (a held schedule can as well be given by gac_sim_set_input at its times). */
+void gac_schedule_input(double t, const double *q, const double *qd, double *u, void *schedule);
+
+/* GAC_OK if the schedule is usable: pointers set, n >= 1, times finite and strictly increasing
+ * (GAC_ERR_BAD_OPTION), values finite (GAC_ERR_BAD_INPUT). */
+int gac_schedule_check(const gac_schedule *s);
 
 /* Bind sim to model m and point its arrays at dwork / iwork (laid out as gac_sim_init does), e.g. after the
  * struct and its arrays were copied elsewhere.  Changes nothing else (the arrays' contents stay). */

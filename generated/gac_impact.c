@@ -253,8 +253,9 @@ int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q,
     return gac_impact_rounds(m, q, qd, p, nactive, active, e, -1, qd_plus, impulse, work, &rounds, &plastic);
 }
 
-int gac_constrained_dynamics(const gac_model *m, const double *q, const double *qd, const double *p,
-                             int nactive, const int *active, double *qdd, double *lambda, double *work)
+int gac_constrained_dynamics(const gac_model *m, const double *q, const double *qd, const double *u,
+                             const double *p, int nactive, const int *active, double *qdd, double *lambda,
+                             double *work)
 {
     const int nq = m->nq;
     double v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)], bias[GAC_AT_LEAST_1(m->njrow)];
@@ -262,7 +263,7 @@ int gac_constrained_dynamics(const gac_model *m, const double *q, const double *
     double *Y = J + m->njrow * nq;
     double *A = Y + nq * nq;
     int a, i, code;
-    m->forward_dynamics(q, qd, p, qdd);
+    m->forward_dynamics(q, qd, u, p, qdd);
     if (nactive == 0) return GAC_OK;
     code = gac_impact_system(m, q, qd, p, nactive, active, work, v, e);
     if (code != GAC_OK) return code;

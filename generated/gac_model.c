@@ -7,7 +7,8 @@ int gac_model_check(const gac_model *m)
 {
     int c;
     if (m == 0) return GAC_ERR_NULL_ARGUMENT;
-    if (m->nq < 1 || m->nx != 2 * m->nq || m->nparam < 0 || m->npoint < 1 || m->ncontact < 0 || m->njrow < 0)
+    if (m->nq < 1 || m->nx != 2 * m->nq || m->nparam < 0 || m->nu < 0 || m->npoint < 1 || m->ncontact < 0
+        || m->njrow < 0)
         return GAC_ERR_BAD_MODEL;
     if ((m->ncontact > 0 && m->contacts == 0) || (m->nparam > 0 && m->default_parameters == 0)
         || m->q0 == 0 || m->qd0 == 0)
@@ -36,7 +37,7 @@ long gac_impact_nwork(const gac_model *m)
 long gac_sim_ndouble(const gac_model *m)
 {
     const long nq = m->nq;
-    return 28L * m->nx + m->nparam + 7L * GAC_AT_LEAST_1(m->ncontact) + gac_impact_nwork(m) + nq * nq;
+    return 28L * m->nx + m->nparam + 2L * m->nu + 7L * GAC_AT_LEAST_1(m->ncontact) + gac_impact_nwork(m) + nq * nq;
 }
 
 long gac_sim_nint(const gac_model *m)
@@ -74,7 +75,8 @@ const char *gac_error_message(int code)
     case GAC_ERR_IMPACT_ACCURACY: return "the impact law could not be solved to round-off (an impulse < 0, a contact still approaching, an energy gain or an elastic energy change): the impact system is ill-conditioned";
     case GAC_ERR_UNSTABLE: return "RK4 is unstable at this step: the chain's fastest mode needs dt below about 2.8 / its rate; reduce dt or use an adaptive method";
     case GAC_ERR_LOST_CONTACT: return "a point lies beyond its wall at an impact: a wall crossing was missed, the motion is too fast or I_f too ill-conditioned (extreme mass, length or inertia ratios) for the tolerance";
-    case GAC_ERR_BAD_MODEL: return "the model descriptor is inconsistent: nq >= 1, nx = 2 nq, npoint >= 1, ncontact, njrow, nparam >= 0, every table and kernel present, each contact's point, axis, normal sign, Jacobian row and restitution index in range";
+    case GAC_ERR_BAD_INPUT: return "an input is NaN or infinite: the inputs given to sim_set_input, and those a controller writes, must be finite";
+    case GAC_ERR_BAD_MODEL: return "the model descriptor is inconsistent: nq >= 1, nx = 2 nq, npoint >= 1, ncontact, njrow, nparam, nu >= 0, every table and kernel present, each contact's point, axis, normal sign, Jacobian row and restitution index in range";
     default: return "unknown error code";
     }
 }

@@ -37,6 +37,9 @@ class CompiledModel:
         self.name = generated.name
         self.n, self.nq = scene.n, self.layout.nq          # nq: the model's own coordinates
         self.p = scene.parameter_vector()
+        self.parameter_names = scene.parameter_names()
+        self.input_names = list(scene.inputs)              # u[i] acts on coordinate input_names[i]
+        self.nu = scene.nu
         self.q0, self.qd0 = self.layout.reduce(scene.q0), self.layout.reduce(scene.qd0)
         self.contacts = list(self.layout.contacts)
         self.contact_rows = list(self.layout.contact_rows)
@@ -64,6 +67,22 @@ class CompiledModel:
     def _params(self, p):
         return self.p if p is None else self._vec(p, len(self.p), "p")
 
+    def _inputs(self, u):
+        return np.zeros(max(self.nu, 1)) if u is None else self._vec(u, self.nu, "u")
+
+    def parameters(self, overrides: dict | None = None, base=None) -> np.ndarray:
+        """The parameter vector with ``overrides`` ({name: value}, names of ``parameter_names``) applied to
+        ``base`` (default: the scene's own)."""
+        p = np.array(self.p if base is None else base, dtype=float)
+        for name, value in (overrides or {}).items():
+            if name not in self.parameter_names:
+                raise ValueError(f"p[{name}]: no such parameter; this model's parameters are "
+                                 f"{', '.join(self.parameter_names)}")
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+                raise ValueError(f"p[{name}]: expected a number, got {value!r}")
+            p[self.parameter_names.index(name)] = float(value)
+        return p
+
     def _call(self, name: str, out_size: int, *inputs):
         out = np.zeros(out_size)
         self._fn[name](*(self._ptr(a) for a in inputs), self._ptr(out))
@@ -74,19 +93,27 @@ class CompiledModel:
         q = self._vec(q, self.nq, "q")
         return self._call("mass_matrix", self.nq ** 2, q, self._params(p)).reshape(self.nq, self.nq)
 
-    def bias(self, q, qd, p=None) -> np.ndarray:
+    def bias(self, q, qd, p=None, u=None) -> np.ndarray:
+        """R of I_f qdd = R, with the generalised forces of the inputs u (default 0), springs and dampers."""
         return self._call("bias", self.nq, self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd"),
-                          self._params(p))
+                          self._inputs(u), self._params(p))
 
-    def forward_dynamics(self, q, qd, p=None) -> np.ndarray:
+    def forward_dynamics(self, q, qd, p=None, u=None) -> np.ndarray:
         return self._call("forward_dynamics", self.nq, self._vec(q, self.nq, "q"),
-                          self._vec(qd, self.nq, "qd"), self._params(p))
+                          self._vec(qd, self.nq, "qd"), self._inputs(u), self._params(p))
 
-    def rhs(self, t: float, x, p=None) -> np.ndarray:
+    def rhs(self, t: float, x, p=None, u=None) -> np.ndarray:
         x = self._vec(x, 2 * self.nq, "x")
         out = np.zeros(2 * self.nq)
-        self._fn["rhs"](float(t), self._ptr(x), self._ptr(self._params(p)), self._ptr(out))
+        self._fn["rhs"](float(t), self._ptr(x), self._ptr(self._inputs(u)), self._ptr(self._params(p)),
+                        self._ptr(out))
         return out
+
+    def power(self, q, qd, p=None, u=None) -> tuple[float, float]:
+        """(power of the inputs, dissipation of the dampers) in W: dE/dt = P_in - P_damp in flight."""
+        P = self._call("power", 2, self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd"), self._inputs(u),
+                       self._params(p))
+        return float(P[0]), float(P[1])
 
     def contact_points(self, q, p=None) -> np.ndarray:
         return self._call("contact_points", 3 * (self.n + 1), self._vec(q, self.nq, "q"),
@@ -130,13 +157,14 @@ class CompiledModel:
         return qd_plus, impulse[:len(active)]
 
 
-    def constrained_dynamics(self, q, qd, active, p=None) -> tuple[np.ndarray, np.ndarray]:
+    def constrained_dynamics(self, q, qd, active, p=None, u=None) -> tuple[np.ndarray, np.ndarray]:
         """Accelerations and contact forces with the contacts ``active`` held at their walls (bilateral,
         frictionless): I_f qdd = R + N^T lambda, N qdd = -Ndot qd (the runtime's persistent contact)."""
         q, qd = self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd")
         active = np.ascontiguousarray(active, dtype=np.int32)
         qdd, lam = np.zeros(self.nq), np.zeros(max(len(active), 1))
-        code = self._fn["constrained_dynamics"](self._ptr(q), self._ptr(qd), self._ptr(self._params(p)), len(active),
+        code = self._fn["constrained_dynamics"](self._ptr(q), self._ptr(qd), self._ptr(self._inputs(u)),
+                                                self._ptr(self._params(p)), len(active),
                                                 self.ffi.cast("int *", self.ffi.from_buffer(active)),
                                                 self._ptr(qdd), self._ptr(lam), self._ptr(self._work))
         if code != self.lib.GAC_OK:

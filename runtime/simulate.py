@@ -20,6 +20,7 @@ import numpy as np
 from codegen.scene import Scene, SceneError
 from codegen.specialise import coordinate_names
 
+from .inputs import InputSchedule, attach, input_source, set_input  # noqa: F401  (InputSchedule: re-export)
 from .model import CompiledModel, load_model
 
 METHODS = ("dopri5", "dop853", "rk4")
@@ -90,6 +91,9 @@ class SimulationResult:
     persistent_final: list = field(default_factory=list)  # (point, wall) of the contacts resting at t_final
     warnings: list = field(default_factory=list)          # results of limited accuracy, one sentence each
     energy_scale: float = 1.0     # J: max(T0 + |V0|, M g L), the scale energy_drift is measured on
+    energy_input_work: float = 0.0     # J: work of the inputs, int u . qd_actuated dt
+    energy_damping_loss: float = 0.0   # J: energy the joint dampers took, int C theta_dot^2 dt (>= 0)
+    u: np.ndarray | None = None        # (len(t), nu) the inputs at the sample times (None: no inputs)
 
     @property
     def success(self) -> bool:
@@ -103,9 +107,10 @@ class SimulationResult:
 
     @property
     def energy_residual(self) -> float:
-        """J: what the energy balance leaves, E_final - E_initial + energy_impact_loss.  Flight conserves
-        T + V (no input, no damping), so this is the integration error of the flight phases."""
-        return self.energy_final - self.energy_initial + self.energy_impact_loss
+        """J: what the energy balance leaves, E_final - E_initial + energy_impact_loss + energy_damping_loss -
+        energy_input_work (E = T + V, springs' potential included): the integration error of the flight phases."""
+        return (self.energy_final - self.energy_initial + self.energy_impact_loss + self.energy_damping_loss
+                - self.energy_input_work)
 
     @property
     def energy_drift(self) -> float:
@@ -114,8 +119,10 @@ class SimulationResult:
         return self.energy_residual / self.energy_scale
 
     def energy_summary(self) -> str:
-        """One line: initial and final energy, losses at impacts, and the balance's residual."""
-        return (f"energy: initial {self.energy_initial:.12g} J, final {self.energy_final:.12g} J, lost at impacts "
+        """One line: initial and final energy, inputs' work, losses in dampers and at impacts, and the residual."""
+        driven = (f"work of the inputs {self.energy_input_work:.6g} J, taken by dampers {self.energy_damping_loss:.6g} J, "
+                  if self.energy_input_work or self.energy_damping_loss else "")
+        return (f"energy: initial {self.energy_initial:.12g} J, final {self.energy_final:.12g} J, {driven}lost at impacts "
                 f"{self.energy_impact_loss:.6g} J; balance residual {self.energy_residual:.3e} J = "
                 f"{self.energy_drift:.3e} of {self.energy_scale:.6g} J (max(T0 + |V0|, M g L))")
 
@@ -144,6 +151,7 @@ class SimulationResult:
             "energy_initial": self.energy_initial, "energy_final": self.energy_final,
             "energy_impact_loss": self.energy_impact_loss, "energy_residual": self.energy_residual,
             "energy_scale": self.energy_scale, "energy_drift": self.energy_drift,
+            "energy_input_work": self.energy_input_work, "energy_damping_loss": self.energy_damping_loss,
             "n_rhs": self.n_rhs, "n_steps": self.n_steps, "n_rejected": self.n_rejected,
             "status": self.status, "message": self.message, "method": self.method, "options": self.options,
             "contact_events": [{"t": e.t, "point": e.point, "wall": e.wall, "kind": e.kind}
@@ -177,7 +185,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
              atol: float = DEFAULT_ATOL, dt: float | None = None, t_eval=None, h_max: float = 0.0,
              contact_tol: float = 1e-6, event_samples: int = 4, event_tol: float = 1e-13,
              max_impacts: int = 10000, max_steps: int = 10_000_000, rest_height: float | None = None,
-             zeno_impacts: int = 20, p=None, q0=None, qd0=None,
+             zeno_impacts: int = 20, p=None, q0=None, qd0=None, u=None,
              max_wall_time: float | None = None, charts: bool = True, check_start: bool = True) -> SimulationResult:
     """Simulate the scene's hybrid dynamics from its initial state over [0, t_end].
 
@@ -201,7 +209,12 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     check_start   refuse q0/p overrides that put a contact point outside its wall beyond round-off (False:
                   a restart from a state the loop itself produced, with its resting contacts held at
                   their landing gaps)
-    p, q0, qd0    override the scene's parameters and initial state (q0, qd0 in the full layout of Eq. 13)
+    p, q0, qd0    override the scene's parameters (a vector in the order of model.parameter_names, or a dict
+                  {name: value} of the ones that change) and initial state (q0, qd0 in the full layout of Eq. 13)
+    u             the inputs of a driven model (runtime.inputs): None (0), constant values (one per input, in
+                  the order of model.input_names), an InputSchedule (values at times, held or linear; both
+                  evaluated in C, the loop stopping at each time), or a function u(t, q, qd) of the full-layout
+                  state, called back from C at every stage (slower: a Python call per stage)
     Samples, final state and impact states are returned in the full layout of Eq. 13 whatever the model.
     """
     model = scene if isinstance(scene, CompiledModel) else load_model(scene)
@@ -236,6 +249,9 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     nq, nx = model.nq, 2 * model.nq
     layout = model.layout
     overridden = p is not None or q0 is not None      # the scene's own values were checked when it was loaded
+    if isinstance(p, dict):
+        p = model.parameters(p)
+    source = input_source(model, u)
     try:
         p = model.p if p is None else np.ascontiguousarray(p, dtype=float)
     except (TypeError, ValueError):
@@ -264,6 +280,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     code = getattr(lib, f"{name}_sim_init")(sim, 0.0, ptr(q), ptr(qd), ptr(p), opt)
     if code < 0:
         raise ValueError(f"simulate: {model.error_message(code)}")
+    keep_alive = attach(model, sim, source)   # noqa: F841  (the schedule or handle the C loop points at)
 
     x_eval = np.zeros((len(t_eval), nx))
     i_eval = ffi.new("int *", 0)
@@ -286,7 +303,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     energy_ref = sum(link.mass for link in model.scene.links) * max(abs(p[0]), 1.0) * sum(
         link.length for link in model.scene.links)
     if method == "rk4":
-        _check_rk4_step(model, q, qd, p, dt)
+        _check_rk4_step(model, q, qd, p, dt, source.value_at(0.0, layout.expand(q), layout.expand(qd, velocity=True)))
     ERR_MAX_STEPS = lib.GAC_ERR_MAX_STEPS
     # The C loop runs in chunks of at most CHUNK_STEPS steps so that the wall-time budget is looked at
     # regularly; max_steps (per flight segment) is counted across the chunks.
@@ -294,12 +311,19 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     start = time.perf_counter()
     segment_t, segment_steps = float(state.t), int(state.n_steps) + int(state.n_rejected)
     status, message = 0, "reached t_end"
+    stops = source.breakpoints(t_end) + [t_end]   # the loop stops where a schedule jumps or bends
+    stop = 0
     while True:
         opt_steps = chunk
         if max_steps:
             opt_steps = max(1, min(chunk, int(max_steps) - (int(state.n_steps) + int(state.n_rejected) - segment_steps)))
         state.opt.max_steps = opt_steps
-        code = advance(sim, float(t_end), t_eval_ptr, len(t_eval), i_eval, x_eval_ptr, record)
+        code = advance(sim, float(stops[stop]), t_eval_ptr, len(t_eval), i_eval, x_eval_ptr, record)
+        if code == SIM_END and stop + 1 < len(stops):
+            if source.kind == "hold":
+                set_input(model, sim, source.value_at(stops[stop]))
+            stop += 1
+            continue
         if code == SIM_END:
             break
         if code == ERR_MAX_STEPS:
@@ -320,6 +344,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
             contact_events += _read_contact_events(model, rec)
         if code == SIM_CONTACT:
             continue
+        if code == lib.GAC_ERR_BAD_INPUT and source.error is not None:
+            raise source.error
         if code != SIM_IMPACT:
             status = -1
             message = f"at t = {state.t:.12g} s: {model.error_message(code)}"
@@ -355,7 +381,9 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                        f"{len(impacts)} impacts ({impacts[-1].t - impacts[max(0, len(impacts) - 100)].t:.3g} s "
                        f"of simulated time for the last {min(len(impacts), 100)})")
             break
-    if charts and code == lib.GAC_ERR_GIMBAL_LOCK:
+    if charts and code == lib.GAC_ERR_GIMBAL_LOCK and model.scene.driven:
+        message += " (the second base chart is not available for a chain with inputs, springs or dampers)"
+    elif charts and code == lib.GAC_ERR_GIMBAL_LOCK:
         from .charts import simulate_with_charts
         return simulate_with_charts(
             model.scene, t_end, t_eval=t_eval, p=None if p is model.p else p,
@@ -367,8 +395,14 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     x_final = np.array(ffi.unpack(state.x, nx))
     n = i_eval[0]
     warnings = impact_warnings(impacts)
+    q_samples, qd_samples = layout.expand(x_eval[:n, :nq]), layout.expand(x_eval[:n, nq:], velocity=True)
+    u_samples = None
+    if model.nu:
+        u_samples = np.array([source.value_at(t, qs, qds) for t, qs, qds in zip(t_eval[:n], q_samples, qd_samples)])
+        u_samples = u_samples.reshape(n, model.nu)
     return SimulationResult(
-        t=t_eval[:n].copy(), q=layout.expand(x_eval[:n, :nq]), qd=layout.expand(x_eval[:n, nq:], velocity=True),
+        t=t_eval[:n].copy(), q=q_samples, qd=qd_samples, u=u_samples,
+        energy_input_work=float(state.work_input), energy_damping_loss=float(state.work_damping),
         impacts=impacts, t_final=float(state.t), q_final=layout.expand(x_final[:nq]),
         qd_final=layout.expand(x_final[nq:], velocity=True),
         energy_initial=energy_initial, energy_final=sum(model.energy(x_final[:nq], x_final[nq:], p)),
@@ -538,19 +572,19 @@ def _step_diagnosis(model: CompiledModel, sim, t_from: float, steps: int) -> str
             "max_steps / max_wall_time or loosen rtol/atol")
 
 
-def _rk4_stability(model: CompiledModel, q, qd, p, dt: float) -> tuple[float, str]:
+def _rk4_stability(model: CompiledModel, q, qd, p, dt: float, u=None) -> tuple[float, str]:
     """The spectral radius of the flight Jacobian d(qd, qdd)/d(q, qd) at (q, qd), estimated by power
     iteration on finite-difference Jacobian-vector products, and a sentence comparing dt with RK4's
     stability bound RK4_STABLE / radius."""
     x0 = np.r_[q, qd]
-    f0 = model.rhs(0.0, x0, p)
+    f0 = model.rhs(0.0, x0, p, u)
     rng = np.random.default_rng(0)
     v = rng.normal(size=x0.size)
     radius = 0.0
     for _ in range(30):
         v /= np.linalg.norm(v)
         h = 1e-7 * max(1.0, np.linalg.norm(x0))
-        w = (model.rhs(0.0, x0 + h * v, p) - f0) / h
+        w = (model.rhs(0.0, x0 + h * v, p, u) - f0) / h
         radius = float(np.linalg.norm(w))
         if not np.isfinite(radius) or radius == 0.0:
             break
@@ -561,7 +595,7 @@ def _rk4_stability(model: CompiledModel, q, qd, p, dt: float) -> tuple[float, st
                    f"dt below about {limit:.3g} s")
 
 
-def _check_rk4_step(model: CompiledModel, q, qd, p, dt: float) -> None:
+def _check_rk4_step(model: CompiledModel, q, qd, p, dt: float, u=None) -> None:
     """Refuse an RK4 step that the scene's fastest mode at the start makes unstable."""
-    limit, sentence = _rk4_stability(model, q, qd, p, dt)
+    limit, sentence = _rk4_stability(model, q, qd, p, dt, u)
     _check(dt <= limit, "dt", f"{dt:g} s is too large for RK4 on this scene: {sentence}")

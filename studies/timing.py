@@ -84,6 +84,7 @@ HARNESS = r"""
 int main(int argc, char **argv)
 {{
     double p[{NAME}_NPARAM], q[{NAME}_NQ], qd[{NAME}_NQ], x[{NAME}_NX], xd[{NAME}_NX], acc = 0.0;
+    double u[{NAME}_NU + 1] = {{0.0}};             /* inputs at 0 (one more entry: never a zero-length array) */
     long calls = argc > 1 ? atol(argv[1]) : 100000, i;
     int batch, k;
     {name}_default_parameters(p);
@@ -94,7 +95,7 @@ int main(int argc, char **argv)
         clock_gettime(CLOCK_MONOTONIC, &a);
         for (i = 0; i < calls; ++i) {{
             x[0] += 1e-12;                        /* a new input every call */
-            {name}_rhs(0.0, x, p, xd);
+            {name}_rhs(0.0, x, u, p, xd);
             acc += xd[{NAME}_NX - 1];
         }}
         clock_gettime(CLOCK_MONOTONIC, &b);

@@ -54,7 +54,8 @@ SCENE_FILES = [
     ("nanwall.toml", (ROD + "[walls]\nx2_min = nan\n").encode(), "walls.x2_min: must be a finite number"),
     ("farwall.toml", (ROD + "[walls]\nx2_min = -1e12\n").encode(), "walls.x2_min: must be within [-1e+09, 1e+09]"),
     ("restitution.toml", ("restitution = 1.5\n" + ROD + WALLS).encode(), "restitution: must be in [0, 1]"),
-    ("unknown.toml", (ROD + "stiffness = 3\n").encode(), "unknown key 'stiffness'"),
+    ("unknown.toml", (ROD + "stiffnes = 3\n").encode(), "unknown key 'stiffnes'"),
+    ("spring-on-base.toml", (ROD + "stiffness = 3\n").encode(), "links[1].stiffness: theta_1 orients the base"),
     ("outside.toml", (ROD + "[walls]\nx2_min = 0.5\n").encode(), "outside the wall x2_min"),
     ("state.toml", (ROD + "[initial]\nq = [0, 0, 0, 0, 0]\n").encode(), "initial.q: expected a list of 6 numbers"),
 ]

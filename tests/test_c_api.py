@@ -263,7 +263,7 @@ def test_header_sizes_are_the_library_formulas(built):
                             ("SIM_NINT", lib.gac_sim_nint), ("RECORD_NDOUBLE", lib.gac_record_ndouble),
                             ("RECORD_NINT", lib.gac_record_nint)):
         assert formula(descriptor) == getattr(lib, f"PAPER_CASE1_{suffix}") == model.size(suffix), suffix
-    sizes = interface.size_values(n=4, nq=model.nq, nparam=len(model.p), npoint=5, ncontact=len(model.contacts),
+    sizes = interface.size_values(n=4, nq=model.nq, nparam=len(model.p), nu=0, npoint=5, ncontact=len(model.contacts),
                                   njrow=len(model.contact_rows))
     assert sizes == {s.suffix: model.size(s.suffix) for s in interface.SIZES}
 

@@ -74,35 +74,49 @@ static int gac_finite(const double *x, int n)
     return 1;
 }
 
+/* The inputs at time t and state x: the held ones, or the controller's (into s->u_eval, starting from the
+ * held ones).  A non-finite controller output is kept in s->fail (GAC_ERR_BAD_INPUT). */
+static const double *gac_input(gac_sim *s, double t, const double *x)
+{
+    const gac_model *md = s->model;
+    if (s->controller == 0 || md->nu == 0) return s->u;
+    gac_copy(s->u_eval, s->u, md->nu);
+    s->controller(t, x, x + md->nq, s->u_eval, s->controller_data);
+    if (!gac_finite(s->u_eval, md->nu) && s->fail == 0) s->fail = GAC_ERR_BAD_INPUT;
+    return s->u_eval;
+}
+
 /* The flight right-hand side: free, or with the persistent contacts held (an error is kept in s->fail;
  * in a trial stage of an adaptive step it only rejects the step). */
 static void gac_f(gac_sim *s, double t, const double *x, double *f)
 {
     const gac_model *md = s->model;
+    const double *u = gac_input(s, t, x);
     s->n_rhs++;
     if (s->nactive == 0) {
-        md->rhs(t, x, s->p, f);
+        md->rhs(t, x, u, s->p, f);
     } else {
         double lambda[md->nq];
         int i, code;
         for (i = 0; i < md->nq; ++i) f[i] = x[md->nq + i];
-        code = gac_constrained_dynamics(md, x, x + md->nq, s->p, s->nactive, s->active, f + md->nq, lambda,
+        code = gac_constrained_dynamics(md, x, x + md->nq, u, s->p, s->nactive, s->active, f + md->nq, lambda,
                                         s->work);
         if (code != GAC_OK && s->fail == 0) s->fail = code;
     }
 }
 
-/* Event value of every contact at x: its gap, or for a persistent contact its force lambda.  An event is
- * a value falling from > 0 to <= 0: a wall crossing, or a persistent contact that would pull. */
-static void gac_events(gac_sim *s, const double *x, double *ev)
+/* Event value of every contact at time t and state x: its gap, or for a persistent contact its force lambda.
+ * An event is a value falling from > 0 to <= 0: a wall crossing, or a persistent contact that would pull. */
+static void gac_events(gac_sim *s, double t, const double *x, double *ev)
 {
     const gac_model *md = s->model;
     md->contact_gaps(x, s->p, ev);
     if (s->nactive > 0) {
         double qdd[md->nq], lambda[md->nq];
+        const double *u = gac_input(s, t, x);
         int a, code;
         for (a = 0; a < md->nq; ++a) lambda[a] = 0.0;
-        code = gac_constrained_dynamics(md, x, x + md->nq, s->p, s->nactive, s->active, qdd, lambda, s->work);
+        code = gac_constrained_dynamics(md, x, x + md->nq, u, s->p, s->nactive, s->active, qdd, lambda, s->work);
         if (code != GAC_OK && s->fail == 0) s->fail = code;
         for (a = 0; a < s->nactive; ++a) ev[s->active[a]] = lambda[a];
     }
@@ -116,8 +130,10 @@ void gac_sim_bind(gac_sim *s, const gac_model *md, double *dwork, int *iwork)
     double *d = dwork;
     int j;
     s->model = md;
-    s->x = d;             d += nx;             /* dwork: x | p | f | k[0..15] | x1 | xs | cont[0..7] */
+    s->x = d;             d += nx;             /* dwork: x | p | u | u_eval | f | k[0..15] | x1 | xs | cont[0..7] */
     s->p = d;             d += md->nparam;
+    s->u = d;             d += md->nu;
+    s->u_eval = d;        d += md->nu;
     s->f = d;             d += nx;
     for (j = 0; j < 16; ++j) {
         s->k[j] = d;
@@ -187,6 +203,11 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     gac_sim_bind(s, md, dwork, iwork);
     s->opt = *opt;
     for (i = 0; i < md->nparam; ++i) s->p[i] = pv[i];
+    for (i = 0; i < md->nu; ++i) s->u[i] = s->u_eval[i] = 0.0;
+    s->controller = 0;
+    s->controller_data = 0;
+    s->input_changed = 0;
+    s->work_input = s->work_damping = 0.0;
     for (i = 0; i < md->nx; ++i) s->x[i] = x[i];
     s->t = t0;
     s->h = opt->dt;                               /* RK4 step, or the first adaptive step (0: automatic) */
@@ -220,7 +241,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
         int code = gac_rest_at_start(s);
         if (code < 0) return code;
     }
-    gac_events(s, s->x, s->ev);
+    gac_events(s, s->t, s->x, s->ev);
     return s->fail < 0 ? s->fail : GAC_OK;
 }
 
@@ -612,7 +633,7 @@ static double gac_value_at(gac_sim *s, int what, int c, double t)
     const gac_model *md = s->model;
     gac_dense(s, t, s->xs);
     if (what == 0) {
-        gac_events(s, s->xs, s->es);
+        gac_events(s, t, s->xs, s->es);
         return s->es[c];
     }
     gac_normal_velocities(md, s->xs, s->p, s->es);
@@ -788,7 +809,7 @@ static int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
         double gj[nc1], vj[nc1];
         int have_v = 0;
         gac_dense(s, tj, s->xs);
-        gac_events(s, s->xs, gj);
+        gac_events(s, tj, s->xs, gj);
         for (c = 0; c < md->ncontact; ++c) {           /* crossings and returns at the samples */
             double tc;
             if (gj[c] > 0.0) continue;
@@ -860,15 +881,16 @@ static void gac_normal_velocities(const gac_model *md, const double *x, const do
     }
 }
 
-/* Normal accelerations (along the inward normals) of all contacts at state x, with the contacts
+/* Normal accelerations (along the inward normals) of all contacts at time t and state x, with the contacts
  * set[0..n-1] held (n = 0: free flight). */
-static int gac_normal_accelerations(gac_sim *s, const double *x, int n, const int *set, double *an)
+static int gac_normal_accelerations(gac_sim *s, double t, const double *x, int n, const int *set, double *an)
 {
     const gac_model *md = s->model;
     const int nq = md->nq;
     double qdd[nq], lambda[nq], bias[GAC_AT_LEAST_1(md->njrow)];
     double *J = s->work + nq * nq;
-    int c, i, code = gac_constrained_dynamics(md, x, x + nq, s->p, n, set, qdd, lambda, s->work);
+    const double *u = gac_input(s, t, x);
+    int c, i, code = gac_constrained_dynamics(md, x, x + nq, u, s->p, n, set, qdd, lambda, s->work);
     if (code != GAC_OK) return code;
     md->contact_jacobian(x, s->p, J);
     md->contact_bias(x, x + nq, s->p, bias);
@@ -967,7 +989,7 @@ static int gac_project(gac_sim *s, double *x, int n, const int *set, int positio
  * acceleration-level complementarity problem: lambda >= 0, normal acceleration w = A lambda + c >= 0,
  * lambda_i w_i = 0, with A = N I_f^-1 N^T and c = N qdd_free + Ndot qd.  Solved exactly by enumerating the
  * pushing sets, as the impact's complementarity form.  The set is reduced in place. */
-static int gac_settle(gac_sim *s, const double *x, int *n, int *set)
+static int gac_settle(gac_sim *s, double t, const double *x, int *n, int *set)
 {
     const gac_model *md = s->model;
     const int nq = md->nq, m = *n;
@@ -979,7 +1001,7 @@ static int gac_settle(gac_sim *s, const double *x, int *n, int *set)
     unsigned long mask, full;
     if (m == 0) return GAC_OK;
     if (m > GAC_MAX_LCP(md)) return GAC_ERR_LCP;
-    md->forward_dynamics(x, x + nq, s->p, qdd);
+    md->forward_dynamics(x, x + nq, gac_input(s, t, x), s->p, qdd);
     code = gac_impact_system(md, x, x + nq, s->p, m, set, s->work, v, e);
     if (code != GAC_OK) return code;
     md->contact_bias(x, x + nq, s->p, bias);
@@ -1123,7 +1145,7 @@ static int gac_rest_at_start(gac_sim *s)
     int set[md->nq], n = 0, c, code;
     md->contact_gaps(s->x, s->p, gaps);
     gac_normal_velocities(md, s->x, s->p, vn);
-    code = gac_normal_accelerations(s, s->x, 0, 0, an);
+    code = gac_normal_accelerations(s, s->t, s->x, 0, 0, an);
     if (code != GAC_OK) return code;
     for (c = 0; c < md->ncontact; ++c) {
         if (fabs(an[c]) > a) a = fabs(an[c]);
@@ -1137,7 +1159,7 @@ static int gac_rest_at_start(gac_sim *s)
     if (n == 0) return GAC_OK;
     for (c = 0; c < n; ++c) s->gap_held[set[c]] = gaps[set[c]];         /* held where they start */
     code = gac_project(s, s->x, n, set, 0);
-    if (code == GAC_OK) code = gac_settle(s, s->x, &n, set);
+    if (code == GAC_OK) code = gac_settle(s, s->t, s->x, &n, set);
     if (code != GAC_OK) return code;
     s->n_activations += n;
     gac_set_active(s, n, set, 0);
@@ -1312,7 +1334,7 @@ static int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     if (s->rest_height > 0.0 || s->opt.zeno_impacts > 0) {
         const double floor = gac_graze_depth(s, x) + 16.0 * GAC_EPS * gac_extent(s, x);
         height = s->rest_height > floor ? s->rest_height : floor;
-        code = gac_normal_accelerations(s, x, s->nactive, s->active, an);
+        code = gac_normal_accelerations(s, t, x, s->nactive, s->active, an);
         if (code != GAC_OK) return code;
     }
     for (k = 0; k < n; ++k) {
@@ -1396,7 +1418,7 @@ static int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
             for (a = 0; a < s->nactive; ++a) {
                 if (s->active[a] != c) others[m++] = s->active[a];
             }
-            code = gac_normal_accelerations(s, s->x1, m, others, a_free);
+            code = gac_normal_accelerations(s, t, s->x1, m, others, a_free);
             if (code != GAC_OK) return code;
             held_lift = a_free[c] < 0.0 && vn[c] * vn[c] <= 2.0 * (-a_free[c]) * height;
         }
@@ -1410,7 +1432,7 @@ static int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
             if (!s->is_active[set[k]]) s->gap_held[set[k]] = gaps[set[k]];   /* stays, so V does too */
         }
         code = gac_hold(s, s->x1, nset, set, n, list);   /* held at rest, the others not pushed in */
-        if (code == GAC_OK) code = gac_settle(s, s->x1, &nset, set);
+        if (code == GAC_OK) code = gac_settle(s, t, s->x1, &nset, set);
         if (code != GAC_OK && code != GAC_ERR_LCP) return code;
         gac_normal_velocities(md, s->x1, s->p, vn);
         for (k = 0; k < n; ++k) {
@@ -1461,7 +1483,7 @@ static int gac_release(gac_sim *s, double t, int c_event, gac_impact_record *r)
     for (a = 0; a < s->nactive; ++a) {
         if (s->active[a] != c_event) set[n++] = s->active[a];
     }
-    code = gac_settle(s, s->xs, &n, set);
+    code = gac_settle(s, t, s->xs, &n, set);
     if (code != GAC_OK) return code;
     r->t = t;
     r->ncontact = 0;
@@ -1474,6 +1496,74 @@ static int gac_release(gac_sim *s, double t, int c_event, gac_impact_record *r)
     r->approach_before = r->approach_after = 0.0;
     gac_set_active(s, n, set, r);
     return GAC_OK;
+}
+
+/* Add the work of the inputs and the dissipation of the dampers over [s->t, t_b] of the current step to
+ * s->work_input and s->work_damping: 5-point Gauss-Legendre (exact for polynomials of degree 9) on the
+ * step's dense output. */
+static void gac_add_work(gac_sim *s, double t_b)
+{
+    static const double node[5] = {0.04691007703066800, 0.23076534494715845, 0.5, 0.76923465505284155,
+                                   0.95308992296933200};
+    static const double weight[5] = {0.11846344252809454, 0.23931433524968324, 0.28444444444444444,
+                                     0.23931433524968324, 0.11846344252809454};
+    const gac_model *md = s->model;
+    const double h = t_b - s->t;
+    double x[md->nx], P[2], w_in = 0.0, w_damp = 0.0;
+    int j;
+    if (md->power == 0 || !(h > 0.0)) return;
+    for (j = 0; j < 5; ++j) {
+        const double t = s->t + node[j] * h;
+        gac_dense(s, t, x);
+        md->power(x, x + md->nq, gac_input(s, t, x), s->p, P);
+        w_in += weight[j] * P[0];
+        w_damp += weight[j] * P[1];
+    }
+    s->work_input += h * w_in;
+    s->work_damping += h * w_damp;
+}
+
+int gac_sim_set_input(gac_sim *s, const double *u)
+{
+    int i;
+    if (s == 0 || (u == 0 && s->model->nu > 0)) return GAC_ERR_NULL_ARGUMENT;
+    if (!gac_finite(u, s->model->nu)) return GAC_ERR_BAD_INPUT;
+    for (i = 0; i < s->model->nu; ++i) s->u[i] = u[i];
+    s->f_valid = 0;                    /* the flight derivative and the resting contacts' forces change */
+    s->input_changed = 1;
+    return GAC_OK;
+}
+
+int gac_sim_set_controller(gac_sim *s, gac_controller controller, void *user)
+{
+    if (s == 0) return GAC_ERR_NULL_ARGUMENT;
+    s->controller = controller;
+    s->controller_data = user;
+    s->f_valid = 0;
+    s->input_changed = 1;
+    return GAC_OK;
+}
+
+/* After the inputs changed: release the resting contacts that the new inputs pull off their walls (their
+ * force lambda <= 0 at the current state).  Returns 1 (record filled: GAC_SIM_CONTACT), 0 or an error. */
+static int gac_recheck_rest(gac_sim *s, gac_impact_record *record)
+{
+    const gac_model *md = s->model;
+    int a, code;
+    s->input_changed = 0;
+    if (s->nactive == 0) return 0;
+    gac_events(s, s->t, s->x, s->ev);
+    if (s->fail) return s->fail;
+    for (a = 0; a < s->nactive; ++a) {
+        if (s->ev[s->active[a]] <= 0.0) break;
+    }
+    if (a == s->nactive) return 0;
+    gac_copy(s->xs, s->x, md->nx);
+    code = gac_release(s, s->t, s->active[a], record);
+    if (code < 0) return code;
+    s->f_valid = s->vn_valid = 0;
+    gac_events(s, s->t, s->x, s->ev);
+    return s->fail ? s->fail : 1;
 }
 
 /* Write the samples t_eval[*i_eval ..] that fall in (t_a, t_b] (state from the dense output). */
@@ -1522,6 +1612,10 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
         for (i = 0; i < s->nactive; ++i) record->activated[i] = s->active[i];
         return GAC_SIM_CONTACT;
     }
+    if (s->input_changed) {
+        const int code = gac_recheck_rest(s, record);
+        if (code != 0) return code < 0 ? code : GAC_SIM_CONTACT;
+    }
     while (s->t < t_end) {
         double h, t1, t_event = 0.0, err = 0.0;
         int c_event = -1, last;
@@ -1550,6 +1644,7 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
             double fac;
             const int eighth = s->opt.method == GAC_METHOD_DOP853;
             err = eighth ? gac_dop853_step(s, h) : gac_dopri5_step(s, h);
+            if (s->fail == GAC_ERR_BAD_INPUT) return s->fail;
             if (s->fail) {                  /* a trial stage the constraints cannot hold: reject and shrink */
                 s->fail_seen = s->fail;
                 s->fail = 0;
@@ -1580,6 +1675,7 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
         if (gac_find_event(s, t1, &t_event, &c_event)) {
             int code, released = s->is_active[c_event];
             if (s->fail) return s->fail;
+            gac_add_work(s, t_event);
             gac_emit(s, t_event, t_eval, n_eval, i_eval, x_eval);
             gac_dense(s, t_event, s->xs);
             code = released ? gac_release(s, t_event, c_event, record)
@@ -1588,7 +1684,7 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
             for (i = 0; i < md->nx; ++i) s->x[i] = code == 1 ? s->x1[i] : s->xs[i];
             s->t = t_event;
             s->f_valid = s->vn_valid = 0;
-            gac_events(s, s->x, s->ev);
+            gac_events(s, s->t, s->x, s->ev);
             if (s->fail) return s->fail;
             if (released) {                       /* a wall crossing counts once the gap has opened again */
                 for (i = 0; i < record->nreleased; ++i) {
@@ -1603,6 +1699,8 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
             }
             continue;                                         /* grazing: carry on from the touch */
         }
+        gac_add_work(s, t1);
+        if (s->fail) return s->fail;
         gac_emit(s, t1, t_eval, n_eval, i_eval, x_eval);
         gac_copy(s->x, s->x1, md->nx);
         {
@@ -1616,7 +1714,7 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
             int code = gac_project(s, s->x, s->nactive, s->active, 1);
             if (code != GAC_OK) return code;
             s->f_valid = s->vn_valid = 0;
-            gac_events(s, s->x, s->ev);
+            gac_events(s, s->t, s->x, s->ev);
             if (s->fail) return s->fail;
         }
     }

@@ -9,6 +9,9 @@
  *         height h it strikes the floor at t_1 = sqrt(2 h / g) with speed u_1 = g t_1, and after impact k at
  *         speed u_k leaves at e u_k: u_k = e^(k-1) u_1, t_(k+1) = t_k + 2 e u_k / g.  Every integrator is
  *         exact on this motion (a quadratic), so the loop must match these closed forms to round-off.
+ *         An input u (N) pushes it up: with u held at m g + m a from rest at height h it rises as
+ *         h + a t^2 / 2, the input doing the work u (y - h); a PD controller u = m g - k (y - y_ref) - c v
+ *         makes it a damped oscillator about y_ref (closed form), and a linear input schedule gives a cubic.
  *   box   a point mass in the square [0, 2] x [0, 2] under gravity, q = [x, y], e = 1 on every wall: x moves
  *         at constant speed between the side walls (closed-form impact times), y bounces on the floor, and
  *         the energy is kept.
@@ -38,15 +41,21 @@ static int checks = 0, failures = 0, broken = 0;
 
 /* ---- ball: p = [g, m, e] ------------------------------------------------------------------------ */
 static void ball_mass(const double *q, const double *p, double *M) { (void)q; M[0] = p[1]; }
-static void ball_bias(const double *q, const double *qd, const double *p, double *R)
+static void ball_bias(const double *q, const double *qd, const double *u, const double *p, double *R)
 {
     (void)q; (void)qd;
-    R[0] = -p[1] * p[0];
+    R[0] = -p[1] * p[0] + u[0];
 }
-static void ball_fd(const double *q, const double *qd, const double *p, double *qdd)
+static void ball_fd(const double *q, const double *qd, const double *u, const double *p, double *qdd)
 {
     (void)q; (void)qd;
-    qdd[0] = -p[0];
+    qdd[0] = -p[0] + u[0] / p[1];
+}
+static void ball_power(const double *q, const double *qd, const double *u, const double *p, double *P)
+{
+    (void)q; (void)p;
+    P[0] = u[0] * qd[0];
+    P[1] = 0.0;
 }
 static void ball_points(const double *q, const double *p, double *r)
 {
@@ -70,11 +79,11 @@ static void ball_energy(const double *q, const double *qd, const double *p, doub
     E[0] = 0.5 * p[1] * qd[0] * qd[0];
     E[1] = p[1] * p[0] * q[0];
 }
-static void ball_rhs(double t, const double *x, const double *p, double *xdot)
+static void ball_rhs(double t, const double *x, const double *u, const double *p, double *xdot)
 {
     (void)t;
     xdot[0] = x[1];
-    ball_fd(x, x + 1, p, xdot + 1);
+    ball_fd(x, x + 1, u, p, xdot + 1);
 }
 
 static const gac_contact ball_contacts[1] = {{1, 1, +1, 0, 2, 0.0}};   /* O_1 on the floor, e = p[2] */
@@ -82,13 +91,13 @@ static const double ball_p[3] = {9.81, 2.0, 0.8};
 static const double ball_q0[1] = {1.0}, ball_qd0[1] = {0.0};
 
 static const gac_model ball = {
-    .name = "ball", .n = 0, .nq = 1, .nx = 2, .nparam = 3, .npoint = 1, .ncontact = 1, .njrow = 1,
+    .name = "ball", .n = 0, .nq = 1, .nx = 2, .nparam = 3, .nu = 1, .npoint = 1, .ncontact = 1, .njrow = 1,
     .contacts = ball_contacts,
     .chart = {.a = {0.0, 1.0}, .b = {1.0, 0.0}, .theta0_index = -1, .theta0_value = 0.0},   /* measure 1 */
     .default_parameters = ball_p, .q0 = ball_q0, .qd0 = ball_qd0,
     .mass_matrix = ball_mass, .bias = ball_bias, .forward_dynamics = ball_fd, .contact_points = ball_points,
     .contact_velocities = ball_velocities, .contact_jacobian = ball_jacobian, .contact_gaps = ball_gaps,
-    .contact_bias = ball_jbias, .energy = ball_energy, .rhs = ball_rhs
+    .contact_bias = ball_jbias, .energy = ball_energy, .rhs = ball_rhs, .power = ball_power
 };
 
 /* ---- box: p = [g, m, e], walls x = 0, x = 2, y = 0, y = 2 ---------------------------------------- */
@@ -97,14 +106,15 @@ static void box_mass(const double *q, const double *p, double *M)
     (void)q;
     M[0] = p[1]; M[1] = 0.0; M[2] = 0.0; M[3] = p[1];
 }
-static void box_bias(const double *q, const double *qd, const double *p, double *R)
+static void box_bias(const double *q, const double *qd, const double *u, const double *p, double *R)
 {
     (void)q; (void)qd;
+    (void)u;
     R[0] = 0.0; R[1] = -p[1] * p[0];
 }
-static void box_fd(const double *q, const double *qd, const double *p, double *qdd)
+static void box_fd(const double *q, const double *qd, const double *u, const double *p, double *qdd)
 {
-    (void)q; (void)qd;
+    (void)q; (void)qd; (void)u;
     qdd[0] = 0.0; qdd[1] = -p[0];
 }
 static void box_points(const double *q, const double *p, double *r)
@@ -137,11 +147,11 @@ static void box_energy(const double *q, const double *qd, const double *p, doubl
     E[0] = 0.5 * p[1] * (qd[0] * qd[0] + qd[1] * qd[1]);
     E[1] = p[1] * p[0] * q[1];
 }
-static void box_rhs(double t, const double *x, const double *p, double *xdot)
+static void box_rhs(double t, const double *x, const double *u, const double *p, double *xdot)
 {
     (void)t;
     xdot[0] = x[2]; xdot[1] = x[3];
-    box_fd(x, x + 2, p, xdot + 2);
+    box_fd(x, x + 2, u, p, xdot + 2);
 }
 
 static const gac_contact box_contacts[4] = {
@@ -164,6 +174,7 @@ static const gac_model box = {
 #define NDOUBLE 2048
 #define NINT 256
 static double dwork[NDOUBLE], rdwork[64], work[256];
+static const double zero_input[1] = {0.0};
 static int iwork[NINT], riwork[64];
 
 static void test_sizes(void)
@@ -192,7 +203,7 @@ static void test_impact_kernels(void)
     CHECK(code == GAC_OK && NEAR(qd_plus[0], 2.4, 1e-15), "complementarity = Eq. 47 here (%.17g)", qd_plus[0]);
     CHECK(gac_impact(&ball, q, down, ball_p, 2, bad, qd_plus, F, work) == GAC_ERR_BAD_CONTACT, "repeated contact");
     CHECK(gac_impact(&ball, q, down, ball_p, 0, active, qd_plus, F, work) == GAC_ERR_BAD_CONTACT, "no contact");
-    code = gac_constrained_dynamics(&ball, q, rest, ball_p, 1, active, qdd, lambda, work);
+    code = gac_constrained_dynamics(&ball, q, rest, zero_input, ball_p, 1, active, qdd, lambda, work);
     CHECK(code == GAC_OK && NEAR(qdd[0], 0.0, 1e-15) && NEAR(lambda[0], 2.0 * 9.81, 1e-13),
           "resting: qdd %g, lambda %.17g (m g)", qdd[0], lambda[0]);
 }
@@ -242,6 +253,100 @@ static void test_ball(int method)
         CHECK(NEAR(x_eval[2 * i], h - 0.5 * g * t_eval[i] * t_eval[i], 1e-12)
               && NEAR(x_eval[2 * i + 1], -g * t_eval[i], 1e-12), "sample %d: %.17g %.17g", i, x_eval[2 * i],
               x_eval[2 * i + 1]);
+    }
+}
+
+/* A PD controller on the ball's height: u = m g - k (y - y_ref) - c v (gains per unit mass in *user). */
+typedef struct { double k, c, y_ref; } pd_gains;
+static void ball_pd(double t, const double *q, const double *qd, double *u, void *user)
+{
+    const pd_gains *pd = (const pd_gains *)user;
+    const double m = ball_p[1];
+    (void)t;
+    u[0] = m * ball_p[0] - m * pd->k * (q[0] - pd->y_ref) - m * pd->c * qd[0];
+}
+
+static void nan_controller(double t, const double *q, const double *qd, double *u, void *user)
+{
+    (void)t; (void)q; (void)qd; (void)user;
+    u[0] = NAN;
+}
+
+/* Inputs: held between advance calls, from a controller, from a schedule; the inputs' work. */
+static void test_inputs(void)
+{
+    const double g = ball_p[0], m = ball_p[1];
+    gac_options opt;
+    gac_sim sim;
+    gac_impact_record rec;
+    double u, E0, E[2], v_ref;
+    int code;
+    gac_default_options(&opt);
+    opt.rtol = 1e-12;
+    opt.atol = 1e-12;
+    gac_record_bind(&rec, &ball, rdwork, riwork);
+
+    /* held: u = m (g + 2) lifts it as 1 + t^2 until t = 1, then u = m g keeps v = 2 */
+    code = gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt);
+    u = m * (g + 2.0);
+    code = code == GAC_OK ? gac_sim_set_input(&sim, &u) : code;
+    CHECK(code == GAC_OK, "init and set_input %d", code);
+    code = gac_sim_advance(&sim, 1.0, 0, 0, 0, 0, &rec);
+    CHECK(code == GAC_SIM_END && NEAR(sim.x[0], 2.0, 1e-12) && NEAR(sim.x[1], 2.0, 1e-12),
+          "held input: y %.17g v %.17g, expected 2, 2", sim.x[0], sim.x[1]);
+    CHECK(NEAR(sim.work_input, u * 1.0, 1e-11), "work %.17g, expected %.17g", sim.work_input, u);
+    u = m * g;
+    gac_sim_set_input(&sim, &u);
+    code = gac_sim_advance(&sim, 2.0, 0, 0, 0, 0, &rec);
+    v_ref = m * (g + 2.0) + 2.0 * m * g + (broken ? 1e-6 : 0.0);
+    CHECK(code == GAC_SIM_END && NEAR(sim.x[0], 4.0, 1e-12) && NEAR(sim.x[1], 2.0, 1e-12),
+          "hover: y %.17g v %.17g, expected 4, 2", sim.x[0], sim.x[1]);
+    CHECK(NEAR(sim.work_input, v_ref, 1e-10), "work %.17g, expected %.17g", sim.work_input, v_ref);
+
+    /* PD controller: a damped oscillator about y_ref = 1.5, omega_0 = 2, zeta = 0.2 */
+    {
+        pd_gains pd = {4.0, 0.8, 1.5};
+        const double w0 = 2.0, zeta = 0.2, wd = w0 * sqrt(1.0 - zeta * zeta), e0 = -0.5, T = 3.0;
+        const double e = e0 * exp(-zeta * w0 * T) * (cos(wd * T) + zeta * w0 / wd * sin(wd * T));
+        code = gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt);
+        code = code == GAC_OK ? gac_sim_set_controller(&sim, ball_pd, &pd) : code;
+        ball_energy(sim.x, sim.x + 1, ball_p, E);
+        E0 = E[0] + E[1];
+        code = code == GAC_OK ? gac_sim_advance(&sim, T, 0, 0, 0, 0, &rec) : code;
+        CHECK(code == GAC_SIM_END && NEAR(sim.x[0], 1.5 + e, 1e-9), "PD: y %.17g, expected %.17g (code %d)",
+              sim.x[0], 1.5 + e, code);
+        ball_energy(sim.x, sim.x + 1, ball_p, E);
+        CHECK(NEAR(E[0] + E[1] - E0, sim.work_input, 1e-9 * fabs(E0)), "PD: energy change %.17g, work %.17g",
+              E[0] + E[1] - E0, sim.work_input);
+    }
+
+    /* linear schedule: a = 6 t on [0, 1] (y = 1 + t^3), then held at a = 6 */
+    {
+        const double times[2] = {0.0, 1.0}, values[2] = {m * g, m * (g + 6.0)};
+        gac_schedule schedule = {2, 1, times, values, 1};
+        CHECK(gac_schedule_check(&schedule) == GAC_OK, "schedule ok");
+        code = gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt);
+        code = code == GAC_OK ? gac_sim_set_controller(&sim, gac_schedule_input, &schedule) : code;
+        code = code == GAC_OK ? gac_sim_advance(&sim, 1.0, 0, 0, 0, 0, &rec) : code;
+        CHECK(code == GAC_SIM_END && NEAR(sim.x[0], 2.0, 1e-12) && NEAR(sim.x[1], 3.0, 1e-12),
+              "schedule at 1: y %.17g v %.17g, expected 2, 3", sim.x[0], sim.x[1]);
+        code = gac_sim_advance(&sim, 1.5, 0, 0, 0, 0, &rec);
+        CHECK(code == GAC_SIM_END && NEAR(sim.x[0], 4.25, 1e-12) && NEAR(sim.x[1], 6.0, 1e-12),
+              "schedule at 1.5: y %.17g v %.17g, expected 4.25, 6", sim.x[0], sim.x[1]);
+    }
+
+    /* errors */
+    {
+        const double bad_times[2] = {1.0, 0.5}, values[2] = {0.0, 0.0};
+        gac_schedule bad = {2, 1, bad_times, values, 0};
+        double nan_u = NAN;
+        CHECK(gac_schedule_check(&bad) == GAC_ERR_BAD_OPTION, "decreasing schedule times refused");
+        code = gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt);
+        CHECK(gac_sim_set_input(&sim, &nan_u) == GAC_ERR_BAD_INPUT, "NaN input refused");
+        CHECK(gac_sim_set_input(&sim, 0) == GAC_ERR_NULL_ARGUMENT, "NULL input refused");
+        gac_sim_set_controller(&sim, nan_controller, 0);
+        code = gac_sim_advance(&sim, 1.0, 0, 0, 0, 0, &rec);
+        CHECK(code == GAC_ERR_BAD_INPUT, "NaN from the controller stops the loop: %d", code);
     }
 }
 
@@ -334,6 +439,7 @@ int main(int argc, char **argv)
     test_ball(GAC_METHOD_DOP853);
     test_ball(GAC_METHOD_RK4);
     test_box();
+    test_inputs();
     test_errors();
     printf("%d checks, %d failed\n", checks, failures);
     return failures == 0 ? 0 : 1;

@@ -1,0 +1,175 @@
+"""Inputs of a driven model at run time: what ``simulate(..., u=...)`` accepts and how it reaches the C loop.
+
+    u = [0.5, -0.2]                                  constant inputs (one per actuated coordinate)
+    u = InputSchedule([0, 1, 2], [[0, 0], [1, 0], [1, 1]], mode="hold")    values at times
+    u = lambda t, q, qd: -k * (q[4] - 0.3)           state feedback from Python (q, qd: the full layout of Eq. 13)
+
+Constant inputs are held by the C loop (``NAME_sim_set_input``).  A held schedule is set the same way at
+each of its times, the C loop stopping there, so every jump falls on a step boundary (the zero-order hold of
+FMI co-simulation).  A linear schedule is evaluated in C at every stage (``gac_schedule_input``), the C loop
+again stopping at each of its times, where the slope changes.  A Python function is called back from C at
+every stage: the most general and the slowest (a Python call per stage, about 1-2 us each).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+MODES = ("hold", "linear")
+
+
+@dataclass(frozen=True)
+class InputSchedule:
+    """Inputs given as values at times: ``values[k]`` (one per input) from ``times[k]`` on, held until the next
+    time (mode 'hold') or interpolated linearly to it (mode 'linear'); ``values[0]`` before ``times[0]`` and
+    the last values after the last time."""
+
+    times: tuple
+    values: tuple
+    mode: str = "hold"
+
+
+class InputSource:
+    """A checked description of the inputs of one run, for the simulation driver."""
+
+    def __init__(self, kind: str, nu: int, constant=None, times=None, values=None, function=None,
+                 layout=None):
+        self.kind = kind                      # 'constant', 'hold', 'linear' or 'function'
+        self.nu = nu
+        self.constant = constant              # (nu,) for 'constant'
+        self.times, self.values = times, values
+        self.function, self.layout = function, layout
+        self.error = None                     # an exception the Python function raised, kept for the driver
+
+    def breakpoints(self, t_end: float) -> list[float]:
+        """Times in (0, t_end) where the C loop must stop: a held value jumps or a slope changes there."""
+        if self.kind not in ("hold", "linear"):
+            return []
+        return [float(t) for t in self.times if 0.0 < t < t_end]
+
+    def value_at(self, t: float, q_full=None, qd_full=None) -> np.ndarray:
+        """The inputs at time t (and, for a function, state (q, qd) in the full layout)."""
+        if self.kind == "constant":
+            return self.constant.copy()
+        if self.kind == "function":
+            return _call(self.function, t, q_full, qd_full, self.nu)
+        k = int(np.searchsorted(self.times, t, side="right")) - 1
+        if k < 0:
+            return self.values[0].copy()
+        if self.kind == "hold" or k == len(self.times) - 1:
+            return self.values[k].copy()
+        w = (t - self.times[k]) / (self.times[k + 1] - self.times[k])
+        return self.values[k] + w * (self.values[k + 1] - self.values[k])
+
+
+def _call(function, t, q, qd, nu: int) -> np.ndarray:
+    value = np.asarray(function(t, q, qd), dtype=float).reshape(-1)
+    if value.shape != (nu,):
+        raise ValueError(f"u: the input function returned {value.shape[0]} values at t = {t:.9g} s; this model has "
+                         f"{nu} input(s)")
+    if not np.all(np.isfinite(value)):
+        raise ValueError(f"u: the input function returned a value that is not finite at t = {t:.9g} s: "
+                         f"{value.tolist()}")
+    return value
+
+
+def input_source(model, u) -> InputSource:
+    """Check ``u`` against the model's inputs (model.input_names) and describe it."""
+    nu = model.nu
+    names = ", ".join(model.input_names) or "none"
+    if u is None:
+        return InputSource("constant", nu, constant=np.zeros(nu))
+    if nu == 0:
+        raise ValueError("u: this model has no inputs (the scene declares none; name the actuated coordinates "
+                         "with inputs = [...] in the scene)")
+    if callable(u) and not isinstance(u, InputSchedule):
+        return InputSource("function", nu, function=u, layout=model.layout)
+    if isinstance(u, InputSchedule):
+        if u.mode not in MODES:
+            raise ValueError(f"u.mode: must be one of {MODES}, got {u.mode!r}")
+        try:
+            times = np.asarray(u.times, dtype=float).reshape(-1)
+            values = np.asarray(u.values, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError("u: an InputSchedule needs numeric times and values") from None
+        if values.ndim == 1 and nu == 1:
+            values = values.reshape(-1, 1)
+        if len(times) < 1 or values.shape != (len(times), nu):
+            raise ValueError(f"u.values: expected one row of {nu} value(s) ({names}) per time, i.e. shape "
+                             f"({len(times)}, {nu}), got {values.shape}")
+        if not np.all(np.isfinite(times)) or np.any(np.diff(times) <= 0):
+            raise ValueError(f"u.times: must be finite and strictly increasing, got {times.tolist()}")
+        if not np.all(np.isfinite(values)):
+            raise ValueError("u.values: must be finite")
+        return InputSource(u.mode, nu, times=np.ascontiguousarray(times), values=np.ascontiguousarray(values))
+    try:
+        constant = np.asarray(u, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ValueError(f"u: expected {nu} number(s) ({names}), an InputSchedule or a function "
+                         f"u(t, q, qd), got {u!r}") from None
+    if constant.shape != (nu,) or not np.all(np.isfinite(constant)):
+        raise ValueError(f"u: expected {nu} finite number(s) ({names}), got {np.asarray(u).tolist()}")
+    return InputSource("constant", nu, constant=np.ascontiguousarray(constant))
+
+
+def attach(model, sim, source: InputSource):
+    """Give the inputs to an initialised simulation (NAME_sim *); returns what must stay alive during the run."""
+    ffi, lib, name = model.ffi, model.lib, model.name
+    if source.kind in ("constant", "hold"):
+        first = source.constant if source.kind == "constant" else source.value_at(0.0)
+        set_input(model, sim, first)
+        return None
+    if source.kind == "linear":
+        schedule = ffi.new("gac_schedule *")
+        keep = (ffi.from_buffer(source.times), ffi.from_buffer(source.values))
+        schedule.n, schedule.nu, schedule.linear = len(source.times), source.nu, 1
+        schedule.t = ffi.cast("double *", keep[0])
+        schedule.u = ffi.cast("double *", keep[1])
+        code = lib.gac_schedule_check(schedule)
+        if code != lib.GAC_OK:
+            raise ValueError(f"u: {model.error_message(code)}")
+        getattr(lib, f"{name}_sim_set_controller")(sim, lib.gac_schedule_input, schedule)
+        return schedule, keep
+    handle = ffi.new_handle(source)
+    _python_controller(model)
+    getattr(lib, f"{name}_sim_set_controller")(sim, getattr(lib, f"{name}_python_controller"), handle)
+    return handle
+
+
+def set_input(model, sim, u: np.ndarray) -> None:
+    code = getattr(model.lib, f"{model.name}_sim_set_input")(sim, model._ptr(np.ascontiguousarray(u, dtype=float)))
+    if code != model.lib.GAC_OK:
+        raise ValueError(f"u: {model.error_message(code)}")
+
+
+_ATTACHED = set()     # modules whose Python controller is defined
+
+
+def _python_controller(model) -> None:
+    """Define NAME_python_controller (declared extern "Python" in the model's cffi declarations) once per module:
+    it calls the run's Python function with the full-layout state and writes its value; an exception or a bad
+    value is kept on the source and NaN written, so the C loop stops with GAC_ERR_BAD_INPUT."""
+    key = id(model.lib)
+    if key in _ATTACHED:
+        return
+    ffi, nq = model.ffi, model.nq
+
+    @ffi.def_extern(name=f"{model.name}_python_controller")
+    def controller(t, q, qd, u, user):
+        source = ffi.from_handle(user)
+        out = ffi.cast("double *", u)
+        try:
+            layout = source.layout
+            q_full = layout.expand(np.frombuffer(ffi.buffer(q, 8 * nq), dtype=float))
+            qd_full = layout.expand(np.frombuffer(ffi.buffer(qd, 8 * nq), dtype=float), velocity=True)
+            value = _call(source.function, float(t), q_full, qd_full, source.nu)
+            for i in range(source.nu):
+                out[i] = value[i]
+        except BaseException as exc:          # noqa: BLE001 - kept and raised again by the driver
+            if source.error is None:
+                source.error = exc
+            for i in range(source.nu):
+                out[i] = float("nan")
+
+    _ATTACHED.add(key)

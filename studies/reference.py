@@ -271,6 +271,66 @@ class ReferenceChain:
             p += self.m[i - 1] * v[i + 1] + np.cross(w[i + 1], h_w)
         return p
 
+    # --- generalised forces other than gravity ---------------------------------
+
+    def relative_angle(self, q, k):
+        """The angle of joint k read off the frames: T_k^T R_{k-1}^T R_k = Rz(angle) (k = 0..n)."""
+        frames = self.frames(q)
+        Rrel = self.T[k + 1].T @ frames[k].T @ frames[k + 1]
+        return np.arctan2(Rrel[1, 0], Rrel[0, 0])
+
+    def applied_forces(self, q, qd, u=(), inputs=(), springs=None, dampers=None):
+        """Q of I_f qdd = R + Q, by virtual power, for:
+        inputs[i] = "theta_k": a torque u[i] about z_k acting on frame k and -u[i] on frame k-1, so
+            Q += u[i] (Jw_k - Jw_{k-1})^T z_k  (Jw_k: columns z_j, j <= k; Jw_{-2} = 0);
+        inputs[i] = "Xa": a force u[i] e_a on the point O_1, Q += Jv(O_1)^T u[i] e_a;
+        springs {k: (K, rest)}: the torque -K (angle_k - rest) of the same kind, the angle read off the
+        frames; dampers {k: C}: the torque -C (w_k - w_{k-1}) . z_k, the relative rate from the velocities."""
+        z = self.joint_axes(q)
+        w, _ = self.velocities(q, qd)
+
+        def torque_map(k):
+            J = np.zeros((3, self.N))
+            for j in range(-1, k + 1):
+                J[:, j + 1] = z[j + 1]
+            J_parent = np.zeros((3, self.N))
+            for j in range(-1, k):
+                J_parent[:, j + 1] = z[j + 1]
+            return (J - J_parent).T @ z[k + 1]
+
+        Q = np.zeros(self.N)
+        for value, name in zip(u, inputs):
+            if name.startswith("theta_"):
+                Q += value * torque_map(int(name[len("theta_"):]))
+            else:
+                a = int(name[1]) - 1
+                Q[self.n + 2 + a] += value          # Jv(O_1) = [0 | I] on the translations
+        for k, (K, rest) in (springs or {}).items():
+            Q += -K * (self.relative_angle(q, k) - rest) * torque_map(k)
+        for k, C in (dampers or {}).items():
+            rate = (w[k + 1] - w[k]) @ z[k + 1]
+            Q += -C * rate * torque_map(k)
+        return Q
+
+    def spring_energy(self, q, springs):
+        """sum_k 1/2 K (angle_k - rest)^2, the angles read off the frames."""
+        return sum(0.5 * K * (self.relative_angle(q, k) - rest) ** 2 for k, (K, rest) in springs.items())
+
+    def angular_momentum(self, q, qd):
+        """Total angular momentum about the reference origin, sum_i (r_ci x m v_ci + I_ci w_i)."""
+        frames = self.frames(q)
+        O = self.origins(q)
+        w, v = self.velocities(q, qd)
+        L = np.zeros(3)
+        for i in range(1, self.n + 1):
+            R = frames[i + 1]
+            m, h_w, K_w = self.m[i - 1], R @ self.h[i - 1], R @ self.K[i - 1] @ R.T
+            c = h_w / m                                         # centre of mass from O_i
+            r_c, v_c = O[i + 1] + c, v[i + 1] + np.cross(w[i + 1], c)
+            I_c = K_w - m * (c @ c * np.eye(3) - np.outer(c, c))
+            L += np.cross(r_c, m * v_c) + I_c @ w[i + 1]
+        return L
+
     # --- dynamics ------------------------------------------------------------
 
     def mass_matrix(self, q):

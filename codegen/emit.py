@@ -206,10 +206,12 @@ STANDALONE_TEMPLATES = {"{name}_example.c": "example_main.c.j2", "Makefile": "Ma
                         "CMakeLists.txt": "CMakeLists.txt.j2"}
 
 
-def render_standalone(scene: Scene, name: str, library_sources: list[str]) -> dict[str, str]:
+def render_standalone(scene: Scene, name: str, library_sources: list[str], layout) -> dict[str, str]:
     """The example program and build files that go beside NAME.h / NAME.c and the library's files
-    (``--standalone``); ``library_sources``: the library's .c file names."""
+    (``--standalone``); ``library_sources``: the library's .c file names; ``layout``: the model's."""
     env = _environment()
-    context = dict(NAME=name.upper(), name=name, version=__version__, scene=scene, library_sources=library_sources)
+    full = scene.input_coordinates()
+    context = dict(NAME=name.upper(), name=name, version=__version__, scene=scene, library_sources=library_sources,
+                   inputs=[(i, coordinate, layout.free.index(full[i])) for i, coordinate in enumerate(scene.inputs)])
     return {filename.format(name=name): env.get_template(template).render(**context)
             for filename, template in STANDALONE_TEMPLATES.items()}

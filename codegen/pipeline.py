@@ -87,7 +87,7 @@ def write_model(model: GeneratedModel, out_dir: str | Path) -> list[Path]:
 def write_standalone(model: GeneratedModel, scene: Scene, out_dir: str | Path) -> list[Path]:
     """Write the example program, Makefile and CMakeLists.txt next to the model (and its library copy)."""
     sources = [path.name for path in library_files() if path.suffix == ".c"]
-    return _write_files(out_dir, render_standalone(scene, model.name, sources))
+    return _write_files(out_dir, render_standalone(scene, model.name, sources, model.layout))
 
 
 def _write_files(out_dir: str | Path, files: dict[str, str]) -> list[Path]:

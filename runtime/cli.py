@@ -48,6 +48,12 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--no-charts", action="store_true", help="stop at the gimbal lock of the base chart instead")
     sim.add_argument("--max-wall-time", type=float, default=None, metavar="S",
                      help="stop the run after S seconds of wall time, saying where the time went")
+    sim.add_argument("--input", metavar="U1,U2,...", default=None,
+                     help="constant inputs of a driven scene, one per actuated coordinate in the order of the "
+                          "scene's inputs list (N m on an angle, N on a translation; default 0)")
+    sim.add_argument("--param", metavar="NAME=VALUE", action="append", default=[],
+                     help="override one parameter by name (repeatable), e.g. --param e_x2_min=0.5 "
+                          "--param stiffness_2=30")
     return parser
 
 
@@ -77,6 +83,23 @@ def simulate_arguments_problem(args, t_end: float) -> str:
         return f"--max-wall-time: must be a finite time > 0 s, got {args.max_wall_time}"
     if args.charts and args.no_charts:
         return "--charts and --no-charts: give at most one"
+    if args.input is not None:
+        try:
+            values = [float(v) for v in args.input.split(",")]
+        except ValueError:
+            return f"--input: expected numbers separated by commas, got {args.input!r}"
+        if not all(math.isfinite(v) for v in values):
+            return f"--input: must be finite, got {args.input!r}"
+    for item in args.param:
+        name, _, value = item.partition("=")
+        try:
+            number = float(value)
+        except ValueError:
+            return f"--param: expected NAME=VALUE with a number, got {item!r}"
+        if not name or not math.isfinite(number):
+            return f"--param: expected NAME=VALUE with a finite number, got {item!r}"
+    if (args.input is not None or args.param) and args.charts:
+        return "--input/--param: not available with --charts"
     if args.json:
         problem = output_file_problem("--json", args.json)
         if problem:
@@ -124,8 +147,10 @@ def main(argv=None) -> int:
             result = simulate_with_charts(scene, t_end, method=args.method, rtol=args.rtol, atol=args.atol,
                                           dt=args.dt, t_eval=t_eval, models=charts, max_wall_time=args.max_wall_time)
         else:
+            u = None if args.input is None else [float(v) for v in args.input.split(",")]
+            p = {name: float(value) for name, _, value in (item.partition("=") for item in args.param)} or None
             result = simulate(model, t_end, method=args.method, rtol=args.rtol, atol=args.atol, dt=args.dt,
-                              t_eval=t_eval, charts=not args.no_charts, max_wall_time=args.max_wall_time)
+                              t_eval=t_eval, charts=not args.no_charts, max_wall_time=args.max_wall_time, u=u, p=p)
         elapsed = time.perf_counter() - start
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)

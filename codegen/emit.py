@@ -12,7 +12,7 @@ from . import __version__, interface
 from .flatten import Program
 from .artifact import GeneratedModel, RenderedFunction, scene_hash  # noqa: F401
 from .ops import count_ops
-from .scene import Scene
+from .scene import JointStop, Scene
 from .specialise import coordinate_names
 
 
@@ -125,13 +125,16 @@ def render_model(scene: Scene, name: str, programs: list[Program], bake_params: 
         params=[(i, pname, _param_doc(pname) + (" [built in as 0]" if pname in zeros else ""), _double_literal(value))
                 for i, (pname, value) in enumerate(params)],
         contacts=[(c, point, wall) for c, (point, wall) in enumerate(layout.contacts)],
+        contact_table=[_contact_entry(c, point, wall, layout, pnames, bake_params)
+                       for c, (point, wall) in enumerate(layout.contacts)],
+        row_labels=[f"(theta_{point})" if axis == "theta" else f"(O_{point},X{axis + 1})"
+                    for point, axis in layout.contact_rows],
         rows=list(layout.contact_rows), twists=scene.all_twists,
-        row_of_contact=[layout.contact_rows.index((point, wall.axis)) for point, wall in layout.contacts],
         chart=_chart_context(scene, layout),
         q0=[_double_literal(float(x)) for x in layout.reduce(scene.q0)],
         qd0=[_double_literal(float(x)) for x in layout.reduce(scene.qd0)],
         literal=_double_literal,
-        e_index=[-1 if bake_params else pnames.index(f"e_{wall.name}") for _, wall in layout.contacts],
+
         inputs=[(i, coordinate, macro_name(coordinate), "N m" if coordinate.startswith("theta") else "N")
                 for i, coordinate in enumerate(scene.inputs)],
         param_macros=[(i, macro_name(pname)) for i, pname in enumerate(pnames)],
@@ -161,7 +164,8 @@ PARAM_DOC = {
 
 
 JOINT_DOC = {"stiffness": "spring stiffness K (N m/rad)", "rest_angle": "spring rest angle (rad)",
-             "damping": "damper coefficient C (N m s/rad)"}
+             "damping": "damper coefficient C (N m s/rad)", "lower": "lower limit (rad)", "upper": "upper limit (rad)",
+             "e_limit": "restitution of the limits (-)"}
 
 
 def _check_kernels(functions: list[RenderedFunction]) -> None:
@@ -183,13 +187,33 @@ def _chart_context(scene: Scene, layout) -> dict:
             "value": _double_literal(float(fixed.get(1, 0.0)))}
 
 
+def _contact_entry(c: int, point: int, wall, layout, pnames: list[str], bake_params: bool) -> dict:
+    """One row of the model's gac_contact table, and its description for the header."""
+    stop = isinstance(wall, JointStop)
+    row = layout.contact_rows.index((point, "theta" if stop else wall.axis))
+    e_name = f"e_limit_{point}" if stop else f"e_{wall.name}"
+    sign = int(wall.normal_sign)
+    if stop:
+        label = wall.name
+        doc = (f"joint {point} {'lower' if wall.side < 0 else 'upper'} limit, theta_{point} "
+               f"{'>=' if wall.side < 0 else '<='} {wall.parameter} (e = {wall.restitution}), Jacobian row {row}")
+    else:
+        label = f"O{point}/{wall.name}"
+        doc = (f"O_{point} / {wall.name} (e = {wall.restitution}), Jacobian row {row}, normal "
+               f"{'+' if sign > 0 else '-'}X{wall.axis + 1}")
+    return dict(c=c, point=point, axis=-1 if stop else wall.axis, sign=sign, row=row,
+                e_index=-1 if bake_params else pnames.index(e_name), e_value=_double_literal(float(wall.restitution)),
+                kind="GAC_CONTACT_STOP" if stop else "GAC_CONTACT_WALL",
+                coordinate=layout.free.index(point + 1) if stop else -1, label=label, doc=doc)
+
+
 def macro_name(name: str) -> str:
     """A parameter or coordinate name as part of a C macro name: 'e_x2_min' -> 'E_X2_MIN', 'theta_-1' -> 'THETA_M1'."""
     return name.replace("-", "M").upper()
 
 
 def _param_doc(pname: str) -> str:
-    if pname.startswith(("stiffness_", "rest_angle_", "damping_")):
+    if pname.startswith(("stiffness_", "rest_angle_", "damping_", "lower_", "upper_", "e_limit_")):
         base, joint = pname.rsplit("_", 1)
         return f"joint {joint}: {JOINT_DOC[base]}"
     if pname.startswith("wall_"):

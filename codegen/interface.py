@@ -136,6 +136,9 @@ FUNCTIONS = (
               Arg("axis", "int *", "out: wall axis, 0..2 for X1..X3"),
               Arg("normal_sign", "int *", "out: inward normal sign, +1 or -1")),
              "Point, wall axis and inward normal of contact c (0, -1, 0 outside the range)."),
+    Function("contact_name", "const char *", (Arg("c", "int", "contact index 0..NCONTACT-1"),),
+             "Contact c's name: \"O3/x2_min\" (point O_3 on the wall x2_min) or \"theta_2_upper\" (a joint stop); "
+             "\"\" outside the range."),
     Function("default_parameters", "void", (Arg("p", "double *", "out: the scene's parameters (NPARAM)"),),
              "The scene's parameter vector."),
     Function("initial_state", "void",
@@ -295,6 +298,8 @@ STRUCTS = (
                        "long n_rhs", "long n_impacts", "int nactive", "int *active", "long n_activations",
                        "long n_releases", "int err_index", "double *u", "double work_input", "double work_damping")),
     Struct("gac_schedule", ("int n", "int nu", "const double *t", "const double *u", "int linear"), partial=False),
+    Struct("gac_contact", ("int point", "int axis", "int normal_sign", "int row", "int e_index", "double e_value",
+                           "int kind", "int coordinate"), partial=False),
     Struct("gac_model", ("const char *name", "int n", "int nq", "int nx", "int nparam", "int nu", "int npoint",
                          "int ncontact", "int njrow")),
 )

@@ -11,7 +11,8 @@ CSE'd by :mod:`codegen.flatten`.  The kernels and their C signatures:
     contact_points(q, p, r)              O_1..O_{n+1}, (n+1) x 3
     contact_velocities(q, qd, p, v)      their velocities, (n+1) x 3                    (Eq. 42)
     contact_jacobian(q, p, J)            rows of Eq. 42 that the walls need, nrow x nq
-    contact_gaps(q, p, gap)              signed distance of each (point, wall) pair, >= 0 inside
+    contact_gaps(q, p, gap)              signed distance of each (point, wall) pair, >= 0 inside, then of each
+                                         joint stop (rad: theta_k - lower, upper - theta_k)
     contact_bias(q, qd, p, a)            J_dot qd: contact row accelerations at Theta_ddot = 0
     energy(q, qd, p, E)                  E[0] kinetic, E[1] potential (gravity and joint springs)
     power(q, qd, u, p, P)                P[0] power of the inputs, P[1] dissipation of the dampers (>= 0)
@@ -25,7 +26,7 @@ import sympy as sp
 from . import articulated, gibbs_appell, kinematics
 from .kinematics import ChainSymbols
 from .linalg import ldlt_solve
-from .scene import Scene
+from .scene import JointStop, Scene
 from .tape import Tape, add, cross, dot, mat_t_vec, matvec, scale, column
 
 
@@ -129,6 +130,10 @@ def contact_jacobian_kernel(chain: ChainSymbols) -> Kernel:
     values = []
     for point, axis in rows:
         row = [sp.Integer(0)] * chain.nq
+        if axis == "theta":                  # a joint stop: d(theta_k)/dq, a row of the identity
+            row[point + 1] = sp.Integer(1)
+            values += [row[i] for i in free]
+            continue
         for j in range(-1, point):           # joints -1 .. point-1 move O_point
             origin = points[max(j, 1) - 1]   # O_-1 = O_0 = O_1
             arm = tuple(a - b for a, b in zip(points[point - 1], origin))
@@ -166,7 +171,7 @@ def contact_bias_kernel(chain: ChainSymbols) -> Kernel:
         x = column(frames[i], 0)
         a_rel = add(cross(omega_dot[i], x), cross(omega[i], cross(omega[i], x)))
         acc.append(tape.let_vec(add(acc[-1], scale(moments[i].length, a_rel)), f"aO_{i + 1}"))
-    k.values = [acc[point - 1][axis] for point, axis in rows]
+    k.values = [sp.Integer(0) if axis == "theta" else acc[point - 1][axis] for point, axis in rows]   # stops: 0
     return k
 
 
@@ -178,6 +183,9 @@ def contact_gaps_kernel(chain: ChainSymbols) -> Kernel:
     points = _points(k.tape, chain)
     values = []
     for point, wall in contacts:
+        if isinstance(wall, JointStop):      # theta_k - lower, or upper - theta_k (rad)
+            values.append(wall.normal_sign * (chain.theta(point) - chain.param(wall.parameter)))
+            continue
         position = chain.param(f"wall_{wall.name}")
         values.append(wall.normal_sign * (points[point - 1][wall.axis] - position))
     k.values = values

@@ -211,8 +211,21 @@ class Joint:
     stiffness: float | None = None
     rest_angle: float = 0.0
     damping: float | None = None
+    lower: float | None = None            # rad: a stop theta_k >= lower (None: none)
+    upper: float | None = None            # rad: a stop theta_k <= upper (None: none)
+    limit_restitution: float = 0.0        # e of both stops (Newton's law, Eq. 47, on the joint's rate)
 
     def validate(self, where: str) -> None:
+        for key in ("lower", "upper"):
+            if getattr(self, key) is not None:
+                _number(getattr(self, key), f"{where}.{key}")
+        if self.lower is not None and self.upper is not None and not self.lower < self.upper:
+            raise SceneError(f"{where}.upper: must be > lower = {self.lower!r} rad, got {self.upper!r}")
+        e = _number(self.limit_restitution, f"{where}.limit_restitution")
+        if not 0.0 <= e <= 1.0:
+            raise SceneError(f"{where}.limit_restitution: must be in [0, 1], got {e!r}")
+        if e != 0.0 and self.lower is None and self.upper is None:
+            raise SceneError(f"{where}.limit_restitution: given without a lower or upper limit")
         if self.stiffness is not None:
             _nonnegative(self.stiffness, f"{where}.stiffness", STIFFNESS_MAX)
         elif self.rest_angle != 0.0:
@@ -223,7 +236,33 @@ class Joint:
 
     @property
     def is_free(self) -> bool:
+        """No spring and no damper (stops act at impacts and as constraints, not as forces in flight)."""
         return self.stiffness is None and self.damping is None
+
+
+@dataclass(frozen=True)
+class JointStop:
+    """The stop of joint k at its lower or upper limit: a unilateral constraint on theta_k, handled like a
+    wall (an event when the gap closes, an impact by Newton's law on the row of the identity, a resting
+    constraint), with gap = theta_k - lower or upper - theta_k (rad)."""
+
+    joint: int            # k, 2..n
+    side: int             # -1: lower, +1: upper
+    position: float       # rad
+    restitution: float
+
+    @property
+    def name(self) -> str:
+        return f"theta_{self.joint}_{'lower' if self.side < 0 else 'upper'}"
+
+    @property
+    def normal_sign(self) -> float:
+        """+1 for a lower stop (the gap grows with theta_k), -1 for an upper one."""
+        return -float(self.side)
+
+    @property
+    def parameter(self) -> str:
+        return f"{'lower' if self.side < 0 else 'upper'}_{self.joint}"
 
 
 FREE_JOINT = Joint()
@@ -463,6 +502,11 @@ class Scene:
                              "orientation chart; allowed |theta_0| < pi/2")
         object.__setattr__(self, "q0", q0)
         object.__setattr__(self, "qd0", qd0)
+        for k, stop in self.stops():
+            theta = q0[k + 1]
+            if stop.normal_sign * (theta - stop.position) < 0:
+                raise SceneError(f"initial.q[{k + 1}] (theta_{k}): {theta!r} rad is beyond the joint's "
+                                 f"{'lower' if stop.side < 0 else 'upper'} limit {stop.position!r} rad")
         points = contact_points(self, np.array(q0))
         for w in self.walls:
             for p in w.points:
@@ -487,6 +531,12 @@ class Scene:
                 names += [f"stiffness_{k}", f"rest_angle_{k}"]
             if joint.damping is not None:
                 names.append(f"damping_{k}")
+            if joint.lower is not None:
+                names.append(f"lower_{k}")
+            if joint.upper is not None:
+                names.append(f"upper_{k}")
+            if joint.lower is not None or joint.upper is not None:
+                names.append(f"e_limit_{k}")
         return names
 
     def parameter_vector(self) -> np.ndarray:
@@ -500,6 +550,12 @@ class Scene:
                 values += [joint.stiffness, joint.rest_angle]
             if joint.damping is not None:
                 values.append(joint.damping)
+            if joint.lower is not None:
+                values.append(joint.lower)
+            if joint.upper is not None:
+                values.append(joint.upper)
+            if joint.lower is not None or joint.upper is not None:
+                values.append(joint.limit_restitution)
         return np.array(values, dtype=float)
 
     def check_parameters(self, p) -> None:
@@ -519,19 +575,39 @@ class Scene:
                 except SceneError as exc:
                     raise SceneError(f"p[Ixx_{i} .. Iyz_{i}]: the inertia of link {i}{str(exc)[len('.inertia'):]}") \
                         from None
+        for k in range(2, self.n + 1):
+            lo, hi = value.get(f"lower_{k}"), value.get(f"upper_{k}")
+            if lo is not None and hi is not None and not lo < hi:
+                raise SceneError(f"p[upper_{k}]: must be > p[lower_{k}] = {lo!r}, got {hi!r}")
         for axis in (1, 2, 3):
             lo, hi = value.get(f"wall_x{axis}_min"), value.get(f"wall_x{axis}_max")
             if lo is not None and hi is not None and not lo < hi:
                 raise SceneError(f"p[wall_x{axis}_max]: must be > p[wall_x{axis}_min] = {lo!r}, got {hi!r}")
 
-    def contacts(self) -> list[tuple[int, Wall]]:
-        """The (point, wall) pairs with a gap function, wall-major then point order."""
-        return [(p, w) for w in self.walls for p in w.points]
+    def stops(self) -> list[tuple[int, JointStop]]:
+        """The joint stops as (joint k, JointStop) pairs, joint order, lower before upper."""
+        out = []
+        for k, joint in enumerate(self.joints, start=2):
+            for side, position in ((-1, joint.lower), (+1, joint.upper)):
+                if position is not None:
+                    out.append((k, JointStop(k, side, float(position), float(joint.limit_restitution))))
+        return out
 
-    def contact_rows(self) -> list[tuple[int, int]]:
-        """The (point, axis) pairs whose Jacobian row (Eq. 42) some wall needs, point-major."""
+    def contacts(self) -> list[tuple]:
+        """The (point, wall) pairs with a gap function, wall-major then point order, then the joint stops as
+        (joint k, JointStop) pairs."""
+        return [(p, w) for w in self.walls for p in w.points] + self.stops()
+
+    def contact_rows(self) -> list[tuple]:
+        """The (point, axis) pairs whose Jacobian row (Eq. 42) some wall needs, point-major, then a row
+        (k, "theta") for each joint with a stop (a row of the identity)."""
         needed = {(p, w.axis) for w in self.walls for p in w.points}
-        return sorted(needed)
+        return sorted(needed) + stop_rows(self.stops())
+
+
+def stop_rows(stops) -> list[tuple[int, str]]:
+    """One Jacobian row (k, "theta") per joint that has a stop, in joint order."""
+    return [(k, "theta") for k in sorted({k for k, _ in stops})]
 
 
 def check_parameter(name: str, value: float) -> float:
@@ -629,7 +705,7 @@ def shipped_scene_names() -> list[str]:
 # loading from TOML / JSON
 # ---------------------------------------------------------------------------
 TOP_KEYS = ("name", "description", "gravity", "links", "walls", "restitution", "contacts", "initial", "inputs")
-JOINT_KEYS = ("stiffness", "rest_angle", "damping")
+JOINT_KEYS = ("stiffness", "rest_angle", "damping", "lower", "upper", "limit_restitution")
 LINE_KEYS = ("length", "mu", "J", "twist", "twist_matrix", "count") + JOINT_KEYS
 RIGID_KEYS = ("length", "mass", "com", "inertia", "twist", "twist_matrix", "count") + JOINT_KEYS
 INITIAL_KEYS = ("q", "qd")
@@ -778,9 +854,10 @@ def _links_from_data(items) -> tuple[tuple[Link, ...], tuple, tuple]:
             if index == 1 and any(key in item for key in JOINT_KEYS):
                 key = next(key for key in JOINT_KEYS if key in item)
                 raise SceneError(f"{where}.{key}: theta_1 orients the base (link 1 has no parent link), so "
-                                 "springs and dampers can be given for the joints of links 2..n")
+                                 "springs, dampers and limits can be given for the joints of links 2..n")
             if index > 1:
-                joint = Joint(item.get("stiffness"), item.get("rest_angle", 0.0), item.get("damping"))
+                joint = Joint(item.get("stiffness"), item.get("rest_angle", 0.0), item.get("damping"),
+                              item.get("lower"), item.get("upper"), item.get("limit_restitution", 0.0))
                 joint.validate(where)
                 joints.append(joint)
                 if "twist" in item:

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scene import RigidLink, Scene, SceneError, coordinate_names, frames
+from .scene import RigidLink, Scene, SceneError, coordinate_names, frames, stop_rows
 
 ANGLE_SNAP = 1e-12       # an angle within this of a multiple of pi/2 counts as exactly that multiple
 
@@ -89,6 +89,12 @@ def layout_for(scene: Scene, specialise: bool = True) -> Layout:
     rows = tuple(sorted({(p, w.axis) for p, w in contacts}))
     notes.append(f"contacts: {len(contacts)} (point, wall) gap functions and {len(rows)} Jacobian rows, only "
                  "for the walls and points of the scene")
+    stops = tuple(scene.stops())
+    if stops:
+        contacts += stops
+        rows += tuple(stop_rows(stops))
+        notes.append(f"joint stops: {len(stops)} ({', '.join(stop.name for _, stop in stops)}), after the walls' "
+                     "contacts, with a row of the identity each joint")
     zero_params = tuple(name for name, value in zip(scene.parameter_names(), scene.parameter_vector())
                         if value == 0.0 and not name.startswith(("wall_", "e_")))
     if zero_params:

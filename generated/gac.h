@@ -111,16 +111,23 @@ typedef void (*gac_kernel_rhs)(double t, const double *x, const double *u, const
  * user points to, not of how often it is called.  user: the caller's pointer, passed through. */
 typedef void (*gac_controller)(double t, const double *q, const double *qd, double *u, void *user);
 
-/* One contact: a point of the chain and a wall. */
+/* One contact: a point of the chain and a wall (kind GAC_CONTACT_WALL), or a joint and its stop (kind
+ * GAC_CONTACT_STOP: a unilateral constraint on the coordinate q[coordinate], gap = normal_sign (q - limit) in
+ * rad, its Jacobian row a row of the identity).  Both are handled alike: events, impacts, resting. */
+#define GAC_CONTACT_WALL 0
+#define GAC_CONTACT_STOP 1
 typedef struct {
-    int point;            /* the point O_point, 1-based (1..npoint); its coordinates are
-                             contact_points[3*(point-1) .. 3*(point-1)+2] */
-    int axis;             /* the wall's normal axis, 0..2 for X1..X3 */
-    int normal_sign;      /* +1: the inward normal is +X_axis (a *_min wall), -1: -X_axis (a *_max wall) */
+    int point;            /* wall: the point O_point, 1-based (1..npoint); its coordinates are
+                             contact_points[3*(point-1) .. 3*(point-1)+2].  stop: the joint k (information) */
+    int axis;             /* wall: its normal axis, 0..2 for X1..X3.  stop: -1 */
+    int normal_sign;      /* wall: +1: the inward normal is +X_axis (a *_min wall), -1: -X_axis (a *_max wall).
+                             stop: +1 for a lower limit, -1 for an upper one */
     int row;              /* the row of contact_jacobian / contact_bias for (point, axis), 0..njrow-1 */
-    int e_index;          /* restitution e of the wall (Newton's law, Eq. 47): p[e_index], or e_value when
-                             e_index < 0 (a constant of the model) */
+    int e_index;          /* restitution e of the wall or stop (Newton's law, Eq. 47): p[e_index], or e_value
+                             when e_index < 0 (a constant of the model) */
     double e_value;
+    int kind;             /* GAC_CONTACT_WALL (0) or GAC_CONTACT_STOP (1) */
+    int coordinate;       /* stop: the index into q of its joint's angle (0..nq-1); wall: unused */
 } gac_contact;
 
 /* The base chart's measure mu(q) = |a . (e_z x Rz(theta_0) b)| (|det E|; |cos theta_0| for the default
@@ -223,7 +230,7 @@ int gac_constrained_dynamics(const gac_model *m, const double *q, const double *
                              double *work);
 
 /* Contact c's point index (1-based, O_1 = 1), wall axis (0..2 for X1..X3) and inward normal sign (+1/-1);
- * c outside 0..ncontact-1: 0, -1, 0. */
+ * a joint stop: its joint k, axis -1 and +1 (lower) or -1 (upper); c outside 0..ncontact-1: 0, -1, 0. */
 void gac_contact_info(const gac_model *m, int c, int *point, int *axis, int *normal_sign);
 
 /* The base chart's measure mu(q) (gac_chart), in [0, 1] for the default twists. */

@@ -877,7 +877,8 @@ static void gac_normal_velocities(const gac_model *md, const double *x, const do
     md->contact_velocities(x, x + md->nq, p, v);
     for (c = 0; c < md->ncontact; ++c) {
         const gac_contact *k = &md->contacts[c];
-        vn[c] = (double)k->normal_sign * v[3 * (k->point - 1) + k->axis];
+        vn[c] = (double)k->normal_sign * (k->kind == GAC_CONTACT_STOP ? x[md->nq + k->coordinate]
+                                                                       : v[3 * (k->point - 1) + k->axis]);
     }
 }
 

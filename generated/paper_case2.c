@@ -548,20 +548,25 @@ void paper_case2_rhs(double t, const double *GAC_RESTRICT x, const double *GAC_R
     paper_case2_forward_dynamics(x, x + PAPER_CASE2_NQ, u, p, xdot + PAPER_CASE2_NQ);
 }
 
-/* The contacts: point, wall axis, inward normal sign, Jacobian row, restitution (p index, or -1: the value). */
+/* The contacts: point (a stop: its joint), wall axis (-1), inward normal sign, Jacobian row, restitution (p index,
+ * or -1: the value), kind, coordinate (a stop: its joint angle's index in q). */
 static const gac_contact paper_case2_contacts[PAPER_CASE2_NCONTACT] = {
-    { 1, 0, 1, 0, 12, 1.0 },   /* 0: O_1 / x1_min */
-    { 2, 0, 1, 3, 12, 1.0 },   /* 1: O_2 / x1_min */
-    { 1, 0, -1, 0, 13, 1.0 },   /* 2: O_1 / x1_max */
-    { 2, 0, -1, 3, 13, 1.0 },   /* 3: O_2 / x1_max */
-    { 1, 1, 1, 1, 14, 1.0 },   /* 4: O_1 / x2_min */
-    { 2, 1, 1, 4, 14, 1.0 },   /* 5: O_2 / x2_min */
-    { 1, 1, -1, 1, 15, 1.0 },   /* 6: O_1 / x2_max */
-    { 2, 1, -1, 4, 15, 1.0 },   /* 7: O_2 / x2_max */
-    { 1, 2, 1, 2, 16, 1.0 },   /* 8: O_1 / x3_min */
-    { 2, 2, 1, 5, 16, 1.0 },   /* 9: O_2 / x3_min */
-    { 1, 2, -1, 2, 17, 1.0 },   /* 10: O_1 / x3_max */
-    { 2, 2, -1, 5, 17, 1.0 },   /* 11: O_2 / x3_max */
+    { 1, 0, 1, 0, 12, 1.0, GAC_CONTACT_WALL, -1 },   /* 0: O1/x1_min */
+    { 2, 0, 1, 3, 12, 1.0, GAC_CONTACT_WALL, -1 },   /* 1: O2/x1_min */
+    { 1, 0, -1, 0, 13, 1.0, GAC_CONTACT_WALL, -1 },   /* 2: O1/x1_max */
+    { 2, 0, -1, 3, 13, 1.0, GAC_CONTACT_WALL, -1 },   /* 3: O2/x1_max */
+    { 1, 1, 1, 1, 14, 1.0, GAC_CONTACT_WALL, -1 },   /* 4: O1/x2_min */
+    { 2, 1, 1, 4, 14, 1.0, GAC_CONTACT_WALL, -1 },   /* 5: O2/x2_min */
+    { 1, 1, -1, 1, 15, 1.0, GAC_CONTACT_WALL, -1 },   /* 6: O1/x2_max */
+    { 2, 1, -1, 4, 15, 1.0, GAC_CONTACT_WALL, -1 },   /* 7: O2/x2_max */
+    { 1, 2, 1, 2, 16, 1.0, GAC_CONTACT_WALL, -1 },   /* 8: O1/x3_min */
+    { 2, 2, 1, 5, 16, 1.0, GAC_CONTACT_WALL, -1 },   /* 9: O2/x3_min */
+    { 1, 2, -1, 2, 17, 1.0, GAC_CONTACT_WALL, -1 },   /* 10: O1/x3_max */
+    { 2, 2, -1, 5, 17, 1.0, GAC_CONTACT_WALL, -1 },   /* 11: O2/x3_max */
+};
+
+static const char paper_case2_contact_names[PAPER_CASE2_NCONTACT][16] = {      /* no pointers: read-only data */
+"O1/x1_min", "O2/x1_min", "O1/x1_max", "O2/x1_max", "O1/x2_min", "O2/x2_min", "O1/x2_max", "O2/x2_max", "O1/x3_min", "O2/x3_min", "O1/x3_max", "O2/x3_max"
 };
 
 /* The scene's parameters (layout in paper_case2.h) and initial state. */
@@ -646,6 +651,11 @@ int paper_case2_constrained_dynamics(const double *GAC_RESTRICT q, const double 
 void paper_case2_contact_info(int c, int *point, int *axis, int *normal_sign)
 {
     gac_contact_info(&paper_case2_model, c, point, axis, normal_sign);
+}
+
+const char *paper_case2_contact_name(int c)
+{
+    return c >= 0 && c < PAPER_CASE2_NCONTACT ? paper_case2_contact_names[c] : "";
 }
 
 void paper_case2_default_parameters(double *p)

@@ -68,7 +68,7 @@
  *     contact 9: O_2 / x3_min (e = 1.0), Jacobian row 5, normal +X3
  *     contact 10: O_1 / x3_max (e = 1.0), Jacobian row 2, normal -X3
  *     contact 11: O_2 / x3_max (e = 1.0), Jacobian row 5, normal -X3
- *   Contact Jacobian rows (Eq. 42), NJROW = 6: row r = d(O_i . X_a)/dq for (i, a) =
+ *   Contact Jacobian rows (Eq. 42), NJROW = 6: row r = d(O_i . X_a)/dq for (i, a), or d(theta_k)/dq for a joint stop =
  *     0:(O_1,X1) 1:(O_1,X2) 2:(O_1,X3) 3:(O_2,X1) 4:(O_2,X2) 5:(O_2,X3)
  *
  * OPERATION COUNTS (after CSE; rule in codegen/ops.py: adds incl. subtractions, muls, divs, calls)
@@ -302,6 +302,12 @@ int paper_case2_constrained_dynamics(const double *GAC_RESTRICT q, const double 
  *   normal_sign  out: inward normal sign, +1 or -1
  */
 void paper_case2_contact_info(int c, int *point, int *axis, int *normal_sign);
+
+/* Contact c's name: "O3/x2_min" (point O_3 on the wall x2_min) or "theta_2_upper" (a joint stop); ""
+ * outside the range.
+ *   c            contact index 0..NCONTACT-1
+ */
+const char *paper_case2_contact_name(int c);
 
 /* The scene's parameter vector.
  *   p            out: the scene's parameters (NPARAM)

@@ -48,7 +48,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--no-charts", action="store_true", help="stop at the gimbal lock of the base chart instead")
     sim.add_argument("--max-wall-time", type=float, default=None, metavar="S",
                      help="stop the run after S seconds of wall time, saying where the time went")
-    sim.add_argument("--input", metavar="U1,U2,...", default=None,
+    sim.add_argument("--input", metavar="U1,U2", default=None,
                      help="constant inputs of a driven scene, one per actuated coordinate in the order of the "
                           "scene's inputs list (N m on an angle, N on a translation; default 0)")
     sim.add_argument("--param", metavar="NAME=VALUE", action="append", default=[],

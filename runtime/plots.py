@@ -83,7 +83,7 @@ def plot_impact_configurations(model: CompiledModel, result: SimulationResult, o
             ax.plot(shape[:, 0], shape[:, 2], shape[:, 1], "-o", color=colour, ms=3, lw=1.2, label=label)
     for k, impact in enumerate(result.impacts, start=1):          # mark the touching points
         shape = shapes[k]
-        for c in impact.contacts:
+        for c in (c for c in impact.contacts if c.kind == "wall"):
             point = shape[c.point - 1]
             if planar:
                 ax.plot(point[0], point[1], "r*", ms=8)

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from codegen.scene import Scene, SceneError
+from codegen.scene import JointStop, Scene, SceneError
 from codegen.specialise import coordinate_names
 
 from .inputs import InputSchedule, attach, input_source, set_input  # noqa: F401  (InputSchedule: re-export)
@@ -33,11 +33,17 @@ RK4_STABLE = 1.0        # RK4 is stable for h |lambda| < 2.78 on the imaginary a
 
 @dataclass
 class Contact:
-    """One contact of an impact: point O_point (1-based, as in the paper) on a wall, and its impulse."""
+    """One contact of an impact: point O_point (1-based, as in the paper) on a wall, or (kind 'stop') joint
+    ``point`` on its stop ``wall`` ('theta_2_upper'), and its impulse."""
 
     point: int
     wall: str
-    impulse: float        # N s along the wall's inward normal (>= 0: it pushes)
+    impulse: float        # N s along the wall's inward normal (>= 0: it pushes); N m s for a stop
+    kind: str = "wall"    # 'wall' | 'stop'
+
+    @property
+    def label(self) -> str:
+        return self.wall if self.kind == "stop" else f"O{self.point}/{self.wall}"
 
 
 @dataclass
@@ -66,6 +72,10 @@ class ContactEvent:
     wall: str
     kind: str             # 'persist' | 'release'
 
+    @property
+    def label(self) -> str:
+        return self.wall if self.wall.startswith("theta_") else f"O{self.point}/{self.wall}"
+
 
 @dataclass
 class SimulationResult:
@@ -90,7 +100,7 @@ class SimulationResult:
     contact_events: list = field(default_factory=list)   # ContactEvent, in time order
     persistent_final: list = field(default_factory=list)  # (point, wall) of the contacts resting at t_final
     warnings: list = field(default_factory=list)          # results of limited accuracy, one sentence each
-    energy_scale: float = 1.0     # J: max(T0 + |V0|, M g L), the scale energy_drift is measured on
+    energy_scale: float = 1.0     # J: max(T0 + |V0|, M g L, |W_inputs|, D_dampers), what energy_drift is measured on
     energy_input_work: float = 0.0     # J: work of the inputs, int u . qd_actuated dt
     energy_damping_loss: float = 0.0   # J: energy the joint dampers took, int C theta_dot^2 dt (>= 0)
     u: np.ndarray | None = None        # (len(t), nu) the inputs at the sample times (None: no inputs)
@@ -124,12 +134,13 @@ class SimulationResult:
                   if self.energy_input_work or self.energy_damping_loss else "")
         return (f"energy: initial {self.energy_initial:.12g} J, final {self.energy_final:.12g} J, {driven}lost at impacts "
                 f"{self.energy_impact_loss:.6g} J; balance residual {self.energy_residual:.3e} J = "
-                f"{self.energy_drift:.3e} of {self.energy_scale:.6g} J (max(T0 + |V0|, M g L))")
+                f"{self.energy_drift:.3e} of {self.energy_scale:.6g} J (max(T0 + |V0|, M g L"
+                f"{', |W_in|, D_damp' if driven else ''}))")
 
     def impact_table(self) -> str:
         lines = [f"{'#':>3} {'t (s)':>14}  contacts (point/wall: impulse N s)"]
         for k, impact in enumerate(self.impacts, start=1):
-            contacts = ", ".join(f"O{c.point}/{c.wall}: {c.impulse:.6g}" for c in impact.contacts)
+            contacts = ", ".join(f"{c.label}: {c.impulse:.6g}" for c in impact.contacts)
             lines.append(f"{k:>3} {impact.t:14.9f}  {contacts}")
         return "\n".join(lines)
 
@@ -138,12 +149,12 @@ class SimulationResult:
         if not self.contact_events:
             return ""
         lines = [f"resting contact: {'t (s)':>14}  point/wall"]
-        lines += [f"{e.kind:>15} {e.t:14.9f}  O{e.point}/{e.wall}" for e in self.contact_events]
+        lines += [f"{e.kind:>15} {e.t:14.9f}  {e.label}" for e in self.contact_events]
         return "\n".join(lines)
 
     def to_json(self) -> dict:
         return {
-            "impacts": [{"t": i.t, "contacts": [{"point": c.point, "wall": c.wall, "impulse": c.impulse}
+            "impacts": [{"t": i.t, "contacts": [{"point": c.point, "wall": c.wall, "impulse": c.impulse, "kind": c.kind}
                                                 for c in i.contacts],
                          "energy_before": i.energy_before, "energy_after": i.energy_after,
                          "complementarity": i.complementarity} for i in self.impacts],
@@ -298,7 +309,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     energy_initial = T0 + V0
     impacts: list[Impact] = []
     names = model.scene.parameter_names()
-    elastic_walls = {w.name for w in model.scene.walls if p[names.index(f"e_{w.name}")] == 1.0}
+    elastic_walls = {w.name for _, w in model.contacts                 # walls and joint stops with e = 1
+                     if p[names.index(f"e_limit_{w.joint}" if isinstance(w, JointStop) else f"e_{w.name}")] == 1.0}
     # energy scale of lifting the whole chain by its own length: round-off floor of the impact energy checks
     energy_ref = sum(link.mass for link in model.scene.links) * max(abs(p[0]), 1.0) * sum(
         link.length for link in model.scene.links)
@@ -381,8 +393,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                        f"{len(impacts)} impacts ({impacts[-1].t - impacts[max(0, len(impacts) - 100)].t:.3g} s "
                        f"of simulated time for the last {min(len(impacts), 100)})")
             break
-    if charts and code == lib.GAC_ERR_GIMBAL_LOCK and model.scene.driven:
-        message += " (the second base chart is not available for a chain with inputs, springs or dampers)"
+    if charts and code == lib.GAC_ERR_GIMBAL_LOCK and (model.scene.driven or model.scene.stops()):
+        message += " (the second base chart is not available for a chain with inputs, springs, dampers or limits)"
     elif charts and code == lib.GAC_ERR_GIMBAL_LOCK:
         from .charts import simulate_with_charts
         return simulate_with_charts(
@@ -409,7 +421,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         n_steps=int(state.n_steps), n_rejected=int(state.n_rejected), n_rhs=int(state.n_rhs), status=status,
         message=message + (f"; {len(warnings)} impact(s) of limited accuracy (see warnings)" if warnings else ""),
         method=method, contact_events=contact_events, warnings=warnings,
-        energy_scale=energy_scale(model.scene, p, T0, V0),
+        energy_scale=max(energy_scale(model.scene, p, T0, V0), abs(float(state.work_input)), float(state.work_damping)),
         persistent_final=[(model.contacts[state.active[k]][0], model.contacts[state.active[k]][1].name)
                           for k in range(state.nactive)],
         options={"rtol": rtol, "atol": atol, "dt": dt, "contact_tol": contact_tol, "event_samples": event_samples,
@@ -447,7 +459,7 @@ def _read_impact(model: CompiledModel, r) -> Impact:
     contacts = []
     for k in range(r.ncontact):
         point, wall = model.contacts[r.contact[k]]
-        contacts.append(Contact(point, wall.name, float(r.impulse[k])))
+        contacts.append(Contact(point, wall.name, float(r.impulse[k]), "stop" if isinstance(wall, JointStop) else "wall"))
     unpack, layout = model.ffi.unpack, model.layout
     return Impact(float(r.t), contacts, float(r.energy_before), float(r.energy_after), bool(r.complementarity),
                   layout.expand(unpack(r.q, nq)), layout.expand(unpack(r.qd_before, nq), velocity=True),
@@ -523,6 +535,9 @@ def _check_inside(model: CompiledModel, q: np.ndarray, p: np.ndarray, name: str)
     points = model.contact_points(q, p)
     for c in np.flatnonzero(gaps < -1e-12 * max(1.0, float(np.abs(points).max()))):
         point, wall = model.contacts[c]
+        if isinstance(wall, JointStop):
+            raise ValueError(f"{name}: joint {point} is beyond its {'lower' if wall.side < 0 else 'upper'} limit "
+                             f"{wall.parameter} by {-gaps[c]:.3g} rad")
         axis = f"X{wall.axis + 1}"
         position = p[model.scene.parameter_names().index(f"wall_{wall.name}")]
         raise ValueError(f"{name}: contact point O_{point} is outside the wall {wall.name}: {axis} = "

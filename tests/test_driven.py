@@ -183,9 +183,9 @@ def test_hold_schedule_jumps_on_a_step_boundary():
     """A held schedule equals two runs chained at the jump (the second from the first's end state)."""
     model = load_model(DRIVEN_SCENE)
     opts = dict(method="dop853", rtol=1e-12, atol=1e-12, max_impacts=1)
-    whole = simulate(model, 0.3, u=InputSchedule([0.0, 0.15], [[1.0, -1.0], [-2.0, 0.5]]), **opts)
-    first = simulate(model, 0.15, u=[1.0, -1.0], **opts)
-    second = simulate(model, 0.15, u=[-2.0, 0.5], q0=first.q_final, qd0=first.qd_final, **opts)
+    whole = simulate(model, 0.12, u=InputSchedule([0.0, 0.06], [[1.0, -1.0], [-2.0, 0.5]]), **opts)
+    first = simulate(model, 0.06, u=[1.0, -1.0], **opts)
+    second = simulate(model, 0.06, u=[-2.0, 0.5], q0=first.q_final, qd0=first.qd_final, **opts)
     assert not whole.impacts and not first.impacts
     assert rel_err(whole.q_final, second.q_final) < 1e-9
 
@@ -283,3 +283,77 @@ def test_walls_stay_walls_under_inputs():
     lowest = min(contact_points(scene, q)[:, 1].min() for q in run.q)
     assert lowest > -1e-6
     assert isinstance(scene.walls[0], Wall)
+
+
+# ---------------------------------------------------------------------------------------------------
+# joint limits: stops handled like walls (events, Newton's law on a row of the identity, resting)
+# ---------------------------------------------------------------------------------------------------
+def rods_with_stops(e: float, rate0: float = 0.0, lower=-0.2, upper=0.2) -> Scene:
+    q0 = (-math.pi / 2, 0.0, -math.pi / 2, 0.0, 0.0, 0.0, 0.0)
+    qd0 = (0.0, 0.0, -rate0 / 2, rate0, 0.0, rate0 / 4, 0.0)
+    return Scene(name=f"rods_stops_{int(e * 10)}", links=(LineLink(1.0, 1.5, (1e-3, 1e-3, 1e-3)),) * 2, gravity=0.0,
+                 q0=q0, qd0=qd0, joints=(Joint(lower=lower, upper=upper, limit_restitution=e),), inputs=("theta_2",))
+
+
+def test_an_elastic_stop_reverses_the_joint_rate_and_keeps_energy_and_momentum(compiled):
+    scene = rods_with_stops(1.0, rate0=1.0)
+    model = compiled(scene)
+    run = simulate(model, 2.0, method="dop853", rtol=1e-12, atol=1e-12)
+    assert run.success and len(run.impacts) >= 4
+    ref = reference_of(scene)
+    for impact in run.impacts:
+        assert [c.kind for c in impact.contacts] == ["stop"]
+        stop = impact.contacts[0].wall
+        assert stop in ("theta_2_upper", "theta_2_lower")
+        assert impact.q[3] == pytest.approx(0.2 if stop.endswith("upper") else -0.2, abs=1e-9)
+        assert impact.qd_after[3] == pytest.approx(-impact.qd_before[3], rel=1e-10)       # e = 1 on theta_2's row
+        for momentum in (ref.linear_momentum, ref.angular_momentum):                       # an internal impulse
+            assert np.abs(momentum(impact.q, impact.qd_after) - momentum(impact.q, impact.qd_before)).max() < 1e-12
+    assert abs(run.energy_final - run.energy_initial) < 1e-10 * run.energy_initial
+    assert abs(run.energy_impact_loss) < 1e-12
+
+
+def test_a_plastic_stop_holds_the_joint_until_the_input_pulls_it_off(compiled):
+    model = compiled(rods_with_stops(0.0))
+    u = InputSchedule([0.0, 0.6], [[0.5], [-0.5]])               # push into the upper stop, then away from it
+    run = simulate(model, 1.0, u=u, t_eval=np.linspace(0, 1, 101), method="dop853", rtol=1e-10, atol=1e-12)
+    assert run.success, run.message
+    first = run.impacts[0]
+    assert first.contacts[0].wall == "theta_2_upper" and first.qd_after[3] == pytest.approx(0.0, abs=1e-12)
+    kinds = [(e.kind, e.wall) for e in run.contact_events]
+    assert ("persist", "theta_2_upper") in kinds and ("release", "theta_2_upper") in kinds
+    rest = next(e.t for e in run.contact_events if e.kind == "persist")
+    held = (run.t > rest) & (run.t <= 0.6)
+    assert held.sum() > 10 and np.abs(run.q[held, 3] - 0.2).max() < 1e-6      # at its stop while pushed
+    assert run.q[-1, 3] < 0.19                                                   # and off it once pulled
+    assert abs(run.energy_drift) < 1e-8
+
+
+def test_stops_and_walls_take_part_in_one_impact():
+    run = simulate(DRIVEN_SCENE, 1.0)
+    assert run.success
+    mixed = [i for i in run.impacts if {c.kind for c in i.contacts} == {"wall", "stop"}]
+    assert mixed and all(c.impulse >= 0 for c in mixed[0].contacts)
+    assert "theta_2_upper" in run.impact_table() and "O1/x2_min" in run.impact_table()
+
+
+@pytest.mark.parametrize("joint,message", [
+    ({"lower": 0.5, "upper": 0.5}, "links[2].upper: must be > lower = 0.5 rad, got 0.5"),
+    ({"limit_restitution": 0.5}, "links[2].limit_restitution: given without a lower or upper limit"),
+    ({"upper": 1.0, "limit_restitution": 1.5}, "links[2].limit_restitution: must be in [0, 1], got 1.5"),
+    ({"upper": -0.5}, "initial.q[3] (theta_2): 0.0 rad is beyond the joint's upper limit -0.5 rad"),
+])
+def test_bad_limits_are_named(joint, message):
+    data = {"links": [{"length": 1.0, "mu": 1.0}, {"length": 1.0, "mu": 1.0, **joint}],
+            "initial": {"q": [-1.5707963267948966, 0.0, -1.5707963267948966, 0.0, 0.0, 0.0, 0.0]}}
+    with pytest.raises(SceneError) as error:
+        scene_from_dict(data)
+    assert message in str(error.value)
+
+
+def test_limits_by_parameter_are_checked():
+    model = load_model(DRIVEN_SCENE)
+    with pytest.raises(ValueError, match=r"p\[upper_2\]: must be > p\[lower_2\] = 0.5, got 0.2"):
+        simulate(model, 0.1, p={"lower_2": 0.5, "upper_2": 0.2})
+    with pytest.raises(ValueError, match="joint 2 is beyond its upper limit upper_2"):
+        simulate(model, 0.1, p={"upper_2": 0.3})

@@ -293,6 +293,6 @@ void gac_contact_info(const gac_model *m, int c, int *point, int *axis, int *nor
         return;
     }
     *point = m->contacts[c].point;
-    *axis = m->contacts[c].axis;
+    *axis = m->contacts[c].kind == GAC_CONTACT_STOP ? -1 : m->contacts[c].axis;
     *normal_sign = m->contacts[c].normal_sign;
 }

@@ -20,10 +20,15 @@ int gac_model_check(const gac_model *m)
     if (m->chart.theta0_index >= m->nq) return GAC_ERR_BAD_MODEL;
     for (c = 0; c < m->ncontact; ++c) {
         const gac_contact *k = &m->contacts[c];
-        if (k->point < 1 || k->point > m->npoint || k->axis < 0 || k->axis > 2
-            || (k->normal_sign != 1 && k->normal_sign != -1) || k->row < 0 || k->row >= m->njrow
+        if ((k->normal_sign != 1 && k->normal_sign != -1) || k->row < 0 || k->row >= m->njrow
             || k->e_index >= m->nparam)
             return GAC_ERR_BAD_MODEL;
+        if (k->kind == GAC_CONTACT_STOP) {
+            if (k->coordinate < 0 || k->coordinate >= m->nq) return GAC_ERR_BAD_MODEL;
+        } else if (k->kind != GAC_CONTACT_WALL || k->point < 1 || k->point > m->npoint || k->axis < 0
+                   || k->axis > 2) {
+            return GAC_ERR_BAD_MODEL;
+        }
     }
     return GAC_OK;
 }
@@ -65,7 +70,7 @@ const char *gac_error_message(int code)
     case GAC_ERR_LCP: return "impact complementarity problem has no solution (too many or degenerate contacts)";
     case GAC_ERR_GIMBAL_LOCK: return "gimbal lock: theta_0 is too close to the singularity of the base chart (|det E| below sqrt(16 eps / tol)) for results to the tolerance; continue on a second chart";
     case GAC_ERR_BAD_OPTION: return "bad option or argument: allowed are method RK4, DOPRI5 or DOP853; RK4: 0 < dt < 1e300; DOPRI5, DOP853: rtol > 0, atol > 0, dt >= 0; h_max >= 0, event_samples >= 1, event_tol > 0, contact_tol >= 0, max_steps >= 0, rest_height < 1e300 (not NaN), zeno_impacts >= 0; t0, q and qd finite; sim_advance: t_end finite and >= the current time, n_eval >= 0, 0 <= *i_eval <= n_eval";
-    case GAC_ERR_START_OUTSIDE: return "the start state has a contact point beyond its wall: allowed is a gap >= -(contact_tol + the simultaneity window + 1e-12 max(1 m, the largest |point coordinate|)), a point inside the box or on its wall";
+    case GAC_ERR_START_OUTSIDE: return "the start state has a contact point beyond its wall or a joint beyond its stop: allowed is a gap >= -(contact_tol + the simultaneity window + 1e-12 max(1 m, the largest |point coordinate|)), a point inside the box or on its wall";
     case GAC_ERR_NULL_ARGUMENT: return "a required pointer argument is NULL: sim_init needs sim, q and qd (and, in the library, the model and its work arrays; opt and p may be NULL: the defaults); sim_advance needs sim and record, and t_eval, i_eval and x_eval when n_eval > 0";
     case GAC_ERR_MAX_STEPS: return "maximum number of steps reached";
     case GAC_ERR_STEP_SIZE: return "step size underflow: the adaptive integrator cannot meet the tolerance";
@@ -76,7 +81,7 @@ const char *gac_error_message(int code)
     case GAC_ERR_UNSTABLE: return "RK4 is unstable at this step: the chain's fastest mode needs dt below about 2.8 / its rate; reduce dt or use an adaptive method";
     case GAC_ERR_LOST_CONTACT: return "a point lies beyond its wall at an impact: a wall crossing was missed, the motion is too fast or I_f too ill-conditioned (extreme mass, length or inertia ratios) for the tolerance";
     case GAC_ERR_BAD_INPUT: return "an input is NaN or infinite: the inputs given to sim_set_input, and those a controller writes, must be finite";
-    case GAC_ERR_BAD_MODEL: return "the model descriptor is inconsistent: nq >= 1, nx = 2 nq, npoint >= 1, ncontact, njrow, nparam, nu >= 0, every table and kernel present, each contact's point, axis, normal sign, Jacobian row and restitution index in range";
+    case GAC_ERR_BAD_MODEL: return "the model descriptor is inconsistent: nq >= 1, nx = 2 nq, npoint >= 1, ncontact, njrow, nparam, nu >= 0, every table and kernel present, each contact's kind, point, axis (a stop: its coordinate), normal sign, Jacobian row and restitution index in range";
     default: return "unknown error code";
     }
 }

@@ -52,10 +52,13 @@ class Layout:
     def expand(self, reduced, velocity: bool = False) -> np.ndarray:
         """The model's coordinates -> full layout; fixed entries get their value (0 for velocities)."""
         reduced = np.asarray(reduced, dtype=float)
-        full = np.zeros(reduced.shape[:-1] + (self.nq_full,))
-        full[..., list(self.free)] = reduced
-        for index, value in self.fixed:
-            full[..., index] = 0.0 if velocity else value
+        if not self.fixed:
+            return reduced.copy()
+        full = np.zeros(reduced.shape[:-1] + (len(self.free) + len(self.fixed),))
+        full[..., self.free] = reduced
+        if not velocity:
+            for index, value in self.fixed:
+                full[..., index] = value
         return full
 
 

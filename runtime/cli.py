@@ -54,6 +54,30 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--param", metavar="NAME=VALUE", action="append", default=[],
                      help="override one parameter by name (repeatable), e.g. --param e_x2_min=0.5 "
                           "--param stiffness_2=30")
+    outputs = sim.add_argument_group("sample exports")
+    outputs.add_argument("--csv", metavar="FILE", help="write the samples (t, q, qd, inputs, joint points O_i) as CSV")
+    outputs.add_argument("--npz", metavar="FILE", help="write the samples and the impacts as a numpy .npz")
+
+    sweep = commands.add_parser(
+        "sweep", help="run a grid or random sample over parameters and start coordinates",
+        description="Sweep parameters (NAME) and start coordinates (q.NAME, qd.NAME) of a scene; runs in parallel "
+                    "(threads, processes or a Dask cluster) and writes DIR/runs.csv, DIR/runs.npz, DIR/sweep.png.",
+        epilog="Example: python -m runtime sweep --scene paper-case1 --vary e_x2_min=0.05:1:20 "
+               "--vary q.theta_2=-0.1:0.1:10 --workers 2 --out sweep")
+    sweep.add_argument("--scene", default="paper-case1", help="shipped scene name or .toml/.json file")
+    sweep.add_argument("--vary", action="append", default=[], metavar="NAME=LO:HI:N", required=True,
+                       help="vary a parameter or q.NAME / qd.NAME over N values from LO to HI (repeatable: a grid)")
+    sweep.add_argument("--samples", type=int, default=None, metavar="N",
+                       help="N random points, uniform in the --vary ranges, instead of the grid")
+    sweep.add_argument("--seed", type=int, default=0, help="random seed of --samples (default 0)")
+    sweep.add_argument("--t-end", type=float, default=None, help="end time of every run in s (default: the scene's)")
+    sweep.add_argument("--workers", type=int, default=2, help="local worker processes (default 2; 1: serial)")
+    sweep.add_argument("--threads", action="store_true", help="local threads instead of processes")
+    sweep.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                       help="run on this Dask scheduler (tcp://host:8786) instead of locally")
+    sweep.add_argument("--rtol", type=float, default=DEFAULT_RTOL, help=f"relative tolerance (default {DEFAULT_RTOL:g})")
+    sweep.add_argument("--atol", type=float, default=DEFAULT_ATOL, help=f"absolute tolerance (default {DEFAULT_ATOL:g})")
+    sweep.add_argument("--out", metavar="DIR", required=True, help="folder for runs.csv, runs.npz and sweep.png")
     return parser
 
 
@@ -100,10 +124,11 @@ def simulate_arguments_problem(args, t_end: float) -> str:
             return f"--param: expected NAME=VALUE with a finite number, got {item!r}"
     if (args.input is not None or args.param) and args.charts:
         return "--input/--param: not available with --charts"
-    if args.json:
-        problem = output_file_problem("--json", args.json)
-        if problem:
-            return problem
+    for option in ("json", "csv", "npz"):
+        if getattr(args, option):
+            problem = output_file_problem(f"--{option}", getattr(args, option))
+            if problem:
+                return problem
     if args.plot:
         import importlib.util
         if importlib.util.find_spec("matplotlib") is None:
@@ -118,6 +143,8 @@ def main(argv=None) -> int:
         print(f"error: {argv[0]!r} is a study: run {shlex.join(['python', '-m', 'studies', *argv])}", file=sys.stderr)
         return 2
     args = build_parser().parse_args(argv)
+    if args.command == "sweep":
+        return sweep_main(args)
     loaded = scene_and_horizon(args)
     if loaded is None:
         return 2
@@ -176,6 +203,15 @@ def main(argv=None) -> int:
             print(f"error: --json: cannot write {args.json}: {exc.strerror or exc}", file=sys.stderr)
             return 2
         print(f"wrote {args.json}")
+    for option, writer in (("csv", "write_csv"), ("npz", "write_npz")):
+        if getattr(args, option):
+            from . import export
+            try:
+                getattr(export, writer)(result, getattr(args, option), scene)
+            except OSError as exc:
+                print(f"error: --{option}: cannot write {getattr(args, option)}: {exc.strerror or exc}", file=sys.stderr)
+                return 2
+            print(f"wrote {getattr(args, option)}")
     if args.plot:
         from .plots import plot_all
         try:
@@ -185,3 +221,63 @@ def main(argv=None) -> int:
             return 2
         print("wrote " + ", ".join(str(p) for p in paths))
     return 0 if result.success else 1
+
+
+def sweep_main(args) -> int:
+    """python -m runtime sweep: check every argument, build the model, run, write the table and the plot."""
+    import math
+    from .sweep import build_runs, check_names, parse_vary, plot_sweep
+    loaded = scene_and_horizon(args)
+    if loaded is None:
+        return 2
+    scene, t_end = loaded
+    try:
+        varies = [parse_vary(text) for text in args.vary]
+        check_names(varies, scene.parameter_names(), scene.n)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    problems = [
+        (not (math.isfinite(t_end) and t_end >= 0), f"--t-end: must be a finite time >= 0 s, got {t_end}"),
+        (args.samples is not None and not 1 <= args.samples <= 10_000_000,
+         f"--samples: must be in 1..10000000, got {args.samples}"),
+        (args.workers < 1 or args.workers > 1024, f"--workers: must be in 1..1024, got {args.workers}"),
+        (not (math.isfinite(args.rtol) and args.rtol > 0), f"--rtol: must be a finite tolerance > 0, got {args.rtol}"),
+        (not (math.isfinite(args.atol) and args.atol > 0), f"--atol: must be a finite tolerance > 0, got {args.atol}"),
+    ]
+    count = args.samples or math.prod(v.count for v in varies)
+    problems.append((count > 10_000_000, f"--vary: the grid has {count:,} runs; at most 10,000,000"))
+    problems.append((bool(output_dir_problem("--out", args.out)), output_dir_problem("--out", args.out)))
+    import importlib.util
+    for module, extra in (("tqdm", "ensemble"), ("matplotlib", "plot")):
+        problems.append((importlib.util.find_spec(module) is None,
+                         f"sweep: needs {module}, which is not installed (pip install -e \".[{extra}]\")"))
+    if args.scheduler:
+        problems.append((importlib.util.find_spec("distributed") is None,
+                         "--scheduler: needs dask.distributed (pip install -e \".[ensemble]\")"))
+    for bad, message in problems:
+        if bad:
+            print(f"error: {message}", file=sys.stderr)
+            return 2
+    from .ensemble import simulate_many
+    try:
+        model = load_model(scene, progress=lambda m: print(f"  {m}", file=sys.stderr, flush=True))
+    except (CompilerNotFound, BuildError, CacheError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 3
+    runs = build_runs(varies, args.samples, args.seed)
+    where = (f"Dask scheduler {args.scheduler}" if args.scheduler else
+             f"{args.workers} local {'threads' if args.threads else 'processes'}" if args.workers > 1 else "serially")
+    print(f"sweep {scene.name}: {len(runs):,} runs of {t_end} s, {where}", file=sys.stderr)
+    study = simulate_many(model, runs, t_end, workers=args.workers, processes=not args.threads,
+                          client=args.scheduler, keep="final", progress=True, rtol=args.rtol, atol=args.atol,
+                          t_eval=[])
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    study.to_csv(out / "runs.csv")
+    study.to_npz(out / "runs.npz")
+    plot_sweep(study, varies, out / "sweep.png")
+    failed = sum(1 for row in study.rows if row["status"] != 0)
+    print(f"{len(runs):,} runs in {study.seconds:.2f} s ({len(runs) / max(study.seconds, 1e-9):,.0f} runs/s), "
+          f"{failed} stopped early or refused; wrote {out / 'runs.csv'}, {out / 'runs.npz'}, {out / 'sweep.png'}")
+    return 0

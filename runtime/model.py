@@ -29,8 +29,9 @@ class CompiledModel:
     the model's own coordinates: ``layout.free`` of the full layout of Eq. 13 (all of it for the general
     model; ``layout.reduce`` / ``layout.expand`` convert)."""
 
-    def __init__(self, scene: Scene, generated: GeneratedModel, module):
+    def __init__(self, scene: Scene, generated: GeneratedModel, module, build_options: tuple = ()):
         self.scene = scene
+        self.build_options = build_options            # (bake_params, flags, specialise) of load_model
         self.generated = generated
         self.layout = generated.layout
         self.ffi, self.lib = module.ffi, module.lib
@@ -45,6 +46,13 @@ class CompiledModel:
         self.contact_rows = list(self.layout.contact_rows)
         self._fn = {f.name: getattr(self.lib, f"{self.name}_{f.name}") for f in interface.ALL_FUNCTIONS}
         self._work = np.zeros(self.size("IMPACT_NWORK"))
+
+    def __reduce__(self):
+        """Pickled as the scene and build options: another process (a Dask worker) loads the model from the
+        shared build cache, once per process (runtime.model.model_of)."""
+        if not self.build_options:
+            raise TypeError("this model was not built by load_model, so it cannot be rebuilt elsewhere")
+        return model_of, (self.scene, *self.build_options)
 
     def size(self, suffix: str) -> int:
         """The model's size NAME_<suffix> (codegen.interface.SIZES), read from the compiled module."""
@@ -201,4 +209,16 @@ def _build_model(scene: Scene, bake_params: bool, flags: tuple, progress, specia
     generated = generate_cached(scene, bake_params=bake_params, specialise=specialise, progress=progress)
     module = compile_model(generated.name, generated.header, generated.source, generated.cdef,
                            flags=flags, progress=progress)
-    return CompiledModel(scene, generated, module)
+    return CompiledModel(scene, generated, module, (bool(bake_params), tuple(flags), bool(specialise)))
+
+
+_BY_SCENE: dict[tuple, CompiledModel] = {}    # (scene, options) -> model, for model_of
+
+
+def model_of(scene: Scene, bake_params: bool, flags: tuple, specialise: bool) -> CompiledModel:
+    """The model of a scene, built (or loaded from the build cache) once per process: what an unpickled
+    CompiledModel is."""
+    key = (scene, bool(bake_params), tuple(flags), bool(specialise))
+    if key not in _BY_SCENE:
+        _BY_SCENE[key] = _build_model(scene, bake_params, tuple(flags), None, specialise)
+    return _BY_SCENE[key]

@@ -1725,3 +1725,25 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
     }
     return GAC_SIM_END;
 }
+
+int gac_sim_run(gac_sim *s, double t_end, long max_impacts, gac_impact_record *record, gac_run_summary *summary)
+{
+    int code;
+    if (s == 0 || record == 0 || summary == 0) return GAC_ERR_NULL_ARGUMENT;
+    if (max_impacts < 1) return GAC_ERR_BAD_OPTION;
+    summary->n_impacts = summary->n_contact_events = 0;
+    summary->t_first_impact = -1.0;
+    summary->energy_impact_loss = 0.0;
+    for (;;) {
+        code = gac_sim_advance(s, t_end, 0, 0, 0, 0, record);
+        if (code == GAC_SIM_CONTACT) {
+            summary->n_contact_events++;
+            continue;
+        }
+        if (code != GAC_SIM_IMPACT) return code;
+        if (summary->n_impacts == 0) summary->t_first_impact = record->t;
+        summary->n_impacts++;
+        summary->energy_impact_loss += record->energy_before - record->energy_after;
+        if (summary->n_impacts >= max_impacts) return GAC_SIM_IMPACT;
+    }
+}

@@ -403,6 +403,16 @@ int paper_case1_sim_set_input(paper_case1_sim *sim, const double *u);
  */
 int paper_case1_sim_set_controller(paper_case1_sim *sim, gac_controller controller, void *user);
 
+/* Run to t_end in one call, counting the impacts (gac_sim_run): for studies of many runs.  Returns
+ * GAC_SIM_END, GAC_SIM_IMPACT (max_impacts reached) or an error (< 0).
+ *   sim          an initialised simulation
+ *   t_end        integrate up to this time (s)
+ *   max_impacts  stop after this many impacts (> 0)
+ *   record       out: the last impact (not NULL)
+ *   summary      out: impacts, first impact time, losses, contact events
+ */
+int paper_case1_sim_run(paper_case1_sim *sim, double t_end, long max_impacts, paper_case1_impact_record *record, gac_run_summary *summary);
+
 /* The current time and state (gac_sim_state).
  *   sim          the simulation (NULL: nothing is written)
  *   t            out: current time (s), or NULL

@@ -700,6 +700,15 @@ int paper_case2_sim_advance(paper_case2_sim *sim, double t_end, const double *t_
     return gac_sim_advance(&sim->base, t_end, t_eval, n_eval, i_eval, x_eval, &record->base);
 }
 
+int paper_case2_sim_run(paper_case2_sim *sim, double t_end, long max_impacts, paper_case2_impact_record *record,
+                  gac_run_summary *summary)
+{
+    if (sim == 0 || record == 0) return GAC_ERR_NULL_ARGUMENT;
+    paper_case2_bind(&sim->base, sim->dwork, sim->iwork);
+    paper_case2_bind_record(record);
+    return gac_sim_run(&sim->base, t_end, max_impacts, &record->base, summary);
+}
+
 int paper_case2_sim_set_input(paper_case2_sim *sim, const double *GAC_RESTRICT u)
 {
     if (sim == 0) return GAC_ERR_NULL_ARGUMENT;

@@ -14,6 +14,8 @@ local threads run the compiled part side by side.  Given a Dask ``distributed.Cl
 address), the runs go to its workers in chunks; a worker loads the compiled model from the shared build
 cache once (the model pickles as its scene), and Dask retries the chunks of a worker that is lost.
 
+A run with constant inputs and no samples goes through C in one call (``NAME_sim_run``: the GIL is released
+for the whole run, and the impacts are counted there instead of being read one by one into Python).
 Results come back in the order of ``runs``, the same whatever the number of workers: one row per run
 (its overrides, status, message, impacts, energies, counts), plus, if asked, the final states or the
 sampled trajectories as arrays.  A run that fails (a bad override, a stop before t_end) is a row with its
@@ -136,15 +138,18 @@ def run_one(model: CompiledModel, run: dict, index: int, t_end: float, keep: str
     try:
         q0 = _state(model, run.get("q0"), model.scene.q0, "q0")
         qd0 = _state(model, run.get("qd0"), model.scene.qd0, "qd0")
-        result = simulate(model, run.get("t_end", t_end), p=run.get("p"), q0=q0, qd0=qd0, u=run.get("u"),
-                          **options)
+        u = run.get("u")
+        whole_in_c = keep != "samples" and options.get("max_wall_time") is None and len(options["t_eval"]) == 0 \
+            and (u is None or not (callable(u) or hasattr(u, "times")))
+        result = simulate(model, run.get("t_end", t_end), p=run.get("p"), q0=q0, qd0=qd0, u=u,
+                          keep_impacts=not whole_in_c, **options)
     except (ValueError, RuntimeError) as exc:
         row.update(status=-2, message=f"refused: {exc}", t_final=math.nan, n_impacts=0, t_first_impact=math.nan,
                    energy_initial=math.nan, energy_final=math.nan, energy_impact_loss=math.nan,
                    energy_drift=math.nan, n_steps=0, n_rhs=0)
         return row, None, time.perf_counter() - start
-    row.update(status=result.status, message=result.message, t_final=result.t_final, n_impacts=len(result.impacts),
-               t_first_impact=result.impacts[0].t if result.impacts else math.nan,
+    row.update(status=result.status, message=result.message, t_final=result.t_final, n_impacts=result.n_impacts,
+               t_first_impact=result.t_first_impact,
                energy_initial=result.energy_initial, energy_final=result.energy_final,
                energy_impact_loss=result.energy_impact_loss, energy_drift=result.energy_drift,
                n_steps=result.n_steps, n_rhs=result.n_rhs)
@@ -192,6 +197,8 @@ def simulate_many(model, runs, t_end: float, *, workers: int = 1, processes: boo
         check_run(model, run, index)
     options = dict(options)
     options.setdefault("charts", False)       # a study compares like with like: no chart rerun of some runs
+    if keep != "samples":
+        options.setdefault("t_eval", [])      # no samples: with constant inputs a whole run stays in C
     start = time.perf_counter()
     bar = _progress_bar(len(runs), progress)
     if client is not None:

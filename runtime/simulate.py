@@ -104,6 +104,18 @@ class SimulationResult:
     energy_input_work: float = 0.0     # J: work of the inputs, int u . qd_actuated dt
     energy_damping_loss: float = 0.0   # J: energy the joint dampers took, int C theta_dot^2 dt (>= 0)
     u: np.ndarray | None = None        # (len(t), nu) the inputs at the sample times (None: no inputs)
+    impact_counts: tuple | None = None # keep_impacts=False: (impacts, first impact time, energy they took)
+
+    @property
+    def n_impacts(self) -> int:
+        return len(self.impacts) if self.impact_counts is None else self.impact_counts[0]
+
+    @property
+    def t_first_impact(self) -> float:
+        """s; NaN when there was none."""
+        if self.impact_counts is None:
+            return self.impacts[0].t if self.impacts else float("nan")
+        return self.impact_counts[1] if self.impact_counts[0] else float("nan")
 
     @property
     def success(self) -> bool:
@@ -113,6 +125,8 @@ class SimulationResult:
     def energy_impact_loss(self) -> float:
         """J: the energy the impacts took, sum of (E before - E after) over the impacts (>= 0; it includes
         what landings on a wall took, Impact.energy_rest)."""
+        if self.impact_counts is not None:
+            return self.impact_counts[2]
         return float(sum(i.energy_before - i.energy_after for i in self.impacts))
 
     @property
@@ -197,7 +211,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
              contact_tol: float = 1e-6, event_samples: int = 4, event_tol: float = 1e-13,
              max_impacts: int = 10000, max_steps: int = 10_000_000, rest_height: float | None = None,
              zeno_impacts: int = 20, p=None, q0=None, qd0=None, u=None,
-             max_wall_time: float | None = None, charts: bool = True, check_start: bool = True) -> SimulationResult:
+             max_wall_time: float | None = None, charts: bool = True, check_start: bool = True,
+             keep_impacts: bool = True) -> SimulationResult:
     """Simulate the scene's hybrid dynamics from its initial state over [0, t_end].
 
     method        'dopri5' (adaptive Dormand-Prince 5(4), rtol/atol), 'dop853' (adaptive 8(5,3)),
@@ -226,6 +241,10 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                   the order of model.input_names), an InputSchedule (values at times, held or linear; both
                   evaluated in C, the loop stopping at each time), or a function u(t, q, qd) of the full-layout
                   state, called back from C at every stage (slower: a Python call per stage)
+    keep_impacts  False: the whole run in one C call (NAME_sim_run), returning counts (n_impacts, t_first_impact,
+                  energy_impact_loss) instead of Impact records, for studies of many runs; the impacts' post-
+                  conditions are then the C loop's own (GAC_ERR_IMPACT_ACCURACY), not repeated here.  Needs
+                  constant inputs, no samples after t = 0 and no max_wall_time
     Samples, final state and impact states are returned in the full layout of Eq. 13 whatever the model.
     """
     model = scene if isinstance(scene, CompiledModel) else load_model(scene)
@@ -325,7 +344,20 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     status, message = 0, "reached t_end"
     stops = source.breakpoints(t_end) + [t_end]   # the loop stops where a schedule jumps or bends
     stop = 0
-    while True:
+    summary = None
+    if not keep_impacts:
+        _check(len(stops) == 1 and source.kind == "constant" and max_wall_time is None
+               and (len(t_eval) == 0 or t_eval[-1] <= 0.0), "keep_impacts",
+               "False needs constant inputs, no samples after t = 0 and no max_wall_time")
+        summary = ffi.new("gac_run_summary *")
+        state.opt.max_steps = int(max_steps)
+        code = getattr(lib, f"{name}_sim_run")(sim, float(t_end), int(max_impacts), record, summary)
+        if code == SIM_IMPACT:
+            status, message = -1, (f"stopped after {summary.n_impacts} impacts at t = {float(state.t):.12g} s: the "
+                                   f"max_impacts limit of {max_impacts} (raise max_impacts to go on)")
+        elif code != SIM_END:
+            status, message = -1, f"at t = {float(state.t):.12g} s: {model.error_message(code)}"
+    while keep_impacts:
         opt_steps = chunk
         if max_steps:
             opt_steps = max(1, min(chunk, int(max_steps) - (int(state.n_steps) + int(state.n_rejected) - segment_steps)))
@@ -415,6 +447,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     return SimulationResult(
         t=t_eval[:n].copy(), q=q_samples, qd=qd_samples, u=u_samples,
         energy_input_work=float(state.work_input), energy_damping_loss=float(state.work_damping),
+        impact_counts=None if summary is None else (int(summary.n_impacts), float(summary.t_first_impact),
+                                                    float(summary.energy_impact_loss)),
         impacts=impacts, t_final=float(state.t), q_final=layout.expand(x_final[:nq]),
         qd_final=layout.expand(x_final[nq:], velocity=True),
         energy_initial=energy_initial, energy_final=sum(model.energy(x_final[:nq], x_final[nq:], p)),

@@ -17,6 +17,7 @@ STUDIES = {
     "benchmark": ("studies.benchmark", "the compiled hybrid loop against scipy's solve_ivp with events"),
     "charts": ("studies.charts_report", "chart switching near the gimbal lock, against an independent run"),
     "specialise": ("studies.specialise_report", "general against specialised models on the paper's scenes"),
+    "ensemble": ("studies.ensemble_bench", "runs per second of simulate_many: threads, processes, Dask"),
     "driven": ("studies.driven_cost", "the cost of inputs, springs and dampers: ns per rhs, simulation time"),
 }
 

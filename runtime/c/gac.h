@@ -442,6 +442,20 @@ void gac_sim_state(const gac_sim *sim, double *t, double *q, double *qd);
 int gac_sim_advance(gac_sim *sim, double t_end, const double *t_eval, int n_eval, int *i_eval,
                     double *x_eval, gac_impact_record *record);
 
+/* What gac_sim_run reports of a whole run. */
+typedef struct {
+    long n_impacts;              /* impacts applied */
+    double t_first_impact;       /* s; -1 when there was none */
+    double energy_impact_loss;   /* J: sum of (energy_before - energy_after) over the impacts */
+    long n_contact_events;       /* GAC_SIM_CONTACT stops (resting contacts made or released) */
+} gac_run_summary;
+
+/* Run to t_end in one call: gac_sim_advance until GAC_SIM_END, an error, or max_impacts impacts (> 0; then
+ * GAC_SIM_IMPACT is returned), counting into summary (zeroed first).  For studies of many runs: the whole run
+ * stays in C.  record: a bound record (not NULL), overwritten at each impact.  Returns GAC_SIM_END,
+ * GAC_SIM_IMPACT (max_impacts reached) or an error (< 0). */
+int gac_sim_run(gac_sim *sim, double t_end, long max_impacts, gac_impact_record *record, gac_run_summary *summary);
+
 #ifdef __cplusplus
 }
 #endif

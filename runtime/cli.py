@@ -57,6 +57,11 @@ def build_parser() -> argparse.ArgumentParser:
     outputs = sim.add_argument_group("sample exports")
     outputs.add_argument("--csv", metavar="FILE", help="write the samples (t, q, qd, inputs, joint points O_i) as CSV")
     outputs.add_argument("--npz", metavar="FILE", help="write the samples and the impacts as a numpy .npz")
+    outputs.add_argument("--animate", metavar="FILE", help="write an animation of the run (.gif, or .mp4 with ffmpeg)")
+    outputs.add_argument("--fps", type=int, default=30, help="frames per second of --animate (default 30)")
+    outputs.add_argument("--film-strip", metavar="FILE", help="write the chain at --film-times side by side (PNG)")
+    outputs.add_argument("--film-times", metavar="T1,T2,...", default=None,
+                         help="times of the --film-strip panels in s (default: 5 evenly spaced)")
 
     sweep = commands.add_parser(
         "sweep", help="run a grid or random sample over parameters and start coordinates",
@@ -124,9 +129,27 @@ def simulate_arguments_problem(args, t_end: float) -> str:
             return f"--param: expected NAME=VALUE with a finite number, got {item!r}"
     if (args.input is not None or args.param) and args.charts:
         return "--input/--param: not available with --charts"
-    for option in ("json", "csv", "npz"):
+    if args.animate or args.film_strip:
+        import importlib.util
+        if importlib.util.find_spec("matplotlib") is None:
+            return "--animate/--film-strip: needs matplotlib, which is not installed (pip install -e \".[plot]\")"
+    if args.animate:
+        from .animate import animation_problem
+        problem = animation_problem(args.animate)
+        if problem:
+            return problem
+        if not 1 <= args.fps <= 120:
+            return f"--fps: must be in 1..120, got {args.fps}"
+    if args.film_times is not None:
+        try:
+            times = [float(x) for x in args.film_times.split(",")]
+        except ValueError:
+            return f"--film-times: expected times in s separated by commas, got {args.film_times!r}"
+        if not times or len(times) > 26 or not all(0.0 <= x <= t_end for x in times):
+            return f"--film-times: 1 to 26 times within [0, t_end = {t_end:g}] s, got {args.film_times!r}"
+    for option in ("json", "csv", "npz", "animate", "film_strip"):
         if getattr(args, option):
-            problem = output_file_problem(f"--{option}", getattr(args, option))
+            problem = output_file_problem(f"--{option.replace('_', '-')}", getattr(args, option))
             if problem:
                 return problem
     if args.plot:
@@ -203,6 +226,17 @@ def main(argv=None) -> int:
             print(f"error: --json: cannot write {args.json}: {exc.strerror or exc}", file=sys.stderr)
             return 2
         print(f"wrote {args.json}")
+    if args.animate:
+        from .animate import animate
+        frames = animate(result, scene, args.animate, fps=args.fps,
+                         progress=lambda m: print(f"  animate: {m}", file=sys.stderr, flush=True))
+        print(f"wrote {args.animate} ({frames} frames)")
+    if args.film_strip:
+        from .animate import film_strip
+        times = ([float(x) for x in args.film_times.split(",")] if args.film_times
+                 else list(np.linspace(0.0, result.t[-1] if len(result.t) else 0.0, 5)))
+        film_strip(result, scene, args.film_strip, times)
+        print(f"wrote {args.film_strip}")
     for option, writer in (("csv", "write_csv"), ("npz", "write_npz")):
         if getattr(args, option):
             from . import export

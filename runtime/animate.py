@@ -1,0 +1,142 @@
+"""Animations and film strips of a run: the chain in its box, frame by frame (matplotlib.animation).
+
+    python -m runtime simulate --scene paper-case1 --animate case1.gif
+    python -m runtime simulate --scene paper-case1 --film-strip strip.png --film-times 0,0.25,0.5,0.75,1.0
+
+A planar run (every point stays in one plane X3 = const) is drawn in the X1-X2 plane, any other in 3D.  Each
+frame shows the walls, the chain (points O_1..O_{n+1}), the time, and the points that touch a wall at an
+impact within the frame's interval (red stars).  GIF is written by Pillow (a matplotlib dependency); MP4
+needs ffmpeg on the PATH.  Frames are the run's samples, thinned to at most ``max_frames``.
+"""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from codegen.scene import Scene, contact_points
+
+MAX_FRAMES = 400
+
+
+def animation_problem(path: str) -> str:
+    """What keeps an animation from being written to ``path`` ('' when nothing does), checked before a run."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in (".gif", ".mp4"):
+        return f"--animate: the file must end in .gif or .mp4, got {path!r}"
+    if suffix == ".mp4" and shutil.which("ffmpeg") is None:
+        return "--animate: .mp4 needs ffmpeg on the PATH (not found); write a .gif instead"
+    return ""
+
+
+def _shapes(result, scene: Scene) -> np.ndarray:
+    return np.array([contact_points(scene, q) for q in result.q])
+
+
+def _planar(shapes: np.ndarray) -> bool:
+    return bool(np.ptp(shapes[..., 2]) < 1e-9)
+
+
+def _box(ax, scene: Scene, planar: bool) -> None:
+    walls = {w.name: w.position for w in scene.walls}
+    if planar:
+        lo1, hi1 = walls.get("x1_min"), walls.get("x1_max")
+        lo2, hi2 = walls.get("x2_min"), walls.get("x2_max")
+        for x in (lo1, hi1):
+            if x is not None:
+                ax.axvline(x, color="k", lw=1.5)
+        for y in (lo2, hi2):
+            if y is not None:
+                ax.axhline(y, color="k", lw=1.5)
+        ax.set_aspect("equal")
+        ax.set_xlabel("X1 (m)")
+        ax.set_ylabel("X2 (m)")
+    else:
+        ax.set_xlabel("X1 (m)")
+        ax.set_ylabel("X3 (m)")
+        ax.set_zlabel("X2 (m)")
+
+
+def _limits(ax, shapes: np.ndarray, scene: Scene, planar: bool) -> None:
+    walls = {w.name: w.position for w in scene.walls}
+    margin = 0.05 * max(float(np.ptp(shapes[..., :2])), 1e-3)
+    for axis, setter in ((0, ax.set_xlim), (1, ax.set_ylim if planar else ax.set_zlim), (2, None if planar else ax.set_ylim)):
+        if setter is None:
+            continue
+        lo = walls.get(f"x{axis + 1}_min", float(shapes[..., axis].min()))
+        hi = walls.get(f"x{axis + 1}_max", float(shapes[..., axis].max()))
+        setter(min(lo, float(shapes[..., axis].min())) - margin, max(hi, float(shapes[..., axis].max())) + margin)
+
+
+def _draw(ax, shape, planar: bool, **style):
+    if planar:
+        return ax.plot(shape[:, 0], shape[:, 1], **style)[0]
+    return ax.plot(shape[:, 0], shape[:, 2], shape[:, 1], **style)[0]
+
+
+def animate(result, scene: Scene, path, fps: int = 30, max_frames: int = MAX_FRAMES, progress=None) -> int:
+    """Write the run as an animation; returns the number of frames."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib import animation
+    if len(result.t) == 0:
+        raise ValueError("--animate: the run has no samples to draw")
+    shapes = _shapes(result, scene)
+    frames = np.unique(np.linspace(0, len(result.t) - 1, min(max_frames, len(result.t))).round().astype(int))
+    planar = _planar(shapes)
+    fig = plt.figure(figsize=(6.4, 4.8))
+    ax = fig.add_subplot(111) if planar else fig.add_subplot(111, projection="3d")
+    _box(ax, scene, planar)
+    _limits(ax, shapes, scene, planar)
+    chain = _draw(ax, shapes[0], planar, color="tab:blue", marker="o", ms=4, lw=2)
+    stars = _draw(ax, shapes[0][:0], planar, color="r", marker="*", ms=12, ls="none")
+    label = ax.set_title("")
+    impact_t = np.array([i.t for i in result.impacts])
+
+    def update(k):
+        i = frames[k]
+        shape = shapes[i]
+        if planar:
+            chain.set_data(shape[:, 0], shape[:, 1])
+        else:
+            chain.set_data_3d(shape[:, 0], shape[:, 2], shape[:, 1])
+        t_prev = result.t[frames[k - 1]] if k > 0 else -np.inf
+        hits = [imp for imp, t in zip(result.impacts, impact_t) if t_prev < t <= result.t[i]]
+        points = np.array([contact_points(scene, imp.q)[c.point - 1] for imp in hits for c in imp.contacts
+                           if c.kind == "wall"]).reshape(-1, 3)
+        if planar:
+            stars.set_data(points[:, 0], points[:, 1])
+        else:
+            stars.set_data_3d(points[:, 0], points[:, 2], points[:, 1])
+        label.set_text(f"{scene.name}   t = {result.t[i]:.3f} s" + (f"   impact ({len(hits)})" if hits else ""))
+        if progress and k % 50 == 0:
+            progress(f"frame {k + 1}/{len(frames)}")
+        return chain, stars, label
+
+    movie = animation.FuncAnimation(fig, update, frames=len(frames), blit=False)
+    writer = animation.PillowWriter(fps=fps) if str(path).lower().endswith(".gif") else animation.FFMpegWriter(fps=fps)
+    movie.save(str(path), writer=writer)
+    plt.close(fig)
+    return len(frames)
+
+
+def film_strip(result, scene: Scene, path, times) -> None:
+    """The chain at the chosen times, side by side (as the paper's Fig. 14 A-E), from the nearest samples."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    shapes = _shapes(result, scene)
+    planar = _planar(shapes)
+    fig = plt.figure(figsize=(3.0 * len(times), 3.2))
+    for k, t in enumerate(times):
+        i = int(np.argmin(np.abs(result.t - t)))
+        ax = fig.add_subplot(1, len(times), k + 1, **({} if planar else {"projection": "3d"}))
+        _box(ax, scene, planar)
+        _limits(ax, shapes, scene, planar)
+        _draw(ax, shapes[i], planar, color="tab:blue", marker="o", ms=3, lw=2)
+        ax.set_title(f"{chr(ord('A') + k) if k < 26 else k}: t = {result.t[i]:.3f} s", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

@@ -21,7 +21,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--t-end", type=float, default=1.5, help="simulated time of each run in s (default 1.5)")
     parser.add_argument("--workers", type=int, default=2, help="threads / processes / Dask workers (default 2)")
     parser.add_argument("--repeats", type=int, default=2, help="repeats of each measurement (default 2)")
-    parser.add_argument("--memory-runs", type=int, default=100000, help="rows for the memory measurement")
+    parser.add_argument("--memory-runs", type=int, default=20000,
+                        help="rows for the memory measurement (default 20000; tracemalloc slows the runs)")
     return parser
 
 
@@ -87,8 +88,10 @@ def main(argv=None) -> int:
         cluster.close()
     tracemalloc.start()
     study = simulate_many(model, [{"p": {restitution: 0.5}}] * args.memory_runs, 1e-3, t_eval=[])
-    current, _ = tracemalloc.get_traced_memory()
+    current, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
-    print(f"memory of {args.memory_runs:,} summary rows: {current / 1e6:.0f} MB ({current / args.memory_runs:.0f} B "
-          f"per row, {len(study.rows[0])} fields)")
+    per_row, peak_row = current / args.memory_runs, peak / args.memory_runs
+    print(f"memory of {args.memory_runs:,} summary rows: {current / 1e6:.1f} MB ({per_row:.0f} B per row, "
+          f"{len(study.rows[0])} fields; peak {peak_row:.0f} B per row): 100,000 rows about {per_row * 1e5 / 1e6:.0f} MB "
+          f"(peak {peak_row * 1e5 / 1e6:.0f} MB)")
     return 0

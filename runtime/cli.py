@@ -79,7 +79,8 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--workers", type=int, default=2, help="local worker processes (default 2; 1: serial)")
     sweep.add_argument("--threads", action="store_true", help="local threads instead of processes")
     sweep.add_argument("--scheduler", metavar="ADDRESS", default=None,
-                       help="run on this Dask scheduler (tcp://host:8786) instead of locally")
+                       help="run on this Dask scheduler (tcp://host:8786), or 'local': a Dask LocalCluster of "
+                            "--workers processes started for the sweep")
     sweep.add_argument("--rtol", type=float, default=DEFAULT_RTOL, help=f"relative tolerance (default {DEFAULT_RTOL:g})")
     sweep.add_argument("--atol", type=float, default=DEFAULT_ATOL, help=f"absolute tolerance (default {DEFAULT_ATOL:g})")
     sweep.add_argument("--out", metavar="DIR", required=True, help="folder for runs.csv, runs.npz and sweep.png")
@@ -303,9 +304,19 @@ def sweep_main(args) -> int:
     where = (f"Dask scheduler {args.scheduler}" if args.scheduler else
              f"{args.workers} local {'threads' if args.threads else 'processes'}" if args.workers > 1 else "serially")
     print(f"sweep {scene.name}: {len(runs):,} runs of {t_end} s, {where}", file=sys.stderr)
-    study = simulate_many(model, runs, t_end, workers=args.workers, processes=not args.threads,
-                          client=args.scheduler, keep="final", progress=True, rtol=args.rtol, atol=args.atol,
-                          t_eval=[])
+    cluster = client = None
+    if args.scheduler == "local":
+        from distributed import Client, LocalCluster
+        cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True, dashboard_address=None)
+        client = Client(cluster)
+    try:
+        study = simulate_many(model, runs, t_end, workers=args.workers, processes=not args.threads,
+                              client=client or args.scheduler, keep="final", progress=True, rtol=args.rtol,
+                              atol=args.atol, t_eval=[])
+    finally:
+        if client is not None:
+            client.close()
+            cluster.close()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     study.to_csv(out / "runs.csv")

@@ -147,3 +147,15 @@ def test_simulate_command_writes_exports(tmp_path):
     assert (tmp_path / "a.csv").read_text().startswith("t,q.theta_-1,q.theta_0")
     assert np.load(tmp_path / "a.npz")["samples"].shape[0] == 301
     load_scene("paper-case1")
+
+
+def test_sweep_on_a_dask_local_cluster_writes_the_same_table(tmp_path):
+    pytest.importorskip("distributed", reason="dask.distributed is not installed (the ensemble extra)")
+    tables = []
+    for how in (["--workers", "1"], ["--scheduler", "local", "--workers", "2"]):
+        out = tmp_path / how[1]
+        done = run_cli("sweep", "--scene", "paper-case1", "--vary", "e_x2_min=0.2:1:4", "--t-end", "0.5", *how,
+                       "--out", str(out), cwd=ROOT)
+        assert done.returncode == 0, done.stderr
+        tables.append((out / "runs.csv").read_text())
+    assert tables[0] == tables[1]

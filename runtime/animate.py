@@ -38,16 +38,18 @@ def _planar(shapes: np.ndarray) -> bool:
     return bool(np.ptp(shapes[..., 2]) < 1e-9)
 
 
-def _box(ax, scene: Scene, planar: bool) -> None:
+def draw_box(ax, scene: Scene, planar: bool) -> None:
+    """The walls (in the plane: the rectangle if all four exist, else each wall as a line) and axis labels."""
     walls = {w.name: w.position for w in scene.walls}
     if planar:
         lo1, hi1 = walls.get("x1_min"), walls.get("x1_max")
         lo2, hi2 = walls.get("x2_min"), walls.get("x2_max")
-        for x in (lo1, hi1):
-            if x is not None:
+        if None not in (lo1, hi1, lo2, hi2):
+            ax.plot([lo1, hi1, hi1, lo1, lo1], [lo2, lo2, hi2, hi2, lo2], "k-", lw=1.5)
+        else:
+            for x in (x for x in (lo1, hi1) if x is not None):
                 ax.axvline(x, color="k", lw=1.5)
-        for y in (lo2, hi2):
-            if y is not None:
+            for y in (y for y in (lo2, hi2) if y is not None):
                 ax.axhline(y, color="k", lw=1.5)
         ax.set_aspect("equal")
         ax.set_xlabel("X1 (m)")
@@ -88,7 +90,7 @@ def animate(result, scene: Scene, path, fps: int = 30, max_frames: int = MAX_FRA
     planar = _planar(shapes)
     fig = plt.figure(figsize=(6.4, 4.8))
     ax = fig.add_subplot(111) if planar else fig.add_subplot(111, projection="3d")
-    _box(ax, scene, planar)
+    draw_box(ax, scene, planar)
     _limits(ax, shapes, scene, planar)
     chain = _draw(ax, shapes[0], planar, color="tab:blue", marker="o", ms=4, lw=2)
     stars = _draw(ax, shapes[0][:0], planar, color="r", marker="*", ms=12, ls="none")
@@ -133,7 +135,7 @@ def film_strip(result, scene: Scene, path, times) -> None:
     for k, t in enumerate(times):
         i = int(np.argmin(np.abs(result.t - t)))
         ax = fig.add_subplot(1, len(times), k + 1, **({} if planar else {"projection": "3d"}))
-        _box(ax, scene, planar)
+        draw_box(ax, scene, planar)
         _limits(ax, shapes, scene, planar)
         _draw(ax, shapes[i], planar, color="tab:blue", marker="o", ms=3, lw=2)
         ax.set_title(f"{chr(ord('A') + k) if k < 26 else k}: t = {result.t[i]:.3f} s", fontsize=9)

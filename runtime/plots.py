@@ -89,18 +89,9 @@ def plot_impact_configurations(model: CompiledModel, result: SimulationResult, o
                 ax.plot(point[0], point[1], "r*", ms=8)
             else:
                 ax.plot([point[0]], [point[2]], [point[1]], "r*", ms=8)
-    if planar:
-        lo1, hi1 = walls.get("x1_min"), walls.get("x1_max")
-        lo2, hi2 = walls.get("x2_min"), walls.get("x2_max")
-        if None not in (lo1, hi1, lo2, hi2):
-            ax.plot([lo1, hi1, hi1, lo1, lo1], [lo2, lo2, hi2, hi2, lo2], "k-", lw=1.5)
-        ax.set_aspect("equal")
-        ax.set_xlabel("X1 (m)")
-        ax.set_ylabel("X2 (m)")
-    else:
-        ax.set_xlabel("X1 (m)")
-        ax.set_ylabel("X3 (m)")
-        ax.set_zlabel("X2 (m)")
+    from .animate import draw_box
+    draw_box(ax, model.scene, planar)
+    if not planar:
         for axis, setter in ((0, ax.set_xlim), (2, ax.set_ylim), (1, ax.set_zlim)):
             lo, hi = walls.get(f"x{axis + 1}_min"), walls.get(f"x{axis + 1}_max")
             if lo is not None and hi is not None:

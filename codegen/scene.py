@@ -558,17 +558,21 @@ class Scene:
                 values.append(joint.limit_restitution)
         return np.array(values, dtype=float)
 
-    def check_parameters(self, p) -> None:
+    def check_parameters(self, p, changed=None) -> None:
         """Refuse a parameter vector p (layout of parameter_names()) that a scene file could not give:
         every value in its range, rigid links' inertias physical, each wall pair ordered (min < max).
+        ``changed``: the names whose values may differ from the scene's (the others were checked when the
+        scene was built; default: all).
         (Whether the start lies inside the walls is the caller's check: it depends on the state too.)"""
         names = self.parameter_names()
         p = np.asarray(p)
         if p.shape != (len(names),):
             raise SceneError(f"p: expected {len(names)} values ({', '.join(names)}), got shape {p.shape}")
-        value = {name: check_parameter(name, v) for name, v in zip(names, p.tolist())}
+        value = dict(zip(names, p.tolist()))
+        for name in (names if changed is None else changed):
+            check_parameter(name, value[name])
         for i, link in enumerate(self.links, start=1):
-            if link.kind == "rigid":
+            if link.kind == "rigid" and (changed is None or any(name.endswith(f"_{i}") for name in changed)):
                 l, m, cx, cy, cz, Ixx, Iyy, Izz, Ixy, Ixz, Iyz = (value[f"{key}_{i}"] for key in link.param_names)
                 try:
                     RigidLink(l, m, (cx, cy, cz), ((Ixx, Ixy, Ixz), (Ixy, Iyy, Iyz), (Ixz, Iyz, Izz))).validate("")

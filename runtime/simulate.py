@@ -546,7 +546,7 @@ def _check_parameters(model: CompiledModel, p: np.ndarray) -> None:
     if np.array_equal(p, model.p):              # the scene's own values, checked when it was loaded
         return
     try:
-        model.scene.check_parameters(p)
+        model.scene.check_parameters(p, changed=[names[k] for k in np.flatnonzero(p != model.p)])
     except SceneError as exc:
         raise ValueError(str(exc)) from None
     for k, name in enumerate(names):

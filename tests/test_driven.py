@@ -357,3 +357,24 @@ def test_limits_by_parameter_are_checked():
         simulate(model, 0.1, p={"lower_2": 0.5, "upper_2": 0.2})
     with pytest.raises(ValueError, match="joint 2 is beyond its upper limit upper_2"):
         simulate(model, 0.1, p={"upper_2": 0.3})
+
+
+def test_stop_gaps_and_rows_match_finite_differences(compiled):
+    """Each contact's gap (walls and stops) changes along its Jacobian row signed by its normal: dgap/dq =
+    normal_sign J[row] (finite differences), and a stop's row has no J_dot qd term."""
+    scene = dataclasses.replace(random_scene(3, seed=55, random_twists=True),
+                                joints=(Joint(lower=-2.0, upper=2.5, limit_restitution=0.4), Joint(upper=3.0)))
+    model = compiled(scene)
+    q, qd = reference.random_state(3, np.random.default_rng(5))
+    q[3:5] = [0.3, -0.7]
+    J, bias, h = model.contact_jacobian(q), model.contact_bias(q, qd), 1e-6
+    stops = 0
+    for c, (point, wall) in enumerate(model.contacts):
+        axis = "theta" if hasattr(wall, "joint") else wall.axis
+        row = model.contact_rows.index((point, axis))
+        grad = [(model.contact_gaps(q + h * e)[c] - model.contact_gaps(q - h * e)[c]) / (2 * h) for e in np.eye(8)]
+        assert np.allclose(grad, wall.normal_sign * J[row], atol=1e-8)
+        if axis == "theta":
+            stops += 1
+            assert bias[row] == 0.0
+    assert stops == 3

@@ -207,30 +207,42 @@ def forward_dynamics(tape: Tape, chain: ChainSymbols, moments: dict[int, LinkSym
     velocity-product accelerations, gravity included) are the bias forces of the recursion, and
     their accumulation from the tip (Eq. 38-41) is the same pass that accumulates the inertias.
     """
+    def loads(k):
+        S, T = gibbs_appell.link_loads(tape, moments, motion, k)
+        return T, S
+    return _solve(tape, chain, moments, loads, chain.generalized_force)
+
+
+def inertia_solve(tape: Tape, chain: ChainSymbols, moments: dict[int, LinkSymbols], Q: list) -> list[sp.Expr]:
+    """I_f^-1 Q (full layout) for generalised forces Q (full layout, 0 on fixed coordinates): the same
+    recursion with no motion, no gravity and no loads on the links, only the joint forces Q."""
+    return _solve(tape, chain, moments, None, lambda index: Q[index])
+
+
+def _solve(tape: Tape, chain: ChainSymbols, moments: dict[int, LinkSymbols], loads, force) -> list[sp.Expr]:
+    """The articulated-body recursion for I_f x = Q(loads, force): ``loads(k)`` gives the bias load (moment,
+    force) of real link k about O_k in frame k (None: no loads), ``force(index)`` the generalised force on
+    coordinate ``index`` of the full layout.  Returns x in the full layout (0 for fixed coordinates)."""
     n = chain.n
     free = set(chain.layout.free)
     joints = {k: JointTransform(tape, chain, moments, k) for k in range(-1, n + 1)}
     pivots = {}
-    inertia = force = None          # articulated inertia and force of links > k, about O_k in frame k
+    inertia = force_k = None        # articulated inertia and force of links > k, about O_k in frame k
     for k in range(n, -2, -1):      # backward: tip to base
         tag = index_name(k)
         I_k = _own_inertia(moments, k)
-        if k >= 1:
-            S, T = gibbs_appell.link_loads(tape, moments, motion, k)
-            p_k = (T, S)
-        else:
-            p_k = (ZERO3, ZERO3)
+        p_k = loads(k) if (k >= 1 and loads is not None) else (ZERO3, ZERO3)
         if inertia is not None:
             I_k = _add_inertia(I_k, joints[k + 1].inertia_to_parent(tape, inertia))
-            N_parent, F_parent = joints[k + 1].force_to_parent(tape, force)
+            N_parent, F_parent = joints[k + 1].force_to_parent(tape, force_k)
             p_k = (add(p_k[0], N_parent), add(p_k[1], F_parent))
         if k + 1 in free:
-            inertia, force, W, ud = _pivot(tape, I_k, p_k, tag, chain.generalized_force(k + 1))
+            inertia, force_k, W, ud = _pivot(tape, I_k, p_k, tag, force(k + 1))
             pivots[k] = (W, ud)
         else:                       # a locked joint passes everything on
-            inertia, force = I_k, p_k
+            inertia, force_k = I_k, p_k
     qdd = [ZERO] * chain.nq
-    X_ddot = _root_translations(tape, chain, joints[-1], inertia, force, free)
+    X_ddot = _root_translations(tape, chain, joints[-1], inertia, force_k, free, force)
     for a in range(3):
         qdd[n + 2 + a] = X_ddot[a]
     motion = (ZERO3, X_ddot)        # of the reference frame at O_1
@@ -245,7 +257,7 @@ def forward_dynamics(tape: Tape, chain: ChainSymbols, moments: dict[int, LinkSym
     return qdd
 
 
-def _root_translations(tape: Tape, chain: ChainSymbols, joint: JointTransform, inertia, force, free):
+def _root_translations(tape: Tape, chain: ChainSymbols, joint: JointTransform, inertia, force, free, generalized):
     """X_ddot (reference frame) from the articulated 3 x 3 block of the whole chain at O_1.
 
     With the chain's articulated inertia (A, B, C) and force (N, F) in frame -1, the translation
@@ -255,7 +267,7 @@ def _root_translations(tape: Tape, chain: ChainSymbols, joint: JointTransform, i
     n = chain.n
     _, _, C = inertia
     _, F = force
-    Q_X = tuple(chain.generalized_force(n + 2 + a) for a in range(3))
+    Q_X = tuple(generalized(n + 2 + a) for a in range(3))
     if any(x != 0 for x in Q_X):                    # C y = R_{-1}^T Q_X - F
         F = tuple(tape.let(f - q, f"FQ_{a}") for a, (f, q) in enumerate(zip(F, joint.vec_to_child(Q_X))))
     kept = [a for a in range(3) if n + 2 + a in free]
@@ -273,3 +285,37 @@ def _root_translations(tape: Tape, chain: ChainSymbols, joint: JointTransform, i
     for i, a in enumerate(kept):
         out[a] = x[i]
     return tuple(out)
+
+
+# --- I_f v: the generalised momentum --------------------------------------------------------------
+def generalized_momentum(tape: Tape, chain: ChainSymbols, moments: dict[int, LinkSymbols],
+                         velocities) -> list[sp.Expr]:
+    """I_f v = dT/dv (full layout) for generalised velocities v, by composite momenta at O(n) cost.
+
+    ``velocities``: (omega_k, v_k) of every frame k = -1..n in its own frame (kinematics.link_velocities for
+    the velocities v).  Link k's momentum about O_k, in frame k, is H = K omega + h x v (angular) and
+    L = B0 v + omega x h (linear), with B0, h, K of Eq. 4-7; summed from the tip and carried to the parent
+    like a force, the momentum of links >= k about O_k gives joint k's entry H_z (joint k turns frame k about
+    its z axis), and the whole chain's linear momentum the entries of X1..X3 (reference frame)."""
+    n = chain.n
+    omega, vel = velocities
+    joints = {k: JointTransform(tape, chain, moments, k) for k in range(-1, n + 1)}
+    h = [ZERO] * chain.nq
+    total = None                    # momentum (H, L) of links >= k about O_k in frame k
+    for k in range(n, -2, -1):
+        tag = index_name(k)
+        if k >= 1:
+            B = moments[k]
+            w, v = omega[k], vel[k]
+            own = (add(matvec(B.K, w), cross(B.h, v)), add(tuple(B.B0 * x for x in v), cross(w, B.h)))
+        else:
+            own = (ZERO3, ZERO3)
+        if total is not None:
+            H_parent, L_parent = joints[k + 1].force_to_parent(tape, total)
+            own = (add(own[0], H_parent), add(own[1], L_parent))
+        total = (tape.let_vec(own[0], f"Hm_{tag}"), tape.let_vec(own[1], f"Lm_{tag}"))
+        h[k + 1] = total[0][2]
+    L_ref = joints[-1].vec_to_parent(total[1])
+    for a in range(3):
+        h[n + 2 + a] = L_ref[a]
+    return h

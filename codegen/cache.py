@@ -26,6 +26,7 @@ from contextlib import contextmanager
 from importlib import resources
 from pathlib import Path
 
+from . import interface
 from .artifact import GeneratedModel, OpCount, RenderedFunction, scene_hash
 from .scene import Scene
 from .specialise import layout_for
@@ -140,9 +141,10 @@ def generator_fingerprint() -> str:
 
 
 def generation_key(scene: Scene, name: str | None = None, bake_params: bool = False,
-                   specialise: bool = True) -> str:
+                   specialise: bool = True, dense: bool | None = None) -> str:
     name = name or scene.name
-    text = f"{scene_hash(scene)}|{name}|{bool(bake_params)}|{bool(specialise)}|{generator_fingerprint()}"
+    dense = interface.wants_dense(scene.n, dense)
+    text = f"{scene_hash(scene)}|{name}|{bool(bake_params)}|{bool(specialise)}|{dense}|{generator_fingerprint()}"
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 
@@ -209,7 +211,8 @@ def _model_from_payload(payload: dict, scene: Scene, bake_params: bool, speciali
 
 
 def generate_cached(scene: Scene, *, name: str | None = None, bake_params: bool = False,
-                    specialise: bool = True, progress=None, refresh: bool = False) -> GeneratedModel:
+                    specialise: bool = True, progress=None, refresh: bool = False,
+                    dense: bool | None = None) -> GeneratedModel:
     """``codegen.generate`` through the on-disk cache of generated text.
 
     A cached model has everything but the C lines of its functions (``functions[i].lines`` is
@@ -217,7 +220,7 @@ def generate_cached(scene: Scene, *, name: str | None = None, bake_params: bool 
     and stores the result (the command line does this, so it reports its own timings).
     """
     name = name or scene.name
-    key = generation_key(scene, name, bake_params, specialise)
+    key = generation_key(scene, name, bake_params, specialise, dense)
     folder = cache_dir()
     path = folder / f"gen_{key}.json"
     with entry_lock(folder, path.stem):
@@ -229,7 +232,7 @@ def generate_cached(scene: Scene, *, name: str | None = None, bake_params: bool 
                 report_corrupted(path.name, problem, progress)
         from .pipeline import generate          # the computer algebra loads only when a model is generated
         model = generate(scene, name=name, bake_params=bake_params, progress=progress or (lambda m: None),
-                         specialise=specialise)
+                         specialise=specialise, dense=dense)
         if _hash_generator_sources() == generator_fingerprint():   # the generator did not change meanwhile
             payload = _payload(model)
             data = {"format": GEN_FORMAT, "key": key, "sha256": _payload_hash(payload), "payload": payload}

@@ -109,7 +109,8 @@ def _environment() -> jinja2.Environment:
 
 def render_model(scene: Scene, name: str, programs: list[Program], bake_params: bool, layout) -> GeneratedModel:
     functions = [render_function(p) for p in programs]
-    _check_kernels(functions)
+    dense = _check_kernels(functions)
+    generated = {f.name: f for f in functions}
     env = _environment()
     params = list(zip(scene.parameter_names(), scene.parameter_vector().tolist()))
     pnames = [pname for pname, _ in params]
@@ -140,7 +141,8 @@ def render_model(scene: Scene, name: str, programs: list[Program], bake_params: 
         param_macros=[(i, macro_name(pname)) for i, pname in enumerate(pnames)],
         has_power=scene.driven,
         sizes=interface.SIZES, size_values=sizes, constants=interface.CONSTANTS, structs=interface.STRUCTS,
-        kernels=list(zip(interface.KERNELS, functions)), all_functions=interface.ALL_FUNCTIONS,
+        kernels=[(f, generated.get(f.name)) for f in interface.KERNELS], dense=dense,
+        formed=[f for f in interface.KERNELS if f.name not in generated], all_functions=interface.ALL_FUNCTIONS,
         library_functions=interface.LIBRARY_FUNCTIONS, api_functions=interface.FUNCTIONS,
     )
     header = env.get_template("model.h.j2").render(**context)
@@ -168,12 +170,16 @@ JOINT_DOC = {"stiffness": "spring stiffness K (N m/rad)", "rest_angle": "spring 
              "e_limit": "restitution of the limits (-)"}
 
 
-def _check_kernels(functions: list[RenderedFunction]) -> None:
-    """The generated kernels are those codegen.interface declares: same names, order, inputs and output."""
-    declared = [(f.name, tuple(a.name for a in f.args[:-1]), f.args[-1].name) for f in interface.KERNELS]
+def _check_kernels(functions: list[RenderedFunction]) -> bool:
+    """The generated kernels are those codegen.interface declares (all, or all but the dense ones): same names,
+    order, inputs and output.  Returns whether the dense kernels are among them."""
+    dense = any(f.name == "mass_matrix" for f in functions)
+    declared = [(f.name, tuple(a.name for a in f.args[:-1]), f.args[-1].name) for f in interface.KERNELS
+                if dense or not f.dense]
     generated = [(f.name, tuple(f.inputs), f.output) for f in functions]
     if declared != generated:
         raise AssertionError(f"kernels {generated} differ from codegen.interface.KERNELS {declared}")
+    return dense
 
 
 def _chart_context(scene: Scene, layout) -> dict:

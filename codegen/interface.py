@@ -34,6 +34,7 @@ class Function:
     summary: str                    # what it does, one line
     doc: str = ""                   # more, for the header comment (lines joined by spaces)
     kernel: bool = False            # a generated kernel (its body is the scene's straight-line code)
+    dense: bool = False             # a dense kernel (O(n^2) code): generated, or formed by the library
 
     def c_type(self, arg: Arg, name: str, restrict: str = "") -> str:
         ctype = arg.ctype.format(name=name, NAME=name.upper())
@@ -75,18 +76,30 @@ def _out(name, doc):
 # ---------------------------------------------------------------------------------------------------
 KERNELS = (
     Function("mass_matrix", "void", (_q(), _p(), _out("M", "I_f, NQ x NQ row-major, symmetric")),
-             "Flight inertia matrix I_f (Eq. 12).", kernel=True),
+             "Flight inertia matrix I_f (Eq. 12).", kernel=True, dense=True),
     Function("bias", "void", (_q(), _qd(), _u(), _p(), _out("R", "R (NQ): I_f qdd = R in flight")),
-             "Right-hand side R of I_f qdd = R (Eq. 12, 38-41), inputs, springs and dampers included.", kernel=True),
+             "Right-hand side R of I_f qdd = R (Eq. 12, 38-41), inputs, springs and dampers included.", kernel=True,
+             dense=True),
     Function("forward_dynamics", "void", (_q(), _qd(), _u(), _p(), _out("qdd", "qdd (NQ; rad/s^2, m/s^2)")),
              "Accelerations solving I_f qdd = R.", kernel=True),
+    Function("inertia_solve", "void",
+             (_q(), Arg("Q", "const double *", "generalised forces (NQ; N m on an angle, N on a translation)", True),
+              _p(), _out("x", "I_f^-1 Q (NQ; rad/s^2, m/s^2)")),
+             "I_f^-1 Q: the accelerations generalised forces Q alone give (articulated-body recursion, O(n)).",
+             kernel=True),
+    Function("generalized_momentum", "void", (_q(), _qd(), _p(), _out("h", "I_f qd (NQ; N m s, N s)")),
+             "Generalised momentum I_f qd = dT/dqd (composite momenta, O(n)).", kernel=True),
     Function("contact_points", "void", (_q(), _p(), _out("r", "O_1..O_NPOINT, NPOINT x 3 (m)")),
              "Contact points O_1..O_(n+1) in the reference frame.", kernel=True),
     Function("contact_velocities", "void",
              (_q(), _qd(), _p(), _out("v", "their velocities, NPOINT x 3 (m/s)")),
              "Velocities of the contact points (Eq. 42).", kernel=True),
     Function("contact_jacobian", "void", (_q(), _p(), _out("J", "NJROW x NQ, row r = d(O_i . X_a)/dq")),
-             "Rows of the contact Jacobian (Eq. 42) that the walls need.", kernel=True),
+             "Rows of the contact Jacobian (Eq. 42) that the walls need.", kernel=True, dense=True),
+    Function("contact_generalized_force", "void",
+             (_q(), Arg("f", "const double *", "force along each contact Jacobian row (NJROW; N, N m on a stop)",
+                        True), _p(), _out("Q", "J^T f (NQ; N m on an angle, N on a translation)")),
+             "Generalised force J^T f of forces along the contact Jacobian rows (O(n)).", kernel=True),
     Function("contact_gaps", "void", (_q(), _p(), _out("gap", "NCONTACT gaps (m), >= 0 inside the box")),
              "Gap of each contact (point, wall).", kernel=True),
     Function("energy", "void", (_q(), _qd(), _p(), _out("E", "E[0] kinetic, E[1] potential energy (J)")),
@@ -98,6 +111,17 @@ KERNELS = (
              (_q(), _qd(), _u(), _p(), _out("P", "P[0] power of the inputs, P[1] dissipation of the dampers (W)")),
              "Rates of the energy balance: dE/dt = P[0] - P[1] in flight.", kernel=True),
 )
+
+DENSE_KERNELS = tuple(f.name for f in KERNELS if f.dense)
+DENSE_MAX_LINKS = 12        # up to this n the dense kernels are generated unless told otherwise
+
+
+def wants_dense(n: int, dense: bool | None) -> bool:
+    """Whether a model of n links gets its dense kernels generated: ``dense`` if given, else n <= DENSE_MAX_LINKS.
+    Without them NAME_mass_matrix, NAME_bias and NAME_contact_jacobian form the matrices at run time from the
+    O(n) kernels (gac_mass_matrix, gac_bias, gac_contact_jacobian)."""
+    return n <= DENSE_MAX_LINKS if dense is None else bool(dense)
+
 
 _WORK = Arg("work", "double *", "scratch, {NAME}_IMPACT_NWORK doubles", restrict=True)
 _ACTIVE = (Arg("nactive", "int", "number of contacts"),
@@ -209,15 +233,15 @@ ALL_FUNCTIONS = KERNELS + FUNCTIONS
 # per-model size macros NAME_<suffix>: one formula each (the library's gac_* functions compute the same;
 # the wrappers refuse to run if they ever differ)
 # ---------------------------------------------------------------------------------------------------
-def impact_nwork(nq: int, njrow: int) -> int:
-    """gac_impact_nwork: M | J | Y | A | b = 3 nq^2 + njrow nq + nq."""
-    return 3 * nq * nq + njrow * nq + nq
+def impact_nwork(nq: int, njrow: int, npoint: int) -> int:
+    """gac_impact_nwork: Y | A | g | vel | f = 2 nq^2 + nq + 3 npoint + max(njrow, 1)."""
+    return 2 * nq * nq + nq + 3 * npoint + max(njrow, 1)
 
 
-def sim_ndouble(nq: int, nparam: int, nu: int, ncontact: int, njrow: int) -> int:
+def sim_ndouble(nq: int, nparam: int, nu: int, ncontact: int, njrow: int, npoint: int) -> int:
     """gac_sim_ndouble: x, p, u and the controller's u, f, 16 stages, x1, xs, 8 dense-output rows, 7 per-contact
     arrays, the impact work and an nq x nq scratch."""
-    return 28 * 2 * nq + nparam + 2 * nu + 7 * max(ncontact, 1) + impact_nwork(nq, njrow) + nq * nq
+    return 28 * 2 * nq + nparam + 2 * nu + 7 * max(ncontact, 1) + impact_nwork(nq, njrow, npoint) + nq * nq
 
 
 def sim_nint(nq: int, ncontact: int) -> int:
@@ -261,8 +285,8 @@ SIZES = (
 def size_values(n: int, nq: int, nparam: int, nu: int, npoint: int, ncontact: int, njrow: int) -> dict[str, int]:
     """The value of every NAME_<suffix> of SIZES for a model of these sizes."""
     values = {"N": n, "NQ": nq, "NX": 2 * nq, "NPARAM": nparam, "NU": nu, "NPOINT": npoint, "NCONTACT": ncontact,
-              "NJROW": njrow, "IMPACT_NWORK": impact_nwork(nq, njrow),
-              "SIM_NDOUBLE": sim_ndouble(nq, nparam, nu, ncontact, njrow), "SIM_NINT": sim_nint(nq, ncontact),
+              "NJROW": njrow, "IMPACT_NWORK": impact_nwork(nq, njrow, npoint),
+              "SIM_NDOUBLE": sim_ndouble(nq, nparam, nu, ncontact, njrow, npoint), "SIM_NINT": sim_nint(nq, ncontact),
               "RECORD_NDOUBLE": record_ndouble(nq), "RECORD_NINT": record_nint(nq)}
     assert list(values) == [s.suffix for s in SIZES]
     return values

@@ -16,6 +16,14 @@ CSE'd by :mod:`codegen.flatten`.  The kernels and their C signatures:
     contact_bias(q, qd, p, a)            J_dot qd: contact row accelerations at Theta_ddot = 0
     energy(q, qd, p, E)                  E[0] kinetic, E[1] potential (gravity and joint springs)
     power(q, qd, u, p, P)                P[0] power of the inputs, P[1] dissipation of the dampers (>= 0)
+    inertia_solve(q, Q, p, x)            x = I_f^-1 Q for generalised forces Q, by the articulated recursion
+    generalized_momentum(q, qd, p, h)    h = I_f qd = dT/dqd, by composite momenta
+    contact_generalized_force(q, f, p, Q)  Q = J^T f for forces f along the contact Jacobian's rows
+
+Every kernel but three costs O(n) for n links.  mass_matrix, bias and contact_jacobian form dense matrices
+(O(n^2) code); the hybrid loop does not use them (it applies I_f^-1, I_f and J^T through the three operators
+above), so they are generated only where they are small (interface.DENSE_MAX_LINKS) or when asked for, and otherwise
+formed at run time from the operators (gac_mass_matrix, gac_bias, gac_contact_jacobian of the C library).
 """
 from __future__ import annotations
 
@@ -23,7 +31,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from . import articulated, gibbs_appell, kinematics
+from . import articulated, gibbs_appell, interface, kinematics
 from .kinematics import ChainSymbols
 from .linalg import ldlt_solve
 from .scene import JointStop, Scene
@@ -36,7 +44,8 @@ class Kernel:
 
     name: str
     summary: str
-    inputs: tuple[str, ...]                       # subset of ("q", "qd", "u", "p"), in that order
+    inputs: tuple[str, ...]                       # the arrays it reads, in C signature order: q, then qd, u,
+                                                  # Q or f, then p
     output: str                                   # name of the output array
     output_size: int
     tape: Tape
@@ -226,6 +235,66 @@ def power_kernel(chain: ChainSymbols) -> Kernel:
     return k
 
 
+def inertia_solve_kernel(chain: ChainSymbols) -> Kernel:
+    free = chain.layout.free
+    k = _new(chain, "inertia_solve", "x = I_f^-1 Q: the accelerations that generalised forces Q alone give "
+             "(no motion, no gravity), by the O(n) articulated-body recursion.", ("q", "Q", "p"), "x", len(free))
+    Q = [sp.Integer(0)] * chain.nq
+    for j, i in enumerate(free):
+        Q[i] = sp.Symbol(f"Q[{j}]", real=True)
+    moments = kinematics.link_moments_all(k.tape, chain)
+    x = articulated.inertia_solve(k.tape, chain, moments, Q)
+    k.values = [x[i] for i in free]
+    return k
+
+
+def generalized_momentum_kernel(chain: ChainSymbols) -> Kernel:
+    k = _new(chain, "generalized_momentum", "h = I_f qd = dT/dqd: the generalised momentum, by composite "
+             "momenta at O(n) cost (I_f times any vector).", ("q", "qd", "p"), "h", len(chain.layout.free))
+    rotations = kinematics.joint_rotations(k.tape, chain)
+    moments = kinematics.link_moments_all(k.tape, chain)
+    velocities = kinematics.link_velocities(k.tape, chain, rotations, moments)
+    h = articulated.generalized_momentum(k.tape, chain, moments, velocities)
+    k.values = [h[i] for i in chain.layout.free]
+    return k
+
+
+def contact_generalized_force_kernel(chain: ChainSymbols) -> Kernel:
+    """Q = J^T f: f[r] is a force along row r of contact_jacobian (N along X_a on point O_i, or N m on a stop's
+    joint).  Joint j (origin O_max(j,1)) moves the points beyond it, so Q_j = z_j . M_j with M_j the moment
+    about its origin of the forces on those points; M is accumulated from the tip,
+    M_i = M_{i+1} + (O_{i+1} - O_i) x F_{>i}, in the reference frame; X1..X3 take the total force."""
+    rows = chain.layout.contact_rows
+    free = chain.layout.free
+    k = _new(chain, "contact_generalized_force", "Q = J^T f: the generalised force of forces f along the contact "
+             "Jacobian rows (N on a point's axis, N m on a stop's joint).", ("q", "f", "p"), "Q", len(free))
+    tape, n = k.tape, chain.n
+    rotations = kinematics.joint_rotations(tape, chain)
+    moments = kinematics.link_moments_all(tape, chain)
+    frames = kinematics.reference_frames(tape, chain, rotations)
+    point_force = {i: [sp.Integer(0)] * 3 for i in range(1, n + 2)}
+    Q = [sp.Integer(0)] * chain.nq
+    for r, (point, axis) in enumerate(rows):
+        f = sp.Symbol(f"f[{r}]", real=True)
+        if axis == "theta":                  # a stop: a torque on its joint angle
+            Q[point + 1] += f
+        else:
+            point_force[point][axis] += f
+    beyond = tuple(point_force[n + 1])       # total force on the points beyond O_i
+    moment = (sp.Integer(0),) * 3            # their moment about O_i
+    for i in range(n, 0, -1):
+        arm = scale(moments[i].length, column(frames[i], 0))          # O_{i+1} - O_i
+        moment = tape.let_vec(add(moment, cross(arm, beyond)), f"Mf_{i}")
+        Q[i + 1] += dot(column(frames[i], 2), moment)
+        beyond = tape.let_vec(add(beyond, tuple(point_force[i])), f"Ff_{i}")
+    for j in (-1, 0):                        # the imaginary joints turn about O_1 too
+        Q[j + 1] += dot(column(frames[j], 2), moment)
+    for a in range(3):
+        Q[n + 2 + a] += beyond[a]
+    k.values = [Q[i] for i in free]
+    return k
+
+
 def _points(tape: Tape, chain: ChainSymbols):
     rotations = kinematics.joint_rotations(tape, chain)
     moments = kinematics.link_moments_all(tape, chain)
@@ -233,16 +302,22 @@ def _points(tape: Tape, chain: ChainSymbols):
     return kinematics.point_positions(tape, chain, frames, moments)
 
 
-KERNEL_BUILDERS = (mass_matrix_kernel, bias_kernel, forward_dynamics_kernel, contact_points_kernel,
-                   contact_velocities_kernel, contact_jacobian_kernel, contact_gaps_kernel, energy_kernel,
+KERNEL_BUILDERS = (mass_matrix_kernel, bias_kernel, forward_dynamics_kernel, inertia_solve_kernel,
+                   generalized_momentum_kernel, contact_points_kernel, contact_velocities_kernel,
+                   contact_jacobian_kernel, contact_generalized_force_kernel, contact_gaps_kernel, energy_kernel,
                    contact_bias_kernel, power_kernel)
+def builders(dense: bool):
+    """The kernel builders of a model, in the order of codegen.interface.KERNELS."""
+    return [b for b in KERNEL_BUILDERS if dense or b.__name__.removesuffix("_kernel") not in interface.DENSE_KERNELS]
 
 
-def build_kernels(scene: Scene, bake_params: bool = False, progress=None, layout=None) -> list[Kernel]:
-    """Derive every kernel of the scene (symbolic, per-intermediate symbols; no CSE yet)."""
+def build_kernels(scene: Scene, bake_params: bool = False, progress=None, layout=None,
+                  dense: bool | None = None) -> list[Kernel]:
+    """Derive every kernel of the scene (symbolic, per-intermediate symbols; no CSE yet); the dense ones
+    (codegen.interface.DENSE_KERNELS) only if ``interface.wants_dense(n, dense)``."""
     chain = ChainSymbols(scene, bake_params, layout)
     kernels = []
-    for builder in KERNEL_BUILDERS:
+    for builder in builders(interface.wants_dense(scene.n, dense)):
         if progress:
             progress(builder.__name__.removesuffix("_kernel"))
         kernels.append(builder(chain))

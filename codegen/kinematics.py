@@ -221,6 +221,23 @@ def velocity_products(tape: Tape, chain: ChainSymbols, rotations: dict[int, Mat]
     return Motion(omega, omega_dot_v, acc_v)
 
 
+def link_velocities(tape: Tape, chain: ChainSymbols, rotations: dict[int, Mat],
+                    moments: dict[int, LinkSymbols]) -> tuple[dict[int, Vec], dict[int, Vec]]:
+    """omega_k and the velocity of O_k, both in frame k, for k = -1..n (Eq. 15-17 as a recursion):
+        omega_k = ^kR_{k-1} omega_{k-1} + theta_dot_k z,   v_k = ^kR_{k-1} (v_{k-1} + omega_{k-1} x r_{k-1}),
+    from the reference frame's omega = 0 and v = (X1_dot, X2_dot, X3_dot)."""
+    omega, vel = {}, {}
+    w_prev, v_prev, r_prev = (ZERO, ZERO, ZERO), chain.base_velocity(), (ZERO, ZERO, ZERO)
+    for k in range(-1, chain.n + 1):
+        R = rotations[k]
+        tag = index_name(k)
+        v = tape.let_vec(mat_t_vec(R, add(v_prev, cross(w_prev, r_prev))), f"vl_{tag}")
+        w = tape.let_vec(add(mat_t_vec(R, w_prev), scale(chain.theta_dot(k), E_Z)), f"wl_{tag}")
+        omega[k], vel[k] = w, v
+        w_prev, v_prev, r_prev = w, v, link_offset(chain, moments, k)
+    return omega, vel
+
+
 def reference_frames(tape: Tape, chain: ChainSymbols, rotations: dict[int, Mat]) -> dict[int, Mat]:
     """^{ref}R_k for k = -1..n, by accumulating the joint rotations."""
     frames = {}

@@ -166,9 +166,14 @@ def forward_dynamics_kernel(chain: ChainSymbols, expansion: Expansion) -> kernel
 DYNAMICS = {"mass_matrix": mass_matrix_kernel, "bias": bias_kernel, "forward_dynamics": forward_dynamics_kernel}
 
 
-def build_kernels(scene: Scene, bake_params: bool = False, progress=None, layout=None) -> list[kernels.Kernel]:
+def build_kernels(scene: Scene, bake_params: bool = False, progress=None, layout=None,
+                  dense: bool | None = True) -> list[kernels.Kernel]:
     """Every kernel of the scene, with the dynamics (mass_matrix, bias, forward_dynamics) from the
-    Lagrangian expansion and the others (contacts, energy) from codegen.kernels, in the model's order."""
+    Lagrangian expansion and the others (contacts, energy, the operators) from codegen.kernels, in the
+    model's order.  The dense kernels are always generated (they are what this expansion is compared by);
+    ``dense`` False is refused."""
+    if dense is False:
+        raise ValueError("dense: the Lagrangian formulation always generates the dense kernels")
     chain = ChainSymbols(scene, bake_params, layout)
     if progress:
         progress("lagrange expansion")

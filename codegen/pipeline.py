@@ -24,7 +24,7 @@ def _quiet(message: str) -> None:
 
 def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
              progress=_quiet, specialise: bool = True, formulation: str = "gibbs_appell",
-             raw_ops: bool = False) -> GeneratedModel:
+             raw_ops: bool = False, dense: bool | None = None) -> GeneratedModel:
     """Generate the C model of ``scene``.  ``progress(message)`` is called as stages advance.
 
     ``specialise`` (default) leaves out what the scene does not need (see codegen.specialise);
@@ -35,6 +35,10 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
     "gibbs_appell" (the paper's recursion, codegen.kernels) or "lagrange" (an explicit Euler-Lagrange
     expansion, codegen.lagrange, for comparison); the other kernels are the same.  ``raw_ops`` also
     records sympy's ``count_ops`` of each dynamics kernel before CSE in ``.raw_ops`` (name -> int).
+
+    ``dense``: generate the dense kernels mass_matrix, bias, contact_jacobian (O(n^2) code; the hybrid loop
+    does not need them); None (default) does for n <= codegen.kernels.DENSE_MAX_LINKS, and otherwise the
+    model forms them at run time from its O(n) kernels.
     """
     if formulation not in FORMULATIONS:
         raise ValueError(f"formulation: must be one of {', '.join(FORMULATIONS)}, got {formulation!r}")
@@ -43,8 +47,10 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
     check_not_singular(scene, layout)
     timings = {}
     start = time.perf_counter()
+    if formulation == "lagrange" and dense is None:
+        dense = True
     derived = FORMULATIONS[formulation](scene, bake_params, progress=lambda k: progress(f"derive {k}"),
-                                        layout=layout)
+                                        layout=layout, dense=dense)
     timings["derive"] = time.perf_counter() - start
     raw = {}
     if raw_ops:

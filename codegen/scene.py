@@ -33,12 +33,12 @@ DEFAULT_GRAVITY = 9.81
 PAPER_J = (5.89e-5, 2.94e-5, 2.94e-5)
 GIMBAL_MARGIN = 1e-6  # |cos(theta_0)| below this is the gimbal lock of the base chart
 
-# Longest chain a scene may have.  Generation and compilation grow faster than n (a 64-link model takes
-# about a minute to derive and compile on a 2-core machine), so a longer chain is refused up front
+# Longest chain a scene may have.  Every generated kernel is O(n) code, but sympy's CSE and the C compiler
+# still grow faster than n (docs/performance.md, "Long chains"), so a longer chain is refused up front
 # instead of leaving the user waiting on a build that does not end.
-MAX_LINKS = 64
+MAX_LINKS = 256
 MAX_LINKS_REASON = (f"at most {MAX_LINKS} links: generating and compiling the model grows faster than n "
-                    "(n = 64 takes about a minute)")
+                    "(docs/performance.md, 'Long chains')")
 
 # Ranges of the physical numbers: wide enough for ratios of 1e6 and more within one chain, narrow enough
 # that the products the kernels form (masses times squared lengths and rates) stay normal doubles.

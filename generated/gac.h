@@ -44,8 +44,8 @@
 /* ---- return codes ------------------------------------------------------------------------------ */
 #define GAC_OK                     0
 #define GAC_ERR_BAD_CONTACT       -1   /* active contact list empty, too long, repeated or out of range */
-#define GAC_ERR_SINGULAR_MASS     -2   /* I_f singular to double precision (pivot < 1e-15 of its largest
-                                          diagonal: mass, length and inertia ratios beyond 15 digits) */
+#define GAC_ERR_SINGULAR_MASS     -2   /* I_f singular to double precision: its solve (inertia_solve) is not
+                                          finite (mass, length and inertia ratios beyond 15 digits) */
 #define GAC_ERR_SINGULAR_IMPACT   -3   /* active contact rows linearly dependent */
 #define GAC_ERR_LCP               -4   /* complementarity impact has no solution / too many contacts */
 #define GAC_ERR_GIMBAL_LOCK       -5   /* theta_0 too close to the gimbal lock of the base chart: the base
@@ -104,6 +104,8 @@ typedef void (*gac_kernel_q)(const double *q, const double *p, double *out);
 typedef void (*gac_kernel_qqd)(const double *q, const double *qd, const double *p, double *out);
 typedef void (*gac_kernel_qqdu)(const double *q, const double *qd, const double *u, const double *p, double *out);
 typedef void (*gac_kernel_rhs)(double t, const double *x, const double *u, const double *p, double *xdot);
+/* q, a vector v (its size and meaning per kernel), p -> out: the linear operators of the model */
+typedef void (*gac_kernel_qv)(const double *q, const double *v, const double *p, double *out);
 
 /* A controller: writes the inputs u (nu) for time t (s) and state (q, qd).  On entry u holds the inputs
  * last given to gac_sim_set_input.  Called at every stage of the integrators and wherever the loop needs
@@ -152,14 +154,17 @@ typedef struct {
     gac_chart chart;
     const double *default_parameters;  /* [nparam] */
     const double *q0, *qd0;            /* [nq] each: the scene's initial state */
-    /* kernels */
-    gac_kernel_q   mass_matrix;        /* q, p -> I_f (nq x nq, row-major, symmetric positive definite) */
-    gac_kernel_qqdu bias;              /* q, qd, u, p -> R (nq): I_f qdd = R in flight (Eq. 12), the generalised
-                                          forces of inputs, joint springs and dampers included */
-    gac_kernel_qqdu forward_dynamics;  /* q, qd, u, p -> qdd (nq) solving I_f qdd = R */
+    /* kernels: every one costs O(n) for a chain of n links; the library never forms I_f or the contact
+       Jacobian J (njrow x nq), it applies them (gac_mass_matrix and friends below form them when asked) */
+    gac_kernel_qqdu forward_dynamics;  /* q, qd, u, p -> qdd (nq) solving I_f qdd = R in flight (Eq. 12), R with
+                                          the generalised forces of inputs, joint springs and dampers */
+    gac_kernel_qv  inertia_solve;      /* q, Q (nq), p -> I_f^-1 Q (nq): the response to generalised forces Q */
+    gac_kernel_qqd generalized_momentum; /* q, qd, p -> I_f qd (nq) = dT/dqd */
     gac_kernel_q   contact_points;     /* q, p -> O_1..O_npoint (npoint x 3, m) */
-    gac_kernel_qqd contact_velocities; /* q, qd, p -> their velocities (npoint x 3, m/s) (Eq. 42) */
-    gac_kernel_q   contact_jacobian;   /* q, p -> rows d(O_i . X_a)/dq (njrow x nq) (Eq. 42) */
+    gac_kernel_qqd contact_velocities; /* q, qd, p -> their velocities (npoint x 3, m/s) (Eq. 42); linear in qd:
+                                          J w is read off contact_velocities(q, w) */
+    gac_kernel_qv  contact_generalized_force; /* q, f (njrow), p -> J^T f (nq): the generalised force of a force
+                                          f[r] along each Jacobian row r (N on a point's axis, N m on a stop) */
     gac_kernel_q   contact_gaps;       /* q, p -> gap of each contact (ncontact, m; >= 0 inside) */
     gac_kernel_qqd contact_bias;       /* q, qd, p -> Jdot qd (njrow, m/s^2): the rows' accelerations at qdd = 0 */
     gac_kernel_qqd energy;             /* q, qd, p -> E[0] kinetic, E[1] potential energy (J), joint springs
@@ -173,10 +178,20 @@ typedef struct {
  * contact entries in range), else GAC_ERR_BAD_MODEL (m NULL: GAC_ERR_NULL_ARGUMENT). */
 int gac_model_check(const gac_model *m);
 
+/* ---- the dense matrices, formed from the kernels' O(n) operators (O(n^2) each; for analysis) -------- */
+
+/* I_f (nq x nq, row-major, symmetric): column j = generalized_momentum(q, e_j), symmetrised. */
+void gac_mass_matrix(const gac_model *m, const double *q, const double *p, double *M);
+/* R (nq) of I_f qdd = R in flight: generalized_momentum(q, forward_dynamics(q, qd, u)). */
+void gac_bias(const gac_model *m, const double *q, const double *qd, const double *u, const double *p, double *R);
+/* J (njrow x nq, row-major): row r = contact_generalized_force(q, e_r). */
+void gac_contact_jacobian(const gac_model *m, const double *q, const double *p, double *J);
+
 /* ---- workspace sizes (one formula each; the generated NAME.h has them as macros) ---------------- */
 
 /* Doubles of the work array of gac_impact, gac_impact_complementarity and gac_constrained_dynamics:
- * 3 nq^2 + njrow nq + nq, laid out as M (nq*nq, the factor of I_f) | J (njrow*nq) | Y (nq*nq) | A (nq*nq) | nq. */
+ * 2 nq^2 + nq + 3 npoint + max(njrow, 1), laid out as Y (nq*nq: row a = I_f^-1 n_a of active contact a) |
+ * A (nq*nq: N I_f^-1 N^T, nactive x nactive) | g (nq) | vel (3 npoint) | f (max(njrow, 1)). */
 long gac_impact_nwork(const gac_model *m);
 /* Doubles and ints of one simulation (gac_sim_init): dwork = x (nx) | p (nparam) | u (nu) | private;
  * iwork = active (nq) | private.

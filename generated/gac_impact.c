@@ -33,18 +33,36 @@ double gac_chart_measure(const gac_model *m, const double *q)
     return fabs(-a[0] * (s * b[0] + c * b[1]) + a[1] * (c * b[0] - s * b[1]));
 }
 
+/* Contact c's Jacobian row applied to velocities w, unsigned: the rate of its point along its wall's axis,
+ * read from vel = contact_velocities(q, w) (npoint x 3), or, for a stop, the rate of its joint angle. */
+double gac_row_value(const gac_model *m, int c, const double *w, const double *vel)
+{
+    const gac_contact *k = &m->contacts[c];
+    return k->kind == GAC_CONTACT_STOP ? w[k->coordinate] : vel[3 * (k->point - 1) + k->axis];
+}
+
+/* n_c = J^T (sign e_row): the generalised force of a unit force along contact c's inward normal (its signed
+ * Jacobian row), into g (nq); f (njrow) is scratch. */
+static void gac_contact_direction(const gac_model *m, const double *q, const double *p, int c, double *f,
+                                  double *g)
+{
+    int r;
+    for (r = 0; r < m->njrow; ++r) f[r] = 0.0;
+    f[m->contacts[c].row] = (double)m->contacts[c].normal_sign;
+    m->contact_generalized_force(q, f, p, g);
+}
+
 /* Assemble the impact problem of the active contacts (Eq. 44-48 with the velocities eliminated):
- *   Y_a = I_f^-1 n_a (n_a = signed Jacobian row of contact a),  A = N I_f^-1 N^T,  v_a = n_a . qd.
- * work layout: M (nq*nq, factor of I_f) | J (njrow*nq) | Y (nq*nq) | A (nq*nq) | b (nq).
+ *   Y_a = I_f^-1 n_a (n_a = signed Jacobian row of contact a),  A = N I_f^-1 N^T,  v_a = n_a . qd,
+ * with O(n) operators of the model: n_a = J^T (sign e_row) (contact_generalized_force), Y_a by inertia_solve
+ * (the articulated-body recursion); neither I_f nor J is formed, so the cost is O(nactive n + nactive^2 nq).
+ * work layout: GAC_WORK_Y, GAC_WORK_A, ... (gac_internal.h).
  * v[a] (m/s) and e[a] receive the normal velocity and the restitution of contact active[a]. */
 int gac_impact_system(const gac_model *m, const double *q, const double *qd, const double *p, int nactive,
                       const int *active, double *work, double *v, double *e)
 {
     const int nq = m->nq;
-    double *M = work;
-    double *J = M + nq * nq;
-    double *Y = J + m->njrow * nq;
-    double *A = Y + nq * nq;
+    double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work), *g = GAC_WORK_G(m, work), *f = GAC_WORK_F(m, work);
     int a, c, i;
     if (m->ncontact == 0) return GAC_ERR_BAD_CONTACT;   /* the scene has no walls */
     if (nactive < 1 || nactive > nq) return GAC_ERR_BAD_CONTACT;
@@ -55,34 +73,22 @@ int gac_impact_system(const gac_model *m, const double *q, const double *qd, con
         }
     }
     if (gac_chart_measure(m, q) < GAC_CHART_FLOOR) return GAC_ERR_GIMBAL_LOCK;
-    m->mass_matrix(q, p, M);
-    if (gac_ldlt(nq, M, 1e-15) != 0) return GAC_ERR_SINGULAR_MASS;
-    m->contact_jacobian(q, p, J);
     for (a = 0; a < nactive; ++a) {
-        int r;
-        double sign, rate = 0.0;
-        const double *row;
-        gac_contact_row(m, active[a], &r, &sign);
-        row = J + r * nq;
+        double rate = 0.0;
+        double *Ya = Y + (long)a * nq;
+        gac_contact_direction(m, q, p, active[a], f, g);
+        m->inertia_solve(q, g, p, Ya);
         for (i = 0; i < nq; ++i) {
-            Y[a*nq + i] = sign * row[i];
-            rate += sign * row[i] * qd[i];
+            if (!isfinite(Ya[i])) return GAC_ERR_SINGULAR_MASS;
+            rate += g[i] * qd[i];
         }
-        gac_ldlt_solve(nq, M, Y + a*nq);
+        for (c = 0; c <= a; ++c) {             /* A is symmetric: n_a . Y_c = n_a I_f^-1 n_c */
+            double s = 0.0;
+            for (i = 0; i < nq; ++i) s += g[i] * Y[(long)c * nq + i];
+            A[a*nactive + c] = A[c*nactive + a] = s;
+        }
         v[a] = rate;
         e[a] = gac_restitution(m, p, active[a]);
-    }
-    for (a = 0; a < nactive; ++a) {
-        int r;
-        double sign;
-        const double *row;
-        gac_contact_row(m, active[a], &r, &sign);
-        row = J + r * nq;
-        for (c = 0; c < nactive; ++c) {
-            double s = 0.0;
-            for (i = 0; i < nq; ++i) s += row[i] * Y[c*nq + i];
-            A[a*nactive + c] = sign * s;
-        }
     }
     return GAC_OK;
 }
@@ -105,8 +111,7 @@ int gac_impact(const gac_model *m, const double *GAC_RESTRICT q, const double *G
 {
     const int nq = m->nq;
     double v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)];
-    double *Y = work + nq * nq + m->njrow * nq;
-    double *A = Y + nq * nq;
+    double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work);
     int a;
     int code = gac_impact_system(m, q, qd, p, nactive, active, work, v, e);
     if (code != GAC_OK) return code;
@@ -193,8 +198,7 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
 {
     const int nq = m->nq, max_lcp = GAC_MAX_LCP(m);
     double v[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)], scale = 0.0, v_tol;
-    double *Y = work + nq * nq + m->njrow * nq;
-    double *A = Y + nq * nq;
+    double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work);
     int a, b, i, round, code;
     *rounds = *plastic = 0;
     code = gac_impact_system(m, q, qd, p, n, list, work, v, e_wall);
@@ -259,22 +263,19 @@ int gac_constrained_dynamics(const gac_model *m, const double *q, const double *
 {
     const int nq = m->nq;
     double v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)], bias[GAC_AT_LEAST_1(m->njrow)];
-    double *J = work + nq * nq;
-    double *Y = J + m->njrow * nq;
-    double *A = Y + nq * nq;
+    double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work), *vel = GAC_WORK_VEL(m, work);
     int a, i, code;
     m->forward_dynamics(q, qd, u, p, qdd);
     if (nactive == 0) return GAC_OK;
     code = gac_impact_system(m, q, qd, p, nactive, active, work, v, e);
     if (code != GAC_OK) return code;
     m->contact_bias(q, qd, p, bias);
+    m->contact_velocities(q, qdd, p, vel);       /* J qdd_free, read row by row */
     for (a = 0; a < nactive; ++a) {              /* lambda = -(N qdd_free + Ndot qd) */
         int row;
-        double sign, acc;
+        double sign;
         gac_contact_row(m, active[a], &row, &sign);
-        acc = bias[row];
-        for (i = 0; i < nq; ++i) acc += J[row*nq + i] * qdd[i];
-        lambda[a] = -sign * acc;
+        lambda[a] = -sign * (bias[row] + gac_row_value(m, active[a], qdd, vel));
     }
     if (gac_ldlt_drop(nactive, A, 1e-12) < 0) return GAC_ERR_SINGULAR_CONTACT;
     gac_ldlt_solve(nactive, A, lambda);

@@ -14,6 +14,14 @@
 /* max(n, 1): the length of an array with one entry per contact or per Jacobian row, never 0. */
 #define GAC_AT_LEAST_1(n) ((n) > 0 ? (n) : 1)
 
+/* The impact work array (gac_impact_nwork doubles): Y (nq*nq; row a = I_f^-1 n_a of active contact a) |
+ * A (nq*nq; N I_f^-1 N^T, nactive x nactive, row-major) | g (nq) | vel (3 npoint) | f (max(njrow, 1)). */
+#define GAC_WORK_Y(m, w)   (w)
+#define GAC_WORK_A(m, w)   ((w) + (long)(m)->nq * (m)->nq)
+#define GAC_WORK_G(m, w)   ((w) + 2L * (m)->nq * (m)->nq)
+#define GAC_WORK_VEL(m, w) (GAC_WORK_G(m, w) + (m)->nq)
+#define GAC_WORK_F(m, w)   (GAC_WORK_VEL(m, w) + 3L * (m)->npoint)
+
 /* gac_linalg.c */
 int gac_ldlt(int n, double *A, double tol);
 void gac_ldlt_solve(int n, const double *LD, double *b);
@@ -21,6 +29,7 @@ int gac_ldlt_drop(int n, double *A, double tol);
 
 /* gac_impact.c */
 void gac_contact_row(const gac_model *m, int c, int *row, double *sign);
+double gac_row_value(const gac_model *m, int c, const double *w, const double *vel);
 double gac_restitution(const gac_model *m, const double *p, int c);
 int gac_impact_system(const gac_model *m, const double *q, const double *qd, const double *p, int nactive,
                       const int *active, double *work, double *v, double *e);

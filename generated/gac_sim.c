@@ -889,19 +889,17 @@ static int gac_normal_accelerations(gac_sim *s, double t, const double *x, int n
     const gac_model *md = s->model;
     const int nq = md->nq;
     double qdd[nq], lambda[nq], bias[GAC_AT_LEAST_1(md->njrow)];
-    double *J = s->work + nq * nq;
+    double *vel = GAC_WORK_VEL(md, s->work);
     const double *u = gac_input(s, t, x);
-    int c, i, code = gac_constrained_dynamics(md, x, x + nq, u, s->p, n, set, qdd, lambda, s->work);
+    int c, code = gac_constrained_dynamics(md, x, x + nq, u, s->p, n, set, qdd, lambda, s->work);
     if (code != GAC_OK) return code;
-    md->contact_jacobian(x, s->p, J);
     md->contact_bias(x, x + nq, s->p, bias);
+    md->contact_velocities(x, qdd, s->p, vel);           /* J qdd, read row by row */
     for (c = 0; c < md->ncontact; ++c) {
         int row;
-        double sign, acc;
+        double sign;
         gac_contact_row(md, c, &row, &sign);
-        acc = bias[row];
-        for (i = 0; i < nq; ++i) acc += J[row*nq + i] * qdd[i];
-        an[c] = sign * acc;
+        an[c] = sign * (bias[row] + gac_row_value(md, c, qdd, vel));
     }
     return GAC_OK;
 }
@@ -912,7 +910,7 @@ static int gac_add_independent(gac_sim *s, const double *x, int *n, int *set, in
 {
     const gac_model *md = s->model;
     double v[md->nq], e[md->nq];
-    double *A = s->work + md->nq * md->nq + md->njrow * md->nq + md->nq * md->nq;
+    double *A = GAC_WORK_A(md, s->work);
     int code;
     if (*n == md->nq) return GAC_OK;
     set[*n] = c;
@@ -935,8 +933,7 @@ static int gac_project(gac_sim *s, double *x, int n, const int *set, int positio
     const double floor = 1e-6 * s->opt.contact_tol + 1e-15;
     double v[nq], e[nq], g[nc1], g0[nc1];
     double corr[nq], target[nq];
-    double *Y = s->work + nq * nq + md->njrow * nq;
-    double *A = Y + nq * nq;
+    double *Y = GAC_WORK_Y(md, s->work), *A = GAC_WORK_A(md, s->work);
     int held[nq], in_set[nc1], a, c, i, it, code, m = n;
     if (n == 0) return GAC_OK;
     g[0] = g0[0] = 0.0;
@@ -996,8 +993,7 @@ static int gac_settle(gac_sim *s, double t, const double *x, int *n, int *set)
     const int nq = md->nq, m = *n;
     double v[nq], e[nq], c[nq], qdd[nq], bias[GAC_AT_LEAST_1(md->njrow)];
     double Asub[GAC_LCP_CAP * GAC_LCP_CAP], rhs[nq], scale = 0.0;   /* m <= GAC_LCP_CAP (below) */
-    double *J = s->work + nq * nq;
-    double *A = J + md->njrow * nq + nq * nq;
+    double *A = GAC_WORK_A(md, s->work), *vel = GAC_WORK_VEL(md, s->work);
     int a, b, code;
     unsigned long mask, full;
     if (m == 0) return GAC_OK;
@@ -1006,13 +1002,12 @@ static int gac_settle(gac_sim *s, double t, const double *x, int *n, int *set)
     code = gac_impact_system(md, x, x + nq, s->p, m, set, s->work, v, e);
     if (code != GAC_OK) return code;
     md->contact_bias(x, x + nq, s->p, bias);
+    md->contact_velocities(x, qdd, s->p, vel);           /* J qdd_free, read row by row */
     for (a = 0; a < m; ++a) {
-        int row, i;
-        double sign, acc;
+        int row;
+        double sign;
         gac_contact_row(md, set[a], &row, &sign);
-        acc = bias[row];
-        for (i = 0; i < nq; ++i) acc += J[row*nq + i] * qdd[i];
-        c[a] = sign * acc;
+        c[a] = sign * (bias[row] + gac_row_value(md, set[a], qdd, vel));
         if (fabs(c[a]) > scale) scale = fabs(c[a]);
     }
     full = (1UL << m) - 1UL;
@@ -1058,8 +1053,7 @@ static int gac_hold(gac_sim *s, double *x, int nset, const int *set, int n, cons
     const int nq = md->nq;
     double v[nq], e[nq], rhs[nq], F[nq];
     double *Asub = s->sub;                         /* up to nq x nq */
-    double *Y = s->work + nq * nq + md->njrow * nq;
-    double *A = Y + nq * nq;
+    double *Y = GAC_WORK_Y(md, s->work), *A = GAC_WORK_A(md, s->work);
     double scale = 0.0;
     int all[nq], m = nset, a, b, i, k, code, uni;
     unsigned long mask;
@@ -1169,20 +1163,21 @@ static int gac_rest_at_start(gac_sim *s)
 }
 
 /* The round-off bound of the impact law on the kinetic energy, relative to T (the velocities qd -> qd_plus
- * at T = T(qd); work holds I_f's LDL^T as left by gac_impact_system).  The law's solves are backward stable:
- * they are exact for I_f + dI_f with |dI_f| <= 4 (nq + 1) eps |I_f|, and the energy they leave differs from
- * the law's by dI_f's work on the velocities, |qd^T dI_f dqd| + |dqd^T dI_f dqd| / 2 (dqd = qd_plus - qd).
- * So b = max(1e-10, 4 (nq + 1) eps |I_f| (|qd| |dqd| + |dqd|^2 / 2) / T), |I_f| (2-norm) by 16 power
- * iterations on the factor, with |dqd| taken as sum_a |F_a| |I_f^-1 n_a| when the contacts' changes
- * cancel (nearly dependent contacts pushing against each other).  b grows where a large velocity change
- * meets a soft direction of I_f (a slender link with a tiny axial inertia, a state near the gimbal lock). */
-static double gac_impact_roundoff(const gac_model *md, const double *work, int n, const double *F,
-                                  const double *qd, const double *qd_plus, double T)
+ * at T = T(qd); work holds the rows Y_a = I_f^-1 n_a as left by gac_impact_system).  The law's solves are
+ * backward stable: they are exact for I_f + dI_f with |dI_f| <= 4 (nq + 1) eps |I_f|, and the energy they
+ * leave differs from the law's by dI_f's work on the velocities, |qd^T dI_f dqd| + |dqd^T dI_f dqd| / 2
+ * (dqd = qd_plus - qd).  So b = max(1e-10, 4 (nq + 1) eps |I_f| (|qd| |dqd| + |dqd|^2 / 2) / T), |I_f|
+ * (2-norm) by 16 power iterations with the model's I_f v (generalized_momentum, O(n) each), with |dqd| taken
+ * as sum_a |F_a| |I_f^-1 n_a| when the contacts' changes cancel (nearly dependent contacts pushing against
+ * each other).  b grows where a large velocity change meets a soft direction of I_f (a slender link with a
+ * tiny axial inertia, a state near the gimbal lock). */
+static double gac_impact_roundoff(const gac_model *md, const double *q, const double *p, const double *work, int n,
+                                  const double *F, const double *qd, const double *qd_plus, double T)
 {
     const int nq = md->nq;
-    const double *Y = work + nq * nq + md->njrow * nq;
+    const double *Y = GAC_WORK_Y(md, work);
     double x[nq], y[nq], norm_M = 0.0, size = 0.0, change = 0.0, parts = 0.0, b;
-    int a, i, k, it;
+    int a, i, it;
     for (i = 0; i < nq; ++i) {
         x[i] = 1.0 + 0.1 * i * (i % 2 ? -1.0 : 1.0);      /* a fixed, generic start */
         size += qd[i] * qd[i];
@@ -1193,24 +1188,15 @@ static double gac_impact_roundoff(const gac_model *md, const double *work, int n
         for (i = 0; i < nq; ++i) column += Y[a*nq + i] * Y[a*nq + i];
         parts += fabs(F[a]) * sqrt(column);
     }
-    for (it = 0; it < 16; ++it) {                        /* |I_f| = |L D L^T| by power iteration */
+    for (it = 0; it < 16; ++it) {                        /* |I_f| by power iteration */
         double sum = 0.0;
         for (i = 0; i < nq; ++i) sum += x[i] * x[i];
         sum = sqrt(sum);
         if (!(sum > 0.0)) break;
         for (i = 0; i < nq; ++i) y[i] = x[i] / sum;
-        for (i = 0; i < nq; ++i) {                       /* y = L^T y, D y, L y in place */
-            for (k = i + 1; k < nq; ++k) y[i] += work[k*nq + i] * y[k];
-        }
-        for (i = 0; i < nq; ++i) y[i] *= work[i*nq + i];
-        for (i = nq - 1; i >= 0; --i) {
-            for (k = 0; k < i; ++k) y[i] += work[i*nq + k] * y[k];
-        }
+        md->generalized_momentum(q, y, p, x);            /* x = I_f y */
         norm_M = 0.0;
-        for (i = 0; i < nq; ++i) {
-            norm_M += y[i] * y[i];
-            x[i] = y[i];
-        }
+        for (i = 0; i < nq; ++i) norm_M += x[i] * x[i];
         norm_M = sqrt(norm_M);
     }
     size = sqrt(size);
@@ -1361,7 +1347,7 @@ static int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     code = gac_impact_rounds(md, x, x + nq, s->p, n, list, e_law, first, qd_plus, F, s->work, &rounds,
                                    &plastic);
     if (code != GAC_OK) return code;
-    bound = r->roundoff = gac_impact_roundoff(md, s->work, n, F, x + nq, qd_plus, T_before);
+    bound = r->roundoff = gac_impact_roundoff(md, x, s->p, s->work, n, F, x + nq, qd_plus, T_before);
     md->energy(x, qd_plus, s->p, E);
     T_law = E[0];
     for (k = 0; k < n; ++k) changed |= e[k] != e_law[k];

@@ -387,6 +387,236 @@ void paper_case1_forward_dynamics(const double *GAC_RESTRICT q, const double *GA
     qdd[5] = sol_1;
 }
 
+/* x = I_f^-1 Q: the accelerations that generalised forces Q alone give (no motion, no gravity), by the O(n) articulated-body recursion.  274 ops (95 add, 165 mul, 6 div, 8 calls) */
+void paper_case1_inertia_solve(const double *GAC_RESTRICT q, const double *GAC_RESTRICT Q, const double *GAC_RESTRICT p, double *GAC_RESTRICT x)
+{
+    (void)q;
+    (void)Q;
+    (void)p;
+    const double B0_1 = p[1]*p[2];
+    const double x0 = p[1]*p[1];
+    const double h_1_x = 0.5*p[2]*x0;
+    const double B2_1 = 0.3333333333333333*p[2]*(p[1]*p[1]*p[1]);
+    const double K_1_zz = B2_1 + p[1]*p[5];
+    const double B0_2 = p[6]*p[7];
+    const double x1 = p[6]*p[6];
+    const double h_2_x = 0.5*p[7]*x1;
+    const double B2_2 = 0.3333333333333333*p[7]*(p[6]*p[6]*p[6]);
+    const double K_2_zz = B2_2 + p[10]*p[6];
+    const double B0_3 = p[11]*p[12];
+    const double x2 = p[11]*p[11];
+    const double h_3_x = 0.5*p[12]*x2;
+    const double B2_3 = 0.3333333333333333*p[12]*(p[11]*p[11]*p[11]);
+    const double K_3_zz = B2_3 + p[11]*p[15];
+    const double B0_4 = p[16]*p[17];
+    const double h_4_x = 0.5*p[17]*(p[16]*p[16]);
+    const double B2_4 = 0.3333333333333333*p[17]*(p[16]*p[16]*p[16]);
+    const double K_4_zz = B2_4 + p[16]*p[20];
+    const double c_1 = cos(q[0]);
+    const double s_1 = sin(q[0]);
+    const double c_2 = cos(q[1]);
+    const double s_2 = sin(q[1]);
+    const double c_3 = cos(q[2]);
+    const double s_3 = sin(q[2]);
+    const double c_4 = cos(q[3]);
+    const double s_4 = sin(q[3]);
+    const double Dinv_4 = 1.0/(K_4_zz);
+    const double W_4_4 = Dinv_4*h_4_x;
+    const double ud_4 = Dinv_4*Q[3];
+    const double IaC_4_11 = B0_4 - W_4_4*h_4_x;
+    const double paF_4_y = Q[3]*W_4_4;
+    const double x3 = c_4*c_4;
+    const double x4 = s_4*s_4;
+    const double IzC_4_00 = B0_4*x3 + IaC_4_11*x4;
+    const double x5 = c_4*s_4;
+    const double IzC_4_01 = B0_4*x5 - IaC_4_11*x5;
+    const double IzC_4_11 = B0_4*x4 + IaC_4_11*x3;
+    const double IsB_4_20 = IzC_4_01*p[11];
+    const double IsB_4_21 = IzC_4_11*p[11];
+    const double IsA_4_22 = IzC_4_11*x2;
+    const double pF_4_x = -paF_4_y*s_4;
+    const double pF_4_y = c_4*paF_4_y;
+    const double pN_4_z = Q[3] + pF_4_y*p[11];
+    const double x28 = IsA_4_22 + K_3_zz;
+    const double Dinv_3 = 1.0/(x28);
+    const double W_3_3 = Dinv_3*IsB_4_20;
+    const double x6 = IsB_4_21 + h_3_x;
+    const double W_3_4 = Dinv_3*x6;
+    const double x7 = Q[2] - pN_4_z;
+    const double ud_3 = Dinv_3*x7;
+    const double IaC_3_00 = B0_3 + IzC_4_00 - IsB_4_20*W_3_3;
+    const double IaC_3_01 = IzC_4_01 - W_3_3*x6;
+    const double IaC_3_11 = B0_3 + IzC_4_11 - W_3_4*x6;
+    const double paF_3_x = pF_4_x + W_3_3*x7;
+    const double paF_3_y = pF_4_y + W_3_4*x7;
+    const double x10 = IaC_3_01*c_3;
+    const double x11 = x10 - IaC_3_11*s_3;
+    const double x8 = IaC_3_01*s_3;
+    const double x9 = -x8 + IaC_3_00*c_3;
+    const double IzC_3_00 = c_3*x9 - s_3*x11;
+    const double IzC_3_01 = c_3*x11 + s_3*x9;
+    const double IzC_3_11 = c_3*(x8 + IaC_3_11*c_3) + s_3*(x10 + IaC_3_00*s_3);
+    const double IsB_3_20 = IzC_3_01*p[6];
+    const double IsB_3_21 = IzC_3_11*p[6];
+    const double IsA_3_22 = IzC_3_11*x1;
+    const double pF_3_x = c_3*paF_3_x - paF_3_y*s_3;
+    const double pF_3_y = c_3*paF_3_y + paF_3_x*s_3;
+    const double pN_3_z = Q[2] + pF_3_y*p[6];
+    const double x29 = IsA_3_22 + K_2_zz;
+    const double Dinv_2 = 1.0/(x29);
+    const double W_2_3 = Dinv_2*IsB_3_20;
+    const double x12 = IsB_3_21 + h_2_x;
+    const double W_2_4 = Dinv_2*x12;
+    const double x13 = Q[1] - pN_3_z;
+    const double ud_2 = Dinv_2*x13;
+    const double IaC_2_00 = B0_2 + IzC_3_00 - IsB_3_20*W_2_3;
+    const double IaC_2_01 = IzC_3_01 - W_2_3*x12;
+    const double IaC_2_11 = B0_2 + IzC_3_11 - W_2_4*x12;
+    const double paF_2_x = pF_3_x + W_2_3*x13;
+    const double paF_2_y = pF_3_y + W_2_4*x13;
+    const double x14 = IaC_2_01*s_2;
+    const double x15 = -x14 + IaC_2_00*c_2;
+    const double x16 = IaC_2_01*c_2;
+    const double x17 = x16 - IaC_2_11*s_2;
+    const double IzC_2_00 = c_2*x15 - s_2*x17;
+    const double IzC_2_01 = c_2*x17 + s_2*x15;
+    const double IzC_2_11 = c_2*(x14 + IaC_2_11*c_2) + s_2*(x16 + IaC_2_00*s_2);
+    const double IsB_2_20 = IzC_2_01*p[1];
+    const double IsB_2_21 = IzC_2_11*p[1];
+    const double IsA_2_22 = IzC_2_11*x0;
+    const double pF_2_x = c_2*paF_2_x - paF_2_y*s_2;
+    const double pF_2_y = c_2*paF_2_y + paF_2_x*s_2;
+    const double pN_2_z = Q[1] + pF_2_y*p[1];
+    const double x30 = IsA_2_22 + K_1_zz;
+    const double Dinv_1 = 1.0/(x30);
+    const double W_1_3 = Dinv_1*IsB_2_20;
+    const double x18 = IsB_2_21 + h_1_x;
+    const double W_1_4 = Dinv_1*x18;
+    const double x19 = Q[0] - pN_2_z;
+    const double ud_1 = Dinv_1*x19;
+    const double IaC_1_00 = B0_1 + IzC_2_00 - IsB_2_20*W_1_3;
+    const double IaC_1_01 = IzC_2_01 - W_1_3*x18;
+    const double IaC_1_11 = B0_1 + IzC_2_11 - W_1_4*x18;
+    const double paF_1_x = pF_2_x + W_1_3*x19;
+    const double paF_1_y = pF_2_y + W_1_4*x19;
+    const double x20 = IaC_1_01*s_1;
+    const double x21 = -x20 + IaC_1_00*c_1;
+    const double x22 = IaC_1_01*c_1;
+    const double x23 = x22 - IaC_1_11*s_1;
+    const double IzC_1_00 = c_1*x21 - s_1*x23;
+    const double IzC_1_01 = c_1*x23 + s_1*x21;
+    const double IzC_1_11 = c_1*(x20 + IaC_1_11*c_1) + s_1*(x22 + IaC_1_00*s_1);
+    const double pF_1_y = c_1*paF_1_x - paF_1_y*s_1;
+    const double pF_1_z = c_1*paF_1_y + paF_1_x*s_1;
+    const double FQ_1 = -Q[4] - pF_1_z;
+    const double FQ_2 = pF_1_y - Q[5];
+    const double Dinv_0 = 1.0/(IzC_1_11);
+    const double L_1_0 = -Dinv_0*IzC_1_01;
+    const double D_1 = IzC_1_00 + IzC_1_01*L_1_0;
+    const double Dinv_1_2 = 1.0/(D_1);
+    const double z_1 = -FQ_2 + FQ_1*L_1_0;
+    const double sol_1 = Dinv_1_2*z_1;
+    const double sol_0 = -Dinv_0*FQ_1 - L_1_0*sol_1;
+    const double acc_1_x = c_1*sol_1 - s_1*sol_0;
+    const double acc_1_y = -c_1*sol_0 - s_1*sol_1;
+    const double qdd_1 = ud_1 - W_1_3*acc_1_x - W_1_4*acc_1_y;
+    const double x24 = acc_1_y + p[1]*qdd_1;
+    const double acc_2_x = acc_1_x*c_2 + s_2*x24;
+    const double acc_2_y = c_2*x24 - acc_1_x*s_2;
+    const double qdd_2 = ud_2 - qdd_1 - W_2_3*acc_2_x - W_2_4*acc_2_y;
+    const double x25 = qdd_1 + qdd_2;
+    const double alpha_3_z = x25;
+    const double x26 = acc_2_y + p[6]*x25;
+    const double acc_3_x = acc_2_x*c_3 + s_3*x26;
+    const double acc_3_y = c_3*x26 - acc_2_x*s_3;
+    const double qdd_3 = ud_3 - alpha_3_z - W_3_3*acc_3_x - W_3_4*acc_3_y;
+    const double x27 = alpha_3_z + qdd_3;
+    const double alpha_4_z = x27;
+    const double acc_4_y = c_4*(acc_3_y + p[11]*x27) - acc_3_x*s_4;
+    const double qdd_4 = ud_4 - alpha_4_z - W_4_4*acc_4_y;
+    x[0] = qdd_1;
+    x[1] = qdd_2;
+    x[2] = qdd_3;
+    x[3] = qdd_4;
+    x[4] = sol_0;
+    x[5] = sol_1;
+}
+
+/* h = I_f qd = dT/dqd: the generalised momentum, by composite momenta at O(n) cost (I_f times any vector).  148 ops (46 add, 94 mul, 0 div, 8 calls) */
+void paper_case1_generalized_momentum(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT h)
+{
+    (void)q;
+    (void)qd;
+    (void)p;
+    const double c_1 = cos(q[0]);
+    const double s_1 = sin(q[0]);
+    const double c_2 = cos(q[1]);
+    const double s_2 = sin(q[1]);
+    const double c_3 = cos(q[2]);
+    const double s_3 = sin(q[2]);
+    const double c_4 = cos(q[3]);
+    const double s_4 = sin(q[3]);
+    const double B0_1 = p[1]*p[2];
+    const double h_1_x = 0.5*p[2]*(p[1]*p[1]);
+    const double B2_1 = 0.3333333333333333*p[2]*(p[1]*p[1]*p[1]);
+    const double K_1_zz = B2_1 + p[1]*p[5];
+    const double B0_2 = p[6]*p[7];
+    const double h_2_x = 0.5*p[7]*(p[6]*p[6]);
+    const double B2_2 = 0.3333333333333333*p[7]*(p[6]*p[6]*p[6]);
+    const double K_2_zz = B2_2 + p[10]*p[6];
+    const double B0_3 = p[11]*p[12];
+    const double h_3_x = 0.5*p[12]*(p[11]*p[11]);
+    const double B2_3 = 0.3333333333333333*p[12]*(p[11]*p[11]*p[11]);
+    const double K_3_zz = B2_3 + p[11]*p[15];
+    const double B0_4 = p[16]*p[17];
+    const double h_4_x = 0.5*p[17]*(p[16]*p[16]);
+    const double B2_4 = 0.3333333333333333*p[17]*(p[16]*p[16]*p[16]);
+    const double K_4_zz = B2_4 + p[16]*p[20];
+    const double vl_1_x = c_1*qd[5] - qd[4]*s_1;
+    const double vl_1_y = -c_1*qd[4] - qd[5]*s_1;
+    const double x0 = vl_1_y + p[1]*qd[0];
+    const double vl_2_x = c_2*vl_1_x + s_2*x0;
+    const double vl_2_y = c_2*x0 - s_2*vl_1_x;
+    const double wl_2_z = qd[0] + qd[1];
+    const double x1 = vl_2_y + p[6]*wl_2_z;
+    const double vl_3_x = c_3*vl_2_x + s_3*x1;
+    const double vl_3_y = c_3*x1 - s_3*vl_2_x;
+    const double wl_3_z = qd[2] + wl_2_z;
+    const double x2 = vl_3_y + p[11]*wl_3_z;
+    const double vl_4_x = c_4*vl_3_x + s_4*x2;
+    const double vl_4_y = c_4*x2 - s_4*vl_3_x;
+    const double wl_4_z = qd[3] + wl_3_z;
+    const double Hm_4_z = K_4_zz*wl_4_z + h_4_x*vl_4_y;
+    const double Lm_4_x = B0_4*vl_4_x;
+    const double Lm_4_y = B0_4*vl_4_y + h_4_x*wl_4_z;
+    const double pF_4_x = Lm_4_x*c_4 - Lm_4_y*s_4;
+    const double pF_4_y = Lm_4_x*s_4 + Lm_4_y*c_4;
+    const double pN_4_z = Hm_4_z + pF_4_y*p[11];
+    const double Hm_3_z = pN_4_z + K_3_zz*wl_3_z + h_3_x*vl_3_y;
+    const double Lm_3_x = pF_4_x + B0_3*vl_3_x;
+    const double Lm_3_y = pF_4_y + B0_3*vl_3_y + h_3_x*wl_3_z;
+    const double pF_3_x = Lm_3_x*c_3 - Lm_3_y*s_3;
+    const double pF_3_y = Lm_3_x*s_3 + Lm_3_y*c_3;
+    const double pN_3_z = Hm_3_z + pF_3_y*p[6];
+    const double Hm_2_z = pN_3_z + K_2_zz*wl_2_z + h_2_x*vl_2_y;
+    const double Lm_2_x = pF_3_x + B0_2*vl_2_x;
+    const double Lm_2_y = pF_3_y + B0_2*vl_2_y + h_2_x*wl_2_z;
+    const double pF_2_x = Lm_2_x*c_2 - Lm_2_y*s_2;
+    const double pF_2_y = Lm_2_x*s_2 + Lm_2_y*c_2;
+    const double pN_2_z = Hm_2_z + pF_2_y*p[1];
+    const double Hm_1_z = pN_2_z + K_1_zz*qd[0] + h_1_x*vl_1_y;
+    const double Lm_1_x = pF_2_x + B0_1*vl_1_x;
+    const double Lm_1_y = pF_2_y + B0_1*vl_1_y + h_1_x*qd[0];
+    const double pF_1_y = Lm_1_x*c_1 - Lm_1_y*s_1;
+    const double pF_1_z = Lm_1_x*s_1 + Lm_1_y*c_1;
+    h[0] = Hm_1_z;
+    h[1] = Hm_2_z;
+    h[2] = Hm_3_z;
+    h[3] = Hm_4_z;
+    h[4] = -pF_1_z;
+    h[5] = pF_1_y;
+}
+
 /* Positions of O_1..O_{n+1} in the reference frame, row i-1 = O_i.  42 ops (14 add, 20 mul, 0 div, 8 calls) */
 void paper_case1_contact_points(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT r)
 {
@@ -576,6 +806,46 @@ void paper_case1_contact_jacobian(const double *GAC_RESTRICT q, const double *GA
     J[57] = -O_4_x - x5;
     J[58] = 0.0;
     J[59] = 1.0;
+}
+
+/* Q = J^T f: the generalised force of forces f along the contact Jacobian rows (N on a point's axis, N m on a stop's joint).  57 ops (21 add, 28 mul, 0 div, 8 calls) */
+void paper_case1_contact_generalized_force(const double *GAC_RESTRICT q, const double *GAC_RESTRICT f, const double *GAC_RESTRICT p, double *GAC_RESTRICT Q)
+{
+    (void)q;
+    (void)f;
+    (void)p;
+    const double c_1 = cos(q[0]);
+    const double s_1 = sin(q[0]);
+    const double c_2 = cos(q[1]);
+    const double s_2 = sin(q[1]);
+    const double c_3 = cos(q[2]);
+    const double s_3 = sin(q[2]);
+    const double c_4 = cos(q[3]);
+    const double s_4 = sin(q[3]);
+    const double Rref_2_00 = -c_1*s_2 - c_2*s_1;
+    const double Rref_2_01 = s_1*s_2 - c_1*c_2;
+    const double Rref_3_00 = Rref_2_00*c_3 + Rref_2_01*s_3;
+    const double Rref_3_01 = Rref_2_01*c_3 - Rref_2_00*s_3;
+    const double Rref_4_00 = Rref_3_00*c_4 + Rref_3_01*s_4;
+    const double Rref_4_01 = Rref_3_01*c_4 - Rref_3_00*s_4;
+    const double Mf_4_z = Rref_4_00*f[9]*p[16] + Rref_4_01*f[8]*p[16];
+    const double Ff_4_x = f[6] + f[8];
+    const double Ff_4_y = f[7] + f[9];
+    const double Mf_3_z = Mf_4_z + Ff_4_x*Rref_3_01*p[11] + Ff_4_y*Rref_3_00*p[11];
+    const double Ff_3_x = Ff_4_x + f[4];
+    const double Ff_3_y = Ff_4_y + f[5];
+    const double Mf_2_z = Mf_3_z + Ff_3_x*Rref_2_01*p[6] + Ff_3_y*Rref_2_00*p[6];
+    const double Ff_2_x = Ff_3_x + f[2];
+    const double Ff_2_y = Ff_3_y + f[3];
+    const double Mf_1_z = Mf_2_z - Ff_2_x*c_1*p[1] - Ff_2_y*p[1]*s_1;
+    const double Ff_1_x = Ff_2_x + f[0];
+    const double Ff_1_y = Ff_2_y + f[1];
+    Q[0] = Mf_1_z;
+    Q[1] = Mf_2_z;
+    Q[2] = Mf_3_z;
+    Q[3] = Mf_4_z;
+    Q[4] = Ff_1_x;
+    Q[5] = Ff_1_y;
 }
 
 /* Gap of each (point, wall) pair: distance of the point inside its wall (negative = beyond it).  78 ops (34 add, 36 mul, 0 div, 8 calls) */
@@ -846,9 +1116,10 @@ const gac_model paper_case1_model = {
     .contacts = paper_case1_contacts,
     .chart = { .a = { 0.0, 1.0 }, .b = { 1.0, 0.0 }, .theta0_index = -1, .theta0_value = 0.0 },
     .default_parameters = paper_case1_parameters, .q0 = paper_case1_q0, .qd0 = paper_case1_qd0,
-    .mass_matrix = paper_case1_mass_matrix, .bias = paper_case1_bias, .forward_dynamics = paper_case1_forward_dynamics,
+    .forward_dynamics = paper_case1_forward_dynamics, .inertia_solve = paper_case1_inertia_solve,
+    .generalized_momentum = paper_case1_generalized_momentum,
     .contact_points = paper_case1_contact_points, .contact_velocities = paper_case1_contact_velocities,
-    .contact_jacobian = paper_case1_contact_jacobian, .contact_gaps = paper_case1_contact_gaps,
+    .contact_generalized_force = paper_case1_contact_generalized_force, .contact_gaps = paper_case1_contact_gaps,
     .contact_bias = paper_case1_contact_bias, .energy = paper_case1_energy, .rhs = paper_case1_rhs,
     .power = 0   /* no inputs, springs or dampers: only gravity works in flight */
 };

@@ -7,7 +7,10 @@
  * Parameters     runtime array p (layout below)
  * Method         recursive Gibbs-Appell (Korayem-style, Eq. 1-48 of the paper), straight-line,
  *                common-subexpression-eliminated.  forward_dynamics solves I_f Theta_ddot = R by an O(n)
- *                articulated-body recursion (I_f never formed); the impact law factorises I_f (LDL^T).
+ *                articulated-body recursion; the impact law and resting contact apply I_f^-1, I_f and J^T
+ *                through O(n) kernels (inertia_solve, generalized_momentum, contact_generalized_force):
+ *                the hybrid loop never forms I_f or J.  Dense kernels (mass_matrix, bias,
+ *                contact_jacobian): generated.
  * Library        the hybrid loop (integrators, events, impact law, resting contact) is the plain C99
  *                library gac (gac.h, gac_*.c beside this file); paper_case1.c holds the kernels and the
  *                descriptor paper_case1_model that the library runs.  Build: cc -std=c99 paper_case1.c gac_*.c -lm
@@ -99,9 +102,12 @@
  *   mass_matrix             137 = 46 add + 83 mul + 0 div + 8 calls
  *   bias                    119 = 36 add + 75 mul + 0 div + 8 calls
  *   forward_dynamics        336 = 115 add + 207 mul + 6 div + 8 calls
+ *   inertia_solve           274 = 95 add + 165 mul + 6 div + 8 calls
+ *   generalized_momentum    148 = 46 add + 94 mul + 0 div + 8 calls
  *   contact_points           42 = 14 add + 20 mul + 0 div + 8 calls
  *   contact_velocities       49 = 17 add + 24 mul + 0 div + 8 calls
  *   contact_jacobian         62 = 34 add + 20 mul + 0 div + 8 calls
+ *   contact_generalized_force     57 = 21 add + 28 mul + 0 div + 8 calls
  *   contact_gaps             78 = 34 add + 36 mul + 0 div + 8 calls
  *   energy                  176 = 48 add + 120 mul + 0 div + 8 calls
  *   contact_bias             51 = 15 add + 28 mul + 0 div + 8 calls
@@ -140,8 +146,8 @@
 #define PAPER_CASE1_NPOINT           5      /* contact points O_1..O_NPOINT */
 #define PAPER_CASE1_NCONTACT         20     /* contacts (point, wall) */
 #define PAPER_CASE1_NJROW            10     /* contact Jacobian rows */
-#define PAPER_CASE1_IMPACT_NWORK     174    /* doubles of the work array of impact, impact_complementarity, constrained_dynamics */
-#define PAPER_CASE1_SIM_NDOUBLE      715    /* doubles of a simulation's storage (gac_sim_ndouble) */
+#define PAPER_CASE1_IMPACT_NWORK     103    /* doubles of the work array of impact, impact_complementarity, constrained_dynamics */
+#define PAPER_CASE1_SIM_NDOUBLE      644    /* doubles of a simulation's storage (gac_sim_ndouble) */
 #define PAPER_CASE1_SIM_NINT         46     /* ints of a simulation's storage (gac_sim_nint) */
 #define PAPER_CASE1_RECORD_NDOUBLE   24     /* doubles of an impact record's storage (gac_record_ndouble) */
 #define PAPER_CASE1_RECORD_NINT      18     /* ints of an impact record's storage (gac_record_nint) */
@@ -225,6 +231,22 @@ void paper_case1_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT q
  *   6 outputs.   336 ops (115 add, 207 mul, 6 div, 8 calls) */
 void paper_case1_forward_dynamics(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT qdd);
 
+/* x = I_f^-1 Q: the accelerations that generalised forces Q alone give (no motion, no gravity), by the O(n) articulated-body recursion.
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   Q    in : generalised forces (NQ; N m on an angle, N on a translation)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   x    out: I_f^-1 Q (NQ; rad/s^2, m/s^2)
+ *   6 outputs.   274 ops (95 add, 165 mul, 6 div, 8 calls) */
+void paper_case1_inertia_solve(const double *GAC_RESTRICT q, const double *GAC_RESTRICT Q, const double *GAC_RESTRICT p, double *GAC_RESTRICT x);
+
+/* h = I_f qd = dT/dqd: the generalised momentum, by composite momenta at O(n) cost (I_f times any vector).
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   h    out: I_f qd (NQ; N m s, N s)
+ *   6 outputs.   148 ops (46 add, 94 mul, 0 div, 8 calls) */
+void paper_case1_generalized_momentum(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT h);
+
 /* Positions of O_1..O_{n+1} in the reference frame, row i-1 = O_i.
  *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
  *   p    in : parameters (NPARAM, layout in the header)
@@ -246,6 +268,14 @@ void paper_case1_contact_velocities(const double *GAC_RESTRICT q, const double *
  *   J    out: NJROW x NQ, row r = d(O_i . X_a)/dq
  *   60 outputs.   62 ops (34 add, 20 mul, 0 div, 8 calls) */
 void paper_case1_contact_jacobian(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT J);
+
+/* Q = J^T f: the generalised force of forces f along the contact Jacobian rows (N on a point's axis, N m on a stop's joint).
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   f    in : force along each contact Jacobian row (NJROW; N, N m on a stop)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   Q    out: J^T f (NQ; N m on an angle, N on a translation)
+ *   6 outputs.   57 ops (21 add, 28 mul, 0 div, 8 calls) */
+void paper_case1_contact_generalized_force(const double *GAC_RESTRICT q, const double *GAC_RESTRICT f, const double *GAC_RESTRICT p, double *GAC_RESTRICT Q);
 
 /* Gap of each (point, wall) pair: distance of the point inside its wall (negative = beyond it).
  *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)

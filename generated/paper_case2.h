@@ -7,7 +7,10 @@
  * Parameters     runtime array p (layout below)
  * Method         recursive Gibbs-Appell (Korayem-style, Eq. 1-48 of the paper), straight-line,
  *                common-subexpression-eliminated.  forward_dynamics solves I_f Theta_ddot = R by an O(n)
- *                articulated-body recursion (I_f never formed); the impact law factorises I_f (LDL^T).
+ *                articulated-body recursion; the impact law and resting contact apply I_f^-1, I_f and J^T
+ *                through O(n) kernels (inertia_solve, generalized_momentum, contact_generalized_force):
+ *                the hybrid loop never forms I_f or J.  Dense kernels (mass_matrix, bias,
+ *                contact_jacobian): generated.
  * Library        the hybrid loop (integrators, events, impact law, resting contact) is the plain C99
  *                library gac (gac.h, gac_*.c beside this file); paper_case2.c holds the kernels and the
  *                descriptor paper_case2_model that the library runs.  Build: cc -std=c99 paper_case2.c gac_*.c -lm
@@ -75,9 +78,12 @@
  *   mass_matrix              58 = 10 add + 42 mul + 0 div + 6 calls
  *   bias                    106 = 30 add + 70 mul + 0 div + 6 calls
  *   forward_dynamics        236 = 71 add + 153 mul + 6 div + 6 calls
+ *   inertia_solve           175 = 52 add + 111 mul + 6 div + 6 calls
+ *   generalized_momentum     87 = 24 add + 57 mul + 0 div + 6 calls
  *   contact_points           21 = 5 add + 10 mul + 0 div + 6 calls
  *   contact_velocities       41 = 11 add + 24 mul + 0 div + 6 calls
  *   contact_jacobian         40 = 12 add + 22 mul + 0 div + 6 calls
+ *   contact_generalized_force     42 = 11 add + 25 mul + 0 div + 6 calls
  *   contact_gaps             48 = 17 add + 25 mul + 0 div + 6 calls
  *   energy                  100 = 27 add + 67 mul + 0 div + 6 calls
  *   contact_bias             74 = 22 add + 46 mul + 0 div + 6 calls
@@ -116,8 +122,8 @@
 #define PAPER_CASE2_NPOINT           2      /* contact points O_1..O_NPOINT */
 #define PAPER_CASE2_NCONTACT         12     /* contacts (point, wall) */
 #define PAPER_CASE2_NJROW            6      /* contact Jacobian rows */
-#define PAPER_CASE2_IMPACT_NWORK     150    /* doubles of the work array of impact, impact_complementarity, constrained_dynamics */
-#define PAPER_CASE2_SIM_NDOUBLE      624    /* doubles of a simulation's storage (gac_sim_ndouble) */
+#define PAPER_CASE2_IMPACT_NWORK     90     /* doubles of the work array of impact, impact_complementarity, constrained_dynamics */
+#define PAPER_CASE2_SIM_NDOUBLE      564    /* doubles of a simulation's storage (gac_sim_ndouble) */
 #define PAPER_CASE2_SIM_NINT         30     /* ints of a simulation's storage (gac_sim_nint) */
 #define PAPER_CASE2_RECORD_NDOUBLE   24     /* doubles of an impact record's storage (gac_record_ndouble) */
 #define PAPER_CASE2_RECORD_NINT      18     /* ints of an impact record's storage (gac_record_nint) */
@@ -190,6 +196,22 @@ void paper_case2_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT q
  *   6 outputs.   236 ops (71 add, 153 mul, 6 div, 6 calls) */
 void paper_case2_forward_dynamics(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT qdd);
 
+/* x = I_f^-1 Q: the accelerations that generalised forces Q alone give (no motion, no gravity), by the O(n) articulated-body recursion.
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   Q    in : generalised forces (NQ; N m on an angle, N on a translation)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   x    out: I_f^-1 Q (NQ; rad/s^2, m/s^2)
+ *   6 outputs.   175 ops (52 add, 111 mul, 6 div, 6 calls) */
+void paper_case2_inertia_solve(const double *GAC_RESTRICT q, const double *GAC_RESTRICT Q, const double *GAC_RESTRICT p, double *GAC_RESTRICT x);
+
+/* h = I_f qd = dT/dqd: the generalised momentum, by composite momenta at O(n) cost (I_f times any vector).
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   h    out: I_f qd (NQ; N m s, N s)
+ *   6 outputs.   87 ops (24 add, 57 mul, 0 div, 6 calls) */
+void paper_case2_generalized_momentum(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT h);
+
 /* Positions of O_1..O_{n+1} in the reference frame, row i-1 = O_i.
  *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
  *   p    in : parameters (NPARAM, layout in the header)
@@ -211,6 +233,14 @@ void paper_case2_contact_velocities(const double *GAC_RESTRICT q, const double *
  *   J    out: NJROW x NQ, row r = d(O_i . X_a)/dq
  *   36 outputs.   40 ops (12 add, 22 mul, 0 div, 6 calls) */
 void paper_case2_contact_jacobian(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT J);
+
+/* Q = J^T f: the generalised force of forces f along the contact Jacobian rows (N on a point's axis, N m on a stop's joint).
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   f    in : force along each contact Jacobian row (NJROW; N, N m on a stop)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   Q    out: J^T f (NQ; N m on an angle, N on a translation)
+ *   6 outputs.   42 ops (11 add, 25 mul, 0 div, 6 calls) */
+void paper_case2_contact_generalized_force(const double *GAC_RESTRICT q, const double *GAC_RESTRICT f, const double *GAC_RESTRICT p, double *GAC_RESTRICT Q);
 
 /* Gap of each (point, wall) pair: distance of the point inside its wall (negative = beyond it).
  *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)

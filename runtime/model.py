@@ -31,7 +31,7 @@ class CompiledModel:
 
     def __init__(self, scene: Scene, generated: GeneratedModel, module, build_options: tuple = ()):
         self.scene = scene
-        self.build_options = build_options            # (bake_params, flags, specialise) of load_model
+        self.build_options = build_options            # (bake_params, flags, specialise, dense) of load_model
         self.generated = generated
         self.layout = generated.layout
         self.ffi, self.lib = module.ffi, module.lib
@@ -123,6 +123,22 @@ class CompiledModel:
                        self._params(p))
         return float(P[0]), float(P[1])
 
+    def inertia_solve(self, q, Q, p=None) -> np.ndarray:
+        """I_f^-1 Q: the accelerations that generalised forces Q alone give (O(n), no matrix formed)."""
+        return self._call("inertia_solve", self.nq, self._vec(q, self.nq, "q"), self._vec(Q, self.nq, "Q"),
+                          self._params(p))
+
+    def generalized_momentum(self, q, qd, p=None) -> np.ndarray:
+        """I_f qd = dT/dqd (O(n), no matrix formed)."""
+        return self._call("generalized_momentum", self.nq, self._vec(q, self.nq, "q"),
+                          self._vec(qd, self.nq, "qd"), self._params(p))
+
+    def contact_generalized_force(self, q, f, p=None) -> np.ndarray:
+        """J^T f: the generalised force of forces f along the contact Jacobian rows (``contact_rows``; N, or
+        N m on a joint stop's row)."""
+        return self._call("contact_generalized_force", self.nq, self._vec(q, self.nq, "q"),
+                          self._vec(f, len(self.contact_rows), "f"), self._params(p))
+
     def contact_points(self, q, p=None) -> np.ndarray:
         return self._call("contact_points", 3 * (self.n + 1), self._vec(q, self.nq, "q"),
                           self._params(p)).reshape(self.n + 1, 3)
@@ -133,6 +149,8 @@ class CompiledModel:
 
     def contact_jacobian(self, q, p=None) -> np.ndarray:
         rows = len(self.contact_rows)
+        if rows == 0:
+            return np.zeros((0, self.nq))
         return self._call("contact_jacobian", rows * self.nq, self._vec(q, self.nq, "q"),
                           self._params(p)).reshape(rows, self.nq)
 
@@ -181,23 +199,28 @@ class CompiledModel:
 
 
 def load_model(scene: Scene | str | Path, bake_params: bool = False, flags=None, progress=None,
-               specialise: bool = True) -> CompiledModel:
+               specialise: bool = True, dense: bool | None = None) -> CompiledModel:
     """Generate (cached) and compile (cached) the model of a scene, a shipped scene name or a scene
     file.  ``specialise`` (default) leaves out what the scene does not need; False gives the general
-    model.  For a name or a file, the same model object is returned again while the file is unchanged
-    (same path, modification time and size) and the options are the same."""
+    model.  ``dense``: generate the dense kernels (mass_matrix, bias, contact_jacobian; O(n^2) code, not
+    needed by simulations); None (default) does up to codegen.interface.DENSE_MAX_LINKS links, and otherwise
+    they are formed at run time from the O(n) kernels.  For a name or a file, the same model object is
+    returned again while the file is unchanged (same path, modification time and size) and the options are
+    the same."""
     flags = DEFAULT_FLAGS if flags is None else tuple(flags)
+    if dense is not None and not isinstance(dense, bool):
+        raise TypeError(f"dense: expected True, False or None, got {dense!r}")
     if isinstance(scene, Scene):
-        return _build_model(scene, bake_params, flags, progress, specialise)
+        return _build_model(scene, bake_params, flags, progress, specialise, dense)
     if not isinstance(scene, (str, os.PathLike)):
         raise TypeError("scene: expected a Scene, a shipped scene name or a path to a .toml/.json scene "
                         f"file, got {reprlib.repr(scene)} ({type(scene).__name__})")
     path = scene_file(scene)
     stat = path.stat()
-    key = (path, stat.st_mtime_ns, stat.st_size, bool(bake_params), flags, bool(specialise))
+    key = (path, stat.st_mtime_ns, stat.st_size, bool(bake_params), flags, bool(specialise), dense)
     model = _MODELS.get(key)
     if model is None:
-        model = _build_model(load_scene(path), bake_params, flags, progress, specialise)
+        model = _build_model(load_scene(path), bake_params, flags, progress, specialise, dense)
         _MODELS[key] = model
     return model
 
@@ -205,20 +228,23 @@ def load_model(scene: Scene | str | Path, bake_params: bool = False, flags=None,
 _MODELS: dict[tuple, CompiledModel] = {}      # (scene file, mtime, size, options) -> model
 
 
-def _build_model(scene: Scene, bake_params: bool, flags: tuple, progress, specialise: bool) -> CompiledModel:
-    generated = generate_cached(scene, bake_params=bake_params, specialise=specialise, progress=progress)
+def _build_model(scene: Scene, bake_params: bool, flags: tuple, progress, specialise: bool,
+                 dense: bool | None = None) -> CompiledModel:
+    generated = generate_cached(scene, bake_params=bake_params, specialise=specialise, progress=progress,
+                                dense=dense)
     module = compile_model(generated.name, generated.header, generated.source, generated.cdef,
                            flags=flags, progress=progress)
-    return CompiledModel(scene, generated, module, (bool(bake_params), tuple(flags), bool(specialise)))
+    return CompiledModel(scene, generated, module, (bool(bake_params), tuple(flags), bool(specialise), dense))
 
 
 _BY_SCENE: dict[tuple, CompiledModel] = {}    # (scene, options) -> model, for model_of
 
 
-def model_of(scene: Scene, bake_params: bool, flags: tuple, specialise: bool) -> CompiledModel:
+def model_of(scene: Scene, bake_params: bool, flags: tuple, specialise: bool,
+             dense: bool | None = None) -> CompiledModel:
     """The model of a scene, built (or loaded from the build cache) once per process: what an unpickled
     CompiledModel is."""
-    key = (scene, bool(bake_params), tuple(flags), bool(specialise))
+    key = (scene, bool(bake_params), tuple(flags), bool(specialise), dense)
     if key not in _BY_SCENE:
-        _BY_SCENE[key] = _build_model(scene, bake_params, tuple(flags), None, specialise)
+        _BY_SCENE[key] = _build_model(scene, bake_params, tuple(flags), None, specialise, dense)
     return _BY_SCENE[key]

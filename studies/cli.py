@@ -19,6 +19,7 @@ STUDIES = {
     "specialise": ("studies.specialise_report", "general against specialised models on the paper's scenes"),
     "ensemble": ("studies.ensemble_bench", "runs per second of simulate_many: threads, processes, Dask"),
     "driven": ("studies.driven_cost", "the cost of inputs, springs and dampers: ns per rhs, simulation time"),
+    "simcost": ("studies.simcost", "time per simulated second against n, with the fitted exponent"),
 }
 
 

@@ -206,8 +206,10 @@ EXTREME_PARAMETERS = (
         name="tiny-axial-1e-9-tight", scene="stress-tiny-axial", params={"Jxx_1": 2.94e-14},
         description="Jxx = 1e-9 Jyy at rtol = 1e-12 with max_steps = 20000: the step collapses, a clear stop",
         simulate={"t_end": 1.0, "method": "dopri5", "rtol": 1e-12, "atol": 1e-14, "max_steps": 20000},
+        # the fast mode is link 1's spin about its own axis, which the base chart spreads over theta_0 and
+        # theta_1; which of them dominates the error estimate turns on round-off at the impacts (cond I_f ~ 4e13)
         expect=Expect.status(r"maximum number of steps reached \(20000 steps since t = [0-9.e-]+ s, the last "
-                             r"event\): mean step [0-9.e-]+ s; the step is limited by .*theta_1.*raise max_steps")),
+                             r"event\): mean step [0-9.e-]+ s; the step is limited by .*theta_[01].*raise max_steps")),
 
     # 200 rad of rotation in 1 s: at rtol = 1e-10 the momenta drift 4e-8 and 9e-8 (relative; consistent with
     # that tolerance), so the case runs at 1e-12 to make the conservation checks sharp.

@@ -16,7 +16,7 @@ from codegen.artifact import library_files
 from codegen.emit import c_expression
 from codegen.pipeline import write_model
 from codegen.ops import count_ops
-from codegen.scene import Scene, LineLink, load_scene
+from codegen.scene import MAX_LINKS, Scene, LineLink, load_scene
 from conftest import random_scene
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -196,7 +196,7 @@ def test_cli_writes_files_and_reports(tmp_path):
 
 def test_cli_rejects_bad_input_clearly(tmp_path):
     result = run_cli("--links", "0", "--out", str(tmp_path))
-    assert result.returncode == 2 and "--links: must be in 1..64, got 0" in result.stderr
+    assert result.returncode == 2 and f"--links: must be in 1..{MAX_LINKS}, got 0" in result.stderr
     bad = tmp_path / "bad.toml"
     bad.write_text('[[links]]\nlength = -1.0\nmu = 1.0\n')
     result = run_cli("--scene", str(bad), "--out", str(tmp_path))

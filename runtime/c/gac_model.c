@@ -13,9 +13,9 @@ int gac_model_check(const gac_model *m)
     if ((m->ncontact > 0 && m->contacts == 0) || (m->nparam > 0 && m->default_parameters == 0)
         || m->q0 == 0 || m->qd0 == 0)
         return GAC_ERR_BAD_MODEL;
-    if (m->mass_matrix == 0 || m->bias == 0 || m->forward_dynamics == 0 || m->contact_points == 0
-        || m->contact_velocities == 0 || m->contact_jacobian == 0 || m->contact_gaps == 0
-        || m->contact_bias == 0 || m->energy == 0 || m->rhs == 0)
+    if (m->forward_dynamics == 0 || m->inertia_solve == 0 || m->generalized_momentum == 0
+        || m->contact_points == 0 || m->contact_velocities == 0 || m->contact_generalized_force == 0
+        || m->contact_gaps == 0 || m->contact_bias == 0 || m->energy == 0 || m->rhs == 0)
         return GAC_ERR_BAD_MODEL;
     if (m->chart.theta0_index >= m->nq) return GAC_ERR_BAD_MODEL;
     for (c = 0; c < m->ncontact; ++c) {
@@ -36,7 +36,7 @@ int gac_model_check(const gac_model *m)
 long gac_impact_nwork(const gac_model *m)
 {
     const long nq = m->nq;
-    return 3 * nq * nq + (long)m->njrow * nq + nq;
+    return 2 * nq * nq + nq + 3L * m->npoint + GAC_AT_LEAST_1(m->njrow);
 }
 
 long gac_sim_ndouble(const gac_model *m)
@@ -65,7 +65,7 @@ const char *gac_error_message(int code)
     switch (code) {
     case GAC_OK: return "ok";
     case GAC_ERR_BAD_CONTACT: return "bad active-contact list: empty, longer than NQ, repeated, or index outside 0..NCONTACT-1";
-    case GAC_ERR_SINGULAR_MASS: return "inertia matrix I_f is singular to double precision (a pivot of its LDL^T below 1e-15 of its largest diagonal): the chain's ratios of masses, lengths and inertias span more than 15 digits at this state";
+    case GAC_ERR_SINGULAR_MASS: return "inertia matrix I_f is singular to double precision (its solve by the articulated-body recursion is not finite): the chain's ratios of masses, lengths and inertias span more than 15 digits at this state";
     case GAC_ERR_SINGULAR_IMPACT: return "impact matrix J I_f^-1 J^T is singular: the active contact constraints are dependent";
     case GAC_ERR_LCP: return "impact complementarity problem has no solution (too many or degenerate contacts)";
     case GAC_ERR_GIMBAL_LOCK: return "gimbal lock: theta_0 is too close to the singularity of the base chart (|det E| below sqrt(16 eps / tol)) for results to the tolerance; continue on a second chart";

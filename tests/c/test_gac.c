@@ -40,12 +40,8 @@ static int checks = 0, failures = 0, broken = 0;
 #define NEAR(a, b, tol) (fabs((a) - (b)) <= (tol))
 
 /* ---- ball: p = [g, m, e] ------------------------------------------------------------------------ */
-static void ball_mass(const double *q, const double *p, double *M) { (void)q; M[0] = p[1]; }
-static void ball_bias(const double *q, const double *qd, const double *u, const double *p, double *R)
-{
-    (void)q; (void)qd;
-    R[0] = -p[1] * p[0] + u[0];
-}
+static void ball_solve(const double *q, const double *Q, const double *p, double *x) { (void)q; x[0] = Q[0] / p[1]; }
+static void ball_momentum(const double *q, const double *qd, const double *p, double *h) { (void)q; h[0] = p[1] * qd[0]; }
 static void ball_fd(const double *q, const double *qd, const double *u, const double *p, double *qdd)
 {
     (void)q; (void)qd;
@@ -67,7 +63,7 @@ static void ball_velocities(const double *q, const double *qd, const double *p, 
     (void)q; (void)p;
     v[0] = 0.0; v[1] = qd[0]; v[2] = 0.0;
 }
-static void ball_jacobian(const double *q, const double *p, double *J) { (void)q; (void)p; J[0] = 1.0; }
+static void ball_force(const double *q, const double *f, const double *p, double *Q) { (void)q; (void)p; Q[0] = f[0]; }
 static void ball_gaps(const double *q, const double *p, double *gap) { (void)p; gap[0] = q[0]; }
 static void ball_jbias(const double *q, const double *qd, const double *p, double *a)
 {
@@ -95,22 +91,22 @@ static const gac_model ball = {
     .contacts = ball_contacts,
     .chart = {.a = {0.0, 1.0}, .b = {1.0, 0.0}, .theta0_index = -1, .theta0_value = 0.0},   /* measure 1 */
     .default_parameters = ball_p, .q0 = ball_q0, .qd0 = ball_qd0,
-    .mass_matrix = ball_mass, .bias = ball_bias, .forward_dynamics = ball_fd, .contact_points = ball_points,
-    .contact_velocities = ball_velocities, .contact_jacobian = ball_jacobian, .contact_gaps = ball_gaps,
+    .forward_dynamics = ball_fd, .inertia_solve = ball_solve, .generalized_momentum = ball_momentum,
+    .contact_points = ball_points, .contact_velocities = ball_velocities, .contact_generalized_force = ball_force,
+    .contact_gaps = ball_gaps,
     .contact_bias = ball_jbias, .energy = ball_energy, .rhs = ball_rhs, .power = ball_power
 };
 
 /* ---- box: p = [g, m, e], walls x = 0, x = 2, y = 0, y = 2 ---------------------------------------- */
-static void box_mass(const double *q, const double *p, double *M)
+static void box_solve(const double *q, const double *Q, const double *p, double *x)
 {
     (void)q;
-    M[0] = p[1]; M[1] = 0.0; M[2] = 0.0; M[3] = p[1];
+    x[0] = Q[0] / p[1]; x[1] = Q[1] / p[1];
 }
-static void box_bias(const double *q, const double *qd, const double *u, const double *p, double *R)
+static void box_momentum(const double *q, const double *qd, const double *p, double *h)
 {
-    (void)q; (void)qd;
-    (void)u;
-    R[0] = 0.0; R[1] = -p[1] * p[0];
+    (void)q;
+    h[0] = p[1] * qd[0]; h[1] = p[1] * qd[1];
 }
 static void box_fd(const double *q, const double *qd, const double *u, const double *p, double *qdd)
 {
@@ -127,10 +123,10 @@ static void box_velocities(const double *q, const double *qd, const double *p, d
     (void)q; (void)p;
     v[0] = qd[0]; v[1] = qd[1]; v[2] = 0.0;
 }
-static void box_jacobian(const double *q, const double *p, double *J)
+static void box_force(const double *q, const double *f, const double *p, double *Q)
 {
     (void)q; (void)p;
-    J[0] = 1.0; J[1] = 0.0; J[2] = 0.0; J[3] = 1.0;
+    Q[0] = f[0]; Q[1] = f[1];
 }
 static void box_gaps(const double *q, const double *p, double *gap)
 {
@@ -166,8 +162,9 @@ static const gac_model box = {
     .contacts = box_contacts,
     .chart = {.a = {0.0, 1.0}, .b = {1.0, 0.0}, .theta0_index = -1, .theta0_value = 0.0},
     .default_parameters = box_p, .q0 = box_q0, .qd0 = box_qd0,
-    .mass_matrix = box_mass, .bias = box_bias, .forward_dynamics = box_fd, .contact_points = box_points,
-    .contact_velocities = box_velocities, .contact_jacobian = box_jacobian, .contact_gaps = box_gaps,
+    .forward_dynamics = box_fd, .inertia_solve = box_solve, .generalized_momentum = box_momentum,
+    .contact_points = box_points, .contact_velocities = box_velocities, .contact_generalized_force = box_force,
+    .contact_gaps = box_gaps,
     .contact_bias = box_jbias, .energy = box_energy, .rhs = box_rhs
 };
 
@@ -181,12 +178,25 @@ static int iwork[NINT], riwork[64];
 static void test_sizes(void)
 {
     CHECK(gac_model_check(&ball) == GAC_OK && gac_model_check(&box) == GAC_OK, "models consistent");
-    CHECK(gac_impact_nwork(&box) == 3 * 4 + 2 * 2 + 2, "impact work %ld", gac_impact_nwork(&box));
+    CHECK(gac_impact_nwork(&box) == 2 * 4 + 2 + 3 * 1 + 2, "impact work %ld", gac_impact_nwork(&box));
     CHECK(gac_sim_ndouble(&box) == 28 * 4 + 3 + 7 * 4 + gac_impact_nwork(&box) + 4, "sim doubles %ld",
           gac_sim_ndouble(&box));
     CHECK(gac_sim_nint(&box) == 2 + 2 * 4 && gac_record_ndouble(&box) == 8 && gac_record_nint(&box) == 6, "ints");
     CHECK(gac_sim_ndouble(&box) <= NDOUBLE && gac_sim_nint(&box) <= NINT, "test arrays large enough");
     CHECK(NEAR(gac_chart_measure(&box, box_q0), 1.0, 0.0), "chart measure 1");
+}
+
+/* The dense matrices formed from the operators: I_f = m I, R = -m g + u, J = I. */
+static void test_dense(void)
+{
+    const double q[2] = {0.5, 1.5}, qd[2] = {0.3, -0.2}, u[1] = {0.7};
+    double M[4], R[1], J[4];
+    gac_mass_matrix(&box, q, box_p, M);
+    CHECK(M[0] == box_p[1] && M[1] == 0.0 && M[2] == 0.0 && M[3] == box_p[1], "mass matrix m I");
+    gac_bias(&ball, q, qd, u, ball_p, R);
+    CHECK(NEAR(R[0], -ball_p[1] * ball_p[0] + u[0], 1e-14), "bias -m g + u: %.17g", R[0]);
+    gac_contact_jacobian(&box, q, box_p, J);
+    CHECK(J[0] == 1.0 && J[1] == 0.0 && J[2] == 0.0 && J[3] == 1.0, "contact Jacobian I");
 }
 
 /* The impact law at one state, without the loop: Eq. 47 for one contact is qd+ = -e qd-, F = m (1 + e) |qd-|. */
@@ -435,6 +445,7 @@ int main(int argc, char **argv)
 {
     broken = argc > 1 && strcmp(argv[1], "--break") == 0;
     test_sizes();
+    test_dense();
     test_impact_kernels();
     test_ball(GAC_METHOD_DOPRI5);
     test_ball(GAC_METHOD_DOP853);

@@ -1,0 +1,116 @@
+"""The O(n) operators of a model -- inertia_solve (I_f^-1 Q), generalized_momentum (I_f qd) and
+contact_generalized_force (J^T f) -- against the independent reference model (its mass matrix from geometric
+Jacobians and its point Jacobian), against finite differences of the kinetic energy, and against each
+other; and the dense matrices a model without dense kernels forms from them (gac_mass_matrix, gac_bias,
+gac_contact_jacobian) against the generated dense kernels."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from studies import reference
+from conftest import random_parameters, random_scene, reference_of
+from codegen.scene import default_scene
+from runtime import load_model, simulate
+
+CASES = [(1, ("line",)), (3, ("line", "rigid")), (6, ("rigid",))]
+
+
+def _model(scene, dense, specialise=False):
+    return load_model(scene, specialise=specialise, dense=dense)
+
+
+def _rows(model, ref, q_full):
+    """The reference model's contact Jacobian rows (point, axis) in the model's row order (general layout)."""
+    Jp = ref.point_jacobian(q_full)
+    rows = []
+    for point, axis in model.contact_rows:
+        if axis == "theta":
+            row = np.zeros(Jp.shape[2])
+            row[point + 1] = 1.0
+            rows.append(row)
+        else:
+            rows.append(Jp[point - 1, axis])
+    return np.array(rows)
+
+
+@pytest.mark.parametrize("n, kinds", CASES)
+@pytest.mark.parametrize("dense", [True, False])
+def test_operators_against_the_reference_model(n, kinds, dense):
+    scene = random_scene(n, seed=300 + n, random_twists=True, kinds=kinds)
+    model = _model(scene, dense)
+    rng = np.random.default_rng(n)
+    for trial in range(3):
+        p = random_parameters(scene, seed=3000 * n + trial)
+        ref = reference_of(scene, p)
+        q, qd = reference.random_state(n, rng)
+        M = ref.mass_matrix(q)
+        h = model.generalized_momentum(q, qd, p)
+        assert np.max(np.abs(h - M @ qd)) < 1e-10 * np.max(np.abs(M)) * np.max(np.abs(qd))
+        Q = rng.normal(size=model.nq)
+        x = model.inertia_solve(q, Q, p)
+        # backward error of the solve (independent of I_f's conditioning), and the round trip through I_f
+        assert np.max(np.abs(M @ x - Q)) < 1e-10 * np.max(np.abs(M)) * np.max(np.abs(x))
+        assert np.max(np.abs(model.generalized_momentum(q, x, p) - Q)) < 1e-10 * np.max(np.abs(M)) * np.max(np.abs(x))
+        N = _rows(model, ref, q)
+        f = rng.normal(size=len(N))
+        lever = max(1.0, np.max(np.abs(ref.points(q))))
+        assert np.max(np.abs(model.contact_generalized_force(q, f, p) - N.T @ f)) < 1e-12 * lever * np.max(np.abs(f))
+        # the dense matrices, generated or formed from the operators
+        assert np.max(np.abs(model.mass_matrix(q, p) - M)) < 1e-10 * np.max(np.abs(M))
+        assert np.max(np.abs(model.contact_jacobian(q, p) - N)) < 1e-12 * lever
+        R = model.bias(q, qd, p)
+        assert np.max(np.abs(R - M @ ref.forward_dynamics(q, qd))) < 1e-9 * max(1.0, np.max(np.abs(R)))
+
+
+@pytest.mark.parametrize("n", [2, 5])
+def test_momentum_is_the_gradient_of_the_kinetic_energy(n):
+    """T is quadratic in qd, so a central difference (T(qd + s e_j) - T(qd - s e_j)) / 2s is exact up to
+    round-off for any step s: the momentum against the energy kernel, a separate derivation."""
+    scene = random_scene(n, seed=400 + n, random_twists=True, kinds=("rigid", "line"))
+    model = _model(scene, dense=False)
+    rng = np.random.default_rng(40 + n)
+    q, qd = reference.random_state(n, rng)
+    h = model.generalized_momentum(q, qd)
+    step = 0.5
+    for j in range(model.nq):
+        e = np.zeros(model.nq)
+        e[j] = step
+        difference = (model.energy(q, qd + e)[0] - model.energy(q, qd - e)[0]) / (2 * step)
+        assert abs(difference - h[j]) < 1e-12 * max(1.0, model.energy(q, qd)[0])
+
+
+@pytest.mark.parametrize("n", [3, 7])
+def test_specialised_planar_layouts(n):
+    """Locked coordinates (planar reduction): the operators work on the model's own coordinates."""
+    scene = default_scene(n)
+    model = _model(scene, dense=False, specialise=True)
+    dense = _model(scene, dense=True, specialise=True)
+    rng = np.random.default_rng(n)
+    q = model.q0 + rng.normal(scale=0.3, size=model.nq)
+    qd = rng.normal(size=model.nq)
+    M = dense.mass_matrix(q)
+    assert np.max(np.abs(model.mass_matrix(q) - M)) < 1e-12 * np.max(np.abs(M))
+    x = model.inertia_solve(q, qd)
+    assert np.max(np.abs(M @ x - qd)) < 1e-11 * np.max(np.abs(M)) * np.max(np.abs(x))
+    J = dense.contact_jacobian(q)
+    assert np.max(np.abs(model.contact_jacobian(q) - J)) < 1e-13 * n
+    f = rng.normal(size=len(J))
+    assert np.max(np.abs(model.contact_generalized_force(q, f) - J.T @ f)) < 1e-12 * n * np.max(np.abs(f))
+    R = dense.bias(q, qd)
+    assert np.max(np.abs(model.bias(q, qd) - R)) < 1e-10 * max(1.0, np.max(np.abs(R)))
+
+
+def test_the_hybrid_loop_never_uses_the_dense_kernels():
+    """A model with and one without its dense kernels simulate the same run bit for bit: the loop applies the
+    operators only."""
+    scene = default_scene(4)
+    runs = [simulate(_model(scene, dense=dense, specialise=True), 1.5) for dense in (True, False)]
+    assert len(runs[0].impacts) > 0
+    assert [i.t for i in runs[0].impacts] == [i.t for i in runs[1].impacts]
+    assert np.array_equal(runs[0].q, runs[1].q) and np.array_equal(runs[0].qd, runs[1].qd)
+
+
+def test_dense_option_is_checked():
+    with pytest.raises(TypeError, match="dense"):
+        load_model(default_scene(2), dense="yes")

@@ -55,6 +55,8 @@ class RenderedFunction:
     output_size: int
     lines: list[str]
     ops: OpCount
+    parts: list = None               # a long function split: lines of each part (values crossing parts in s[])
+    scratch: int = 0                 # doubles of s[] a split function needs
 
 
 @dataclass

@@ -91,14 +91,70 @@ def c_expression(expr: sp.Expr) -> str:
     return PRINTER.doprint(expr)
 
 
-def render_function(program: Program) -> RenderedFunction:
+# A kernel longer than this is emitted as parts of at most this many lines.  Parts compile about 1.5 times
+# faster per line at n = 64 but run 2-9 % slower, so the right-hand side's forward_dynamics (called at every
+# integrator stage) is cut only when it is very long.
+SPLIT_LINES = 600
+SPLIT_LINES_HOT = 8000
+HOT_KERNELS = ("forward_dynamics",)
+
+
+def render_function(program: Program, split_lines: int | None = SPLIT_LINES) -> RenderedFunction:
+    """The C lines of one kernel, and its operation count.  A kernel of more than ``split_lines`` lines (None:
+    never) is also cut into parts of at most that many lines, called one after the other: the compiler's
+    register allocation and scheduling grow faster than a function's length, so parts compile faster (and
+    no slower code comes of it; docs/performance.md)."""
     kernel = program.kernel
     lines = [f"const double {symbol.name} = {c_expression(expr)};" for symbol, expr in program.assignments]
     for i, expr in enumerate(program.outputs):
         lines.append(f"{kernel.output}[{i}] = {c_expression(expr)};")
     ops = count_ops([e for _, e in program.assignments] + list(program.outputs))
-    return RenderedFunction(kernel.name, kernel.summary, kernel.inputs, kernel.output, kernel.output_size,
-                            lines, ops)
+    function = RenderedFunction(kernel.name, kernel.summary, kernel.inputs, kernel.output, kernel.output_size,
+                                lines, ops)
+    if split_lines is not None and len(lines) > split_lines:
+        function.parts, function.scratch = split(program, lines, split_lines)
+    return function
+
+
+def split(program: Program, lines: list[str], size: int) -> tuple[list[list[str]], int]:
+    """Cut straight-line code into parts of at most ``size`` lines (the outputs go with the last part).  A value
+    one part defines and a later part uses is stored in the scratch array s[] at the end of the first and
+    read back at the start of the other; a slot is reused once the last part reading it has started."""
+    symbols = [symbol for symbol, _ in program.assignments]
+    expressions = [expr for _, expr in program.assignments] + list(program.outputs)
+    bounds = list(range(0, len(lines), size))
+    part_of_line = [i // size for i in range(len(lines))]
+    defined_in = {symbol: part_of_line[i] for i, symbol in enumerate(symbols)}
+    last_use = {}                                    # symbol -> last part that reads it from another part
+    imports = [[] for _ in bounds]
+    for i, expr in enumerate(expressions):
+        part = part_of_line[i]
+        for symbol in expr.free_symbols:
+            home = defined_in.get(symbol)
+            if home is not None and home < part:
+                if symbol not in imports[part]:
+                    imports[part].append(symbol)
+                last_use[symbol] = max(last_use.get(symbol, part), part)
+    slot, free, in_use, scratch = {}, [], [], 0
+    exports = [[] for _ in bounds]
+    for part in range(len(bounds)):
+        for symbol in [s for s in in_use if last_use[s] <= part]:   # read at this part's start: reusable
+            in_use.remove(symbol)
+            free.append(slot[symbol])
+        for symbol in symbols:
+            if defined_in[symbol] == part and symbol in last_use:
+                slot[symbol] = free.pop() if free else scratch
+                scratch += slot[symbol] == scratch
+                in_use.append(symbol)
+                exports[part].append(symbol)
+    parts = []
+    for part, start in enumerate(bounds):
+        body = [f"const double {symbol.name} = s[{slot[symbol]}];"
+                for symbol in sorted(imports[part], key=lambda s: slot[s])]
+        body += lines[start:start + size]
+        body += [f"s[{slot[symbol]}] = {symbol.name};" for symbol in exports[part]]
+        parts.append(body)
+    return parts, max(scratch, 1)
 
 
 def _environment() -> jinja2.Environment:
@@ -107,8 +163,15 @@ def _environment() -> jinja2.Environment:
                               trim_blocks=True, lstrip_blocks=True)
 
 
-def render_model(scene: Scene, name: str, programs: list[Program], bake_params: bool, layout) -> GeneratedModel:
-    functions = [render_function(p) for p in programs]
+def render_model(scene: Scene, name: str, programs: list[Program], bake_params: bool, layout,
+                 split_lines: int | None = None) -> GeneratedModel:
+    """``split_lines``: cut every kernel longer than this into parts (None: SPLIT_LINES, and SPLIT_LINES_HOT
+    for the right-hand side's forward_dynamics)."""
+    def size(kernel):
+        if split_lines is not None:
+            return split_lines
+        return SPLIT_LINES_HOT if kernel.name in HOT_KERNELS else SPLIT_LINES
+    functions = [render_function(p, size(p.kernel)) for p in programs]
     dense = _check_kernels(functions)
     generated = {f.name: f for f in functions}
     env = _environment()

@@ -24,7 +24,7 @@ def _quiet(message: str) -> None:
 
 def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
              progress=_quiet, specialise: bool = True, formulation: str = "gibbs_appell",
-             raw_ops: bool = False, dense: bool | None = None) -> GeneratedModel:
+             raw_ops: bool = False, dense: bool | None = None, split_lines: int | None = None) -> GeneratedModel:
     """Generate the C model of ``scene``.  ``progress(message)`` is called as stages advance.
 
     ``specialise`` (default) leaves out what the scene does not need (see codegen.specialise);
@@ -37,8 +37,9 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
     records sympy's ``count_ops`` of each dynamics kernel before CSE in ``.raw_ops`` (name -> int).
 
     ``dense``: generate the dense kernels mass_matrix, bias, contact_jacobian (O(n^2) code; the hybrid loop
-    does not need them); None (default) does for n <= codegen.kernels.DENSE_MAX_LINKS, and otherwise the
-    model forms them at run time from its O(n) kernels.
+    does not need them); None (default) does for n <= codegen.interface.DENSE_MAX_LINKS, and otherwise the
+    model forms them at run time from its O(n) kernels.  ``split_lines``: cut kernels longer than this into
+    parts (None: codegen.emit's defaults).
     """
     if formulation not in FORMULATIONS:
         raise ValueError(f"formulation: must be one of {', '.join(FORMULATIONS)}, got {formulation!r}")
@@ -68,7 +69,7 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
 
     start = time.perf_counter()
     progress("render")
-    model = render_model(scene, name, programs, bake_params, layout)
+    model = render_model(scene, name, programs, bake_params, layout, split_lines)
     timings["render"] = time.perf_counter() - start
     model.timings = timings
     model.formulation = formulation

@@ -163,15 +163,24 @@ def _environment() -> jinja2.Environment:
                               trim_blocks=True, lstrip_blocks=True)
 
 
+def split_size(kernel_name: str, split_lines: int | None = None) -> int:
+    """The part length of a kernel: ``split_lines`` if given, else SPLIT_LINES (SPLIT_LINES_HOT for the
+    right-hand side's forward_dynamics)."""
+    if split_lines is not None:
+        return split_lines
+    return SPLIT_LINES_HOT if kernel_name in HOT_KERNELS else SPLIT_LINES
+
+
 def render_model(scene: Scene, name: str, programs: list[Program], bake_params: bool, layout,
                  split_lines: int | None = None) -> GeneratedModel:
-    """``split_lines``: cut every kernel longer than this into parts (None: SPLIT_LINES, and SPLIT_LINES_HOT
-    for the right-hand side's forward_dynamics)."""
-    def size(kernel):
-        if split_lines is not None:
-            return split_lines
-        return SPLIT_LINES_HOT if kernel.name in HOT_KERNELS else SPLIT_LINES
-    functions = [render_function(p, size(p.kernel)) for p in programs]
+    """The model's files from its flattened kernels; ``split_lines``: see split_size."""
+    functions = [render_function(p, split_size(p.kernel.name, split_lines)) for p in programs]
+    return assemble_model(scene, name, functions, bake_params, layout)
+
+
+def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], bake_params: bool,
+                   layout) -> GeneratedModel:
+    """The model's header, source and cffi declarations from its rendered kernels (in interface order)."""
     dense = _check_kernels(functions)
     generated = {f.name: f for f in functions}
     env = _environment()

@@ -24,7 +24,8 @@ def _quiet(message: str) -> None:
 
 def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
              progress=_quiet, specialise: bool = True, formulation: str = "gibbs_appell",
-             raw_ops: bool = False, dense: bool | None = None, split_lines: int | None = None) -> GeneratedModel:
+             raw_ops: bool = False, dense: bool | None = None, split_lines: int | None = None,
+             workers: int | None = None) -> GeneratedModel:
     """Generate the C model of ``scene``.  ``progress(message)`` is called as stages advance.
 
     ``specialise`` (default) leaves out what the scene does not need (see codegen.specialise);
@@ -40,12 +41,21 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
     does not need them); None (default) does for n <= codegen.interface.DENSE_MAX_LINKS, and otherwise the
     model forms them at run time from its O(n) kernels.  ``split_lines``: cut kernels longer than this into
     parts (None: codegen.emit's defaults).
+
+    ``workers``: processes that derive, flatten and render the kernels side by side (each kernel is derived on
+    its own tape, so they are independent); None: one per core (at most MAX_WORKERS) from
+    PARALLEL_MIN_LINKS links on, else 1.  Workers are forked, so only a single-threaded process uses them
+    (another generates serially).  The result is the same text whatever the number.
     """
     if formulation not in FORMULATIONS:
         raise ValueError(f"formulation: must be one of {', '.join(FORMULATIONS)}, got {formulation!r}")
     name = name or scene.name
     layout = layout_for(scene, specialise)
     check_not_singular(scene, layout)
+    if workers is None:
+        workers = min(os.cpu_count() or 1, MAX_WORKERS) if scene.n >= PARALLEL_MIN_LINKS else 1
+    if workers > 1 and formulation == "gibbs_appell" and not raw_ops and _can_fork():
+        return _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, workers, progress)
     timings = {}
     start = time.perf_counter()
     if formulation == "lagrange" and dense is None:
@@ -74,6 +84,62 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
     model.timings = timings
     model.formulation = formulation
     model.raw_ops = raw
+    return model
+
+
+PARALLEL_MIN_LINKS = 24     # below this, starting worker processes costs more than it saves
+MAX_WORKERS = 4
+
+
+def _can_fork() -> bool:
+    """Worker processes are forked (a spawned one would re-run the caller's main module, which need not be a
+    file): only from a process with a single thread, where a fork is safe."""
+    import multiprocessing
+    import threading
+    return "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1
+
+
+def _kernel_job(job):
+    """Derive, flatten and render one kernel (in a worker process): (rendered function, stage seconds)."""
+    scene, bake_params, layout, builder_name, split_lines = job
+    from .emit import render_function, split_size
+    from .kinematics import ChainSymbols
+    builder = next(b for b in kernels.KERNEL_BUILDERS if b.__name__ == builder_name)
+    start = time.perf_counter()
+    kernel = builder(ChainSymbols(scene, bake_params, layout))
+    derived = time.perf_counter()
+    program = flatten(kernel)
+    flattened = time.perf_counter()
+    function = render_function(program, split_size(kernel.name, split_lines))
+    return function, (derived - start, flattened - derived, time.perf_counter() - flattened)
+
+
+def _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, workers, progress):
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from .emit import assemble_model
+    from .interface import wants_dense
+    builders = kernels.builders(wants_dense(scene.n, dense))
+    start = time.perf_counter()
+    progress(f"derive, cse and render {len(builders)} kernels in {workers} processes")
+    functions, seconds = {}, [0.0, 0.0, 0.0]
+    context = multiprocessing.get_context("fork")        # _can_fork: this process has one thread
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+        jobs = {pool.submit(_kernel_job, (scene, bake_params, layout, b.__name__, split_lines)): b
+                for b in builders}
+        for done in as_completed(jobs):
+            function, stages = done.result()
+            functions[function.name] = function
+            seconds = [a + b for a, b in zip(seconds, stages)]
+            progress(f"  {function.name}: {len(function.lines)} lines ({sum(stages):.2f} s)")
+    wall = time.perf_counter() - start
+    ordered = [functions[b.__name__.removesuffix("_kernel")] for b in builders]
+    begin = time.perf_counter()
+    model = assemble_model(scene, name, ordered, bake_params, layout)
+    model.timings = {"derive": seconds[0], "cse": seconds[1], "render": seconds[2] + time.perf_counter() - begin,
+                     "parallel_wall": wall + time.perf_counter() - begin}
+    model.formulation = "gibbs_appell"
+    model.raw_ops = {}
     return model
 
 

@@ -6,6 +6,7 @@
 #include "paper_case1.h"
 #include <math.h>
 
+/* ---- kernel mass_matrix ---- */
 /* Flight inertia matrix I_f(Theta) (Eq. 12, Fig. 2), full, row-major.  137 ops (46 add, 83 mul, 0 div, 8 calls) */
 void paper_case1_mass_matrix(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT M)
 {
@@ -125,6 +126,7 @@ void paper_case1_mass_matrix(const double *GAC_RESTRICT q, const double *GAC_RES
     M[35] = Bc0_1;
 }
 
+/* ---- kernel bias ---- */
 /* Right-hand side R(Theta, Theta_dot) of I_f Theta_ddot = R (Eq. 12, 38-41, Fig. 3), generalised forces of inputs, springs and dampers included.  119 ops (36 add, 75 mul, 0 div, 8 calls) */
 void paper_case1_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT R)
 {
@@ -203,6 +205,7 @@ void paper_case1_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT q
     R[5] = -Fp_0_y;
 }
 
+/* ---- kernel forward_dynamics ---- */
 /* Theta_ddot solving I_f Theta_ddot = R, by an O(n) articulated-body recursion.  336 ops (115 add, 207 mul, 6 div, 8 calls) */
 void paper_case1_forward_dynamics(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT qdd)
 {
@@ -387,6 +390,7 @@ void paper_case1_forward_dynamics(const double *GAC_RESTRICT q, const double *GA
     qdd[5] = sol_1;
 }
 
+/* ---- kernel inertia_solve ---- */
 /* x = I_f^-1 Q: the accelerations that generalised forces Q alone give (no motion, no gravity), by the O(n) articulated-body recursion.  274 ops (95 add, 165 mul, 6 div, 8 calls) */
 void paper_case1_inertia_solve(const double *GAC_RESTRICT q, const double *GAC_RESTRICT Q, const double *GAC_RESTRICT p, double *GAC_RESTRICT x)
 {
@@ -542,6 +546,7 @@ void paper_case1_inertia_solve(const double *GAC_RESTRICT q, const double *GAC_R
     x[5] = sol_1;
 }
 
+/* ---- kernel generalized_momentum ---- */
 /* h = I_f qd = dT/dqd: the generalised momentum, by composite momenta at O(n) cost (I_f times any vector).  148 ops (46 add, 94 mul, 0 div, 8 calls) */
 void paper_case1_generalized_momentum(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT h)
 {
@@ -617,6 +622,7 @@ void paper_case1_generalized_momentum(const double *GAC_RESTRICT q, const double
     h[5] = pF_1_y;
 }
 
+/* ---- kernel contact_points ---- */
 /* Positions of O_1..O_{n+1} in the reference frame, row i-1 = O_i.  42 ops (14 add, 20 mul, 0 div, 8 calls) */
 void paper_case1_contact_points(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT r)
 {
@@ -661,6 +667,7 @@ void paper_case1_contact_points(const double *GAC_RESTRICT q, const double *GAC_
     r[14] = 0.0;
 }
 
+/* ---- kernel contact_velocities ---- */
 /* Velocities of O_1..O_{n+1} in the reference frame (Eq. 42).  49 ops (17 add, 24 mul, 0 div, 8 calls) */
 void paper_case1_contact_velocities(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT v)
 {
@@ -713,6 +720,7 @@ void paper_case1_contact_velocities(const double *GAC_RESTRICT q, const double *
     v[14] = 0.0;
 }
 
+/* ---- kernel contact_jacobian ---- */
 /* Rows d(O_i . X_a)/dTheta of the contact Jacobian (Eq. 42, Fig. 4) for the (point, axis) pairs the walls need, row-major.  62 ops (34 add, 20 mul, 0 div, 8 calls) */
 void paper_case1_contact_jacobian(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT J)
 {
@@ -808,6 +816,7 @@ void paper_case1_contact_jacobian(const double *GAC_RESTRICT q, const double *GA
     J[59] = 1.0;
 }
 
+/* ---- kernel contact_generalized_force ---- */
 /* Q = J^T f: the generalised force of forces f along the contact Jacobian rows (N on a point's axis, N m on a stop's joint).  57 ops (21 add, 28 mul, 0 div, 8 calls) */
 void paper_case1_contact_generalized_force(const double *GAC_RESTRICT q, const double *GAC_RESTRICT f, const double *GAC_RESTRICT p, double *GAC_RESTRICT Q)
 {
@@ -848,6 +857,7 @@ void paper_case1_contact_generalized_force(const double *GAC_RESTRICT q, const d
     Q[5] = Ff_1_y;
 }
 
+/* ---- kernel contact_gaps ---- */
 /* Gap of each (point, wall) pair: distance of the point inside its wall (negative = beyond it).  78 ops (34 add, 36 mul, 0 div, 8 calls) */
 void paper_case1_contact_gaps(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT gap)
 {
@@ -913,6 +923,7 @@ void paper_case1_contact_gaps(const double *GAC_RESTRICT q, const double *GAC_RE
     gap[19] = -x14 - x15;
 }
 
+/* ---- kernel energy ---- */
 /* E[0] = kinetic energy T, E[1] = potential energy V, gravity and joint springs (J).  176 ops (48 add, 120 mul, 0 div, 8 calls) */
 void paper_case1_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT E)
 {
@@ -976,6 +987,7 @@ void paper_case1_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRICT
     E[1] = p[0]*(href_1_y + B0_1*q[5]) + p[0]*(href_2_y + B0_2*O_2_y) + p[0]*(href_3_y + B0_3*O_3_y) + p[0]*(href_4_y + B0_4*O_4_y);
 }
 
+/* ---- kernel contact_bias ---- */
 /* J_dot qd: accelerations of the contact Jacobian rows' (point, axis) at Theta_ddot = 0, row order of contact_jacobian.  51 ops (15 add, 28 mul, 0 div, 8 calls) */
 void paper_case1_contact_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT a)
 {
@@ -1023,6 +1035,7 @@ void paper_case1_contact_bias(const double *GAC_RESTRICT q, const double *GAC_RE
     a[9] = aO_5_y;
 }
 
+/* ---- kernel power ---- */
 /* P[0] = power of the inputs sum u_i qd_(c_i), P[1] = dissipation of the joint dampers sum C_k theta_dot_k^2 >= 0 (W).  0 ops (0 add, 0 mul, 0 div, 0 calls) */
 void paper_case1_power(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT P)
 {
@@ -1034,6 +1047,7 @@ void paper_case1_power(const double *GAC_RESTRICT q, const double *GAC_RESTRICT 
     P[1] = 0.0;
 }
 
+/* ---- end of kernels ---- */
 void paper_case1_rhs(double t, const double *GAC_RESTRICT x, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p,
                  double *GAC_RESTRICT xdot)
 {

@@ -6,6 +6,7 @@
 #include "paper_case2.h"
 #include <math.h>
 
+/* ---- kernel mass_matrix ---- */
 /* Flight inertia matrix I_f(Theta) (Eq. 12, Fig. 2), full, row-major.  58 ops (10 add, 42 mul, 0 div, 6 calls) */
 void paper_case2_mass_matrix(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT M)
 {
@@ -83,6 +84,7 @@ void paper_case2_mass_matrix(const double *GAC_RESTRICT q, const double *GAC_RES
     M[35] = B0_1;
 }
 
+/* ---- kernel bias ---- */
 /* Right-hand side R(Theta, Theta_dot) of I_f Theta_ddot = R (Eq. 12, 38-41, Fig. 3), generalised forces of inputs, springs and dampers included.  106 ops (30 add, 70 mul, 0 div, 6 calls) */
 void paper_case2_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT R)
 {
@@ -141,6 +143,7 @@ void paper_case2_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT q
     R[5] = Fp_m1_x*s_m1 - Fp_0_z*c_m1;
 }
 
+/* ---- kernel forward_dynamics ---- */
 /* Theta_ddot solving I_f Theta_ddot = R, by an O(n) articulated-body recursion.  236 ops (71 add, 153 mul, 6 div, 6 calls) */
 void paper_case2_forward_dynamics(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT qdd)
 {
@@ -270,6 +273,7 @@ void paper_case2_forward_dynamics(const double *GAC_RESTRICT q, const double *GA
     qdd[5] = Xdd_2;
 }
 
+/* ---- kernel inertia_solve ---- */
 /* x = I_f^-1 Q: the accelerations that generalised forces Q alone give (no motion, no gravity), by the O(n) articulated-body recursion.  175 ops (52 add, 111 mul, 6 div, 6 calls) */
 void paper_case2_inertia_solve(const double *GAC_RESTRICT q, const double *GAC_RESTRICT Q, const double *GAC_RESTRICT p, double *GAC_RESTRICT x)
 {
@@ -376,6 +380,7 @@ void paper_case2_inertia_solve(const double *GAC_RESTRICT q, const double *GAC_R
     x[5] = Xdd_2;
 }
 
+/* ---- kernel generalized_momentum ---- */
 /* h = I_f qd = dT/dqd: the generalised momentum, by composite momenta at O(n) cost (I_f times any vector).  87 ops (24 add, 57 mul, 0 div, 6 calls) */
 void paper_case2_generalized_momentum(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT h)
 {
@@ -426,6 +431,7 @@ void paper_case2_generalized_momentum(const double *GAC_RESTRICT q, const double
     h[5] = c_m1*pF_1_z - pF_0_x*s_m1;
 }
 
+/* ---- kernel contact_points ---- */
 /* Positions of O_1..O_{n+1} in the reference frame, row i-1 = O_i.  21 ops (5 add, 10 mul, 0 div, 6 calls) */
 void paper_case2_contact_points(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT r)
 {
@@ -453,6 +459,7 @@ void paper_case2_contact_points(const double *GAC_RESTRICT q, const double *GAC_
     r[5] = O_2_z;
 }
 
+/* ---- kernel contact_velocities ---- */
 /* Velocities of O_1..O_{n+1} in the reference frame (Eq. 42).  41 ops (11 add, 24 mul, 0 div, 6 calls) */
 void paper_case2_contact_velocities(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT v)
 {
@@ -490,6 +497,7 @@ void paper_case2_contact_velocities(const double *GAC_RESTRICT q, const double *
     v[5] = vO_2_z;
 }
 
+/* ---- kernel contact_jacobian ---- */
 /* Rows d(O_i . X_a)/dTheta of the contact Jacobian (Eq. 42, Fig. 4) for the (point, axis) pairs the walls need, row-major.  40 ops (12 add, 22 mul, 0 div, 6 calls) */
 void paper_case2_contact_jacobian(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT J)
 {
@@ -552,6 +560,7 @@ void paper_case2_contact_jacobian(const double *GAC_RESTRICT q, const double *GA
     J[35] = 1.0;
 }
 
+/* ---- kernel contact_generalized_force ---- */
 /* Q = J^T f: the generalised force of forces f along the contact Jacobian rows (N on a point's axis, N m on a stop's joint).  42 ops (11 add, 25 mul, 0 div, 6 calls) */
 void paper_case2_contact_generalized_force(const double *GAC_RESTRICT q, const double *GAC_RESTRICT f, const double *GAC_RESTRICT p, double *GAC_RESTRICT Q)
 {
@@ -586,6 +595,7 @@ void paper_case2_contact_generalized_force(const double *GAC_RESTRICT q, const d
     Q[5] = Ff_1_z;
 }
 
+/* ---- kernel contact_gaps ---- */
 /* Gap of each (point, wall) pair: distance of the point inside its wall (negative = beyond it).  48 ops (17 add, 25 mul, 0 div, 6 calls) */
 void paper_case2_contact_gaps(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT gap)
 {
@@ -628,6 +638,7 @@ void paper_case2_contact_gaps(const double *GAC_RESTRICT q, const double *GAC_RE
     gap[11] = -x8 + 1.0*p[11];
 }
 
+/* ---- kernel energy ---- */
 /* E[0] = kinetic energy T, E[1] = potential energy V, gravity and joint springs (J).  100 ops (27 add, 67 mul, 0 div, 6 calls) */
 void paper_case2_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT E)
 {
@@ -671,6 +682,7 @@ void paper_case2_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRICT
     E[1] = p[0]*(href_1_y + B0_1*q[4]);
 }
 
+/* ---- kernel contact_bias ---- */
 /* J_dot qd: accelerations of the contact Jacobian rows' (point, axis) at Theta_ddot = 0, row order of contact_jacobian.  74 ops (22 add, 46 mul, 0 div, 6 calls) */
 void paper_case2_contact_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT a)
 {
@@ -716,6 +728,7 @@ void paper_case2_contact_bias(const double *GAC_RESTRICT q, const double *GAC_RE
     a[5] = aO_2_z;
 }
 
+/* ---- kernel power ---- */
 /* P[0] = power of the inputs sum u_i qd_(c_i), P[1] = dissipation of the joint dampers sum C_k theta_dot_k^2 >= 0 (W).  0 ops (0 add, 0 mul, 0 div, 0 calls) */
 void paper_case2_power(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT P)
 {
@@ -727,6 +740,7 @@ void paper_case2_power(const double *GAC_RESTRICT q, const double *GAC_RESTRICT 
     P[1] = 0.0;
 }
 
+/* ---- end of kernels ---- */
 void paper_case2_rhs(double t, const double *GAC_RESTRICT x, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p,
                  double *GAC_RESTRICT xdot)
 {

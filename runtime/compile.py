@@ -133,18 +133,66 @@ def compile_model(name: str, header: str, source: str, cdef: str, flags=DEFAULT_
             raise BuildError(f"the freshly built module {target} cannot be imported: {exc}") from exc
 
 
+PARALLEL_LINES = 4000     # a model source longer than this is compiled as several units side by side
+KERNEL_MARK, END_MARK = "/* ---- kernel ", "/* ---- end of kernels ---- */"
+
+
+def translation_units(source: str, count: int) -> list[str]:
+    """The model's source cut into at most ``count`` translation units at its kernel boundaries (the template's
+    marks), balanced by lines: the first holds everything outside the kernels, each starts with the includes
+    that precede the first kernel.  A source without the marks is one unit."""
+    lines = source.splitlines(keepends=True)
+    marks = [i for i, line in enumerate(lines) if line.startswith(KERNEL_MARK)]
+    ends = [i for i, line in enumerate(lines) if line.startswith(END_MARK)]
+    if count < 2 or len(marks) < 2 or len(ends) != 1:
+        return [source]
+    head, tail = lines[:marks[0]], lines[ends[0]:]
+    groups = [lines[a:b] for a, b in zip(marks, marks[1:] + ends)]
+    units = [list(tail)] + [[] for _ in range(count - 1)]
+    for group in sorted(groups, key=len, reverse=True):            # largest first, into the lightest unit
+        min(units, key=len).extend(group)
+    return ["".join(head + unit) for unit in units if unit]
+
+
+def _compile_objects(sources: list[Path], folder: Path, flags) -> list[Path]:
+    """Compile C sources to position-independent objects in ``folder``, side by side (one per core)."""
+    from concurrent.futures import ThreadPoolExecutor
+    import subprocess
+    compiler = shlex.split(os.environ["CC"]) if os.environ.get("CC") else [find_compiler()]
+    pic = shlex.split(sysconfig.get_config_var("CCSHARED") or "-fPIC")
+
+    def one(path: Path) -> Path:
+        obj = folder / f"{path.stem}.o"
+        done = subprocess.run([*compiler, *pic, *flags, f"-I{folder}", f"-I{LIBRARY_DIR}", "-c", str(path), "-o",
+                               str(obj)], capture_output=True, text=True)
+        if done.returncode != 0:
+            raise BuildError(f"compiling {path.name} failed: {done.stderr.strip()[-2000:]}")
+        return obj
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+        return list(pool.map(one, sources))
+
+
 def _build(name, header, source, cdef, flags, module_name: str, target: Path, sidecar: Path) -> float:
-    """Build the module in a temporary directory, move it to ``target``, then write its sidecar."""
+    """Build the module in a temporary directory, move it to ``target``, then write its sidecar.  A long
+    model (PARALLEL_LINES) is compiled as several units, with the library, one per core, then linked."""
     find_compiler()
     start = time.perf_counter()
     workdir = Path(tempfile.mkdtemp(prefix=f"{module_name}-", dir=target.parent))
     try:
         (workdir / f"{name}.h").write_text(header)
         (workdir / f"{name}.c").write_text(source)
+        cores = os.cpu_count() or 1
+        sources, objects = [str(workdir / f"{name}.c"), *map(str, library_sources())], []
+        if cores > 1 and source.count("\n") > PARALLEL_LINES:
+            units = []
+            for k, text in enumerate(translation_units(source, cores)):
+                units.append(workdir / f"{name}_unit{k}.c")
+                units[-1].write_text(text)
+            objects = _compile_objects([*units, *library_sources()], workdir, flags)
+            sources = []
         ffi = cffi.FFI()
         ffi.cdef(cdef)
-        ffi.set_source(module_name, f'#include "{name}.h"',
-                       sources=[str(workdir / f"{name}.c"), *map(str, library_sources())],
+        ffi.set_source(module_name, f'#include "{name}.h"', sources=sources, extra_objects=list(map(str, objects)),
                        include_dirs=[str(workdir), str(LIBRARY_DIR)], extra_compile_args=list(flags), libraries=["m"])
         try:
             built = Path(ffi.compile(tmpdir=str(workdir), verbose=False))

@@ -20,6 +20,7 @@ STUDIES = {
     "ensemble": ("studies.ensemble_bench", "runs per second of simulate_many: threads, processes, Dask"),
     "driven": ("studies.driven_cost", "the cost of inputs, springs and dampers: ns per rhs, simulation time"),
     "simcost": ("studies.simcost", "time per simulated second against n, with the fitted exponent"),
+    "peer": ("studies.peer", "forward dynamics against Pinocchio's ABA traced by CasADi, side by side in C"),
 }
 
 

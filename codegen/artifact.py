@@ -3,6 +3,7 @@ operation counts, and the scene hash that keys it.  Light on purpose (no sympy, 
 reads cached models through it without loading the computer algebra."""
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib.util
 import json
@@ -72,7 +73,13 @@ class GeneratedModel:
 
 
 def scene_hash(scene: Scene) -> str:
-    """sha256 of a canonical JSON form of the scene (every field, floats by repr)."""
+    """sha256 of a canonical JSON form of the scene (every field, floats by repr); remembered per scene (a
+    frozen, hashable value) so that loading a long chain's model again does not walk it again."""
+    return _scene_hash(scene)
+
+
+@functools.lru_cache(maxsize=256)
+def _scene_hash(scene: Scene) -> str:
     def canonical(value):
         if isinstance(value, float):
             return repr(value)

@@ -36,7 +36,7 @@ try:
 except ImportError:  # pragma: no cover - not POSIX: no cross-process lock
     fcntl = None
 
-GEN_FORMAT = 1
+GEN_FORMAT = 2
 GEN_PAYLOAD_KEYS = ("name", "header", "source", "cdef", "functions")
 FUNCTION_KEYS = ("name", "summary", "inputs", "output", "output_size", "ops")
 OPS_FIELDS = ("add", "mul", "div", "sqrt", "trig", "other_calls")
@@ -157,7 +157,17 @@ def _payload(model: GeneratedModel) -> dict:
 
 
 def _payload_hash(payload: dict) -> str:
-    return sha256_of(json.dumps(payload, sort_keys=True, separators=(",", ":")).encode())
+    """sha256 over the payload's fields in a fixed order: the texts as they are (no re-serialising of megabytes
+    of C on every load), the small function list as canonical JSON."""
+    digest = hashlib.sha256()
+    for field in GEN_PAYLOAD_KEYS:
+        value = payload.get(field)
+        text = value if isinstance(value, str) else json.dumps(value, sort_keys=True, separators=(",", ":"))
+        digest.update(field.encode())
+        digest.update(b"\0")
+        digest.update(text.encode())
+        digest.update(b"\0")
+    return digest.hexdigest()
 
 
 def _read_generated(path: Path, key: str, name: str) -> tuple[dict | None, str | None]:

@@ -101,8 +101,8 @@
  * OPERATION COUNTS (after CSE; rule in codegen/ops.py: adds incl. subtractions, muls, divs, calls)
  *   mass_matrix             137 = 46 add + 83 mul + 0 div + 8 calls
  *   bias                    119 = 36 add + 75 mul + 0 div + 8 calls
- *   forward_dynamics        336 = 115 add + 207 mul + 6 div + 8 calls
- *   inertia_solve           274 = 95 add + 165 mul + 6 div + 8 calls
+ *   forward_dynamics        316 = 112 add + 190 mul + 6 div + 8 calls
+ *   inertia_solve           254 = 92 add + 148 mul + 6 div + 8 calls
  *   generalized_momentum    148 = 46 add + 94 mul + 0 div + 8 calls
  *   contact_points           42 = 14 add + 20 mul + 0 div + 8 calls
  *   contact_velocities       49 = 17 add + 24 mul + 0 div + 8 calls
@@ -228,7 +228,7 @@ void paper_case1_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT q
  *   u    in : inputs (NU, layout in the header; N m on an angle, N on a translation; NULL when NU = 0)
  *   p    in : parameters (NPARAM, layout in the header)
  *   qdd  out: qdd (NQ; rad/s^2, m/s^2)
- *   6 outputs.   336 ops (115 add, 207 mul, 6 div, 8 calls) */
+ *   6 outputs.   316 ops (112 add, 190 mul, 6 div, 8 calls) */
 void paper_case1_forward_dynamics(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT qdd);
 
 /* x = I_f^-1 Q: the accelerations that generalised forces Q alone give (no motion, no gravity), by the O(n) articulated-body recursion.
@@ -236,7 +236,7 @@ void paper_case1_forward_dynamics(const double *GAC_RESTRICT q, const double *GA
  *   Q    in : generalised forces (NQ; N m on an angle, N on a translation)
  *   p    in : parameters (NPARAM, layout in the header)
  *   x    out: I_f^-1 Q (NQ; rad/s^2, m/s^2)
- *   6 outputs.   274 ops (95 add, 165 mul, 6 div, 8 calls) */
+ *   6 outputs.   254 ops (92 add, 148 mul, 6 div, 8 calls) */
 void paper_case1_inertia_solve(const double *GAC_RESTRICT q, const double *GAC_RESTRICT Q, const double *GAC_RESTRICT p, double *GAC_RESTRICT x);
 
 /* h = I_f qd = dT/dqd: the generalised momentum, by composite momenta at O(n) cost (I_f times any vector).

@@ -144,7 +144,7 @@ void paper_case2_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT q
 }
 
 /* ---- kernel forward_dynamics ---- */
-/* Theta_ddot solving I_f Theta_ddot = R, by an O(n) articulated-body recursion.  236 ops (71 add, 153 mul, 6 div, 6 calls) */
+/* Theta_ddot solving I_f Theta_ddot = R, by an O(n) articulated-body recursion.  224 ops (72 add, 140 mul, 6 div, 6 calls) */
 void paper_case2_forward_dynamics(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT qdd)
 {
     (void)q;
@@ -192,17 +192,20 @@ void paper_case2_forward_dynamics(const double *GAC_RESTRICT q, const double *GA
     const double ud_1 = -Dinv_1*T_1_z;
     const double IaC_1_11 = B0_1 - W_1_4*h_1_x;
     const double paF_1_y = S_1_y - T_1_z*W_1_4;
-    const double x0 = c_1*c_1;
-    const double x1 = s_1*s_1;
-    const double IzA_1_00 = K_1_xx*x0 + K_1_yy*x1;
-    const double x2 = c_1*s_1;
-    const double IzA_1_01 = K_1_xx*x2 - K_1_yy*x2;
-    const double IzA_1_11 = K_1_xx*x1 + K_1_yy*x0;
+    const double ss_1 = s_1*s_1;
+    const double sc_1 = c_1*s_1;
+    const double x0 = K_1_xx - K_1_yy;
+    const double x1 = ss_1*x0;
+    const double IzA_1_00 = K_1_xx - x1;
+    const double IzA_1_01 = sc_1*x0;
+    const double IzA_1_11 = K_1_yy + x1;
     const double IzB_1_02 = h_1_x*s_1;
     const double IzB_1_12 = -c_1*h_1_x;
-    const double IzC_1_00 = B0_1*x0 + IaC_1_11*x1;
-    const double IzC_1_01 = B0_1*x2 - IaC_1_11*x2;
-    const double IzC_1_11 = B0_1*x1 + IaC_1_11*x0;
+    const double x2 = B0_1 - IaC_1_11;
+    const double x3 = ss_1*x2;
+    const double IzC_1_00 = B0_1 - x3;
+    const double IzC_1_01 = sc_1*x2;
+    const double IzC_1_11 = IaC_1_11 + x3;
     const double pF_1_y = S_1_x*c_1 - paF_1_y*s_1;
     const double pF_1_z = S_1_x*s_1 + c_1*paF_1_y;
     const double pN_1_y = T_1_x*c_1 - T_1_y*s_1;
@@ -216,16 +219,18 @@ void paper_case2_forward_dynamics(const double *GAC_RESTRICT q, const double *GA
     const double IaC_0_00 = B0_1 - IzB_1_12*W_0_3;
     const double paN_0_y = pN_1_y - W_0_1*pN_1_z;
     const double paF_0_x = S_1_z - W_0_3*pN_1_z;
-    const double x3 = c_0*c_0;
-    const double IzA_0_11 = IaA_0_11*x3;
+    const double ss_0 = s_0*s_0;
     const double x4 = c_0*s_0;
+    const double sc_0 = x4;
+    const double IzA_0_11 = IaA_0_11 - IaA_0_11*ss_0;
     const double IzB_0_00 = -IaB_0_10*x4;
-    const double IzB_0_10 = IaB_0_10*x3;
-    const double x5 = s_0*s_0;
-    const double IzC_0_00 = IaC_0_00*x3 + IzC_1_00*x5;
-    const double IzC_0_01 = IaC_0_00*x4 - IzC_1_00*x4;
+    const double IzB_0_10 = IaB_0_10*(c_0*c_0);
+    const double x5 = IaC_0_00 - IzC_1_00;
+    const double x6 = ss_0*x5;
+    const double IzC_0_00 = IaC_0_00 - x6;
+    const double IzC_0_01 = sc_0*x5;
     const double IzC_0_02 = -IzC_1_01*s_0;
-    const double IzC_0_11 = IaC_0_00*x5 + IzC_1_00*x3;
+    const double IzC_0_11 = IzC_1_00 + x6;
     const double IzC_0_12 = IzC_1_01*c_0;
     const double pF_0_x = c_0*paF_0_x - pF_1_y*s_0;
     const double pF_0_z = c_0*pF_1_y + paF_0_x*s_0;
@@ -274,7 +279,7 @@ void paper_case2_forward_dynamics(const double *GAC_RESTRICT q, const double *GA
 }
 
 /* ---- kernel inertia_solve ---- */
-/* x = I_f^-1 Q: the accelerations that generalised forces Q alone give (no motion, no gravity), by the O(n) articulated-body recursion.  175 ops (52 add, 111 mul, 6 div, 6 calls) */
+/* x = I_f^-1 Q: the accelerations that generalised forces Q alone give (no motion, no gravity), by the O(n) articulated-body recursion.  163 ops (53 add, 98 mul, 6 div, 6 calls) */
 void paper_case2_inertia_solve(const double *GAC_RESTRICT q, const double *GAC_RESTRICT Q, const double *GAC_RESTRICT p, double *GAC_RESTRICT x)
 {
     (void)q;
@@ -297,17 +302,20 @@ void paper_case2_inertia_solve(const double *GAC_RESTRICT q, const double *GAC_R
     const double ud_1 = Dinv_1*Q[2];
     const double IaC_1_11 = B0_1 - W_1_4*h_1_x;
     const double paF_1_y = Q[2]*W_1_4;
-    const double x0 = c_1*c_1;
-    const double x1 = s_1*s_1;
-    const double IzA_1_00 = K_1_xx*x0 + K_1_yy*x1;
-    const double x2 = c_1*s_1;
-    const double IzA_1_01 = K_1_xx*x2 - K_1_yy*x2;
-    const double IzA_1_11 = K_1_xx*x1 + K_1_yy*x0;
+    const double ss_1 = s_1*s_1;
+    const double sc_1 = c_1*s_1;
+    const double x0 = K_1_xx - K_1_yy;
+    const double x1 = ss_1*x0;
+    const double IzA_1_00 = K_1_xx - x1;
+    const double IzA_1_01 = sc_1*x0;
+    const double IzA_1_11 = K_1_yy + x1;
     const double IzB_1_02 = h_1_x*s_1;
     const double IzB_1_12 = -c_1*h_1_x;
-    const double IzC_1_00 = B0_1*x0 + IaC_1_11*x1;
-    const double IzC_1_01 = B0_1*x2 - IaC_1_11*x2;
-    const double IzC_1_11 = B0_1*x1 + IaC_1_11*x0;
+    const double x2 = B0_1 - IaC_1_11;
+    const double x3 = ss_1*x2;
+    const double IzC_1_00 = B0_1 - x3;
+    const double IzC_1_01 = sc_1*x2;
+    const double IzC_1_11 = IaC_1_11 + x3;
     const double pF_1_y = -paF_1_y*s_1;
     const double pF_1_z = c_1*paF_1_y;
     const double Dinv_0 = 1.0/(IzA_1_11);
@@ -319,16 +327,18 @@ void paper_case2_inertia_solve(const double *GAC_RESTRICT q, const double *GAC_R
     const double IaC_0_00 = B0_1 - IzB_1_12*W_0_3;
     const double paN_0_y = Q[1]*W_0_1;
     const double paF_0_x = Q[1]*W_0_3;
-    const double x3 = c_0*c_0;
-    const double IzA_0_11 = IaA_0_11*x3;
+    const double ss_0 = s_0*s_0;
     const double x4 = c_0*s_0;
+    const double sc_0 = x4;
+    const double IzA_0_11 = IaA_0_11 - IaA_0_11*ss_0;
     const double IzB_0_00 = -IaB_0_10*x4;
-    const double IzB_0_10 = IaB_0_10*x3;
-    const double x5 = s_0*s_0;
-    const double IzC_0_00 = IaC_0_00*x3 + IzC_1_00*x5;
-    const double IzC_0_01 = IaC_0_00*x4 - IzC_1_00*x4;
+    const double IzB_0_10 = IaB_0_10*(c_0*c_0);
+    const double x5 = IaC_0_00 - IzC_1_00;
+    const double x6 = ss_0*x5;
+    const double IzC_0_00 = IaC_0_00 - x6;
+    const double IzC_0_01 = sc_0*x5;
     const double IzC_0_02 = -IzC_1_01*s_0;
-    const double IzC_0_11 = IaC_0_00*x5 + IzC_1_00*x3;
+    const double IzC_0_11 = IzC_1_00 + x6;
     const double IzC_0_12 = IzC_1_01*c_0;
     const double pF_0_x = c_0*paF_0_x - pF_1_y*s_0;
     const double pF_0_z = c_0*pF_1_y + paF_0_x*s_0;
@@ -336,13 +346,13 @@ void paper_case2_inertia_solve(const double *GAC_RESTRICT q, const double *GAC_R
     const double Dinv_m1 = 1.0/(IzA_0_11);
     const double W_m1_3 = Dinv_m1*IzB_0_10;
     const double W_m1_5 = -Dinv_m1*IzB_0_00;
-    const double x6 = Q[0] - pN_0_z;
-    const double ud_m1 = Dinv_m1*x6;
+    const double x7 = Q[0] - pN_0_z;
+    const double ud_m1 = Dinv_m1*x7;
     const double IaC_m1_00 = IzC_0_00 - IzB_0_10*W_m1_3;
     const double IaC_m1_02 = IzC_0_01 + IzB_0_00*W_m1_3;
     const double IaC_m1_22 = IzC_0_11 + IzB_0_00*W_m1_5;
-    const double paF_m1_x = pF_0_x + W_m1_3*x6;
-    const double paF_m1_z = pF_0_z + W_m1_5*x6;
+    const double paF_m1_x = pF_0_x + W_m1_3*x7;
+    const double paF_m1_z = pF_0_z + W_m1_5*x7;
     const double FQ_0 = paF_m1_x + Q[5]*s_m1 - Q[3]*c_m1;
     const double FQ_1 = -pF_1_z + Q[3]*s_m1 + Q[5]*c_m1;
     const double FQ_2 = paF_m1_z - Q[4];

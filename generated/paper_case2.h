@@ -77,8 +77,8 @@
  * OPERATION COUNTS (after CSE; rule in codegen/ops.py: adds incl. subtractions, muls, divs, calls)
  *   mass_matrix              58 = 10 add + 42 mul + 0 div + 6 calls
  *   bias                    106 = 30 add + 70 mul + 0 div + 6 calls
- *   forward_dynamics        236 = 71 add + 153 mul + 6 div + 6 calls
- *   inertia_solve           175 = 52 add + 111 mul + 6 div + 6 calls
+ *   forward_dynamics        224 = 72 add + 140 mul + 6 div + 6 calls
+ *   inertia_solve           163 = 53 add + 98 mul + 6 div + 6 calls
  *   generalized_momentum     87 = 24 add + 57 mul + 0 div + 6 calls
  *   contact_points           21 = 5 add + 10 mul + 0 div + 6 calls
  *   contact_velocities       41 = 11 add + 24 mul + 0 div + 6 calls
@@ -193,7 +193,7 @@ void paper_case2_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT q
  *   u    in : inputs (NU, layout in the header; N m on an angle, N on a translation; NULL when NU = 0)
  *   p    in : parameters (NPARAM, layout in the header)
  *   qdd  out: qdd (NQ; rad/s^2, m/s^2)
- *   6 outputs.   236 ops (71 add, 153 mul, 6 div, 6 calls) */
+ *   6 outputs.   224 ops (72 add, 140 mul, 6 div, 6 calls) */
 void paper_case2_forward_dynamics(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT qdd);
 
 /* x = I_f^-1 Q: the accelerations that generalised forces Q alone give (no motion, no gravity), by the O(n) articulated-body recursion.
@@ -201,7 +201,7 @@ void paper_case2_forward_dynamics(const double *GAC_RESTRICT q, const double *GA
  *   Q    in : generalised forces (NQ; N m on an angle, N on a translation)
  *   p    in : parameters (NPARAM, layout in the header)
  *   x    out: I_f^-1 Q (NQ; rad/s^2, m/s^2)
- *   6 outputs.   175 ops (52 add, 111 mul, 6 div, 6 calls) */
+ *   6 outputs.   163 ops (53 add, 98 mul, 6 div, 6 calls) */
 void paper_case2_inertia_solve(const double *GAC_RESTRICT q, const double *GAC_RESTRICT Q, const double *GAC_RESTRICT p, double *GAC_RESTRICT x);
 
 /* h = I_f qd = dT/dqd: the generalised momentum, by composite momenta at O(n) cost (I_f times any vector).

@@ -133,7 +133,7 @@ def compile_model(name: str, header: str, source: str, cdef: str, flags=DEFAULT_
             raise BuildError(f"the freshly built module {target} cannot be imported: {exc}") from exc
 
 
-PARALLEL_LINES = 4000     # a model source longer than this is compiled as several units side by side
+PARALLEL_LINES = 1000     # a model source longer than this is compiled as several units side by side
 KERNEL_MARK, END_MARK = "/* ---- kernel ", "/* ---- end of kernels ---- */"
 
 

@@ -1,76 +1,104 @@
-"""How the generator scales with n: stage timings and operation counts, as a Markdown table
-(general n + 5 coordinate models of the built-in N-link scene unless --specialise).
+"""How building a model scales with n: for the built-in N-link scene, a cold build into an empty cache --
+derive, CSE and render (in worker processes from codegen.pipeline.PARALLEL_MIN_LINKS links on), the compile
+(several translation units side by side for a long source), their sum -- then the warm load of the cached
+model in a fresh process, the lines of C and the operation counts.  Specialised (planar, n + 2 coordinates,
+what `python -m codegen --links N` builds) unless --general.
 
-    python -m studies scaling --links 1,2,4,8,16,32
+    python -m studies scaling --links 1,2,4,8,16,32,64,128,256
 """
 from __future__ import annotations
 
 import argparse
+import os
+import subprocess
 import sys
+import tempfile
 import time
 
-from codegen.pipeline import generate
+WARM_LOAD = """
+import sys, time
 from codegen.scene import default_scene
+from runtime import load_model
+scene = default_scene({n})
+start = time.perf_counter()
+load_model(scene, specialise={specialise})
+print(time.perf_counter() - start)
+"""
 
-from .machine import describe
 
-
-def measure(n: int, compile_code: bool = True, progress=print, specialise: bool = False) -> dict:
+def measure(n: int, progress=print, specialise: bool = True) -> dict:
+    """One cold build of the n-link model into a new, empty cache, and its warm load from there."""
+    from codegen.cache import generate_cached
+    from codegen.scene import default_scene
     scene = default_scene(n)
-    model = generate(scene, progress=lambda m: progress(f"  n={n}: {m}"), specialise=specialise)
-    row = {"n": n, **model.timings}
-    if compile_code:
-        from runtime.compile import compile_model
-        start = time.perf_counter()
-        # a fresh build every time (the nonce defeats the cache) so the compile time is real
-        compile_model(model.name, model.header, model.source, model.cdef,
-                      flags=("-O2", f"-DSCALING_NONCE={time.time_ns()}"))
-        row["compile"] = time.perf_counter() - start
+    with tempfile.TemporaryDirectory(prefix="scaling-") as cache:
+        previous = os.environ.get("GIBBS_APPELL_CACHE")
+        os.environ["GIBBS_APPELL_CACHE"] = cache
+        try:
+            from runtime.compile import compile_model
+            start = time.perf_counter()
+            model = generate_cached(scene, specialise=specialise, refresh=True,
+                                    progress=lambda m: progress(f"  n={n}: {m}"))
+            generated = time.perf_counter() - start
+            compile_model(model.name, model.header, model.source, model.cdef)
+            total = time.perf_counter() - start
+            warm = subprocess.run([sys.executable, "-c", WARM_LOAD.format(n=n, specialise=specialise)],
+                                  capture_output=True, text=True, check=True)
+        finally:
+            if previous is None:
+                os.environ.pop("GIBBS_APPELL_CACHE", None)
+            else:
+                os.environ["GIBBS_APPELL_CACHE"] = previous
     ops = {f.name: f.ops for f in model.functions}
-    row["ops_M"] = ops["mass_matrix"]
-    row["ops_R"] = ops["bias"]
-    row["ops_MR"] = ops["mass_matrix"] + ops["bias"]
-    row["ops_fd"] = ops["forward_dynamics"]
-    row["c_lines"] = len(model.source.splitlines())
-    return row
+    return {"n": n, **model.timings, "generate": generated, "compile": total - generated, "total": total,
+            "warm_ms": float(warm.stdout.split()[-1]) * 1e3, "ops_fd": ops["forward_dynamics"],
+            "c_lines": len(model.source.splitlines()), "nq": model.layout.nq,
+            "parallel": "parallel_wall" in model.timings}
 
 
 def markdown(rows) -> str:
-    lines = ["| n | derive s | CSE s | render s | compile s | I_f + R ops (add/mul/div/calls) "
-             "| forward dynamics ops (add/mul/div/calls) | lines of C |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = ["| n | coordinates | derive s | CSE s | render s | generate (wall) s | compile s | cold total s "
+             "| warm load ms | lines of C | forward dynamics ops |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        mr, fd = r["ops_MR"], r["ops_fd"]
-        lines.append(f"| {r['n']} | {r['derive']:.2f} | {r['cse']:.2f} | {r['render']:.2f} | "
-                     f"{r.get('compile', float('nan')):.2f} | {mr.total:,} ({mr.add}/{mr.mul}/{mr.div}/{mr.calls}) | "
-                     f"{fd.total:,} ({fd.add}/{fd.mul}/{fd.div}/{fd.calls}) | {r['c_lines']:,} |")
+        star = "*" if r["parallel"] else ""
+        lines.append(f"| {r['n']} | {r['nq']} | {r['derive']:.2f}{star} | {r['cse']:.2f}{star} | {r['render']:.2f}{star} "
+                     f"| {r['generate']:.2f} | {r['compile']:.2f} | {r['total']:.2f} | {r['warm_ms']:.1f} "
+                     f"| {r['c_lines']:,} | {r['ops_fd'].total:,} |")
+    if any(r["parallel"] for r in rows):
+        lines.append("\n\\* summed over the worker processes (they run side by side: the wall time is the "
+                     "generate column).")
     return "\n".join(lines)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="python -m studies scaling", description=__doc__,
+    parser = argparse.ArgumentParser(prog="python -m studies scaling", description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--links", default="1,2,4,8,16,32", help="comma-separated n values")
-    parser.add_argument("--no-compile", action="store_true", help="skip the (fresh) cffi compile")
-    parser.add_argument("--specialise", action="store_true",
-                        help="measure the scene-specialised (planar, n + 2 coordinates) models instead of the "
-                             "general n + 5 coordinate ones")
+    parser.add_argument("--links", default="1,2,4,8,16,32,64", help="comma-separated n values")
+    parser.add_argument("--general", action="store_true",
+                        help="measure the general (n + 5 coordinate) models instead of the specialised ones")
     return parser
 
 
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
+    from codegen.scene import MAX_LINKS
     try:
         ns = [int(x) for x in args.links.split(",")]
     except ValueError:
         print(f"error: --links: expected comma-separated integers, got {args.links!r}", file=sys.stderr)
         return 2
+    if not all(1 <= n <= MAX_LINKS for n in ns):
+        print(f"error: --links: every n must be in 1..{MAX_LINKS}, got {args.links!r}", file=sys.stderr)
+        return 2
+    from .machine import describe
+    from .toolchain import compiler_version
     rows = []
     for n in ns:
         print(f"n = {n} ...", file=sys.stderr, flush=True)
-        rows.append(measure(n, not args.no_compile, progress=lambda m: print(m, file=sys.stderr, flush=True),
-                            specialise=args.specialise))
-    print(f"Machine: {describe()}")
+        rows.append(measure(n, progress=lambda m: print(m, file=sys.stderr, flush=True),
+                            specialise=not args.general))
+    print(f"Machine: {describe(compiler_version())}")
     print(markdown(rows))
     return 0
 

@@ -126,26 +126,25 @@ def split(program: Program, lines: list[str], size: int) -> tuple[list[list[str]
     part_of_line = [i // size for i in range(len(lines))]
     defined_in = {symbol: part_of_line[i] for i, symbol in enumerate(symbols)}
     last_use = {}                                    # symbol -> last part that reads it from another part
-    imports = [[] for _ in bounds]
+    imports = [{} for _ in bounds]                   # per part, an ordered set of the symbols it reads in
     for i, expr in enumerate(expressions):
         part = part_of_line[i]
         for symbol in expr.free_symbols:
             home = defined_in.get(symbol)
             if home is not None and home < part:
-                if symbol not in imports[part]:
-                    imports[part].append(symbol)
+                imports[part][symbol] = None
                 last_use[symbol] = max(last_use.get(symbol, part), part)
-    slot, free, in_use, scratch = {}, [], [], 0
+    released = [[] for _ in bounds]                  # per part, the symbols whose slot is free from its start on
+    for symbol, part in last_use.items():
+        released[part].append(symbol)
+    slot, free, scratch = {}, [], 0
     exports = [[] for _ in bounds]
     for part in range(len(bounds)):
-        for symbol in [s for s in in_use if last_use[s] <= part]:   # read at this part's start: reusable
-            in_use.remove(symbol)
-            free.append(slot[symbol])
-        for symbol in symbols:
-            if defined_in[symbol] == part and symbol in last_use:
+        free.extend(slot[symbol] for symbol in released[part])     # read at this part's start: reusable
+        for symbol in symbols[bounds[part]:bounds[part] + size]:
+            if symbol in last_use:
                 slot[symbol] = free.pop() if free else scratch
                 scratch += slot[symbol] == scratch
-                in_use.append(symbol)
                 exports[part].append(symbol)
     parts = []
     for part, start in enumerate(bounds):

@@ -91,7 +91,7 @@ def urdf(scene) -> str:
             body = scene.links[k - 1]
             if not isinstance(body, LineLink):
                 raise ValueError("peer: only line links are mapped")
-            l, mu, J = body.length, body.mu, body.J
+            l, mu, J = float(body.length), float(body.mu), tuple(map(float, body.J))
             m = mu * l
             inertial = (f'<inertial><mass value="{m!r}"/><origin xyz="{l / 2!r} 0 0"/>'
                         f'<inertia ixx="{l * J[0]!r}" iyy="{mu * l ** 3 / 12 + l * J[1]!r}" '

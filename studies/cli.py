@@ -24,6 +24,29 @@ STUDIES = {
 }
 
 
+def parse_links(text: str, low: int = 1) -> list[int]:
+    """A study's --links: '1-8', '1,2,4', '1-4,8,16' -> sorted distinct n, each in low..MAX_LINKS; ValueError
+    naming the option and the range otherwise."""
+    from codegen.scene import MAX_LINKS
+    ns = set()
+    try:
+        for part in text.split(","):
+            part = part.strip()
+            if "-" in part:
+                lo, hi = (int(x) for x in part.split("-", 1))
+                if lo > hi:
+                    raise ValueError
+                ns.update(range(lo, hi + 1))
+            else:
+                ns.add(int(part))
+    except ValueError:
+        raise ValueError(f"--links: expected a range like 1-8 or a list like 1,2,4, got {text!r}") from None
+    bad = [n for n in ns if not low <= n <= MAX_LINKS]
+    if bad or not ns:
+        raise ValueError(f"--links: every n must be in {low}..{MAX_LINKS}, got {text!r}")
+    return sorted(ns)
+
+
 def build_parser() -> argparse.ArgumentParser:
     width = max(map(len, STUDIES)) + 2
     parser = argparse.ArgumentParser(

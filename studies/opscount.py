@@ -28,8 +28,8 @@ import time
 from pathlib import Path
 
 from codegen.outputs import output_dir_problem
-from codegen.scene import MAX_LINKS
 
+from .cli import parse_links
 from .machine import describe
 from .toolchain import compile_c, compiler_version
 
@@ -262,27 +262,6 @@ def plots(rows, out: Path) -> list[Path]:
 # ---------------------------------------------------------------------------
 # command line
 # ---------------------------------------------------------------------------
-def parse_links(text: str) -> list[int]:
-    """'1-8', '1,2,4', '1-4,8,16' -> sorted distinct n, each in 1..MAX_LINKS."""
-    ns = set()
-    try:
-        for part in text.split(","):
-            part = part.strip()
-            if "-" in part:
-                lo, hi = (int(x) for x in part.split("-", 1))
-                if lo > hi:
-                    raise ValueError
-                ns.update(range(lo, hi + 1))
-            else:
-                ns.add(int(part))
-    except ValueError:
-        raise ValueError(f"--links: expected a range like 1-8 or a list like 1,2,4, got {text!r}") from None
-    bad = [n for n in ns if not 1 <= n <= MAX_LINKS]
-    if bad or not ns:
-        raise ValueError(f"--links: every n must be in 1..{MAX_LINKS}, got {text!r}")
-    return sorted(ns)
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m studies ops", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)

@@ -268,14 +268,14 @@ def peer_available(peer_python: str) -> str:
 
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
-    from codegen.scene import MAX_LINKS
+    from .cli import parse_links
     try:
-        links = sorted({int(x) for x in args.links.split(",")})
-    except ValueError:
-        print(f"error: --links: expected integers separated by commas, got {args.links!r}", file=sys.stderr)
+        links = parse_links(args.links)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
         return 2
-    if not all(1 <= n <= MAX_LINKS for n in links) or args.batches < 1:
-        print(f"error: --links in 1..{MAX_LINKS}, --batches >= 1", file=sys.stderr)
+    if args.batches < 1:
+        print(f"error: --batches: must be >= 1, got {args.batches}", file=sys.stderr)
         return 2
     problem = peer_available(args.peer_python)
     if problem:

@@ -82,14 +82,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
-    from codegen.scene import MAX_LINKS
+    from .cli import parse_links
     try:
-        ns = [int(x) for x in args.links.split(",")]
-    except ValueError:
-        print(f"error: --links: expected comma-separated integers, got {args.links!r}", file=sys.stderr)
-        return 2
-    if not all(1 <= n <= MAX_LINKS for n in ns):
-        print(f"error: --links: every n must be in 1..{MAX_LINKS}, got {args.links!r}", file=sys.stderr)
+        ns = parse_links(args.links)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
         return 2
     from .machine import describe
     from .toolchain import compiler_version

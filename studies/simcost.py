@@ -52,14 +52,11 @@ def measure(n: int, t_end: float, repeats: int, progress=print) -> dict:
 
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
-    from codegen.scene import MAX_LINKS
+    from .cli import parse_links
     try:
-        links = sorted({int(x) for x in args.links.split(",")})
-    except ValueError:
-        print(f"error: --links: expected integers separated by commas, got {args.links!r}", file=sys.stderr)
-        return 2
-    if not all(2 <= n <= MAX_LINKS for n in links):
-        print(f"error: --links: every n must be in 2..{MAX_LINKS}, got {args.links!r}", file=sys.stderr)
+        links = parse_links(args.links, low=2)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
         return 2
     if not (args.t_end > 0 and args.repeats >= 1):
         print("error: --t-end must be > 0 and --repeats >= 1", file=sys.stderr)

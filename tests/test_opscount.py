@@ -16,6 +16,7 @@ from codegen.ops import raw_count_ops
 from codegen.scene import MAX_LINKS, default_scene
 from conftest import random_scene
 from studies import opscount
+from studies.cli import parse_links
 
 ROOT = Path(__file__).resolve().parent.parent
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -48,12 +49,12 @@ def test_raw_count_ops_is_sympy_count_ops_on_kernels(build):
 
 
 def test_parse_links():
-    assert opscount.parse_links("1-4") == [1, 2, 3, 4]
-    assert opscount.parse_links("8,1,2,2") == [1, 2, 8]
-    assert opscount.parse_links("1-3,16") == [1, 2, 3, 16]
+    assert parse_links("1-4") == [1, 2, 3, 4]
+    assert parse_links("8,1,2,2") == [1, 2, 8]
+    assert parse_links("1-3,16") == [1, 2, 3, 16]
     for bad in ("0-3", "4-2", "a", "1,,2", str(MAX_LINKS + 1)):
         with pytest.raises(ValueError, match="--links"):
-            opscount.parse_links(bad)
+            parse_links(bad)
 
 
 def run_ops(*args):

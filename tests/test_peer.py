@@ -87,3 +87,10 @@ def test_default_scene_urdf_has_gravity_along_minus_x2():
     roll, pitch, yaw = map(float, fixed[0].find("origin").get("rpy").split())
     R = np.array([[1, 0, 0], [0, math.cos(roll), -math.sin(roll)], [0, math.sin(roll), math.cos(roll)]])
     assert (pitch, yaw) == (0.0, 0.0) and np.allclose(R @ [0, 1, 0], [0, 0, 1], atol=1e-15)
+
+
+def test_simulation_cost_needs_two_links_or_more():
+    from studies.cli import parse_links
+    assert parse_links("2-4,8", low=2) == [2, 3, 4, 8]
+    with pytest.raises(ValueError, match="--links: every n must be in 2.."):
+        parse_links("1,4", low=2)

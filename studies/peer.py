@@ -9,8 +9,9 @@ alternating batches, and checks that they agree (coordinates mapped exactly; rel
 
     python -m studies peer [--links 4,8,16,32,64] [--flags="-O2,-O3 -march=native"] [--peer-python PATH]
 
-Without the peer (pip install -e ".[peer]", or --peer-python naming an interpreter that has it) it says so
-and stops.
+Without the peer it says so and stops; it pins numpy 1.24, so it lives in an environment of its own:
+python3 -m venv .peer && .peer/bin/pip install cmeel-casadi-kin-dyn (the `peer` extra), then --peer-python
+.peer/bin/python.
 """
 from __future__ import annotations
 
@@ -263,7 +264,8 @@ def peer_available(peer_python: str) -> str:
         return ""
     last = (check.stderr.strip().splitlines() or ["?"])[-1]
     return (f"the peer (Pinocchio + CasADi, from casadi_kin_dyn) is not available to {peer_python}: {last}. "
-            "Install the peer extra (pip install -e \".[peer]\"), or give --peer-python an interpreter that has it")
+            "It pins numpy 1.24, so give it an environment of its own: python3 -m venv .peer && "
+            ".peer/bin/pip install cmeel-casadi-kin-dyn (the peer extra), then --peer-python .peer/bin/python")
 
 
 def main(argv=None) -> int:

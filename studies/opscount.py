@@ -58,7 +58,7 @@ def measure(n: int, formulation: str, specialise: bool = False, progress=None, c
     say = progress or (lambda message: None)
     scene = default_scene(n)
     start = time.perf_counter()
-    model = generate(scene, specialise=specialise, formulation=formulation, raw_ops=True, progress=say)
+    model = generate(scene, specialise=specialise, formulation=formulation, raw_ops=True, progress=say, dense=True)
     generation = time.perf_counter() - start
     ops = {f.name: f.ops for f in model.functions}
     say("compile (cc -std=c99 -O2 -c)")

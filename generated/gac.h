@@ -2,7 +2,7 @@
  * gac.h -- the hybrid (flight + impact) simulation of an open chain of rigid links confined in a box,
  * for any model described by a const gac_model (sizes, contact tables, kernels).  Plain C99.
  *
- * The library holds everything that does not depend on the scene: the LDL^T solves, the impact law of
+ * The library holds everything that does not depend on the scene: the small LDL^T solves in contact space, the impact law of
  * Eq. 44-48 with complementarity (and its LCP), the constrained dynamics of resting contacts, the
  * integrators RK4, DOPRI5 and DOP853 with dense output, event location, resting (persistent) contact and
  * the floor on the base chart's measure.  A model (NAME.c, written by the generator, or written by hand)

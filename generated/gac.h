@@ -336,7 +336,9 @@ typedef struct {
                                     own e minus the law with e = 0 (dropped bounces that would rise less
                                     than rest_height) */
     double roundoff;             /* the law's relative round-off bound on the energy (>= 1e-10), the tolerance
-                                    of its post-conditions (grows with cond(I_f)) */
+                                    of its post-conditions: the solves' error on the velocity change, holding
+                                    landed contacts included, and the error of evaluating T itself (grows with
+                                    cond(I_f) and with velocities along its soft directions) */
     double approach_before;      /* largest |normal velocity| of any contact before (m/s) */
     double approach_after;       /* fastest approach of a contact within contact_tol after (m/s) */
     int nactivated, *activated;  /* contacts made persistent at this event */

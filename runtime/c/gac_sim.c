@@ -1169,18 +1169,22 @@ static int gac_rest_at_start(gac_sim *s)
  * (dqd = qd_plus - qd).  So b = max(1e-10, 4 (nq + 1) eps |I_f| (|qd| |dqd| + |dqd|^2 / 2) / T), |I_f|
  * (2-norm) by 16 power iterations with the model's I_f v (generalized_momentum, O(n) each), with |dqd| taken
  * as sum_a |F_a| |I_f^-1 n_a| when the contacts' changes cancel (nearly dependent contacts pushing against
- * each other).  b grows where a large velocity change meets a soft direction of I_f (a slender link with a
- * tiny axial inertia, a state near the gimbal lock). */
+ * each other).  The energies the post-conditions compare are themselves evaluated with an error of about
+ * (nq + 1) eps |I_f| |v|^2 / 2 at velocities v, so b also holds (nq + 1) eps |I_f| (|qd|^2 + |qd_plus|^2) / (2 T)
+ * (far below 1e-10 unless the velocities lie along a soft direction of I_f).  b grows where a large velocity
+ * change meets a soft direction of I_f (a slender link with a tiny axial inertia, a state near the gimbal
+ * lock). */
 static double gac_impact_roundoff(const gac_model *md, const double *q, const double *p, const double *work, int n,
                                   const double *F, const double *qd, const double *qd_plus, double T)
 {
     const int nq = md->nq;
     const double *Y = GAC_WORK_Y(md, work);
-    double x[nq], y[nq], norm_M = 0.0, size = 0.0, change = 0.0, parts = 0.0, b;
+    double x[nq], y[nq], norm_M = 0.0, size = 0.0, change = 0.0, parts = 0.0, after = 0.0, b;
     int a, i, it;
     for (i = 0; i < nq; ++i) {
         x[i] = 1.0 + 0.1 * i * (i % 2 ? -1.0 : 1.0);      /* a fixed, generic start */
         size += qd[i] * qd[i];
+        after += qd_plus[i] * qd_plus[i];
         change += (qd_plus[i] - qd[i]) * (qd_plus[i] - qd[i]);
     }
     for (a = 0; a < n; ++a) {                            /* sum |F_a| |Y_a|: the changes before they cancel */
@@ -1199,9 +1203,11 @@ static double gac_impact_roundoff(const gac_model *md, const double *q, const do
         for (i = 0; i < nq; ++i) norm_M += x[i] * x[i];
         norm_M = sqrt(norm_M);
     }
+    b = (nq + 1) * GAC_EPS * norm_M * 0.5 * (size + after);          /* evaluating T before and after */
     size = sqrt(size);
     change = sqrt(change) > parts ? sqrt(change) : parts;
-    b = 4.0 * (nq + 1) * GAC_EPS * norm_M * (size * change + 0.5 * change * change) / (T > 0.0 ? T : 1e-300);
+    b += 4.0 * (nq + 1) * GAC_EPS * norm_M * (size * change + 0.5 * change * change);
+    b /= T > 0.0 ? T : 1e-300;
     return b > 1e-10 ? b : 1e-10;
 }
 
@@ -1433,6 +1439,10 @@ static int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
             }
         }
         gac_normal_velocities(md, s->x1, s->p, vn);
+        if (nset > 0) {          /* holding them changed the velocities too: the bound covers the whole change */
+            const double held = gac_impact_roundoff(md, x, s->p, s->work, 0, F, x + nq, s->x1 + nq, T_before);
+            if (held > bound) bound = r->roundoff = held;
+        }
     }
     if (rounds == 0) {                               /* no impulse: an impact only if a contact lands */
         int same = nset == s->nactive;

@@ -102,8 +102,8 @@ HOT_KERNELS = ("forward_dynamics",)
 def render_function(program: Program, split_lines: int | None = SPLIT_LINES) -> RenderedFunction:
     """The C lines of one kernel, and its operation count.  A kernel of more than ``split_lines`` lines (None:
     never) is also cut into parts of at most that many lines, called one after the other: the compiler's
-    register allocation and scheduling grow faster than a function's length, so parts compile faster (and
-    no slower code comes of it; docs/performance.md)."""
+    register allocation and scheduling grow faster than a function's length, so parts compile faster (at a
+    cost of 2-9 % per call, measured: hence SPLIT_LINES_HOT for the right-hand side; docs/performance.md)."""
     kernel = program.kernel
     lines = [f"const double {symbol.name} = {c_expression(expr)};" for symbol, expr in program.assignments]
     for i, expr in enumerate(program.outputs):

@@ -84,10 +84,13 @@ def _is_identity(T: Mat) -> bool:
 class JointTransform:
     """^{k-1}R_k = T_k Rz(theta_k) and the offset ^{k-1}r = O_k - O_{k-1}, applied piecewise."""
 
-    def __init__(self, tape: Tape, chain: ChainSymbols, moments: dict[int, LinkSymbols], k: int):
+    def __init__(self, tape: Tape, chain: ChainSymbols, moments: dict[int, LinkSymbols], k: int, cs=None):
+        """``cs``: (cos theta_k, sin theta_k) when already known (default: formed on the tape, the same symbols
+        as joint_rotations')."""
         theta = chain.theta(k)
-        self.c = tape.let(sp.cos(theta), f"c_{index_name(k)}")       # same symbols as joint_rotations
-        self.s = tape.let(sp.sin(theta), f"s_{index_name(k)}")
+        if cs is None:
+            cs = (tape.let(sp.cos(theta), f"c_{index_name(k)}"), tape.let(sp.sin(theta), f"s_{index_name(k)}"))
+        self.c, self.s = cs
         c, s = self.c, self.s
         self.Rz = ((c, -s, ZERO), (s, c, ZERO), (ZERO, ZERO, sp.Integer(1)))
         self.T = chain.twists[k + 1]
@@ -244,34 +247,53 @@ def _solve(tape: Tape, chain: ChainSymbols, moments: dict[int, LinkSymbols], loa
     free = set(chain.layout.free)
     joints = {k: JointTransform(tape, chain, moments, k) for k in range(-1, n + 1)}
     pivots = {}
-    inertia = force_k = None        # articulated inertia and force of links > k, about O_k in frame k
+    child = None                    # articulated inertia and force of links > k, about O_{k+1} in frame k + 1
     for k in range(n, -2, -1):      # backward: tip to base
-        tag = index_name(k)
-        I_k = _own_inertia(moments, k)
-        p_k = loads(k) if (k >= 1 and loads is not None) else (ZERO3, ZERO3)
-        if inertia is not None:
-            I_k = _add_inertia(I_k, joints[k + 1].inertia_to_parent(tape, inertia))
-            N_parent, F_parent = joints[k + 1].force_to_parent(tape, force_k)
-            p_k = (add(p_k[0], N_parent), add(p_k[1], F_parent))
-        if k + 1 in free:
-            inertia, force_k, W, ud = _pivot(tape, I_k, p_k, tag, force(k + 1))
-            pivots[k] = (W, ud)
-        else:                       # a locked joint passes everything on
-            inertia, force_k = I_k, p_k
+        load = loads(k) if (k >= 1 and loads is not None) else None
+        child, pivots[k] = backward_step(tape, moments, joints.get(k + 1), k, child, load,
+                                         force(k + 1) if k + 1 in free else None)
     qdd = [ZERO] * chain.nq
+    inertia, force_k = child
     X_ddot = _root_translations(tape, chain, joints[-1], inertia, force_k, free, force)
     for a in range(3):
         qdd[n + 2 + a] = X_ddot[a]
     motion = (ZERO3, X_ddot)        # of the reference frame at O_1
     for k in range(-1, n + 1):      # forward: base to tip
-        alpha, acc = joints[k].motion_to_child(tape, motion)
-        if k in pivots:
-            W, ud = pivots[k]
-            value = ud - sum((w * m for w, m in zip(W, alpha + acc)), ZERO)
-            qdd[k + 1] = tape.let(value, f"qdd_{index_name(k)}")
-            alpha = (alpha[0], alpha[1], alpha[2] + qdd[k + 1])
-        motion = (alpha, acc)
+        motion, value = forward_step(tape, joints[k], pivots[k], motion, k)
+        if value is not None:
+            qdd[k + 1] = value
     return qdd
+
+
+def backward_step(tape: Tape, moments: dict[int, LinkSymbols], joint: JointTransform | None, k: int, child,
+                  load, tau):
+    """One step of the backward pass at frame k: link k's own inertia (Eq. 4-7) and bias load ``load`` (moment,
+    force; None: none) plus ``child`` (articulated inertia and force of links > k in frame k + 1, carried to O_k
+    by ``joint`` = joint k + 1; None at the tip); then joint k's pivot with generalised force ``tau`` (None: a
+    locked joint, which passes everything on).  Returns ((inertia, force) of links >= k with the pivot taken
+    out, in frame k) and the pivot (W, u / D) or None."""
+    I_k = _own_inertia(moments, k)
+    p_k = (load[0], load[1]) if load is not None else (ZERO3, ZERO3)
+    if child is not None:
+        I_k = _add_inertia(I_k, joint.inertia_to_parent(tape, child[0]))
+        N_parent, F_parent = joint.force_to_parent(tape, child[1])
+        p_k = (add(p_k[0], N_parent), add(p_k[1], F_parent))
+    if tau is None:
+        return (I_k, p_k), None
+    inertia, force_k, W, ud = _pivot(tape, I_k, p_k, index_name(k), tau)
+    return (inertia, force_k), (W, ud)
+
+
+def forward_step(tape: Tape, joint: JointTransform, pivot, motion, k: int):
+    """One step of the forward pass: the motion (alpha, a) of O_{k-1} in frame k - 1 carried to O_k in frame
+    k by ``joint`` = joint k, then joint k's acceleration from its pivot (W, u / D) (None: locked, 0).
+    Returns the motion of frame k and theta_ddot_k (None when locked)."""
+    alpha, acc = joint.motion_to_child(tape, motion)
+    if pivot is None:
+        return (alpha, acc), None
+    W, ud = pivot
+    value = tape.let(ud - sum((w * m for w, m in zip(W, alpha + acc)), ZERO), f"qdd_{index_name(k)}")
+    return ((alpha[0], alpha[1], alpha[2] + value), acc), value
 
 
 def _root_translations(tape: Tape, chain: ChainSymbols, joint: JointTransform, inertia, force, free, generalized):

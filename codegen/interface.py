@@ -123,6 +123,16 @@ def wants_dense(n: int, dense: bool | None) -> bool:
     return n <= DENSE_MAX_LINKS if dense is None else bool(dense)
 
 
+ROLLED_MIN_LINKS = 32       # from this n on, forward_dynamics is emitted with loops over the links (codegen.rolled)
+
+
+def wants_rolled(n: int, rolled: bool | None) -> bool:
+    """Whether a model of n links gets the rolled forward dynamics (loops over its links, codegen.rolled):
+    ``rolled`` if given, else n >= ROLLED_MIN_LINKS.  Where the scene has no run of identical links to loop over,
+    the kernel stays unrolled."""
+    return n >= ROLLED_MIN_LINKS if rolled is None else bool(rolled)
+
+
 _WORK = Arg("work", "double *", "scratch, {NAME}_IMPACT_NWORK doubles", restrict=True)
 _ACTIVE = (Arg("nactive", "int", "number of contacts"),
            Arg("active", "const int *", "their indices 0..NCONTACT-1", restrict=True))

@@ -312,12 +312,14 @@ def builders(dense: bool):
 
 
 def build_kernels(scene: Scene, bake_params: bool = False, progress=None, layout=None,
-                  dense: bool | None = None) -> list[Kernel]:
+                  dense: bool | None = None, skip=()) -> list[Kernel]:
     """Derive every kernel of the scene (symbolic, per-intermediate symbols; no CSE yet); the dense ones
-    (codegen.interface.DENSE_KERNELS) only if ``interface.wants_dense(n, dense)``."""
+    (codegen.interface.DENSE_KERNELS) only if ``interface.wants_dense(n, dense)``; none named in ``skip``."""
     chain = ChainSymbols(scene, bake_params, layout)
     kernels = []
     for builder in builders(interface.wants_dense(scene.n, dense)):
+        if builder.__name__.removesuffix("_kernel") in skip:
+            continue
         if progress:
             progress(builder.__name__.removesuffix("_kernel"))
         kernels.append(builder(chain))

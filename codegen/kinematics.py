@@ -203,22 +203,26 @@ def velocity_products(tape: Tape, chain: ChainSymbols, rotations: dict[int, Mat]
     starting from the reference frame, which has omega = 0 and r_ddot_{Ov} = g X2 (gravity).
     """
     omega, omega_dot_v, acc_v = {}, {}, {}
-    w_prev, wd_prev = (ZERO, ZERO, ZERO), (ZERO, ZERO, ZERO)
-    a_prev = scale(chain.gravity, E_Y)
+    previous = ((ZERO, ZERO, ZERO), (ZERO, ZERO, ZERO), scale(chain.gravity, E_Y))
     r_prev = (ZERO, ZERO, ZERO)
     for k in range(-1, chain.n + 1):
-        R = rotations[k]
-        tag = index_name(k)
-        u = tape.let_vec(mat_t_vec(R, w_prev), f"wp_{tag}")            # ^kR_{k-1} omega_{k-1}
-        w = tape.let_vec(add(u, scale(chain.theta_dot(k), E_Z)), f"w_{tag}")
-        wd = tape.let_vec(add(mat_t_vec(R, wd_prev), scale(chain.theta_dot(k), cross(u, E_Z))),
-                          f"wdv_{tag}")
-        a_local = add(a_prev, add(cross(wd_prev, r_prev), cross(w_prev, cross(w_prev, r_prev))))
-        a = tape.let_vec(mat_t_vec(R, tape.let_vec(a_local, f"ap_{tag}")), f"av_{tag}")
+        w, wd, a = velocity_step(tape, rotations[k], chain.theta_dot(k), previous, r_prev, index_name(k))
         omega[k], omega_dot_v[k], acc_v[k] = w, wd, a
-        w_prev, wd_prev, a_prev = w, wd, a
+        previous = (w, wd, a)
         r_prev = link_offset(chain, moments, k)
     return Motion(omega, omega_dot_v, acc_v)
+
+
+def velocity_step(tape: Tape, R: Mat, theta_dot, previous, r_prev: Vec, tag: str) -> tuple[Vec, Vec, Vec]:
+    """One step of velocity_products: (omega, omega_dot_v, r_ddot_Ov) of frame k from those of frame k - 1
+    (``previous``), the joint rotation R = ^{k-1}R_k, theta_dot_k and the offset r_{k-1} = O_k - O_{k-1}."""
+    w_prev, wd_prev, a_prev = previous
+    u = tape.let_vec(mat_t_vec(R, w_prev), f"wp_{tag}")                # ^kR_{k-1} omega_{k-1}
+    w = tape.let_vec(add(u, scale(theta_dot, E_Z)), f"w_{tag}")
+    wd = tape.let_vec(add(mat_t_vec(R, wd_prev), scale(theta_dot, cross(u, E_Z))), f"wdv_{tag}")
+    a_local = add(a_prev, add(cross(wd_prev, r_prev), cross(w_prev, cross(w_prev, r_prev))))
+    a = tape.let_vec(mat_t_vec(R, tape.let_vec(a_local, f"ap_{tag}")), f"av_{tag}")
+    return w, wd, a
 
 
 def link_velocities(tape: Tape, chain: ChainSymbols, rotations: dict[int, Mat],

@@ -6,7 +6,8 @@ import time
 from pathlib import Path
 
 from .artifact import library_files
-from .emit import GeneratedModel, render_model, render_standalone
+from .emit import GeneratedModel, assemble_model, render_function, render_standalone, split_size
+from .interface import wants_dense, wants_rolled
 from .flatten import flatten, live_assignments
 from .ops import raw_count_ops
 from . import kernels, lagrange
@@ -25,7 +26,7 @@ def _quiet(message: str) -> None:
 def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
              progress=_quiet, specialise: bool = True, formulation: str = "gibbs_appell",
              raw_ops: bool = False, dense: bool | None = None, split_lines: int | None = None,
-             workers: int | None = None) -> GeneratedModel:
+             workers: int | None = None, rolled: bool | None = None) -> GeneratedModel:
     """Generate the C model of ``scene``.  ``progress(message)`` is called as stages advance.
 
     ``specialise`` (default) leaves out what the scene does not need (see codegen.specialise);
@@ -40,7 +41,9 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
     ``dense``: generate the dense kernels mass_matrix, bias, contact_jacobian (O(n^2) code; the hybrid loop
     does not need them); None (default) does for n <= codegen.interface.DENSE_MAX_LINKS, and otherwise the
     model forms them at run time from its O(n) kernels.  ``split_lines``: cut kernels longer than this into
-    parts (None: codegen.emit's defaults).
+    parts (None: codegen.emit's defaults).  ``rolled``: emit forward_dynamics with loops over the links
+    (codegen.rolled) instead of straight-line code per link; None (default) does from
+    codegen.interface.ROLLED_MIN_LINKS links on (the Gibbs-Appell formulation only).
 
     ``workers``: processes that derive, flatten and render the kernels side by side (each kernel is derived on
     its own tape, so they are independent); None: one per core (at most MAX_WORKERS) from
@@ -54,14 +57,17 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
     check_not_singular(scene, layout)
     if workers is None:
         workers = min(os.cpu_count() or 1, MAX_WORKERS) if scene.n >= PARALLEL_MIN_LINKS else 1
+    roll = formulation == "gibbs_appell" and wants_rolled(scene.n, rolled)
     if workers > 1 and formulation == "gibbs_appell" and not raw_ops and _can_fork():
-        return _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, workers, progress)
+        return _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, workers, progress, roll)
     timings = {}
     start = time.perf_counter()
     if formulation == "lagrange" and dense is None:
         dense = True
+    looped = _rolled_function(scene, bake_params, layout) if roll else None
     derived = FORMULATIONS[formulation](scene, bake_params, progress=lambda k: progress(f"derive {k}"),
-                                        layout=layout, dense=dense)
+                                        layout=layout, dense=dense,
+                                        **({"skip": ("forward_dynamics",)} if looped is not None else {}))
     timings["derive"] = time.perf_counter() - start
     raw = {}
     if raw_ops:
@@ -79,12 +85,30 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
 
     start = time.perf_counter()
     progress("render")
-    model = render_model(scene, name, programs, bake_params, layout, split_lines)
+    functions = [render_function(p, split_size(p.kernel.name, split_lines)) for p in programs]
+    if looped is not None:
+        functions.insert(_kernel_position("forward_dynamics", dense, scene.n), looped)
+    model = assemble_model(scene, name, functions, bake_params, layout)
     timings["render"] = time.perf_counter() - start
     model.timings = timings
     model.formulation = formulation
     model.raw_ops = raw
     return model
+
+
+def _kernel_position(name: str, dense: bool | None, n: int) -> int:
+    return [b.__name__.removesuffix("_kernel") for b in kernels.builders(wants_dense(n, dense))].index(name)
+
+
+def _rolled_function(scene, bake_params, layout):
+    """forward_dynamics with loops over the scene's run of identical links, rendered (None: no such run)."""
+    from . import rolled
+    from .kinematics import ChainSymbols
+    chain = ChainSymbols(scene, bake_params, layout)
+    built = rolled.rolled_kernel(chain)
+    if built is None:
+        return None
+    return rolled.render("forward_dynamics", rolled.summary(built), ("q", "qd", "u", "p"), "qdd", layout.nq, built)
 
 
 PARALLEL_MIN_LINKS = 24     # below this, starting worker processes costs more than it saves
@@ -101,11 +125,15 @@ def _can_fork() -> bool:
 
 def _kernel_job(job):
     """Derive, flatten and render one kernel (in a worker process): (rendered function, stage seconds)."""
-    scene, bake_params, layout, builder_name, split_lines = job
+    scene, bake_params, layout, builder_name, split_lines, roll = job
     from .emit import render_function, split_size
     from .kinematics import ChainSymbols
     builder = next(b for b in kernels.KERNEL_BUILDERS if b.__name__ == builder_name)
     start = time.perf_counter()
+    if roll and builder_name == "forward_dynamics_kernel":
+        function = _rolled_function(scene, bake_params, layout)
+        if function is not None:
+            return function, (time.perf_counter() - start, 0.0, 0.0)
     kernel = builder(ChainSymbols(scene, bake_params, layout))
     derived = time.perf_counter()
     program = flatten(kernel)
@@ -114,18 +142,16 @@ def _kernel_job(job):
     return function, (derived - start, flattened - derived, time.perf_counter() - flattened)
 
 
-def _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, workers, progress):
+def _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, workers, progress, roll):
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
-    from .emit import assemble_model
-    from .interface import wants_dense
     builders = kernels.builders(wants_dense(scene.n, dense))
     start = time.perf_counter()
     progress(f"derive, cse and render {len(builders)} kernels in {workers} processes")
     functions, seconds = {}, [0.0, 0.0, 0.0]
     context = multiprocessing.get_context("fork")        # _can_fork: this process has one thread
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        jobs = {pool.submit(_kernel_job, (scene, bake_params, layout, b.__name__, split_lines)): b
+        jobs = {pool.submit(_kernel_job, (scene, bake_params, layout, b.__name__, split_lines, roll)): b
                 for b in builders}
         for done in as_completed(jobs):
             function, stages = done.result()

@@ -141,10 +141,12 @@ def generator_fingerprint() -> str:
 
 
 def generation_key(scene: Scene, name: str | None = None, bake_params: bool = False,
-                   specialise: bool = True, dense: bool | None = None) -> str:
+                   specialise: bool = True, dense: bool | None = None, rolled: bool | None = None) -> str:
     name = name or scene.name
     dense = interface.wants_dense(scene.n, dense)
-    text = f"{scene_hash(scene)}|{name}|{bool(bake_params)}|{bool(specialise)}|{dense}|{generator_fingerprint()}"
+    rolled = interface.wants_rolled(scene.n, rolled)
+    text = (f"{scene_hash(scene)}|{name}|{bool(bake_params)}|{bool(specialise)}|{dense}|{rolled}|"
+            f"{generator_fingerprint()}")
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 
@@ -222,7 +224,7 @@ def _model_from_payload(payload: dict, scene: Scene, bake_params: bool, speciali
 
 def generate_cached(scene: Scene, *, name: str | None = None, bake_params: bool = False,
                     specialise: bool = True, progress=None, refresh: bool = False,
-                    dense: bool | None = None) -> GeneratedModel:
+                    dense: bool | None = None, rolled: bool | None = None) -> GeneratedModel:
     """``codegen.generate`` through the on-disk cache of generated text.
 
     A cached model has everything but the C lines of its functions (``functions[i].lines`` is
@@ -230,7 +232,7 @@ def generate_cached(scene: Scene, *, name: str | None = None, bake_params: bool 
     and stores the result (the command line does this, so it reports its own timings).
     """
     name = name or scene.name
-    key = generation_key(scene, name, bake_params, specialise, dense)
+    key = generation_key(scene, name, bake_params, specialise, dense, rolled)
     folder = cache_dir()
     path = folder / f"gen_{key}.json"
     with entry_lock(folder, path.stem):
@@ -242,7 +244,7 @@ def generate_cached(scene: Scene, *, name: str | None = None, bake_params: bool 
                 report_corrupted(path.name, problem, progress)
         from .pipeline import generate          # the computer algebra loads only when a model is generated
         model = generate(scene, name=name, bake_params=bake_params, progress=progress or (lambda m: None),
-                         specialise=specialise, dense=dense)
+                         specialise=specialise, dense=dense, rolled=rolled)
         if _hash_generator_sources() == generator_fingerprint():   # the generator did not change meanwhile
             payload = _payload(model)
             data = {"format": GEN_FORMAT, "key": key, "sha256": _payload_hash(payload), "payload": payload}

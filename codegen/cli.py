@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 from .cache import CacheError, cache_dir, generate_cached
+from .interface import ROLLED_MIN_LINKS, wants_rolled
 from .outputs import output_dir_problem
 from .pipeline import write_model, write_standalone
 from .scene import MAX_LINKS, MAX_LINKS_REASON, SceneError, default_scene, is_c_identifier, load_scene, shipped_scene_names
@@ -53,6 +54,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--standalone", action="store_true",
                         help="also write NAME_example.c (simulates the scene and prints its impacts), a Makefile "
                              "and a CMakeLists.txt: everything needed to build and embed it with no Python")
+    loops = parser.add_mutually_exclusive_group()
+    loops.add_argument("--rolled", dest="rolled", action="store_true", default=None,
+                       help="emit the forward dynamics with loops over the scene's run of identical links (small "
+                            f"code; the default from {ROLLED_MIN_LINKS} links on)")
+    loops.add_argument("--unrolled", dest="rolled", action="store_false",
+                       help="emit the forward dynamics as straight-line code per link (the default below "
+                            f"{ROLLED_MIN_LINKS} links)")
     parser.add_argument("--no-compile", action="store_true",
                         help="skip the cffi compile check/build of the generated code")
     return parser
@@ -71,6 +79,20 @@ def out_dir_problem(value: str) -> str:
 def default_out(args: argparse.Namespace) -> str:
     """build/ for a scene file, generated/ for a shipped scene or --links."""
     return "build" if args.scene is not None and Path(args.scene).exists() else "generated"
+
+
+def loops_note(scene, layout, args) -> str:
+    """How the forward dynamics will be emitted: rolled over which links, or unrolled and why."""
+    if not wants_rolled(scene.n, args.rolled):
+        return (f"straight-line code per link (--rolled for loops; the default from {ROLLED_MIN_LINKS} links on)"
+                if args.rolled is None else "straight-line code per link (--unrolled)")
+    from .kinematics import ChainSymbols
+    from .rolled import ROLL_MIN_RUN, find_run
+    run = find_run(ChainSymbols(scene, args.bake_params, layout))
+    if run is None:
+        return (f"straight-line code per link: no run of {ROLL_MIN_RUN} identical links between link 2 and link "
+                "n - 1 to loop over")
+    return f"loops over links {run[0]}..{run[1]}, straight-line code for the others"
 
 
 def main(argv=None) -> int:
@@ -105,11 +127,15 @@ def main(argv=None) -> int:
     except SceneError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    if args.rolled and loops_note(scene, layout, args).startswith("straight"):
+        print(f"error: --rolled: {loops_note(scene, layout, args)}", file=sys.stderr)
+        return 2
     if args.explain:
         print(f"scene {scene.name}: n = {scene.n}; the model keeps {layout.nq} of {scene.nq} coordinates")
         for note in layout.notes:
             print(f"  - {note}")
         print(f"  - parameters: {'baked in as constants' if args.bake_params else 'a runtime array p'}")
+        print(f"  - forward dynamics: {loops_note(scene, layout, args)}")
         return 0
 
     out = args.out if args.out is not None else default_out(args)
@@ -126,7 +152,7 @@ def main(argv=None) -> int:
     progress(f"scene {scene.name}: n = {scene.n} links, {layout.nq} of {scene.nq} coordinates, "
              f"{len(scene.walls)} walls, {len(layout.contacts)} contacts")
     model = generate_cached(scene, name=args.name, bake_params=args.bake_params, specialise=not args.general,
-                            progress=progress, refresh=True)
+                            progress=progress, refresh=True, rolled=args.rolled)
     try:
         paths = write_model(model, out)
         if args.standalone:

@@ -123,7 +123,7 @@ def wants_dense(n: int, dense: bool | None) -> bool:
     return n <= DENSE_MAX_LINKS if dense is None else bool(dense)
 
 
-ROLLED_MIN_LINKS = 32       # from this n on, forward_dynamics is emitted with loops over the links (codegen.rolled)
+ROLLED_MIN_LINKS = 8        # from this n on, forward_dynamics is emitted with loops over the links (codegen.rolled)
 
 
 def wants_rolled(n: int, rolled: bool | None) -> bool:

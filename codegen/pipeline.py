@@ -11,7 +11,7 @@ from .interface import wants_dense, wants_rolled
 from .flatten import flatten, live_assignments
 from .ops import raw_count_ops
 from . import kernels, lagrange
-from .scene import Scene
+from .scene import Scene, SceneError
 from .specialise import check_not_singular, layout_for
 
 
@@ -59,12 +59,15 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
         workers = min(os.cpu_count() or 1, MAX_WORKERS) if scene.n >= PARALLEL_MIN_LINKS else 1
     roll = formulation == "gibbs_appell" and wants_rolled(scene.n, rolled)
     if workers > 1 and formulation == "gibbs_appell" and not raw_ops and _can_fork():
-        return _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, workers, progress, roll)
+        return _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, workers, progress,
+                                     "asked" if rolled and roll else roll)
     timings = {}
     start = time.perf_counter()
     if formulation == "lagrange" and dense is None:
         dense = True
     looped = _rolled_function(scene, bake_params, layout) if roll else None
+    if rolled and looped is None:
+        raise SceneError(_NO_RUN.format(n=scene.n))
     derived = FORMULATIONS[formulation](scene, bake_params, progress=lambda k: progress(f"derive {k}"),
                                         layout=layout, dense=dense,
                                         **({"skip": ("forward_dynamics",)} if looped is not None else {}))
@@ -94,6 +97,10 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
     model.formulation = formulation
     model.raw_ops = raw
     return model
+
+
+_NO_RUN = ("rolled: the scene's links 2..n - 1 (n = {n}) hold no run of codegen.rolled.ROLL_MIN_RUN identical links "
+           "(same kind, twists, joint spring, damper and inputs) to loop over; leave rolled unset or False")
 
 
 def _kernel_position(name: str, dense: bool | None, n: int) -> int:
@@ -134,6 +141,8 @@ def _kernel_job(job):
         function = _rolled_function(scene, bake_params, layout)
         if function is not None:
             return function, (time.perf_counter() - start, 0.0, 0.0)
+        if roll == "asked":
+            raise SceneError(_NO_RUN.format(n=scene.n))
     kernel = builder(ChainSymbols(scene, bake_params, layout))
     derived = time.perf_counter()
     program = flatten(kernel)

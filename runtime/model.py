@@ -31,7 +31,7 @@ class CompiledModel:
 
     def __init__(self, scene: Scene, generated: GeneratedModel, module, build_options: tuple = ()):
         self.scene = scene
-        self.build_options = build_options            # (bake_params, flags, specialise, dense) of load_model
+        self.build_options = build_options            # (bake_params, flags, specialise, dense, rolled) of load_model
         self.generated = generated
         self.layout = generated.layout
         self.ffi, self.lib = module.ffi, module.lib
@@ -199,28 +199,30 @@ class CompiledModel:
 
 
 def load_model(scene: Scene | str | Path, bake_params: bool = False, flags=None, progress=None,
-               specialise: bool = True, dense: bool | None = None) -> CompiledModel:
+               specialise: bool = True, dense: bool | None = None, rolled: bool | None = None) -> CompiledModel:
     """Generate (cached) and compile (cached) the model of a scene, a shipped scene name or a scene
     file.  ``specialise`` (default) leaves out what the scene does not need; False gives the general
     model.  ``dense``: generate the dense kernels (mass_matrix, bias, contact_jacobian; O(n^2) code, not
     needed by simulations); None (default) does up to codegen.interface.DENSE_MAX_LINKS links, and otherwise
-    they are formed at run time from the O(n) kernels.  For a name or a file, the same model object is
+    they are formed at run time from the O(n) kernels.  ``rolled``: emit the forward dynamics with loops over the
+    links (codegen.rolled); None (default) does from codegen.interface.ROLLED_MIN_LINKS links on.  For a name or a file, the same model object is
     returned again while the file is unchanged (same path, modification time and size) and the options are
     the same."""
     flags = DEFAULT_FLAGS if flags is None else tuple(flags)
-    if dense is not None and not isinstance(dense, bool):
-        raise TypeError(f"dense: expected True, False or None, got {dense!r}")
+    for option, value in (("dense", dense), ("rolled", rolled)):
+        if value is not None and not isinstance(value, bool):
+            raise TypeError(f"{option}: expected True, False or None, got {value!r}")
     if isinstance(scene, Scene):
-        return _build_model(scene, bake_params, flags, progress, specialise, dense)
+        return _build_model(scene, bake_params, flags, progress, specialise, dense, rolled)
     if not isinstance(scene, (str, os.PathLike)):
         raise TypeError("scene: expected a Scene, a shipped scene name or a path to a .toml/.json scene "
                         f"file, got {reprlib.repr(scene)} ({type(scene).__name__})")
     path = scene_file(scene)
     stat = path.stat()
-    key = (path, stat.st_mtime_ns, stat.st_size, bool(bake_params), flags, bool(specialise), dense)
+    key = (path, stat.st_mtime_ns, stat.st_size, bool(bake_params), flags, bool(specialise), dense, rolled)
     model = _MODELS.get(key)
     if model is None:
-        model = _build_model(load_scene(path), bake_params, flags, progress, specialise, dense)
+        model = _build_model(load_scene(path), bake_params, flags, progress, specialise, dense, rolled)
         _MODELS[key] = model
     return model
 
@@ -229,22 +231,22 @@ _MODELS: dict[tuple, CompiledModel] = {}      # (scene file, mtime, size, option
 
 
 def _build_model(scene: Scene, bake_params: bool, flags: tuple, progress, specialise: bool,
-                 dense: bool | None = None) -> CompiledModel:
+                 dense: bool | None = None, rolled: bool | None = None) -> CompiledModel:
     generated = generate_cached(scene, bake_params=bake_params, specialise=specialise, progress=progress,
-                                dense=dense)
+                                dense=dense, rolled=rolled)
     module = compile_model(generated.name, generated.header, generated.source, generated.cdef,
                            flags=flags, progress=progress)
-    return CompiledModel(scene, generated, module, (bool(bake_params), tuple(flags), bool(specialise), dense))
+    return CompiledModel(scene, generated, module, (bool(bake_params), tuple(flags), bool(specialise), dense, rolled))
 
 
 _BY_SCENE: dict[tuple, CompiledModel] = {}    # (scene, options) -> model, for model_of
 
 
 def model_of(scene: Scene, bake_params: bool, flags: tuple, specialise: bool,
-             dense: bool | None = None) -> CompiledModel:
+             dense: bool | None = None, rolled: bool | None = None) -> CompiledModel:
     """The model of a scene, built (or loaded from the build cache) once per process: what an unpickled
     CompiledModel is."""
-    key = (scene, bool(bake_params), tuple(flags), bool(specialise), dense)
+    key = (scene, bool(bake_params), tuple(flags), bool(specialise), dense, rolled)
     if key not in _BY_SCENE:
-        _BY_SCENE[key] = _build_model(scene, bake_params, tuple(flags), None, specialise, dense)
+        _BY_SCENE[key] = _build_model(scene, bake_params, tuple(flags), None, specialise, dense, rolled)
     return _BY_SCENE[key]

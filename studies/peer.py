@@ -117,6 +117,7 @@ def pin_order(n: int) -> list[int]:
 HARNESS = r"""
 #define _POSIX_C_SOURCE 199309L
 #include "{name}.h"
+#include "{rname}.h"
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -141,6 +142,7 @@ static double now(void)
 int main(void)
 {{
     double p[{NAME}_NPARAM], u[{NAME}_NU + 1] = {{0.0}}, tau[NQ] = {{0.0}}, sink = 0.0, worst = 0.0, scale = 0.0;
+    double outr[NQ], worst_rolled = 0.0;
     casadi_int sz_arg, sz_res, sz_iw, sz_w;
     const double *arg[3];
     double *res[1], *w;
@@ -164,20 +166,28 @@ int main(void)
     for (s = 0; s < S; ++s) {{                         /* the two agree, coordinates mapped */
         arg[0] = qp[s]; arg[1] = vp[s];
         {name}_forward_dynamics(q[s], qd[s], u, p, out);
+        {rname}_forward_dynamics(q[s], qd[s], u, p, outr);
         peer_aba(arg, res, iw, w, 0);
         for (i = 0; i < NQ; ++i) {{
             if (fabs(out[order[i]] - outp[i]) > worst) worst = fabs(out[order[i]] - outp[i]);
+            if (fabs(outr[i] - out[i]) > worst_rolled) worst_rolled = fabs(outr[i] - out[i]);
             if (fabs(out[order[i]]) > scale) scale = fabs(out[order[i]]);
         }}
     }}
-    printf("agree %.3e\n", worst / scale);
+    printf("agree %.3e %.3e\n", worst / scale, worst_rolled / scale);
     for (b = 0; b < {batches}; ++b) {{                 /* alternating batches: drift hits both alike */
         long r;
-        double t0 = now(), t1, t2;
+        double t0 = now(), t1, t2, t3;
         for (r = 0; r < reps; ++r)
             for (s = 0; s < S; ++s) {{
                 {name}_forward_dynamics(q[s], qd[s], u, p, out);
                 sink += out[NQ - 1];
+            }}
+        t3 = now();
+        for (r = 0; r < reps; ++r)
+            for (s = 0; s < S; ++s) {{
+                {rname}_forward_dynamics(q[s], qd[s], u, p, outr);
+                sink += outr[NQ - 1];
             }}
         t1 = now();
         for (r = 0; r < reps; ++r)
@@ -187,7 +197,8 @@ int main(void)
                 sink += outp[NQ - 1];
             }}
         t2 = now();
-        printf("ours %.4f peer %.4f\n", (t1 - t0) / (reps * S) * 1e-3, (t2 - t1) / (reps * S) * 1e-3);
+        printf("ours %.4f peer %.4f rolled %.4f\n", (t3 - t0) / (reps * S) * 1e-3, (t2 - t1) / (reps * S) * 1e-3,
+               (t1 - t3) / (reps * S) * 1e-3);
     }}
     fprintf(stderr, "%g\n", sink);
     free(w);
@@ -213,8 +224,12 @@ def measure(n: int, flag_sets, batches: int, peer_python: str, progress=print) -
     from .toolchain import compile_c
     scene = default_scene(n)
     start = time.perf_counter()
-    model = generate(scene, specialise=False, dense=False)
+    model = generate(scene, specialise=False, dense=False, rolled=False)
+    looped = generate(scene, name=f"{scene.name}_rolled", specialise=False, dense=False, rolled=True)
     ours_ops = {f.name: f.ops for f in model.functions}["forward_dynamics"]
+    rolled_summary = {f.name: f.summary for f in looped.functions}["forward_dynamics"]
+    if "in loops" not in rolled_summary:
+        raise RuntimeError(f"n = {n}: the chain has no run of links long enough to loop over")
     rows = []
     with tempfile.TemporaryDirectory(prefix="peer-") as tmp:
         folder = Path(tmp)
@@ -227,32 +242,41 @@ def measure(n: int, flag_sets, batches: int, peer_python: str, progress=print) -
         progress(f"  n = {n}: both generated in {time.perf_counter() - start:.1f} s")
         (folder / f"{model.name}.h").write_text(model.header)
         (folder / f"{model.name}.c").write_text(model.source)
+        (folder / f"{looped.name}.h").write_text(looped.header)
+        (folder / f"{looped.name}.c").write_text(looped.source)
         q, qd = random_states(scene, np.random.default_rng(n))
         with open(folder / "states.txt", "w") as out:
             for s in range(STATES):
                 out.write(" ".join(repr(float(x)) for x in q[s]) + "\n")
                 out.write(" ".join(repr(float(x)) for x in qd[s]) + "\n")
         reps = max(1, int(200 / n))
-        (folder / "side.c").write_text(HARNESS.format(name=model.name, NAME=model.name.upper(), states=STATES,
+        (folder / "side.c").write_text(HARNESS.format(name=model.name, NAME=model.name.upper(), rname=looped.name,
+                                                      states=STATES,
                                                       order=", ".join(map(str, pin_order(n))), reps=reps,
                                                       batches=batches))
         for flags in flag_sets:
             build = folder / "side"
-            seconds = compile_c([folder / "side.c", folder / f"{model.name}.c", folder / "peer_aba.c",
+            seconds = compile_c([folder / "side.c", folder / f"{model.name}.c", folder / f"{looped.name}.c",
+                                 folder / "peer_aba.c",
                                  *library_sources()], build, flags=tuple(flags.split()),
                                 include_dirs=[folder, LIBRARY_DIR])
             run = subprocess.run([str(build)], cwd=folder, capture_output=True, text=True, check=True)
             lines = run.stdout.split("\n")
-            agree = float(lines[0].split()[1])
+            agree, agree_rolled = map(float, lines[0].split()[1:3])
             ours = [float(line.split()[1]) for line in lines[1:] if line]
             peer = [float(line.split()[3]) for line in lines[1:] if line]
+            rolled = [float(line.split()[5]) for line in lines[1:] if line]
             ratios = [a / b for a, b in zip(ours, peer)]
-            rows.append({"n": n, "flags": flags, "agree": agree, "ours_us": statistics.median(ours),
+            rolled_ratios = [a / b for a, b in zip(rolled, peer)]
+            rows.append({"n": n, "flags": flags, "agree": agree, "agree_rolled": agree_rolled,
+                         "ours_us": statistics.median(ours), "rolled_us": statistics.median(rolled),
                          "peer_us": statistics.median(peer), "ratio": statistics.median(ratios),
-                         "ratio_min": min(ratios), "ratio_max": max(ratios), "ours_ops": ours_ops.total,
+                         "ratio_min": min(ratios), "ratio_max": max(ratios),
+                         "rolled_ratio": statistics.median(rolled_ratios), "rolled_ratio_min": min(rolled_ratios),
+                         "rolled_ratio_max": max(rolled_ratios), "ours_ops": ours_ops.total,
                          "peer_ops": info["ops"]["total"], "compile_s": seconds})
-            progress(f"  n = {n} {flags}: ours {rows[-1]['ours_us']:.3f} us, peer {rows[-1]['peer_us']:.3f} us, "
-                     f"agree {agree:.1e}")
+            progress(f"  n = {n} {flags}: unrolled {rows[-1]['ours_us']:.3f} us, rolled {rows[-1]['rolled_us']:.3f} "
+                     f"us, peer {rows[-1]['peer_us']:.3f} us, agree {agree:.1e}")
     return rows
 
 
@@ -292,11 +316,14 @@ def main(argv=None) -> int:
     print(f"Machine: {describe(compiler_version())}")
     print(f"Forward dynamics of the general built-in n-link chain (n + 5 coordinates), {STATES} random states, "
           f"median of {args.batches} alternating batches; ratio = ours / peer (min-max over the batches).\n")
-    print("| n | flags | peer µs | ours µs | ratio (min-max) | agree (rel.) | peer ops | ours ops |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| n | flags | peer µs | ours unrolled µs | ratio (min-max) | ours rolled µs | ratio (min-max) | "
+          "agree (rel.) | peer ops | ours ops |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(f"| {r['n']} | `{r['flags']}` | {r['peer_us']:.3f} | {r['ours_us']:.3f} | {r['ratio']:.2f} "
-              f"({r['ratio_min']:.2f}-{r['ratio_max']:.2f}) | {r['agree']:.0e} | {r['peer_ops']:,} | {r['ours_ops']:,} |")
+              f"({r['ratio_min']:.2f}-{r['ratio_max']:.2f}) | {r['rolled_us']:.3f} | {r['rolled_ratio']:.2f} "
+              f"({r['rolled_ratio_min']:.2f}-{r['rolled_ratio_max']:.2f}) | {max(r['agree'], r['agree_rolled']):.0e} "
+              f"| {r['peer_ops']:,} | {r['ours_ops']:,} |")
     per_link = {}
     for key in ("peer_ops", "ours_ops"):
         ops = {r["n"]: r[key] for r in rows}

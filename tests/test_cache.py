@@ -224,7 +224,7 @@ def builds(monkeypatch):
     """Stand-in for building a model: records (scene, options) and returns a new object each time."""
     made = []
 
-    def build(scene, bake_params, flags, progress, specialise, dense=None):
+    def build(scene, bake_params, flags, progress, specialise, dense=None, rolled=None):
         made.append((scene, bake_params, flags, specialise))
         return object()
     monkeypatch.setattr(runtime.model, "_build_model", build)

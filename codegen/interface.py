@@ -333,7 +333,7 @@ STRUCTS = (
     Struct("gac_impact_record", ("double t", "int ncontact", "int *contact", "double *impulse",
                                  "double energy_before", "double energy_after", "double *q", "double *qd_before",
                                  "double *qd_after", "int complementarity", "int rounds", "int plastic",
-                                 "double energy_rest", "double roundoff", "double approach_before",
+                                 "int law_elastic", "double energy_rest", "double roundoff", "double approach_before",
                                  "double approach_after", "int nactivated", "int *activated", "int nreleased",
                                  "int *released"), partial=False),
     Struct("gac_sim", ("gac_options opt", "double t", "double *x", "double *p", "long n_steps", "long n_rejected",

@@ -1275,7 +1275,7 @@ static int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     gac_normal_velocities(md, x, s->p, vn);
     r->ncontact = 0;
     r->nactivated = r->nreleased = 0;
-    r->rounds = r->plastic = 0;
+    r->rounds = r->plastic = r->law_elastic = 0;
     r->energy_rest = 0.0;
     r->roundoff = 1e-10;
     v_rest = gac_v_round(md, vn);
@@ -1356,6 +1356,11 @@ static int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     bound = r->roundoff = gac_impact_roundoff(md, x, s->p, s->work, n, F, x + nq, qd_plus, T_before);
     md->energy(x, qd_plus, s->p, E);
     T_law = E[0];
+    r->law_elastic = !plastic;                   /* contacts on walls with e < 1 may take part, without impulse */
+    for (k = 0; k < n; ++k) {
+        if (F[k] > 0.0 && e_law[k] != 1.0) r->law_elastic = 0;
+    }
+    if (r->law_elastic && fabs(T_law - T_before) > bound * T_before) return GAC_ERR_IMPACT_ACCURACY;
     for (k = 0; k < n; ++k) changed |= e[k] != e_law[k];
     for (pass = 0; changed && pass < 2; ++pass) {
         int elastic_landing = 0;

@@ -60,6 +60,8 @@ class Impact:
     plastic: bool = False               # the rounds were closed by a plastic round (energy lost, also at e = 1)
     energy_rest: float = 0.0            # J: kinetic energy taken by contacts that landed (made persistent)
     roundoff: float = 1e-10             # the law's relative round-off bound on the energy (grows with cond(I_f))
+    law_elastic: bool = False           # the law (each contact's own e, before landings) had only e = 1 contacts
+                                        # take impulses, no plastic round: energy_after + energy_rest = energy_before
 
 
 @dataclass
@@ -327,9 +329,6 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     T0, V0 = model.energy(q, qd, p)
     energy_initial = T0 + V0
     impacts: list[Impact] = []
-    names = model.scene.parameter_names()
-    elastic_walls = {w.name for _, w in model.contacts                 # walls and joint stops with e = 1
-                     if p[names.index(f"e_limit_{w.joint}" if isinstance(w, JointStop) else f"e_{w.name}")] == 1.0}
     # energy scale of lifting the whole chain by its own length: round-off floor of the impact energy checks
     energy_ref = sum(link.mass for link in model.scene.links) * max(abs(p[0]), 1.0) * sum(
         link.length for link in model.scene.links)
@@ -410,7 +409,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                 status, message = -1, (f"impact at t = {impact.t:.12g} s: after it, dt = {dt:g} s is too large "
                                        f"for RK4: {sentence.replace('at the start', 'now')}")
                 break
-        problem = _impact_problem(model, impact, rec, elastic_walls, energy_ref)
+        problem = _impact_problem(model, impact, rec, energy_ref)
         if problem:
             status, message = -1, f"impact at t = {impact.t:.12g} s: {problem}"
             break
@@ -498,7 +497,7 @@ def _read_impact(model: CompiledModel, r) -> Impact:
     return Impact(float(r.t), contacts, float(r.energy_before), float(r.energy_after), bool(r.complementarity),
                   layout.expand(unpack(r.q, nq)), layout.expand(unpack(r.qd_before, nq), velocity=True),
                   layout.expand(unpack(r.qd_after, nq), velocity=True), int(r.rounds), bool(r.plastic),
-                  float(r.energy_rest), float(r.roundoff))
+                  float(r.energy_rest), float(r.roundoff), bool(r.law_elastic))
 
 
 def _read_contact_events(model: CompiledModel, r) -> list[ContactEvent]:
@@ -583,12 +582,12 @@ APPROACH_FLOOR = 1e-6   # m/s: below 1e-9 of this (1e-15 m/s) an approach is rou
                         # at zero speed), whatever the impact's own speed
 
 
-def _impact_problem(model: CompiledModel, impact: Impact, record, elastic_walls: set, energy_ref: float) -> str:
+def _impact_problem(model: CompiledModel, impact: Impact, record, energy_ref: float) -> str:
     """The post-impact checks, repeated from the record with independent kernels: no negative impulse;
     no contact at its wall still approaching it (measured in C with the contact_velocities kernel); no
-    energy gain; and, when every contact that took an impulse is on a wall with e = 1 and the law was not
-    closed by a plastic round, no energy change other than what landings took (energy_rest).
-    Returns '' when all hold."""
+    energy gain; and, when the law was elastic (only contacts on walls with e = 1 took impulses in it, no plastic
+    round: Impact.law_elastic), no energy change other than what landings took (energy_rest).  Returns '' when
+    all hold."""
     if any(c.impulse < 0.0 for c in impact.contacts):
         return f"an impulse is negative ({min(c.impulse for c in impact.contacts):.3g} N s)"
     bound = max(float(record.roundoff), 1e-10)  # the law's round-off bound (grows with the condition of I_f)
@@ -598,8 +597,7 @@ def _impact_problem(model: CompiledModel, impact: Impact, record, elastic_walls:
     tol = bound * max(abs(E0), energy_ref)      # energy_ref: a floor for a chain at rest near V = 0
     if E1 > E0 + tol:
         return f"energy increased from {E0!r} J to {E1!r} J"
-    elastic = all(c.wall in elastic_walls for c in impact.contacts if c.impulse > 0.0) and not impact.plastic
-    if elastic and abs(E1 + impact.energy_rest - E0) > tol:
+    if impact.law_elastic and abs(E1 + impact.energy_rest - E0) > tol:
         return (f"elastic impact changed the energy from {E0!r} J to {E1!r} J "
                 f"({impact.energy_rest!r} J taken by landings)")
     return ""

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from studies import fuzz
+from runtime.model import load_model
 from runtime.simulate import Contact, Impact
 
 
@@ -85,7 +86,7 @@ def test_each_independent_check_can_fail(compiled):
     gain = Impact(0.1, [Contact(point, wall_of.name, 1.0)], 0.0, 0.0, False, q, qd, 1.1 * qd)
     assert "energy gain" in fuzz.check_run(model, run, FakeResult(np.array([q]), np.array([qd]), q, qd, [gain]),
                                            0.1, 20.0)[0]
-    loss = Impact(0.1, [Contact(point, wall_of.name, 1.0)], 0.0, 0.0, False, q, qd, 0.9 * qd)
+    loss = Impact(0.1, [Contact(point, wall_of.name, 1.0)], 0.0, 0.0, False, q, qd, 0.9 * qd, law_elastic=True)
     assert "elastic impact" in fuzz.check_run(model, run, FakeResult(np.array([q]), np.array([qd]), q, qd, [loss]),
                                               0.1, 20.0)[0]
     assert "over budget" in fuzz.check_run(model, run, clean, 30.0, 20.0)[0]
@@ -107,3 +108,21 @@ def test_thousand_runs_have_no_failure():
     assert len(outcomes) == 1000
     failed = [(o.case, o.violations or o.message[:160]) for o in outcomes if o.failed]
     assert failed == []
+
+
+def test_a_law_with_a_plastic_wall_is_not_held_to_energy_conservation():
+    """Case 0-8/11 of the study: an e = 1 contact is struck and, in the law's second round, a contact on an e = 0
+    wall takes an impulse (energy lost, physically); the first contact then lands (struck again with e = 0) and
+    the recorded contacts are all on e = 1 walls.  The law was not elastic, and its record says so, so the
+    energy check does not apply to it; the run passes every check."""
+    from runtime.simulate import simulate
+    rng = np.random.default_rng([0, 8])
+    scene = fuzz.random_structure(rng, 8, 8)
+    model = load_model(scene, specialise=False)
+    for _ in range(12):
+        run = fuzz.random_run(rng, scene, model)
+    result = simulate(model, run.t_end, p=run.p, q0=run.q0, qd0=run.qd0, **run.options)
+    assert result.status >= 0, result.message
+    assert fuzz.check_run(model, run, result, 0.1, 20.0) == []
+    impact = next(i for i in result.impacts if abs(i.t - 1.1424422067) < 1e-6)
+    assert not impact.law_elastic and all(c.wall in ("x2_min", "x2_max") for c in impact.contacts)

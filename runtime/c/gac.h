@@ -332,6 +332,9 @@ typedef struct {
                                     took no impulse, or more than one round) */
     int rounds;                  /* rounds of the impact law (1 for Eq. 47 with complementarity) */
     int plastic;                 /* 1 if GAC_MAX_ROUNDS rounds ended in a plastic round */
+    int law_elastic;             /* 1 if the law with each contact's own e (before landings) was elastic: only
+                                    contacts with e = 1 took impulses, no plastic round; it then keeps the
+                                    kinetic energy, to roundoff (energy_after + energy_rest = energy_before) */
     double energy_rest;          /* kinetic energy (J) the landings took: the law with each landing contact's
                                     own e minus the law with e = 0 (dropped bounces that would rise less
                                     than rest_height) */

@@ -6,21 +6,26 @@ dozen links it no longer fits the instruction cache and the compiler's time grow
 runs the same three passes of the articulated-body recursion (codegen.articulated) with the links of a run of
 identical links as the iterations of a C loop:
 
-    velocities  omega_k, omega_dot_v_k, r_ddot_Ov_k and the loads (S_k, T_k)   base -> tip   (Eq. 18, 20, 39-40)
-    backward    articulated inertia and force, joint pivots                    tip -> base   (Eq. 38-41)
-    forward     joint accelerations theta_ddot_k                               base -> tip
+    velocities  omega_k, omega_dot_v_k, r_ddot_Ov_k                    base -> tip   (Eq. 18, 20)
+    backward    the loads (S_k, T_k), articulated inertia and force,
+                joint pivots                                           tip -> base   (Eq. 38-41)
+    forward     joint accelerations theta_ddot_k                       base -> tip
 
 The links before the run (the imaginary links -1, 0 and link 1 at least) and after it (the tip at least) stay
 straight-line code.  Each loop body is derived once, symbolically, for a generic link k: the link's parameters
 are read as p[a k + b] and its coordinate as q[k + c] (index maps checked affine over the run), so a run is a
 range of links with the same link kind, twists, joint springs, dampers and inputs, and the same parameters built
 in as zero.  Values cross from one pass to the next through per-link arrays on the kernel's stack (cos and sin of
-theta_k, the loads, the pivots: 14 doubles per link) and from one iteration to the next through a small carried
-array; an entry that is an exact constant (a structural zero) is not stored but kept as the constant, and the
-rolled kernel is used only if the constants are the same at every iteration.
+theta_k, the velocities, the pivots: at most 17 doubles per link) and from one iteration to the next through
+small carried arrays.  An entry that is an exact constant (a structural zero) is not stored but kept as the
+constant where it is the same constant at every iteration (entries that differ, say zero only at the tip, are
+stored: a fixed point between the block before a loop and its body), and a carried entry that nothing after the
+loop needs through any number of iterations is not carried at all (a liveness fixed point: in a planar model the
+out-of-plane inertia).
 
-The operations per link are those of the unrolled kernel plus the link's moments, formed in two passes (a few
-operations).  What it saves is code: the kernel's size no longer grows with n.
+The operations per link are those of the unrolled kernel (the link's moments are formed once, in the backward
+pass, where the loads and the inertia both need them).  What it saves is code: the kernel's size no longer grows
+with n.
 """
 from __future__ import annotations
 
@@ -31,7 +36,11 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from . import articulated, gibbs_appell, kinematics
+from .artifact import OpCount, RenderedFunction
+from .emit import c_expression
+from .flatten import flatten
 from .kernels import Kernel
+from .ops import count_ops
 from .kinematics import ChainSymbols, Motion
 from .tape import E_Y, ZERO, Tape, index_name, matmul, scale
 
@@ -237,9 +246,9 @@ def find_run(chain: ChainSymbols) -> tuple[int, int] | None:
     return best
 
 
-def generic_chain(chain: ChainSymbols, run: tuple[int, int]) -> tuple[ChainSymbols, int]:
+def generic_chain(chain: ChainSymbols, run: tuple[int, int]) -> ChainSymbols:
     """A copy of ``chain`` whose symbols of link k* = run[0] (its coordinate, its parameters and those of link
-    k* - 1 and joint k*, the inputs on theta_k*) read the arrays at the loop index k instead: (copy, k*)."""
+    k* - 1 and joint k*, the inputs on theta_k*) read the arrays at the loop index k instead."""
     k0, k1 = run
     ks = list(range(k0, k1 + 1))
     g = copy.copy(chain)
@@ -266,7 +275,7 @@ def generic_chain(chain: ChainSymbols, run: tuple[int, int]) -> tuple[ChainSymbo
         if m is None:
             raise NotRollable("the inputs on the run's joints are not in link order")
         g.u[inputs[0][slot]] = sp.Symbol(f"u[{_affine(m[0], m[1] - m[0] * k0)}]", real=True)
-    return g, k0
+    return g
 
 
 _CONCRETE = re.compile(r"^(q|qd|u|p)\[(\d+)\]$")
@@ -360,7 +369,7 @@ def build_blocks(chain: ChainSymbols, run: tuple[int, int], forced: dict | None 
     k0, k1 = run
     ks = list(range(k0, k1 + 1))
     free = chain.layout.free
-    g, _ = generic_chain(chain, run)
+    g = generic_chain(chain, run)
     here = Generic()
     cs = Store("cs", 2, -1, n, "cos theta_k, sin theta_k")
     mv = Store("mv", 9, 1, n, "omega, omega_dot_v, r_ddot_Ov of link k (Eq. 18, 20)")
@@ -544,12 +553,8 @@ def summary(built) -> str:
             f"{first}..{last} in loops.")
 
 
-def render(name: str, summary: str, inputs, output: str, size: int, built) -> "RenderedFunction":
+def render(name: str, summary: str, inputs, output: str, size: int, built) -> RenderedFunction:
     """The kernel's C lines (each block flattened and CSE'd on its own) and its operations per call."""
-    from .emit import c_expression
-    from .flatten import flatten
-    from .ops import count_ops
-    from .artifact import OpCount, RenderedFunction
     blocks, stores, carries = built
     lines = []
     for store in stores:

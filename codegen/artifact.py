@@ -80,17 +80,32 @@ def scene_hash(scene: Scene) -> str:
 
 @functools.lru_cache(maxsize=256)
 def _scene_hash(scene: Scene) -> str:
-    def canonical(value):
-        if isinstance(value, float):
-            return repr(value)
-        if isinstance(value, (list, tuple)):
-            return [canonical(v) for v in value]
-        if hasattr(value, "__dataclass_fields__"):
-            return {"type": type(value).__name__,
-                    **{k: canonical(getattr(value, k)) for k in value.__dataclass_fields__}}
-        return value
-    text = json.dumps(canonical(scene), sort_keys=True)
+    text = json.dumps(_canonical(scene), sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _canonical(value):
+    """The scene's fields as JSON data: floats by repr, dataclasses as {"type": name, field: value}.  Equal parts
+    (a chain's identical links, joints and twists) are converted once."""
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, (tuple, list)) or hasattr(value, "__dataclass_fields__"):
+        try:
+            return _canonical_part(value)
+        except TypeError:                   # unhashable: a list, or a tuple holding one
+            return _convert(value)
+    return value
+
+
+@functools.lru_cache(maxsize=4096)
+def _canonical_part(value):
+    return _convert(value)
+
+
+def _convert(value):
+    if isinstance(value, (list, tuple)):
+        return [_canonical(v) for v in value]
+    return {"type": type(value).__name__, **{k: _canonical(getattr(value, k)) for k in value.__dataclass_fields__}}
 
 
 def library_dir() -> Path:

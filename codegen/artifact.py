@@ -70,6 +70,22 @@ class GeneratedModel:
     cdef: str
     functions: list[RenderedFunction]
     bake_params: bool = False         # the parameters are constants in the code (p is ignored)
+    digest: str = ""                  # text_digest of header, source and cdef ("" until computed)
+
+    def text_digest(self) -> str:
+        if not self.digest:
+            self.digest = text_digest(self.header, self.source, self.cdef)
+        return self.digest
+
+
+def text_digest(header: str, source: str, cdef: str) -> str:
+    """sha256 of a model's three texts, computed once per load: the cached text's check and the compiled module's
+    key both build on it."""
+    digest = hashlib.sha256()
+    for text in (header, source, cdef):
+        digest.update(text.encode())
+        digest.update(b"\0")
+    return digest.hexdigest()
 
 
 def scene_hash(scene: Scene) -> str:

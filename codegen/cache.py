@@ -18,16 +18,16 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import importlib.util
 import json
 import os
 import sys
 import tempfile
 from contextlib import contextmanager
-from importlib import resources
 from pathlib import Path
 
 from . import interface
-from .artifact import GeneratedModel, OpCount, RenderedFunction, scene_hash
+from .artifact import GeneratedModel, OpCount, RenderedFunction, scene_hash, text_digest
 from .scene import Scene
 from .specialise import layout_for
 
@@ -38,6 +38,7 @@ except ImportError:  # pragma: no cover - not POSIX: no cross-process lock
 
 GEN_FORMAT = 2
 GEN_PAYLOAD_KEYS = ("name", "header", "source", "cdef", "functions")
+TEXT_KEYS = ("header", "source", "cdef")
 FUNCTION_KEYS = ("name", "summary", "inputs", "output", "output_size", "ops")
 OPS_FIELDS = ("add", "mul", "div", "sqrt", "trig", "other_calls")
 FIX = "set GIBBS_APPELL_CACHE to a writable directory"
@@ -126,8 +127,8 @@ def sha256_of(data: bytes) -> str:
 def _hash_generator_sources() -> str:
     digest = hashlib.sha256()
     for package, pattern in (("codegen", "*.py"), ("templates", "*.j2")):
-        folder = resources.files(package)
-        for path in sorted(Path(str(folder)).glob(pattern)):
+        folder = next(iter(importlib.util.find_spec(package).submodule_search_locations))   # not imported
+        for path in sorted(Path(folder).glob(pattern)):
             digest.update(path.name.encode())
             digest.update(path.read_bytes())
     return digest.hexdigest()[:16]
@@ -158,17 +159,21 @@ def _payload(model: GeneratedModel) -> dict:
             "functions": functions}
 
 
-def _payload_hash(payload: dict) -> str:
-    """sha256 over the payload's fields in a fixed order: the texts as they are (no re-serialising of megabytes
-    of C on every load), the small function list as canonical JSON."""
+def _payload_hash(payload: dict, texts: str) -> str:
+    """sha256 over the payload's fields in a fixed order: the three texts through their text_digest ``texts`` (no
+    re-serialising of megabytes of C on every load, and no second pass over them for the module's key), the
+    small fields as canonical JSON."""
     digest = hashlib.sha256()
     for field in GEN_PAYLOAD_KEYS:
         value = payload.get(field)
-        text = value if isinstance(value, str) else json.dumps(value, sort_keys=True, separators=(",", ":"))
+        if field in TEXT_KEYS:
+            continue
         digest.update(field.encode())
         digest.update(b"\0")
-        digest.update(text.encode())
+        digest.update((value if isinstance(value, str) else json.dumps(value, sort_keys=True,
+                                                                       separators=(",", ":"))).encode())
         digest.update(b"\0")
+    digest.update(b"texts\0" + texts.encode())
     return digest.hexdigest()
 
 
@@ -197,9 +202,12 @@ def _read_generated(path: Path, key: str, name: str) -> tuple[dict | None, str |
     for field in GEN_PAYLOAD_KEYS:
         if field not in payload:
             return None, f"missing key {field!r}"
-    if _payload_hash(payload) != data["sha256"]:
+    if not all(isinstance(payload[k], str) for k in TEXT_KEYS):
+        return None, "payload does not match its key"
+    payload["digest"] = text_digest(*(payload[k] for k in TEXT_KEYS))
+    if _payload_hash(payload, payload["digest"]) != data["sha256"]:
         return None, "sha256 mismatch"
-    if payload["name"] != name or not all(isinstance(payload[k], str) for k in ("header", "source", "cdef")):
+    if payload["name"] != name:
         return None, "payload does not match its key"
     functions = payload["functions"]
     if not isinstance(functions, list) or not all(
@@ -214,7 +222,7 @@ def _model_from_payload(payload: dict, scene: Scene, bake_params: bool, speciali
     functions = [RenderedFunction(f["name"], f["summary"], tuple(f["inputs"]), f["output"], f["output_size"],
                                   [], OpCount(*f["ops"])) for f in payload["functions"]]
     model = GeneratedModel(payload["name"], payload["header"], payload["source"], payload["cdef"], functions,
-                           bake_params)
+                           bake_params, payload["digest"])
     model.layout = layout_for(scene, specialise)
     model.timings = {}
     model.formulation = "gibbs_appell"
@@ -247,6 +255,7 @@ def generate_cached(scene: Scene, *, name: str | None = None, bake_params: bool 
                          specialise=specialise, dense=dense, rolled=rolled)
         if _hash_generator_sources() == generator_fingerprint():   # the generator did not change meanwhile
             payload = _payload(model)
-            data = {"format": GEN_FORMAT, "key": key, "sha256": _payload_hash(payload), "payload": payload}
+            data = {"format": GEN_FORMAT, "key": key, "sha256": _payload_hash(payload, model.text_digest()),
+                    "payload": payload}
             write_atomic(path, json.dumps(data).encode())
     return model

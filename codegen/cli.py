@@ -165,7 +165,8 @@ def main(argv=None) -> int:
         from runtime.compile import BuildError, CompilerNotFound, compile_model
         start = time.perf_counter()
         try:
-            compile_model(model.name, model.header, model.source, model.cdef, progress=progress)
+            compile_model(model.name, model.header, model.source, model.cdef, progress=progress,
+                          digest=model.text_digest())
         except (CompilerNotFound, BuildError, CacheError) as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 3

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import cffi
 
-from codegen.artifact import library_files
+from codegen.artifact import library_files, text_digest
 from codegen.cache import CacheError, cache_dir, entry_lock, report_corrupted, sha256_of, write_atomic  # noqa: F401
 
 DEFAULT_FLAGS = ("-O2",)
@@ -55,9 +55,11 @@ class BuildError(RuntimeError):
     """The C compiler rejected the generated code."""
 
 
-def build_key(header: str, source: str, cdef: str, flags) -> str:
+def build_key(texts: str, flags) -> str:
+    """The compiled module's key: the model's texts (their codegen.artifact.text_digest), the library, the flags,
+    Python and cffi."""
     digest = hashlib.sha256()
-    for part in (header, source, cdef, library_text(), " ".join(flags), sys.version, cffi.__version__):
+    for part in (texts, library_text(), " ".join(flags), sys.version, cffi.__version__):
         digest.update(part.encode())
         digest.update(b"\0")
     return digest.hexdigest()[:20]
@@ -97,14 +99,15 @@ def verify_module(target: Path, sidecar: Path) -> str | None:
 
 
 def compile_model(name: str, header: str, source: str, cdef: str, flags=DEFAULT_FLAGS,
-                  progress=None):
-    """Return the compiled cffi module (with .ffi and .lib) for this generated model.
+                  progress=None, digest: str | None = None):
+    """Return the compiled cffi module (with .ffi and .lib) for this generated model.  ``digest``: the texts'
+    codegen.artifact.text_digest if known (GeneratedModel.text_digest()), else computed here.
 
     ``progress(message)`` is told whether the build was cached or how long it took, and about a
     corrupted entry that is rebuilt (stderr without ``progress``).
     """
     flags = tuple(flags)
-    module_name = f"_gac_{build_key(header, source, cdef, flags)}"
+    module_name = f"_gac_{build_key(digest or text_digest(header, source, cdef), flags)}"
     if module_name in _LOADED:                     # imported (after its check) earlier in this process
         if progress:
             progress(f"compile: cached {module_name}{SUFFIX}")

@@ -235,7 +235,7 @@ def _build_model(scene: Scene, bake_params: bool, flags: tuple, progress, specia
     generated = generate_cached(scene, bake_params=bake_params, specialise=specialise, progress=progress,
                                 dense=dense, rolled=rolled)
     module = compile_model(generated.name, generated.header, generated.source, generated.cdef,
-                           flags=flags, progress=progress)
+                           flags=flags, progress=progress, digest=generated.text_digest())
     return CompiledModel(scene, generated, module, (bool(bake_params), tuple(flags), bool(specialise), dense, rolled))
 
 

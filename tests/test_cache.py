@@ -14,6 +14,7 @@ import codegen.cache
 import codegen.pipeline
 import runtime.compile
 import runtime.model
+from codegen.artifact import text_digest
 from codegen.cache import CacheError, generation_key
 from codegen.scene import default_scene
 from runtime import load_model
@@ -29,7 +30,7 @@ def entries(folder: Path) -> tuple[Path, Path, Path]:
     """The gen json, the module and its sidecar of SCENE's model in ``folder``."""
     gen = folder / f"gen_{generation_key(SCENE)}.json"
     payload = json.loads(gen.read_text())["payload"]
-    module, sidecar = module_files(folder, f"_gac_{build_key(payload['header'], payload['source'], payload['cdef'], ('-O2',))}")
+    module, sidecar = module_files(folder, f"_gac_{build_key(text_digest(payload['header'], payload['source'], payload['cdef']), ('-O2',))}")
     return gen, module, sidecar
 
 

@@ -170,13 +170,6 @@ def split_size(kernel_name: str, split_lines: int | None = None) -> int:
     return SPLIT_LINES_HOT if kernel_name in HOT_KERNELS else SPLIT_LINES
 
 
-def render_model(scene: Scene, name: str, programs: list[Program], bake_params: bool, layout,
-                 split_lines: int | None = None) -> GeneratedModel:
-    """The model's files from its flattened kernels; ``split_lines``: see split_size."""
-    functions = [render_function(p, split_size(p.kernel.name, split_lines)) for p in programs]
-    return assemble_model(scene, name, functions, bake_params, layout)
-
-
 def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], bake_params: bool,
                    layout) -> GeneratedModel:
     """The model's header, source and cffi declarations from its rendered kernels (in interface order)."""

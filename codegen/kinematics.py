@@ -170,9 +170,14 @@ def joint_rotations(tape: Tape, chain: ChainSymbols) -> dict[int, Mat]:
     for k in range(-1, chain.n + 1):
         c = tape.let(sp.cos(chain.theta(k)), f"c_{index_name(k)}")
         s = tape.let(sp.sin(chain.theta(k)), f"s_{index_name(k)}")
-        Rz = ((c, -s, ZERO), (s, c, ZERO), (ZERO, ZERO, sp.Integer(1)))
-        rotations[k] = tape.let_mat(matmul(chain.twists[k + 1], Rz), f"R_{index_name(k)}")
+        rotations[k] = joint_rotation(tape, chain.twists[k + 1], c, s, index_name(k))
     return rotations
+
+
+def joint_rotation(tape: Tape, T: Mat, c, s, tag: str) -> Mat:
+    """^{k-1}R_k = T_k Rz(theta_k) from the twist and c = cos theta_k, s = sin theta_k."""
+    Rz = ((c, -s, ZERO), (s, c, ZERO), (ZERO, ZERO, sp.Integer(1)))
+    return tape.let_mat(matmul(T, Rz), f"R_{tag}")
 
 
 def link_offset(chain: ChainSymbols, moments: dict[int, LinkSymbols], k: int) -> Vec:

@@ -60,14 +60,12 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
     roll = formulation == "gibbs_appell" and wants_rolled(scene.n, rolled)
     if workers > 1 and formulation == "gibbs_appell" and not raw_ops and _can_fork():
         return _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, workers, progress,
-                                     "asked" if rolled and roll else roll)
+                                     rolled if roll else False)
     timings = {}
     start = time.perf_counter()
     if formulation == "lagrange" and dense is None:
         dense = True
-    looped = _rolled_function(scene, bake_params, layout) if roll else None
-    if rolled and looped is None:
-        raise SceneError(_NO_RUN.format(n=scene.n))
+    looped = _rolled_function(scene, bake_params, layout, rolled) if roll else None
     derived = FORMULATIONS[formulation](scene, bake_params, progress=lambda k: progress(f"derive {k}"),
                                         layout=layout, dense=dense,
                                         **({"skip": ("forward_dynamics",)} if looped is not None else {}))
@@ -107,13 +105,16 @@ def _kernel_position(name: str, dense: bool | None, n: int) -> int:
     return [b.__name__.removesuffix("_kernel") for b in kernels.builders(wants_dense(n, dense))].index(name)
 
 
-def _rolled_function(scene, bake_params, layout):
-    """forward_dynamics with loops over the scene's run of identical links, rendered (None: no such run)."""
+def _rolled_function(scene, bake_params, layout, asked: bool | None):
+    """forward_dynamics with loops over the scene's run of identical links, rendered; without such a run None, or
+    a SceneError when the loops were asked for (``asked`` True rather than the default None)."""
     from . import rolled
     from .kinematics import ChainSymbols
     chain = ChainSymbols(scene, bake_params, layout)
     built = rolled.rolled_kernel(chain)
     if built is None:
+        if asked:
+            raise SceneError(_NO_RUN.format(n=scene.n))
         return None
     return rolled.render("forward_dynamics", rolled.summary(built), ("q", "qd", "u", "p"), "qdd", layout.nq, built)
 
@@ -132,17 +133,15 @@ def _can_fork() -> bool:
 
 def _kernel_job(job):
     """Derive, flatten and render one kernel (in a worker process): (rendered function, stage seconds)."""
-    scene, bake_params, layout, builder_name, split_lines, roll = job
+    scene, bake_params, layout, builder_name, split_lines, rolled = job
     from .emit import render_function, split_size
     from .kinematics import ChainSymbols
     builder = next(b for b in kernels.KERNEL_BUILDERS if b.__name__ == builder_name)
     start = time.perf_counter()
-    if roll and builder_name == "forward_dynamics_kernel":
-        function = _rolled_function(scene, bake_params, layout)
+    if rolled is not False and builder_name == "forward_dynamics_kernel":
+        function = _rolled_function(scene, bake_params, layout, rolled)
         if function is not None:
             return function, (time.perf_counter() - start, 0.0, 0.0)
-        if roll == "asked":
-            raise SceneError(_NO_RUN.format(n=scene.n))
     kernel = builder(ChainSymbols(scene, bake_params, layout))
     derived = time.perf_counter()
     program = flatten(kernel)
@@ -151,7 +150,9 @@ def _kernel_job(job):
     return function, (derived - start, flattened - derived, time.perf_counter() - flattened)
 
 
-def _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, workers, progress, roll):
+def _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, workers, progress, rolled):
+    """``rolled``: False (straight-line forward dynamics), None (loops where the scene has a run) or True (loops,
+    an error without a run)."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
     builders = kernels.builders(wants_dense(scene.n, dense))
@@ -160,7 +161,7 @@ def _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, 
     functions, seconds = {}, [0.0, 0.0, 0.0]
     context = multiprocessing.get_context("fork")        # _can_fork: this process has one thread
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        jobs = {pool.submit(_kernel_job, (scene, bake_params, layout, b.__name__, split_lines, roll)): b
+        jobs = {pool.submit(_kernel_job, (scene, bake_params, layout, b.__name__, split_lines, rolled)): b
                 for b in builders}
         for done in as_completed(jobs):
             function, stages = done.result()

@@ -42,7 +42,7 @@ from .flatten import flatten
 from .kernels import Kernel
 from .ops import count_ops
 from .kinematics import ChainSymbols, Motion
-from .tape import E_Y, ZERO, Tape, index_name, matmul, scale
+from .tape import E_Y, ZERO, Tape, index_name, scale
 
 ROLL_MIN_RUN = 4          # the fewest links a loop covers
 
@@ -83,6 +83,14 @@ def _pattern(values, forced: tuple | None = None) -> tuple:
     if len(forced) != len(natural) or any(f is not None and f != m for f, m in zip(forced, natural)):
         raise Mismatch(None, forced, tuple(natural))
     return forced
+
+
+def _expand(pattern: tuple, stored) -> tuple:
+    """The values a pattern stands for: its constants, its aliases, and ``stored(i)`` for each stored entry."""
+    out = []
+    for i, entry in enumerate(pattern):
+        out.append(stored(i) if entry is None else out[entry[1]] if isinstance(entry, tuple) else entry)
+    return tuple(out)
 
 
 def _meet(a: tuple, b: tuple) -> tuple:
@@ -143,15 +151,7 @@ class Store:
             for pattern in patterns:
                 met = _meet(met, pattern)
             raise Mismatch(self.name, met, met)
-        out = []
-        for i, entry in enumerate(patterns.pop()):
-            if entry is None:
-                out.append(sp.Symbol(self._index(k, i), real=True))
-            elif isinstance(entry, tuple):
-                out.append(out[entry[1]])
-            else:
-                out.append(entry)
-        return tuple(out)
+        return _expand(patterns.pop(), lambda i: sp.Symbol(self._index(k, i), real=True))
 
 
 @dataclass
@@ -175,17 +175,12 @@ class Carry:
 
     def read(self) -> tuple[tuple, list[str]]:
         """(values, the lines declaring the stored ones)."""
-        out, lines = [], []
-        for i, entry in enumerate(self.pattern):
-            if entry is None:
-                local = f"cin_{self.name}_{i}"
-                lines.append(f"const double {local} = {self.name}[{i}];")
-                out.append(sp.Symbol(local, real=True))
-            elif isinstance(entry, tuple):
-                out.append(out[entry[1]])
-            else:
-                out.append(entry)
-        return tuple(out), lines
+        lines = []
+
+        def stored(i):
+            lines.append(f"const double cin_{self.name}_{i} = {self.name}[{i}];")
+            return sp.Symbol(f"cin_{self.name}_{i}", real=True)
+        return _expand(self.pattern, stored), lines
 
 
 @dataclass
@@ -296,18 +291,13 @@ def _check_generic(chain: ChainSymbols, block: Block) -> None:
 
 
 # --- the blocks ----------------------------------------------------------------------------------------------
-def _rotation(tape: Tape, T, c, s, tag: str):
-    Rz = ((c, -s, ZERO), (s, c, ZERO), (ZERO, ZERO, sp.Integer(1)))
-    return tape.let_mat(matmul(T, Rz), f"R_{tag}")
-
-
 def _velocity(tape: Tape, chain: ChainSymbols, k: int, previous):
     """Link k's step of the velocity pass: (omega, omega_dot_v, r_ddot_Ov) of frame k (Eq. 18, 20) and
     (cos, sin) of theta_k."""
     tag = index_name(k)
     theta = chain.theta(k)
     c, s = tape.let(sp.cos(theta), f"c_{tag}"), tape.let(sp.sin(theta), f"s_{tag}")
-    R = _rotation(tape, chain.twists[k + 1], c, s, tag)
+    R = kinematics.joint_rotation(tape, chain.twists[k + 1], c, s, tag)
     r_prev = (kinematics.link_offset(chain, {k - 1: kinematics.link_moments(tape, chain, k - 1)}, k - 1)
               if k >= 2 else (ZERO, ZERO, ZERO))
     return kinematics.velocity_step(tape, R, chain.theta_dot(k), previous, r_prev, tag), (c, s)

@@ -187,7 +187,7 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
         bake_params=bake_params, functions=functions, nq=layout.nq,
         coordinates=[names[i] for i in layout.free], fixed=[(names[i], _double_literal(v)) for i, v in layout.fixed],
         notes=layout.notes,
-        params=[(i, pname, _param_doc(pname) + (" [built in as 0]" if pname in zeros else ""), _double_literal(value))
+        params=[(i, pname, param_doc(pname) + (" [built in as 0]" if pname in zeros else ""), _double_literal(value))
                 for i, (pname, value) in enumerate(params)],
         contacts=[(c, point, wall) for c, (point, wall) in enumerate(layout.contacts)],
         contact_table=[_contact_entry(c, point, wall, layout, pnames, bake_params)
@@ -282,7 +282,7 @@ def macro_name(name: str) -> str:
     return name.replace("-", "M").upper()
 
 
-def _param_doc(pname: str) -> str:
+def param_doc(pname: str) -> str:
     if pname.startswith(("stiffness_", "rest_angle_", "damping_", "lower_", "upper_", "e_limit_")):
         base, joint = pname.rsplit("_", 1)
         return f"joint {joint}: {JOINT_DOC[base]}"

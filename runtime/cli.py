@@ -84,6 +84,23 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--rtol", type=float, default=DEFAULT_RTOL, help=f"relative tolerance (default {DEFAULT_RTOL:g})")
     sweep.add_argument("--atol", type=float, default=DEFAULT_ATOL, help=f"absolute tolerance (default {DEFAULT_ATOL:g})")
     sweep.add_argument("--out", metavar="DIR", required=True, help="folder for runs.csv, runs.npz and sweep.png")
+
+    fmu = commands.add_parser(
+        "fmu", help="package a scene's model as an FMI 2.0 Co-Simulation FMU (DIR/NAME.fmu)",
+        description="Build NAME.fmu: modelDescription.xml, the C sources and a shared library for this platform. "
+                    "Each fmi2DoStep runs the hybrid loop (flight, impacts, resting contact) inside the FMU.",
+        epilog="Example: python -m runtime fmu --scene driven-fold --out build   (then e.g. fmpy simulate "
+               "build/driven_fold.fmu)")
+    fmu.add_argument("--scene", default="paper-case1", help="shipped scene name or .toml/.json file")
+    fmu.add_argument("--out", metavar="DIR", default="build", help="folder for NAME.fmu (default build)")
+    fmu.add_argument("--name", metavar="NAME", default=None, help="model identifier (default: the scene's name)")
+    fmu.add_argument("--bake-params", action="store_true",
+                     help="bake the parameters into the code (the FMU then has no parameter variables p.*)")
+    fmu.add_argument("--general", action="store_true", help="the general model (no scene-driven specialisation)")
+    fmu.add_argument("--t-end", type=float, default=None,
+                     help="stop time of the FMU's default experiment in s (default: the scene's usual horizon)")
+    fmu.add_argument("--step", type=float, default=1e-3,
+                     help="communication step of the default experiment in s (default 0.001)")
     return parser
 
 
@@ -169,6 +186,8 @@ def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     if args.command == "sweep":
         return sweep_main(args)
+    if args.command == "fmu":
+        return fmu_main(args)
     loaded = scene_and_horizon(args)
     if loaded is None:
         return 2
@@ -325,4 +344,34 @@ def sweep_main(args) -> int:
     failed = sum(1 for row in study.rows if row["status"] != 0)
     print(f"{len(runs):,} runs in {study.seconds:.2f} s ({len(runs) / max(study.seconds, 1e-9):,.0f} runs/s), "
           f"{failed} stopped early or refused; wrote {out / 'runs.csv'}, {out / 'runs.npz'}, {out / 'sweep.png'}")
+    return 0
+
+
+def fmu_main(args) -> int:
+    """python -m runtime fmu: build DIR/NAME.fmu and say where it is."""
+    from codegen.scene import SceneError, is_c_identifier
+    from .fmu import build_fmu
+    import math
+    problem = output_dir_problem("--out", args.out)
+    for option, value in (("--t-end", args.t_end), ("--step", args.step)):
+        if not problem and value is not None and not (math.isfinite(value) and value > 0):
+            problem = f"{option}: must be a finite time > 0 s, got {value}"
+    if not problem and args.name is not None and not is_c_identifier(args.name):
+        problem = f"--name: must be a C identifier of 1..48 characters, got {args.name!r}"
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
+        return 2
+    start = time.perf_counter()
+    progress = lambda m: print(f"  {m}", file=sys.stderr, flush=True)  # noqa: E731
+    try:
+        path = build_fmu(args.scene, args.out, name=args.name, bake_params=args.bake_params,
+                         specialise=not args.general, stop_time=args.t_end, step_size=args.step, progress=progress)
+    except SceneError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except (CompilerNotFound, BuildError, CacheError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 3
+    print(f"wrote {path} ({path.stat().st_size / 1024:.0f} kB, FMI 2.0 Co-Simulation) in "
+          f"{time.perf_counter() - start:.2f} s")
     return 0

@@ -1,0 +1,730 @@
+/*
+ * gac_fmi2.c -- the FMI 2.0 Co-Simulation interface over a gac_model (see gac_fmi2.h for the variables).
+ *
+ * States of an instance (FMI 2.0, section 4.2.4): instantiated -> initialization mode -> stepping ->
+ * terminated, and error after a failed step.  Parameters and initial values may be set until the end of
+ * initialization mode; fmi2ExitInitializationMode starts the simulation (gac_sim_init) and reports a start
+ * outside the box or a bad option by name.  Inputs may be set between steps; each step holds them.
+ */
+#ifdef GAC_FMI2_STANDARD_HEADERS
+#include "fmi2Functions.h"
+#else
+#include "fmi2_types.h"
+#endif
+#include "gac_fmi2.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#if defined(__GNUC__) && !defined(GAC_FMI2_STANDARD_HEADERS)
+#  define GAC_FMI2_EXPORT __attribute__((visibility("default")))
+#elif defined(_WIN32) && !defined(GAC_FMI2_STANDARD_HEADERS)
+#  define GAC_FMI2_EXPORT __declspec(dllexport)
+#else
+#  define GAC_FMI2_EXPORT
+#endif
+
+enum { MODE_INSTANTIATED, MODE_INITIALIZATION, MODE_STEPPING, MODE_TERMINATED, MODE_ERROR };
+
+/* Indices of the solver parameters and the energy outputs within their blocks. */
+enum { SOLVER_RTOL, SOLVER_ATOL, SOLVER_DT, SOLVER_HMAX };
+enum { OUT_KINETIC, OUT_POTENTIAL, OUT_WORK_INPUT, OUT_WORK_DAMPING, OUT_IMPACT_LOSS };
+enum { INT_METHOD, INT_IMPACTS, INT_RESTING };
+
+typedef struct {
+    const gac_model *m;
+    const gac_fmi2_description *d;
+    fmi2CallbackLogger logger;
+    fmi2CallbackAllocateMemory allocate_memory;
+    fmi2CallbackFreeMemory free_memory;
+    fmi2ComponentEnvironment environment;
+    char *name;
+    int logging;
+    int mode;
+    double t0;
+    int tolerance_defined;       /* fmi2SetupExperiment gave a tolerance ... */
+    double tolerance;
+    int rtol_set, atol_set;      /* ... which rtol and atol follow unless they were set themselves */
+    double *p, *q0, *qd0, *u;    /* nparam, nq, nq, nu */
+    double solver[GAC_FMI2_NSOLVER_REAL];
+    int method;
+    long n_impacts;
+    double impact_loss;
+    gac_sim sim;
+    double *dwork;               /* gac_sim_ndouble(m) */
+    int *iwork;                  /* gac_sim_nint(m) */
+    gac_impact_record record;
+    double *rdwork;              /* gac_record_ndouble(m) */
+    int *riwork;                 /* gac_record_nint(m) */
+} Instance;
+
+/* A saved state (fmi2GetFMUstate): what a step changes. */
+typedef struct {
+    int mode;
+    long n_impacts;
+    double impact_loss;
+    gac_sim sim;
+    double *dwork, *u;
+    int *iwork;
+} Snapshot;
+
+long gac_fmi2_nreal(const gac_model *m)
+{
+    return 2L * m->nq + m->nu + m->nparam + 2L * m->nq + GAC_FMI2_NSOLVER_REAL + GAC_FMI2_NOUT_REAL;
+}
+
+/* ---- logging ------------------------------------------------------------------------------------ */
+
+/* Send one message (no printf directives of its own: '%' is written as "pct") to the importer's logger.
+ * Errors are always sent; other messages only with logging on. */
+static void say(const Instance *in, fmi2Status status, const char *category, const char *text)
+{
+    char message[520];
+    size_t k = 0;
+    if (in == 0 || in->logger == 0) return;
+    if (status < fmi2Error && !in->logging) return;
+    for (; *text != '\0' && k + 4 < sizeof message; text++) {
+        if (*text == '%') {
+            memcpy(message + k, "pct", 3);
+            k += 3;
+        } else {
+            message[k++] = *text;
+        }
+    }
+    message[k] = '\0';
+    in->logger(in->environment, in->name, status, category, message);
+}
+
+static fmi2Status fail(Instance *in, const char *function, const char *why)
+{
+    char text[480];
+    snprintf(text, sizeof text, "%.60s: %.400s", function, why);
+    say(in, fmi2Error, "logStatusError", text);
+    return fmi2Error;
+}
+
+/* ---- value references --------------------------------------------------------------------------- */
+
+static long vr_u(const gac_model *m) { return 2L * m->nq; }
+static long vr_p(const gac_model *m) { return vr_u(m) + m->nu; }
+static long vr_q0(const gac_model *m) { return vr_p(m) + m->nparam; }
+static long vr_qd0(const gac_model *m) { return vr_q0(m) + m->nq; }
+static long vr_solver(const gac_model *m) { return vr_qd0(m) + m->nq; }
+static long vr_out(const gac_model *m) { return vr_solver(m) + GAC_FMI2_NSOLVER_REAL; }
+
+/* The state the outputs show: the simulation's once it runs, the initial values before. */
+static void current_state(const Instance *in, const double **q, const double **qd)
+{
+    if (in->mode == MODE_INSTANTIATED || in->mode == MODE_INITIALIZATION) {
+        *q = in->q0;
+        *qd = in->qd0;
+    } else {
+        *q = in->sim.x;
+        *qd = in->sim.x + in->m->nq;
+    }
+}
+
+static double real_value(const Instance *in, long r)
+{
+    const gac_model *m = in->m;
+    const double *q, *qd;
+    current_state(in, &q, &qd);
+    if (r < m->nq) return q[r];
+    if (r < vr_u(m)) return qd[r - m->nq];
+    if (r < vr_p(m)) return in->u[r - vr_u(m)];
+    if (r < vr_q0(m)) return in->p[r - vr_p(m)];
+    if (r < vr_qd0(m)) return in->q0[r - vr_q0(m)];
+    if (r < vr_solver(m)) return in->qd0[r - vr_qd0(m)];
+    if (r < vr_out(m)) return in->solver[r - vr_solver(m)];
+    r -= vr_out(m);
+    if (r == OUT_KINETIC || r == OUT_POTENTIAL) {
+        double E[2];
+        m->energy(q, qd, in->p, E);
+        return E[r];
+    }
+    if (in->mode == MODE_INSTANTIATED || in->mode == MODE_INITIALIZATION) return 0.0;
+    if (r == OUT_WORK_INPUT) return in->sim.work_input;
+    if (r == OUT_WORK_DAMPING) return in->sim.work_damping;
+    return in->impact_loss;
+}
+
+/* ---- instances ---------------------------------------------------------------------------------- */
+
+static size_t align8(size_t n) { return (n + 7u) & ~(size_t)7u; }
+
+GAC_FMI2_EXPORT const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+GAC_FMI2_EXPORT const char *fmi2GetVersion(void) { return fmi2Version; }
+
+GAC_FMI2_EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
+                                               const fmi2String categories[])
+{
+    Instance *in = (Instance *)c;
+    (void)nCategories;
+    (void)categories;
+    if (in == 0) return fmi2Error;
+    in->logging = loggingOn ? 1 : 0;
+    return fmi2OK;
+}
+
+/* Back to the state after fmi2Instantiate: the scene's parameters and initial state, default options. */
+static void reset(Instance *in)
+{
+    const gac_model *m;
+    gac_options opt;
+    int i;
+    m = in->m;
+    for (i = 0; i < m->nparam; i++) in->p[i] = m->default_parameters[i];
+    for (i = 0; i < m->nq; i++) {
+        in->q0[i] = m->q0[i];
+        in->qd0[i] = m->qd0[i];
+    }
+    for (i = 0; i < m->nu; i++) in->u[i] = 0.0;
+    gac_default_options(&opt);
+    in->solver[SOLVER_RTOL] = opt.rtol;
+    in->solver[SOLVER_ATOL] = opt.atol;
+    in->solver[SOLVER_DT] = opt.dt;
+    in->solver[SOLVER_HMAX] = opt.h_max;
+    in->method = opt.method;
+    in->tolerance_defined = 0;
+    in->tolerance = 0.0;
+    in->rtol_set = in->atol_set = 0;
+    in->t0 = 0.0;
+    in->n_impacts = 0;
+    in->impact_loss = 0.0;
+    in->mode = MODE_INSTANTIATED;
+}
+
+GAC_FMI2_EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+                                              fmi2String fmuResourceLocation,
+                                              const fmi2CallbackFunctions *functions, fmi2Boolean visible,
+                                              fmi2Boolean loggingOn)
+{
+    const gac_fmi2_description *d = gac_fmi2_describe();
+    const gac_model *m = d->model;
+    Instance probe, *in;
+    size_t name_len, ndouble, nint, bytes;
+    char *block;
+    (void)fmuResourceLocation;
+    (void)visible;
+    if (functions == 0 || functions->allocateMemory == 0 || functions->freeMemory == 0) return 0;
+    memset(&probe, 0, sizeof probe);
+    probe.logger = functions->logger;
+    probe.environment = functions->componentEnvironment;
+    probe.name = (char *)(instanceName ? instanceName : "?");
+    if (instanceName == 0 || instanceName[0] == '\0') {
+        fail(&probe, "fmi2Instantiate", "instanceName must be a non-empty string");
+        return 0;
+    }
+    if (fmuType != fmi2CoSimulation) {
+        fail(&probe, "fmi2Instantiate", "this FMU supports Co-Simulation only (fmuType must be fmi2CoSimulation)");
+        return 0;
+    }
+    if (fmuGUID == 0 || strcmp(fmuGUID, d->guid) != 0) {
+        fail(&probe, "fmi2Instantiate", "fmuGUID does not match the GUID of this FMU's modelDescription.xml");
+        return 0;
+    }
+    if (gac_model_check(m) != GAC_OK) {
+        fail(&probe, "fmi2Instantiate", gac_error_message(GAC_ERR_BAD_MODEL));
+        return 0;
+    }
+    /* One block: the instance, its name, then the doubles and ints it owns. */
+    name_len = strlen(instanceName) + 1;
+    ndouble = (size_t)m->nparam + 2u * (size_t)m->nq + (size_t)m->nu + (size_t)gac_sim_ndouble(m)
+              + (size_t)gac_record_ndouble(m);
+    nint = (size_t)gac_sim_nint(m) + (size_t)gac_record_nint(m);
+    bytes = align8(sizeof(Instance)) + align8(name_len) + ndouble * sizeof(double) + nint * sizeof(int);
+    block = (char *)functions->allocateMemory(1, bytes);
+    if (block == 0) {
+        fail(&probe, "fmi2Instantiate", "allocateMemory returned NULL");
+        return 0;
+    }
+    memset(block, 0, bytes);
+    in = (Instance *)block;
+    in->m = m;
+    in->d = d;
+    in->logger = functions->logger;
+    in->allocate_memory = functions->allocateMemory;
+    in->free_memory = functions->freeMemory;
+    in->environment = functions->componentEnvironment;
+    in->name = block + align8(sizeof(Instance));
+    memcpy(in->name, instanceName, name_len);
+    in->logging = loggingOn ? 1 : 0;
+    in->p = (double *)(block + align8(sizeof(Instance)) + align8(name_len));
+    in->q0 = in->p + m->nparam;
+    in->qd0 = in->q0 + m->nq;
+    in->u = in->qd0 + m->nq;
+    in->dwork = in->u + m->nu;
+    in->rdwork = in->dwork + gac_sim_ndouble(m);
+    in->iwork = (int *)(in->rdwork + gac_record_ndouble(m));
+    in->riwork = in->iwork + gac_sim_nint(m);
+    reset(in);
+    return in;
+}
+
+GAC_FMI2_EXPORT void fmi2FreeInstance(fmi2Component c)
+{
+    Instance *in = (Instance *)c;
+    if (in != 0) in->free_memory(in);
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2Reset(fmi2Component c)
+{
+    if (c == 0) return fmi2Error;
+    reset((Instance *)c);
+    return fmi2OK;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
+{
+    Instance *in = (Instance *)c;
+    (void)stopTimeDefined;
+    (void)stopTime;
+    if (in == 0) return fmi2Error;
+    if (in->mode != MODE_INSTANTIATED)
+        return fail(in, "fmi2SetupExperiment", "allowed only after fmi2Instantiate or fmi2Reset");
+    if (!isfinite(startTime)) return fail(in, "fmi2SetupExperiment", "startTime must be finite");
+    if (toleranceDefined && !(tolerance > 0.0 && tolerance < 1.0))
+        return fail(in, "fmi2SetupExperiment", "tolerance must be in (0, 1)");
+    in->t0 = startTime;
+    in->tolerance_defined = toleranceDefined ? 1 : 0;
+    in->tolerance = tolerance;
+    return fmi2OK;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component c)
+{
+    Instance *in = (Instance *)c;
+    if (in == 0) return fmi2Error;
+    if (in->mode != MODE_INSTANTIATED)
+        return fail(in, "fmi2EnterInitializationMode", "allowed only after fmi2Instantiate or fmi2Reset");
+    in->mode = MODE_INITIALIZATION;
+    return fmi2OK;
+}
+
+/* Start the hybrid loop at t0 with the initial values, parameters and options set so far.  The tolerance of
+ * fmi2SetupExperiment gives rtol (and atol = tolerance / 100) unless solver.rtol (solver.atol) was set. */
+GAC_FMI2_EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c)
+{
+    Instance *in = (Instance *)c;
+    gac_options opt;
+    int code;
+    char why[300];
+    if (in == 0) return fmi2Error;
+    if (in->mode != MODE_INITIALIZATION)
+        return fail(in, "fmi2ExitInitializationMode", "allowed only in initialization mode");
+    if (in->tolerance_defined && !in->rtol_set) in->solver[SOLVER_RTOL] = in->tolerance;
+    if (in->tolerance_defined && !in->atol_set) in->solver[SOLVER_ATOL] = in->tolerance / 100.0;
+    gac_default_options(&opt);
+    opt.method = in->method;
+    opt.rtol = in->solver[SOLVER_RTOL];
+    opt.atol = in->solver[SOLVER_ATOL];
+    opt.dt = in->solver[SOLVER_DT];
+    opt.h_max = in->solver[SOLVER_HMAX];
+    code = gac_sim_init(&in->sim, in->m, in->dwork, in->iwork, in->t0, in->q0, in->qd0, in->p, &opt);
+    if (code == GAC_OK && in->m->nu > 0) code = gac_sim_set_input(&in->sim, in->u);
+    if (code != GAC_OK) {
+        snprintf(why, sizeof why, "the simulation cannot start: %s", gac_error_message(code));
+        return fail(in, "fmi2ExitInitializationMode", why);
+    }
+    gac_record_bind(&in->record, in->m, in->rdwork, in->riwork);
+    in->n_impacts = 0;
+    in->impact_loss = 0.0;
+    in->mode = MODE_STEPPING;
+    return fmi2OK;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2Terminate(fmi2Component c)
+{
+    Instance *in = (Instance *)c;
+    if (in == 0) return fmi2Error;
+    if (in->mode != MODE_STEPPING && in->mode != MODE_ERROR)
+        return fail(in, "fmi2Terminate", "allowed only after initialization");
+    in->mode = MODE_TERMINATED;
+    return fmi2OK;
+}
+
+/* ---- getting and setting values ----------------------------------------------------------------- */
+
+GAC_FMI2_EXPORT fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[])
+{
+    Instance *in = (Instance *)c;
+    size_t k;
+    if (in == 0) return fmi2Error;
+    if (nvr > 0 && (vr == 0 || value == 0)) return fail(in, "fmi2GetReal", "vr and value must not be NULL");
+    for (k = 0; k < nvr; k++) {
+        if ((long)vr[k] >= gac_fmi2_nreal(in->m)) {
+            char why[160];
+            snprintf(why, sizeof why, "no Real variable has value reference %u (0..%ld)", vr[k],
+                     gac_fmi2_nreal(in->m) - 1);
+            return fail(in, "fmi2GetReal", why);
+        }
+        value[k] = real_value(in, (long)vr[k]);
+    }
+    return fmi2OK;
+}
+
+/* Set one Real; returns NULL or why it was refused. */
+static const char *set_real(Instance *in, long r, double v, char *why, size_t size)
+{
+    const gac_model *m = in->m;
+    int before_start = in->mode == MODE_INSTANTIATED || in->mode == MODE_INITIALIZATION;
+    if (r < vr_u(m)) return "q and qd are outputs: set the initial values q0 and qd0 instead";
+    if (!isfinite(v)) return "the value must be finite";
+    if (r < vr_p(m)) {
+        if (in->mode == MODE_TERMINATED || in->mode == MODE_ERROR) return "inputs cannot be set after the end";
+        in->u[r - vr_u(m)] = v;
+        if (in->mode == MODE_STEPPING && gac_sim_set_input(&in->sim, in->u) != GAC_OK) return "input refused";
+        return 0;
+    }
+    if (r >= vr_out(m)) return "the energy outputs cannot be set";
+    if (!before_start) return "parameters, initial values and solver settings are fixed after initialization";
+    if (r < vr_q0(m)) {
+        if (in->d->bake_params) return "this FMU was built with its parameters baked into the code";
+        in->p[r - vr_p(m)] = v;
+    } else if (r < vr_qd0(m)) {
+        in->q0[r - vr_q0(m)] = v;
+    } else if (r < vr_solver(m)) {
+        in->qd0[r - vr_qd0(m)] = v;
+    } else {
+        long s = r - vr_solver(m);
+        if (s < 0 || s >= GAC_FMI2_NSOLVER_REAL) return "no such solver setting";
+        if ((s == SOLVER_RTOL || s == SOLVER_ATOL) && !(v > 0.0)) return "solver.rtol and solver.atol must be > 0";
+        if ((s == SOLVER_DT || s == SOLVER_HMAX) && v < 0.0) {
+            snprintf(why, size, "solver.%s must be >= 0 s (0: automatic / unbounded), got %g",
+                     s == SOLVER_DT ? "dt" : "h_max", v);
+            return why;
+        }
+        in->solver[s] = v;
+        if (s == SOLVER_RTOL) in->rtol_set = 1;
+        if (s == SOLVER_ATOL) in->atol_set = 1;
+    }
+    return 0;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                       const fmi2Real value[])
+{
+    Instance *in = (Instance *)c;
+    size_t k;
+    if (in == 0) return fmi2Error;
+    if (nvr > 0 && (vr == 0 || value == 0)) return fail(in, "fmi2SetReal", "vr and value must not be NULL");
+    for (k = 0; k < nvr; k++) {
+        char why[200], text[300];
+        const char *refused;
+        if ((long)vr[k] >= gac_fmi2_nreal(in->m)) {
+            snprintf(text, sizeof text, "no Real variable has value reference %u (0..%ld)", vr[k],
+                     gac_fmi2_nreal(in->m) - 1);
+            return fail(in, "fmi2SetReal", text);
+        }
+        refused = set_real(in, (long)vr[k], value[k], why, sizeof why);
+        if (refused != 0) {
+            snprintf(text, sizeof text, "value reference %u: %s", vr[k], refused);
+            return fail(in, "fmi2SetReal", text);
+        }
+    }
+    return fmi2OK;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                          fmi2Integer value[])
+{
+    Instance *in = (Instance *)c;
+    size_t k;
+    if (in == 0) return fmi2Error;
+    if (nvr > 0 && (vr == 0 || value == 0)) return fail(in, "fmi2GetInteger", "vr and value must not be NULL");
+    for (k = 0; k < nvr; k++) {
+        int stepping = in->mode != MODE_INSTANTIATED && in->mode != MODE_INITIALIZATION;
+        if (vr[k] == INT_METHOD) value[k] = in->method;
+        else if (vr[k] == INT_IMPACTS) value[k] = (fmi2Integer)in->n_impacts;
+        else if (vr[k] == INT_RESTING) value[k] = stepping ? in->sim.nactive : 0;
+        else return fail(in, "fmi2GetInteger", "no Integer variable has this value reference (0..2)");
+    }
+    return fmi2OK;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                          const fmi2Integer value[])
+{
+    Instance *in = (Instance *)c;
+    size_t k;
+    if (in == 0) return fmi2Error;
+    if (nvr > 0 && (vr == 0 || value == 0)) return fail(in, "fmi2SetInteger", "vr and value must not be NULL");
+    for (k = 0; k < nvr; k++) {
+        if (vr[k] != INT_METHOD) return fail(in, "fmi2SetInteger", "only solver.method (value reference 0) can be set");
+        if (in->mode != MODE_INSTANTIATED && in->mode != MODE_INITIALIZATION)
+            return fail(in, "fmi2SetInteger", "solver.method is fixed after initialization");
+        if (value[k] != GAC_METHOD_RK4 && value[k] != GAC_METHOD_DOPRI5 && value[k] != GAC_METHOD_DOP853)
+            return fail(in, "fmi2SetInteger", "solver.method must be 0 (RK4), 1 (DOPRI5) or 2 (DOP853)");
+        in->method = value[k];
+    }
+    return fmi2OK;
+}
+
+static fmi2Status no_variables(Instance *in, size_t nvr, const char *function)
+{
+    if (in == 0) return fmi2Error;
+    if (nvr == 0) return fmi2OK;
+    return fail(in, function, "this FMU has no variables of this type");
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                          fmi2Boolean value[])
+{
+    (void)vr;
+    (void)value;
+    return no_variables((Instance *)c, nvr, "fmi2GetBoolean");
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                          const fmi2Boolean value[])
+{
+    (void)vr;
+    (void)value;
+    return no_variables((Instance *)c, nvr, "fmi2SetBoolean");
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                         fmi2String value[])
+{
+    (void)vr;
+    (void)value;
+    return no_variables((Instance *)c, nvr, "fmi2GetString");
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                         const fmi2String value[])
+{
+    (void)vr;
+    (void)value;
+    return no_variables((Instance *)c, nvr, "fmi2SetString");
+}
+
+/* ---- saved states ------------------------------------------------------------------------------- */
+
+/* A snapshot is one block from allocateMemory: the Snapshot, then the simulation's doubles and the inputs,
+ * then its ints. */
+GAC_FMI2_EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
+{
+    Instance *in = (Instance *)c;
+    const gac_model *m;
+    Snapshot *s;
+    size_t nd, ni;
+    if (in == 0) return fmi2Error;
+    if (FMUstate == 0) return fail(in, "fmi2GetFMUstate", "FMUstate must not be NULL");
+    if (in->mode != MODE_STEPPING) return fail(in, "fmi2GetFMUstate", "allowed only between steps");
+    m = in->m;
+    nd = (size_t)gac_sim_ndouble(m);
+    ni = (size_t)gac_sim_nint(m);
+    s = (Snapshot *)*FMUstate;
+    if (s == 0) {
+        char *block = (char *)in->allocate_memory(1, align8(sizeof(Snapshot))
+                                                  + (nd + (size_t)m->nu) * sizeof(double) + ni * sizeof(int));
+        if (block == 0) return fail(in, "fmi2GetFMUstate", "allocateMemory returned NULL");
+        s = (Snapshot *)block;
+        s->dwork = (double *)(block + align8(sizeof(Snapshot)));
+        s->u = s->dwork + nd;
+        s->iwork = (int *)(s->u + m->nu);
+    }
+    s->mode = in->mode;
+    s->n_impacts = in->n_impacts;
+    s->impact_loss = in->impact_loss;
+    s->sim = in->sim;
+    memcpy(s->dwork, in->dwork, nd * sizeof(double));
+    memcpy(s->iwork, in->iwork, ni * sizeof(int));
+    if (m->nu > 0) memcpy(s->u, in->u, (size_t)m->nu * sizeof(double));
+    *FMUstate = s;
+    return fmi2OK;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
+{
+    Instance *in = (Instance *)c;
+    const Snapshot *s = (const Snapshot *)FMUstate;
+    const gac_model *m;
+    if (in == 0) return fmi2Error;
+    if (s == 0) return fail(in, "fmi2SetFMUstate", "FMUstate must not be NULL");
+    if (in->mode != MODE_STEPPING && in->mode != MODE_ERROR)
+        return fail(in, "fmi2SetFMUstate", "allowed only after initialization");
+    m = in->m;
+    in->mode = s->mode;
+    in->n_impacts = s->n_impacts;
+    in->impact_loss = s->impact_loss;
+    in->sim = s->sim;
+    memcpy(in->dwork, s->dwork, (size_t)gac_sim_ndouble(m) * sizeof(double));
+    memcpy(in->iwork, s->iwork, (size_t)gac_sim_nint(m) * sizeof(int));
+    if (m->nu > 0) memcpy(in->u, s->u, (size_t)m->nu * sizeof(double));
+    gac_sim_bind(&in->sim, m, in->dwork, in->iwork);
+    return fmi2OK;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
+{
+    Instance *in = (Instance *)c;
+    if (in == 0) return fmi2Error;
+    if (FMUstate == 0) return fail(in, "fmi2FreeFMUstate", "FMUstate must not be NULL");
+    if (*FMUstate != 0) in->free_memory(*FMUstate);
+    *FMUstate = 0;
+    return fmi2OK;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size)
+{
+    (void)FMUstate;
+    (void)size;
+    return c ? fail((Instance *)c, "fmi2SerializedFMUstateSize", "not supported (canSerializeFMUstate=false)")
+             : fmi2Error;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[],
+                                                 size_t size)
+{
+    (void)FMUstate;
+    (void)serializedState;
+    (void)size;
+    return c ? fail((Instance *)c, "fmi2SerializeFMUstate", "not supported (canSerializeFMUstate=false)")
+             : fmi2Error;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
+                                                   fmi2FMUstate *FMUstate)
+{
+    (void)serializedState;
+    (void)size;
+    (void)FMUstate;
+    return c ? fail((Instance *)c, "fmi2DeSerializeFMUstate", "not supported (canSerializeFMUstate=false)")
+             : fmi2Error;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
+                                                        size_t nUnknown, const fmi2ValueReference vKnown_ref[],
+                                                        size_t nKnown, const fmi2Real dvKnown[],
+                                                        fmi2Real dvUnknown[])
+{
+    (void)vUnknown_ref;
+    (void)nUnknown;
+    (void)vKnown_ref;
+    (void)nKnown;
+    (void)dvKnown;
+    (void)dvUnknown;
+    return c ? fail((Instance *)c, "fmi2GetDirectionalDerivative",
+                    "not supported (providesDirectionalDerivative=false)")
+             : fmi2Error;
+}
+
+/* ---- co-simulation ------------------------------------------------------------------------------ */
+
+GAC_FMI2_EXPORT fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                                       const fmi2Integer order[], const fmi2Real value[])
+{
+    (void)vr;
+    (void)order;
+    (void)value;
+    if (c == 0) return fmi2Error;
+    if (nvr == 0) return fmi2OK;
+    return fail((Instance *)c, "fmi2SetRealInputDerivatives",
+                "not supported: inputs are held over each step (canInterpolateInputs=false)");
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                                        const fmi2Integer order[], fmi2Real value[])
+{
+    (void)vr;
+    (void)order;
+    (void)value;
+    if (c == 0) return fmi2Error;
+    if (nvr == 0) return fmi2OK;
+    return fail((Instance *)c, "fmi2GetRealOutputDerivatives", "not supported (maxOutputDerivativeOrder=0)");
+}
+
+/* Advance from currentCommunicationPoint (the instance's time) by communicationStepSize: flight, impacts
+ * and resting contacts, with the inputs held. */
+GAC_FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
+                                      fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
+{
+    Instance *in = (Instance *)c;
+    double t_end;
+    int code, i_eval = 0;
+    char why[400];
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (in == 0) return fmi2Error;
+    if (in->mode != MODE_STEPPING)
+        return fail(in, "fmi2DoStep", in->mode == MODE_ERROR ? "an earlier step failed: reset or free the instance"
+                                                             : "allowed only after initialization and before the end");
+    if (!isfinite(communicationStepSize) || communicationStepSize < 0.0)
+        return fail(in, "fmi2DoStep", "communicationStepSize must be finite and >= 0");
+    if (!(fabs(currentCommunicationPoint - in->sim.t) <= 1e-12 * (1.0 + fabs(in->sim.t)))) {
+        snprintf(why, sizeof why, "currentCommunicationPoint %.17g differs from the FMU's time %.17g",
+                 currentCommunicationPoint, in->sim.t);
+        return fail(in, "fmi2DoStep", why);
+    }
+    t_end = in->sim.t + communicationStepSize;
+    for (;;) {
+        code = gac_sim_advance(&in->sim, t_end, 0, 0, &i_eval, 0, &in->record);
+        if (code == GAC_SIM_IMPACT) {
+            in->n_impacts++;
+            in->impact_loss += in->record.energy_before - in->record.energy_after;
+            if (in->logging) {
+                snprintf(why, sizeof why, "impact at t = %.17g s: %d contacts, energy %.17g -> %.17g J",
+                         in->record.t, in->record.ncontact, in->record.energy_before, in->record.energy_after);
+                say(in, fmi2OK, "logEvents", why);
+            }
+        } else if (code != GAC_SIM_CONTACT) {
+            break;
+        }
+    }
+    if (code != GAC_SIM_END) {
+        in->mode = MODE_ERROR;
+        snprintf(why, sizeof why, "the simulation stopped at t = %.17g s: %s", in->sim.t, gac_error_message(code));
+        return fail(in, "fmi2DoStep", why);
+    }
+    return fmi2OK;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2CancelStep(fmi2Component c)
+{
+    return c ? fail((Instance *)c, "fmi2CancelStep", "not supported: steps are synchronous (canRunAsynchronuously=false)")
+             : fmi2Error;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value)
+{
+    Instance *in = (Instance *)c;
+    if (in == 0 || value == 0) return fmi2Error;
+    if (s != fmi2DoStepStatus) return fail(in, "fmi2GetStatus", "only fmi2DoStepStatus is reported");
+    *value = in->mode == MODE_ERROR ? fmi2Error : fmi2OK;
+    return fmi2OK;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value)
+{
+    Instance *in = (Instance *)c;
+    if (in == 0 || value == 0) return fmi2Error;
+    if (s != fmi2LastSuccessfulTime) return fail(in, "fmi2GetRealStatus", "only fmi2LastSuccessfulTime is reported");
+    *value = in->mode == MODE_INSTANTIATED || in->mode == MODE_INITIALIZATION ? in->t0 : in->sim.t;
+    return fmi2OK;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value)
+{
+    (void)s;
+    (void)value;
+    return c ? fail((Instance *)c, "fmi2GetIntegerStatus", "no Integer status is reported") : fmi2Error;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
+{
+    Instance *in = (Instance *)c;
+    if (in == 0 || value == 0) return fmi2Error;
+    if (s != fmi2Terminated) return fail(in, "fmi2GetBooleanStatus", "only fmi2Terminated is reported");
+    *value = fmi2False;
+    return fmi2OK;
+}
+
+GAC_FMI2_EXPORT fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value)
+{
+    (void)s;
+    (void)value;
+    return c ? fail((Instance *)c, "fmi2GetStringStatus", "no String status is reported") : fmi2Error;
+}

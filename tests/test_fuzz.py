@@ -110,19 +110,41 @@ def test_thousand_runs_have_no_failure():
     assert failed == []
 
 
-def test_a_law_with_a_plastic_wall_is_not_held_to_energy_conservation():
-    """Case 0-8/11 of the study: an e = 1 contact is struck and, in the law's second round, a contact on an e = 0
-    wall takes an impulse (energy lost, physically); the first contact then lands (struck again with e = 0) and
-    the recorded contacts are all on e = 1 walls.  The law was not elastic, and its record says so, so the
-    energy check does not apply to it; the run passes every check."""
+def corner_scene(e_left: float):
+    """A rod in a corner: O1 slides at 0.3 m/s towards the left wall (restitution e_left) while O2 falls onto
+    the floor (e = 1); both arrive at t_hit = (sqrt(1 + 2 g 0.1) - 1) / g, in closed form."""
+    import math
+    from codegen.scene import scene_from_dict
+    t_hit = (math.sqrt(1.0 + 2.0 * 9.81 * 0.1) - 1.0) / 9.81
+    data = {"name": "corner", "gravity": 9.81, "links": [{"length": 1.0, "mu": 1.0}],
+            "walls": {"x1_min": 0.0, "x1_max": 5.0, "x2_min": 0.0, "x2_max": 5.0},
+            "restitution": {"x1_min": e_left, "x2_min": 1.0, "x1_max": 1.0, "x2_max": 1.0},
+            "initial": {"q": [-math.pi / 2, 0.0, math.atan2(-0.6, -0.8), 0.3 * t_hit, 0.9, 0.0],   # O2 at (0.6, 0.1)
+                        "qd": [0.0, 0.0, 0.0, -0.3, -1.0, 0.0]}}
+    return scene_from_dict(data), t_hit
+
+
+@pytest.mark.parametrize("e_left", [0.0, 0.5, 1.0])
+def test_the_energy_check_follows_the_law_not_the_walls(e_left):
+    """An impact on an e = 1 floor with a contact on a wall of restitution e_left: the law is elastic only when
+    e_left = 1, and the energy it takes is the work-energy identity's sum of F_k v_k- (1 - e_k) / 2 (Newton's
+    law v_k+ = -e_k v_k-), which vanishes for e_left = 1.  The study's checks and simulate's own accept each run."""
     from runtime.simulate import simulate
-    rng = np.random.default_rng([0, 8])
-    scene = fuzz.random_structure(rng, 8, 8)
-    model = load_model(scene, specialise=False)
-    for _ in range(12):
-        run = fuzz.random_run(rng, scene, model)
-    result = simulate(model, run.t_end, p=run.p, q0=run.q0, qd0=run.qd0, **run.options)
-    assert result.status >= 0, result.message
+    scene, t_hit = corner_scene(e_left)
+    model = load_model(scene)
+    run = fuzz.Run(p=model.p, q0=np.array(scene.q0), qd0=np.array(scene.qd0), t_end=0.1,
+                   options={"method": "dopri5", "rtol": 1e-10, "atol": 1e-12}, extent=5.0)
+    result = simulate(model, run.t_end, **run.options)
+    assert result.status == 0 and result.warnings == [], result.message
     assert fuzz.check_run(model, run, result, 0.1, 20.0) == []
-    impact = next(i for i in result.impacts if abs(i.t - 1.1424422067) < 1e-6)
-    assert not impact.law_elastic and all(c.wall in ("x2_min", "x2_max") for c in impact.contacts)
+    impact, = result.impacts
+    assert impact.t == pytest.approx(t_hit, abs=1e-12)
+    assert sorted(c.label for c in impact.contacts) == ["O1/x1_min", "O2/x2_min"]
+    assert all(c.impulse > 0 for c in impact.contacts)
+    assert impact.law_elastic == (e_left == 1.0)
+    v_before = {"O1/x1_min": 0.3, "O2/x2_min": 1.0 + 9.81 * t_hit}            # approach speeds, closed form
+    e = {"O1/x1_min": e_left, "O2/x2_min": 1.0}
+    loss = sum(c.impulse * v_before[c.label] * (1.0 - e[c.label]) / 2.0 for c in impact.contacts)
+    assert impact.energy_before - impact.energy_after == pytest.approx(loss, abs=1e-10 * impact.energy_before)
+    if e_left < 1.0:
+        assert loss > 0.01 * impact.energy_before

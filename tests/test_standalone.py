@@ -64,6 +64,39 @@ def test_cmake_build(case1_dir, tmp_path):
     assert len(impact_times(result.stdout)) == 1
 
 
+def test_cmake_package_is_found_by_a_consumer(case1_dir, tmp_path, compiled):
+    """cmake --install gives a CMake package: a separate project finds it with find_package and links
+    paper_case1::paper_case1; its first impact is the Python runtime's."""
+    cmake = shutil.which("cmake") or str(Path(sys.executable).parent / "cmake")
+    build, prefix, consumer = tmp_path / "build", tmp_path / "prefix", tmp_path / "consumer"
+    subprocess.run([cmake, "-S", str(case1_dir), "-B", str(build), "-DPAPER_CASE1_BUILD_EXAMPLE=OFF",
+                    f"-DCMAKE_C_FLAGS={STRICT}"], check=True, capture_output=True)
+    subprocess.run([cmake, "--build", str(build)], check=True, capture_output=True)
+    subprocess.run([cmake, "--install", str(build), "--prefix", str(prefix)], check=True, capture_output=True)
+    assert (prefix / "include" / "paper_case1" / "paper_case1.h").exists()
+    assert not (build / "paper_case1_example").exists()
+    consumer.mkdir()
+    (consumer / "CMakeLists.txt").write_text(
+        "cmake_minimum_required(VERSION 3.14)\nproject(consumer C)\n"
+        "find_package(paper_case1 0.1.0 CONFIG REQUIRED)\n"
+        "add_executable(first_impact main.c)\ntarget_link_libraries(first_impact PRIVATE paper_case1::paper_case1)\n")
+    (consumer / "main.c").write_text(
+        '#include <paper_case1.h>\n#include <stdio.h>\n'
+        'int main(void) { paper_case1_options opt; paper_case1_sim sim; paper_case1_impact_record rec;\n'
+        '  double p[PAPER_CASE1_NPARAM], q[PAPER_CASE1_NQ], qd[PAPER_CASE1_NQ]; int code;\n'
+        '  paper_case1_default_options(&opt); opt.rtol = 1e-10; opt.atol = 1e-12;\n'
+        '  paper_case1_default_parameters(p); paper_case1_initial_state(q, qd);\n'
+        '  paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);\n'
+        '  code = paper_case1_sim_advance(&sim, 0.3, 0, 0, 0, 0, &rec);\n'
+        '  printf("%.15f\\n", rec.base.t); return code == GAC_SIM_IMPACT ? 0 : 1; }\n')
+    subprocess.run([cmake, "-S", str(consumer), "-B", str(consumer / "build"), f"-DCMAKE_PREFIX_PATH={prefix}",
+                    f"-DCMAKE_C_FLAGS={STRICT}"], check=True, capture_output=True)
+    subprocess.run([cmake, "--build", str(consumer / "build")], check=True, capture_output=True)
+    result = subprocess.run([str(consumer / "build" / "first_impact")], capture_output=True, text=True, check=True)
+    python = simulate(compiled(load_scene("paper-case1"), specialise=True), 0.3, rtol=1e-10, atol=1e-12, t_eval=[])
+    assert abs(float(result.stdout) - python.impacts[0].t) < 1e-12
+
+
 def test_header_compiles_as_cxx_and_links_from_cxx(case1_dir, tmp_path):
     (tmp_path / "use.cpp").write_text(
         '#include "paper_case1.h"\n#include <cstdio>\n'

@@ -51,6 +51,9 @@ def build_parser() -> argparse.ArgumentParser:
                              "zero parameters built in)")
     parser.add_argument("--explain", action="store_true",
                         help="print what the model leaves out for this scene and why, then stop")
+    parser.add_argument("--urdf", metavar="FILE",
+                        help="write the scene's chain as URDF to FILE (root link floating, revolute joints about z, a "
+                             "fixed tip link), say what URDF cannot hold, then stop")
     parser.add_argument("--standalone", action="store_true",
                         help="also write NAME_example.c (simulates the scene and prints its impacts), a Makefile "
                              "and a CMakeLists.txt: everything needed to build and embed it with no Python")
@@ -95,6 +98,26 @@ def loops_note(scene, layout, args) -> str:
     return f"loops over links {run[0]}..{run[1]}, straight-line code for the others"
 
 
+def write_urdf(scene, path: str) -> int:
+    """--urdf FILE: the scene's chain as URDF (codegen.urdf), with a note for each thing URDF cannot hold."""
+    from .outputs import output_file_problem
+    from .urdf import scene_to_urdf
+    problem = output_file_problem("--urdf", path)
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
+        return 2
+    text, notes = scene_to_urdf(scene)
+    try:
+        Path(path).write_text(text)
+    except OSError as exc:
+        print(f"error: --urdf: cannot write {path}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    print(f"wrote {path}: {scene.n} links, {scene.n - 1} joints")
+    for note in notes:
+        print(f"  note: {note}")
+    return 0
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv[:1] == ["ops"]:                      # a study, not a generation: python -m studies ops
@@ -130,6 +153,8 @@ def main(argv=None) -> int:
     if args.rolled and loops_note(scene, layout, args).startswith("straight"):
         print(f"error: --rolled: {loops_note(scene, layout, args)}", file=sys.stderr)
         return 2
+    if args.urdf:
+        return write_urdf(scene, args.urdf)
     if args.explain:
         print(f"scene {scene.name}: n = {scene.n}; the model keeps {layout.nq} of {scene.nq} coordinates")
         for note in layout.notes:

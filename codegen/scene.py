@@ -709,7 +709,8 @@ def shipped_scene_names() -> list[str]:
 # ---------------------------------------------------------------------------
 # loading from TOML / JSON
 # ---------------------------------------------------------------------------
-TOP_KEYS = ("name", "description", "gravity", "links", "walls", "restitution", "contacts", "initial", "inputs")
+TOP_KEYS = ("name", "description", "gravity", "links", "urdf", "urdf_tip_length", "walls", "restitution", "contacts",
+            "initial", "inputs")
 JOINT_KEYS = ("stiffness", "rest_angle", "damping", "lower", "upper", "limit_restitution")
 LINE_KEYS = ("length", "mu", "J", "twist", "twist_matrix", "count") + JOINT_KEYS
 RIGID_KEYS = ("length", "mass", "com", "inertia", "twist", "twist_matrix", "count") + JOINT_KEYS
@@ -752,7 +753,7 @@ def load_scene(source: str | Path) -> Scene:
         data = _parse_json(text, path)
     else:
         data = _parse_toml(text, path)
-    return scene_from_dict(data, default_name=path.stem.replace("-", "_"))
+    return scene_from_dict(data, default_name=path.stem.replace("-", "_"), folder=path.parent)
 
 
 def _parse_json(text: str, path: Path) -> dict:
@@ -797,10 +798,11 @@ def _toml_field_at(text: str, line: int) -> str:
     return key
 
 
-def scene_from_dict(data: dict, default_name: str = "scene") -> Scene:
-    """Build a Scene from the plain-data form used by the TOML/JSON files (see docs/scenes.md)."""
+def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path | None = None) -> Scene:
+    """Build a Scene from the plain-data form used by the TOML/JSON files (see docs/scenes.md).  ``urdf``: a URDF
+    file (relative to ``folder``, the scene file's) whose serial chain gives the links (codegen.urdf)."""
     _check_keys(data, TOP_KEYS, "scene")
-    links, twists, joints = _links_from_data(data.get("links"))
+    links, twists, joints = _links_from_data(_link_tables(data, folder))
     n = len(links)
     walls = _walls_from_data(data.get("walls", {}), data.get("restitution", 1.0), data.get("contacts", {}))
     initial = data.get("initial", {})
@@ -817,6 +819,31 @@ def scene_from_dict(data: dict, default_name: str = "scene") -> Scene:
         joints=joints if n > 1 else (),
         inputs=data.get("inputs", ()),
     )
+
+
+def _link_tables(data: dict, folder) -> list:
+    """The [[links]] tables, given or read from the URDF file the scene names."""
+    if "urdf" not in data:
+        if "urdf_tip_length" in data:
+            raise SceneError("urdf_tip_length: given without a urdf file")
+        return data.get("links")
+    if "links" in data:
+        raise SceneError("urdf: give either links or a urdf file, not both")
+    from .urdf import urdf_links
+    if not isinstance(data["urdf"], str) or not data["urdf"]:
+        raise SceneError(f"urdf: expected the path of a URDF file, got {data['urdf']!r}")
+    path = Path(folder or ".") / data["urdf"]
+    tip = data.get("urdf_tip_length")
+    if tip is not None:
+        tip = _in_range(tip, "urdf_tip_length", LENGTH_RANGE, "m")
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise SceneError(f"urdf: cannot read {path}: {exc.strerror or exc}") from None
+    try:
+        return urdf_links(text, tip)
+    except SceneError as exc:
+        raise SceneError(f"urdf {path}: {exc}") from None
 
 
 def _links_from_data(items) -> tuple[tuple[Link, ...], tuple, tuple]:

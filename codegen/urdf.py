@@ -1,0 +1,308 @@
+"""Chains to and from URDF (the Unified Robot Description Format of ROS).
+
+A URDF serial chain maps onto the paper's chain as follows.  The root link (the one that is no joint's child)
+is link 1, floating: its pose is the base chart (theta_-1, theta_0, theta_1, X1, X2, X3).  Each revolute or
+continuous joint is joint k = 2..n, with its URDF angle as theta_k (same zero, same sign).  The link frames of
+the model are the URDF link frames turned by a constant rotation A_k (same origins):
+
+    x_k  towards the next joint's origin (link k's length l_k is the distance to it; for the last link, to the
+         origin of a fixed child link such as a tool tip, or the given tip length along the last link's x)
+    z_k  the axis of joint k (for the root link, the axis of joint 2 where it is normal to x_1)
+
+so that the twist of joint k is T_k = A_(k-1)^T E_k A_k (E_k: the joint origin's rpy rotation), each link's
+centre of mass is A_k^T c and its inertia about it A_k^T R I R^T A_k (c, R, I: the URDF <inertial>).  A chain
+whose next joint is not normal to a joint's axis (an offset along the axis) has no such frame and is refused,
+as are trees, prismatic, planar or floating joints, mimic joints and joint friction (not in this model).
+<limit lower upper> become the joint's stops, <dynamics damping> its damper; effort and velocity limits
+describe actuators and are not part of the dynamics.
+
+``urdf_links`` gives the link tables of a scene file ([[links]] entries); ``scene_to_urdf`` writes a scene's
+chain as URDF.
+"""
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from .scene import LineLink, Scene, SceneError
+
+PERPENDICULAR_TOL = 1e-9      # |cos| between a joint axis and the direction to the next joint
+SNAP = 1e-14                  # twist entries this close to 0 or +-1 are made exact (planar chains stay planar)
+
+
+# ---------------------------------------------------------------------------------------------------
+# rotations
+# ---------------------------------------------------------------------------------------------------
+def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """URDF's fixed-axis roll, pitch, yaw: R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    cr, sr, cp, sp, cy, sy = (math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch),
+                              math.cos(yaw), math.sin(yaw))
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def matrix_rpy(R) -> tuple[float, float, float]:
+    """roll, pitch, yaw of a rotation matrix (inverse of rpy_matrix; at pitch = +-90 degrees yaw = 0)."""
+    R = np.asarray(R, dtype=float)
+    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
+    if math.hypot(R[0, 0], R[1, 0]) > 1e-9:
+        roll, yaw = math.atan2(R[2, 1], R[2, 2]), math.atan2(R[1, 0], R[0, 0])
+    else:
+        roll, yaw = math.atan2(-R[1, 2], R[1, 1]), 0.0
+    return roll, pitch, yaw
+
+
+def _snap(M: np.ndarray) -> np.ndarray:
+    M = M.copy()
+    for value in (0.0, 1.0, -1.0):
+        M[np.abs(M - value) < SNAP] = value
+    return M
+
+
+def _frame(x: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """The rotation with columns x, z x x, z (x and z unit and normal)."""
+    return np.column_stack([x, np.cross(z, x), z])
+
+
+# ---------------------------------------------------------------------------------------------------
+# URDF -> link tables
+# ---------------------------------------------------------------------------------------------------
+def _floats(element, attribute: str, default: str, where: str, count: int = 3) -> np.ndarray:
+    text = default if element is None else element.get(attribute, default)
+    try:
+        values = [float(v) for v in text.split()]
+    except ValueError:
+        values = []
+    if len(values) != count or not all(math.isfinite(v) for v in values):
+        raise SceneError(f"{where}: {attribute}={text!r}: expected {count} finite numbers")
+    return np.array(values)
+
+
+def _origin(element, where: str) -> tuple[np.ndarray, np.ndarray]:
+    origin = element.find("origin")
+    return (_floats(origin, "xyz", "0 0 0", f"{where} <origin>"),
+            rpy_matrix(*_floats(origin, "rpy", "0 0 0", f"{where} <origin>")))
+
+
+def _inertial(link, where: str) -> tuple[float, np.ndarray, np.ndarray]:
+    """mass, centre of mass and inertia about it, in the URDF link frame."""
+    inertial = link.find("inertial")
+    if inertial is None:
+        raise SceneError(f"{where}: no <inertial>; every link of the chain needs a mass and an inertia")
+    mass = _floats(inertial.find("mass"), "value", "", f"{where} <mass>", 1)[0]
+    c, R = _origin(inertial, f"{where} <inertial>")
+    tensor = inertial.find("inertia")
+    if tensor is None:
+        raise SceneError(f"{where}: <inertial> has no <inertia>")
+    values = {key: _floats(tensor, key, "", f"{where} <inertia>", 1)[0]
+              for key in ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")}
+    I = np.array([[values["ixx"], values["ixy"], values["ixz"]],
+                  [values["ixy"], values["iyy"], values["iyz"]],
+                  [values["ixz"], values["iyz"], values["izz"]]])
+    return float(mass), c, R @ I @ R.T
+
+
+def _chain(robot) -> tuple[list, list, object]:
+    """The links root..last and the revolute/continuous joints between them, and the fixed tip joint (or None)."""
+    links = {link.get("name"): link for link in robot.findall("link")}
+    joints = robot.findall("joint")
+    children: dict[str, list] = {}
+    parents = set()
+    for joint in joints:
+        name = joint.get("name")
+        parent, child = joint.find("parent"), joint.find("child")
+        if parent is None or child is None:
+            raise SceneError(f"urdf joint {name!r}: needs <parent link=...> and <child link=...>")
+        if child.get("link") in parents:
+            raise SceneError(f"urdf link {child.get('link')!r}: child of two joints")
+        parents.add(child.get("link"))
+        children.setdefault(parent.get("link"), []).append(joint)
+    roots = [name for name in links if name not in parents]
+    if len(roots) != 1:
+        raise SceneError(f"urdf: expected one root link (a link that is no joint's child), found {roots}")
+    chain, revolute, tip = [links[roots[0]]], [], None
+    while True:
+        below = children.get(chain[-1].get("name"), [])
+        moving = [j for j in below if j.get("type") != "fixed"]
+        fixed = [j for j in below if j.get("type") == "fixed"]
+        if len(moving) > 1 or (moving and fixed) or len(fixed) > 1:
+            raise SceneError(f"urdf link {chain[-1].get('name')!r}: has {len(below)} child joints; the model is a "
+                             "serial chain (one revolute joint per link, or one fixed tip at its end)")
+        if fixed:
+            tip = fixed[0]
+            if children.get(tip.find("child").get("link")):
+                raise SceneError(f"urdf joint {tip.get('name')!r}: a fixed joint is allowed only as the chain's tip "
+                                 "(with nothing below it)")
+            return chain, revolute, tip
+        if not moving:
+            return chain, revolute, None
+        joint = moving[0]
+        kind = joint.get("type")
+        if kind not in ("revolute", "continuous"):
+            raise SceneError(f"urdf joint {joint.get('name')!r}: type {kind!r}; the chain's joints are revolute or "
+                             "continuous (its base floats freely: give the root link, not a floating joint)")
+        if joint.find("mimic") is not None:
+            raise SceneError(f"urdf joint {joint.get('name')!r}: <mimic> couples joints; not in this model")
+        revolute.append(joint)
+        chain.append(links[joint.find("child").get("link")])
+
+
+def urdf_links(source: str | Path, tip_length: float | None = None) -> list[dict]:
+    """The [[links]] tables of a scene (rigid links with their twists, stops and dampers) for the serial chain of
+    a URDF file or text.  ``tip_length`` (m): the last link's length when the URDF has no fixed tip link."""
+    text = Path(source).read_text() if isinstance(source, Path) or not str(source).lstrip().startswith("<") \
+        else str(source)
+    try:
+        robot = ET.fromstring(text)
+    except ET.ParseError as exc:
+        raise SceneError(f"urdf: not well-formed XML: {exc}") from None
+    if robot.tag != "robot":
+        raise SceneError(f"urdf: the root element is <{robot.tag}>, expected <robot>")
+    chain, joints, tip = _chain(robot)
+    n = len(chain)
+    # joint k (k = 2..n) in its child's frame: axis a_k; its origin in the parent's frame: xyz, rpy E_k
+    axes = [None] + [_floats(j.find("axis"), "xyz", "1 0 0", f"urdf joint {j.get('name')!r} <axis>")
+                     for j in joints]
+    origins = [_origin(j, f"urdf joint {j.get('name')!r}") for j in joints]
+    for k, a in enumerate(axes[1:], start=2):
+        if np.linalg.norm(a) == 0.0:
+            raise SceneError(f"urdf joint {joints[k - 2].get('name')!r} <axis>: the zero vector")
+        axes[k - 1] = a / np.linalg.norm(a)
+    # the offset from each link's joint to the next joint (or the tip), in that link's URDF frame
+    offsets = [xyz for xyz, _ in origins]
+    if tip is not None:
+        offsets.append(_origin(tip, f"urdf joint {tip.get('name')!r}")[0])
+    elif tip_length is not None:
+        offsets.append(None)
+    else:
+        raise SceneError(f"urdf: the last link {chain[-1].get('name')!r} has no fixed tip link; give its length "
+                         "(urdf_tip_length in the scene file) or add a fixed joint to a tip link at its end")
+    # the model's frame of each link: A_k with x_k towards the next joint, z_k the joint's axis
+    A = []
+    for k in range(n):
+        where = f"urdf link {chain[k].get('name')!r}"
+        if k == 0:
+            if n > 1:
+                z = origins[0][1] @ axes[1]                        # joint 2's axis in the root frame
+            else:
+                z = np.array([0.0, 0.0, 1.0])
+        else:
+            z = axes[k]
+        d = offsets[k]
+        if d is None:                                              # the given tip length along x
+            x = np.array([1.0, 0.0, 0.0]) - z[0] * z
+            if np.linalg.norm(x) < 1e-6:
+                x = np.array([0.0, 1.0, 0.0]) - z[1] * z
+            length = float(tip_length)
+        else:
+            length = float(np.linalg.norm(d))
+            if length == 0.0:
+                raise SceneError(f"{where}: the next joint (or tip) sits at the joint itself; a link needs a length")
+            x = d / length
+            cosine = float(x @ z)
+            if abs(cosine) > PERPENDICULAR_TOL:
+                if k == 0:                                         # the root's z is free: any normal to x
+                    z = z - cosine * x
+                    if np.linalg.norm(z) < 1e-6:
+                        z = np.cross(x, [1.0, 0.0, 0.0]) if abs(x[0]) < 0.9 else np.cross(x, [0.0, 1.0, 0.0])
+                else:
+                    raise SceneError(
+                        f"{where}: the next joint's origin is not normal to this joint's axis (angle "
+                        f"{math.degrees(math.acos(max(-1.0, min(1.0, cosine)))):.6g} degrees, needs 90): the "
+                        "model's links reach the next joint along x, normal to the joint axis z")
+        z = z / np.linalg.norm(z)
+        x = (x - (x @ z) * z) / np.linalg.norm(x - (x @ z) * z)
+        A.append((_frame(x, z), length))
+    tables = []
+    for k in range(n):
+        Ak, length = A[k]
+        mass, c, I = _inertial(chain[k], f"urdf link {chain[k].get('name')!r}")
+        com = Ak.T @ c
+        inertia = Ak.T @ I @ Ak
+        table = {"length": length, "mass": mass, "com": [float(v) for v in com],
+                 "inertia": [[float(v) for v in row] for row in 0.5 * (inertia + inertia.T)]}
+        if k >= 1:
+            joint = joints[k - 1]
+            where = f"urdf joint {joint.get('name')!r}"
+            twist = _snap(A[k - 1][0].T @ origins[k - 1][1] @ Ak)
+            table["twist_matrix"] = [[float(v) for v in row] for row in twist]
+            if joint.get("type") == "revolute":
+                limit = joint.find("limit")
+                if limit is None:
+                    raise SceneError(f"{where}: a revolute joint needs <limit lower upper> (URDF); use type "
+                                     "continuous for a joint without stops")
+                lower = _floats(limit, "lower", "0", f"{where} <limit>", 1)[0]
+                upper = _floats(limit, "upper", "0", f"{where} <limit>", 1)[0]
+                if not lower < upper:
+                    raise SceneError(f"{where} <limit>: lower = {lower!r} must be < upper = {upper!r} rad")
+                table["lower"], table["upper"] = float(lower), float(upper)
+            dynamics = joint.find("dynamics")
+            if dynamics is not None:
+                if _floats(dynamics, "friction", "0", f"{where} <dynamics>", 1)[0] != 0.0:
+                    raise SceneError(f"{where} <dynamics friction>: joint friction is not in this model; give 0 or "
+                                     "leave it out")
+                damping = _floats(dynamics, "damping", "0", f"{where} <dynamics>", 1)[0]
+                if damping != 0.0:
+                    table["damping"] = float(damping)
+        tables.append(table)
+    return tables
+
+
+# ---------------------------------------------------------------------------------------------------
+# scene -> URDF
+# ---------------------------------------------------------------------------------------------------
+def _num(value) -> str:
+    return repr(float(value))
+
+
+def _numbers(values) -> str:
+    return " ".join(_num(v) for v in values)
+
+
+def link_inertial(link) -> tuple[float, np.ndarray, np.ndarray]:
+    """mass, centre of mass and inertia about it (link frame) of a line or rigid link."""
+    if isinstance(link, LineLink):
+        l, mu, J = float(link.length), float(link.mu), [float(v) for v in link.J]
+        m = mu * l
+        return m, np.array([l / 2, 0.0, 0.0]), np.diag([l * J[0], m * l * l / 12 + l * J[1], m * l * l / 12 + l * J[2]])
+    return float(link.mass), np.array(link.com, dtype=float), np.array(link.inertia, dtype=float)
+
+
+def scene_to_urdf(scene: Scene) -> tuple[str, list[str]]:
+    """The scene's chain as URDF (root link1 floating, revolute or continuous joints theta_2..theta_n about z, a
+    fixed tip link at the end of link n), and notes on what URDF cannot hold (springs, the restitution of stops)."""
+    notes = []
+    parts = [f'<robot name="{scene.name}">']
+    for i, link in enumerate(scene.links, start=1):
+        m, c, I = link_inertial(link)
+        parts.append(f'  <link name="link{i}"><inertial><origin xyz="{_numbers(c)}" rpy="0.0 0.0 0.0"/>'
+                     f'<mass value="{_num(m)}"/><inertia ixx="{_num(I[0, 0])}" iyy="{_num(I[1, 1])}" izz="{_num(I[2, 2])}" '
+                     f'ixy="{_num(I[0, 1])}" ixz="{_num(I[0, 2])}" iyz="{_num(I[1, 2])}"/></inertial></link>')
+    for k in range(2, scene.n + 1):
+        joint = scene.joints[k - 2]
+        stops = joint.lower is not None and joint.upper is not None
+        if (joint.lower is None) != (joint.upper is None):
+            notes.append(f"theta_{k}: a single stop has no URDF form (a revolute joint has both limits); written as "
+                         "continuous")
+        if joint.stiffness is not None:
+            notes.append(f"theta_{k}: the spring (K = {joint.stiffness!r} N m/rad, rest angle {joint.rest_angle!r} "
+                         "rad) has no URDF element; left out")
+        if stops and joint.limit_restitution != 0.0:
+            notes.append(f"theta_{k}: the stops' restitution {joint.limit_restitution!r} has no URDF element")
+        limit = (f'<limit lower="{_num(joint.lower)}" upper="{_num(joint.upper)}" effort="0.0" velocity="0.0"/>'
+                 if stops else "")
+        damping = f'<dynamics damping="{_num(joint.damping)}"/>' if joint.damping is not None else ""
+        length = scene.links[k - 2].length
+        parts.append(f'  <joint name="theta_{k}" type="{"revolute" if stops else "continuous"}">'
+                     f'<parent link="link{k - 1}"/><child link="link{k}"/>'
+                     f'<origin xyz="{_num(length)} 0.0 0.0" rpy="{_numbers(matrix_rpy(scene.twists[k - 2]))}"/>'
+                     f'<axis xyz="0.0 0.0 1.0"/>{limit}{damping}</joint>')
+    parts.append('  <link name="tip"/>')
+    parts.append(f'  <joint name="tip" type="fixed"><parent link="link{scene.n}"/><child link="tip"/>'
+                 f'<origin xyz="{_num(scene.links[-1].length)} 0.0 0.0" rpy="0.0 0.0 0.0"/></joint>')
+    parts.append("</robot>")
+    return "\n".join(parts) + "\n", notes

@@ -1,0 +1,238 @@
+"""Chains from and to URDF (codegen.urdf): a URDF chain's forward kinematics, computed here directly from the XML
+(joint origins, rpy, axis rotations by Rodrigues' formula), against the scene's own kinematics; its kinetic
+energy (URDF inertials, velocities by central differences) against the generated model's; the round trip
+scene -> URDF -> scene; every refused construct named."""
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+
+from codegen.scene import SceneError, contact_points, frames, load_scene, scene_from_dict
+from codegen.urdf import rpy_matrix, scene_to_urdf, urdf_links
+from runtime import load_model
+
+
+# ---------------------------------------------------------------------------------------------------
+# an independent reading of a URDF chain
+# ---------------------------------------------------------------------------------------------------
+def rodrigues(axis, angle):
+    a = np.asarray(axis, float) / np.linalg.norm(axis)
+    K = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
+def numbers(element, attribute, default):
+    return np.array([float(v) for v in (element.get(attribute, default) if element is not None else default).split()])
+
+
+def urdf_fk(text, angles):
+    """World poses (root at the origin, unrotated) of every link of a serial URDF chain, with its joint angles:
+    [(origin, rotation, com, mass, inertia in the world frame)], and the tip's origin."""
+    robot = ET.fromstring(text)
+    links = {link.get("name"): link for link in robot.findall("link")}
+    by_parent = {j.find("parent").get("link"): j for j in robot.findall("joint")}
+    child_names = {j.find("child").get("link") for j in robot.findall("joint")}
+    name = next(n for n in links if n not in child_names)
+    p, R, out, k = np.zeros(3), np.eye(3), [], 0
+    while True:
+        inertial = links[name].find("inertial")
+        if inertial is not None:
+            o = inertial.find("origin")
+            Rc = rpy_matrix(*numbers(o, "rpy", "0 0 0"))
+            t = inertial.find("inertia")
+            I = np.array([[float(t.get("ixx")), float(t.get("ixy")), float(t.get("ixz"))],
+                          [float(t.get("ixy")), float(t.get("iyy")), float(t.get("iyz"))],
+                          [float(t.get("ixz")), float(t.get("iyz")), float(t.get("izz"))]])
+            out.append((p, R, p + R @ numbers(o, "xyz", "0 0 0"), float(inertial.find("mass").get("value")),
+                        R @ Rc @ I @ Rc.T @ R.T))
+        joint = by_parent.get(name)
+        if joint is None:
+            return out, None
+        o = joint.find("origin")
+        p = p + R @ numbers(o, "xyz", "0 0 0")
+        R = R @ rpy_matrix(*numbers(o, "rpy", "0 0 0"))
+        if joint.get("type") == "fixed":
+            return out, p
+        R = R @ rodrigues(numbers(joint.find("axis"), "xyz", "1 0 0"), angles[k])
+        k += 1
+        name = joint.find("child").get("link")
+
+
+def kabsch(P, Q):
+    """The rotation U minimising |U P_i - Q_i| (rows), and the residual."""
+    H = P.T @ Q
+    u, _, vt = np.linalg.svd(H)
+    d = np.sign(np.linalg.det(vt.T @ u.T))
+    U = vt.T @ np.diag([1, 1, d]) @ u.T
+    return U, np.abs(P @ U.T - Q).max()
+
+
+ARM = """<robot name="arm">
+  <link name="base"><inertial><origin xyz="0.05 0.01 -0.02" rpy="0.1 0.2 0.3"/><mass value="2.0"/>
+    <inertia ixx="0.02" iyy="0.03" izz="0.025" ixy="0.001" ixz="-0.002" iyz="0.0015"/></inertial></link>
+  <link name="upper"><inertial><origin xyz="0.0 0.0 0.2" rpy="0 0 0"/><mass value="1.2"/>
+    <inertia ixx="0.012" iyy="0.011" izz="0.002" ixy="0" ixz="0" iyz="0.0003"/></inertial></link>
+  <link name="fore"><inertial><origin xyz="0.15 0.0 0.0" rpy="0 0.3 0"/><mass value="0.8"/>
+    <inertia ixx="0.001" iyy="0.006" izz="0.0065" ixy="0.0002" ixz="0" iyz="0"/></inertial></link>
+  <link name="hand"><inertial><origin xyz="0 0.03 0" rpy="0 0 0"/><mass value="0.3"/>
+    <inertia ixx="0.0004" iyy="0.0003" izz="0.0005" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="tool"/>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/>
+    <origin xyz="0.3 0.0 0.0" rpy="0.4 -0.2 0.7"/><axis xyz="0 1 0"/>
+    <limit lower="-1.5" upper="1.2" effort="10" velocity="3"/><dynamics damping="0.05"/></joint>
+  <joint name="elbow" type="continuous"><parent link="upper"/><child link="fore"/>
+    <origin xyz="0.0 0.0 0.4" rpy="0 0 0.5"/><axis xyz="0 0 1"/></joint>
+  <joint name="wrist" type="revolute"><parent link="fore"/><child link="hand"/>
+    <origin xyz="0.3 0.0 0.0" rpy="0.2 0 0"/><axis xyz="0 0.6 0.8"/><limit lower="-0.5" upper="0.5"/></joint>
+  <joint name="tool" type="fixed"><parent link="hand"/><child link="tool"/><origin xyz="0.1 0 0"/></joint>
+</robot>
+"""
+
+
+def arm_scene(text=ARM, tip=None):
+    data = {"name": "arm", "links": urdf_links(text, tip),
+            "walls": {"x2_min": -5.0}, "initial": {"q": [0.2, -0.3, 0.4, 0.3, -0.6, 0.2, 0.0, 1.0, 0.0],
+                                                    "qd": [0.0] * 9}}
+    return scene_from_dict(data)
+
+
+def test_links_are_read_as_the_urdf_says():
+    tables = urdf_links(ARM)
+    assert [t["length"] for t in tables] == pytest.approx([0.3, 0.4, 0.3, 0.1], abs=1e-15)
+    assert [t["mass"] for t in tables] == [2.0, 1.2, 0.8, 0.3]
+    assert (tables[1]["lower"], tables[1]["upper"], tables[1]["damping"]) == (-1.5, 1.2, 0.05)
+    assert "lower" not in tables[2] and "damping" not in tables[2]            # continuous, no dynamics
+    assert (tables[3]["lower"], tables[3]["upper"]) == (-0.5, 0.5)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_kinematics_and_inertia_agree_with_the_urdf(seed):
+    """Points, centres of mass and inertias of the scene built from the URDF, at random angles, against the URDF's
+    own forward kinematics (its root pose found by fitting the joint origins)."""
+    rng = np.random.default_rng(seed)
+    scene = arm_scene()
+    q = np.array(scene.q0)
+    q[:scene.n + 2] = rng.uniform(-1.2, 1.2, scene.n + 2)
+    q[scene.n + 2:] = rng.uniform(-1, 1, 3)
+    poses, tip = urdf_fk(ARM, q[3:scene.n + 2])
+    points = contact_points(scene, q)
+    P = np.array([pose[0] for pose in poses] + [tip])
+    U, residual = kabsch(P, points - points[0])
+    assert residual < 1e-13
+    Rs = frames(scene, q)
+    for i, link in enumerate(scene.links):
+        origin, R, com, mass, inertia = poses[i]
+        ours_com = points[i] + Rs[i + 2] @ np.array(link.com)
+        assert np.abs(ours_com - (points[0] + U @ com)).max() < 1e-13
+        assert link.mass == mass
+        ours_inertia = Rs[i + 2] @ np.array(link.inertia) @ Rs[i + 2].T
+        assert np.abs(ours_inertia - U @ inertia @ U.T).max() < 1e-15
+        # the joint axis: z of the model's frame is the URDF joint's axis, in the world
+        if i >= 1:
+            axis = numbers(ET.fromstring(ARM).findall("joint")[i - 1].find("axis"), "xyz", "1 0 0")
+            assert np.abs(Rs[i + 2][:, 2] - U @ R @ (axis / np.linalg.norm(axis))).max() < 1e-13
+
+
+def test_kinetic_energy_agrees_with_the_urdf():
+    """T of the generated model at random states against the URDF's: sum of m |v_c|^2 / 2 + w . I w / 2, the
+    velocities of the URDF's links by central differences of its kinematics along the same motion."""
+    scene = arm_scene()
+    model = load_model(scene, specialise=False)
+    rng = np.random.default_rng(7)
+    n = scene.n
+    for _ in range(3):
+        q = np.array(scene.q0)
+        q[:n + 2] = rng.uniform(-1.2, 1.2, n + 2)
+        qd = rng.uniform(-1, 1, n + 5)
+
+        def world(t):
+            """Each link's centre of mass and rotation in the world, and its inertia in its own frame."""
+            qt = q + t * qd
+            poses, tip = urdf_fk(ARM, qt[3:n + 2])
+            points = contact_points(scene, qt)
+            U, _ = kabsch(np.array([p[0] for p in poses] + [tip]), points - points[0])
+            return [(points[0] + U @ com, U @ R, R.T @ inertia @ R) for _, R, com, _, inertia in poses]
+        h = 1e-5
+        T = 0.0
+        for (cp, Rp, _), (cm, Rm, _), (_, R0, I_body), link in zip(world(h), world(-h), world(0.0), scene.links):
+            v = (cp - cm) / (2 * h)
+            W = (Rp - Rm) / (2 * h) @ R0.T
+            w = np.array([W[2, 1], W[0, 2], W[1, 0]])
+            T += 0.5 * link.mass * v @ v + 0.5 * w @ (R0 @ I_body @ R0.T) @ w
+        assert model.energy(q, qd)[0] == pytest.approx(T, rel=1e-8)
+
+
+def test_round_trip_scene_urdf_scene():
+    """A shipped scene and a 3D rigid chain written as URDF and read back: the same links, twists, stops and
+    dampers (line links come back as the rigid links they are)."""
+    from codegen.urdf import link_inertial
+    for scene in (load_scene("paper-case1"), arm_scene(), load_scene("driven-fold")):
+        text, notes = scene_to_urdf(scene)
+        tables = urdf_links(text)
+        assert len(tables) == scene.n
+        for k, (link, table) in enumerate(zip(scene.links, tables), start=1):
+            m, c, I = link_inertial(link)
+            assert table["length"] == pytest.approx(link.length, abs=1e-15)
+            assert table["mass"] == pytest.approx(m, rel=1e-15)
+            assert np.abs(np.array(table["com"]) - c).max() < 1e-15
+            assert np.abs(np.array(table["inertia"]) - I).max() < 1e-15
+            if k >= 2:
+                assert np.abs(np.array(table["twist_matrix"]) - np.array(scene.twists[k - 2])).max() < 1e-15
+                joint = scene.joints[k - 2]
+                assert table.get("damping") == joint.damping
+                if joint.lower is not None and joint.upper is not None:
+                    assert (table["lower"], table["upper"]) == (joint.lower, joint.upper)
+        if scene.name == "driven_fold":
+            assert any("spring" in note for note in notes) and any("restitution" in note for note in notes)
+
+
+def test_a_planar_urdf_chain_stays_planar(tmp_path):
+    """Parallel joint axes normal to the links give twists about z only: the model is specialised as planar."""
+    text, _ = scene_to_urdf(load_scene("paper-case1"))
+    (tmp_path / "square.urdf").write_text(text)
+    scene_file = tmp_path / "square.toml"
+    scene_file.write_text('name = "square"\nurdf = "square.urdf"\n'
+                          '[walls]\nx1_min = 0.0\nx1_max = 3.0\nx2_min = 0.0\nx2_max = 2.0\n'
+                          '[initial]\nq = ' + str(list(load_scene("paper-case1").q0)) + '\n')
+    scene = load_scene(scene_file)
+    from codegen.specialise import layout_for
+    assert layout_for(scene).planar_normal is not None
+    assert np.abs(contact_points(scene, np.array(scene.q0))
+                  - contact_points(load_scene("paper-case1"), np.array(scene.q0))).max() < 1e-15
+
+
+def replace(old, new):
+    assert old in ARM
+    return ARM.replace(old, new)
+
+
+NO_TIP = replace('<joint name="tool" type="fixed"><parent link="hand"/><child link="tool"/><origin xyz="0.1 0 0"/>'
+                 '</joint>', '').replace('<link name="tool"/>', '')
+
+
+@pytest.mark.parametrize("text, message", [
+    (replace('type="continuous"', 'type="prismatic"'), "type 'prismatic'"),
+    (replace('<origin xyz="0.0 0.0 0.4" rpy="0 0 0.5"/>', '<origin xyz="0.0 0.1 0.4" rpy="0 0 0.5"/>'),
+     "not normal to this joint's axis"),
+    (replace('<dynamics damping="0.05"/>', '<dynamics damping="0.05" friction="0.2"/>'), "joint friction"),
+    (replace('<limit lower="-0.5" upper="0.5"/>', ''), "needs <limit lower upper>"),
+    (replace('<limit lower="-0.5" upper="0.5"/>', '<limit lower="0.5" upper="0.5"/>'), "must be < upper"),
+    (NO_TIP, "no fixed tip link"),
+    (replace('<link name="tool"/>', '<link name="tool"/><link name="extra"/>'), "one root link"),
+    (replace('<axis xyz="0 0 1"/>', '<axis xyz="0 0 1"/><mimic joint="shoulder"/>'), "<mimic>"),
+    (replace('<mass value="0.8"/>', '<mass value="heavy"/>'), "expected 1 finite numbers"),
+    ("<robot><link", "not well-formed XML"),
+])
+def test_what_the_model_cannot_hold_is_refused_by_name(text, message):
+    with pytest.raises(SceneError, match=message.replace("(", r"\(").replace("<", "<")):
+        arm_scene(text)
+
+
+def test_tip_length_for_a_chain_without_a_tip():
+    scene = arm_scene(NO_TIP, tip=0.25)
+    assert scene.links[-1].length == 0.25
+    with pytest.raises(SceneError, match="urdf_tip_length: given without a urdf file"):
+        scene_from_dict({"name": "x", "links": [{"length": 1.0, "mu": 1.0}], "urdf_tip_length": 0.2})

@@ -12,7 +12,7 @@ from . import __version__, interface
 from .flatten import Program
 from .artifact import GeneratedModel, RenderedFunction, scene_hash  # noqa: F401
 from .ops import count_ops
-from .scene import JointStop, Scene
+from .scene import JointStop, Scene, Wall
 from .specialise import coordinate_names
 
 
@@ -181,7 +181,8 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
     names = coordinate_names(scene.n)
     zeros = set(layout.zero_params)
     sizes = interface.size_values(n=scene.n, nq=layout.nq, nparam=len(params), nu=scene.nu, npoint=scene.n + 1,
-                                  ncontact=len(layout.contacts), njrow=len(layout.contact_rows))
+                                  ncontact=len(layout.contacts), njrow=len(layout.contact_rows),
+                                  friction=any(w.friction > 0.0 for _, w in layout.contacts if isinstance(w, Wall)))
     context = dict(
         NAME=name.upper(), name=name, version=__version__, scene=scene, scene_hash=scene_hash(scene),
         bake_params=bake_params, functions=functions, nq=layout.nq,
@@ -203,7 +204,7 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
         inputs=[(i, coordinate, macro_name(coordinate), "N m" if coordinate.startswith("theta") else "N")
                 for i, coordinate in enumerate(scene.inputs)],
         param_macros=[(i, macro_name(pname)) for i, pname in enumerate(pnames)],
-        has_power=scene.driven,
+        has_power=scene.driven, friction_velocity=_double_literal(float(scene.friction_velocity)),
         sizes=interface.SIZES, size_values=sizes, constants=interface.CONSTANTS, structs=interface.STRUCTS,
         kernels=[(f, generated.get(f.name)) for f in interface.KERNELS], dense=dense,
         formed=[f for f in interface.KERNELS if f.name not in generated], all_functions=interface.ALL_FUNCTIONS,
@@ -271,10 +272,19 @@ def _contact_entry(c: int, point: int, wall, layout, pnames: list[str], bake_par
         label = f"O{point}/{wall.name}"
         doc = (f"O_{point} / {wall.name} (e = {wall.restitution}), Jacobian row {row}, normal "
                f"{'+' if sign > 0 else '-'}X{wall.axis + 1}")
+    friction = 0.0 if stop else float(wall.friction)
+    tangents = [a for a in range(3) if not stop and a != wall.axis]
+    trow = [layout.contact_rows.index((point, a)) if friction > 0.0 and (point, a) in layout.contact_rows else -1
+            for a in tangents] if tangents else [-1, -1]
+    if friction > 0.0:
+        doc += f", Coulomb friction mu = {friction} (tangential rows {', '.join(str(r) for r in trow if r >= 0)})"
     return dict(c=c, point=point, axis=-1 if stop else wall.axis, sign=sign, row=row,
                 e_index=-1 if bake_params else pnames.index(e_name), e_value=_double_literal(float(wall.restitution)),
                 kind="GAC_CONTACT_STOP" if stop else "GAC_CONTACT_WALL",
-                coordinate=layout.free.index(point + 1) if stop else -1, label=label, doc=doc)
+                coordinate=layout.free.index(point + 1) if stop else -1, label=label, doc=doc,
+                has_friction=int(friction > 0.0),
+                mu_index=-1 if bake_params or friction == 0.0 else pnames.index(f"friction_{wall.name}"),
+                mu_value=_double_literal(friction), trow=trow)
 
 
 def macro_name(name: str) -> str:
@@ -290,6 +300,8 @@ def param_doc(pname: str) -> str:
         return f"position of wall {pname[5:]} (m)"
     if pname.startswith("e_"):
         return f"restitution of wall {pname[2:]} (-)"
+    if pname.startswith("friction_"):
+        return f"Coulomb friction coefficient of wall {pname[9:]} (-)"
     if pname == "g":
         return PARAM_DOC["g"]
     base, link = pname.rsplit("_", 1)
@@ -306,6 +318,7 @@ def render_standalone(scene: Scene, name: str, library_sources: list[str], layou
     env = _environment()
     full = scene.input_coordinates()
     context = dict(NAME=name.upper(), name=name, version=__version__, scene=scene, library_sources=library_sources,
-                   inputs=[(i, coordinate, layout.free.index(full[i])) for i, coordinate in enumerate(scene.inputs)])
+                   inputs=[(i, coordinate, layout.free.index(full[i])) for i, coordinate in enumerate(scene.inputs)],
+                   friction=any(w.friction > 0.0 for w in scene.walls))
     return {filename.format(name=name): env.get_template(template).render(**context)
             for filename, template in STANDALONE_TEMPLATES.items()}

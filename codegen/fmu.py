@@ -45,7 +45,8 @@ ENERGY_OUTPUTS = (("energy.kinetic", "kinetic energy T"),
                   ("energy.potential", "potential energy V (gravity and joint springs)"),
                   ("energy.work_input", "work of the inputs since the start"),
                   ("energy.dissipated", "energy the joint dampers took since the start"),
-                  ("energy.impact_loss", "kinetic energy the impacts took since the start"))
+                  ("energy.impact_loss", "kinetic energy the impacts took since the start"),
+                  ("energy.friction", "energy sliding friction took at resting contacts since the start"))
 METHOD_START = 1                                    # GAC_METHOD_DOPRI5
 
 

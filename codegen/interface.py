@@ -243,15 +243,17 @@ ALL_FUNCTIONS = KERNELS + FUNCTIONS
 # per-model size macros NAME_<suffix>: one formula each (the library's gac_* functions compute the same;
 # the wrappers refuse to run if they ever differ)
 # ---------------------------------------------------------------------------------------------------
-def impact_nwork(nq: int, njrow: int, npoint: int) -> int:
-    """gac_impact_nwork: Y | A | g | vel | f = 2 nq^2 + nq + 3 npoint + max(njrow, 1)."""
-    return 2 * nq * nq + nq + 3 * npoint + max(njrow, 1)
+def impact_nwork(nq: int, njrow: int, npoint: int, friction: bool = False) -> int:
+    """gac_impact_nwork: Y | A | g | vel | f = 2 nq^2 + nq + 3 npoint + max(njrow, 1), and for a model with
+    friction Z | B (2 nq^2 more)."""
+    return (4 if friction else 2) * nq * nq + nq + 3 * npoint + max(njrow, 1)
 
 
-def sim_ndouble(nq: int, nparam: int, nu: int, ncontact: int, njrow: int, npoint: int) -> int:
+def sim_ndouble(nq: int, nparam: int, nu: int, ncontact: int, njrow: int, npoint: int, friction: bool = False) -> int:
     """gac_sim_ndouble: x, p, u and the controller's u, f, 16 stages, x1, xs, 8 dense-output rows, 7 per-contact
     arrays, the impact work and an nq x nq scratch."""
-    return 28 * 2 * nq + nparam + 2 * nu + 7 * max(ncontact, 1) + impact_nwork(nq, njrow, npoint) + nq * nq
+    return (28 * 2 * nq + nparam + 2 * nu + 7 * max(ncontact, 1) + impact_nwork(nq, njrow, npoint, friction)
+            + nq * nq)
 
 
 def sim_nint(nq: int, ncontact: int) -> int:
@@ -292,11 +294,13 @@ SIZES = (
 )
 
 
-def size_values(n: int, nq: int, nparam: int, nu: int, npoint: int, ncontact: int, njrow: int) -> dict[str, int]:
-    """The value of every NAME_<suffix> of SIZES for a model of these sizes."""
+def size_values(n: int, nq: int, nparam: int, nu: int, npoint: int, ncontact: int, njrow: int,
+                friction: bool = False) -> dict[str, int]:
+    """The value of every NAME_<suffix> of SIZES for a model of these sizes (friction: some wall has friction)."""
     values = {"N": n, "NQ": nq, "NX": 2 * nq, "NPARAM": nparam, "NU": nu, "NPOINT": npoint, "NCONTACT": ncontact,
-              "NJROW": njrow, "IMPACT_NWORK": impact_nwork(nq, njrow, npoint),
-              "SIM_NDOUBLE": sim_ndouble(nq, nparam, nu, ncontact, njrow, npoint), "SIM_NINT": sim_nint(nq, ncontact),
+              "NJROW": njrow, "IMPACT_NWORK": impact_nwork(nq, njrow, npoint, friction),
+              "SIM_NDOUBLE": sim_ndouble(nq, nparam, nu, ncontact, njrow, npoint, friction),
+              "SIM_NINT": sim_nint(nq, ncontact),
               "RECORD_NDOUBLE": record_ndouble(nq), "RECORD_NINT": record_nint(nq)}
     assert list(values) == [s.suffix for s in SIZES]
     return values
@@ -338,10 +342,12 @@ STRUCTS = (
                                  "int *released"), partial=False),
     Struct("gac_sim", ("gac_options opt", "double t", "double *x", "double *p", "long n_steps", "long n_rejected",
                        "long n_rhs", "long n_impacts", "int nactive", "int *active", "long n_activations",
-                       "long n_releases", "int err_index", "double *u", "double work_input", "double work_damping")),
+                       "long n_releases", "int err_index", "double *u", "double work_input", "double work_damping",
+                       "double work_friction")),
     Struct("gac_schedule", ("int n", "int nu", "const double *t", "const double *u", "int linear"), partial=False),
     Struct("gac_contact", ("int point", "int axis", "int normal_sign", "int row", "int e_index", "double e_value",
-                           "int kind", "int coordinate"), partial=False),
+                           "int kind", "int coordinate", "int has_friction", "int mu_index", "double mu_value",
+                           "int trow[2]"), partial=False),
     Struct("gac_run_summary", ("long n_impacts", "double t_first_impact", "double energy_impact_loss",
                                "long n_contact_events"), partial=False),
     Struct("gac_model", ("const char *name", "int n", "int nq", "int nx", "int nparam", "int nu", "int npoint",

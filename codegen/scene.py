@@ -190,6 +190,8 @@ Link = LineLink | RigidLink
 # joints and inputs
 # ---------------------------------------------------------------------------
 STIFFNESS_MAX = 1e12      # N m/rad, and N m s/rad for damping
+FRICTION_MAX = 1e3        # Coulomb coefficients of the walls
+FRICTION_VELOCITY_RANGE = (1e-9, 1.0)   # m/s: below it sliding friction is regularised (see Scene)
 
 
 def coordinate_names(n: int) -> list[str]:
@@ -280,6 +282,7 @@ class Wall:
     position: float
     restitution: float = 1.0
     points: tuple[int, ...] = ()  # contact points O_i (1-based) that may touch it
+    friction: float = 0.0         # Coulomb coefficient mu >= 0 of a point resting on it (0: frictionless)
 
     @property
     def axis(self) -> int:
@@ -356,6 +359,9 @@ class Scene:
     joints     springs and dampers of the joints 2..n (Joint; n - 1 entries, or () for none)
     inputs     the actuated coordinates by name ("theta_2", "X2", ...): input u_i is the generalised force
                of inputs[i] (N m on an angle, N on a translation), added to the flight equations
+    friction_velocity  v_s (m/s): a point resting on a wall with friction mu slides against the Coulomb force
+               -mu lambda v_t / max(|v_t|, v_s) (lambda its normal force, v_t its tangential velocity): exact
+               Coulomb sliding above v_s, a stiff viscous regime below it in place of sticking
     """
 
     name: str
@@ -369,6 +375,7 @@ class Scene:
     description: str = ""
     joints: tuple = ()          # Joint of joints 2..n (n - 1 entries); () means no springs or dampers
     inputs: tuple = ()          # names of the actuated coordinates (coordinate_names), one input u_i each
+    friction_velocity: float = 1e-4   # m/s, see above
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not _NAME_RE.match(self.name):
@@ -397,6 +404,8 @@ class Scene:
         object.__setattr__(self, "gravity", _number(self.gravity, "gravity"))
         if abs(self.gravity) > 1e6:
             raise SceneError(f"gravity: must be within [-1e6, 1e6] m/s^2, got {self.gravity!r}")
+        object.__setattr__(self, "friction_velocity", _in_range(self.friction_velocity, "friction_velocity",
+                                                                FRICTION_VELOCITY_RANGE, "m/s"))
         self._validate_walls()
         self._validate_joints()
         self._validate_state()
@@ -443,7 +452,10 @@ class Scene:
                                      f"(O_1..O_{n + 1}), got {p!r}")
             if len(set(points)) != len(points):
                 raise SceneError(f"contacts.{w.name}: repeated point index in {list(points)}")
-            walls.append(Wall(w.name, float(w.position), e, tuple(sorted(points))))
+            mu = _number(w.friction, f"friction.{w.name}")
+            if not 0.0 <= mu <= FRICTION_MAX:
+                raise SceneError(f"friction.{w.name}: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {mu!r}")
+            walls.append(Wall(w.name, float(w.position), e, tuple(sorted(points)), float(mu)))
         walls.sort(key=lambda w: WALL_NAMES.index(w.name))
         for axis in range(3):
             lo = self._find(walls, f"x{axis + 1}_min")
@@ -527,6 +539,7 @@ class Scene:
             names += [f"{name}_{i}" for name in link.param_names]
         names += [f"wall_{w.name}" for w in self.walls]
         names += [f"e_{w.name}" for w in self.walls]
+        names += [f"friction_{w.name}" for w in self.walls if w.friction > 0.0]
         for k, joint in enumerate(self.joints, start=2):
             if joint.stiffness is not None:
                 names += [f"stiffness_{k}", f"rest_angle_{k}"]
@@ -546,6 +559,7 @@ class Scene:
             values += list(link.param_values())
         values += [w.position for w in self.walls]
         values += [w.restitution for w in self.walls]
+        values += [w.friction for w in self.walls if w.friction > 0.0]
         for joint in self.joints:
             if joint.stiffness is not None:
                 values += [joint.stiffness, joint.rest_angle]
@@ -607,6 +621,7 @@ class Scene:
         """The (point, axis) pairs whose Jacobian row (Eq. 42) some wall needs, point-major, then a row
         (k, "theta") for each joint with a stop (a row of the identity)."""
         needed = {(p, w.axis) for w in self.walls for p in w.points}
+        needed |= {(p, axis) for w in self.walls if w.friction > 0.0 for p in w.points for axis in range(3)}
         return sorted(needed) + stop_rows(self.stops())
 
 
@@ -635,6 +650,10 @@ def check_parameter(name: str, value: float) -> float:
         value = _number(value, field, INERTIA_MAX)
     elif kind in ("stiffness", "damping"):
         value = _nonnegative(value, field, STIFFNESS_MAX)
+    elif name.startswith("friction_"):
+        value = _number(value, field)
+        if not 0.0 <= value <= FRICTION_MAX:
+            raise SceneError(f"{field}: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {value!r}")
     elif name.startswith("e_"):
         value = _number(value, field)
         if not 0.0 <= value <= 1.0:
@@ -709,8 +728,8 @@ def shipped_scene_names() -> list[str]:
 # ---------------------------------------------------------------------------
 # loading from TOML / JSON
 # ---------------------------------------------------------------------------
-TOP_KEYS = ("name", "description", "gravity", "links", "urdf", "urdf_tip_length", "walls", "restitution", "contacts",
-            "initial", "inputs")
+TOP_KEYS = ("name", "description", "gravity", "links", "urdf", "urdf_tip_length", "walls", "restitution", "friction",
+            "friction_velocity", "contacts", "initial", "inputs")
 JOINT_KEYS = ("stiffness", "rest_angle", "damping", "lower", "upper", "limit_restitution")
 LINE_KEYS = ("length", "mu", "J", "twist", "twist_matrix", "count") + JOINT_KEYS
 RIGID_KEYS = ("length", "mass", "com", "inertia", "twist", "twist_matrix", "count") + JOINT_KEYS
@@ -804,7 +823,8 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
     _check_keys(data, TOP_KEYS, "scene")
     links, twists, joints = _links_from_data(_link_tables(data, folder))
     n = len(links)
-    walls = _walls_from_data(data.get("walls", {}), data.get("restitution", 1.0), data.get("contacts", {}))
+    walls = _walls_from_data(data.get("walls", {}), data.get("restitution", 1.0), data.get("contacts", {}),
+                             data.get("friction", 0.0))
     initial = data.get("initial", {})
     _check_keys(initial, INITIAL_KEYS, "initial")
     return Scene(
@@ -818,6 +838,7 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
         qd0=tuple(initial["qd"]) if "qd" in initial else (),
         joints=joints if n > 1 else (),
         inputs=data.get("inputs", ()),
+        friction_velocity=data.get("friction_velocity", 1e-4),
     )
 
 
@@ -902,13 +923,18 @@ def _links_from_data(items) -> tuple[tuple[Link, ...], tuple, tuple]:
     return tuple(links), tuple(twists), tuple(joints)
 
 
-def _walls_from_data(walls, restitution, contacts) -> tuple[Wall, ...]:
+def _walls_from_data(walls, restitution, contacts, friction=0.0) -> tuple[Wall, ...]:
     _check_keys(walls, WALL_NAMES, "walls")
     if isinstance(restitution, dict):
         _check_keys(restitution, WALL_NAMES + ("default",), "restitution")
         for name in restitution:
             if name != "default" and name not in walls:
                 raise SceneError(f"restitution.{name}: there is no such wall in [walls]")
+    if isinstance(friction, dict):
+        _check_keys(friction, WALL_NAMES + ("default",), "friction")
+        for name in friction:
+            if name != "default" and name not in walls:
+                raise SceneError(f"friction.{name}: there is no such wall in [walls]")
     _check_keys(contacts, WALL_NAMES, "contacts")
     for name in contacts:
         if name not in walls:
@@ -934,5 +960,12 @@ def _walls_from_data(walls, restitution, contacts) -> tuple[Wall, ...]:
         if not isinstance(points, (list, tuple)) or (name in contacts and not points):
             raise SceneError(f"contacts.{name}: expected a non-empty list of point indices "
                              f"(O_1 is 1), got {points!r}")
-        out.append(Wall(name, _number(walls[name], f"walls.{name}"), e, tuple(points)))
+        if isinstance(friction, dict):
+            mu, where = friction.get(name, friction.get("default", 0.0)), f"friction.{name}"
+        else:
+            mu, where = friction, "friction"
+        mu = _number(mu, where)
+        if not 0.0 <= mu <= FRICTION_MAX:
+            raise SceneError(f"{where}: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {mu!r}")
+        out.append(Wall(name, _number(walls[name], f"walls.{name}"), e, tuple(points), mu))
     return tuple(out)

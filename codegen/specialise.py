@@ -89,9 +89,12 @@ def layout_for(scene: Scene, specialise: bool = True) -> Layout:
             notes.append(f"walls {', '.join(w.name for w in across)} dropped: every point stays at "
                          f"X{normal + 1} = {scene.q0[n + 2 + normal]:g}, inside them")
     contacts = tuple((p, w) for w in walls for p in w.points)
-    rows = tuple(sorted({(p, w.axis) for p, w in contacts}))
+    tangents = {(p, axis) for p, w in contacts if w.friction > 0.0 for axis in range(3)
+                if axis != w.axis and axis != normal}                  # rows of the friction forces
+    rows = tuple(sorted({(p, w.axis) for p, w in contacts} | tangents))
     notes.append(f"contacts: {len(contacts)} (point, wall) gap functions and {len(rows)} Jacobian rows, only "
-                 "for the walls and points of the scene")
+                 "for the walls and points of the scene" + (" (with the tangential rows of the walls with friction)"
+                                                            if tangents else ""))
     stops = tuple(scene.stops())
     if stops:
         contacts += stops
@@ -99,7 +102,7 @@ def layout_for(scene: Scene, specialise: bool = True) -> Layout:
         notes.append(f"joint stops: {len(stops)} ({', '.join(stop.name for _, stop in stops)}), after the walls' "
                      "contacts, with a row of the identity each joint")
     zero_params = tuple(name for name, value in zip(scene.parameter_names(), scene.parameter_vector())
-                        if value == 0.0 and not name.startswith(("wall_", "e_")))
+                        if value == 0.0 and not name.startswith(("wall_", "e_", "friction_")))
     if zero_params:
         notes.append(f"zero parameters built in (their terms vanish; they cannot be changed at run time): "
                      f"{', '.join(zero_params)}")

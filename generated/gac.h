@@ -73,6 +73,8 @@
 #define GAC_ERR_BAD_MODEL        -21   /* the model descriptor is inconsistent (gac_model_check) */
 #define GAC_ERR_BAD_INPUT        -22   /* an input u (set by gac_sim_set_input, or written by the controller)
                                           is NaN or infinite */
+#define GAC_ERR_FRICTION         -23   /* the resting contacts with Coulomb friction have no unique normal forces
+                                          (their system is singular: the Painleve paradox of sliding friction) */
 
 /* ---- what gac_sim_advance stops at (> 0) ------------------------------------------------------ */
 #define GAC_SIM_END      1    /* reached t_end */
@@ -130,6 +132,11 @@ typedef struct {
     double e_value;
     int kind;             /* GAC_CONTACT_WALL (0) or GAC_CONTACT_STOP (1) */
     int coordinate;       /* stop: the index into q of its joint's angle (0..nq-1); wall: unused */
+    int has_friction;     /* wall: 1 if the wall has Coulomb friction (0: frictionless; a zero-initialised entry) */
+    int mu_index;         /* its coefficient mu: p[mu_index], or mu_value when mu_index < 0 */
+    double mu_value;
+    int trow[2];          /* the Jacobian rows of the point along the wall's two tangential axes (ascending), -1 for
+                             an axis the model does not move along (the normal of a planar model) */
 } gac_contact;
 
 /* The base chart's measure mu(q) = |a . (e_z x Rz(theta_0) b)| (|det E|; |cos theta_0| for the default
@@ -172,6 +179,9 @@ typedef struct {
     gac_kernel_rhs rhs;                /* t, x, u, p -> xdot = [qd, qdd] (nx); t unused */
     gac_kernel_qqdu power;             /* q, qd, u, p -> P[0] power of the inputs, P[1] dissipation of the
                                           dampers (W, >= 0); NULL: nothing in flight does work but gravity */
+    double friction_velocity;          /* v_s (m/s, > 0 when a contact has friction): a resting point slides against
+                                          -mu lambda v_t / max(|v_t|, v_s), lambda its normal force, v_t its
+                                          velocity along the wall (Coulomb above v_s, viscous below) */
 } gac_model;
 
 /* GAC_OK if the descriptor is consistent (sizes > 0 where needed, nx = 2 nq, tables and kernels present,
@@ -191,7 +201,8 @@ void gac_contact_jacobian(const gac_model *m, const double *q, const double *p, 
 
 /* Doubles of the work array of gac_impact, gac_impact_complementarity and gac_constrained_dynamics:
  * 2 nq^2 + nq + 3 npoint + max(njrow, 1), laid out as Y (nq*nq: row a = I_f^-1 n_a of active contact a) |
- * A (nq*nq: N I_f^-1 N^T, nactive x nactive) | g (nq) | vel (3 npoint) | f (max(njrow, 1)). */
+ * A (nq*nq: N I_f^-1 N^T, nactive x nactive) | g (nq) | vel (3 npoint) | f (max(njrow, 1)); a model with
+ * friction (some contact has has_friction) needs 2 nq^2 more: Z (nq*nq) | B (nq*nq). */
 long gac_impact_nwork(const gac_model *m);
 /* Doubles and ints of one simulation (gac_sim_init): dwork = x (nx) | p (nparam) | u (nu) | private;
  * iwork = active (nq) | private.
@@ -233,9 +244,12 @@ int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q,
                                double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse,
                                double *GAC_RESTRICT work);
 
-/* Generalised accelerations with the contacts active[0..nactive-1] held as bilateral frictionless
- * constraints: I_f qdd = R + N^T lambda, N qdd = -Ndot qd (N: Jacobian rows signed along the inward normal),
- * solved as qdd = qdd_free + I_f^-1 N^T lambda with (N I_f^-1 N^T) lambda = -(N qdd_free + Ndot qd).
+/* Generalised accelerations with the contacts active[0..nactive-1] held as bilateral constraints:
+ * I_f qdd = R + N^T lambda, N qdd = -Ndot qd (N: Jacobian rows signed along the inward normal), solved as
+ * qdd = qdd_free + I_f^-1 N^T lambda with (N I_f^-1 N^T) lambda = -(N qdd_free + Ndot qd).  On a wall with
+ * Coulomb friction (has_friction) the point also takes -mu lambda v_t / max(|v_t|, friction_velocity) along the
+ * wall (v_t its velocity there): the system for lambda is then N I_f^-1 (N^T + mu J_t^T (-phi)) lambda = ...,
+ * not symmetric, and GAC_ERR_FRICTION when it is singular (the Painleve paradox).
  * qdd (nq, rad/s^2 or m/s^2 by coordinate) and lambda (nactive) out; lambda[k] (N) is the force of contact
  * active[k] along its inward normal (> 0 pushes); a contact whose row depends on the earlier ones' (held
  * by them already) gets lambda = 0.  work: gac_impact_nwork(m) doubles.  nactive = 0 gives
@@ -364,6 +378,7 @@ typedef struct {
     double *u;                   /* the inputs held over the next advance call (nu; gac_sim_set_input) */
     double work_input;           /* J: work of the inputs since gac_sim_init, int u . qd_actuated dt */
     double work_damping;         /* J: energy the joint dampers took since gac_sim_init, int C theta_dot^2 dt */
+    double work_friction;        /* J: energy sliding friction took since gac_sim_init, int mu lambda |v_t| ... dt */
     /* private: the model, integrator state and scratch (pointers into dwork / iwork) */
     const gac_model *model;
     gac_controller controller;   /* NULL: the held inputs u */

@@ -63,3 +63,45 @@ int gac_ldlt_drop(int n, double *A, double tol)
 {
     return gac_ldlt_factor(n, A, tol, 1);
 }
+
+/* Solve A x = b in place (x into b) for a general n x n row-major A, by Gaussian elimination with partial
+ * pivoting (A is overwritten).  Returns 0, or -1 when a pivot is not above tol * max|A_ij| (singular). */
+int gac_lu_solve(int n, double *A, double *b, double tol)
+{
+    int i, j, k;
+    double scale = 0.0;
+    for (i = 0; i < n * n; ++i) {
+        if (fabs(A[i]) > scale) scale = fabs(A[i]);
+    }
+    if (!(scale > 0.0)) return -1;
+    for (k = 0; k < n; ++k) {
+        int pivot = k;
+        for (i = k + 1; i < n; ++i) {
+            if (fabs(A[i*n + k]) > fabs(A[pivot*n + k])) pivot = i;
+        }
+        if (!(fabs(A[pivot*n + k]) > tol * scale)) return -1;
+        if (pivot != k) {
+            double t;
+            for (j = 0; j < n; ++j) {
+                t = A[k*n + j];
+                A[k*n + j] = A[pivot*n + j];
+                A[pivot*n + j] = t;
+            }
+            t = b[k];
+            b[k] = b[pivot];
+            b[pivot] = t;
+        }
+        for (i = k + 1; i < n; ++i) {
+            const double factor = A[i*n + k] / A[k*n + k];
+            if (factor == 0.0) continue;
+            for (j = k; j < n; ++j) A[i*n + j] -= factor * A[k*n + j];
+            b[i] -= factor * b[k];
+        }
+    }
+    for (i = n - 1; i >= 0; --i) {
+        double sum = b[i];
+        for (j = i + 1; j < n; ++j) sum -= A[i*n + j] * b[j];
+        b[i] = sum / A[i*n + i];
+    }
+    return 0;
+}

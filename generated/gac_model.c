@@ -23,6 +23,11 @@ int gac_model_check(const gac_model *m)
         if ((k->normal_sign != 1 && k->normal_sign != -1) || k->row < 0 || k->row >= m->njrow
             || k->e_index >= m->nparam)
             return GAC_ERR_BAD_MODEL;
+        if (k->has_friction) {
+            if (k->kind != GAC_CONTACT_WALL || k->mu_index >= m->nparam || !(m->friction_velocity > 0.0)
+                || k->trow[0] < -1 || k->trow[0] >= m->njrow || k->trow[1] < -1 || k->trow[1] >= m->njrow)
+                return GAC_ERR_BAD_MODEL;
+        }
         if (k->kind == GAC_CONTACT_STOP) {
             if (k->coordinate < 0 || k->coordinate >= m->nq) return GAC_ERR_BAD_MODEL;
         } else if (k->kind != GAC_CONTACT_WALL || k->point < 1 || k->point > m->npoint || k->axis < 0
@@ -33,10 +38,20 @@ int gac_model_check(const gac_model *m)
     return GAC_OK;
 }
 
+/* 1 if some contact of the model has friction. */
+int gac_has_friction(const gac_model *m)
+{
+    int c;
+    for (c = 0; c < m->ncontact; ++c) {
+        if (m->contacts[c].has_friction) return 1;
+    }
+    return 0;
+}
+
 long gac_impact_nwork(const gac_model *m)
 {
     const long nq = m->nq;
-    return 2 * nq * nq + nq + 3L * m->npoint + GAC_AT_LEAST_1(m->njrow);
+    return (gac_has_friction(m) ? 4 : 2) * nq * nq + nq + 3L * m->npoint + GAC_AT_LEAST_1(m->njrow);
 }
 
 long gac_sim_ndouble(const gac_model *m)
@@ -81,6 +96,7 @@ const char *gac_error_message(int code)
     case GAC_ERR_UNSTABLE: return "RK4 is unstable at this step: the chain's fastest mode needs dt below about 2.8 / its rate; reduce dt or use an adaptive method";
     case GAC_ERR_LOST_CONTACT: return "a point lies beyond its wall at an impact: a wall crossing was missed, the motion is too fast or I_f too ill-conditioned (extreme mass, length or inertia ratios) for the tolerance";
     case GAC_ERR_BAD_INPUT: return "an input is NaN or infinite: the inputs given to sim_set_input, and those a controller writes, must be finite";
+    case GAC_ERR_FRICTION: return "the resting contacts with Coulomb friction have no unique normal forces: their system (the normal rows of I_f^-1 applied to the normal and friction directions) is singular at this state, the Painleve paradox of sliding friction; lower the friction coefficient or let the contact impact";
     case GAC_ERR_BAD_MODEL: return "the model descriptor is inconsistent: nq >= 1, nx = 2 nq, npoint >= 1, ncontact, njrow, nparam, nu >= 0, every table and kernel present, each contact's kind, point, axis (a stop: its coordinate), normal sign, Jacobian row and restitution index in range";
     default: return "unknown error code";
     }

@@ -105,6 +105,7 @@ class SimulationResult:
     energy_scale: float = 1.0     # J: max(T0 + |V0|, M g L, |W_inputs|, D_dampers), what energy_drift is measured on
     energy_input_work: float = 0.0     # J: work of the inputs, int u . qd_actuated dt
     energy_damping_loss: float = 0.0   # J: energy the joint dampers took, int C theta_dot^2 dt (>= 0)
+    energy_friction_loss: float = 0.0  # J: energy sliding friction took at resting contacts (>= 0)
     u: np.ndarray | None = None        # (len(t), nu) the inputs at the sample times (None: no inputs)
     impact_counts: tuple | None = None # keep_impacts=False: (impacts, first impact time, energy they took)
 
@@ -133,10 +134,11 @@ class SimulationResult:
 
     @property
     def energy_residual(self) -> float:
-        """J: what the energy balance leaves, E_final - E_initial + energy_impact_loss + energy_damping_loss -
-        energy_input_work (E = T + V, springs' potential included): the integration error of the flight phases."""
+        """J: what the energy balance leaves, E_final - E_initial + energy_impact_loss + energy_damping_loss +
+        energy_friction_loss - energy_input_work (E = T + V, springs' potential included): the integration error of
+        the flight phases."""
         return (self.energy_final - self.energy_initial + self.energy_impact_loss + self.energy_damping_loss
-                - self.energy_input_work)
+                + self.energy_friction_loss - self.energy_input_work)
 
     @property
     def energy_drift(self) -> float:
@@ -148,6 +150,8 @@ class SimulationResult:
         """One line: initial and final energy, inputs' work, losses in dampers and at impacts, and the residual."""
         driven = (f"work of the inputs {self.energy_input_work:.6g} J, taken by dampers {self.energy_damping_loss:.6g} J, "
                   if self.energy_input_work or self.energy_damping_loss else "")
+        if self.energy_friction_loss:
+            driven += f"taken by friction {self.energy_friction_loss:.6g} J, "
         return (f"energy: initial {self.energy_initial:.12g} J, final {self.energy_final:.12g} J, {driven}lost at impacts "
                 f"{self.energy_impact_loss:.6g} J; balance residual {self.energy_residual:.3e} J = "
                 f"{self.energy_drift:.3e} of {self.energy_scale:.6g} J (max(T0 + |V0|, M g L"
@@ -179,6 +183,7 @@ class SimulationResult:
             "energy_impact_loss": self.energy_impact_loss, "energy_residual": self.energy_residual,
             "energy_scale": self.energy_scale, "energy_drift": self.energy_drift,
             "energy_input_work": self.energy_input_work, "energy_damping_loss": self.energy_damping_loss,
+            "energy_friction_loss": self.energy_friction_loss,
             "n_rhs": self.n_rhs, "n_steps": self.n_steps, "n_rejected": self.n_rejected,
             "status": self.status, "message": self.message, "method": self.method, "options": self.options,
             "contact_events": [{"t": e.t, "point": e.point, "wall": e.wall, "kind": e.kind}
@@ -446,6 +451,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     return SimulationResult(
         t=t_eval[:n].copy(), q=q_samples, qd=qd_samples, u=u_samples,
         energy_input_work=float(state.work_input), energy_damping_loss=float(state.work_damping),
+        energy_friction_loss=float(state.work_friction),
         impact_counts=None if summary is None else (int(summary.n_impacts), float(summary.t_first_impact),
                                                     float(summary.energy_impact_loss)),
         impacts=impacts, t_final=float(state.t), q_final=layout.expand(x_final[:nq]),
@@ -454,7 +460,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         n_steps=int(state.n_steps), n_rejected=int(state.n_rejected), n_rhs=int(state.n_rhs), status=status,
         message=message + (f"; {len(warnings)} impact(s) of limited accuracy (see warnings)" if warnings else ""),
         method=method, contact_events=contact_events, warnings=warnings,
-        energy_scale=max(energy_scale(model.scene, p, T0, V0), abs(float(state.work_input)), float(state.work_damping)),
+        energy_scale=max(energy_scale(model.scene, p, T0, V0), abs(float(state.work_input)), float(state.work_damping),
+                         float(state.work_friction)),
         persistent_final=[(model.contacts[state.active[k]][0], model.contacts[state.active[k]][1].name)
                           for k in range(state.nactive)],
         options={"rtol": rtol, "atol": atol, "dt": dt, "contact_tol": contact_tol, "event_samples": event_samples,

@@ -257,14 +257,32 @@ int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q,
     return gac_impact_rounds(m, q, qd, p, nactive, active, e, -1, qd_plus, impulse, work, &rounds, &plastic);
 }
 
-int gac_constrained_dynamics(const gac_model *m, const double *q, const double *qd, const double *u,
-                             const double *p, int nactive, const int *active, double *qdd, double *lambda,
-                             double *work)
+/* Coulomb coefficient of contact c's wall (0 for a frictionless wall or a stop). */
+static double gac_friction(const gac_model *m, const double *p, int c)
+{
+    const gac_contact *k = &m->contacts[c];
+    if (!k->has_friction) return 0.0;
+    return k->mu_index >= 0 ? p[k->mu_index] : k->mu_value;
+}
+
+/* The constrained dynamics of the contacts held at their walls (active), with Coulomb friction on the walls
+ * that have it: a held point with velocity v_t along its wall takes the force -mu lambda phi, phi = v_t /
+ * max(|v_t|, v_s) (v_s = m->friction_velocity), lambda >= 0 its normal force.  With d_a = n_a + mu_a J^T(-phi_a)
+ * the generalised direction of contact a's force, qdd = qdd_free + sum_a I_f^-1 d_a lambda_a and the normal
+ * rows n_b . qdd + ndot_b qd = 0 give B lambda = -(N qdd_free + Ndot qd), B_ba = n_b I_f^-1 d_a (not symmetric
+ * with friction: solved by LU; singular is the Painleve paradox, GAC_ERR_FRICTION).  Constraints dependent on
+ * the earlier ones (found by the LDL^T of the frictionless N I_f^-1 N^T) take no force.  dissipation (if not
+ * NULL): the power friction takes, sum_a mu_a lambda_a phi_a . v_t,a (W). */
+int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const double *qd, const double *u,
+                                      const double *p, int nactive, const int *active, double *qdd, double *lambda,
+                                      double *work, double *dissipation)
 {
     const int nq = m->nq;
     double v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)], bias[GAC_AT_LEAST_1(m->njrow)];
+    double mu[GAC_AT_LEAST_1(nq)], slide[GAC_AT_LEAST_1(nq)];
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work), *vel = GAC_WORK_VEL(m, work);
-    int a, i, code;
+    int a, b, i, code, friction = 0;
+    if (dissipation) *dissipation = 0.0;
     m->forward_dynamics(q, qd, u, p, qdd);
     if (nactive == 0) return GAC_OK;
     code = gac_impact_system(m, q, qd, p, nactive, active, work, v, e);
@@ -276,13 +294,70 @@ int gac_constrained_dynamics(const gac_model *m, const double *q, const double *
         double sign;
         gac_contact_row(m, active[a], &row, &sign);
         lambda[a] = -sign * (bias[row] + gac_row_value(m, active[a], qdd, vel));
+        mu[a] = gac_friction(m, p, active[a]);
+        if (mu[a] > 0.0) friction = 1;
     }
-    if (gac_ldlt_drop(nactive, A, 1e-12) < 0) return GAC_ERR_SINGULAR_CONTACT;
-    gac_ldlt_solve(nactive, A, lambda);
+    if (!friction) {
+        if (gac_ldlt_drop(nactive, A, 1e-12) < 0) return GAC_ERR_SINGULAR_CONTACT;
+        gac_ldlt_solve(nactive, A, lambda);
+    } else {
+        double *Z = GAC_WORK_Z(m, work), *B = GAC_WORK_B(m, work), *g = GAC_WORK_G(m, work), *f = GAC_WORK_F(m, work);
+        double vq[3 * m->npoint];
+        m->contact_velocities(q, qd, p, vq);
+        for (a = 0; a < nactive * nactive; ++a) B[a] = A[a];
+        for (a = 0; a < nactive; ++a) {
+            const gac_contact *k = &m->contacts[active[a]];
+            double vt[2] = {0.0, 0.0}, speed, scale;
+            int j, axis = 0, r;
+            slide[a] = 0.0;
+            if (!(mu[a] > 0.0)) continue;
+            for (j = 0; j < 2; ++j, ++axis) {        /* the two tangential axes, ascending */
+                if (axis == k->axis) ++axis;
+                if (k->trow[j] >= 0) vt[j] = vq[3 * (k->point - 1) + axis];
+            }
+            speed = sqrt(vt[0] * vt[0] + vt[1] * vt[1]);
+            scale = speed > m->friction_velocity ? speed : m->friction_velocity;
+            for (r = 0; r < m->njrow; ++r) f[r] = 0.0;
+            for (j = 0; j < 2; ++j) {
+                if (k->trow[j] >= 0) f[k->trow[j]] = -vt[j] / scale;          /* -phi: against the sliding */
+            }
+            slide[a] = (vt[0] * vt[0] + vt[1] * vt[1]) / scale;               /* phi . v_t >= 0 */
+            m->contact_generalized_force(q, f, p, g);
+            m->inertia_solve(q, g, p, Z + (long)a * nq);
+            m->contact_velocities(q, Z + (long)a * nq, p, vel);
+            for (b = 0; b < nactive; ++b) {
+                int row;
+                double sign;
+                gac_contact_row(m, active[b], &row, &sign);
+                B[b*nactive + a] += mu[a] * sign * gac_row_value(m, active[b], Z + (long)a * nq, vel);
+            }
+        }
+        if (gac_ldlt_drop(nactive, A, 1e-12) < 0) return GAC_ERR_SINGULAR_CONTACT;
+        for (b = 0; b < nactive; ++b) {
+            if (A[b*nactive + b] == 1e300) {         /* dependent on the others: no force */
+                for (a = 0; a < nactive; ++a) B[b*nactive + a] = 0.0;
+                B[b*nactive + b] = 1.0;
+                lambda[b] = 0.0;
+            }
+        }
+        if (gac_lu_solve(nactive, B, lambda, 1e-12) != 0) return GAC_ERR_FRICTION;
+        for (a = 0; a < nactive; ++a) {
+            if (!(mu[a] > 0.0)) continue;
+            for (i = 0; i < nq; ++i) qdd[i] += mu[a] * Z[(long)a * nq + i] * lambda[a];
+            if (dissipation) *dissipation += mu[a] * lambda[a] * slide[a];
+        }
+    }
     for (i = 0; i < nq; ++i) {
         for (a = 0; a < nactive; ++a) qdd[i] += Y[a*nq + i] * lambda[a];
     }
     return GAC_OK;
+}
+
+int gac_constrained_dynamics(const gac_model *m, const double *q, const double *qd, const double *u,
+                             const double *p, int nactive, const int *active, double *qdd, double *lambda,
+                             double *work)
+{
+    return gac_constrained_dynamics_friction(m, q, qd, u, p, nactive, active, qdd, lambda, work, 0);
 }
 
 void gac_contact_info(const gac_model *m, int c, int *point, int *axis, int *normal_sign)

@@ -207,7 +207,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     s->controller = 0;
     s->controller_data = 0;
     s->input_changed = 0;
-    s->work_input = s->work_damping = 0.0;
+    s->work_input = s->work_damping = s->work_friction = 0.0;
     for (i = 0; i < md->nx; ++i) s->x[i] = x[i];
     s->t = t0;
     s->h = opt->dt;                               /* RK4 step, or the first adaptive step (0: automatic) */
@@ -1500,9 +1500,9 @@ static int gac_release(gac_sim *s, double t, int c_event, gac_impact_record *r)
     return GAC_OK;
 }
 
-/* Add the work of the inputs and the dissipation of the dampers over [s->t, t_b] of the current step to
- * s->work_input and s->work_damping: 5-point Gauss-Legendre (exact for polynomials of degree 9) on the
- * step's dense output. */
+/* Add the work of the inputs, the dissipation of the dampers and (with resting contacts on walls with friction)
+ * that of sliding friction over [s->t, t_b] of the current step to s->work_input, s->work_damping and
+ * s->work_friction: 5-point Gauss-Legendre (exact for polynomials of degree 9) on the step's dense output. */
 static void gac_add_work(gac_sim *s, double t_b)
 {
     static const double node[5] = {0.04691007703066800, 0.23076534494715845, 0.5, 0.76923465505284155,
@@ -1511,18 +1511,28 @@ static void gac_add_work(gac_sim *s, double t_b)
                                      0.23931433524968324, 0.11846344252809454};
     const gac_model *md = s->model;
     const double h = t_b - s->t;
-    double x[md->nx], P[2], w_in = 0.0, w_damp = 0.0;
+    const int friction = s->nactive > 0 && gac_has_friction(md);
+    double x[md->nx], P[2], w_in = 0.0, w_damp = 0.0, w_friction = 0.0;
     int j;
-    if (md->power == 0 || !(h > 0.0)) return;
+    if ((md->power == 0 && !friction) || !(h > 0.0)) return;
     for (j = 0; j < 5; ++j) {
         const double t = s->t + node[j] * h;
         gac_dense(s, t, x);
-        md->power(x, x + md->nq, gac_input(s, t, x), s->p, P);
-        w_in += weight[j] * P[0];
-        w_damp += weight[j] * P[1];
+        if (md->power != 0) {
+            md->power(x, x + md->nq, gac_input(s, t, x), s->p, P);
+            w_in += weight[j] * P[0];
+            w_damp += weight[j] * P[1];
+        }
+        if (friction) {
+            double qdd[md->nq], lambda[md->nq], D = 0.0;
+            if (gac_constrained_dynamics_friction(md, x, x + md->nq, gac_input(s, t, x), s->p, s->nactive, s->active,
+                                                  qdd, lambda, s->work, &D) == GAC_OK)
+                w_friction += weight[j] * D;
+        }
     }
     s->work_input += h * w_in;
     s->work_damping += h * w_damp;
+    s->work_friction += h * w_friction;
 }
 
 int gac_sim_set_input(gac_sim *s, const double *u)

@@ -29,7 +29,7 @@ enum { MODE_INSTANTIATED, MODE_INITIALIZATION, MODE_STEPPING, MODE_TERMINATED, M
 
 /* Indices of the solver parameters and the energy outputs within their blocks. */
 enum { SOLVER_RTOL, SOLVER_ATOL, SOLVER_DT, SOLVER_HMAX };
-enum { OUT_KINETIC, OUT_POTENTIAL, OUT_WORK_INPUT, OUT_WORK_DAMPING, OUT_IMPACT_LOSS };
+enum { OUT_KINETIC, OUT_POTENTIAL, OUT_WORK_INPUT, OUT_WORK_DAMPING, OUT_IMPACT_LOSS, OUT_FRICTION };
 enum { INT_METHOD, INT_IMPACTS, INT_RESTING };
 
 typedef struct {
@@ -146,6 +146,7 @@ static double real_value(const Instance *in, long r)
     if (in->mode == MODE_INSTANTIATED || in->mode == MODE_INITIALIZATION) return 0.0;
     if (r == OUT_WORK_INPUT) return in->sim.work_input;
     if (r == OUT_WORK_DAMPING) return in->sim.work_damping;
+    if (r == OUT_FRICTION) return in->sim.work_friction;
     return in->impact_loss;
 }
 

@@ -18,13 +18,14 @@
  *   then nq                     qd0      parameter   initial rates (fixed; start: the scene's)
  *   then GAC_FMI2_NSOLVER_REAL  solver   parameter   rtol, atol, dt (s), h_max (s) of gac_options (fixed)
  *   then GAC_FMI2_NOUT_REAL     energy   output      kinetic, potential (J), the inputs' work, the dampers'
- *                                                    dissipation and the impacts' losses since the start (J)
+ *                                                    dissipation, the impacts' losses and what sliding friction
+ *                                                    took since the start (J)
  *
  * and Integer variables 0 = solver method (parameter, GAC_METHOD_*), 1 = impacts since the start (output),
  * 2 = resting contacts now (output).  There are no Boolean or String variables.
  *
- * Energy balance: kinetic + potential + impact losses + dissipation - work of the inputs stays equal to its
- * value at the start (to the integration tolerance).
+ * Energy balance: kinetic + potential + impact losses + dissipation + friction - work of the inputs stays equal
+ * to its value at the start (to the integration tolerance).
  *
  * Memory: every allocation goes through the importer's allocateMemory / freeMemory (at fmi2Instantiate and
  * fmi2GetFMUstate); fmi2DoStep allocates nothing.  Instances share nothing: one per thread.
@@ -35,7 +36,7 @@
 #include "gac.h"
 
 #define GAC_FMI2_NSOLVER_REAL 4   /* rtol, atol, dt, h_max */
-#define GAC_FMI2_NOUT_REAL    5   /* kinetic, potential, work_input, work_damping, impact_loss */
+#define GAC_FMI2_NOUT_REAL    6   /* kinetic, potential, work_input, work_damping, impact_loss, friction */
 #define GAC_FMI2_NINTEGER     3   /* method, impacts, resting contacts */
 
 /* What the generated glue tells the slave about its model. */

@@ -168,6 +168,27 @@ static const gac_model box = {
     .contact_bias = box_jbias, .energy = box_energy, .rhs = box_rhs
 };
 
+/* ---- sled: the box's point on a rough floor, p = [g, m, e, mu]; friction along x (row 0) ------------------ */
+static void sled_gaps(const double *q, const double *p, double *gap)
+{
+    (void)p;
+    gap[0] = q[1];
+}
+static const gac_contact sled_contacts[1] = {{1, 1, +1, 1, 2, 0.0, GAC_CONTACT_WALL, -1, 1, 3, 0.0, {0, -1}}};
+static const double sled_p[4] = {9.81, 0.5, 0.0, 0.5};
+static const double sled_q0[2] = {0.0, 0.0}, sled_qd0[2] = {3.0, 0.0};
+
+static const gac_model sled = {
+    .name = "sled", .n = 0, .nq = 2, .nx = 4, .nparam = 4, .npoint = 1, .ncontact = 1, .njrow = 2,
+    .contacts = sled_contacts,
+    .chart = {.a = {0.0, 1.0}, .b = {1.0, 0.0}, .theta0_index = -1, .theta0_value = 0.0},
+    .default_parameters = sled_p, .q0 = sled_q0, .qd0 = sled_qd0,
+    .forward_dynamics = box_fd, .inertia_solve = box_solve, .generalized_momentum = box_momentum,
+    .contact_points = box_points, .contact_velocities = box_velocities, .contact_generalized_force = box_force,
+    .contact_gaps = sled_gaps,
+    .contact_bias = box_jbias, .energy = box_energy, .rhs = box_rhs, .friction_velocity = 1e-4
+};
+
 /* ---- caller-owned memory, large enough for both models ------------------------------------------ */
 #define NDOUBLE 2048
 #define NINT 256
@@ -400,6 +421,39 @@ static void test_box(void)
     CHECK(sim.x[0] > 0.0 && sim.x[0] < 2.0 && sim.x[1] > 0.0 && sim.x[1] < 2.0 && sim.nactive == 0, "inside");
 }
 
+/* A point sliding on a rough floor (Coulomb mu, resting from the start): the normal force m g, the deceleration
+ * mu g, x(t) = v0 t - mu g t^2 / 2 until it stops at v0^2 / (2 mu g), and the friction loss m v0^2 / 2. */
+static void test_sled(void)
+{
+    const double g = sled_p[0], m = sled_p[1], mu = sled_p[3], v0 = sled_qd0[0], t_stop = v0 / (mu * g);
+    const double t_eval[2] = {0.3, 1.0};
+    double x_eval[8], qdd[2], lambda[2], swork[64];
+    const int active[1] = {0};
+    gac_options opt;
+    gac_sim sim;
+    gac_impact_record rec;
+    int code, i_eval = 0;
+    CHECK(gac_model_check(&sled) == GAC_OK && gac_impact_nwork(&sled) == 4 * 4 + 2 + 3 + 2, "sled model, work %ld",
+          gac_impact_nwork(&sled));
+    code = gac_constrained_dynamics(&sled, sled_q0, sled_qd0, 0, sled_p, 1, active, qdd, lambda, swork);
+    CHECK(code == GAC_OK && NEAR(lambda[0], m * g, 1e-12) && NEAR(qdd[0], -mu * g, 1e-12) && NEAR(qdd[1], 0.0, 1e-12),
+          "sliding: lambda %.17g, qdd %.17g %.17g", lambda[0], qdd[0], qdd[1]);
+    gac_default_options(&opt);
+    opt.rtol = 1e-10;
+    opt.atol = 1e-12;
+    code = gac_sim_init(&sim, &sled, dwork, iwork, 0.0, sled_q0, sled_qd0, 0, &opt);
+    CHECK(code == GAC_OK, "init %d", code);
+    gac_record_bind(&rec, &sled, rdwork, riwork);
+    while ((code = gac_sim_advance(&sim, 1.0, t_eval, 2, &i_eval, x_eval, &rec)) == GAC_SIM_CONTACT) {
+    }
+    CHECK(code == GAC_SIM_END && sim.nactive == 1 && i_eval == 2, "end %d, resting %d", code, sim.nactive);
+    CHECK(NEAR(x_eval[0], v0 * 0.3 - 0.5 * mu * g * 0.09, 1e-8), "x(0.3) %.17g", x_eval[0]);
+    CHECK(t_stop < 1.0 && NEAR(x_eval[4], v0 * v0 / (2.0 * mu * g), 1e-8), "x(1) %.17g, expected %.17g", x_eval[4],
+          v0 * v0 / (2.0 * mu * g));
+    CHECK(NEAR(sim.work_friction, 0.5 * m * v0 * v0, 1e-9), "friction loss %.17g", sim.work_friction);
+    CHECK(fabs(x_eval[5]) < 1e-12 && fabs(x_eval[7]) < 1e-12, "on the floor");
+}
+
 /* Refusals: NULL pointers, bad options, an inconsistent model, a start beyond a wall (sim unchanged). */
 static void test_errors(void)
 {
@@ -451,6 +505,7 @@ int main(int argc, char **argv)
     test_ball(GAC_METHOD_DOP853);
     test_ball(GAC_METHOD_RK4);
     test_box();
+    test_sled();
     test_inputs();
     test_errors();
     printf("%d checks, %d failed\n", checks, failures);

@@ -375,7 +375,7 @@ class Scene:
     description: str = ""
     joints: tuple = ()          # Joint of joints 2..n (n - 1 entries); () means no springs or dampers
     inputs: tuple = ()          # names of the actuated coordinates (coordinate_names), one input u_i each
-    friction_velocity: float = 1e-4   # m/s, see above
+    friction_velocity: float = 1e-3   # m/s, see above
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not _NAME_RE.match(self.name):
@@ -838,7 +838,7 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
         qd0=tuple(initial["qd"]) if "qd" in initial else (),
         joints=joints if n > 1 else (),
         inputs=data.get("inputs", ()),
-        friction_velocity=data.get("friction_velocity", 1e-4),
+        friction_velocity=data.get("friction_velocity", 1e-3),
     )
 
 

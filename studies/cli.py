@@ -21,6 +21,7 @@ STUDIES = {
     "driven": ("studies.driven_cost", "the cost of inputs, springs and dampers: ns per rhs, simulation time"),
     "simcost": ("studies.simcost", "time per simulated second against n, with the fitted exponent"),
     "peer": ("studies.peer", "forward dynamics against Pinocchio's ABA traced by CasADi, side by side in C"),
+    "friction": ("studies.friction_cost", "friction at resting contacts: cost and the regularisation velocity"),
     "fmu": ("studies.fmu_cost", "a run through the FMI 2.0 FMU (driven by FMPy) against runtime.simulate"),
 }
 

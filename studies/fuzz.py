@@ -9,7 +9,9 @@ masses 1e-4 ... 1e4 kg (log-uniform, per link, so ratios of 1e5 within a chain o
 rigid bodies (a random box, centre of mass off the axis, principal axes turned); planar chains (parallel
 joint axes, start in the X1-X2 plane) and spatial ones with random twists; gravity 0 or 9.81; a box around
 the start, often cramped (margins 1e-3 ... 1 of the chain's extent, so that a side can be shorter than the
-chain); restitution per wall 0, 1 or uniform in [0, 1]; rates up to 20 rad/s; DOPRI5 and DOP853 at
+chain); restitution per wall 0, 1 or uniform in [0, 1]; Coulomb friction on the walls of 30 % of the structures
+(mu uniform in [0, 1.5] per wall and run, drawn so that the other structures' runs are unchanged); rates up to
+20 rad/s; DOPRI5 and DOP853 at
 rtol 1e-11 ... 1e-6 (atol = rtol x the shortest link, at least 1e-16) and RK4 at dt 1e-5 ... 1e-3 s.  A
 *structure* (n, link kinds, twists, planar or not) is compiled once; its runs draw new lengths, masses,
 inertias, walls, restitutions, start and integrator through the parameter vector and the start override.
@@ -23,6 +25,7 @@ Every run is checked independently of the engine's own checks (``check_run``):
   * e = 1 kept: where every contact that took an impulse is on a wall with e = 1, |T_after + energy taken
     by landings - T_before| <= tol T_before;
   * honest accuracy: an impact whose round-off bound exceeds 1e-6 is named in the result's warnings;
+  * friction only takes energy: the energy it took >= -ENERGY_TOL x the run's energy scale;
   * the run ends within its wall-time budget (the ``max_wall_time`` it was given, plus slack).
 Outcomes are classed by message (numbers stripped).  A run *fails* on a violated check, an exception,
 or a stop from the engine's own post-impact checks or a non-finite state (FAILURE_PATTERNS); a stop with
@@ -50,6 +53,8 @@ ENERGY_TOL = 1e-7         # relative energy change allowed at an impact (round-o
 BUDGET = 20.0             # s of wall time per run
 BUDGET_SLACK = 5.0        # s beyond the budget before a run counts as over it
 T_END_MAX = 2.0           # s
+ROUGH_SHARE = 0.3         # structures whose walls have Coulomb friction (mu uniform in [0, 1.5] per run and wall)
+ROUGH_STREAM = 7919       # the random stream that decides it, apart from the structure's own
 
 # Stops that are failures of the engine: its own post-impact checks and non-finite states.
 FAILURE_PATTERNS = (
@@ -101,8 +106,11 @@ def random_structure(rng, index: int, n_max: int = 8) -> Scene:
     if not planar and n > 1:
         twists = tuple(tuple(map(tuple, np.eye(3) if rng.uniform() < 0.3 else _rotation(rng))) for _ in range(n - 1))
     gravity = float(rng.choice([0.0, 9.81]))
-    walls = tuple(Wall(name, -1e3 if name.endswith("min") else 1e3, 1.0) for name in WALL_NAMES
-                  if not (planar and name.startswith("x3")))
+    # friction on the walls of some structures, drawn apart so that the frictionless structures and their runs
+    # stay those of earlier releases of this study
+    rough = np.random.default_rng([index, ROUGH_STREAM]).uniform() < ROUGH_SHARE
+    walls = tuple(Wall(name, -1e3 if name.endswith("min") else 1e3, 1.0, friction=0.5 if rough else 0.0)
+                  for name in WALL_NAMES if not (planar and name.startswith("x3")))
     q0 = [-math.pi / 2, 0.0] + [0.0] * n + [0.0, 0.0, 0.0]
     return Scene(name=f"fuzz{index}", links=links, twists=twists, gravity=gravity, walls=walls, q0=tuple(q0))
 
@@ -148,6 +156,8 @@ def random_run(rng, scene: Scene, model) -> Run:
             p[names.index(name)] = hi[axis] + margin if side else lo[axis] - margin
         elif name.startswith("e_"):
             p[names.index(name)] = float(rng.choice([0.0, 1.0, rng.uniform()]))
+        elif name.startswith("friction_"):
+            p[names.index(name)] = float(rng.uniform(0.0, 1.5))
     omega = _log_uniform(rng, 0.1, 20.0)
     qd = np.zeros(scene.nq)
     qd[:2 + n] = rng.uniform(-omega, omega, 2 + n)
@@ -225,6 +235,8 @@ def check_run(model, run: Run, result, seconds: float, budget: float) -> list[st
             if abs(T1 + impact.energy_rest - T0) > tol * T0:
                 violations.append(f"elastic impact at t = {impact.t:.6g} s changed T: {T0!r} -> {T1!r} J")
                 break
+    if result.energy_friction_loss < -ENERGY_TOL * result.energy_scale:
+        violations.append(f"friction gave energy: {result.energy_friction_loss!r} J")
     if seconds > budget + BUDGET_SLACK:
         violations.append(f"over budget: {seconds:.1f} s")
     return violations

@@ -20,7 +20,7 @@ from pathlib import Path
 from codegen.artifact import library_files
 from codegen.scene import Scene, SceneError, load_scene
 
-from .compile import LIBRARY_DIR, BuildError, find_compiler
+from .compile import LIBRARY_DIR, PARALLEL_LINES, BuildError, find_compiler, translation_units
 from .horizon import DEFAULT_T_END
 
 FMI2_DIR = LIBRARY_DIR / "fmi2"          # gac_fmi2.c, gac_fmi2.h, fmi2_types.h: the slave, for any model
@@ -82,6 +82,13 @@ def build_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", *, name:
         binary = work / "binaries" / folder / f"{model.name}{suffix}"
         binary.parent.mkdir(parents=True)
         c_files = [work / "sources" / s for s in sources if s.endswith(".c")]
+        cores = os.cpu_count() or 1
+        if cores > 1 and model.source.count("\n") > PARALLEL_LINES:     # a long model: units side by side
+            c_files.remove(work / "sources" / f"{model.name}.c")
+            for k, text in enumerate(translation_units(model.source, cores)):
+                unit = work / f"{model.name}_unit{k}.c"
+                unit.write_text(text)
+                c_files.append(unit)
         objects = _compile(compiler, c_files, work)
         _run([*compiler, "-shared", *objects, "-lm", "-o", str(binary)], "linking the FMU's shared library")
         say(f"FMU binary {folder}/{binary.name} built in {time.perf_counter() - start:.2f} s")

@@ -270,7 +270,8 @@ static double gac_friction(const gac_model *m, const double *p, int c)
  * max(|v_t|, v_s) (v_s = m->friction_velocity), lambda >= 0 its normal force.  With d_a = n_a + mu_a J^T(-phi_a)
  * the generalised direction of contact a's force, qdd = qdd_free + sum_a I_f^-1 d_a lambda_a and the normal
  * rows n_b . qdd + ndot_b qd = 0 give B lambda = -(N qdd_free + Ndot qd), B_ba = n_b I_f^-1 d_a (not symmetric
- * with friction: solved by LU; singular is the Painleve paradox, GAC_ERR_FRICTION).  Constraints dependent on
+ * with friction: solved by LU).  GAC_ERR_FRICTION where B + B^T is not positive definite (to 1e-8 of its
+ * diagonal): friction strong enough for the Painleve paradox, where the forces are not unique or unbounded.  Constraints dependent on
  * the earlier ones (found by the LDL^T of the frictionless N I_f^-1 N^T) take no force.  dissipation (if not
  * NULL): the power friction takes, sum_a mu_a lambda_a phi_a . v_t,a (W). */
 int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const double *qd, const double *u,
@@ -335,11 +336,18 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
         if (gac_ldlt_drop(nactive, A, 1e-12) < 0) return GAC_ERR_SINGULAR_CONTACT;
         for (b = 0; b < nactive; ++b) {
             if (A[b*nactive + b] == 1e300) {         /* dependent on the others: no force */
-                for (a = 0; a < nactive; ++a) B[b*nactive + a] = 0.0;
+                for (a = 0; a < nactive; ++a) B[b*nactive + a] = B[a*nactive + b] = 0.0;
                 B[b*nactive + b] = 1.0;
                 lambda[b] = 0.0;
             }
         }
+        /* Unique, bounded forces need B to stay a P-matrix as friction bends it away from N I_f^-1 N^T; B + B^T
+         * positive definite (checked by LDL^T in A's place, which is no longer needed) ensures it.  Where it fails
+         * the friction is strong enough for the Painleve paradox (one contact: B_aa <= 0), and the model stops. */
+        for (a = 0; a < nactive; ++a) {
+            for (b = 0; b < nactive; ++b) A[a*nactive + b] = 0.5 * (B[a*nactive + b] + B[b*nactive + a]);
+        }
+        if (gac_ldlt(nactive, A, 1e-8) != 0) return GAC_ERR_FRICTION;
         if (gac_lu_solve(nactive, B, lambda, 1e-12) != 0) return GAC_ERR_FRICTION;
         for (a = 0; a < nactive; ++a) {
             if (!(mu[a] > 0.0)) continue;

@@ -171,3 +171,25 @@ def test_frictionless_scenes_have_no_friction_rows():
     rough = rod(0.5)
     assert sorted(load_model(rough).contact_rows) == [(1, 0), (1, 1), (2, 0), (2, 1)]      # planar: X1 tangent only
     assert sorted(load_model(rough, specialise=False).contact_rows) == [(p, a) for p in (1, 2) for a in range(3)]
+
+
+@pytest.mark.parametrize("mu, v, paradox", [(2.0, -1.0, True), (2.0, 1.0, False), (1.0, -1.0, False)])
+def test_the_painleve_paradox_is_named(mu, v, paradox):
+    """A uniform rod leaning at tan(theta) = 2 with its lower end sliding on a rough floor: its normal force obeys
+    m B N = ..., m B = 1 + 3 cos(theta) (cos(theta) + mu s sin(theta)) (s: the sliding direction's sign, towards the
+    rod's lean +1), negative for s = -1 and mu > 4/3 at this angle (Painleve): the model says so and does not
+    run; otherwise it runs."""
+    theta = math.atan(2.0)
+    data = {"name": "painleve", "gravity": G, "links": [{"length": 1.0, "mu": 1.0, "J": [0.0, 0.0, 0.0]}],
+            "walls": {"x2_min": 0.0}, "restitution": 0.0, "friction": mu,
+            "initial": {"q": [-math.pi / 2, 0.0, math.atan2(-math.cos(theta), math.sin(theta)), 1.0, 0.0, 0.0],
+                        "qd": [0.0, 0.0, 0.0, v, 0.0, 0.0]}}
+    model = load_model(scene_from_dict(data))
+    assert (1 + 3 * math.cos(theta) * (math.cos(theta) + mu * math.copysign(1.0, v) * math.sin(theta)) < 0) == paradox
+    if paradox:
+        with pytest.raises(ValueError, match="Painleve paradox"):
+            simulate(model, 0.3)
+    else:
+        result = simulate(model, 0.3, rtol=1e-10, atol=1e-12)
+        assert result.success, result.message
+        assert result.contact_events[0].kind == "persist"

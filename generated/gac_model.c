@@ -96,7 +96,7 @@ const char *gac_error_message(int code)
     case GAC_ERR_UNSTABLE: return "RK4 is unstable at this step: the chain's fastest mode needs dt below about 2.8 / its rate; reduce dt or use an adaptive method";
     case GAC_ERR_LOST_CONTACT: return "a point lies beyond its wall at an impact: a wall crossing was missed, the motion is too fast or I_f too ill-conditioned (extreme mass, length or inertia ratios) for the tolerance";
     case GAC_ERR_BAD_INPUT: return "an input is NaN or infinite: the inputs given to sim_set_input, and those a controller writes, must be finite";
-    case GAC_ERR_FRICTION: return "the resting contacts with Coulomb friction have no unique, bounded normal forces at this state: their system B (the normal rows of I_f^-1 applied to the normal and friction directions) has lost B + B^T > 0, the Painleve paradox of sliding friction (a tangential impact the model does not have); lower the friction coefficient";
+    case GAC_ERR_FRICTION: return "the resting contacts with Coulomb friction have no unique, bounded normal forces at this state: their system B (the normal rows of I_f^-1 applied to the normal and friction directions) is no P-matrix (a principal minor <= 0), the Painleve paradox of sliding friction (a tangential impact the model does not have); lower the friction coefficient";
     case GAC_ERR_BAD_MODEL: return "the model descriptor is inconsistent: nq >= 1, nx = 2 nq, npoint >= 1, ncontact, njrow, nparam, nu >= 0, every table and kernel present, each contact's kind, point, axis (a stop: its coordinate), normal sign, Jacobian row and restitution index in range";
     default: return "unknown error code";
     }

@@ -74,7 +74,7 @@
 #define GAC_ERR_BAD_INPUT        -22   /* an input u (set by gac_sim_set_input, or written by the controller)
                                           is NaN or infinite */
 #define GAC_ERR_FRICTION         -23   /* the resting contacts with Coulomb friction have no unique, bounded normal
-                                          forces (their system loses B + B^T > 0: the Painleve paradox) */
+                                          forces (their system is no P-matrix: the Painleve paradox) */
 
 /* ---- what gac_sim_advance stops at (> 0) ------------------------------------------------------ */
 #define GAC_SIM_END      1    /* reached t_end */
@@ -249,7 +249,8 @@ int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q,
  * qdd = qdd_free + I_f^-1 N^T lambda with (N I_f^-1 N^T) lambda = -(N qdd_free + Ndot qd).  On a wall with
  * Coulomb friction (has_friction) the point also takes -mu lambda v_t / max(|v_t|, friction_velocity) along the
  * wall (v_t its velocity there): the system for lambda is then N I_f^-1 (N^T + mu J_t^T (-phi)) lambda = ...,
- * not symmetric, and GAC_ERR_FRICTION where B + B^T is not positive definite (the Painleve paradox).
+ * not symmetric, and GAC_ERR_FRICTION where it is not a P-matrix (the Painleve paradox: B + B^T positive
+ * definite suffices; otherwise, for up to 10 contacts, every principal minor is checked).
  * qdd (nq, rad/s^2 or m/s^2 by coordinate) and lambda (nactive) out; lambda[k] (N) is the force of contact
  * active[k] along its inward normal (> 0 pushes); a contact whose row depends on the earlier ones' (held
  * by them already) gets lambda = 0.  work: gac_impact_nwork(m) doubles.  nactive = 0 gives

@@ -265,13 +265,58 @@ static double gac_friction(const gac_model *m, const double *p, int c)
     return k->mu_index >= 0 ? p[k->mu_index] : k->mu_value;
 }
 
+/* 1 if the n x n row-major B (n <= GAC_PMATRIX_MAX) is a P-matrix with margin: every principal minor above
+ * tol times the product of its diagonal's magnitudes (the minors by Gaussian elimination of each subset). */
+#define GAC_PMATRIX_MAX 10
+static int gac_is_p_matrix(int n, const double *B, double tol)
+{
+    double M[GAC_PMATRIX_MAX * GAC_PMATRIX_MAX];
+    int idx[GAC_PMATRIX_MAX];
+    unsigned long mask;
+    if (n > GAC_PMATRIX_MAX) return 0;
+    for (mask = 1; mask < (1UL << n); ++mask) {
+        double det = 1.0, scale = 1.0;
+        int k = 0, i, j, c;
+        for (i = 0; i < n; ++i) {
+            if (mask & (1UL << i)) idx[k++] = i;
+        }
+        for (i = 0; i < k; ++i) {
+            for (j = 0; j < k; ++j) M[i*k + j] = B[idx[i]*n + idx[j]];
+            scale *= fabs(M[i*k + i]) > 0.0 ? fabs(M[i*k + i]) : 1.0;
+        }
+        for (c = 0; c < k; ++c) {                 /* elimination with partial pivoting: det = +-prod of pivots */
+            int p = c;
+            for (i = c + 1; i < k; ++i) {
+                if (fabs(M[i*k + c]) > fabs(M[p*k + c])) p = i;
+            }
+            if (M[p*k + c] == 0.0) return 0;
+            if (p != c) {
+                for (j = 0; j < k; ++j) {
+                    const double t = M[c*k + j];
+                    M[c*k + j] = M[p*k + j];
+                    M[p*k + j] = t;
+                }
+                det = -det;
+            }
+            det *= M[c*k + c];
+            for (i = c + 1; i < k; ++i) {
+                const double f = M[i*k + c] / M[c*k + c];
+                for (j = c; j < k; ++j) M[i*k + j] -= f * M[c*k + j];
+            }
+        }
+        if (!(det > tol * scale)) return 0;
+    }
+    return 1;
+}
+
 /* The constrained dynamics of the contacts held at their walls (active), with Coulomb friction on the walls
  * that have it: a held point with velocity v_t along its wall takes the force -mu lambda phi, phi = v_t /
  * max(|v_t|, v_s) (v_s = m->friction_velocity), lambda >= 0 its normal force.  With d_a = n_a + mu_a J^T(-phi_a)
  * the generalised direction of contact a's force, qdd = qdd_free + sum_a I_f^-1 d_a lambda_a and the normal
  * rows n_b . qdd + ndot_b qd = 0 give B lambda = -(N qdd_free + Ndot qd), B_ba = n_b I_f^-1 d_a (not symmetric
- * with friction: solved by LU).  GAC_ERR_FRICTION where B + B^T is not positive definite (to 1e-8 of its
- * diagonal): friction strong enough for the Painleve paradox, where the forces are not unique or unbounded.  Constraints dependent on
+ * with friction: solved by LU).  GAC_ERR_FRICTION where B is not a P-matrix (B + B^T positive definite, else
+ * every principal minor positive, to 1e-8 of its diagonal's scale; more than 10 contacts: the first test only):
+ * friction strong enough for the Painleve paradox, where the forces are not unique or unbounded.  Constraints dependent on
  * the earlier ones (found by the LDL^T of the frictionless N I_f^-1 N^T) take no force.  dissipation (if not
  * NULL): the power friction takes, sum_a mu_a lambda_a phi_a . v_t,a (W). */
 int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const double *qd, const double *u,
@@ -341,13 +386,14 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
                 lambda[b] = 0.0;
             }
         }
-        /* Unique, bounded forces need B to stay a P-matrix as friction bends it away from N I_f^-1 N^T; B + B^T
-         * positive definite (checked by LDL^T in A's place, which is no longer needed) ensures it.  Where it fails
-         * the friction is strong enough for the Painleve paradox (one contact: B_aa <= 0), and the model stops. */
+        /* Unique, bounded forces need B to stay a P-matrix as friction bends it away from N I_f^-1 N^T: B + B^T
+         * positive definite (checked by LDL^T in A's place, which is no longer needed) ensures it; where that
+         * fails, up to GAC_PMATRIX_MAX contacts are checked exactly, minor by minor.  Where B is no P-matrix the
+         * friction is strong enough for the Painleve paradox (one contact: B_aa <= 0), and the model stops. */
         for (a = 0; a < nactive; ++a) {
             for (b = 0; b < nactive; ++b) A[a*nactive + b] = 0.5 * (B[a*nactive + b] + B[b*nactive + a]);
         }
-        if (gac_ldlt(nactive, A, 1e-8) != 0) return GAC_ERR_FRICTION;
+        if (gac_ldlt(nactive, A, 1e-8) != 0 && !gac_is_p_matrix(nactive, B, 1e-8)) return GAC_ERR_FRICTION;
         if (gac_lu_solve(nactive, B, lambda, 1e-12) != 0) return GAC_ERR_FRICTION;
         for (a = 0; a < nactive; ++a) {
             if (!(mu[a] > 0.0)) continue;

@@ -184,8 +184,9 @@ class CompiledModel:
 
 
     def constrained_dynamics(self, q, qd, active, p=None, u=None) -> tuple[np.ndarray, np.ndarray]:
-        """Accelerations and contact forces with the contacts ``active`` held at their walls (bilateral,
-        frictionless): I_f qdd = R + N^T lambda, N qdd = -Ndot qd (the runtime's persistent contact)."""
+        """Accelerations and contact forces with the contacts ``active`` held at their walls (bilateral, with
+        Coulomb friction on walls that have it): I_f qdd = R + N^T lambda + friction, N qdd = -Ndot qd (the
+        runtime's persistent contact)."""
         q, qd = self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd")
         active = np.ascontiguousarray(active, dtype=np.int32)
         qdd, lam = np.zeros(self.nq), np.zeros(max(len(active), 1))

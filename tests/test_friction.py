@@ -133,6 +133,61 @@ def test_constrained_dynamics_with_friction_against_a_dense_solve():
         assert np.abs(qdd - qdd_ref).max() < 1e-10 * max(1.0, np.abs(qdd_ref).max())
 
 
+def p_matrix(B, tol=1e-8):
+    """B + B^T positive definite, or every principal minor above tol times its diagonal's scale (the library's rule)."""
+    n = len(B)
+    if np.linalg.eigvalsh(B + B.T).min() > 1e-8 * np.abs(np.diag(B + B.T)).max():
+        return True
+    for mask in range(1, 2 ** n):
+        rows = [i for i in range(n) if mask >> i & 1]
+        sub = B[np.ix_(rows, rows)]
+        if not np.linalg.det(sub) > tol * np.prod([abs(sub[i, i]) or 1.0 for i in range(len(rows))]):
+            return False
+    return True
+
+
+def test_the_painleve_guard_follows_the_p_matrix_rule():
+    """Rough walls (mu = 3) and random held sets of a 3D chain: the C solve refuses exactly the states whose
+    system B (formed here with the reference model) is no P-matrix, and agrees with the dense solve elsewhere."""
+    from runtime.model import ImpactError
+    data = {"name": "very_rough", "gravity": G,
+            "links": [{"length": 1.0, "mu": 1.0}, {"length": 0.6, "mu": 0.5, "twist": 0.9},
+                      {"length": 0.8, "mu": 1.5, "twist": -0.4}],
+            "walls": {"x2_min": -5.0, "x1_min": -5.0, "x3_min": -5.0}, "friction": 3.0,
+            "initial": {"q": [0.1, 0.2, 0.3, 0.4, 0.5, 0.0, 0.0, 0.0]}}
+    scene = scene_from_dict(data)
+    model = load_model(scene, specialise=False)
+    ref = reference_of(scene)
+    rng = np.random.default_rng(11)
+    contacts = model.contacts
+    refused = accepted = 0
+    for _ in range(60):
+        q = np.r_[rng.uniform(-1.5, 1.5, scene.n + 2), rng.uniform(-1, 1, 3)]
+        qd = rng.uniform(-2, 2, scene.nq)
+        active = sorted(rng.choice(len(contacts), size=rng.integers(1, 4), replace=False).tolist())
+        if len({contacts[c][0] for c in active}) < len(active):
+            continue
+        M, J = ref.mass_matrix(q), ref.point_jacobian(q)
+        N, D = [], []
+        for c in active:
+            point, wall = contacts[c]
+            n_row = wall.normal_sign * J[point - 1, wall.axis]
+            tangents = [a for a in range(3) if a != wall.axis]
+            vt = np.array([J[point - 1, a] @ qd for a in tangents])
+            phi = vt / max(np.linalg.norm(vt), scene.friction_velocity)
+            N.append(n_row)
+            D.append(n_row - wall.friction * sum(phi[j] * J[point - 1, a] for j, a in enumerate(tangents)))
+        B = np.array(N) @ np.linalg.solve(M, np.array(D).T)
+        if p_matrix(B):
+            model.constrained_dynamics(q, qd, active)
+            accepted += 1
+        else:
+            with pytest.raises(ImpactError, match="Painleve paradox"):
+                model.constrained_dynamics(q, qd, active)
+            refused += 1
+    assert refused >= 3 and accepted >= 10
+
+
 def test_energy_balance_closes_with_impacts_and_sliding():
     """A chain thrown onto a rough floor (impacts with e = 0.3, then sliding and rolling to rest): initial energy =
     final + impact losses + friction loss, to the integration tolerance."""

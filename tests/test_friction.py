@@ -83,6 +83,24 @@ def test_a_pushed_rod_creeps_below_the_limit_and_slides_above_it(force):
     assert abs(result.energy_residual) < 1e-9 * max(1.0, result.energy_input_work)
 
 
+def contact_directions(scene, contacts, active, J, qd):
+    """The signed normal rows N and the generalised directions D = N + mu J_t^T(-phi) of the held contacts, from
+    the reference model's point Jacobians J (n + 1, 3, nq): the friction law written out independently."""
+    N, D = [], []
+    for c in active:
+        point, wall = contacts[c]
+        n_row = wall.normal_sign * J[point - 1, wall.axis]
+        d = n_row.copy()
+        if wall.friction > 0:
+            tangents = [a for a in range(3) if a != wall.axis]
+            vt = np.array([J[point - 1, a] @ qd for a in tangents])
+            phi = vt / max(np.linalg.norm(vt), scene.friction_velocity)
+            d -= wall.friction * sum(phi[j] * J[point - 1, a] for j, a in enumerate(tangents))
+        N.append(n_row)
+        D.append(d)
+    return np.array(N), np.array(D)
+
+
 def test_constrained_dynamics_with_friction_against_a_dense_solve():
     """Random 3D states of a 3-link chain with friction on the floor and a side wall, random sets of held
     contacts: the C solve (O(n) operators, LU of the non-symmetric system) against numpy with the reference
@@ -111,21 +129,9 @@ def test_constrained_dynamics_with_friction_against_a_dense_solve():
 
         M, R, J = ref.mass_matrix(q), ref.bias(q, qd), ref.point_jacobian(q)
         bias = model.contact_bias(q, qd)
-        N, D, rhs = [], [], []
-        for c in active:
-            point, wall = contacts[c]
-            sign = wall.normal_sign
-            n_row = sign * J[point - 1, wall.axis]
-            d = n_row.copy()
-            if wall.friction > 0:
-                tangents = [a for a in range(3) if a != wall.axis]
-                vt = np.array([J[point - 1, a] @ qd for a in tangents])
-                phi = vt / max(np.linalg.norm(vt), scene.friction_velocity)
-                d -= wall.friction * sum(phi[j] * J[point - 1, a] for j, a in enumerate(tangents))
-            N.append(n_row)
-            D.append(d)
-            rhs.append(-sign * bias[model.contact_rows.index((point, wall.axis))])
-        N, D = np.array(N), np.array(D)
+        N, D = contact_directions(scene, contacts, active, J, qd)
+        rhs = [-contacts[c][1].normal_sign * bias[model.contact_rows.index((contacts[c][0], contacts[c][1].axis))]
+               for c in active]
         Minv_R, Minv_D = np.linalg.solve(M, R), np.linalg.solve(M, D.T)
         lam_ref = np.linalg.solve(N @ Minv_D, np.array(rhs) - N @ Minv_R)
         qdd_ref = Minv_R + Minv_D @ lam_ref
@@ -168,16 +174,8 @@ def test_the_painleve_guard_follows_the_p_matrix_rule():
         if len({contacts[c][0] for c in active}) < len(active):
             continue
         M, J = ref.mass_matrix(q), ref.point_jacobian(q)
-        N, D = [], []
-        for c in active:
-            point, wall = contacts[c]
-            n_row = wall.normal_sign * J[point - 1, wall.axis]
-            tangents = [a for a in range(3) if a != wall.axis]
-            vt = np.array([J[point - 1, a] @ qd for a in tangents])
-            phi = vt / max(np.linalg.norm(vt), scene.friction_velocity)
-            N.append(n_row)
-            D.append(n_row - wall.friction * sum(phi[j] * J[point - 1, a] for j, a in enumerate(tangents)))
-        B = np.array(N) @ np.linalg.solve(M, np.array(D).T)
+        N, D = contact_directions(scene, contacts, active, J, qd)
+        B = N @ np.linalg.solve(M, D.T)
         if p_matrix(B):
             model.constrained_dynamics(q, qd, active)
             accepted += 1

@@ -154,7 +154,7 @@ def p_matrix(B, tol=1e-8):
 
 def test_the_painleve_guard_follows_the_p_matrix_rule():
     """Rough walls (mu = 3) and random held sets of a 3D chain: the C solve refuses exactly the states whose
-    system B (formed here with the reference model) is no P-matrix, and agrees with the dense solve elsewhere."""
+    system B (formed here with the reference model) is no P-matrix, and solves the others."""
     from runtime.model import ImpactError
     data = {"name": "very_rough", "gravity": G,
             "links": [{"length": 1.0, "mu": 1.0}, {"length": 0.6, "mu": 0.5, "twist": 0.9},

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
-from pathlib import Path
 
 import numpy as np
 
@@ -46,13 +45,16 @@ def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
 
 
 def matrix_rpy(R) -> tuple[float, float, float]:
-    """roll, pitch, yaw of a rotation matrix (inverse of rpy_matrix; at pitch = +-90 degrees yaw = 0)."""
+    """roll, pitch, yaw of a rotation matrix (inverse of rpy_matrix; at pitch = +-90 degrees yaw = 0), checked by
+    rebuilding R (ValueError for a matrix that is not a rotation)."""
     R = np.asarray(R, dtype=float)
     pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
     if math.hypot(R[0, 0], R[1, 0]) > 1e-9:
         roll, yaw = math.atan2(R[2, 1], R[2, 2]), math.atan2(R[1, 0], R[0, 0])
     else:
         roll, yaw = math.atan2(-R[1, 2], R[1, 1]), 0.0
+    if np.max(np.abs(rpy_matrix(roll, pitch, yaw) - R)) >= 1e-12:
+        raise ValueError("matrix_rpy: not a rotation")
     return roll, pitch, yaw
 
 
@@ -151,11 +153,9 @@ def _chain(robot) -> tuple[list, list, object]:
         chain.append(links[joint.find("child").get("link")])
 
 
-def urdf_links(source: str | Path, tip_length: float | None = None) -> list[dict]:
+def urdf_links(text: str, tip_length: float | None = None) -> list[dict]:
     """The [[links]] tables of a scene (rigid links with their twists, stops and dampers) for the serial chain of
-    a URDF file or text.  ``tip_length`` (m): the last link's length when the URDF has no fixed tip link."""
-    text = Path(source).read_text() if isinstance(source, Path) or not str(source).lstrip().startswith("<") \
-        else str(source)
+    a URDF text.  ``tip_length`` (m): the last link's length when the URDF has no fixed tip link."""
     try:
         robot = ET.fromstring(text)
     except ET.ParseError as exc:

@@ -157,11 +157,19 @@ def translation_units(source: str, count: int) -> list[str]:
     return ["".join(head + unit) for unit in units if unit]
 
 
-def _compile_objects(sources: list[Path], folder: Path, flags) -> list[Path]:
-    """Compile C sources to position-independent objects in ``folder``, side by side (one per core)."""
+def compiler_command() -> list[str]:
+    """The compiler command: $CC as written (it may carry flags) when set, else the program find_compiler finds;
+    CompilerNotFound when there is none."""
+    program = find_compiler()
+    return shlex.split(os.environ["CC"]) if os.environ.get("CC") else [program]
+
+
+def compile_objects(sources: list[Path], folder: Path, flags) -> list[Path]:
+    """Compile C sources to position-independent objects in ``folder`` (which, with the library's folder, is on
+    the include path), side by side (one per core)."""
     from concurrent.futures import ThreadPoolExecutor
     import subprocess
-    compiler = shlex.split(os.environ["CC"]) if os.environ.get("CC") else [find_compiler()]
+    compiler = compiler_command()
     pic = shlex.split(sysconfig.get_config_var("CCSHARED") or "-fPIC")
 
     def one(path: Path) -> Path:
@@ -191,7 +199,7 @@ def _build(name, header, source, cdef, flags, module_name: str, target: Path, si
             for k, text in enumerate(translation_units(source, cores)):
                 units.append(workdir / f"{name}_unit{k}.c")
                 units[-1].write_text(text)
-            objects = _compile_objects([*units, *library_sources()], workdir, flags)
+            objects = compile_objects([*units, *library_sources()], workdir, flags)
             sources = []
         ffi = cffi.FFI()
         ffi.cdef(cdef)

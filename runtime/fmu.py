@@ -8,23 +8,21 @@ from __future__ import annotations
 
 import math
 import os
-import shlex
 import subprocess
 import sys
 import tempfile
 import time
 import zipfile
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from codegen.artifact import library_files
 from codegen.scene import Scene, SceneError, load_scene
 
-from .compile import LIBRARY_DIR, PARALLEL_LINES, BuildError, find_compiler, translation_units
+from .compile import LIBRARY_DIR, PARALLEL_LINES, BuildError, compile_objects, compiler_command, translation_units
 from .horizon import DEFAULT_T_END
 
 FMI2_DIR = LIBRARY_DIR / "fmi2"          # gac_fmi2.c, gac_fmi2.h, fmi2_types.h: the slave, for any model
-FLAGS = ("-std=c99", "-O2")
+FLAGS = ("-std=c99", "-O2", "-fvisibility=hidden")   # only the fmi2* functions are exported (GAC_FMI2_EXPORT)
 DEFAULT_STEP = 1e-3                      # s: the DefaultExperiment's communication step
 
 
@@ -62,7 +60,7 @@ def build_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", *, name:
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise SceneError(f"{label}: must be a finite number of seconds > 0, got {value!r}")
     folder, suffix = fmi_platform()
-    compiler = shlex.split(os.environ["CC"]) if os.environ.get("CC") else [find_compiler()]
+    compiler = compiler_command()
     model = generate_cached(scene, name=name, bake_params=bake_params, specialise=specialise, rolled=rolled,
                             progress=progress)
     files = {f"{model.name}.h": model.header, f"{model.name}.c": model.source}
@@ -89,8 +87,8 @@ def build_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", *, name:
                 unit = work / f"{model.name}_unit{k}.c"
                 unit.write_text(text)
                 c_files.append(unit)
-        objects = _compile(compiler, c_files, work)
-        _run([*compiler, "-shared", *objects, "-lm", "-o", str(binary)], "linking the FMU's shared library")
+        objects = compile_objects(c_files, work / "sources", FLAGS)       # objects beside the sources, not zipped
+        _run([*compiler, "-shared", *map(str, objects), "-lm", "-o", str(binary)], "linking the FMU's shared library")
         say(f"FMU binary {folder}/{binary.name} built in {time.perf_counter() - start:.2f} s")
         staged = work / "package.fmu"
         with zipfile.ZipFile(staged, "w", zipfile.ZIP_DEFLATED) as archive:
@@ -101,20 +99,6 @@ def build_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", *, name:
                     archive.write(work / "sources" / filename, f"sources/{filename}")
         os.replace(staged, target)
     return target
-
-
-def _compile(compiler: list[str], c_files: list[Path], work: Path) -> list[str]:
-    """Compile every source to a position-independent object, one per core; only the fmi2 functions are
-    exported (-fvisibility=hidden, and GAC_FMI2_EXPORT on them)."""
-    include = [f"-I{work / 'sources'}"]
-
-    def one(path: Path) -> str:
-        obj = work / f"{path.stem}.o"
-        _run([*compiler, *FLAGS, "-fPIC", "-fvisibility=hidden", *include, "-c", str(path), "-o", str(obj)],
-             f"compiling {path.name}")
-        return str(obj)
-    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
-        return list(pool.map(one, c_files))
 
 
 def _run(command: list[str], what: str) -> None:

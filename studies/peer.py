@@ -48,25 +48,10 @@ def build_parser() -> argparse.ArgumentParser:
 # ---------------------------------------------------------------------------------------------------
 # the chain as a URDF
 # ---------------------------------------------------------------------------------------------------
-def rpy(R) -> tuple[float, float, float]:
-    """URDF roll, pitch, yaw of R = Rz(yaw) Ry(pitch) Rx(roll), checked by rebuilding R."""
-    R = np.asarray(R, dtype=float)
-    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
-    if math.hypot(R[0, 0], R[1, 0]) > 1e-9:
-        roll, yaw = math.atan2(R[2, 1], R[2, 2]), math.atan2(R[1, 0], R[0, 0])
-    else:                                       # pitch = +-90 degrees: put it all in roll
-        roll, yaw = math.atan2(-R[1, 2], R[1, 1]), 0.0
-    c, s = np.cos([roll, pitch, yaw]), np.sin([roll, pitch, yaw])
-    Rx = np.array([[1, 0, 0], [0, c[0], -s[0]], [0, s[0], c[0]]])
-    Ry = np.array([[c[1], 0, s[1]], [0, 1, 0], [-s[1], 0, c[1]]])
-    Rz = np.array([[c[2], -s[2], 0], [s[2], c[2], 0], [0, 0, 1]])
-    assert np.max(np.abs(Rz @ Ry @ Rx - R)) < 1e-12, "rpy: not a rotation"
-    return roll, pitch, yaw
-
-
 def urdf(scene) -> str:
     """The scene's chain for Pinocchio: q_pin = [X1, X2, X3, theta_-1, theta_0, theta_1 .. theta_n]."""
     from codegen.scene import LineLink
+    from codegen.urdf import link_inertial, matrix_rpy
     free = '<limit lower="-1e9" upper="1e9" effort="1e9" velocity="1e9"/>'
     massless = '<inertial><mass value="0"/><inertia ixx="0" iyy="0" izz="0" ixy="0" ixz="0" iyz="0"/></inertial>'
 
@@ -92,15 +77,14 @@ def urdf(scene) -> str:
             body = scene.links[k - 1]
             if not isinstance(body, LineLink):
                 raise ValueError("peer: only line links are mapped")
-            l, mu, J = float(body.length), float(body.mu), tuple(map(float, body.J))
-            m = mu * l
-            inertial = (f'<inertial><mass value="{m!r}"/><origin xyz="{l / 2!r} 0 0"/>'
-                        f'<inertia ixx="{l * J[0]!r}" iyy="{mu * l ** 3 / 12 + l * J[1]!r}" '
-                        f'izz="{mu * l ** 3 / 12 + l * J[2]!r}" ixy="0" ixz="0" iyz="0"/></inertial>')
+            m, c, I = link_inertial(body)
+            inertial = (f'<inertial><mass value="{float(m)!r}"/><origin xyz="{float(c[0])!r} 0 0"/>'
+                        f'<inertia ixx="{float(I[0, 0])!r}" iyy="{float(I[1, 1])!r}" '
+                        f'izz="{float(I[2, 2])!r}" ixy="0" ixz="0" iyz="0"/></inertial>')
         else:
             inertial = massless
         parts += [link(name, inertial),
-                  joint(f"theta_{k}".replace("-", "m"), "revolute", previous, name, "0 0 1", offset, rpy(twists[k + 1]))]
+                  joint(f"theta_{k}".replace("-", "m"), "revolute", previous, name, "0 0 1", offset, matrix_rpy(twists[k + 1]))]
         previous = name
     parts.append("</robot>")
     return "\n".join(parts)

@@ -10,13 +10,12 @@ source ``BuildError``, both with a message that says what to do.
 """
 from __future__ import annotations
 
-import os
 import shlex
 import subprocess
 import time
 from pathlib import Path
 
-from runtime.compile import BuildError, CompilerNotFound, find_compiler  # noqa: F401
+from runtime.compile import BuildError, CompilerNotFound, compiler_command  # noqa: F401
 
 DEFAULT_FLAGS = ("-O2",)
 STANDARD = "-std=c99"
@@ -25,8 +24,7 @@ STANDARD = "-std=c99"
 def compiler() -> list[str]:
     """The compiler command: $CC as written (it may carry flags) when set, else the program the runtime
     finds; CompilerNotFound when there is none."""
-    program = find_compiler()
-    return shlex.split(os.environ["CC"]) if os.environ.get("CC") else [program]
+    return compiler_command()
 
 
 def compiler_version() -> str:

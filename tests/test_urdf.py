@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from codegen.scene import SceneError, contact_points, frames, load_scene, scene_from_dict
-from codegen.urdf import rpy_matrix, scene_to_urdf, urdf_links
+from codegen.urdf import matrix_rpy, rpy_matrix, scene_to_urdf, urdf_links
+from studies.reference import random_rotation
 from runtime import load_model
 
 
@@ -97,6 +98,14 @@ def arm_scene(text=ARM, tip=None):
             "walls": {"x2_min": -5.0}, "initial": {"q": [0.2, -0.3, 0.4, 0.3, -0.6, 0.2, 0.0, 1.0, 0.0],
                                                     "qd": [0.0] * 9}}
     return scene_from_dict(data)
+
+
+def test_rpy_rebuilds_every_rotation():
+    rng = np.random.default_rng(3)
+    for R in [random_rotation(rng) for _ in range(50)] + [np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0.0]]),
+                                                           np.array([[0, 0, -1], [0, 1, 0], [1, 0, 0.0]])]:
+        roll, pitch, yaw = matrix_rpy(R)           # matrix_rpy() checks the round trip itself
+        assert all(math.isfinite(a) for a in (roll, pitch, yaw))
 
 
 def test_links_are_read_as_the_urdf_says():

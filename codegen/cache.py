@@ -21,6 +21,7 @@ import hashlib
 import importlib.util
 import json
 import os
+import shutil
 import sys
 import tempfile
 from contextlib import contextmanager
@@ -95,8 +96,19 @@ def entry_lock(folder: Path, entry: str):
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
+def clear_entry(path: Path) -> None:
+    """Remove whatever stands where the cache entry ``path`` (a file) belongs but is no regular file (a
+    directory, a dangling link, a socket), so that the entry can be written there again."""
+    if path.is_symlink() or (path.exists() and not path.is_file()):
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path)
+        else:
+            path.unlink()
+
+
 def write_atomic(path: Path, data: bytes) -> None:
     """Write ``data`` to a temporary file beside ``path`` and rename it into place."""
+    clear_entry(path)
     handle, tmp = tempfile.mkstemp(prefix=f".{path.name}-", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(handle, "wb") as out:

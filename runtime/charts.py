@@ -43,7 +43,8 @@ import numpy as np
 from codegen.scene import Scene, load_scene
 
 from .model import CompiledModel, load_model
-from .simulate import Impact, SimulationResult, energy_scale, impact_warnings, sample_times, simulate
+from .simulate import (Impact, SimulationResult, _check_inside, _check_parameters, energy_scale, impact_warnings,
+                       sample_times, simulate)
 
 CHART_NAMES = ("A", "B")
 EZ = np.array([0.0, 0.0, 1.0])
@@ -388,12 +389,20 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
            f"must be an integer >= 1, got {chunk_steps!r}")
     started = time.perf_counter()                     # the wall-time budget counts compiling chart B too
     models = models or ChartModels(scene, progress=progress)      # compiled for the scene's own start
-    if q0 is not None or qd0 is not None:                           # validated like a scene's start
-        scene = dataclasses.replace(scene, q0=tuple(scene.q0 if q0 is None else np.asarray(q0, dtype=float)),
-                                    qd0=tuple(scene.qd0 if qd0 is None else np.asarray(qd0, dtype=float)))
     charts, compiled = models.charts, models.models
     user = sample_times(t_eval, t_end)
+    if isinstance(p, dict):
+        p = compiled[0].parameters(p)
     p_vec = compiled[0].p if p is None else np.asarray(p, dtype=float)
+    if p is not None:
+        _check_parameters(compiled[0], p_vec)
+    # The start: the scene's, or q0/qd0 checked like simulate() checks them, against the walls of p (which may
+    # move the box: the scene's own walls say nothing about an overridden start)
+    q_start = np.array(scene.q0 if q0 is None else _full_state(q0, scene.nq, "q0"), dtype=float)
+    qd_start = np.array(scene.qd0 if qd0 is None else _full_state(qd0, scene.nq, "qd0"), dtype=float)
+    if p is not None or q0 is not None:
+        compiled_a = compiled[0]
+        _check_inside(compiled_a, compiled_a.layout.reduce(q_start), p_vec, "q0" if q0 is not None else "initial.q")
     out = _Output(len(user), scene.nq)
     impacts: list[Impact] = []
     impact_chart: list[int] = []
@@ -414,14 +423,14 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
         return run
 
     t = 0.0
-    q, qd = np.array(scene.q0, dtype=float), np.array(scene.qd0, dtype=float)
+    q, qd = q_start.copy(), qd_start.copy()
     energy_initial = _energy(compiled[0], q, qd, p_vec)
     T0, V0 = compiled[0].energy(compiled[0].layout.reduce(q), compiled[0].layout.reduce(qd), p_vec)
     current = 0
     out.last_a = q[:3].copy()
     if charts[0].measure(q[1]) < threshold:               # start on B when A is already poor
         q, qd = convert_state(q, qd, charts[0], charts[1])
-        switches.append(ChartSwitch(0.0, "A", "B", float(charts[0].measure(scene.q0[1])),
+        switches.append(ChartSwitch(0.0, "A", "B", float(charts[0].measure(q_start[1])),
                                     float(charts[1].measure(q[1])), "start: mu_A < threshold"))
         current = 1
     min_measure = float(charts[current].measure(q[1]))
@@ -587,6 +596,14 @@ class _Output:
         """Samples written without a gap from the first."""
         missing = np.flatnonzero(self.chart < 0)
         return int(missing[0]) if len(missing) else len(self.chart)
+
+
+def _full_state(values, nq: int, name: str) -> np.ndarray:
+    """A start q0/qd0 in the full layout of Eq. 13: nq finite numbers."""
+    values = np.asarray(values, dtype=float).ravel()
+    _check(values.shape == (nq,) and bool(np.all(np.isfinite(values))), name,
+           f"expected {nq} finite numbers (the full layout of Eq. 13), got {values.tolist()!r}")
+    return values
 
 
 def _energy(model: CompiledModel, q, qd, p) -> float:

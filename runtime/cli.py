@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
+import re
 import shlex
 import sys
 import time
@@ -15,9 +17,14 @@ from .compile import BuildError, CacheError, CompilerNotFound
 from .model import load_model
 from codegen.outputs import output_dir_problem, output_file_problem
 from .horizon import scene_and_horizon
-from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, METHODS, simulate
+from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, METHODS, RTOL_MIN, simulate
 
 STUDIES = ("precision", "stress", "fuzz")     # studies: python -m studies STUDY
+TABLE_ROWS = 20        # impacts and contact events printed in full up to this many, else the first and last half
+
+# The simulate() arguments a message may advise changing, as this command's options
+CLI_OPTIONS = {"max_impacts": "--max-impacts", "max_steps": "--max-steps", "max_wall_time": "--max-wall-time",
+               "rtol": "--rtol", "atol": "--atol", "reduce dt": "reduce --dt"}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -46,6 +53,13 @@ def build_parser() -> argparse.ArgumentParser:
                      "every switch (by default a run that comes near the gimbal lock theta_0 = +-pi/2 is run "
                      "again with chart switching; runtime/charts.py)")
     sim.add_argument("--no-charts", action="store_true", help="stop at the gimbal lock of the base chart instead")
+    sim.add_argument("--max-impacts", type=int, default=10000, metavar="N",
+                     help="stop the run after this many impacts (default 10000)")
+    sim.add_argument("--max-steps", type=int, default=10_000_000, metavar="N",
+                     help="integrator steps allowed between two events (default 10000000; 0: unbounded)")
+    sim.add_argument("--all-impacts", action="store_true",
+                     help=f"print every impact (default: all up to {TABLE_ROWS}, else the first and last "
+                          f"{TABLE_ROWS // 2})")
     sim.add_argument("--max-wall-time", type=float, default=None, metavar="S",
                      help="stop the run after S seconds of wall time, saying where the time went")
     sim.add_argument("--input", metavar="U1,U2", default=None,
@@ -107,10 +121,35 @@ def build_parser() -> argparse.ArgumentParser:
 MAX_SAMPLES = 10_000_000     # output samples of one run (each 2 nq doubles): 1 GB for a 4-link chain
 
 
+def tolerance_problem(rtol: float, atol: float) -> str | None:
+    """The message for --rtol/--atol outside what the C loop accepts (GAC_RTOL_MIN <= rtol < 1, atol > 0)."""
+    if not (RTOL_MIN <= rtol < 1):
+        return f"--rtol: must be a tolerance in [{RTOL_MIN:g}, 1), got {rtol}"
+    if not (0 < atol < 1e300):
+        return f"--atol: must be a finite tolerance > 0, got {atol}"
+    return None
+
+
+def in_cli_words(message: str) -> str:
+    """A simulate() message with the arguments it advises changing named as this command's options."""
+    for word, option in CLI_OPTIONS.items():
+        message = re.sub(rf"(?<![\w-]){re.escape(word)}(?![\w])", option, message)
+    return message
+
+
+def smallest_spacing(t_end: float) -> float:
+    """The smallest sample spacing, to 3 significant digits, that keeps t_end / spacing + 1 <= MAX_SAMPLES."""
+    spacing = t_end / (MAX_SAMPLES - 1)
+    scale = 10.0 ** (math.floor(math.log10(spacing)) - 2)
+    spacing = math.ceil(spacing / scale) * scale
+    while t_end / spacing + 1 > MAX_SAMPLES:       # round-off of the rounding itself
+        spacing += scale
+    return float(f"{spacing:.6g}")
+
+
 def simulate_arguments_problem(args, t_end: float) -> str:
     """What is wrong with the simulate command's numbers and output paths ('' when nothing is), checked
     before the model is built so that a bad argument costs nothing and writes nothing."""
-    import math
     if not (math.isfinite(t_end) and t_end >= 0):
         return f"--t-end: must be a finite time >= 0 s, got {t_end}"
     if not (math.isfinite(args.samples_dt) and args.samples_dt > 0):
@@ -118,14 +157,18 @@ def simulate_arguments_problem(args, t_end: float) -> str:
     samples = t_end / args.samples_dt + 1
     if samples > MAX_SAMPLES:
         return (f"--samples-dt: {args.samples_dt:g} s over t_end = {t_end:g} s asks for {samples:.3g} samples; at most "
-                f"{MAX_SAMPLES:,} (give --samples-dt >= {t_end / (MAX_SAMPLES - 1):.3g} s)")
-    for option, value in (("--rtol", args.rtol), ("--atol", args.atol)):
-        if not (math.isfinite(value) and value > 0):
-            return f"{option}: must be a finite tolerance > 0, got {value}"
+                f"{MAX_SAMPLES:,} (give --samples-dt >= {smallest_spacing(t_end):.6g} s)")
+    problem = tolerance_problem(args.rtol, args.atol)
+    if problem:
+        return problem
     if args.dt is not None and not (math.isfinite(args.dt) and args.dt > 0):
         return f"--dt: must be a finite step > 0 s, got {args.dt}"
     if args.method == "rk4" and args.dt is None:
         return "--dt: rk4 needs a step (e.g. --dt 1e-5, the paper's)"
+    if args.max_impacts < 1:
+        return f"--max-impacts: must be an integer >= 1, got {args.max_impacts}"
+    if args.max_steps < 0:
+        return f"--max-steps: must be an integer >= 0 (0: unbounded), got {args.max_steps}"
     if args.max_wall_time is not None and not (math.isfinite(args.max_wall_time) and args.max_wall_time > 0):
         return f"--max-wall-time: must be a finite time > 0 s, got {args.max_wall_time}"
     if args.charts and args.no_charts:
@@ -215,25 +258,30 @@ def main(argv=None) -> int:
         start = time.perf_counter()
         if args.charts:
             result = simulate_with_charts(scene, t_end, method=args.method, rtol=args.rtol, atol=args.atol,
-                                          dt=args.dt, t_eval=t_eval, models=charts, max_wall_time=args.max_wall_time)
+                                          dt=args.dt, t_eval=t_eval, models=charts, max_wall_time=args.max_wall_time,
+                                          max_impacts=args.max_impacts, max_steps=args.max_steps)
         else:
             u = None if args.input is None else [float(v) for v in args.input.split(",")]
             p = {name: float(value) for name, _, value in (item.partition("=") for item in args.param)} or None
             result = simulate(model, t_end, method=args.method, rtol=args.rtol, atol=args.atol, dt=args.dt,
-                              t_eval=t_eval, charts=not args.no_charts, max_wall_time=args.max_wall_time, u=u, p=p)
+                              t_eval=t_eval, charts=not args.no_charts, max_wall_time=args.max_wall_time, u=u, p=p,
+                              max_impacts=args.max_impacts, max_steps=args.max_steps)
         elapsed = time.perf_counter() - start
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     print(f"scene {scene.name}: n = {scene.n}, t_end = {t_end} s, method {args.method}"
           + (f" dt = {args.dt}" if args.method == "rk4" else f" rtol = {args.rtol} atol = {args.atol}"))
-    print(result.impact_table())
+    limit = None if args.all_impacts else TABLE_ROWS
+    print(result.impact_table(limit))
     if getattr(result, "contact_events", None):
-        print(result.contact_event_table())
+        print(result.contact_event_table(limit))
+    if limit is not None and max(len(result.impacts), len(getattr(result, "contact_events", ()))) > limit:
+        print("(every impact and contact event: --all-impacts, or --json FILE)")
     if hasattr(result, "switch_table"):
         print(f"chart switches (mu = |cos theta_0| of a chart; B = {result.chart_b_name}):")
         print(result.switch_table())
-    print(f"status {result.status}: {result.message}")
+    print(f"status {result.status}: {in_cli_words(result.message)}")
     if result.status != 0 and args.no_charts and "gimbal lock" in result.message:
         print("hint: without --no-charts the run continues on a second chart")
     print(result.energy_summary())
@@ -296,8 +344,7 @@ def sweep_main(args) -> int:
         (args.samples is not None and not 1 <= args.samples <= 10_000_000,
          f"--samples: must be in 1..10000000, got {args.samples}"),
         (args.workers < 1 or args.workers > 1024, f"--workers: must be in 1..1024, got {args.workers}"),
-        (not (math.isfinite(args.rtol) and args.rtol > 0), f"--rtol: must be a finite tolerance > 0, got {args.rtol}"),
-        (not (math.isfinite(args.atol) and args.atol > 0), f"--atol: must be a finite tolerance > 0, got {args.atol}"),
+        (bool(tolerance_problem(args.rtol, args.atol)), tolerance_problem(args.rtol, args.atol)),
     ]
     count = args.samples or math.prod(v.count for v in varies)
     problems.append((count > 10_000_000, f"--vary: the grid has {count:,} runs; at most 10,000,000"))

@@ -30,7 +30,8 @@ from pathlib import Path
 import cffi
 
 from codegen.artifact import library_files, text_digest
-from codegen.cache import CacheError, cache_dir, entry_lock, report_corrupted, sha256_of, write_atomic  # noqa: F401
+from codegen.cache import (CacheError, cache_dir, clear_entry, entry_lock, report_corrupted, sha256_of,  # noqa: F401
+                           write_atomic)
 
 DEFAULT_FLAGS = ("-O2",)
 SUFFIX = sysconfig.get_config_var("EXT_SUFFIX") or ".so"
@@ -210,6 +211,7 @@ def _build(name, header, source, cdef, flags, module_name: str, target: Path, si
         except Exception as exc:  # setuptools raises CompileError / LinkError / VerificationError
             raise BuildError(f"compiling the generated model {name!r} failed: {exc}") from exc
         digest = sha256_of(built.read_bytes())
+        clear_entry(target)
         os.replace(built, target)
         write_atomic(sidecar, f"{digest}  {target.name}\n".encode())
     finally:

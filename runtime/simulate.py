@@ -25,6 +25,7 @@ from .model import CompiledModel, load_model
 
 METHODS = ("dopri5", "dop853", "rk4")
 DEFAULT_RTOL, DEFAULT_ATOL = 1e-8, 1e-10   # the adaptive methods' tolerances, here, in the CLI and in C
+RTOL_MIN = 1e-14        # the smallest rtol the C loop accepts (GAC_RTOL_MIN in gac.h): ~50 unit round-offs
 CHUNK_STEPS = 20000     # steps per call into the C loop between two looks at the wall-time budget
 ROUNDOFF_WARN = 1e-6    # an impact whose energy round-off bound exceeds this is named in result.warnings
 RK4_STABLE = 1.0        # RK4 is stable for h |lambda| < 2.78 on the imaginary and negative real axes; the
@@ -157,19 +158,25 @@ class SimulationResult:
                 f"{self.energy_drift:.3e} of {self.energy_scale:.6g} J (max(T0 + |V0|, M g L"
                 f"{', |W_in|, D_damp' if driven else ''}))")
 
-    def impact_table(self) -> str:
+    def impact_table(self, limit: int | None = None) -> str:
+        """The impacts, one line each; ``limit``: at most this many lines, the first and the last half of
+        them around a line saying how many were left out (None: all)."""
         lines = [f"{'#':>3} {'t (s)':>14}  contacts (point/wall: impulse N s)"]
-        for k, impact in enumerate(self.impacts, start=1):
+        for k, impact in _shown(self.impacts, limit, "impacts"):
+            if impact is None:
+                lines.append(k)
+                continue
             contacts = ", ".join(f"{c.label}: {c.impulse:.6g}" for c in impact.contacts)
             lines.append(f"{k:>3} {impact.t:14.9f}  {contacts}")
         return "\n".join(lines)
 
-    def contact_event_table(self) -> str:
-        """The resting-contact events, one line each ('' when there are none)."""
+    def contact_event_table(self, limit: int | None = None) -> str:
+        """The resting-contact events, one line each ('' when there are none); ``limit`` as impact_table's."""
         if not self.contact_events:
             return ""
         lines = [f"resting contact: {'t (s)':>14}  point/wall"]
-        lines += [f"{e.kind:>15} {e.t:14.9f}  {e.label}" for e in self.contact_events]
+        for _, e in _shown(self.contact_events, limit, "contact events"):
+            lines.append(_ if e is None else f"{e.kind:>15} {e.t:14.9f}  {e.label}")
         return "\n".join(lines)
 
     def to_json(self) -> dict:
@@ -211,6 +218,19 @@ def _integer(value, field_name: str, lowest: int, meaning: str) -> int:
             or not np.isfinite(value) or int(value) != value or value < lowest:
         raise ValueError(f"{field_name}: must be an integer >= {lowest} ({meaning}), got {value!r}")
     return int(value)
+
+
+def _shown(rows: list, limit: int | None, what: str):
+    """(number, row) of the rows a table shows: all, or the first and last limit // 2 with ('... N more
+    WHAT ...', None) between them."""
+    if limit is None or len(rows) <= limit:
+        yield from enumerate(rows, start=1)
+        return
+    head = max(limit // 2, 1)
+    tail = max(limit - head, 1)
+    yield from enumerate(rows[:head], start=1)
+    yield f"    ... {len(rows) - head - tail} more {what} ...", None
+    yield from enumerate(rows[len(rows) - tail:], start=len(rows) - tail + 1)
 
 
 def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "dopri5", rtol: float = DEFAULT_RTOL,
@@ -264,8 +284,9 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         _check(dt is not None and np.isfinite(dt) and dt > 0, "dt", f"rk4 needs a step dt > 0 s, got {dt!r}")
     else:
         rtol, atol = _real(rtol, "rtol"), _real(atol, "atol")
-        _check(np.isfinite(rtol) and rtol > 0, "rtol", f"must be > 0, got {rtol!r}")
-        _check(np.isfinite(atol) and atol > 0, "atol", f"must be > 0, got {atol!r}")
+        _check(RTOL_MIN <= rtol < 1, "rtol", f"must be in [{RTOL_MIN:g}, 1) (below {RTOL_MIN:g} round-off stops "
+               f"the steps), got {rtol!r}")
+        _check(0 < atol < 1e300, "atol", f"must be in (0, 1e300) (absolute error per coordinate), got {atol!r}")
         dt = None if dt is None else _real(dt, "dt")
         _check(dt is None or (np.isfinite(dt) and dt > 0), "dt", f"first step must be > 0 s, got {dt!r}")
     contact_tol, event_tol, h_max = _real(contact_tol, "contact_tol"), _real(event_tol, "event_tol"), _real(h_max, "h_max")

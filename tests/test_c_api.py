@@ -79,6 +79,11 @@ int main(int argc, char **argv)
     } else if (strcmp(c, "init_bad_method") == 0) {
         opt.method = 7;
         code = paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);
+    } else if (strcmp(c, "init_rtol_below_min") == 0 || strcmp(c, "init_rtol_at_min") == 0
+               || strcmp(c, "init_rtol_one") == 0) {
+        opt.rtol = strcmp(c, "init_rtol_below_min") == 0 ? 0.99 * GAC_RTOL_MIN
+                   : strcmp(c, "init_rtol_one") == 0 ? 1.0 : GAC_RTOL_MIN;
+        code = paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);
     } else if (strcmp(c, "init_null_opt") == 0 || strcmp(c, "init_null_p") == 0) {
         const int null_opt = strcmp(c, "init_null_opt") == 0;
         code = paper_case1_sim_init(&sim, 0.0, q, qd, null_opt ? p : NULL, null_opt ? NULL : &opt);
@@ -201,9 +206,15 @@ def drive(built, *args) -> dict:
     ("init_null_qd", "ERR_NULL_ARGUMENT"),
     ("init_nan_q", "ERR_BAD_OPTION"),
     ("init_bad_method", "ERR_BAD_OPTION"),
+    ("init_rtol_below_min", "ERR_BAD_OPTION"),
+    ("init_rtol_one", "ERR_BAD_OPTION"),
 ])
 def test_sim_init_refuses_bad_arguments(built, case, expected):
     assert int(drive(built, case)["code"]) == code_of(built, expected)
+
+
+def test_sim_init_accepts_the_smallest_rtol(built):
+    assert int(drive(built, "init_rtol_at_min")["code"]) == 0
 
 
 @pytest.mark.parametrize("case", ["init_null_opt", "init_null_p"])

@@ -305,3 +305,30 @@ def test_resting_contact_survives_the_chunk_restarts():
     assert max(abs(a.t - b.t) for a, b in zip(charted.contact_events, plain.contact_events)) < 1e-8
     assert sorted(charted.persistent_final) == sorted(plain.persistent_final)
     assert charted.contact_gaps(p).min() > -1e-9
+
+
+def test_overridden_box_and_start_pass_the_lock_as_the_scene_does(scene, models):
+    """Walls (p) and start (q0) moved together by 10 m: the same motion, shifted, through the lock. The rerun
+    with charts checks the start against the walls of p, not against the scene's own box."""
+    shift = 10.0
+    q0 = np.array(scene.q0, dtype=float)
+    q0[-3:] += shift
+    model = models.models[0]
+    names = model.scene.parameter_names()
+    p = {name: model.p[names.index(name)] + shift for name in names if name.startswith("wall_x")}
+    moved = simulate(model, 0.5, p=p, q0=q0, **ACCURATE)
+    home = simulate(model, 0.5, **ACCURATE)
+    assert moved.status == 0 and home.status == 0, (moved.message, home.message)
+    assert len(moved.switches) >= 1 and len(moved.switches) == len(home.switches)
+    expected = np.array(home.q_final, dtype=float)
+    expected[-3:] += shift
+    assert np.allclose(moved.q_final, expected, atol=1e-8)
+    assert np.allclose(moved.qd_final, home.qd_final, atol=1e-8)
+
+
+def test_overridden_start_outside_the_overridden_box_is_refused(scene, models):
+    model = models.models[0]
+    q0 = np.array(scene.q0, dtype=float)
+    q0[-3:] += 10.0                                  # the chain moved, the box not
+    with pytest.raises(ValueError, match="q0: contact point O_1 is outside the wall"):
+        simulate_with_charts(scene, 0.1, models=models, q0=q0, **ACCURATE)

@@ -391,7 +391,9 @@ static const char *set_real(Instance *in, long r, double v, char *why, size_t si
     } else {
         long s = r - vr_solver(m);
         if (s < 0 || s >= GAC_FMI2_NSOLVER_REAL) return "no such solver setting";
-        if ((s == SOLVER_RTOL || s == SOLVER_ATOL) && !(v > 0.0)) return "solver.rtol and solver.atol must be > 0";
+        if (s == SOLVER_RTOL && !(v >= GAC_RTOL_MIN && v < 1.0))
+            return "solver.rtol must be in [1e-14, 1) (GAC_RTOL_MIN: below it round-off stops the steps)";
+        if (s == SOLVER_ATOL && !(v > 0.0 && v < 1e300)) return "solver.atol must be in (0, 1e300)";
         if ((s == SOLVER_DT || s == SOLVER_HMAX) && v < 0.0) {
             snprintf(why, size, "solver.%s must be >= 0 s (0: automatic / unbounded), got %g",
                      s == SOLVER_DT ? "dt" : "h_max", v);

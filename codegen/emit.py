@@ -204,6 +204,7 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
         inputs=[(i, coordinate, macro_name(coordinate), "N m" if coordinate.startswith("theta") else "N")
                 for i, coordinate in enumerate(scene.inputs)],
         param_macros=[(i, macro_name(pname)) for i, pname in enumerate(pnames)],
+        coordinate_macros=[(i, macro_name(names[full]), names[full]) for i, full in enumerate(layout.free)],
         has_power=scene.driven, friction_velocity=_double_literal(float(scene.friction_velocity)),
         sizes=interface.SIZES, size_values=sizes, constants=interface.CONSTANTS, structs=interface.STRUCTS,
         kernels=[(f, generated.get(f.name)) for f in interface.KERNELS], dense=dense,

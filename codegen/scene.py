@@ -739,10 +739,10 @@ INITIAL_KEYS = ("q", "qd")
 def scene_file(source: str | Path) -> Path:
     """The absolute path of the file a scene source names: a .toml/.json path, else a shipped scene."""
     if not isinstance(source, (str, Path)):
-        raise SceneError(f"scene: expected a shipped scene name or a path to a .toml/.json file, got "
+        raise SceneError(f"scene: expected a shipped scene name or a path to a .toml/.json/.urdf file, got "
                          f"{source!r} ({type(source).__name__})")
     if not str(source).strip():
-        raise SceneError("scene: empty name; expected a .toml/.json scene file or a shipped scene name")
+        raise SceneError("scene: empty name; expected a .toml/.json scene file, a .urdf file or a shipped scene name")
     path = Path(source)
     if not path.exists():
         shipped = _shipped_scene_path(str(source)) if re.fullmatch(r"[A-Za-z0-9_-]+", str(source)) else None
@@ -756,9 +756,48 @@ def scene_file(source: str | Path) -> Path:
     return path.absolute()
 
 
+URDF_BOX_MARGIN = 0.25     # m: the default box around a URDF chain is this much wider than its reach
+URDF_RESTITUTION = 0.7     # e of the default box's walls
+
+
+def urdf_scene(path: str | Path) -> Scene:
+    """A scene for a URDF file alone: its serial chain (codegen.urdf) at rest with every joint at 0 (at the
+    middle of its limits where 0 is outside them) and the base frame unturned, falling under gravity (-X2) from
+    the centre of a box of six walls (e = URDF_RESTITUTION) that holds the chain in any orientation: half-width
+    its reach from its centre plus URDF_BOX_MARGIN.  For other walls or a start of your own, write a scene file
+    with ``urdf = "FILE"`` (docs/scenes.md)."""
+    path = Path(path)
+    folder, name = path.absolute().parent, re.sub(r"\W", "_", path.stem)[:48] or "urdf"
+    if not re.match(r"[A-Za-z_]", name):
+        name = f"urdf_{name}"[:48]
+    links, twists, joints = _links_from_data(_link_tables({"urdf": path.name}, folder))
+    n = len(links)
+    angles = []
+    for joint in (joints if n > 1 else ()):
+        lower = -math.inf if joint.lower is None else joint.lower
+        upper = math.inf if joint.upper is None else joint.upper
+        angles.append(0.0 if lower <= 0.0 <= upper else
+                      0.5 * (lower + upper) if math.isfinite(lower + upper) else (lower if lower > 0 else upper))
+    q = [0.0, 0.0, 0.0, *angles, 0.0, 0.0, 0.0]
+    probe = Scene(name=name, links=links, twists=twists if n > 1 else (), joints=joints if n > 1 else (),
+                  q0=tuple(q))
+    points = contact_points(probe, np.array(q))
+    centre = 0.5 * (points.min(axis=0) + points.max(axis=0))
+    reach = float(np.linalg.norm(points - centre, axis=1).max())
+    half = reach + URDF_BOX_MARGIN
+    q[n + 2: n + 5] = [round(float(v), 12) for v in (half - centre)]      # the chain's centre at (half, half, half)
+    walls = tuple(Wall(f"x{axis}_{side}", 0.0 if side == "min" else round(2 * half, 12), URDF_RESTITUTION)
+                  for axis in (1, 2, 3) for side in ("min", "max"))
+    return Scene(name=name, links=links, twists=probe.twists, joints=probe.joints, walls=walls, q0=tuple(q),
+                 description=f"{path.name} at rest in a {2 * half:.3g} m box (the default box of a URDF file)")
+
+
 def load_scene(source: str | Path) -> Scene:
-    """Load a scene from a .toml or .json file, or a shipped scene by name (e.g. 'paper-case1')."""
+    """Load a scene from a .toml or .json file, a shipped scene by name (e.g. 'paper-case1'), or a URDF file
+    (.urdf: its chain in a default box, urdf_scene)."""
     path = scene_file(source)
+    if path.suffix.lower() == ".urdf":
+        return urdf_scene(path)
     try:
         raw = path.read_bytes()
     except OSError as exc:

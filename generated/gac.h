@@ -86,6 +86,10 @@
 
 /* ---- integrators (gac_options.method) -------------------------------------------------------- */
 #define GAC_METHOD_RK4     0   /* classical fixed-step RK4 (opt.dt), cubic Hermite dense output */
+/* The smallest relative tolerance the adaptive methods accept: about 50 unit round-offs, below which a
+ * step's error estimate is round-off and the step size collapses ("step size underflow"). */
+#define GAC_RTOL_MIN 1e-14
+
 #define GAC_METHOD_DOPRI5  1   /* Dormand-Prince 5(4), adaptive (opt.rtol, opt.atol), 4th-order dense output */
 #define GAC_METHOD_DOP853  2   /* Dormand-Prince 8(5,3), adaptive, 7th-order dense output */
 
@@ -320,7 +324,8 @@ const char *gac_error_message(int code);
 typedef struct {
     int method;            /* GAC_METHOD_RK4, GAC_METHOD_DOPRI5 (default) or GAC_METHOD_DOP853 */
     double dt;             /* RK4 step (s); for the adaptive methods the first step, 0 = automatic */
-    double rtol, atol;     /* adaptive methods: relative and absolute tolerances (default 1e-8, 1e-10) */
+    double rtol, atol;     /* adaptive methods: relative and absolute tolerances (default 1e-8, 1e-10);
+                              GAC_RTOL_MIN <= rtol < 1 (below, round-off stops the steps), atol > 0 */
     double h_max;          /* largest step (s), 0 = unbounded */
     int event_samples;     /* interpolant samples per step searched for wall crossings (default 4); a dip
                               through a wall between two samples is found at the gap's minimum */

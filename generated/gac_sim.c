@@ -170,7 +170,8 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     if (opt->method != GAC_METHOD_RK4 && opt->method != GAC_METHOD_DOPRI5
         && opt->method != GAC_METHOD_DOP853) return GAC_ERR_BAD_OPTION;
     if (opt->method == GAC_METHOD_RK4 && !(opt->dt > 0.0 && opt->dt < 1e300)) return GAC_ERR_BAD_OPTION;
-    if (opt->method != GAC_METHOD_RK4 && !(opt->rtol > 0.0 && opt->atol > 0.0 && opt->dt >= 0.0))
+    if (opt->method != GAC_METHOD_RK4
+        && !(opt->rtol >= GAC_RTOL_MIN && opt->rtol < 1.0 && opt->atol > 0.0 && opt->atol < 1e300 && opt->dt >= 0.0))
         return GAC_ERR_BAD_OPTION;
     if (opt->event_samples < 1 || !(opt->event_tol > 0.0) || !(opt->contact_tol >= 0.0) || !(opt->h_max >= 0.0)
         || opt->max_steps < 0 || !(opt->rest_height < 1e300) || opt->zeno_impacts < 0)

@@ -152,6 +152,14 @@
 #define PAPER_CASE1_RECORD_NDOUBLE   24     /* doubles of an impact record's storage (gac_record_ndouble) */
 #define PAPER_CASE1_RECORD_NINT      18     /* ints of an impact record's storage (gac_record_nint) */
 
+/* Coordinate indices into q and qd: x[PAPER_CASE1_Q_...] is a coordinate, x[PAPER_CASE1_NQ + PAPER_CASE1_Q_...] its rate. */
+#define PAPER_CASE1_Q_THETA_1                    0
+#define PAPER_CASE1_Q_THETA_2                    1
+#define PAPER_CASE1_Q_THETA_3                    2
+#define PAPER_CASE1_Q_THETA_4                    3
+#define PAPER_CASE1_Q_X1                         4
+#define PAPER_CASE1_Q_X2                         5
+
 /* Parameter indices into p. */
 #define PAPER_CASE1_P_G                          0
 #define PAPER_CASE1_P_L_1                        1

@@ -128,6 +128,14 @@
 #define PAPER_CASE2_RECORD_NDOUBLE   24     /* doubles of an impact record's storage (gac_record_ndouble) */
 #define PAPER_CASE2_RECORD_NINT      18     /* ints of an impact record's storage (gac_record_nint) */
 
+/* Coordinate indices into q and qd: x[PAPER_CASE2_Q_...] is a coordinate, x[PAPER_CASE2_NQ + PAPER_CASE2_Q_...] its rate. */
+#define PAPER_CASE2_Q_THETA_M1                   0
+#define PAPER_CASE2_Q_THETA_0                    1
+#define PAPER_CASE2_Q_THETA_1                    2
+#define PAPER_CASE2_Q_X1                         3
+#define PAPER_CASE2_Q_X2                         4
+#define PAPER_CASE2_Q_X3                         5
+
 /* Parameter indices into p. */
 #define PAPER_CASE2_P_G                          0
 #define PAPER_CASE2_P_L_1                        1

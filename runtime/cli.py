@@ -11,7 +11,7 @@ import sys
 import time
 from pathlib import Path
 
-from codegen.scene import shipped_scene_names
+from codegen.scene import MAX_LINKS, shipped_scene_names
 
 from .compile import BuildError, CacheError, CompilerNotFound
 from .model import load_model
@@ -35,8 +35,12 @@ def build_parser() -> argparse.ArgumentParser:
                               description="Simulate a scene: flight in compiled code, impacts by Eq. 48 "
                                           "(complementarity form when a contact would pull).",
                               epilog=f"Shipped scenes: {', '.join(shipped_scene_names())}.")
-    sim.add_argument("--scene", default="paper-case1", help="shipped scene name or .toml/.json file "
-                     "(default paper-case1)")
+    which = sim.add_mutually_exclusive_group()
+    which.add_argument("--scene", default=None, help="shipped scene name, .toml/.json scene file, or .urdf file (its "
+                       "chain in a default box: docs/scenes.md) (default paper-case1)")
+    which.add_argument("--links", type=int, default=None, metavar="N",
+                       help=f"the built-in N-link chain of python -m codegen --links N (1..{MAX_LINKS}; N = 4 is the "
+                            "paper's case study 1)")
     sim.add_argument("--t-end", type=float, default=None,
                      help="end time in s (default: 1.5 for paper-case1, 1.75 for paper-case2, else 1.0)")
     sim.add_argument("--method", choices=METHODS, default="dopri5", help="integrator (default dopri5)")
@@ -270,6 +274,8 @@ def main(argv=None) -> int:
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    if args.scene and str(args.scene).lower().endswith(".urdf"):
+        print(f"scene {scene.name}: {scene.description}")
     print(f"scene {scene.name}: n = {scene.n}, t_end = {t_end} s, method {args.method}"
           + (f" dt = {args.dt}" if args.method == "rk4" else f" rtol = {args.rtol} atol = {args.atol}"))
     limit = None if args.all_impacts else TABLE_ROWS

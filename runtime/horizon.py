@@ -3,16 +3,20 @@ from __future__ import annotations
 
 import sys
 
-from codegen.scene import SceneError, load_scene
+from codegen.scene import MAX_LINKS, SceneError, default_scene, load_scene
 
-DEFAULT_T_END = {"paper_case1": 1.5, "paper_case2": 1.75}     # s; any other scene: 1.0
+DEFAULT_T_END = {"paper_case1": 1.5, "paper_case2": 1.75, "chain4": 1.5}     # s; any other scene: 1.0
 
 
 def scene_and_horizon(args):
-    """The scene named by ``args.scene`` and the run's horizon (``args.t_end``, else the scene's usual one),
-    or None after printing why the scene cannot be loaded."""
+    """The scene named by ``args.scene`` (or the built-in chain of ``args.links`` links, where the command has
+    --links) and the run's horizon (``args.t_end``, else the scene's usual one), or None after printing why the
+    scene cannot be loaded."""
+    links = getattr(args, "links", None)
     try:
-        scene = load_scene(args.scene)
+        if links is not None and not 1 <= links <= MAX_LINKS:
+            raise SceneError(f"--links: must be in 1..{MAX_LINKS}, got {links}")
+        scene = default_scene(links) if links is not None else load_scene(args.scene or "paper-case1")
     except SceneError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return None

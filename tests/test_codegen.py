@@ -56,6 +56,26 @@ def test_generated_c_is_strict_c99_and_header_is_cxx(tmp_path, which, bake):
                     "-I", str(tmp_path), str(cxx)], check=True)
 
 
+@pytest.mark.parametrize("which", ["case2", "rigid3d"])
+def test_header_names_every_coordinate_index(tmp_path, which):
+    """NAME_Q_<coordinate> is the index of each of the model's coordinates in q (theta_-1 -> THETA_M1), so a
+    controller need not hard-code q[1]: read back from a compiled C program, against the model's layout."""
+    from codegen.specialise import coordinate_names, layout_for
+    scene = SCENES[which]()
+    model = codegen.generate(scene)
+    write(model, tmp_path)
+    names = [coordinate_names(scene.n)[i] for i in layout_for(scene, True).free]
+    NAME = model.name.upper()
+    macros = [f"{NAME}_Q_{name.replace('-', 'M').upper()}" for name in names]
+    program = tmp_path / "indices.c"
+    program.write_text(f'#include <stdio.h>\n#include "{model.name}.h"\nint main(void) {{\n'
+                       + "".join(f'    printf("%d\\n", {m});\n' for m in macros)
+                       + f'    printf("%d\\n", {NAME}_NQ);\n    return 0;\n}}\n')
+    subprocess.run(["gcc", *STRICT, "-I", str(tmp_path), str(program), "-o", str(tmp_path / "indices")], check=True)
+    printed = subprocess.run([str(tmp_path / "indices")], capture_output=True, text=True, check=True).stdout.split()
+    assert [int(v) for v in printed] == [*range(len(names)), len(names)]
+
+
 def test_no_globals_and_no_malloc_in_generated_code(tmp_path):
     """The model's and the library's object files define only code and read-only data (the descriptor, whose
     pointers are relocated, sits in .data.rel.ro), and call only libm and the library."""

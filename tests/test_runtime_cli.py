@@ -103,3 +103,51 @@ def test_long_impact_table_is_summarised_unless_all_are_asked_for(capsys):
     out = capsys.readouterr().out
     rows = [line for line in out.splitlines() if line[:3].strip().isdigit()]
     assert [int(r.split()[0]) for r in rows] == list(range(1, total + 1)) and "more impacts" not in out
+
+
+# ---------------------------------------------------------------------------
+# the runtime runs what the generator makes: the built-in chains and URDF files
+# ---------------------------------------------------------------------------
+def test_simulate_runs_the_built_in_chain_of_codegen_links(capsys, monkeypatch):
+    """--links N is python -m codegen --links N's scene (chain4 is the paper's case study 1: the same impacts
+    as the shipped paper-case1 scene, whose model differs only by its name)."""
+    import runtime.cli
+    from codegen.scene import default_scene
+    seen = []
+    real = runtime.cli.load_model
+    monkeypatch.setattr(runtime.cli, "load_model", lambda scene, **k: seen.append(scene) or real(scene, **k))
+    assert runtime.cli.main(["simulate", "--links", "4"]) == 0
+    chain = capsys.readouterr().out
+    assert seen == [default_scene(4)] and "scene chain4: n = 4, t_end = 1.5 s" in chain
+    assert runtime.cli.main(["simulate", "--scene", "paper-case1"]) == 0
+    case1 = capsys.readouterr().out
+    table = lambda out: [line for line in out.splitlines() if line[:3].strip().isdigit()]  # noqa: E731
+    assert len(table(chain)) == 7 and table(chain) == table(case1)
+
+
+@pytest.mark.parametrize("links,message", [(0, "--links: must be in 1..1024, got 0"),
+                                           (1025, "--links: must be in 1..1024, got 1025")])
+def test_simulate_links_out_of_range(capsys, links, message):
+    import runtime.cli
+    assert runtime.cli.main(["simulate", "--links", str(links)]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_simulate_runs_a_urdf_file_in_a_default_box(tmp_path, capsys):
+    import numpy as np
+    import runtime.cli
+    from codegen.scene import URDF_BOX_MARGIN, contact_points, load_scene
+    urdf = tmp_path / "my-arm.urdf"
+    urdf.write_text((ROOT / "codegen" / "scenes" / "urdf-arm.urdf").read_text())
+    scene = load_scene(urdf)
+    shipped = load_scene("urdf-arm")
+    assert scene.links == shipped.links and scene.joints == shipped.joints and scene.name == "my_arm"
+    # the box holds the chain in any orientation about its centre: every point within reach + margin of it
+    points = contact_points(scene, np.array(scene.q0))
+    centre = 0.5 * (points.min(axis=0) + points.max(axis=0))
+    half = [w.position for w in scene.walls if w.name == "x1_max"][0] / 2
+    assert np.allclose(centre, half, atol=1e-12) and len(scene.walls) == 6
+    assert np.isclose(half, np.linalg.norm(points - centre, axis=1).max() + URDF_BOX_MARGIN)
+    assert runtime.cli.main(["simulate", "--scene", str(urdf), "--t-end", "0.5"]) == 0
+    out = capsys.readouterr().out
+    assert "default box of a URDF file" in out and "status 0: reached t_end" in out

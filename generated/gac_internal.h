@@ -6,6 +6,8 @@
 
 #include "gac.h"
 
+#include <string.h>
+
 #define GAC_EPS 2.220446049250313e-16
 
 /* Contacts one complementarity solve takes: min(nq, GAC_LCP_CAP). */
@@ -25,6 +27,62 @@
  * force) | B (nq*nq; the normal rows applied to the normal and friction directions, nactive x nactive). */
 #define GAC_WORK_Z(m, w)   (GAC_WORK_F(m, w) + GAC_AT_LEAST_1((m)->njrow))
 #define GAC_WORK_B(m, w)   (GAC_WORK_Z(m, w) + (long)(m)->nq * (m)->nq)
+
+#define GAC_V_FLOOR 1e-12   /* m/s: a contact at its wall approaching slower than this, or than 1e-10 of
+                               the fastest contact's normal speed (gac_v_round), is at rest: round-off */
+
+/* dst[0..n-1] = src[0..n-1] (distinct arrays). */
+static inline void gac_copy(double *dst, const double *src, int n)
+{
+    if (n > 0) memcpy(dst, src, (size_t)n * sizeof *dst);
+}
+
+/* 1 if x[0..n-1] are all finite. */
+static inline int gac_finite(const double *x, int n)
+{
+    int i;
+    for (i = 0; i < n; ++i) {
+        if (!(x[i] - x[i] == 0.0)) return 0;
+    }
+    return 1;
+}
+
+/* gac_sim.c: the right-hand side and event functions of the loop */
+const double *gac_input(gac_sim *s, double t, const double *x);
+void gac_f(gac_sim *s, double t, const double *x, double *f);
+void gac_events(gac_sim *s, double t, const double *x, double *ev);
+
+/* gac_integrate.c: the integrators and their dense output */
+double gac_initial_step(gac_sim *s, double t_end);
+double gac_rk4_step(gac_sim *s, double h);
+double gac_dopri5_step(gac_sim *s, double h);
+double gac_dop853_step(gac_sim *s, double h);
+void gac_prepare_dense(gac_sim *s, double h);
+void gac_dense(gac_sim *s, double t, double *out);
+
+/* gac_events.c: event location and the loop's tolerances */
+double gac_v_round(const gac_model *md, const double *vn);
+double gac_extent(const gac_sim *s, const double *x);
+double gac_graze_depth(const gac_sim *s, const double *x);
+int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event);
+double gac_chart_floor(const gac_sim *s);
+double gac_simultaneity_window(const gac_sim *s, const double *x);
+
+/* gac_rest.c: resting contact */
+double gac_total_energy(const gac_model *md, const double *x, const double *p);
+void gac_normal_velocities(const gac_model *md, const double *x, const double *p, double *vn);
+int gac_normal_accelerations(gac_sim *s, double t, const double *x, int n, const int *set, double *an);
+int gac_add_independent(gac_sim *s, const double *x, int *n, int *set, int c);
+int gac_project(gac_sim *s, double *x, int n, const int *set, int positions);
+int gac_settle(gac_sim *s, double t, const double *x, int *n, int *set);
+int gac_hold(gac_sim *s, double *x, int nset, const int *set, int n, const int *list);
+void gac_set_active(gac_sim *s, int n, const int *set, gac_impact_record *r);
+int gac_rest_at_start(gac_sim *s);
+int gac_release(gac_sim *s, double t, int c_event, gac_impact_record *r);
+int gac_recheck_rest(gac_sim *s, gac_impact_record *record);
+
+/* gac_resolve.c: one impact event */
+int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r);
 
 /* gac_model.c */
 int gac_has_friction(const gac_model *m);

@@ -12,6 +12,7 @@ from . import __version__, interface
 from .flatten import Program
 from .artifact import GeneratedModel, RenderedFunction, scene_hash  # noqa: F401
 from .ops import count_ops
+from .parameters import parameter_rules
 from .scene import JointStop, Scene, Wall
 from .specialise import coordinate_names
 
@@ -180,6 +181,7 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
     pnames = [pname for pname, _ in params]
     names = coordinate_names(scene.n)
     zeros = set(layout.zero_params)
+    rules = parameter_rules(scene, layout.zero_params, bake_params)
     sizes = interface.size_values(n=scene.n, nq=layout.nq, nparam=len(params), nu=scene.nu, npoint=scene.n + 1,
                                   ncontact=len(layout.contacts), njrow=len(layout.contact_rows),
                                   friction=any(w.friction > 0.0 for _, w in layout.contacts if isinstance(w, Wall)))
@@ -188,8 +190,11 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
         bake_params=bake_params, functions=functions, nq=layout.nq,
         coordinates=[names[i] for i in layout.free], fixed=[(names[i], _double_literal(v)) for i, v in layout.fixed],
         notes=layout.notes,
-        params=[(i, pname, param_doc(pname) + (" [built in as 0]" if pname in zeros else ""), _double_literal(value))
-                for i, (pname, value) in enumerate(params)],
+        params=[(i, pname, param_doc(pname) + (" [built in as 0]" if pname in zeros else ""), _double_literal(value),
+                 f"[{rule.lo:g}, {rule.hi:g}]") for i, ((pname, value), rule) in enumerate(zip(params, rules))],
+        parameter_info=[(rule.name, _double_literal(rule.lo), _double_literal(rule.hi), _c_string(rule.text))
+                        for rule in rules],
+        relations=parameter_relations(rules),
         contacts=[(c, point, wall) for c, (point, wall) in enumerate(layout.contacts)],
         contact_table=[_contact_entry(c, point, wall, layout, pnames, bake_params)
                        for c, (point, wall) in enumerate(layout.contacts)],
@@ -234,6 +239,27 @@ PARAM_DOC = {
 JOINT_DOC = {"stiffness": "spring stiffness K (N m/rad)", "rest_angle": "spring rest angle (rad)",
              "damping": "damper coefficient C (N m s/rad)", "lower": "lower limit (rad)", "upper": "upper limit (rad)",
              "e_limit": "restitution of the limits (-)"}
+
+
+def parameter_relations(rules) -> list[tuple[str, int, str]]:
+    """The relations of the parameter rules (codegen.parameters) as C: (condition on p, the index a failure is
+    reported on, what it says), in the order of the vector."""
+    relations = []
+    for rule in rules:
+        if rule.above >= 0:
+            relations.append((f"p[{rule.index}] > p[{rule.above}]", rule.index, f"{rule.name} > {rule.above_name}"))
+        if rule.inertia_of:
+            i = rule.inertia_of
+            relations.append((f"gac_inertia_admissible(p + {rule.index})", rule.index,
+                              f"Ixx_{i} .. Iyz_{i}: a physical inertia"))
+    return relations
+
+
+def _c_string(text: str) -> str:
+    """A text as a C string literal's contents (the rules' words are plain ASCII without quotes)."""
+    if not text.isascii() or '"' in text or "\\" in text:
+        raise AssertionError(f"not a plain C string: {text!r}")
+    return text
 
 
 def _check_kernels(functions: list[RenderedFunction]) -> bool:

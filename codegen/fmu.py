@@ -16,6 +16,7 @@ from xml.sax.saxutils import quoteattr
 from . import __version__
 from .artifact import GeneratedModel
 from .emit import _double_literal, _environment, param_doc
+from .parameters import parameter_rules
 from .scene import Scene, coordinate_names
 
 FMI_VERSION = "2.0"
@@ -109,8 +110,12 @@ def fmi2_variables(model: GeneratedModel, scene: Scene) -> list[Variable]:
     for c in scene.inputs:
         real.append((f"u.{c}", "input", "continuous", f"generalised force on {c}, held over each step",
                      coordinate_unit(c, force=True), 0.0))
-    for pname, value in zip(scene.parameter_names(), scene.parameter_vector().tolist()):
-        real.append((f"p.{pname}", "parameter", "fixed", param_doc(pname), _parameter_unit(pname), value))
+    bounds = {}                                     # the parameters' allowed ranges (codegen.parameters), as min, max
+    for rule, value in zip(parameter_rules(scene, layout.zero_params, model.bake_params),
+                           scene.parameter_vector().tolist()):
+        real.append((f"p.{rule.name}", "parameter", "fixed", param_doc(rule.name), _parameter_unit(rule.name), value))
+        bounds[f"p.{rule.name}"] = (_double_literal(rule.lo), _double_literal(rule.hi))
+    bounds["solver.dt"] = bounds["solver.h_max"] = ("0", None)
     for c, value in zip(coordinates, q0):
         real.append((f"q0.{c}", "parameter", "fixed", f"initial {c}", coordinate_unit(c), float(value)))
     for c, value in zip(coordinates, qd0):
@@ -127,8 +132,7 @@ def fmi2_variables(model: GeneratedModel, scene: Scene) -> list[Variable]:
             continue                                # built into the code: nothing to set
         variables.append(Variable(vname, vr, "Real", causality, variability, doc, unit,
                                   None if start is None else _double_literal(start),
-                                  "calculated" if causality == "output" else None,
-                                  min="0" if vname in ("solver.dt", "solver.h_max") else None))
+                                  "calculated" if causality == "output" else None, *bounds.get(vname, (None, None))))
     variables += [
         Variable("solver.method", 0, "Integer", "parameter", "fixed", "integrator: 0 RK4 (fixed step solver.dt), "
                  "1 DOPRI5, 2 DOP853", start=str(METHOD_START), min="0", max="2"),

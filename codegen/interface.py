@@ -179,6 +179,14 @@ FUNCTIONS = (
              (Arg("q", "double *", "out: the scene's initial coordinates (NQ)"),
               Arg("qd", "double *", "out: the scene's initial velocities (NQ)")),
              "The scene's initial state."),
+    Function("check_parameters", "int",
+             (Arg("p", "const double *", "parameters (NPARAM)"),
+              Arg("bad_index", "int *", "out: the parameter that fails, if any (NULL: not written)")),
+             "Every parameter in its allowed range and the relations between them (what the scene loader checks).",
+             "Each p[i] finite, within [lo, hi] of the descriptor's parameter_info[i] (which names it and says what it "
+             "allows in words), and 0 or at least DBL_MIN in magnitude; then the relations: a wall's max above its "
+             "min, a joint's upper limit above its lower one, a rigid link's inertia physical (reported on Ixx of "
+             "the link).  sim_init calls it.  Returns GAC_OK or GAC_ERR_BAD_PARAMETER."),
     Function("error_message", "const char *", (Arg("code", "int", "a return code"),),
              "Message for a return code (gac_error_message)."),
     Function("default_options", "void", (Arg("opt", "{name}_options *", "out (NULL: nothing is done)"),),
@@ -191,7 +199,8 @@ FUNCTIONS = (
               Arg("p", "const double *", "parameters (NPARAM, copied; NULL: the scene's)"),
               Arg("opt", "const {name}_options *", "options (copied; NULL: the defaults)")),
              "Start a simulation (gac_sim_init); on an error *sim is left unchanged.",
-             "Returns GAC_OK, GAC_ERR_NULL_ARGUMENT, GAC_ERR_BAD_OPTION, GAC_ERR_START_OUTSIDE or another error."),
+             "Returns GAC_OK, GAC_ERR_NULL_ARGUMENT, GAC_ERR_BAD_OPTION, GAC_ERR_BAD_PARAMETER (check_parameters says "
+             "which), GAC_ERR_START_OUTSIDE or another error."),
     Function("sim_advance", "int",
              (Arg("sim", "{name}_sim *", "an initialised simulation"),
               Arg("t_end", "double", "integrate up to this time (s), finite, >= sim->base.t"),
@@ -313,7 +322,7 @@ CODES = ("GAC_OK", "GAC_ERR_BAD_CONTACT", "GAC_ERR_SINGULAR_MASS", "GAC_ERR_SING
          "GAC_ERR_GIMBAL_LOCK", "GAC_ERR_BAD_OPTION", "GAC_ERR_MAX_STEPS", "GAC_ERR_STEP_SIZE",
          "GAC_ERR_NONFINITE", "GAC_ERR_TOO_MANY_CONTACTS", "GAC_ERR_SINGULAR_CONTACT", "GAC_ERR_IMPACT_ACCURACY",
          "GAC_ERR_UNSTABLE", "GAC_ERR_LOST_CONTACT", "GAC_ERR_START_OUTSIDE", "GAC_ERR_NULL_ARGUMENT",
-         "GAC_ERR_BAD_MODEL", "GAC_ERR_BAD_INPUT")
+         "GAC_ERR_BAD_MODEL", "GAC_ERR_BAD_INPUT", "GAC_ERR_FRICTION", "GAC_ERR_BAD_PARAMETER")
 STOPS = ("GAC_SIM_END", "GAC_SIM_IMPACT", "GAC_SIM_CONTACT")
 METHODS = ("GAC_METHOD_RK4", "GAC_METHOD_DOPRI5", "GAC_METHOD_DOP853")
 LIMITS = ("GAC_LCP_CAP", "GAC_MAX_ROUNDS")
@@ -350,8 +359,9 @@ STRUCTS = (
                            "int trow[2]"), partial=False),
     Struct("gac_run_summary", ("long n_impacts", "double t_first_impact", "double energy_impact_loss",
                                "long n_contact_events"), partial=False),
+    Struct("gac_parameter_info", ("const char *name", "double lo", "double hi", "const char *range"), partial=False),
     Struct("gac_model", ("const char *name", "int n", "int nq", "int nx", "int nparam", "int nu", "int npoint",
-                         "int ncontact", "int njrow")),
+                         "int ncontact", "int njrow", "const gac_parameter_info *parameter_info")),
 )
 
 _MODEL = Arg("m", "const gac_model *", "a model descriptor")
@@ -363,6 +373,8 @@ LIBRARY_FUNCTIONS = (
     Function("record_ndouble", "long", (_MODEL,), "Doubles of an impact record's storage."),
     Function("record_nint", "long", (_MODEL,), "Ints of an impact record's storage."),
     Function("chart_measure", "double", (_MODEL, _q()), "The base chart's measure |det E| at q."),
+    Function("inertia_admissible", "int", (Arg("I", "const double *", "Ixx, Iyy, Izz, Ixy, Ixz, Iyz (kg m^2)"),),
+             "1 if I is a physical inertia (the rule of a rigid link's inertia parameters)."),
     Function("error_message", "const char *", (Arg("code", "int", "a return code"),), "Message for a code."),
     Function("sim_run", "int",
              (Arg("sim", "gac_sim *", "an initialised simulation"), Arg("t_end", "double", "end time (s)"),

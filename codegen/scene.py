@@ -46,7 +46,8 @@ MAX_LINKS_REASON = (f"at most {MAX_LINKS} links: generating and compiling the mo
 LENGTH_RANGE = (1e-9, 1e9)        # m
 MASS_RANGE = (1e-12, 1e12)        # kg, and kg/m for mu
 INERTIA_MAX = 1e100               # |J| (kg m), |I| (kg m^2): 0 or at least the smallest normal double
-COORDINATE_MAX = 1e9              # |wall position| (m), |gravity| (m/s^2), |initial state entry|
+COORDINATE_MAX = 1e9              # |wall position| (m), |initial state entry|
+GRAVITY_MAX = 1e6                 # |gravity| (m/s^2)
 
 
 class SceneError(ValueError):
@@ -168,6 +169,8 @@ class RigidLink:
         inertia = np.array(_matrix3([list(r) for r in self.inertia], f"{where}.inertia", INERTIA_MAX))
         if not np.allclose(inertia, inertia.T, rtol=0, atol=1e-12 * max(1.0, np.abs(inertia).max())):
             raise SceneError(f"{where}.inertia: must be symmetric")
+        for k in range(3):                      # the moments about the axes (a parameter's range: Ixx, Iyy, Izz)
+            _nonnegative(inertia[k, k], f"{where}.inertia[{k}][{k}]")
         eig = np.linalg.eigvalsh(inertia)
         tol = 1e-12 * max(1.0, eig.max())
         if eig.min() < -tol:
@@ -402,7 +405,7 @@ class Scene:
             raise SceneError("base_twists: expected 3 matrices (T_-1, T_0, T_1)")
         object.__setattr__(self, "base_twists", base)
         object.__setattr__(self, "gravity", _number(self.gravity, "gravity"))
-        if abs(self.gravity) > 1e6:
+        if abs(self.gravity) > GRAVITY_MAX:
             raise SceneError(f"gravity: must be within [-1e6, 1e6] m/s^2, got {self.gravity!r}")
         object.__setattr__(self, "friction_velocity", _in_range(self.friction_velocity, "friction_velocity",
                                                                 FRICTION_VELOCITY_RANGE, "m/s"))
@@ -574,34 +577,13 @@ class Scene:
         return np.array(values, dtype=float)
 
     def check_parameters(self, p, changed=None) -> None:
-        """Refuse a parameter vector p (layout of parameter_names()) that a scene file could not give:
-        every value in its range, rigid links' inertias physical, each wall pair ordered (min < max).
-        ``changed``: the names whose values may differ from the scene's (the others were checked when the
-        scene was built; default: all).
+        """Refuse a parameter vector p (layout of parameter_names()) that a scene file could not give: every value in
+        its range, rigid links' inertias physical, each wall pair and joint's limits ordered (min < max, lower <
+        upper); the rules of codegen.parameters, which the generated C checks too.  ``changed``: the names whose
+        values may differ from the scene's (the others were checked when the scene was built; default: all).
         (Whether the start lies inside the walls is the caller's check: it depends on the state too.)"""
-        names = self.parameter_names()
-        p = np.asarray(p)
-        if p.shape != (len(names),):
-            raise SceneError(f"p: expected {len(names)} values ({', '.join(names)}), got shape {p.shape}")
-        value = dict(zip(names, p.tolist()))
-        for name in (names if changed is None else changed):
-            check_parameter(name, value[name])
-        for i, link in enumerate(self.links, start=1):
-            if link.kind == "rigid" and (changed is None or any(name.endswith(f"_{i}") for name in changed)):
-                l, m, cx, cy, cz, Ixx, Iyy, Izz, Ixy, Ixz, Iyz = (value[f"{key}_{i}"] for key in link.param_names)
-                try:
-                    RigidLink(l, m, (cx, cy, cz), ((Ixx, Ixy, Ixz), (Ixy, Iyy, Iyz), (Ixz, Iyz, Izz))).validate("")
-                except SceneError as exc:
-                    raise SceneError(f"p[Ixx_{i} .. Iyz_{i}]: the inertia of link {i}{str(exc)[len('.inertia'):]}") \
-                        from None
-        for k in range(2, self.n + 1):
-            lo, hi = value.get(f"lower_{k}"), value.get(f"upper_{k}")
-            if lo is not None and hi is not None and not lo < hi:
-                raise SceneError(f"p[upper_{k}]: must be > p[lower_{k}] = {lo!r}, got {hi!r}")
-        for axis in (1, 2, 3):
-            lo, hi = value.get(f"wall_x{axis}_min"), value.get(f"wall_x{axis}_max")
-            if lo is not None and hi is not None and not lo < hi:
-                raise SceneError(f"p[wall_x{axis}_max]: must be > p[wall_x{axis}_min] = {lo!r}, got {hi!r}")
+        from .parameters import check_vector, parameter_rules
+        check_vector(parameter_rules(self), p, changed)
 
     def stops(self) -> list[tuple[int, JointStop]]:
         """The joint stops as (joint k, JointStop) pairs, joint order, lower before upper."""
@@ -628,39 +610,6 @@ class Scene:
 def stop_rows(stops) -> list[tuple[int, str]]:
     """One Jacobian row (k, "theta") per joint that has a stop, in joint order."""
     return [(k, "theta") for k in sorted({k for k, _ in stops})]
-
-
-def check_parameter(name: str, value: float) -> float:
-    """One entry of a parameter vector (named as in Scene.parameter_names()) in its allowed range."""
-    field = f"p[{name}]"
-    kind = name.rsplit("_", 1)[0] if name[-1].isdigit() else name
-    if kind == "g":
-        value = _number(value, field)
-        if abs(value) > 1e6:
-            raise SceneError(f"{field}: must be within [-1e6, 1e6] m/s^2, got {value!r}")
-    elif kind == "l":
-        value = _in_range(value, field, LENGTH_RANGE, "m")
-    elif kind == "mu":
-        value = _in_range(value, field, MASS_RANGE, "kg/m")
-    elif kind == "m":
-        value = _in_range(value, field, MASS_RANGE, "kg")
-    elif kind in ("Jxx", "Jyy", "Jzz", "Ixx", "Iyy", "Izz"):
-        value = _nonnegative(value, field)
-    elif kind in ("Ixy", "Ixz", "Iyz"):
-        value = _number(value, field, INERTIA_MAX)
-    elif kind in ("stiffness", "damping"):
-        value = _nonnegative(value, field, STIFFNESS_MAX)
-    elif name.startswith("friction_"):
-        value = _number(value, field)
-        if not 0.0 <= value <= FRICTION_MAX:
-            raise SceneError(f"{field}: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {value!r}")
-    elif name.startswith("e_"):
-        value = _number(value, field)
-        if not 0.0 <= value <= 1.0:
-            raise SceneError(f"{field}: restitution must be in [0, 1], got {value!r}")
-    else:                                   # centre of mass offsets, wall positions (m), rest angles (rad)
-        value = _number(value, field)
-    return value
 
 
 # ---------------------------------------------------------------------------

@@ -75,6 +75,9 @@
                                           is NaN or infinite */
 #define GAC_ERR_FRICTION         -23   /* the resting contacts with Coulomb friction have no unique, bounded normal
                                           forces (their system is no P-matrix: the Painleve paradox) */
+#define GAC_ERR_BAD_PARAMETER    -24   /* a parameter is outside its allowed range or breaks a relation with others
+                                          (gac_check_parameters gives its index; the model's parameter_info its
+                                          name and what it allows) */
 
 /* ---- what gac_sim_advance stops at (> 0) ------------------------------------------------------ */
 #define GAC_SIM_END      1    /* reached t_end */
@@ -151,6 +154,22 @@ typedef struct {
     double theta0_value;  /* rad */
 } gac_chart;
 
+/* What one parameter may be (a row of gac_model.parameter_info): finite, lo <= p[i] <= hi, and 0 or at least the
+ * smallest normal double (DBL_MIN) in magnitude; lo = hi for a value the model has built in.  range says it in
+ * words, with the relation the model's check names this parameter by if there is one
+ * ("must be within [-1e+09, 1e+09] m, and > wall_x1_min"). */
+typedef struct {
+    const char *name;     /* as in the parameter layout: "g", "l_3", "e_x2_min", "upper_2" */
+    double lo, hi;
+    const char *range;
+} gac_parameter_info;
+
+/* A model's check of a parameter vector p (nparam): GAC_OK, or GAC_ERR_BAD_PARAMETER with *bad_index (if bad_index
+ * is not NULL) the first parameter outside its range (parameter_info) or, when every range holds, the parameter a
+ * failed relation is named by (a wall's max not above its min, a joint's upper limit not above its lower one,
+ * a rigid link's inertia not physical: Ixx of that link). */
+typedef int (*gac_parameter_check)(const double *p, int *bad_index);
+
 typedef struct {
     const char *name;     /* the model's name (NAME) */
     int n;                /* real links (information only) */
@@ -186,11 +205,31 @@ typedef struct {
     double friction_velocity;          /* v_s (m/s, > 0 when a contact has friction): a resting point slides against
                                           -mu lambda v_t / max(|v_t|, v_s), lambda its normal force, v_t its
                                           velocity along the wall (Coulomb above v_s, viscous below) */
+    gac_parameter_check check_parameters;  /* the ranges of parameter_info and the relations between parameters;
+                                          called by gac_sim_init (NULL: parameters need only be finite) */
+    const gac_parameter_info *parameter_info; /* [nparam]: each parameter's name and allowed values (NULL: none) */
 } gac_model;
 
 /* GAC_OK if the descriptor is consistent (sizes > 0 where needed, nx = 2 nq, tables and kernels present,
- * contact entries in range), else GAC_ERR_BAD_MODEL (m NULL: GAC_ERR_NULL_ARGUMENT). */
+ * contact entries in range, parameter_info rows named with lo <= hi), else GAC_ERR_BAD_MODEL (m NULL:
+ * GAC_ERR_NULL_ARGUMENT). */
 int gac_model_check(const gac_model *m);
+
+/* ---- parameters ------------------------------------------------------------------------------- */
+
+/* Every parameter finite and, when the model has a check_parameters, in its range and relations: GAC_OK,
+ * GAC_ERR_BAD_PARAMETER (*bad_index, if bad_index is not NULL: the parameter that fails; m->parameter_info, when
+ * not NULL, names it and says what it allows) or GAC_ERR_NULL_ARGUMENT (m or p NULL).  gac_sim_init calls it. */
+int gac_check_parameters(const gac_model *m, const double *p, int *bad_index);
+
+/* 1 if value is finite, within [lo, hi], and 0 or at least DBL_MIN in magnitude; else 0.  The range test of one
+ * parameter (lo, hi of its parameter_info row). */
+int gac_in_range(double value, double lo, double hi);
+
+/* 1 if I = (Ixx, Iyy, Izz, Ixy, Ixz, Iyz) (kg m^2, about the centre of mass) is a physical inertia: its principal
+ * moments a <= b <= c (eigenvalues by cyclic Jacobi rotations) have a >= -tol and a + b >= c - tol,
+ * tol = 1e-12 max(1, c), the scene loader's test; else 0.  The six entries must be finite. */
+int gac_inertia_admissible(const double *I);
 
 /* ---- the dense matrices, formed from the kernels' O(n) operators (O(n^2) each; for analysis) -------- */
 
@@ -418,13 +457,15 @@ void gac_default_options(gac_options *opt);
  * dwork: gac_sim_ndouble(m) doubles, iwork: gac_sim_nint(m) ints, owned by the caller for the life of sim.
  * Pointers: sim, m, dwork, iwork, q and qd must not be NULL (GAC_ERR_NULL_ARGUMENT); opt NULL means the
  * default options (gac_default_options), p NULL the model's default_parameters.
- * Refused: an inconsistent model (GAC_ERR_BAD_MODEL); options out of range, t0, q or qd not finite
- * (GAC_ERR_BAD_OPTION); a contact point beyond its wall, gap < -(contact_tol + w + 1e-12 max(1 m, l))
- * (GAC_ERR_START_OUTSIDE), w the simultaneity window (contact_tol, or for the adaptive methods
- * 100 (atol + rtol l) if larger; l the largest |point coordinate|): the depth at which the loop itself
- * reports a lost contact.  A start on or inside the walls is accepted, and so is a state the loop itself
- * left (its resting contacts held at their landing gaps).  On any of these errors *sim, dwork and iwork
- * are left unchanged; sim must have been initialised with GAC_OK before it is passed to gac_sim_advance.
+ * Refused: an inconsistent model (GAC_ERR_BAD_MODEL); options out of range (GAC_ERR_BAD_OPTION); a parameter
+ * not finite, or outside its range or relations (m->check_parameters; GAC_ERR_BAD_PARAMETER, gac_check_parameters
+ * says which); t0, q or qd not finite (GAC_ERR_BAD_OPTION); a contact point beyond its wall,
+ * gap < -(contact_tol + w + 1e-12 max(1 m, l)) (GAC_ERR_START_OUTSIDE), w the simultaneity window (contact_tol,
+ * or for the adaptive methods 100 (atol + rtol l) if larger; l the largest |point coordinate|): the depth at
+ * which the loop itself reports a lost contact.  A start on or inside the walls is accepted, and so is a state
+ * the loop itself left (its resting contacts held at their landing gaps).  On any of these errors *sim, dwork
+ * and iwork are left unchanged; sim must have been initialised with GAC_OK before it is passed to
+ * gac_sim_advance.
  * Returns GAC_OK or an error (< 0). */
 int gac_sim_init(gac_sim *sim, const gac_model *m, double *dwork, int *iwork, double t0, const double *q,
                  const double *qd, const double *p, const gac_options *opt);

@@ -1,7 +1,10 @@
 /*
- * gac_model.c -- the model descriptor's check, the workspace sizes and the error messages.
+ * gac_model.c -- the model descriptor's check, the parameters' checks, the workspace sizes and the error messages.
  */
 #include "gac_internal.h"
+
+#include <float.h>
+#include <math.h>
 
 int gac_model_check(const gac_model *m)
 {
@@ -18,6 +21,10 @@ int gac_model_check(const gac_model *m)
         || m->contact_gaps == 0 || m->contact_bias == 0 || m->energy == 0 || m->rhs == 0)
         return GAC_ERR_BAD_MODEL;
     if (m->chart.theta0_index >= m->nq) return GAC_ERR_BAD_MODEL;
+    for (c = 0; m->parameter_info != 0 && c < m->nparam; ++c) {
+        const gac_parameter_info *info = &m->parameter_info[c];
+        if (info->name == 0 || info->range == 0 || !(info->lo <= info->hi)) return GAC_ERR_BAD_MODEL;
+    }
     for (c = 0; c < m->ncontact; ++c) {
         const gac_contact *k = &m->contacts[c];
         if ((k->normal_sign != 1 && k->normal_sign != -1) || k->row < 0 || k->row >= m->njrow
@@ -36,6 +43,88 @@ int gac_model_check(const gac_model *m)
         }
     }
     return GAC_OK;
+}
+
+int gac_in_range(double value, double lo, double hi)
+{
+    return value - value == 0.0 && lo <= value && value <= hi && (value == 0.0 || fabs(value) >= DBL_MIN);
+}
+
+/* The eigenvalues of the symmetric 3x3 matrix A (overwritten) by cyclic Jacobi rotations (Golub and Van Loan,
+ * Matrix Computations, section 8.4, sym.schur2): each rotation makes one off-diagonal entry zero; the sweeps stop
+ * once the off-diagonal part is below 1e-18 of the whole (|A| <= 1 here: no overflow). */
+static void gac_eigenvalues3(double A[3][3], double ev[3])
+{
+    int sweep, p, q, r;
+    for (sweep = 0; sweep < 32; ++sweep) {
+        const double off = A[0][1] * A[0][1] + A[0][2] * A[0][2] + A[1][2] * A[1][2];
+        const double all = 2.0 * off + A[0][0] * A[0][0] + A[1][1] * A[1][1] + A[2][2] * A[2][2];
+        if (!(off > 1e-36 * all)) break;
+        for (p = 0; p < 2; ++p) {
+            for (q = p + 1; q < 3; ++q) {
+                double tau, t, c, s;
+                if (A[p][q] == 0.0) continue;
+                tau = (A[q][q] - A[p][p]) / (2.0 * A[p][q]);
+                t = (tau >= 0.0 ? 1.0 : -1.0) / (fabs(tau) + sqrt(1.0 + tau * tau));
+                c = 1.0 / sqrt(1.0 + t * t);
+                s = t * c;
+                for (r = 0; r < 3; ++r) {                     /* A J: columns p and q */
+                    const double arp = A[r][p], arq = A[r][q];
+                    A[r][p] = c * arp - s * arq;
+                    A[r][q] = s * arp + c * arq;
+                }
+                for (r = 0; r < 3; ++r) {                     /* J^T (A J): rows p and q */
+                    const double apr = A[p][r], aqr = A[q][r];
+                    A[p][r] = c * apr - s * aqr;
+                    A[q][r] = s * apr + c * aqr;
+                }
+                A[p][q] = A[q][p] = 0.0;
+            }
+        }
+    }
+    for (p = 0; p < 3; ++p) ev[p] = A[p][p];
+}
+
+int gac_inertia_admissible(const double *I)
+{
+    double A[3][3], ev[3], scale = 0.0, tol, swap;
+    int i, j;
+    A[0][0] = I[0]; A[1][1] = I[1]; A[2][2] = I[2];
+    A[0][1] = A[1][0] = I[3];
+    A[0][2] = A[2][0] = I[4];
+    A[1][2] = A[2][1] = I[5];
+    for (i = 0; i < 6; ++i) {
+        if (fabs(I[i]) > scale) scale = fabs(I[i]);
+    }
+    if (scale == 0.0) return 1;
+    for (i = 0; i < 3; ++i) {                                 /* scaled to |A| <= 1, the eigenvalues scaled back */
+        for (j = 0; j < 3; ++j) A[i][j] /= scale;
+    }
+    gac_eigenvalues3(A, ev);
+    for (i = 0; i < 3; ++i) {
+        ev[i] *= scale;
+        for (j = i; j > 0 && ev[j] < ev[j - 1]; --j) {         /* ascending: a <= b <= c */
+            swap = ev[j];
+            ev[j] = ev[j - 1];
+            ev[j - 1] = swap;
+        }
+    }
+    tol = 1e-12 * (ev[2] > 1.0 ? ev[2] : 1.0);
+    return ev[0] >= -tol && ev[0] + ev[1] >= ev[2] - tol;
+}
+
+int gac_check_parameters(const gac_model *m, const double *p, int *bad_index)
+{
+    int i;
+    if (m == 0 || p == 0) return GAC_ERR_NULL_ARGUMENT;
+    for (i = 0; i < m->nparam; ++i) {
+        if (!(p[i] - p[i] == 0.0)) {
+            if (bad_index != 0) *bad_index = i;
+            return GAC_ERR_BAD_PARAMETER;
+        }
+    }
+    if (m->check_parameters == 0 || m->check_parameters(p, bad_index) == GAC_OK) return GAC_OK;
+    return GAC_ERR_BAD_PARAMETER;
 }
 
 /* 1 if some contact of the model has friction. */
@@ -97,7 +186,8 @@ const char *gac_error_message(int code)
     case GAC_ERR_LOST_CONTACT: return "a point lies beyond its wall at an impact: a wall crossing was missed, the motion is too fast or I_f too ill-conditioned (extreme mass, length or inertia ratios) for the tolerance";
     case GAC_ERR_BAD_INPUT: return "an input is NaN or infinite: the inputs given to sim_set_input, and those a controller writes, must be finite";
     case GAC_ERR_FRICTION: return "the resting contacts with Coulomb friction have no unique, bounded normal forces at this state: their system B (the normal rows of I_f^-1 applied to the normal and friction directions) is no P-matrix (a principal minor <= 0), the Painleve paradox of sliding friction (a tangential impact the model does not have); lower the friction coefficient";
-    case GAC_ERR_BAD_MODEL: return "the model descriptor is inconsistent: nq >= 1, nx = 2 nq, npoint >= 1, ncontact, njrow, nparam, nu >= 0, every table and kernel present, each contact's kind, point, axis (a stop: its coordinate), normal sign, Jacobian row and restitution index in range";
+    case GAC_ERR_BAD_MODEL: return "the model descriptor is inconsistent: nq >= 1, nx = 2 nq, npoint >= 1, ncontact, njrow, nparam, nu >= 0, every table and kernel present, each contact's kind, point, axis (a stop: its coordinate), normal sign, Jacobian row and restitution index in range, each parameter_info row named with lo <= hi";
+    case GAC_ERR_BAD_PARAMETER: return "a parameter is outside its allowed range (not finite, beyond [lo, hi], or nonzero below the smallest normal double) or breaks a relation (a wall's max not above its min, a joint's upper limit not above its lower one, a rigid link's inertia not physical): gac_check_parameters gives its index, the model's parameter_info its name and the values it allows";
     default: return "unknown error code";
     }
 }

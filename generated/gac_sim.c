@@ -109,8 +109,8 @@ void gac_sim_bind(gac_sim *s, const gac_model *md, double *dwork, int *iwork)
     s->n_shrink = iwork + md->nq + nc1;
 }
 
-/* gac_sim_init once its pointers and the model are checked: the options, the state and the start inside
- * the walls checked before anything is written. */
+/* gac_sim_init once its pointers and the model are checked: the options, the parameters, the state and the start
+ * inside the walls checked before anything is written. */
 static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iwork, double t0,
                          const double *q, const double *qd, const double *p, const gac_options *opt)
 {
@@ -127,6 +127,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
         || opt->max_steps < 0 || !(opt->rest_height < 1e300) || opt->zeno_impacts < 0)
         return GAC_ERR_BAD_OPTION;
     for (i = 0; i < md->nparam; ++i) pv[i] = p == 0 ? md->default_parameters[i] : p[i];   /* NULL: the defaults */
+    if (gac_check_parameters(md, pv, 0) != GAC_OK) return GAC_ERR_BAD_PARAMETER;
     for (i = 0; i < md->nq; ++i) {
         x[i] = q[i];
         x[md->nq + i] = qd[i];

@@ -1132,6 +1132,40 @@ static const double paper_case1_parameters[PAPER_CASE1_NPARAM] = {
 static const double paper_case1_q0[PAPER_CASE1_NQ] = { 0.7853981633974483, -1.5707963267948966, -1.5707963267948966, -1.5707963267948966, 1.5, 0.3 };
 static const double paper_case1_qd0[PAPER_CASE1_NQ] = { 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 };
 
+/* Each parameter's name and allowed values: finite, within [lo, hi], 0 or at least DBL_MIN in magnitude; the rule
+ * in words (codegen/parameters.py: the rules the scene loader and simulate() apply). */
+static const gac_parameter_info paper_case1_parameter_info[PAPER_CASE1_NPARAM] = {
+    { "g", -1000000.0, 1000000.0, "must be within [-1e6, 1e6] m/s^2" },
+    { "l_1", 1e-09, 1000000000.0, "must be in [1e-09, 1e+09] m" },
+    { "mu_1", 1e-12, 1000000000000.0, "must be in [1e-12, 1e+12] kg/m" },
+    { "Jxx_1", 0.0, 1e+100, "must be >= 0 and <= 1e+100 kg m" },
+    { "Jyy_1", 0.0, 1e+100, "must be >= 0 and <= 1e+100 kg m" },
+    { "Jzz_1", 0.0, 1e+100, "must be >= 0 and <= 1e+100 kg m" },
+    { "l_2", 1e-09, 1000000000.0, "must be in [1e-09, 1e+09] m" },
+    { "mu_2", 1e-12, 1000000000000.0, "must be in [1e-12, 1e+12] kg/m" },
+    { "Jxx_2", 0.0, 1e+100, "must be >= 0 and <= 1e+100 kg m" },
+    { "Jyy_2", 0.0, 1e+100, "must be >= 0 and <= 1e+100 kg m" },
+    { "Jzz_2", 0.0, 1e+100, "must be >= 0 and <= 1e+100 kg m" },
+    { "l_3", 1e-09, 1000000000.0, "must be in [1e-09, 1e+09] m" },
+    { "mu_3", 1e-12, 1000000000000.0, "must be in [1e-12, 1e+12] kg/m" },
+    { "Jxx_3", 0.0, 1e+100, "must be >= 0 and <= 1e+100 kg m" },
+    { "Jyy_3", 0.0, 1e+100, "must be >= 0 and <= 1e+100 kg m" },
+    { "Jzz_3", 0.0, 1e+100, "must be >= 0 and <= 1e+100 kg m" },
+    { "l_4", 1e-09, 1000000000.0, "must be in [1e-09, 1e+09] m" },
+    { "mu_4", 1e-12, 1000000000000.0, "must be in [1e-12, 1e+12] kg/m" },
+    { "Jxx_4", 0.0, 1e+100, "must be >= 0 and <= 1e+100 kg m" },
+    { "Jyy_4", 0.0, 1e+100, "must be >= 0 and <= 1e+100 kg m" },
+    { "Jzz_4", 0.0, 1e+100, "must be >= 0 and <= 1e+100 kg m" },
+    { "wall_x1_min", -1000000000.0, 1000000000.0, "must be within [-1e+09, 1e+09] m" },
+    { "wall_x1_max", -1000000000.0, 1000000000.0, "must be within [-1e+09, 1e+09] m, and > wall_x1_min" },
+    { "wall_x2_min", -1000000000.0, 1000000000.0, "must be within [-1e+09, 1e+09] m" },
+    { "wall_x2_max", -1000000000.0, 1000000000.0, "must be within [-1e+09, 1e+09] m, and > wall_x2_min" },
+    { "e_x1_min", 0.0, 1.0, "restitution must be in [0, 1]" },
+    { "e_x1_max", 0.0, 1.0, "restitution must be in [0, 1]" },
+    { "e_x2_min", 0.0, 1.0, "restitution must be in [0, 1]" },
+    { "e_x2_max", 0.0, 1.0, "restitution must be in [0, 1]" },
+};
+
 const gac_model paper_case1_model = {
     .name = "paper_case1",
     .n = PAPER_CASE1_N, .nq = PAPER_CASE1_NQ, .nx = PAPER_CASE1_NX, .nparam = PAPER_CASE1_NPARAM, .nu = PAPER_CASE1_NU,
@@ -1145,7 +1179,8 @@ const gac_model paper_case1_model = {
     .contact_points = paper_case1_contact_points, .contact_velocities = paper_case1_contact_velocities,
     .contact_generalized_force = paper_case1_contact_generalized_force, .contact_gaps = paper_case1_contact_gaps,
     .contact_bias = paper_case1_contact_bias, .energy = paper_case1_energy, .rhs = paper_case1_rhs,
-    .power = 0   /* no inputs, springs or dampers: only gravity works in flight */
+    .power = 0,   /* no inputs, springs or dampers: only gravity works in flight */
+    .check_parameters = paper_case1_check_parameters, .parameter_info = paper_case1_parameter_info
 };
 
 /* The storage of paper_case1.h agrees with the library's formulas (both come from one formula). */
@@ -1203,6 +1238,20 @@ void paper_case1_default_parameters(double *p)
 {
     int i;
     for (i = 0; i < PAPER_CASE1_NPARAM; ++i) p[i] = paper_case1_parameters[i];
+}
+
+/* Every parameter in its range (paper_case1_parameter_info), then the relations between them. */
+int paper_case1_check_parameters(const double *p, int *bad_index)
+{
+    int i, bad = -1;
+    for (i = 0; i < PAPER_CASE1_NPARAM && bad < 0; ++i) {
+        if (!gac_in_range(p[i], paper_case1_parameter_info[i].lo, paper_case1_parameter_info[i].hi)) bad = i;
+    }
+    if (bad < 0 && !(p[22] > p[21])) bad = 22;   /* wall_x1_max > wall_x1_min */
+    if (bad < 0 && !(p[24] > p[23])) bad = 24;   /* wall_x2_max > wall_x2_min */
+    if (bad < 0) return GAC_OK;
+    if (bad_index != 0) *bad_index = bad;
+    return GAC_ERR_BAD_PARAMETER;
 }
 
 void paper_case1_initial_state(double *q, double *qd)

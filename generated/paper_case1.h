@@ -36,36 +36,41 @@
  *     T_3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
  *     T_4 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
  *
- *   Parameter vector p (NPARAM = 29), with the scene's values:
- *     p[0] g          = 9.81                   gravity along -X2 (m/s^2)
- *     p[1] l_1        = 1.0                    link 1: length (m)
- *     p[2] mu_1       = 1.0                    link 1: mass per unit length (kg/m)
- *     p[3] Jxx_1      = 5.89e-05               link 1: moment of inertia per unit length about x (kg m)
- *     p[4] Jyy_1      = 2.94e-05               link 1: moment of inertia per unit length about y (kg m)
- *     p[5] Jzz_1      = 2.94e-05               link 1: moment of inertia per unit length about z (kg m)
- *     p[6] l_2        = 1.0                    link 2: length (m)
- *     p[7] mu_2       = 1.0                    link 2: mass per unit length (kg/m)
- *     p[8] Jxx_2      = 5.89e-05               link 2: moment of inertia per unit length about x (kg m)
- *     p[9] Jyy_2      = 2.94e-05               link 2: moment of inertia per unit length about y (kg m)
- *     p[10] Jzz_2      = 2.94e-05               link 2: moment of inertia per unit length about z (kg m)
- *     p[11] l_3        = 1.0                    link 3: length (m)
- *     p[12] mu_3       = 1.0                    link 3: mass per unit length (kg/m)
- *     p[13] Jxx_3      = 5.89e-05               link 3: moment of inertia per unit length about x (kg m)
- *     p[14] Jyy_3      = 2.94e-05               link 3: moment of inertia per unit length about y (kg m)
- *     p[15] Jzz_3      = 2.94e-05               link 3: moment of inertia per unit length about z (kg m)
- *     p[16] l_4        = 1.0                    link 4: length (m)
- *     p[17] mu_4       = 1.0                    link 4: mass per unit length (kg/m)
- *     p[18] Jxx_4      = 5.89e-05               link 4: moment of inertia per unit length about x (kg m)
- *     p[19] Jyy_4      = 2.94e-05               link 4: moment of inertia per unit length about y (kg m)
- *     p[20] Jzz_4      = 2.94e-05               link 4: moment of inertia per unit length about z (kg m)
- *     p[21] wall_x1_min = 0.0                    position of wall x1_min (m)
- *     p[22] wall_x1_max = 3.0                    position of wall x1_max (m)
- *     p[23] wall_x2_min = 0.0                    position of wall x2_min (m)
- *     p[24] wall_x2_max = 2.0                    position of wall x2_max (m)
- *     p[25] e_x1_min   = 1.0                    restitution of wall x1_min (-)
- *     p[26] e_x1_max   = 1.0                    restitution of wall x1_max (-)
- *     p[27] e_x2_min   = 1.0                    restitution of wall x2_min (-)
- *     p[28] e_x2_max   = 1.0                    restitution of wall x2_max (-)
+ *   Parameter vector p (NPARAM = 29), with the scene's values and allowed ranges:
+ *     p[0] g          = 9.81                   gravity along -X2 (m/s^2)  [-1e+06, 1e+06]
+ *     p[1] l_1        = 1.0                    link 1: length (m)  [1e-09, 1e+09]
+ *     p[2] mu_1       = 1.0                    link 1: mass per unit length (kg/m)  [1e-12, 1e+12]
+ *     p[3] Jxx_1      = 5.89e-05               link 1: moment of inertia per unit length about x (kg m)  [0, 1e+100]
+ *     p[4] Jyy_1      = 2.94e-05               link 1: moment of inertia per unit length about y (kg m)  [0, 1e+100]
+ *     p[5] Jzz_1      = 2.94e-05               link 1: moment of inertia per unit length about z (kg m)  [0, 1e+100]
+ *     p[6] l_2        = 1.0                    link 2: length (m)  [1e-09, 1e+09]
+ *     p[7] mu_2       = 1.0                    link 2: mass per unit length (kg/m)  [1e-12, 1e+12]
+ *     p[8] Jxx_2      = 5.89e-05               link 2: moment of inertia per unit length about x (kg m)  [0, 1e+100]
+ *     p[9] Jyy_2      = 2.94e-05               link 2: moment of inertia per unit length about y (kg m)  [0, 1e+100]
+ *     p[10] Jzz_2      = 2.94e-05               link 2: moment of inertia per unit length about z (kg m)  [0, 1e+100]
+ *     p[11] l_3        = 1.0                    link 3: length (m)  [1e-09, 1e+09]
+ *     p[12] mu_3       = 1.0                    link 3: mass per unit length (kg/m)  [1e-12, 1e+12]
+ *     p[13] Jxx_3      = 5.89e-05               link 3: moment of inertia per unit length about x (kg m)  [0, 1e+100]
+ *     p[14] Jyy_3      = 2.94e-05               link 3: moment of inertia per unit length about y (kg m)  [0, 1e+100]
+ *     p[15] Jzz_3      = 2.94e-05               link 3: moment of inertia per unit length about z (kg m)  [0, 1e+100]
+ *     p[16] l_4        = 1.0                    link 4: length (m)  [1e-09, 1e+09]
+ *     p[17] mu_4       = 1.0                    link 4: mass per unit length (kg/m)  [1e-12, 1e+12]
+ *     p[18] Jxx_4      = 5.89e-05               link 4: moment of inertia per unit length about x (kg m)  [0, 1e+100]
+ *     p[19] Jyy_4      = 2.94e-05               link 4: moment of inertia per unit length about y (kg m)  [0, 1e+100]
+ *     p[20] Jzz_4      = 2.94e-05               link 4: moment of inertia per unit length about z (kg m)  [0, 1e+100]
+ *     p[21] wall_x1_min = 0.0                    position of wall x1_min (m)  [-1e+09, 1e+09]
+ *     p[22] wall_x1_max = 3.0                    position of wall x1_max (m)  [-1e+09, 1e+09]
+ *     p[23] wall_x2_min = 0.0                    position of wall x2_min (m)  [-1e+09, 1e+09]
+ *     p[24] wall_x2_max = 2.0                    position of wall x2_max (m)  [-1e+09, 1e+09]
+ *     p[25] e_x1_min   = 1.0                    restitution of wall x1_min (-)  [0, 1]
+ *     p[26] e_x1_max   = 1.0                    restitution of wall x1_max (-)  [0, 1]
+ *     p[27] e_x2_min   = 1.0                    restitution of wall x2_min (-)  [0, 1]
+ *     p[28] e_x2_max   = 1.0                    restitution of wall x2_max (-)  [0, 1]
+ *   Allowed values, checked by paper_case1_check_parameters (which paper_case1_sim_init calls: GAC_ERR_BAD_PARAMETER):
+ *   each p[i] finite, within its range above, 0 or at least DBL_MIN in magnitude (the row
+ *   paper_case1_model.parameter_info[i]: name, lo, hi, the rule in words), and
+ *     wall_x1_max > wall_x1_min
+ *     wall_x2_max > wall_x2_min
  *
  *   Named parameter indices: PAPER_CASE1_P_<NAME> (below), e.g. p[PAPER_CASE1_P_G].
  *
@@ -393,6 +398,16 @@ void paper_case1_default_parameters(double *p);
  */
 void paper_case1_initial_state(double *q, double *qd);
 
+/* Every parameter in its allowed range and the relations between them (what the scene loader checks).
+ * Each p[i] finite, within [lo, hi] of the descriptor's parameter_info[i] (which names it and says what it
+ * allows in words), and 0 or at least DBL_MIN in magnitude; then the relations: a wall's max above its
+ * min, a joint's upper limit above its lower one, a rigid link's inertia physical (reported on Ixx of the
+ * link).  sim_init calls it.  Returns GAC_OK or GAC_ERR_BAD_PARAMETER.
+ *   p            parameters (NPARAM)
+ *   bad_index    out: the parameter that fails, if any (NULL: not written)
+ */
+int paper_case1_check_parameters(const double *p, int *bad_index);
+
 /* Message for a return code (gac_error_message).
  *   code         a return code
  */
@@ -404,7 +419,8 @@ const char *paper_case1_error_message(int code);
 void paper_case1_default_options(paper_case1_options *opt);
 
 /* Start a simulation (gac_sim_init); on an error *sim is left unchanged.  Returns GAC_OK,
- * GAC_ERR_NULL_ARGUMENT, GAC_ERR_BAD_OPTION, GAC_ERR_START_OUTSIDE or another error.
+ * GAC_ERR_NULL_ARGUMENT, GAC_ERR_BAD_OPTION, GAC_ERR_BAD_PARAMETER (check_parameters says which),
+ * GAC_ERR_START_OUTSIDE or another error.
  *   sim          the simulation (not NULL)
  *   t0           start time (s)
  *   q            start coordinates (NQ; not NULL)

@@ -808,6 +808,29 @@ static const double paper_case2_parameters[PAPER_CASE2_NPARAM] = {
 static const double paper_case2_q0[PAPER_CASE2_NQ] = { 0.5235987755982988, 0.0, 0.5235987755982988, 0.1, 0.4, 0.1 };
 static const double paper_case2_qd0[PAPER_CASE2_NQ] = { 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 };
 
+/* Each parameter's name and allowed values: finite, within [lo, hi], 0 or at least DBL_MIN in magnitude; the rule
+ * in words (codegen/parameters.py: the rules the scene loader and simulate() apply). */
+static const gac_parameter_info paper_case2_parameter_info[PAPER_CASE2_NPARAM] = {
+    { "g", -1000000.0, 1000000.0, "must be within [-1e6, 1e6] m/s^2" },
+    { "l_1", 1e-09, 1000000000.0, "must be in [1e-09, 1e+09] m" },
+    { "mu_1", 1e-12, 1000000000000.0, "must be in [1e-12, 1e+12] kg/m" },
+    { "Jxx_1", 0.0, 1e+100, "must be >= 0 and <= 1e+100 kg m" },
+    { "Jyy_1", 0.0, 1e+100, "must be >= 0 and <= 1e+100 kg m" },
+    { "Jzz_1", 0.0, 1e+100, "must be >= 0 and <= 1e+100 kg m" },
+    { "wall_x1_min", -1000000000.0, 1000000000.0, "must be within [-1e+09, 1e+09] m" },
+    { "wall_x1_max", -1000000000.0, 1000000000.0, "must be within [-1e+09, 1e+09] m, and > wall_x1_min" },
+    { "wall_x2_min", -1000000000.0, 1000000000.0, "must be within [-1e+09, 1e+09] m" },
+    { "wall_x2_max", -1000000000.0, 1000000000.0, "must be within [-1e+09, 1e+09] m, and > wall_x2_min" },
+    { "wall_x3_min", -1000000000.0, 1000000000.0, "must be within [-1e+09, 1e+09] m" },
+    { "wall_x3_max", -1000000000.0, 1000000000.0, "must be within [-1e+09, 1e+09] m, and > wall_x3_min" },
+    { "e_x1_min", 0.0, 1.0, "restitution must be in [0, 1]" },
+    { "e_x1_max", 0.0, 1.0, "restitution must be in [0, 1]" },
+    { "e_x2_min", 0.0, 1.0, "restitution must be in [0, 1]" },
+    { "e_x2_max", 0.0, 1.0, "restitution must be in [0, 1]" },
+    { "e_x3_min", 0.0, 1.0, "restitution must be in [0, 1]" },
+    { "e_x3_max", 0.0, 1.0, "restitution must be in [0, 1]" },
+};
+
 const gac_model paper_case2_model = {
     .name = "paper_case2",
     .n = PAPER_CASE2_N, .nq = PAPER_CASE2_NQ, .nx = PAPER_CASE2_NX, .nparam = PAPER_CASE2_NPARAM, .nu = PAPER_CASE2_NU,
@@ -821,7 +844,8 @@ const gac_model paper_case2_model = {
     .contact_points = paper_case2_contact_points, .contact_velocities = paper_case2_contact_velocities,
     .contact_generalized_force = paper_case2_contact_generalized_force, .contact_gaps = paper_case2_contact_gaps,
     .contact_bias = paper_case2_contact_bias, .energy = paper_case2_energy, .rhs = paper_case2_rhs,
-    .power = 0   /* no inputs, springs or dampers: only gravity works in flight */
+    .power = 0,   /* no inputs, springs or dampers: only gravity works in flight */
+    .check_parameters = paper_case2_check_parameters, .parameter_info = paper_case2_parameter_info
 };
 
 /* The storage of paper_case2.h agrees with the library's formulas (both come from one formula). */
@@ -879,6 +903,21 @@ void paper_case2_default_parameters(double *p)
 {
     int i;
     for (i = 0; i < PAPER_CASE2_NPARAM; ++i) p[i] = paper_case2_parameters[i];
+}
+
+/* Every parameter in its range (paper_case2_parameter_info), then the relations between them. */
+int paper_case2_check_parameters(const double *p, int *bad_index)
+{
+    int i, bad = -1;
+    for (i = 0; i < PAPER_CASE2_NPARAM && bad < 0; ++i) {
+        if (!gac_in_range(p[i], paper_case2_parameter_info[i].lo, paper_case2_parameter_info[i].hi)) bad = i;
+    }
+    if (bad < 0 && !(p[7] > p[6])) bad = 7;   /* wall_x1_max > wall_x1_min */
+    if (bad < 0 && !(p[9] > p[8])) bad = 9;   /* wall_x2_max > wall_x2_min */
+    if (bad < 0 && !(p[11] > p[10])) bad = 11;   /* wall_x3_max > wall_x3_min */
+    if (bad < 0) return GAC_OK;
+    if (bad_index != 0) *bad_index = bad;
+    return GAC_ERR_BAD_PARAMETER;
 }
 
 void paper_case2_initial_state(double *q, double *qd)

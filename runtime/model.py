@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import reprlib
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -61,6 +62,21 @@ class CompiledModel:
     def error_message(self, code: int) -> str:
         """The C library's message for a return code."""
         return self.ffi.string(self._fn["error_message"](code)).decode()
+
+    def parameter_problem(self, p=None) -> str:
+        """The C check of a parameter vector (NAME_check_parameters, which NAME_sim_init and the FMU apply): '' if it
+        passes, else 'p[NAME]: the rule in words, got VALUE' for the parameter it names, from the model's C table
+        (NAME_model.parameter_info)."""
+        p = self._params(p)
+        bad = self.ffi.new("int *", -1)
+        if self._fn["check_parameters"](self._ptr(p), bad) == self.lib.GAC_OK:
+            return ""
+        info = getattr(self.lib, f"{self.name}_model").parameter_info[bad[0]]
+        value = float(p[bad[0]])
+        subnormal = " (nonzero below the smallest normal double: give 0 or a larger magnitude)" \
+            if value != 0.0 and abs(value) < sys.float_info.min else ""
+        return (f"p[{self.ffi.string(info.name).decode()}]: {self.ffi.string(info.range).decode()}, "
+                f"got {value!r}{subnormal}")
 
     # -- plumbing ---------------------------------------------------------------
     def _ptr(self, array: np.ndarray):

@@ -1,4 +1,4 @@
-"""The C API of the generated hybrid loop: NULL pointers, out-of-range arguments and starts beyond a wall
+"""The C API of the generated hybrid loop: NULL pointers, out-of-range arguments and parameters, and starts beyond a wall
 are refused with the documented codes (never a crash), and the example program parses its arguments."""
 import re
 import subprocess
@@ -89,6 +89,16 @@ int main(int argc, char **argv)
         code = paper_case1_sim_init(&sim, 0.0, q, qd, null_opt ? p : NULL, null_opt ? NULL : &opt);
         if (paper_case1_sim_init(&other, 0.0, q, qd, p, &opt) != GAC_OK) return 3;
         printf("same=%d\n", code == GAC_OK && same_run(&sim, &other, 1.5));
+    } else if (strcmp(c, "init_bad_restitution") == 0 || strcmp(c, "init_walls_crossed") == 0) {
+        int bad = -1;
+        if (strcmp(c, "init_bad_restitution") == 0) p[PAPER_CASE1_P_E_X2_MIN] = -0.5;
+        else p[PAPER_CASE1_P_WALL_X1_MIN] = 4.0;                  /* beyond x1_max = 3 */
+        memset(&sim, 0xab, sizeof sim);
+        memset(&other, 0xab, sizeof other);
+        code = paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);
+        printf("same=%d\n", memcmp(&sim, &other, sizeof sim) == 0 && paper_case1_check_parameters(p, &bad) == code);
+        printf("name=%s\n", bad >= 0 ? paper_case1_model.parameter_info[bad].name : "");
+        printf("msg=%s\n", bad >= 0 ? paper_case1_model.parameter_info[bad].range : "");
     } else if (strcmp(c, "floor") == 0 && argc == 4) {   /* floor <depth below x2_min> <contact_tol> */
         opt.contact_tol = strtod(argv[3], NULL);
         lower_to(q, p, strtod(argv[2], NULL));
@@ -214,6 +224,19 @@ def test_sim_init_refuses_bad_arguments(built, case, expected):
 
 def test_sim_init_accepts_the_smallest_rtol(built):
     assert int(drive(built, "init_rtol_at_min")["code"]) == 0
+
+
+@pytest.mark.parametrize("case,name,rule", [
+    ("init_bad_restitution", "e_x2_min", "restitution must be in [0, 1]"),
+    ("init_walls_crossed", "wall_x1_max", "must be within [-1e+09, 1e+09] m, and > wall_x1_min"),
+])
+def test_sim_init_refuses_a_bad_parameter(built, case, name, rule):
+    """sim_init returns GAC_ERR_BAD_PARAMETER and leaves sim unchanged; check_parameters gives the same code and
+    the index, whose row of the model's parameter table names the parameter and its rule."""
+    result = drive(built, case)
+    assert int(result["code"]) == code_of(built, "ERR_BAD_PARAMETER")
+    assert result["same"] == "1"
+    assert (result["name"], result["msg"]) == (name, rule)
 
 
 @pytest.mark.parametrize("case", ["init_null_opt", "init_null_p"])

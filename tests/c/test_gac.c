@@ -15,6 +15,8 @@
  *   box   a point mass in the square [0, 2] x [0, 2] under gravity, q = [x, y], e = 1 on every wall: x moves
  *         at constant speed between the side walls (closed-form impact times), y bounces on the floor, and
  *         the energy is kept.
+ *   checked_ball  the ball with a parameter table and a check of its own (g, m > 0, e in [0, 1]), as a generated
+ *         model has: gac_sim_init refuses parameters outside it.
  * Exit status 0 if every check holds; with the argument --break one expected value is made wrong on
  * purpose, and the program must fail (the checks can fail).
  */
@@ -96,6 +98,24 @@ static const gac_model ball = {
     .contact_gaps = ball_gaps,
     .contact_bias = ball_jbias, .energy = ball_energy, .rhs = ball_rhs, .power = ball_power
 };
+
+/* ---- checked_ball: the ball with its parameters' ranges and a check ------------------------------- */
+static const gac_parameter_info ball_info[3] = {
+    {"g", -1e6, 1e6, "must be within [-1e6, 1e6] m/s^2"},
+    {"m", 1e-12, 1e12, "must be in [1e-12, 1e+12] kg"},
+    {"e", 0.0, 1.0, "restitution must be in [0, 1]"},
+};
+static int ball_check(const double *p, int *bad_index)
+{
+    int i;
+    for (i = 0; i < 3; ++i) {
+        if (!gac_in_range(p[i], ball_info[i].lo, ball_info[i].hi)) {
+            if (bad_index != 0) *bad_index = i;
+            return GAC_ERR_BAD_PARAMETER;
+        }
+    }
+    return GAC_OK;
+}
 
 /* ---- box: p = [g, m, e], walls x = 0, x = 2, y = 0, y = 2 ---------------------------------------- */
 static void box_solve(const double *q, const double *Q, const double *p, double *x)
@@ -495,6 +515,66 @@ static void test_errors(void)
           && strcmp(gac_error_message(12345), "unknown error code") == 0, "messages");
 }
 
+/* Parameters: the range test of one value, the inertia test, and gac_sim_init refusing a vector outside the model's
+ * check (sim unchanged) with the index gac_check_parameters gives. */
+static void test_parameters(void)
+{
+    static const double plate[6] = {1.0, 2.0, 3.0, 0.0, 0.0, 0.0};               /* Izz = Ixx + Iyy: a flat plate */
+    static const double rod[6] = {0.0, 1.0, 1.0, 0.0, 0.0, 0.0};                 /* no moment about its axis */
+    static const double turned[6] = {2.0, 2.0, 3.5, -1.0, 0.0, 0.0};             /* diag(1, 3, 3.5) turned 45 deg */
+    static const double turned_bad[6] = {2.0, 2.0, 4.5, -1.0, 0.0, 0.0};         /* diag(1, 3, 4.5): 1 + 3 < 4.5 */
+    static const double indefinite[6] = {1.0, 1.0, 1.0, 2.0, 0.0, 0.0};          /* eigenvalues -1, 1, 3 */
+    static const double within_tol[6] = {1.0, 2.0, 3.0 + 2e-12, 0.0, 0.0, 0.0};  /* tol = 1e-12 c */
+    static const double beyond_tol[6] = {1.0, 2.0, 3.0 + 1e-11, 0.0, 0.0, 0.0};
+    static const double huge[6] = {2e100, 2e100, 3e100, 1e99, -1e99, 0.0};       /* moments 1.9, 2.1, 3.0 e100 */
+    static const double huge_bad[6] = {1e100, 2e100, 3e100, 1e99, -1e99, 0.0};   /* 0.99, 2.0, 3.005 e100 */
+    gac_model checked = ball, bad_table = ball;
+    gac_parameter_info wrong[3];
+    const double bad_e[3] = {9.81, 2.0, 1.5}, bad_m[3] = {9.81, -2.0, 0.5}, good[3] = {9.81, 2.0, 0.5};
+    double nan_p[3] = {9.81, 2.0, 0.5};
+    gac_sim sim, before;
+    int bad = -1;
+    checked.check_parameters = ball_check;
+    checked.parameter_info = ball_info;
+
+    CHECK(gac_in_range(0.5, 0.0, 1.0) && gac_in_range(0.0, 0.0, 1.0) && gac_in_range(1.0, 0.0, 1.0), "in range");
+    CHECK(!gac_in_range(-0.5, 0.0, 1.0) && !gac_in_range(1.5, 0.0, 1.0), "out of range");
+    CHECK(!gac_in_range(NAN, -1e9, 1e9) && !gac_in_range(INFINITY, -1e300, 1e300), "not finite");
+    CHECK(!gac_in_range(1e-310, 0.0, 1.0) && gac_in_range(3e-308, 0.0, 1.0), "below the smallest normal double");
+
+    CHECK(gac_inertia_admissible(plate) && gac_inertia_admissible(rod) && gac_inertia_admissible(turned),
+          "physical inertias");
+    CHECK(!gac_inertia_admissible(turned_bad) && !gac_inertia_admissible(indefinite), "unphysical inertias");
+    CHECK(gac_inertia_admissible(within_tol) && !gac_inertia_admissible(beyond_tol), "the tolerance 1e-12 c");
+    CHECK(gac_inertia_admissible(huge) && !gac_inertia_admissible(huge_bad), "large entries");
+
+    CHECK(gac_model_check(&checked) == GAC_OK, "model with a parameter table");
+    CHECK(gac_check_parameters(&checked, good, &bad) == GAC_OK && bad == -1, "good parameters");
+    CHECK(gac_check_parameters(&checked, bad_e, &bad) == GAC_ERR_BAD_PARAMETER && bad == 2
+          && strcmp(checked.parameter_info[bad].name, "e") == 0, "e = 1.5 refused as parameter %d", bad);
+    CHECK(gac_check_parameters(&checked, bad_m, 0) == GAC_ERR_BAD_PARAMETER, "m < 0 refused, bad_index NULL");
+    CHECK(gac_check_parameters(0, good, &bad) == GAC_ERR_NULL_ARGUMENT, "model NULL");
+    memset(&sim, 0xab, sizeof sim);
+    memcpy(&before, &sim, sizeof sim);
+    CHECK(gac_sim_init(&sim, &checked, dwork, iwork, 0.0, ball_q0, ball_qd0, bad_e, 0) == GAC_ERR_BAD_PARAMETER,
+          "sim_init refuses e = 1.5");
+    CHECK(memcmp(&sim, &before, sizeof sim) == 0, "a refused start leaves sim unchanged");
+    CHECK(gac_sim_init(&sim, &checked, dwork, iwork, 0.0, ball_q0, ball_qd0, good, 0) == GAC_OK, "good start");
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, bad_e, 0) == GAC_OK,
+          "a model without a check takes any finite parameters");
+    nan_p[1] = NAN;
+    bad = -1;
+    CHECK(gac_check_parameters(&ball, nan_p, &bad) == GAC_ERR_BAD_PARAMETER && bad == 1, "NaN refused (%d)", bad);
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, nan_p, 0) == GAC_ERR_BAD_PARAMETER,
+          "sim_init refuses a NaN parameter");
+    memcpy(wrong, ball_info, sizeof wrong);
+    wrong[1].lo = 2e12;                                                          /* lo > hi */
+    bad_table.parameter_info = wrong;
+    CHECK(gac_model_check(&bad_table) == GAC_ERR_BAD_MODEL, "a parameter row with lo > hi");
+    CHECK(strcmp(gac_error_message(GAC_ERR_BAD_PARAMETER), gac_error_message(GAC_ERR_BAD_OPTION)) != 0
+          && strstr(gac_error_message(GAC_ERR_BAD_PARAMETER), "parameter_info") != 0, "message");
+}
+
 int main(int argc, char **argv)
 {
     broken = argc > 1 && strcmp(argv[1], "--break") == 0;
@@ -508,6 +588,7 @@ int main(int argc, char **argv)
     test_sled();
     test_inputs();
     test_errors();
+    test_parameters();
     printf("%d checks, %d failed\n", checks, failures);
     return failures == 0 ? 0 : 1;
 }

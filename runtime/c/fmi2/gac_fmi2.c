@@ -3,8 +3,10 @@
  *
  * States of an instance (FMI 2.0, section 4.2.4): instantiated -> initialization mode -> stepping ->
  * terminated, and error after a failed step.  Parameters and initial values may be set until the end of
- * initialization mode; fmi2ExitInitializationMode starts the simulation (gac_sim_init) and reports a start
- * outside the box or a bad option by name.  Inputs may be set between steps; each step holds them.
+ * initialization mode, each parameter within its range (the model's parameter_info); fmi2ExitInitializationMode
+ * checks the parameters together (gac_check_parameters: the relations between them too), starts the simulation
+ * (gac_sim_init) and reports a bad parameter, a start outside the box or a bad option by name.  Inputs may be set
+ * between steps; each step holds them.
  */
 #ifdef GAC_FMI2_STANDARD_HEADERS
 #include "fmi2Functions.h"
@@ -13,8 +15,10 @@
 #endif
 #include "gac_fmi2.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #if defined(__GNUC__) && !defined(GAC_FMI2_STANDARD_HEADERS)
@@ -102,6 +106,30 @@ static fmi2Status fail(Instance *in, const char *function, const char *why)
     snprintf(text, sizeof text, "%.60s: %.400s", function, why);
     say(in, fmi2Error, "logStatusError", text);
     return fmi2Error;
+}
+
+/* v with the fewest significant digits (up to 17) that give it back exactly. */
+static void format_real(char *text, size_t size, double v)
+{
+    int digits;
+    for (digits = 1; digits <= 17; digits++) {
+        snprintf(text, size, "%.*g", digits, v);
+        if (strtod(text, 0) == v) return;
+    }
+}
+
+/* Why parameter i may not be v: "p.NAME = v: the rule in words" (the model's parameter_info). */
+static void parameter_problem(const gac_model *m, int i, double v, char *why, size_t size)
+{
+    char value[32];
+    format_real(value, sizeof value, v);
+    if (m->parameter_info == 0) {
+        snprintf(why, size, "parameter %d = %s is not allowed (finite values only)", i, value);
+        return;
+    }
+    snprintf(why, size, "p.%.40s = %s: %.260s%s", m->parameter_info[i].name, value, m->parameter_info[i].range,
+             v != 0.0 && fabs(v) < DBL_MIN ? " (nonzero below the smallest normal double: give 0 or a larger magnitude)"
+                                           : "");
 }
 
 /* ---- value references --------------------------------------------------------------------------- */
@@ -310,11 +338,16 @@ GAC_FMI2_EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
     Instance *in = (Instance *)c;
     gac_options opt;
-    int code;
-    char why[300];
+    int code, bad = 0;
+    char why[480], problem[420];
     if (in == 0) return fmi2Error;
     if (in->mode != MODE_INITIALIZATION)
         return fail(in, "fmi2ExitInitializationMode", "allowed only in initialization mode");
+    if (gac_check_parameters(in->m, in->p, &bad) != GAC_OK) {        /* the parameters together: the relations too */
+        parameter_problem(in->m, bad, in->p[bad], problem, sizeof problem);
+        snprintf(why, sizeof why, "the simulation cannot start: %s", problem);
+        return fail(in, "fmi2ExitInitializationMode", why);
+    }
     if (in->tolerance_defined && !in->rtol_set) in->solver[SOLVER_RTOL] = in->tolerance;
     if (in->tolerance_defined && !in->atol_set) in->solver[SOLVER_ATOL] = in->tolerance / 100.0;
     gac_default_options(&opt);
@@ -382,8 +415,13 @@ static const char *set_real(Instance *in, long r, double v, char *why, size_t si
     if (r >= vr_out(m)) return "the energy outputs cannot be set";
     if (!before_start) return "parameters, initial values and solver settings are fixed after initialization";
     if (r < vr_q0(m)) {
+        const int i = (int)(r - vr_p(m));
         if (in->d->bake_params) return "this FMU was built with its parameters baked into the code";
-        in->p[r - vr_p(m)] = v;
+        if (m->parameter_info != 0 && !gac_in_range(v, m->parameter_info[i].lo, m->parameter_info[i].hi)) {
+            parameter_problem(m, i, v, why, size);
+            return why;
+        }
+        in->p[i] = v;
     } else if (r < vr_qd0(m)) {
         in->q0[r - vr_q0(m)] = v;
     } else if (r < vr_solver(m)) {
@@ -414,7 +452,7 @@ GAC_FMI2_EXPORT fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference
     if (in == 0) return fmi2Error;
     if (nvr > 0 && (vr == 0 || value == 0)) return fail(in, "fmi2SetReal", "vr and value must not be NULL");
     for (k = 0; k < nvr; k++) {
-        char why[200], text[300];
+        char why[420], text[480];
         const char *refused;
         if ((long)vr[k] >= gac_fmi2_nreal(in->m)) {
             snprintf(text, sizeof text, "no Real variable has value reference %u (0..%ld)", vr[k],

@@ -1,0 +1,172 @@
+"""The allowed values of a model's runtime parameters, described once.
+
+Every entry p[i] of a parameter vector (layout ``Scene.parameter_names()``) has a range by its kind (a length, a
+mass, a restitution, ...): finite, within [lo, hi], and 0 or at least the smallest normal double in magnitude.  A
+few entries also have a relation to others: a wall's max lies above its min, a joint's upper limit above its lower
+one, and a rigid link's six inertia entries form a physical inertia.  The ranges are the scene loader's
+(codegen.scene), so a scene file and a changed parameter vector are held to the same limits.
+
+``parameter_rules`` lists the rules of a scene's vector, one per entry (and, for a generated model, the values it
+has built in: ``zero_params`` of its layout, or all of them with ``bake_params``).  From that one list come
+
+* the Python check of a vector, ``check_vector`` (``Scene.check_parameters``, which ``simulate()`` applies to
+  its ``p`` overrides);
+* the C check: the table ``NAME_model.parameter_info`` (each parameter's name, range and rule in words) and the
+  function ``NAME_check_parameters`` in the generated NAME.c (templates/model.c.j2), which ``gac_sim_init`` and
+  the FMU call;
+* the FMU's ``min`` and ``max`` of every parameter (codegen/fmu.py).
+
+Plain data: no sympy, no jinja2, no runtime import.
+"""
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+
+from .scene import (COORDINATE_MAX, FRICTION_MAX, GRAVITY_MAX, INERTIA_MAX, LENGTH_RANGE, MASS_RANGE, STIFFNESS_MAX,
+                    RigidLink, Scene, SceneError)
+
+
+@dataclass(frozen=True)
+class Range:
+    """The values a kind of parameter may take: lo <= value <= hi, in words as messages give them."""
+
+    lo: float
+    hi: float
+    text: str
+
+
+_ANGLE = Range(-COORDINATE_MAX, COORDINATE_MAX, f"must be within [-{COORDINATE_MAX:g}, {COORDINATE_MAX:g}] rad")
+_POSITION = Range(-COORDINATE_MAX, COORDINATE_MAX, f"must be within [-{COORDINATE_MAX:g}, {COORDINATE_MAX:g}] m")
+_RESTITUTION = Range(0.0, 1.0, "restitution must be in [0, 1]")
+_INERTIA_PER_LENGTH = Range(0.0, INERTIA_MAX, f"must be >= 0 and <= {INERTIA_MAX:g} kg m")
+_MOMENT = Range(0.0, INERTIA_MAX, f"must be >= 0 and <= {INERTIA_MAX:g} kg m^2")
+_PRODUCT = Range(-INERTIA_MAX, INERTIA_MAX, f"must be within [-{INERTIA_MAX:g}, {INERTIA_MAX:g}] kg m^2")
+
+# kind of parameter (parameter_kind) -> its range
+RANGES = {
+    "g": Range(-GRAVITY_MAX, GRAVITY_MAX, "must be within [-1e6, 1e6] m/s^2"),
+    "l": Range(*LENGTH_RANGE, f"must be in [{LENGTH_RANGE[0]:g}, {LENGTH_RANGE[1]:g}] m"),
+    "mu": Range(*MASS_RANGE, f"must be in [{MASS_RANGE[0]:g}, {MASS_RANGE[1]:g}] kg/m"),
+    "m": Range(*MASS_RANGE, f"must be in [{MASS_RANGE[0]:g}, {MASS_RANGE[1]:g}] kg"),
+    "Jxx": _INERTIA_PER_LENGTH, "Jyy": _INERTIA_PER_LENGTH, "Jzz": _INERTIA_PER_LENGTH,
+    "cx": _POSITION, "cy": _POSITION, "cz": _POSITION,
+    "Ixx": _MOMENT, "Iyy": _MOMENT, "Izz": _MOMENT, "Ixy": _PRODUCT, "Ixz": _PRODUCT, "Iyz": _PRODUCT,
+    "wall": _POSITION,
+    "e": _RESTITUTION,
+    "friction": Range(0.0, FRICTION_MAX, f"the Coulomb coefficient must be in [0, {FRICTION_MAX:g}]"),
+    "stiffness": Range(0.0, STIFFNESS_MAX, f"must be >= 0 and <= {STIFFNESS_MAX:g} N m/rad"),
+    "rest_angle": _ANGLE,
+    "damping": Range(0.0, STIFFNESS_MAX, f"must be >= 0 and <= {STIFFNESS_MAX:g} N m s/rad"),
+    "lower": _ANGLE, "upper": _ANGLE,
+    "e_limit": _RESTITUTION,
+}
+
+SMALLEST_NORMAL = sys.float_info.min          # a nonzero value below this in magnitude is refused
+INERTIA_NAMES = RigidLink.param_names[5:]     # Ixx, Iyy, Izz, Ixy, Ixz, Iyz: consecutive in p
+INERTIA_WORDS = "a physical inertia (positive semi-definite, principal moments obeying the triangle inequality)"
+
+
+def parameter_kind(name: str) -> str:
+    """The kind of a parameter, the key of RANGES: 'e_x2_min' -> 'e', 'e_limit_3' -> 'e_limit', 'wall_x1_max' ->
+    'wall', 'Jxx_2' -> 'Jxx', 'g' -> 'g'."""
+    for prefix in ("wall", "e_limit", "e", "friction"):
+        if name.startswith(prefix + "_"):
+            return prefix
+    return name.rsplit("_", 1)[0] if name[-1].isdigit() else name
+
+
+@dataclass(frozen=True)
+class Rule:
+    """What p[index] may be: its range (lo = hi for a value built into the model), and the relation it is named by
+    when that fails: above >= 0, p[index] > p[above]; inertia_of = i > 0, p[index .. index + 5] = Ixx_i .. Iyz_i
+    a physical inertia."""
+
+    index: int
+    name: str
+    lo: float
+    hi: float
+    range_text: str
+    above: int = -1
+    above_name: str = ""
+    inertia_of: int = 0
+
+    @property
+    def text(self) -> str:
+        """The whole rule in words, its relation included (the C table's, the FMU's messages)."""
+        words = self.range_text
+        if self.above >= 0:
+            words += f", and > {self.above_name}"
+        if self.inertia_of:
+            i = self.inertia_of
+            words += f"; Ixx_{i} .. Iyz_{i} together {INERTIA_WORDS}"
+        return words
+
+
+def parameter_rules(scene: Scene, zero_params=(), bake_params: bool = False) -> list[Rule]:
+    """The rule of every entry of the scene's parameter vector, in its order.  ``zero_params``: the parameters a
+    generated model has built in as 0 (its layout's); ``bake_params``: the model has every parameter built in as the
+    scene's value.  A built-in value may not change: its range is that value alone."""
+    names = scene.parameter_names()
+    values = scene.parameter_vector().tolist()
+    rules = []
+    for index, (name, value) in enumerate(zip(names, values)):
+        kind = parameter_kind(name)
+        lo, hi, text = RANGES[kind].lo, RANGES[kind].hi, RANGES[kind].text
+        if bake_params:
+            lo = hi = value
+            text = f"built into this model as a constant ({value!r}; generated with bake_params)"
+        elif name in zero_params:
+            lo = hi = 0.0
+            text = "built into this model as 0 (the scene's value, so its terms were left out; the general model " \
+                   "takes other values)"
+        partner = ""                                # the parameter this one must exceed
+        if kind == "wall" and name.endswith("_max"):
+            partner = name[:-len("_max")] + "_min"     # wall_x1_max > wall_x1_min
+        elif kind == "upper":
+            partner = "lower" + name[len("upper"):]    # upper_k > lower_k
+        if partner in names:
+            rules.append(Rule(index, name, lo, hi, text, above=names.index(partner), above_name=partner))
+        elif kind == "Ixx":
+            rules.append(Rule(index, name, lo, hi, text, inertia_of=int(name.rsplit("_", 1)[1])))
+        else:
+            rules.append(Rule(index, name, lo, hi, text))
+    return rules
+
+
+def check_vector(rules: list[Rule], p, changed=None) -> None:
+    """Raise SceneError naming the first parameter of ``p`` that breaks its rule: every entry in its range, then the
+    relations, in the order of the vector (the order NAME_check_parameters checks them in).  ``changed``: the names
+    whose values may differ from the scene's (the others were checked when the scene was built; default: all)."""
+    p = np.asarray(p, dtype=float)
+    if p.shape != (len(rules),):
+        raise SceneError(f"p: expected {len(rules)} values ({', '.join(r.name for r in rules)}), got shape {p.shape}")
+    value = p.tolist()
+    changed = None if changed is None else set(changed)
+    for rule in rules:
+        if changed is not None and rule.name not in changed:
+            continue
+        x = value[rule.index]
+        if not rule.lo <= x <= rule.hi:
+            raise SceneError(f"p[{rule.name}]: {rule.range_text}, got {x!r}")
+        if x != 0.0 and abs(x) < SMALLEST_NORMAL:
+            raise SceneError(f"p[{rule.name}]: {x!r} is below the smallest normal double ({SMALLEST_NORMAL:.3g}); "
+                             "give 0 or a larger magnitude")
+    for rule in rules:
+        if rule.above >= 0 and not value[rule.index] > value[rule.above]:
+            raise SceneError(f"p[{rule.name}]: must be > p[{rule.above_name}] = {value[rule.above]!r}, "
+                             f"got {value[rule.index]!r}")
+        if rule.inertia_of and (changed is None or changed & {f"{key}_{rule.inertia_of}" for key in INERTIA_NAMES}):
+            check_inertia(value[rule.index:rule.index + 6], rule.inertia_of)
+
+
+def check_inertia(entries, link: int) -> None:
+    """Ixx, Iyy, Izz, Ixy, Ixz, Iyz of ``link`` a physical inertia (RigidLink.validate's test), or SceneError."""
+    Ixx, Iyy, Izz, Ixy, Ixz, Iyz = entries
+    try:
+        RigidLink(1.0, 1.0, (0.0, 0.0, 0.0), ((Ixx, Ixy, Ixz), (Ixy, Iyy, Iyz), (Ixz, Iyz, Izz))).validate("")
+    except SceneError as exc:
+        raise SceneError(f"p[Ixx_{link} .. Iyz_{link}]: the inertia of link {link}{str(exc)[len('.inertia'):]}") \
+            from None

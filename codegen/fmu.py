@@ -16,6 +16,7 @@ from xml.sax.saxutils import quoteattr
 from . import __version__
 from .artifact import GeneratedModel
 from .emit import _double_literal, _environment, param_doc
+from .interface import RTOL_MIN
 from .parameters import parameter_rules
 from .scene import Scene, coordinate_names
 
@@ -116,6 +117,7 @@ def fmi2_variables(model: GeneratedModel, scene: Scene) -> list[Variable]:
         real.append((f"p.{rule.name}", "parameter", "fixed", param_doc(rule.name), _parameter_unit(rule.name), value))
         bounds[f"p.{rule.name}"] = (_double_literal(rule.lo), _double_literal(rule.hi))
     bounds["solver.dt"] = bounds["solver.h_max"] = ("0", None)
+    bounds["solver.rtol"] = (_double_literal(RTOL_MIN), "1.0")     # below 1 too: fmi2SetReal refuses rtol = 1
     for c, value in zip(coordinates, q0):
         real.append((f"q0.{c}", "parameter", "fixed", f"initial {c}", coordinate_unit(c), float(value)))
     for c, value in zip(coordinates, qd0):

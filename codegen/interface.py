@@ -327,6 +327,7 @@ STOPS = ("GAC_SIM_END", "GAC_SIM_IMPACT", "GAC_SIM_CONTACT")
 METHODS = ("GAC_METHOD_RK4", "GAC_METHOD_DOPRI5", "GAC_METHOD_DOP853")
 LIMITS = ("GAC_LCP_CAP", "GAC_MAX_ROUNDS")
 CONSTANTS = CODES + STOPS + METHODS + LIMITS
+RTOL_MIN = 1e-14      # GAC_RTOL_MIN: the smallest rtol the adaptive methods accept (a double: not read by cffi)
 
 
 # ---------------------------------------------------------------------------------------------------

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from codegen.scene import JointStop, Scene, SceneError
+from codegen.interface import RTOL_MIN  # the smallest rtol the C loop accepts (GAC_RTOL_MIN)
 from codegen.specialise import coordinate_names
 
 from .inputs import InputSchedule, attach, input_source, set_input  # noqa: F401  (InputSchedule: re-export)
@@ -25,7 +26,6 @@ from .model import CompiledModel, load_model
 
 METHODS = ("dopri5", "dop853", "rk4")
 DEFAULT_RTOL, DEFAULT_ATOL = 1e-8, 1e-10   # the adaptive methods' tolerances, here, in the CLI and in C
-RTOL_MIN = 1e-14        # the smallest rtol the C loop accepts (GAC_RTOL_MIN in gac.h): ~50 unit round-offs
 CHUNK_STEPS = 20000     # steps per call into the C loop between two looks at the wall-time budget
 ROUNDOFF_WARN = 1e-6    # an impact whose energy round-off bound exceeds this is named in result.warnings
 RK4_STABLE = 1.0        # RK4 is stable for h |lambda| < 2.78 on the imaginary and negative real axes; the

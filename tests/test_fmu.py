@@ -243,7 +243,13 @@ def test_bad_calls_fail_with_a_message(case1_fmu, capsys):
     slave.fmu.enterInitializationMode()
     with pytest.raises(FMICallException):
         slave.fmu.setReal(slave.refs(["solver.rtol"]), [-1.0])
-    assert "solver.rtol and solver.atol must be > 0" in capsys.readouterr().out
+    assert "solver.rtol must be in [1e-14, 1)" in capsys.readouterr().out
+    with pytest.raises(FMICallException):
+        slave.fmu.setReal(slave.refs(["solver.rtol"]), [1e-300])
+    assert "solver.rtol must be in [1e-14, 1)" in capsys.readouterr().out
+    with pytest.raises(FMICallException):
+        slave.fmu.setReal(slave.refs(["solver.atol"]), [0.0])
+    assert "solver.atol must be in (0, 1e300)" in capsys.readouterr().out
     with pytest.raises(FMICallException):
         slave.fmu.setReal(slave.refs(["q.X1"]), [1.0])
     assert "q and qd are outputs" in capsys.readouterr().out

@@ -215,6 +215,7 @@ def test_return_codes_table_is_gac_h():
     defined = re.findall(r"#define (GAC_OK|GAC_ERR_\w+)\s+-?\d+", header)
     assert sorted(defined) == sorted(interface.CODES)
     assert "GAC_ERR_BAD_PARAMETER" in interface.CODES
+    assert float(re.search(r"#define GAC_RTOL_MIN (\S+)", header).group(1)) == interface.RTOL_MIN
 
 
 def test_scene_loader_refuses_a_negative_moment():

@@ -222,6 +222,20 @@ FUNCTIONS = (
               Arg("user", "void *", "passed to the controller as it is")),
              "Let a controller give the inputs at every stage (gac_sim_set_controller).",
              "Returns GAC_OK or GAC_ERR_NULL_ARGUMENT."),
+    Function("sim_set_clock", "int",
+             (Arg("sim", "{name}_sim *", "an initialised simulation"),
+              Arg("clock", "gac_clock", "clock(user): seconds from a fixed origin, never decreasing; NULL: C's clock() "
+                  "(processor time)"),
+              Arg("user", "void *", "passed to the clock as it is")),
+             "Measure the wall-time budget (options.max_wall_time) with this clock from now on (gac_sim_set_clock).",
+             "Returns GAC_OK or GAC_ERR_NULL_ARGUMENT."),
+    Function("sim_set_progress", "int",
+             (Arg("sim", "{name}_sim *", "an initialised simulation"),
+              Arg("progress", "gac_progress", "progress(t, n_steps, n_impacts, user), every GAC_LOOK_STEPS steps and "
+                  "at each sim_advance; nonzero stops the run (GAC_ERR_STOPPED); NULL: none"),
+              Arg("user", "void *", "passed to the callback as it is")),
+             "Follow the run and let a callback stop it (gac_sim_set_progress).",
+             "Returns GAC_OK or GAC_ERR_NULL_ARGUMENT."),
     Function("sim_run", "int",
              (Arg("sim", "{name}_sim *", "an initialised simulation"),
               Arg("t_end", "double", "integrate up to this time (s)"),
@@ -322,10 +336,11 @@ CODES = ("GAC_OK", "GAC_ERR_BAD_CONTACT", "GAC_ERR_SINGULAR_MASS", "GAC_ERR_SING
          "GAC_ERR_GIMBAL_LOCK", "GAC_ERR_BAD_OPTION", "GAC_ERR_MAX_STEPS", "GAC_ERR_STEP_SIZE",
          "GAC_ERR_NONFINITE", "GAC_ERR_TOO_MANY_CONTACTS", "GAC_ERR_SINGULAR_CONTACT", "GAC_ERR_IMPACT_ACCURACY",
          "GAC_ERR_UNSTABLE", "GAC_ERR_LOST_CONTACT", "GAC_ERR_START_OUTSIDE", "GAC_ERR_NULL_ARGUMENT",
-         "GAC_ERR_BAD_MODEL", "GAC_ERR_BAD_INPUT", "GAC_ERR_FRICTION", "GAC_ERR_BAD_PARAMETER")
+         "GAC_ERR_BAD_MODEL", "GAC_ERR_BAD_INPUT", "GAC_ERR_FRICTION", "GAC_ERR_BAD_PARAMETER",
+         "GAC_ERR_WALL_TIME", "GAC_ERR_STOPPED")
 STOPS = ("GAC_SIM_END", "GAC_SIM_IMPACT", "GAC_SIM_CONTACT")
 METHODS = ("GAC_METHOD_RK4", "GAC_METHOD_DOPRI5", "GAC_METHOD_DOP853")
-LIMITS = ("GAC_LCP_CAP", "GAC_MAX_ROUNDS")
+LIMITS = ("GAC_LCP_CAP", "GAC_MAX_ROUNDS", "GAC_LOOK_STEPS")
 CONSTANTS = CODES + STOPS + METHODS + LIMITS
 RTOL_MIN = 1e-14      # GAC_RTOL_MIN: the smallest rtol the adaptive methods accept (a double: not read by cffi)
 
@@ -343,7 +358,7 @@ class Struct:
 STRUCTS = (
     Struct("gac_options", ("int method", "double dt", "double rtol", "double atol", "double h_max",
                            "int event_samples", "double event_tol", "double contact_tol", "long max_steps",
-                           "double rest_height", "int zeno_impacts"), partial=False),
+                           "double rest_height", "int zeno_impacts", "double max_wall_time"), partial=False),
     Struct("gac_impact_record", ("double t", "int ncontact", "int *contact", "double *impulse",
                                  "double energy_before", "double energy_after", "double *q", "double *qd_before",
                                  "double *qd_after", "int complementarity", "int rounds", "int plastic",
@@ -353,7 +368,7 @@ STRUCTS = (
     Struct("gac_sim", ("gac_options opt", "double t", "double *x", "double *p", "long n_steps", "long n_rejected",
                        "long n_rhs", "long n_impacts", "int nactive", "int *active", "long n_activations",
                        "long n_releases", "int err_index", "double *u", "double work_input", "double work_damping",
-                       "double work_friction")),
+                       "double work_friction", "double wall_time", "double rk4_h_rho")),
     Struct("gac_schedule", ("int n", "int nu", "const double *t", "const double *u", "int linear"), partial=False),
     Struct("gac_contact", ("int point", "int axis", "int normal_sign", "int row", "int e_index", "double e_value",
                            "int kind", "int coordinate", "int has_friction", "int mu_index", "double mu_value",

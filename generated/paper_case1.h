@@ -457,6 +457,22 @@ int paper_case1_sim_set_input(paper_case1_sim *sim, const double *u);
  */
 int paper_case1_sim_set_controller(paper_case1_sim *sim, gac_controller controller, void *user);
 
+/* Measure the wall-time budget (options.max_wall_time) with this clock from now on (gac_sim_set_clock).
+ * Returns GAC_OK or GAC_ERR_NULL_ARGUMENT.
+ *   sim          an initialised simulation
+ *   clock        clock(user): seconds from a fixed origin, never decreasing; NULL: C's clock() (processor time)
+ *   user         passed to the clock as it is
+ */
+int paper_case1_sim_set_clock(paper_case1_sim *sim, gac_clock clock, void *user);
+
+/* Follow the run and let a callback stop it (gac_sim_set_progress).  Returns GAC_OK or
+ * GAC_ERR_NULL_ARGUMENT.
+ *   sim          an initialised simulation
+ *   progress     progress(t, n_steps, n_impacts, user), every GAC_LOOK_STEPS steps and at each sim_advance; nonzero stops the run (GAC_ERR_STOPPED); NULL: none
+ *   user         passed to the callback as it is
+ */
+int paper_case1_sim_set_progress(paper_case1_sim *sim, gac_progress progress, void *user);
+
 /* Run to t_end in one call, counting the impacts (gac_sim_run): for studies of many runs.  Returns
  * GAC_SIM_END, GAC_SIM_IMPACT (max_impacts reached) or an error (< 0).
  *   sim          an initialised simulation

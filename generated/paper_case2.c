@@ -979,6 +979,20 @@ int paper_case2_sim_set_controller(paper_case2_sim *sim, gac_controller controll
     return gac_sim_set_controller(&sim->base, controller, user);
 }
 
+int paper_case2_sim_set_clock(paper_case2_sim *sim, gac_clock clock, void *user)
+{
+    if (sim == 0) return GAC_ERR_NULL_ARGUMENT;
+    paper_case2_bind(&sim->base, sim->dwork, sim->iwork);
+    return gac_sim_set_clock(&sim->base, clock, user);
+}
+
+int paper_case2_sim_set_progress(paper_case2_sim *sim, gac_progress progress, void *user)
+{
+    if (sim == 0) return GAC_ERR_NULL_ARGUMENT;
+    paper_case2_bind(&sim->base, sim->dwork, sim->iwork);
+    return gac_sim_set_progress(&sim->base, progress, user);
+}
+
 void paper_case2_sim_state(const paper_case2_sim *sim, double *t, double *q, double *qd)
 {
     int i;

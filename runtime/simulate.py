@@ -6,8 +6,9 @@
         print(impact.t, [(c.point, c.wall) for c in impact.contacts])
 
 Flight segments run in compiled code (``NAME_sim_advance``, the C library in ``runtime/c``) up to the
-next impact, which is located, resolved and applied in C; Python talks to C once per flight segment,
-checks every impact (no contact still approaching its wall, no energy gain) and collects the result.
+next impact, which is located, resolved, applied and checked in C (no pulling impulse, no contact still
+approaching its wall, no energy gain); the budgets (steps, wall time) and RK4's stability rule are the C loop's
+too.  Python validates the arguments, talks to C once per flight segment, and collects and reports the result.
 Codes and sizes come from the compiled module (``lib.GAC_...``), never from header text.
 """
 from __future__ import annotations
@@ -26,11 +27,7 @@ from .model import CompiledModel, load_model
 
 METHODS = ("dopri5", "dop853", "rk4")
 DEFAULT_RTOL, DEFAULT_ATOL = 1e-8, 1e-10   # the adaptive methods' tolerances, here, in the CLI and in C
-CHUNK_STEPS = 20000     # steps per call into the C loop between two looks at the wall-time budget
 ROUNDOFF_WARN = 1e-6    # an impact whose energy round-off bound exceeds this is named in result.warnings
-RK4_STABLE = 1.0        # RK4 is stable for h |lambda| < 2.78 on the imaginary and negative real axes; the
-                        # estimate is of the largest mode at one state, so a factor 2.8 is kept in hand
-
 
 @dataclass
 class Contact:
@@ -239,7 +236,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
              max_impacts: int = 10000, max_steps: int = 10_000_000, rest_height: float | None = None,
              zeno_impacts: int = 20, p=None, q0=None, qd0=None, u=None,
              max_wall_time: float | None = None, charts: bool = True, check_start: bool = True,
-             keep_impacts: bool = True) -> SimulationResult:
+             keep_impacts: bool = True, progress=None) -> SimulationResult:
     """Simulate the scene's hybrid dynamics from its initial state over [0, t_end].
 
     method        'dopri5' (adaptive Dormand-Prince 5(4), rtol/atol), 'dop853' (adaptive 8(5,3)),
@@ -255,7 +252,10 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     zeno_impacts  a contact becomes persistent after this many impacts at shrinking intervals (0: never)
     max_steps     integrator steps allowed between two events (impacts, contact changes); 0: unbounded
     max_wall_time s: stop with status -1 once the run has taken this long (None: unbounded); the message
-                  says where the time went (mean step, the coordinate that limits the step)
+                  says where the time went (mean step, the coordinate that limits the step).  The C loop looks
+                  at the clock (time.perf_counter) every GAC_LOOK_STEPS steps and at every event
+    progress      progress(t, n_steps, n_impacts), called by the C loop as often; returning False stops the run
+                  (status -1, "stopped by the progress callback"), as does an exception in it
     charts        a run that comes near the gimbal lock of the base chart (the C loop stops with
                   GAC_ERR_GIMBAL_LOCK before it) is run again with chart switching (runtime.charts) and that
                   result returned (a ChartResult, samples in the scene's coordinates); False: stop there
@@ -270,8 +270,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                   state, called back from C at every stage (slower: a Python call per stage)
     keep_impacts  False: the whole run in one C call (NAME_sim_run), returning counts (n_impacts, t_first_impact,
                   energy_impact_loss) instead of Impact records, for studies of many runs; the impacts' post-
-                  conditions are then the C loop's own (GAC_ERR_IMPACT_ACCURACY), not repeated here.  Needs
-                  constant inputs, no samples after t = 0 and no max_wall_time
+                  conditions are the C loop's own (GAC_ERR_IMPACT_ACCURACY), as always.  Needs constant inputs and
+                  no samples after t = 0
     Samples, final state and impact states are returned in the full layout of Eq. 13 whatever the model.
     """
     model = scene if isinstance(scene, CompiledModel) else load_model(scene)
@@ -330,6 +330,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     opt.rtol, opt.atol, opt.h_max = rtol, atol, h_max
     opt.event_samples, opt.event_tol, opt.contact_tol = int(event_samples), event_tol, contact_tol
     opt.max_steps = int(max_steps)
+    opt.max_wall_time = 0.0 if max_wall_time is None else float(max_wall_time)
     opt.rest_height = -1.0 if rest_height is None else float(rest_height)
     opt.zeno_impacts = int(zeno_impacts)
     sim = ffi.new(f"{name}_sim *")
@@ -339,6 +340,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     if code < 0:
         raise ValueError(f"simulate: {model.error_message(code)}")
     keep_alive = attach(model, sim, source)   # noqa: F841  (the schedule or handle the C loop points at)
+    watch = _watch(model, sim, max_wall_time, progress)   # noqa: F841  (the clock and progress handles)
 
     x_eval = np.zeros((len(t_eval), nx))
     i_eval = ffi.new("int *", 0)
@@ -355,38 +357,23 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     T0, V0 = model.energy(q, qd, p)
     energy_initial = T0 + V0
     impacts: list[Impact] = []
-    # energy scale of lifting the whole chain by its own length: round-off floor of the impact energy checks
-    energy_ref = sum(link.mass for link in model.scene.links) * max(abs(p[0]), 1.0) * sum(
-        link.length for link in model.scene.links)
-    if method == "rk4":
-        _check_rk4_step(model, q, qd, p, dt, source.value_at(0.0, layout.expand(q), layout.expand(qd, velocity=True)))
-    ERR_MAX_STEPS = lib.GAC_ERR_MAX_STEPS
-    # The C loop runs in chunks of at most CHUNK_STEPS steps so that the wall-time budget is looked at
-    # regularly; max_steps (per flight segment) is counted across the chunks.
-    chunk = CHUNK_STEPS if max_steps == 0 else min(CHUNK_STEPS, int(max_steps))
-    start = time.perf_counter()
-    segment_t, segment_steps = float(state.t), int(state.n_steps) + int(state.n_rejected)
+    segment_t, segment_steps = float(state.t), 0       # the last event: max_steps counts from it
     status, message = 0, "reached t_end"
     stops = source.breakpoints(t_end) + [t_end]   # the loop stops where a schedule jumps or bends
     stop = 0
     summary = None
     if not keep_impacts:
-        _check(len(stops) == 1 and source.kind == "constant" and max_wall_time is None
-               and (len(t_eval) == 0 or t_eval[-1] <= 0.0), "keep_impacts",
-               "False needs constant inputs, no samples after t = 0 and no max_wall_time")
+        _check(len(stops) == 1 and source.kind == "constant" and (len(t_eval) == 0 or t_eval[-1] <= 0.0),
+               "keep_impacts", "False needs constant inputs and no samples after t = 0")
         summary = ffi.new("gac_run_summary *")
-        state.opt.max_steps = int(max_steps)
         code = getattr(lib, f"{name}_sim_run")(sim, float(t_end), int(max_impacts), record, summary)
         if code == SIM_IMPACT:
             status, message = -1, (f"stopped after {summary.n_impacts} impacts at t = {float(state.t):.12g} s: the "
                                    f"max_impacts limit of {max_impacts} (raise max_impacts to go on)")
         elif code != SIM_END:
-            status, message = -1, f"at t = {float(state.t):.12g} s: {model.error_message(code)}"
+            status, message = -1, _stop_message(model, state, code, segment_t, segment_steps, max_steps, max_wall_time,
+                                                dt, summary.n_impacts)
     while keep_impacts:
-        opt_steps = chunk
-        if max_steps:
-            opt_steps = max(1, min(chunk, int(max_steps) - (int(state.n_steps) + int(state.n_rejected) - segment_steps)))
-        state.opt.max_steps = opt_steps
         code = advance(sim, float(stops[stop]), t_eval_ptr, len(t_eval), i_eval, x_eval_ptr, record)
         if code == SIM_END and stop + 1 < len(stops):
             if source.kind == "hold":
@@ -395,60 +382,23 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
             continue
         if code == SIM_END:
             break
-        if code == ERR_MAX_STEPS:
-            taken = int(state.n_steps) + int(state.n_rejected) - segment_steps
-            if max_steps and taken >= max_steps:
-                status = -1
-                message = (f"at t = {state.t:.12g} s: maximum number of steps reached ({int(max_steps)} steps since "
-                           f"t = {segment_t:.6g} s, the last event): {_step_diagnosis(model, state, segment_t, taken)}")
-                break
-            if max_wall_time is not None and time.perf_counter() - start > max_wall_time:
-                status = -1
-                message = (f"at t = {state.t:.12g} s: wall-time budget of {max_wall_time:g} s used up "
-                           f"({int(state.n_steps)} steps): {_step_diagnosis(model, state, segment_t, taken)}")
-                break
-            continue
-        segment_t, segment_steps = float(state.t), int(state.n_steps) + int(state.n_rejected)
         if code in (SIM_IMPACT, SIM_CONTACT):
             contact_events += _read_contact_events(model, rec)
+            segment_t, segment_steps = float(state.t), int(state.n_steps) + int(state.n_rejected)
         if code == SIM_CONTACT:
             continue
         if code == lib.GAC_ERR_BAD_INPUT and source.error is not None:
             raise source.error
         if code != SIM_IMPACT:
             status = -1
-            message = f"at t = {state.t:.12g} s: {model.error_message(code)}"
-            if code == lib.GAC_ERR_UNSTABLE:
-                x_now = np.array(ffi.unpack(state.x, nx))
-                sentence = _rk4_stability(model, x_now[:nq], x_now[nq:], p, dt)[1]
-                message += f" (dt = {dt:g} s; {sentence.replace('at the start', 'now')})"
-            if method == "rk4" and code == lib.GAC_ERR_NONFINITE:
-                message += (f" (rk4 with dt = {dt:g} s is unstable on this motion: reduce dt, or use an adaptive "
-                            "method)")
+            message = _stop_message(model, state, code, segment_t, segment_steps, max_steps, max_wall_time, dt,
+                                    len(impacts))
             break
-        impact = _read_impact(model, rec)
-        impacts.append(impact)
-        if method == "rk4":                  # an impact may spin the chain up past RK4's stability
-            q_after, qd_after = layout.reduce(impact.q), layout.reduce(impact.qd_after)
-            limit, sentence = _rk4_stability(model, q_after, qd_after, p, dt)
-            if dt > limit:
-                status, message = -1, (f"impact at t = {impact.t:.12g} s: after it, dt = {dt:g} s is too large "
-                                       f"for RK4: {sentence.replace('at the start', 'now')}")
-                break
-        problem = _impact_problem(model, impact, rec, energy_ref)
-        if problem:
-            status, message = -1, f"impact at t = {impact.t:.12g} s: {problem}"
-            break
+        impacts.append(_read_impact(model, rec))        # its post-conditions were checked in C
         if len(impacts) >= max_impacts:
             status = -1
-            message = (f"stopped after {len(impacts)} impacts at t = {impact.t:.12g} s: the max_impacts limit of "
+            message = (f"stopped after {len(impacts)} impacts at t = {impacts[-1].t:.12g} s: the max_impacts limit of "
                        f"{max_impacts} (raise max_impacts to go on)")
-            break
-        if max_wall_time is not None and time.perf_counter() - start > max_wall_time:
-            status = -1
-            message = (f"at t = {state.t:.12g} s: wall-time budget of {max_wall_time:g} s used up after "
-                       f"{len(impacts)} impacts ({impacts[-1].t - impacts[max(0, len(impacts) - 100)].t:.3g} s "
-                       f"of simulated time for the last {min(len(impacts), 100)})")
             break
     if charts and code == lib.GAC_ERR_GIMBAL_LOCK and (model.scene.driven or model.scene.stops()):
         message += " (the second base chart is not available for a chain with inputs, springs, dampers or limits)"
@@ -460,7 +410,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
             max_impacts=max_impacts, max_steps=max_steps, method=method, rtol=rtol, atol=atol, dt=dt,
             h_max=h_max, contact_tol=contact_tol, event_samples=event_samples, event_tol=event_tol,
             rest_height=rest_height, zeno_impacts=zeno_impacts,
-            max_wall_time=None if max_wall_time is None else max(max_wall_time - (time.perf_counter() - start), 1e-3))
+            max_wall_time=None if max_wall_time is None else max(max_wall_time - float(state.wall_time), 1e-3),
+            progress=progress)
     x_final = np.array(ffi.unpack(state.x, nx))
     n = i_eval[0]
     warnings = impact_warnings(impacts)
@@ -606,31 +557,6 @@ def _check_inside(model: CompiledModel, q: np.ndarray, p: np.ndarray, name: str)
                          f"{position:g} (gap {gaps[c]:.3g} m)")
 
 
-APPROACH_FLOOR = 1e-6   # m/s: below 1e-9 of this (1e-15 m/s) an approach is round-off (a resting contact touched
-                        # at zero speed), whatever the impact's own speed
-
-
-def _impact_problem(model: CompiledModel, impact: Impact, record, energy_ref: float) -> str:
-    """The post-impact checks, repeated from the record with independent kernels: no negative impulse;
-    no contact at its wall still approaching it (measured in C with the contact_velocities kernel); no
-    energy gain; and, when the law was elastic (only contacts on walls with e = 1 took impulses in it, no plastic
-    round: Impact.law_elastic), no energy change other than what landings took (energy_rest).  Returns '' when
-    all hold."""
-    if any(c.impulse < 0.0 for c in impact.contacts):
-        return f"an impulse is negative ({min(c.impulse for c in impact.contacts):.3g} N s)"
-    bound = max(float(record.roundoff), 1e-10)  # the law's round-off bound (grows with the condition of I_f)
-    if record.approach_after > 10 * bound * max(record.approach_before, APPROACH_FLOOR):
-        return f"a contact still approaches its wall after the impact ({record.approach_after:.3g} m/s)"
-    E0, E1 = impact.energy_before, impact.energy_after
-    tol = bound * max(abs(E0), energy_ref)      # energy_ref: a floor for a chain at rest near V = 0
-    if E1 > E0 + tol:
-        return f"energy increased from {E0!r} J to {E1!r} J"
-    if impact.law_elastic and abs(E1 + impact.energy_rest - E0) > tol:
-        return (f"elastic impact changed the energy from {E0!r} J to {E1!r} J "
-                f"({impact.energy_rest!r} J taken by landings)")
-    return ""
-
-
 def _step_diagnosis(model: CompiledModel, sim, t_from: float, steps: int) -> str:
     """Where the steps go: their mean size since t_from and the state component that dominated the error
     estimate of the last step (the fastest mode), with its rate."""
@@ -647,30 +573,54 @@ def _step_diagnosis(model: CompiledModel, sim, t_from: float, steps: int) -> str
             "max_steps / max_wall_time or loosen rtol/atol")
 
 
-def _rk4_stability(model: CompiledModel, q, qd, p, dt: float, u=None) -> tuple[float, str]:
-    """The spectral radius of the flight Jacobian d(qd, qdd)/d(q, qd) at (q, qd), estimated by power
-    iteration on finite-difference Jacobian-vector products, and a sentence comparing dt with RK4's
-    stability bound RK4_STABLE / radius."""
-    x0 = np.r_[q, qd]
-    f0 = model.rhs(0.0, x0, p, u)
-    rng = np.random.default_rng(0)
-    v = rng.normal(size=x0.size)
-    radius = 0.0
-    for _ in range(30):
-        v /= np.linalg.norm(v)
-        h = 1e-7 * max(1.0, np.linalg.norm(x0))
-        w = (model.rhs(0.0, x0 + h * v, p, u) - f0) / h
-        radius = float(np.linalg.norm(w))
-        if not np.isfinite(radius) or radius == 0.0:
-            break
-        v = w
-    radius = max(radius, float(np.abs(qd).max()))
-    limit = RK4_STABLE / radius if radius > 0 else np.inf
-    return limit, (f"the fastest mode of the chain at the start has rate {radius:.3g} 1/s, so RK4 needs "
-                   f"dt below about {limit:.3g} s")
+def _stop_message(model: CompiledModel, sim, code: int, segment_t: float, segment_steps: int, max_steps: int,
+                  max_wall_time: float | None, dt: float | None, n_impacts: int) -> str:
+    """The result's message for a run the C loop stopped with ``code``: the loop's reason, and for the budgets and
+    RK4's stability rule what the run was doing (the loop decided; this only reports)."""
+    lib = model.lib
+    where = f"at t = {float(sim.t):.12g} s"
+    steps = int(sim.n_steps) + int(sim.n_rejected) - segment_steps
+    if code == lib.GAC_ERR_MAX_STEPS:
+        return (f"{where}: maximum number of steps reached ({int(max_steps)} steps since t = {segment_t:.6g} s, the "
+                f"last event): {_step_diagnosis(model, sim, segment_t, steps)}")
+    if code == lib.GAC_ERR_WALL_TIME:
+        used = f"{where}: wall-time budget of {max_wall_time:g} s used up ({int(sim.n_steps)} steps, {n_impacts} impacts)"
+        return f"{used}: {_step_diagnosis(model, sim, segment_t, steps)}" if steps > 0 else used
+    if code == lib.GAC_ERR_STOPPED:
+        return f"{where}: stopped by the progress callback"
+    message = f"{where}: {model.error_message(code)}"
+    if code == lib.GAC_ERR_UNSTABLE:
+        message += (f" (dt = {dt:g} s: h rho = {float(sim.rk4_h_rho):.3g} in the last step, rho the rate of the "
+                    "chain's fastest mode seen in it)")
+    if code == lib.GAC_ERR_NONFINITE and dt is not None:
+        message += f" (rk4 with dt = {dt:g} s is unstable on this motion: reduce dt, or use an adaptive method)"
+    return message
 
 
-def _check_rk4_step(model: CompiledModel, q, qd, p, dt: float, u=None) -> None:
-    """Refuse an RK4 step that the scene's fastest mode at the start makes unstable."""
-    limit, sentence = _rk4_stability(model, q, qd, p, dt, u)
-    _check(dt <= limit, "dt", f"{dt:g} s is too large for RK4 on this scene: {sentence}")
+_WATCHED = set()      # modules whose Python clock and progress callbacks are defined
+
+
+def _watch(model: CompiledModel, sim, max_wall_time: float | None, progress):
+    """Give the C loop time.perf_counter as its clock (for max_wall_time) and ``progress`` as its progress callback
+    (progress(t, n_steps, n_impacts) returning False stops the run).  Returns the handle the loop points at."""
+    ffi, lib, name = model.ffi, model.lib, model.name
+    if id(lib) not in _WATCHED:
+        @ffi.def_extern(name=f"{name}_python_clock")
+        def clock(user):
+            return time.perf_counter()
+
+        @ffi.def_extern(name=f"{name}_python_progress")
+        def report(t, n_steps, n_impacts, user):
+            callback = ffi.from_handle(user)
+            try:
+                return int(callback(float(t), int(n_steps), int(n_impacts)) is False)
+            except BaseException:             # noqa: BLE001 - an error in the callback stops the run
+                return 1
+        _WATCHED.add(id(lib))
+    if max_wall_time is not None:
+        getattr(lib, f"{name}_sim_set_clock")(sim, getattr(lib, f"{name}_python_clock"), ffi.NULL)
+    if progress is None:
+        return None
+    handle = ffi.new_handle(progress)
+    getattr(lib, f"{name}_sim_set_progress")(sim, getattr(lib, f"{name}_python_progress"), handle)
+    return handle

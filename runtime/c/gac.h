@@ -80,6 +80,9 @@
                                           name and what it allows) */
 
 /* ---- what gac_sim_advance stops at (> 0) ------------------------------------------------------ */
+#define GAC_ERR_WALL_TIME        -25   /* the run used opt.max_wall_time seconds of its clock (gac_sim_set_clock)
+                                          since gac_sim_init or the last gac_sim_set_clock */
+#define GAC_ERR_STOPPED          -26   /* the progress callback (gac_sim_set_progress) asked the run to stop */
 #define GAC_SIM_END      1    /* reached t_end */
 #define GAC_SIM_IMPACT   2    /* stopped at an impact, already applied; see the record (which may also list
                                  contacts made persistent or released by the impact) */
@@ -121,6 +124,17 @@ typedef void (*gac_kernel_qv)(const double *q, const double *v, const double *p,
  * the flight dynamics (events, impacts, resting contact), so it must be a function of (t, q, qd) and of what
  * user points to, not of how often it is called.  user: the caller's pointer, passed through. */
 typedef void (*gac_controller)(double t, const double *q, const double *qd, double *u, void *user);
+
+/* A clock for the wall-time budget: seconds from any fixed origin, never decreasing.  user: passed through.
+ * The default (NULL) is C's clock(): the processor time of the process, which on a target without a clock
+ * counts nothing; give a monotonic wall clock where the host has one. */
+typedef double (*gac_clock)(void *user);
+
+/* Progress of a run: called with the simulated time t (s), the steps (accepted and rejected) and the impacts since
+ * gac_sim_init, every GAC_LOOK_STEPS steps and at the start of every gac_sim_advance; returning nonzero stops the
+ * run (GAC_ERR_STOPPED) at that step end, from which a later gac_sim_advance may go on.  user: passed through. */
+typedef int (*gac_progress)(double t, long n_steps, long n_impacts, void *user);
+#define GAC_LOOK_STEPS 64      /* steps between two looks at the clock and the progress callback */
 
 /* One contact: a point of the chain and a wall (kind GAC_CONTACT_WALL), or a joint and its stop (kind
  * GAC_CONTACT_STOP: a unilateral constraint on the coordinate q[coordinate], gap = normal_sign (q - limit) in
@@ -356,8 +370,9 @@ const char *gac_error_message(int code);
  * losses they close the energy balance E(t) - E(0) = work_input - work_damping - (impact losses).
  *
  * Stops before trouble: GAC_ERR_GIMBAL_LOCK (the base chart's measure below sqrt(16 eps / rtol): continue on
- * a second chart), GAC_ERR_UNSTABLE (RK4 past its stability), GAC_ERR_LOST_CONTACT, GAC_ERR_MAX_STEPS
- * (sim.err_index names the state component that limits the step).
+ * a second chart), GAC_ERR_UNSTABLE (RK4 past its stability, sim.rk4_h_rho), GAC_ERR_LOST_CONTACT,
+ * GAC_ERR_MAX_STEPS (sim.err_index names the state component that limits the step), GAC_ERR_WALL_TIME
+ * (opt.max_wall_time of the run's clock used), GAC_ERR_STOPPED (the progress callback said stop).
  */
 
 typedef struct {
@@ -375,6 +390,9 @@ typedef struct {
                               10 contact_tol; 0: never by this rule */
     int zeno_impacts;      /* persistent after this many impacts of one contact at shrinking intervals
                               (default 20; 0: never by this rule) */
+    double max_wall_time;  /* s of the run's clock (gac_sim_set_clock) allowed since gac_sim_init or the last
+                              gac_sim_set_clock, looked at every GAC_LOOK_STEPS steps and at the start of every
+                              advance: GAC_ERR_WALL_TIME beyond it.  0 (default): unbounded */
 } gac_options;
 
 /* What gac_sim_advance reports.  Scalars are fields; the arrays (nq entries each) point into the arrays
@@ -424,10 +442,20 @@ typedef struct {
     double work_input;           /* J: work of the inputs since gac_sim_init, int u . qd_actuated dt */
     double work_damping;         /* J: energy the joint dampers took since gac_sim_init, int C theta_dot^2 dt */
     double work_friction;        /* J: energy sliding friction took since gac_sim_init, int mu lambda |v_t| ... dt */
+    double wall_time;            /* s of the run's clock used, as of the last look (GAC_LOOK_STEPS) */
+    double rk4_h_rho;            /* RK4: h rho of the last step, rho the rate of the chain's fastest mode seen in it
+                                    (the stability rule: 3 steps in a row above 2.5, or one above 10, stop the run
+                                    with GAC_ERR_UNSTABLE) */
     /* private: the model, integrator state and scratch (pointers into dwork / iwork) */
     const gac_model *model;
     gac_controller controller;   /* NULL: the held inputs u */
     void *controller_data;
+    gac_clock clock;             /* NULL: clock() */
+    void *clock_data;
+    gac_progress progress;       /* NULL: none */
+    void *progress_data;
+    double wall_start;           /* the clock's reading when the budget started */
+    long n_look;                 /* steps since the last look */
     double *u_eval;              /* nu: the controller's output at the current evaluation */
     int input_changed;           /* gac_sim_set_input since the last advance: resting contacts re-checked */
     double h;
@@ -480,6 +508,14 @@ int gac_sim_set_input(gac_sim *sim, const double *u);
  * must be finite (GAC_ERR_BAD_INPUT otherwise, at the next call that evaluates it).  Returns GAC_OK or
  * GAC_ERR_NULL_ARGUMENT (sim NULL). */
 int gac_sim_set_controller(gac_sim *sim, gac_controller controller, void *user);
+
+/* The clock the wall-time budget (opt.max_wall_time) is measured with (NULL: C's clock(), the process's processor
+ * time); the budget starts again from now.  Returns GAC_OK or GAC_ERR_NULL_ARGUMENT (sim NULL). */
+int gac_sim_set_clock(gac_sim *sim, gac_clock clock, void *user);
+
+/* Call progress(sim, user) every GAC_LOOK_STEPS steps and at the start of every gac_sim_advance (NULL: none); a
+ * nonzero return stops the run with GAC_ERR_STOPPED.  Returns GAC_OK or GAC_ERR_NULL_ARGUMENT (sim NULL). */
+int gac_sim_set_progress(gac_sim *sim, gac_progress progress, void *user);
 
 /* An input schedule: values u_k (nu each) at times t_k (n >= 1, strictly increasing), held (linear = 0: u(t) =
  * u_k for t_k <= t < t_k+1) or interpolated linearly between the times (linear = 1); u_0 before t_0 and

@@ -9,6 +9,7 @@
 
 #include <math.h>
 #include <string.h>
+#include <time.h>
 
 void gac_default_options(gac_options *opt)
 {
@@ -24,6 +25,28 @@ void gac_default_options(gac_options *opt)
     opt->max_steps = 10000000L;
     opt->rest_height = -1.0;
     opt->zeno_impacts = 20;
+    opt->max_wall_time = 0.0;
+}
+
+/* The run's clock in seconds: the embedder's, or C's processor time. */
+static double gac_clock_now(const gac_sim *s)
+{
+    if (s->clock != 0) return s->clock(s->clock_data);
+    return (double)clock() / (double)CLOCKS_PER_SEC;
+}
+
+/* The loop's look at the world: the progress callback (it may stop the run) and the wall-time budget.  GAC_OK,
+ * GAC_ERR_STOPPED or GAC_ERR_WALL_TIME. */
+static int gac_look(gac_sim *s)
+{
+    s->n_look = 0;
+    if (s->progress != 0 && s->progress(s->t, s->n_steps + s->n_rejected, s->n_impacts, s->progress_data) != 0)
+        return GAC_ERR_STOPPED;
+    if (s->opt.max_wall_time > 0.0) {
+        s->wall_time = gac_clock_now(s) - s->wall_start;
+        if (!(s->wall_time <= s->opt.max_wall_time)) return GAC_ERR_WALL_TIME;
+    }
+    return GAC_OK;
 }
 
 /* The inputs at time t and state x: the held ones, or the controller's (into s->u_eval, starting from the
@@ -124,7 +147,8 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
         && !(opt->rtol >= GAC_RTOL_MIN && opt->rtol < 1.0 && opt->atol > 0.0 && opt->atol < 1e300 && opt->dt >= 0.0))
         return GAC_ERR_BAD_OPTION;
     if (opt->event_samples < 1 || !(opt->event_tol > 0.0) || !(opt->contact_tol >= 0.0) || !(opt->h_max >= 0.0)
-        || opt->max_steps < 0 || !(opt->rest_height < 1e300) || opt->zeno_impacts < 0)
+        || opt->max_steps < 0 || !(opt->rest_height < 1e300) || opt->zeno_impacts < 0
+        || !(opt->max_wall_time >= 0.0 && opt->max_wall_time < 1e300))
         return GAC_ERR_BAD_OPTION;
     for (i = 0; i < md->nparam; ++i) pv[i] = p == 0 ? md->default_parameters[i] : p[i];   /* NULL: the defaults */
     if (gac_check_parameters(md, pv, 0) != GAC_OK) return GAC_ERR_BAD_PARAMETER;
@@ -158,6 +182,14 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     for (i = 0; i < md->nu; ++i) s->u[i] = s->u_eval[i] = 0.0;
     s->controller = 0;
     s->controller_data = 0;
+    s->clock = 0;
+    s->clock_data = 0;
+    s->progress = 0;
+    s->progress_data = 0;
+    s->wall_start = opt->max_wall_time > 0.0 ? gac_clock_now(s) : 0.0;
+    s->wall_time = 0.0;
+    s->n_look = 0;
+    s->rk4_h_rho = 0.0;
     s->input_changed = 0;
     s->work_input = s->work_damping = s->work_friction = 0.0;
     for (i = 0; i < md->nx; ++i) s->x[i] = x[i];
@@ -281,6 +313,24 @@ int gac_sim_set_input(gac_sim *s, const double *u)
     return GAC_OK;
 }
 
+int gac_sim_set_clock(gac_sim *s, gac_clock clock, void *user)
+{
+    if (s == 0) return GAC_ERR_NULL_ARGUMENT;
+    s->clock = clock;
+    s->clock_data = user;
+    s->wall_start = gac_clock_now(s);
+    s->wall_time = 0.0;
+    return GAC_OK;
+}
+
+int gac_sim_set_progress(gac_sim *s, gac_progress progress, void *user)
+{
+    if (s == 0) return GAC_ERR_NULL_ARGUMENT;
+    s->progress = progress;
+    s->progress_data = user;
+    return GAC_OK;
+}
+
 int gac_sim_set_controller(gac_sim *s, gac_controller controller, void *user)
 {
     if (s == 0) return GAC_ERR_NULL_ARGUMENT;
@@ -341,6 +391,10 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
         const int code = gac_recheck_rest(s, record);
         if (code != 0) return code < 0 ? code : GAC_SIM_CONTACT;
     }
+    if (s->t < t_end) {                           /* the budget and the progress callback, once per call ... */
+        const int code = gac_look(s);
+        if (code != GAC_OK) return code;
+    }
     while (s->t < t_end) {
         double h, t1, t_event = 0.0, err = 0.0;
         int c_event = -1, last;
@@ -350,6 +404,10 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
         }
         if (s->fail) return s->fail;
         if (s->opt.max_steps > 0 && steps >= s->opt.max_steps) return GAC_ERR_MAX_STEPS;
+        if (++s->n_look >= GAC_LOOK_STEPS) {      /* ... and every GAC_LOOK_STEPS steps, at a step end */
+            const int code = gac_look(s);
+            if (code != GAC_OK) return code;
+        }
         if (s->opt.method != GAC_METHOD_RK4 && !(s->h > 0.0)) s->h = gac_initial_step(s, t_end);
         h = s->h;
         if (s->opt.h_max > 0.0 && h > s->opt.h_max) h = s->opt.h_max;
@@ -362,7 +420,7 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
         if (s->opt.method == GAC_METHOD_RK4) {
             /* RK4 has no error control: 3 steps in a row at h rho > 2.5, or one far past it, mean the step is
              * beyond its stability */
-            const double h_rho = gac_rk4_step(s, h);
+            const double h_rho = s->rk4_h_rho = gac_rk4_step(s, h);
             s->n_unstable = h_rho > 2.5 ? s->n_unstable + 1 : 0;
             if (s->n_unstable >= 3 || !(h_rho < 10.0)) return GAC_ERR_UNSTABLE;
         } else {

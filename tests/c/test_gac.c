@@ -441,6 +441,79 @@ static void test_box(void)
     CHECK(sim.x[0] > 0.0 && sim.x[0] < 2.0 && sim.x[1] > 0.0 && sim.x[1] < 2.0 && sim.nactive == 0, "inside");
 }
 
+/* The budget and the progress callback: a fake clock that advances 1 s per reading, a callback that asks to stop
+ * at its third call; a run stopped either way goes on from where it stopped, to the same end state bit for bit. */
+static double fake_clock(void *user)
+{
+    double *now = (double *)user;
+    *now += 1.0;
+    return *now;
+}
+
+static int stop_at_third(double t, long n_steps, long n_impacts, void *user)
+{
+    int *calls = (int *)user;
+    (void)t; (void)n_steps; (void)n_impacts;
+    return ++*calls == 3;
+}
+
+static int run_box_to_end(gac_sim *sim, gac_impact_record *rec)
+{
+    int code;
+    while ((code = gac_sim_advance(sim, 5.0, 0, 0, 0, 0, rec)) == GAC_SIM_IMPACT) {
+    }
+    return code;
+}
+
+static void test_budget_and_progress(void)
+{
+    static double dwork2[NDOUBLE];
+    static int iwork2[NINT];
+    double now = 0.0, x_ref[4];
+    gac_options opt;
+    gac_sim sim, ref;
+    gac_impact_record rec;
+    int code, calls = 0, i, same = 1;
+    long steps_ref;
+    gac_record_bind(&rec, &box, rdwork, riwork);
+    gac_default_options(&opt);
+    CHECK(opt.max_wall_time == 0.0, "no budget by default");
+    opt.h_max = 1e-3;                              /* 5,000 steps: about 80 looks */
+    CHECK(gac_sim_init(&ref, &box, dwork2, iwork2, 0.0, box_q0, box_qd0, 0, &opt) == GAC_OK, "reference init");
+    CHECK(run_box_to_end(&ref, &rec) == GAC_SIM_END, "reference run");
+    for (i = 0; i < 4; ++i) x_ref[i] = ref.x[i];
+    steps_ref = ref.n_steps;
+    opt.max_wall_time = 10.5;
+    CHECK(gac_sim_init(&sim, &box, dwork, iwork, 0.0, box_q0, box_qd0, 0, &opt) == GAC_OK, "init with a budget");
+    CHECK(gac_sim_set_clock(&sim, fake_clock, &now) == GAC_OK && now == 1.0, "clock read once when set");
+    code = run_box_to_end(&sim, &rec);
+    CHECK(code == GAC_ERR_WALL_TIME && sim.wall_time == 11.0 && now == 12.0 && sim.t < 5.0,
+          "the budget stops the run at the 11th reading: code %d, wall_time %g, t %g", code, sim.wall_time, sim.t);
+    CHECK(sim.n_steps + sim.n_rejected <= 11L * GAC_LOOK_STEPS, "looked at every %d steps (%ld steps)", GAC_LOOK_STEPS,
+          sim.n_steps + sim.n_rejected);
+    CHECK(gac_sim_set_clock(&sim, fake_clock, &now) == GAC_OK && sim.wall_time == 0.0, "the budget starts again");
+    sim.opt.max_wall_time = 0.0;
+    code = run_box_to_end(&sim, &rec);
+    for (i = 0; i < 4; ++i) same = same && sim.x[i] == x_ref[i];
+    CHECK(code == GAC_SIM_END && same && sim.n_steps == steps_ref, "resumed after the budget: same end state");
+
+    opt.max_wall_time = 0.0;
+    CHECK(gac_sim_init(&sim, &box, dwork, iwork, 0.0, box_q0, box_qd0, 0, &opt) == GAC_OK, "init");
+    CHECK(gac_sim_set_progress(&sim, stop_at_third, &calls) == GAC_OK, "progress set");
+    code = run_box_to_end(&sim, &rec);
+    CHECK(code == GAC_ERR_STOPPED && calls == 3 && sim.t > 0.0 && sim.t < 5.0, "stopped by the callback: code %d",
+          code);
+    CHECK(gac_sim_set_progress(&sim, 0, 0) == GAC_OK, "progress cleared");
+    code = run_box_to_end(&sim, &rec);
+    for (same = 1, i = 0; i < 4; ++i) same = same && sim.x[i] == x_ref[i];
+    CHECK(code == GAC_SIM_END && same, "resumed after the callback's stop: same end state");
+    CHECK(gac_sim_set_clock(0, 0, 0) == GAC_ERR_NULL_ARGUMENT && gac_sim_set_progress(0, 0, 0) == GAC_ERR_NULL_ARGUMENT,
+          "NULL sim refused");
+    opt.max_wall_time = -1.0;
+    CHECK(gac_sim_init(&sim, &box, dwork, iwork, 0.0, box_q0, box_qd0, 0, &opt) == GAC_ERR_BAD_OPTION,
+          "a negative budget refused");
+}
+
 /* A point sliding on a rough floor (Coulomb mu, resting from the start): the normal force m g, the deceleration
  * mu g, x(t) = v0 t - mu g t^2 / 2 until it stops at v0^2 / (2 mu g), and the friction loss m v0^2 / 2. */
 static void test_sled(void)
@@ -586,6 +659,7 @@ int main(int argc, char **argv)
     test_ball(GAC_METHOD_RK4);
     test_box();
     test_sled();
+    test_budget_and_progress();
     test_inputs();
     test_errors();
     test_parameters();

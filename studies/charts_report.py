@@ -18,6 +18,7 @@ from codegen.scene import load_scene
 from runtime.charts import ChartModels, simulate_with_charts
 from runtime.simulate import simulate
 
+from .machine import describe
 from .reference import integrate_reference
 from .timing import time_call
 
@@ -80,6 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     build_parser().parse_args(argv)
+    print(f"Machine: {describe()}")
     print(lock_table())
     print()
     print(long_table())

@@ -1,6 +1,6 @@
-"""Studies that compare two variants of a model (`python -m studies driven`, `python -m studies specialise`):
-the ratio they print comes from one program (or one process) that ran both, batch by batch, shown as
-median (min-max) of the batches."""
+"""Studies' reports show what they measured: where two variants of a model are compared (`python -m studies
+driven`, `python -m studies specialise`) the ratio comes from one program (or one process) that ran both, batch
+by batch, shown as median (min-max) of the batches; a row labelled "one chart" ran one chart."""
 import re
 import subprocess
 import sys
@@ -54,3 +54,13 @@ def test_specialise_study_times_general_and_specialised_side_by_side():
             check_ratio(r["general / specialised per rhs"])
         else:
             assert r["general / specialised per rhs"] == ""
+
+
+def test_charts_study_one_chart_row_runs_one_chart():
+    """The gimbal-lock scene's single chart stops before the lock at t = 0.25 s (simulate would otherwise
+    switch charts itself); the chart-switching run gets through it to 0.5 s."""
+    from studies.charts_report import lock_table
+    text = lock_table(methods=("dop853",), rtols=(1e-10,))
+    one, switching = table(text, "method")
+    assert one["run"] == "one chart" and switching["run"].startswith("charts")
+    assert float(one["reaches t (s)"]) < 0.25 and float(switching["reaches t (s)"]) == 0.5

@@ -182,3 +182,39 @@ def test_the_link_cap_stated_in_the_pages_is_the_code_s():
               for number in re.findall(pattern, page.read_text())]
     assert len(stated) >= 4, stated
     assert all(number == MAX_LINKS for _, number in stated), stated
+
+
+def scaling_table() -> dict:
+    """performance.md's `python -m studies scaling` table: n -> cold total build time in s."""
+    text = (ROOT / "docs" / "performance.md").read_text()
+    header = next(line for line in text.splitlines() if line.startswith("|") and "cold total s" in line)
+    columns = [c.strip() for c in header.strip("|").split("|")]
+    rows = text[text.index(header):].splitlines()[2:]
+    table = {}
+    for row in rows:
+        if not row.startswith("|"):
+            break
+        cells = dict(zip(columns, (c.strip() for c in row.strip("|").split("|"))))
+        table[int(cells["n"])] = float(cells["cold total s"])
+    return table
+
+
+def test_build_times_agree_across_pages():
+    """Every page that states a build time ("X s at n = N", "n = N [builds] in [about] X s") states the same
+    one: for an n of performance.md's scaling table its cold total (as rounded in the prose), otherwise the same
+    figure as the other pages."""
+    table = scaling_table()
+    stated = {}
+    for page in PAGES:
+        text = page.read_text()
+        for seconds, n in re.findall(r"([\d.]+)\s+s\s+at\s+n\s+=\s+([\d,]+)", text):
+            stated.setdefault(int(n.replace(",", "")), []).append((page.name, float(seconds)))
+        for n, seconds in re.findall(r"\bn\s+=\s+([\d,]+)\s+(?:builds\s+)?in\s+(?:about\s+)?([\d.]+)\s+s\b",
+                                     text):
+            stated.setdefault(int(n.replace(",", "")), []).append((page.name, float(seconds)))
+    assert {64, 256} <= set(stated), stated
+    for n, figures in stated.items():
+        reference = table.get(n, figures[0][1])
+        for page, seconds in figures:
+            assert abs(seconds - reference) <= 0.05 * reference, \
+                f"{page}: n = {n} builds in {seconds} s, but {reference} s elsewhere ({figures}, table {table.get(n)})"

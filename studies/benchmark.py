@@ -10,7 +10,6 @@ confirmed by RK4 at a small step), and the ratio.  The scipy baseline uses the s
 from __future__ import annotations
 
 import argparse
-import platform
 import sys
 
 import numpy as np
@@ -20,7 +19,9 @@ from runtime.model import CompiledModel, load_model
 from runtime.simulate import simulate
 
 from . import baseline
+from .machine import describe
 from .timing import time_call
+from .toolchain import compiler_version
 
 
 SCIPY_METHOD = {"dopri5": "RK45", "dop853": "DOP853"}
@@ -62,8 +63,9 @@ def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     model = load_model(load_scene(args.scene))
     reference = reference_times(model, args.t_end)
-    print(f"{args.scene}, t_end = {args.t_end} s, {len(reference)} impacts; machine {platform.machine()}, "
-          f"Python {platform.python_version()}; medians of {args.repeat} runs")
+    print(f"Machine: {describe(compiler_version())}")
+    print(f"{args.scene}, t_end = {args.t_end} s, {len(reference)} impacts; medians of {args.repeat} runs (ours), "
+          f"{max(3, args.repeat // 7)} (scipy)")
     print("| method | rtol (atol = rtol/100) | compiled loop ms | impact-time error s | rhs "
           "| scipy solve_ivp + events ms | error s | rhs | speed-up |")
     print("|---|---|---|---|---|---|---|---|---|")

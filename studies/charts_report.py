@@ -1,7 +1,8 @@
 """Figures for docs/simulation.md, "Near gimbal lock: chart switching":  python -m studies charts
 
 1. The gimbal-lock scene over its first 0.5 s (free flight through the lock at t = 0.25 s): one chart
-   against chart switching, for DOPRI5 and DOP853 at several tolerances: how far each gets, its steps,
+   (``simulate(..., charts=False)``; by default simulate switches charts itself near the lock) against
+   chart switching, for DOPRI5 and DOP853 at several tolerances: how far each gets, its steps,
    energy drift and largest error of the points O_1..O_3 against an independent integration (the numpy
    reference model with the base orientation as a rotation matrix, scipy DOP853 at rtol = 1e-12;
    studies.reference.integrate_reference, which tests/test_charts.py checks the runtime against too).
@@ -18,6 +19,7 @@ from codegen.scene import load_scene
 from runtime.charts import ChartModels, simulate_with_charts
 from runtime.simulate import simulate
 
+from .machine import describe
 from .reference import integrate_reference
 from .timing import time_call
 
@@ -28,7 +30,7 @@ def _timed(fn, repeat: int = 3):
     return timing.result, timing.median
 
 
-def lock_table(max_steps: int = 20000) -> str:
+def lock_table(max_steps: int = 20000, methods=("dopri5", "dop853"), rtols=(1e-6, 1e-8, 1e-10, 1e-12)) -> str:
     scene = load_scene("gimbal-lock")
     models = ChartModels(scene)
     model = models.models[0]
@@ -38,10 +40,10 @@ def lock_table(max_steps: int = 20000) -> str:
     expected = integrate_reference(scene, te)
     lines = ["| method | rtol | run | reaches t (s) | steps | energy drift | max point error (m) | ms |",
              "|---|---|---|---|---|---|---|---|"]
-    for method in ("dopri5", "dop853"):
-        for rtol in (1e-6, 1e-8, 1e-10, 1e-12):
+    for method in methods:
+        for rtol in rtols:
             opts = {"method": method, "rtol": rtol, "atol": rtol / 100, "t_eval": te}
-            plain, t_plain = _timed(lambda: simulate(model, t_end, max_steps=max_steps, **opts), 1)
+            plain, t_plain = _timed(lambda: simulate(model, t_end, max_steps=max_steps, charts=False, **opts), 1)
             charts, t_charts = _timed(lambda: simulate_with_charts(scene, t_end, models=models, **opts))
             n = len(plain.t)
             err_plain = np.abs(np.array([model.contact_points(q) for q in plain.q]) - expected[:n]).max()
@@ -62,7 +64,7 @@ def long_table() -> str:
         scene = load_scene(name)
         models = ChartModels(scene)
         A = models.charts[0]
-        plain, t_plain = _timed(lambda: simulate(models.models[0], t_end, max_steps=200000, **opts))
+        plain, t_plain = _timed(lambda: simulate(models.models[0], t_end, max_steps=200000, charts=False, **opts))
         charts, t_charts = _timed(lambda: simulate_with_charts(scene, t_end, models=models, **opts))
         for label, r, seconds in (("one chart", plain, t_plain), ("charts", charts, t_charts)):
             switches = len(r.switches) if label == "charts" else "-"
@@ -80,6 +82,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     build_parser().parse_args(argv)
+    print(f"Machine: {describe()}")
     print(lock_table())
     print()
     print(long_table())

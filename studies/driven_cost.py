@@ -1,6 +1,7 @@
 """What driving a chain costs: ns per NAME_rhs (C loop) of the built-in n-link chain, passive and with a
-spring, a damper and a torque input on every joint, measured side by side (alternating, repeated); and the
-simulation time of the shipped driven scene against the same scene passive.
+spring, a damper and a torque input on every joint, both timed in one C program (alternating batches; the
+ratio taken batch by batch); and the simulation time of the shipped driven scene against the same scene
+passive (alternating, repeated).
 
     python -m studies driven [--links 4,8,16] [--repeats 3] [--runs 200]
 """
@@ -13,11 +14,15 @@ import time
 
 import numpy as np
 
+from .machine import describe
+from .toolchain import compiler_version
+
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m studies driven", description=__doc__.split("\n\n")[0])
     parser.add_argument("--links", default="4,8,16", help="chain lengths, comma-separated (default 4,8,16)")
-    parser.add_argument("--repeats", type=int, default=3, help="alternating repeats of each timing (default 3)")
+    parser.add_argument("--repeats", type=int, default=3,
+                        help="alternating repeats of each simulation timing (default 3)")
     parser.add_argument("--runs", type=int, default=200, help="simulations of the driven scene per repeat")
     return parser
 
@@ -34,7 +39,7 @@ def main(argv=None) -> int:
     from codegen.pipeline import generate
     from codegen.scene import default_scene, load_scene
     from runtime import load_model, simulate
-    from .timing import time_rhs
+    from .timing import median_range, ratios, time_rhs_side_by_side
     try:
         links = [int(x) for x in args.links.split(",")]
     except ValueError:
@@ -43,20 +48,17 @@ def main(argv=None) -> int:
     if not all(1 <= n <= 64 for n in links) or args.repeats < 1 or args.runs < 1:
         print("error: --links in 1..64, --repeats >= 1, --runs >= 1", file=sys.stderr)
         return 2
-    print("| n | passive ns/rhs | driven ns/rhs | ratio | forward dynamics ops passive / driven |")
+    print(f"Machine: {describe(compiler_version())}")
+    print("| n | passive ns/rhs | driven ns/rhs | driven / passive | forward dynamics ops passive / driven |")
     print("|---|---|---|---|---|")
     for n in links:
         start = time.perf_counter()
         passive, driven = generate(default_scene(n)), generate(driven_variant(default_scene(n)))
-        samples = {"passive": [], "driven": []}
-        for _ in range(args.repeats):                       # alternate, so drift hits both alike
-            samples["passive"].append(time_rhs(passive).median)
-            samples["driven"].append(time_rhs(driven).median)
-        a, b = np.median(samples["passive"]), np.median(samples["driven"])
+        a, b = time_rhs_side_by_side([passive, driven], [100000, 100000])     # one program, alternating batches
+        ratio = ratios(b, a)
         ops = {f.name: f.ops.total for f in passive.functions}["forward_dynamics"], \
             {f.name: f.ops.total for f in driven.functions}["forward_dynamics"]
-        print(f"| {n} | {a:.1f} ({min(samples['passive']):.1f}-{max(samples['passive']):.1f}) | {b:.1f} "
-              f"({min(samples['driven']):.1f}-{max(samples['driven']):.1f}) | {b / a:.2f} | {ops[0]} / {ops[1]} |",
+        print(f"| {n} | {median_range(a, 1)} | {median_range(b, 1)} | {median_range(ratio)} | {ops[0]} / {ops[1]} |",
               flush=True)
         print(f"  (n = {n}: {time.perf_counter() - start:.1f} s)", file=sys.stderr)
     scene = load_scene("driven-fold")

@@ -19,7 +19,8 @@ from pathlib import Path
 from codegen.pipeline import generate, write_model, write_standalone
 from codegen.scene import default_scene
 
-from .toolchain import compile_c
+from .machine import describe
+from .toolchain import compile_c, compiler_version
 
 
 def measure(n: int, t_end: float, runs: int, folder: Path) -> dict:
@@ -68,6 +69,7 @@ def main(argv=None) -> int:
         with tempfile.TemporaryDirectory() as tmp:
             print(f"n = {n} ...", file=sys.stderr, flush=True)
             rows.append(measure(n, args.t_end, args.runs, Path(tmp)))
+    print(f"Machine: {describe(compiler_version())}")
     print("| n | object code (text / data / bss bytes) | ms per simulated second, DOPRI5 / DOP853 (rtol 1e-10) "
           "| impacts in the run |")
     print("|---|---|---|---|")

@@ -13,6 +13,8 @@ import tracemalloc
 
 import numpy as np
 
+from .machine import describe
+
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m studies ensemble", description=__doc__.split("\n\n")[0])
@@ -62,6 +64,7 @@ def main(argv=None) -> int:
             assert study.rows == reference, "Dask: rows differ from the serial ones"
             print(f"  repeat {repeat + 1}: {name} {study.seconds:.2f} s", file=sys.stderr, flush=True)
     impacts = np.mean([row["n_impacts"] for row in reference])
+    print(f"Machine: {describe()}")
     print(f"{args.scene}, {args.runs:,} runs of {args.t_end} s ({restitution} from 0.1 to 1, {impacts:.1f} impacts "
           f"per run on average), {args.repeats} repeats:\n")
     print("| how | runs/s, median (min-max) | speed-up |")

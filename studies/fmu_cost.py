@@ -14,7 +14,9 @@ import time
 
 import numpy as np
 
+from .machine import describe
 from .timing import time_call
+from .toolchain import compiler_version
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -55,6 +57,7 @@ def main(argv=None) -> int:
         slave = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(path), unzipdir=f"{tmp}/unzipped"),
                           modelIdentifier=md.coSimulation.modelIdentifier, instanceName="study")
         slave.instantiate()
+        print(f"Machine: {describe(compiler_version())}")
         print("| communication step s | FMU (FMPy) ms per run (spread) | runtime.simulate ms (spread) | ratio "
               "| impacts | max abs difference of q at the end |")
         print("|---|---|---|---|---|---|")

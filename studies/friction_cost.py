@@ -8,7 +8,9 @@ import argparse
 import dataclasses
 import sys
 
+from .machine import describe
 from .timing import time_call
+from .toolchain import compiler_version
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -47,6 +49,7 @@ def main(argv=None) -> int:
             print(f"error: --velocities: {exc}", file=sys.stderr)
             return 2
     n = scene.n
+    print(f"Machine: {describe(compiler_version())}")
     print(f"{scene.name}, {args.t_end:g} s, DOPRI5 rtol 1e-8 (median of {args.repeats} runs, spread in brackets)")
     print("| floor | steps | rhs | ms per run | impacts | friction loss J | X1 at the end m | energy residual J |")
     print("|---|---|---|---|---|---|---|---|")

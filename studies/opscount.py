@@ -7,9 +7,11 @@ it generates the model of the built-in n-link scene (the general n + 5 coordinat
 --specialise) and reports: the derivation and CSE times (all kernels of the model), the operation counts
 after CSE of I_f (mass_matrix), R (bias) and the forward dynamics (rule in codegen.ops), sympy's raw
 ``count_ops`` of I_f and R before CSE, the lines of C, the compile time (``cc -std=c99 -O2 -c`` of the
-model's .c, studies.toolchain) and the time per right-hand-side evaluation from a C timing loop
-(studies.timing.time_rhs; no Python in the loop).  Output: a Markdown table on stdout and in DIR/ops.md,
-the rows as DIR/ops.json, and PNG plots in DIR.
+model's .c, studies.toolchain) and the time per right-hand-side evaluation from a C timing loop, both
+formulations of one n in one C program, alternating batches (studies.timing.time_rhs_side_by_side; no
+Python in the loop), so that the Lagrange / Gibbs-Appell time ratio is measured, batch by batch, in this
+run.  Output: a Markdown table on stdout and in DIR/ops.md, the rows as DIR/ops.json, and PNG plots in DIR.
+Against Pinocchio's articulated-body algorithm: python -m studies peer (also side by side in one program).
 
 Every (n, formulation) runs in its own process with a time limit (--timeout); a formulation that runs
 out of time is reported as such and, being slower still for larger n, not tried again for larger n.
@@ -37,44 +39,42 @@ FORMULATIONS = ("gibbs_appell", "lagrange")
 LABELS = {"gibbs_appell": "Gibbs–Appell", "lagrange": "Lagrange"}
 START_VARIABLE = "CODEGEN_OPS_T0"
 
-# The bar to beat: forward dynamics of this very chain (same coordinates and inertias) by Pinocchio's
-# articulated-body algorithm traced by CasADi into C, gcc -O2.  n -> (operations, us per call).
-BAR_TO_BEAT = {4: (1123, 0.27), 8: (1939, 0.50), 16: (3571, 1.20), 32: (6835, 1.84)}
-BAR_TO_BEAT_SOURCE = ("Pinocchio's articulated-body algorithm traced by CasADi into C (gcc -O2), for this "
-                      "chain with the same coordinates and inertias, timed on the same 2-core machine")
-
 
 # ---------------------------------------------------------------------------
 # one measurement (runs in a child process)
 # ---------------------------------------------------------------------------
-def measure(n: int, formulation: str, specialise: bool = False, progress=None, calls: int | None = None) -> dict:
-    """Generate, count, compile and time one model; returns a JSON-able row.  ``calls`` per timing batch
-    (default: about 0.2 s per batch, from the operation count)."""
+def measure(n: int, formulation: str, specialise: bool = False, progress=None, keep: Path | None = None) -> dict:
+    """Generate, count and compile one model; returns a JSON-able row.  With ``keep`` the model's text is
+    written there (``NAME.h``, ``NAME.c``, NAME = ``model_name(n, formulation)``) for the timing, which
+    run_all does for both formulations of one n together."""
     from codegen.pipeline import generate
     from codegen.scene import default_scene
-
-    from .timing import time_rhs
 
     say = progress or (lambda message: None)
     scene = default_scene(n)
     start = time.perf_counter()
-    model = generate(scene, specialise=specialise, formulation=formulation, raw_ops=True, progress=say, dense=True)
+    model = generate(scene, name=model_name(n, formulation), specialise=specialise, formulation=formulation,
+                     raw_ops=True, progress=say, dense=True)
     generation = time.perf_counter() - start
     ops = {f.name: f.ops for f in model.functions}
     say("compile (cc -std=c99 -O2 -c)")
     compile_seconds = _compile_seconds(model)
-    fd_ops = ops["forward_dynamics"].total
-    calls = calls or max(200, min(100000, int(2e8 / max(fd_ops, 1))))     # about 0.2 s per timing batch
-    say(f"time rhs in C ({calls} calls x 7 batches)")
-    ns = time_rhs(model, calls=calls).median
+    if keep is not None:
+        (Path(keep) / f"{model.name}.h").write_text(model.header)
+        (Path(keep) / f"{model.name}.c").write_text(model.source)
     return {
-        "n": n, "formulation": formulation, "status": "ok", "nq": model.layout.nq,
+        "n": n, "formulation": formulation, "status": "ok", "nq": model.layout.nq, "name": model.name,
         "derive_s": model.timings["derive"], "cse_s": model.timings["cse"], "render_s": model.timings["render"],
         "generation_s": generation,
         "ops": {name: _op_dict(ops[name]) for name in ("mass_matrix", "bias", "forward_dynamics")},
         "raw_ops": dict(model.raw_ops), "c_lines": len(model.source.splitlines()),
-        "compile_s": compile_seconds, "ns_per_rhs": ns, "timing_calls": calls,
+        "compile_s": compile_seconds,
     }
+
+
+def model_name(n: int, formulation: str) -> str:
+    """The C name of one measured model (the two formulations of one n are linked into one timing program)."""
+    return f"chain{n}_{formulation}"
 
 
 def _op_dict(count) -> dict:
@@ -92,13 +92,13 @@ def _compile_seconds(model) -> float:
                          link=False)
 
 
-def run_child(n: int, formulation: str, specialise: bool, timeout: float, say, calls: int | None = None) -> dict:
-    """measure() in a child process with a time limit; a row with status 'timeout'/'error' otherwise."""
-    command = [sys.executable, "-m", "studies.opscount", "--one", str(n), "--formulation", formulation]
+def run_child(n: int, formulation: str, specialise: bool, timeout: float, say, keep: Path) -> dict:
+    """measure() in a child process with a time limit (the model's text written to ``keep``); a row with
+    status 'timeout'/'error' otherwise."""
+    command = [sys.executable, "-m", "studies.opscount", "--one", str(n), "--formulation", formulation,
+               "--keep", str(keep)]
     if specialise:
         command.append("--specialise")
-    if calls:
-        command += ["--calls", str(calls)]
     env = dict(os.environ)
     root = str(Path(__file__).resolve().parent.parent)
     env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
@@ -120,24 +120,59 @@ def run_child(n: int, formulation: str, specialise: bool, timeout: float, say, c
     return row
 
 
+def default_calls(row: dict) -> int:
+    """rhs calls per timing batch: about 2e8 operations of the forward dynamics per batch (at most 100,000 calls)."""
+    return max(200, min(100000, int(2e8 / max(row["ops"]["forward_dynamics"]["total"], 1))))
+
+
+def time_side_by_side(rows: list[dict], keep: Path, say, calls: int | None = None) -> None:
+    """Time the rhs of every measured model of one n in one C program (alternating batches) and write into
+    the rows ns_per_rhs (median, min, max over the batches) and, for Lagrange beside Gibbs-Appell, the time
+    ratio batch by batch (``rhs_ratio``: Lagrange / Gibbs-Appell, median, min, max)."""
+    from types import SimpleNamespace
+
+    from .timing import BATCHES, ratios, time_rhs_side_by_side
+    models = [SimpleNamespace(name=r["name"], header=(keep / f"{r['name']}.h").read_text(),
+                              source=(keep / f"{r['name']}.c").read_text()) for r in rows]
+    counts = [calls or default_calls(r) for r in rows]
+    say(f"n={rows[0]['n']}: time rhs in C, " + " beside ".join(LABELS[r["formulation"]] for r in rows)
+        + f" ({' / '.join(map(str, counts))} calls x {BATCHES} batches)")
+    timings = time_rhs_side_by_side(models, counts)
+    for r, timing, count in zip(rows, timings, counts):
+        r.update(ns_per_rhs=timing.median, ns_per_rhs_min=timing.low, ns_per_rhs_max=timing.high,
+                 timing_calls=count, timed_with=[x["formulation"] for x in rows])
+    by = {r["formulation"]: timing for r, timing in zip(rows, timings)}
+    if "gibbs_appell" in by and "lagrange" in by:
+        ratio = ratios(by["lagrange"], by["gibbs_appell"])
+        lagrange = next(r for r in rows if r["formulation"] == "lagrange")
+        lagrange["rhs_ratio"] = {"median": ratio.median, "min": ratio.low, "max": ratio.high}
+
+
 def run_all(ns, specialise: bool, timeout: float, lagrange_max: int | None, say, calls: int | None = None
             ) -> list[dict]:
     rows = []
     gave_up = {}                                                 # formulation -> n where it timed out
-    for n in ns:
-        for formulation in FORMULATIONS:
-            if formulation in gave_up:
-                rows.append({"n": n, "formulation": formulation, "status": "skipped",
-                             "note": f"skipped (timed out at n = {gave_up[formulation]})"})
-            elif formulation == "lagrange" and lagrange_max is not None and n > lagrange_max:
-                rows.append({"n": n, "formulation": formulation, "status": "skipped",
-                             "note": f"skipped (n > --lagrange-max {lagrange_max})"})
-            else:
-                say(f"n={n} {formulation} ...")
-                row = run_child(n, formulation, specialise, timeout, say, calls)
-                if row["status"] == "timeout":
-                    gave_up[formulation] = n
-                rows.append(row)
+    with tempfile.TemporaryDirectory(prefix="ops-") as tmp:
+        keep = Path(tmp)
+        for n in ns:
+            measured = []
+            for formulation in FORMULATIONS:
+                if formulation in gave_up:
+                    rows.append({"n": n, "formulation": formulation, "status": "skipped",
+                                 "note": f"skipped (timed out at n = {gave_up[formulation]})"})
+                elif formulation == "lagrange" and lagrange_max is not None and n > lagrange_max:
+                    rows.append({"n": n, "formulation": formulation, "status": "skipped",
+                                 "note": f"skipped (n > --lagrange-max {lagrange_max})"})
+                else:
+                    say(f"n={n} {formulation} ...")
+                    row = run_child(n, formulation, specialise, timeout, say, keep)
+                    if row["status"] == "timeout":
+                        gave_up[formulation] = n
+                    rows.append(row)
+                    if row["status"] == "ok":
+                        measured.append(row)
+            if measured:
+                time_side_by_side(measured, keep, say, calls)
     return rows
 
 
@@ -149,45 +184,43 @@ def _ops_cell(o: dict) -> str:
 
 
 def markdown(rows, specialise: bool = False) -> str:
+    """The report: every figure in it was measured in this run, and the one time ratio (Lagrange against
+    Gibbs-Appell, per rhs) is taken batch by batch from one program that ran both."""
     layout = "specialised (planar, n + 2 coordinates)" if specialise else "general (n + 5 coordinates)"
     lines = [
         f"Built-in n-link scene, {layout}.  Operations after CSE as "
         "total (add/mul/div/sqrt/sincos/other), rule in `codegen/ops.py`; raw = sympy `count_ops` before CSE; "
         "derive and CSE times are for all kernels of the model; compile = `gcc -O2` of the model's .c; "
-        "rhs = one `NAME_rhs` call in a C loop.  Ratios are ours / Pinocchio+CasADi (forward dynamics "
-        "operations; rhs time against its forward-dynamics call).",
+        "rhs = one `NAME_rhs` call in a C loop, both formulations of one n timed in one program, alternating "
+        "batches: median (min-max) of the batches.  The Lagrange rows' ratios are Lagrange / Gibbs–Appell of "
+        "the same n: forward dynamics operations, and rhs time batch by batch (median (min-max)).",
         "",
         "| n | formulation | derive s | CSE s | I_f ops | R ops | forward dynamics ops | raw I_f / R "
-        "| lines of C | compile s | ns per rhs | ops / Pinocchio | time / Pinocchio |",
+        "| lines of C | compile s | ns per rhs | ops / Gibbs–Appell | time / Gibbs–Appell |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
+    ours = {r["n"]: r for r in rows if r["formulation"] == "gibbs_appell" and r["status"] == "ok"}
     for r in rows:
         label = LABELS[r["formulation"]]
         if r["status"] != "ok":
             lines.append(f"| {r['n']} | {label} | {r['note']} |  |  |  |  |  |  |  |  |  |  |")
             continue
         ops, raw = r["ops"], r["raw_ops"]
-        bar = BAR_TO_BEAT.get(r["n"])
-        ratio_ops = f"{ops['forward_dynamics']['total'] / bar[0]:.2f}" if bar else ""
-        ratio_time = f"{r['ns_per_rhs'] / (bar[1] * 1e3):.2f}" if bar else ""
+        ratio_ops = ratio_time = ""
+        if r["formulation"] == "lagrange" and r["n"] in ours:
+            ratio_ops = f"{ops['forward_dynamics']['total'] / ours[r['n']]['ops']['forward_dynamics']['total']:.2f}"
+        if "rhs_ratio" in r:
+            q = r["rhs_ratio"]
+            ratio_time = f"{q['median']:.2f} ({q['min']:.2f}-{q['max']:.2f})"
+        ns = (f"{r['ns_per_rhs']:,.0f} ({r['ns_per_rhs_min']:,.0f}-{r['ns_per_rhs_max']:,.0f})"
+              if "ns_per_rhs" in r else "not timed")
         lines.append(
             f"| {r['n']} | {label} | {r['derive_s']:.2f} | {r['cse_s']:.2f} | {_ops_cell(ops['mass_matrix'])} | "
             f"{_ops_cell(ops['bias'])} | {_ops_cell(ops['forward_dynamics'])} | "
             f"{raw['mass_matrix']:,} / {raw['bias']:,} | {r['c_lines']:,} | {r['compile_s']:.2f} | "
-            f"{r['ns_per_rhs']:,.0f} | {ratio_ops} | {ratio_time} |")
-    lines += ["", "The bar to beat: " + BAR_TO_BEAT_SOURCE + ".", "",
-              "| n | Pinocchio+CasADi operations | µs per call | Gibbs–Appell forward dynamics operations "
-              "| µs per rhs | ratio operations | ratio time |",
-              "|---|---|---|---|---|---|---|"]
-    measured = {r["n"]: r for r in rows if r["formulation"] == "gibbs_appell" and r["status"] == "ok"}
-    for n, (bar_ops, bar_us) in BAR_TO_BEAT.items():
-        r = measured.get(n)
-        if r is None:
-            lines.append(f"| {n} | {bar_ops:,} | {bar_us:.2f} | not measured |  |  |  |")
-            continue
-        fd, us = r["ops"]["forward_dynamics"]["total"], r["ns_per_rhs"] / 1e3
-        lines.append(f"| {n} | {bar_ops:,} | {bar_us:.2f} | {fd:,} | {us:.2f} | {fd / bar_ops:.2f} | "
-                     f"{us / bar_us:.2f} |")
+            f"{ns} | {ratio_ops} | {ratio_time} |")
+    lines += ["", "Against Pinocchio's articulated-body algorithm traced by CasADi: `python -m studies peer` "
+              "(both forward dynamics side by side in one C program)."]
     return "\n".join(lines)
 
 
@@ -237,16 +270,13 @@ def plots(rows, out: Path) -> list[Path]:
                 color=style[f], label=f"{LABELS[f]}: I_f + R (after CSE)")
         ax.plot(x, [r["raw_ops"]["mass_matrix"] + r["raw_ops"]["bias"] for r in rs], "^:", color=style[f],
                 label=f"{LABELS[f]}: I_f + R, raw count_ops before CSE")
-    ax.plot(list(BAR_TO_BEAT), [v[0] for v in BAR_TO_BEAT.values()], "k*", markersize=10,
-            label="Pinocchio ABA + CasADi")
     finish(ax, "operations", "Operations against n", out / "ops_vs_n.png")
 
     fig, ax = plt.subplots(figsize=(7, 5))
     for f, rs in ok.items():
+        rs = [r for r in rs if "ns_per_rhs" in r]
         ax.plot([r["n"] for r in rs], [r["ns_per_rhs"] / 1e3 for r in rs], "o-", color=style[f],
-                label=f"{LABELS[f]}: one rhs (C loop, gcc -O2)")
-    ax.plot(list(BAR_TO_BEAT), [v[1] for v in BAR_TO_BEAT.values()], "k*", markersize=10,
-            label="Pinocchio ABA + CasADi, one call")
+                label=f"{LABELS[f]}: one rhs (C loop, gcc -O2, both side by side)")
     finish(ax, "µs per call", "Time per right-hand side against n", out / "rhs_time_vs_n.png")
 
     fig, ax = plt.subplots(figsize=(7, 5))
@@ -276,9 +306,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--lagrange-max", type=int, metavar="N",
                         help="skip the Lagrangian expansion for n > N (reported in the table)")
     parser.add_argument("--calls", type=int, metavar="K",
-                        help="rhs calls per timing batch (7 batches, median; default: about 0.2 s per batch)")
+                        help="rhs calls per timing batch (7 batches, median; default: about 2e8 operations per batch)")
     parser.add_argument("--one", type=int, help=argparse.SUPPRESS)            # child process: one measurement
     parser.add_argument("--formulation", choices=FORMULATIONS, help=argparse.SUPPRESS)
+    parser.add_argument("--keep", help=argparse.SUPPRESS)                     # child: where the model's text goes
     return parser
 
 
@@ -296,7 +327,8 @@ def main(argv=None) -> int:
 
     if args.one is not None:                                     # child: one row of JSON on stdout
         row = measure(args.one, args.formulation, args.specialise,
-                      progress=lambda m: say(f"n={args.one} {args.formulation}: {m}"), calls=args.calls)
+                      progress=lambda m: say(f"n={args.one} {args.formulation}: {m}"),
+                      keep=Path(args.keep) if args.keep else None)
         print(json.dumps(row))
         return 0
     try:

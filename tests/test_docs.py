@@ -113,3 +113,108 @@ def test_readme_use_commands_run(tmp_path):
     assert (tmp_path / "case2.json").is_file()
     assert {"chain3.c", "chain3.h", "gac.h", "gac_sim.c", "Makefile", "CMakeLists.txt"} <= \
         {p.name for p in (tmp_path / "build" / "chain3").iterdir()}
+
+
+# ---------------------------------------------------------------------------------------------------
+# measured figures: a table of timings names the command that measured it; the link cap is the code's
+# ---------------------------------------------------------------------------------------------------
+TIME_UNIT = re.compile(r"(?<![\w/])(s|ms|µs|ns)(?![\w/])|runs/s|ns/rhs")
+
+
+def tables_with_context(page: Path):
+    """(header line, the text of its section up to the table: from the previous heading on) of every table."""
+    lines = page.read_text().splitlines()
+    found, context, in_code = [], [], False
+    for k, line in enumerate(lines):
+        in_code ^= line.startswith("```")
+        if line.startswith("|") and k + 1 < len(lines) and lines[k + 1].startswith("|---"):
+            found.append((line, "\n".join(context)))
+        context = [] if line.startswith("#") and not in_code else context + [line]
+    return found
+
+
+# a column of wall-clock time: ms, µs, ns (not "1 ms samples"), runs/s, or a build stage in s
+WALL_TIME = re.compile(r"(?<![\w/])(?<!\d )(ms|µs|ns)(?![\w/])|runs/s|ns/rhs|"
+                       r"\b(derive|CSE|render|compile|cold total|generate \(wall\)) s\b")
+DATE = re.compile(r"\b20\d\d-\d\d-\d\d\b")
+MACHINE = re.compile(r"\b\d+-core\b|\b\d+ cores\b")
+
+
+def tables_where(unit: re.Pattern) -> list:
+    return [pytest.param(page, header, context, id=f"{page.name}: {header[:50]}")
+            for page in PAGES for header, context in tables_with_context(page)
+            if any(unit.search(cell) for cell in header.strip("|").split("|"))]
+
+
+TIMED_TABLES, WALL_TIME_TABLES = tables_where(TIME_UNIT), tables_where(WALL_TIME)
+
+
+def test_the_pages_show_timed_tables():
+    assert len(WALL_TIME_TABLES) >= 10, [c.values[1] for c in WALL_TIME_TABLES]
+    assert len(TIMED_TABLES) > len(WALL_TIME_TABLES)
+
+
+@pytest.mark.parametrize("page, header, context", TIMED_TABLES)
+def test_a_table_of_timings_names_its_command(page, header, context):
+    """A table with a column in s, ms, µs or ns has the `python -m ...` command that measured it in its section,
+    before it."""
+    assert "python -m " in context, f"{page.name}: no `python -m ...` command before the table {header[:80]}"
+
+
+@pytest.mark.parametrize("page, header, context", WALL_TIME_TABLES)
+def test_a_table_of_wall_times_says_when_and_where(page, header, context):
+    """A table of wall-clock times (they change with the machine and its load) states, in its section before
+    it, the date it was measured (YYYY-MM-DD) and the machine (its cores)."""
+    assert DATE.search(context), f"{page.name}: no date (YYYY-MM-DD) before the table {header[:80]}"
+    assert MACHINE.search(context), f"{page.name}: no machine (N-core / N cores) before the table {header[:80]}"
+
+
+def test_the_link_cap_stated_in_the_pages_is_the_code_s():
+    """Every statement of the largest chain (`--links N` ranges, "at most N links", "up to N links are
+    accepted", "the largest accepted") gives codegen.scene.MAX_LINKS, the cap codegen's --links and the
+    scene loader check."""
+    from codegen.cli import build_parser
+    from codegen.scene import MAX_LINKS
+    assert f"1 <= N <= {MAX_LINKS}" in build_parser().format_help().replace("\n", " ").replace("  ", " ")
+    patterns = [r"--links N[^\n]*\(1\.\.([\d,]+)\)", r"at most \**([\d,]+) links", r"up\s+to\s+([\d,]+)\s+links\s+are\s+accepted",
+                r"n = ([\d,]+) \(the largest accepted\)"]
+    stated = [(page.name, int(number.replace(",", ""))) for page in PAGES for pattern in patterns
+              for number in re.findall(pattern, page.read_text())]
+    assert len(stated) >= 4, stated
+    assert all(number == MAX_LINKS for _, number in stated), stated
+
+
+def scaling_table() -> dict:
+    """performance.md's `python -m studies scaling` table: n -> cold total build time in s."""
+    text = (ROOT / "docs" / "performance.md").read_text()
+    header = next(line for line in text.splitlines() if line.startswith("|") and "cold total s" in line)
+    columns = [c.strip() for c in header.strip("|").split("|")]
+    rows = text[text.index(header):].splitlines()[2:]
+    table = {}
+    for row in rows:
+        if not row.startswith("|"):
+            break
+        cells = dict(zip(columns, (c.strip() for c in row.strip("|").split("|"))))
+        table[int(cells["n"])] = float(cells["cold total s"])
+    return table
+
+
+def test_build_times_agree_across_pages():
+    """Every page that states a build time ("X s at n = N", "n = N [builds] in [about] X s") states the same
+    one: for an n of performance.md's scaling table its cold total (as rounded in the prose), otherwise the same
+    figure as the other pages."""
+    table = scaling_table()
+    stated = {}
+    for page in PAGES:
+        text = page.read_text()
+        for seconds, n in re.findall(r"([\d.]+)\s+s\s+at\s+n\s+=\s+([\d,]+)", text):
+            stated.setdefault(int(n.replace(",", "")), []).append((page.name, float(seconds)))
+        for n, seconds in re.findall(r"\bn\s+=\s+([\d,]+)\s+(?:builds\s+)?in\s+(?:about\s+)?([\d.]+)\s+s\b",
+                                     text):
+            stated.setdefault(int(n.replace(",", "")), []).append((page.name, float(seconds)))
+    assert {64, 256} <= set(stated), stated
+    for n, figures in stated.items():
+        reference = table.get(n, figures[0][1])
+        for page, seconds in figures:
+            assert abs(seconds - reference) <= 0.05 * reference, \
+                f"{page}: n = {n} builds in {seconds} s, but {reference} s elsewhere ({figures}, table {table.get(n)})"

@@ -78,6 +78,36 @@ def test_time_limit_is_reported_and_larger_n_skipped():
     assert text.count("timed out (> 0.2 s)") == 2 and text.count("skipped (timed out at n = 1)") == 2
 
 
+def tables(text: str) -> list[list[dict]]:
+    """Every Markdown table of a report as a list of {header: cell} rows."""
+    found, block = [], []
+    for line in text.splitlines() + [""]:
+        if line.startswith("|"):
+            block.append([cell.strip() for cell in line.strip().strip("|").split("|")])
+        elif block:
+            found.append([dict(zip(block[0], row)) for row in block[2:]])
+            block = []
+    return found
+
+
+def ratio_columns(row: dict) -> list[str]:
+    return [header for header in row if (" / " in header or "ratio" in header) and "raw" not in header]
+
+
+def check_shows_only_what_it_measured(text: str, rows: list[dict]):
+    """Every table row of the report is about an n of this run, and a ratio appears only in a Lagrange row whose
+    Gibbs-Appell partner of the same n was measured (and timed beside it) in this run."""
+    measured = {(r["n"], r["formulation"]) for r in rows if r["status"] == "ok"}
+    ran = {r["n"] for r in rows}
+    for table in tables(text):
+        for row in table:
+            assert int(row["n"]) in ran, f"a table row about n = {row['n']}, which this run did not measure: {row}"
+            for header in ratio_columns(row):
+                if row[header]:
+                    assert row.get("formulation") == "Lagrange", (header, row)
+                    assert (int(row["n"]), "gibbs_appell") in measured and (int(row["n"]), "lagrange") in measured
+
+
 def check_report(out: Path, ns, lagrange_ns):
     text = (out / "ops.md").read_text()
     rows = json.loads((out / "ops.json").read_text())["rows"]
@@ -95,6 +125,7 @@ def check_report(out: Path, ns, lagrange_ns):
         assert r["raw_ops"]["bias"] > 0
         label = opscount.LABELS[formulation]
         assert f"| {n} | {label} | " in text
+    check_shows_only_what_it_measured(text, rows)
     return text, rows
 
 
@@ -112,3 +143,32 @@ def test_cli_links_1_2_both_formulations(tmp_path):
     assert result.returncode == 0, result.stderr
     text, rows = check_report(tmp_path, [1, 2], [1, 2])
     assert text in result.stdout
+
+
+def synthetic_row(n, formulation, fd_ops, ns):
+    ops = {"add": 1, "mul": 1, "div": 0, "sqrt": 0, "sincos": 0, "other": 0}
+    return {"n": n, "formulation": formulation, "status": "ok", "derive_s": 0.1, "cse_s": 0.1,
+            "ops": {"mass_matrix": {**ops, "total": 2}, "bias": {**ops, "total": 2},
+                    "forward_dynamics": {**ops, "total": fd_ops}},
+            "raw_ops": {"mass_matrix": 3, "bias": 3}, "c_lines": 10, "compile_s": 0.5,
+            "ns_per_rhs": ns, "ns_per_rhs_min": ns - 1, "ns_per_rhs_max": ns + 1}
+
+
+def test_report_ratios_are_this_runs_own():
+    """Gibbs-Appell alone at n = 4, 8, 16, 32 (where a constant of an earlier measurement could be divided in):
+    no ratio; Lagrange beside Gibbs-Appell at n = 3: the operation ratio of the two rows and the time ratio
+    measured batch by batch, as given."""
+    rows = [synthetic_row(n, "gibbs_appell", 100 * n, 50.0 * n) for n in (4, 8, 16, 32)]
+    rows += [synthetic_row(3, "gibbs_appell", 300, 150.0), synthetic_row(3, "lagrange", 2400, 1200.0)]
+    rows[-1]["rhs_ratio"] = {"median": 7.5, "min": 7.25, "max": 8.5}
+    text = opscount.markdown(rows)
+    check_shows_only_what_it_measured(text, rows)
+    (table,) = tables(text)
+    lagrange = next(row for row in table if row["formulation"] == "Lagrange")
+    assert lagrange["ops / Gibbs–Appell"] == "8.00"                       # 2400 / 300
+    assert lagrange["time / Gibbs–Appell"] == "7.50 (7.25-8.50)"
+    assert "Pinocchio" not in "".join(row["formulation"] for row in table)
+    for row in table:
+        if row["formulation"] == "Gibbs–Appell":
+            assert all(row[h] == "" for h in ratio_columns(row)), row
+

@@ -240,6 +240,9 @@ def main(argv=None) -> int:
     print(result.energy_summary())
     print(f"steps {result.n_steps} (rejected {result.n_rejected}), rhs evaluations {result.n_rhs}, "
           f"simulation {elapsed * 1e3:.2f} ms, model ready in {prepared:.2f} s")
+    for warning in result.warnings:
+        if warning not in scene.warnings:         # the scene's own were printed when it was loaded
+            print(f"warning: {warning}", file=sys.stderr)
     if args.json:
         try:
             Path(args.json).write_text(json.dumps(result.to_json(), indent=1))

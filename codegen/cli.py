@@ -143,6 +143,8 @@ def main(argv=None) -> int:
     except SceneError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    for warning in scene.warnings:                # values that suggest a slip of units: said, not refused
+        print(f"warning: {warning}", file=sys.stderr)
 
     try:
         layout = layout_for(scene, specialise=not args.general)

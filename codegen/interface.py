@@ -340,7 +340,7 @@ CODES = ("GAC_OK", "GAC_ERR_BAD_CONTACT", "GAC_ERR_SINGULAR_MASS", "GAC_ERR_SING
          "GAC_ERR_WALL_TIME", "GAC_ERR_STOPPED")
 STOPS = ("GAC_SIM_END", "GAC_SIM_IMPACT", "GAC_SIM_CONTACT")
 METHODS = ("GAC_METHOD_RK4", "GAC_METHOD_DOPRI5", "GAC_METHOD_DOP853")
-LIMITS = ("GAC_LCP_CAP", "GAC_MAX_ROUNDS", "GAC_LOOK_STEPS")
+LIMITS = ("GAC_LCP_CAP", "GAC_MAX_ROUNDS", "GAC_LOOK_STEPS", "GAC_SLOW_SLIDING")
 CONSTANTS = CODES + STOPS + METHODS + LIMITS
 RTOL_MIN = 1e-14      # GAC_RTOL_MIN: the smallest rtol the adaptive methods accept (a double: not read by cffi)
 
@@ -368,7 +368,8 @@ STRUCTS = (
     Struct("gac_sim", ("gac_options opt", "double t", "double *x", "double *p", "long n_steps", "long n_rejected",
                        "long n_rhs", "long n_impacts", "int nactive", "int *active", "long n_activations",
                        "long n_releases", "int err_index", "double *u", "double work_input", "double work_damping",
-                       "double work_friction", "double wall_time", "double rk4_h_rho")),
+                       "double work_friction", "double wall_time", "double rk4_h_rho", "long n_slow_sliding",
+                       "double t_slow_sliding")),
     Struct("gac_schedule", ("int n", "int nu", "const double *t", "const double *u", "int linear"), partial=False),
     Struct("gac_contact", ("int point", "int axis", "int normal_sign", "int row", "int e_index", "double e_value",
                            "int kind", "int coordinate", "int has_friction", "int mu_index", "double mu_value",

@@ -49,6 +49,11 @@ INERTIA_MAX = 1e100               # |J| (kg m), |I| (kg m^2): 0 or at least the 
 COORDINATE_MAX = 1e9              # |wall position| (m), |initial state entry|
 GRAVITY_MAX = 1e6                 # |gravity| (m/s^2)
 
+# Values a scene may hold but that suggest a slip of units: warnings (Scene.warnings), not errors.
+UNITS_LENGTH = (1e-4, 1e2)        # m: a link length outside it suggests mm or km given as m
+UNITS_MASS = (1e-6, 1e4)          # kg: a link mass outside it suggests g or t given as kg
+UNITS_ANGLE = 2 * math.pi         # rad: an angle beyond it in magnitude suggests degrees given as radians
+
 
 class SceneError(ValueError):
     """A scene field has a bad value; the message names the field and the allowed range."""
@@ -585,6 +590,11 @@ class Scene:
         from .parameters import check_vector, parameter_rules
         check_vector(parameter_rules(self), p, changed)
 
+    @property
+    def warnings(self) -> list[str]:
+        """Values the scene accepts but that suggest a slip of units (see unit_warnings), one sentence each."""
+        return unit_warnings(self)
+
     def stops(self) -> list[tuple[int, JointStop]]:
         """The joint stops as (joint k, JointStop) pairs, joint order, lower before upper."""
         out = []
@@ -605,6 +615,41 @@ class Scene:
         needed = {(p, w.axis) for w in self.walls for p in w.points}
         needed |= {(p, axis) for w in self.walls if w.friction > 0.0 for p in w.points for axis in range(3)}
         return sorted(needed) + stop_rows(self.stops())
+
+
+def unit_warnings(scene: Scene) -> list[str]:
+    """Link lengths outside UNITS_LENGTH, link masses outside UNITS_MASS, and angles (rest angles, joint limits,
+    initial angles) beyond UNITS_ANGLE in magnitude: one sentence per kind, naming the first such field and how
+    many more there are."""
+    found: dict[str, list[str]] = {"length": [], "mass": [], "angle": []}
+    for i, link in enumerate(scene.links, start=1):
+        if not UNITS_LENGTH[0] <= link.length <= UNITS_LENGTH[1]:
+            found["length"].append(f"links[{i}].length = {link.length:g} m")
+        if not UNITS_MASS[0] <= link.mass <= UNITS_MASS[1]:
+            found["mass"].append(f"links[{i}].mu = {link.mu:g} kg/m (a mass of {link.mass:g} kg)"
+                                 if link.kind == "line" else f"links[{i}].mass = {link.mass:g} kg")
+    for k, joint in enumerate(scene.joints, start=2):
+        for key in ("rest_angle", "lower", "upper"):
+            value = getattr(joint, key)
+            if value is not None and abs(value) > UNITS_ANGLE:
+                found["angle"].append(f"links[{k}].{key} = {value:g} rad")
+    names = coordinate_names(scene.n)
+    for index in range(scene.n + 2):
+        if abs(scene.q0[index]) > UNITS_ANGLE:
+            found["angle"].append(f"initial.q[{index}] ({names[index]}) = {scene.q0[index]:g} rad")
+    advice = {
+        "length": f"outside {UNITS_LENGTH[0]:g} ... {UNITS_LENGTH[1]:g} m, unusual for a link; lengths are in m, "
+                  "not mm or km",
+        "mass": f"outside {UNITS_MASS[0]:g} ... {UNITS_MASS[1]:g} kg, unusual for a link; masses are in kg and mu "
+                "in kg/m, not g or t",
+        "angle": "beyond 2 pi in magnitude; angles are in radians (90 degrees is 1.5708 rad)",
+    }
+    out = []
+    for kind, fields in found.items():
+        if fields:
+            more = f" (and {len(fields) - 1} more)" if len(fields) > 1 else ""
+            out.append(f"{fields[0]}{more}: {advice[kind]}")
+    return out
 
 
 def stop_rows(stops) -> list[tuple[int, str]]:

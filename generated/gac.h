@@ -103,6 +103,8 @@
 #define GAC_CHART_FLOOR  5.96e-5   /* sqrt(16 eps / 1e-6): gac_impact refuses a base chart measure below it */
 #define GAC_LCP_CAP      16        /* contacts one complementarity solve takes at most: min(nq, 16) */
 #define GAC_MAX_ROUNDS   256       /* rounds of the impact law before its plastic closing round */
+#define GAC_SLOW_SLIDING 4         /* a resting point sliding slower than this many friction_velocity is in (or
+                                      near) the regularised friction's stiff, viscous regime: sim.n_slow_sliding */
 
 #ifdef __cplusplus
 extern "C" {
@@ -446,6 +448,10 @@ typedef struct {
     double rk4_h_rho;            /* RK4: h rho of the last step, rho the rate of the chain's fastest mode seen in it
                                     (the stability rule: 3 steps in a row above 2.5, or one above 10, stop the run
                                     with GAC_ERR_UNSTABLE) */
+    long n_slow_sliding;         /* accepted steps begun with a point resting on a wall with friction and sliding
+                                    slower than GAC_SLOW_SLIDING friction_velocity, where the regularisation is
+                                    stiff (time constant about friction_velocity / (mu g)) and may limit the step */
+    double t_slow_sliding;       /* s: the time those steps covered */
     /* private: the model, integrator state and scratch (pointers into dwork / iwork) */
     const gac_model *model;
     gac_controller controller;   /* NULL: the held inputs u */

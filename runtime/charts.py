@@ -556,13 +556,14 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
         message = f"{message}; {len(switches)} chart switch(es)"
     extra = {"contact_events": events, "persistent_final": persistent} \
         if "contact_events" in {f.name for f in dataclasses.fields(SimulationResult)} else {}
-    warnings = impact_warnings(impacts)
+    accuracy = impact_warnings(impacts, compiled[0], p_vec)
+    warnings = compiled[0].scene.warnings + accuracy
     return ChartResult(
         **extra, t=user[:n_done].copy(), q=out.q[:n_done], qd=out.qd[:n_done], impacts=impacts,
         t_final=float(t), q_final=q_final, qd_final=qd_final, energy_initial=energy_initial,
         energy_final=_energy(compiled[current], q, qd, p_vec),
         n_steps=totals["n_steps"], n_rejected=totals["n_rejected"], n_rhs=totals["n_rhs"], status=status,
-        message=message + (f"; {len(warnings)} impact(s) of limited accuracy (see warnings)" if warnings else ""),
+        message=message + (f"; {len(accuracy)} impact(s) of limited accuracy (see warnings)" if accuracy else ""),
         method=options.get("method", "dopri5"), options=opts, warnings=warnings,
         energy_scale=energy_scale(scene, p_vec, T0, V0),
         chart=out.chart[:n_done], q_native=out.q_native[:n_done], qd_native=out.qd_native[:n_done],

@@ -89,7 +89,8 @@ def build_parser() -> argparse.ArgumentParser:
                "--vary q.theta_2=-0.1:0.1:10 --workers 2 --out sweep")
     sweep.add_argument("--scene", default="paper-case1", help="shipped scene name or .toml/.json file")
     sweep.add_argument("--vary", action="append", default=[], metavar="NAME=LO:HI:N", required=True,
-                       help="vary a parameter or q.NAME / qd.NAME over N values from LO to HI (repeatable: a grid)")
+                       help="vary a parameter or q.NAME / qd.NAME over N values from LO to HI (repeatable, at most 6: "
+                            "a grid; sweep.png draws the third and later as panels)")
     sweep.add_argument("--samples", type=int, default=None, metavar="N",
                        help="N random points, uniform in the --vary ranges, instead of the grid")
     sweep.add_argument("--seed", type=int, default=0, help="random seed of --samples (default 0)")
@@ -293,6 +294,9 @@ def main(argv=None) -> int:
     print(result.energy_summary())
     print(f"steps {result.n_steps} (rejected {result.n_rejected}), rhs evaluations {result.n_rhs}, "
           f"simulation {elapsed * 1e3:.2f} ms, model ready in {prepared:.2f} s")
+    for warning in result.warnings:
+        if warning not in scene.warnings:         # the scene's own were printed when it was loaded
+            print(f"warning: {warning}", file=sys.stderr)
     if args.json:
         try:
             Path(args.json).write_text(json.dumps(result.to_json(), indent=1))

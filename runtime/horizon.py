@@ -11,7 +11,7 @@ DEFAULT_T_END = {"paper_case1": 1.5, "paper_case2": 1.75, "chain4": 1.5}     # s
 def scene_and_horizon(args):
     """The scene named by ``args.scene`` (or the built-in chain of ``args.links`` links, where the command has
     --links) and the run's horizon (``args.t_end``, else the scene's usual one), or None after printing why the
-    scene cannot be loaded."""
+    scene cannot be loaded.  The scene's warnings are printed on loading."""
     links = getattr(args, "links", None)
     try:
         if links is not None and not 1 <= links <= MAX_LINKS:
@@ -20,4 +20,6 @@ def scene_and_horizon(args):
     except SceneError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return None
+    for warning in scene.warnings:                # values that suggest a slip of units: said, not refused
+        print(f"warning: {warning}", file=sys.stderr)
     return scene, (args.t_end if args.t_end is not None else DEFAULT_T_END.get(scene.name, 1.0))

@@ -28,6 +28,9 @@ from .model import CompiledModel, load_model
 METHODS = ("dopri5", "dop853", "rk4")
 DEFAULT_RTOL, DEFAULT_ATOL = 1e-8, 1e-10   # the adaptive methods' tolerances, here, in the CLI and in C
 ROUNDOFF_WARN = 1e-6    # an impact whose energy round-off bound exceeds this is named in result.warnings
+FRICTION_WARN_STEPS = 10_000   # a run with at least this many steps begun in the regularised friction regime, and
+FRICTION_WARN_SHARE = 0.5      # at least this share of its steps, says in result.warnings that friction limits them
+
 
 @dataclass
 class Contact:
@@ -414,7 +417,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
             progress=progress)
     x_final = np.array(ffi.unpack(state.x, nx))
     n = i_eval[0]
-    warnings = impact_warnings(impacts)
+    accuracy = impact_warnings(impacts, model, p)
+    warnings = model.scene.warnings + accuracy + friction_warnings(model, p, state, method)
     q_samples, qd_samples = layout.expand(x_eval[:n, :nq]), layout.expand(x_eval[:n, nq:], velocity=True)
     u_samples = None
     if model.nu:
@@ -430,7 +434,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         qd_final=layout.expand(x_final[nq:], velocity=True),
         energy_initial=energy_initial, energy_final=sum(model.energy(x_final[:nq], x_final[nq:], p)),
         n_steps=int(state.n_steps), n_rejected=int(state.n_rejected), n_rhs=int(state.n_rhs), status=status,
-        message=message + (f"; {len(warnings)} impact(s) of limited accuracy (see warnings)" if warnings else ""),
+        message=message + (f"; {len(accuracy)} impact(s) of limited accuracy (see warnings)" if accuracy else ""),
         method=method, contact_events=contact_events, warnings=warnings,
         energy_scale=max(energy_scale(model.scene, p, T0, V0), abs(float(state.work_input)), float(state.work_damping),
                          float(state.work_friction)),
@@ -459,11 +463,85 @@ def energy_scale(scene: Scene, p: np.ndarray, T0: float, V0: float) -> float:
     return max(T0 + abs(V0), weight_scale(scene, p), 1e-300)
 
 
-def impact_warnings(impacts: list[Impact]) -> list[str]:
-    """One sentence for each impact whose energy round-off bound exceeds ROUNDOFF_WARN."""
+def impact_warnings(impacts: list[Impact], model: CompiledModel | None = None, p=None) -> list[str]:
+    """One sentence for each impact whose energy round-off bound exceeds ROUNDOFF_WARN, naming the chain's most
+    extreme ratio (ill_conditioning) when the model and its parameters p are given."""
+    flagged = [i for i in impacts if i.roundoff > ROUNDOFF_WARN]
+    if not flagged:
+        return []
+    cause = "extreme mass, length or inertia ratios" if model is None else \
+        ill_conditioning(model.scene, p, planar=model.layout.planar_normal is not None)
     return [f"impact at t = {i.t:.9g} s: its energy is accurate only to {i.roundoff:.2g} (relative; I_f is "
-            "ill-conditioned there: extreme mass, length or inertia ratios)" for i in impacts
-            if i.roundoff > ROUNDOFF_WARN]
+            f"ill-conditioned there: {cause})" for i in flagged]
+
+
+def ill_conditioning(scene: Scene, p, planar: bool) -> str:
+    """The largest of the ratios that make I_f ill-conditioned, as a phrase: that of the links' masses, of their
+    lengths, of their principal moments of inertia about their centres of mass (axial ones included; a planar model
+    turns its links about their joint axes only, so only those count), and that of the whole chain's moment of
+    inertia (straight, about its end: M L^2 / 3) to its largest link's, which measures how I_f grows with the
+    number of links (docs/simulation.md).  p: the parameters (scene.parameter_names()); planar: the model is."""
+    value = dict(zip(scene.parameter_names(), np.asarray(p, dtype=float).tolist()))
+    masses, lengths, moments = [], [], []          # (value, link); moments: (value, link, which one)
+    for i, link in enumerate(scene.links, start=1):
+        l = value[f"l_{i}"]
+        if link.kind == "line":
+            m = value[f"mu_{i}"] * l
+            axial = l * value[f"Jxx_{i}"]
+            across_y, across_z = (m * l * l / 12 + l * value[f"{key}_{i}"] for key in ("Jyy", "Jzz"))
+            found = [(across_z, "about its joint axis")] if planar else \
+                [(axial, "axial"), (across_y, "transverse"), (across_z, "transverse")]
+        else:
+            m = value[f"m_{i}"]
+            Ixx, Iyy, Izz, Ixy, Ixz, Iyz = (value[f"{key}_{i}"] for key in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"))
+            inertia = np.array([[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]])
+            found = [(Izz, "about its joint axis")] if planar else \
+                [(v, "principal") for v in np.linalg.eigvalsh(inertia)]
+        masses.append((m, i))
+        lengths.append((l, i))
+        moments += [(v, i, which) for v, which in found if v > 0.0]
+    candidates = []
+    if len(scene.links) > 1:
+        (lo, a), (hi, b) = min(masses), max(masses)
+        candidates.append((hi / lo, f"that of the links' masses: {hi:.3g} kg (link {b}) is {hi / lo:.2g} times "
+                                    f"{lo:.3g} kg (link {a})"))
+        (lo, a), (hi, b) = min(lengths), max(lengths)
+        candidates.append((hi / lo, f"that of the links' lengths: {hi:.3g} m (link {b}) is {hi / lo:.2g} times "
+                                    f"{lo:.3g} m (link {a})"))
+    if moments:
+        (lo, a, low), (hi, b, high) = min(moments), max(moments)
+        candidates.append((hi / lo, f"that of the links' moments of inertia: {hi:.3g} kg m^2 (link {b}, {high}) is "
+                                    f"{hi / lo:.2g} times {lo:.3g} kg m^2 (link {a}, {low})"))
+        whole = sum(m for m, _ in masses) * sum(l for l, _ in lengths) ** 2 / 3
+        candidates.append((whole / hi, f"the chain's length: its {scene.n} links, straight, have a moment of inertia "
+                                       f"about its end (M L^2 / 3 = {whole:.3g} kg m^2) {whole / hi:.2g} times its "
+                                       f"largest link's ({hi:.3g} kg m^2)"))
+    return "its most extreme ratio is " + max(candidates)[1] if candidates else "extreme mass, length or inertia ratios"
+
+
+def friction_warnings(model: CompiledModel, p, sim, method: str) -> list[str]:
+    """A sentence when the regularised friction limited the steps: at least FRICTION_WARN_STEPS of the run's
+    accepted steps, and FRICTION_WARN_SHARE of them, began with a point resting on a rough wall and sliding slower
+    than GAC_SLOW_SLIDING friction_velocity (sim.n_slow_sliding), where the friction force is nearly viscous,
+    -mu lambda v_t / friction_velocity: a stiff term of time constant about tau = friction_velocity / (mu g) that
+    caps an explicit step near a few tau.  Steps far shorter than tau are limited by something else, and RK4's
+    step is the caller's: neither is named."""
+    slow, steps = int(sim.n_slow_sliding), int(sim.n_steps)
+    if method == "rk4" or slow < max(FRICTION_WARN_STEPS, FRICTION_WARN_SHARE * steps):
+        return []
+    v_s = model.scene.friction_velocity
+    names = model.scene.parameter_names()
+    mu = max((float(p[k]) for k, name in enumerate(names) if name.startswith("friction_")), default=0.0)
+    h = float(sim.t_slow_sliding) / slow
+    tau = v_s / (mu * abs(float(p[0]))) if mu * abs(float(p[0])) > 0.0 else None
+    if tau is not None and h < 0.01 * tau:
+        return []
+    scale = f" (time constant about friction_velocity / (mu g) = {tau:.2g} s)" if tau is not None else ""
+    return [f"{slow:,} of the run's {steps:,} steps ({slow / max(steps, 1):.0%}) began with a point resting on a rough "
+            f"wall and sliding slower than {model.lib.GAC_SLOW_SLIDING} friction_velocity, at a mean step of "
+            f"{h:.2g} s: there the regularised friction is a stiff viscous force{scale} that limits the step. The "
+            f"scene's friction_velocity = {v_s:g} m/s: a larger one takes proportionally fewer steps there, at the "
+            "price of a slow creep (below friction_velocity) where the chain would stick"]
 
 
 def _read_impact(model: CompiledModel, r) -> Impact:

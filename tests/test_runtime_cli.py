@@ -29,7 +29,8 @@ def test_simulate_writes_json_and_plots(tmp_path):
         assert key in data
     assert data["t_final"] == 0.5 and len(data["q_final"]) == 6
     pngs = sorted(p.name for p in (tmp_path / "plots").glob("*.png"))
-    assert "paper_case2_impacts.png" in pngs and "paper_case2_angles.png" in pngs and len(pngs) == 6
+    assert "paper_case2_impacts.png" in pngs and "paper_case2_angles.png" in pngs and len(pngs) == 8   # X1..X3
+    assert "paper_case2_positions_X3.png" in pngs
 
 
 def test_rk4_needs_dt_and_bad_scene_is_named(tmp_path):

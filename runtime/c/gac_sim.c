@@ -192,6 +192,8 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     s->rk4_h_rho = 0.0;
     s->input_changed = 0;
     s->work_input = s->work_damping = s->work_friction = 0.0;
+    s->n_slow_sliding = 0;
+    s->t_slow_sliding = 0.0;
     for (i = 0; i < md->nx; ++i) s->x[i] = x[i];
     s->t = t0;
     s->h = opt->dt;                               /* RK4 step, or the first adaptive step (0: automatic) */
@@ -341,6 +343,32 @@ int gac_sim_set_controller(gac_sim *s, gac_controller controller, void *user)
     return GAC_OK;
 }
 
+/* 1 if at x a persistent contact on a wall with friction slides slower than GAC_SLOW_SLIDING friction_velocity
+ * (its velocity along the wall, as in gac_constrained_dynamics_friction): the regularised friction force is then
+ * (nearly) viscous, -mu lambda v_t / friction_velocity, a stiff term that bounds an explicit method's step. */
+static int gac_slow_sliding(const gac_sim *s, const double *x)
+{
+    const gac_model *md = s->model;
+    const double slow = GAC_SLOW_SLIDING * md->friction_velocity;
+    double vq[3 * GAC_AT_LEAST_1(md->npoint)];
+    int a, j;
+    if (s->nactive == 0 || !gac_has_friction(md)) return 0;
+    md->contact_velocities(x, x + md->nq, s->p, vq);
+    for (a = 0; a < s->nactive; ++a) {
+        const gac_contact *k = &md->contacts[s->active[a]];
+        const double mu = k->mu_index >= 0 ? s->p[k->mu_index] : k->mu_value;
+        double speed2 = 0.0;
+        int axis = 0;
+        if (k->kind != GAC_CONTACT_WALL || !k->has_friction || !(mu > 0.0)) continue;
+        for (j = 0; j < 2; ++j, ++axis) {             /* the two tangential axes, ascending */
+            if (axis == k->axis) ++axis;
+            if (k->trow[j] >= 0) speed2 += vq[3 * (k->point - 1) + axis] * vq[3 * (k->point - 1) + axis];
+        }
+        if (speed2 < slow * slow) return 1;
+    }
+    return 0;
+}
+
 /* Write the samples t_eval[*i_eval ..] that fall in (t_a, t_b] (state from the dense output). */
 static void gac_emit(gac_sim *s, double t_b, const double *t_eval, int n_eval, int *i_eval,
                      double *x_eval)
@@ -450,6 +478,10 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
         }
         steps++;
         s->n_steps++;
+        if (gac_slow_sliding(s, s->x)) {
+            s->n_slow_sliding++;
+            s->t_slow_sliding += h;
+        }
         if (s->fail) return s->fail;
         if (!gac_finite(s->x1, md->nx)) return GAC_ERR_NONFINITE;
         if (gac_chart_measure(md, s->x1) < gac_chart_floor(s)) return GAC_ERR_GIMBAL_LOCK;

@@ -544,6 +544,11 @@ static void test_sled(void)
     CHECK(t_stop < 1.0 && NEAR(x_eval[4], v0 * v0 / (2.0 * mu * g), 1e-8), "x(1) %.17g, expected %.17g", x_eval[4],
           v0 * v0 / (2.0 * mu * g));
     CHECK(NEAR(sim.work_friction, 0.5 * m * v0 * v0, 1e-9), "friction loss %.17g", sim.work_friction);
+    /* the steps in the regularised regime: those begun after the stop or within GAC_SLOW_SLIDING v_s of it */
+    CHECK(sim.n_slow_sliding > 0 && sim.t_slow_sliding > 0.5 * (1.0 - t_stop)
+          && sim.t_slow_sliding <= 1.0 - t_stop + GAC_SLOW_SLIDING * sled.friction_velocity / (mu * g) + 1e-12,
+          "slow sliding: %ld steps over %.17g s, at rest for %.17g s", sim.n_slow_sliding, sim.t_slow_sliding,
+          1.0 - t_stop);
     CHECK(fabs(x_eval[5]) < 1e-12 && fabs(x_eval[7]) < 1e-12, "on the floor");
 }
 

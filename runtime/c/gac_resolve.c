@@ -227,11 +227,17 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     /* post-conditions of the law (kinetic energy at the impact configuration), to its round-off bound */
     if (T_after > T_before * (1.0 + bound) + 1e-300) return GAC_ERR_IMPACT_ACCURACY;
     if (elastic && !plastic && fabs(T_after - T_before) > bound * T_before) return GAC_ERR_IMPACT_ACCURACY;
-    /* the persistent set: landing and persistent contacts that end at rest */
+    /* the persistent set: landing and persistent contacts that end at rest, and any other contact within
+     * contact_tol of its wall that the law leaves at rest (after a plastic round, or rounds that end at
+     * round-off, whatever its approach speed; holding it takes no energy): held, it rests if it pushes
+     * (gac_settle); left free, a contact pressed into its wall would sink from gap <= 0, where no crossing
+     * is looked for */
     gac_normal_velocities(md, s->x1, s->p, vn);
     v_hold = 1e-9 * scale;                          /* at rest, to the law's round-off */
     for (k = 0; k < n; ++k) {
         c = list[k];
+        const int left_at_rest = height > 0.0 && !s->is_active[c] && gaps[c] <= s->opt.contact_tol
+                                 && fabs(vn[c]) <= v_hold;
         /* a persistent contact that the impact lifts by less than h stays (its small lift velocity, what the
          * bounces of the accumulation it stands for would carry, is removed with the others') */
         int held_lift = 0;
@@ -246,7 +252,7 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
             if (code != GAC_OK) return code;
             held_lift = a_free[c] < 0.0 && vn[c] * vn[c] <= 2.0 * (-a_free[c]) * height;
         }
-        if ((landing[k] && vn[c] <= v_hold) || held_lift) {
+        if ((landing[k] && vn[c] <= v_hold) || held_lift || left_at_rest) {
             code = gac_add_independent(s, s->x1, &nset, set, list[k]);
             if (code != GAC_OK) return code;
         }

@@ -279,7 +279,10 @@ void gac_set_active(gac_sim *s, int n, const int *set, gac_impact_record *r)
 /* gac_sim_init: contacts that start at their wall (|gap| <= contact_tol) with a normal velocity whose bounce
  * would rise less than rest_height (under the largest free-flight normal acceleration of any contact, so
  * that a contact pressed only through the others, like the top of a ladder, counts) become persistent:
- * positions and velocities projected, then only those with a pushing force kept. */
+ * positions and velocities projected, then only those with a pushing force kept.  On a wall with e = 1 a
+ * contact must start at rest to round-off (gac_v_round), as it must arrive at rest to land there: the bounce
+ * rule alone would let the projection take kinetic energy from an elastic chain (a chain spinning fast has a
+ * large normal acceleration, so a large normal velocity passes it). */
 int gac_rest_at_start(gac_sim *s)
 {
     const gac_model *md = s->model;
@@ -294,7 +297,9 @@ int gac_rest_at_start(gac_sim *s)
         if (fabs(an[c]) > a) a = fabs(an[c]);
     }
     for (c = 0; c < md->ncontact; ++c) {
-        if (fabs(gaps[c]) <= s->opt.contact_tol && vn[c] * vn[c] <= 2.0 * a * s->rest_height) {
+        const int at_rest = gac_restitution(md, s->p, c) < 1.0 ? vn[c] * vn[c] <= 2.0 * a * s->rest_height
+                                                                : fabs(vn[c]) <= gac_v_round(md, vn);
+        if (fabs(gaps[c]) <= s->opt.contact_tol && at_rest) {
             code = gac_add_independent(s, s->x, &n, set, c);
             if (code != GAC_OK) return code;
         }

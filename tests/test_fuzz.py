@@ -97,6 +97,7 @@ def test_each_independent_check_can_fail(compiled):
     assert "friction gave energy" in fuzz.check_run(model, run, gift, 0.1, 20.0)[0]
 
 
+@pytest.mark.slow      # runs with wall-time budgets: on a loaded machine they end early
 def test_fast_sample_has_no_failure():
     """16 runs on 4 structures of up to 4 links (about a minute on 2 cores): every run ends at t_end or with
     a physical stop, and passes the independent checks."""
@@ -155,6 +156,7 @@ def test_the_energy_check_follows_the_law_not_the_walls(e_left):
         assert loss > 0.01 * impact.energy_before
 
 
+@pytest.mark.slow      # runs with wall-time budgets: on a loaded machine they end early
 def test_rough_sample_has_no_failure():
     """Runs of two structures whose walls have Coulomb friction (structures 4 and 11 of the study's stream): every
     run ends cleanly and passes the independent checks, friction's loss included."""

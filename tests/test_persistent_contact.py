@@ -289,6 +289,7 @@ def random_box_chain(n: int) -> Scene:
                  q0=(-math.pi / 2, 0.0) + (0.3,) * n + (0.0, 2.0, 0.0))
 
 
+@pytest.mark.slow
 def test_random_spatial_drops_into_a_box_end_cleanly(compiled):
     """Random throws of 1-3 spatial links into a box (walls, floor and corners; e in {0, 0.3, 0.7}): each run
     finishes (or stops at the base chart's gimbal lock, a separate limit), T + V never rises, nothing sinks

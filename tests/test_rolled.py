@@ -84,7 +84,9 @@ CASES = {
 }
 
 
-@pytest.mark.parametrize("case", CASES)
+# the line run in the default suite; the rigid runs (a minute each to build on two cores) with -m slow
+@pytest.mark.parametrize("case", [case if case.startswith("3d line") else pytest.param(case, marks=pytest.mark.slow)
+                                  for case in CASES])
 def test_rolled_equals_unrolled_and_the_reference(case):
     scene = CASES[case](11)
     assert _run(scene) is not None
@@ -109,6 +111,7 @@ def test_rolled_equals_unrolled_and_the_reference(case):
         assert np.max(np.abs(M @ a - R)) < 1e-10 * np.max(np.abs(M)) * max(1.0, np.max(np.abs(a)))
 
 
+@pytest.mark.slow
 def test_planar_specialised_and_baked_chains_roll_the_same():
     """Specialised planar models (n + 2 coordinates, out-of-plane blocks dropped) and parameters baked into the
     code: loops over the run give what straight-line code gives, and a parameter built in as zero stays zero."""

@@ -670,7 +670,7 @@ def _stop_message(model: CompiledModel, sim, code: int, segment_t: float, segmen
     if code == lib.GAC_ERR_UNSTABLE:
         message += (f" (dt = {dt:g} s: h rho = {float(sim.rk4_h_rho):.3g} in the last step, rho the rate of the "
                     "chain's fastest mode seen in it)")
-    if code == lib.GAC_ERR_NONFINITE and dt is not None:
+    if code == lib.GAC_ERR_NONFINITE and sim.opt.method == lib.GAC_METHOD_RK4:
         message += f" (rk4 with dt = {dt:g} s is unstable on this motion: reduce dt, or use an adaptive method)"
     return message
 

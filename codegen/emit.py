@@ -214,7 +214,7 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
         sizes=interface.SIZES, size_values=sizes, constants=interface.CONSTANTS, structs=interface.STRUCTS,
         kernels=[(f, generated.get(f.name)) for f in interface.KERNELS], dense=dense,
         formed=[f for f in interface.KERNELS if f.name not in generated], all_functions=interface.ALL_FUNCTIONS,
-        library_functions=interface.LIBRARY_FUNCTIONS, api_functions=interface.FUNCTIONS,
+        library_functions=interface.LIBRARY_FUNCTIONS, api_functions=interface.FUNCTIONS, callbacks=interface.CALLBACKS,
     )
     header = env.get_template("model.h.j2").render(**context)
     source = env.get_template("model.c.j2").render(**context)

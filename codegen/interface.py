@@ -236,14 +236,20 @@ FUNCTIONS = (
               Arg("user", "void *", "passed to the callback as it is")),
              "Follow the run and let a callback stop it (gac_sim_set_progress).",
              "Returns GAC_OK or GAC_ERR_NULL_ARGUMENT."),
+    Function("sim_set_schedule", "int",
+             (Arg("sim", "{name}_sim *", "an initialised simulation"),
+              Arg("schedule", "const gac_schedule *", "inputs at times, held or linear (kept alive by the caller); "
+                  "NULL: none")),
+             "Drive the run by an input schedule, each of its times a step boundary (gac_sim_set_schedule).",
+             "Returns GAC_OK, GAC_ERR_NULL_ARGUMENT, or GAC_ERR_BAD_OPTION / GAC_ERR_BAD_INPUT for a schedule that "
+             "gac_schedule_check refuses or whose nu is not NU."),
     Function("sim_run", "int",
              (Arg("sim", "{name}_sim *", "an initialised simulation"),
               Arg("t_end", "double", "integrate up to this time (s)"),
-              Arg("max_impacts", "long", "stop after this many impacts (> 0)"),
               Arg("record", "{name}_impact_record *", "out: the last impact (not NULL)"),
               Arg("summary", "gac_run_summary *", "out: impacts, first impact time, losses, contact events")),
              "Run to t_end in one call, counting the impacts (gac_sim_run): for studies of many runs.",
-             "Returns GAC_SIM_END, GAC_SIM_IMPACT (max_impacts reached) or an error (< 0)."),
+             "Returns GAC_SIM_END or an error (< 0; GAC_ERR_MAX_IMPACTS after options.max_impacts impacts)."),
     Function("sim_state", "void",
              (Arg("sim", "const {name}_sim *", "the simulation (NULL: nothing is written)"),
               Arg("t", "double *", "out: current time (s), or NULL"),
@@ -260,6 +266,24 @@ FUNCTIONS = (
 )
 
 ALL_FUNCTIONS = KERNELS + FUNCTIONS
+
+# The functions a model's cffi module declares extern "Python" (NAME_python_<name>): the front end defines them, the
+# loop calls them through the pointers given to sim_set_controller, sim_set_clock and sim_set_progress.
+CALLBACKS = (
+    Function("python_controller", "void",
+             (Arg("t", "double", "time (s)"), Arg("q", "const double *", "NQ"), Arg("qd", "const double *", "NQ"),
+              Arg("u", "double *", "out: the inputs (NU)"), Arg("user", "void *", "the run's handle")),
+             "The inputs of a run driven by a Python function u(t, q, qd) (a gac_controller)."),
+    Function("python_clock", "double", (Arg("user", "void *", "unused"),),
+             "Seconds of the Python process's monotonic clock (a gac_clock)."),
+    Function("python_progress", "int",
+             (Arg("t", "double", "simulated time (s)"), Arg("n_steps", "long", "steps so far"),
+              Arg("n_impacts", "long", "impacts so far"), Arg("user", "void *", "the run's handle")),
+             "The run's Python progress callback; nonzero stops the run (a gac_progress)."),
+)
+
+# The per-model C types NAME_<type>: a front end creates them by these names.
+TYPES = ("options", "sim", "impact_record")
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -337,7 +361,7 @@ CODES = ("GAC_OK", "GAC_ERR_BAD_CONTACT", "GAC_ERR_SINGULAR_MASS", "GAC_ERR_SING
          "GAC_ERR_NONFINITE", "GAC_ERR_TOO_MANY_CONTACTS", "GAC_ERR_SINGULAR_CONTACT", "GAC_ERR_IMPACT_ACCURACY",
          "GAC_ERR_UNSTABLE", "GAC_ERR_LOST_CONTACT", "GAC_ERR_START_OUTSIDE", "GAC_ERR_NULL_ARGUMENT",
          "GAC_ERR_BAD_MODEL", "GAC_ERR_BAD_INPUT", "GAC_ERR_FRICTION", "GAC_ERR_BAD_PARAMETER",
-         "GAC_ERR_WALL_TIME", "GAC_ERR_STOPPED")
+         "GAC_ERR_WALL_TIME", "GAC_ERR_STOPPED", "GAC_ERR_MAX_IMPACTS")
 STOPS = ("GAC_SIM_END", "GAC_SIM_IMPACT", "GAC_SIM_CONTACT")
 METHODS = ("GAC_METHOD_RK4", "GAC_METHOD_DOPRI5", "GAC_METHOD_DOP853")
 LIMITS = ("GAC_LCP_CAP", "GAC_MAX_ROUNDS", "GAC_LOOK_STEPS", "GAC_SLOW_SLIDING")
@@ -358,7 +382,8 @@ class Struct:
 STRUCTS = (
     Struct("gac_options", ("int method", "double dt", "double rtol", "double atol", "double h_max",
                            "int event_samples", "double event_tol", "double contact_tol", "long max_steps",
-                           "double rest_height", "int zeno_impacts", "double max_wall_time"), partial=False),
+                           "double rest_height", "int zeno_impacts", "double max_wall_time", "long max_impacts"),
+           partial=False),
     Struct("gac_impact_record", ("double t", "int ncontact", "int *contact", "double *impulse",
                                  "double energy_before", "double energy_after", "double *q", "double *qd_before",
                                  "double *qd_after", "int complementarity", "int rounds", "int plastic",
@@ -393,9 +418,12 @@ LIBRARY_FUNCTIONS = (
     Function("inertia_admissible", "int", (Arg("I", "const double *", "Ixx, Iyy, Izz, Ixy, Ixz, Iyz (kg m^2)"),),
              "1 if I is a physical inertia (the rule of a rigid link's inertia parameters)."),
     Function("error_message", "const char *", (Arg("code", "int", "a return code"),), "Message for a code."),
+    Function("check_options", "int",
+             (Arg("opt", "const gac_options *", "options"),
+              Arg("field", "const char **", "out: the first option out of range and what it allows, or NULL")),
+             "GAC_OK if every option is in its range (gac_check_options)."),
     Function("sim_run", "int",
              (Arg("sim", "gac_sim *", "an initialised simulation"), Arg("t_end", "double", "end time (s)"),
-              Arg("max_impacts", "long", "stop after this many impacts (> 0)"),
               Arg("record", "gac_impact_record *", "a bound record"),
               Arg("summary", "gac_run_summary *", "out: counts of the run")),
              "Run to t_end in one call, counting impacts (gac_sim_run)."),

@@ -26,6 +26,43 @@ void gac_default_options(gac_options *opt)
     opt->rest_height = -1.0;
     opt->zeno_impacts = 20;
     opt->max_wall_time = 0.0;
+    opt->max_impacts = 10000;
+}
+
+int gac_check_options(const gac_options *opt, const char **field)
+{
+    const char *bad = 0;
+    if (opt == 0) return GAC_ERR_NULL_ARGUMENT;
+    if (opt->method != GAC_METHOD_RK4 && opt->method != GAC_METHOD_DOPRI5 && opt->method != GAC_METHOD_DOP853)
+        bad = "method: must be GAC_METHOD_RK4, GAC_METHOD_DOPRI5 or GAC_METHOD_DOP853";
+    else if (opt->method == GAC_METHOD_RK4 && !(opt->dt > 0.0 && opt->dt < 1e300))
+        bad = "dt: RK4 needs a step within (0, 1e300) s";
+    else if (opt->method != GAC_METHOD_RK4 && !(opt->rtol >= GAC_RTOL_MIN && opt->rtol < 1.0))
+        bad = "rtol: must be within [1e-14, 1) (GAC_RTOL_MIN: below it round-off stops the steps)";
+    else if (opt->method != GAC_METHOD_RK4 && !(opt->atol > 0.0 && opt->atol < 1e300))
+        bad = "atol: must be within (0, 1e300) (absolute error per coordinate)";
+    else if (opt->method != GAC_METHOD_RK4 && !(opt->dt >= 0.0 && opt->dt < 1e300))
+        bad = "dt: the first step of an adaptive method must be within [0, 1e300) s (0: automatic)";
+    else if (!(opt->h_max >= 0.0 && opt->h_max < 1e300))
+        bad = "h_max: must be within [0, 1e300) s (0: unbounded)";
+    else if (opt->event_samples < 1)
+        bad = "event_samples: must be >= 1 (interpolant samples searched per step)";
+    else if (!(opt->event_tol > 0.0 && opt->event_tol < 1e300))
+        bad = "event_tol: must be within (0, 1e300) s";
+    else if (!(opt->contact_tol >= 0.0 && opt->contact_tol < 1e300))
+        bad = "contact_tol: must be within [0, 1e300) m";
+    else if (opt->max_steps < 0)
+        bad = "max_steps: must be >= 0 (0: unbounded)";
+    else if (!(opt->rest_height < 1e300))
+        bad = "rest_height: must be < 1e300 m and not NaN (< 0: 10 contact_tol; 0: never by this rule)";
+    else if (opt->zeno_impacts < 0)
+        bad = "zeno_impacts: must be >= 0 (0: never by this rule)";
+    else if (!(opt->max_wall_time >= 0.0 && opt->max_wall_time < 1e300))
+        bad = "max_wall_time: must be within [0, 1e300) s (0: unbounded)";
+    else if (opt->max_impacts < 0)
+        bad = "max_impacts: must be >= 0 (0: unbounded)";
+    if (field != 0) *field = bad;
+    return bad == 0 ? GAC_OK : GAC_ERR_BAD_OPTION;
 }
 
 /* The run's clock in seconds: the embedder's, or C's processor time. */
@@ -140,16 +177,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     const int nc1 = GAC_AT_LEAST_1(md->ncontact);
     double x[md->nx], pv[GAC_AT_LEAST_1(md->nparam)];
     int i;
-    if (opt->method != GAC_METHOD_RK4 && opt->method != GAC_METHOD_DOPRI5
-        && opt->method != GAC_METHOD_DOP853) return GAC_ERR_BAD_OPTION;
-    if (opt->method == GAC_METHOD_RK4 && !(opt->dt > 0.0 && opt->dt < 1e300)) return GAC_ERR_BAD_OPTION;
-    if (opt->method != GAC_METHOD_RK4
-        && !(opt->rtol >= GAC_RTOL_MIN && opt->rtol < 1.0 && opt->atol > 0.0 && opt->atol < 1e300 && opt->dt >= 0.0))
-        return GAC_ERR_BAD_OPTION;
-    if (opt->event_samples < 1 || !(opt->event_tol > 0.0) || !(opt->contact_tol >= 0.0) || !(opt->h_max >= 0.0)
-        || opt->max_steps < 0 || !(opt->rest_height < 1e300) || opt->zeno_impacts < 0
-        || !(opt->max_wall_time >= 0.0 && opt->max_wall_time < 1e300))
-        return GAC_ERR_BAD_OPTION;
+    if (gac_check_options(opt, 0) != GAC_OK) return GAC_ERR_BAD_OPTION;
     for (i = 0; i < md->nparam; ++i) pv[i] = p == 0 ? md->default_parameters[i] : p[i];   /* NULL: the defaults */
     if (gac_check_parameters(md, pv, 0) != GAC_OK) return GAC_ERR_BAD_PARAMETER;
     for (i = 0; i < md->nq; ++i) {
@@ -182,6 +210,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     for (i = 0; i < md->nu; ++i) s->u[i] = s->u_eval[i] = 0.0;
     s->controller = 0;
     s->controller_data = 0;
+    s->schedule = 0;
     s->clock = 0;
     s->clock_data = 0;
     s->progress = 0;
@@ -336,6 +365,7 @@ int gac_sim_set_progress(gac_sim *s, gac_progress progress, void *user)
 int gac_sim_set_controller(gac_sim *s, gac_controller controller, void *user)
 {
     if (s == 0) return GAC_ERR_NULL_ARGUMENT;
+    s->schedule = 0;
     s->controller = controller;
     s->controller_data = user;
     s->f_valid = 0;
@@ -386,19 +416,80 @@ static void gac_emit(gac_sim *s, double t_b, const double *t_eval, int n_eval, i
     }
 }
 
+/* The schedule's interval that holds time t begins: its inputs from there (a held schedule's value over the
+ * interval, set as held inputs; a linear one stays the controller, evaluated at every stage). */
+static void gac_schedule_begin(gac_sim *s)
+{
+    if (s->schedule->linear) {
+        s->controller = gac_schedule_input;
+        s->controller_data = (void *)s->schedule;
+    } else {
+        s->controller = 0;
+        s->controller_data = 0;
+        gac_schedule_input(s->t, s->x, s->x + s->model->nq, s->u, (void *)s->schedule);
+    }
+    s->f_valid = 0;                    /* the flight derivative and the resting contacts' forces change */
+    s->input_changed = 1;
+}
+
+int gac_sim_set_schedule(gac_sim *s, const gac_schedule *schedule)
+{
+    int code;
+    if (s == 0) return GAC_ERR_NULL_ARGUMENT;
+    if (schedule == 0) {
+        if (s->schedule != 0 && s->schedule->linear) s->controller = 0, s->controller_data = 0;
+        s->schedule = 0;
+        return GAC_OK;
+    }
+    code = gac_schedule_check(schedule);
+    if (code != GAC_OK) return code;
+    if (schedule->nu != s->model->nu) return GAC_ERR_BAD_OPTION;
+    s->schedule = schedule;
+    gac_schedule_begin(s);
+    return GAC_OK;
+}
+
+/* The end of the stretch the loop integrates next: the schedule's first time after t, or t_end. */
+static double gac_next_stop(const gac_sim *s, double t_end)
+{
+    int k;
+    if (s->schedule == 0) return t_end;
+    for (k = 0; k < s->schedule->n; ++k) {
+        if (s->schedule->t[k] > s->t) return s->schedule->t[k] < t_end ? s->schedule->t[k] : t_end;
+    }
+    return t_end;
+}
+
+static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_eval, int *i_eval,
+                          double *x_eval, gac_impact_record *record);
+
 int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, int *i_eval,
                     double *x_eval, gac_impact_record *record)
+{
+    if (s == 0 || record == 0 || (n_eval > 0 && (t_eval == 0 || x_eval == 0 || i_eval == 0)))
+        return GAC_ERR_NULL_ARGUMENT;
+    if (!(t_end >= s->t) || !(t_end - t_end == 0.0) || n_eval < 0
+        || (n_eval > 0 && (*i_eval < 0 || *i_eval > n_eval)))
+        return GAC_ERR_BAD_OPTION;                /* t_end NaN, infinite or before t; bad sample index */
+    if (s->opt.max_impacts > 0 && s->n_impacts >= s->opt.max_impacts && s->t < t_end && !s->pending)
+        return GAC_ERR_MAX_IMPACTS;
+    for (;;) {                                    /* stretches between the schedule's times */
+        const double t_stop = gac_next_stop(s, t_end);
+        const int code = gac_advance_to(s, t_stop, t_eval, n_eval, i_eval, x_eval, record);
+        if (code != GAC_SIM_END || t_stop >= t_end) return code;
+        gac_schedule_begin(s);
+    }
+}
+
+/* The loop from s->t to t_end (no schedule time inside): flight steps up to the next event. */
+static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_eval, int *i_eval,
+                          double *x_eval, gac_impact_record *record)
 {
     const gac_model *md;
     long steps = 0;
     double fac_max = 10.0;
     int i;
-    if (s == 0 || record == 0 || (n_eval > 0 && (t_eval == 0 || x_eval == 0 || i_eval == 0)))
-        return GAC_ERR_NULL_ARGUMENT;
     md = s->model;
-    if (!(t_end >= s->t) || !(t_end - t_end == 0.0) || n_eval < 0
-        || (n_eval > 0 && (*i_eval < 0 || *i_eval > n_eval)))
-        return GAC_ERR_BAD_OPTION;                /* t_end NaN, infinite or before t; bad sample index */
     if (s->pending) {                                        /* the activations of gac_sim_init */
         s->pending = 0;
         record->t = s->t;
@@ -540,11 +631,10 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
     return GAC_SIM_END;
 }
 
-int gac_sim_run(gac_sim *s, double t_end, long max_impacts, gac_impact_record *record, gac_run_summary *summary)
+int gac_sim_run(gac_sim *s, double t_end, gac_impact_record *record, gac_run_summary *summary)
 {
     int code;
     if (s == 0 || record == 0 || summary == 0) return GAC_ERR_NULL_ARGUMENT;
-    if (max_impacts < 1) return GAC_ERR_BAD_OPTION;
     summary->n_impacts = summary->n_contact_events = 0;
     summary->t_first_impact = -1.0;
     summary->energy_impact_loss = 0.0;
@@ -558,6 +648,5 @@ int gac_sim_run(gac_sim *s, double t_end, long max_impacts, gac_impact_record *r
         if (summary->n_impacts == 0) summary->t_first_impact = record->t;
         summary->n_impacts++;
         summary->energy_impact_loss += record->energy_before - record->energy_after;
-        if (summary->n_impacts >= max_impacts) return GAC_SIM_IMPACT;
     }
 }

@@ -956,13 +956,12 @@ int paper_case2_sim_advance(paper_case2_sim *sim, double t_end, const double *t_
     return gac_sim_advance(&sim->base, t_end, t_eval, n_eval, i_eval, x_eval, &record->base);
 }
 
-int paper_case2_sim_run(paper_case2_sim *sim, double t_end, long max_impacts, paper_case2_impact_record *record,
-                  gac_run_summary *summary)
+int paper_case2_sim_run(paper_case2_sim *sim, double t_end, paper_case2_impact_record *record, gac_run_summary *summary)
 {
     if (sim == 0 || record == 0) return GAC_ERR_NULL_ARGUMENT;
     paper_case2_bind(&sim->base, sim->dwork, sim->iwork);
     paper_case2_bind_record(record);
-    return gac_sim_run(&sim->base, t_end, max_impacts, &record->base, summary);
+    return gac_sim_run(&sim->base, t_end, &record->base, summary);
 }
 
 int paper_case2_sim_set_input(paper_case2_sim *sim, const double *GAC_RESTRICT u)
@@ -970,6 +969,13 @@ int paper_case2_sim_set_input(paper_case2_sim *sim, const double *GAC_RESTRICT u
     if (sim == 0) return GAC_ERR_NULL_ARGUMENT;
     paper_case2_bind(&sim->base, sim->dwork, sim->iwork);
     return gac_sim_set_input(&sim->base, u);
+}
+
+int paper_case2_sim_set_schedule(paper_case2_sim *sim, const gac_schedule *schedule)
+{
+    if (sim == 0) return GAC_ERR_NULL_ARGUMENT;
+    paper_case2_bind(&sim->base, sim->dwork, sim->iwork);
+    return gac_sim_set_schedule(&sim->base, schedule);
 }
 
 int paper_case2_sim_set_controller(paper_case2_sim *sim, gac_controller controller, void *user)

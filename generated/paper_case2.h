@@ -439,15 +439,22 @@ int paper_case2_sim_set_clock(paper_case2_sim *sim, gac_clock clock, void *user)
  */
 int paper_case2_sim_set_progress(paper_case2_sim *sim, gac_progress progress, void *user);
 
+/* Drive the run by an input schedule, each of its times a step boundary (gac_sim_set_schedule).  Returns
+ * GAC_OK, GAC_ERR_NULL_ARGUMENT, or GAC_ERR_BAD_OPTION / GAC_ERR_BAD_INPUT for a schedule that
+ * gac_schedule_check refuses or whose nu is not NU.
+ *   sim          an initialised simulation
+ *   schedule     inputs at times, held or linear (kept alive by the caller); NULL: none
+ */
+int paper_case2_sim_set_schedule(paper_case2_sim *sim, const gac_schedule *schedule);
+
 /* Run to t_end in one call, counting the impacts (gac_sim_run): for studies of many runs.  Returns
- * GAC_SIM_END, GAC_SIM_IMPACT (max_impacts reached) or an error (< 0).
+ * GAC_SIM_END or an error (< 0; GAC_ERR_MAX_IMPACTS after options.max_impacts impacts).
  *   sim          an initialised simulation
  *   t_end        integrate up to this time (s)
- *   max_impacts  stop after this many impacts (> 0)
  *   record       out: the last impact (not NULL)
  *   summary      out: impacts, first impact time, losses, contact events
  */
-int paper_case2_sim_run(paper_case2_sim *sim, double t_end, long max_impacts, paper_case2_impact_record *record, gac_run_summary *summary);
+int paper_case2_sim_run(paper_case2_sim *sim, double t_end, paper_case2_impact_record *record, gac_run_summary *summary);
 
 /* The current time and state (gac_sim_state).
  *   sim          the simulation (NULL: nothing is written)

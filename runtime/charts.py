@@ -43,8 +43,8 @@ import numpy as np
 from codegen.scene import Scene, load_scene
 
 from .model import CompiledModel, load_model
-from .simulate import (Impact, SimulationResult, _check_inside, _check_parameters, energy_scale, impact_warnings,
-                       sample_times, simulate)
+from .simulate import (Impact, Impacts, SimulationResult, _check_inside, _check_parameters, energy_scale,
+                       impact_warnings, sample_times, simulate)
 
 CHART_NAMES = ("A", "B")
 EZ = np.array([0.0, 0.0, 1.0])
@@ -559,7 +559,7 @@ def simulate_with_charts(scene: Scene | str, t_end: float, threshold: float = 0.
     accuracy = impact_warnings(impacts, compiled[0], p_vec)
     warnings = compiled[0].scene.warnings + accuracy
     return ChartResult(
-        **extra, t=user[:n_done].copy(), q=out.q[:n_done], qd=out.qd[:n_done], impacts=impacts,
+        **extra, t=user[:n_done].copy(), q=out.q[:n_done], qd=out.qd[:n_done], impacts=Impacts.of(impacts),
         t_final=float(t), q_final=q_final, qd_final=qd_final, energy_initial=energy_initial,
         energy_final=_energy(compiled[current], q, qd, p_vec),
         n_steps=totals["n_steps"], n_rejected=totals["n_rejected"], n_rhs=totals["n_rhs"], status=status,

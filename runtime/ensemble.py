@@ -14,8 +14,8 @@ local threads run the compiled part side by side.  Given a Dask ``distributed.Cl
 address), the runs go to its workers in chunks; a worker loads the compiled model from the shared build
 cache once (the model pickles as its scene), and Dask retries the chunks of a worker that is lost.
 
-A run with constant inputs and no samples goes through C in one call (``NAME_sim_run``: the GIL is released
-for the whole run, and the impacts are counted there instead of being read one by one into Python).
+A run keeps only the count, first time and energy of its impacts (``simulate(keep_impacts=False)``), not their
+records; the GIL is released for each flight stretch between two events.
 Results come back in the order of ``runs``, the same whatever the number of workers: one row per run
 (its overrides, status, message, impacts, energies, counts), plus, if asked, the final states or the
 sampled trajectories as arrays.  A run that fails (a bad override, a stop before t_end) is a row with its
@@ -139,10 +139,8 @@ def run_one(model: CompiledModel, run: dict, index: int, t_end: float, keep: str
         q0 = _state(model, run.get("q0"), model.scene.q0, "q0")
         qd0 = _state(model, run.get("qd0"), model.scene.qd0, "qd0")
         u = run.get("u")
-        whole_in_c = keep != "samples" and options.get("max_wall_time") is None and len(options["t_eval"]) == 0 \
-            and (u is None or not (callable(u) or hasattr(u, "times")))
-        result = simulate(model, run.get("t_end", t_end), p=run.get("p"), q0=q0, qd0=qd0, u=u,
-                          keep_impacts=not whole_in_c, **options)
+        result = simulate(model, run.get("t_end", t_end), p=run.get("p"), q0=q0, qd0=qd0, u=u, keep_impacts=False,
+                          **options)
     except (ValueError, RuntimeError) as exc:
         row.update(status=-2, message=f"refused: {exc}", t_final=math.nan, n_impacts=0, t_first_impact=math.nan,
                    energy_initial=math.nan, energy_final=math.nan, energy_impact_loss=math.nan,

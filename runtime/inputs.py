@@ -4,11 +4,11 @@
     u = InputSchedule([0, 1, 2], [[0, 0], [1, 0], [1, 1]], mode="hold")    values at times
     u = lambda t, q, qd: -k * (q[4] - 0.3)           state feedback from Python (q, qd: the full layout of Eq. 13)
 
-Constant inputs are held by the C loop (``NAME_sim_set_input``).  A held schedule is set the same way at
-each of its times, the C loop stopping there, so every jump falls on a step boundary (the zero-order hold of
-FMI co-simulation).  A linear schedule is evaluated in C at every stage (``gac_schedule_input``), the C loop
-again stopping at each of its times, where the slope changes.  A Python function is called back from C at
-every stage: the most general and the slowest (a Python call per stage, about 1-2 us each).
+Constant inputs are held by the C loop (``NAME_sim_set_input``).  A schedule is given to the C loop as it is
+(``NAME_sim_set_schedule``): the loop ends a step at each of its times, so that every jump of a held schedule (the
+zero-order hold of FMI co-simulation) and every kink of a linear one falls on a step boundary, and evaluates it
+in C.  A Python function is called back from C at every stage: the most general and the slowest (a Python call
+per stage, about 1-2 us each).
 """
 from __future__ import annotations
 
@@ -41,12 +41,6 @@ class InputSource:
         self.times, self.values = times, values
         self.function, self.layout = function, layout
         self.error = None                     # an exception the Python function raised, kept for the driver
-
-    def breakpoints(self, t_end: float) -> list[float]:
-        """Times in (0, t_end) where the C loop must stop: a held value jumps or a slope changes there."""
-        if self.kind not in ("hold", "linear"):
-            return []
-        return [float(t) for t in self.times if 0.0 < t < t_end]
 
     def value_at(self, t: float, q_full=None, qd_full=None) -> np.ndarray:
         """The inputs at time t (and, for a function, state (q, qd) in the full layout)."""
@@ -115,47 +109,38 @@ def input_source(model, u) -> InputSource:
 
 def attach(model, sim, source: InputSource):
     """Give the inputs to an initialised simulation (NAME_sim *); returns what must stay alive during the run."""
-    ffi, lib, name = model.ffi, model.lib, model.name
-    if source.kind in ("constant", "hold"):
-        first = source.constant if source.kind == "constant" else source.value_at(0.0)
-        set_input(model, sim, first)
+    ffi, lib = model.ffi, model.lib
+    if source.kind == "constant":
+        set_input(model, sim, source.constant)
         return None
-    if source.kind == "linear":
+    if source.kind in ("hold", "linear"):
         schedule = ffi.new("gac_schedule *")
         keep = (ffi.from_buffer(source.times), ffi.from_buffer(source.values))
-        schedule.n, schedule.nu, schedule.linear = len(source.times), source.nu, 1
+        schedule.n, schedule.nu, schedule.linear = len(source.times), source.nu, int(source.kind == "linear")
         schedule.t = ffi.cast("double *", keep[0])
         schedule.u = ffi.cast("double *", keep[1])
-        code = lib.gac_schedule_check(schedule)
+        code = model.c.sim_set_schedule(sim, schedule)
         if code != lib.GAC_OK:
             raise ValueError(f"u: {model.error_message(code)}")
-        getattr(lib, f"{name}_sim_set_controller")(sim, lib.gac_schedule_input, schedule)
         return schedule, keep
     handle = ffi.new_handle(source)
     _python_controller(model)
-    getattr(lib, f"{name}_sim_set_controller")(sim, getattr(lib, f"{name}_python_controller"), handle)
+    model.c.sim_set_controller(sim, model.c.python_controller, handle)
     return handle
 
 
 def set_input(model, sim, u: np.ndarray) -> None:
-    code = getattr(model.lib, f"{model.name}_sim_set_input")(sim, model._ptr(np.ascontiguousarray(u, dtype=float)))
+    code = model.c.sim_set_input(sim, model._ptr(np.ascontiguousarray(u, dtype=float)))
     if code != model.lib.GAC_OK:
         raise ValueError(f"u: {model.error_message(code)}")
-
-
-_ATTACHED = set()     # modules whose Python controller is defined
 
 
 def _python_controller(model) -> None:
     """Define NAME_python_controller (declared extern "Python" in the model's cffi declarations) once per module:
     it calls the run's Python function with the full-layout state and writes its value; an exception or a bad
     value is kept on the source and NaN written, so the C loop stops with GAC_ERR_BAD_INPUT."""
-    key = id(model.lib)
-    if key in _ATTACHED:
-        return
     ffi, nq = model.ffi, model.nq
 
-    @ffi.def_extern(name=f"{model.name}_python_controller")
     def controller(t, q, qd, u, user):
         source = ffi.from_handle(user)
         out = ffi.cast("double *", u)
@@ -172,4 +157,4 @@ def _python_controller(model) -> None:
             for i in range(source.nu):
                 out[i] = float("nan")
 
-    _ATTACHED.add(key)
+    model.c.define_callback("python_controller", controller)

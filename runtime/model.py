@@ -25,6 +25,45 @@ class ImpactError(RuntimeError):
     """The generated impact solver returned an error code (message from the C side)."""
 
 
+_DEFINED: dict[int, set] = {}      # id(compiled module) -> the callbacks defined in it
+
+
+class CInterface:
+    """The one edge between Python and a compiled model, bound from its description (codegen.interface): every
+    function NAME_<f> as ``c.<f>`` (``c.sim_init`` is NAME_sim_init), the model's descriptor NAME_model as
+    ``c.model``, new C objects of its types by their short names (``c.new("sim")``), and the definition of the
+    Python callbacks the loop calls (``c.define_callback("python_clock", function)``, once per module)."""
+
+    def __init__(self, ffi, lib, name: str):
+        self.ffi, self.lib, self.name = ffi, lib, name
+        for f in interface.ALL_FUNCTIONS + interface.CALLBACKS:
+            setattr(self, f.name, getattr(lib, f"{name}_{f.name}"))
+        self.model = getattr(lib, f"{name}_model")
+
+    def size(self, suffix: str) -> int:
+        """The model's size NAME_<suffix> (one of codegen.interface.SIZES)."""
+        if suffix not in {size.suffix for size in interface.SIZES}:
+            raise ValueError(f"suffix: one of {', '.join(size.suffix for size in interface.SIZES)}, got {suffix!r}")
+        return int(getattr(self.lib, f"{self.name.upper()}_{suffix}"))
+
+    def new(self, type_name: str, init=None):
+        """A new NAME_<type_name> (one of codegen.interface.TYPES), zeroed or from ``init``, owned by Python."""
+        if type_name not in interface.TYPES:
+            raise ValueError(f"type_name: one of {', '.join(interface.TYPES)}, got {type_name!r}")
+        return self.ffi.new(f"{self.name}_{type_name} *", init)
+
+    def define_callback(self, callback: str, function) -> None:
+        """Define the extern "Python" function NAME_<callback> (one of codegen.interface.CALLBACKS) as ``function``,
+        once per compiled module: cffi allows one definition, so ``function`` must find its run through the
+        ``user`` handle it is passed."""
+        if callback not in {f.name for f in interface.CALLBACKS}:
+            raise ValueError(f"callback: one of {', '.join(f.name for f in interface.CALLBACKS)}, got {callback!r}")
+        defined = _DEFINED.setdefault(id(self.lib), set())
+        if callback not in defined:
+            self.ffi.def_extern(name=f"{self.name}_{callback}")(function)
+            defined.add(callback)
+
+
 class CompiledModel:
     """Calls into the compiled kernels of one scene.  Arrays in and out are float64 numpy arrays, in
     the model's own coordinates: ``layout.free`` of the full layout of Eq. 13 (all of it for the general
@@ -45,7 +84,7 @@ class CompiledModel:
         self.q0, self.qd0 = self.layout.reduce(scene.q0), self.layout.reduce(scene.qd0)
         self.contacts = list(self.layout.contacts)
         self.contact_rows = list(self.layout.contact_rows)
-        self._fn = {f.name: getattr(self.lib, f"{self.name}_{f.name}") for f in interface.ALL_FUNCTIONS}
+        self.c = CInterface(self.ffi, self.lib, self.name)   # every call into the compiled model goes through it
         self._work = np.zeros(self.size("IMPACT_NWORK"))
 
     def __reduce__(self):
@@ -57,11 +96,11 @@ class CompiledModel:
 
     def size(self, suffix: str) -> int:
         """The model's size NAME_<suffix> (codegen.interface.SIZES), read from the compiled module."""
-        return int(getattr(self.lib, f"{self.name.upper()}_{suffix}"))
+        return self.c.size(suffix)
 
     def error_message(self, code: int) -> str:
         """The C library's message for a return code."""
-        return self.ffi.string(self._fn["error_message"](code)).decode()
+        return self.ffi.string(self.c.error_message(code)).decode()
 
     def parameter_problem(self, p=None) -> str:
         """The C check of a parameter vector (NAME_check_parameters, which NAME_sim_init and the FMU apply): '' if it
@@ -69,9 +108,9 @@ class CompiledModel:
         (NAME_model.parameter_info)."""
         p = self._params(p)
         bad = self.ffi.new("int *", -1)
-        if self._fn["check_parameters"](self._ptr(p), bad) == self.lib.GAC_OK:
+        if self.c.check_parameters(self._ptr(p), bad) == self.lib.GAC_OK:
             return ""
-        info = getattr(self.lib, f"{self.name}_model").parameter_info[bad[0]]
+        info = self.c.model.parameter_info[bad[0]]
         value = float(p[bad[0]])
         subnormal = " (nonzero below the smallest normal double: give 0 or a larger magnitude)" \
             if value != 0.0 and abs(value) < sys.float_info.min else ""
@@ -109,7 +148,7 @@ class CompiledModel:
 
     def _call(self, name: str, out_size: int, *inputs):
         out = np.zeros(out_size)
-        self._fn[name](*(self._ptr(a) for a in inputs), self._ptr(out))
+        getattr(self.c, name)(*(self._ptr(a) for a in inputs), self._ptr(out))
         return out
 
     # -- kernels ----------------------------------------------------------------
@@ -129,7 +168,7 @@ class CompiledModel:
     def rhs(self, t: float, x, p=None, u=None) -> np.ndarray:
         x = self._vec(x, 2 * self.nq, "x")
         out = np.zeros(2 * self.nq)
-        self._fn["rhs"](float(t), self._ptr(x), self._ptr(self._inputs(u)), self._ptr(self._params(p)),
+        self.c.rhs(float(t), self._ptr(x), self._ptr(self._inputs(u)), self._ptr(self._params(p)),
                         self._ptr(out))
         return out
 
@@ -190,7 +229,7 @@ class CompiledModel:
         q, qd = self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd")
         active = np.ascontiguousarray(active, dtype=np.int32)
         qd_plus, impulse = np.zeros(self.nq), np.zeros(max(len(active), 1))
-        solve = self._fn["impact"] if mode == "equality" else self._fn["impact_complementarity"]
+        solve = self.c.impact if mode == "equality" else self.c.impact_complementarity
         code = solve(self._ptr(q), self._ptr(qd), self._ptr(self._params(p)), len(active),
                                   self.ffi.cast("int *", self.ffi.from_buffer(active)),
                                   self._ptr(qd_plus), self._ptr(impulse), self._ptr(self._work))
@@ -206,7 +245,7 @@ class CompiledModel:
         q, qd = self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd")
         active = np.ascontiguousarray(active, dtype=np.int32)
         qdd, lam = np.zeros(self.nq), np.zeros(max(len(active), 1))
-        code = self._fn["constrained_dynamics"](self._ptr(q), self._ptr(qd), self._ptr(self._inputs(u)),
+        code = self.c.constrained_dynamics(self._ptr(q), self._ptr(qd), self._ptr(self._inputs(u)),
                                                 self._ptr(self._params(p)), len(active),
                                                 self.ffi.cast("int *", self.ffi.from_buffer(active)),
                                                 self._ptr(qdd), self._ptr(lam), self._ptr(self._work))

@@ -14,6 +14,7 @@ Codes and sizes come from the compiled module (``lib.GAC_...``), never from head
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -87,7 +88,7 @@ class SimulationResult:
     t: np.ndarray                 # sample times (s)
     q: np.ndarray                 # (len(t), nq) configuration samples, layout of Eq. 13
     qd: np.ndarray                # (len(t), nq) velocity samples (pre-impact at an impact time)
-    impacts: list[Impact]
+    impacts: Impacts              # the Impact records in time order (or only their count: keep_impacts=False)
     t_final: float
     q_final: np.ndarray
     qd_final: np.ndarray
@@ -108,18 +109,15 @@ class SimulationResult:
     energy_damping_loss: float = 0.0   # J: energy the joint dampers took, int C theta_dot^2 dt (>= 0)
     energy_friction_loss: float = 0.0  # J: energy sliding friction took at resting contacts (>= 0)
     u: np.ndarray | None = None        # (len(t), nu) the inputs at the sample times (None: no inputs)
-    impact_counts: tuple | None = None # keep_impacts=False: (impacts, first impact time, energy they took)
 
     @property
     def n_impacts(self) -> int:
-        return len(self.impacts) if self.impact_counts is None else self.impact_counts[0]
+        return len(self.impacts)
 
     @property
     def t_first_impact(self) -> float:
         """s; NaN when there was none."""
-        if self.impact_counts is None:
-            return self.impacts[0].t if self.impacts else float("nan")
-        return self.impact_counts[1] if self.impact_counts[0] else float("nan")
+        return self.impacts.t_first
 
     @property
     def success(self) -> bool:
@@ -129,9 +127,7 @@ class SimulationResult:
     def energy_impact_loss(self) -> float:
         """J: the energy the impacts took, sum of (E before - E after) over the impacts (>= 0; it includes
         what landings on a wall took, Impact.energy_rest)."""
-        if self.impact_counts is not None:
-            return self.impact_counts[2]
-        return float(sum(i.energy_before - i.energy_after for i in self.impacts))
+        return self.impacts.energy_loss
 
     @property
     def energy_residual(self) -> float:
@@ -233,79 +229,146 @@ def _shown(rows: list, limit: int | None, what: str):
     yield from enumerate(rows[len(rows) - tail:], start=len(rows) - tail + 1)
 
 
-def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "dopri5", rtol: float = DEFAULT_RTOL,
-             atol: float = DEFAULT_ATOL, dt: float | None = None, t_eval=None, h_max: float = 0.0,
-             contact_tol: float = 1e-6, event_samples: int = 4, event_tol: float = 1e-13,
-             max_impacts: int = 10000, max_steps: int = 10_000_000, rest_height: float | None = None,
-             zeno_impacts: int = 20, p=None, q0=None, qd0=None, u=None,
-             max_wall_time: float | None = None, charts: bool = True, check_start: bool = True,
-             keep_impacts: bool = True, progress=None) -> SimulationResult:
+# The options of the C loop (gac_options), set by simulate(**options) under these names.  Their defaults are the C
+# library's (gac_default_options) and their ranges its own (gac_check_options): one rule for Python, the standalone
+# program and the FMU.  None leaves an option at its default.
+LOOP_OPTIONS = {
+    "rtol": "relative tolerance of the adaptive methods",
+    "atol": "absolute tolerance of the adaptive methods (per coordinate)",
+    "dt": "rk4: the step (s); adaptive methods: the first step (None: automatic)",
+    "h_max": "the largest step (s; 0: unbounded)",
+    "event_samples": "interpolant samples per step searched for wall crossings",
+    "event_tol": "time tolerance of event location (s)",
+    "contact_tol": "approaching contacts within this gap (m) of their wall join a simultaneous impact",
+    "max_steps": "steps allowed between two events (impacts, contact changes; 0: unbounded)",
+    "max_impacts": "the run stops after this many impacts (impact accumulation; 0: unbounded)",
+    "max_wall_time": "s of wall time the run may take (None: unbounded)",
+    "rest_height": "m: a bounce rising less than this ends in resting contact (None: 10 contact_tol; 0: never)",
+    "zeno_impacts": "a contact rests after this many impacts at shrinking intervals (0: never)",
+}
+_INTEGER_OPTIONS = ("event_samples", "max_steps", "max_impacts", "zeno_impacts")
+
+
+def _loop_options(model: CompiledModel, method: str, given: dict):
+    """The C options of a run: the library's defaults, ``method`` and the given options, checked by the library."""
+    unknown = sorted(set(given) - set(LOOP_OPTIONS))
+    _check(not unknown, unknown[0] if unknown else "", "no such option of simulate(); the loop's options are "
+           + ", ".join(LOOP_OPTIONS))
+    _check(method in METHODS, "method", f"must be one of {METHODS}, got {method!r}")
+    opt = model.c.new("options")
+    model.c.default_options(opt)
+    opt.method = {"rk4": model.lib.GAC_METHOD_RK4, "dopri5": model.lib.GAC_METHOD_DOPRI5,
+                  "dop853": model.lib.GAC_METHOD_DOP853}[method]
+    for name, value in given.items():
+        if value is None:
+            continue
+        if name in _INTEGER_OPTIONS:
+            whole = not isinstance(value, bool) and isinstance(value, (int, np.integer, float, np.floating)) \
+                and np.isfinite(value) and int(value) == value
+            _check(whole and abs(value) < 2 ** 31, name, f"must be an integer ({LOOP_OPTIONS[name]}), got {value!r}")
+            value = int(value)
+        else:
+            value = _real(value, name)
+        setattr(opt, name, value)
+    field_text = model.ffi.new("const char **")
+    if model.lib.gac_check_options(opt, field_text) != model.lib.GAC_OK:
+        field_name, rule = model.ffi.string(field_text[0]).decode().split(": ", 1)
+        raise ValueError(f"{field_name}: {rule}, got {given.get(field_name)!r}")
+    return opt
+
+
+class Impacts(Sequence):
+    """The impacts of a run in time order: their count, the first one's time and the energy they took, always; the
+    records themselves (Impact rows) unless the run was told not to keep them (simulate(keep_impacts=False), for
+    studies of many runs: then only len(), t_first and energy_loss are there)."""
+
+    def __init__(self, kept: bool = True):
+        self.kept = kept
+        self._rows: list[Impact] = []
+        self.count = 0
+        self.t_first = float("nan")    # s; NaN when there was none
+        self.energy_loss = 0.0         # J: sum of (energy_before - energy_after)
+
+    @classmethod
+    def of(cls, rows: list[Impact]) -> "Impacts":
+        """The kept impacts of a list of records (a run assembled from parts)."""
+        impacts = cls()
+        for row in rows:
+            impacts._keep(row)
+        return impacts
+
+    def _keep(self, row: Impact) -> None:
+        if self.count == 0:
+            self.t_first = row.t
+        self.count += 1
+        self.energy_loss += row.energy_before - row.energy_after
+        self._rows.append(row)
+
+    def add(self, model: CompiledModel, record) -> None:
+        """Count the impact the C loop just applied (its post-conditions were checked there), and keep it."""
+        if self.count == 0:
+            self.t_first = float(record.t)
+        self.count += 1
+        self.energy_loss += float(record.energy_before) - float(record.energy_after)
+        if self.kept:
+            self._rows.append(_read_impact(model, record))
+
+    def __len__(self) -> int:
+        return self.count
+
+    def __getitem__(self, index):
+        if not self.kept:
+            raise IndexError(f"impacts: this run kept only their count ({self.count}), first time and energy "
+                             "(simulate(keep_impacts=False)); run with keep_impacts=True for the records")
+        return self._rows[index]
+
+    def __eq__(self, other) -> bool:
+        """Equal to a list or tuple of Impact records (or another Impacts) with the same records."""
+        if isinstance(other, (list, tuple, Impacts)):
+            return len(self) == len(other) and all(a == b for a, b in zip(self, other))
+        return NotImplemented
+
+    __hash__ = None
+
+    def __repr__(self) -> str:
+        return f"Impacts({self.count} impact(s){'' if self.kept else ', records not kept'})"
+
+
+def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "dopri5", t_eval=None, *,
+             p=None, q0=None, qd0=None, u=None, progress=None, charts: bool = True, check_start: bool = True,
+             keep_impacts: bool = True, **options) -> SimulationResult:
     """Simulate the scene's hybrid dynamics from its initial state over [0, t_end].
 
     method        'dopri5' (adaptive Dormand-Prince 5(4), rtol/atol), 'dop853' (adaptive 8(5,3)),
                   or 'rk4' (fixed step dt, as the paper)
     t_eval        sample times (ascending, within [0, t_end]); default: every 1 ms and t_end
-    contact_tol   approaching contacts within this gap (m) of their wall join a simultaneous impact
-    event_samples interpolant samples per step searched for wall crossings
-    max_impacts   stop with status -1 beyond this many impacts (impact accumulation)
-    rest_height   m: at an impact on a wall with e < 1, a contact whose bounce would rise less than this
-                  (v+^2 <= 2 a rest_height, a its normal acceleration towards the wall) rests on the wall:
-                  persistent frictionless contact, released when its force would pull.
-                  None (default): 10 contact_tol; 0: never by this rule
-    zeno_impacts  a contact becomes persistent after this many impacts at shrinking intervals (0: never)
-    max_steps     integrator steps allowed between two events (impacts, contact changes); 0: unbounded
-    max_wall_time s: stop with status -1 once the run has taken this long (None: unbounded); the message
-                  says where the time went (mean step, the coordinate that limits the step).  The C loop looks
-                  at the clock (time.perf_counter) every GAC_LOOK_STEPS steps and at every event
-    progress      progress(t, n_steps, n_impacts), called by the C loop as often; returning False stops the run
-                  (status -1, "stopped by the progress callback"), as does an exception in it
+    p, q0, qd0    override the scene's parameters (a vector in the order of model.parameter_names, or a dict
+                  {name: value} of the ones that change) and initial state (q0, qd0 in the full layout of Eq. 13)
+    u             the inputs of a driven model (runtime.inputs): None (0), constant values (one per input, in
+                  the order of model.input_names), an InputSchedule (values at times, held or linear; evaluated
+                  in C, each of its times a step boundary), or a function u(t, q, qd) of the full-layout state,
+                  called back from C at every stage (slower: a Python call per stage)
+    progress      progress(t, n_steps, n_impacts), called by the C loop every GAC_LOOK_STEPS steps and at every
+                  event; returning False stops the run (status -1, "stopped by the progress callback"), as does an
+                  exception in it
     charts        a run that comes near the gimbal lock of the base chart (the C loop stops with
                   GAC_ERR_GIMBAL_LOCK before it) is run again with chart switching (runtime.charts) and that
                   result returned (a ChartResult, samples in the scene's coordinates); False: stop there
     check_start   refuse q0/p overrides that put a contact point outside its wall beyond round-off (False:
                   a restart from a state the loop itself produced, with its resting contacts held at
                   their landing gaps)
-    p, q0, qd0    override the scene's parameters (a vector in the order of model.parameter_names, or a dict
-                  {name: value} of the ones that change) and initial state (q0, qd0 in the full layout of Eq. 13)
-    u             the inputs of a driven model (runtime.inputs): None (0), constant values (one per input, in
-                  the order of model.input_names), an InputSchedule (values at times, held or linear; both
-                  evaluated in C, the loop stopping at each time), or a function u(t, q, qd) of the full-layout
-                  state, called back from C at every stage (slower: a Python call per stage)
-    keep_impacts  False: the whole run in one C call (NAME_sim_run), returning counts (n_impacts, t_first_impact,
-                  energy_impact_loss) instead of Impact records, for studies of many runs; the impacts' post-
-                  conditions are the C loop's own (GAC_ERR_IMPACT_ACCURACY), as always.  Needs constant inputs and
-                  no samples after t = 0
+    keep_impacts  False: count the impacts (len(result.impacts), t_first_impact, energy_impact_loss) without
+                  keeping their records, for studies of many runs
+    **options     the C loop's options (LOOP_OPTIONS: rtol, atol, dt, h_max, event_samples, event_tol, contact_tol,
+                  max_steps, max_impacts, max_wall_time, rest_height, zeno_impacts), with the C library's defaults
+                  and ranges; the budgets stop the run with status -1 and a message that says where the time went
     Samples, final state and impact states are returned in the full layout of Eq. 13 whatever the model.
     """
     model = scene if isinstance(scene, CompiledModel) else load_model(scene)
-    ffi, lib, name = model.ffi, model.lib, model.name
-    _check(method in METHODS, "method", f"must be one of {METHODS}, got {method!r}")
+    ffi, lib, c = model.ffi, model.lib, model.c
     t_end = _real(t_end, "t_end")
     _check(np.isfinite(t_end) and t_end >= 0, "t_end", f"must be a finite time >= 0 s, got {t_end!r}")
-    if method == "rk4":
-        dt = None if dt is None else _real(dt, "dt")
-        _check(dt is not None and np.isfinite(dt) and dt > 0, "dt", f"rk4 needs a step dt > 0 s, got {dt!r}")
-    else:
-        rtol, atol = _real(rtol, "rtol"), _real(atol, "atol")
-        _check(RTOL_MIN <= rtol < 1, "rtol", f"must be in [{RTOL_MIN:g}, 1) (below {RTOL_MIN:g} round-off stops "
-               f"the steps), got {rtol!r}")
-        _check(0 < atol < 1e300, "atol", f"must be in (0, 1e300) (absolute error per coordinate), got {atol!r}")
-        dt = None if dt is None else _real(dt, "dt")
-        _check(dt is None or (np.isfinite(dt) and dt > 0), "dt", f"first step must be > 0 s, got {dt!r}")
-    contact_tol, event_tol, h_max = _real(contact_tol, "contact_tol"), _real(event_tol, "event_tol"), _real(h_max, "h_max")
-    _check(np.isfinite(contact_tol) and contact_tol >= 0, "contact_tol", f"must be a finite gap >= 0 m, got {contact_tol!r}")
-    max_steps = _integer(max_steps, "max_steps", 0, "0: unbounded")
-    max_impacts = _integer(max_impacts, "max_impacts", 1, "a run stops with status -1 after this many impacts")
-    max_wall_time = None if max_wall_time is None else _real(max_wall_time, "max_wall_time")
-    _check(max_wall_time is None or (np.isfinite(max_wall_time) and max_wall_time > 0), "max_wall_time",
-           f"must be a time > 0 s (or None: unbounded), got {max_wall_time!r}")
-    event_samples = _integer(event_samples, "event_samples", 1, "interpolant samples searched per step")
-    _check(np.isfinite(event_tol) and event_tol > 0, "event_tol", f"must be a finite time > 0 s, got {event_tol!r}")
-    _check(h_max >= 0, "h_max", f"must be >= 0 s (0: unbounded), got {h_max!r}")
-    rest_height = None if rest_height is None else _real(rest_height, "rest_height")
-    _check(rest_height is None or (np.isfinite(rest_height) and rest_height >= 0), "rest_height",
-           f"must be a finite height >= 0 m (or None: 10 contact_tol), got {rest_height!r}")
-    zeno_impacts = _integer(zeno_impacts, "zeno_impacts", 0, "0: off")
+    opt = _loop_options(model, method, options)
 
     nq, nx = model.nq, 2 * model.nq
     layout = model.layout
@@ -326,98 +389,58 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         _check_inside(model, q, p, "q0" if q0 is not None else "initial.q")
     t_eval = sample_times(t_eval, t_end)
 
-    opt = ffi.new(f"{name}_options *")
-    getattr(lib, f"{name}_default_options")(opt)
-    opt.method = getattr(lib, f"GAC_METHOD_{method.upper()}")
-    opt.dt = dt if dt is not None else 0.0
-    opt.rtol, opt.atol, opt.h_max = rtol, atol, h_max
-    opt.event_samples, opt.event_tol, opt.contact_tol = int(event_samples), event_tol, contact_tol
-    opt.max_steps = int(max_steps)
-    opt.max_wall_time = 0.0 if max_wall_time is None else float(max_wall_time)
-    opt.rest_height = -1.0 if rest_height is None else float(rest_height)
-    opt.zeno_impacts = int(zeno_impacts)
-    sim = ffi.new(f"{name}_sim *")
+    sim = c.new("sim")
     state = sim.base          # the library's state (gac_sim): t, x, counters; its arrays live in *sim
-    ptr = model._ptr
-    code = getattr(lib, f"{name}_sim_init")(sim, 0.0, ptr(q), ptr(qd), ptr(p), opt)
+    code = c.sim_init(sim, 0.0, model._ptr(q), model._ptr(qd), model._ptr(p), opt)
     if code < 0:
         raise ValueError(f"simulate: {model.error_message(code)}")
     keep_alive = attach(model, sim, source)   # noqa: F841  (the schedule or handle the C loop points at)
-    watch = _watch(model, sim, max_wall_time, progress)   # noqa: F841  (the clock and progress handles)
+    watch = _watch(model, sim, opt.max_wall_time, progress)   # noqa: F841  (the clock and progress handles)
 
+    # the loop: one C call per impact or change of the resting contacts, up to t_end or the loop's stop
     x_eval = np.zeros((len(t_eval), nx))
     i_eval = ffi.new("int *", 0)
     while i_eval[0] < len(t_eval) and t_eval[i_eval[0]] <= 0.0:      # samples at the start (as sim_init left it)
         x_eval[i_eval[0]] = ffi.unpack(state.x, nx)
         i_eval[0] += 1
-    record = ffi.new(f"{name}_impact_record *")
+    record = c.new("impact_record")
     rec = record.base         # the library's record (gac_impact_record); its arrays live in *record
-    advance = getattr(lib, f"{name}_sim_advance")
-    SIM_END, SIM_IMPACT, SIM_CONTACT = lib.GAC_SIM_END, lib.GAC_SIM_IMPACT, lib.GAC_SIM_CONTACT
-    contact_events: list[ContactEvent] = []
     t_eval_ptr = ffi.cast("double *", ffi.from_buffer(t_eval))
     x_eval_ptr = ffi.cast("double *", ffi.from_buffer(x_eval))
     T0, V0 = model.energy(q, qd, p)
-    energy_initial = T0 + V0
-    impacts: list[Impact] = []
+    impacts = Impacts(kept=keep_impacts)
+    contact_events: list[ContactEvent] = []
     segment_t, segment_steps = float(state.t), 0       # the last event: max_steps counts from it
-    status, message = 0, "reached t_end"
-    stops = source.breakpoints(t_end) + [t_end]   # the loop stops where a schedule jumps or bends
-    stop = 0
-    summary = None
-    if not keep_impacts:
-        _check(len(stops) == 1 and source.kind == "constant" and (len(t_eval) == 0 or t_eval[-1] <= 0.0),
-               "keep_impacts", "False needs constant inputs and no samples after t = 0")
-        summary = ffi.new("gac_run_summary *")
-        code = getattr(lib, f"{name}_sim_run")(sim, float(t_end), int(max_impacts), record, summary)
-        if code == SIM_IMPACT:
-            status, message = -1, (f"stopped after {summary.n_impacts} impacts at t = {float(state.t):.12g} s: the "
-                                   f"max_impacts limit of {max_impacts} (raise max_impacts to go on)")
-        elif code != SIM_END:
-            status, message = -1, _stop_message(model, state, code, segment_t, segment_steps, max_steps, max_wall_time,
-                                                dt, summary.n_impacts)
-    while keep_impacts:
-        code = advance(sim, float(stops[stop]), t_eval_ptr, len(t_eval), i_eval, x_eval_ptr, record)
-        if code == SIM_END and stop + 1 < len(stops):
-            if source.kind == "hold":
-                set_input(model, sim, source.value_at(stops[stop]))
-            stop += 1
-            continue
-        if code == SIM_END:
-            break
-        if code in (SIM_IMPACT, SIM_CONTACT):
+    while True:
+        code = c.sim_advance(sim, float(t_end), t_eval_ptr, len(t_eval), i_eval, x_eval_ptr, record)
+        if code == lib.GAC_SIM_IMPACT:
+            impacts.add(model, rec)
+        if code in (lib.GAC_SIM_IMPACT, lib.GAC_SIM_CONTACT):
             contact_events += _read_contact_events(model, rec)
             segment_t, segment_steps = float(state.t), int(state.n_steps) + int(state.n_rejected)
-        if code == SIM_CONTACT:
             continue
-        if code == lib.GAC_ERR_BAD_INPUT and source.error is not None:
-            raise source.error
-        if code != SIM_IMPACT:
-            status = -1
-            message = _stop_message(model, state, code, segment_t, segment_steps, max_steps, max_wall_time, dt,
-                                    len(impacts))
-            break
-        impacts.append(_read_impact(model, rec))        # its post-conditions were checked in C
-        if len(impacts) >= max_impacts:
-            status = -1
-            message = (f"stopped after {len(impacts)} impacts at t = {impacts[-1].t:.12g} s: the max_impacts limit of "
-                       f"{max_impacts} (raise max_impacts to go on)")
-            break
+        break
+    if code == lib.GAC_ERR_BAD_INPUT and source.error is not None:
+        raise source.error
+    status, message = (0, "reached t_end") if code == lib.GAC_SIM_END else \
+        (-1, _stop_message(model, state, code, segment_t, segment_steps, len(impacts)))
     if charts and code == lib.GAC_ERR_GIMBAL_LOCK and (model.scene.driven or model.scene.stops()):
         message += " (the second base chart is not available for a chain with inputs, springs, dampers or limits)"
     elif charts and code == lib.GAC_ERR_GIMBAL_LOCK:
         from .charts import simulate_with_charts
+        given = {name: getattr(opt, name) for name in LOOP_OPTIONS}
+        given["dt"] = given["dt"] or None
+        given["max_wall_time"] = None if not opt.max_wall_time else max(opt.max_wall_time - float(state.wall_time), 1e-3)
+        given["rest_height"] = None if opt.rest_height < 0 else given["rest_height"]
         return simulate_with_charts(
             model.scene, t_end, t_eval=t_eval, p=None if p is model.p else p,
             q0=None if q0 is None else layout.expand(q), qd0=None if qd0 is None else layout.expand(qd, velocity=True),
-            max_impacts=max_impacts, max_steps=max_steps, method=method, rtol=rtol, atol=atol, dt=dt,
-            h_max=h_max, contact_tol=contact_tol, event_samples=event_samples, event_tol=event_tol,
-            rest_height=rest_height, zeno_impacts=zeno_impacts,
-            max_wall_time=None if max_wall_time is None else max(max_wall_time - float(state.wall_time), 1e-3),
-            progress=progress)
+            method=method, progress=progress, **given)
+
+    # the result, in the full layout of Eq. 13
     x_final = np.array(ffi.unpack(state.x, nx))
     n = i_eval[0]
-    accuracy = impact_warnings(impacts, model, p)
+    accuracy = impact_warnings(impacts, model, p) if keep_impacts else []
     warnings = model.scene.warnings + accuracy + friction_warnings(model, p, state, method)
     q_samples, qd_samples = layout.expand(x_eval[:n, :nq]), layout.expand(x_eval[:n, nq:], velocity=True)
     u_samples = None
@@ -428,11 +451,9 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         t=t_eval[:n].copy(), q=q_samples, qd=qd_samples, u=u_samples,
         energy_input_work=float(state.work_input), energy_damping_loss=float(state.work_damping),
         energy_friction_loss=float(state.work_friction),
-        impact_counts=None if summary is None else (int(summary.n_impacts), float(summary.t_first_impact),
-                                                    float(summary.energy_impact_loss)),
         impacts=impacts, t_final=float(state.t), q_final=layout.expand(x_final[:nq]),
         qd_final=layout.expand(x_final[nq:], velocity=True),
-        energy_initial=energy_initial, energy_final=sum(model.energy(x_final[:nq], x_final[nq:], p)),
+        energy_initial=T0 + V0, energy_final=sum(model.energy(x_final[:nq], x_final[nq:], p)),
         n_steps=int(state.n_steps), n_rejected=int(state.n_rejected), n_rhs=int(state.n_rhs), status=status,
         message=message + (f"; {len(accuracy)} impact(s) of limited accuracy (see warnings)" if accuracy else ""),
         method=method, contact_events=contact_events, warnings=warnings,
@@ -440,10 +461,16 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                          float(state.work_friction)),
         persistent_final=[(model.contacts[state.active[k]][0], model.contacts[state.active[k]][1].name)
                           for k in range(state.nactive)],
-        options={"rtol": rtol, "atol": atol, "dt": dt, "contact_tol": contact_tol, "event_samples": event_samples,
-                 "event_tol": event_tol, "h_max": h_max, "t_end": t_end, "rest_height": rest_height,
-                 "zeno_impacts": zeno_impacts, "max_steps": max_steps, "max_impacts": max_impacts,
-                 "max_wall_time": max_wall_time})
+        options={"t_end": t_end, **{name: _option_value(opt, name) for name in LOOP_OPTIONS}})
+
+
+def _option_value(opt, name: str):
+    """An option as the run used it, None where the C value means 'automatic' or 'unbounded' (dt, rest_height,
+    max_wall_time)."""
+    value = getattr(opt, name)
+    if name in ("dt", "max_wall_time") and value == 0.0 or name == "rest_height" and value < 0.0:
+        return None
+    return int(value) if name in _INTEGER_OPTIONS else float(value)
 
 
 def weight_scale(scene: Scene, p: np.ndarray) -> float:
@@ -651,12 +678,15 @@ def _step_diagnosis(model: CompiledModel, sim, t_from: float, steps: int) -> str
             "max_steps / max_wall_time or loosen rtol/atol")
 
 
-def _stop_message(model: CompiledModel, sim, code: int, segment_t: float, segment_steps: int, max_steps: int,
-                  max_wall_time: float | None, dt: float | None, n_impacts: int) -> str:
+def _stop_message(model: CompiledModel, sim, code: int, segment_t: float, segment_steps: int, n_impacts: int) -> str:
     """The result's message for a run the C loop stopped with ``code``: the loop's reason, and for the budgets and
     RK4's stability rule what the run was doing (the loop decided; this only reports)."""
     lib = model.lib
+    max_steps, max_wall_time, dt = int(sim.opt.max_steps), float(sim.opt.max_wall_time), float(sim.opt.dt)
     where = f"at t = {float(sim.t):.12g} s"
+    if code == lib.GAC_ERR_MAX_IMPACTS:
+        return (f"stopped after {n_impacts} impacts {where}: the max_impacts limit of {int(sim.opt.max_impacts)} "
+                "(raise max_impacts to go on)")
     steps = int(sim.n_steps) + int(sim.n_rejected) - segment_steps
     if code == lib.GAC_ERR_MAX_STEPS:
         return (f"{where}: maximum number of steps reached ({int(max_steps)} steps since t = {segment_t:.6g} s, the "
@@ -675,30 +705,27 @@ def _stop_message(model: CompiledModel, sim, code: int, segment_t: float, segmen
     return message
 
 
-_WATCHED = set()      # modules whose Python clock and progress callbacks are defined
-
-
-def _watch(model: CompiledModel, sim, max_wall_time: float | None, progress):
+def _watch(model: CompiledModel, sim, max_wall_time: float, progress):
     """Give the C loop time.perf_counter as its clock (for max_wall_time) and ``progress`` as its progress callback
     (progress(t, n_steps, n_impacts) returning False stops the run).  Returns the handle the loop points at."""
-    ffi, lib, name = model.ffi, model.lib, model.name
-    if id(lib) not in _WATCHED:
-        @ffi.def_extern(name=f"{name}_python_clock")
-        def clock(user):
-            return time.perf_counter()
+    ffi, c = model.ffi, model.c
 
-        @ffi.def_extern(name=f"{name}_python_progress")
-        def report(t, n_steps, n_impacts, user):
-            callback = ffi.from_handle(user)
-            try:
-                return int(callback(float(t), int(n_steps), int(n_impacts)) is False)
-            except BaseException:             # noqa: BLE001 - an error in the callback stops the run
-                return 1
-        _WATCHED.add(id(lib))
-    if max_wall_time is not None:
-        getattr(lib, f"{name}_sim_set_clock")(sim, getattr(lib, f"{name}_python_clock"), ffi.NULL)
+    def clock(user):
+        return time.perf_counter()
+
+    def report(t, n_steps, n_impacts, user):
+        callback = ffi.from_handle(user)
+        try:
+            return int(callback(float(t), int(n_steps), int(n_impacts)) is False)
+        except BaseException:             # noqa: BLE001 - an error in the callback stops the run
+            return 1
+
+    c.define_callback("python_clock", clock)
+    c.define_callback("python_progress", report)
+    if max_wall_time > 0.0:
+        c.sim_set_clock(sim, c.python_clock, ffi.NULL)
     if progress is None:
         return None
     handle = ffi.new_handle(progress)
-    getattr(lib, f"{name}_sim_set_progress")(sim, getattr(lib, f"{name}_python_progress"), handle)
+    c.sim_set_progress(sim, c.python_progress, handle)
     return handle

@@ -83,6 +83,8 @@
 #define GAC_ERR_WALL_TIME        -25   /* the run used opt.max_wall_time seconds of its clock (gac_sim_set_clock)
                                           since gac_sim_init or the last gac_sim_set_clock */
 #define GAC_ERR_STOPPED          -26   /* the progress callback (gac_sim_set_progress) asked the run to stop */
+#define GAC_ERR_MAX_IMPACTS      -27   /* opt.max_impacts impacts applied since gac_sim_init: the run stops before
+                                          the next step (raise it to go on, then gac_sim_advance again) */
 #define GAC_SIM_END      1    /* reached t_end */
 #define GAC_SIM_IMPACT   2    /* stopped at an impact, already applied; see the record (which may also list
                                  contacts made persistent or released by the impact) */
@@ -377,6 +379,17 @@ const char *gac_error_message(int code);
  * (opt.max_wall_time of the run's clock used), GAC_ERR_STOPPED (the progress callback said stop).
  */
 
+/* An input schedule: values u_k (nu each) at times t_k (n >= 1, strictly increasing), held (linear = 0: u(t) =
+ * u_k for t_k <= t < t_k+1) or interpolated linearly between the times (linear = 1); u_0 before t_0 and
+ * u_(n-1) after t_(n-1).  The caller owns both arrays. */
+typedef struct {
+    int n;                /* number of times */
+    int nu;               /* inputs per time */
+    const double *t;      /* [n] times (s) */
+    const double *u;      /* [n * nu] values, row k at u + k nu */
+    int linear;           /* 0: held, 1: linear between the times */
+} gac_schedule;
+
 typedef struct {
     int method;            /* GAC_METHOD_RK4, GAC_METHOD_DOPRI5 (default) or GAC_METHOD_DOP853 */
     double dt;             /* RK4 step (s); for the adaptive methods the first step, 0 = automatic */
@@ -395,6 +408,9 @@ typedef struct {
     double max_wall_time;  /* s of the run's clock (gac_sim_set_clock) allowed since gac_sim_init or the last
                               gac_sim_set_clock, looked at every GAC_LOOK_STEPS steps and at the start of every
                               advance: GAC_ERR_WALL_TIME beyond it.  0 (default): unbounded */
+    long max_impacts;      /* impacts allowed since gac_sim_init: once applied, gac_sim_advance returns
+                              GAC_ERR_MAX_IMPACTS before the next step (impact accumulation; default 10000).
+                              0: unbounded */
 } gac_options;
 
 /* What gac_sim_advance reports.  Scalars are fields; the arrays (nq entries each) point into the arrays
@@ -455,6 +471,7 @@ typedef struct {
     /* private: the model, integrator state and scratch (pointers into dwork / iwork) */
     const gac_model *model;
     gac_controller controller;   /* NULL: the held inputs u */
+    const gac_schedule *schedule; /* NULL: none (gac_sim_set_schedule) */
     void *controller_data;
     gac_clock clock;             /* NULL: clock() */
     void *clock_data;
@@ -484,6 +501,11 @@ typedef struct {
 
 /* Default options (DOPRI5, rtol 1e-8, atol 1e-10, persistent contact on).  opt NULL: nothing is done. */
 void gac_default_options(gac_options *opt);
+
+/* GAC_OK if every option is in its range, else GAC_ERR_BAD_OPTION with *field (if field is not NULL) a static
+ * string naming the first option out of range and what it allows ("rtol: must be within [1e-14, 1) ..."); NULL opt:
+ * GAC_ERR_NULL_ARGUMENT.  gac_sim_init applies it. */
+int gac_check_options(const gac_options *opt, const char **field);
 
 /* Start a simulation of model m at time t0 from (q, qd) with parameters p (copied into dwork), inputs 0 and
  * no controller.  Contacts
@@ -523,21 +545,17 @@ int gac_sim_set_clock(gac_sim *sim, gac_clock clock, void *user);
  * nonzero return stops the run with GAC_ERR_STOPPED.  Returns GAC_OK or GAC_ERR_NULL_ARGUMENT (sim NULL). */
 int gac_sim_set_progress(gac_sim *sim, gac_progress progress, void *user);
 
-/* An input schedule: values u_k (nu each) at times t_k (n >= 1, strictly increasing), held (linear = 0: u(t) =
- * u_k for t_k <= t < t_k+1) or interpolated linearly between the times (linear = 1); u_0 before t_0 and
- * u_(n-1) after t_(n-1).  The caller owns both arrays. */
-typedef struct {
-    int n;                /* number of times */
-    int nu;               /* inputs per time */
-    const double *t;      /* [n] times (s) */
-    const double *u;      /* [n * nu] values, row k at u + k nu */
-    int linear;           /* 0: held, 1: linear between the times */
-} gac_schedule;
-
-/* A gac_controller giving the schedule's value at t (user: a const gac_schedule *).  For exact results give
- * it with gac_sim_set_controller and end each gac_sim_advance at the schedule's times, so that a jump or a
- * kink falls on a step boundary (a held schedule can as well be given by gac_sim_set_input at its times). */
+/* A gac_controller giving the schedule's value at t (user: a const gac_schedule *).  With gac_sim_set_controller
+ * the loop does not know the schedule's times; gac_sim_set_schedule is the exact way to drive a run by it. */
 void gac_schedule_input(double t, const double *q, const double *qd, double *u, void *schedule);
+
+/* Drive the run by the schedule s (checked by gac_schedule_check; the caller keeps it alive) from now on: every
+ * gac_sim_advance ends a step at each of the schedule's times, so that a jump (held) or a kink (linear) falls on a
+ * step boundary, and starts the next step from a fresh derivative with the resting contacts re-checked; a held
+ * schedule's value is held over each interval [t_k, t_k+1) (gac_sim_set_input at t_k), a linear one is evaluated
+ * at every stage.  s NULL: no schedule (the inputs stay as they are).  A later gac_sim_set_controller replaces it.
+ * Returns GAC_OK, GAC_ERR_NULL_ARGUMENT (sim NULL), or the error of gac_schedule_check (nothing changed). */
+int gac_sim_set_schedule(gac_sim *sim, const gac_schedule *s);
 
 /* GAC_OK if the schedule is usable: pointers set, n >= 1, times finite and strictly increasing
  * (GAC_ERR_BAD_OPTION), values finite (GAC_ERR_BAD_INPUT). */
@@ -574,11 +592,10 @@ typedef struct {
     long n_contact_events;       /* GAC_SIM_CONTACT stops (resting contacts made or released) */
 } gac_run_summary;
 
-/* Run to t_end in one call: gac_sim_advance until GAC_SIM_END, an error, or max_impacts impacts (> 0; then
- * GAC_SIM_IMPACT is returned), counting into summary (zeroed first).  For studies of many runs: the whole run
- * stays in C.  record: a bound record (not NULL), overwritten at each impact.  Returns GAC_SIM_END,
- * GAC_SIM_IMPACT (max_impacts reached) or an error (< 0). */
-int gac_sim_run(gac_sim *sim, double t_end, long max_impacts, gac_impact_record *record, gac_run_summary *summary);
+/* Run to t_end in one call: gac_sim_advance until GAC_SIM_END or an error (GAC_ERR_MAX_IMPACTS once
+ * opt.max_impacts impacts were applied), counting into summary (zeroed first).  For studies of many runs: the whole run
+ * stays in C.  record: a bound record (not NULL), overwritten at each impact.  Returns GAC_SIM_END or an error (< 0). */
+int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_summary *summary);
 
 #ifdef __cplusplus
 }

@@ -173,7 +173,7 @@ const char *gac_error_message(int code)
     case GAC_ERR_SINGULAR_IMPACT: return "impact matrix J I_f^-1 J^T is singular: the active contact constraints are dependent";
     case GAC_ERR_LCP: return "impact complementarity problem has no solution (too many or degenerate contacts)";
     case GAC_ERR_GIMBAL_LOCK: return "gimbal lock: theta_0 is too close to the singularity of the base chart (|det E| below sqrt(16 eps / tol)) for results to the tolerance; continue on a second chart";
-    case GAC_ERR_BAD_OPTION: return "bad option or argument: allowed are method RK4, DOPRI5 or DOP853; RK4: 0 < dt < 1e300; DOPRI5, DOP853: 1e-14 (GAC_RTOL_MIN) <= rtol < 1, 0 < atol < 1e300, dt >= 0; h_max >= 0, event_samples >= 1, event_tol > 0, contact_tol >= 0, max_steps >= 0, rest_height < 1e300 (not NaN), zeno_impacts >= 0, 0 <= max_wall_time < 1e300; t0, q and qd finite; sim_advance: t_end finite and >= the current time, n_eval >= 0, 0 <= *i_eval <= n_eval";
+    case GAC_ERR_BAD_OPTION: return "bad option or argument: allowed are method RK4, DOPRI5 or DOP853; RK4: 0 < dt < 1e300; DOPRI5, DOP853: 1e-14 (GAC_RTOL_MIN) <= rtol < 1, 0 < atol < 1e300, dt >= 0; h_max >= 0, event_samples >= 1, event_tol > 0, contact_tol >= 0, max_steps >= 0, rest_height < 1e300 (not NaN), zeno_impacts >= 0, 0 <= max_wall_time < 1e300, max_impacts >= 0 (gac_check_options names the option); t0, q and qd finite; sim_advance: t_end finite and >= the current time, n_eval >= 0, 0 <= *i_eval <= n_eval";
     case GAC_ERR_START_OUTSIDE: return "the start state has a contact point beyond its wall or a joint beyond its stop: allowed is a gap >= -(contact_tol + the simultaneity window + 1e-12 max(1 m, the largest |point coordinate|)), a point inside the box or on its wall";
     case GAC_ERR_NULL_ARGUMENT: return "a required pointer argument is NULL: sim_init needs sim, q and qd (and, in the library, the model and its work arrays; opt and p may be NULL: the defaults); sim_advance needs sim and record, and t_eval, i_eval and x_eval when n_eval > 0";
     case GAC_ERR_MAX_STEPS: return "maximum number of steps reached";
@@ -189,6 +189,7 @@ const char *gac_error_message(int code)
     case GAC_ERR_BAD_MODEL: return "the model descriptor is inconsistent: nq >= 1, nx = 2 nq, npoint >= 1, ncontact, njrow, nparam, nu >= 0, every table and kernel present, each contact's kind, point, axis (a stop: its coordinate), normal sign, Jacobian row and restitution index in range, each parameter_info row named with lo <= hi";
     case GAC_ERR_WALL_TIME: return "wall-time budget used up: the run took opt.max_wall_time seconds of its clock";
     case GAC_ERR_STOPPED: return "stopped by the progress callback";
+    case GAC_ERR_MAX_IMPACTS: return "the max_impacts limit reached: opt.max_impacts impacts applied (raise it to go on)";
     case GAC_ERR_BAD_PARAMETER: return "a parameter is outside its allowed range (not finite, beyond [lo, hi], or nonzero below the smallest normal double) or breaks a relation (a wall's max not above its min, a joint's upper limit not above its lower one, a rigid link's inertia not physical): gac_check_parameters gives its index, the model's parameter_info its name and the values it allows";
     default: return "unknown error code";
     }

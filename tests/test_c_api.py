@@ -341,7 +341,8 @@ def test_example_help(built, flag):
     result = example(built, flag)
     assert result.returncode == 0, result.stderr
     assert result.stdout.startswith("usage: ") and "# paper_case1" not in result.stdout     # nothing simulated
-    for text in ("t_end", "tol_or_dt", "dopri5", "dop853", "rk4", "--time N", "rtol 1e-8", "atol 1e-10"):
+    for text in ("t_end", "tol_or_dt", "dopri5", "dop853", "rk4", "--time N", "rtol 1e-8", "atol 1e-10", "--exact",
+                 "--rtol R", "--event-samples K", "--contact-tol C", "--rest-height H", "--zeno-impacts K"):
         assert text in result.stdout
 
 
@@ -361,6 +362,16 @@ def test_example_help(built, flag):
     (["1", "--time"], "--time"),
     (["1", "--time", "0"], "--time"),
     (["1", "--time", "two"], "--time"),
+    (["1", "--rtol", "1e-15"], "--rtol"),
+    (["1", "--atol", "0"], "--atol"),
+    (["1", "rk4", "--dt", "0"], "--dt"),
+    (["1", "--h-max", "inf"], "--h-max"),
+    (["1", "--event-samples", "0"], "--event-samples"),
+    (["1", "--event-tol", "nan"], "--event-tol"),
+    (["1", "--contact-tol", "-1e-6"], "--contact-tol"),
+    (["1", "--rest-height", "-2"], "--rest-height"),
+    (["1", "--zeno-impacts", "1.5"], "--zeno-impacts"),
+    (["1", "--max-steps", "-1"], "--max-steps"),
 ])
 def test_example_refuses_bad_arguments(built, args, named):
     result = example(built, *args)

@@ -15,6 +15,9 @@
  *   box   a point mass in the square [0, 2] x [0, 2] under gravity, q = [x, y], e = 1 on every wall: x moves
  *         at constant speed between the side walls (closed-form impact times), y bounces on the floor, and
  *         the energy is kept.
+ *   spring  the ball's point on a spring, qdd = -w^2 y, its wall out of reach: y = cos(w t) (the integrators'
+ *         orders of convergence and dense output).
+ *   skew  a point in a corner with the coupled inertia [[2, 1], [1, 2]]: Newton's law on two contacts by hand.
  *   checked_ball  the ball with a parameter table and a check of its own (g, m > 0, e in [0, 1]), as a generated
  *         model has: gac_sim_init refuses parameters outside it.
  * Exit status 0 if every check holds; with the argument --break one expected value is made wrong on
@@ -653,6 +656,248 @@ static void test_parameters(void)
           && strstr(gac_error_message(GAC_ERR_BAD_PARAMETER), "parameter_info") != 0, "message");
 }
 
+/* ---- spring: the ball's kernels with a spring in place of gravity and no wall in reach, p = [w^2, m, e] ------
+ * qdd = -w^2 y: from y(0) = 1, v(0) = 0 the motion is y = cos(w t), v = -w sin(w t) (w = 2 here).  Its contact's
+ * gap is y + 10 >= 9: never touched. */
+static void spring_fd(const double *q, const double *qd, const double *u, const double *p, double *qdd)
+{
+    (void)qd; (void)u;
+    qdd[0] = -p[0] * q[0];
+}
+static void spring_gaps(const double *q, const double *p, double *gap) { (void)p; gap[0] = q[0] + 10.0; }
+static void spring_energy(const double *q, const double *qd, const double *p, double *E)
+{
+    E[0] = 0.5 * p[1] * qd[0] * qd[0];
+    E[1] = 0.5 * p[1] * p[0] * q[0] * q[0];
+}
+static void spring_rhs(double t, const double *x, const double *u, const double *p, double *xdot)
+{
+    (void)t;
+    xdot[0] = x[1];
+    spring_fd(x, x + 1, u, p, xdot + 1);
+}
+static const double spring_p[3] = {4.0, 1.0, 1.0};
+static const double spring_q0[1] = {1.0}, spring_qd0[1] = {0.0};
+static const gac_model spring = {
+    .name = "spring", .n = 0, .nq = 1, .nx = 2, .nparam = 3, .nu = 1, .npoint = 1, .ncontact = 1, .njrow = 1,
+    .contacts = ball_contacts,
+    .chart = {.a = {0.0, 1.0}, .b = {1.0, 0.0}, .theta0_index = -1, .theta0_value = 0.0},
+    .default_parameters = spring_p, .q0 = spring_q0, .qd0 = spring_qd0,
+    .forward_dynamics = spring_fd, .inertia_solve = ball_solve, .generalized_momentum = ball_momentum,
+    .contact_points = ball_points, .contact_velocities = ball_velocities, .contact_generalized_force = ball_force,
+    .contact_gaps = spring_gaps,
+    .contact_bias = ball_jbias, .energy = spring_energy, .rhs = spring_rhs, .power = ball_power
+};
+
+/* ---- skew: a point in the corner x >= 0, y >= 0 with the coupled inertia I_f = [[2, 1], [1, 2]] (kg), no gravity,
+ * J = I, e = p[0] on both walls.  I_f^-1 = [[2, -1], [-1, 2]] / 3, so the contact-space matrix J I_f^-1 J^T is
+ * I_f^-1 itself: its diagonal is 2/3 and its off-diagonal -1/3 (a P-matrix: both principal minors 2/3 and 1/3 > 0). */
+static void skew_solve(const double *q, const double *Q, const double *p, double *x)
+{
+    (void)q; (void)p;
+    x[0] = (2.0 * Q[0] - Q[1]) / 3.0; x[1] = (2.0 * Q[1] - Q[0]) / 3.0;
+}
+static void skew_momentum(const double *q, const double *qd, const double *p, double *h)
+{
+    (void)q; (void)p;
+    h[0] = 2.0 * qd[0] + qd[1]; h[1] = qd[0] + 2.0 * qd[1];
+}
+static void skew_fd(const double *q, const double *qd, const double *u, const double *p, double *qdd)
+{
+    (void)q; (void)qd; (void)u; (void)p;
+    qdd[0] = 0.0; qdd[1] = 0.0;
+}
+static void skew_gaps(const double *q, const double *p, double *gap)
+{
+    (void)p;
+    gap[0] = q[0]; gap[1] = q[1];
+}
+static void skew_energy(const double *q, const double *qd, const double *p, double *E)
+{
+    (void)q; (void)p;
+    E[0] = 0.5 * (2.0 * qd[0] * qd[0] + 2.0 * qd[0] * qd[1] + 2.0 * qd[1] * qd[1]);
+    E[1] = 0.0;
+}
+static void skew_rhs(double t, const double *x, const double *u, const double *p, double *xdot)
+{
+    (void)t;
+    xdot[0] = x[2]; xdot[1] = x[3];
+    skew_fd(x, x + 2, u, p, xdot + 2);
+}
+static const gac_contact skew_contacts[2] = {
+    {1, 0, +1, 0, 0, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}}, {1, 1, +1, 1, 0, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}}
+};
+static const double skew_p[3] = {0.5, 0.0, 0.0};
+static const double skew_q0[2] = {1.0, 1.0}, skew_qd0[2] = {0.0, 0.0};
+static const gac_model skew = {
+    .name = "skew", .n = 0, .nq = 2, .nx = 4, .nparam = 3, .npoint = 1, .ncontact = 2, .njrow = 2,
+    .contacts = skew_contacts,
+    .chart = {.a = {0.0, 1.0}, .b = {1.0, 0.0}, .theta0_index = -1, .theta0_value = 0.0},
+    .default_parameters = skew_p, .q0 = skew_q0, .qd0 = skew_qd0,
+    .forward_dynamics = skew_fd, .inertia_solve = skew_solve, .generalized_momentum = skew_momentum,
+    .contact_points = box_points, .contact_velocities = box_velocities, .contact_generalized_force = box_force,
+    .contact_gaps = skew_gaps,
+    .contact_bias = box_jbias, .energy = skew_energy, .rhs = skew_rhs
+};
+
+/* The spring's y(1) with the loop stepping at a fixed h (RK4: dt = h; DOPRI5 and DOP853: first step h, h_max = h and
+ * tolerances so loose that every step is accepted); the error against cos(w). */
+static double spring_error(int method, double h)
+{
+    gac_options opt;
+    gac_sim sim;
+    gac_impact_record rec;
+    int code;
+    gac_default_options(&opt);
+    opt.method = method;
+    opt.dt = h;
+    opt.h_max = h;
+    opt.rtol = 0.5;
+    opt.atol = 1e3;
+    gac_record_bind(&rec, &spring, rdwork, riwork);
+    code = gac_sim_init(&sim, &spring, dwork, iwork, 0.0, spring_q0, spring_qd0, 0, &opt);
+    if (code == GAC_OK) code = gac_sim_advance(&sim, 1.0, 0, 0, 0, 0, &rec);
+    CHECK(code == GAC_SIM_END && sim.n_rejected == 0, "spring run: code %d, %ld rejected", code, sim.n_rejected);
+    return fabs(sim.x[0] - cos(2.0));
+}
+
+/* Order of convergence: the global error of a method of order k falls by 2^k when h halves (once h is small enough
+ * for the leading error term to dominate: DOPRI5 from h = 1/64 here).  And dense output: samples between the steps
+ * against the closed form y = cos(2 t). */
+static void test_integrators(void)
+{
+    static const struct { int method; double h, order; } cases[3] = {
+        {GAC_METHOD_RK4, 1.0 / 32, 4.0}, {GAC_METHOD_DOPRI5, 1.0 / 64, 5.0}, {GAC_METHOD_DOP853, 1.0 / 4, 8.0}};
+    double t_eval[41], x_eval[82], worst = 0.0;
+    gac_options opt;
+    gac_sim sim;
+    gac_impact_record rec;
+    int k, i_eval = 0, code;
+    for (k = 0; k < 3; ++k) {
+        double e1 = spring_error(cases[k].method, cases[k].h), e2 = spring_error(cases[k].method, cases[k].h / 2);
+        double order = log2(e1 / e2);
+        CHECK(fabs(order - cases[k].order) < 0.3, "method %d: observed order %.3f (errors %.3g, %.3g), expected %g",
+              cases[k].method, order, e1, e2, cases[k].order);
+    }
+    for (k = 0; k < 3; ++k) {
+        gac_default_options(&opt);
+        opt.method = cases[k].method;
+        opt.rtol = 1e-11;
+        opt.atol = 1e-13;
+        if (cases[k].method == GAC_METHOD_RK4) opt.dt = 1e-3;
+        for (i_eval = 0; i_eval < 41; ++i_eval) t_eval[i_eval] = 0.0371 * i_eval;    /* between the steps */
+        i_eval = 0;
+        gac_record_bind(&rec, &spring, rdwork, riwork);
+        code = gac_sim_init(&sim, &spring, dwork, iwork, 0.0, spring_q0, spring_qd0, 0, &opt);
+        if (code == GAC_OK) code = gac_sim_advance(&sim, 1.6, t_eval, 41, &i_eval, x_eval, &rec);
+        worst = 0.0;
+        for (int i = 0; i < 41; ++i) {
+            worst = fmax(worst, fabs(x_eval[2 * i] - cos(2.0 * t_eval[i])));
+            worst = fmax(worst, fabs(x_eval[2 * i + 1] + 2.0 * sin(2.0 * t_eval[i])));
+        }
+        /* RK4 at dt = 1e-3: its cubic Hermite interpolant errs O(dt^4) = 1e-12 times the derivatives (16); the
+         * adaptive methods' interpolants are of order 4 and 7 on steps the tolerance 1e-11 keeps short */
+        CHECK(code == GAC_SIM_END && i_eval == 41 && worst < 1e-8, "method %d dense output: code %d, %d samples, "
+              "worst error %.3g", cases[k].method, code, i_eval, worst);
+    }
+}
+
+/* Event location on the ball pushed away from its floor (g = -128 m/s^2: an upward acceleration a = 128) and thrown
+ * down at 1 m/s from y0: y = y0 - t + 64 t^2, lowest at t = 1/128, where y = y0 - 1/256.  DOPRI5 is exact on it, so
+ * with a first step and h_max of 0.02 s and one event sample per step the first step spans the whole dip.
+ *   y0 = 1/512: the dip crosses the floor, y = 0 at t* = (1 - sqrt(1 - 256 y0)) / 128 = (1 - sqrt(1/2)) / 128, where
+ *     v = -1 + 128 t* = -sqrt(1/2); the impact (e = 1/2) leaves at +sqrt(1/2) / 2.  Both ends of the step lie above the
+ *     floor (y(0.02) = y0 + 0.0056), so the crossing is found from the gap's minimum between the samples.
+ *   y0 = 1/256: the lowest point touches the floor at zero speed: a graze, no impact; y(0.05) = 1/256 - 0.05 + 0.16. */
+static void test_events(void)
+{
+    const double p[3] = {-128.0, 1.0, 0.5}, down[1] = {-1.0};
+    const double t_star = (1.0 - sqrt(0.5)) / 128.0;
+    double y0[1] = {1.0 / 512.0};
+    gac_options opt;
+    gac_sim sim;
+    gac_impact_record rec;
+    int code, impacts = 0;
+    gac_default_options(&opt);
+    opt.dt = 0.02;
+    opt.h_max = 0.02;
+    opt.event_samples = 1;
+    gac_record_bind(&rec, &ball, rdwork, riwork);
+    code = gac_sim_init(&sim, &ball, dwork, iwork, 0.0, y0, down, p, &opt);
+    if (code == GAC_OK) code = gac_sim_advance(&sim, 0.05, 0, 0, 0, 0, &rec);
+    CHECK(code == GAC_SIM_IMPACT && NEAR(rec.t, t_star, 1e-12) && NEAR(rec.qd_before[0], -sqrt(0.5), 1e-10)
+          && NEAR(rec.qd_after[0], 0.5 * sqrt(0.5), 1e-10),
+          "dip between samples: code %d, t %.17g (expected %.17g), v %.17g -> %.17g", code, rec.t, t_star,
+          rec.qd_before[0], rec.qd_after[0]);
+    y0[0] = 1.0 / 256.0;
+    code = gac_sim_init(&sim, &ball, dwork, iwork, 0.0, y0, down, p, &opt);
+    while (code == GAC_OK || code == GAC_SIM_IMPACT || code == GAC_SIM_CONTACT) {
+        code = gac_sim_advance(&sim, 0.05, 0, 0, 0, 0, &rec);
+        impacts += code == GAC_SIM_IMPACT;
+        if (code == GAC_SIM_END) break;
+    }
+    CHECK(code == GAC_SIM_END && impacts == 0 && NEAR(sim.x[0], 1.0 / 256.0 - 0.05 + 0.16, 1e-12)
+          && NEAR(sim.x[1], -1.0 + 128.0 * 0.05, 1e-11),
+          "graze: code %d, %d impacts, y %.17g, v %.17g", code, impacts, sim.x[0], sim.x[1]);
+}
+
+/* Resting contact: the ball (m = 2 kg, g = 9.81) with e = 0 dropped from 1 m lands at t1 = sqrt(2 / g) and stays on
+ * the floor (persistent contact, force m g); an upward input u = m (g + a), a = 2 m/s^2, set at t = 1 s releases it
+ * and it rises as y = a (t - 1)^2 / 2: y(1.5) = 0.25 m, v(1.5) = 1 m/s. */
+static void test_resting_contact(void)
+{
+    const double p[3] = {9.81, 2.0, 0.0}, h[1] = {1.0}, rest[1] = {0.0}, up[1] = {2.0 * (9.81 + 2.0)};
+    gac_sim sim;
+    gac_impact_record rec;
+    int code, landed = 0, released = 0;
+    gac_record_bind(&rec, &ball, rdwork, riwork);
+    code = gac_sim_init(&sim, &ball, dwork, iwork, 0.0, h, rest, p, 0);
+    while (code == GAC_OK || code == GAC_SIM_IMPACT || code == GAC_SIM_CONTACT) {
+        code = gac_sim_advance(&sim, 1.0, 0, 0, 0, 0, &rec);
+        if (code == GAC_SIM_IMPACT) {
+            CHECK(NEAR(rec.t, sqrt(2.0 / 9.81), 1e-12), "landing at %.17g", rec.t);
+            landed += rec.nactivated;
+        }
+        if (code == GAC_SIM_CONTACT) landed += rec.nactivated;
+        if (code == GAC_SIM_END) break;
+    }
+    CHECK(code == GAC_SIM_END && landed == 1 && sim.nactive == 1 && fabs(sim.x[0]) < 1e-12 && fabs(sim.x[1]) < 1e-12,
+          "at rest on the floor: code %d, landed %d, nactive %d, y %.3g, v %.3g", code, landed, sim.nactive, sim.x[0],
+          sim.x[1]);
+    CHECK(gac_sim_set_input(&sim, up) == GAC_OK, "input set");
+    code = gac_sim_advance(&sim, 1.5, 0, 0, 0, 0, &rec);
+    if (code == GAC_SIM_CONTACT) released = rec.nreleased;
+    CHECK(code == GAC_SIM_CONTACT && released == 1 && rec.t == 1.0 && sim.nactive == 0,
+          "released by the upward force at t = 1: code %d, released %d, t %.17g", code, released, rec.t);
+    code = gac_sim_advance(&sim, 1.5, 0, 0, 0, 0, &rec);
+    CHECK(code == GAC_SIM_END && NEAR(sim.x[0], 0.25, 1e-12) && NEAR(sim.x[1], 1.0, 1e-12),
+          "rising: code %d, y %.17g, v %.17g", code, sim.x[0], sim.x[1]);
+}
+
+/* Newton's law (Eq. 47) on two coupled contacts (the skew model, e = 1/2), by hand with A = J I_f^-1 J^T =
+ * [[2, -1], [-1, 2]] / 3 and A F = -(1 + e) v-:
+ *   v- = (-1, -1): F = I_f (1.5, 1.5) = (4.5, 4.5) >= 0, v+ = v- + I_f^-1 F = (0.5, 0.5) = -e v-.
+ *   v- = (-2, 0.5), with complementarity: round 1 takes the approaching contact 0 alone: F0 = 1.5 * 2 / (2/3) = 4.5,
+ *     v = (-2, 0.5) + (3, -1.5) = (1, -1); contact 1, driven into its wall, is struck by its own law in round 2:
+ *     F1 = 1.5 * 1 / (2/3) = 2.25, v = (1, -1) + (-0.75, 1.5) = (0.25, 0.5), both separating: done.  Impulses
+ *     (4.5, 2.25), two rounds, kinetic energy 3.25 J -> 0.4375 J. */
+static void test_impact_law(void)
+{
+    const double q[2] = {0.0, 0.0}, both[2] = {-1.0, -1.0}, one[2] = {-2.0, 0.5};
+    const int active[2] = {0, 1};
+    double qd_plus[2], F[2];
+    int code = gac_impact(&skew, q, both, skew_p, 2, active, qd_plus, F, work);
+    CHECK(code == GAC_OK && NEAR(F[0], 4.5, 1e-14) && NEAR(F[1], 4.5, 1e-14) && NEAR(qd_plus[0], 0.5, 1e-15)
+          && NEAR(qd_plus[1], 0.5, 1e-15), "Eq. 47, two contacts: code %d, F (%.17g, %.17g), v+ (%.17g, %.17g)", code,
+          F[0], F[1], qd_plus[0], qd_plus[1]);
+    code = gac_impact_complementarity(&skew, q, both, skew_p, 2, active, qd_plus, F, work);
+    CHECK(code == GAC_OK && NEAR(F[0], 4.5, 1e-14) && NEAR(F[1], 4.5, 1e-14), "complementarity = Eq. 47 when both push");
+    code = gac_impact_complementarity(&skew, q, one, skew_p, 2, active, qd_plus, F, work);
+    CHECK(code == GAC_OK && NEAR(F[0], 4.5, 1e-14) && NEAR(F[1], 2.25, 1e-14) && NEAR(qd_plus[0], 0.25, 1e-15)
+          && NEAR(qd_plus[1], 0.5, 1e-15), "two rounds: code %d, F (%.17g, %.17g), v+ (%.17g, %.17g)", code, F[0], F[1],
+          qd_plus[0], qd_plus[1]);
+}
+
 int main(int argc, char **argv)
 {
     broken = argc > 1 && strcmp(argv[1], "--break") == 0;
@@ -668,6 +913,10 @@ int main(int argc, char **argv)
     test_inputs();
     test_errors();
     test_parameters();
+    test_integrators();
+    test_events();
+    test_resting_contact();
+    test_impact_law();
     printf("%d checks, %d failed\n", checks, failures);
     return failures == 0 ? 0 : 1;
 }

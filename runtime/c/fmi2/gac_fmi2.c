@@ -84,7 +84,7 @@ long gac_fmi2_nreal(const gac_model *m)
  * Errors are always sent; other messages only with logging on. */
 static void say(const Instance *in, fmi2Status status, const char *category, const char *text)
 {
-    char message[520];
+    char message[1040];
     size_t k = 0;
     if (in == 0 || in->logger == 0) return;
     if (status < fmi2Error && !in->logging) return;
@@ -679,6 +679,29 @@ GAC_FMI2_EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const f
     return fail((Instance *)c, "fmi2GetRealOutputDerivatives", "not supported (maxOutputDerivativeOrder=0)");
 }
 
+/* The logEvents line of the impact in record: its time, its contacts by name as the model's NAME_contact_name
+ * gives them (O1/x2_min for point O_1 on the wall x2_min, theta_2_upper for a joint's stop) and the energy. */
+static void impact_message(const gac_model *m, const gac_impact_record *r, char *text, size_t size)
+{
+    size_t used;
+    int k;
+    snprintf(text, size, "impact at t = %.17g s: %d contacts", r->t, r->ncontact);
+    for (k = 0; k < r->ncontact; ++k) {
+        const gac_contact *c = &m->contacts[r->contact[k]];
+        used = strlen(text);
+        if (used + 100 >= size) {                 /* room kept for the energy below */
+            snprintf(text + used, size - used, " ...");
+            break;
+        }
+        if (c->kind == GAC_CONTACT_STOP)
+            snprintf(text + used, size - used, " theta_%d_%s", c->point, c->normal_sign > 0 ? "lower" : "upper");
+        else
+            snprintf(text + used, size - used, " O%d/x%d_%s", c->point, c->axis + 1, c->normal_sign > 0 ? "min" : "max");
+    }
+    used = strlen(text);
+    snprintf(text + used, size - used, ", energy %.17g -> %.17g J", r->energy_before, r->energy_after);
+}
+
 /* Advance from currentCommunicationPoint (the instance's time) by communicationStepSize: flight, impacts
  * and resting contacts, with the inputs held. */
 GAC_FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
@@ -707,9 +730,9 @@ GAC_FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunica
             in->n_impacts++;
             in->impact_loss += in->record.energy_before - in->record.energy_after;
             if (in->logging) {
-                snprintf(why, sizeof why, "impact at t = %.17g s: %d contacts, energy %.17g -> %.17g J",
-                         in->record.t, in->record.ncontact, in->record.energy_before, in->record.energy_after);
-                say(in, fmi2OK, "logEvents", why);
+                char line[1024];
+                impact_message(in->m, &in->record, line, sizeof line);
+                say(in, fmi2OK, "logEvents", line);
             }
         } else if (code != GAC_SIM_CONTACT) {
             break;

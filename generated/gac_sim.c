@@ -26,6 +26,7 @@ void gac_default_options(gac_options *opt)
     opt->rest_height = -1.0;
     opt->zeno_impacts = 20;
     opt->max_wall_time = 0.0;
+    opt->energy_tol = -1.0;
 }
 
 /* The run's clock in seconds: the embedder's, or C's processor time. */
@@ -148,7 +149,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
         return GAC_ERR_BAD_OPTION;
     if (opt->event_samples < 1 || !(opt->event_tol > 0.0) || !(opt->contact_tol >= 0.0) || !(opt->h_max >= 0.0)
         || opt->max_steps < 0 || !(opt->rest_height < 1e300) || opt->zeno_impacts < 0
-        || !(opt->max_wall_time >= 0.0 && opt->max_wall_time < 1e300))
+        || !(opt->max_wall_time >= 0.0 && opt->max_wall_time < 1e300) || !(opt->energy_tol < 1.0))
         return GAC_ERR_BAD_OPTION;
     for (i = 0; i < md->nparam; ++i) pv[i] = p == 0 ? md->default_parameters[i] : p[i];   /* NULL: the defaults */
     if (gac_check_parameters(md, pv, 0) != GAC_OK) return GAC_ERR_BAD_PARAMETER;
@@ -227,6 +228,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
         int code = gac_rest_at_start(s);
         if (code < 0) return code;
     }
+    gac_energy_start(s);
     gac_events(s, s->t, s->x, s->ev);
     return s->fail < 0 ? s->fail : GAC_OK;
 }
@@ -501,6 +503,7 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
             s->f_valid = s->vn_valid = 0;
             gac_events(s, s->t, s->x, s->ev);
             if (s->fail) return s->fail;
+            if (gac_energy_check(s) != GAC_OK) return GAC_ERR_DRIFT;
             if (released) {                       /* a wall crossing counts once the gap has opened again */
                 for (i = 0; i < record->nreleased; ++i) {
                     if (s->ev[record->released[i]] > 0.0) s->ev[record->released[i]] = 0.0;
@@ -531,6 +534,10 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
             s->f_valid = s->vn_valid = 0;
             gac_events(s, s->t, s->x, s->ev);
             if (s->fail) return s->fail;
+        }
+        {
+            const int code = gac_energy_check(s);
+            if (code != GAC_OK) return code;
         }
     }
     while (n_eval > 0 && *i_eval < n_eval && t_eval[*i_eval] <= t_end) {   /* samples at t_end itself */

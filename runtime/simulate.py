@@ -239,7 +239,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
              max_impacts: int = 10000, max_steps: int = 10_000_000, rest_height: float | None = None,
              zeno_impacts: int = 20, p=None, q0=None, qd0=None, u=None,
              max_wall_time: float | None = None, charts: bool = True, check_start: bool = True,
-             keep_impacts: bool = True, progress=None) -> SimulationResult:
+             keep_impacts: bool = True, progress=None, energy_tol: float | None = None) -> SimulationResult:
     """Simulate the scene's hybrid dynamics from its initial state over [0, t_end].
 
     method        'dopri5' (adaptive Dormand-Prince 5(4), rtol/atol), 'dop853' (adaptive 8(5,3)),
@@ -271,6 +271,10 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                   the order of model.input_names), an InputSchedule (values at times, held or linear; both
                   evaluated in C, the loop stopping at each time), or a function u(t, q, qd) of the full-layout
                   state, called back from C at every stage (slower: a Python call per stage)
+    energy_tol    the energy balance's allowed residual relative to the run's energy scale: the C loop stops with
+                  status -1 ("energy drift") at the first step end where E - E0 - W_inputs + D_dampers + D_friction
+                  + impact losses exceeds it (gac.h, "Energy balance").  None (default): min(0.1, max(1e-8, 1e4 rtol))
+                  for dopri5 / dop853, off for rk4; 0: off; else 0 < energy_tol < 1
     keep_impacts  False: the whole run in one C call (NAME_sim_run), returning counts (n_impacts, t_first_impact,
                   energy_impact_loss) instead of Impact records, for studies of many runs; the impacts' post-
                   conditions are the C loop's own (GAC_ERR_IMPACT_ACCURACY), as always.  Needs constant inputs and
@@ -306,6 +310,9 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     _check(rest_height is None or (np.isfinite(rest_height) and rest_height >= 0), "rest_height",
            f"must be a finite height >= 0 m (or None: 10 contact_tol), got {rest_height!r}")
     zeno_impacts = _integer(zeno_impacts, "zeno_impacts", 0, "0: off")
+    energy_tol = None if energy_tol is None else _real(energy_tol, "energy_tol")
+    _check(energy_tol is None or 0 <= energy_tol < 1, "energy_tol",
+           f"must be in [0, 1) (relative to the run's energy scale; 0: off; None: automatic), got {energy_tol!r}")
 
     nq, nx = model.nq, 2 * model.nq
     layout = model.layout
@@ -336,6 +343,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     opt.max_wall_time = 0.0 if max_wall_time is None else float(max_wall_time)
     opt.rest_height = -1.0 if rest_height is None else float(rest_height)
     opt.zeno_impacts = int(zeno_impacts)
+    opt.energy_tol = -1.0 if energy_tol is None else float(energy_tol)
     sim = ffi.new(f"{name}_sim *")
     state = sim.base          # the library's state (gac_sim): t, x, counters; its arrays live in *sim
     ptr = model._ptr
@@ -375,7 +383,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                                    f"max_impacts limit of {max_impacts} (raise max_impacts to go on)")
         elif code != SIM_END:
             status, message = -1, _stop_message(model, state, code, segment_t, segment_steps, max_steps, max_wall_time,
-                                                dt, summary.n_impacts)
+                                                dt, summary.n_impacts, rec)
     while keep_impacts:
         code = advance(sim, float(stops[stop]), t_eval_ptr, len(t_eval), i_eval, x_eval_ptr, record)
         if code == SIM_END and stop + 1 < len(stops):
@@ -395,7 +403,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         if code != SIM_IMPACT:
             status = -1
             message = _stop_message(model, state, code, segment_t, segment_steps, max_steps, max_wall_time, dt,
-                                    len(impacts))
+                                    len(impacts), rec)
             break
         impacts.append(_read_impact(model, rec))        # its post-conditions were checked in C
         if len(impacts) >= max_impacts:
@@ -443,7 +451,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         options={"rtol": rtol, "atol": atol, "dt": dt, "contact_tol": contact_tol, "event_samples": event_samples,
                  "event_tol": event_tol, "h_max": h_max, "t_end": t_end, "rest_height": rest_height,
                  "zeno_impacts": zeno_impacts, "max_steps": max_steps, "max_impacts": max_impacts,
-                 "max_wall_time": max_wall_time})
+                 "max_wall_time": max_wall_time, "energy_tol": energy_tol})
 
 
 def weight_scale(scene: Scene, p: np.ndarray) -> float:
@@ -652,9 +660,10 @@ def _step_diagnosis(model: CompiledModel, sim, t_from: float, steps: int) -> str
 
 
 def _stop_message(model: CompiledModel, sim, code: int, segment_t: float, segment_steps: int, max_steps: int,
-                  max_wall_time: float | None, dt: float | None, n_impacts: int) -> str:
-    """The result's message for a run the C loop stopped with ``code``: the loop's reason, and for the budgets and
-    RK4's stability rule what the run was doing (the loop decided; this only reports)."""
+                  max_wall_time: float | None, dt: float | None, n_impacts: int, record=None) -> str:
+    """The result's message for a run the C loop stopped with ``code``: the loop's reason, and for the budgets,
+    RK4's stability rule, the energy balance and an impact's accuracy what the run was doing (the loop decided;
+    this only reports its numbers; record: the C impact record, for the impact's round-off bound)."""
     lib = model.lib
     where = f"at t = {float(sim.t):.12g} s"
     steps = int(sim.n_steps) + int(sim.n_rejected) - segment_steps
@@ -670,6 +679,14 @@ def _stop_message(model: CompiledModel, sim, code: int, segment_t: float, segmen
     if code == lib.GAC_ERR_UNSTABLE:
         message += (f" (dt = {dt:g} s: h rho = {float(sim.rk4_h_rho):.3g} in the last step, rho the rate of the "
                     "chain's fastest mode seen in it)")
+    if code in (lib.GAC_ERR_DRIFT, lib.GAC_ERR_PROJECTION):
+        residual, scale = float(sim.energy_residual), float(sim.energy_scale)
+        message += (f" (the balance's residual is {residual:.3g} J, {abs(residual) / scale:.3g} of the scale "
+                    f"{scale:.6g} J; projections onto resting contacts changed the energy by "
+                    f"{float(sim.energy_projection):.3g} J in all, impacts took {float(sim.energy_impacts):.6g} J)")
+    if code == lib.GAC_ERR_IMPACT_ACCURACY and record is not None:
+        message += (f" (this impact's energy is known only to {float(record.roundoff):.3g} relative, its law's "
+                    "round-off bound)")
     if code == lib.GAC_ERR_NONFINITE and sim.opt.method == lib.GAC_METHOD_RK4:
         message += f" (rk4 with dt = {dt:g} s is unstable on this motion: reduce dt, or use an adaptive method)"
     return message

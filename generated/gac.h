@@ -61,7 +61,7 @@
 #define GAC_ERR_SINGULAR_CONTACT -15   /* the persistent contact constraints are dependent */
 #define GAC_ERR_IMPACT_ACCURACY  -16   /* an impact failed its post-conditions (F >= 0, no approach, no energy
                                           gain, e = 1 energy kept) beyond round-off, or its round-off bound
-                                          (record.roundoff) exceeds min(0.1, max(1e-6, 1e4 rtol)) (RK4: 1e-4), or its
+                                          (record.roundoff) exceeds GAC_IMPACT_ROUNDOFF_MAX, or its
                                           elastic rounds (every contact e = 1) did not end: ill-conditioned */
 #define GAC_ERR_UNSTABLE         -17   /* RK4: 3 steps in a row at h rho > 2.5 (or one > 10), rho the rate of the
                                           chain's fastest mode between the last two stages: dt is past RK4's
@@ -111,6 +111,8 @@
 #define GAC_CHART_FLOOR  5.96e-5   /* sqrt(16 eps / 1e-6): gac_impact refuses a base chart measure below it */
 #define GAC_LCP_CAP      16        /* contacts one complementarity solve takes at most: min(nq, 16) */
 #define GAC_MAX_ROUNDS   256       /* rounds of the impact law before its plastic closing round */
+#define GAC_IMPACT_ROUNDOFF_MAX 1e-2  /* an impact whose round-off bound (record.roundoff) exceeds this stops the
+                                         run (GAC_ERR_IMPACT_ACCURACY): its energy is not known */
 #define GAC_SLOW_SLIDING 4         /* a resting point sliding slower than this many friction_velocity is in (or
                                       near) the regularised friction's stiff, viscous regime: sim.n_slow_sliding */
 
@@ -351,8 +353,8 @@ const char *gac_error_message(int code);
  * rounds until no contact approaches: F >= 0, no energy gain, e = 1 keeps the energy exactly; a contact
  * that separates takes an impulse only if the others drive it into its wall.  Its post-conditions are
  * checked to the law's round-off bound (record.roundoff; GAC_ERR_IMPACT_ACCURACY otherwise), and that bound must
- * not exceed min(0.1, max(1e-6, 1e4 rtol)) (RK4: 1e-4): an impact known only to a larger relative error of its energy
- * stops the run (GAC_ERR_IMPACT_ACCURACY, record.roundoff says the bound), as does the plastic closing round of
+ * not exceed GAC_IMPACT_ROUNDOFF_MAX (1e-2): an impact known only to a larger error of its energy stops the run
+ * (GAC_ERR_IMPACT_ACCURACY, record.roundoff says its bound), as does the plastic closing round of
  * a sequence of rounds on walls that all have e = 1.
  *
  * Resting contact (Zeno behaviour).  With e < 1 and gravity, impacts of a point on a wall accumulate

@@ -89,7 +89,7 @@ int gac_energy_projected(gac_sim *s, double E_before, const double *x);
 double gac_step_energy_error(gac_sim *s);
 
 /* gac_resolve.c: one impact event */
-double gac_impact_accuracy(const gac_sim *s);
+int gac_impact_inaccurate(const gac_sim *s, double b);
 int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r);
 
 /* gac_model.c */

@@ -181,7 +181,7 @@ const char *gac_error_message(int code)
     case GAC_ERR_NONFINITE: return "the state became NaN or infinite";
     case GAC_ERR_TOO_MANY_CONTACTS: return "more simultaneous approaching contacts than degrees of freedom";
     case GAC_ERR_SINGULAR_CONTACT: return "the persistent contact constraints are dependent (N I_f^-1 N^T is singular)";
-    case GAC_ERR_IMPACT_ACCURACY: return "the impact law could not be solved to round-off (an impulse < 0, a contact still approaching, an energy gain or an elastic energy change), or only to a round-off bound above min(0.1, max(1e-6, 1e4 rtol)) of the energy (RK4: 1e-4), or its elastic rounds (every contact e = 1) did not end: the impact system is ill-conditioned";
+    case GAC_ERR_IMPACT_ACCURACY: return "the impact law could not be solved to round-off (an impulse < 0, a contact still approaching, an energy gain or an elastic energy change), or only to a round-off bound above GAC_IMPACT_ROUNDOFF_MAX = 1e-2 of the energy, or its elastic rounds (every contact e = 1) did not end: the impact system is ill-conditioned";
     case GAC_ERR_UNSTABLE: return "RK4 is unstable at this step: the chain's fastest mode needs dt below about 2.8 / its rate; reduce dt or use an adaptive method";
     case GAC_ERR_LOST_CONTACT: return "a point lies beyond its wall at an impact: a wall crossing was missed, the motion is too fast or I_f too ill-conditioned (extreme mass, length or inertia ratios) for the tolerance";
     case GAC_ERR_BAD_INPUT: return "an input is NaN or infinite: the inputs given to sim_set_input, and those a controller writes, must be finite";

@@ -57,17 +57,13 @@ static double gac_impact_roundoff(const gac_model *md, const double *q, const do
     return b > 1e-10 ? b : 1e-10;
 }
 
-/* The largest round-off bound of the law (relative, on the energy) at which an impact is accepted:
- * min(0.1, max(1e-6, 1e4 rtol)) for the adaptive methods (the run's automatic energy tolerance, but never below
- * 1e-6), 1e-4 for RK4 (as at the default rtol).  Beyond it the impact is known to less than the whole run's
- * energy budget (the bound reaches 1e4 on a chain whose I_f is ill-conditioned along the impact's directions). */
-double gac_impact_accuracy(const gac_sim *s)
+/* 1 if an impact with the law's round-off bound b (relative to T) leaves the run without useful accuracy: b above
+ * GAC_IMPACT_ROUNDOFF_MAX (the bound reaches 1e4 on a chain whose I_f is ill-conditioned along the impact's
+ * directions). */
+int gac_impact_inaccurate(const gac_sim *s, double b)
 {
-    double limit;
-    if (s->opt.method == GAC_METHOD_RK4) return 1e-4;
-    limit = 1e4 * s->opt.rtol;
-    if (limit < 1e-6) limit = 1e-6;
-    return limit < 0.1 ? limit : 0.1;
+    (void)s;
+    return b > GAC_IMPACT_ROUNDOFF_MAX;
 }
 
 /* Resolve the impact at state s->xs (time t).
@@ -94,7 +90,7 @@ double gac_impact_accuracy(const gac_sim *s)
  * rule would end: its lift velocity is removed with the others' round-off, a bilateral resting
  * constraint, not an impact impulse; the energy it takes is in energy_rest); one lifted higher is
  * released.  The set is brought to rest by gac_hold, which drives no other contact into its wall.
- * Refused (GAC_ERR_IMPACT_ACCURACY): a bound b above gac_impact_accuracy, and a plastic closing round when every
+ * Refused (GAC_ERR_IMPACT_ACCURACY): a bound b that gac_impact_inaccurate refuses, and a plastic closing round when every
  * contact has e = 1 (the sequence of elastic rounds did not end; a plastic round would take energy silently).
  * Post-conditions, checked here (GAC_ERR_IMPACT_ACCURACY if one fails), to the law's round-off bound b
  * (gac_impact_roundoff, 1e-10 for a well-conditioned I_f): every impulse >= 0; no contact within contact_tol
@@ -195,7 +191,7 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
                                    &plastic);
     if (code != GAC_OK) return code;
     bound = r->roundoff = gac_impact_roundoff(md, x, s->p, s->work, n, F, x + nq, qd_plus, T_before);
-    if (bound > gac_impact_accuracy(s)) return GAC_ERR_IMPACT_ACCURACY;   /* no useful accuracy left */
+    if (gac_impact_inaccurate(s, bound)) return GAC_ERR_IMPACT_ACCURACY;   /* no useful accuracy left */
     if (plastic) {                           /* e = 1 walls only: the plastic closing round would take energy */
         int all_elastic = 1;
         for (k = 0; k < n; ++k) all_elastic &= e_law[k] == 1.0;
@@ -300,7 +296,7 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
         if (nset > 0) {          /* holding them changed the velocities too: the bound covers the whole change */
             const double held = gac_impact_roundoff(md, x, s->p, s->work, 0, F, x + nq, s->x1 + nq, T_before);
             if (held > bound) bound = r->roundoff = held;
-            if (bound > gac_impact_accuracy(s)) return GAC_ERR_IMPACT_ACCURACY;
+            if (gac_impact_inaccurate(s, bound)) return GAC_ERR_IMPACT_ACCURACY;
         }
     }
     if (rounds == 0) {                               /* no impulse: an impact only if a contact lands */

@@ -361,7 +361,8 @@ CODES = ("GAC_OK", "GAC_ERR_BAD_CONTACT", "GAC_ERR_SINGULAR_MASS", "GAC_ERR_SING
          "GAC_ERR_NONFINITE", "GAC_ERR_TOO_MANY_CONTACTS", "GAC_ERR_SINGULAR_CONTACT", "GAC_ERR_IMPACT_ACCURACY",
          "GAC_ERR_UNSTABLE", "GAC_ERR_LOST_CONTACT", "GAC_ERR_START_OUTSIDE", "GAC_ERR_NULL_ARGUMENT",
          "GAC_ERR_BAD_MODEL", "GAC_ERR_BAD_INPUT", "GAC_ERR_FRICTION", "GAC_ERR_BAD_PARAMETER",
-         "GAC_ERR_WALL_TIME", "GAC_ERR_STOPPED", "GAC_ERR_MAX_IMPACTS")
+         "GAC_ERR_WALL_TIME", "GAC_ERR_STOPPED", "GAC_ERR_MAX_IMPACTS",
+         "GAC_ERR_DRIFT", "GAC_ERR_PROJECTION")
 STOPS = ("GAC_SIM_END", "GAC_SIM_IMPACT", "GAC_SIM_CONTACT")
 METHODS = ("GAC_METHOD_RK4", "GAC_METHOD_DOPRI5", "GAC_METHOD_DOP853")
 LIMITS = ("GAC_LCP_CAP", "GAC_MAX_ROUNDS", "GAC_LOOK_STEPS", "GAC_SLOW_SLIDING")
@@ -382,7 +383,8 @@ class Struct:
 STRUCTS = (
     Struct("gac_options", ("int method", "double dt", "double rtol", "double atol", "double h_max",
                            "int event_samples", "double event_tol", "double contact_tol", "long max_steps",
-                           "double rest_height", "int zeno_impacts", "double max_wall_time", "long max_impacts"),
+                           "double rest_height", "int zeno_impacts", "double max_wall_time", "long max_impacts",
+                           "double energy_tol"),
            partial=False),
     Struct("gac_impact_record", ("double t", "int ncontact", "int *contact", "double *impulse",
                                  "double energy_before", "double energy_after", "double *q", "double *qd_before",
@@ -394,7 +396,8 @@ STRUCTS = (
                        "long n_rhs", "long n_impacts", "int nactive", "int *active", "long n_activations",
                        "long n_releases", "int err_index", "double *u", "double work_input", "double work_damping",
                        "double work_friction", "double wall_time", "double rk4_h_rho", "long n_slow_sliding",
-                       "double t_slow_sliding")),
+                       "double t_slow_sliding", "double energy_initial", "double energy_impacts",
+                       "double energy_projection", "double energy_residual", "double energy_scale")),
     Struct("gac_schedule", ("int n", "int nu", "const double *t", "const double *u", "int linear"), partial=False),
     Struct("gac_contact", ("int point", "int axis", "int normal_sign", "int row", "int e_index", "double e_value",
                            "int kind", "int coordinate", "int has_friction", "int mu_index", "double mu_value",

@@ -60,7 +60,9 @@
 #define GAC_ERR_TOO_MANY_CONTACTS -14  /* more approaching contacts at once than nq */
 #define GAC_ERR_SINGULAR_CONTACT -15   /* the persistent contact constraints are dependent */
 #define GAC_ERR_IMPACT_ACCURACY  -16   /* an impact failed its post-conditions (F >= 0, no approach, no energy
-                                          gain, e = 1 energy kept) beyond round-off: ill-conditioned */
+                                          gain, e = 1 energy kept) beyond round-off, or its round-off bound
+                                          (record.roundoff) exceeds GAC_IMPACT_ROUNDOFF_MAX, or its
+                                          elastic rounds (every contact e = 1) did not end: ill-conditioned */
 #define GAC_ERR_UNSTABLE         -17   /* RK4: 3 steps in a row at h rho > 2.5 (or one > 10), rho the rate of the
                                           chain's fastest mode between the last two stages: dt is past RK4's
                                           stability (about 2.8 / rho); the state is the last step's */
@@ -85,6 +87,12 @@
 #define GAC_ERR_STOPPED          -26   /* the progress callback (gac_sim_set_progress) asked the run to stop */
 #define GAC_ERR_MAX_IMPACTS      -27   /* opt.max_impacts impacts applied since gac_sim_init: the run stops before
                                           the next step (raise it to go on, then gac_sim_advance again) */
+#define GAC_ERR_DRIFT            -28   /* the energy balance of the run (sim.energy_residual) left more than
+                                          opt.energy_tol of the run's energy scale (sim.energy_scale): the
+                                          integration error is beyond the tolerance (tighten rtol) */
+#define GAC_ERR_PROJECTION       -29   /* bringing the state back onto the resting contacts after a step changed
+                                          the energy by more than opt.energy_tol of the energy scale: the step left
+                                          the constraints too far (tighten rtol) */
 #define GAC_SIM_END      1    /* reached t_end */
 #define GAC_SIM_IMPACT   2    /* stopped at an impact, already applied; see the record (which may also list
                                  contacts made persistent or released by the impact) */
@@ -105,6 +113,8 @@
 #define GAC_CHART_FLOOR  5.96e-5   /* sqrt(16 eps / 1e-6): gac_impact refuses a base chart measure below it */
 #define GAC_LCP_CAP      16        /* contacts one complementarity solve takes at most: min(nq, 16) */
 #define GAC_MAX_ROUNDS   256       /* rounds of the impact law before its plastic closing round */
+#define GAC_IMPACT_ROUNDOFF_MAX 1e-2  /* an impact whose round-off bound (record.roundoff) exceeds this stops the
+                                         run (GAC_ERR_IMPACT_ACCURACY): its energy is not known */
 #define GAC_SLOW_SLIDING 4         /* a resting point sliding slower than this many friction_velocity is in (or
                                       near) the regularised friction's stiff, viscous regime: sim.n_slow_sliding */
 
@@ -344,7 +354,10 @@ const char *gac_error_message(int code);
  * one take part.  The law (gac_impact_complementarity) is Newton's law, Eq. 47, with complementarity, in
  * rounds until no contact approaches: F >= 0, no energy gain, e = 1 keeps the energy exactly; a contact
  * that separates takes an impulse only if the others drive it into its wall.  Its post-conditions are
- * checked to the law's round-off bound (record.roundoff; GAC_ERR_IMPACT_ACCURACY otherwise).
+ * checked to the law's round-off bound (record.roundoff; GAC_ERR_IMPACT_ACCURACY otherwise), and that bound must
+ * not exceed GAC_IMPACT_ROUNDOFF_MAX (1e-2): an impact known only to a larger error of its energy stops the run
+ * (GAC_ERR_IMPACT_ACCURACY, record.roundoff says its bound), as does the plastic closing round of
+ * a sequence of rounds on walls that all have e = 1.
  *
  * Resting contact (Zeno behaviour).  With e < 1 and gravity, impacts of a point on a wall accumulate
  * (the bounces shrink geometrically).  At an impact on a wall with e < 1, a contact whose bounce would rise
@@ -373,10 +386,25 @@ const char *gac_error_message(int code);
  * (5-point Gauss-Legendre on the step's interpolant): sim.work_input, sim.work_damping; with the impacts'
  * losses they close the energy balance E(t) - E(0) = work_input - work_damping - (impact losses).
  *
+ * Energy balance.  The loop keeps the balance's residual (J)
+ *     sim.energy_residual = E - E(0) - work_input + work_damping + work_friction + energy_impacts,
+ * E = T + V at the current state, and checks it at every step end (after the projection onto the resting
+ * contacts) and after every impact: beyond energy_tol x sim.energy_scale (the largest T + |V| at a step end so
+ * far plus |work_input| + work_damping + work_friction + energy_impacts) the run stops with GAC_ERR_DRIFT at
+ * that state.  opt.energy_tol < 0 (default) is min(0.1, max(1e-8, 1e4 rtol)) for the adaptive methods, a
+ * budget of 1e4 steps' worth of tolerance, and off for RK4; 0 turns the check off.  What a projection onto
+ * the resting contacts changes in E is in the residual (it should keep the energy) and summed in
+ * sim.energy_projection; one that changes E by more than energy_tol x energy_scale / 10 stops the run with
+ * GAC_ERR_PROJECTION.  The adaptive methods also hold each step's own energy error to the tolerance where the
+ * flight is conservative (no power kernel, no friction at a resting contact): |E(x1) - E(x0)| / (rtol x
+ * energy_scale / 10) enters the step's error norm (the larger of the two decides), as the error of each
+ * component alone does not bound the energy's, which accumulates over many steps.
+ *
  * Stops before trouble: GAC_ERR_GIMBAL_LOCK (the base chart's measure below sqrt(16 eps / rtol): continue on
  * a second chart), GAC_ERR_UNSTABLE (RK4 past its stability, sim.rk4_h_rho), GAC_ERR_LOST_CONTACT,
  * GAC_ERR_MAX_STEPS (sim.err_index names the state component that limits the step), GAC_ERR_WALL_TIME
- * (opt.max_wall_time of the run's clock used), GAC_ERR_STOPPED (the progress callback said stop).
+ * (opt.max_wall_time of the run's clock used), GAC_ERR_STOPPED (the progress callback said stop),
+ * GAC_ERR_DRIFT and GAC_ERR_PROJECTION (the energy balance, above).
  */
 
 /* An input schedule: values u_k (nu each) at times t_k (n >= 1, strictly increasing), held (linear = 0: u(t) =
@@ -411,6 +439,10 @@ typedef struct {
     long max_impacts;      /* impacts allowed since gac_sim_init: once applied, gac_sim_advance returns
                               GAC_ERR_MAX_IMPACTS before the next step (impact accumulation; default 10000).
                               0: unbounded */
+    double energy_tol;     /* the energy balance's allowed residual, relative to the run's energy scale (see
+                              "Energy balance" above): GAC_ERR_DRIFT beyond it.  < 0 (default): automatic,
+                              min(0.1, max(1e-8, 1e4 rtol)) for the adaptive methods and off for RK4 (a fixed
+                              step has no tolerance to hold it to); 0: off; else 0 < energy_tol < 1 */
 } gac_options;
 
 /* What gac_sim_advance reports.  Scalars are fields; the arrays (nq entries each) point into the arrays
@@ -468,6 +500,14 @@ typedef struct {
                                     slower than GAC_SLOW_SLIDING friction_velocity, where the regularisation is
                                     stiff (time constant about friction_velocity / (mu g)) and may limit the step */
     double t_slow_sliding;       /* s: the time those steps covered */
+    double energy_initial;       /* J: T + V at gac_sim_init */
+    double energy_impacts;       /* J: energy the impacts took since gac_sim_init, sum of energy_before - energy_after */
+    double energy_projection;    /* J: energy change of the projections onto the resting contacts since gac_sim_init
+                                    (part of energy_residual: a projection should keep the energy) */
+    double energy_residual;      /* J: the energy balance at the current state, E - energy_initial - work_input
+                                    + work_damping + work_friction + energy_impacts */
+    double energy_scale;         /* J: what energy_residual is measured on: the largest T + |V| at a step end so far,
+                                    plus |work_input| + work_damping + work_friction + energy_impacts */
     /* private: the model, integrator state and scratch (pointers into dwork / iwork) */
     const gac_model *model;
     gac_controller controller;   /* NULL: the held inputs u */
@@ -497,6 +537,8 @@ typedef struct {
     double *t_last, *dt_last;
     double *gap_held;            /* gap (m) a persistent contact is held at: its gap when it landed (within
                                     contact_tol, or the integration's position error below its wall) */
+    double energy_x;             /* J: T + V at x (kept by gac_energy_check) */
+    double energy_tol;           /* resolved opt.energy_tol (0: off) */
 } gac_sim;
 
 /* Default options (DOPRI5, rtol 1e-8, atol 1e-10, persistent contact on).  opt NULL: nothing is done. */

@@ -81,7 +81,15 @@ int gac_rest_at_start(gac_sim *s);
 int gac_release(gac_sim *s, double t, int c_event, gac_impact_record *r);
 int gac_recheck_rest(gac_sim *s, gac_impact_record *record);
 
+/* gac_energy.c: the energy balance */
+double gac_energy_tolerance(const gac_options *opt);
+void gac_energy_start(gac_sim *s);
+int gac_energy_check(gac_sim *s);
+int gac_energy_projected(gac_sim *s, double E_before, const double *x);
+double gac_step_energy_error(gac_sim *s);
+
 /* gac_resolve.c: one impact event */
+int gac_impact_inaccurate(const gac_sim *s, double b);
 int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r);
 
 /* gac_model.c */

@@ -173,7 +173,7 @@ const char *gac_error_message(int code)
     case GAC_ERR_SINGULAR_IMPACT: return "impact matrix J I_f^-1 J^T is singular: the active contact constraints are dependent";
     case GAC_ERR_LCP: return "impact complementarity problem has no solution (too many or degenerate contacts)";
     case GAC_ERR_GIMBAL_LOCK: return "gimbal lock: theta_0 is too close to the singularity of the base chart (|det E| below sqrt(16 eps / tol)) for results to the tolerance; continue on a second chart";
-    case GAC_ERR_BAD_OPTION: return "bad option or argument: allowed are method RK4, DOPRI5 or DOP853; RK4: 0 < dt < 1e300; DOPRI5, DOP853: 1e-14 (GAC_RTOL_MIN) <= rtol < 1, 0 < atol < 1e300, dt >= 0; h_max >= 0, event_samples >= 1, event_tol > 0, contact_tol >= 0, max_steps >= 0, rest_height < 1e300 (not NaN), zeno_impacts >= 0, 0 <= max_wall_time < 1e300, max_impacts >= 0 (gac_check_options names the option); t0, q and qd finite; sim_advance: t_end finite and >= the current time, n_eval >= 0, 0 <= *i_eval <= n_eval";
+    case GAC_ERR_BAD_OPTION: return "bad option or argument: allowed are method RK4, DOPRI5 or DOP853; RK4: 0 < dt < 1e300; DOPRI5, DOP853: 1e-14 (GAC_RTOL_MIN) <= rtol < 1, 0 < atol < 1e300, dt >= 0; h_max >= 0, event_samples >= 1, event_tol > 0, contact_tol >= 0, max_steps >= 0, rest_height < 1e300 (not NaN), zeno_impacts >= 0, 0 <= max_wall_time < 1e300, max_impacts >= 0, energy_tol < 1 (< 0: automatic, 0: off) (gac_check_options names the option); t0, q and qd finite; sim_advance: t_end finite and >= the current time, n_eval >= 0, 0 <= *i_eval <= n_eval";
     case GAC_ERR_START_OUTSIDE: return "the start state has a contact point beyond its wall or a joint beyond its stop: allowed is a gap >= -(contact_tol + the simultaneity window + 1e-12 max(1 m, the largest |point coordinate|)), a point inside the box or on its wall";
     case GAC_ERR_NULL_ARGUMENT: return "a required pointer argument is NULL: sim_init needs sim, q and qd (and, in the library, the model and its work arrays; opt and p may be NULL: the defaults); sim_advance needs sim and record, and t_eval, i_eval and x_eval when n_eval > 0";
     case GAC_ERR_MAX_STEPS: return "maximum number of steps reached";
@@ -181,7 +181,7 @@ const char *gac_error_message(int code)
     case GAC_ERR_NONFINITE: return "the state became NaN or infinite";
     case GAC_ERR_TOO_MANY_CONTACTS: return "more simultaneous approaching contacts than degrees of freedom";
     case GAC_ERR_SINGULAR_CONTACT: return "the persistent contact constraints are dependent (N I_f^-1 N^T is singular)";
-    case GAC_ERR_IMPACT_ACCURACY: return "the impact law could not be solved to round-off (an impulse < 0, a contact still approaching, an energy gain or an elastic energy change): the impact system is ill-conditioned";
+    case GAC_ERR_IMPACT_ACCURACY: return "the impact law could not be solved to round-off (an impulse < 0, a contact still approaching, an energy gain or an elastic energy change), or only to a round-off bound above GAC_IMPACT_ROUNDOFF_MAX = 1e-2 of the energy, or its elastic rounds (every contact e = 1) did not end: the impact system is ill-conditioned";
     case GAC_ERR_UNSTABLE: return "RK4 is unstable at this step: the chain's fastest mode needs dt below about 2.8 / its rate; reduce dt or use an adaptive method";
     case GAC_ERR_LOST_CONTACT: return "a point lies beyond its wall at an impact: a wall crossing was missed, the motion is too fast or I_f too ill-conditioned (extreme mass, length or inertia ratios) for the tolerance";
     case GAC_ERR_BAD_INPUT: return "an input is NaN or infinite: the inputs given to sim_set_input, and those a controller writes, must be finite";
@@ -190,6 +190,8 @@ const char *gac_error_message(int code)
     case GAC_ERR_WALL_TIME: return "wall-time budget used up: the run took opt.max_wall_time seconds of its clock";
     case GAC_ERR_STOPPED: return "stopped by the progress callback";
     case GAC_ERR_MAX_IMPACTS: return "the max_impacts limit reached: opt.max_impacts impacts applied (raise it to go on)";
+    case GAC_ERR_DRIFT: return "energy drift: the energy balance (E - E(0) - work of the inputs + what dampers, friction and impacts took) left more than energy_tol of the run's energy scale; the flight's integration error is beyond the tolerance: tighten rtol";
+    case GAC_ERR_PROJECTION: return "projecting the state back onto the resting contacts changed the energy by more than energy_tol / 10 of the run's energy scale: the step left the constraints too far; tighten rtol";
     case GAC_ERR_BAD_PARAMETER: return "a parameter is outside its allowed range (not finite, beyond [lo, hi], or nonzero below the smallest normal double) or breaks a relation (a wall's max not above its min, a joint's upper limit not above its lower one, a rigid link's inertia not physical): gac_check_parameters gives its index, the model's parameter_info its name and the values it allows";
     default: return "unknown error code";
     }

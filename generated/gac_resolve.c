@@ -57,6 +57,15 @@ static double gac_impact_roundoff(const gac_model *md, const double *q, const do
     return b > 1e-10 ? b : 1e-10;
 }
 
+/* 1 if an impact with the law's round-off bound b (relative to T) leaves the run without useful accuracy: b above
+ * GAC_IMPACT_ROUNDOFF_MAX (the bound reaches 1e4 on a chain whose I_f is ill-conditioned along the impact's
+ * directions). */
+int gac_impact_inaccurate(const gac_sim *s, double b)
+{
+    (void)s;
+    return b > GAC_IMPACT_ROUNDOFF_MAX;
+}
+
 /* Resolve the impact at state s->xs (time t).
  * Who takes part: every contact within contact_tol of its wall (c_event whatever its gap), every
  * approaching contact within the simultaneity window, and every persistent contact, approaching ones
@@ -81,6 +90,8 @@ static double gac_impact_roundoff(const gac_model *md, const double *q, const do
  * rule would end: its lift velocity is removed with the others' round-off, a bilateral resting
  * constraint, not an impact impulse; the energy it takes is in energy_rest); one lifted higher is
  * released.  The set is brought to rest by gac_hold, which drives no other contact into its wall.
+ * Refused (GAC_ERR_IMPACT_ACCURACY): a bound b that gac_impact_inaccurate refuses, and a plastic closing round when every
+ * contact has e = 1 (the sequence of elastic rounds did not end; a plastic round would take energy silently).
  * Post-conditions, checked here (GAC_ERR_IMPACT_ACCURACY if one fails), to the law's round-off bound b
  * (gac_impact_roundoff, 1e-10 for a well-conditioned I_f): every impulse >= 0; no contact within contact_tol
  * of its wall approaches it faster than 10 b max|v-| + 1e-15 m/s; the kinetic energy does not grow by
@@ -180,6 +191,12 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
                                    &plastic);
     if (code != GAC_OK) return code;
     bound = r->roundoff = gac_impact_roundoff(md, x, s->p, s->work, n, F, x + nq, qd_plus, T_before);
+    if (gac_impact_inaccurate(s, bound)) return GAC_ERR_IMPACT_ACCURACY;   /* no useful accuracy left */
+    if (plastic) {                           /* e = 1 walls only: the plastic closing round would take energy */
+        int all_elastic = 1;
+        for (k = 0; k < n; ++k) all_elastic &= e_law[k] == 1.0;
+        if (all_elastic) return GAC_ERR_IMPACT_ACCURACY;
+    }
     md->energy(x, qd_plus, s->p, E);
     T_law = E[0];
     r->law_elastic = !plastic;                   /* contacts on walls with e < 1 may take part, without impulse */
@@ -279,6 +296,7 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
         if (nset > 0) {          /* holding them changed the velocities too: the bound covers the whole change */
             const double held = gac_impact_roundoff(md, x, s->p, s->work, 0, F, x + nq, s->x1 + nq, T_before);
             if (held > bound) bound = r->roundoff = held;
+            if (gac_impact_inaccurate(s, bound)) return GAC_ERR_IMPACT_ACCURACY;
         }
     }
     if (rounds == 0) {                               /* no impulse: an impact only if a contact lands */
@@ -305,5 +323,6 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
         s->t_last[c] = t;
     }
     gac_set_active(s, nset, set, r);
+    s->energy_impacts += r->energy_before - r->energy_after;
     return 1;
 }

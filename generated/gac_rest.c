@@ -72,7 +72,9 @@ int gac_add_independent(gac_sim *s, const double *x, int *n, int *set, int c)
  * s->gap_held (the gap each had when it landed) by Newton steps dq = -Y (N Y)^-1 (g - g_held)
  * (Y = I_f^-1 N^T, the smallest correction in the mass metric), a contact outside the set that the
  * correction would push deeper into its wall being held where it is (an active set); then the normal
- * velocities to 0, qd -= Y (N Y)^-1 N qd: a plastic impact, so the kinetic energy cannot grow. */
+ * velocities to 0, qd -= Y (N Y)^-1 N qd: a plastic impact, so the kinetic energy cannot grow.  With positions,
+ * the energy change is what the step left off the constraints (gac_energy_projected: summed, and
+ * GAC_ERR_PROJECTION beyond its tolerance). */
 int gac_project(gac_sim *s, double *x, int n, const int *set, int positions)
 {
     const gac_model *md = s->model;
@@ -83,6 +85,7 @@ int gac_project(gac_sim *s, double *x, int n, const int *set, int positions)
     double corr[nq], target[nq];
     double *Y = GAC_WORK_Y(md, s->work), *A = GAC_WORK_A(md, s->work);
     int held[nq], in_set[nc1], a, c, i, it, code, m = n;
+    const double E_before = positions && n > 0 ? gac_total_energy(md, x, s->p) : 0.0;
     if (n == 0) return GAC_OK;
     g[0] = g0[0] = 0.0;
     md->contact_gaps(x, s->p, g0);
@@ -128,7 +131,7 @@ int gac_project(gac_sim *s, double *x, int n, const int *set, int positions)
     for (i = 0; i < nq; ++i) {
         for (a = 0; a < n; ++a) x[nq + i] += Y[a*nq + i] * corr[a];
     }
-    return GAC_OK;
+    return positions ? gac_energy_projected(s, E_before, x) : GAC_OK;   /* what it changed in the energy */
 }
 
 /* Of the contacts set[0..*n-1] (at their walls, normal velocities 0), keep those that push in the

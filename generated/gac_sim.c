@@ -27,6 +27,7 @@ void gac_default_options(gac_options *opt)
     opt->zeno_impacts = 20;
     opt->max_wall_time = 0.0;
     opt->max_impacts = 10000;
+    opt->energy_tol = -1.0;
 }
 
 int gac_check_options(const gac_options *opt, const char **field)
@@ -61,6 +62,9 @@ int gac_check_options(const gac_options *opt, const char **field)
         bad = "max_wall_time: must be within [0, 1e300) s (0: unbounded)";
     else if (opt->max_impacts < 0)
         bad = "max_impacts: must be >= 0 (0: unbounded)";
+    else if (!(opt->energy_tol < 1.0))
+        bad = "energy_tol: must be < 1 and not NaN (the energy balance's allowed residual per energy scale; < 0: "
+              "automatic, 0: off)";
     if (field != 0) *field = bad;
     return bad == 0 ? GAC_OK : GAC_ERR_BAD_OPTION;
 }
@@ -256,6 +260,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
         int code = gac_rest_at_start(s);
         if (code < 0) return code;
     }
+    gac_energy_start(s);
     gac_events(s, s->t, s->x, s->ev);
     return s->fail < 0 ? s->fail : GAC_OK;
 }
@@ -592,6 +597,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             s->f_valid = s->vn_valid = 0;
             gac_events(s, s->t, s->x, s->ev);
             if (s->fail) return s->fail;
+            if (gac_energy_check(s) != GAC_OK) return GAC_ERR_DRIFT;
             if (released) {                       /* a wall crossing counts once the gap has opened again */
                 for (i = 0; i < record->nreleased; ++i) {
                     if (s->ev[record->released[i]] > 0.0) s->ev[record->released[i]] = 0.0;
@@ -622,6 +628,10 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             s->f_valid = s->vn_valid = 0;
             gac_events(s, s->t, s->x, s->ev);
             if (s->fail) return s->fail;
+        }
+        {
+            const int code = gac_energy_check(s);
+            if (code != GAC_OK) return code;
         }
     }
     while (n_eval > 0 && *i_eval < n_eval && t_eval[*i_eval] <= t_end) {   /* samples at t_end itself */

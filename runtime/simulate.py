@@ -245,6 +245,7 @@ LOOP_OPTIONS = {
     "max_wall_time": "s of wall time the run may take (None: unbounded)",
     "rest_height": "m: a bounce rising less than this ends in resting contact (None: 10 contact_tol; 0: never)",
     "zeno_impacts": "a contact rests after this many impacts at shrinking intervals (0: never)",
+    "energy_tol": "the energy balance's allowed residual per energy scale (None: automatic; 0: off)",
 }
 _INTEGER_OPTIONS = ("event_samples", "max_steps", "max_impacts", "zeno_impacts")
 
@@ -360,8 +361,13 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     keep_impacts  False: count the impacts (len(result.impacts), t_first_impact, energy_impact_loss) without
                   keeping their records, for studies of many runs
     **options     the C loop's options (LOOP_OPTIONS: rtol, atol, dt, h_max, event_samples, event_tol, contact_tol,
-                  max_steps, max_impacts, max_wall_time, rest_height, zeno_impacts), with the C library's defaults
+                  max_steps, max_impacts, max_wall_time, rest_height, zeno_impacts, energy_tol), with the C library's
+                  defaults
                   and ranges; the budgets stop the run with status -1 and a message that says where the time went
+                  energy_tol: the energy balance's allowed residual relative to the run's energy scale: the C loop
+                  stops with status -1 ("energy drift") at the first step end where E - E0 - W_inputs + D_dampers +
+                  D_friction + impact losses exceeds it (gac.h, "Energy balance"); None: min(0.1, max(1e-8, 1e4 rtol))
+                  for dopri5 / dop853, off for rk4; 0: off
     Samples, final state and impact states are returned in the full layout of Eq. 13 whatever the model.
     """
     model = scene if isinstance(scene, CompiledModel) else load_model(scene)
@@ -423,7 +429,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     if code == lib.GAC_ERR_BAD_INPUT and source.error is not None:
         raise source.error
     status, message = (0, "reached t_end") if code == lib.GAC_SIM_END else \
-        (-1, _stop_message(model, state, code, segment_t, segment_steps, len(impacts)))
+        (-1, _stop_message(model, state, code, segment_t, segment_steps, len(impacts), rec))
     if charts and code == lib.GAC_ERR_GIMBAL_LOCK and (model.scene.driven or model.scene.stops()):
         message += " (the second base chart is not available for a chain with inputs, springs, dampers or limits)"
     elif charts and code == lib.GAC_ERR_GIMBAL_LOCK:
@@ -468,7 +474,7 @@ def _option_value(opt, name: str):
     """An option as the run used it, None where the C value means 'automatic' or 'unbounded' (dt, rest_height,
     max_wall_time)."""
     value = getattr(opt, name)
-    if name in ("dt", "max_wall_time") and value == 0.0 or name == "rest_height" and value < 0.0:
+    if name in ("dt", "max_wall_time") and value == 0.0 or name in ("rest_height", "energy_tol") and value < 0.0:
         return None
     return int(value) if name in _INTEGER_OPTIONS else float(value)
 
@@ -678,9 +684,11 @@ def _step_diagnosis(model: CompiledModel, sim, t_from: float, steps: int) -> str
             "max_steps / max_wall_time or loosen rtol/atol")
 
 
-def _stop_message(model: CompiledModel, sim, code: int, segment_t: float, segment_steps: int, n_impacts: int) -> str:
-    """The result's message for a run the C loop stopped with ``code``: the loop's reason, and for the budgets and
-    RK4's stability rule what the run was doing (the loop decided; this only reports)."""
+def _stop_message(model: CompiledModel, sim, code: int, segment_t: float, segment_steps: int, n_impacts: int,
+                  record=None) -> str:
+    """The result's message for a run the C loop stopped with ``code``: the loop's reason, and for the budgets,
+    RK4's stability rule, the energy balance and an impact's accuracy what the run was doing (the loop decided;
+    this only reports its numbers; record: the C impact record, for the impact's round-off bound)."""
     lib = model.lib
     max_steps, max_wall_time, dt = int(sim.opt.max_steps), float(sim.opt.max_wall_time), float(sim.opt.dt)
     where = f"at t = {float(sim.t):.12g} s"
@@ -700,6 +708,14 @@ def _stop_message(model: CompiledModel, sim, code: int, segment_t: float, segmen
     if code == lib.GAC_ERR_UNSTABLE:
         message += (f" (dt = {dt:g} s: h rho = {float(sim.rk4_h_rho):.3g} in the last step, rho the rate of the "
                     "chain's fastest mode seen in it)")
+    if code in (lib.GAC_ERR_DRIFT, lib.GAC_ERR_PROJECTION):
+        residual, scale = float(sim.energy_residual), float(sim.energy_scale)
+        message += (f" (the balance's residual is {residual:.3g} J, {abs(residual) / scale:.3g} of the scale "
+                    f"{scale:.6g} J; projections onto resting contacts changed the energy by "
+                    f"{float(sim.energy_projection):.3g} J in all, impacts took {float(sim.energy_impacts):.6g} J)")
+    if code == lib.GAC_ERR_IMPACT_ACCURACY and record is not None:
+        message += (f" (this impact's energy is known only to {float(record.roundoff):.3g} relative, its law's "
+                    "round-off bound)")
     if code == lib.GAC_ERR_NONFINITE and sim.opt.method == lib.GAC_METHOD_RK4:
         message += f" (rk4 with dt = {dt:g} s is unstable on this motion: reduce dt, or use an adaptive method)"
     return message

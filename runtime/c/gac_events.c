@@ -179,6 +179,26 @@ static int gac_dip_candidates(gac_sim *s, double t1, int *cand, double *speed, d
     return n;
 }
 
+/* 1 if at the sample state s->xs a free contact lies beyond its wall by more than contact_tol plus the
+ * simultaneity window (the depth gac_resolve refuses at an impact) while no crossing was located before it: a
+ * crossing was missed (the motion too fast, or I_f too ill-conditioned, for the tolerance).  g: the event values
+ * at the sample time t (gaps of the free contacts). */
+static int gac_lost_contact(gac_sim *s, double t, const double *g)
+{
+    const gac_model *md = s->model;
+    double depth = -1.0;
+    int c;
+    for (c = 0; c < md->ncontact; ++c) {
+        if (s->is_active[c] || !(g[c] < -s->opt.contact_tol)) continue;
+        if (depth < 0.0) {
+            gac_dense(s, t, s->xs);
+            depth = s->opt.contact_tol + gac_simultaneity_window(s, s->xs);
+        }
+        if (g[c] < -depth) return 1;
+    }
+    return 0;
+}
+
 /* Search the accepted step for the first event at event_samples points of the interpolant (the step ends
  * included), so that a dip through a wall and back inside one step is still seen.  Events: a wall
  * crossing (gap from > 0 to <= 0 between samples, or below 0 at a gap minimum between two samples where
@@ -188,6 +208,8 @@ static int gac_dip_candidates(gac_sim *s, double t1, int *cand, double *speed, d
  * below reach = speed x the interval (a contact farther from its wall cannot dip to it unless its normal
  * speed inside the step exceeds twice the sum of those at the step ends); only there are the normal
  * velocities at the samples evaluated.
+ * A free contact found beyond its wall deeper than the lost-contact depth at a sample before any event
+ * (gac_lost_contact) sets s->fail = GAC_ERR_LOST_CONTACT (returned as an event at that sample).
  * Returns 1 with *t_event and *c_event, or 0; s->eprev ends as the event values at the step end. */
 int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
 {
@@ -246,6 +268,12 @@ int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
                 *c_event = c;
             }
             found = 1;
+        }
+        if (!found && gac_lost_contact(s, tj, gj)) {     /* beyond its wall with no crossing to locate */
+            if (s->fail == 0) s->fail = GAC_ERR_LOST_CONTACT;
+            *t_event = tj;
+            *c_event = 0;
+            return 1;
         }
         gac_copy(s->eprev, gj, md->ncontact);
         if (have_v) gac_copy(vprev, vj, md->ncontact);

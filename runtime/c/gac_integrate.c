@@ -57,6 +57,14 @@ static double gac_norm(gac_sim *s, const double *d, const double *y0, const doub
     return sqrt(sum / md->nx);
 }
 
+/* A step's error norm with its energy error (gac_step_energy_error: 0 where the flight is not conservative):
+ * the larger of the two, so that the step also keeps the energy to the tolerance. */
+static double gac_with_energy(gac_sim *s, double err)
+{
+    const double e = gac_step_energy_error(s);
+    return e > err ? e : err;
+}
+
 /* Starting step for DOPRI5 (Hairer, Norsett & Wanner, Solving ODEs I, Sect. II.4). */
 double gac_initial_step(gac_sim *s, double t_end)
 {
@@ -192,7 +200,7 @@ double gac_dopri5_step(gac_sim *s, double h)
     gac_stage5(nq, s->x1, s->x, h, a71, k1, a73, k3, a74, k4, a75, k5, a76, k6);
     gac_f(s, t + h, s->x1, k7);
     gac_error6(nq, s->xs, h, e1, k1, e3, k3, e4, k4, e5, k5, e6, k6, e7, k7);   /* the error estimate, in xs */
-    return gac_norm(s, s->xs, s->x, s->x1);
+    return gac_with_energy(s, gac_norm(s, s->xs, s->x, s->x1));
 }
 
 /* DOP853 stages first..last-1: K[stage] = f(t + c[stage] h, x + h sum_j a[stage][j] K[j]). */
@@ -243,8 +251,8 @@ double gac_dop853_step(gac_sim *s, double h)
             s->err_index = i;
         }
     }
-    if (e5 == 0.0 && e3 == 0.0) return 0.0;
-    return fabs(h) * e5 / sqrt((e5 + 0.01 * e3) * nx);
+    if (e5 == 0.0 && e3 == 0.0) return gac_with_energy(s, 0.0);
+    return gac_with_energy(s, fabs(h) * e5 / sqrt((e5 + 0.01 * e3) * nx));
 }
 
 /* The dense outputs on the nx = 2 nq state entries (separate functions for the reason given at gac_stage1):

@@ -898,6 +898,71 @@ static void test_impact_law(void)
           qd_plus[0], qd_plus[1]);
 }
 
+/* The loop's own rules for schedules, impact counts and options.
+ * A held schedule on the ball (m, g; no impact before t = 0.6): u = 0, then m (g + 4) from t = 0.2, then 0 from
+ * t = 0.5, so y is quadratic on each interval: y(0.2) = 1 - g 0.2^2 / 2, v(0.2) = -0.2 g; y(0.5) = y(0.2) + 0.3
+ * v(0.2) + 2 0.3^2, v(0.5) = v(0.2) + 4 0.3; y(0.6) = y(0.5) + 0.1 v(0.5) - g 0.1^2 / 2.  DOPRI5 is exact on
+ * quadratics, so with every jump on a step boundary the result is exact to round-off; a jump inside a step
+ * leaves an error of the order of the tolerance (1e-6 here).  A linear schedule 0 -> 10 m over [0, 0.4] (then
+ * 10 m): y'' = -g + 25 t, y(0.4) = 1 - g 0.4^2 / 2 + 25 0.4^3 / 6, v(0.4) = -0.4 g + 25 0.4^2 / 2, then y'' = 10 - g. */
+static void test_loop_rules(void)
+{
+    const double g = ball_p[0], m = ball_p[1];
+    const double t_held[3] = {0.0, 0.2, 0.5}, u_held[3] = {0.0, 2.0 * (9.81 + 4.0), 0.0};
+    const double t_lin[2] = {0.0, 0.4}, u_lin[2] = {0.0, 2.0 * 10.0};
+    const gac_schedule held = {3, 1, t_held, u_held, 0}, linear = {2, 1, t_lin, u_lin, 1};
+    const gac_schedule wrong = {2, 2, t_lin, u_lin, 0};
+    const double y2 = 1.0 - g * 0.04 / 2.0, v2 = -0.2 * g, y5 = y2 + 0.3 * v2 + 2.0 * 0.09, v5 = v2 + 1.2;
+    const double y6 = y5 + 0.1 * v5 - g * 0.01 / 2.0;
+    const double y4 = 1.0 - g * 0.16 / 2.0 + 25.0 * 0.064 / 6.0, v4 = -0.4 * g + 25.0 * 0.16 / 2.0;
+    const double y6_lin = y4 + 0.2 * v4 + (10.0 - g) * 0.04 / 2.0;
+    const char *field = 0;
+    gac_options opt;
+    gac_sim sim;
+    gac_impact_record rec;
+    int code, n;
+    (void)m;
+    gac_record_bind(&rec, &ball, rdwork, riwork);
+    gac_default_options(&opt);
+    opt.rtol = 1e-6;
+    opt.atol = 1e-8;
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt) == GAC_OK, "init");
+    CHECK(gac_sim_set_schedule(&sim, &wrong) == GAC_ERR_BAD_OPTION && sim.schedule == 0, "a schedule of 2 inputs refused");
+    CHECK(gac_sim_set_schedule(&sim, &held) == GAC_OK, "held schedule set");
+    code = gac_sim_advance(&sim, 0.6, 0, 0, 0, 0, &rec);
+    CHECK(code == GAC_SIM_END && NEAR(sim.x[0], y6, 1e-12) && NEAR(sim.x[1], v5 - 0.1 * g, 1e-12),
+          "held schedule: y(0.6) = %.17g, exact %.17g", sim.x[0], y6);
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt) == GAC_OK, "init");
+    CHECK(gac_sim_set_schedule(&sim, &linear) == GAC_OK, "linear schedule set");
+    code = gac_sim_advance(&sim, 0.6, 0, 0, 0, 0, &rec);
+    CHECK(code == GAC_SIM_END && NEAR(sim.x[0], y6_lin, 1e-12), "linear schedule: y(0.6) = %.17g, exact %.17g",
+          sim.x[0], y6_lin);
+
+    /* max_impacts: the ball bounces (e = 0.8); after 2 impacts the next advance stops before any step */
+    gac_default_options(&opt);
+    opt.max_impacts = 2;
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt) == GAC_OK, "init");
+    for (n = 0; (code = gac_sim_advance(&sim, 5.0, 0, 0, 0, 0, &rec)) == GAC_SIM_IMPACT; ++n) {}
+    CHECK(code == GAC_ERR_MAX_IMPACTS && n == 2 && sim.n_impacts == 2 && sim.t == rec.t,
+          "stopped after 2 impacts at the second one: code %d, n %d, t %g", code, n, sim.t);
+    sim.opt.max_impacts = 0;
+    code = gac_sim_advance(&sim, 5.0, 0, 0, 0, 0, &rec);
+    CHECK(code == GAC_SIM_IMPACT && sim.n_impacts == 3, "raising the limit goes on");
+
+    /* gac_check_options names the option out of range */
+    gac_default_options(&opt);
+    CHECK(gac_check_options(&opt, &field) == GAC_OK && field == 0, "defaults pass");
+    opt.rtol = 0.0;
+    CHECK(gac_check_options(&opt, &field) == GAC_ERR_BAD_OPTION && strncmp(field, "rtol: ", 6) == 0, "rtol named");
+    gac_default_options(&opt);
+    opt.max_impacts = -1;
+    CHECK(gac_check_options(&opt, &field) == GAC_ERR_BAD_OPTION && strncmp(field, "max_impacts: ", 13) == 0,
+          "max_impacts named");
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt) == GAC_ERR_BAD_OPTION,
+          "sim_init applies the same check");
+    CHECK(gac_check_options(0, &field) == GAC_ERR_NULL_ARGUMENT, "NULL options");
+}
+
 int main(int argc, char **argv)
 {
     broken = argc > 1 && strcmp(argv[1], "--break") == 0;
@@ -917,6 +982,7 @@ int main(int argc, char **argv)
     test_events();
     test_resting_contact();
     test_impact_law();
+    test_loop_rules();
     printf("%d checks, %d failed\n", checks, failures);
     return failures == 0 ? 0 : 1;
 }

@@ -97,232 +97,356 @@ int gac_impact_inaccurate(const gac_sim *s, double b)
  * of its wall approaches it faster than 10 b max|v-| + 1e-15 m/s; the kinetic energy does not grow by
  * more than b T and, when every contact that takes an impulse has e = 1, changes by at most b T.  The state
  * after the impact is in s->x1.  Returns 1 (impact applied), 0 (graze) or an error. */
-int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
+/* One impact being resolved: what gac_resolve's steps share (the arrays live on gac_resolve's stack). */
+typedef struct {
+    double t;              /* the impact time (s) */
+    const double *x;       /* the state there, s->xs */
+    int c_event;           /* the contact whose crossing was located */
+    int n;                 /* contacts taking part: list[0..n-1] (indices of the model's contacts) */
+    int first;             /* the position of c_event in list, or -1 */
+    int *list, *landing, *shrinking;
+    double *gaps, *vn, *an; /* per model contact: gap, normal velocity (before; after, once the law is applied),
+                               normal acceleration towards the wall with the persistent contacts held */
+    double *e, *e_law;     /* per contact taking part: the restitution applied, and its wall's own */
+    double *qd_plus, *F;   /* the law's velocities and impulses */
+    double scale;          /* the largest |normal velocity| before (m/s) */
+    double height;         /* the rest height in force (m; 0: no landings by it) */
+    double T_before, T_law, bound;
+    int rounds, plastic;
+} gac_impact_event;
+
+/* 1 if the event at ev->x is an impact: a contact that is not persistent approaches its wall faster than
+ * gac_v_round within contact_tol (c_event whatever its gap), or c_event came back to its wall at its apex; 0: a
+ * grazing touch, nothing to resolve. */
+static int gac_is_impact(const gac_sim *s, gac_impact_event *ev)
 {
     const gac_model *md = s->model;
-    const int nc1 = GAC_AT_LEAST_1(md->ncontact);
-    const int nq = md->nq;
-    double gaps[nc1], vn[nc1], an[nc1];
-    double e[nq], e_law[nq], qd_plus[nq], F[nq], E[2];
-    double scale = 0.0, v_hold, v_rest, approach_tol, T_before, T_after, T_law, bound, height = 0.0, window;
-    int list[nq], landing[nq], shrinking[nc1], set[nq];
-    int c, i, k, pass, n = 0, nset = 0, impact = 0, elastic = 1, changed = 0, first = -1, code, rounds, plastic;
-    double *x = s->xs;
-    md->contact_gaps(x, s->p, gaps);
-    gac_normal_velocities(md, x, s->p, vn);
-    r->ncontact = 0;
-    r->nactivated = r->nreleased = 0;
-    r->rounds = r->plastic = r->law_elastic = 0;
-    r->energy_rest = 0.0;
-    r->roundoff = 1e-10;
-    v_rest = gac_v_round(md, vn);
+    const double v_rest = gac_v_round(md, ev->vn);
+    int c, impact = 0;
+    ev->scale = 0.0;
     for (c = 0; c < md->ncontact; ++c) {
-        if (fabs(vn[c]) > scale) scale = fabs(vn[c]);
-        if (!s->is_active[c] && (((c == c_event || gaps[c] <= s->opt.contact_tol) && vn[c] < -v_rest)
-                                 || (c == c_event && gaps[c] <= 0.0 && vn[c] <= 0.0)))   /* back at the apex */
+        const double gap = ev->gaps[c], v = ev->vn[c];
+        if (fabs(v) > ev->scale) ev->scale = fabs(v);
+        if (!s->is_active[c] && (((c == ev->c_event || gap <= s->opt.contact_tol) && v < -v_rest)
+                                 || (c == ev->c_event && gap <= 0.0 && v <= 0.0)))   /* back at the apex */
             impact = 1;
     }
-    if (!impact) return 0;                               /* grazing touch: nothing to resolve */
-    {
-        /* every other point must be on the right side of its wall, to the event search's tolerance */
-        const double depth = s->opt.contact_tol + gac_simultaneity_window(s, x);
-        for (c = 0; c < md->ncontact; ++c) {
-            if (gaps[c] < -depth) return GAC_ERR_LOST_CONTACT;
-        }
+    return impact;
+}
+
+/* Who takes part: every contact within contact_tol of its wall, c_event, every approaching contact within the
+ * simultaneity window and every persistent one, approaching ones first, then those at rest, then separating ones
+ * (at most nq: more approaching ones is GAC_ERR_TOO_MANY_CONTACTS; resting or leaving ones beyond nq are held by the
+ * others).  Before that, every other point must be on the right side of its wall to the event search's tolerance
+ * (GAC_ERR_LOST_CONTACT) and the base chart usable (GAC_ERR_GIMBAL_LOCK). */
+static int gac_gather(const gac_sim *s, gac_impact_event *ev)
+{
+    const gac_model *md = s->model;
+    const double v_rest = gac_v_round(md, ev->vn);
+    const double depth = s->opt.contact_tol + gac_simultaneity_window(s, ev->x);
+    const double window = gac_simultaneity_window(s, ev->x);
+    int c, pass;
+    for (c = 0; c < md->ncontact; ++c) {
+        if (ev->gaps[c] < -depth) return GAC_ERR_LOST_CONTACT;
     }
-    if (gac_chart_measure(md, x) < gac_chart_floor(s)) return GAC_ERR_GIMBAL_LOCK;
-    window = gac_simultaneity_window(s, x);
+    if (gac_chart_measure(md, ev->x) < gac_chart_floor(s)) return GAC_ERR_GIMBAL_LOCK;
+    ev->n = 0;
+    ev->first = -1;
     for (pass = 0; pass < 3; ++pass) {                   /* approaching, then at rest, then separating */
         for (c = 0; c < md->ncontact; ++c) {
-            const int near = s->is_active[c] || c == c_event || gaps[c] <= s->opt.contact_tol
-                             || (vn[c] < -v_rest && gaps[c] <= window);
-            const int kind = vn[c] < 0.0 ? 0 : vn[c] == 0.0 ? 1 : 2;
+            const int near = s->is_active[c] || c == ev->c_event || ev->gaps[c] <= s->opt.contact_tol
+                             || (ev->vn[c] < -v_rest && ev->gaps[c] <= window);
+            const int kind = ev->vn[c] < 0.0 ? 0 : ev->vn[c] == 0.0 ? 1 : 2;
             if (!near || kind != pass) continue;
-            if (n == nq) {
+            if (ev->n == md->nq) {
                 if (pass == 0) return GAC_ERR_TOO_MANY_CONTACTS;
                 continue;                                /* resting or leaving: the others hold it */
             }
-            if (c == c_event) first = n;
-            list[n++] = c;
+            if (c == ev->c_event) ev->first = ev->n;
+            ev->list[ev->n++] = c;
         }
     }
-    r->t = t;
-    md->energy(x, x + nq, s->p, E);
-    T_before = E[0];
-    if (!gac_finite(E, 2)) return GAC_ERR_NONFINITE;
-    r->energy_before = E[0] + E[1];
-    for (i = 0; i < nq; ++i) {
-        r->q[i] = x[i];
-        r->qd_before[i] = x[nq + i];
-    }
-    /* who lands */
+    return GAC_OK;
+}
+
+/* Who lands: a contact that approaches a wall with e < 1 and whose bounce would rise less than the rest height h
+ * ((e v-)^2 <= 2 a h, a its normal acceleration towards the wall with the persistent contacts held; h = rest_height,
+ * never below the resolution of the positions, graze_depth + 16 eps l, unless both rules are off), or that has had
+ * zeno_impacts impacts at shrinking intervals, is struck with e = 0.  On a wall with e = 1 a contact lands only if
+ * it arrives at rest (v-^2 <= 2 a h).  A persistent contact takes part with its own e (at rest e does not matter;
+ * driven into its wall in a later round, it bounces) and stays if it ends at rest. */
+static int gac_who_lands(gac_sim *s, gac_impact_event *ev)
+{
+    const gac_model *md = s->model;
+    int c, k;
     for (c = 0; c < md->ncontact; ++c) {
-        an[c] = 0.0;
-        /* impacts of c at shrinking intervals */
-        shrinking[c] = s->dt_last[c] >= 0.0 && t - s->t_last[c] <= s->dt_last[c];
+        ev->an[c] = 0.0;
+        ev->shrinking[c] = s->dt_last[c] >= 0.0 && ev->t - s->t_last[c] <= s->dt_last[c];   /* shrinking intervals */
     }
+    ev->height = 0.0;
     if (s->rest_height > 0.0 || s->opt.zeno_impacts > 0) {
-        const double floor = gac_graze_depth(s, x) + 16.0 * GAC_EPS * gac_extent(s, x);
-        height = s->rest_height > floor ? s->rest_height : floor;
-        code = gac_normal_accelerations(s, t, x, s->nactive, s->active, an);
+        const double floor = gac_graze_depth(s, ev->x) + 16.0 * GAC_EPS * gac_extent(s, ev->x);
+        const int code = gac_normal_accelerations(s, ev->t, ev->x, s->nactive, s->active, ev->an);
         if (code != GAC_OK) return code;
+        ev->height = s->rest_height > floor ? s->rest_height : floor;
     }
-    for (k = 0; k < n; ++k) {
-        c = list[k];
-        e_law[k] = e[k] = gac_restitution(md, s->p, c);
-        landing[k] = s->is_active[c];                 /* a persistent contact stays if it ends at rest */
-        if (s->is_active[c]) {
-            /* its own e: at rest (v = 0) e does not matter; driven into its wall in a later round, it bounces */
-        } else if (vn[c] <= 0.0 && gaps[c] <= s->opt.contact_tol) {
-            const double reach = 2.0 * (-an[c]) * height;   /* v^2 of a bounce that rises that high */
-            const double bounce = e_law[k] < 1.0 ? e_law[k] * vn[c] : vn[c];   /* e = 1: arrived at rest */
-            const int rests = an[c] < 0.0 && bounce * bounce <= reach;
-            const int zeno = e_law[k] < 1.0 && s->opt.zeno_impacts > 0 && shrinking[c]
+    for (k = 0; k < ev->n; ++k) {
+        c = ev->list[k];
+        ev->e_law[k] = ev->e[k] = gac_restitution(md, s->p, c);
+        ev->landing[k] = s->is_active[c];
+        if (!s->is_active[c] && ev->vn[c] <= 0.0 && ev->gaps[c] <= s->opt.contact_tol) {
+            const double reach = 2.0 * (-ev->an[c]) * ev->height;   /* v^2 of a bounce that rises that high */
+            const double bounce = ev->e_law[k] < 1.0 ? ev->e_law[k] * ev->vn[c] : ev->vn[c];   /* e = 1: at rest */
+            const int rests = ev->an[c] < 0.0 && bounce * bounce <= reach;
+            const int zeno = ev->e_law[k] < 1.0 && s->opt.zeno_impacts > 0 && ev->shrinking[c]
                              && s->n_shrink[c] + 1 >= s->opt.zeno_impacts;
             if (rests || zeno) {
-                landing[k] = 1;
-                e[k] = 0.0;
+                ev->landing[k] = 1;
+                ev->e[k] = 0.0;
             }
         }
     }
-    /* the law with every contact's own e, then (if some contact lands) with the landings plastic; a landing
-     * on a wall with e = 1 is kept only if it takes no more than round-off energy (it arrived at rest) */
-    code = gac_impact_rounds(md, x, x + nq, s->p, n, list, e_law, first, qd_plus, F, s->work, &rounds,
-                                   &plastic);
+    return GAC_OK;
+}
+
+/* The law (gac_impact_rounds: Newton's law, Eq. 47, with complementarity, in rounds) with every contact's own e,
+ * its round-off bound and its own verdict (refused: a bound gac_impact_inaccurate refuses, a plastic closing round
+ * when every contact has e = 1, an elastic law that changed the energy beyond its bound); then, if some contact
+ * lands, with the landings plastic, a landing on an e = 1 wall kept only if it takes no more than round-off
+ * energy (it arrived at rest).  r->rounds, plastic, law_elastic, roundoff. */
+static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq;
+    const double *x = ev->x;
+    double E[2];
+    int k, pass, changed = 0, all_elastic = 1, code;
+    code = gac_impact_rounds(md, x, x + nq, s->p, ev->n, ev->list, ev->e_law, ev->first, ev->qd_plus, ev->F,
+                             s->work, &ev->rounds, &ev->plastic);
     if (code != GAC_OK) return code;
-    bound = r->roundoff = gac_impact_roundoff(md, x, s->p, s->work, n, F, x + nq, qd_plus, T_before);
-    if (gac_impact_inaccurate(s, bound)) return GAC_ERR_IMPACT_ACCURACY;   /* no useful accuracy left */
-    if (plastic) {                           /* e = 1 walls only: the plastic closing round would take energy */
-        int all_elastic = 1;
-        for (k = 0; k < n; ++k) all_elastic &= e_law[k] == 1.0;
-        if (all_elastic) return GAC_ERR_IMPACT_ACCURACY;
+    ev->bound = r->roundoff = gac_impact_roundoff(md, x, s->p, s->work, ev->n, ev->F, x + nq, ev->qd_plus,
+                                                  ev->T_before);
+    if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;   /* no useful accuracy left */
+    for (k = 0; k < ev->n; ++k) all_elastic &= ev->e_law[k] == 1.0;
+    if (ev->plastic && all_elastic) return GAC_ERR_IMPACT_ACCURACY;   /* the plastic closing round takes energy */
+    md->energy(x, ev->qd_plus, s->p, E);
+    ev->T_law = E[0];
+    r->law_elastic = !ev->plastic;              /* contacts on walls with e < 1 may take part, without impulse */
+    for (k = 0; k < ev->n; ++k) {
+        if (ev->F[k] > 0.0 && ev->e_law[k] != 1.0) r->law_elastic = 0;
     }
-    md->energy(x, qd_plus, s->p, E);
-    T_law = E[0];
-    r->law_elastic = !plastic;                   /* contacts on walls with e < 1 may take part, without impulse */
-    for (k = 0; k < n; ++k) {
-        if (F[k] > 0.0 && e_law[k] != 1.0) r->law_elastic = 0;
-    }
-    if (r->law_elastic && fabs(T_law - T_before) > bound * T_before) return GAC_ERR_IMPACT_ACCURACY;
-    for (k = 0; k < n; ++k) changed |= e[k] != e_law[k];
+    if (r->law_elastic && fabs(ev->T_law - ev->T_before) > ev->bound * ev->T_before) return GAC_ERR_IMPACT_ACCURACY;
+    for (k = 0; k < ev->n; ++k) changed |= ev->e[k] != ev->e_law[k];
     for (pass = 0; changed && pass < 2; ++pass) {
         int elastic_landing = 0;
-        code = gac_impact_rounds(md, x, x + nq, s->p, n, list, e, first, qd_plus, F, s->work, &rounds,
-                                       &plastic);
+        code = gac_impact_rounds(md, x, x + nq, s->p, ev->n, ev->list, ev->e, ev->first, ev->qd_plus, ev->F,
+                                 s->work, &ev->rounds, &ev->plastic);
         if (code != GAC_OK) return code;
-        md->energy(x, qd_plus, s->p, E);
-        for (k = 0; k < n; ++k) {
-            if (landing[k] && !s->is_active[list[k]] && e_law[k] == 1.0 && T_law - E[0] > bound * T_before) {
-                landing[k] = 0;
-                e[k] = 1.0;
+        md->energy(x, ev->qd_plus, s->p, E);
+        for (k = 0; k < ev->n; ++k) {
+            if (ev->landing[k] && !s->is_active[ev->list[k]] && ev->e_law[k] == 1.0
+                && ev->T_law - E[0] > ev->bound * ev->T_before) {
+                ev->landing[k] = 0;
+                ev->e[k] = 1.0;
                 elastic_landing = 1;
             }
         }
         if (!elastic_landing) break;
     }
-    r->rounds = rounds;
-    r->plastic = plastic;
+    r->rounds = ev->rounds;
+    r->plastic = ev->plastic;
+    return GAC_OK;
+}
+
+/* The record's contacts (those that approached or took an impulse) and the law's post-conditions at the impact
+ * configuration, to its round-off bound b: every impulse >= 0, the kinetic energy not grown by more than b T and,
+ * when every contact that takes an impulse has e = 1 and no plastic round closed the rounds, changed by at most
+ * b T.  The state after the law is in s->x1. */
+static int gac_check_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq;
+    double E[2], T_after;
+    int i, k, elastic = 1;
     for (i = 0; i < nq; ++i) {
-        s->x1[i] = x[i];
-        s->x1[nq + i] = qd_plus[i];
+        s->x1[i] = ev->x[i];
+        s->x1[nq + i] = ev->qd_plus[i];
     }
     md->energy(s->x1, s->x1 + nq, s->p, E);
     T_after = E[0];
-    r->energy_rest = T_law - T_after;
-    /* the record: the contacts that approached or took an impulse */
-    r->complementarity = rounds > 1;
-    for (k = 0; k < n; ++k) {
-        c = list[k];
-        if (F[k] > 0.0 || (!s->is_active[c] && vn[c] < 0.0)) {
+    r->energy_rest = ev->T_law - T_after;
+    r->complementarity = ev->rounds > 1;
+    for (k = 0; k < ev->n; ++k) {
+        const int c = ev->list[k];
+        if (ev->F[k] > 0.0 || (!s->is_active[c] && ev->vn[c] < 0.0)) {
             r->contact[r->ncontact] = c;
-            r->impulse[r->ncontact++] = F[k];
-            if (!(F[k] > 0.0) || !(vn[c] < 0.0)) r->complementarity = 1;
-            if (F[k] > 0.0 && e[k] != 1.0) elastic = 0;
+            r->impulse[r->ncontact++] = ev->F[k];
+            if (!(ev->F[k] > 0.0) || !(ev->vn[c] < 0.0)) r->complementarity = 1;
+            if (ev->F[k] > 0.0 && ev->e[k] != 1.0) elastic = 0;
         }
-        if (F[k] < 0.0) return GAC_ERR_IMPACT_ACCURACY;
+        if (ev->F[k] < 0.0) return GAC_ERR_IMPACT_ACCURACY;
     }
-    /* post-conditions of the law (kinetic energy at the impact configuration), to its round-off bound */
-    if (T_after > T_before * (1.0 + bound) + 1e-300) return GAC_ERR_IMPACT_ACCURACY;
-    if (elastic && !plastic && fabs(T_after - T_before) > bound * T_before) return GAC_ERR_IMPACT_ACCURACY;
-    /* the persistent set: landing and persistent contacts that end at rest, and any other contact within
-     * contact_tol of its wall that the law leaves at rest (after a plastic round, or rounds that end at
-     * round-off, whatever its approach speed; holding it takes no energy): held, it rests if it pushes
-     * (gac_settle); left free, a contact pressed into its wall would sink from gap <= 0, where no crossing
-     * is looked for */
-    gac_normal_velocities(md, s->x1, s->p, vn);
-    v_hold = 1e-9 * scale;                          /* at rest, to the law's round-off */
-    for (k = 0; k < n; ++k) {
-        c = list[k];
-        const int left_at_rest = height > 0.0 && !s->is_active[c] && gaps[c] <= s->opt.contact_tol
-                                 && fabs(vn[c]) <= v_hold;
-        /* a persistent contact that the impact lifts by less than h stays (its small lift velocity, what the
-         * bounces of the accumulation it stands for would carry, is removed with the others') */
+    if (T_after > ev->T_before * (1.0 + ev->bound) + 1e-300) return GAC_ERR_IMPACT_ACCURACY;
+    if (elastic && !ev->plastic && fabs(T_after - ev->T_before) > ev->bound * ev->T_before)
+        return GAC_ERR_IMPACT_ACCURACY;
+    return GAC_OK;
+}
+
+/* The resting set after the impact, set[0..*nset-1]: landing and persistent contacts that end at rest, any other
+ * contact within contact_tol of its wall that the law leaves at rest (after a plastic round, or rounds that end at
+ * round-off, whatever its approach speed; holding it takes no energy; left free, a contact pressed into its wall
+ * would sink from gap <= 0, where no crossing is looked for), and a persistent contact of a wall with e < 1 that the
+ * impact lifts by less than h (its small lift velocity, what the bounces of the accumulation it stands for would
+ * carry, is removed with the others'); one lifted higher is released.  Independent rows only.  ev->vn: the normal
+ * velocities after the law. */
+static int gac_choose_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *set)
+{
+    const gac_model *md = s->model;
+    const int nc1 = GAC_AT_LEAST_1(md->ncontact);
+    const double v_hold = 1e-9 * ev->scale;         /* at rest, to the law's round-off */
+    int k, code;
+    for (k = 0; k < ev->n; ++k) {
+        const int c = ev->list[k];
+        const int left_at_rest = ev->height > 0.0 && !s->is_active[c] && ev->gaps[c] <= s->opt.contact_tol
+                                 && fabs(ev->vn[c]) <= v_hold;
         int held_lift = 0;
-        if (s->is_active[c] && vn[c] > v_hold && e_law[k] < 1.0 && height > 0.0) {
+        if (s->is_active[c] && ev->vn[c] > v_hold && ev->e_law[k] < 1.0 && ev->height > 0.0) {
             /* its acceleration towards the wall with the other persistent contacts held */
             double a_free[nc1];
-            int others[nq], m = 0, a;
+            int others[md->nq], m = 0, a;
             for (a = 0; a < s->nactive; ++a) {
                 if (s->active[a] != c) others[m++] = s->active[a];
             }
-            code = gac_normal_accelerations(s, t, s->x1, m, others, a_free);
+            code = gac_normal_accelerations(s, ev->t, s->x1, m, others, a_free);
             if (code != GAC_OK) return code;
-            held_lift = a_free[c] < 0.0 && vn[c] * vn[c] <= 2.0 * (-a_free[c]) * height;
+            held_lift = a_free[c] < 0.0 && ev->vn[c] * ev->vn[c] <= 2.0 * (-a_free[c]) * ev->height;
         }
-        if ((landing[k] && vn[c] <= v_hold) || held_lift || left_at_rest) {
-            code = gac_add_independent(s, s->x1, &nset, set, list[k]);
+        if ((ev->landing[k] && ev->vn[c] <= v_hold) || held_lift || left_at_rest) {
+            code = gac_add_independent(s, s->x1, nset, set, c);
             if (code != GAC_OK) return code;
         }
     }
-    if (nset > 0) {
-        for (k = 0; k < nset; ++k) {  /* a landing contact is held at the gap it landed at: the configuration */
-            if (!s->is_active[set[k]]) s->gap_held[set[k]] = gaps[set[k]];   /* stays, so V does too */
-        }
-        code = gac_hold(s, s->x1, nset, set, n, list);   /* held at rest, the others not pushed in */
-        if (code == GAC_OK) code = gac_settle(s, t, s->x1, &nset, set);
-        if (code != GAC_OK && code != GAC_ERR_LCP) return code;
-        gac_normal_velocities(md, s->x1, s->p, vn);
-        for (k = 0; k < n; ++k) {
-            /* a contact whose row is (nearly) dependent on the held ones' moves with them: if holding them
-             * drives it into its wall, or the contacts are too degenerate to say which push, nothing is
-             * held this time (the law's velocities stand) */
-            if (code == GAC_ERR_LCP || vn[list[k]] < -(10.0 * bound * scale + 1e-15)) {
-                for (i = 0; i < nq; ++i) s->x1[nq + i] = qd_plus[i];
-                nset = 0;
-                break;
-            }
-        }
-        gac_normal_velocities(md, s->x1, s->p, vn);
-        if (nset > 0) {          /* holding them changed the velocities too: the bound covers the whole change */
-            const double held = gac_impact_roundoff(md, x, s->p, s->work, 0, F, x + nq, s->x1 + nq, T_before);
-            if (held > bound) bound = r->roundoff = held;
-            if (gac_impact_inaccurate(s, bound)) return GAC_ERR_IMPACT_ACCURACY;
+    return GAC_OK;
+}
+
+/* Bring the resting set to rest (gac_hold, which drives no other contact into its wall, then gac_settle keeps those
+ * that push), each landing contact held at the gap it landed at (the configuration stays, so V does too).  If
+ * holding them drives a contact whose row is (nearly) dependent on theirs into its wall, or the contacts are too
+ * degenerate to say which push, nothing is held this time (the law's velocities stand).  Holding changes the
+ * velocities too: the round-off bound then covers the whole change. */
+static int gac_hold_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *set, gac_impact_record *r)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq;
+    int i, k, code;
+    for (k = 0; k < *nset; ++k) {
+        if (!s->is_active[set[k]]) s->gap_held[set[k]] = ev->gaps[set[k]];
+    }
+    code = gac_hold(s, s->x1, *nset, set, ev->n, ev->list);
+    if (code == GAC_OK) code = gac_settle(s, ev->t, s->x1, nset, set);
+    if (code != GAC_OK && code != GAC_ERR_LCP) return code;
+    gac_normal_velocities(md, s->x1, s->p, ev->vn);
+    for (k = 0; k < ev->n; ++k) {
+        if (code == GAC_ERR_LCP || ev->vn[ev->list[k]] < -(10.0 * ev->bound * ev->scale + 1e-15)) {
+            for (i = 0; i < nq; ++i) s->x1[nq + i] = ev->qd_plus[i];
+            *nset = 0;
+            break;
         }
     }
-    if (rounds == 0) {                               /* no impulse: an impact only if a contact lands */
-        int same = nset == s->nactive;
-        for (k = 0; same && k < nset; ++k) same = s->is_active[set[k]];
-        if (same) return 0;
+    gac_normal_velocities(md, s->x1, s->p, ev->vn);
+    if (*nset > 0) {
+        const double held = gac_impact_roundoff(md, ev->x, s->p, s->work, 0, ev->F, ev->x + nq, s->x1 + nq,
+                                                ev->T_before);
+        if (held > ev->bound) ev->bound = r->roundoff = held;
+        if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;
     }
+    return GAC_OK;
+}
+
+/* The record after the impact (velocities, energies, the fastest approach left, checked to the law's round-off:
+ * no contact within contact_tol of its wall approaches it faster than 10 b max|v-| + 1e-15 m/s), each struck
+ * contact's impact history (for the Zeno rule), and the new resting set. */
+static int gac_finish(gac_sim *s, gac_impact_event *ev, int nset, const int *set, gac_impact_record *r)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq;
+    double E[2];
+    int c, i, k;
     for (i = 0; i < nq; ++i) r->qd_after[i] = s->x1[nq + i];
-    md->energy(x, s->x1 + nq, s->p, E);          /* at the impact configuration, as T_law */
-    r->energy_rest = T_law > E[0] ? T_law - E[0] : 0.0; /* (a landing may also leave more than the law) */
+    md->energy(ev->x, s->x1 + nq, s->p, E);          /* at the impact configuration, as T_law */
+    r->energy_rest = ev->T_law > E[0] ? ev->T_law - E[0] : 0.0; /* (a landing may also leave more than the law) */
     r->energy_after = gac_total_energy(md, s->x1, s->p);
     r->approach_after = 0.0;                  /* fastest approach of a contact at its wall, afterwards */
     for (c = 0; c < md->ncontact; ++c) {
-        if (gaps[c] <= s->opt.contact_tol && -vn[c] > r->approach_after) r->approach_after = -vn[c];
+        if (ev->gaps[c] <= s->opt.contact_tol && -ev->vn[c] > r->approach_after) r->approach_after = -ev->vn[c];
     }
-    r->approach_before = scale;
-    approach_tol = 10.0 * bound * scale + 1e-15;
-    if (r->approach_after > approach_tol) return GAC_ERR_IMPACT_ACCURACY;
+    r->approach_before = ev->scale;
+    if (r->approach_after > 10.0 * ev->bound * ev->scale + 1e-15) return GAC_ERR_IMPACT_ACCURACY;
     for (k = 0; k < r->ncontact; ++k) {                    /* impact history of each new contact */
         c = r->contact[k];
         if (s->is_active[c]) continue;
-        s->n_shrink[c] = shrinking[c] ? s->n_shrink[c] + 1 : 0;
-        s->dt_last[c] = s->dt_last[c] < -1.5 ? -1.0 : t - s->t_last[c];
-        s->t_last[c] = t;
+        s->n_shrink[c] = ev->shrinking[c] ? s->n_shrink[c] + 1 : 0;
+        s->dt_last[c] = s->dt_last[c] < -1.5 ? -1.0 : ev->t - s->t_last[c];
+        s->t_last[c] = ev->t;
     }
     gac_set_active(s, nset, set, r);
     s->energy_impacts += r->energy_before - r->energy_after;
     return 1;
+}
+
+/* Resolve the impact at state s->xs (time t) in named steps: is it an impact (gac_is_impact), who takes part
+ * (gac_gather), who lands (gac_who_lands), the law and its own verdict (gac_apply_law), its post-conditions
+ * (gac_check_law), the resting set (gac_choose_resting, gac_hold_resting) and the record (gac_finish).  Refused
+ * (GAC_ERR_IMPACT_ACCURACY): a post-condition that fails beyond the law's round-off bound b (gac_impact_roundoff,
+ * 1e-10 for a well-conditioned I_f), a bound gac_impact_inaccurate refuses, a plastic closing round when every
+ * contact has e = 1.  r->energy_rest is the kinetic energy the landings take (the law with every contact's own e
+ * minus the law with the landings plastic).  The state after the impact is in s->x1.  Returns 1 (impact applied),
+ * 0 (graze) or an error. */
+int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
+{
+    const gac_model *md = s->model;
+    const int nc1 = GAC_AT_LEAST_1(md->ncontact);
+    const int nq = md->nq;
+    double gaps[nc1], vn[nc1], an[nc1], e[nq], e_law[nq], qd_plus[nq], F[nq], E[2];
+    int list[nq], landing[nq], shrinking[nc1], set[nq];
+    int i, k, code, nset = 0;
+    gac_impact_event ev;
+    ev.t = t;
+    ev.x = s->xs;
+    ev.c_event = c_event;
+    ev.list = list, ev.landing = landing, ev.shrinking = shrinking;
+    ev.gaps = gaps, ev.vn = vn, ev.an = an, ev.e = e, ev.e_law = e_law, ev.qd_plus = qd_plus, ev.F = F;
+    md->contact_gaps(ev.x, s->p, gaps);
+    gac_normal_velocities(md, ev.x, s->p, vn);
+    r->ncontact = 0;
+    r->nactivated = r->nreleased = 0;
+    r->rounds = r->plastic = r->law_elastic = 0;
+    r->energy_rest = 0.0;
+    r->roundoff = 1e-10;
+    if (!gac_is_impact(s, &ev)) return 0;                /* grazing touch: nothing to resolve */
+    code = gac_gather(s, &ev);
+    if (code != GAC_OK) return code;
+    r->t = t;
+    md->energy(ev.x, ev.x + nq, s->p, E);
+    if (!gac_finite(E, 2)) return GAC_ERR_NONFINITE;
+    ev.T_before = E[0];
+    r->energy_before = E[0] + E[1];
+    for (i = 0; i < nq; ++i) {
+        r->q[i] = ev.x[i];
+        r->qd_before[i] = ev.x[nq + i];
+    }
+    code = gac_who_lands(s, &ev);
+    if (code == GAC_OK) code = gac_apply_law(s, &ev, r);
+    if (code == GAC_OK) code = gac_check_law(s, &ev, r);
+    if (code != GAC_OK) return code;
+    gac_normal_velocities(md, s->x1, s->p, vn);          /* from here on: after the law */
+    code = gac_choose_resting(s, &ev, &nset, set);
+    if (code == GAC_OK && nset > 0) code = gac_hold_resting(s, &ev, &nset, set, r);
+    if (code != GAC_OK) return code;
+    if (ev.rounds == 0) {                               /* no impulse: an impact only if a contact lands */
+        int same = nset == s->nactive;
+        for (k = 0; same && k < nset; ++k) same = s->is_active[set[k]];
+        if (same) return 0;
+    }
+    return gac_finish(s, &ev, nset, set, r);
 }

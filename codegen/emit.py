@@ -172,8 +172,9 @@ def split_size(kernel_name: str, split_lines: int | None = None) -> int:
 
 
 def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], bake_params: bool,
-                   layout) -> GeneratedModel:
-    """The model's header, source and cffi declarations from its rendered kernels (in interface order)."""
+                   layout, chart_b=None) -> GeneratedModel:
+    """The model's header, source and cffi declarations from its rendered kernels (in interface order).
+    ``chart_b``: (the scene on chart B, its rendered loop kernels) for a second base chart (codegen.charts), or None."""
     dense = _check_kernels(functions)
     generated = {f.name: f for f in functions}
     env = _environment()
@@ -201,7 +202,11 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
         row_labels=[f"(theta_{point})" if axis == "theta" else f"(O_{point},X{axis + 1})"
                     for point, axis in layout.contact_rows],
         rows=list(layout.contact_rows), twists=scene.all_twists,
-        chart=_chart_context(scene, layout),
+        chart=_chart_context(scene, layout), base=_base_context(scene, layout),
+        chart_b=None if chart_b is None else dict(
+            functions=chart_b[1], base=_base_context(chart_b[0], layout),
+            q0=[_double_literal(float(x)) for x in layout.reduce(chart_b[0].q0)],
+            qd0=[_double_literal(float(x)) for x in layout.reduce(chart_b[0].qd0)]),
         q0=[_double_literal(float(x)) for x in layout.reduce(scene.q0)],
         qd0=[_double_literal(float(x)) for x in layout.reduce(scene.qd0)],
         literal=_double_literal,
@@ -283,6 +288,14 @@ def _chart_context(scene: Scene, layout) -> dict:
     return {"a": [_double_literal(float(x)) for x in T0[2, :]], "b": [_double_literal(float(x)) for x in T1[:, 2]],
             "index": layout.free.index(1) if 1 in layout.free else -1,
             "value": _double_literal(float(fixed.get(1, 0.0)))}
+
+
+def _base_context(scene: Scene, layout) -> dict:
+    """The base chart's twists T_-1, T_0, T_1 (row-major, 9 numbers each) and the indices in q of theta_-1, theta_0,
+    theta_1 (-1 for one the model holds fixed): gac_model.base, for the conversion between two charts."""
+    T = [[_double_literal(float(x)) for row in M for x in row] for M in scene.base_twists]
+    return {"T_m1": T[0], "T_0": T[1], "T_1": T[2],
+            "index": [layout.free.index(i) if i in layout.free else -1 for i in range(3)]}
 
 
 def _contact_entry(c: int, point: int, wall, layout, pnames: list[str], bake_params: bool) -> dict:

@@ -1180,7 +1180,10 @@ const gac_model paper_case1_model = {
     .contact_generalized_force = paper_case1_contact_generalized_force, .contact_gaps = paper_case1_contact_gaps,
     .contact_bias = paper_case1_contact_bias, .energy = paper_case1_energy, .rhs = paper_case1_rhs,
     .power = 0,   /* no inputs, springs or dampers: only gravity works in flight */
-    .check_parameters = paper_case1_check_parameters, .parameter_info = paper_case1_parameter_info
+    .check_parameters = paper_case1_check_parameters, .parameter_info = paper_case1_parameter_info,
+    .base = { .T_m1 = { 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, -1.0, 0.0 }, .T_0 = { 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0 },
+              .T_1 = { 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0 }, .index = { -1, -1, 0 } },
+    .chart_b = 0   /* no second base chart (a planar model, or an input on a base angle) */
 };
 
 /* The storage of paper_case1.h agrees with the library's formulas (both come from one formula). */
@@ -1329,13 +1332,11 @@ int paper_case1_sim_set_progress(paper_case1_sim *sim, gac_progress progress, vo
 
 void paper_case1_sim_state(const paper_case1_sim *sim, double *t, double *q, double *qd)
 {
-    int i;
+    gac_sim base;
     if (sim == 0) return;
-    if (t != 0) *t = sim->base.t;
-    for (i = 0; i < PAPER_CASE1_NQ; ++i) {          /* the state x is dwork[0..NX-1] (gac_sim_bind) */
-        if (q != 0) q[i] = sim->dwork[i];
-        if (qd != 0) qd[i] = sim->dwork[PAPER_CASE1_NQ + i];
-    }
+    base = sim->base;                   /* bound to sim's own arrays (read only here), wherever sim was copied */
+    gac_sim_bind(&base, &paper_case1_model, (double *)sim->dwork, (int *)sim->iwork);
+    gac_sim_state(&base, t, q, qd);
 }
 
 void paper_case1_sim_copy(paper_case1_sim *dst, const paper_case1_sim *src)

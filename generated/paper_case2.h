@@ -449,7 +449,7 @@ int paper_case2_sim_set_progress(paper_case2_sim *sim, gac_progress progress, vo
  */
 int paper_case2_sim_run(paper_case2_sim *sim, double t_end, long max_impacts, paper_case2_impact_record *record, gac_run_summary *summary);
 
-/* The current time and state (gac_sim_state).
+/* The current time and state, in chart A's coordinates whichever base chart is integrated (gac_sim_state).
  *   sim          the simulation (NULL: nothing is written)
  *   t            out: current time (s), or NULL
  *   q            out: current coordinates (NQ), or NULL

@@ -109,6 +109,7 @@ class SimulationResult:
     energy_friction_loss: float = 0.0  # J: energy sliding friction took at resting contacts (>= 0)
     u: np.ndarray | None = None        # (len(t), nu) the inputs at the sample times (None: no inputs)
     impact_counts: tuple | None = None # keep_impacts=False: (impacts, first impact time, energy they took)
+    n_chart_switches: int = 0          # switches between the base charts near the gimbal lock (gac_sim.n_chart_switches)
 
     @property
     def n_impacts(self) -> int:
@@ -192,6 +193,7 @@ class SimulationResult:
             "energy_input_work": self.energy_input_work, "energy_damping_loss": self.energy_damping_loss,
             "energy_friction_loss": self.energy_friction_loss,
             "n_rhs": self.n_rhs, "n_steps": self.n_steps, "n_rejected": self.n_rejected,
+            "n_chart_switches": self.n_chart_switches,
             "status": self.status, "message": self.message, "method": self.method, "options": self.options,
             "contact_events": [{"t": e.t, "point": e.point, "wall": e.wall, "kind": e.kind}
                                for e in self.contact_events],
@@ -259,9 +261,11 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                   at the clock (time.perf_counter) every GAC_LOOK_STEPS steps and at every event
     progress      progress(t, n_steps, n_impacts), called by the C loop as often; returning False stops the run
                   (status -1, "stopped by the progress callback"), as does an exception in it
-    charts        a run that comes near the gimbal lock of the base chart (the C loop stops with
-                  GAC_ERR_GIMBAL_LOCK before it) is run again with chart switching (runtime.charts) and that
-                  result returned (a ChartResult, samples in the scene's coordinates); False: stop there
+    charts        near the gimbal lock of the base chart the C loop integrates on the model's second base chart
+                  (where chart A's measure falls below 0.3, and back on A above 0.6; gac_options.chart_switch):
+                  True (default), or the threshold itself (a number in [0.1, 0.35]); False: never (the run stops
+                  with GAC_ERR_GIMBAL_LOCK).  Samples, impacts and the final state are in the scene's coordinates
+                  whichever chart was integrated; result.n_chart_switches counts the switches
     check_start   refuse q0/p overrides that put a contact point outside its wall beyond round-off (False:
                   a restart from a state the loop itself produced, with its resting contacts held at
                   their landing gaps)
@@ -336,6 +340,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     opt.max_wall_time = 0.0 if max_wall_time is None else float(max_wall_time)
     opt.rest_height = -1.0 if rest_height is None else float(rest_height)
     opt.zeno_impacts = int(zeno_impacts)
+    opt.chart_switch = _chart_switch(charts)
     sim = ffi.new(f"{name}_sim *")
     state = sim.base          # the library's state (gac_sim): t, x, counters; its arrays live in *sim
     ptr = model._ptr
@@ -347,8 +352,9 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
 
     x_eval = np.zeros((len(t_eval), nx))
     i_eval = ffi.new("int *", 0)
+    sim_state = getattr(lib, f"{name}_sim_state")      # the state in chart A's coordinates, whichever chart runs
     while i_eval[0] < len(t_eval) and t_eval[i_eval[0]] <= 0.0:      # samples at the start (as sim_init left it)
-        x_eval[i_eval[0]] = ffi.unpack(state.x, nx)
+        sim_state(sim, ffi.NULL, ptr(x_eval[i_eval[0], :nq]), ptr(x_eval[i_eval[0], nq:]))
         i_eval[0] += 1
     record = ffi.new(f"{name}_impact_record *")
     rec = record.base         # the library's record (gac_impact_record); its arrays live in *record
@@ -403,19 +409,10 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
             message = (f"stopped after {len(impacts)} impacts at t = {impacts[-1].t:.12g} s: the max_impacts limit of "
                        f"{max_impacts} (raise max_impacts to go on)")
             break
-    if charts and code == lib.GAC_ERR_GIMBAL_LOCK and (model.scene.driven or model.scene.stops()):
-        message += " (the second base chart is not available for a chain with inputs, springs, dampers or limits)"
-    elif charts and code == lib.GAC_ERR_GIMBAL_LOCK:
-        from .charts import simulate_with_charts
-        return simulate_with_charts(
-            model.scene, t_end, t_eval=t_eval, p=None if p is model.p else p,
-            q0=None if q0 is None else layout.expand(q), qd0=None if qd0 is None else layout.expand(qd, velocity=True),
-            max_impacts=max_impacts, max_steps=max_steps, method=method, rtol=rtol, atol=atol, dt=dt,
-            h_max=h_max, contact_tol=contact_tol, event_samples=event_samples, event_tol=event_tol,
-            rest_height=rest_height, zeno_impacts=zeno_impacts,
-            max_wall_time=None if max_wall_time is None else max(max_wall_time - float(state.wall_time), 1e-3),
-            progress=progress)
-    x_final = np.array(ffi.unpack(state.x, nx))
+    x_final = np.zeros(nx)
+    sim_state(sim, ffi.NULL, ptr(x_final[:nq]), ptr(x_final[nq:]))
+    if status == 0 and int(state.n_chart_switches):
+        message += f"; {int(state.n_chart_switches)} chart switch(es)"
     n = i_eval[0]
     accuracy = impact_warnings(impacts, model, p)
     warnings = model.scene.warnings + accuracy + friction_warnings(model, p, state, method)
@@ -443,7 +440,21 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         options={"rtol": rtol, "atol": atol, "dt": dt, "contact_tol": contact_tol, "event_samples": event_samples,
                  "event_tol": event_tol, "h_max": h_max, "t_end": t_end, "rest_height": rest_height,
                  "zeno_impacts": zeno_impacts, "max_steps": max_steps, "max_impacts": max_impacts,
-                 "max_wall_time": max_wall_time})
+                 "max_wall_time": max_wall_time, "chart_switch": float(opt.chart_switch)},
+        n_chart_switches=int(state.n_chart_switches))
+
+
+def _chart_switch(charts) -> float:
+    """gac_options.chart_switch from simulate()'s ``charts``: True -> 0.3, False -> 0 (never), or a threshold."""
+    if charts is True or charts is False:
+        return 0.3 if charts else 0.0
+    value = _real(charts, "charts")
+    _check(CHART_SWITCH_MIN <= value <= CHART_SWITCH_MAX, "charts", f"must be True, False or a threshold of chart A's "
+           f"measure within [{CHART_SWITCH_MIN}, {CHART_SWITCH_MAX}], got {charts!r}")
+    return value
+
+
+CHART_SWITCH_MIN, CHART_SWITCH_MAX = 0.1, 0.35      # GAC_CHART_SWITCH_MIN, _MAX (gac.h)
 
 
 def weight_scale(scene: Scene, p: np.ndarray) -> float:

@@ -104,6 +104,18 @@ def test_world_trajectory_agrees_with_an_independent_integration(through_lock, s
     assert np.abs(points - expected).max() < 1e-8
 
 
+@pytest.mark.parametrize("method", [{"method": "rk4", "dt": 1e-4}, {"method": "dopri5", "rtol": 1e-8, "atol": 1e-10}],
+                         ids=["rk4", "dopri5"])
+def test_other_integrators_pass_the_lock(scene, model, method):
+    """RK4 (no step rejection: the switch is made at the start of a step that would pass the lock) and DOPRI5
+    at its default tolerance, against the same independent integration."""
+    t = np.linspace(0.0, 0.6, 61)
+    r = simulate(model, 0.6, t_eval=t, **method)
+    assert r.status == 0 and r.n_chart_switches == 1, r.message
+    points = np.array([model.contact_points(q) for q in r.q])
+    assert np.abs(points - integrate_reference(scene, t)).max() < 1e-8
+
+
 def test_energy_is_kept_through_the_lock(through_lock, scene, model):
     """Free flight with no damping: T + V constant on every sample where chart A's own rates are well
     conditioned, and at the end (the balance of the run)."""
@@ -185,18 +197,26 @@ def test_case2_switches_and_agrees_with_a_single_chart():
     assert np.abs(charted.q_final - plain.q_final).max() < 1e-9
 
 
-def test_resting_contact_carries_over_a_switch():
-    """A chain coming to rest on the floor while its base turns through chart A's lock region: the switches keep
-    the resting contacts (held gaps, the same set), no point sinks, and the energy balance closes."""
-    scene = load_scene("stress-zeno")
-    p = scene.parameter_vector()
-    p[scene.parameter_names().index("e_x2_min")] = 0.5
-    model = load_model(scene)
-    r = simulate(model, 4.0, p=p, **ACCURATE)
+def test_resting_contacts_start_on_chart_b_and_carry_over_a_switch(model):
+    """Link 1 lying on the floor with its joint axis z_1 vertical: chart A's lock itself (mu_A = 1e-7).  The run
+    starts on chart B with O_1 and O_2 resting on the floor (e = 0), link 2 falls and lands, rolling link 1 about
+    its own axis until mu_A passes 0.6: back on chart A with the three contacts held.  No point sinks, the
+    energy balance closes, the rests at the start are reported at t = 0 in chart A's coordinates."""
+    p = model.parameters({"e_x2_min": 0.0})
+    q0 = np.array([0.3, np.pi / 2 - 1e-7, -0.4, 0.5, 1.0, 0.0, 1.0])     # theta_2 = 0.5: O_3 above the floor
+    assert model.contact_points(q0)[2, 1] > 0.1 and abs(model.contact_points(q0)[1, 1]) < 1e-6
+    qd0 = np.zeros(7)
+    qd0[4], qd0[6] = 0.1, 0.05                                             # sliding on the frictionless floor
+    r = simulate(model, 1.5, q0=q0, qd0=qd0, p=p, **ACCURATE)
     assert r.status == 0, r.message
-    assert r.persistent_final
-    assert np.array([model.contact_gaps(model.layout.reduce(q), p) for q in r.q]).min() > -1e-8
-    assert abs(r.energy_drift) < 1e-8
+    assert r.n_chart_switches >= 2                       # on B from the start, back on A once link 1 rolls
+    assert [(e.t, e.kind, e.point) for e in r.contact_events[:2]] == [(0.0, "persist", 1), (0.0, "persist", 2)]
+    assert sorted(r.persistent_final) == [(1, "x2_min"), (2, "x2_min"), (3, "x2_min")]
+    assert np.abs(r.q[0] - q0).max() < 1e-9             # theta_-1, theta_1 alone are conditioned like eps / mu_A
+    A = Chart.of(model.scene.base_twists)
+    assert np.abs(A.rotation(r.q[0, :3]) - A.rotation(q0[:3])).max() < 1e-14
+    assert np.array([model.contact_gaps(q, p) for q in r.q]).min() > -1e-9
+    assert abs(r.energy_drift) < 1e-9
 
 
 # ---------------------------------------------------------------------------

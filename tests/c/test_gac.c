@@ -567,6 +567,20 @@ static void test_errors(void)
     CHECK(gac_sim_init(&sim, 0, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, 0) == GAC_ERR_NULL_ARGUMENT, "model NULL");
     CHECK(gac_sim_init(&sim, &ball, 0, iwork, 0.0, ball_q0, ball_qd0, 0, 0) == GAC_ERR_NULL_ARGUMENT, "dwork NULL");
     CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, 0, ball_qd0, 0, 0) == GAC_ERR_NULL_ARGUMENT, "q NULL");
+    CHECK(opt.chart_switch == 0.3, "chart_switch default 0.3");
+    opt.chart_switch = 0.5;                                 /* back at 1.0: chart B need not be better there */
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt) == GAC_ERR_BAD_OPTION,
+          "chart_switch above GAC_CHART_SWITCH_MAX");
+    opt.chart_switch = 0.05;
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt) == GAC_ERR_BAD_OPTION,
+          "chart_switch below GAC_CHART_SWITCH_MIN");
+    opt.chart_switch = 0.0;
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt) == GAC_OK, "chart_switch 0");
+    CHECK(sim.chart == 0 && sim.n_chart_switches == 0, "no second chart: chart A");
+    bad.chart_b = &ball;                                    /* a second chart of other sizes */
+    CHECK(gac_model_check(&bad) == GAC_ERR_BAD_MODEL, "chart_b of other sizes refused");
+    bad = box;
+    gac_default_options(&opt);
     opt.method = 7;
     CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt) == GAC_ERR_BAD_OPTION, "method");
     bad.nx = 3;

@@ -202,9 +202,10 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
         row_labels=[f"(theta_{point})" if axis == "theta" else f"(O_{point},X{axis + 1})"
                     for point, axis in layout.contact_rows],
         rows=list(layout.contact_rows), twists=scene.all_twists,
-        chart=_chart_context(scene, layout), base=_base_context(scene, layout),
+        chart=_chart_context(scene, layout), base=_base_context(scene, layout), layout_free=list(layout.free),
         chart_b=None if chart_b is None else dict(
             functions=chart_b[1], base=_base_context(chart_b[0], layout),
+            rows=[[_double_literal(float(x)) for x in row] for row in chart_b[0].base_twists[0]],
             q0=[_double_literal(float(x)) for x in layout.reduce(chart_b[0].q0)],
             qd0=[_double_literal(float(x)) for x in layout.reduce(chart_b[0].qd0)]),
         q0=[_double_literal(float(x)) for x in layout.reduce(scene.q0)],

@@ -192,8 +192,6 @@ def simulate_arguments_problem(args, t_end: float) -> str:
             return f"--param: expected NAME=VALUE with a number, got {item!r}"
         if not name or not math.isfinite(number):
             return f"--param: expected NAME=VALUE with a finite number, got {item!r}"
-    if (args.input is not None or args.param) and args.charts:
-        return "--input/--param: not available with --charts"
     if args.animate or args.film_strip:
         import importlib.util
         if importlib.util.find_spec("matplotlib") is None:

@@ -51,8 +51,8 @@
 #define GAC_ERR_GIMBAL_LOCK       -5   /* theta_0 too close to the gimbal lock of the base chart: the base
                                           chart's measure mu = |det E| (|cos theta_0| for the default twists)
                                           is below GAC_CHART_FLOOR, where I_f's solves lose 1e-6 (16 eps / mu^2);
-                                          the hybrid loop stops earlier, below sqrt(16 eps / rtol).  Continue
-                                          on a second chart */
+                                          the hybrid loop continues on the model's second chart (chart_b) below
+                                          sqrt(16 eps / rtol), or, without one, stops there with this code */
 #define GAC_ERR_BAD_OPTION       -10   /* an option or argument is out of range (the ranges: gac_error_message) */
 #define GAC_ERR_MAX_STEPS        -11   /* opt.max_steps reached in one advance call */
 #define GAC_ERR_STEP_SIZE        -12   /* adaptive step size fell below round-off */

@@ -171,9 +171,21 @@ def split_size(kernel_name: str, split_lines: int | None = None) -> int:
     return SPLIT_LINES_HOT if kernel_name in HOT_KERNELS else SPLIT_LINES
 
 
+def _weight_scale_expression(scene: Scene, pnames: list) -> str:
+    """C expression of M |g| L from the parameter vector p: the work to lift the whole chain by its own length (the
+    energy scale of a chain at rest on the floor, where T + V can be exactly 0)."""
+    masses, lengths = [], []
+    for i, link in enumerate(scene.links, start=1):
+        l = f"p[{pnames.index(f'l_{i}')}]"
+        masses.append(f"p[{pnames.index(f'mu_{i}')}] * {l}" if link.kind == "line" else f"p[{pnames.index(f'm_{i}')}]")
+        lengths.append(l)
+    return f"({' + '.join(masses)}) * fabs(p[{pnames.index('g')}]) * ({' + '.join(lengths)})"
+
+
 def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], bake_params: bool,
-                   layout) -> GeneratedModel:
-    """The model's header, source and cffi declarations from its rendered kernels (in interface order)."""
+                   layout, chart_b=None) -> GeneratedModel:
+    """The model's header, source and cffi declarations from its rendered kernels (in interface order).
+    ``chart_b``: (the scene on chart B, its rendered loop kernels) for a second base chart (codegen.charts), or None."""
     dense = _check_kernels(functions)
     generated = {f.name: f for f in functions}
     env = _environment()
@@ -195,13 +207,19 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
         parameter_info=[(rule.name, _double_literal(rule.lo), _double_literal(rule.hi), _c_string(rule.text))
                         for rule in rules],
         relations=parameter_relations(rules),
+        weight_scale=_weight_scale_expression(scene, pnames),
         contacts=[(c, point, wall) for c, (point, wall) in enumerate(layout.contacts)],
         contact_table=[_contact_entry(c, point, wall, layout, pnames, bake_params)
                        for c, (point, wall) in enumerate(layout.contacts)],
         row_labels=[f"(theta_{point})" if axis == "theta" else f"(O_{point},X{axis + 1})"
                     for point, axis in layout.contact_rows],
         rows=list(layout.contact_rows), twists=scene.all_twists,
-        chart=_chart_context(scene, layout),
+        chart=_chart_context(scene, layout), base=_base_context(scene, layout), layout_free=list(layout.free),
+        chart_b=None if chart_b is None else dict(
+            functions=chart_b[1], base=_base_context(chart_b[0], layout),
+            rows=[[_double_literal(float(x)) for x in row] for row in chart_b[0].base_twists[0]],
+            q0=[_double_literal(float(x)) for x in layout.reduce(chart_b[0].q0)],
+            qd0=[_double_literal(float(x)) for x in layout.reduce(chart_b[0].qd0)]),
         q0=[_double_literal(float(x)) for x in layout.reduce(scene.q0)],
         qd0=[_double_literal(float(x)) for x in layout.reduce(scene.qd0)],
         literal=_double_literal,
@@ -283,6 +301,14 @@ def _chart_context(scene: Scene, layout) -> dict:
     return {"a": [_double_literal(float(x)) for x in T0[2, :]], "b": [_double_literal(float(x)) for x in T1[:, 2]],
             "index": layout.free.index(1) if 1 in layout.free else -1,
             "value": _double_literal(float(fixed.get(1, 0.0)))}
+
+
+def _base_context(scene: Scene, layout) -> dict:
+    """The base chart's twists T_-1, T_0, T_1 (row-major, 9 numbers each) and the indices in q of theta_-1, theta_0,
+    theta_1 (-1 for one the model holds fixed): gac_model.base, for the conversion between two charts."""
+    T = [[_double_literal(float(x)) for row in M for x in row] for M in scene.base_twists]
+    return {"T_m1": T[0], "T_0": T[1], "T_1": T[2],
+            "index": [layout.free.index(i) if i in layout.free else -1 for i in range(3)]}
 
 
 def _contact_entry(c: int, point: int, wall, layout, pnames: list[str], bake_params: bool) -> dict:

@@ -6,6 +6,7 @@ import time
 from pathlib import Path
 
 from .artifact import library_files
+from .charts import chart_b_scene
 from .emit import GeneratedModel, assemble_model, render_function, render_standalone, split_size
 from .interface import wants_dense, wants_rolled
 from .flatten import flatten, live_assignments
@@ -53,7 +54,27 @@ def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
     if formulation not in FORMULATIONS:
         raise ValueError(f"formulation: must be one of {', '.join(FORMULATIONS)}, got {formulation!r}")
     name = name or scene.name
-    layout = layout_for(scene, specialise)
+    model = _generate(scene, name, bake_params, progress, formulation, raw_ops, dense, split_lines, workers, rolled,
+                      layout_for(scene, specialise))
+    scene_b = chart_b_scene(scene, model.layout) if formulation == "gibbs_appell" else None
+    if scene_b is None:
+        return model
+    # chart B: the same chain with T_-1 turned a right angle (codegen.charts), its loop kernels only (no dense
+    # ones), in the same NAME.c as NAME_b_* and the descriptor NAME_model_b
+    start = time.perf_counter()
+    progress("chart B")
+    model_b = _generate(scene_b, f"{name}_b", bake_params, progress, formulation, False, False, split_lines, workers,
+                        rolled, model.layout)
+    chart_b = assemble_model(scene, name, model.functions, bake_params, model.layout,
+                             chart_b=(scene_b, model_b.functions))
+    chart_b.timings = dict(model.timings, chart_b=time.perf_counter() - start)
+    chart_b.formulation, chart_b.raw_ops = model.formulation, model.raw_ops
+    return chart_b
+
+
+def _generate(scene, name, bake_params, progress, formulation, raw_ops, dense, split_lines, workers, rolled,
+              layout) -> GeneratedModel:
+    """One chart's model: its kernels derived, flattened and rendered, then assembled."""
     check_not_singular(scene, layout)
     if workers is None:
         workers = min(os.cpu_count() or 1, MAX_WORKERS) if scene.n >= PARALLEL_MIN_LINKS else 1

@@ -51,8 +51,8 @@
 #define GAC_ERR_GIMBAL_LOCK       -5   /* theta_0 too close to the gimbal lock of the base chart: the base
                                           chart's measure mu = |det E| (|cos theta_0| for the default twists)
                                           is below GAC_CHART_FLOOR, where I_f's solves lose 1e-6 (16 eps / mu^2);
-                                          the hybrid loop stops earlier, below sqrt(16 eps / rtol).  Continue
-                                          on a second chart */
+                                          the hybrid loop continues on the model's second chart (chart_b) below
+                                          sqrt(16 eps / rtol), or, without one, stops there with this code */
 #define GAC_ERR_BAD_OPTION       -10   /* an option or argument is out of range (the ranges: gac_error_message) */
 #define GAC_ERR_MAX_STEPS        -11   /* opt.max_steps reached in one advance call */
 #define GAC_ERR_STEP_SIZE        -12   /* adaptive step size fell below round-off */
@@ -198,7 +198,19 @@ typedef struct {
  * a rigid link's inertia not physical: Ixx of that link). */
 typedef int (*gac_parameter_check)(const double *p, int *bad_index);
 
+/* The base orientation's parametrisation (docs/model.md, "Frame convention"):
+ *     ^{ref}R_1 = T_-1 Rz(theta_-1) T_0 Rz(theta_0) T_1 Rz(theta_1),   omega_1 = E(theta) thetadot,
+ * E's columns the three base joint axes in the reference frame.  T_0 and T_1 turn each axis a right angle from
+ * the previous one (T_0[2][2] = T_1[2][2] = 0), so |det E| = |u_-1 x z_1|: the chart is singular when link 1's
+ * joint axis z_1 lies along the fixed first axis u_-1 = T_-1 e_z.  Matrices row-major. */
 typedef struct {
+    double T_m1[9], T_0[9], T_1[9];
+    int index[3];         /* theta_-1, theta_0, theta_1 = q[index[0..2]]; -1 when the model holds one fixed */
+} gac_base;
+
+typedef struct gac_model gac_model;
+
+struct gac_model {
     const char *name;     /* the model's name (NAME) */
     int n;                /* real links (information only) */
     int nq;               /* generalised coordinates, >= 1 */
@@ -236,7 +248,16 @@ typedef struct {
     gac_parameter_check check_parameters;  /* the ranges of parameter_info and the relations between parameters;
                                           called by gac_sim_init (NULL: parameters need only be finite) */
     const gac_parameter_info *parameter_info; /* [nparam]: each parameter's name and allowed values (NULL: none) */
-} gac_model;
+    double (*weight_scale)(const double *p); /* p -> M |g| L (J), the work to lift the whole chain by its own length:
+                                          the energy balance's scale for a chain whose T + V is near 0 (at rest on
+                                          the floor); NULL: none (the scale is then T + |V| alone) */
+    gac_base base;                     /* this chart's base parametrisation (gac_chart.c) */
+    const gac_model *chart_b;          /* the same chain on a second base chart (NULL: none): base.T_m1 replaced by
+                                          C T_-1, C a constant right-angle rotation turning u_-1 perpendicular,
+                                          every other entry the same (sizes, contacts, parameters); only theta_-1,
+                                          theta_0, theta_1 and their rates differ.  The loop integrates on it
+                                          near this chart's gimbal lock (gac_options.chart_switch) */
+};
 
 /* GAC_OK if the descriptor is consistent (sizes > 0 where needed, nx = 2 nq, tables and kernels present,
  * contact entries in range, parameter_info rows named with lo <= hi), else GAC_ERR_BAD_MODEL (m NULL:
@@ -340,6 +361,38 @@ double gac_chart_measure(const gac_model *m, const double *q);
 /* Message for a return code (a static string). */
 const char *gac_error_message(int code);
 
+/* ---- the two base charts (gac_chart.c) ------------------------------------------------------------ */
+/* Chart A is a model's own base parametrisation (gac_base), chart B the same with T_-1 replaced by C T_-1
+ * (gac_model.chart_b).  Link 1's frame, the inner joint angles theta_2..theta_n and the base position X are the
+ * same in both; only (theta_-1, theta_0, theta_1) and their rates differ, through the orientation R = ^{ref}R_1
+ * and the angular velocity omega = E thetadot, which both charts share.  Because C turns u_-1 by a right angle,
+ * z_1 cannot be near both charts' first axes: on B (mu_A <= 2 chart_switch <= 0.7) mu_B >= sqrt(1 - 0.7^2). */
+#define GAC_CHART_SWITCH_MIN 0.1
+#define GAC_CHART_SWITCH_MAX 0.35
+#define GAC_CHART_LOCK 1e-12    /* a measure below this is the chart's own lock: theta_-1 is kept from `near` */
+
+/* R = T_-1 Rz(angles[0]) T_0 Rz(angles[1]) T_1 Rz(angles[2]) (3 x 3, row-major). */
+void gac_base_rotation(const gac_base *c, const double *angles, double *R);
+/* E (3 x 3, row-major): its columns the joint axes u_-1, u_0, u_1 in the reference frame; omega = E thetadot. */
+void gac_base_axes(const gac_base *c, const double *angles, double *E);
+/* The chart's measure |det E| = |u_-1 x z_1| of an orientation R (given in any chart), in [0, 1]. */
+double gac_base_measure(const gac_base *c, const double *R);
+/* The angles of orientation R on chart c, in closed form: of the two solutions (theta_0 on either side of the
+ * lock) and their 2 pi shifts, the one nearest `near` (sum of the three distances); near NULL: the principal one
+ * (theta_0 - phi in [-pi, 0], phi the lock angle), wrapped to (-pi, pi].  At the chart's lock (measure below
+ * GAC_CHART_LOCK) only theta_-1 +- theta_1 is defined: theta_-1 is near[0] (0 without near).  Checked by
+ * recomposing R: GAC_OK, or GAC_ERR_BAD_MODEL (T_0 or T_1 does not turn its axis a right angle). */
+int gac_base_angles(const gac_base *c, const double *R, const double *near, double *angles);
+/* The rates with E(angles) rates = omega; at the chart's lock (|det E| below GAC_CHART_LOCK) the least-squares
+ * rates of least norm. */
+void gac_base_rates(const gac_base *c, const double *angles, const double *omega, double *rates);
+/* A state x = [q, qd] (2 nq) of the chart `from` as the same motion on the chart `to`: R and omega kept, the base
+ * angles from gac_base_angles (near: as there, `to`'s angles to continue from) and their rates from
+ * gac_base_rates; every other coordinate and rate copied.  Both charts must keep the three angles as coordinates
+ * at the same indices.  x and out may be the same array.  GAC_OK or GAC_ERR_BAD_MODEL. */
+int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const double *x, const double *near,
+                      double *out);
+
 /* ---- the hybrid simulation -------------------------------------------------------------------- */
 /*
  * Events.  Each accepted step's interpolant is sampled at opt.event_samples points; an impact is a gap
@@ -389,19 +442,28 @@ const char *gac_error_message(int code);
  * Energy balance.  The loop keeps the balance's residual (J)
  *     sim.energy_residual = E - E(0) - work_input + work_damping + work_friction + energy_impacts,
  * E = T + V at the current state, and checks it at every step end (after the projection onto the resting
- * contacts) and after every impact: beyond energy_tol x sim.energy_scale (the largest T + |V| at a step end so
- * far plus |work_input| + work_damping + work_friction + energy_impacts) the run stops with GAC_ERR_DRIFT at
- * that state.  opt.energy_tol < 0 (default) is min(0.1, max(1e-8, 1e4 rtol)) for the adaptive methods, a
+ * contacts) and after every impact: beyond energy_tol x sim.energy_scale (the largest of M g L, the model's
+ * weight_scale, and T + |V| at a step end so far, plus |work_input| + work_damping + work_friction +
+ * energy_impacts) the run stops with GAC_ERR_DRIFT at that state.  opt.energy_tol < 0 (default) is min(0.1, max(1e-8, 1e4 rtol)) for the adaptive methods, a
  * budget of 1e4 steps' worth of tolerance, and off for RK4; 0 turns the check off.  What a projection onto
  * the resting contacts changes in E is in the residual (it should keep the energy) and summed in
  * sim.energy_projection; one that changes E by more than energy_tol x energy_scale / 10 stops the run with
  * GAC_ERR_PROJECTION.  The adaptive methods also hold each step's own energy error to the tolerance where the
- * flight is conservative (no power kernel, no friction at a resting contact): |E(x1) - E(x0)| / (rtol x
+ * flight is free and conservative (no power kernel, no resting contact): |E(x1) - E(x0)| / (rtol x
  * energy_scale / 10) enters the step's error norm (the larger of the two decides), as the error of each
  * component alone does not bound the energy's, which accumulates over many steps.
  *
- * Stops before trouble: GAC_ERR_GIMBAL_LOCK (the base chart's measure below sqrt(16 eps / rtol): continue on
- * a second chart), GAC_ERR_UNSTABLE (RK4 past its stability, sim.rk4_h_rho), GAC_ERR_LOST_CONTACT,
+ * Base charts.  With a second chart (gac_model.chart_b) and opt.chart_switch > 0, the loop leaves chart A at
+ * the end of an accepted step where mu_A < chart_switch (at the start of the run too) and comes back at the end
+ * of one where mu_A > 2 chart_switch: the state is converted (gac_chart_convert) and the integrator restarts from
+ * it with a fresh first step.  A step whose end falls below the chart's floor, or whose theta_0 passes the lock,
+ * is rejected and retried shorter (RK4: the switch is made at its start).  Resting contacts, held gaps, the
+ * work integrals and the counters carry over.  Samples, impact records and gac_sim_state are in chart A's
+ * coordinates, whichever chart was integrated; sim.chart and sim.n_chart_switches say which and how often.
+ *
+ * Stops before trouble: GAC_ERR_GIMBAL_LOCK (the base chart's measure below sqrt(16 eps / rtol) and no second
+ * chart to continue on: chart_switch 0, or a model without chart_b), GAC_ERR_UNSTABLE (RK4 past its stability,
+ * sim.rk4_h_rho), GAC_ERR_LOST_CONTACT,
  * GAC_ERR_MAX_STEPS (sim.err_index names the state component that limits the step), GAC_ERR_WALL_TIME
  * (opt.max_wall_time of the run's clock used), GAC_ERR_STOPPED (the progress callback said stop),
  * GAC_ERR_DRIFT and GAC_ERR_PROJECTION (the energy balance, above).
@@ -443,6 +505,10 @@ typedef struct {
                               "Energy balance" above): GAC_ERR_DRIFT beyond it.  < 0 (default): automatic,
                               min(0.1, max(1e-8, 1e4 rtol)) for the adaptive methods and off for RK4 (a fixed
                               step has no tolerance to hold it to); 0: off; else 0 < energy_tol < 1 */
+    double chart_switch;   /* a model with a second base chart (gac_model.chart_b) integrates on it where chart A's
+                              measure mu_A falls below this, and back on A where mu_A exceeds twice this (the
+                              hysteresis); 0: never (GAC_ERR_GIMBAL_LOCK near the lock), else within
+                              [GAC_CHART_SWITCH_MIN, GAC_CHART_SWITCH_MAX] (default 0.3) */
 } gac_options;
 
 /* What gac_sim_advance reports.  Scalars are fields; the arrays (nq entries each) point into the arrays
@@ -506,10 +572,17 @@ typedef struct {
                                     (part of energy_residual: a projection should keep the energy) */
     double energy_residual;      /* J: the energy balance at the current state, E - energy_initial - work_input
                                     + work_damping + work_friction + energy_impacts */
-    double energy_scale;         /* J: what energy_residual is measured on: the largest T + |V| at a step end so far,
-                                    plus |work_input| + work_damping + work_friction + energy_impacts */
+    double energy_scale;         /* J: what energy_residual is measured on: the largest of M g L (weight_scale) and
+                                    T + |V| at a step end so far, plus |work_input| + work_damping + work_friction + energy_impacts */
+    int chart;                   /* the base chart integrated now: 0 = A (the model given to gac_sim_init), 1 = B
+                                    (its chart_b).  x is in this chart's coordinates; gac_sim_state, the samples
+                                    and the impact records are always in chart A's */
+    long n_chart_switches;       /* switches between the charts since gac_sim_init (the start on B included) */
     /* private: the model, integrator state and scratch (pointers into dwork / iwork) */
-    const gac_model *model;
+    const gac_model *model;      /* the model integrated now: model_a, or model_a->chart_b */
+    const gac_model *model_a;    /* the model given to gac_sim_init (chart A) */
+    double near_a[3];            /* chart A's base angles at the last step end (on B), sample or chart switch: the
+                                    branch and 2 pi shift of the next conversion to chart A continue from them */
     gac_controller controller;   /* NULL: the held inputs u */
     const gac_schedule *schedule; /* NULL: none (gac_sim_set_schedule) */
     void *controller_data;
@@ -610,8 +683,9 @@ void gac_sim_bind(gac_sim *sim, const gac_model *m, double *dwork, int *iwork);
 /* Point the arrays of record at dwork (gac_record_ndouble(m) doubles) and iwork (gac_record_nint(m) ints). */
 void gac_record_bind(gac_impact_record *record, const gac_model *m, double *dwork, int *iwork);
 
-/* The current time and state (sim->t and sim->x, copied out).  sim NULL: nothing is written; an output
- * that is NULL (t, q or qd) is skipped. */
+/* The current time and state, in chart A's coordinates (sim->x converted when the loop is on chart B: sim->x
+ * is the state of the chart integrated now, sim->chart).  sim NULL: nothing is written; an output that is
+ * NULL (t, q or qd) is skipped. */
 void gac_sim_state(const gac_sim *sim, double *t, double *q, double *qd);
 
 /* Integrate until t_end, the first impact (which is located, resolved and applied; record filled) or the

@@ -21,6 +21,17 @@ int gac_model_check(const gac_model *m)
         || m->contact_gaps == 0 || m->contact_bias == 0 || m->energy == 0 || m->rhs == 0)
         return GAC_ERR_BAD_MODEL;
     if (m->chart.theta0_index >= m->nq) return GAC_ERR_BAD_MODEL;
+    if (m->chart_b != 0) {               /* the same chain on a second chart: same sizes and tables, three angles */
+        const gac_model *b = m->chart_b;
+        if (b->nq != m->nq || b->nx != m->nx || b->nparam != m->nparam || b->nu != m->nu || b->npoint != m->npoint
+            || b->ncontact != m->ncontact || b->njrow != m->njrow || b->contacts != m->contacts || b->chart_b != 0
+            || gac_model_check(b) != GAC_OK)
+            return GAC_ERR_BAD_MODEL;
+        for (c = 0; c < 3; ++c) {
+            if (m->base.index[c] < 0 || m->base.index[c] >= m->nq || b->base.index[c] != m->base.index[c])
+                return GAC_ERR_BAD_MODEL;
+        }
+    }
     for (c = 0; m->parameter_info != 0 && c < m->nparam; ++c) {
         const gac_parameter_info *info = &m->parameter_info[c];
         if (info->name == 0 || info->range == 0 || !(info->lo <= info->hi)) return GAC_ERR_BAD_MODEL;
@@ -172,8 +183,8 @@ const char *gac_error_message(int code)
     case GAC_ERR_SINGULAR_MASS: return "inertia matrix I_f is singular to double precision (its solve by the articulated-body recursion is not finite): the chain's ratios of masses, lengths and inertias span more than 15 digits at this state";
     case GAC_ERR_SINGULAR_IMPACT: return "impact matrix J I_f^-1 J^T is singular: the active contact constraints are dependent";
     case GAC_ERR_LCP: return "impact complementarity problem has no solution (too many or degenerate contacts)";
-    case GAC_ERR_GIMBAL_LOCK: return "gimbal lock: theta_0 is too close to the singularity of the base chart (|det E| below sqrt(16 eps / tol)) for results to the tolerance; continue on a second chart";
-    case GAC_ERR_BAD_OPTION: return "bad option or argument: allowed are method RK4, DOPRI5 or DOP853; RK4: 0 < dt < 1e300; DOPRI5, DOP853: 1e-14 (GAC_RTOL_MIN) <= rtol < 1, 0 < atol < 1e300, dt >= 0; h_max >= 0, event_samples >= 1, event_tol > 0, contact_tol >= 0, max_steps >= 0, rest_height < 1e300 (not NaN), zeno_impacts >= 0, 0 <= max_wall_time < 1e300, max_impacts >= 0, energy_tol < 1 (< 0: automatic, 0: off) (gac_check_options names the option); t0, q and qd finite; sim_advance: t_end finite and >= the current time, n_eval >= 0, 0 <= *i_eval <= n_eval";
+    case GAC_ERR_GIMBAL_LOCK: return "gimbal lock: theta_0 is too close to the singularity of the base chart (|det E| below sqrt(16 eps / tol)) for results to the tolerance, and the run has no second chart to continue on (opt.chart_switch = 0, or a model without one: a base angle with an input, spring, damper or stop, or a planar model)";
+    case GAC_ERR_BAD_OPTION: return "bad option or argument: allowed are method RK4, DOPRI5 or DOP853; RK4: 0 < dt < 1e300; DOPRI5, DOP853: 1e-14 (GAC_RTOL_MIN) <= rtol < 1, 0 < atol < 1e300, dt >= 0; h_max >= 0, event_samples >= 1, event_tol > 0, contact_tol >= 0, max_steps >= 0, rest_height < 1e300 (not NaN), zeno_impacts >= 0, 0 <= max_wall_time < 1e300, max_impacts >= 0, energy_tol < 1 (< 0: automatic, 0: off), chart_switch 0 or within [0.1, 0.35] (GAC_CHART_SWITCH_MIN, _MAX) (gac_check_options names the option); t0, q and qd finite; sim_advance: t_end finite and >= the current time, n_eval >= 0, 0 <= *i_eval <= n_eval";
     case GAC_ERR_START_OUTSIDE: return "the start state has a contact point beyond its wall or a joint beyond its stop: allowed is a gap >= -(contact_tol + the simultaneity window + 1e-12 max(1 m, the largest |point coordinate|)), a point inside the box or on its wall";
     case GAC_ERR_NULL_ARGUMENT: return "a required pointer argument is NULL: sim_init needs sim, q and qd (and, in the library, the model and its work arrays; opt and p may be NULL: the defaults); sim_advance needs sim and record, and t_eval, i_eval and x_eval when n_eval > 0";
     case GAC_ERR_MAX_STEPS: return "maximum number of steps reached";

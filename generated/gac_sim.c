@@ -28,6 +28,7 @@ void gac_default_options(gac_options *opt)
     opt->max_wall_time = 0.0;
     opt->max_impacts = 10000;
     opt->energy_tol = -1.0;
+    opt->chart_switch = 0.3;
 }
 
 int gac_check_options(const gac_options *opt, const char **field)
@@ -65,6 +66,10 @@ int gac_check_options(const gac_options *opt, const char **field)
     else if (!(opt->energy_tol < 1.0))
         bad = "energy_tol: must be < 1 and not NaN (the energy balance's allowed residual per energy scale; < 0: "
               "automatic, 0: off)";
+    else if (!(opt->chart_switch == 0.0
+               || (opt->chart_switch >= GAC_CHART_SWITCH_MIN && opt->chart_switch <= GAC_CHART_SWITCH_MAX)))
+        bad = "chart_switch: must be 0 (never) or within [0.1, 0.35] (GAC_CHART_SWITCH_MIN, _MAX: chart A's measure "
+              "below which the loop integrates on the second base chart)";
     if (field != 0) *field = bad;
     return bad == 0 ? GAC_OK : GAC_ERR_BAD_OPTION;
 }
@@ -92,12 +97,21 @@ static int gac_look(gac_sim *s)
 
 /* The inputs at time t and state x: the held ones, or the controller's (into s->u_eval, starting from the
  * held ones).  A non-finite controller output is kept in s->fail (GAC_ERR_BAD_INPUT). */
+static void gac_to_chart_a(gac_sim *s, double *x);
+
 const double *gac_input(gac_sim *s, double t, const double *x)
 {
     const gac_model *md = s->model;
     if (s->controller == 0 || md->nu == 0) return s->u;
     gac_copy(s->u_eval, s->u, md->nu);
-    s->controller(t, x, x + md->nq, s->u_eval, s->controller_data);
+    if (s->chart == 1) {                      /* the controller sees chart A's coordinates, as every caller does */
+        double xa[md->nx];
+        gac_copy(xa, x, md->nx);
+        gac_to_chart_a(s, xa);
+        s->controller(t, xa, xa + md->nq, s->u_eval, s->controller_data);
+    } else {
+        s->controller(t, x, x + md->nq, s->u_eval, s->controller_data);
+    }
     if (!gac_finite(s->u_eval, md->nu) && s->fail == 0) s->fail = GAC_ERR_BAD_INPUT;
     return s->u_eval;
 }
@@ -138,12 +152,113 @@ void gac_events(gac_sim *s, double t, const double *x, double *ev)
     }
 }
 
+/* ---- the two base charts ----------------------------------------------------------------------- */
+
+/* 1 if the run may switch charts: opt.chart_switch > 0 and the model has a second chart. */
+static int gac_can_switch(const gac_sim *s)
+{
+    return s->opt.chart_switch > 0.0 && s->model_a->chart_b != 0;
+}
+
+/* Chart A's measure mu_A of the state x of the chart integrated now. */
+static double gac_measure_a(const gac_sim *s, const double *x)
+{
+    const gac_model *md = s->model;
+    double angles[3], R[9];
+    int i;
+    if (s->chart == 0) return gac_chart_measure(md, x);
+    for (i = 0; i < 3; ++i) angles[i] = x[md->base.index[i]];
+    gac_base_rotation(&md->base, angles, R);
+    return gac_base_measure(&s->model_a->base, R);
+}
+
+/* 1 if the run should leave the chart it is on at its current state: mu_A below opt.chart_switch on A, above
+ * twice that on B (the hysteresis keeps a motion near the threshold from switching at every step). */
+static int gac_wants_switch(const gac_sim *s)
+{
+    const double mu_a = gac_can_switch(s) ? gac_measure_a(s, s->x) : 1.0;
+    return gac_can_switch(s) && (s->chart == 0 ? mu_a < s->opt.chart_switch : mu_a > 2.0 * s->opt.chart_switch);
+}
+
+/* The current chart's signed measure a . (e_z x Rz(theta_0) b) (gac_chart_measure without the absolute value): its
+ * sign changes where theta_0 passes the lock. */
+static double gac_signed_measure(const gac_model *m, const double *q)
+{
+    const double *a = m->chart.a, *b = m->chart.b;
+    const double theta0 = m->chart.theta0_index >= 0 ? q[m->chart.theta0_index] : m->chart.theta0_value;
+    const double c = cos(theta0), s = sin(theta0);
+    return -a[0] * (s * b[0] + c * b[1]) + a[1] * (c * b[0] - s * b[1]);
+}
+
+/* 1 if the step from s->x to s->x1 ends below the chart's floor or passes its lock on the way. */
+static int gac_step_near_lock(const gac_sim *s)
+{
+    const gac_model *md = s->model;
+    if (!gac_finite(s->x1, md->nx)) return 0;
+    return gac_chart_measure(md, s->x1) < gac_chart_floor(s)
+           || (gac_signed_measure(md, s->x) > 0.0) != (gac_signed_measure(md, s->x1) > 0.0);
+}
+
+/* Continue on the other chart from the current state: x converted (gac_chart_convert; chart A's angles continued
+ * from near_a, chart B's the principal ones), the integrator restarted (fresh first step, f invalid), the event
+ * values evaluated again with the new chart's kernels. */
+static int gac_switch_chart(gac_sim *s)
+{
+    const gac_model *from = s->model, *to = s->chart == 0 ? s->model_a->chart_b : s->model_a;
+    int i, code;
+    if (s->chart == 0) {
+        for (i = 0; i < 3; ++i) s->near_a[i] = s->x[from->base.index[i]];
+    }
+    code = gac_chart_convert(&from->base, &to->base, from->nq, s->x, s->chart == 0 ? 0 : s->near_a, s->x);
+    if (code != GAC_OK) return code;
+    if (s->chart == 1) {
+        for (i = 0; i < 3; ++i) s->near_a[i] = s->x[to->base.index[i]];
+    }
+    s->chart = 1 - s->chart;
+    s->model = to;
+    s->n_chart_switches++;
+    s->f_valid = s->vn_valid = 0;
+    s->h = s->opt.method == GAC_METHOD_RK4 ? s->opt.dt : 0.0;
+    s->n_unstable = 0;
+    gac_events(s, s->t, s->x, s->ev);
+    return s->fail < 0 ? s->fail : GAC_OK;
+}
+
+/* A state x (nx) of the chart integrated now, in chart A's coordinates, in place (near_a follows it). */
+static void gac_to_chart_a(gac_sim *s, double *x)
+{
+    const gac_model *md = s->model;
+    int i;
+    if (s->chart == 0) return;
+    if (gac_chart_convert(&md->base, &s->model_a->base, md->nq, x, s->near_a, x) != GAC_OK) return;
+    for (i = 0; i < 3; ++i) s->near_a[i] = x[md->base.index[i]];
+}
+
+/* The impact record (q, qd_before, qd_after) in chart A's coordinates; returns code. */
+static int gac_report(gac_sim *s, gac_impact_record *record, int code)
+{
+    const int nq = s->model->nq;
+    double x[2 * nq], y[2 * nq];
+    if (s->chart == 0) return code;
+    gac_copy(x, record->q, nq);
+    gac_copy(x + nq, record->qd_before, nq);
+    gac_copy(y, record->q, nq);
+    gac_copy(y + nq, record->qd_after, nq);
+    gac_to_chart_a(s, x);
+    gac_to_chart_a(s, y);
+    gac_copy(record->q, x, nq);
+    gac_copy(record->qd_before, x + nq, nq);
+    gac_copy(record->qd_after, y + nq, nq);
+    return code;
+}
+
 void gac_sim_bind(gac_sim *s, const gac_model *md, double *dwork, int *iwork)
 {
     const int nx = md->nx, nc1 = GAC_AT_LEAST_1(md->ncontact);
     double *d = dwork;
     int j;
-    s->model = md;
+    s->model_a = md;
+    s->model = s->chart == 1 && md->chart_b != 0 ? md->chart_b : md;   /* the chart integrated now */
     s->x = d;             d += nx;             /* dwork: x | p | u | u_eval | f | k[0..15] | x1 | xs | cont[0..7] */
     s->p = d;             d += md->nparam;
     s->u = d;             d += md->nu;
@@ -208,6 +323,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
             if (gaps[i] < -depth) return GAC_ERR_START_OUTSIDE;
         }
     }
+    s->chart = 0;
     gac_sim_bind(s, md, dwork, iwork);
     s->opt = *opt;
     for (i = 0; i < md->nparam; ++i) s->p[i] = pv[i];
@@ -228,6 +344,8 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     s->n_slow_sliding = 0;
     s->t_slow_sliding = 0.0;
     for (i = 0; i < md->nx; ++i) s->x[i] = x[i];
+    s->n_chart_switches = 0;
+    for (i = 0; i < 3; ++i) s->near_a[i] = md->base.index[i] >= 0 ? x[md->base.index[i]] : 0.0;
     s->t = t0;
     s->h = opt->dt;                               /* RK4 step, or the first adaptive step (0: automatic) */
     s->f_valid = 0;
@@ -255,6 +373,10 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
         s->t_last[i] = t0;
         s->dt_last[i] = -2.0;                     /* -2: no impact of this contact yet, -1: one */
         s->gap_held[i] = 0.0;
+    }
+    if (gac_wants_switch(s)) {                    /* chart A already poor at the start: start on B */
+        int code = gac_switch_chart(s);
+        if (code != GAC_OK) return code;
     }
     if (s->rest_height > 0.0) {
         int code = gac_rest_at_start(s);
@@ -297,9 +419,15 @@ void gac_sim_state(const gac_sim *s, double *t, double *q, double *qd)
     int i;
     if (s == 0) return;
     if (t != 0) *t = s->t;
-    for (i = 0; i < s->model->nq; ++i) {
-        if (q != 0) q[i] = s->x[i];
-        if (qd != 0) qd[i] = s->x[s->model->nq + i];
+    {
+        const int nq = s->model->nq;
+        double x[2 * nq];
+        gac_copy(x, s->x, 2 * nq);
+        if (s->chart == 1) gac_chart_convert(&s->model->base, &s->model_a->base, nq, x, s->near_a, x);
+        for (i = 0; i < nq; ++i) {
+            if (q != 0) q[i] = x[i];
+            if (qd != 0) qd[i] = x[nq + i];
+        }
     }
 }
 
@@ -417,6 +545,7 @@ static void gac_emit(gac_sim *s, double t_b, const double *t_eval, int n_eval, i
             int i;
             for (i = 0; i < md->nx; ++i) out[i] = s->x[i];
         }
+        gac_to_chart_a(s, out);
         ++*i_eval;
     }
 }
@@ -509,11 +638,11 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         record->nactivated = s->nactive;
         record->nreleased = 0;
         for (i = 0; i < s->nactive; ++i) record->activated[i] = s->active[i];
-        return GAC_SIM_CONTACT;
+        return gac_report(s, record, GAC_SIM_CONTACT);
     }
     if (s->input_changed) {
         const int code = gac_recheck_rest(s, record);
-        if (code != 0) return code < 0 ? code : GAC_SIM_CONTACT;
+        if (code != 0) return code < 0 ? code : gac_report(s, record, GAC_SIM_CONTACT);
     }
     if (s->t < t_end) {                           /* the budget and the progress callback, once per call ... */
         const int code = gac_look(s);
@@ -572,6 +701,23 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             fac_max = 10.0;
             s->fail_seen = 0;
         }
+        if (gac_step_near_lock(s)) {          /* below the chart's floor at the step's end, or past its lock */
+            if (!gac_can_switch(s)) {
+                if (gac_chart_measure(md, s->x1) < gac_chart_floor(s)) return GAC_ERR_GIMBAL_LOCK;
+            } else if (s->opt.method != GAC_METHOD_RK4) {  /* retry shorter: the switch comes at a step's end */
+                s->n_rejected++;
+                s->h = 0.25 * h;
+                fac_max = 1.0;
+                steps++;
+                continue;
+            } else {                                       /* RK4: continue on the other chart from the step's start */
+                const int code = gac_switch_chart(s);
+                if (code != GAC_OK) return code;
+                md = s->model;
+                steps++;
+                continue;
+            }
+        }
         steps++;
         s->n_steps++;
         if (gac_slow_sliding(s, s->x)) {
@@ -580,7 +726,6 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         }
         if (s->fail) return s->fail;
         if (!gac_finite(s->x1, md->nx)) return GAC_ERR_NONFINITE;
-        if (gac_chart_measure(md, s->x1) < gac_chart_floor(s)) return GAC_ERR_GIMBAL_LOCK;
         t1 = last ? t_end : s->t + h;
         gac_prepare_dense(s, h);
         if (gac_find_event(s, t1, &t_event, &c_event)) {
@@ -604,10 +749,10 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
                 }
             }
             if (s->opt.method == GAC_METHOD_RK4) s->h = s->opt.dt;
-            if (released) return GAC_SIM_CONTACT;
+            if (released) return gac_report(s, record, GAC_SIM_CONTACT);
             if (code == 1) {
                 s->n_impacts++;
-                return GAC_SIM_IMPACT;
+                return gac_report(s, record, GAC_SIM_IMPACT);
             }
             continue;                                         /* grazing: carry on from the touch */
         }
@@ -633,9 +778,20 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             const int code = gac_energy_check(s);
             if (code != GAC_OK) return code;
         }
+        if (s->chart == 1) {                      /* chart A's angles followed step by step (near_a) */
+            double x[md->nx];
+            gac_copy(x, s->x, md->nx);
+            gac_to_chart_a(s, x);
+        }
+        if (gac_wants_switch(s)) {                /* near chart A's lock, or far enough from it again */
+            const int code = gac_switch_chart(s);
+            if (code != GAC_OK) return code;
+            md = s->model;
+        }
     }
     while (n_eval > 0 && *i_eval < n_eval && t_eval[*i_eval] <= t_end) {   /* samples at t_end itself */
         for (i = 0; i < md->nx; ++i) x_eval[(long)(*i_eval) * md->nx + i] = s->x[i];
+        gac_to_chart_a(s, x_eval + (long)(*i_eval) * md->nx);
         ++*i_eval;
     }
     return GAC_SIM_END;

@@ -1166,6 +1166,12 @@ static const gac_parameter_info paper_case1_parameter_info[PAPER_CASE1_NPARAM] =
     { "e_x2_max", 0.0, 1.0, "restitution must be in [0, 1]" },
 };
 
+/* M |g| L (J): the work to lift the whole chain by its own length, the energy scale of a chain at rest. */
+static double paper_case1_weight_scale(const double *p)
+{
+    return (p[2] * p[1] + p[7] * p[6] + p[12] * p[11] + p[17] * p[16]) * fabs(p[0]) * (p[1] + p[6] + p[11] + p[16]);
+}
+
 const gac_model paper_case1_model = {
     .name = "paper_case1",
     .n = PAPER_CASE1_N, .nq = PAPER_CASE1_NQ, .nx = PAPER_CASE1_NX, .nparam = PAPER_CASE1_NPARAM, .nu = PAPER_CASE1_NU,
@@ -1180,7 +1186,11 @@ const gac_model paper_case1_model = {
     .contact_generalized_force = paper_case1_contact_generalized_force, .contact_gaps = paper_case1_contact_gaps,
     .contact_bias = paper_case1_contact_bias, .energy = paper_case1_energy, .rhs = paper_case1_rhs,
     .power = 0,   /* no inputs, springs or dampers: only gravity works in flight */
-    .check_parameters = paper_case1_check_parameters, .parameter_info = paper_case1_parameter_info
+    .check_parameters = paper_case1_check_parameters, .parameter_info = paper_case1_parameter_info,
+    .weight_scale = paper_case1_weight_scale,
+    .base = { .T_m1 = { 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, -1.0, 0.0 }, .T_0 = { 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0 },
+              .T_1 = { 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0 }, .index = { -1, -1, 0 } },
+    .chart_b = 0   /* no second base chart (a planar model, or an input on a base angle) */
 };
 
 /* The storage of paper_case1.h agrees with the library's formulas (both come from one formula). */
@@ -1335,13 +1345,11 @@ int paper_case1_sim_set_progress(paper_case1_sim *sim, gac_progress progress, vo
 
 void paper_case1_sim_state(const paper_case1_sim *sim, double *t, double *q, double *qd)
 {
-    int i;
+    gac_sim base;
     if (sim == 0) return;
-    if (t != 0) *t = sim->base.t;
-    for (i = 0; i < PAPER_CASE1_NQ; ++i) {          /* the state x is dwork[0..NX-1] (gac_sim_bind) */
-        if (q != 0) q[i] = sim->dwork[i];
-        if (qd != 0) qd[i] = sim->dwork[PAPER_CASE1_NQ + i];
-    }
+    base = sim->base;                   /* bound to sim's own arrays (read only here), wherever sim was copied */
+    gac_sim_bind(&base, &paper_case1_model, (double *)sim->dwork, (int *)sim->iwork);
+    gac_sim_state(&base, t, q, qd);
 }
 
 void paper_case1_sim_copy(paper_case1_sim *dst, const paper_case1_sim *src)

@@ -26,6 +26,7 @@
  *     - no parameter is zero: all stay in the runtime array p
  *   Frames: ^ref R_-1 = T_-1 Rz(theta_-1), ^(k-1) R_k = T_k Rz(theta_k); (X1, X2, X3) = O_1.
  *   Gravity acts along -X2.  The base-orientation chart is singular at theta_0 = +-pi/2.
+ *   No second base chart: a planar model never comes near the singularity.
  *   Matrices are row-major: element (i, j) of an R x C matrix is at [i*C + j].
  *
  *   Twists T_k (fixed, rows):
@@ -490,7 +491,7 @@ int paper_case1_sim_set_schedule(paper_case1_sim *sim, const gac_schedule *sched
  */
 int paper_case1_sim_run(paper_case1_sim *sim, double t_end, paper_case1_impact_record *record, gac_run_summary *summary);
 
-/* The current time and state (gac_sim_state).
+/* The current time and state, in chart A's coordinates whichever base chart is integrated (gac_sim_state).
  *   sim          the simulation (NULL: nothing is written)
  *   t            out: current time (s), or NULL
  *   q            out: current coordinates (NQ), or NULL

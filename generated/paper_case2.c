@@ -6,6 +6,18 @@
 #include "paper_case2.h"
 #include <math.h>
 
+/* Chart B's kernels (after chart A's): the same chain with T_-1 replaced by C T_-1, for paper_case2_model_b. */
+void paper_case2_b_forward_dynamics(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT qdd);
+void paper_case2_b_inertia_solve(const double *GAC_RESTRICT q, const double *GAC_RESTRICT Q, const double *GAC_RESTRICT p, double *GAC_RESTRICT x);
+void paper_case2_b_generalized_momentum(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT h);
+void paper_case2_b_contact_points(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT r);
+void paper_case2_b_contact_velocities(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT v);
+void paper_case2_b_contact_generalized_force(const double *GAC_RESTRICT q, const double *GAC_RESTRICT f, const double *GAC_RESTRICT p, double *GAC_RESTRICT Q);
+void paper_case2_b_contact_gaps(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT gap);
+void paper_case2_b_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT E);
+void paper_case2_b_contact_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT a);
+void paper_case2_b_power(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT P);
+
 /* ---- kernel mass_matrix ---- */
 /* Flight inertia matrix I_f(Theta) (Eq. 12, Fig. 2), full, row-major.  58 ops (10 add, 42 mul, 0 div, 6 calls) */
 void paper_case2_mass_matrix(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT M)
@@ -750,6 +762,552 @@ void paper_case2_power(const double *GAC_RESTRICT q, const double *GAC_RESTRICT 
     P[1] = 0.0;
 }
 
+/* ---- kernel forward_dynamics ---- */
+/* Theta_ddot solving I_f Theta_ddot = R, by an O(n) articulated-body recursion.  230 ops (74 add, 144 mul, 6 div, 6 calls) */
+void paper_case2_b_forward_dynamics(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT qdd)
+{
+    (void)q;
+    (void)qd;
+    (void)u;
+    (void)p;
+    const double c_m1 = cos(q[0]);
+    const double s_m1 = sin(q[0]);
+    const double c_0 = cos(q[1]);
+    const double s_0 = sin(q[1]);
+    const double c_1 = cos(q[2]);
+    const double s_1 = sin(q[2]);
+    const double B0_1 = p[1]*p[2];
+    const double h_1_x = 0.5*p[2]*(p[1]*p[1]);
+    const double B2_1 = 0.3333333333333333*p[2]*(p[1]*p[1]*p[1]);
+    const double K_1_xx = p[1]*p[3];
+    const double K_1_yy = B2_1 + p[1]*p[4];
+    const double K_1_zz = B2_1 + p[1]*p[5];
+    const double av_m1_x = -p[0]*s_m1;
+    const double av_m1_y = -c_m1*p[0];
+    const double wp_0_x = qd[0]*s_0;
+    const double wp_0_y = c_0*qd[0];
+    const double wdv_0_x = qd[1]*wp_0_y;
+    const double wdv_0_y = -qd[1]*wp_0_x;
+    const double av_0_x = av_m1_x*c_0;
+    const double av_0_y = -av_m1_x*s_0;
+    const double wp_1_x = c_1*wp_0_y + qd[1]*s_1;
+    const double wp_1_y = c_1*qd[1] - s_1*wp_0_y;
+    const double w_1_z = qd[2] + wp_0_x;
+    const double wdv_1_x = c_1*wdv_0_y + qd[2]*wp_1_y;
+    const double wdv_1_y = -qd[2]*wp_1_x - s_1*wdv_0_y;
+    const double av_1_x = av_0_y*c_1 - av_m1_y*s_1;
+    const double av_1_y = -av_0_y*s_1 - av_m1_y*c_1;
+    const double hw_1_y = -h_1_x*w_1_z;
+    const double hw_1_z = h_1_x*wp_1_y;
+    const double S_1_x = B0_1*av_1_x + hw_1_y*w_1_z - hw_1_z*wp_1_y;
+    const double S_1_y = B0_1*av_1_y + h_1_x*wdv_0_x + hw_1_z*wp_1_x;
+    const double S_1_z = B0_1*av_0_x - h_1_x*wdv_1_y - hw_1_y*wp_1_x;
+    const double Kw_1_x = K_1_xx*wp_1_x;
+    const double Kw_1_y = K_1_yy*wp_1_y;
+    const double Kw_1_z = K_1_zz*w_1_z;
+    const double T_1_x = K_1_xx*wdv_1_x + Kw_1_z*wp_1_y - Kw_1_y*w_1_z;
+    const double T_1_y = K_1_yy*wdv_1_y + Kw_1_x*w_1_z - Kw_1_z*wp_1_x - av_0_x*h_1_x;
+    const double T_1_z = K_1_zz*wdv_0_x + Kw_1_y*wp_1_x + av_1_y*h_1_x - Kw_1_x*wp_1_y;
+    const double Dinv_1 = 1.0/(K_1_zz);
+    const double W_1_4 = Dinv_1*h_1_x;
+    const double ud_1 = -Dinv_1*T_1_z;
+    const double IaC_1_11 = B0_1 - W_1_4*h_1_x;
+    const double paF_1_y = S_1_y - T_1_z*W_1_4;
+    const double ss_1 = s_1*s_1;
+    const double sc_1 = c_1*s_1;
+    const double x0 = K_1_xx - K_1_yy;
+    const double x1 = ss_1*x0;
+    const double IzA_1_00 = K_1_xx - x1;
+    const double IzA_1_01 = sc_1*x0;
+    const double IzA_1_11 = K_1_yy + x1;
+    const double IzB_1_02 = h_1_x*s_1;
+    const double IzB_1_12 = -c_1*h_1_x;
+    const double x2 = B0_1 - IaC_1_11;
+    const double x3 = ss_1*x2;
+    const double IzC_1_00 = B0_1 - x3;
+    const double IzC_1_01 = sc_1*x2;
+    const double IzC_1_11 = IaC_1_11 + x3;
+    const double pF_1_y = S_1_x*c_1 - paF_1_y*s_1;
+    const double pF_1_z = S_1_x*s_1 + c_1*paF_1_y;
+    const double pN_1_y = T_1_x*c_1 - T_1_y*s_1;
+    const double pN_1_z = T_1_x*s_1 + T_1_y*c_1;
+    const double Dinv_0 = 1.0/(IzA_1_11);
+    const double W_0_1 = Dinv_0*IzA_1_01;
+    const double W_0_3 = Dinv_0*IzB_1_12;
+    const double ud_0 = -Dinv_0*pN_1_z;
+    const double IaA_0_11 = IzA_1_00 - IzA_1_01*W_0_1;
+    const double IaB_0_10 = IzB_1_02 - IzB_1_12*W_0_1;
+    const double IaC_0_00 = B0_1 - IzB_1_12*W_0_3;
+    const double paN_0_y = pN_1_y - W_0_1*pN_1_z;
+    const double paF_0_x = S_1_z - W_0_3*pN_1_z;
+    const double ss_0 = s_0*s_0;
+    const double x4 = c_0*s_0;
+    const double sc_0 = x4;
+    const double IzA_0_11 = IaA_0_11 - IaA_0_11*ss_0;
+    const double IzB_0_00 = -IaB_0_10*x4;
+    const double IzB_0_10 = IaB_0_10*(c_0*c_0);
+    const double x5 = IaC_0_00 - IzC_1_00;
+    const double x6 = ss_0*x5;
+    const double IzC_0_00 = IaC_0_00 - x6;
+    const double IzC_0_01 = sc_0*x5;
+    const double IzC_0_02 = -IzC_1_01*s_0;
+    const double IzC_0_11 = IzC_1_00 + x6;
+    const double IzC_0_12 = IzC_1_01*c_0;
+    const double pF_0_x = c_0*paF_0_x - pF_1_y*s_0;
+    const double pF_0_z = c_0*pF_1_y + paF_0_x*s_0;
+    const double pN_0_z = c_0*paN_0_y;
+    const double Dinv_m1 = 1.0/(IzA_0_11);
+    const double W_m1_3 = Dinv_m1*IzB_0_10;
+    const double W_m1_5 = -Dinv_m1*IzB_0_00;
+    const double ud_m1 = -Dinv_m1*pN_0_z;
+    const double IaC_m1_00 = IzC_0_00 - IzB_0_10*W_m1_3;
+    const double IaC_m1_02 = IzC_0_01 + IzB_0_00*W_m1_3;
+    const double IaC_m1_22 = IzC_0_11 + IzB_0_00*W_m1_5;
+    const double paF_m1_x = pF_0_x - W_m1_3*pN_0_z;
+    const double paF_m1_z = pF_0_z - W_m1_5*pN_0_z;
+    const double Dinv_0_2 = 1.0/(IaC_m1_00);
+    const double L_1_0 = -Dinv_0_2*IzC_0_02;
+    const double D_1 = IzC_1_11 + IzC_0_02*L_1_0;
+    const double Dinv_1_2 = 1.0/(D_1);
+    const double L_2_0 = Dinv_0_2*IaC_m1_02;
+    const double u_2_1 = -IzC_0_12 - IaC_m1_02*L_1_0;
+    const double L_2_1 = Dinv_1_2*u_2_1;
+    const double D_2 = IaC_m1_22 - IaC_m1_02*L_2_0 - L_2_1*u_2_1;
+    const double Dinv_2 = 1.0/(D_2);
+    const double z_1 = pF_1_z + L_1_0*paF_m1_x;
+    const double z_2 = -paF_m1_z + L_2_0*paF_m1_x - L_2_1*z_1;
+    const double sol_2 = Dinv_2*z_2;
+    const double sol_1 = Dinv_1_2*z_1 - L_2_1*sol_2;
+    const double sol_0 = -Dinv_0_2*paF_m1_x - L_1_0*sol_1 - L_2_0*sol_2;
+    const double Xdd_0 = c_m1*sol_0 - s_m1*sol_1;
+    const double Xdd_1 = -c_m1*sol_1 - s_m1*sol_0;
+    const double acc_m1_x = Xdd_0*c_m1 - Xdd_1*s_m1;
+    const double acc_m1_y = -Xdd_0*s_m1 - Xdd_1*c_m1;
+    const double qdd_m1 = ud_m1 - W_m1_3*acc_m1_x - W_m1_5*sol_2;
+    const double alpha_0_x = qdd_m1*s_0;
+    const double alpha_0_y = c_0*qdd_m1;
+    const double acc_0_x = acc_m1_x*c_0 + s_0*sol_2;
+    const double acc_0_y = c_0*sol_2 - acc_m1_x*s_0;
+    const double qdd_0 = ud_0 - W_0_1*alpha_0_y - W_0_3*acc_0_x;
+    const double acc_1_y = -acc_0_y*s_1 - acc_m1_y*c_1;
+    const double qdd_1 = ud_1 - alpha_0_x - W_1_4*acc_1_y;
+    qdd[0] = qdd_m1;
+    qdd[1] = qdd_0;
+    qdd[2] = qdd_1;
+    qdd[3] = Xdd_0;
+    qdd[4] = Xdd_1;
+    qdd[5] = -sol_2;
+}
+
+/* ---- kernel inertia_solve ---- */
+/* x = I_f^-1 Q: the accelerations that generalised forces Q alone give (no motion, no gravity), by the O(n) articulated-body recursion.  163 ops (53 add, 98 mul, 6 div, 6 calls) */
+void paper_case2_b_inertia_solve(const double *GAC_RESTRICT q, const double *GAC_RESTRICT Q, const double *GAC_RESTRICT p, double *GAC_RESTRICT x)
+{
+    (void)q;
+    (void)Q;
+    (void)p;
+    const double B0_1 = p[1]*p[2];
+    const double h_1_x = 0.5*p[2]*(p[1]*p[1]);
+    const double B2_1 = 0.3333333333333333*p[2]*(p[1]*p[1]*p[1]);
+    const double K_1_xx = p[1]*p[3];
+    const double K_1_yy = B2_1 + p[1]*p[4];
+    const double K_1_zz = B2_1 + p[1]*p[5];
+    const double c_m1 = cos(q[0]);
+    const double s_m1 = sin(q[0]);
+    const double c_0 = cos(q[1]);
+    const double s_0 = sin(q[1]);
+    const double c_1 = cos(q[2]);
+    const double s_1 = sin(q[2]);
+    const double Dinv_1 = 1.0/(K_1_zz);
+    const double W_1_4 = Dinv_1*h_1_x;
+    const double ud_1 = Dinv_1*Q[2];
+    const double IaC_1_11 = B0_1 - W_1_4*h_1_x;
+    const double paF_1_y = Q[2]*W_1_4;
+    const double ss_1 = s_1*s_1;
+    const double sc_1 = c_1*s_1;
+    const double x0 = K_1_xx - K_1_yy;
+    const double x1 = ss_1*x0;
+    const double IzA_1_00 = K_1_xx - x1;
+    const double IzA_1_01 = sc_1*x0;
+    const double IzA_1_11 = K_1_yy + x1;
+    const double IzB_1_02 = h_1_x*s_1;
+    const double IzB_1_12 = -c_1*h_1_x;
+    const double x2 = B0_1 - IaC_1_11;
+    const double x3 = ss_1*x2;
+    const double IzC_1_00 = B0_1 - x3;
+    const double IzC_1_01 = sc_1*x2;
+    const double IzC_1_11 = IaC_1_11 + x3;
+    const double pF_1_y = -paF_1_y*s_1;
+    const double pF_1_z = c_1*paF_1_y;
+    const double Dinv_0 = 1.0/(IzA_1_11);
+    const double W_0_1 = Dinv_0*IzA_1_01;
+    const double W_0_3 = Dinv_0*IzB_1_12;
+    const double ud_0 = Dinv_0*Q[1];
+    const double IaA_0_11 = IzA_1_00 - IzA_1_01*W_0_1;
+    const double IaB_0_10 = IzB_1_02 - IzB_1_12*W_0_1;
+    const double IaC_0_00 = B0_1 - IzB_1_12*W_0_3;
+    const double paN_0_y = Q[1]*W_0_1;
+    const double paF_0_x = Q[1]*W_0_3;
+    const double ss_0 = s_0*s_0;
+    const double x4 = c_0*s_0;
+    const double sc_0 = x4;
+    const double IzA_0_11 = IaA_0_11 - IaA_0_11*ss_0;
+    const double IzB_0_00 = -IaB_0_10*x4;
+    const double IzB_0_10 = IaB_0_10*(c_0*c_0);
+    const double x5 = IaC_0_00 - IzC_1_00;
+    const double x6 = ss_0*x5;
+    const double IzC_0_00 = IaC_0_00 - x6;
+    const double IzC_0_01 = sc_0*x5;
+    const double IzC_0_02 = -IzC_1_01*s_0;
+    const double IzC_0_11 = IzC_1_00 + x6;
+    const double IzC_0_12 = IzC_1_01*c_0;
+    const double pF_0_x = c_0*paF_0_x - pF_1_y*s_0;
+    const double pF_0_z = c_0*pF_1_y + paF_0_x*s_0;
+    const double pN_0_z = Q[2]*s_0 + c_0*paN_0_y;
+    const double Dinv_m1 = 1.0/(IzA_0_11);
+    const double W_m1_3 = Dinv_m1*IzB_0_10;
+    const double W_m1_5 = -Dinv_m1*IzB_0_00;
+    const double x7 = Q[0] - pN_0_z;
+    const double ud_m1 = Dinv_m1*x7;
+    const double IaC_m1_00 = IzC_0_00 - IzB_0_10*W_m1_3;
+    const double IaC_m1_02 = IzC_0_01 + IzB_0_00*W_m1_3;
+    const double IaC_m1_22 = IzC_0_11 + IzB_0_00*W_m1_5;
+    const double paF_m1_x = pF_0_x + W_m1_3*x7;
+    const double paF_m1_z = pF_0_z + W_m1_5*x7;
+    const double FQ_0 = paF_m1_x + Q[4]*s_m1 - Q[3]*c_m1;
+    const double FQ_1 = -pF_1_z + Q[3]*s_m1 + Q[4]*c_m1;
+    const double FQ_2 = Q[5] + paF_m1_z;
+    const double Dinv_0_2 = 1.0/(IaC_m1_00);
+    const double L_1_0 = -Dinv_0_2*IzC_0_02;
+    const double D_1 = IzC_1_11 + IzC_0_02*L_1_0;
+    const double Dinv_1_2 = 1.0/(D_1);
+    const double L_2_0 = Dinv_0_2*IaC_m1_02;
+    const double u_2_1 = -IzC_0_12 - IaC_m1_02*L_1_0;
+    const double L_2_1 = Dinv_1_2*u_2_1;
+    const double D_2 = IaC_m1_22 - IaC_m1_02*L_2_0 - L_2_1*u_2_1;
+    const double Dinv_2 = 1.0/(D_2);
+    const double z_1 = -FQ_1 + FQ_0*L_1_0;
+    const double z_2 = -FQ_2 + FQ_0*L_2_0 - L_2_1*z_1;
+    const double sol_2 = Dinv_2*z_2;
+    const double sol_1 = Dinv_1_2*z_1 - L_2_1*sol_2;
+    const double sol_0 = -Dinv_0_2*FQ_0 - L_1_0*sol_1 - L_2_0*sol_2;
+    const double Xdd_0 = c_m1*sol_0 - s_m1*sol_1;
+    const double Xdd_1 = -c_m1*sol_1 - s_m1*sol_0;
+    const double acc_m1_x = Xdd_0*c_m1 - Xdd_1*s_m1;
+    const double acc_m1_y = -Xdd_0*s_m1 - Xdd_1*c_m1;
+    const double qdd_m1 = ud_m1 - W_m1_3*acc_m1_x - W_m1_5*sol_2;
+    const double alpha_0_x = qdd_m1*s_0;
+    const double alpha_0_y = c_0*qdd_m1;
+    const double acc_0_x = acc_m1_x*c_0 + s_0*sol_2;
+    const double acc_0_y = c_0*sol_2 - acc_m1_x*s_0;
+    const double qdd_0 = ud_0 - W_0_1*alpha_0_y - W_0_3*acc_0_x;
+    const double acc_1_y = -acc_0_y*s_1 - acc_m1_y*c_1;
+    const double qdd_1 = ud_1 - alpha_0_x - W_1_4*acc_1_y;
+    x[0] = qdd_m1;
+    x[1] = qdd_0;
+    x[2] = qdd_1;
+    x[3] = Xdd_0;
+    x[4] = Xdd_1;
+    x[5] = -sol_2;
+}
+
+/* ---- kernel generalized_momentum ---- */
+/* h = I_f qd = dT/dqd: the generalised momentum, by composite momenta at O(n) cost (I_f times any vector).  87 ops (24 add, 57 mul, 0 div, 6 calls) */
+void paper_case2_b_generalized_momentum(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT h)
+{
+    (void)q;
+    (void)qd;
+    (void)p;
+    const double c_m1 = cos(q[0]);
+    const double s_m1 = sin(q[0]);
+    const double c_0 = cos(q[1]);
+    const double s_0 = sin(q[1]);
+    const double c_1 = cos(q[2]);
+    const double s_1 = sin(q[2]);
+    const double B0_1 = p[1]*p[2];
+    const double h_1_x = 0.5*p[2]*(p[1]*p[1]);
+    const double B2_1 = 0.3333333333333333*p[2]*(p[1]*p[1]*p[1]);
+    const double K_1_xx = p[1]*p[3];
+    const double K_1_yy = B2_1 + p[1]*p[4];
+    const double K_1_zz = B2_1 + p[1]*p[5];
+    const double vl_m1_x = c_m1*qd[3] - qd[4]*s_m1;
+    const double vl_m1_y = -c_m1*qd[4] - qd[3]*s_m1;
+    const double vl_0_x = c_0*vl_m1_x - qd[5]*s_0;
+    const double vl_0_y = -c_0*qd[5] - s_0*vl_m1_x;
+    const double wl_0_x = qd[0]*s_0;
+    const double wl_0_y = c_0*qd[0];
+    const double vl_1_x = c_1*vl_0_y - s_1*vl_m1_y;
+    const double vl_1_y = -c_1*vl_m1_y - s_1*vl_0_y;
+    const double wl_1_x = c_1*wl_0_y + qd[1]*s_1;
+    const double wl_1_y = c_1*qd[1] - s_1*wl_0_y;
+    const double wl_1_z = qd[2] + wl_0_x;
+    const double Hm_1_x = K_1_xx*wl_1_x;
+    const double Hm_1_y = K_1_yy*wl_1_y - h_1_x*vl_0_x;
+    const double Hm_1_z = K_1_zz*wl_1_z + h_1_x*vl_1_y;
+    const double Lm_1_x = B0_1*vl_1_x;
+    const double Lm_1_y = B0_1*vl_1_y + h_1_x*wl_1_z;
+    const double Lm_1_z = B0_1*vl_0_x - h_1_x*wl_1_y;
+    const double pF_1_y = Lm_1_x*c_1 - Lm_1_y*s_1;
+    const double pF_1_z = Lm_1_x*s_1 + Lm_1_y*c_1;
+    const double pN_1_y = Hm_1_x*c_1 - Hm_1_y*s_1;
+    const double pN_1_z = Hm_1_x*s_1 + Hm_1_y*c_1;
+    const double pF_0_x = Lm_1_z*c_0 - pF_1_y*s_0;
+    const double pF_0_z = Lm_1_z*s_0 + c_0*pF_1_y;
+    const double pN_0_z = Hm_1_z*s_0 + c_0*pN_1_y;
+    h[0] = pN_0_z;
+    h[1] = pN_1_z;
+    h[2] = Hm_1_z;
+    h[3] = c_m1*pF_0_x + pF_1_z*s_m1;
+    h[4] = c_m1*pF_1_z - pF_0_x*s_m1;
+    h[5] = -pF_0_z;
+}
+
+/* ---- kernel contact_points ---- */
+/* Positions of O_1..O_{n+1} in the reference frame, row i-1 = O_i.  21 ops (5 add, 10 mul, 0 div, 6 calls) */
+void paper_case2_b_contact_points(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT r)
+{
+    (void)q;
+    (void)p;
+    const double c_m1 = cos(q[0]);
+    const double s_m1 = sin(q[0]);
+    const double c_0 = cos(q[1]);
+    const double s_0 = sin(q[1]);
+    const double c_1 = cos(q[2]);
+    const double s_1 = sin(q[2]);
+    const double Rref_0_01 = -c_m1*s_0;
+    const double Rref_0_11 = s_0*s_m1;
+    const double Rref_1_00 = Rref_0_01*c_1 + s_1*s_m1;
+    const double Rref_1_10 = Rref_0_11*c_1 + c_m1*s_1;
+    const double Rref_1_20 = -c_0*c_1;
+    const double O_2_x = q[3] + Rref_1_00*p[1];
+    const double O_2_y = q[4] + Rref_1_10*p[1];
+    const double O_2_z = q[5] + Rref_1_20*p[1];
+    r[0] = q[3];
+    r[1] = q[4];
+    r[2] = q[5];
+    r[3] = O_2_x;
+    r[4] = O_2_y;
+    r[5] = O_2_z;
+}
+
+/* ---- kernel contact_velocities ---- */
+/* Velocities of O_1..O_{n+1} in the reference frame (Eq. 42).  41 ops (11 add, 24 mul, 0 div, 6 calls) */
+void paper_case2_b_contact_velocities(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT v)
+{
+    (void)q;
+    (void)qd;
+    (void)p;
+    const double c_m1 = cos(q[0]);
+    const double s_m1 = sin(q[0]);
+    const double c_0 = cos(q[1]);
+    const double s_0 = sin(q[1]);
+    const double c_1 = cos(q[2]);
+    const double s_1 = sin(q[2]);
+    const double Rref_0_00 = c_0*c_m1;
+    const double Rref_0_01 = -c_m1*s_0;
+    const double Rref_0_10 = -c_0*s_m1;
+    const double Rref_0_11 = s_0*s_m1;
+    const double Rref_1_00 = Rref_0_01*c_1 + s_1*s_m1;
+    const double Rref_1_10 = Rref_0_11*c_1 + c_m1*s_1;
+    const double Rref_1_20 = -c_0*c_1;
+    const double wref_0_x = qd[1]*s_m1;
+    const double wref_0_y = c_m1*qd[1];
+    const double wref_1_x = wref_0_x + Rref_0_00*qd[2];
+    const double wref_1_y = wref_0_y + Rref_0_10*qd[2];
+    const double wref_1_z = -qd[0] - qd[2]*s_0;
+    const double x0 = Rref_1_20*p[1];
+    const double x1 = p[1]*wref_1_z;
+    const double vO_2_x = qd[3] + wref_1_y*x0 - Rref_1_10*x1;
+    const double vO_2_y = qd[4] + Rref_1_00*x1 - wref_1_x*x0;
+    const double vO_2_z = qd[5] + Rref_1_10*p[1]*wref_1_x - Rref_1_00*p[1]*wref_1_y;
+    v[0] = qd[3];
+    v[1] = qd[4];
+    v[2] = qd[5];
+    v[3] = vO_2_x;
+    v[4] = vO_2_y;
+    v[5] = vO_2_z;
+}
+
+/* ---- kernel contact_generalized_force ---- */
+/* Q = J^T f: the generalised force of forces f along the contact Jacobian rows (N on a point's axis, N m on a stop's joint).  42 ops (11 add, 25 mul, 0 div, 6 calls) */
+void paper_case2_b_contact_generalized_force(const double *GAC_RESTRICT q, const double *GAC_RESTRICT f, const double *GAC_RESTRICT p, double *GAC_RESTRICT Q)
+{
+    (void)q;
+    (void)f;
+    (void)p;
+    const double c_m1 = cos(q[0]);
+    const double s_m1 = sin(q[0]);
+    const double c_0 = cos(q[1]);
+    const double s_0 = sin(q[1]);
+    const double c_1 = cos(q[2]);
+    const double s_1 = sin(q[2]);
+    const double Rref_0_00 = c_0*c_m1;
+    const double Rref_0_01 = -c_m1*s_0;
+    const double Rref_0_10 = -c_0*s_m1;
+    const double Rref_0_11 = s_0*s_m1;
+    const double Rref_1_00 = Rref_0_01*c_1 + s_1*s_m1;
+    const double Rref_1_10 = Rref_0_11*c_1 + c_m1*s_1;
+    const double Rref_1_20 = -c_0*c_1;
+    const double x0 = f[5]*p[1];
+    const double Mf_1_x = Rref_1_10*x0 - Rref_1_20*f[4]*p[1];
+    const double Mf_1_y = -Rref_1_00*x0 + Rref_1_20*f[3]*p[1];
+    const double Mf_1_z = Rref_1_00*f[4]*p[1] - Rref_1_10*f[3]*p[1];
+    const double Ff_1_x = f[0] + f[3];
+    const double Ff_1_y = f[1] + f[4];
+    const double Ff_1_z = f[2] + f[5];
+    Q[0] = -Mf_1_z;
+    Q[1] = Mf_1_x*s_m1 + Mf_1_y*c_m1;
+    Q[2] = Mf_1_x*Rref_0_00 + Mf_1_y*Rref_0_10 - Mf_1_z*s_0;
+    Q[3] = Ff_1_x;
+    Q[4] = Ff_1_y;
+    Q[5] = Ff_1_z;
+}
+
+/* ---- kernel contact_gaps ---- */
+/* Gap of each (point, wall) pair: distance of the point inside its wall (negative = beyond it).  48 ops (17 add, 25 mul, 0 div, 6 calls) */
+void paper_case2_b_contact_gaps(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, double *GAC_RESTRICT gap)
+{
+    (void)q;
+    (void)p;
+    const double c_m1 = cos(q[0]);
+    const double s_m1 = sin(q[0]);
+    const double c_0 = cos(q[1]);
+    const double s_0 = sin(q[1]);
+    const double c_1 = cos(q[2]);
+    const double s_1 = sin(q[2]);
+    const double Rref_0_01 = -c_m1*s_0;
+    const double Rref_0_11 = s_0*s_m1;
+    const double Rref_1_00 = Rref_0_01*c_1 + s_1*s_m1;
+    const double Rref_1_10 = Rref_0_11*c_1 + c_m1*s_1;
+    const double Rref_1_20 = -c_0*c_1;
+    const double O_2_x = q[3] + Rref_1_00*p[1];
+    const double O_2_y = q[4] + Rref_1_10*p[1];
+    const double O_2_z = q[5] + Rref_1_20*p[1];
+    const double x0 = 1.0*p[6];
+    const double x1 = -1.0*q[3];
+    const double x2 = 1.0*O_2_x;
+    const double x3 = 1.0*p[8];
+    const double x4 = -1.0*q[4];
+    const double x5 = 1.0*O_2_y;
+    const double x6 = 1.0*p[10];
+    const double x7 = -1.0*q[5];
+    const double x8 = 1.0*O_2_z;
+    gap[0] = -x0 - x1;
+    gap[1] = x2 - x0;
+    gap[2] = x1 + 1.0*p[7];
+    gap[3] = -x2 + 1.0*p[7];
+    gap[4] = -x3 - x4;
+    gap[5] = x5 - x3;
+    gap[6] = x4 + 1.0*p[9];
+    gap[7] = -x5 + 1.0*p[9];
+    gap[8] = -x6 - x7;
+    gap[9] = x8 - x6;
+    gap[10] = x7 + 1.0*p[11];
+    gap[11] = -x8 + 1.0*p[11];
+}
+
+/* ---- kernel energy ---- */
+/* E[0] = kinetic energy T, E[1] = potential energy V, gravity and joint springs (J).  100 ops (27 add, 67 mul, 0 div, 6 calls) */
+void paper_case2_b_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT E)
+{
+    (void)q;
+    (void)qd;
+    (void)p;
+    const double c_m1 = cos(q[0]);
+    const double s_m1 = sin(q[0]);
+    const double c_0 = cos(q[1]);
+    const double s_0 = sin(q[1]);
+    const double c_1 = cos(q[2]);
+    const double s_1 = sin(q[2]);
+    const double B0_1 = p[1]*p[2];
+    const double h_1_x = 0.5*p[2]*(p[1]*p[1]);
+    const double B2_1 = 0.3333333333333333*p[2]*(p[1]*p[1]*p[1]);
+    const double K_1_xx = p[1]*p[3];
+    const double K_1_yy = B2_1 + p[1]*p[4];
+    const double K_1_zz = B2_1 + p[1]*p[5];
+    const double Rref_0_00 = c_0*c_m1;
+    const double Rref_0_01 = -c_m1*s_0;
+    const double Rref_0_10 = -c_0*s_m1;
+    const double Rref_0_11 = s_0*s_m1;
+    const double Rref_1_00 = Rref_0_01*c_1 + s_1*s_m1;
+    const double Rref_1_01 = c_1*s_m1 - Rref_0_01*s_1;
+    const double Rref_1_10 = Rref_0_11*c_1 + c_m1*s_1;
+    const double Rref_1_11 = c_1*c_m1 - Rref_0_11*s_1;
+    const double Rref_1_20 = -c_0*c_1;
+    const double Rref_1_21 = c_0*s_1;
+    const double wref_0_x = qd[1]*s_m1;
+    const double wref_0_y = c_m1*qd[1];
+    const double wref_1_x = wref_0_x + Rref_0_00*qd[2];
+    const double wref_1_y = wref_0_y + Rref_0_10*qd[2];
+    const double wref_1_z = -qd[0] - qd[2]*s_0;
+    const double href_1_x = Rref_1_00*h_1_x;
+    const double href_1_y = Rref_1_10*h_1_x;
+    const double href_1_z = Rref_1_20*h_1_x;
+    const double wloc_1_x = Rref_1_00*wref_1_x + Rref_1_10*wref_1_y + Rref_1_20*wref_1_z;
+    const double wloc_1_y = Rref_1_01*wref_1_x + Rref_1_11*wref_1_y + Rref_1_21*wref_1_z;
+    const double wloc_1_z = Rref_0_00*wref_1_x + Rref_0_10*wref_1_y - s_0*wref_1_z;
+    E[0] = qd[3]*(href_1_z*wref_1_y - href_1_y*wref_1_z) + qd[4]*(href_1_x*wref_1_z - href_1_z*wref_1_x) + qd[5]*(href_1_y*wref_1_x - href_1_x*wref_1_y) + 0.5*B0_1*(qd[3]*qd[3] + qd[4]*qd[4] + qd[5]*qd[5]) + 0.5*K_1_xx*(wloc_1_x*wloc_1_x) + 0.5*K_1_yy*(wloc_1_y*wloc_1_y) + 0.5*K_1_zz*(wloc_1_z*wloc_1_z);
+    E[1] = p[0]*(href_1_y + B0_1*q[4]);
+}
+
+/* ---- kernel contact_bias ---- */
+/* J_dot qd: accelerations of the contact Jacobian rows' (point, axis) at Theta_ddot = 0, row order of contact_jacobian.  74 ops (22 add, 46 mul, 0 div, 6 calls) */
+void paper_case2_b_contact_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT a)
+{
+    (void)q;
+    (void)qd;
+    (void)p;
+    const double c_m1 = cos(q[0]);
+    const double s_m1 = sin(q[0]);
+    const double c_0 = cos(q[1]);
+    const double s_0 = sin(q[1]);
+    const double c_1 = cos(q[2]);
+    const double s_1 = sin(q[2]);
+    const double Rref_0_00 = c_0*c_m1;
+    const double Rref_0_01 = -c_m1*s_0;
+    const double Rref_0_10 = -c_0*s_m1;
+    const double Rref_0_11 = s_0*s_m1;
+    const double Rref_1_00 = Rref_0_01*c_1 + s_1*s_m1;
+    const double Rref_1_10 = Rref_0_11*c_1 + c_m1*s_1;
+    const double Rref_1_20 = -c_0*c_1;
+    const double x0 = c_m1*qd[1];
+    const double wdb_1_x = qd[0]*x0;
+    const double x1 = qd[1]*s_m1;
+    const double wdb_1_y = -qd[0]*x1;
+    const double wb_1_x = x1;
+    const double wb_1_y = x0;
+    const double wdb_2_x = wdb_1_x + qd[2]*(Rref_0_10*qd[0] - s_0*wb_1_y);
+    const double wdb_2_y = wdb_1_y + qd[2]*(s_0*wb_1_x - Rref_0_00*qd[0]);
+    const double wdb_2_z = qd[2]*(Rref_0_10*wb_1_x - Rref_0_00*wb_1_y);
+    const double wb_2_x = wb_1_x + Rref_0_00*qd[2];
+    const double wb_2_y = wb_1_y + Rref_0_10*qd[2];
+    const double wb_2_z = -qd[0] - qd[2]*s_0;
+    const double x2 = Rref_1_00*wb_2_z - Rref_1_20*wb_2_x;
+    const double x3 = Rref_1_10*wb_2_x - Rref_1_00*wb_2_y;
+    const double aO_2_x = p[1]*(Rref_1_20*wdb_2_y + wb_2_y*x3 - Rref_1_10*wdb_2_z - wb_2_z*x2);
+    const double x4 = Rref_1_20*wb_2_y - Rref_1_10*wb_2_z;
+    const double aO_2_y = p[1]*(Rref_1_00*wdb_2_z + wb_2_z*x4 - Rref_1_20*wdb_2_x - wb_2_x*x3);
+    const double aO_2_z = p[1]*(Rref_1_10*wdb_2_x + wb_2_x*x2 - Rref_1_00*wdb_2_y - wb_2_y*x4);
+    a[0] = 0.0;
+    a[1] = 0.0;
+    a[2] = 0.0;
+    a[3] = aO_2_x;
+    a[4] = aO_2_y;
+    a[5] = aO_2_z;
+}
+
+/* ---- kernel power ---- */
+/* P[0] = power of the inputs sum u_i qd_(c_i), P[1] = dissipation of the joint dampers sum C_k theta_dot_k^2 >= 0 (W).  0 ops (0 add, 0 mul, 0 div, 0 calls) */
+void paper_case2_b_power(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT P)
+{
+    (void)q;
+    (void)qd;
+    (void)u;
+    (void)p;
+    P[0] = 0.0;
+    P[1] = 0.0;
+}
+
 /* ---- end of kernels ---- */
 void paper_case2_rhs(double t, const double *GAC_RESTRICT x, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p,
                  double *GAC_RESTRICT xdot)
@@ -831,6 +1389,51 @@ static const gac_parameter_info paper_case2_parameter_info[PAPER_CASE2_NPARAM] =
     { "e_x3_max", 0.0, 1.0, "restitution must be in [0, 1]" },
 };
 
+/* M |g| L (J): the work to lift the whole chain by its own length, the energy scale of a chain at rest. */
+static double paper_case2_weight_scale(const double *p)
+{
+    return (p[2] * p[1]) * fabs(p[0]) * (p[1]);
+}
+
+/* ---- chart B: the same chain with T_-1 replaced by C T_-1 (C a right-angle rotation), for the loop near chart
+ * A's gimbal lock (gac.h, "the two base charts").  Its loop kernels only; contacts, parameters and their check
+ * are chart A's. ---- */
+static void paper_case2_b_rhs(double t, const double *GAC_RESTRICT x, const double *GAC_RESTRICT u,
+                 const double *GAC_RESTRICT p, double *GAC_RESTRICT xdot)
+{
+    int i;
+    (void)t;
+    for (i = 0; i < PAPER_CASE2_NQ; ++i) {
+        xdot[i] = x[PAPER_CASE2_NQ + i];
+    }
+    paper_case2_b_forward_dynamics(x, x + PAPER_CASE2_NQ, u, p, xdot + PAPER_CASE2_NQ);
+}
+
+/* Chart B's start: the scene's initial state on chart B. */
+static const double paper_case2_b_q0[PAPER_CASE2_NQ] = { 0.0, 0.5235987755982987, 2.0943951023931953, 0.1, 0.4, 0.1 };
+static const double paper_case2_b_qd0[PAPER_CASE2_NQ] = { -0.0, 0.0, 0.0, 0.0, 0.0, 0.0 };
+
+static const gac_model paper_case2_model_b = {
+    .name = "paper_case2_b",
+    .n = PAPER_CASE2_N, .nq = PAPER_CASE2_NQ, .nx = PAPER_CASE2_NX, .nparam = PAPER_CASE2_NPARAM, .nu = PAPER_CASE2_NU,
+    .npoint = PAPER_CASE2_NPOINT, .ncontact = PAPER_CASE2_NCONTACT, .njrow = PAPER_CASE2_NJROW,
+    .contacts = paper_case2_contacts,
+    .chart = { .a = { 0.0, 1.0 }, .b = { 1.0, 0.0 }, .theta0_index = 1, .theta0_value = 0.0 },
+    .default_parameters = paper_case2_parameters, .q0 = paper_case2_b_q0, .qd0 = paper_case2_b_qd0,
+    .friction_velocity = 0.001,
+    .forward_dynamics = paper_case2_b_forward_dynamics, .inertia_solve = paper_case2_b_inertia_solve,
+    .generalized_momentum = paper_case2_b_generalized_momentum,
+    .contact_points = paper_case2_b_contact_points, .contact_velocities = paper_case2_b_contact_velocities,
+    .contact_generalized_force = paper_case2_b_contact_generalized_force, .contact_gaps = paper_case2_b_contact_gaps,
+    .contact_bias = paper_case2_b_contact_bias, .energy = paper_case2_b_energy, .rhs = paper_case2_b_rhs,
+    .power = 0,
+    .check_parameters = paper_case2_check_parameters, .parameter_info = paper_case2_parameter_info,
+    .weight_scale = paper_case2_weight_scale,
+    .base = { .T_m1 = { 1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0 }, .T_0 = { 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0 },
+              .T_1 = { 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0 }, .index = { 0, 1, 2 } },
+    .chart_b = 0
+};
+
 const gac_model paper_case2_model = {
     .name = "paper_case2",
     .n = PAPER_CASE2_N, .nq = PAPER_CASE2_NQ, .nx = PAPER_CASE2_NX, .nparam = PAPER_CASE2_NPARAM, .nu = PAPER_CASE2_NU,
@@ -845,7 +1448,11 @@ const gac_model paper_case2_model = {
     .contact_generalized_force = paper_case2_contact_generalized_force, .contact_gaps = paper_case2_contact_gaps,
     .contact_bias = paper_case2_contact_bias, .energy = paper_case2_energy, .rhs = paper_case2_rhs,
     .power = 0,   /* no inputs, springs or dampers: only gravity works in flight */
-    .check_parameters = paper_case2_check_parameters, .parameter_info = paper_case2_parameter_info
+    .check_parameters = paper_case2_check_parameters, .parameter_info = paper_case2_parameter_info,
+    .weight_scale = paper_case2_weight_scale,
+    .base = { .T_m1 = { 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, -1.0, 0.0 }, .T_0 = { 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0 },
+              .T_1 = { 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0 }, .index = { 0, 1, 2 } },
+    .chart_b = &paper_case2_model_b
 };
 
 /* The storage of paper_case2.h agrees with the library's formulas (both come from one formula). */
@@ -1001,13 +1608,11 @@ int paper_case2_sim_set_progress(paper_case2_sim *sim, gac_progress progress, vo
 
 void paper_case2_sim_state(const paper_case2_sim *sim, double *t, double *q, double *qd)
 {
-    int i;
+    gac_sim base;
     if (sim == 0) return;
-    if (t != 0) *t = sim->base.t;
-    for (i = 0; i < PAPER_CASE2_NQ; ++i) {          /* the state x is dwork[0..NX-1] (gac_sim_bind) */
-        if (q != 0) q[i] = sim->dwork[i];
-        if (qd != 0) qd[i] = sim->dwork[PAPER_CASE2_NQ + i];
-    }
+    base = sim->base;                   /* bound to sim's own arrays (read only here), wherever sim was copied */
+    gac_sim_bind(&base, &paper_case2_model, (double *)sim->dwork, (int *)sim->iwork);
+    gac_sim_state(&base, t, q, qd);
 }
 
 void paper_case2_sim_copy(paper_case2_sim *dst, const paper_case2_sim *src)

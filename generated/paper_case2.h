@@ -25,6 +25,11 @@
  *     - no parameter is zero: all stay in the runtime array p
  *   Frames: ^ref R_-1 = T_-1 Rz(theta_-1), ^(k-1) R_k = T_k Rz(theta_k); (X1, X2, X3) = O_1.
  *   Gravity acts along -X2.  The base-orientation chart is singular at theta_0 = +-pi/2.
+ *   Second base chart: paper_case2_model.chart_b, the same chain with T_-1 replaced by
+ *     T_-1 = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]]
+ *   (its loop kernels paper_case2_b_* in paper_case2.c); the hybrid loop integrates on it near the singularity
+ *   (options.chart_switch).  sim_state, the samples and the impact records are always in the coordinates
+ *   above (chart A); sim->base.x is the state of the chart integrated now (sim->base.chart).
  *   Matrices are row-major: element (i, j) of an R x C matrix is at [i*C + j].
  *
  *   Twists T_k (fixed, rows):
@@ -456,7 +461,7 @@ int paper_case2_sim_set_schedule(paper_case2_sim *sim, const gac_schedule *sched
  */
 int paper_case2_sim_run(paper_case2_sim *sim, double t_end, paper_case2_impact_record *record, gac_run_summary *summary);
 
-/* The current time and state (gac_sim_state).
+/* The current time and state, in chart A's coordinates whichever base chart is integrated (gac_sim_state).
  *   sim          the simulation (NULL: nothing is written)
  *   t            out: current time (s), or NULL
  *   q            out: current coordinates (NQ), or NULL

@@ -2,4 +2,3 @@
 from .compile import BuildError, CacheError, CompilerNotFound, compile_model  # noqa: F401
 from .model import CompiledModel, ImpactError, load_model  # noqa: F401
 from .simulate import Contact, Impact, SimulationResult, simulate  # noqa: F401
-from .charts import ChartResult, ChartSwitch, simulate_with_charts  # noqa: F401,E402

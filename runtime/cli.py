@@ -53,9 +53,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help=f"output sample spacing in s (default 1e-3; at most {MAX_SAMPLES:,} samples)")
     sim.add_argument("--json", metavar="FILE", help="write the result (impacts, final state, energies) as JSON")
     sim.add_argument("--plot", metavar="DIR", help="write PNG plots (time histories, impact configurations)")
-    sim.add_argument("--charts", action="store_true", help="run with chart switching from the start and print "
-                     "every switch (by default a run that comes near the gimbal lock theta_0 = +-pi/2 is run "
-                     "again with chart switching; runtime/charts.py)")
+    sim.add_argument("--charts", action="store_true", help="kept for old command lines: near the gimbal lock "
+                     "theta_0 = +-pi/2 the C loop switches to the model's second base chart by default")
     sim.add_argument("--no-charts", action="store_true", help="stop at the gimbal lock of the base chart instead")
     sim.add_argument("--max-impacts", type=int, default=10000, metavar="N",
                      help="stop the run after this many impacts (default 10000)")
@@ -193,8 +192,6 @@ def simulate_arguments_problem(args, t_end: float) -> str:
             return f"--param: expected NAME=VALUE with a number, got {item!r}"
         if not name or not math.isfinite(number):
             return f"--param: expected NAME=VALUE with a finite number, got {item!r}"
-    if (args.input is not None or args.param) and args.charts:
-        return "--input/--param: not available with --charts"
     if args.animate or args.film_strip:
         import importlib.util
         if importlib.util.find_spec("matplotlib") is None:
@@ -247,12 +244,7 @@ def main(argv=None) -> int:
     start = time.perf_counter()
     try:
         progress = lambda m: print(f"  {m}", file=sys.stderr, flush=True)  # noqa: E731
-        if args.charts:
-            from .charts import ChartModels, simulate_with_charts
-            charts = ChartModels(scene, progress=progress)
-            model = charts.models[0]
-        else:
-            model = load_model(scene, progress=progress)
+        model = load_model(scene, progress=progress)
     except (CompilerNotFound, BuildError, CacheError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 3
@@ -261,16 +253,11 @@ def main(argv=None) -> int:
     t_eval = np.unique(np.r_[np.arange(0.0, t_end, args.samples_dt), t_end]) if t_end > 0 else np.array([0.0])
     try:
         start = time.perf_counter()
-        if args.charts:
-            result = simulate_with_charts(scene, t_end, method=args.method, rtol=args.rtol, atol=args.atol,
-                                          dt=args.dt, t_eval=t_eval, models=charts, max_wall_time=args.max_wall_time,
-                                          max_impacts=args.max_impacts, max_steps=args.max_steps)
-        else:
-            u = None if args.input is None else [float(v) for v in args.input.split(",")]
-            p = {name: float(value) for name, _, value in (item.partition("=") for item in args.param)} or None
-            result = simulate(model, t_end, method=args.method, rtol=args.rtol, atol=args.atol, dt=args.dt,
-                              t_eval=t_eval, charts=not args.no_charts, max_wall_time=args.max_wall_time, u=u, p=p,
-                              max_impacts=args.max_impacts, max_steps=args.max_steps)
+        u = None if args.input is None else [float(v) for v in args.input.split(",")]
+        p = {name: float(value) for name, _, value in (item.partition("=") for item in args.param)} or None
+        result = simulate(model, t_end, method=args.method, rtol=args.rtol, atol=args.atol, dt=args.dt,
+                          t_eval=t_eval, charts=not args.no_charts, max_wall_time=args.max_wall_time, u=u, p=p,
+                          max_impacts=args.max_impacts, max_steps=args.max_steps)
         elapsed = time.perf_counter() - start
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -285,9 +272,6 @@ def main(argv=None) -> int:
         print(result.contact_event_table(limit))
     if limit is not None and max(len(result.impacts), len(getattr(result, "contact_events", ()))) > limit:
         print("(every impact and contact event: --all-impacts, or --json FILE)")
-    if hasattr(result, "switch_table"):
-        print(f"chart switches (mu = |cos theta_0| of a chart; B = {result.chart_b_name}):")
-        print(result.switch_table())
     print(f"status {result.status}: {in_cli_words(result.message)}")
     if result.status != 0 and args.no_charts and "gimbal lock" in result.message:
         print("hint: without --no-charts the run continues on a second chart")

@@ -194,7 +194,6 @@ def simulate_many(model, runs, t_end: float, *, workers: int = 1, processes: boo
     for index, run in enumerate(runs):
         check_run(model, run, index)
     options = dict(options)
-    options.setdefault("charts", False)       # a study compares like with like: no chart rerun of some runs
     if keep != "samples":
         options.setdefault("t_eval", [])      # no samples: with constant inputs a whole run stays in C
     start = time.perf_counter()

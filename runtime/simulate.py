@@ -109,6 +109,7 @@ class SimulationResult:
     energy_damping_loss: float = 0.0   # J: energy the joint dampers took, int C theta_dot^2 dt (>= 0)
     energy_friction_loss: float = 0.0  # J: energy sliding friction took at resting contacts (>= 0)
     u: np.ndarray | None = None        # (len(t), nu) the inputs at the sample times (None: no inputs)
+    n_chart_switches: int = 0          # switches between the base charts near the gimbal lock (gac_sim.n_chart_switches)
 
     @property
     def n_impacts(self) -> int:
@@ -188,6 +189,7 @@ class SimulationResult:
             "energy_input_work": self.energy_input_work, "energy_damping_loss": self.energy_damping_loss,
             "energy_friction_loss": self.energy_friction_loss,
             "n_rhs": self.n_rhs, "n_steps": self.n_steps, "n_rejected": self.n_rejected,
+            "n_chart_switches": self.n_chart_switches,
             "status": self.status, "message": self.message, "method": self.method, "options": self.options,
             "contact_events": [{"t": e.t, "point": e.point, "wall": e.wall, "kind": e.kind}
                                for e in self.contact_events],
@@ -250,8 +252,9 @@ LOOP_OPTIONS = {
 _INTEGER_OPTIONS = ("event_samples", "max_steps", "max_impacts", "zeno_impacts")
 
 
-def _loop_options(model: CompiledModel, method: str, given: dict):
-    """The C options of a run: the library's defaults, ``method`` and the given options, checked by the library."""
+def _loop_options(model: CompiledModel, method: str, given: dict, chart_switch: float):
+    """The C options of a run: the library's defaults, ``method``, the given options and simulate(charts=) as
+    chart_switch, checked by the library."""
     unknown = sorted(set(given) - set(LOOP_OPTIONS))
     _check(not unknown, unknown[0] if unknown else "", "no such option of simulate(); the loop's options are "
            + ", ".join(LOOP_OPTIONS))
@@ -271,6 +274,8 @@ def _loop_options(model: CompiledModel, method: str, given: dict):
         else:
             value = _real(value, name)
         setattr(opt, name, value)
+    opt.chart_switch = chart_switch
+    given = {**given, "chart_switch": chart_switch}
     field_text = model.ffi.new("const char **")
     if model.lib.gac_check_options(opt, field_text) != model.lib.GAC_OK:
         field_name, rule = model.ffi.string(field_text[0]).decode().split(": ", 1)
@@ -352,9 +357,11 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     progress      progress(t, n_steps, n_impacts), called by the C loop every GAC_LOOK_STEPS steps and at every
                   event; returning False stops the run (status -1, "stopped by the progress callback"), as does an
                   exception in it
-    charts        a run that comes near the gimbal lock of the base chart (the C loop stops with
-                  GAC_ERR_GIMBAL_LOCK before it) is run again with chart switching (runtime.charts) and that
-                  result returned (a ChartResult, samples in the scene's coordinates); False: stop there
+    charts        near the gimbal lock of the base chart the C loop integrates on the model's second base chart
+                  (where chart A's measure falls below 0.3, and back on A above 0.6; gac_options.chart_switch):
+                  True (default), or the threshold itself (a number in [0.1, 0.35]); False: never (the run stops
+                  with GAC_ERR_GIMBAL_LOCK).  Samples, impacts and the final state are in the scene's coordinates
+                  whichever chart was integrated; result.n_chart_switches counts the switches
     check_start   refuse q0/p overrides that put a contact point outside its wall beyond round-off (False:
                   a restart from a state the loop itself produced, with its resting contacts held at
                   their landing gaps)
@@ -374,7 +381,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     ffi, lib, c = model.ffi, model.lib, model.c
     t_end = _real(t_end, "t_end")
     _check(np.isfinite(t_end) and t_end >= 0, "t_end", f"must be a finite time >= 0 s, got {t_end!r}")
-    opt = _loop_options(model, method, options)
+    opt = _loop_options(model, method, options, chart_switch=0.3 if charts is True else 0.0 if charts is False
+                        else _real(charts, "charts"))
 
     nq, nx = model.nq, 2 * model.nq
     layout = model.layout
@@ -407,7 +415,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     x_eval = np.zeros((len(t_eval), nx))
     i_eval = ffi.new("int *", 0)
     while i_eval[0] < len(t_eval) and t_eval[i_eval[0]] <= 0.0:      # samples at the start (as sim_init left it)
-        x_eval[i_eval[0]] = ffi.unpack(state.x, nx)
+        row = x_eval[i_eval[0]]          # in chart A's coordinates, whichever base chart the loop starts on
+        c.sim_state(sim, ffi.NULL, model._ptr(row[:nq]), model._ptr(row[nq:]))
         i_eval[0] += 1
     record = c.new("impact_record")
     rec = record.base         # the library's record (gac_impact_record); its arrays live in *record
@@ -430,21 +439,12 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         raise source.error
     status, message = (0, "reached t_end") if code == lib.GAC_SIM_END else \
         (-1, _stop_message(model, state, code, segment_t, segment_steps, len(impacts), rec))
-    if charts and code == lib.GAC_ERR_GIMBAL_LOCK and (model.scene.driven or model.scene.stops()):
-        message += " (the second base chart is not available for a chain with inputs, springs, dampers or limits)"
-    elif charts and code == lib.GAC_ERR_GIMBAL_LOCK:
-        from .charts import simulate_with_charts
-        given = {name: getattr(opt, name) for name in LOOP_OPTIONS}
-        given["dt"] = given["dt"] or None
-        given["max_wall_time"] = None if not opt.max_wall_time else max(opt.max_wall_time - float(state.wall_time), 1e-3)
-        given["rest_height"] = None if opt.rest_height < 0 else given["rest_height"]
-        return simulate_with_charts(
-            model.scene, t_end, t_eval=t_eval, p=None if p is model.p else p,
-            q0=None if q0 is None else layout.expand(q), qd0=None if qd0 is None else layout.expand(qd, velocity=True),
-            method=method, progress=progress, **given)
+    if status == 0 and int(state.n_chart_switches):
+        message += f"; {int(state.n_chart_switches)} chart switch(es)"
 
-    # the result, in the full layout of Eq. 13
-    x_final = np.array(ffi.unpack(state.x, nx))
+    # the result, in the full layout of Eq. 13 and chart A's coordinates, whichever base chart was integrated
+    x_final = np.zeros(nx)
+    c.sim_state(sim, ffi.NULL, model._ptr(x_final[:nq]), model._ptr(x_final[nq:]))
     n = i_eval[0]
     accuracy = impact_warnings(impacts, model, p) if keep_impacts else []
     warnings = model.scene.warnings + accuracy + friction_warnings(model, p, state, method)
@@ -467,7 +467,9 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                          float(state.work_friction)),
         persistent_final=[(model.contacts[state.active[k]][0], model.contacts[state.active[k]][1].name)
                           for k in range(state.nactive)],
-        options={"t_end": t_end, **{name: _option_value(opt, name) for name in LOOP_OPTIONS}})
+        options={"t_end": t_end, **{name: _option_value(opt, name) for name in LOOP_OPTIONS},
+                 "chart_switch": float(opt.chart_switch)},
+        n_chart_switches=int(state.n_chart_switches))
 
 
 def _option_value(opt, name: str):

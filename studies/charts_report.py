@@ -1,8 +1,7 @@
 """Figures for docs/simulation.md, "Near gimbal lock: chart switching":  python -m studies charts
 
 1. The gimbal-lock scene over its first 0.5 s (free flight through the lock at t = 0.25 s): one chart
-   (``simulate(..., charts=False)``; by default simulate switches charts itself near the lock) against
-   chart switching, for DOPRI5 and DOP853 at several tolerances: how far each gets, its steps,
+   (``simulate(..., charts=False)``) against chart switching in the C loop (the default), for DOPRI5 and DOP853 at several tolerances: how far each gets, its steps,
    energy drift and largest error of the points O_1..O_3 against an independent integration (the numpy
    reference model with the base orientation as a rotation matrix, scipy DOP853 at rtol = 1e-12;
    studies.reference.integrate_reference, which tests/test_charts.py checks the runtime against too).
@@ -15,8 +14,9 @@ import sys
 
 import numpy as np
 
+from codegen.charts import Chart
 from codegen.scene import load_scene
-from runtime.charts import ChartModels, simulate_with_charts
+from runtime.model import load_model
 from runtime.simulate import simulate
 
 from .machine import describe
@@ -32,8 +32,7 @@ def _timed(fn, repeat: int = 3):
 
 def lock_table(max_steps: int = 20000, methods=("dopri5", "dop853"), rtols=(1e-6, 1e-8, 1e-10, 1e-12)) -> str:
     scene = load_scene("gimbal-lock")
-    models = ChartModels(scene)
-    model = models.models[0]
+    model = load_model(scene)
     t_end = 0.5
     te = np.linspace(0.0, t_end, 101)
     print("independent reference ...", file=sys.stderr, flush=True)
@@ -44,13 +43,13 @@ def lock_table(max_steps: int = 20000, methods=("dopri5", "dop853"), rtols=(1e-6
         for rtol in rtols:
             opts = {"method": method, "rtol": rtol, "atol": rtol / 100, "t_eval": te}
             plain, t_plain = _timed(lambda: simulate(model, t_end, max_steps=max_steps, charts=False, **opts), 1)
-            charts, t_charts = _timed(lambda: simulate_with_charts(scene, t_end, models=models, **opts))
+            charts, t_charts = _timed(lambda: simulate(model, t_end, **opts))
             n = len(plain.t)
             err_plain = np.abs(np.array([model.contact_points(q) for q in plain.q]) - expected[:n]).max()
-            err_charts = np.abs(charts.contact_points() - expected).max()
+            err_charts = np.abs(np.array([model.contact_points(q) for q in charts.q]) - expected).max()
             lines.append(f"| {method} | {rtol:g} | one chart | {plain.t_final:.6f} | {plain.n_steps} | "
                          f"{plain.energy_drift:.1e} | {err_plain:.1e} | {t_plain * 1e3:.0f} |")
-            lines.append(f"| | | charts ({len(charts.switches)} switch) | {charts.t_final:g} | {charts.n_steps} | "
+            lines.append(f"| | | charts ({charts.n_chart_switches} switch) | {charts.t_final:g} | {charts.n_steps} | "
                          f"{charts.energy_drift:.1e} | {err_charts:.1e} | {t_charts * 1e3:.1f} |")
             print(lines[-2] + "\n" + lines[-1], file=sys.stderr, flush=True)
     return "\n".join(lines)
@@ -62,12 +61,12 @@ def long_table() -> str:
     opts = {"method": "dop853", "rtol": 1e-10, "atol": 1e-12}
     for name, t_end in (("gimbal-lock", 10.0), ("paper-case2", 20.0)):
         scene = load_scene(name)
-        models = ChartModels(scene)
-        A = models.charts[0]
-        plain, t_plain = _timed(lambda: simulate(models.models[0], t_end, max_steps=200000, charts=False, **opts))
-        charts, t_charts = _timed(lambda: simulate_with_charts(scene, t_end, models=models, **opts))
+        model = load_model(scene)
+        A = Chart.of(scene.base_twists)
+        plain, t_plain = _timed(lambda: simulate(model, t_end, max_steps=200000, charts=False, **opts))
+        charts, t_charts = _timed(lambda: simulate(model, t_end, **opts))
         for label, r, seconds in (("one chart", plain, t_plain), ("charts", charts, t_charts)):
-            switches = len(r.switches) if label == "charts" else "-"
+            switches = r.n_chart_switches if label == "charts" else "-"
             mu = A.measure(r.q[:, 1]).min()
             lines.append(f"| {name} | {t_end:g} | {label} | {r.status} (t = {r.t_final:.4g} s) | {len(r.impacts)} | "
                          f"{switches} | {mu:.1e} | {r.energy_drift:.1e} | {r.n_steps} | {seconds * 1e3:.0f} |")

@@ -255,13 +255,6 @@ def run_structure(args) -> list[Outcome]:
     except Exception as exc:                           # noqa: BLE001 - reported as an outcome
         return [Outcome(f"{seed}-{index}/{k}", scene.n, False, "-", -1, f"exception: {classify(str(exc))}", True,
                         message=str(exc)) for k in range(runs)]
-    planar = not any(w.name.startswith("x3") for w in scene.walls)
-    if not planar:                  # the second chart's model, compiled once (cached) as a user's would be
-        from runtime.charts import ChartModels
-        try:
-            ChartModels(scene)
-        except Exception:                              # noqa: BLE001 - a run that needs it will say so
-            pass
     for k in range(runs):
         run = random_run(rng, scene, model)
         case = f"{seed}-{index}/{k}"

@@ -11,7 +11,6 @@ import pytest
 
 from codegen.scene import load_scene
 from runtime import simulate
-from runtime.charts import simulate_with_charts
 
 SCENES = Path(__file__).parent / "scenes"
 
@@ -59,7 +58,7 @@ def test_separating_contact_scene_runs_to_the_end_across_the_lock():
     """The same rod later turns through the base chart's gimbal lock: with chart switching the run ends at
     t_end."""
     scene = load_scene(str(SCENES / "approach_roomy_1rod.toml"))
-    result = simulate_with_charts(scene, 0.2386, method="dopri5", rtol=4.34e-10, atol=9.17e-14)
+    result = simulate(scene, 0.2386, method="dopri5", rtol=4.34e-10, atol=9.17e-14)
     assert result.success, result.message
 
 

@@ -570,6 +570,20 @@ static void test_errors(void)
     CHECK(gac_sim_init(&sim, 0, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, 0) == GAC_ERR_NULL_ARGUMENT, "model NULL");
     CHECK(gac_sim_init(&sim, &ball, 0, iwork, 0.0, ball_q0, ball_qd0, 0, 0) == GAC_ERR_NULL_ARGUMENT, "dwork NULL");
     CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, 0, ball_qd0, 0, 0) == GAC_ERR_NULL_ARGUMENT, "q NULL");
+    CHECK(opt.chart_switch == 0.3, "chart_switch default 0.3");
+    opt.chart_switch = 0.5;                                 /* back at 1.0: chart B need not be better there */
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt) == GAC_ERR_BAD_OPTION,
+          "chart_switch above GAC_CHART_SWITCH_MAX");
+    opt.chart_switch = 0.05;
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt) == GAC_ERR_BAD_OPTION,
+          "chart_switch below GAC_CHART_SWITCH_MIN");
+    opt.chart_switch = 0.0;
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt) == GAC_OK, "chart_switch 0");
+    CHECK(sim.chart == 0 && sim.n_chart_switches == 0, "no second chart: chart A");
+    bad.chart_b = &ball;                                    /* a second chart of other sizes */
+    CHECK(gac_model_check(&bad) == GAC_ERR_BAD_MODEL, "chart_b of other sizes refused");
+    bad = box;
+    gac_default_options(&opt);
     opt.method = 7;
     CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt) == GAC_ERR_BAD_OPTION, "method");
     bad.nx = 3;
@@ -963,6 +977,103 @@ static void test_loop_rules(void)
     CHECK(gac_check_options(0, &field) == GAC_ERR_NULL_ARGUMENT, "NULL options");
 }
 
+/* ---- the two base charts: the default base twists (chart A, first axis X2) and chart B = C T_-1 with C = Rz(-90 deg)
+ * (first axis X1).  Angles round trip, the same orientation and angular velocity on both charts, the lock. ---- */
+static double lcg_state = 0.5;
+static double uniform(double lo, double hi)       /* a fixed pseudo-random sequence (no rand(): reproducible) */
+{
+    lcg_state = fmod(lcg_state * 9301.0 + 49297.0, 233280.0);
+    return lo + (hi - lo) * lcg_state / 233280.0;
+}
+
+static double max_diff(const double *a, const double *b, int n)
+{
+    double d = 0.0;
+    int i;
+    for (i = 0; i < n; ++i) d = fabs(a[i] - b[i]) > d ? fabs(a[i] - b[i]) : d;
+    return d;
+}
+
+static void test_charts(void)
+{
+    const gac_base A = {{1, 0, 0, 0, 0, 1, 0, -1, 0}, {1, 0, 0, 0, 0, -1, 0, 1, 0}, {0, 0, 1, 1, 0, 0, 0, 1, 0}, {0, 1, 2}};
+    const gac_base B = {{0, 0, 1, -1, 0, 0, 0, -1, 0}, {1, 0, 0, 0, 0, -1, 0, 1, 0}, {0, 0, 1, 1, 0, 0, 0, 1, 0}, {0, 1, 2}};
+    double worst_angles = 0.0, worst_R = 0.0, worst_omega = 0.0;
+    int k, i;
+    for (k = 0; k < 200; ++k) {
+        /* a state of a 3-coordinate "chain" (the base angles only) with theta_0 away from both charts' locks */
+        double x[6], y[6], z[6], RA[9], RB[9], EA[9], EB[9], wA[3], wB[3], near[3];
+        x[0] = uniform(-3.0, 3.0);
+        x[1] = uniform(-1.4, 1.4);                   /* chart A's lock is at theta_0 = +-pi/2 */
+        x[2] = uniform(-3.0, 3.0);
+        for (i = 3; i < 6; ++i) x[i] = uniform(-5.0, 5.0);
+        gac_base_rotation(&A, x, RA);
+        if (gac_base_measure(&B, RA) < 0.05) continue;          /* near chart B's own lock: not a switch state */
+        CHECK(gac_chart_convert(&A, &B, 3, x, 0, y) == GAC_OK, "A -> B");
+        for (i = 0; i < 3; ++i) near[i] = x[i] + (broken && k == 0 ? 1e-3 : 0.0) + 0.1;
+        CHECK(gac_chart_convert(&B, &A, 3, y, near, z) == GAC_OK, "B -> A");
+        gac_base_rotation(&B, y, RB);
+        gac_base_axes(&A, x, EA);
+        gac_base_axes(&B, y, EB);
+        for (i = 0; i < 3; ++i) {
+            wA[i] = EA[3 * i] * x[3] + EA[3 * i + 1] * x[4] + EA[3 * i + 2] * x[5];
+            wB[i] = EB[3 * i] * y[3] + EB[3 * i + 1] * y[4] + EB[3 * i + 2] * y[5];
+        }
+        worst_R = fmax(worst_R, max_diff(RA, RB, 9));
+        worst_omega = fmax(worst_omega, max_diff(wA, wB, 3) / (1.0 + fabs(wA[0]) + fabs(wA[1]) + fabs(wA[2])));
+        worst_angles = fmax(worst_angles, max_diff(x, z, 6) + (broken && k < 3 ? 1.0 : 0.0));
+        /* |det E| of each chart is its measure of R */
+        CHECK(NEAR(fabs(EA[0] * (EA[4] * EA[8] - EA[5] * EA[7]) - EA[1] * (EA[3] * EA[8] - EA[5] * EA[6])
+                        + EA[2] * (EA[3] * EA[7] - EA[4] * EA[6])), gac_base_measure(&A, RA), 1e-12), "det E_A = mu_A");
+    }
+    CHECK(worst_angles <= 1e-12, "angles and rates round trip A -> B -> A: %.3g", worst_angles);
+    CHECK(worst_R <= 1e-12, "the same orientation on both charts: %.3g", worst_R);
+    CHECK(worst_omega <= 1e-12, "the same angular velocity on both charts: %.3g", worst_omega);
+    {
+        /* chart A's lock: theta_0 = pi/2 puts z_1 along X2; only theta_-1 + theta_1 is defined there */
+        const double x[3] = {0.7, 1.5707963267948966, -0.2}, near[3] = {0.3, 1.5, 0.1};
+        double R[9], angles[3], back[9], E[9], rates[3], omega[3] = {0.3, -1.2, 0.8}, w[3], r[3], n[3], y[6];
+        gac_base_rotation(&A, x, R);
+        CHECK(gac_base_measure(&A, R) < 1e-15, "at the lock: %.3g", gac_base_measure(&A, R));
+        CHECK(gac_base_angles(&A, R, near, angles) == GAC_OK, "angles at the lock");
+        CHECK(angles[0] == near[0], "theta_-1 kept from near at the lock: %.17g", angles[0]);
+        gac_base_rotation(&A, angles, back);
+        CHECK(max_diff(back, R, 9) <= 1e-12, "the lock's angles recompose R: %.3g", max_diff(back, R, 9));
+        /* least-squares rates of least norm: E^T (E r - omega) = 0 and r orthogonal to the null vector of E */
+        gac_base_rates(&A, angles, omega, rates);
+        gac_base_axes(&A, angles, E);
+        for (i = 0; i < 3; ++i) w[i] = E[3 * i] * rates[0] + E[3 * i + 1] * rates[1] + E[3 * i + 2] * rates[2] - omega[i];
+        for (i = 0; i < 3; ++i) r[i] = E[i] * w[0] + E[3 + i] * w[1] + E[6 + i] * w[2];
+        n[0] = E[1] * E[5] - E[2] * E[4];               /* null vector: rows 0 and 1 crossed */
+        n[1] = E[2] * E[3] - E[0] * E[5];
+        n[2] = E[0] * E[4] - E[1] * E[3];
+        CHECK(fabs(r[0]) + fabs(r[1]) + fabs(r[2]) <= 1e-12, "normal equations at the lock");
+        CHECK(fabs(n[0] * rates[0] + n[1] * rates[1] + n[2] * rates[2]) <= 1e-12 * (fabs(n[0]) + fabs(n[1]) + fabs(n[2])),
+              "least norm at the lock");
+        /* the lock state converts to chart B (far from its own lock) and back to the same orientation */
+        {
+            const double xs[6] = {x[0], x[1], x[2], 0.5, 0.0, -0.5};   /* rates with omega in E's range */
+            double RB[9];
+            CHECK(gac_chart_convert(&A, &B, 3, xs, 0, y) == GAC_OK, "A -> B from the lock");
+            gac_base_rotation(&B, y, RB);
+            CHECK(max_diff(RB, R, 9) <= 1e-12, "lock state on B: %.3g", max_diff(RB, R, 9));
+            CHECK(gac_base_measure(&B, RB) > 0.99, "chart B far from its lock there");
+        }
+    }
+    {
+        /* a twist that does not turn its axis a right angle: refused */
+        gac_base bad = A;
+        double R[9], angles[3];
+        const double x[3] = {0.1, 0.2, 0.3};
+        bad.T_0[8] = 1.0;
+        bad.T_0[4] = 0.0;
+        bad.T_0[5] = 0.0;
+        bad.T_0[7] = 0.0;
+        gac_base_rotation(&A, x, R);
+        CHECK(gac_base_angles(&bad, R, 0, angles) == GAC_ERR_BAD_MODEL, "non-right-angle twist refused");
+    }
+}
+
 int main(int argc, char **argv)
 {
     broken = argc > 1 && strcmp(argv[1], "--break") == 0;
@@ -983,6 +1094,7 @@ int main(int argc, char **argv)
     test_resting_contact();
     test_impact_law();
     test_loop_rules();
+    test_charts();
     printf("%d checks, %d failed\n", checks, failures);
     return failures == 0 ? 0 : 1;
 }

@@ -141,23 +141,26 @@ static long vr_qd0(const gac_model *m) { return vr_q0(m) + m->nq; }
 static long vr_solver(const gac_model *m) { return vr_qd0(m) + m->nq; }
 static long vr_out(const gac_model *m) { return vr_solver(m) + GAC_FMI2_NSOLVER_REAL; }
 
-/* The state the outputs show: the simulation's once it runs, the initial values before. */
-static void current_state(const Instance *in, const double **q, const double **qd)
+/* The state the outputs show: the simulation's once it runs (in chart A's coordinates, whichever base chart the
+ * loop integrates: gac_sim_state), the initial values before.  q, qd: nq each. */
+static void current_state(const Instance *in, double *q, double *qd)
 {
+    int i;
     if (in->mode == MODE_INSTANTIATED || in->mode == MODE_INITIALIZATION) {
-        *q = in->q0;
-        *qd = in->qd0;
+        for (i = 0; i < in->m->nq; ++i) {
+            q[i] = in->q0[i];
+            qd[i] = in->qd0[i];
+        }
     } else {
-        *q = in->sim.x;
-        *qd = in->sim.x + in->m->nq;
+        gac_sim_state(&in->sim, 0, q, qd);
     }
 }
 
 static double real_value(const Instance *in, long r)
 {
     const gac_model *m = in->m;
-    const double *q, *qd;
-    current_state(in, &q, &qd);
+    double q[m->nq], qd[m->nq];
+    current_state(in, q, qd);
     if (r < m->nq) return q[r];
     if (r < vr_u(m)) return qd[r - m->nq];
     if (r < vr_p(m)) return in->u[r - vr_u(m)];
@@ -168,7 +171,11 @@ static double real_value(const Instance *in, long r)
     r -= vr_out(m);
     if (r == OUT_KINETIC || r == OUT_POTENTIAL) {
         double E[2];
-        m->energy(q, qd, in->p, E);
+        if (in->mode == MODE_INSTANTIATED || in->mode == MODE_INITIALIZATION) {
+            m->energy(q, qd, in->p, E);
+        } else {                        /* on the chart integrated now: chart A's rates grow near its lock */
+            in->sim.model->energy(in->sim.x, in->sim.x + m->nq, in->p, E);
+        }
         return E[r];
     }
     if (in->mode == MODE_INSTANTIATED || in->mode == MODE_INITIALIZATION) return 0.0;

@@ -2,6 +2,7 @@
 already built loads neither the computer algebra (sympy) nor the templates (jinja2), the generator never
 imports the runtime, and the studies (studies/) import codegen and runtime, never the other way."""
 import ast
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -107,3 +108,21 @@ def test_no_import_cycle_among_the_packages():
         visit(package, [])
     assert "studies" not in graph["codegen"] | graph["runtime"]
     assert graph["studies"] <= {"codegen", "runtime"}
+
+
+EDGE = re.compile(r"""getattr\([\w.]*lib\b|ffi\.new\(f["']|def_extern""")
+
+
+def test_calls_into_a_compiled_model_go_through_one_edge():
+    """Every lookup of a model's C function or type by its name (NAME_sim_init, NAME_options, the extern "Python"
+    callbacks) is in runtime.model.CInterface, bound from codegen.interface; elsewhere the product calls
+    model.c.<function> and model.c.new(<type>)."""
+    offenders = []
+    for package in ("codegen", "runtime", "studies"):
+        for path in sources(package):
+            if path.name == "model.py" and package == "runtime":
+                continue
+            for number, line in enumerate(path.read_text().splitlines(), start=1):
+                if EDGE.search(line):
+                    offenders.append(f"{path.relative_to(ROOT)}:{number}: {line.strip()}")
+    assert offenders == [], "\n".join(offenders)

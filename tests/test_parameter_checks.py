@@ -96,9 +96,8 @@ def test_python_c_and_fmu_name_the_same_parameter(model, fmu, changed, field, ca
 
     in_c = model.parameter_problem(p)                 # NAME_check_parameters, and the name from the C table
     assert in_c.startswith(f"p[{field}]: "), in_c
-    sim = model.ffi.new(f"{model.name}_sim *")
-    code = getattr(model.lib, f"{model.name}_sim_init")(sim, 0.0, model._ptr(model.q0), model._ptr(model.qd0),
-                                                        model._ptr(p), model.ffi.NULL)
+    sim = model.c.new("sim")
+    code = model.c.sim_init(sim, 0.0, model._ptr(model.q0), model._ptr(model.qd0), model._ptr(p), model.ffi.NULL)
     assert code == model.lib.GAC_ERR_BAD_PARAMETER
 
     ran, log = fmu_messages(fmu, {f"p.{name}": value for name, value in changed.items()}, capsys)

@@ -75,3 +75,64 @@ double gac_step_energy_error(gac_sim *s)
     md->energy(s->x1, s->x1 + md->nq, s->p, E);
     return fabs(E[0] + E[1] - s->energy_x) / (0.1 * s->opt.rtol * s->energy_scale);
 }
+
+/* Add the work of the inputs, the dissipation of the dampers and (with resting contacts on walls with friction)
+ * that of sliding friction over [s->t, t_b] of the current step to s->work_input, s->work_damping and
+ * s->work_friction: 5-point Gauss-Legendre (exact for polynomials of degree 9) on the step's dense output. */
+void gac_add_work(gac_sim *s, double t_b)
+{
+    static const double node[5] = {0.04691007703066800, 0.23076534494715845, 0.5, 0.76923465505284155,
+                                   0.95308992296933200};
+    static const double weight[5] = {0.11846344252809454, 0.23931433524968324, 0.28444444444444444,
+                                     0.23931433524968324, 0.11846344252809454};
+    const gac_model *md = s->model;
+    const double h = t_b - s->t;
+    const int friction = s->nactive > 0 && gac_has_friction(md);
+    double x[md->nx], P[2], w_in = 0.0, w_damp = 0.0, w_friction = 0.0;
+    int j;
+    if ((md->power == 0 && !friction) || !(h > 0.0)) return;
+    for (j = 0; j < 5; ++j) {
+        const double t = s->t + node[j] * h;
+        gac_dense(s, t, x);
+        if (md->power != 0) {
+            md->power(x, x + md->nq, gac_input(s, t, x), s->p, P);
+            w_in += weight[j] * P[0];
+            w_damp += weight[j] * P[1];
+        }
+        if (friction) {
+            double qdd[md->nq], lambda[md->nq], D = 0.0;
+            if (gac_constrained_dynamics_friction(md, x, x + md->nq, gac_input(s, t, x), s->p, s->nactive, s->active,
+                                                  qdd, lambda, s->work, &D) == GAC_OK)
+                w_friction += weight[j] * D;
+        }
+    }
+    s->work_input += h * w_in;
+    s->work_damping += h * w_damp;
+    s->work_friction += h * w_friction;
+}
+
+/* 1 if at x a persistent contact on a wall with friction slides slower than GAC_SLOW_SLIDING friction_velocity
+ * (its velocity along the wall, as in gac_constrained_dynamics_friction): the regularised friction force is then
+ * (nearly) viscous, -mu lambda v_t / friction_velocity, a stiff term that bounds an explicit method's step. */
+int gac_slow_sliding(const gac_sim *s, const double *x)
+{
+    const gac_model *md = s->model;
+    const double slow = GAC_SLOW_SLIDING * md->friction_velocity;
+    double vq[3 * GAC_AT_LEAST_1(md->npoint)];
+    int a, j;
+    if (s->nactive == 0 || !gac_has_friction(md)) return 0;
+    md->contact_velocities(x, x + md->nq, s->p, vq);
+    for (a = 0; a < s->nactive; ++a) {
+        const gac_contact *k = &md->contacts[s->active[a]];
+        const double mu = k->mu_index >= 0 ? s->p[k->mu_index] : k->mu_value;
+        double speed2 = 0.0;
+        int axis = 0;
+        if (k->kind != GAC_CONTACT_WALL || !k->has_friction || !(mu > 0.0)) continue;
+        for (j = 0; j < 2; ++j, ++axis) {             /* the two tangential axes, ascending */
+            if (axis == k->axis) ++axis;
+            if (k->trow[j] >= 0) speed2 += vq[3 * (k->point - 1) + axis] * vq[3 * (k->point - 1) + axis];
+        }
+        if (speed2 < slow * slow) return 1;
+    }
+    return 0;
+}

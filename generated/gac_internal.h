@@ -114,4 +114,22 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
                       const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
                       int *rounds, int *plastic);
 
+
+/* gac_setup.c */
+double gac_clock_now(const gac_sim *s);          /* the run's clock (s): the embedder's, or C's processor time */
+void gac_schedule_begin(gac_sim *s);             /* the schedule's interval that holds s->t begins: its inputs */
+
+/* gac_switch.c: the two base charts in the loop */
+int gac_can_switch(const gac_sim *s);            /* 1 if the run may switch charts (option on, second chart) */
+int gac_wants_switch(const gac_sim *s);          /* 1 if the run should leave the chart it is on, at s->x */
+int gac_step_near_lock(const gac_sim *s);        /* 1 if the step s->x -> s->x1 ends below the floor or passes the lock */
+int gac_switch_chart(gac_sim *s);                /* continue on the other chart from s->x */
+void gac_to_chart_a(gac_sim *s, double *x);      /* a state of the chart integrated now, in chart A's coordinates
+                                                    (a conversion that fails is kept in s->fail) */
+int gac_report(gac_sim *s, gac_impact_record *record, int code);   /* the record in chart A's coordinates */
+
+/* gac_energy.c: work and sliding */
+void gac_add_work(gac_sim *s, double t_b);       /* the work of inputs, dampers and friction over [s->t, t_b] */
+int gac_slow_sliding(const gac_sim *s, const double *x);   /* 1 if a resting point slides in the viscous regime */
+
 #endif /* GAC_INTERNAL_H */

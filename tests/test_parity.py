@@ -26,9 +26,8 @@ not run rather than compared against a different run.
 
 Rows: the paper's two case studies, a driven chain folding against its joint stops, a chain thrown onto a rough
 floor (resting contact, Coulomb friction), the built-in 12-link chain (rolled forward dynamics) and three random
-admissible scenes of the fuzz study (studies/fuzz.py, fixed seeds) written as scene files.  [The gimbal-lock scene
-joins the table once chart switching runs in C: today the Python runtime switches charts and the other two stop
-at the chart floor.]
+admissible scenes of the fuzz study (studies/fuzz.py, fixed seeds) written as scene files, and the gimbal-lock
+scene, which passes the lock of its base chart on the second chart in all three (the C loop switches).
 """
 from __future__ import annotations
 
@@ -81,7 +80,7 @@ ROWS = [
         fmu="the FMU has no event_samples, event_tol, contact_tol, rest_height or zeno_impacts parameter"),
     Row("driven-stops", "driven-fold", 1.5, dict(method="dopri5", rtol=1e-10, atol=1e-12)),
     Row("friction-rest", "rough-floor", 2.0, dict(method="dopri5", rtol=1e-9, atol=1e-11), grid_until=0.93),
-    # (gimbal-lock: the row goes here once chart switching runs in C)
+    Row("gimbal-lock", "gimbal-lock", 3.0, dict(method="dopri5", rtol=1e-10, atol=1e-12)),
     Row("chain12-rolled", "links:12", 0.6, dict(method="dopri5", rtol=1e-9, atol=1e-11), slow=True),
     Row("fuzz-0-0-1", "fuzz:0-0-1", 2.0, dict(method="dop853", rtol=4.519460342714693e-07,
                                                atol=1.4274655908381933e-07), grid_tol=1e-4, slow=True),

@@ -171,15 +171,20 @@ def split_size(kernel_name: str, split_lines: int | None = None) -> int:
     return SPLIT_LINES_HOT if kernel_name in HOT_KERNELS else SPLIT_LINES
 
 
-def _weight_scale_expression(scene: Scene, pnames: list) -> str:
-    """C expression of M |g| L from the parameter vector p: the work to lift the whole chain by its own length (the
-    energy scale of a chain at rest on the floor, where T + V can be exactly 0)."""
+def _weight_scale_expression(scene: Scene, pnames: list, bake_params: bool) -> str:
+    """C expression of M |g| L from the parameter vector p (with bake_params, from the scene's values, as every
+    kernel of such a model): the work to lift the whole chain by its own length (the energy scale of a chain at
+    rest on the floor, where T + V can be exactly 0)."""
+    values = scene.parameter_vector()
+
+    def value(name):
+        index = pnames.index(name)
+        return _double_literal(float(values[index])) if bake_params else f"p[{index}]"
     masses, lengths = [], []
     for i, link in enumerate(scene.links, start=1):
-        l = f"p[{pnames.index(f'l_{i}')}]"
-        masses.append(f"p[{pnames.index(f'mu_{i}')}] * {l}" if link.kind == "line" else f"p[{pnames.index(f'm_{i}')}]")
-        lengths.append(l)
-    return f"({' + '.join(masses)}) * fabs(p[{pnames.index('g')}]) * ({' + '.join(lengths)})"
+        masses.append(f"{value(f'mu_{i}')} * {value(f'l_{i}')}" if link.kind == "line" else value(f"m_{i}"))
+        lengths.append(value(f"l_{i}"))
+    return f"({' + '.join(masses)}) * fabs({value('g')}) * ({' + '.join(lengths)})"
 
 
 def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], bake_params: bool,
@@ -207,7 +212,7 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
         parameter_info=[(rule.name, _double_literal(rule.lo), _double_literal(rule.hi), _c_string(rule.text))
                         for rule in rules],
         relations=parameter_relations(rules),
-        weight_scale=_weight_scale_expression(scene, pnames),
+        weight_scale=_weight_scale_expression(scene, pnames, bake_params),
         contacts=[(c, point, wall) for c, (point, wall) in enumerate(layout.contacts)],
         contact_table=[_contact_entry(c, point, wall, layout, pnames, bake_params)
                        for c, (point, wall) in enumerate(layout.contacts)],

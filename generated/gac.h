@@ -444,8 +444,9 @@ int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const do
  * E = T + V at the current state, and checks it at every step end (after the projection onto the resting
  * contacts) and after every impact: beyond energy_tol x sim.energy_scale (the largest of M g L, the model's
  * weight_scale, and T + |V| at a step end so far, plus |work_input| + work_damping + work_friction +
- * energy_impacts) the run stops with GAC_ERR_DRIFT at that state.  opt.energy_tol < 0 (default) is min(0.1, max(1e-8, 1e4 rtol)) for the adaptive methods, a
- * budget of 1e4 steps' worth of tolerance, and off for RK4; 0 turns the check off.  What a projection onto
+ * energy_impacts), plus what the impacts' laws may change by round-off (sim.energy_roundoff, the sum of each
+ * record's roundoff x T), the run stops with GAC_ERR_DRIFT at that state.  opt.energy_tol < 0 (default) is
+ * min(0.1, max(1e-8, 1e4 rtol)) for the adaptive methods, a budget of 1e4 steps' worth of tolerance, and off for RK4; 0 turns the check off.  What a projection onto
  * the resting contacts changes in E is in the residual (it should keep the energy) and summed in
  * sim.energy_projection; one that changes E by more than energy_tol x energy_scale / 10 stops the run with
  * GAC_ERR_PROJECTION.  The adaptive methods also hold each step's own energy error to the tolerance where the
@@ -568,6 +569,7 @@ typedef struct {
     double t_slow_sliding;       /* s: the time those steps covered */
     double energy_initial;       /* J: T + V at gac_sim_init */
     double energy_impacts;       /* J: energy the impacts took since gac_sim_init, sum of energy_before - energy_after */
+    double energy_roundoff;      /* J: what the impacts' energies are known to, sum of roundoff x T before each */
     double energy_projection;    /* J: energy change of the projections onto the resting contacts since gac_sim_init
                                     (part of energy_residual: a projection should keep the energy) */
     double energy_residual;      /* J: the energy balance at the current state, E - energy_initial - work_input

@@ -139,7 +139,7 @@ def test_start_near_the_lock_begins_on_chart_b(through_lock, scene, model):
 
 
 def test_bad_threshold_is_refused(model):
-    with pytest.raises(ValueError, match=r"charts: must be True, False or a threshold .* within \[0.1, 0.35\]"):
+    with pytest.raises(ValueError, match=r"chart_switch: must be 0 \(never\) or within \[0.1, 0.35\]"):
         simulate(model, 0.1, charts=0.5)
     r = simulate(model, 0.6, charts=0.2, **ACCURATE)
     assert r.status == 0 and r.t_final == 0.6 and r.n_chart_switches >= 1

@@ -80,7 +80,8 @@ ROWS = [
         fmu="the FMU has no event_samples, event_tol, contact_tol, rest_height or zeno_impacts parameter"),
     Row("driven-stops", "driven-fold", 1.5, dict(method="dopri5", rtol=1e-10, atol=1e-12)),
     Row("friction-rest", "rough-floor", 2.0, dict(method="dopri5", rtol=1e-9, atol=1e-11), grid_until=0.93),
-    Row("gimbal-lock", "gimbal-lock", 3.0, dict(method="dopri5", rtol=1e-10, atol=1e-12)),
+    # the grid's step ends move the chart switches too, and 18 impacts of a spinning chain amplify the difference
+    Row("gimbal-lock", "gimbal-lock", 3.0, dict(method="dopri5", rtol=1e-10, atol=1e-12), grid_tol=1e-4),
     Row("chain12-rolled", "links:12", 0.6, dict(method="dopri5", rtol=1e-9, atol=1e-11), slow=True),
     Row("fuzz-0-0-1", "fuzz:0-0-1", 2.0, dict(method="dop853", rtol=4.519460342714693e-07,
                                                atol=1.4274655908381933e-07), grid_tol=1e-4, slow=True),
@@ -196,6 +197,22 @@ def parse_exact(text: str) -> Run:
     return run
 
 
+_PRINTING_LOGGER = []     # keeps the callbacks FMPy's native logger proxy points at after a run alive
+
+
+def _restore_printing_logger() -> None:
+    """FMPy's native logger proxy keeps the last custom logger in a global: once simulate_fmu has returned, that
+    callback is freed, and the next FMU instantiated in this process with FMPy's default callbacks would call it
+    (a crash).  Point the proxy at a printing logger that lives as long as the process."""
+    from ctypes import byref
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMessage
+    from fmpy.logging import addLoggerProxy
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(printLogMessage)
+    _PRINTING_LOGGER.append(callbacks)
+    addLoggerProxy(byref(callbacks))
+
+
 def fmu_run(path: Path, row: Row, interval: float) -> Run:
     from fmpy import read_model_description, simulate_fmu
     from fmpy.fmi2 import fmi2OK
@@ -208,9 +225,12 @@ def fmu_run(path: Path, row: Row, interval: float) -> Run:
         messages.append((status, category.decode(), message.decode()))
     start = {f"solver.{key}": value for key, value in row.options.items() if key in FMU_OPTIONS - {"method"}}
     start["solver.method"] = METHOD_CODES[row.options["method"]]
-    result = simulate_fmu(str(path), stop_time=row.t_end, output_interval=interval, start_values=start,
-                          output=[*q_names, *qd_names, "impacts", "resting_contacts"], debug_logging=True,
-                          logger=logger)
+    try:
+        result = simulate_fmu(str(path), stop_time=row.t_end, output_interval=interval, start_values=start,
+                              output=[*q_names, *qd_names, "impacts", "resting_contacts"], debug_logging=True,
+                              logger=logger)
+    finally:
+        _restore_printing_logger()
     assert all(status == fmi2OK for status, _, _ in messages), messages
     impacts = []
     for _, category, message in messages:

@@ -114,7 +114,7 @@ def test_a_hundred_impacts_are_coloured_by_time_not_listed_in_a_legend(saved, tm
     entries (the start, the touching points), and each impact's configuration coloured by its time."""
     model = load_model("paper-case2")
     result = simulate(model, 10.0, t_eval=np.linspace(0.0, 10.0, 201))
-    assert len(result.impacts) > 100
+    assert len(result.impacts) >= 100
     plot_all(model, result, tmp_path)
     figure = saved[-1]
     assert colour_bar_labels(figure) == ["time of the impact (s)"]

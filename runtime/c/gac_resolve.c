@@ -391,6 +391,7 @@ static int gac_finish(gac_sim *s, gac_impact_event *ev, int nset, const int *set
     }
     gac_set_active(s, nset, set, r);
     s->energy_impacts += r->energy_before - r->energy_after;
+    s->energy_roundoff += r->roundoff * ev->T_before;   /* what this impact's energy is known to */
     return 1;
 }
 

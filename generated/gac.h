@@ -613,6 +613,8 @@ typedef struct {
     double *gap_held;            /* gap (m) a persistent contact is held at: its gap when it landed (within
                                     contact_tol, or the integration's position error below its wall) */
     double energy_x;             /* J: T + V at x (kept by gac_energy_check) */
+    double energy_x1[2];         /* J: T and V at the last step's end x1, if energy_x1_valid (the step's energy error) */
+    int energy_x1_valid;
     double energy_tol;           /* resolved opt.energy_tol (0: off) */
 } gac_sim;
 

@@ -186,10 +186,11 @@ static int gac_dip_candidates(gac_sim *s, double t1, int *cand, double *speed, d
 static int gac_lost_contact(gac_sim *s, double t, const double *g)
 {
     const gac_model *md = s->model;
+    const double shallow = -s->opt.contact_tol;
     double depth = -1.0;
     int c;
     for (c = 0; c < md->ncontact; ++c) {
-        if (s->is_active[c] || !(g[c] < -s->opt.contact_tol)) continue;
+        if (!(g[c] < shallow) || s->is_active[c]) continue;      /* most contacts: inside, one comparison */
         if (depth < 0.0) {
             gac_dense(s, t, s->xs);
             depth = s->opt.contact_tol + gac_simultaneity_window(s, s->xs);

@@ -84,7 +84,7 @@ int gac_recheck_rest(gac_sim *s, gac_impact_record *record);
 /* gac_energy.c: the energy balance */
 double gac_energy_tolerance(const gac_options *opt);
 void gac_energy_start(gac_sim *s);
-int gac_energy_check(gac_sim *s);
+int gac_energy_check(gac_sim *s, const double *E_known);   /* E_known: T, V at s->x if evaluated, or NULL */
 int gac_energy_projected(gac_sim *s, double E_before, const double *x);
 double gac_step_energy_error(gac_sim *s);
 

@@ -214,7 +214,8 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             fac_max = 10.0;
             s->fail_seen = 0;
         }
-        if (gac_step_near_lock(s)) {          /* below the chart's floor at the step's end, or past its lock */
+        if (gac_can_switch(s) ? gac_step_near_lock(s)     /* below the chart's floor at the step's end, or past */
+                              : gac_chart_measure(md, s->x1) < gac_chart_floor(s)) {   /* its lock */
             if (!gac_can_switch(s)) {
                 if (gac_chart_measure(md, s->x1) < gac_chart_floor(s)) return GAC_ERR_GIMBAL_LOCK;
             } else if (s->opt.method != GAC_METHOD_RK4) {  /* retry shorter: the switch comes at a step's end */
@@ -255,7 +256,8 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             s->f_valid = s->vn_valid = 0;
             gac_events(s, s->t, s->x, s->ev);
             if (s->fail) return s->fail;
-            if (gac_energy_check(s) != GAC_OK) return GAC_ERR_DRIFT;
+            s->energy_x1_valid = 0;
+            if (gac_energy_check(s, 0) != GAC_OK) return GAC_ERR_DRIFT;
             if (released) {                       /* a wall crossing counts once the gap has opened again */
                 for (i = 0; i < record->nreleased; ++i) {
                     if (s->ev[record->released[i]] > 0.0) s->ev[record->released[i]] = 0.0;
@@ -288,8 +290,10 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             gac_events(s, s->t, s->x, s->ev);
             if (s->fail) return s->fail;
         }
-        {
-            const int code = gac_energy_check(s);
+        {                                         /* T and V at x: known from the step's energy error unless projected */
+            const int known = s->energy_x1_valid && s->nactive == 0;
+            const int code = gac_energy_check(s, known ? s->energy_x1 : 0);
+            s->energy_x1_valid = 0;
             if (code != GAC_OK) return code;
         }
         if (s->chart == 1) {                      /* chart A's angles followed step by step (near_a) */

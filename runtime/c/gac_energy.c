@@ -30,15 +30,21 @@ void gac_energy_start(gac_sim *s)
         if (weight > s->energy_scale) s->energy_scale = weight;
     }
     s->energy_impacts = s->energy_projection = s->energy_residual = s->energy_roundoff = 0.0;
+    s->energy_x1_valid = 0;
     s->energy_tol = gac_energy_tolerance(&s->opt);
 }
 
 /* The balance at the current state s->x, after a step end or an impact: its energy (s->energy_x), the scale and
  * the residual.  GAC_OK, or GAC_ERR_DRIFT when |residual| > energy_tol x scale. */
-int gac_energy_check(gac_sim *s)
+int gac_energy_check(gac_sim *s, const double *E_known)
 {
     double E[2], scale;
-    s->model->energy(s->x, s->x + s->model->nq, s->p, E);
+    if (E_known != 0) {                                  /* T and V at x, already evaluated */
+        E[0] = E_known[0];
+        E[1] = E_known[1];
+    } else {
+        s->model->energy(s->x, s->x + s->model->nq, s->p, E);
+    }
     s->energy_x = E[0] + E[1];
     if (E[0] + fabs(E[1]) > s->energy_scale) s->energy_scale = E[0] + fabs(E[1]);
     s->energy_residual = s->energy_x - s->energy_initial - s->work_input + s->work_damping + s->work_friction
@@ -73,8 +79,12 @@ double gac_step_energy_error(gac_sim *s)
 {
     const gac_model *md = s->model;
     double E[2], change;
+    s->energy_x1_valid = 0;
     if (md->power != 0 || s->nactive > 0 || !(s->energy_scale > 0.0)) return 0.0;
     md->energy(s->x1, s->x1 + md->nq, s->p, E);
+    s->energy_x1[0] = E[0];                              /* the step end's energies, for gac_energy_check */
+    s->energy_x1[1] = E[1];
+    s->energy_x1_valid = 1;
     /* what evaluating T + V twice leaves by round-off (its terms may be far larger than the scale: a heavy link
      * high above a light chain's zero of V) is no error of the step */
     change = fabs(E[0] + E[1] - s->energy_x) - 64.0 * GAC_EPS * (E[0] + fabs(E[1]) + s->energy_scale);

@@ -224,12 +224,13 @@ int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
     for (j = 1; j <= m && !found; ++j) {
         double tj = j == m ? t1 : s->t + (t1 - s->t) * (double)j / (double)m;
         double gj[nc1], vj[nc1];
-        int have_v = 0;
+        int have_v = 0, deep = 0;
         gac_dense(s, tj, s->xs);
         gac_events(s, tj, s->xs, gj);
         for (c = 0; c < md->ncontact; ++c) {           /* crossings and returns at the samples */
             double tc;
             if (gj[c] > 0.0) continue;
+            if (gj[c] < -s->opt.contact_tol && !s->is_active[c]) deep = 1;   /* maybe beyond its wall */
             if (s->eprev[c] > 0.0) {
                 tc = gac_locate(s, 0, c, t_prev, s->eprev[c], tj, gj[c]);
             } else {
@@ -270,7 +271,7 @@ int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
             }
             found = 1;
         }
-        if (!found && gac_lost_contact(s, tj, gj)) {     /* beyond its wall with no crossing to locate */
+        if (!found && deep && gac_lost_contact(s, tj, gj)) {     /* beyond its wall with no crossing to locate */
             if (s->fail == 0) s->fail = GAC_ERR_LOST_CONTACT;
             *t_event = tj;
             *c_event = 0;

@@ -363,6 +363,7 @@ GAC_FMI2_EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     opt.atol = in->solver[SOLVER_ATOL];
     opt.dt = in->solver[SOLVER_DT];
     opt.h_max = in->solver[SOLVER_HMAX];
+    opt.max_impacts = 0;          /* a co-simulation has no end the FMU knows of: the master bounds each step */
     code = gac_sim_init(&in->sim, in->m, in->dwork, in->iwork, in->t0, in->q0, in->qd0, in->p, &opt);
     if (code == GAC_OK && in->m->nu > 0) code = gac_sim_set_input(&in->sim, in->u);
     if (code != GAC_OK) {

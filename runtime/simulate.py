@@ -304,20 +304,21 @@ class Impacts(Sequence):
         return impacts
 
     def _keep(self, row: Impact) -> None:
-        if self.count == 0:
-            self.t_first = row.t
-        self.count += 1
-        self.energy_loss += row.energy_before - row.energy_after
+        self._count(row.t, row.energy_before - row.energy_after)
         self._rows.append(row)
+
+    def _count(self, t: float, loss: float) -> None:
+        if self.count == 0:
+            self.t_first = t
+        self.count += 1
+        self.energy_loss += loss
 
     def add(self, model: CompiledModel, record) -> None:
         """Count the impact the C loop just applied (its post-conditions were checked there), and keep it."""
-        if self.count == 0:
-            self.t_first = float(record.t)
-        self.count += 1
-        self.energy_loss += float(record.energy_before) - float(record.energy_after)
         if self.kept:
-            self._rows.append(_read_impact(model, record))
+            self._keep(_read_impact(model, record))
+        else:
+            self._count(float(record.t), float(record.energy_before) - float(record.energy_after))
 
     def __len__(self) -> int:
         return self.count

@@ -23,7 +23,7 @@ from codegen.scene import JointStop, Scene, SceneError
 from codegen.interface import RTOL_MIN  # the smallest rtol the C loop accepts (GAC_RTOL_MIN)
 from codegen.specialise import coordinate_names
 
-from .inputs import InputSchedule, attach, input_source, set_input  # noqa: F401  (InputSchedule: re-export)
+from .inputs import InputSchedule, attach, input_source  # noqa: F401  (InputSchedule: re-export)
 from .model import CompiledModel, load_model
 
 METHODS = ("dopri5", "dop853", "rk4")

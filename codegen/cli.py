@@ -201,8 +201,9 @@ def main(argv=None) -> int:
 
     print(f"wrote {', '.join(str(p) for p in paths)}")
     print("operation counts (after CSE): total = add + mul + div + calls")
+    width = max(len(f.name) for f in model.functions)
     for f in model.functions:
         o = f.ops
-        print(f"  {f.name:20s} {o.total:7d} = {o.add} + {o.mul} + {o.div} + {o.calls}")
+        print(f"  {f.name:{width}s} {o.total:7d} = {o.add} + {o.mul} + {o.div} + {o.calls}")
     print("timings: " + ", ".join(f"{stage} {seconds:.2f} s" for stage, seconds in timings.items()))
     return 0

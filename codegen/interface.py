@@ -35,6 +35,8 @@ class Function:
     doc: str = ""                   # more, for the header comment (lines joined by spaces)
     kernel: bool = False            # a generated kernel (its body is the scene's straight-line code)
     dense: bool = False             # a dense kernel (O(n^2) code): generated, or formed by the library
+    fused: bool = False             # two kernels on one tape: generated where forward_dynamics is straight-line
+                                    # code, otherwise formed by the library from the two
 
     def c_type(self, arg: Arg, name: str, restrict: str = "") -> str:
         ctype = arg.ctype.format(name=name, NAME=name.upper())
@@ -110,9 +112,14 @@ KERNELS = (
     Function("power", "void",
              (_q(), _qd(), _u(), _p(), _out("P", "P[0] power of the inputs, P[1] dissipation of the dampers (W)")),
              "Rates of the energy balance: dE/dt = P[0] - P[1] in flight.", kernel=True),
+    Function("forward_dynamics_energy", "void",
+             (_q(), _qd(), _u(), _p(), _out("y", "NQ + 2: qdd (NQ; rad/s^2, m/s^2), then T and V (J)")),
+             "forward_dynamics and energy at one state in one call (the rotations computed once).", kernel=True,
+             fused=True),
 )
 
 DENSE_KERNELS = tuple(f.name for f in KERNELS if f.dense)
+FUSED_KERNELS = tuple(f.name for f in KERNELS if f.fused)
 DENSE_MAX_LINKS = 12        # up to this n the dense kernels are generated unless told otherwise
 
 

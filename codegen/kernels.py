@@ -19,6 +19,9 @@ CSE'd by :mod:`codegen.flatten`.  The kernels and their C signatures:
     inertia_solve(q, Q, p, x)            x = I_f^-1 Q for generalised forces Q, by the articulated recursion
     generalized_momentum(q, qd, p, h)    h = I_f qd = dT/dqd, by composite momenta
     contact_generalized_force(q, f, p, Q)  Q = J^T f for forces f along the contact Jacobian's rows
+    forward_dynamics_energy(q, qd, u, p, y)  forward_dynamics and energy on one tape: y = [qdd, T, V]; generated
+                                         where forward_dynamics is straight-line code, otherwise formed by the
+                                         library from the two (gac_forward_dynamics_energy)
 
 Every kernel but three costs O(n) for n links.  mass_matrix, bias and contact_jacobian form dense matrices
 (O(n^2) code); the hybrid loop does not use them (it applies I_f^-1, I_f and J^T through the three operators
@@ -87,13 +90,12 @@ def forward_dynamics_kernel(chain: ChainSymbols, solver: str = "articulated") ->
     how = {"articulated": "an O(n) articulated-body recursion", "dense": "a straight-line LDL^T of I_f"}
     k = _new(chain, "forward_dynamics", f"Theta_ddot solving I_f Theta_ddot = R, by {how[solver]}.",
              ("q", "qd", "u", "p"), "qdd", len(free))
+    if solver == "articulated":
+        k.values = articulated_accelerations(k.tape, chain)
+        return k
     rotations = kinematics.joint_rotations(k.tape, chain)
     moments = kinematics.link_moments_all(k.tape, chain)
     motion = kinematics.velocity_products(k.tape, chain, rotations, moments)
-    if solver == "articulated":
-        qdd = articulated.forward_dynamics(k.tape, chain, moments, motion)
-        k.values = [qdd[i] for i in free]
-        return k
     R = gibbs_appell.right_hand_side(k.tape, chain, rotations, moments, motion)
     lower = gibbs_appell.inertia_matrix(k.tape, chain, rotations, moments)
     # the model's own (reduced) system: rows and columns of the free coordinates
@@ -104,6 +106,15 @@ def forward_dynamics_kernel(chain: ChainSymbols, solver: str = "articulated") ->
     order = translations + [a for a in range(len(free)) if a not in translations]   # X first (Eq. II block)
     k.values = ldlt_solve(k.tape, reduced, [R[i] for i in free], order)
     return k
+
+
+def articulated_accelerations(tape: Tape, chain: ChainSymbols) -> list[sp.Expr]:
+    """Theta_ddot of the free coordinates by the O(n) articulated-body recursion (codegen.articulated)."""
+    rotations = kinematics.joint_rotations(tape, chain)
+    moments = kinematics.link_moments_all(tape, chain)
+    motion = kinematics.velocity_products(tape, chain, rotations, moments)
+    qdd = articulated.forward_dynamics(tape, chain, moments, motion)
+    return [qdd[i] for i in chain.layout.free]
 
 
 def contact_points_kernel(chain: ChainSymbols) -> Kernel:
@@ -227,6 +238,17 @@ def energy_kernel(chain: ChainSymbols) -> Kernel:
     return k
 
 
+def forward_dynamics_energy_kernel(chain: ChainSymbols) -> Kernel:
+    """forward_dynamics and energy at one state, on one tape: the rotations, the link moments and the parameters'
+    products are computed once for both (the hybrid loop wants the energy wherever it takes a step's end
+    derivative)."""
+    free = chain.layout.free
+    k = _new(chain, "forward_dynamics_energy", "y[0..NQ-1] = Theta_ddot (as forward_dynamics), y[NQ] = T, "
+             "y[NQ+1] = V (as energy).", ("q", "qd", "u", "p"), "y", len(free) + 2)
+    k.values = articulated_accelerations(k.tape, chain) + list(energy_expressions(k.tape, chain))
+    return k
+
+
 def power_kernel(chain: ChainSymbols) -> Kernel:
     """The rates of the energy balance that are not potential: dE/dt = P_in - P_damp in flight."""
     k = _new(chain, "power", "P[0] = power of the inputs sum u_i qd_(c_i), P[1] = dissipation of the joint "
@@ -305,19 +327,24 @@ def _points(tape: Tape, chain: ChainSymbols):
 KERNEL_BUILDERS = (mass_matrix_kernel, bias_kernel, forward_dynamics_kernel, inertia_solve_kernel,
                    generalized_momentum_kernel, contact_points_kernel, contact_velocities_kernel,
                    contact_jacobian_kernel, contact_generalized_force_kernel, contact_gaps_kernel, energy_kernel,
-                   contact_bias_kernel, power_kernel)
-def builders(dense: bool):
-    """The kernel builders of a model, in the order of codegen.interface.KERNELS."""
-    return [b for b in KERNEL_BUILDERS if dense or b.__name__.removesuffix("_kernel") not in interface.DENSE_KERNELS]
+                   contact_bias_kernel, power_kernel, forward_dynamics_energy_kernel)
+def builders(dense: bool, fused: bool = True):
+    """The kernel builders of a model, in the order of codegen.interface.KERNELS: the dense ones
+    (interface.DENSE_KERNELS) if ``dense``, the fused ones (interface.FUSED_KERNELS) if ``fused``."""
+    def wanted(builder) -> bool:
+        name = builder.__name__.removesuffix("_kernel")
+        return (dense or name not in interface.DENSE_KERNELS) and (fused or name not in interface.FUSED_KERNELS)
+    return [b for b in KERNEL_BUILDERS if wanted(b)]
 
 
 def build_kernels(scene: Scene, bake_params: bool = False, progress=None, layout=None,
-                  dense: bool | None = None, skip=()) -> list[Kernel]:
+                  dense: bool | None = None, skip=(), fused: bool = True) -> list[Kernel]:
     """Derive every kernel of the scene (symbolic, per-intermediate symbols; no CSE yet); the dense ones
-    (codegen.interface.DENSE_KERNELS) only if ``interface.wants_dense(n, dense)``; none named in ``skip``."""
+    (codegen.interface.DENSE_KERNELS) only if ``interface.wants_dense(n, dense)``, the fused ones
+    (codegen.interface.FUSED_KERNELS) only if ``fused``; none named in ``skip``."""
     chain = ChainSymbols(scene, bake_params, layout)
     kernels = []
-    for builder in builders(interface.wants_dense(scene.n, dense)):
+    for builder in builders(interface.wants_dense(scene.n, dense), fused):
         if builder.__name__.removesuffix("_kernel") in skip:
             continue
         if progress:

@@ -87,9 +87,11 @@ def _generate(scene, name, bake_params, progress, formulation, raw_ops, dense, s
     if formulation == "lagrange" and dense is None:
         dense = True
     looped = _rolled_function(scene, bake_params, layout, rolled) if roll else None
+    options = {"fused": _wants_fused(scene, bake_params, layout, roll)} if formulation == "gibbs_appell" else {}
+    if looped is not None:
+        options["skip"] = ("forward_dynamics",)
     derived = FORMULATIONS[formulation](scene, bake_params, progress=lambda k: progress(f"derive {k}"),
-                                        layout=layout, dense=dense,
-                                        **({"skip": ("forward_dynamics",)} if looped is not None else {}))
+                                        layout=layout, dense=dense, **options)
     timings["derive"] = time.perf_counter() - start
     raw = {}
     if raw_ops:
@@ -124,6 +126,18 @@ _NO_RUN = ("rolled: the scene's links 2..n - 1 (n = {n}) hold no run of codegen.
 
 def _kernel_position(name: str, dense: bool | None, n: int) -> int:
     return [b.__name__.removesuffix("_kernel") for b in kernels.builders(wants_dense(n, dense))].index(name)
+
+
+def _wants_fused(scene, bake_params, layout, roll: bool) -> bool:
+    """Whether the fused kernels (codegen.interface.FUSED_KERNELS) are generated: where the forward dynamics is
+    straight-line code.  Where it is to be rolled (the scene has a run of identical links) the library forms them
+    from the two kernels, so a long chain's model stays small; decided from the run alone, the same way whether
+    the kernels are generated side by side or not."""
+    if not roll:
+        return True
+    from . import rolled
+    from .kinematics import ChainSymbols
+    return rolled.find_run(ChainSymbols(scene, bake_params, layout)) is None
 
 
 def _rolled_function(scene, bake_params, layout, asked: bool | None):
@@ -176,7 +190,8 @@ def _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, 
     an error without a run)."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
-    builders = kernels.builders(wants_dense(scene.n, dense))
+    builders = kernels.builders(wants_dense(scene.n, dense),
+                                _wants_fused(scene, bake_params, layout, rolled is not False))
     start = time.perf_counter()
     progress(f"derive, cse and render {len(builders)} kernels in {workers} processes")
     functions, seconds = {}, [0.0, 0.0, 0.0]

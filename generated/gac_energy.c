@@ -78,13 +78,13 @@ int gac_energy_projected(gac_sim *s, double E_before, const double *x)
 double gac_step_energy_error(gac_sim *s)
 {
     const gac_model *md = s->model;
-    double E[2], change;
-    s->energy_x1_valid = 0;
+    const double *E = s->energy_x1;
+    double change;
     if (md->power != 0 || s->nactive > 0 || !(s->energy_scale > 0.0)) return 0.0;
-    md->energy(s->x1, s->x1 + md->nq, s->p, E);
-    s->energy_x1[0] = E[0];                              /* the step end's energies, for gac_energy_check */
-    s->energy_x1[1] = E[1];
-    s->energy_x1_valid = 1;
+    if (!s->energy_x1_valid) {                           /* (not already from the step's end, gac_f_end) */
+        md->energy(s->x1, s->x1 + md->nq, s->p, s->energy_x1);
+        s->energy_x1_valid = 1;                          /* the step end's energies, for gac_energy_check */
+    }
     /* what evaluating T + V twice leaves by round-off (its terms may be far larger than the scale: a heavy link
      * high above a light chain's zero of V) is no error of the step */
     change = fabs(E[0] + E[1] - s->energy_x) - 64.0 * GAC_EPS * (E[0] + fabs(E[1]) + s->energy_scale);

@@ -165,7 +165,7 @@ double gac_rk4_step(gac_sim *s, double h)
         dy += d * d;
         s->x1[i] = s->x[i] + h / 6.0 * (s->f[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
     }
-    gac_f(s, s->t + h, s->x1, s->k[4]);        /* derivative at the end: Hermite and next step */
+    gac_f_end(s, s->t + h, s->x1, s->k[4]);    /* derivative at the end: Hermite and next step */
     return dy > 0.0 ? h * sqrt(dk / dy) : 0.0;
 }
 
@@ -198,7 +198,7 @@ double gac_dopri5_step(gac_sim *s, double h)
     gac_stage5(nq, s->xs, s->x, h, a61, k1, a62, k2, a63, k3, a64, k4, a65, k5);
     gac_f(s, t + h, s->xs, k6);
     gac_stage5(nq, s->x1, s->x, h, a71, k1, a73, k3, a74, k4, a75, k5, a76, k6);
-    gac_f(s, t + h, s->x1, k7);
+    gac_f_end(s, t + h, s->x1, k7);
     gac_error6(nq, s->xs, h, e1, k1, e3, k3, e4, k4, e5, k5, e6, k6, e7, k7);   /* the error estimate, in xs */
     return gac_with_energy(s, gac_norm(s, s->xs, s->x, s->x1));
 }
@@ -236,7 +236,7 @@ double gac_dop853_step(gac_sim *s, double h)
         for (j = 0; j < 12; ++j) sum += gac_dop853_a[12][j] * K[j][i];
         s->x1[i] = s->x[i] + h * sum;
     }
-    gac_f(s, s->t + h, s->x1, K[12]);
+    gac_f_end(s, s->t + h, s->x1, K[12]);
     for (i = 0; i < nx; ++i) {
         double err5 = 0.0, err3 = 0.0, a = fabs(s->x[i]), b = fabs(s->x1[i]);
         double scale = s->opt.atol + s->opt.rtol * (a > b ? a : b);

@@ -50,6 +50,7 @@ static inline int gac_finite(const double *x, int n)
 /* gac_sim.c: the right-hand side and event functions of the loop */
 const double *gac_input(gac_sim *s, double t, const double *x);
 void gac_f(gac_sim *s, double t, const double *x, double *f);
+void gac_f_end(gac_sim *s, double t, const double *x, double *f);
 void gac_events(gac_sim *s, double t, const double *x, double *ev);
 
 /* gac_integrate.c: the integrators and their dense output */

@@ -56,6 +56,17 @@ int gac_model_check(const gac_model *m)
     return GAC_OK;
 }
 
+void gac_forward_dynamics_energy(const gac_model *m, const double *q, const double *qd, const double *u,
+                                 const double *p, double *y)
+{
+    if (m->forward_dynamics_energy != 0) {
+        m->forward_dynamics_energy(q, qd, u, p, y);
+        return;
+    }
+    m->forward_dynamics(q, qd, u, p, y);
+    m->energy(q, qd, p, y + m->nq);
+}
+
 int gac_in_range(double value, double lo, double hi)
 {
     return value - value == 0.0 && lo <= value && value <= hi && (value == 0.0 || fabs(value) >= DBL_MIN);

@@ -112,6 +112,8 @@ typedef struct {
     double scale;          /* the largest |normal velocity| before (m/s) */
     double height;         /* the rest height in force (m; 0: no landings by it) */
     double T_before, T_law, bound;
+    double E_plus[2];      /* T and V at (x, qd_plus), kept with qd_plus (J) */
+    int held;              /* 1 once gac_hold_resting changed the velocities after the law */
     int rounds, plastic;
 } gac_impact_event;
 
@@ -219,7 +221,6 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
     const gac_model *md = s->model;
     const int nq = md->nq;
     const double *x = ev->x;
-    double E[2];
     int k, pass, changed = 0, all_elastic = 1, code;
     code = gac_impact_rounds(md, x, x + nq, s->p, ev->n, ev->list, ev->e_law, ev->first, ev->qd_plus, ev->F,
                              s->work, &ev->rounds, &ev->plastic);
@@ -229,8 +230,8 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
     if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;   /* no useful accuracy left */
     for (k = 0; k < ev->n; ++k) all_elastic &= ev->e_law[k] == 1.0;
     if (ev->plastic && all_elastic) return GAC_ERR_IMPACT_ACCURACY;   /* the plastic closing round takes energy */
-    md->energy(x, ev->qd_plus, s->p, E);
-    ev->T_law = E[0];
+    md->energy(x, ev->qd_plus, s->p, ev->E_plus);
+    ev->T_law = ev->E_plus[0];
     r->law_elastic = !ev->plastic;              /* contacts on walls with e < 1 may take part, without impulse */
     for (k = 0; k < ev->n; ++k) {
         if (ev->F[k] > 0.0 && ev->e_law[k] != 1.0) r->law_elastic = 0;
@@ -242,10 +243,10 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
         code = gac_impact_rounds(md, x, x + nq, s->p, ev->n, ev->list, ev->e, ev->first, ev->qd_plus, ev->F,
                                  s->work, &ev->rounds, &ev->plastic);
         if (code != GAC_OK) return code;
-        md->energy(x, ev->qd_plus, s->p, E);
+        md->energy(x, ev->qd_plus, s->p, ev->E_plus);
         for (k = 0; k < ev->n; ++k) {
             if (ev->landing[k] && !s->is_active[ev->list[k]] && ev->e_law[k] == 1.0
-                && ev->T_law - E[0] > ev->bound * ev->T_before) {
+                && ev->T_law - ev->E_plus[0] > ev->bound * ev->T_before) {
                 ev->landing[k] = 0;
                 ev->e[k] = 1.0;
                 elastic_landing = 1;
@@ -266,14 +267,13 @@ static int gac_check_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
 {
     const gac_model *md = s->model;
     const int nq = md->nq;
-    double E[2], T_after;
+    double T_after;
     int i, k, elastic = 1;
     for (i = 0; i < nq; ++i) {
         s->x1[i] = ev->x[i];
         s->x1[nq + i] = ev->qd_plus[i];
     }
-    md->energy(s->x1, s->x1 + nq, s->p, E);
-    T_after = E[0];
+    T_after = ev->E_plus[0];                             /* s->x1 = (x, qd_plus) */
     r->energy_rest = ev->T_law - T_after;
     r->complementarity = ev->rounds > 1;
     for (k = 0; k < ev->n; ++k) {
@@ -354,6 +354,7 @@ static int gac_hold_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *se
         }
     }
     gac_normal_velocities(md, s->x1, s->p, ev->vn);
+    ev->held = *nset > 0;
     if (*nset > 0) {
         const double held = gac_impact_roundoff(md, ev->x, s->p, s->work, 0, ev->F, ev->x + nq, s->x1 + nq,
                                                 ev->T_before);
@@ -370,12 +371,18 @@ static int gac_finish(gac_sim *s, gac_impact_event *ev, int nset, const int *set
 {
     const gac_model *md = s->model;
     const int nq = md->nq;
-    double E[2];
     int c, i, k;
     for (i = 0; i < nq; ++i) r->qd_after[i] = s->x1[nq + i];
-    md->energy(ev->x, s->x1 + nq, s->p, E);          /* at the impact configuration, as T_law */
-    r->energy_rest = ev->T_law > E[0] ? ev->T_law - E[0] : 0.0; /* (a landing may also leave more than the law) */
-    r->energy_after = gac_total_energy(md, s->x1, s->p);
+    if (ev->held) {                                   /* s->x1: the impact configuration, the velocities after */
+        md->energy(s->x1, s->x1 + nq, s->p, s->energy_x1);
+    } else {
+        s->energy_x1[0] = ev->E_plus[0];
+        s->energy_x1[1] = ev->E_plus[1];
+    }
+    s->energy_x1_valid = 1;                           /* for the balance check at s->x1 (gac_sim_advance) */
+    r->energy_rest = ev->T_law > s->energy_x1[0] ? ev->T_law - s->energy_x1[0] : 0.0;   /* (a landing may also
+                                                         leave more than the law) */
+    r->energy_after = s->energy_x1[0] + s->energy_x1[1];
     r->approach_after = 0.0;                  /* fastest approach of a contact at its wall, afterwards */
     for (c = 0; c < md->ncontact; ++c) {
         if (ev->gaps[c] <= s->opt.contact_tol && -ev->vn[c] > r->approach_after) r->approach_after = -ev->vn[c];
@@ -416,6 +423,8 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     ev.x = s->xs;
     ev.c_event = c_event;
     ev.list = list, ev.landing = landing, ev.shrinking = shrinking;
+    ev.held = 0;
+    s->energy_x1_valid = 0;                              /* set again by gac_finish, for the state it leaves */
     ev.gaps = gaps, ev.vn = vn, ev.an = an, ev.e = e, ev.e_law = e_law, ev.qd_plus = qd_plus, ev.F = F;
     md->contact_gaps(ev.x, s->p, gaps);
     gac_normal_velocities(md, ev.x, s->p, vn);

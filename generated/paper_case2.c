@@ -17,6 +17,7 @@ void paper_case2_b_contact_gaps(const double *GAC_RESTRICT q, const double *GAC_
 void paper_case2_b_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT E);
 void paper_case2_b_contact_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT a);
 void paper_case2_b_power(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT P);
+void paper_case2_b_forward_dynamics_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT y);
 
 /* ---- kernel mass_matrix ---- */
 /* Flight inertia matrix I_f(Theta) (Eq. 12, Fig. 2), full, row-major.  58 ops (10 add, 42 mul, 0 div, 6 calls) */
@@ -762,6 +763,164 @@ void paper_case2_power(const double *GAC_RESTRICT q, const double *GAC_RESTRICT 
     P[1] = 0.0;
 }
 
+/* ---- kernel forward_dynamics_energy ---- */
+/* y[0..NQ-1] = Theta_ddot (as forward_dynamics), y[NQ] = T, y[NQ+1] = V (as energy).  305 ops (97 add, 196 mul, 6 div, 6 calls) */
+void paper_case2_forward_dynamics_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT y)
+{
+    (void)q;
+    (void)qd;
+    (void)u;
+    (void)p;
+    const double c_m1 = cos(q[0]);
+    const double s_m1 = sin(q[0]);
+    const double c_0 = cos(q[1]);
+    const double s_0 = sin(q[1]);
+    const double c_1 = cos(q[2]);
+    const double s_1 = sin(q[2]);
+    const double B0_1 = p[1]*p[2];
+    const double h_1_x = 0.5*p[2]*(p[1]*p[1]);
+    const double B2_1 = 0.3333333333333333*p[2]*(p[1]*p[1]*p[1]);
+    const double K_1_xx = p[1]*p[3];
+    const double K_1_yy = B2_1 + p[1]*p[4];
+    const double K_1_zz = B2_1 + p[1]*p[5];
+    const double wp_0_x = qd[0]*s_0;
+    const double wp_0_y = c_0*qd[0];
+    const double wdv_0_x = qd[1]*wp_0_y;
+    const double wdv_0_y = -qd[1]*wp_0_x;
+    const double av_0_x = p[0]*s_0;
+    const double av_0_y = c_0*p[0];
+    const double wp_1_x = c_1*wp_0_y + qd[1]*s_1;
+    const double wp_1_y = c_1*qd[1] - s_1*wp_0_y;
+    const double w_1_z = qd[2] + wp_0_x;
+    const double wdv_1_x = c_1*wdv_0_y + qd[2]*wp_1_y;
+    const double wdv_1_y = -qd[2]*wp_1_x - s_1*wdv_0_y;
+    const double av_1_x = av_0_y*c_1;
+    const double av_1_y = -av_0_y*s_1;
+    const double hw_1_y = -h_1_x*w_1_z;
+    const double hw_1_z = h_1_x*wp_1_y;
+    const double S_1_x = B0_1*av_1_x + hw_1_y*w_1_z - hw_1_z*wp_1_y;
+    const double S_1_y = B0_1*av_1_y + h_1_x*wdv_0_x + hw_1_z*wp_1_x;
+    const double S_1_z = B0_1*av_0_x - h_1_x*wdv_1_y - hw_1_y*wp_1_x;
+    const double Kw_1_x = K_1_xx*wp_1_x;
+    const double Kw_1_y = K_1_yy*wp_1_y;
+    const double Kw_1_z = K_1_zz*w_1_z;
+    const double T_1_x = K_1_xx*wdv_1_x + Kw_1_z*wp_1_y - Kw_1_y*w_1_z;
+    const double T_1_y = K_1_yy*wdv_1_y + Kw_1_x*w_1_z - Kw_1_z*wp_1_x - av_0_x*h_1_x;
+    const double T_1_z = K_1_zz*wdv_0_x + Kw_1_y*wp_1_x + av_1_y*h_1_x - Kw_1_x*wp_1_y;
+    const double Dinv_1 = 1.0/(K_1_zz);
+    const double W_1_4 = Dinv_1*h_1_x;
+    const double ud_1 = -Dinv_1*T_1_z;
+    const double IaC_1_11 = B0_1 - W_1_4*h_1_x;
+    const double paF_1_y = S_1_y - T_1_z*W_1_4;
+    const double ss_1 = s_1*s_1;
+    const double sc_1 = c_1*s_1;
+    const double x0 = K_1_xx - K_1_yy;
+    const double x1 = ss_1*x0;
+    const double IzA_1_00 = K_1_xx - x1;
+    const double IzA_1_01 = sc_1*x0;
+    const double IzA_1_11 = K_1_yy + x1;
+    const double IzB_1_02 = h_1_x*s_1;
+    const double IzB_1_12 = -c_1*h_1_x;
+    const double x2 = B0_1 - IaC_1_11;
+    const double x3 = ss_1*x2;
+    const double IzC_1_00 = B0_1 - x3;
+    const double IzC_1_01 = sc_1*x2;
+    const double IzC_1_11 = IaC_1_11 + x3;
+    const double pF_1_y = S_1_x*c_1 - paF_1_y*s_1;
+    const double pF_1_z = S_1_x*s_1 + c_1*paF_1_y;
+    const double pN_1_y = T_1_x*c_1 - T_1_y*s_1;
+    const double pN_1_z = T_1_x*s_1 + T_1_y*c_1;
+    const double Dinv_0 = 1.0/(IzA_1_11);
+    const double W_0_1 = Dinv_0*IzA_1_01;
+    const double W_0_3 = Dinv_0*IzB_1_12;
+    const double ud_0 = -Dinv_0*pN_1_z;
+    const double IaA_0_11 = IzA_1_00 - IzA_1_01*W_0_1;
+    const double IaB_0_10 = IzB_1_02 - IzB_1_12*W_0_1;
+    const double IaC_0_00 = B0_1 - IzB_1_12*W_0_3;
+    const double paN_0_y = pN_1_y - W_0_1*pN_1_z;
+    const double paF_0_x = S_1_z - W_0_3*pN_1_z;
+    const double ss_0 = s_0*s_0;
+    const double x4 = c_0*s_0;
+    const double sc_0 = x4;
+    const double IzA_0_11 = IaA_0_11 - IaA_0_11*ss_0;
+    const double IzB_0_00 = -IaB_0_10*x4;
+    const double IzB_0_10 = IaB_0_10*(c_0*c_0);
+    const double x5 = IaC_0_00 - IzC_1_00;
+    const double x6 = ss_0*x5;
+    const double IzC_0_00 = IaC_0_00 - x6;
+    const double IzC_0_01 = sc_0*x5;
+    const double IzC_0_02 = -IzC_1_01*s_0;
+    const double IzC_0_11 = IzC_1_00 + x6;
+    const double IzC_0_12 = IzC_1_01*c_0;
+    const double pF_0_x = c_0*paF_0_x - pF_1_y*s_0;
+    const double pF_0_z = c_0*pF_1_y + paF_0_x*s_0;
+    const double pN_0_z = c_0*paN_0_y;
+    const double Dinv_m1 = 1.0/(IzA_0_11);
+    const double W_m1_3 = Dinv_m1*IzB_0_10;
+    const double W_m1_5 = -Dinv_m1*IzB_0_00;
+    const double ud_m1 = -Dinv_m1*pN_0_z;
+    const double IaC_m1_00 = IzC_0_00 - IzB_0_10*W_m1_3;
+    const double IaC_m1_02 = IzC_0_01 + IzB_0_00*W_m1_3;
+    const double IaC_m1_22 = IzC_0_11 + IzB_0_00*W_m1_5;
+    const double paF_m1_x = pF_0_x - W_m1_3*pN_0_z;
+    const double paF_m1_z = pF_0_z - W_m1_5*pN_0_z;
+    const double Dinv_0_2 = 1.0/(IaC_m1_00);
+    const double L_1_0 = -Dinv_0_2*IzC_0_02;
+    const double D_1 = IzC_1_11 + IzC_0_02*L_1_0;
+    const double Dinv_1_2 = 1.0/(D_1);
+    const double L_2_0 = Dinv_0_2*IaC_m1_02;
+    const double u_2_1 = -IzC_0_12 - IaC_m1_02*L_1_0;
+    const double L_2_1 = Dinv_1_2*u_2_1;
+    const double D_2 = IaC_m1_22 - IaC_m1_02*L_2_0 - L_2_1*u_2_1;
+    const double Dinv_2 = 1.0/(D_2);
+    const double z_1 = pF_1_z + L_1_0*paF_m1_x;
+    const double z_2 = -paF_m1_z + L_2_0*paF_m1_x - L_2_1*z_1;
+    const double sol_2 = Dinv_2*z_2;
+    const double sol_1 = Dinv_1_2*z_1 - L_2_1*sol_2;
+    const double sol_0 = -Dinv_0_2*paF_m1_x - L_1_0*sol_1 - L_2_0*sol_2;
+    const double Xdd_0 = c_m1*sol_0 - s_m1*sol_1;
+    const double Xdd_2 = -c_m1*sol_1 - s_m1*sol_0;
+    const double acc_m1_x = Xdd_0*c_m1 - Xdd_2*s_m1;
+    const double acc_m1_y = -Xdd_0*s_m1 - Xdd_2*c_m1;
+    const double qdd_m1 = ud_m1 - W_m1_3*acc_m1_x - W_m1_5*sol_2;
+    const double alpha_0_x = qdd_m1*s_0;
+    const double alpha_0_y = c_0*qdd_m1;
+    const double acc_0_x = acc_m1_x*c_0 + s_0*sol_2;
+    const double acc_0_y = c_0*sol_2 - acc_m1_x*s_0;
+    const double qdd_0 = ud_0 - W_0_1*alpha_0_y - W_0_3*acc_0_x;
+    const double acc_1_y = -acc_0_y*s_1 - acc_m1_y*c_1;
+    const double qdd_1 = ud_1 - alpha_0_x - W_1_4*acc_1_y;
+    const double Rref_0_00 = c_0*c_m1;
+    const double Rref_0_01 = -c_m1*s_0;
+    const double Rref_0_20 = -c_0*s_m1;
+    const double Rref_0_21 = s_0*s_m1;
+    const double Rref_1_00 = Rref_0_01*c_1 + s_1*s_m1;
+    const double Rref_1_01 = c_1*s_m1 - Rref_0_01*s_1;
+    const double Rref_1_10 = c_0*c_1;
+    const double Rref_1_11 = -c_0*s_1;
+    const double Rref_1_20 = Rref_0_21*c_1 + c_m1*s_1;
+    const double Rref_1_21 = c_1*c_m1 - Rref_0_21*s_1;
+    const double wref_0_x = qd[1]*s_m1;
+    const double wref_0_z = c_m1*qd[1];
+    const double wref_1_x = wref_0_x + Rref_0_00*qd[2];
+    const double wref_1_y = qd[0] + qd[2]*s_0;
+    const double wref_1_z = wref_0_z + Rref_0_20*qd[2];
+    const double href_1_x = Rref_1_00*h_1_x;
+    const double href_1_y = Rref_1_10*h_1_x;
+    const double href_1_z = Rref_1_20*h_1_x;
+    const double wloc_1_x = Rref_1_00*wref_1_x + Rref_1_10*wref_1_y + Rref_1_20*wref_1_z;
+    const double wloc_1_y = Rref_1_01*wref_1_x + Rref_1_11*wref_1_y + Rref_1_21*wref_1_z;
+    const double wloc_1_z = Rref_0_00*wref_1_x + Rref_0_20*wref_1_z + s_0*wref_1_y;
+    y[0] = qdd_m1;
+    y[1] = qdd_0;
+    y[2] = qdd_1;
+    y[3] = Xdd_0;
+    y[4] = sol_2;
+    y[5] = Xdd_2;
+    y[6] = qd[3]*(href_1_z*wref_1_y - href_1_y*wref_1_z) + qd[4]*(href_1_x*wref_1_z - href_1_z*wref_1_x) + qd[5]*(href_1_y*wref_1_x - href_1_x*wref_1_y) + 0.5*B0_1*(qd[3]*qd[3] + qd[4]*qd[4] + qd[5]*qd[5]) + 0.5*K_1_xx*(wloc_1_x*wloc_1_x) + 0.5*K_1_yy*(wloc_1_y*wloc_1_y) + 0.5*K_1_zz*(wloc_1_z*wloc_1_z);
+    y[7] = p[0]*(href_1_y + B0_1*q[4]);
+}
+
 /* ---- kernel forward_dynamics ---- */
 /* Theta_ddot solving I_f Theta_ddot = R, by an O(n) articulated-body recursion.  230 ops (74 add, 144 mul, 6 div, 6 calls) */
 void paper_case2_b_forward_dynamics(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT qdd)
@@ -1308,6 +1467,166 @@ void paper_case2_b_power(const double *GAC_RESTRICT q, const double *GAC_RESTRIC
     P[1] = 0.0;
 }
 
+/* ---- kernel forward_dynamics_energy ---- */
+/* y[0..NQ-1] = Theta_ddot (as forward_dynamics), y[NQ] = T, y[NQ+1] = V (as energy).  311 ops (99 add, 200 mul, 6 div, 6 calls) */
+void paper_case2_b_forward_dynamics_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT y)
+{
+    (void)q;
+    (void)qd;
+    (void)u;
+    (void)p;
+    const double c_m1 = cos(q[0]);
+    const double s_m1 = sin(q[0]);
+    const double c_0 = cos(q[1]);
+    const double s_0 = sin(q[1]);
+    const double c_1 = cos(q[2]);
+    const double s_1 = sin(q[2]);
+    const double B0_1 = p[1]*p[2];
+    const double h_1_x = 0.5*p[2]*(p[1]*p[1]);
+    const double B2_1 = 0.3333333333333333*p[2]*(p[1]*p[1]*p[1]);
+    const double K_1_xx = p[1]*p[3];
+    const double K_1_yy = B2_1 + p[1]*p[4];
+    const double K_1_zz = B2_1 + p[1]*p[5];
+    const double av_m1_x = -p[0]*s_m1;
+    const double av_m1_y = -c_m1*p[0];
+    const double wp_0_x = qd[0]*s_0;
+    const double wp_0_y = c_0*qd[0];
+    const double wdv_0_x = qd[1]*wp_0_y;
+    const double wdv_0_y = -qd[1]*wp_0_x;
+    const double av_0_x = av_m1_x*c_0;
+    const double av_0_y = -av_m1_x*s_0;
+    const double wp_1_x = c_1*wp_0_y + qd[1]*s_1;
+    const double wp_1_y = c_1*qd[1] - s_1*wp_0_y;
+    const double w_1_z = qd[2] + wp_0_x;
+    const double wdv_1_x = c_1*wdv_0_y + qd[2]*wp_1_y;
+    const double wdv_1_y = -qd[2]*wp_1_x - s_1*wdv_0_y;
+    const double av_1_x = av_0_y*c_1 - av_m1_y*s_1;
+    const double av_1_y = -av_0_y*s_1 - av_m1_y*c_1;
+    const double hw_1_y = -h_1_x*w_1_z;
+    const double hw_1_z = h_1_x*wp_1_y;
+    const double S_1_x = B0_1*av_1_x + hw_1_y*w_1_z - hw_1_z*wp_1_y;
+    const double S_1_y = B0_1*av_1_y + h_1_x*wdv_0_x + hw_1_z*wp_1_x;
+    const double S_1_z = B0_1*av_0_x - h_1_x*wdv_1_y - hw_1_y*wp_1_x;
+    const double Kw_1_x = K_1_xx*wp_1_x;
+    const double Kw_1_y = K_1_yy*wp_1_y;
+    const double Kw_1_z = K_1_zz*w_1_z;
+    const double T_1_x = K_1_xx*wdv_1_x + Kw_1_z*wp_1_y - Kw_1_y*w_1_z;
+    const double T_1_y = K_1_yy*wdv_1_y + Kw_1_x*w_1_z - Kw_1_z*wp_1_x - av_0_x*h_1_x;
+    const double T_1_z = K_1_zz*wdv_0_x + Kw_1_y*wp_1_x + av_1_y*h_1_x - Kw_1_x*wp_1_y;
+    const double Dinv_1 = 1.0/(K_1_zz);
+    const double W_1_4 = Dinv_1*h_1_x;
+    const double ud_1 = -Dinv_1*T_1_z;
+    const double IaC_1_11 = B0_1 - W_1_4*h_1_x;
+    const double paF_1_y = S_1_y - T_1_z*W_1_4;
+    const double ss_1 = s_1*s_1;
+    const double sc_1 = c_1*s_1;
+    const double x0 = K_1_xx - K_1_yy;
+    const double x1 = ss_1*x0;
+    const double IzA_1_00 = K_1_xx - x1;
+    const double IzA_1_01 = sc_1*x0;
+    const double IzA_1_11 = K_1_yy + x1;
+    const double IzB_1_02 = h_1_x*s_1;
+    const double IzB_1_12 = -c_1*h_1_x;
+    const double x2 = B0_1 - IaC_1_11;
+    const double x3 = ss_1*x2;
+    const double IzC_1_00 = B0_1 - x3;
+    const double IzC_1_01 = sc_1*x2;
+    const double IzC_1_11 = IaC_1_11 + x3;
+    const double pF_1_y = S_1_x*c_1 - paF_1_y*s_1;
+    const double pF_1_z = S_1_x*s_1 + c_1*paF_1_y;
+    const double pN_1_y = T_1_x*c_1 - T_1_y*s_1;
+    const double pN_1_z = T_1_x*s_1 + T_1_y*c_1;
+    const double Dinv_0 = 1.0/(IzA_1_11);
+    const double W_0_1 = Dinv_0*IzA_1_01;
+    const double W_0_3 = Dinv_0*IzB_1_12;
+    const double ud_0 = -Dinv_0*pN_1_z;
+    const double IaA_0_11 = IzA_1_00 - IzA_1_01*W_0_1;
+    const double IaB_0_10 = IzB_1_02 - IzB_1_12*W_0_1;
+    const double IaC_0_00 = B0_1 - IzB_1_12*W_0_3;
+    const double paN_0_y = pN_1_y - W_0_1*pN_1_z;
+    const double paF_0_x = S_1_z - W_0_3*pN_1_z;
+    const double ss_0 = s_0*s_0;
+    const double x4 = c_0*s_0;
+    const double sc_0 = x4;
+    const double IzA_0_11 = IaA_0_11 - IaA_0_11*ss_0;
+    const double IzB_0_00 = -IaB_0_10*x4;
+    const double IzB_0_10 = IaB_0_10*(c_0*c_0);
+    const double x5 = IaC_0_00 - IzC_1_00;
+    const double x6 = ss_0*x5;
+    const double IzC_0_00 = IaC_0_00 - x6;
+    const double IzC_0_01 = sc_0*x5;
+    const double IzC_0_02 = -IzC_1_01*s_0;
+    const double IzC_0_11 = IzC_1_00 + x6;
+    const double IzC_0_12 = IzC_1_01*c_0;
+    const double pF_0_x = c_0*paF_0_x - pF_1_y*s_0;
+    const double pF_0_z = c_0*pF_1_y + paF_0_x*s_0;
+    const double pN_0_z = c_0*paN_0_y;
+    const double Dinv_m1 = 1.0/(IzA_0_11);
+    const double W_m1_3 = Dinv_m1*IzB_0_10;
+    const double W_m1_5 = -Dinv_m1*IzB_0_00;
+    const double ud_m1 = -Dinv_m1*pN_0_z;
+    const double IaC_m1_00 = IzC_0_00 - IzB_0_10*W_m1_3;
+    const double IaC_m1_02 = IzC_0_01 + IzB_0_00*W_m1_3;
+    const double IaC_m1_22 = IzC_0_11 + IzB_0_00*W_m1_5;
+    const double paF_m1_x = pF_0_x - W_m1_3*pN_0_z;
+    const double paF_m1_z = pF_0_z - W_m1_5*pN_0_z;
+    const double Dinv_0_2 = 1.0/(IaC_m1_00);
+    const double L_1_0 = -Dinv_0_2*IzC_0_02;
+    const double D_1 = IzC_1_11 + IzC_0_02*L_1_0;
+    const double Dinv_1_2 = 1.0/(D_1);
+    const double L_2_0 = Dinv_0_2*IaC_m1_02;
+    const double u_2_1 = -IzC_0_12 - IaC_m1_02*L_1_0;
+    const double L_2_1 = Dinv_1_2*u_2_1;
+    const double D_2 = IaC_m1_22 - IaC_m1_02*L_2_0 - L_2_1*u_2_1;
+    const double Dinv_2 = 1.0/(D_2);
+    const double z_1 = pF_1_z + L_1_0*paF_m1_x;
+    const double z_2 = -paF_m1_z + L_2_0*paF_m1_x - L_2_1*z_1;
+    const double sol_2 = Dinv_2*z_2;
+    const double sol_1 = Dinv_1_2*z_1 - L_2_1*sol_2;
+    const double sol_0 = -Dinv_0_2*paF_m1_x - L_1_0*sol_1 - L_2_0*sol_2;
+    const double Xdd_0 = c_m1*sol_0 - s_m1*sol_1;
+    const double Xdd_1 = -c_m1*sol_1 - s_m1*sol_0;
+    const double acc_m1_x = Xdd_0*c_m1 - Xdd_1*s_m1;
+    const double acc_m1_y = -Xdd_0*s_m1 - Xdd_1*c_m1;
+    const double qdd_m1 = ud_m1 - W_m1_3*acc_m1_x - W_m1_5*sol_2;
+    const double alpha_0_x = qdd_m1*s_0;
+    const double alpha_0_y = c_0*qdd_m1;
+    const double acc_0_x = acc_m1_x*c_0 + s_0*sol_2;
+    const double acc_0_y = c_0*sol_2 - acc_m1_x*s_0;
+    const double qdd_0 = ud_0 - W_0_1*alpha_0_y - W_0_3*acc_0_x;
+    const double acc_1_y = -acc_0_y*s_1 - acc_m1_y*c_1;
+    const double qdd_1 = ud_1 - alpha_0_x - W_1_4*acc_1_y;
+    const double Rref_0_00 = c_0*c_m1;
+    const double Rref_0_01 = -c_m1*s_0;
+    const double Rref_0_10 = -c_0*s_m1;
+    const double Rref_0_11 = s_0*s_m1;
+    const double Rref_1_00 = Rref_0_01*c_1 + s_1*s_m1;
+    const double Rref_1_01 = c_1*s_m1 - Rref_0_01*s_1;
+    const double Rref_1_10 = Rref_0_11*c_1 + c_m1*s_1;
+    const double Rref_1_11 = c_1*c_m1 - Rref_0_11*s_1;
+    const double Rref_1_20 = -c_0*c_1;
+    const double Rref_1_21 = c_0*s_1;
+    const double wref_0_x = qd[1]*s_m1;
+    const double wref_0_y = c_m1*qd[1];
+    const double wref_1_x = wref_0_x + Rref_0_00*qd[2];
+    const double wref_1_y = wref_0_y + Rref_0_10*qd[2];
+    const double wref_1_z = -qd[0] - qd[2]*s_0;
+    const double href_1_x = Rref_1_00*h_1_x;
+    const double href_1_y = Rref_1_10*h_1_x;
+    const double href_1_z = Rref_1_20*h_1_x;
+    const double wloc_1_x = Rref_1_00*wref_1_x + Rref_1_10*wref_1_y + Rref_1_20*wref_1_z;
+    const double wloc_1_y = Rref_1_01*wref_1_x + Rref_1_11*wref_1_y + Rref_1_21*wref_1_z;
+    const double wloc_1_z = Rref_0_00*wref_1_x + Rref_0_10*wref_1_y - s_0*wref_1_z;
+    y[0] = qdd_m1;
+    y[1] = qdd_0;
+    y[2] = qdd_1;
+    y[3] = Xdd_0;
+    y[4] = Xdd_1;
+    y[5] = -sol_2;
+    y[6] = qd[3]*(href_1_z*wref_1_y - href_1_y*wref_1_z) + qd[4]*(href_1_x*wref_1_z - href_1_z*wref_1_x) + qd[5]*(href_1_y*wref_1_x - href_1_x*wref_1_y) + 0.5*B0_1*(qd[3]*qd[3] + qd[4]*qd[4] + qd[5]*qd[5]) + 0.5*K_1_xx*(wloc_1_x*wloc_1_x) + 0.5*K_1_yy*(wloc_1_y*wloc_1_y) + 0.5*K_1_zz*(wloc_1_z*wloc_1_z);
+    y[7] = p[0]*(href_1_y + B0_1*q[4]);
+}
+
 /* ---- end of kernels ---- */
 void paper_case2_rhs(double t, const double *GAC_RESTRICT x, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p,
                  double *GAC_RESTRICT xdot)
@@ -1410,7 +1729,7 @@ static void paper_case2_b_rhs(double t, const double *GAC_RESTRICT x, const doub
 }
 
 /* Chart B's start: the scene's initial state on chart B. */
-static const double paper_case2_b_q0[PAPER_CASE2_NQ] = { 0.0, 0.5235987755982987, 2.0943951023931953, 0.1, 0.4, 0.1 };
+static const double paper_case2_b_q0[PAPER_CASE2_NQ] = { 0.0, 0.5235987755982987, 2.0943951023931957, 0.1, 0.4, 0.1 };
 static const double paper_case2_b_qd0[PAPER_CASE2_NQ] = { -0.0, 0.0, 0.0, 0.0, 0.0, 0.0 };
 
 static const gac_model paper_case2_model_b = {
@@ -1426,6 +1745,7 @@ static const gac_model paper_case2_model_b = {
     .contact_points = paper_case2_b_contact_points, .contact_velocities = paper_case2_b_contact_velocities,
     .contact_generalized_force = paper_case2_b_contact_generalized_force, .contact_gaps = paper_case2_b_contact_gaps,
     .contact_bias = paper_case2_b_contact_bias, .energy = paper_case2_b_energy, .rhs = paper_case2_b_rhs,
+    .forward_dynamics_energy = paper_case2_b_forward_dynamics_energy,
     .power = 0,
     .check_parameters = paper_case2_check_parameters, .parameter_info = paper_case2_parameter_info,
     .weight_scale = paper_case2_weight_scale,
@@ -1447,6 +1767,7 @@ const gac_model paper_case2_model = {
     .contact_points = paper_case2_contact_points, .contact_velocities = paper_case2_contact_velocities,
     .contact_generalized_force = paper_case2_contact_generalized_force, .contact_gaps = paper_case2_contact_gaps,
     .contact_bias = paper_case2_contact_bias, .energy = paper_case2_energy, .rhs = paper_case2_rhs,
+    .forward_dynamics_energy = paper_case2_forward_dynamics_energy,
     .power = 0,   /* no inputs, springs or dampers: only gravity works in flight */
     .check_parameters = paper_case2_check_parameters, .parameter_info = paper_case2_parameter_info,
     .weight_scale = paper_case2_weight_scale,

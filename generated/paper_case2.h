@@ -99,6 +99,7 @@
  *   energy                  100 = 27 add + 67 mul + 0 div + 6 calls
  *   contact_bias             74 = 22 add + 46 mul + 0 div + 6 calls
  *   power                     0 = 0 add + 0 mul + 0 div + 0 calls
+ *   forward_dynamics_energy    305 = 97 add + 196 mul + 6 div + 6 calls
  *
  * USING IT
  *   paper_case2_options opt;  paper_case2_sim sim;  paper_case2_impact_record rec;  int code;
@@ -292,6 +293,15 @@ void paper_case2_contact_bias(const double *GAC_RESTRICT q, const double *GAC_RE
  *   P    out: P[0] power of the inputs, P[1] dissipation of the dampers (W)
  *   2 outputs.   0 ops (0 add, 0 mul, 0 div, 0 calls) */
 void paper_case2_power(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT P);
+
+/* y[0..NQ-1] = Theta_ddot (as forward_dynamics), y[NQ] = T, y[NQ+1] = V (as energy).
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   u    in : inputs (NU, layout in the header; N m on an angle, N on a translation; NULL when NU = 0)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   y    out: NQ + 2: qdd (NQ; rad/s^2, m/s^2), then T and V (J)
+ *   8 outputs.   305 ops (97 add, 196 mul, 6 div, 6 calls) */
+void paper_case2_forward_dynamics_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT y);
 
 /* ODE right-hand side of the flight phase.
  *   t            time (s), unused

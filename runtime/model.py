@@ -165,6 +165,12 @@ class CompiledModel:
         return self._call("forward_dynamics", self.nq, self._vec(q, self.nq, "q"),
                           self._vec(qd, self.nq, "qd"), self._inputs(u), self._params(p))
 
+    def forward_dynamics_energy(self, q, qd, p=None, u=None) -> tuple[np.ndarray, float, float]:
+        """forward_dynamics and energy at one state in one call: (qdd, T, V)."""
+        y = self._call("forward_dynamics_energy", self.nq + 2, self._vec(q, self.nq, "q"),
+                       self._vec(qd, self.nq, "qd"), self._inputs(u), self._params(p))
+        return y[:self.nq], float(y[self.nq]), float(y[self.nq + 1])
+
     def rhs(self, t: float, x, p=None, u=None) -> np.ndarray:
         x = self._vec(x, 2 * self.nq, "x")
         out = np.zeros(2 * self.nq)

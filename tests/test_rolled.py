@@ -93,6 +93,8 @@ def test_rolled_equals_unrolled_and_the_reference(case):
     loops = load_model(scene, specialise=False, dense=False, rolled=True)
     straight = load_model(scene, specialise=False, dense=False, rolled=False)
     assert "in loops" in summary(loops) and "in loops" not in summary(straight)
+    generated = [{f.name for f in model.generated.functions} for model in (loops, straight)]
+    assert "forward_dynamics_energy" not in generated[0] and "forward_dynamics_energy" in generated[1]
     names = scene.parameter_names()
     rng = np.random.default_rng(len(case))
     for trial in range(4):
@@ -102,6 +104,11 @@ def test_rolled_equals_unrolled_and_the_reference(case):
         u = rng.normal(size=scene.nu) * 3
         a, b = loops.forward_dynamics(q, qd, p, u), straight.forward_dynamics(q, qd, p, u)
         assert rel(a, b) < 1e-12
+        for model in (loops, straight):       # forward_dynamics_energy: formed by the library, and generated
+            qdd, T, V = model.forward_dynamics_energy(q, qd, p, u)
+            E = model.energy(q, qd, p)
+            assert rel(qdd, model.forward_dynamics(q, qd, p, u)) < 1e-12
+            assert abs(T - E[0]) + abs(V - E[1]) < 1e-12 * (E[0] + abs(E[1]))
         springs = {k: (p[names.index(f"stiffness_{k}")], p[names.index(f"rest_angle_{k}")])
                    for k, j in enumerate(scene.joints, start=2) if j.stiffness is not None}
         dampers = {k: p[names.index(f"damping_{k}")] for k, j in enumerate(scene.joints, start=2) if j.damping}

@@ -240,6 +240,9 @@ struct gac_model {
     gac_kernel_qqd energy;             /* q, qd, p -> E[0] kinetic, E[1] potential energy (J), joint springs
                                           included */
     gac_kernel_rhs rhs;                /* t, x, u, p -> xdot = [qd, qdd] (nx); t unused */
+    gac_kernel_qqdu forward_dynamics_energy; /* q, qd, u, p -> [qdd (nq), T, V]: forward_dynamics and energy in
+                                          one call (the loop's derivative at a step's end, where it also wants the
+                                          energy); NULL: none (the loop calls the two) */
     gac_kernel_qqdu power;             /* q, qd, u, p -> P[0] power of the inputs, P[1] dissipation of the
                                           dampers (W, >= 0); NULL: nothing in flight does work but gravity */
     double friction_velocity;          /* v_s (m/s, > 0 when a contact has friction): a resting point slides against
@@ -279,6 +282,11 @@ int gac_in_range(double value, double lo, double hi);
  * moments a <= b <= c (eigenvalues by cyclic Jacobi rotations) have a >= -tol and a + b >= c - tol,
  * tol = 1e-12 max(1, c), the scene loader's test; else 0.  The six entries must be finite. */
 int gac_inertia_admissible(const double *I);
+
+/* y = [qdd (nq), T, V] at (q, qd): m->forward_dynamics_energy, or where the model has none (its forward dynamics
+ * rolled code) m->forward_dynamics and m->energy. */
+void gac_forward_dynamics_energy(const gac_model *m, const double *q, const double *qd, const double *u,
+                                 const double *p, double *y);
 
 /* ---- the dense matrices, formed from the kernels' O(n) operators (O(n^2) each; for analysis) -------- */
 
@@ -613,7 +621,8 @@ typedef struct {
     double *gap_held;            /* gap (m) a persistent contact is held at: its gap when it landed (within
                                     contact_tol, or the integration's position error below its wall) */
     double energy_x;             /* J: T + V at x (kept by gac_energy_check) */
-    double energy_x1[2];         /* J: T and V at the last step's end x1, if energy_x1_valid (the step's energy error) */
+    double energy_x1[2];         /* J: T and V at s->x1 (a step's end, or the state an impact left), if
+                                    energy_x1_valid */
     int energy_x1_valid;
     double energy_tol;           /* resolved opt.energy_tol (0: off) */
 } gac_sim;

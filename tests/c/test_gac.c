@@ -191,6 +191,23 @@ static const gac_model box = {
     .contact_bias = box_jbias, .energy = box_energy, .rhs = box_rhs
 };
 
+/* box_fused: the box with a fused forward_dynamics_energy kernel (counting its calls); the loop takes the energy at
+ * each step's end from it and must end where the box does, bit for bit. */
+static long fused_calls;
+static void box_fde(const double *q, const double *qd, const double *u, const double *p, double *y)
+{
+    ++fused_calls;
+    box_fd(q, qd, u, p, y);
+    box_energy(q, qd, p, y + 2);
+}
+
+static gac_model box_with_fused(void)
+{
+    gac_model m = box;
+    m.forward_dynamics_energy = box_fde;
+    return m;
+}
+
 /* ---- sled: the box's point on a rough floor, p = [g, m, e, mu]; friction along x (row 0) ------------------ */
 static void sled_gaps(const double *q, const double *p, double *gap)
 {
@@ -467,6 +484,42 @@ static int run_box_to_end(gac_sim *sim, gac_impact_record *rec)
     }
     return code;
 }
+
+/* The fused kernel: gac_forward_dynamics_energy formed (the box has none) and called (box_fused); a run on the
+ * fused model ends where the box's does, bit for bit, with the same energy balance, one fused call per step. */
+static void test_fused_kernel(void)
+{
+    const gac_model fused = box_with_fused();
+    const double q[2] = {0.3, 1.7}, qd[2] = {-0.4, 2.5};
+    double y[4], z[4], E[2];
+    static double dwork_b[NDOUBLE];
+    static int iwork_b[NINT];
+    gac_sim a, b;
+    gac_impact_record rec;
+    int code_a, code_b, i, same = 1;
+    gac_forward_dynamics_energy(&box, q, qd, 0, box_p, y);
+    box_fd(q, qd, 0, box_p, z);
+    box_energy(q, qd, box_p, E);
+    CHECK(y[0] == z[0] && y[1] == z[1] && y[2] == E[0] && y[3] == E[1], "formed: forward_dynamics, then energy");
+    fused_calls = 0;
+    gac_forward_dynamics_energy(&fused, q, qd, 0, box_p, y);
+    CHECK(fused_calls == 1 && y[2] == E[0] && y[3] == E[1], "the model's own kernel called");
+    CHECK(gac_model_check(&fused) == GAC_OK, "a model with a fused kernel is consistent");
+    gac_record_bind(&rec, &box, rdwork, riwork);
+    code_a = gac_sim_init(&a, &box, dwork, iwork, 0.0, box_q0, box_qd0, 0, 0);
+    code_a = code_a == GAC_OK ? run_box_to_end(&a, &rec) : code_a;
+    fused_calls = 0;
+    code_b = gac_sim_init(&b, &fused, dwork_b, iwork_b, 0.0, box_q0, box_qd0, 0, 0);
+    code_b = code_b == GAC_OK ? run_box_to_end(&b, &rec) : code_b;
+    for (i = 0; i < 4; ++i) same &= a.x[i] == b.x[i];
+    CHECK(code_a == GAC_SIM_END && code_b == GAC_SIM_END && same && a.t == b.t, "same end: %d %d", code_a, code_b);
+    CHECK(a.n_rhs == b.n_rhs && a.n_steps == b.n_steps && a.energy_residual == b.energy_residual,
+          "same counts and balance: rhs %ld %ld, residual %.17g %.17g", a.n_rhs, b.n_rhs, a.energy_residual,
+          b.energy_residual);
+    CHECK(fused_calls == b.n_steps + b.n_rejected, "one fused call per step tried: %ld, steps %ld + %ld rejected",
+          fused_calls, b.n_steps, b.n_rejected);
+}
+
 
 static void test_budget_and_progress(void)
 {
@@ -1084,6 +1137,7 @@ int main(int argc, char **argv)
     test_ball(GAC_METHOD_DOP853);
     test_ball(GAC_METHOD_RK4);
     test_box();
+    test_fused_kernel();
     test_sled();
     test_budget_and_progress();
     test_inputs();

@@ -1,4 +1,15 @@
-"""Shared helpers: random scenes, their reference model, and compiled models (cached per session)."""
+"""Shared helpers: the suite's fixed scenes, random parameters and states, the reference model, and the models
+of a scene -- derived (run as Python, no C; tests/derived.py) or compiled -- made once per session.
+
+Tiers (file name prefixes): test_scene_* (scene description), test_derive_* (the derivation, evaluated as Python
+against the independent reference model, no C), test_build_* (generated C text, compile, C API), test_sim_*
+(the hybrid simulation), test_tools_* (command lines, FMU, exports, reports), test_docs.py.
+
+Compiled models are the expensive part (a derivation and a C compile each), so tests take one of the fixed
+scenes of ``chain`` and vary the links through random parameter vectors (``random_parameters``: lengths,
+masses, centres of mass, inertias and gravity are the runtime array p) and random states, not a new scene per
+case.  The same ``chain`` arguments give the same scene in every test file and worker, so each model is built
+once and shared through the on-disk cache."""
 from __future__ import annotations
 
 import sys
@@ -52,7 +63,42 @@ def random_parameters(scene: Scene, seed: int) -> np.ndarray:
     return p
 
 
+KIND_CODES = {("line",): 0, ("rigid",): 1, ("line", "rigid"): 2, ("rigid", "line"): 3}
+
+
+def chain(n: int, kinds=("line",), twists: bool = False, walls: bool = True) -> Scene:
+    """One of the suite's fixed scenes: ``n`` links of ``kinds`` (cycled along the chain), random (but fixed)
+    twists T_2..T_n if ``twists``, fixed gravity and, if ``walls``, all six walls far away.  Vary the links of
+    a test case with ``random_parameters(scene, seed)``; twists are built into the model, not parameters."""
+    kinds = tuple(kinds)
+    twists = bool(twists) and n >= 2
+    seed = 5000 + 100 * n + 10 * KIND_CODES[kinds] + 2 * twists + (not walls)
+    name = f"chain{n}_{'_'.join(kinds)}" + ("_tw" if twists else "") + ("" if walls else "_open")
+    return random_scene(n, seed, random_twists=twists, kinds=kinds, name=name, walls=walls)
+
+
+def random_states(n: int, seed: int, count: int):
+    """``count`` random (q, qd) of an n-link chain (studies.reference.random_state), from one seed."""
+    rng = np.random.default_rng(seed)
+    return [reference.random_state(n, rng) for _ in range(count)]
+
+
 _MODELS = {}
+_DERIVED = {}
+
+
+@pytest.fixture(scope="session")
+def derived():
+    """derived(scene, specialise=False, bake_params=False) -> tests/derived.DerivedModel: the scene's kernels
+    as derived and flattened, run as Python (no C), each kernel made once per session."""
+    from derived import DerivedModel
+
+    def get(scene: Scene, specialise: bool = False, bake_params: bool = False):
+        key = (scene, specialise, bake_params)
+        if key not in _DERIVED:
+            _DERIVED[key] = DerivedModel(scene, specialise=specialise, bake_params=bake_params)
+        return _DERIVED[key]
+    return get
 
 
 @pytest.fixture(scope="session")

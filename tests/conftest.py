@@ -12,6 +12,8 @@ case.  The same ``chain`` arguments give the same scene in every test file and w
 once and shared through the on-disk cache."""
 from __future__ import annotations
 
+import dataclasses
+import math
 import sys
 from pathlib import Path
 
@@ -20,7 +22,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))      # for `from conftest import ...`
 
-from codegen.scene import LineLink, RigidLink, Scene, Wall, WALL_NAMES  # noqa: E402
+from codegen.scene import Joint, LineLink, RigidLink, Scene, Wall, WALL_NAMES, contact_points  # noqa: E402
 from studies import reference  # noqa: E402
 from studies.reference import reference_of, with_parameters  # noqa: E402,F401
 
@@ -63,6 +65,38 @@ def random_parameters(scene: Scene, seed: int) -> np.ndarray:
     return p
 
 
+def rz(angle):
+    c, s = math.cos(angle), math.sin(angle)
+    return ((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0))
+
+
+def random_planar_scene(n, seed, normal_axis):
+    """A planar chain (joint axes along X3 or X1), in-plane centres of mass, in-plane spin and drift,
+    a floor 0.2 m under its lowest point."""
+    rng = np.random.default_rng(seed)
+    links = []
+    for i in range(n):
+        if i % 2:
+            l, m = rng.uniform(0.3, 1.0), rng.uniform(0.2, 2.0)
+            Ixx, Iyy, Izz, Ixy = 0.01 * m, 0.02 * m, 0.025 * m, 0.003 * m
+            links.append(RigidLink(l, m, (l * rng.uniform(0.2, 0.8), 0.05 * l, 0.0),
+                                   ((Ixx, Ixy, 0.0), (Ixy, Iyy, 0.0), (0.0, 0.0, Izz))))
+        else:
+            links.append(LineLink(rng.uniform(0.3, 1.0), rng.uniform(0.5, 2.0), tuple(rng.uniform(1e-5, 1e-3, 3))))
+    theta_m1 = -math.pi / 2 if normal_axis == 2 else 0.0
+    q = [theta_m1, 0.0] + list(rng.uniform(-1.5, 1.5, n)) + [0.0, 0.0, 0.0]
+    qd = [0.0, 0.0] + list(rng.normal(0, 2.0, n)) + [0.0, 0.0, 0.0]
+    for axis in (0, 1, 2):
+        if axis != normal_axis:
+            qd[n + 2 + axis] = -abs(rng.normal()) if axis == 1 else rng.normal()   # heading for the floor
+    twists = tuple(rz(a) for a in rng.uniform(-1, 1, n - 1))
+    probe = Scene(name="probe", links=tuple(links), twists=twists, q0=tuple(q), qd0=tuple(qd))
+    floor = contact_points(probe, np.array(q))[:, 1].min() - 0.2
+    walls = (Wall("x2_min", floor, 0.8), Wall(f"x{3 - normal_axis}_min", -20.0), Wall(f"x{normal_axis + 1}_max", 5.0))
+    return Scene(name=f"planar{n}_{seed}", links=tuple(links), twists=twists, walls=walls, q0=tuple(q),
+                 qd0=tuple(qd), gravity=9.81)
+
+
 KIND_CODES = {("line",): 0, ("rigid",): 1, ("line", "rigid"): 2, ("rigid", "line"): 3}
 
 
@@ -77,6 +111,25 @@ def chain(n: int, kinds=("line",), twists: bool = False, walls: bool = True) -> 
     return random_scene(n, seed, random_twists=twists, kinds=kinds, name=name, walls=walls)
 
 
+INPUTS_3D = ("theta_-1", "theta_0", "theta_1", "theta_2", "theta_3", "X1", "X2", "X3")
+
+
+def driven(scene: Scene, seed: int, inputs=INPUTS_3D) -> Scene:
+    """The scene with a random spring and damper on every joint and the given inputs (those it has)."""
+    rng = np.random.default_rng(seed)
+    joints = tuple(Joint(rng.uniform(0.5, 20.0), rng.uniform(-1, 1), rng.uniform(0.1, 3.0))
+                   for _ in range(scene.n - 1))
+    exists = [i for i in inputs if not i.startswith("theta_") or int(i[6:]) <= scene.n]
+    return dataclasses.replace(scene, joints=joints, inputs=tuple(exists))
+
+
+def driven_free_chain() -> Scene:
+    """The suite's fixed driven scene: 3 twisted links (rigid, slender, rigid), springs and dampers on both
+    joints, inputs on theta_2 and theta_3, no walls, g = 0 and a random start velocity."""
+    scene = driven(chain(3, ("rigid", "line"), twists=True, walls=False), seed=91, inputs=("theta_2", "theta_3"))
+    return dataclasses.replace(scene, gravity=0.0, qd0=tuple(np.random.default_rng(91).normal(size=8)))
+
+
 def random_states(n: int, seed: int, count: int):
     """``count`` random (q, qd) of an n-link chain (studies.reference.random_state), from one seed."""
     rng = np.random.default_rng(seed)
@@ -89,27 +142,28 @@ _DERIVED = {}
 
 @pytest.fixture(scope="session")
 def derived():
-    """derived(scene, specialise=False, bake_params=False) -> tests/derived.DerivedModel: the scene's kernels
-    as derived and flattened, run as Python (no C), each kernel made once per session."""
+    """derived(scene, specialise=False, bake_params=False, formulation="gibbs_appell") -> tests/derived.DerivedModel:
+    the scene's kernels as derived and flattened, run as Python (no C), each kernel made once per session."""
     from derived import DerivedModel
 
-    def get(scene: Scene, specialise: bool = False, bake_params: bool = False):
-        key = (scene, specialise, bake_params)
+    def get(scene: Scene, specialise: bool = False, bake_params: bool = False, formulation: str = "gibbs_appell"):
+        key = (scene, specialise, bake_params, formulation)
         if key not in _DERIVED:
-            _DERIVED[key] = DerivedModel(scene, specialise=specialise, bake_params=bake_params)
+            _DERIVED[key] = DerivedModel(scene, specialise=specialise, bake_params=bake_params,
+                                         formulation=formulation)
         return _DERIVED[key]
     return get
 
 
 @pytest.fixture(scope="session")
 def compiled():
-    """compiled(scene, bake_params=False, specialise=False) -> runtime.CompiledModel, built once per
+    """compiled(scene, bake_params=False, specialise=False, dense=None) -> runtime.CompiledModel, built once per
     session.  Tests get the general model unless they ask for the specialised one."""
     from runtime import load_model
 
-    def get(scene: Scene, bake_params: bool = False, specialise: bool = False):
-        key = (scene, bake_params, specialise)
+    def get(scene: Scene, bake_params: bool = False, specialise: bool = False, dense=None):
+        key = (scene, bake_params, specialise, dense)
         if key not in _MODELS:
-            _MODELS[key] = load_model(scene, bake_params=bake_params, specialise=specialise)
+            _MODELS[key] = load_model(scene, bake_params=bake_params, specialise=specialise, dense=dense)
         return _MODELS[key]
     return get

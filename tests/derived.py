@@ -12,7 +12,7 @@ import numpy as np
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
-from codegen import kernels as kernel_builders
+from codegen import kernels as kernel_builders, lagrange
 from codegen.flatten import flatten
 from codegen.kinematics import ChainSymbols
 from codegen.specialise import layout_for
@@ -42,10 +42,13 @@ _FUNCTIONS: dict[tuple, object] = {}
 
 
 class DerivedModel:
-    """The kernels of ``scene`` as derived (no C): the subset of CompiledModel's kernel calls."""
+    """The kernels of ``scene`` as derived (no C): the subset of CompiledModel's kernel calls.  ``formulation``
+    'lagrange' takes mass_matrix, bias and forward_dynamics from the Euler-Lagrange expansion (codegen.lagrange)."""
 
-    def __init__(self, scene, specialise: bool = False, bake_params: bool = False):
+    def __init__(self, scene, specialise: bool = False, bake_params: bool = False, formulation: str = "gibbs_appell"):
         self.scene, self.specialise, self.bake_params = scene, specialise, bake_params
+        self.formulation = formulation
+        self.expansion = None
         self.layout = layout_for(scene, specialise)
         self.chain = None                                  # ChainSymbols, made on first use
         self.n, self.nq = scene.n, self.layout.nq
@@ -55,12 +58,17 @@ class DerivedModel:
         self.contact_rows = list(self.layout.contact_rows)
 
     def function(self, name: str, solver: str | None = None):
-        key = (self.scene, self.specialise, self.bake_params, name, solver)
+        key = (self.scene, self.specialise, self.bake_params, self.formulation, name, solver)
         if key not in _FUNCTIONS:
             if self.chain is None:
                 self.chain = ChainSymbols(self.scene, self.bake_params, self.layout)
-            builder = getattr(kernel_builders, f"{name}_kernel")
-            kernel = builder(self.chain, solver) if solver else builder(self.chain)
+            if self.formulation == "lagrange" and name in lagrange.DYNAMICS:
+                if self.expansion is None:
+                    self.expansion = lagrange.euler_lagrange(self.chain)
+                kernel = lagrange.DYNAMICS[name](self.chain, self.expansion)
+            else:
+                builder = getattr(kernel_builders, f"{name}_kernel")
+                kernel = builder(self.chain, solver) if solver else builder(self.chain)
             _FUNCTIONS[key] = python_function(flatten(kernel), kernel.inputs)
         return _FUNCTIONS[key]
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from codegen.scene import default_scene
-from conftest import chain, random_parameters, random_states, reference_of
+from conftest import chain, driven_free_chain, random_parameters, random_states, reference_of
 
 SCENES = [chain(1), chain(3, ("rigid", "line"), twists=True), chain(4, twists=True)]
 
@@ -40,6 +40,19 @@ def test_compiled_kernels_equal_the_derived_ones_and_the_reference(compiled, der
         assert close(model.forward_dynamics(q, qd, p), ref.forward_dynamics(q, qd), 1e-9)
         assert close(model.energy(q, qd, p), ref.energy(q, qd), 1e-12)
         assert close(model.contact_points(q, p), ref.points(q), 1e-12)
+
+
+def test_compiled_driven_model_equals_the_derived_one(compiled, derived):
+    """Inputs, joint springs and dampers: the generalised forces, power and spring energy in C."""
+    scene = driven_free_chain()
+    model, expected = compiled(scene), derived(scene)
+    rng = np.random.default_rng(91)
+    for trial, (q, qd) in enumerate(random_states(3, 91, 3)):
+        p = random_parameters(scene, seed=910 + trial)
+        u = rng.normal(size=model.nu) * 3
+        for name in ("bias", "forward_dynamics", "power"):
+            assert close(getattr(model, name)(q, qd, p, u), getattr(expected, name)(q, qd, p, u), 1e-11), name
+        assert close(model.energy(q, qd, p), expected.energy(q, qd, p), 1e-13)
 
 
 def test_compiled_specialised_planar_model_equals_the_derived_one(compiled, derived):

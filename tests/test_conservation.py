@@ -5,7 +5,7 @@ from scipy.integrate import solve_ivp
 
 from studies import reference
 from codegen.scene import load_scene
-from conftest import random_scene, reference_of
+from conftest import chain, random_parameters, reference_of
 
 
 def fly(model, q, qd, t_end, p=None):
@@ -31,7 +31,7 @@ def test_energy_is_conserved_in_flight_paper_scenes(compiled, scene_name):
 
 @pytest.mark.parametrize("n", [2, 4])
 def test_energy_is_conserved_in_flight_random_3d_chain(compiled, n):
-    scene = random_scene(n, seed=60 + n, random_twists=True, kinds=("rigid", "line"))
+    scene = chain(n, ("rigid", "line"), twists=True)
     model = compiled(scene)
     q, qd = reference.random_state(n, np.random.default_rng(n))
     q[1] = 0.3                      # well away from the gimbal lock for the whole run
@@ -44,9 +44,9 @@ def test_energy_is_conserved_in_flight_random_3d_chain(compiled, n):
 
 @pytest.mark.parametrize("n", [1, 3])
 def test_linear_momentum_is_conserved_without_gravity(compiled, n):
-    scene = random_scene(n, seed=70 + n, random_twists=True, kinds=("line", "rigid"))
+    scene = chain(n, ("rigid", "line"), twists=True)
     model = compiled(scene)
-    p = scene.parameter_vector().copy()
+    p = random_parameters(scene, seed=70 + n)
     p[0] = 0.0                                  # g = 0
     ref = reference_of(scene, p)
     q, qd = reference.random_state(n, np.random.default_rng(n))
@@ -61,7 +61,7 @@ def test_linear_momentum_is_conserved_without_gravity(compiled, n):
 
 def test_momentum_check_can_fail(compiled):
     """With gravity the same check must see momentum change (the test above is not vacuous)."""
-    scene = random_scene(1, seed=71, random_twists=False)
+    scene = chain(1)
     model = compiled(scene)
     ref = reference_of(scene)
     q, qd = reference.random_state(1, np.random.default_rng(0))

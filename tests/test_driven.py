@@ -20,26 +20,10 @@ from codegen.scene import Joint, LineLink, Scene, SceneError, Wall, default_scen
 from runtime import load_model, simulate
 from runtime.inputs import InputSchedule
 from studies import reference
-from conftest import random_parameters, random_scene, reference_of
-from test_lagrange import lagrangian
-
-INPUTS_3D = ("theta_-1", "theta_0", "theta_1", "theta_2", "theta_3", "X1", "X2", "X3")
-
+from conftest import chain, driven, driven_free_chain, random_parameters, reference_of
 
 def rel_err(a, b):
     return np.abs(np.asarray(a) - b).max() / max(np.abs(b).max(), 1e-300)
-
-
-def driven(scene: Scene, seed: int, inputs=INPUTS_3D) -> Scene:
-    """The scene with a random spring and damper on every joint and the given inputs."""
-    rng = np.random.default_rng(seed)
-    joints = tuple(Joint(rng.uniform(0.5, 20.0), rng.uniform(-1, 1), rng.uniform(0.1, 3.0))
-                   for _ in range(scene.n - 1))
-    return dataclasses.replace(scene, joints=joints, inputs=tuple(i for i in inputs if _exists(i, scene.n)))
-
-
-def _exists(name: str, n: int) -> bool:
-    return not name.startswith("theta_") or int(name[6:]) <= n
 
 
 def springs_of(scene: Scene, p: np.ndarray):
@@ -54,9 +38,10 @@ def springs_of(scene: Scene, p: np.ndarray):
 
 
 @pytest.mark.parametrize("n,kinds", [(2, ("line",)), (3, ("rigid", "line")), (4, ("rigid",))])
-def test_generalised_forces_match_the_reference(compiled, n, kinds):
-    scene = driven(random_scene(n, seed=40 + n, random_twists=True, kinds=kinds), seed=n)
-    model = compiled(scene)
+def test_generalised_forces_match_the_reference(derived, n, kinds):
+    """The derivation (run as Python, no C); test_build_kernels and the runs below check the compiled C."""
+    scene = driven(chain(n, kinds, twists=True), seed=n)
+    model = derived(scene)
     assert model.nu == len(scene.inputs) >= 6
     rng = np.random.default_rng(n)
     for trial in range(4):
@@ -65,9 +50,11 @@ def test_generalised_forces_match_the_reference(compiled, n, kinds):
         for k in springs:                           # new spring and damper constants too
             springs[k] = (rng.uniform(0.5, 20), rng.uniform(-1, 1))
             dampers[k] = rng.uniform(0.1, 3)
-        p = model.parameters({**{f"stiffness_{k}": K for k, (K, _) in springs.items()},
-                              **{f"rest_angle_{k}": r for k, (_, r) in springs.items()},
-                              **{f"damping_{k}": C for k, C in dampers.items()}}, base=p)
+        names = scene.parameter_names()
+        for k, (K, rest) in springs.items():
+            p[names.index(f"stiffness_{k}")], p[names.index(f"rest_angle_{k}")] = K, rest
+        for k, C in dampers.items():
+            p[names.index(f"damping_{k}")] = C
         ref = reference_of(scene, p)
         q, qd = reference.random_state(n, rng)
         u = rng.normal(size=model.nu) * 3
@@ -88,10 +75,11 @@ def test_generalised_forces_match_the_reference(compiled, n, kinds):
         assert passive.parameter_names() == scene.parameter_names()[:len(passive.parameter_names())]
 
 
-def test_lagrangian_expansion_agrees_with_gibbs_appell(compiled):
-    """The Euler-Lagrange expansion takes the springs from their potential (dV/dq), not as torques."""
-    scene = driven(random_scene(2, seed=77, random_twists=True, kinds=("rigid",)), seed=7)
-    ga, el = compiled(scene), lagrangian(scene)
+def test_lagrangian_expansion_agrees_with_gibbs_appell(derived):
+    """The Euler-Lagrange expansion takes the springs from their potential (dV/dq), not as torques (both
+    derivations run as Python)."""
+    scene = driven(chain(2, ("rigid",), twists=True), seed=7)
+    ga, el = derived(scene), derived(scene, formulation="lagrange")
     rng = np.random.default_rng(7)
     for _ in range(4):
         q, qd = reference.random_state(2, rng)
@@ -144,9 +132,7 @@ def test_damper_decays_at_the_predicted_rate():
 
 def test_momentum_of_a_free_chain_is_kept_under_internal_torques(compiled):
     """g = 0, no walls: joint inputs (state feedback from Python), springs and dampers are internal."""
-    base = random_scene(3, seed=91, random_twists=True, kinds=("rigid", "line"), walls=False)
-    scene = dataclasses.replace(driven(base, seed=91, inputs=("theta_2", "theta_3")), gravity=0.0,
-                                qd0=tuple(np.random.default_rng(91).normal(size=8)))
+    scene = driven_free_chain()
     model = compiled(scene)
     ref = reference_of(scene)
 
@@ -359,12 +345,12 @@ def test_limits_by_parameter_are_checked():
         simulate(model, 0.1, p={"upper_2": 0.3})
 
 
-def test_stop_gaps_and_rows_match_finite_differences(compiled):
+def test_stop_gaps_and_rows_match_finite_differences(derived):
     """Each contact's gap (walls and stops) changes along its Jacobian row signed by its normal: dgap/dq =
     normal_sign J[row] (finite differences), and a stop's row has no J_dot qd term."""
-    scene = dataclasses.replace(random_scene(3, seed=55, random_twists=True),
+    scene = dataclasses.replace(chain(3, twists=True),
                                 joints=(Joint(lower=-2.0, upper=2.5, limit_restitution=0.4), Joint(upper=3.0)))
-    model = compiled(scene)
+    model = derived(scene)
     q, qd = reference.random_state(3, np.random.default_rng(5))
     q[3:5] = [0.3, -0.7]
     J, bias, h = model.contact_jacobian(q), model.contact_bias(q, qd), 1e-6

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from studies import reference
-from conftest import random_scene, reference_of
+from conftest import chain, random_parameters, reference_of
 
 
 def contact_rows(model, ref, q, active):
@@ -63,26 +63,18 @@ def reference_law(M, N, qd, e):
     return qd, F_total
 
 
-def case(n, seed, k, e_values):
-    """A random chain, state, k contacts on distinct points, and restitution from e_values."""
-    scene = random_scene(n, seed=seed, random_twists=True)
-    rng = np.random.default_rng(seed)
-    q, qd = reference.random_state(n, rng)
-    return scene, q, qd, rng
-
-
 @pytest.mark.parametrize("n,seed", [(1, 3), (2, 5), (3, 7), (4, 11)])
 def test_law_matches_the_reference_on_mixed_contact_sets(compiled, n, seed):
-    """Random sets of contacts that approach or separate, random e in [0, 1] (some exactly 0 and 1): the
-    compiled law equals the brute-force rounds of the reference model to 1e-10."""
-    scene = random_scene(n, seed=seed, random_twists=True)
+    """Random links, sets of contacts that approach or separate, random e in [0, 1] (some exactly 0 and 1):
+    the compiled law equals the brute-force rounds of the reference model to 1e-10."""
+    scene = chain(n, twists=True)
     model = compiled(scene)
-    ref = reference_of(scene)
     rng = np.random.default_rng(seed)
     names = scene.parameter_names()
     checked = 0
     for trial in range(25):
-        p = scene.parameter_vector().copy()
+        p = random_parameters(scene, seed=100 * seed + trial)
+        ref = reference_of(scene, p)
         for i, name in enumerate(names):
             if name.startswith("e_"):
                 p[i] = rng.choice([0.0, 1.0, rng.uniform()])
@@ -108,13 +100,13 @@ def test_post_conditions_on_random_contact_sets(compiled):
     """F >= 0, no contact approaches afterwards, the kinetic energy never grows, and it is kept when every
     wall has e = 1: on 200 random states and sets of 1-4 contacts (approaching, resting or separating),
     measured with the reference model."""
-    scene = random_scene(3, seed=21, random_twists=True)
+    scene = chain(3, twists=True)
     model = compiled(scene)
-    ref = reference_of(scene)
     rng = np.random.default_rng(21)
     names = scene.parameter_names()
     for trial in range(200):
-        p = scene.parameter_vector().copy()
+        p = random_parameters(scene, seed=2100 + trial)
+        ref = reference_of(scene, p)
         elastic = trial % 2 == 0
         for i, name in enumerate(names):
             if name.startswith("e_"):
@@ -138,7 +130,7 @@ def test_post_conditions_on_random_contact_sets(compiled):
 
 def test_one_round_is_eq47_when_every_approaching_contact_pushes(compiled):
     """Contacts that all approach and all push under Eq. 47: the law is Eq. 47 (the equality kernel)."""
-    scene = random_scene(2, seed=4, random_twists=True)
+    scene = chain(2, twists=True)
     model = compiled(scene)
     rng = np.random.default_rng(4)
     found = 0
@@ -163,7 +155,7 @@ def test_separating_contact_in_the_window_is_not_made_to_approach(compiled):
     """The class of a rod whose first end strikes its wall while the second, within contact_tol of the
     same wall, moves away: the second takes an impulse only if the first's impulse drives it into the wall,
     and it never leaves approaching (the printed Eq. 48 over both imposes v+ = -e v- on it: approach)."""
-    scene = random_scene(1, seed=2)
+    scene = chain(1)
     model = compiled(scene)
     ref = reference_of(scene)
     wall = "x1_min"

@@ -1,5 +1,6 @@
 """The Lagrangian expansion (codegen.lagrange) against the Gibbs-Appell kernels and the independent numpy
-model (studies/reference.py), for the general and the scene-specialised layouts, slender and rigid links."""
+model (studies/reference.py), for the general and the scene-specialised layouts, slender and rigid links.  The
+derivations run as Python (tests/derived.py); one Lagrangian model is compiled (its rhs and its C)."""
 import subprocess
 
 import numpy as np
@@ -11,8 +12,7 @@ from studies import reference
 from codegen.kinematics import ChainSymbols
 from codegen.lagrange import Differentiator, energies
 from codegen.scene import LineLink, RigidLink, Scene
-from conftest import random_parameters, random_scene, reference_of
-from test_specialise import random_planar_scene
+from conftest import chain, random_parameters, random_planar_scene, random_scene, reference_of
 from runtime.compile import LIBRARY_DIR
 
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror"]
@@ -42,13 +42,13 @@ GENERAL = [pytest.param(1, False, ("line",), id="n1-line", marks=pytest.mark.slo
 
 
 def general_scene(n, random_twists, kinds):
-    return random_scene(n, seed=80 + n, random_twists=random_twists, kinds=kinds)
+    return chain(n, kinds, random_twists)
 
 
 @pytest.mark.parametrize("n,random_twists,kinds", GENERAL)
-def test_general_layout_matches_gibbs_appell_and_reference(compiled, n, random_twists, kinds):
+def test_general_layout_matches_gibbs_appell_and_reference(derived, n, random_twists, kinds):
     scene = general_scene(n, random_twists, kinds)
-    lag, ga = lagrangian(scene), compiled(scene)
+    lag, ga = derived(scene, formulation="lagrange"), derived(scene)
     assert lag.nq == ga.nq == n + 5
     rng = np.random.default_rng(n)
     for trial in range(3):
@@ -69,10 +69,10 @@ SPECIALISED = [pytest.param(1, 2, marks=pytest.mark.slow), pytest.param(2, 0), p
 
 
 @pytest.mark.parametrize("n,normal", SPECIALISED)
-def test_specialised_layout_matches_gibbs_appell_and_reference(compiled, n, normal):
+def test_specialised_layout_matches_gibbs_appell_and_reference(derived, n, normal):
     """Planar scenes (n + 2 coordinates, zero parameters built in), rigid and slender links alternating."""
     scene = random_planar_scene(n, 90 + n, normal)
-    lag, ga = lagrangian(scene, specialise=True), compiled(scene, specialise=True)
+    lag, ga = derived(scene, specialise=True, formulation="lagrange"), derived(scene, specialise=True)
     layout = lag.layout
     assert lag.nq == ga.nq == n + 2
     assert layout.zero_params or n == 1              # rigid links (even positions) have zero cz, Ixz, Iyz
@@ -116,15 +116,15 @@ def test_differentiator_gives_sympy_diff():
         assert sp.expand(d(V, x) - sp.diff(V, x)) == 0, x
 
 
-def test_energies_match_the_energy_kernel(compiled):
+def test_energies_match_the_energy_kernel(derived):
     """T and V written out explicitly equal the model's energy kernel (a separate tape path)."""
-    scene = random_scene(2, seed=11, random_twists=True, kinds=("rigid", "line"))
-    chain = ChainSymbols(scene)
-    T, V = energies(chain)
+    scene = chain(2, ("rigid", "line"), twists=True)
+    symbols = ChainSymbols(scene)
+    T, V = energies(symbols)
     q, qd = reference.random_state(2, np.random.default_rng(11))
-    values = {chain.q[i]: q[i] for i in range(scene.nq)} | {chain.qd[i]: qd[i] for i in range(scene.nq)}
-    values |= {s: v for s, v in zip(chain.p, scene.parameter_vector()) if isinstance(s, sp.Symbol)}
-    T_model, V_model = compiled(scene).energy(q, qd)
+    values = {symbols.q[i]: q[i] for i in range(scene.nq)} | {symbols.qd[i]: qd[i] for i in range(scene.nq)}
+    values |= {s: v for s, v in zip(symbols.p, scene.parameter_vector()) if isinstance(s, sp.Symbol)}
+    T_model, V_model = derived(scene).energy(q, qd)
     assert abs(float(T.xreplace(values)) - T_model) < 1e-12 * abs(T_model)
     assert abs(float(V.xreplace(values)) - V_model) < 1e-12 * (abs(V_model) + 1)
 

@@ -11,15 +11,13 @@ import numpy as np
 import pytest
 
 from studies import reference
-from conftest import random_parameters, random_scene, reference_of
+from conftest import chain, random_parameters, reference_of
 from codegen.scene import default_scene
 from runtime import load_model, simulate
 
-CASES = [(1, ("line",)), (3, ("line", "rigid")), (6, ("rigid",))]
-
-
-def _model(scene, dense, specialise=False):
-    return load_model(scene, specialise=specialise, dense=dense)
+# (scene, dense): the generated dense kernels, or the matrices the library forms from the operators
+CASES = [(chain(1), True), (chain(3, ("rigid", "line"), twists=True), True), (chain(6, ("rigid",), twists=True), True),
+         (chain(3, ("rigid", "line"), twists=True), False), (chain(6, ("rigid",), twists=True), False)]
 
 
 def _rows(model, ref, q_full):
@@ -36,11 +34,10 @@ def _rows(model, ref, q_full):
     return np.array(rows)
 
 
-@pytest.mark.parametrize("n, kinds", CASES)
-@pytest.mark.parametrize("dense", [True, False])
-def test_operators_against_the_reference_model(n, kinds, dense):
-    scene = random_scene(n, seed=300 + n, random_twists=True, kinds=kinds)
-    model = _model(scene, dense)
+@pytest.mark.parametrize("scene, dense", CASES, ids=lambda x: getattr(x, "name", f"dense={x}"))
+def test_operators_against_the_reference_model(compiled, scene, dense):
+    n = scene.n
+    model = compiled(scene, dense=dense)
     rng = np.random.default_rng(n)
     for trial in range(3):
         p = random_parameters(scene, seed=3000 * n + trial)
@@ -66,28 +63,29 @@ def test_operators_against_the_reference_model(n, kinds, dense):
 
 
 @pytest.mark.parametrize("n", [2, 5])
-def test_momentum_is_the_gradient_of_the_kinetic_energy(n):
+def test_momentum_is_the_gradient_of_the_kinetic_energy(derived, n):
     """T is quadratic in qd, so a central difference (T(qd + s e_j) - T(qd - s e_j)) / 2s is exact up to
-    round-off for any step s: the momentum against the energy kernel, a separate derivation."""
-    scene = random_scene(n, seed=400 + n, random_twists=True, kinds=("rigid", "line"))
-    model = _model(scene, dense=False)
+    round-off for any step s: the momentum against the energy kernel, a separate derivation (no C)."""
+    scene = chain(n, ("rigid", "line"), twists=True)
+    model = derived(scene)
     rng = np.random.default_rng(40 + n)
     q, qd = reference.random_state(n, rng)
-    h = model.generalized_momentum(q, qd)
+    p = random_parameters(scene, seed=400 + n)
+    h = model.generalized_momentum(q, qd, p)
     step = 0.5
     for j in range(model.nq):
         e = np.zeros(model.nq)
         e[j] = step
-        difference = (model.energy(q, qd + e)[0] - model.energy(q, qd - e)[0]) / (2 * step)
-        assert abs(difference - h[j]) < 1e-12 * max(1.0, model.energy(q, qd)[0])
+        difference = (model.energy(q, qd + e, p)[0] - model.energy(q, qd - e, p)[0]) / (2 * step)
+        assert abs(difference - h[j]) < 1e-12 * max(1.0, model.energy(q, qd, p)[0])
 
 
 @pytest.mark.parametrize("n", [3, 7])
-def test_specialised_planar_layouts(n):
+def test_specialised_planar_layouts(compiled, n):
     """Locked coordinates (planar reduction): the operators work on the model's own coordinates."""
     scene = default_scene(n)
-    model = _model(scene, dense=False, specialise=True)
-    dense = _model(scene, dense=True, specialise=True)
+    model = compiled(scene, dense=False, specialise=True)
+    dense = compiled(scene, dense=True, specialise=True)
     rng = np.random.default_rng(n)
     q = model.q0 + rng.normal(scale=0.3, size=model.nq)
     qd = rng.normal(size=model.nq)
@@ -103,11 +101,11 @@ def test_specialised_planar_layouts(n):
     assert np.max(np.abs(model.bias(q, qd) - R)) < 1e-10 * max(1.0, np.max(np.abs(R)))
 
 
-def test_the_hybrid_loop_never_uses_the_dense_kernels():
+def test_the_hybrid_loop_never_uses_the_dense_kernels(compiled):
     """A model with and one without its dense kernels simulate the same run bit for bit: the loop applies the
     operators only."""
-    scene = default_scene(4)
-    runs = [simulate(_model(scene, dense=dense, specialise=True), 1.5) for dense in (True, False)]
+    scene = default_scene(3)
+    runs = [simulate(compiled(scene, dense=dense, specialise=True), 1.5) for dense in (True, False)]
     assert len(runs[0].impacts) > 0
     assert [i.t for i in runs[0].impacts] == [i.t for i in runs[1].impacts]
     assert np.array_equal(runs[0].q, runs[1].q) and np.array_equal(runs[0].qd, runs[1].qd)
@@ -124,7 +122,7 @@ def test_kernels_cut_into_parts_compute_the_same(tmp_path):
     from codegen.pipeline import generate, write_model
     from runtime.compile import compile_model
     from runtime.model import CompiledModel
-    scene = random_scene(3, seed=77, random_twists=True, kinds=("rigid", "line"))
+    scene = chain(3, ("rigid", "line"), twists=True)
     models = []
     for split in (None, 25):
         generated = generate(scene, specialise=False, dense=True, split_lines=split)

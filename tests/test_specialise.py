@@ -8,38 +8,7 @@ import codegen
 from codegen.scene import LineLink, RigidLink, Scene, SceneError, Wall, contact_points, load_scene
 from codegen.specialise import layout_for
 from runtime import simulate
-
-
-def rz(angle):
-    c, s = math.cos(angle), math.sin(angle)
-    return ((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0))
-
-
-def random_planar_scene(n, seed, normal_axis):
-    """A planar chain (joint axes along X3 or X1), in-plane centres of mass, in-plane spin and drift,
-    a floor 0.2 m under its lowest point."""
-    rng = np.random.default_rng(seed)
-    links = []
-    for i in range(n):
-        if i % 2:
-            l, m = rng.uniform(0.3, 1.0), rng.uniform(0.2, 2.0)
-            Ixx, Iyy, Izz, Ixy = 0.01 * m, 0.02 * m, 0.025 * m, 0.003 * m
-            links.append(RigidLink(l, m, (l * rng.uniform(0.2, 0.8), 0.05 * l, 0.0),
-                                   ((Ixx, Ixy, 0.0), (Ixy, Iyy, 0.0), (0.0, 0.0, Izz))))
-        else:
-            links.append(LineLink(rng.uniform(0.3, 1.0), rng.uniform(0.5, 2.0), tuple(rng.uniform(1e-5, 1e-3, 3))))
-    theta_m1 = -math.pi / 2 if normal_axis == 2 else 0.0
-    q = [theta_m1, 0.0] + list(rng.uniform(-1.5, 1.5, n)) + [0.0, 0.0, 0.0]
-    qd = [0.0, 0.0] + list(rng.normal(0, 2.0, n)) + [0.0, 0.0, 0.0]
-    for axis in (0, 1, 2):
-        if axis != normal_axis:
-            qd[n + 2 + axis] = -abs(rng.normal()) if axis == 1 else rng.normal()   # heading for the floor
-    twists = tuple(rz(a) for a in rng.uniform(-1, 1, n - 1))
-    probe = Scene(name="probe", links=tuple(links), twists=twists, q0=tuple(q), qd0=tuple(qd))
-    floor = contact_points(probe, np.array(q))[:, 1].min() - 0.2
-    walls = (Wall("x2_min", floor, 0.8), Wall(f"x{3 - normal_axis}_min", -20.0), Wall(f"x{normal_axis + 1}_max", 5.0))
-    return Scene(name=f"planar{n}_{seed}", links=tuple(links), twists=twists, walls=walls, q0=tuple(q),
-                 qd0=tuple(qd), gravity=9.81)
+from conftest import random_planar_scene
 
 
 def compare(compiled, scene, t_end):

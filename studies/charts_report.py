@@ -4,7 +4,7 @@
    (``simulate(..., charts=False)``) against chart switching in the C loop (the default), for DOPRI5 and DOP853 at several tolerances: how far each gets, its steps,
    energy drift and largest error of the points O_1..O_3 against an independent integration (the numpy
    reference model with the base orientation as a rotation matrix, scipy DOP853 at rtol = 1e-12;
-   studies.reference.integrate_reference, which tests/test_charts.py checks the runtime against too).
+   studies.reference.integrate_reference, which tests/test_sim_charts.py checks the runtime against too).
 2. Long runs with impacts: the gimbal-lock scene for 10 s, case 2 for 20 s, with and without charts.
 """
 from __future__ import annotations

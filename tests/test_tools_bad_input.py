@@ -2,8 +2,8 @@
 answered with a specific message (the field, the allowed range) and a non-zero exit, never a traceback,
 a silent NaN or a silently ignored value; good input next to each bad one still works.
 
-(The C API's arguments are in test_c_api.py, the build cache's corruptions in test_cache.py, the codegen
-command's output folder in test_codegen_cli.py.)
+(The C API's arguments are in test_build_c_api.py, the build cache's corruptions in test_build_cache.py, the codegen
+command's output folder in test_tools_codegen_cli.py.)
 """
 import json
 import math
@@ -313,5 +313,5 @@ def test_no_text_speaks_of_how_the_project_was_made():
         if path.suffix in (".py", ".md", ".j2", ".toml", ".c", ".h", ".txt") and path.is_file():
             offenders += [f"{path.relative_to(ROOT)}: {line.strip()}" for line in
                           path.read_text(errors="replace").splitlines() if pattern.search(line)]
-    offenders = [o for o in offenders if not o.startswith("tests/test_bad_input.py")]
+    offenders = [o for o in offenders if not o.startswith("tests/test_tools_bad_input.py")]
     assert offenders == []

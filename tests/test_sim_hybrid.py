@@ -87,7 +87,7 @@ def test_dip_through_a_wall_inside_one_step_is_caught(compiled):
     """A free rod spinning about its centre of mass (at 0.49 m): its tip dips 1 cm below the floor
     and comes back between t = 0.03 s and 0.07 s, inside one 0.1 s RK4 step.  With 8 samples per step
     some are below the floor; with one (the step ends, both above it) the dip is found at the gap's
-    minimum, where the tip's normal velocity changes sign (tests/test_events.py has the exact cases)."""
+    minimum, where the tip's normal velocity changes sign (tests/test_sim_events.py has the exact cases)."""
     omega, phi0, centre = -10.0, -math.pi / 2 + 0.5, np.array([0.5, 0.49])
     o1 = centre - 0.5 * np.array([math.cos(phi0), math.sin(phi0)])
     v1 = omega * 0.5 * np.array([math.sin(phi0), -math.cos(phi0)])

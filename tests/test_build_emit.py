@@ -17,7 +17,7 @@ from codegen.emit import c_expression
 from codegen.pipeline import write_model
 from codegen.ops import count_ops
 from codegen.scene import MAX_LINKS, Scene, LineLink, load_scene
-from conftest import random_scene
+from conftest import chain
 
 ROOT = Path(__file__).resolve().parent.parent
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror"]
@@ -36,7 +36,7 @@ def library_sources(folder: Path) -> list[str]:
 SCENES = {
     "case1": lambda: load_scene("paper-case1"),
     "case2": lambda: load_scene("paper-case2"),
-    "rigid3d": lambda: random_scene(3, seed=5, random_twists=True, kinds=("rigid", "line")),
+    "rigid3d": lambda: chain(3, ("rigid", "line"), twists=True),
     "nowalls": lambda: Scene(name="free", links=(LineLink(1.0, 1.0),)),
 }
 
@@ -195,7 +195,7 @@ def test_printer_evaluates_like_sympy():
 
 
 def test_baked_parameters_give_the_same_dynamics(compiled):
-    scene = random_scene(3, seed=9, random_twists=True, kinds=("rigid", "line"))
+    scene = chain(3, ("rigid", "line"), twists=True)
     general, baked = compiled(scene), compiled(scene, bake_params=True)
     q = np.array([0.3, -0.4, 0.5, 1.1, -0.7, 0.1, 0.2, 0.3])
     qd = np.linspace(-1, 1, scene.nq)

@@ -80,7 +80,7 @@ def test_momentum_is_the_gradient_of_the_kinetic_energy(derived, n):
         assert abs(difference - h[j]) < 1e-12 * max(1.0, model.energy(q, qd, p)[0])
 
 
-@pytest.mark.parametrize("n", [3, 7])
+@pytest.mark.parametrize("n", [3, pytest.param(7, marks=pytest.mark.slow)])
 def test_specialised_planar_layouts(compiled, n):
     """Locked coordinates (planar reduction): the operators work on the model's own coordinates."""
     scene = default_scene(n)

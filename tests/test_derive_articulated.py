@@ -11,7 +11,7 @@ import sympy as sp
 from sympy.printing.pycode import pycode
 
 from studies import reference
-from conftest import random_parameters, random_scene, reference_of
+from conftest import chain, random_parameters, reference_of
 from codegen.flatten import flatten
 from codegen.kinematics import ChainSymbols
 from codegen.kernels import forward_dynamics_kernel
@@ -42,7 +42,7 @@ def solve_both(scene, specialise, q, qd, p):
 @pytest.mark.parametrize("n", [1, 2, 3, pytest.param(5, marks=pytest.mark.slow)])
 @pytest.mark.parametrize("kinds", [("line",), ("line", "rigid")])
 def test_articulated_matches_dense_and_reference_on_random_3d_chains(n, kinds):
-    scene = random_scene(n, seed=70 + n, random_twists=True, kinds=kinds)
+    scene = chain(n, kinds, twists=True)
     rng = np.random.default_rng(n)
     for trial in range(3):
         p = random_parameters(scene, seed=700 * n + trial)

@@ -4,7 +4,7 @@ import pytest
 
 from studies import reference
 from codegen.scene import load_scene
-from conftest import random_scene
+from conftest import chain, random_parameters
 from runtime import ImpactError
 
 
@@ -27,10 +27,10 @@ def solve_eq48(model, q, qd, active, p):
 
 @pytest.mark.parametrize("n,k", [(1, 1), (2, 2), (3, 3), (4, 2)])
 def test_impact_matches_block_system(compiled, n, k):
-    scene = random_scene(n, seed=80 + n, random_twists=True)
+    scene = chain(n, twists=True)
     model = compiled(scene)
     rng = np.random.default_rng(n)
-    p = scene.parameter_vector()
+    p = random_parameters(scene, seed=80 + n)
     q, qd = reference.random_state(n, rng)
     # k contacts on distinct points and walls of distinct axes where possible
     active = []

@@ -30,7 +30,8 @@ def test_case1_specialised_and_general_give_the_same_trajectory(compiled):
     compare(compiled, scene, 1.5)
 
 
-@pytest.mark.parametrize("n,seed,normal", [(1, 1, 2), (2, 2, 0), (3, 3, 2), (4, 4, 0)])
+@pytest.mark.parametrize("n,seed,normal", [pytest.param(1, 1, 2, marks=pytest.mark.slow), (2, 2, 0), (3, 3, 2),
+                                            pytest.param(4, 4, 0, marks=pytest.mark.slow)])
 def test_random_planar_scenes(compiled, n, seed, normal):
     scene = random_planar_scene(n, seed, normal)
     layout = layout_for(scene)

@@ -1,6 +1,6 @@
 """Long chains: the derivation in worker processes gives the same text as a serial one, the source cut into
-translation units holds every kernel once, and a 30-link 3D chain (no dense kernels, compiled in units) agrees
-with the independent reference model and keeps its energy in flight."""
+translation units holds every kernel once, and a long 3D chain (no dense kernels, compiled in units: 16 links by
+default, 30 with -m slow) agrees with the independent reference model and keeps its energy in flight."""
 from __future__ import annotations
 
 import hashlib
@@ -14,7 +14,7 @@ import pytest
 from codegen import interface
 from codegen.pipeline import PARALLEL_MIN_LINKS, generate
 from codegen.scene import default_scene
-from conftest import random_scene, reference_of
+from conftest import chain, reference_of
 from runtime import load_model, simulate
 from runtime.compile import END_MARK, KERNEL_MARK, translation_units
 from studies import reference
@@ -55,9 +55,10 @@ def test_translation_units_hold_every_kernel_once():
     assert translation_units(model.source, 1) == [model.source]
 
 
-@pytest.fixture(scope="module")
-def long_chain():
-    scene = random_scene(30, seed=30, random_twists=True, walls=False)     # 30 links straight out: no box
+@pytest.fixture(scope="module", params=[16, pytest.param(30, marks=pytest.mark.slow)])
+def long_chain(request):
+    scene = chain(request.param, twists=True, walls=False)     # straight out: no box
+    assert scene.n > interface.DENSE_MAX_LINKS                 # no dense kernels generated
     return scene, load_model(scene, specialise=False)
 
 
@@ -66,7 +67,7 @@ def test_long_chain_against_the_reference(long_chain):
     assert "_mass_matrix(" in model.generated.source and "gac_mass_matrix(&" in model.generated.source
     rng = np.random.default_rng(30)
     ref = reference_of(scene)
-    q, qd = reference.random_state(30, rng)
+    q, qd = reference.random_state(scene.n, rng)
     expected = ref.forward_dynamics(q, qd)
     qdd = model.forward_dynamics(q, qd)
     assert np.max(np.abs(qdd - expected)) < 1e-9 * np.max(np.abs(expected))

@@ -146,7 +146,7 @@ def test_planar_specialised_and_baked_chains_roll_the_same():
 
 
 def test_baked_parameters_that_differ_per_link_do_not_roll():
-    scene = run_chain(9, ("line",) * 9, seed=21)
+    scene = run_chain(7, ("line",) * 7, seed=21)                # the shortest chain with a run (links 3..6)
     assert _run(scene, bake=True) is None and _run(scene) is not None
     with pytest.raises(SceneError, match="rolled: .* no run"):
         generate(scene, bake_params=True, rolled=True)

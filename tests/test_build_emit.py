@@ -23,6 +23,17 @@ ROOT = Path(__file__).resolve().parent.parent
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 
 
+_GENERATED = {}
+
+
+def generated(scene, bake_params: bool = False):
+    """codegen.generate(scene), each (scene, bake_params) derived once in this file (the tests only read it)."""
+    key = (scene, bake_params)
+    if key not in _GENERATED:
+        _GENERATED[key] = codegen.generate(scene, bake_params=bake_params)
+    return _GENERATED[key]
+
+
 def write(model, folder: Path) -> Path:
     """NAME.h, NAME.c and the library's files in folder; the path of NAME.c."""
     write_model(model, folder)
@@ -44,7 +55,7 @@ SCENES = {
 @pytest.mark.parametrize("which", sorted(SCENES))
 @pytest.mark.parametrize("bake", [False, True])
 def test_generated_c_is_strict_c99_and_header_is_cxx(tmp_path, which, bake):
-    model = codegen.generate(SCENES[which](), bake_params=bake)
+    model = generated(SCENES[which](), bake)
     source = write(model, tmp_path)
     subprocess.run(["gcc", *STRICT, "-O1", "-c", str(source), "-o", str(tmp_path / "m.o")], check=True)
     for library in library_sources(tmp_path):
@@ -62,7 +73,7 @@ def test_header_names_every_coordinate_index(tmp_path, which):
     controller need not hard-code q[1]: read back from a compiled C program, against the model's layout."""
     from codegen.specialise import coordinate_names, layout_for
     scene = SCENES[which]()
-    model = codegen.generate(scene)
+    model = generated(scene)
     write(model, tmp_path)
     names = [coordinate_names(scene.n)[i] for i in layout_for(scene, True).free]
     NAME = model.name.upper()
@@ -80,7 +91,7 @@ def test_header_names_every_coordinate_index(tmp_path, which):
 def test_no_globals_and_no_malloc_in_generated_code(tmp_path, scene_name):
     """The model's and the library's object files define only code and read-only data (the descriptors and the
     parameter table, whose pointers are relocated, sit in .data.rel.ro), and call only libm and the library."""
-    model = codegen.generate(load_scene(scene_name))
+    model = generated(load_scene(scene_name))
     source = write(model, tmp_path)
     objects = []
     for path in [str(source), *library_sources(tmp_path)]:
@@ -134,7 +145,7 @@ def test_same_scene_gives_byte_identical_output_across_processes(scene):
 
 @pytest.mark.parametrize("scene,name", [("paper-case1", "paper_case1"), ("paper-case2", "paper_case2")])
 def test_committed_generated_code_is_up_to_date(scene, name):
-    model = codegen.generate(load_scene(scene))
+    model = generated(load_scene(scene))
     committed = ROOT / "generated"
     assert (committed / f"{name}.h").read_text() == model.header, \
         f"generated/{name}.h is stale: run python -m codegen --scene {scene}"
@@ -167,7 +178,7 @@ def count_c_operators(rhs: str) -> dict:
 
 @pytest.mark.parametrize("which", ["case1", "rigid3d"])
 def test_reported_operation_counts_match_the_emitted_code(which):
-    model = codegen.generate(SCENES[which]())
+    model = generated(SCENES[which]())
     for function in model.functions:
         totals = {"add": 0, "mul": 0, "div": 0, "calls": 0}
         for line in function.lines:
@@ -263,7 +274,7 @@ def test_interface_is_plain_data_and_matches_the_kernels():
                             env=dict(os.environ, PYTHONPATH=str(ROOT)))
     assert result.returncode == 0 and result.stdout.strip() == "[]", result.stdout + result.stderr
     from codegen import interface
-    model = codegen.generate(SCENES["nowalls"]())
+    model = generated(SCENES["nowalls"]())
     assert [(f.name, tuple(f.inputs), f.output) for f in model.functions] == \
         [(f.name, tuple(a.name for a in f.args[:-1]), f.args[-1].name) for f in interface.KERNELS]
     for function in interface.ALL_FUNCTIONS:               # declared in the header and defined in the source

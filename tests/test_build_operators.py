@@ -16,8 +16,8 @@ from codegen.scene import default_scene
 from runtime import load_model, simulate
 
 # (scene, dense): the generated dense kernels, or the matrices the library forms from the operators
-CASES = [(chain(1), True), (chain(3, ("rigid", "line"), twists=True), True), (chain(6, ("rigid",), twists=True), True),
-         (chain(3, ("rigid", "line"), twists=True), False), (chain(6, ("rigid",), twists=True), False)]
+CASES = [(chain(1), True), (chain(3, ("rigid", "line"), twists=True), True), (chain(4, twists=True), True),
+         (chain(3, ("rigid", "line"), twists=True), False), (chain(4, twists=True), False)]
 
 
 def _rows(model, ref, q_full):

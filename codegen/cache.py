@@ -8,6 +8,8 @@ The cache directory is ``$GIBBS_APPELL_CACHE``, else ``$XDG_CACHE_HOME/gibbs-app
   and the generator fingerprint.  The file carries the sha256 of its payload and is checked on load.
 * ``_gac_KEY.<ext>`` with ``sha256_gac_KEY.txt`` -- a compiled cffi module (written by
   ``runtime.compile``) and its sidecar in ``sha256sum`` format, checked before the module is imported.
+* ``gac_lib_KEY.o`` with ``sha256_gac_lib_KEY.txt`` -- the C library compiled once (``runtime.compile.library_object``),
+  linked into every module built with the same library text and flags.
 
 An entry that fails its check (unreadable, malformed, missing its hash, hash mismatch) is corrupted:
 one line ``cache: rebuilding corrupted entry FILE (REASON)`` is reported and the entry is rebuilt.

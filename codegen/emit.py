@@ -338,14 +338,14 @@ def _contact_entry(c: int, point: int, wall, layout, pnames: list[str], bake_par
     trow = [layout.contact_rows.index((point, a)) if friction > 0.0 and (point, a) in layout.contact_rows else -1
             for a in tangents] if tangents else [-1, -1]
     if friction > 0.0:
-        doc += f", Coulomb friction mu = {friction} (tangential rows {', '.join(str(r) for r in trow if r >= 0)})"
+        doc += f", Coulomb friction coefficient c_f = {friction} (tangential rows {', '.join(str(r) for r in trow if r >= 0)})"
     return dict(c=c, point=point, axis=-1 if stop else wall.axis, sign=sign, row=row,
                 e_index=-1 if bake_params else pnames.index(e_name), e_value=_double_literal(float(wall.restitution)),
                 kind="GAC_CONTACT_STOP" if stop else "GAC_CONTACT_WALL",
                 coordinate=layout.free.index(point + 1) if stop else -1, label=label, doc=doc,
                 has_friction=int(friction > 0.0),
-                mu_index=-1 if bake_params or friction == 0.0 else pnames.index(f"friction_{wall.name}"),
-                mu_value=_double_literal(friction), trow=trow)
+                friction_index=-1 if bake_params or friction == 0.0 else pnames.index(f"friction_{wall.name}"),
+                friction_value=_double_literal(friction), trow=trow)
 
 
 def macro_name(name: str) -> str:

@@ -408,7 +408,7 @@ STRUCTS = (
                        "double energy_roundoff", "int chart", "long n_chart_switches")),
     Struct("gac_schedule", ("int n", "int nu", "const double *t", "const double *u", "int linear"), partial=False),
     Struct("gac_contact", ("int point", "int axis", "int normal_sign", "int row", "int e_index", "double e_value",
-                           "int kind", "int coordinate", "int has_friction", "int mu_index", "double mu_value",
+                           "int kind", "int coordinate", "int has_friction", "int friction_index", "double friction_value",
                            "int trow[2]"), partial=False),
     Struct("gac_run_summary", ("long n_impacts", "double t_first_impact", "double energy_impact_loss",
                                "long n_contact_events"), partial=False),

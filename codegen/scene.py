@@ -290,7 +290,7 @@ class Wall:
     position: float
     restitution: float = 1.0
     points: tuple[int, ...] = ()  # contact points O_i (1-based) that may touch it
-    friction: float = 0.0         # Coulomb coefficient mu >= 0 of a point resting on it (0: frictionless)
+    friction: float = 0.0         # Coulomb (friction) coefficient c_f >= 0 of a point resting on it (0: frictionless)
 
     @property
     def axis(self) -> int:
@@ -367,8 +367,8 @@ class Scene:
     joints     springs and dampers of the joints 2..n (Joint; n - 1 entries, or () for none)
     inputs     the actuated coordinates by name ("theta_2", "X2", ...): input u_i is the generalised force
                of inputs[i] (N m on an angle, N on a translation), added to the flight equations
-    friction_velocity  v_s (m/s): a point resting on a wall with friction mu slides against the Coulomb force
-               -mu lambda v_t / max(|v_t|, v_s) (lambda its normal force, v_t its tangential velocity): exact
+    friction_velocity  v_s (m/s): a point resting on a wall with friction coefficient c_f slides against the Coulomb force
+               -c_f lambda v_t / max(|v_t|, v_s) (lambda its normal force, v_t its tangential velocity): exact
                Coulomb sliding above v_s, a stiff viscous regime below it in place of sticking
     """
 
@@ -460,10 +460,10 @@ class Scene:
                                      f"(O_1..O_{n + 1}), got {p!r}")
             if len(set(points)) != len(points):
                 raise SceneError(f"contacts.{w.name}: repeated point index in {list(points)}")
-            mu = _number(w.friction, f"friction.{w.name}")
-            if not 0.0 <= mu <= FRICTION_MAX:
-                raise SceneError(f"friction.{w.name}: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {mu!r}")
-            walls.append(Wall(w.name, float(w.position), e, tuple(sorted(points)), float(mu)))
+            c_f = _number(w.friction, f"friction.{w.name}")
+            if not 0.0 <= c_f <= FRICTION_MAX:
+                raise SceneError(f"friction.{w.name}: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {c_f!r}")
+            walls.append(Wall(w.name, float(w.position), e, tuple(sorted(points)), float(c_f)))
         walls.sort(key=lambda w: WALL_NAMES.index(w.name))
         for axis in range(3):
             lo = self._find(walls, f"x{axis + 1}_min")
@@ -994,11 +994,11 @@ def _walls_from_data(walls, restitution, contacts, friction=0.0) -> tuple[Wall, 
             raise SceneError(f"contacts.{name}: expected a non-empty list of point indices "
                              f"(O_1 is 1), got {points!r}")
         if isinstance(friction, dict):
-            mu, where = friction.get(name, friction.get("default", 0.0)), f"friction.{name}"
+            c_f, where = friction.get(name, friction.get("default", 0.0)), f"friction.{name}"
         else:
-            mu, where = friction, "friction"
-        mu = _number(mu, where)
-        if not 0.0 <= mu <= FRICTION_MAX:
-            raise SceneError(f"{where}: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {mu!r}")
-        out.append(Wall(name, _number(walls[name], f"walls.{name}"), e, tuple(points), mu))
+            c_f, where = friction, "friction"
+        c_f = _number(c_f, where)
+        if not 0.0 <= c_f <= FRICTION_MAX:
+            raise SceneError(f"{where}: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {c_f!r}")
+        out.append(Wall(name, _number(walls[name], f"walls.{name}"), e, tuple(points), c_f))
     return tuple(out)

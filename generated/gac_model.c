@@ -42,7 +42,7 @@ int gac_model_check(const gac_model *m)
             || k->e_index >= m->nparam)
             return GAC_ERR_BAD_MODEL;
         if (k->has_friction) {
-            if (k->kind != GAC_CONTACT_WALL || k->mu_index >= m->nparam || !(m->friction_velocity > 0.0)
+            if (k->kind != GAC_CONTACT_WALL || k->friction_index >= m->nparam || !(m->friction_velocity > 0.0)
                 || k->trow[0] < -1 || k->trow[0] >= m->njrow || k->trow[1] < -1 || k->trow[1] >= m->njrow)
                 return GAC_ERR_BAD_MODEL;
         }

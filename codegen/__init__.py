@@ -4,8 +4,7 @@
     model = generate(load_scene("paper-case1"))
     model.write("generated/")
 """
-__version__ = "0.1.0"
-
+from .version import __version__  # noqa: E402,F401
 from .scene import Scene, SceneError, load_scene, default_scene  # noqa: E402,F401
 from .artifact import GeneratedModel  # noqa: E402,F401
 

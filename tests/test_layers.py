@@ -2,9 +2,9 @@
 a module imports modules of its own layer or a lower one only, wherever the import stands (module level, inside
 a function or method, under ``if TYPE_CHECKING``), and a package located by name (``find_spec``,
 ``importlib.resources.files``, ``import_module``) counts as imported.  The description layer imports no sympy,
-jinja2 or cffi (numpy only); no product module imports the studies; and no import circle joins two modules (of
-the product, or of the studies, which sit outside the product and may import any of it).  A new module without
-a layer fails here: give it one."""
+jinja2 or cffi (numpy only); another layer is used through its public names; no product module imports the
+studies; and no import circle joins two modules (of the product, or of the studies, which sit outside the product
+and may import any of it).  A new module without a layer fails here: give it one."""
 import ast
 import subprocess
 import sys
@@ -148,6 +148,22 @@ def test_imports_point_to_the_same_or_a_lower_layer():
             elif target in LAYERS and target != module and LAYERS[target] > LAYERS[module]:
                 offenders.append(f"{where(module, line)}: {module} ({LAYER_NAMES[LAYERS[module]]}) imports "
                                  f"{target} ({LAYER_NAMES[LAYERS[target]]}), a higher layer")
+    assert offenders == [], "\n".join(offenders)
+
+
+def test_another_layer_is_used_through_its_public_names():
+    """A module takes from a module of another layer only names without a leading underscore."""
+    offenders = []
+    for module, path in PRODUCT_MODULES.items():
+        package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if not isinstance(node, ast.ImportFrom):
+                continue
+            base = package.split(".")[:len(package.split(".")) - node.level + 1] if node.level else []
+            source = _owner(".".join(base + ([node.module] if node.module else [])), PRODUCT_MODULES)
+            private = [a.name for a in node.names if a.name.startswith("_") and not a.name.startswith("__")]
+            if private and source in LAYERS and LAYERS[source] != LAYERS[module]:
+                offenders.append(f"{where(module, node.lineno)}: {module} takes {', '.join(private)} from {source}")
     assert offenders == [], "\n".join(offenders)
 
 

@@ -5,10 +5,8 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import importlib.util
 import json
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -123,16 +121,3 @@ def _convert(value):
         return [_canonical(v) for v in value]
     return {"type": type(value).__name__, **{k: _canonical(getattr(value, k)) for k in value.__dataclass_fields__}}
 
-
-def library_dir() -> Path:
-    """runtime/c: the plain C library (gac.h, gac_*.c) that every model is built with, found without importing
-    the runtime package."""
-    spec = importlib.util.find_spec("runtime")
-    return Path(next(iter(spec.submodule_search_locations))) / "c"
-
-
-def library_files(folder: Path | None = None) -> list[Path]:
-    """The library's headers and sources (gac*.h, gac*.c) in ``folder`` (default library_dir()), by name."""
-    folder = library_dir() if folder is None else Path(folder)
-    return sorted(path for path in folder.iterdir()
-                  if path.name.startswith("gac") and path.suffix in (".c", ".h") and path.is_file())

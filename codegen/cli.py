@@ -7,6 +7,8 @@ import sys
 import time
 from pathlib import Path
 
+from runtime.compile import BuildError, CompilerNotFound, compile_model, copy_library, library_sources
+
 from .cache import CacheError, cache_dir, generate_cached
 from .interface import ROLLED_MIN_LINKS, wants_rolled
 from .outputs import output_dir_problem
@@ -181,15 +183,14 @@ def main(argv=None) -> int:
     model = generate_cached(scene, name=args.name, bake_params=args.bake_params, specialise=not args.general,
                             progress=progress, refresh=True, rolled=args.rolled)
     try:
-        paths = write_model(model, out)
+        paths = write_model(model, out) + copy_library(out)           # the model, and the library it builds with
         if args.standalone:
-            paths += write_standalone(model, scene, out)
+            paths += write_standalone(model, scene, out, [path.name for path in library_sources()])
     except OSError as exc:
         print(f"error: --out: cannot write into {out}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     timings = dict(model.timings)
     if not args.no_compile:
-        from runtime.compile import BuildError, CompilerNotFound, compile_model
         start = time.perf_counter()
         try:
             compile_model(model.name, model.header, model.source, model.cdef, progress=progress,

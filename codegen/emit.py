@@ -8,13 +8,14 @@ import numpy as np
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
-from . import __version__, interface
+from . import interface
 from .flatten import Program
 from .artifact import GeneratedModel, RenderedFunction, scene_hash  # noqa: F401
 from .ops import count_ops
 from .parameters import parameter_rules
 from .scene import JointStop, Scene, Wall
 from .specialise import coordinate_names
+from .version import __version__
 
 
 class ChainCPrinter(C99CodePrinter):

@@ -13,12 +13,12 @@ import uuid
 from dataclasses import dataclass
 from xml.sax.saxutils import quoteattr
 
-from . import __version__
 from .artifact import GeneratedModel
 from .emit import _double_literal, _environment, param_doc
 from .interface import RTOL_MIN
 from .parameters import parameter_rules
 from .scene import Scene, coordinate_names
+from .version import __version__
 
 FMI_VERSION = "2.0"
 

@@ -9,8 +9,7 @@ one, and a rigid link's six inertia entries form a physical inertia.  The ranges
 ``parameter_rules`` lists the rules of a scene's vector, one per entry (and, for a generated model, the values it
 has built in: ``zero_params`` of its layout, or all of them with ``bake_params``).  From that one list come
 
-* the Python check of a vector, ``check_vector`` (``Scene.check_parameters``, which ``simulate()`` applies to
-  its ``p`` overrides);
+* the Python check of a vector, ``check_vector`` (which ``simulate()`` applies to its ``p`` overrides);
 * the C check: the table ``NAME_model.parameter_info`` (each parameter's name, range and rule in words) and the
   function ``NAME_check_parameters`` in the generated NAME.c (templates/model.c.j2), which ``gac_sim_init`` and
   the FMU call;

@@ -5,7 +5,6 @@ import os
 import time
 from pathlib import Path
 
-from .artifact import library_files
 from .charts import chart_b_scene
 from .emit import GeneratedModel, assemble_model, render_function, render_standalone, split_size
 from .interface import wants_dense, wants_rolled
@@ -222,17 +221,16 @@ def raw_kernel_ops(kernel) -> int:
 
 
 def write_model(model: GeneratedModel, out_dir: str | Path) -> list[Path]:
-    """Write NAME.h and NAME.c into out_dir (created if needed), with a copy of the C library they build
-    with (gac.h, gac_internal.h, gac_*.c from runtime/c); returns the paths."""
-    files = {f"{model.name}.h": model.header, f"{model.name}.c": model.source}
-    files.update((path.name, path.read_text()) for path in library_files())
-    return _write_files(out_dir, files)
+    """Write NAME.h and NAME.c into out_dir (created if needed); returns the paths.  They build with the C library
+    (gac.h, gac_*.c), which the build layer copies beside them: runtime.compile.copy_library."""
+    return _write_files(out_dir, {f"{model.name}.h": model.header, f"{model.name}.c": model.source})
 
 
-def write_standalone(model: GeneratedModel, scene: Scene, out_dir: str | Path) -> list[Path]:
-    """Write the example program, Makefile and CMakeLists.txt next to the model (and its library copy)."""
-    sources = [path.name for path in library_files() if path.suffix == ".c"]
-    return _write_files(out_dir, render_standalone(scene, model.name, sources, model.layout))
+def write_standalone(model: GeneratedModel, scene: Scene, out_dir: str | Path,
+                     library_sources: list[str]) -> list[Path]:
+    """Write the example program, Makefile and CMakeLists.txt next to the model and its library copy;
+    ``library_sources``: the file names of the library's C sources (runtime.compile.library_sources)."""
+    return _write_files(out_dir, render_standalone(scene, model.name, library_sources, model.layout))
 
 
 def _write_files(out_dir: str | Path, files: dict[str, str]) -> list[Path]:

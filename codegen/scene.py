@@ -22,6 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import SceneError
+from .urdf import urdf_links
+
 try:  # Python >= 3.11
     import tomllib
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
@@ -53,10 +56,6 @@ GRAVITY_MAX = 1e6                 # |gravity| (m/s^2)
 UNITS_LENGTH = (1e-4, 1e2)        # m: a link length outside it suggests mm or km given as m
 UNITS_MASS = (1e-6, 1e4)          # kg: a link mass outside it suggests g or t given as kg
 UNITS_ANGLE = 2 * math.pi         # rad: an angle beyond it in magnitude suggests degrees given as radians
-
-
-class SceneError(ValueError):
-    """A scene field has a bad value; the message names the field and the allowed range."""
 
 
 # ---------------------------------------------------------------------------
@@ -581,15 +580,6 @@ class Scene:
                 values.append(joint.limit_restitution)
         return np.array(values, dtype=float)
 
-    def check_parameters(self, p, changed=None) -> None:
-        """Refuse a parameter vector p (layout of parameter_names()) that a scene file could not give: every value in
-        its range, rigid links' inertias physical, each wall pair and joint's limits ordered (min < max, lower <
-        upper); the rules of codegen.parameters, which the generated C checks too.  ``changed``: the names whose
-        values may differ from the scene's (the others were checked when the scene was built; default: all).
-        (Whether the start lies inside the walls is the caller's check: it depends on the state too.)"""
-        from .parameters import check_vector, parameter_rules
-        check_vector(parameter_rules(self), p, changed)
-
     @property
     def warnings(self) -> list[str]:
         """Values the scene accepts but that suggest a slip of units (see unit_warnings), one sentence each."""
@@ -883,7 +873,6 @@ def _link_tables(data: dict, folder) -> list:
         return data.get("links")
     if "links" in data:
         raise SceneError("urdf: give either links or a urdf file, not both")
-    from .urdf import urdf_links
     if not isinstance(data["urdf"], str) or not data["urdf"]:
         raise SceneError(f"urdf: expected the path of a URDF file, got {data['urdf']!r}")
     path = Path(folder or ".") / data["urdf"]

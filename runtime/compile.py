@@ -30,23 +30,48 @@ from pathlib import Path
 
 import cffi
 
-from codegen.artifact import library_files, text_digest
+from codegen.artifact import text_digest
 from codegen.cache import (CacheError, cache_dir, clear_entry, entry_lock, report_corrupted, sha256_of,  # noqa: F401
                            write_atomic)
 
 DEFAULT_FLAGS = ("-O2",)
 SUFFIX = sysconfig.get_config_var("EXT_SUFFIX") or ".so"
-LIBRARY_DIR = Path(__file__).resolve().parent / "c"      # the C library every model is compiled with
+LIBRARY_DIR = Path(__file__).resolve().parent / "c"      # the C library every model is compiled with (package data)
+
+
+def library_files(folder: Path | None = None) -> list[Path]:
+    """The library's headers and sources (gac*.h, gac*.c) in ``folder`` (default LIBRARY_DIR), by name."""
+    folder = LIBRARY_DIR if folder is None else Path(folder)
+    return sorted(path for path in folder.iterdir()
+                  if path.name.startswith("gac") and path.suffix in (".c", ".h") and path.is_file())
+
+
+def copy_library(out_dir: str | Path) -> list[Path]:
+    """Copy the library (gac.h, gac_internal.h, gac_*.c) into out_dir (created if needed), beside a model's NAME.c
+    (codegen.pipeline.write_model), so that the folder builds with no Python; returns the paths.  Every file goes
+    to a temporary name first and all are renamed into place together: a failure leaves no half-written file."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    staged = [(path, out / f".{path.name}.{os.getpid()}.tmp", out / path.name) for path in library_files()]
+    try:
+        for source, tmp, _ in staged:
+            shutil.copyfile(source, tmp)
+        for _, tmp, target in staged:
+            tmp.replace(target)
+    finally:
+        for _, tmp, _ in staged:
+            tmp.unlink(missing_ok=True)
+    return [target for _, _, target in staged]
 
 
 def library_sources() -> list[Path]:
     """The library's C sources (gac_*.c), compiled beside each model's NAME.c."""
-    return [path for path in library_files(LIBRARY_DIR) if path.suffix == ".c"]
+    return [path for path in library_files() if path.suffix == ".c"]
 
 
 def library_text() -> str:
     """Every library file's name and text, in one string (part of the build key)."""
-    return "".join(f"{path.name}\0{path.read_text()}\0" for path in library_files(LIBRARY_DIR))
+    return "".join(f"{path.name}\0{path.read_text()}\0" for path in library_files())
 
 
 class CompilerNotFound(RuntimeError):

@@ -15,10 +15,10 @@ import time
 import zipfile
 from pathlib import Path
 
-from codegen.artifact import library_files
 from codegen.scene import Scene, SceneError, load_scene
 
-from .compile import LIBRARY_DIR, PARALLEL_LINES, BuildError, compile_objects, compiler_command, translation_units
+from .compile import (LIBRARY_DIR, PARALLEL_LINES, BuildError, compile_objects, compiler_command, library_files,
+                      translation_units)
 from .horizon import DEFAULT_T_END
 
 FMI2_DIR = LIBRARY_DIR / "fmi2"          # gac_fmi2.c, gac_fmi2.h, fmi2_types.h: the slave, for any model

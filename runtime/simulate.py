@@ -21,6 +21,7 @@ import numpy as np
 
 from codegen.scene import JointStop, Scene, SceneError
 from codegen.interface import RTOL_MIN  # the smallest rtol the C loop accepts (GAC_RTOL_MIN)
+from codegen.parameters import check_vector, parameter_rules
 from codegen.specialise import coordinate_names
 
 from .inputs import InputSchedule, attach, input_source  # noqa: F401  (InputSchedule: re-export)
@@ -638,7 +639,7 @@ def _check_parameters(model: CompiledModel, p: np.ndarray) -> None:
     if np.array_equal(p, model.p):              # the scene's own values, checked when it was loaded
         return
     try:
-        model.scene.check_parameters(p, changed=[names[k] for k in np.flatnonzero(p != model.p)])
+        check_vector(parameter_rules(model.scene), p, changed=[names[k] for k in np.flatnonzero(p != model.p)])
     except SceneError as exc:
         raise ValueError(str(exc)) from None
     for k, name in enumerate(names):

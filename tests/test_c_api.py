@@ -7,6 +7,7 @@ import pytest
 
 from codegen import interface
 from codegen.pipeline import generate, write_model, write_standalone
+from runtime.compile import copy_library, library_sources
 from codegen.scene import load_scene
 from runtime import simulate
 
@@ -191,7 +192,8 @@ def built(tmp_path_factory, compiled):
     scene = load_scene("paper-case1")
     model = generate(scene)
     write_model(model, out)
-    write_standalone(model, scene, out)
+    copy_library(out)
+    write_standalone(model, scene, out, [path.name for path in library_sources()])
     library = sorted(str(path) for path in out.glob("gac_*.c"))
     (out / "driver.c").write_text(DRIVER)
     subprocess.run(["gcc", *STRICT, *SANITIZE, "-I", str(out),

@@ -12,11 +12,11 @@ import pytest
 import sympy as sp
 
 import codegen
-from codegen.artifact import library_files
 from codegen.emit import c_expression
 from codegen.pipeline import write_model
 from codegen.ops import count_ops
 from codegen.scene import MAX_LINKS, Scene, LineLink, load_scene
+from runtime.compile import copy_library, library_files
 from conftest import random_scene
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -26,6 +26,7 @@ STRICT = ["-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 def write(model, folder: Path) -> Path:
     """NAME.h, NAME.c and the library's files in folder; the path of NAME.c."""
     write_model(model, folder)
+    copy_library(folder)
     return folder / f"{model.name}.c"
 
 

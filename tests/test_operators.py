@@ -122,7 +122,7 @@ def test_kernels_cut_into_parts_compute_the_same(tmp_path):
     """Every kernel cut into parts of 25 lines (values crossing parts through s[]) gives what the whole
     kernels give, on random states of a 3D chain."""
     from codegen.pipeline import generate, write_model
-    from runtime.compile import compile_model
+    from runtime.compile import compile_model, copy_library
     from runtime.model import CompiledModel
     scene = random_scene(3, seed=77, random_twists=True, kinds=("rigid", "line"))
     models = []
@@ -133,6 +133,7 @@ def test_kernels_cut_into_parts_compute_the_same(tmp_path):
     whole, parts = models
     assert "_forward_dynamics_2(" in parts.generated.source and "_forward_dynamics_2(" not in whole.generated.source
     write_model(parts.generated, tmp_path)             # and the parts are strict C99
+    copy_library(tmp_path)
     subprocess.run(["gcc", "-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror", "-O2", "-c",
                     str(tmp_path / f"{parts.name}.c"), "-o", str(tmp_path / "parts.o")], check=True)
     rng = np.random.default_rng(5)

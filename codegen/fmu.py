@@ -15,7 +15,6 @@ from xml.sax.saxutils import quoteattr
 
 from .artifact import GeneratedModel
 from .emit import _double_literal, _environment, param_doc
-from .interface import RTOL_MIN
 from .parameters import parameter_rules
 from .scene import Scene, coordinate_names
 from .version import __version__
@@ -49,7 +48,6 @@ ENERGY_OUTPUTS = (("energy.kinetic", "kinetic energy T"),
                   ("energy.dissipated", "energy the joint dampers took since the start"),
                   ("energy.impact_loss", "kinetic energy the impacts took since the start"),
                   ("energy.friction", "energy sliding friction took at resting contacts since the start"))
-METHOD_START = 1                                    # GAC_METHOD_DOPRI5
 
 
 @dataclass(frozen=True)
@@ -96,8 +94,9 @@ def _parameter_unit(pname: str) -> str | None:
     return DOC_UNITS[match.group(1)] if match else None
 
 
-def fmi2_variables(model: GeneratedModel, scene: Scene) -> list[Variable]:
-    """Every variable of the FMU, in the order of gac_fmi2.h's value references (Real, then Integer)."""
+def fmi2_variables(model: GeneratedModel, scene: Scene, constants: dict) -> list[Variable]:
+    """Every variable of the FMU, in the order of gac_fmi2.h's value references (Real, then Integer).  ``constants``:
+    the library's (gac.h, as runtime.header reads it): the smallest rtol and the integrators' codes."""
     layout = model.layout
     names = coordinate_names(scene.n)
     coordinates = [names[i] for i in layout.free]
@@ -117,7 +116,7 @@ def fmi2_variables(model: GeneratedModel, scene: Scene) -> list[Variable]:
         real.append((f"p.{rule.name}", "parameter", "fixed", param_doc(rule.name), _parameter_unit(rule.name), value))
         bounds[f"p.{rule.name}"] = (_double_literal(rule.lo), _double_literal(rule.hi))
     bounds["solver.dt"] = bounds["solver.h_max"] = ("0", None)
-    bounds["solver.rtol"] = (_double_literal(RTOL_MIN), "1.0")     # below 1 too: fmi2SetReal refuses rtol = 1
+    bounds["solver.rtol"] = (_double_literal(constants["GAC_RTOL_MIN"]), "1.0")     # below 1 too: fmi2SetReal refuses rtol = 1
     for c, value in zip(coordinates, q0):
         real.append((f"q0.{c}", "parameter", "fixed", f"initial {c}", coordinate_unit(c), float(value)))
     for c, value in zip(coordinates, qd0):
@@ -128,6 +127,7 @@ def fmi2_variables(model: GeneratedModel, scene: Scene) -> list[Variable]:
     for vname, doc in ENERGY_OUTPUTS:
         real.append((vname, "output", "continuous", doc, "J", None))
 
+    methods = rk4, dopri5, dop853 = (constants[f"GAC_METHOD_{m}"] for m in ("RK4", "DOPRI5", "DOP853"))
     variables = []
     for vr, (vname, causality, variability, doc, unit, start) in enumerate(real):
         if causality == "parameter" and vname.startswith("p.") and model.bake_params:
@@ -136,8 +136,9 @@ def fmi2_variables(model: GeneratedModel, scene: Scene) -> list[Variable]:
                                   None if start is None else _double_literal(start),
                                   "calculated" if causality == "output" else None, *bounds.get(vname, (None, None))))
     variables += [
-        Variable("solver.method", 0, "Integer", "parameter", "fixed", "integrator: 0 RK4 (fixed step solver.dt), "
-                 "1 DOPRI5, 2 DOP853", start=str(METHOD_START), min="0", max="2"),
+        Variable("solver.method", 0, "Integer", "parameter", "fixed",
+                 f"integrator: {rk4} RK4 (fixed step solver.dt), {dopri5} DOPRI5, {dop853} DOP853",
+                 start=str(dopri5), min=str(min(methods)), max=str(max(methods))),
         Variable("impacts", 1, "Integer", "output", "discrete", "impacts since the start", initial="calculated"),
         Variable("resting_contacts", 2, "Integer", "output", "discrete", "contacts resting on their wall now",
                  initial="calculated"),
@@ -151,9 +152,10 @@ def fmu_guid(model: GeneratedModel) -> str:
 
 
 def fmu_texts(model: GeneratedModel, scene: Scene, sources: list[str], stop_time: float,
-              step_size: float) -> dict[str, str]:
-    """modelDescription.xml and NAME_fmi2.c of the model's FMU; ``sources``: the C files shipped in sources/."""
-    variables = fmi2_variables(model, scene)
+              step_size: float, constants: dict) -> dict[str, str]:
+    """modelDescription.xml and NAME_fmi2.c of the model's FMU; ``sources``: the C files shipped in sources/;
+    ``constants``: the library's (runtime.header.library_constants)."""
+    variables = fmi2_variables(model, scene, constants)
     outputs = [index for index, v in enumerate(variables, start=1) if v.causality == "output"]
     used = sorted({v.unit for v in variables if v.unit})
     context = dict(name=model.name, guid=fmu_guid(model), version=__version__, fmi_version=FMI_VERSION,

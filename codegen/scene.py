@@ -272,7 +272,7 @@ class JointStop:
 
     @property
     def parameter(self) -> str:
-        return f"{'lower' if self.side < 0 else 'upper'}_{self.joint}"
+        return parameter_name("lower" if self.side < 0 else "upper", self.joint)
 
 
 FREE_JOINT = Joint()
@@ -341,6 +341,31 @@ def _clean_rotation(matrix, fieldname: str) -> tuple[tuple[float, ...], ...]:
 def twist_about_x(angle: float) -> tuple[tuple[float, ...], ...]:
     """T_k = Rx(angle): the joint axis of link k tilted about the axis of link k-1 (a DH-like twist)."""
     return _clean_rotation(rot_x(angle).tolist(), "twist")
+
+
+# ---------------------------------------------------------------------------
+# parameter names: composed by parameter_name only, read back by split_parameter_name
+# ---------------------------------------------------------------------------
+WALL_KINDS = ("wall", "e", "friction")      # a wall's parameters, named by the wall: 'e_x2_min'
+
+
+def parameter_name(kind: str, owner: int | str | None = None) -> str:
+    """The name of one runtime parameter: its kind ('l', 'mu', 'Ixx', 'wall', 'e', 'friction', 'stiffness',
+    'rest_angle', 'damping', 'lower', 'upper', 'e_limit') and its owner, a link or joint number or a wall's name:
+    'l_3', 'wall_x1_max', 'friction_x2_min', 'e_limit_2', 'stiffness_2'; 'g' has no owner."""
+    return kind if owner is None else f"{kind}_{owner}"
+
+
+def split_parameter_name(name: str) -> tuple[str, int | str | None]:
+    """(kind, owner) of a parameter's name, the inverse of parameter_name: 'e_limit_3' -> ('e_limit', 3),
+    'e_x2_min' -> ('e', 'x2_min'), 'Jxx_2' -> ('Jxx', 2), 'g' -> ('g', None)."""
+    if name[-1].isdigit():
+        kind, owner = name.rsplit("_", 1)
+        return kind, int(owner)
+    for kind in WALL_KINDS:
+        if name.startswith(kind + "_"):
+            return kind, name[len(kind) + 1:]
+    return name, None
 
 
 # ---------------------------------------------------------------------------
@@ -541,24 +566,32 @@ class Scene:
     # -- parameters ----------------------------------------------------------
     def parameter_names(self) -> list[str]:
         """Names of the runtime parameter vector p (see the generated header for units)."""
-        names = ["g"]
+        names = [parameter_name("g")]
         for i, link in enumerate(self.links, start=1):
-            names += [f"{name}_{i}" for name in link.param_names]
-        names += [f"wall_{w.name}" for w in self.walls]
-        names += [f"e_{w.name}" for w in self.walls]
-        names += [f"friction_{w.name}" for w in self.walls if w.friction > 0.0]
+            names += [parameter_name(kind, i) for kind in link.param_names]
+        names += [parameter_name("wall", w.name) for w in self.walls]
+        names += [parameter_name("e", w.name) for w in self.walls]
+        names += [parameter_name("friction", w.name) for w in self.walls if w.friction > 0.0]
         for k, joint in enumerate(self.joints, start=2):
             if joint.stiffness is not None:
-                names += [f"stiffness_{k}", f"rest_angle_{k}"]
+                names += [parameter_name("stiffness", k), parameter_name("rest_angle", k)]
             if joint.damping is not None:
-                names.append(f"damping_{k}")
+                names.append(parameter_name("damping", k))
             if joint.lower is not None:
-                names.append(f"lower_{k}")
+                names.append(parameter_name("lower", k))
             if joint.upper is not None:
-                names.append(f"upper_{k}")
+                names.append(parameter_name("upper", k))
             if joint.lower is not None or joint.upper is not None:
-                names.append(f"e_limit_{k}")
+                names.append(parameter_name("e_limit", k))
         return names
+
+    def parameter_index(self, kind: str, owner: int | str | None = None) -> int:
+        """The index in p of parameter ``kind`` of ``owner`` (parameter_name), or SceneError if the scene has none."""
+        name = parameter_name(kind, owner)
+        names = self.parameter_names()
+        if name not in names:
+            raise SceneError(f"{name}: this scene has no such parameter (it has {', '.join(names)})")
+        return names.index(name)
 
     def parameter_vector(self) -> np.ndarray:
         values = [self.gravity]

@@ -1,7 +1,8 @@
 """Compile generated C with cffi (API mode) and cache the extension module.
 
 A module is the model's NAME.c linked with the library in ``runtime/c`` (``gac.h`` and ``gac_*.c``: the hybrid
-loop for any model descriptor), which is compiled once per library text and flags into a cached object
+loop for any model descriptor); cffi is given gac.h's own declarations (``runtime.header``) and the model's.  The
+library is compiled once per library text and flags into a cached object
 (``library_object``) shared by every model.  Modules live in the shared cache directory
 (``codegen.cache.cache_dir``) as ``_gac_KEY<ext>``, KEY a hash of the C source, the header, the cffi
 declarations, the library's text, the compiler flags, the Python version and the cffi version; each hash
@@ -33,6 +34,8 @@ import cffi
 from codegen.artifact import text_digest
 from codegen.cache import (CacheError, cache_dir, clear_entry, entry_lock, report_corrupted, sha256_of,  # noqa: F401
                            write_atomic)
+
+from .header import library_cdef
 
 DEFAULT_FLAGS = ("-O2",)
 SUFFIX = sysconfig.get_config_var("EXT_SUFFIX") or ".so"
@@ -267,7 +270,7 @@ def _build(name, header, source, cdef, flags, module_name: str, target: Path, si
             objects += compile_objects(units, workdir, flags)
             sources = []
         ffi = cffi.FFI()
-        ffi.cdef(cdef)
+        ffi.cdef(library_cdef() + cdef)           # the library's declarations from gac.h, then the model's
         ffi.set_source(module_name, f'#include "{name}.h"', sources=sources, extra_objects=list(map(str, objects)),
                        include_dirs=[str(workdir), str(LIBRARY_DIR)], extra_compile_args=list(flags), libraries=["m"])
         try:

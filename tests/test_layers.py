@@ -51,6 +51,7 @@ LAYERS = {
     "templates": DERIVATION,
     # 3. build (cffi) and the C library runtime/c, its package data
     "runtime.compile": BUILD,
+    "runtime.header": BUILD,                  # gac.h read: its constants and its declarations for cffi
     # 4. simulation
     "runtime": SIMULATION,                    # the package: load_model, simulate, compile_model
     "runtime.model": SIMULATION,

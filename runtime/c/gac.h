@@ -297,21 +297,37 @@ void gac_bias(const gac_model *m, const double *q, const double *qd, const doubl
 /* J (njrow x nq, row-major): row r = contact_generalized_force(q, e_r). */
 void gac_contact_jacobian(const gac_model *m, const double *q, const double *p, double *J);
 
-/* ---- workspace sizes (one formula each; the generated NAME.h has them as macros) ---------------- */
+/* ---- workspace sizes ------------------------------------------------------------------------------ */
+/* One formula each, as macros of the model's sizes: the functions below apply them to a descriptor, and a
+ * generated NAME.h defines its storage sizes by them (NAME_SIM_NDOUBLE is GAC_SIM_NDOUBLE(NAME_NQ, ...)), so
+ * that a model's arrays can be sized at compile time.  friction: 1 if some contact has has_friction, else 0. */
+
+/* max(n, 1): the length of an array with one entry per contact or per Jacobian row, never 0. */
+#define GAC_AT_LEAST_1(n) ((n) > 0 ? (n) : 1)
 
 /* Doubles of the work array of gac_impact, gac_impact_complementarity and gac_constrained_dynamics:
  * 2 nq^2 + nq + 3 npoint + max(njrow, 1), laid out as Y (nq*nq: row a = I_f^-1 n_a of active contact a) |
  * A (nq*nq: N I_f^-1 N^T, nactive x nactive) | g (nq) | vel (3 npoint) | f (max(njrow, 1)); a model with
- * friction (some contact has has_friction) needs 2 nq^2 more: Z (nq*nq) | B (nq*nq). */
-long gac_impact_nwork(const gac_model *m);
-/* Doubles and ints of one simulation (gac_sim_init): dwork = x (nx) | p (nparam) | u (nu) | private;
- * iwork = active (nq) | private.
- *   ndouble = 28 nx + nparam + 2 nu + 7 max(ncontact, 1) + gac_impact_nwork + nq^2,
- *   nint = nq + 2 max(ncontact, 1) */
-long gac_sim_ndouble(const gac_model *m);
-long gac_sim_nint(const gac_model *m);
+ * friction needs 2 nq^2 more: Z (nq*nq) | B (nq*nq). */
+#define GAC_IMPACT_NWORK(nq, npoint, njrow, friction) \
+    (((friction) ? 4L : 2L) * (nq) * (nq) + (nq) + 3L * (npoint) + GAC_AT_LEAST_1(njrow))
+/* Doubles and ints of one simulation (gac_sim_init): dwork = x (nx = 2 nq) | p (nparam) | u (nu) | private;
+ * iwork = active (nq) | private.  The doubles: x, p, u and the controller's u, f, 16 stages, x1, xs, 8 dense-output
+ * rows (28 nx in all), 7 per-contact arrays, the impact work and an nq x nq scratch; the ints: active, then
+ * is_active and n_shrink per contact. */
+#define GAC_SIM_NDOUBLE(nq, nparam, nu, npoint, ncontact, njrow, friction) \
+    (28L * 2 * (nq) + (nparam) + 2L * (nu) + 7L * GAC_AT_LEAST_1(ncontact) \
+     + GAC_IMPACT_NWORK(nq, npoint, njrow, friction) + (long)(nq) * (nq))
+#define GAC_SIM_NINT(nq, ncontact) ((long)(nq) + 2L * GAC_AT_LEAST_1(ncontact))
 /* Doubles and ints of one impact record (gac_record_bind): dwork = impulse | q | qd_before | qd_after
  * (nq each), iwork = contact | activated | released (nq each). */
+#define GAC_RECORD_NDOUBLE(nq) (4L * (nq))
+#define GAC_RECORD_NINT(nq) (3L * (nq))
+
+/* The macros above for model m. */
+long gac_impact_nwork(const gac_model *m);
+long gac_sim_ndouble(const gac_model *m);
+long gac_sim_nint(const gac_model *m);
 long gac_record_ndouble(const gac_model *m);
 long gac_record_nint(const gac_model *m);
 

@@ -349,3 +349,15 @@ def size_definitions(name: str, n: int, nq: int, nparam: int, nu: int, npoint: i
         else:
             definitions[size.suffix] = str(counts[size.suffix])
     return definitions
+
+
+def function_table() -> str:
+    """The per-model functions as a markdown table (docs/generated-c.md renders it between its markers): each
+    function's call, its kind and what it does."""
+    lines = ["| function | kind | computes |", "|---|---|---|"]
+    for f in ALL_FUNCTIONS:
+        call = f"NAME_{f.name}({', '.join(a.name for a in f.args)})"
+        kind = ("fused kernel" if f.fused else "dense kernel" if f.dense else "kernel") if f.kernel else "wrapper"
+        summary = f.summary.replace("|", "/").replace("*", "\\*")
+        lines.append(f"| `{call}` | {kind} | {summary} |")
+    return "\n".join(lines) + "\n"

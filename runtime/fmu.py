@@ -19,7 +19,7 @@ from codegen.scene import Scene, SceneError, load_scene
 
 from .compile import (LIBRARY_DIR, PARALLEL_LINES, BuildError, compile_objects, compiler_command, library_files,
                       translation_units)
-from .header import library_constants
+from .header import fmi2_rows, library_constants
 from .horizon import DEFAULT_T_END
 
 FMI2_DIR = LIBRARY_DIR / "fmi2"          # gac_fmi2.c, gac_fmi2.h, fmi2_types.h: the slave, for any model
@@ -68,7 +68,7 @@ def build_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", *, name:
     files.update((path.name, path.read_text()) for path in [*library_files(), *fmi2_sources()])
     sources = [*files, f"{model.name}_fmi2.c"]
     files.update(fmu_texts(model, scene, [s for s in sources if s.endswith(".c")], stop_time, step_size,
-                            library_constants()))
+                            fmi2_rows(), library_constants()))
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -14,6 +14,8 @@ from functools import lru_cache
 from pathlib import Path
 
 LIBRARY_HEADER = Path(__file__).resolve().parent / "c" / "gac.h"
+FMI2_HEADER = Path(__file__).resolve().parent / "c" / "fmi2" / "gac_fmi2.h"
+FMI2_FIELDS = ("id", "name", "count", "causality", "variability", "unit", "start", "what")   # a row of X(...)
 
 _NUMBER = r"-?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?"
 _DEFINE = re.compile(rf"#\s*define\s+(\w+)(\(?)\s*(.*)$")
@@ -88,3 +90,39 @@ def return_codes(constants: dict[str, int | float] | None = None) -> dict[str, i
     constants = library_constants() if constants is None else constants
     return {name: int(value) for name, value in constants.items()
             if name == "GAC_OK" or name.startswith("GAC_ERR_")}
+
+
+def _arguments(text: str) -> list[str]:
+    """The comma-separated arguments of a macro call's text (between its parentheses), strings kept whole."""
+    args, current, quoted = [], "", False
+    for ch in text:
+        if ch == '"':
+            quoted = not quoted
+        if ch == "," and not quoted:
+            args.append(current.strip())
+            current = ""
+        else:
+            current += ch
+    return args + [current.strip()]
+
+
+def parse_rows(text: str, macro: str) -> list[dict[str, str]]:
+    """The rows X(id, name, ...) of the X-macro ``macro`` of a header (gac_fmi2.h's GAC_FMI2_REALS), each as
+    {field: text} by FMI2_FIELDS, strings unquoted."""
+    text = re.sub(r"\\\n", " ", re.sub(r"/\*.*?\*/", "", text, flags=re.S))
+    match = re.search(rf"^#define {macro}\(X\)(.*)$", text, flags=re.M)
+    if match is None:
+        raise ValueError(f"{macro}: no such X-macro in the header")
+    rows = []
+    for call in re.findall(r'X\(((?:[^()"]|"[^"]*")*)\)', match.group(1)):
+        values = [value[1:-1] if value.startswith('"') else value for value in _arguments(call)]
+        if len(values) != len(FMI2_FIELDS):
+            raise ValueError(f"{macro}: a row has {len(values)} fields, not {len(FMI2_FIELDS)}: X({call})")
+        rows.append(dict(zip(FMI2_FIELDS, values)))
+    return rows
+
+
+def fmi2_rows() -> dict[str, list[dict[str, str]]]:
+    """The FMU's variables as gac_fmi2.h describes them: {"Real": rows, "Integer": rows}, in value-reference order."""
+    text = FMI2_HEADER.read_text()
+    return {"Real": parse_rows(text, "GAC_FMI2_REALS"), "Integer": parse_rows(text, "GAC_FMI2_INTEGERS")}

@@ -219,3 +219,34 @@ def test_build_times_agree_across_pages():
         for page, seconds in figures:
             assert abs(seconds - reference) <= 0.05 * reference, \
                 f"{page}: n = {n} builds in {seconds} s, but {reference} s elsewhere ({figures}, table {table.get(n)})"
+
+
+def rendered_tables() -> dict[Path, str]:
+    """The tables the docs render from the interfaces' one description: docs/generated-c.md's functions
+    (codegen.interface), docs/fmi.md's FMU variables (gac_fmi2.h's rows)."""
+    from codegen.fmu import variable_table
+    from codegen.interface import function_table
+    from runtime.header import fmi2_rows, library_constants
+    return {ROOT / "docs" / "generated-c.md": function_table(),
+            ROOT / "docs" / "fmi.md": variable_table(fmi2_rows(), library_constants())}
+
+
+TABLE_START = re.compile(r"^<!-- the table below is rendered from .*-->\n", re.M)
+TABLE_END = "<!-- end of the rendered table -->\n"
+
+
+@pytest.mark.parametrize("page", sorted(rendered_tables(), key=str), ids=lambda page: page.name)
+def test_rendered_tables_are_up_to_date(page):
+    """The committed table between the page's markers is what its description renders now; GAC_UPDATE_DOCS=1
+    rewrites it."""
+    import os
+    text = page.read_text()
+    start = TABLE_START.search(text)
+    assert start is not None and TABLE_END in text[start.end():], f"{page.name}: no rendered-table markers"
+    end = text.index(TABLE_END, start.end())
+    table = rendered_tables()[page]
+    if os.environ.get("GAC_UPDATE_DOCS") == "1":
+        page.write_text(text[:start.end()] + table + text[end:])
+        return
+    assert text[start.end():end] == table, f"{page.name}: the rendered table is out of date (GAC_UPDATE_DOCS=1 " \
+        f"python -m pytest tests/test_docs.py -k rendered rewrites it)"

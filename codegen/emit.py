@@ -202,9 +202,9 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
     rules = parameter_rules(scene, layout.zero_params, bake_params)
     contact_table = [_contact_entry(c, point, wall, layout, scene, bake_params)
                      for c, (point, wall) in enumerate(layout.contacts)]
-    sizes = interface.size_definitions(name, n=scene.n, nq=layout.nq, nparam=len(params), nu=scene.nu, npoint=scene.n + 1,
-                                       ncontact=len(layout.contacts), njrow=len(layout.contact_rows),
-                                       friction=any(entry["has_friction"] for entry in contact_table))
+    sizes = interface.size_definitions(name, n=scene.n, nq=layout.nq, nparam=len(params), nu=scene.nu,
+                                       npoint=scene.n + 1, ncontact=len(layout.contacts),
+                                       njrow=len(layout.contact_rows), friction=any(entry["has_friction"] for entry in contact_table))
     context = dict(
         NAME=name.upper(), name=name, version=__version__, scene=scene, scene_hash=scene_hash(scene),
         bake_params=bake_params, functions=functions, nq=layout.nq,
@@ -342,11 +342,13 @@ def _contact_entry(c: int, point: int, wall, layout, scene: Scene, bake_params: 
     if friction > 0.0:
         doc += f", Coulomb friction coefficient c_f = {friction} (tangential rows {', '.join(str(r) for r in trow if r >= 0)})"
     return dict(c=c, point=point, axis=-1 if stop else wall.axis, sign=sign, row=row,
-                e_index=-1 if bake_params else scene.parameter_index(*restitution), e_value=_double_literal(float(wall.restitution)),
+                e_index=-1 if bake_params else scene.parameter_index(*restitution),
+                e_value=_double_literal(float(wall.restitution)),
                 kind="GAC_CONTACT_STOP" if stop else "GAC_CONTACT_WALL",
                 coordinate=layout.free.index(point + 1) if stop else -1, label=label, doc=doc,
                 has_friction=int(friction > 0.0),
-                friction_index=-1 if bake_params or friction == 0.0 else scene.parameter_index("friction", wall.name),
+                friction_index=(-1 if bake_params or friction == 0.0
+                                else scene.parameter_index("friction", wall.name)),
                 friction_value=_double_literal(friction), trow=trow)
 
 

@@ -4,8 +4,8 @@ that tells the FMI slave (runtime/c/fmi2/gac_fmi2.c) which model it runs.
 The variables are described once, by the rows of gac_fmi2.h (the coordinates q and rates qd (outputs), the inputs
 u, the parameters p, the initial state q0, qd0 and the solver settings (parameters), the energy terms and the
 impact count (outputs)); the tools layer reads them (runtime.header.fmi2_rows) and hands them here, and
-``variable_table`` renders them as docs/fmi.md's table.  Everything here is plain text; building the binary and zipping the FMU is
-``runtime.fmu``'s job.
+``variable_table`` renders them as docs/fmi.md's table.  Everything here is plain text; building the binary and
+zipping the FMU is ``runtime.fmu``'s job.
 """
 from __future__ import annotations
 
@@ -97,7 +97,8 @@ def fmi2_variables(model: GeneratedModel, scene: Scene, rows: dict, constants: d
         "Q": [(c, c, None) for c in coordinates],
         "QD": [(c, c, None) for c in coordinates],
         "U": [(c, c, None) for c in scene.inputs],
-        "P": [(rule.name, param_doc(rule.name), value) for rule, value in zip(rules, scene.parameter_vector().tolist())],
+        "P": [(rule.name, param_doc(rule.name), value)
+              for rule, value in zip(rules, scene.parameter_vector().tolist())],
         "Q0": [(c, c, float(v)) for c, v in zip(coordinates, layout.reduce(scene.q0))],
         "QD0": [(c, c, float(v)) for c, v in zip(coordinates, layout.reduce(scene.qd0))],
     }

@@ -72,7 +72,8 @@ class ChainSymbols:
         """-K_k (theta_k - rest_k): the torque of joint k's spring (0 without one)."""
         if k < 2 or self.scene.joints[k - 2].stiffness is None:
             return sp.Integer(0)
-        return -self.param(parameter_name("stiffness", k)) * (self.theta(k) - self.param(parameter_name("rest_angle", k)))
+        stretch = self.theta(k) - self.param(parameter_name("rest_angle", k))
+        return -self.param(parameter_name("stiffness", k)) * stretch
 
     def damper_torque(self, k: int) -> sp.Expr:
         """-C_k theta_dot_k: the torque of joint k's damper (0 without one)."""

@@ -154,7 +154,9 @@ def check_vector(rules: list[Rule], p, changed=None) -> None:
         if rule.above >= 0 and not value[rule.index] > value[rule.above]:
             raise SceneError(f"p[{rule.name}]: must be > p[{rule.above_name}] = {value[rule.above]!r}, "
                              f"got {value[rule.index]!r}")
-        if rule.inertia_of and (changed is None or changed & {parameter_name(key, rule.inertia_of) for key in INERTIA_NAMES}):
+        if not rule.inertia_of:
+            continue
+        if changed is None or changed & {parameter_name(key, rule.inertia_of) for key in INERTIA_NAMES}:
             check_inertia(value[rule.index:rule.index + 6], rule.inertia_of)
 
 

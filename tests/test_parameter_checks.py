@@ -234,7 +234,7 @@ def test_cffi_declarations_are_gac_h(model):
     for name, value in constants.items():
         assert getattr(model.lib, name) == value, name
     assert len(set(return_codes().values())) == len(return_codes())
-    structs = dict((name, body) for body, name in re.findall(r"typedef struct \{(.*?)\} (gac_\w+);", header, flags=re.S))
+    structs = {name: body for body, name in re.findall(r"typedef struct \{(.*?)\} (gac_\w+);", header, flags=re.S)}
     structs["gac_model"] = re.search(r"struct gac_model \{(.*?)\};", header, flags=re.S).group(1)
     assert {"gac_options", "gac_impact_record", "gac_contact", "gac_run_summary", "gac_parameter_info",
             "gac_sim", "gac_model"} <= set(structs)

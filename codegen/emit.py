@@ -13,7 +13,7 @@ from .flatten import Program
 from .artifact import GeneratedModel, RenderedFunction, scene_hash  # noqa: F401
 from .ops import count_ops
 from .parameters import parameter_rules
-from .scene import JointStop, Scene, split_parameter_name
+from .scene import JointStop, Scene, parameter_name, split_parameter_name
 from .specialise import coordinate_names
 from .version import __version__
 
@@ -277,7 +277,7 @@ def parameter_relations(rules) -> list[tuple[str, int, str]]:
         if rule.inertia_of:
             i = rule.inertia_of
             relations.append((f"gac_inertia_admissible(p + {rule.index})", rule.index,
-                              f"Ixx_{i} .. Iyz_{i}: a physical inertia"))
+                              f"{parameter_name('Ixx', i)} .. {parameter_name('Iyz', i)}: a physical inertia"))
     return relations
 
 

@@ -97,7 +97,7 @@ class Rule:
             words += f", and > {self.above_name}"
         if self.inertia_of:
             i = self.inertia_of
-            words += f"; Ixx_{i} .. Iyz_{i} together {INERTIA_WORDS}"
+            words += f"; {parameter_name('Ixx', i)} .. {parameter_name('Iyz', i)} together {INERTIA_WORDS}"
         return words
 
 

@@ -24,6 +24,7 @@ WORKERS = """
 import hashlib, sys
 from codegen.pipeline import generate
 from codegen.scene import default_scene
+from codegen.options import build_options
 model = generate(default_scene({n}), workers=2)
 assert "parallel_wall" in model.timings, "not derived in workers"
 print(hashlib.sha256((model.header + model.source + model.cdef).encode()).hexdigest())
@@ -44,7 +45,8 @@ def test_workers_give_the_same_text():
 
 
 def test_translation_units_hold_every_kernel_once():
-    model = generate(default_scene(6), dense=True)
+    scene = default_scene(6)
+    model = generate(scene, build_options(scene, dense=True))
     units = translation_units(model.source, 3)
     assert len(units) == 3
     kernels = [line for line in model.source.splitlines() if line.startswith(KERNEL_MARK)]

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from codegen import interface
+from codegen.options import build_options
 from codegen.pipeline import PARALLEL_MIN_LINKS, generate
 from codegen.scene import default_scene
 from conftest import random_scene, reference_of
@@ -24,7 +25,6 @@ WORKERS = """
 import hashlib, sys
 from codegen.pipeline import generate
 from codegen.scene import default_scene
-from codegen.options import build_options
 model = generate(default_scene({n}), workers=2)
 assert "parallel_wall" in model.timings, "not derived in workers"
 print(hashlib.sha256((model.header + model.source + model.cdef).encode()).hexdigest())

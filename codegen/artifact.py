@@ -6,11 +6,13 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from .options import BuildOptions
     from .scene import Scene
+    from .specialise import Layout
 
 
 @dataclass(frozen=True)
@@ -58,21 +60,26 @@ class RenderedFunction:
     scratch: int = 0                 # doubles of s[] a split function needs
 
 
-@dataclass
+@dataclass(frozen=True)
 class GeneratedModel:
-    """The generated files of one scene, as text."""
+    """The generated files of one scene, as text, with what made them."""
 
     name: str
     header: str
     source: str
     cdef: str
     functions: list[RenderedFunction]
-    bake_params: bool = False         # the parameters are constants in the code (p is ignored)
-    digest: str = ""                  # text_digest of header, source and cdef ("" until computed)
+    options: BuildOptions             # every choice the model was generated with (codegen.options)
+    layout: Layout                    # its coordinates, contacts and Jacobian rows (codegen.specialise)
+    digest: str                       # text_digest(header, source, cdef): the compiled module's key builds on it
+    timings: dict = field(default_factory=dict)   # seconds per stage (derive, cse, render, ...); {} when cached
+
+    @property
+    def bake_params(self) -> bool:
+        """The parameters are constants in the code (p is ignored)."""
+        return self.options.bake_params
 
     def text_digest(self) -> str:
-        if not self.digest:
-            self.digest = text_digest(self.header, self.source, self.cdef)
         return self.digest
 
 

@@ -10,8 +10,9 @@ from sympy.printing.c import C99CodePrinter
 
 from . import interface
 from .flatten import Program
-from .artifact import GeneratedModel, RenderedFunction, scene_hash  # noqa: F401
+from .artifact import GeneratedModel, RenderedFunction, scene_hash, text_digest  # noqa: F401
 from .ops import count_ops
+from .options import BuildOptions
 from .parameters import parameter_rules
 from .scene import JointStop, Scene, parameter_name, split_parameter_name
 from .specialise import coordinate_names
@@ -96,9 +97,7 @@ def c_expression(expr: sp.Expr) -> str:
 # A kernel longer than this is emitted as parts of at most this many lines.  Parts compile about 1.5 times
 # faster per line at n = 64 but run 2-9 % slower, so the right-hand side's forward_dynamics (called at every
 # integrator stage) is cut only when it is very long.
-SPLIT_LINES = 600
-SPLIT_LINES_HOT = 8000
-HOT_KERNELS = ("forward_dynamics",)
+SPLIT_LINES, SPLIT_LINES_HOT, HOT_KERNELS = interface.SPLIT_LINES, interface.SPLIT_LINES_HOT, interface.HOT_KERNELS
 
 
 def render_function(program: Program, split_lines: int | None = SPLIT_LINES) -> RenderedFunction:
@@ -164,14 +163,6 @@ def _environment() -> jinja2.Environment:
                               trim_blocks=True, lstrip_blocks=True)
 
 
-def split_size(kernel_name: str, split_lines: int | None = None) -> int:
-    """The part length of a kernel: ``split_lines`` if given, else SPLIT_LINES (SPLIT_LINES_HOT for the
-    right-hand side's forward_dynamics)."""
-    if split_lines is not None:
-        return split_lines
-    return SPLIT_LINES_HOT if kernel_name in HOT_KERNELS else SPLIT_LINES
-
-
 def _weight_scale_expression(scene: Scene, bake_params: bool) -> str:
     """C expression of M |g| L from the parameter vector p (with bake_params, from the scene's values, as every
     kernel of such a model): the work to lift the whole chain by its own length (the energy scale of a chain at
@@ -188,10 +179,12 @@ def _weight_scale_expression(scene: Scene, bake_params: bool) -> str:
     return f"({' + '.join(masses)}) * fabs({value('g')}) * ({' + '.join(lengths)})"
 
 
-def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], bake_params: bool,
-                   layout, chart_b=None) -> GeneratedModel:
+def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], options: BuildOptions,
+                   layout, chart_b=None, timings=None) -> GeneratedModel:
     """The model's header, source and cffi declarations from its rendered kernels (in interface order).
-    ``chart_b``: (the scene on chart B, its rendered loop kernels) for a second base chart (codegen.charts), or None."""
+    ``chart_b``: (the scene on chart B, its rendered loop kernels) for a second base chart (codegen.charts), or None;
+    ``timings``: seconds per stage so far."""
+    bake_params = options.bake_params
     dense = _check_kernels(functions)
     generated = {f.name: f for f in functions}
     env = _environment()
@@ -245,9 +238,8 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
     header = env.get_template("model.h.j2").render(**context)
     source = env.get_template("model.c.j2").render(**context)
     cdef = env.get_template("cdef.h.j2").render(**context)
-    model = GeneratedModel(name, header, source, cdef, functions, bake_params)
-    model.layout = layout
-    return model
+    return GeneratedModel(name, header, source, cdef, functions, options, layout, text_digest(header, source, cdef),
+                          dict(timings or {}))
 
 
 PARAM_DOC = {

@@ -136,6 +136,10 @@ def wants_dense(n: int, dense: bool | None) -> bool:
     return n <= DENSE_MAX_LINKS if dense is None else bool(dense)
 
 
+SPLIT_LINES = 600           # a kernel longer than this is cut into parts (codegen.emit.render_function) ...
+SPLIT_LINES_HOT = 8000      # ... the right-hand side's kernels longer than this (parts cost 2-9 % per call)
+HOT_KERNELS = ("forward_dynamics",)
+
 ROLLED_MIN_LINKS = 8        # from this n on, forward_dynamics is emitted with loops over the links (codegen.rolled)
 
 

@@ -31,13 +31,12 @@ from pathlib import Path
 
 import cffi
 
+from codegen.options import DEFAULT_FLAGS      # the compiler flags of a model that asks for none
 from codegen.artifact import text_digest
 from codegen.cache import (CacheError, cache_dir, clear_entry, entry_lock, report_corrupted, sha256_of,  # noqa: F401
                            write_atomic)
 
 from .header import library_cdef
-
-DEFAULT_FLAGS = ("-O2",)
 SUFFIX = sysconfig.get_config_var("EXT_SUFFIX") or ".so"
 LIBRARY_DIR = Path(__file__).resolve().parent / "c"      # the C library every model is compiled with (package data)
 

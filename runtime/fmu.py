@@ -15,6 +15,7 @@ import time
 import zipfile
 from pathlib import Path
 
+from codegen.options import build_options
 from codegen.scene import Scene, SceneError, load_scene
 
 from .compile import (LIBRARY_DIR, PARALLEL_LINES, BuildError, compile_objects, compiler_command, library_files,
@@ -62,8 +63,8 @@ def build_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", *, name:
             raise SceneError(f"{label}: must be a finite number of seconds > 0, got {value!r}")
     folder, suffix = fmi_platform()
     compiler = compiler_command()
-    model = generate_cached(scene, name=name, bake_params=bake_params, specialise=specialise, rolled=rolled,
-                            progress=progress)
+    options = build_options(scene, bake_params=bake_params, specialise=specialise, rolled=rolled)
+    model = generate_cached(scene, options, name=name, progress=progress)
     files = {f"{model.name}.h": model.header, f"{model.name}.c": model.source}
     files.update((path.name, path.read_text()) for path in [*library_files(), *fmi2_sources()])
     sources = [*files, f"{model.name}_fmi2.c"]

@@ -233,8 +233,8 @@ def builds(monkeypatch):
     """Stand-in for building a model: records (scene, options) and returns a new object each time."""
     made = []
 
-    def build(scene, bake_params, flags, progress, specialise, dense=None, rolled=None):
-        made.append((scene, bake_params, flags, specialise))
+    def build(scene, options, progress):
+        made.append((scene, options))
         return object()
     monkeypatch.setattr(runtime.model, "_build_model", build)
     monkeypatch.setattr(runtime.model, "_MODELS", {})

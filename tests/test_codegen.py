@@ -16,6 +16,7 @@ from codegen.emit import c_expression
 from codegen.pipeline import write_model
 from codegen.ops import count_ops
 from codegen.scene import MAX_LINKS, Scene, LineLink, load_scene
+from codegen.options import build_options
 from runtime.compile import copy_library, library_files
 from conftest import random_scene
 
@@ -45,7 +46,8 @@ SCENES = {
 @pytest.mark.parametrize("which", sorted(SCENES))
 @pytest.mark.parametrize("bake", [False, True])
 def test_generated_c_is_strict_c99_and_header_is_cxx(tmp_path, which, bake):
-    model = codegen.generate(SCENES[which](), bake_params=bake)
+    scene = SCENES[which]()
+    model = codegen.generate(scene, build_options(scene, bake_params=bake))
     source = write(model, tmp_path)
     subprocess.run(["gcc", *STRICT, "-O1", "-c", str(source), "-o", str(tmp_path / "m.o")], check=True)
     for library in library_sources(tmp_path):

@@ -27,6 +27,7 @@ LAYERS = {
     "codegen.scene": DESCRIPTION,
     "codegen.scenes": DESCRIPTION,            # the shipped scene files (package data)
     "codegen.parameters": DESCRIPTION,        # the allowed values of every runtime parameter
+    "codegen.options": DESCRIPTION,           # every choice of a build, resolved once
     "codegen.specialise": DESCRIPTION,        # a model's layout
     "codegen.charts": DESCRIPTION,            # the second base chart's scene
     "codegen.interface": DESCRIPTION,         # the C interface, as plain data

@@ -13,6 +13,7 @@ import pytest
 from studies import reference
 from conftest import random_parameters, random_scene, reference_of
 from codegen.scene import default_scene
+from codegen.options import build_options
 from runtime import load_model, simulate
 
 CASES = [(1, ("line",)), (3, ("line", "rigid")), (6, ("rigid",))]
@@ -127,7 +128,7 @@ def test_kernels_cut_into_parts_compute_the_same(tmp_path):
     scene = random_scene(3, seed=77, random_twists=True, kinds=("rigid", "line"))
     models = []
     for split in (None, 25):
-        generated = generate(scene, specialise=False, dense=True, split_lines=split)
+        generated = generate(scene, build_options(scene, specialise=False, dense=True, split_lines=split))
         module = compile_model(generated.name, generated.header, generated.source, generated.cdef)
         models.append(CompiledModel(scene, generated, module))
     whole, parts = models

@@ -1,11 +1,11 @@
 """Code generator for the hybrid dynamics of open chains of rigid links (recursive Gibbs-Appell).
 
     from codegen import generate, load_scene
+    from codegen.pipeline import write_model
     model = generate(load_scene("paper-case1"))
-    model.write("generated/")
+    write_model(model, "generated/")          # NAME.h, NAME.c (runtime.compile.copy_library adds the C library)
 """
-__version__ = "0.1.0"
-
+from .version import __version__  # noqa: E402,F401
 from .scene import Scene, SceneError, load_scene, default_scene  # noqa: E402,F401
 from .artifact import GeneratedModel  # noqa: E402,F401
 

@@ -5,14 +5,14 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import importlib.util
 import json
-from dataclasses import dataclass
-from pathlib import Path
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from .options import BuildOptions
     from .scene import Scene
+    from .specialise import Layout
 
 
 @dataclass(frozen=True)
@@ -60,21 +60,26 @@ class RenderedFunction:
     scratch: int = 0                 # doubles of s[] a split function needs
 
 
-@dataclass
+@dataclass(frozen=True)
 class GeneratedModel:
-    """The generated files of one scene, as text."""
+    """The generated files of one scene, as text, with what made them."""
 
     name: str
     header: str
     source: str
     cdef: str
     functions: list[RenderedFunction]
-    bake_params: bool = False         # the parameters are constants in the code (p is ignored)
-    digest: str = ""                  # text_digest of header, source and cdef ("" until computed)
+    options: BuildOptions             # every choice the model was generated with (codegen.options)
+    layout: Layout                    # its coordinates, contacts and Jacobian rows (codegen.specialise)
+    digest: str                       # text_digest(header, source, cdef): the compiled module's key builds on it
+    timings: dict = field(default_factory=dict)   # seconds per stage (derive, cse, render, ...); {} when cached
+
+    @property
+    def bake_params(self) -> bool:
+        """The parameters are constants in the code (p is ignored)."""
+        return self.options.bake_params
 
     def text_digest(self) -> str:
-        if not self.digest:
-            self.digest = text_digest(self.header, self.source, self.cdef)
         return self.digest
 
 
@@ -123,16 +128,3 @@ def _convert(value):
         return [_canonical(v) for v in value]
     return {"type": type(value).__name__, **{k: _canonical(getattr(value, k)) for k in value.__dataclass_fields__}}
 
-
-def library_dir() -> Path:
-    """runtime/c: the plain C library (gac.h, gac_*.c) that every model is built with, found without importing
-    the runtime package."""
-    spec = importlib.util.find_spec("runtime")
-    return Path(next(iter(spec.submodule_search_locations))) / "c"
-
-
-def library_files(folder: Path | None = None) -> list[Path]:
-    """The library's headers and sources (gac*.h, gac*.c) in ``folder`` (default library_dir()), by name."""
-    folder = library_dir() if folder is None else Path(folder)
-    return sorted(path for path in folder.iterdir()
-                  if path.name.startswith("gac") and path.suffix in (".c", ".h") and path.is_file())

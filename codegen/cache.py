@@ -8,6 +8,8 @@ The cache directory is ``$GIBBS_APPELL_CACHE``, else ``$XDG_CACHE_HOME/gibbs-app
   and the generator fingerprint.  The file carries the sha256 of its payload and is checked on load.
 * ``_gac_KEY.<ext>`` with ``sha256_gac_KEY.txt`` -- a compiled cffi module (written by
   ``runtime.compile``) and its sidecar in ``sha256sum`` format, checked before the module is imported.
+* ``gac_lib_KEY.o`` with ``sha256_gac_lib_KEY.txt`` -- the C library compiled once (``runtime.compile.library_object``),
+  linked into every module built with the same library text and flags.
 
 An entry that fails its check (unreadable, malformed, missing its hash, hash mismatch) is corrupted:
 one line ``cache: rebuilding corrupted entry FILE (REASON)`` is reported and the entry is rebuilt.
@@ -29,6 +31,7 @@ from pathlib import Path
 
 from . import interface
 from .artifact import GeneratedModel, OpCount, RenderedFunction, scene_hash, text_digest
+from .options import BuildOptions, build_options
 from .scene import Scene
 from .specialise import layout_for
 
@@ -153,13 +156,10 @@ def generator_fingerprint() -> str:
     return _hash_generator_sources()
 
 
-def generation_key(scene: Scene, name: str | None = None, bake_params: bool = False,
-                   specialise: bool = True, dense: bool | None = None, rolled: bool | None = None) -> str:
-    name = name or scene.name
-    dense = interface.wants_dense(scene.n, dense)
-    rolled = interface.wants_rolled(scene.n, rolled)
-    text = (f"{scene_hash(scene)}|{name}|{bool(bake_params)}|{bool(specialise)}|{dense}|{rolled}|"
-            f"{generator_fingerprint()}")
+def generation_key(scene: Scene, options: BuildOptions | None = None, name: str | None = None) -> str:
+    """The generated text's key: the scene, the model's name, the options that shape the text and the generator."""
+    options = build_options(scene) if options is None else options
+    text = f"{scene_hash(scene)}|{name or scene.name}|{options.generation_text()}|{generator_fingerprint()}"
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 
@@ -230,41 +230,37 @@ def _read_generated(path: Path, key: str, name: str) -> tuple[dict | None, str |
     return payload, None
 
 
-def _model_from_payload(payload: dict, scene: Scene, bake_params: bool, specialise: bool) -> GeneratedModel:
+def _model_from_payload(payload: dict, scene: Scene, options: BuildOptions) -> GeneratedModel:
     functions = [RenderedFunction(f["name"], f["summary"], tuple(f["inputs"]), f["output"], f["output_size"],
                                   [], OpCount(*f["ops"])) for f in payload["functions"]]
-    model = GeneratedModel(payload["name"], payload["header"], payload["source"], payload["cdef"], functions,
-                           bake_params, payload["digest"])
-    model.layout = layout_for(scene, specialise)
-    model.timings = {}
-    model.formulation = "gibbs_appell"
-    model.raw_ops = {}
-    return model
+    return GeneratedModel(payload["name"], payload["header"], payload["source"], payload["cdef"], functions,
+                          options, layout_for(scene, options.specialise), payload["digest"])   # (digest: computed
+                                                                                     # when the entry was checked)
 
 
-def generate_cached(scene: Scene, *, name: str | None = None, bake_params: bool = False,
-                    specialise: bool = True, progress=None, refresh: bool = False,
-                    dense: bool | None = None, rolled: bool | None = None) -> GeneratedModel:
-    """``codegen.generate`` through the on-disk cache of generated text.
+def generate_cached(scene: Scene, options: BuildOptions | None = None, *, name: str | None = None,
+                    progress=None, refresh: bool = False) -> GeneratedModel:
+    """``codegen.generate`` through the on-disk cache of generated text (``options``: codegen.options.build_options;
+    None: the scene's defaults).
 
     A cached model has everything but the C lines of its functions (``functions[i].lines`` is
     empty; the text is in ``.source``) and its stage timings.  ``refresh`` always runs the generator
     and stores the result (the command line does this, so it reports its own timings).
     """
+    options = build_options(scene) if options is None else options
     name = name or scene.name
-    key = generation_key(scene, name, bake_params, specialise, dense, rolled)
+    key = generation_key(scene, options, name)
     folder = cache_dir()
     path = folder / f"gen_{key}.json"
     with entry_lock(folder, path.stem):
         if not refresh:
             payload, problem = _read_generated(path, key, name)
             if payload is not None:
-                return _model_from_payload(payload, scene, bake_params, specialise)
+                return _model_from_payload(payload, scene, options)
             if problem:
                 report_corrupted(path.name, problem, progress)
         from .pipeline import generate          # the computer algebra loads only when a model is generated
-        model = generate(scene, name=name, bake_params=bake_params, progress=progress or (lambda m: None),
-                         specialise=specialise, dense=dense, rolled=rolled)
+        model = generate(scene, options, name=name, progress=progress or (lambda m: None))
         if _hash_generator_sources() == generator_fingerprint():   # the generator did not change meanwhile
             payload = _payload(model)
             data = {"format": GEN_FORMAT, "key": key, "sha256": _payload_hash(payload, model.text_digest()),

@@ -18,8 +18,8 @@ direction (X1 or X3, whichever is farther from z_1 at the scene's start): T_0, T
 the same, so link 1's frame, the inner joint angles theta_2..theta_n and the base position X are the
 same in both charts and only (theta_-1, theta_0, theta_1) and their rates change.  The generator
 derives chart B's kernels beside chart A's (``chart_b_scene``); the C loop switches to B where
-mu_A < chart_switch and back where mu_A > 2 chart_switch, so that on B mu_A <= 0.7 and, u_-1 of B
-being perpendicular to A's, mu_B >= sqrt(1 - 0.7^2) > 0.71.
+chi_A < chart_switch and back where chi_A > 2 chart_switch, so that on B chi_A <= 0.7 and, u_-1 of B
+being perpendicular to A's, chi_B >= sqrt(1 - 0.7^2) > 0.71.
 """
 from __future__ import annotations
 
@@ -120,7 +120,7 @@ class Chart:
         Of the two solutions (theta_0 - phi in [-pi, 0] or [0, pi]) and their 2 pi shifts, the one
         closest to ``near`` (sum of the three distances) is returned; without ``near`` the principal one
         (theta_0 - phi in [-pi, 0], |theta_0| <= pi/2 for the default twists) wrapped to (-pi, pi].
-        At the chart's own singularity (mu < LOCK_TOL) only theta_-1 + theta_1 (or the difference) is
+        At the chart's own singularity (chi < LOCK_TOL) only theta_-1 + theta_1 (or the difference) is
         defined; theta_-1 is then taken from ``near`` (or 0).  The result is checked by recomposition.
         """
         return self.angles_path(np.asarray(R, dtype=float)[None], near)[0]

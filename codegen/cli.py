@@ -7,8 +7,11 @@ import sys
 import time
 from pathlib import Path
 
+from runtime.compile import BuildError, CompilerNotFound, compile_model, copy_library, library_sources
+
 from .cache import CacheError, cache_dir, generate_cached
-from .interface import ROLLED_MIN_LINKS, wants_rolled
+from .interface import ROLLED_MIN_LINKS
+from .options import build_options
 from .outputs import output_dir_problem
 from .pipeline import write_model, write_standalone
 from .scene import MAX_LINKS, MAX_LINKS_REASON, SceneError, default_scene, is_c_identifier, load_scene, shipped_scene_names
@@ -84,14 +87,14 @@ def default_out(args: argparse.Namespace) -> str:
     return "build" if args.scene is not None and Path(args.scene).exists() else "generated"
 
 
-def loops_note(scene, layout, args) -> str:
+def loops_note(scene, layout, options, args) -> str:
     """How the forward dynamics will be emitted: rolled over which links, or unrolled and why."""
-    if not wants_rolled(scene.n, args.rolled):
+    if not options.rolled:
         return (f"straight-line code per link (--rolled for loops; the default from {ROLLED_MIN_LINKS} links on)"
                 if args.rolled is None else "straight-line code per link (--unrolled)")
     from .kinematics import ChainSymbols
     from .rolled import ROLL_MIN_RUN, find_run
-    run = find_run(ChainSymbols(scene, args.bake_params, layout))
+    run = find_run(ChainSymbols(scene, options.bake_params, layout))
     if run is None:
         return (f"straight-line code per link: no run of {ROLL_MIN_RUN} identical links between link 2 and link "
                 "n - 1 to loop over")
@@ -146,14 +149,15 @@ def main(argv=None) -> int:
     for warning in scene.warnings:                # values that suggest a slip of units: said, not refused
         print(f"warning: {warning}", file=sys.stderr)
 
+    options = build_options(scene, bake_params=args.bake_params, specialise=not args.general, rolled=args.rolled)
     try:
-        layout = layout_for(scene, specialise=not args.general)
+        layout = layout_for(scene, specialise=options.specialise)
         check_not_singular(scene, layout)
     except SceneError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    if args.rolled and loops_note(scene, layout, args).startswith("straight"):
-        print(f"error: --rolled: {loops_note(scene, layout, args)}", file=sys.stderr)
+    if options.rolled_required and loops_note(scene, layout, options, args).startswith("straight"):
+        print(f"error: --rolled: {loops_note(scene, layout, options, args)}", file=sys.stderr)
         return 2
     if args.urdf:
         return write_urdf(scene, args.urdf)
@@ -161,8 +165,8 @@ def main(argv=None) -> int:
         print(f"scene {scene.name}: n = {scene.n}; the model keeps {layout.nq} of {scene.nq} coordinates")
         for note in layout.notes:
             print(f"  - {note}")
-        print(f"  - parameters: {'baked in as constants' if args.bake_params else 'a runtime array p'}")
-        print(f"  - forward dynamics: {loops_note(scene, layout, args)}")
+        print(f"  - parameters: {'baked in as constants' if options.bake_params else 'a runtime array p'}")
+        print(f"  - forward dynamics: {loops_note(scene, layout, options, args)}")
         return 0
 
     out = args.out if args.out is not None else default_out(args)
@@ -178,18 +182,16 @@ def main(argv=None) -> int:
 
     progress(f"scene {scene.name}: n = {scene.n} links, {layout.nq} of {scene.nq} coordinates, "
              f"{len(scene.walls)} walls, {len(layout.contacts)} contacts")
-    model = generate_cached(scene, name=args.name, bake_params=args.bake_params, specialise=not args.general,
-                            progress=progress, refresh=True, rolled=args.rolled)
+    model = generate_cached(scene, options, name=args.name, progress=progress, refresh=True)
     try:
-        paths = write_model(model, out)
+        paths = write_model(model, out) + copy_library(out)           # the model, and the library it builds with
         if args.standalone:
-            paths += write_standalone(model, scene, out)
+            paths += write_standalone(model, scene, out, [path.name for path in library_sources()])
     except OSError as exc:
         print(f"error: --out: cannot write into {out}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     timings = dict(model.timings)
     if not args.no_compile:
-        from runtime.compile import BuildError, CompilerNotFound, compile_model
         start = time.perf_counter()
         try:
             compile_model(model.name, model.header, model.source, model.cdef, progress=progress,

@@ -8,13 +8,15 @@ import numpy as np
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
-from . import __version__, interface
+from . import interface
 from .flatten import Program
-from .artifact import GeneratedModel, RenderedFunction, scene_hash  # noqa: F401
+from .artifact import GeneratedModel, RenderedFunction, scene_hash, text_digest  # noqa: F401
 from .ops import count_ops
+from .options import BuildOptions
 from .parameters import parameter_rules
-from .scene import JointStop, Scene, Wall
+from .scene import JointStop, Scene, parameter_name, split_parameter_name
 from .specialise import coordinate_names
+from .version import __version__
 
 
 class ChainCPrinter(C99CodePrinter):
@@ -95,9 +97,7 @@ def c_expression(expr: sp.Expr) -> str:
 # A kernel longer than this is emitted as parts of at most this many lines.  Parts compile about 1.5 times
 # faster per line at n = 64 but run 2-9 % slower, so the right-hand side's forward_dynamics (called at every
 # integrator stage) is cut only when it is very long.
-SPLIT_LINES = 600
-SPLIT_LINES_HOT = 8000
-HOT_KERNELS = ("forward_dynamics",)
+SPLIT_LINES, SPLIT_LINES_HOT, HOT_KERNELS = interface.SPLIT_LINES, interface.SPLIT_LINES_HOT, interface.HOT_KERNELS
 
 
 def render_function(program: Program, split_lines: int | None = SPLIT_LINES) -> RenderedFunction:
@@ -163,34 +163,28 @@ def _environment() -> jinja2.Environment:
                               trim_blocks=True, lstrip_blocks=True)
 
 
-def split_size(kernel_name: str, split_lines: int | None = None) -> int:
-    """The part length of a kernel: ``split_lines`` if given, else SPLIT_LINES (SPLIT_LINES_HOT for the
-    right-hand side's forward_dynamics)."""
-    if split_lines is not None:
-        return split_lines
-    return SPLIT_LINES_HOT if kernel_name in HOT_KERNELS else SPLIT_LINES
-
-
-def _weight_scale_expression(scene: Scene, pnames: list, bake_params: bool) -> str:
+def _weight_scale_expression(scene: Scene, bake_params: bool) -> str:
     """C expression of M |g| L from the parameter vector p (with bake_params, from the scene's values, as every
     kernel of such a model): the work to lift the whole chain by its own length (the energy scale of a chain at
     rest on the floor, where T + V can be exactly 0)."""
     values = scene.parameter_vector()
 
-    def value(name):
-        index = pnames.index(name)
+    def value(kind, owner=None):
+        index = scene.parameter_index(kind, owner)
         return _double_literal(float(values[index])) if bake_params else f"p[{index}]"
     masses, lengths = [], []
     for i, link in enumerate(scene.links, start=1):
-        masses.append(f"{value(f'mu_{i}')} * {value(f'l_{i}')}" if link.kind == "line" else value(f"m_{i}"))
-        lengths.append(value(f"l_{i}"))
+        masses.append(f"{value('mu', i)} * {value('l', i)}" if link.kind == "line" else value("m", i))
+        lengths.append(value("l", i))
     return f"({' + '.join(masses)}) * fabs({value('g')}) * ({' + '.join(lengths)})"
 
 
-def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], bake_params: bool,
-                   layout, chart_b=None) -> GeneratedModel:
+def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], options: BuildOptions,
+                   layout, chart_b=None, timings=None) -> GeneratedModel:
     """The model's header, source and cffi declarations from its rendered kernels (in interface order).
-    ``chart_b``: (the scene on chart B, its rendered loop kernels) for a second base chart (codegen.charts), or None."""
+    ``chart_b``: (the scene on chart B, its rendered loop kernels) for a second base chart (codegen.charts), or None;
+    ``timings``: seconds per stage so far."""
+    bake_params = options.bake_params
     dense = _check_kernels(functions)
     generated = {f.name: f for f in functions}
     env = _environment()
@@ -199,9 +193,11 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
     names = coordinate_names(scene.n)
     zeros = set(layout.zero_params)
     rules = parameter_rules(scene, layout.zero_params, bake_params)
-    sizes = interface.size_values(n=scene.n, nq=layout.nq, nparam=len(params), nu=scene.nu, npoint=scene.n + 1,
-                                  ncontact=len(layout.contacts), njrow=len(layout.contact_rows),
-                                  friction=any(w.friction > 0.0 for _, w in layout.contacts if isinstance(w, Wall)))
+    contact_table = [_contact_entry(c, point, wall, layout, scene, bake_params)
+                     for c, (point, wall) in enumerate(layout.contacts)]
+    sizes = interface.size_definitions(name, n=scene.n, nq=layout.nq, nparam=len(params), nu=scene.nu,
+                                       npoint=scene.n + 1, ncontact=len(layout.contacts),
+                                       njrow=len(layout.contact_rows), friction=any(entry["has_friction"] for entry in contact_table))
     context = dict(
         NAME=name.upper(), name=name, version=__version__, scene=scene, scene_hash=scene_hash(scene),
         bake_params=bake_params, functions=functions, nq=layout.nq,
@@ -212,10 +208,9 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
         parameter_info=[(rule.name, _double_literal(rule.lo), _double_literal(rule.hi), _c_string(rule.text))
                         for rule in rules],
         relations=parameter_relations(rules),
-        weight_scale=_weight_scale_expression(scene, pnames, bake_params),
+        weight_scale=_weight_scale_expression(scene, bake_params),
         contacts=[(c, point, wall) for c, (point, wall) in enumerate(layout.contacts)],
-        contact_table=[_contact_entry(c, point, wall, layout, pnames, bake_params)
-                       for c, (point, wall) in enumerate(layout.contacts)],
+        contact_table=contact_table,
         row_labels=[f"(theta_{point})" if axis == "theta" else f"(O_{point},X{axis + 1})"
                     for point, axis in layout.contact_rows],
         rows=list(layout.contact_rows), twists=scene.all_twists,
@@ -235,17 +230,16 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], b
         param_macros=[(i, macro_name(pname)) for i, pname in enumerate(pnames)],
         coordinate_macros=[(i, macro_name(names[full]), names[full]) for i, full in enumerate(layout.free)],
         has_power=scene.driven, friction_velocity=_double_literal(float(scene.friction_velocity)),
-        sizes=interface.SIZES, size_values=sizes, constants=interface.CONSTANTS, structs=interface.STRUCTS,
+        sizes=interface.SIZES, size_values=sizes,
         kernels=[(f, generated.get(f.name)) for f in interface.KERNELS], dense=dense,
         formed=[f for f in interface.KERNELS if f.name not in generated], all_functions=interface.ALL_FUNCTIONS,
-        library_functions=interface.LIBRARY_FUNCTIONS, api_functions=interface.FUNCTIONS, callbacks=interface.CALLBACKS,
+        api_functions=interface.FUNCTIONS, callbacks=interface.CALLBACKS,
     )
     header = env.get_template("model.h.j2").render(**context)
     source = env.get_template("model.c.j2").render(**context)
     cdef = env.get_template("cdef.h.j2").render(**context)
-    model = GeneratedModel(name, header, source, cdef, functions, bake_params)
-    model.layout = layout
-    return model
+    return GeneratedModel(name, header, source, cdef, functions, options, layout, text_digest(header, source, cdef),
+                          dict(timings or {}))
 
 
 PARAM_DOC = {
@@ -275,7 +269,7 @@ def parameter_relations(rules) -> list[tuple[str, int, str]]:
         if rule.inertia_of:
             i = rule.inertia_of
             relations.append((f"gac_inertia_admissible(p + {rule.index})", rule.index,
-                              f"Ixx_{i} .. Iyz_{i}: a physical inertia"))
+                              f"{parameter_name('Ixx', i)} .. {parameter_name('Iyz', i)}: a physical inertia"))
     return relations
 
 
@@ -319,11 +313,11 @@ def _base_context(scene: Scene, layout) -> dict:
             "index": [layout.free.index(i) if i in layout.free else -1 for i in range(3)]}
 
 
-def _contact_entry(c: int, point: int, wall, layout, pnames: list[str], bake_params: bool) -> dict:
+def _contact_entry(c: int, point: int, wall, layout, scene: Scene, bake_params: bool) -> dict:
     """One row of the model's gac_contact table, and its description for the header."""
     stop = isinstance(wall, JointStop)
     row = layout.contact_rows.index((point, "theta" if stop else wall.axis))
-    e_name = f"e_limit_{point}" if stop else f"e_{wall.name}"
+    restitution = ("e_limit", point) if stop else ("e", wall.name)          # the parameter of its e
     sign = int(wall.normal_sign)
     if stop:
         label = wall.name
@@ -338,14 +332,16 @@ def _contact_entry(c: int, point: int, wall, layout, pnames: list[str], bake_par
     trow = [layout.contact_rows.index((point, a)) if friction > 0.0 and (point, a) in layout.contact_rows else -1
             for a in tangents] if tangents else [-1, -1]
     if friction > 0.0:
-        doc += f", Coulomb friction mu = {friction} (tangential rows {', '.join(str(r) for r in trow if r >= 0)})"
+        doc += f", Coulomb friction coefficient c_f = {friction} (tangential rows {', '.join(str(r) for r in trow if r >= 0)})"
     return dict(c=c, point=point, axis=-1 if stop else wall.axis, sign=sign, row=row,
-                e_index=-1 if bake_params else pnames.index(e_name), e_value=_double_literal(float(wall.restitution)),
+                e_index=-1 if bake_params else scene.parameter_index(*restitution),
+                e_value=_double_literal(float(wall.restitution)),
                 kind="GAC_CONTACT_STOP" if stop else "GAC_CONTACT_WALL",
                 coordinate=layout.free.index(point + 1) if stop else -1, label=label, doc=doc,
                 has_friction=int(friction > 0.0),
-                mu_index=-1 if bake_params or friction == 0.0 else pnames.index(f"friction_{wall.name}"),
-                mu_value=_double_literal(friction), trow=trow)
+                friction_index=(-1 if bake_params or friction == 0.0
+                                else scene.parameter_index("friction", wall.name)),
+                friction_value=_double_literal(friction), trow=trow)
 
 
 def macro_name(name: str) -> str:
@@ -354,19 +350,18 @@ def macro_name(name: str) -> str:
 
 
 def param_doc(pname: str) -> str:
-    if pname.startswith(("stiffness_", "rest_angle_", "damping_", "lower_", "upper_", "e_limit_")):
-        base, joint = pname.rsplit("_", 1)
-        return f"joint {joint}: {JOINT_DOC[base]}"
-    if pname.startswith("wall_"):
-        return f"position of wall {pname[5:]} (m)"
-    if pname.startswith("e_"):
-        return f"restitution of wall {pname[2:]} (-)"
-    if pname.startswith("friction_"):
-        return f"Coulomb friction coefficient of wall {pname[9:]} (-)"
-    if pname == "g":
+    kind, owner = split_parameter_name(pname)
+    if kind in JOINT_DOC:
+        return f"joint {owner}: {JOINT_DOC[kind]}"
+    if kind == "wall":
+        return f"position of wall {owner} (m)"
+    if kind == "e":
+        return f"restitution of wall {owner} (-)"
+    if kind == "friction":
+        return f"Coulomb friction coefficient of wall {owner} (-)"
+    if kind == "g":
         return PARAM_DOC["g"]
-    base, link = pname.rsplit("_", 1)
-    return f"link {link}: {PARAM_DOC[base]}"
+    return f"link {owner}: {PARAM_DOC[kind]}"
 
 
 STANDALONE_TEMPLATES = {"{name}_example.c": "example_main.c.j2", "Makefile": "Makefile.j2",

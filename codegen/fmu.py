@@ -1,10 +1,11 @@
 """The texts of an FMI 2.0 Co-Simulation FMU of a generated model: its modelDescription.xml and the small C file
 that tells the FMI slave (runtime/c/fmi2/gac_fmi2.c) which model it runs.
 
-The variables follow the value references of gac_fmi2.h: the coordinates q and rates qd (outputs), the inputs u,
-the parameters p, the initial state q0, qd0 and the solver settings (parameters), the energy terms and the
-impact count (outputs).  Everything here is plain text; building the binary and zipping the FMU is
-``runtime.fmu``'s job.
+The variables are described once, by the rows of gac_fmi2.h (the coordinates q and rates qd (outputs), the inputs
+u, the parameters p, the initial state q0, qd0 and the solver settings (parameters), the energy terms and the
+impact count (outputs)); the tools layer reads them (runtime.header.fmi2_rows) and hands them here, and
+``variable_table`` renders them as docs/fmi.md's table.  Everything here is plain text; building the binary and
+zipping the FMU is ``runtime.fmu``'s job.
 """
 from __future__ import annotations
 
@@ -13,12 +14,11 @@ import uuid
 from dataclasses import dataclass
 from xml.sax.saxutils import quoteattr
 
-from . import __version__
 from .artifact import GeneratedModel
 from .emit import _double_literal, _environment, param_doc
-from .interface import RTOL_MIN
 from .parameters import parameter_rules
 from .scene import Scene, coordinate_names
+from .version import __version__
 
 FMI_VERSION = "2.0"
 
@@ -34,23 +34,6 @@ UNITS = {
 # The unit written in a parameter's description (codegen.emit.param_doc) -> its FMI unit name.
 DOC_UNITS = {"m": "m", "rad": "rad", "kg": "kg", "kg/m": "kg/m", "kg m": "kg.m", "kg m^2": "kg.m2",
              "m/s^2": "m/s2", "N m/rad": "N.m/rad", "N m s/rad": "N.m.s/rad", "-": None}
-
-# Solver settings and energy outputs, in the order of gac_fmi2.h (GAC_FMI2_NSOLVER_REAL, GAC_FMI2_NOUT_REAL);
-# the solver's start values are gac_default_options' (a test reads them back from a built FMU).
-SOLVER_REALS = (("solver.rtol", 1e-8, None, "relative tolerance of DOPRI5/DOP853 (default: the experiment's "
-                 "tolerance if one is given)"),
-                ("solver.atol", 1e-10, None, "absolute tolerance of DOPRI5/DOP853 (default: the experiment's "
-                 "tolerance / 100 if one is given)"),
-                ("solver.dt", 0.0, "s", "RK4 step; the first step of DOPRI5/DOP853 (0: automatic)"),
-                ("solver.h_max", 0.0, "s", "largest step (0: unbounded)"))
-ENERGY_OUTPUTS = (("energy.kinetic", "kinetic energy T"),
-                  ("energy.potential", "potential energy V (gravity and joint springs)"),
-                  ("energy.work_input", "work of the inputs since the start"),
-                  ("energy.dissipated", "energy the joint dampers took since the start"),
-                  ("energy.impact_loss", "kinetic energy the impacts took since the start"),
-                  ("energy.friction", "energy sliding friction took at resting contacts since the start"))
-METHOD_START = 1                                    # GAC_METHOD_DOPRI5
-
 
 @dataclass(frozen=True)
 class Variable:
@@ -96,53 +79,65 @@ def _parameter_unit(pname: str) -> str | None:
     return DOC_UNITS[match.group(1)] if match else None
 
 
-def fmi2_variables(model: GeneratedModel, scene: Scene) -> list[Variable]:
-    """Every variable of the FMU, in the order of gac_fmi2.h's value references (Real, then Integer)."""
+def library_text(text: str, constants: dict) -> str:
+    """A row's text with the library's constants (GAC_METHOD_DOPRI5) written as their values."""
+    return re.sub(r"\bGAC_\w+\b", lambda m: f"{constants[m.group(0)]:g}", text)
+
+
+def fmi2_variables(model: GeneratedModel, scene: Scene, rows: dict, constants: dict) -> list[Variable]:
+    """Every variable of the FMU, in the order of its value references (Real, then Integer), from the rows that
+    describe them once (gac_fmi2.h's GAC_FMI2_REALS and GAC_FMI2_INTEGERS, read by runtime.header.fmi2_rows):
+    a row of count 1 is one variable, a block (count nq, nu or nparam) one per coordinate, input or parameter, with
+    its start from the scene.  ``constants``: the library's (gac.h), for the smallest rtol and the methods' codes."""
     layout = model.layout
     names = coordinate_names(scene.n)
     coordinates = [names[i] for i in layout.free]
-    q0 = layout.reduce(scene.q0)
-    qd0 = layout.reduce(scene.qd0)
-    real: list[tuple] = []
-    for c in coordinates:
-        real.append((f"q.{c}", "output", "continuous", f"coordinate {c}", coordinate_unit(c), None))
-    for c in coordinates:
-        real.append((f"qd.{c}", "output", "continuous", f"rate of {c}", coordinate_unit(c, rate=True), None))
-    for c in scene.inputs:
-        real.append((f"u.{c}", "input", "continuous", f"generalised force on {c}, held over each step",
-                     coordinate_unit(c, force=True), 0.0))
-    bounds = {}                                     # the parameters' allowed ranges (codegen.parameters), as min, max
-    for rule, value in zip(parameter_rules(scene, layout.zero_params, model.bake_params),
-                           scene.parameter_vector().tolist()):
-        real.append((f"p.{rule.name}", "parameter", "fixed", param_doc(rule.name), _parameter_unit(rule.name), value))
-        bounds[f"p.{rule.name}"] = (_double_literal(rule.lo), _double_literal(rule.hi))
+    rules = parameter_rules(scene, layout.zero_params, model.bake_params)
+    blocks = {                                      # a block's members: (name, what %s stands for, scene's start)
+        "Q": [(c, c, None) for c in coordinates],
+        "QD": [(c, c, None) for c in coordinates],
+        "U": [(c, c, None) for c in scene.inputs],
+        "P": [(rule.name, param_doc(rule.name), value)
+              for rule, value in zip(rules, scene.parameter_vector().tolist())],
+        "Q0": [(c, c, float(v)) for c, v in zip(coordinates, layout.reduce(scene.q0))],
+        "QD0": [(c, c, float(v)) for c, v in zip(coordinates, layout.reduce(scene.qd0))],
+    }
+    bounds = {f"p.{rule.name}": (_double_literal(rule.lo), _double_literal(rule.hi)) for rule in rules}
     bounds["solver.dt"] = bounds["solver.h_max"] = ("0", None)
-    bounds["solver.rtol"] = (_double_literal(RTOL_MIN), "1.0")     # below 1 too: fmi2SetReal refuses rtol = 1
-    for c, value in zip(coordinates, q0):
-        real.append((f"q0.{c}", "parameter", "fixed", f"initial {c}", coordinate_unit(c), float(value)))
-    for c, value in zip(coordinates, qd0):
-        real.append((f"qd0.{c}", "parameter", "fixed", f"initial rate of {c}", coordinate_unit(c, rate=True),
-                     float(value)))
-    for vname, value, unit, doc in SOLVER_REALS:
-        real.append((vname, "parameter", "fixed", doc, unit, value))
-    for vname, doc in ENERGY_OUTPUTS:
-        real.append((vname, "output", "continuous", doc, "J", None))
+    bounds["solver.rtol"] = (_double_literal(float(constants["GAC_RTOL_MIN"])), "1.0")   # fmi2SetReal refuses 1
+    methods = [int(constants[f"GAC_METHOD_{m}"]) for m in ("RK4", "DOPRI5", "DOP853")]
+    bounds["solver.method"] = (str(min(methods)), str(max(methods)))
 
     variables = []
-    for vr, (vname, causality, variability, doc, unit, start) in enumerate(real):
-        if causality == "parameter" and vname.startswith("p.") and model.bake_params:
-            continue                                # built into the code: nothing to set
-        variables.append(Variable(vname, vr, "Real", causality, variability, doc, unit,
-                                  None if start is None else _double_literal(start),
-                                  "calculated" if causality == "output" else None, *bounds.get(vname, (None, None))))
-    variables += [
-        Variable("solver.method", 0, "Integer", "parameter", "fixed", "integrator: 0 RK4 (fixed step solver.dt), "
-                 "1 DOPRI5, 2 DOP853", start=str(METHOD_START), min="0", max="2"),
-        Variable("impacts", 1, "Integer", "output", "discrete", "impacts since the start", initial="calculated"),
-        Variable("resting_contacts", 2, "Integer", "output", "discrete", "contacts resting on their wall now",
-                 initial="calculated"),
-    ]
+    for vtype in ("Real", "Integer"):
+        vr = 0
+        for row in rows[vtype]:
+            members = blocks[row["id"]] if row["count"] != "1" else [(None, None, None)]
+            for member, said, scene_start in members:
+                name = row["name"] if member is None else row["name"].rsplit(".", 1)[0] + "." + member
+                unit = _unit(row["unit"], member)
+                what = library_text(row["what"], constants).replace("%s", said or "")
+                start = None
+                if row["causality"] in ("parameter", "input"):
+                    value = scene_start if scene_start is not None else library_text(row["start"], constants)
+                    start = _double_literal(float(value)) if vtype == "Real" else str(int(float(value)))
+                skip = row["id"] == "P" and model.bake_params         # built into the code: nothing to set
+                if not skip:
+                    variables.append(Variable(name, vr, vtype, row["causality"], row["variability"], what, unit, start,
+                                              "calculated" if row["causality"] == "output" else None,
+                                              *bounds.get(name, (None, None))))
+                vr += 1
     return variables
+
+
+def _unit(unit: str, member: str | None) -> str | None:
+    """A row's unit for one of its variables: its own unit, or by the row's rule ("coordinate", "rate", "force",
+    "parameter") from the variable's coordinate or parameter."""
+    if unit == "parameter":
+        return _parameter_unit(member)
+    if unit in ("coordinate", "rate", "force"):
+        return coordinate_unit(member, rate=unit == "rate", force=unit == "force")
+    return unit or None
 
 
 def fmu_guid(model: GeneratedModel) -> str:
@@ -151,9 +146,11 @@ def fmu_guid(model: GeneratedModel) -> str:
 
 
 def fmu_texts(model: GeneratedModel, scene: Scene, sources: list[str], stop_time: float,
-              step_size: float) -> dict[str, str]:
-    """modelDescription.xml and NAME_fmi2.c of the model's FMU; ``sources``: the C files shipped in sources/."""
-    variables = fmi2_variables(model, scene)
+              step_size: float, rows: dict, constants: dict) -> dict[str, str]:
+    """modelDescription.xml and NAME_fmi2.c of the model's FMU; ``sources``: the C files shipped in sources/;
+    ``rows``: the FMU's variables as gac_fmi2.h describes them, ``constants``: the library's (runtime.header's
+    fmi2_rows and library_constants: the emission layer does not read runtime/c itself)."""
+    variables = fmi2_variables(model, scene, rows, constants)
     outputs = [index for index, v in enumerate(variables, start=1) if v.causality == "output"]
     used = sorted({v.unit for v in variables if v.unit})
     context = dict(name=model.name, guid=fmu_guid(model), version=__version__, fmi_version=FMI_VERSION,
@@ -165,3 +162,29 @@ def fmu_texts(model: GeneratedModel, scene: Scene, sources: list[str], stop_time
     env = _environment()
     return {"modelDescription.xml": env.get_template("modelDescription.xml.j2").render(**context),
             f"{model.name}_fmi2.c": env.get_template("fmi2_model.c.j2").render(**context)}
+
+
+UNIT_WORDS = {"coordinate": "m or rad", "rate": "m/s or rad/s", "force": "N or N m", "parameter": "per parameter"}
+
+
+def variable_table(rows: dict, constants: dict) -> str:
+    """The FMU's variables as a markdown table (docs/fmi.md renders it between its markers), one line per row of
+    gac_fmi2.h: a block's name stands for one variable per coordinate C or parameter NAME."""
+    lines = ["| name | type | causality | unit | start | what |", "|---|---|---|---|---|---|"]
+    scene_start = {"P", "Q0", "QD0"}
+    for vtype in ("Real", "Integer"):
+        for row in rows[vtype]:
+            block = row["count"] != "1"
+            member = row["name"].rsplit(".", 1)[1] if block else ""
+            causality = row["causality"] + (" (fixed)" if row["variability"] == "fixed" else "")
+            unit = UNIT_WORDS.get(row["unit"], row["unit"])
+            if row["causality"] == "output":
+                start = ""
+            elif row["id"] in scene_start:
+                start = "the scene's"
+            else:
+                start = library_text(row["start"], constants)
+            what = library_text(row["what"], constants)
+            what = "its description" if what == "%s" else what.replace("%s", member)
+            lines.append(f"| `{row['name']}` | {vtype} | {causality} | {unit} | {start} | {what} |")
+    return "\n".join(lines) + "\n"

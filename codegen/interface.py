@@ -3,14 +3,20 @@
 Every generated model NAME has the same functions: its kernels (straight-line code, generated per scene)
 and thin wrappers around the hand-written library in ``runtime/c`` (``gac.h``), which does the hybrid loop
 for any model through the const descriptor ``NAME_model``.  This module lists them, with their C types and
-the meaning and size of every argument, and the constants a model exports.  From it come the declarations
-of ``NAME.h`` (templates/model.h.j2), the cffi declarations (templates/cdef.h.j2) and the function table of
-``runtime.model.CompiledModel``.  Plain data: no sympy, no jinja2, no runtime import.
+the meaning and size of every argument, and the sizes a model exports.  From it come the declarations
+of ``NAME.h`` (templates/model.h.j2), the model's cffi declarations (templates/cdef.h.j2), the function table of
+``runtime.model.CompiledModel`` and the function table of docs/generated-c.md.  Plain data: no sympy, no jinja2,
+no runtime import.
+
+The library's own interface (its codes, types, storage formulas and functions) is described in one place, gac.h:
+the build layer gives its declarations to cffi (runtime.header), and Python reads a code's value from a compiled
+module (``lib.GAC_OK``) or from that parse, never from a list of its own.
 
 In C types, ``{name}`` stands for the model's name (``paper_case1``) and ``{NAME}`` for it in capitals.
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 
@@ -129,6 +135,10 @@ def wants_dense(n: int, dense: bool | None) -> bool:
     O(n) kernels (gac_mass_matrix, gac_bias, gac_contact_jacobian)."""
     return n <= DENSE_MAX_LINKS if dense is None else bool(dense)
 
+
+SPLIT_LINES = 600           # a kernel longer than this is cut into parts (codegen.emit.render_function) ...
+SPLIT_LINES_HOT = 8000      # ... the right-hand side's kernels longer than this (parts cost 2-9 % per call)
+HOT_KERNELS = ("forward_dynamics",)
 
 ROLLED_MIN_LINKS = 8        # from this n on, forward_dynamics is emitted with loops over the links (codegen.rolled)
 
@@ -294,41 +304,14 @@ TYPES = ("options", "sim", "impact_record")
 
 
 # ---------------------------------------------------------------------------------------------------
-# per-model size macros NAME_<suffix>: one formula each (the library's gac_* functions compute the same;
-# the wrappers refuse to run if they ever differ)
+# per-model size macros NAME_<suffix>: the counts are the model's; the storage sizes are gac.h's macros of them
+# (GAC_SIM_NDOUBLE(NAME_NQ, ...)), the one formula the library's gac_sim_ndouble(m) etc. apply too
 # ---------------------------------------------------------------------------------------------------
-def impact_nwork(nq: int, njrow: int, npoint: int, friction: bool = False) -> int:
-    """gac_impact_nwork: Y | A | g | vel | f = 2 nq^2 + nq + 3 npoint + max(njrow, 1), and for a model with
-    friction Z | B (2 nq^2 more)."""
-    return (4 if friction else 2) * nq * nq + nq + 3 * npoint + max(njrow, 1)
-
-
-def sim_ndouble(nq: int, nparam: int, nu: int, ncontact: int, njrow: int, npoint: int, friction: bool = False) -> int:
-    """gac_sim_ndouble: x, p, u and the controller's u, f, 16 stages, x1, xs, 8 dense-output rows, 7 per-contact
-    arrays, the impact work and an nq x nq scratch."""
-    return (28 * 2 * nq + nparam + 2 * nu + 7 * max(ncontact, 1) + impact_nwork(nq, njrow, npoint, friction)
-            + nq * nq)
-
-
-def sim_nint(nq: int, ncontact: int) -> int:
-    """gac_sim_nint: active (nq), is_active and n_shrink (per contact)."""
-    return nq + 2 * max(ncontact, 1)
-
-
-def record_ndouble(nq: int) -> int:
-    """gac_record_ndouble: impulse, q, qd_before, qd_after."""
-    return 4 * nq
-
-
-def record_nint(nq: int) -> int:
-    """gac_record_nint: contact, activated, released."""
-    return 3 * nq
-
-
 @dataclass(frozen=True)
 class Size:
     suffix: str
     doc: str
+    storage: str = ""               # a storage size: the gac.h macro and its arguments; "" for a count
 
 
 SIZES = (
@@ -340,107 +323,45 @@ SIZES = (
     Size("NPOINT", "contact points O_1..O_NPOINT"),
     Size("NCONTACT", "contacts (point, wall)"),
     Size("NJROW", "contact Jacobian rows"),
-    Size("IMPACT_NWORK", "doubles of the work array of impact, impact_complementarity, constrained_dynamics"),
-    Size("SIM_NDOUBLE", "doubles of a simulation's storage (gac_sim_ndouble)"),
-    Size("SIM_NINT", "ints of a simulation's storage (gac_sim_nint)"),
-    Size("RECORD_NDOUBLE", "doubles of an impact record's storage (gac_record_ndouble)"),
-    Size("RECORD_NINT", "ints of an impact record's storage (gac_record_nint)"),
+    Size("IMPACT_NWORK", "doubles of the work array of impact, impact_complementarity, constrained_dynamics "
+         "(last argument: 1 if a wall has friction)",
+         "GAC_IMPACT_NWORK(NQ, NPOINT, NJROW, FRICTION)"),
+    Size("SIM_NDOUBLE", "doubles of a simulation's storage (gac_sim_ndouble; last argument: 1 if a wall has friction)",
+         "GAC_SIM_NDOUBLE(NQ, NPARAM, NU, NPOINT, NCONTACT, NJROW, FRICTION)"),
+    Size("SIM_NINT", "ints of a simulation's storage (gac_sim_nint)", "GAC_SIM_NINT(NQ, NCONTACT)"),
+    Size("RECORD_NDOUBLE", "doubles of an impact record's storage (gac_record_ndouble)", "GAC_RECORD_NDOUBLE(NQ)"),
+    Size("RECORD_NINT", "ints of an impact record's storage (gac_record_nint)", "GAC_RECORD_NINT(NQ)"),
 )
 
 
-def size_values(n: int, nq: int, nparam: int, nu: int, npoint: int, ncontact: int, njrow: int,
-                friction: bool = False) -> dict[str, int]:
-    """The value of every NAME_<suffix> of SIZES for a model of these sizes (friction: some wall has friction)."""
-    values = {"N": n, "NQ": nq, "NX": 2 * nq, "NPARAM": nparam, "NU": nu, "NPOINT": npoint, "NCONTACT": ncontact,
-              "NJROW": njrow, "IMPACT_NWORK": impact_nwork(nq, njrow, npoint, friction),
-              "SIM_NDOUBLE": sim_ndouble(nq, nparam, nu, ncontact, njrow, npoint, friction),
-              "SIM_NINT": sim_nint(nq, ncontact),
-              "RECORD_NDOUBLE": record_ndouble(nq), "RECORD_NINT": record_nint(nq)}
-    assert list(values) == [s.suffix for s in SIZES]
-    return values
+def size_definitions(name: str, n: int, nq: int, nparam: int, nu: int, npoint: int, ncontact: int, njrow: int,
+                     friction: bool = False) -> dict[str, str]:
+    """The C definition of every NAME_<suffix> of SIZES for model ``name``: a count's value, or a storage size's
+    gac.h macro over the model's counts (FRICTION: 1 if some wall has friction, else 0)."""
+    counts = {"N": n, "NQ": nq, "NX": 2 * nq, "NPARAM": nparam, "NU": nu, "NPOINT": npoint, "NCONTACT": ncontact,
+              "NJROW": njrow}
+    NAME = name.upper()
+
+    def argument(match) -> str:
+        word = match.group(0)
+        return str(int(friction)) if word == "FRICTION" else f"{NAME}_{word}"
+    definitions = {}
+    for size in SIZES:
+        if size.storage:
+            macro, args = size.storage.split("(", 1)
+            definitions[size.suffix] = macro + "(" + re.sub(r"[A-Z_]+", argument, args)
+        else:
+            definitions[size.suffix] = str(counts[size.suffix])
+    return definitions
 
 
-# ---------------------------------------------------------------------------------------------------
-# the library's constants, read by Python from the compiled module (lib.GAC_...); values live in gac.h
-# ---------------------------------------------------------------------------------------------------
-CODES = ("GAC_OK", "GAC_ERR_BAD_CONTACT", "GAC_ERR_SINGULAR_MASS", "GAC_ERR_SINGULAR_IMPACT", "GAC_ERR_LCP",
-         "GAC_ERR_GIMBAL_LOCK", "GAC_ERR_BAD_OPTION", "GAC_ERR_MAX_STEPS", "GAC_ERR_STEP_SIZE",
-         "GAC_ERR_NONFINITE", "GAC_ERR_TOO_MANY_CONTACTS", "GAC_ERR_SINGULAR_CONTACT", "GAC_ERR_IMPACT_ACCURACY",
-         "GAC_ERR_UNSTABLE", "GAC_ERR_LOST_CONTACT", "GAC_ERR_START_OUTSIDE", "GAC_ERR_NULL_ARGUMENT",
-         "GAC_ERR_BAD_MODEL", "GAC_ERR_BAD_INPUT", "GAC_ERR_FRICTION", "GAC_ERR_BAD_PARAMETER",
-         "GAC_ERR_WALL_TIME", "GAC_ERR_STOPPED", "GAC_ERR_MAX_IMPACTS",
-         "GAC_ERR_DRIFT", "GAC_ERR_PROJECTION")
-STOPS = ("GAC_SIM_END", "GAC_SIM_IMPACT", "GAC_SIM_CONTACT")
-METHODS = ("GAC_METHOD_RK4", "GAC_METHOD_DOPRI5", "GAC_METHOD_DOP853")
-LIMITS = ("GAC_LCP_CAP", "GAC_MAX_ROUNDS", "GAC_LOOK_STEPS", "GAC_SLOW_SLIDING")
-CONSTANTS = CODES + STOPS + METHODS + LIMITS
-RTOL_MIN = 1e-14      # GAC_RTOL_MIN: the smallest rtol the adaptive methods accept (a double: not read by cffi)
-
-
-# ---------------------------------------------------------------------------------------------------
-# the library's types and functions as cffi sees them (fields cffi checks against gac.h when it builds)
-# ---------------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Struct:
-    name: str
-    fields: tuple[str, ...]         # C declarations, e.g. "double t"
-    partial: bool = True            # more fields in C than listed (cffi: "...;")
-
-
-STRUCTS = (
-    Struct("gac_options", ("int method", "double dt", "double rtol", "double atol", "double h_max",
-                           "int event_samples", "double event_tol", "double contact_tol", "long max_steps",
-                           "double rest_height", "int zeno_impacts", "double max_wall_time", "long max_impacts",
-                           "double energy_tol", "double chart_switch"),
-           partial=False),
-    Struct("gac_impact_record", ("double t", "int ncontact", "int *contact", "double *impulse",
-                                 "double energy_before", "double energy_after", "double *q", "double *qd_before",
-                                 "double *qd_after", "int complementarity", "int rounds", "int plastic",
-                                 "int law_elastic", "double energy_rest", "double roundoff", "double approach_before",
-                                 "double approach_after", "int nactivated", "int *activated", "int nreleased",
-                                 "int *released"), partial=False),
-    Struct("gac_sim", ("gac_options opt", "double t", "double *x", "double *p", "long n_steps", "long n_rejected",
-                       "long n_rhs", "long n_impacts", "int nactive", "int *active", "long n_activations",
-                       "long n_releases", "int err_index", "double *u", "double work_input", "double work_damping",
-                       "double work_friction", "double wall_time", "double rk4_h_rho", "long n_slow_sliding",
-                       "double t_slow_sliding", "double energy_initial", "double energy_impacts",
-                       "double energy_projection", "double energy_residual", "double energy_scale",
-                       "double energy_roundoff", "int chart", "long n_chart_switches")),
-    Struct("gac_schedule", ("int n", "int nu", "const double *t", "const double *u", "int linear"), partial=False),
-    Struct("gac_contact", ("int point", "int axis", "int normal_sign", "int row", "int e_index", "double e_value",
-                           "int kind", "int coordinate", "int has_friction", "int mu_index", "double mu_value",
-                           "int trow[2]"), partial=False),
-    Struct("gac_run_summary", ("long n_impacts", "double t_first_impact", "double energy_impact_loss",
-                               "long n_contact_events"), partial=False),
-    Struct("gac_parameter_info", ("const char *name", "double lo", "double hi", "const char *range"), partial=False),
-    Struct("gac_model", ("const char *name", "int n", "int nq", "int nx", "int nparam", "int nu", "int npoint",
-                         "int ncontact", "int njrow", "const gac_parameter_info *parameter_info")),
-)
-
-_MODEL = Arg("m", "const gac_model *", "a model descriptor")
-LIBRARY_FUNCTIONS = (
-    Function("model_check", "int", (_MODEL,), "GAC_OK if the descriptor is consistent."),
-    Function("impact_nwork", "long", (_MODEL,), "Doubles of the impact work array."),
-    Function("sim_ndouble", "long", (_MODEL,), "Doubles of a simulation's storage."),
-    Function("sim_nint", "long", (_MODEL,), "Ints of a simulation's storage."),
-    Function("record_ndouble", "long", (_MODEL,), "Doubles of an impact record's storage."),
-    Function("record_nint", "long", (_MODEL,), "Ints of an impact record's storage."),
-    Function("chart_measure", "double", (_MODEL, _q()), "The base chart's measure |det E| at q."),
-    Function("inertia_admissible", "int", (Arg("I", "const double *", "Ixx, Iyy, Izz, Ixy, Ixz, Iyz (kg m^2)"),),
-             "1 if I is a physical inertia (the rule of a rigid link's inertia parameters)."),
-    Function("error_message", "const char *", (Arg("code", "int", "a return code"),), "Message for a code."),
-    Function("check_options", "int",
-             (Arg("opt", "const gac_options *", "options"),
-              Arg("field", "const char **", "out: the first option out of range and what it allows, or NULL")),
-             "GAC_OK if every option is in its range (gac_check_options)."),
-    Function("sim_run", "int",
-             (Arg("sim", "gac_sim *", "an initialised simulation"), Arg("t_end", "double", "end time (s)"),
-              Arg("record", "gac_impact_record *", "a bound record"),
-              Arg("summary", "gac_run_summary *", "out: counts of the run")),
-             "Run to t_end in one call, counting impacts (gac_sim_run)."),
-    Function("schedule_check", "int", (Arg("s", "const gac_schedule *", "a schedule"),), "GAC_OK if usable."),
-    Function("schedule_input", "void",
-             (Arg("t", "double", "time (s)"), Arg("q", "const double *", "unused"),
-              Arg("qd", "const double *", "unused"), Arg("u", "double *", "out: the inputs (nu)"),
-              Arg("schedule", "void *", "a const gac_schedule *")), "The schedule's value at t (a gac_controller)."),
-)
+def function_table() -> str:
+    """The per-model functions as a markdown table (docs/generated-c.md renders it between its markers): each
+    function's call, its kind and what it does."""
+    lines = ["| function | kind | computes |", "|---|---|---|"]
+    for f in ALL_FUNCTIONS:
+        call = f"NAME_{f.name}({', '.join(a.name for a in f.args)})"
+        kind = ("fused kernel" if f.fused else "dense kernel" if f.dense else "kernel") if f.kernel else "wrapper"
+        summary = f.summary.replace("|", "/").replace("*", "\\*")
+        lines.append(f"| `{call}` | {kind} | {summary} |")
+    return "\n".join(lines) + "\n"

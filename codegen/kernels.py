@@ -37,7 +37,7 @@ import sympy as sp
 from . import articulated, gibbs_appell, interface, kinematics
 from .kinematics import ChainSymbols
 from .linalg import ldlt_solve
-from .scene import JointStop, Scene
+from .scene import JointStop, Scene, parameter_name
 from .tape import Tape, add, cross, dot, mat_t_vec, matvec, scale, column
 
 
@@ -206,7 +206,7 @@ def contact_gaps_kernel(chain: ChainSymbols) -> Kernel:
         if isinstance(wall, JointStop):      # theta_k - lower, or upper - theta_k (rad)
             values.append(wall.normal_sign * (chain.theta(point) - chain.param(wall.parameter)))
             continue
-        position = chain.param(f"wall_{wall.name}")
+        position = chain.param(parameter_name("wall", wall.name))
         values.append(wall.normal_sign * (points[point - 1][wall.axis] - position))
     k.values = values
     return k

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from .scene import Scene
+from .scene import Scene, parameter_name
 from .specialise import Layout, layout_for
 from .tape import (E_X, E_Y, E_Z, ZERO, Tape, Vec, Mat, add, column, cross, index_name, matmul,
                    mat_t_vec, matvec, scale, to_exact)
@@ -72,13 +72,14 @@ class ChainSymbols:
         """-K_k (theta_k - rest_k): the torque of joint k's spring (0 without one)."""
         if k < 2 or self.scene.joints[k - 2].stiffness is None:
             return sp.Integer(0)
-        return -self.param(f"stiffness_{k}") * (self.theta(k) - self.param(f"rest_angle_{k}"))
+        stretch = self.theta(k) - self.param(parameter_name("rest_angle", k))
+        return -self.param(parameter_name("stiffness", k)) * stretch
 
     def damper_torque(self, k: int) -> sp.Expr:
         """-C_k theta_dot_k: the torque of joint k's damper (0 without one)."""
         if k < 2 or self.scene.joints[k - 2].damping is None:
             return sp.Integer(0)
-        return -self.param(f"damping_{k}") * self.theta_dot(k)
+        return -self.param(parameter_name("damping", k)) * self.theta_dot(k)
 
     def input_force(self, index: int) -> sp.Expr:
         """The inputs acting on coordinate ``index`` (full layout): u_i for inputs[i] naming it."""
@@ -98,8 +99,8 @@ class ChainSymbols:
         V = sp.Integer(0)
         for k in range(2, self.n + 1):
             if self.scene.joints[k - 2].stiffness is not None:
-                stretch = self.theta(k) - self.param(f"rest_angle_{k}")
-                V += self.param(f"stiffness_{k}") * stretch * stretch / 2
+                stretch = self.theta(k) - self.param(parameter_name("rest_angle", k))
+                V += self.param(parameter_name("stiffness", k)) * stretch * stretch / 2
         return V
 
     def power(self) -> tuple[sp.Expr, sp.Expr]:
@@ -136,7 +137,7 @@ def _number(value: float) -> sp.Expr:
 def link_moments(tape: Tape, chain: ChainSymbols, i: int) -> LinkSymbols:
     """B0..B3 of real link i (Eq. 4-7), as symbols of the runtime parameters."""
     link = chain.scene.links[i - 1]
-    P = lambda name: chain.param(f"{name}_{i}")
+    P = lambda kind: chain.param(parameter_name(kind, i))
     if link.kind == "line":
         l, mu = P("l"), P("mu")
         B0 = tape.let(mu * l, f"B0_{i}")                               # Eq. 4: int mu

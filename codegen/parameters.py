@@ -9,8 +9,7 @@ one, and a rigid link's six inertia entries form a physical inertia.  The ranges
 ``parameter_rules`` lists the rules of a scene's vector, one per entry (and, for a generated model, the values it
 has built in: ``zero_params`` of its layout, or all of them with ``bake_params``).  From that one list come
 
-* the Python check of a vector, ``check_vector`` (``Scene.check_parameters``, which ``simulate()`` applies to
-  its ``p`` overrides);
+* the Python check of a vector, ``check_vector`` (which ``simulate()`` applies to its ``p`` overrides);
 * the C check: the table ``NAME_model.parameter_info`` (each parameter's name, range and rule in words) and the
   function ``NAME_check_parameters`` in the generated NAME.c (templates/model.c.j2), which ``gac_sim_init`` and
   the FMU call;
@@ -26,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .scene import (COORDINATE_MAX, FRICTION_MAX, GRAVITY_MAX, INERTIA_MAX, LENGTH_RANGE, MASS_RANGE, STIFFNESS_MAX,
-                    RigidLink, Scene, SceneError)
+                    RigidLink, Scene, SceneError, parameter_name, split_parameter_name)
 
 
 @dataclass(frozen=True)
@@ -72,10 +71,7 @@ INERTIA_WORDS = "a physical inertia (positive semi-definite, principal moments o
 def parameter_kind(name: str) -> str:
     """The kind of a parameter, the key of RANGES: 'e_x2_min' -> 'e', 'e_limit_3' -> 'e_limit', 'wall_x1_max' ->
     'wall', 'Jxx_2' -> 'Jxx', 'g' -> 'g'."""
-    for prefix in ("wall", "e_limit", "e", "friction"):
-        if name.startswith(prefix + "_"):
-            return prefix
-    return name.rsplit("_", 1)[0] if name[-1].isdigit() else name
+    return split_parameter_name(name)[0]
 
 
 @dataclass(frozen=True)
@@ -101,7 +97,7 @@ class Rule:
             words += f", and > {self.above_name}"
         if self.inertia_of:
             i = self.inertia_of
-            words += f"; Ixx_{i} .. Iyz_{i} together {INERTIA_WORDS}"
+            words += f"; {parameter_name('Ixx', i)} .. {parameter_name('Iyz', i)} together {INERTIA_WORDS}"
         return words
 
 
@@ -113,7 +109,7 @@ def parameter_rules(scene: Scene, zero_params=(), bake_params: bool = False) -> 
     values = scene.parameter_vector().tolist()
     rules = []
     for index, (name, value) in enumerate(zip(names, values)):
-        kind = parameter_kind(name)
+        kind, owner = split_parameter_name(name)
         lo, hi, text = RANGES[kind].lo, RANGES[kind].hi, RANGES[kind].text
         if bake_params:
             lo = hi = value
@@ -123,14 +119,14 @@ def parameter_rules(scene: Scene, zero_params=(), bake_params: bool = False) -> 
             text = "built into this model as 0 (the scene's value, so its terms were left out; the general model " \
                    "takes other values)"
         partner = ""                                # the parameter this one must exceed
-        if kind == "wall" and name.endswith("_max"):
-            partner = name[:-len("_max")] + "_min"     # wall_x1_max > wall_x1_min
+        if kind == "wall" and owner.endswith("_max"):
+            partner = parameter_name("wall", owner[:-len("_max")] + "_min")     # wall_x1_max > wall_x1_min
         elif kind == "upper":
-            partner = "lower" + name[len("upper"):]    # upper_k > lower_k
+            partner = parameter_name("lower", owner)                           # upper_k > lower_k
         if partner in names:
             rules.append(Rule(index, name, lo, hi, text, above=names.index(partner), above_name=partner))
         elif kind == "Ixx":
-            rules.append(Rule(index, name, lo, hi, text, inertia_of=int(name.rsplit("_", 1)[1])))
+            rules.append(Rule(index, name, lo, hi, text, inertia_of=owner))
         else:
             rules.append(Rule(index, name, lo, hi, text))
     return rules
@@ -158,7 +154,9 @@ def check_vector(rules: list[Rule], p, changed=None) -> None:
         if rule.above >= 0 and not value[rule.index] > value[rule.above]:
             raise SceneError(f"p[{rule.name}]: must be > p[{rule.above_name}] = {value[rule.above]!r}, "
                              f"got {value[rule.index]!r}")
-        if rule.inertia_of and (changed is None or changed & {f"{key}_{rule.inertia_of}" for key in INERTIA_NAMES}):
+        if not rule.inertia_of:
+            continue
+        if changed is None or changed & {parameter_name(key, rule.inertia_of) for key in INERTIA_NAMES}:
             check_inertia(value[rule.index:rule.index + 6], rule.inertia_of)
 
 

@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import os
 import time
+from dataclasses import replace
 from pathlib import Path
 
-from .artifact import library_files
 from .charts import chart_b_scene
-from .emit import GeneratedModel, assemble_model, render_function, render_standalone, split_size
-from .interface import wants_dense, wants_rolled
+from .emit import GeneratedModel, assemble_model, render_function, render_standalone
+from .options import BuildOptions, build_options
 from .flatten import flatten, live_assignments
 from .ops import raw_count_ops
 from . import kernels, lagrange
@@ -24,81 +24,49 @@ def _quiet(message: str) -> None:
     pass
 
 
-def generate(scene: Scene, name: str | None = None, bake_params: bool = False,
-             progress=_quiet, specialise: bool = True, formulation: str = "gibbs_appell",
-             raw_ops: bool = False, dense: bool | None = None, split_lines: int | None = None,
-             workers: int | None = None, rolled: bool | None = None) -> GeneratedModel:
-    """Generate the C model of ``scene``.  ``progress(message)`` is called as stages advance.
-
-    ``specialise`` (default) leaves out what the scene does not need (see codegen.specialise);
-    False gives the general model.  The returned model has .header, .source, .cdef, .functions
-    (with op counts), .layout and .timings (seconds per stage: derive, cse, render).
-
-    ``formulation`` chooses how the dynamics kernels (mass_matrix, bias, forward_dynamics) are derived:
-    "gibbs_appell" (the paper's recursion, codegen.kernels) or "lagrange" (an explicit Euler-Lagrange
-    expansion, codegen.lagrange, for comparison); the other kernels are the same.  ``raw_ops`` also
-    records sympy's ``count_ops`` of each dynamics kernel before CSE in ``.raw_ops`` (name -> int).
-
-    ``dense``: generate the dense kernels mass_matrix, bias, contact_jacobian (O(n^2) code; the hybrid loop
-    does not need them); None (default) does for n <= codegen.interface.DENSE_MAX_LINKS, and otherwise the
-    model forms them at run time from its O(n) kernels.  ``split_lines``: cut kernels longer than this into
-    parts (None: codegen.emit's defaults).  ``rolled``: emit forward_dynamics with loops over the links
-    (codegen.rolled) instead of straight-line code per link; None (default) does from
-    codegen.interface.ROLLED_MIN_LINKS links on (the Gibbs-Appell formulation only).
+def generate(scene: Scene, options: BuildOptions | None = None, *, name: str | None = None, progress=_quiet,
+             workers: int | None = None) -> GeneratedModel:
+    """Generate the C model of ``scene`` with ``options`` (codegen.options.build_options; None: the scene's
+    defaults).  ``progress(message)`` is called as stages advance.  The returned model has .header, .source,
+    .cdef, .functions (with op counts), .options, .layout and .timings (seconds per stage: derive, cse, render).
 
     ``workers``: processes that derive, flatten and render the kernels side by side (each kernel is derived on
     its own tape, so they are independent); None: one per core (at most MAX_WORKERS) from
     PARALLEL_MIN_LINKS links on, else 1.  Workers are forked, so only a single-threaded process uses them
     (another generates serially).  The result is the same text whatever the number.
     """
-    if formulation not in FORMULATIONS:
-        raise ValueError(f"formulation: must be one of {', '.join(FORMULATIONS)}, got {formulation!r}")
+    options = build_options(scene) if options is None else options
     name = name or scene.name
-    model = _generate(scene, name, bake_params, progress, formulation, raw_ops, dense, split_lines, workers, rolled,
-                      layout_for(scene, specialise))
-    scene_b = chart_b_scene(scene, model.layout) if formulation == "gibbs_appell" else None
+    model = _generate(scene, name, options, progress, workers, layout_for(scene, options.specialise))
+    scene_b = chart_b_scene(scene, model.layout) if options.formulation == "gibbs_appell" else None
     if scene_b is None:
         return model
     # chart B: the same chain with T_-1 turned a right angle (codegen.charts), its loop kernels only (no dense
     # ones), in the same NAME.c as NAME_b_* and the descriptor NAME_model_b
     start = time.perf_counter()
     progress("chart B")
-    model_b = _generate(scene_b, f"{name}_b", bake_params, progress, formulation, False, False, split_lines, workers,
-                        rolled, model.layout)
-    chart_b = assemble_model(scene, name, model.functions, bake_params, model.layout,
-                             chart_b=(scene_b, model_b.functions))
-    chart_b.timings = dict(model.timings, chart_b=time.perf_counter() - start)
-    chart_b.formulation, chart_b.raw_ops = model.formulation, model.raw_ops
-    return chart_b
+    model_b = _generate(scene_b, f"{name}_b", replace(options, dense=False), progress, workers, model.layout)
+    return assemble_model(scene, name, model.functions, options, model.layout, chart_b=(scene_b, model_b.functions),
+                          timings=dict(model.timings, chart_b=time.perf_counter() - start))
 
 
-def _generate(scene, name, bake_params, progress, formulation, raw_ops, dense, split_lines, workers, rolled,
-              layout) -> GeneratedModel:
+def _generate(scene, name, options: BuildOptions, progress, workers, layout) -> GeneratedModel:
     """One chart's model: its kernels derived, flattened and rendered, then assembled."""
     check_not_singular(scene, layout)
     if workers is None:
         workers = min(os.cpu_count() or 1, MAX_WORKERS) if scene.n >= PARALLEL_MIN_LINKS else 1
-    roll = formulation == "gibbs_appell" and wants_rolled(scene.n, rolled)
-    if workers > 1 and formulation == "gibbs_appell" and not raw_ops and _can_fork():
-        return _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, workers, progress,
-                                     rolled if roll else False)
+    if workers > 1 and options.formulation == "gibbs_appell" and _can_fork():
+        return _generate_in_parallel(scene, name, options, layout, workers, progress)
     timings = {}
     start = time.perf_counter()
-    if formulation == "lagrange" and dense is None:
-        dense = True
-    looped = _rolled_function(scene, bake_params, layout, rolled) if roll else None
-    options = {"fused": _wants_fused(scene, bake_params, layout, roll)} if formulation == "gibbs_appell" else {}
+    looped = _rolled_function(scene, options, layout) if options.rolled else None
+    choices = {"fused": _wants_fused(scene, options, layout)} if options.formulation == "gibbs_appell" else {}
     if looped is not None:
-        options["skip"] = ("forward_dynamics",)
-    derived = FORMULATIONS[formulation](scene, bake_params, progress=lambda k: progress(f"derive {k}"),
-                                        layout=layout, dense=dense, **options)
+        choices["skip"] = ("forward_dynamics",)
+    derived = FORMULATIONS[options.formulation](scene, options.bake_params,
+                                                progress=lambda k: progress(f"derive {k}"), layout=layout,
+                                                dense=options.dense, **choices)
     timings["derive"] = time.perf_counter() - start
-    raw = {}
-    if raw_ops:
-        for kernel in derived:
-            if kernel.name in DYNAMICS_KERNELS:
-                progress(f"raw count_ops {kernel.name}")
-                raw[kernel.name] = raw_kernel_ops(kernel)
 
     start = time.perf_counter()
     programs = []
@@ -109,46 +77,57 @@ def _generate(scene, name, bake_params, progress, formulation, raw_ops, dense, s
 
     start = time.perf_counter()
     progress("render")
-    functions = [render_function(p, split_size(p.kernel.name, split_lines)) for p in programs]
+    functions = [render_function(p, options.split_size(p.kernel.name)) for p in programs]
     if looped is not None:
-        functions.insert(_kernel_position("forward_dynamics", dense, scene.n), looped)
-    model = assemble_model(scene, name, functions, bake_params, layout)
+        functions.insert(_kernel_position("forward_dynamics", options.dense), looped)
     timings["render"] = time.perf_counter() - start
-    model.timings = timings
-    model.formulation = formulation
-    model.raw_ops = raw
-    return model
+    return assemble_model(scene, name, functions, options, layout, timings=timings)
+
+
+def raw_dynamics_ops(scene: Scene, options: BuildOptions | None = None, progress=_quiet) -> dict[str, int]:
+    """sympy's ``count_ops`` of each dynamics kernel (mass_matrix, bias, forward_dynamics) before CSE: what the
+    formulation hands to CSE (a study's measure of the expansion; name -> int)."""
+    options = build_options(scene, dense=True) if options is None else options
+    layout = layout_for(scene, options.specialise)
+    derived = FORMULATIONS[options.formulation](scene, options.bake_params, layout=layout, dense=True,
+                                                **({"fused": False} if options.formulation == "gibbs_appell" else {}))
+    raw = {}
+    for kernel in derived:
+        if kernel.name in DYNAMICS_KERNELS:
+            progress(f"raw count_ops {kernel.name}")
+            raw[kernel.name] = raw_kernel_ops(kernel)
+    return raw
 
 
 _NO_RUN = ("rolled: the scene's links 2..n - 1 (n = {n}) hold no run of codegen.rolled.ROLL_MIN_RUN identical links "
            "(same kind, twists, joint spring, damper and inputs) to loop over; leave rolled unset or False")
 
 
-def _kernel_position(name: str, dense: bool | None, n: int) -> int:
-    return [b.__name__.removesuffix("_kernel") for b in kernels.builders(wants_dense(n, dense))].index(name)
+def _kernel_position(name: str, dense: bool) -> int:
+    return [b.__name__.removesuffix("_kernel") for b in kernels.builders(dense)].index(name)
 
 
-def _wants_fused(scene, bake_params, layout, roll: bool) -> bool:
+def _wants_fused(scene, options: BuildOptions, layout) -> bool:
     """Whether the fused kernels (codegen.interface.FUSED_KERNELS) are generated: where the forward dynamics is
     straight-line code.  Where it is to be rolled (the scene has a run of identical links) the library forms them
     from the two kernels, so a long chain's model stays small; decided from the run alone, the same way whether
     the kernels are generated side by side or not."""
-    if not roll:
+    if not options.rolled:
         return True
     from . import rolled
     from .kinematics import ChainSymbols
-    return rolled.find_run(ChainSymbols(scene, bake_params, layout)) is None
+    return rolled.find_run(ChainSymbols(scene, options.bake_params, layout)) is None
 
 
-def _rolled_function(scene, bake_params, layout, asked: bool | None):
+def _rolled_function(scene, options: BuildOptions, layout):
     """forward_dynamics with loops over the scene's run of identical links, rendered; without such a run None, or
-    a SceneError when the loops were asked for (``asked`` True rather than the default None)."""
+    a SceneError when the loops were required (options.rolled_required: asked for, not the default)."""
     from . import rolled
     from .kinematics import ChainSymbols
-    chain = ChainSymbols(scene, bake_params, layout)
+    chain = ChainSymbols(scene, options.bake_params, layout)
     built = rolled.rolled_kernel(chain)
     if built is None:
-        if asked:
+        if options.rolled_required:
             raise SceneError(_NO_RUN.format(n=scene.n))
         return None
     return rolled.render("forward_dynamics", rolled.summary(built), ("q", "qd", "u", "p"), "qdd", layout.nq, built)
@@ -168,37 +147,33 @@ def _can_fork() -> bool:
 
 def _kernel_job(job):
     """Derive, flatten and render one kernel (in a worker process): (rendered function, stage seconds)."""
-    scene, bake_params, layout, builder_name, split_lines, rolled = job
-    from .emit import render_function, split_size
+    scene, options, layout, builder_name = job
     from .kinematics import ChainSymbols
     builder = next(b for b in kernels.KERNEL_BUILDERS if b.__name__ == builder_name)
     start = time.perf_counter()
-    if rolled is not False and builder_name == "forward_dynamics_kernel":
-        function = _rolled_function(scene, bake_params, layout, rolled)
+    if options.rolled and builder_name == "forward_dynamics_kernel":
+        function = _rolled_function(scene, options, layout)
         if function is not None:
             return function, (time.perf_counter() - start, 0.0, 0.0)
-    kernel = builder(ChainSymbols(scene, bake_params, layout))
+    kernel = builder(ChainSymbols(scene, options.bake_params, layout))
     derived = time.perf_counter()
     program = flatten(kernel)
     flattened = time.perf_counter()
-    function = render_function(program, split_size(kernel.name, split_lines))
+    function = render_function(program, options.split_size(kernel.name))
     return function, (derived - start, flattened - derived, time.perf_counter() - flattened)
 
 
-def _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, workers, progress, rolled):
-    """``rolled``: False (straight-line forward dynamics), None (loops where the scene has a run) or True (loops,
-    an error without a run)."""
+def _generate_in_parallel(scene, name, options: BuildOptions, layout, workers, progress):
+    """_generate's kernels in ``workers`` processes."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
-    builders = kernels.builders(wants_dense(scene.n, dense),
-                                _wants_fused(scene, bake_params, layout, rolled is not False))
+    builders = kernels.builders(options.dense, _wants_fused(scene, options, layout))
     start = time.perf_counter()
     progress(f"derive, cse and render {len(builders)} kernels in {workers} processes")
     functions, seconds = {}, [0.0, 0.0, 0.0]
     context = multiprocessing.get_context("fork")        # _can_fork: this process has one thread
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        jobs = {pool.submit(_kernel_job, (scene, bake_params, layout, b.__name__, split_lines, rolled)): b
-                for b in builders}
+        jobs = {pool.submit(_kernel_job, (scene, options, layout, b.__name__)): b for b in builders}
         for done in as_completed(jobs):
             function, stages = done.result()
             functions[function.name] = function
@@ -206,13 +181,8 @@ def _generate_in_parallel(scene, name, bake_params, layout, dense, split_lines, 
             progress(f"  {function.name}: {len(function.lines)} lines ({sum(stages):.2f} s)")
     wall = time.perf_counter() - start
     ordered = [functions[b.__name__.removesuffix("_kernel")] for b in builders]
-    begin = time.perf_counter()
-    model = assemble_model(scene, name, ordered, bake_params, layout)
-    model.timings = {"derive": seconds[0], "cse": seconds[1], "render": seconds[2] + time.perf_counter() - begin,
-                     "parallel_wall": wall + time.perf_counter() - begin}
-    model.formulation = "gibbs_appell"
-    model.raw_ops = {}
-    return model
+    timings = {"derive": seconds[0], "cse": seconds[1], "render": seconds[2], "parallel_wall": wall}
+    return assemble_model(scene, name, ordered, options, layout, timings=timings)
 
 
 def raw_kernel_ops(kernel) -> int:
@@ -222,17 +192,16 @@ def raw_kernel_ops(kernel) -> int:
 
 
 def write_model(model: GeneratedModel, out_dir: str | Path) -> list[Path]:
-    """Write NAME.h and NAME.c into out_dir (created if needed), with a copy of the C library they build
-    with (gac.h, gac_internal.h, gac_*.c from runtime/c); returns the paths."""
-    files = {f"{model.name}.h": model.header, f"{model.name}.c": model.source}
-    files.update((path.name, path.read_text()) for path in library_files())
-    return _write_files(out_dir, files)
+    """Write NAME.h and NAME.c into out_dir (created if needed); returns the paths.  They build with the C library
+    (gac.h, gac_*.c), which the build layer copies beside them: runtime.compile.copy_library."""
+    return _write_files(out_dir, {f"{model.name}.h": model.header, f"{model.name}.c": model.source})
 
 
-def write_standalone(model: GeneratedModel, scene: Scene, out_dir: str | Path) -> list[Path]:
-    """Write the example program, Makefile and CMakeLists.txt next to the model (and its library copy)."""
-    sources = [path.name for path in library_files() if path.suffix == ".c"]
-    return _write_files(out_dir, render_standalone(scene, model.name, sources, model.layout))
+def write_standalone(model: GeneratedModel, scene: Scene, out_dir: str | Path,
+                     library_sources: list[str]) -> list[Path]:
+    """Write the example program, Makefile and CMakeLists.txt next to the model and its library copy;
+    ``library_sources``: the file names of the library's C sources (runtime.compile.library_sources)."""
+    return _write_files(out_dir, render_standalone(scene, model.name, library_sources, model.layout))
 
 
 def _write_files(out_dir: str | Path, files: dict[str, str]) -> list[Path]:

@@ -42,6 +42,7 @@ from .flatten import flatten
 from .kernels import Kernel
 from .ops import count_ops
 from .kinematics import ChainSymbols, Motion
+from .scene import parameter_name, split_parameter_name
 from .tape import E_Y, ZERO, Tape, index_name, scale
 
 ROLL_MIN_RUN = 4          # the fewest links a loop covers
@@ -202,7 +203,7 @@ class Block:
 # --- which links the loops cover ---------------------------------------------------------------------------------
 def _link_params(chain: ChainSymbols, i: int) -> list[str]:
     """Base names of the parameters of link i and joint i (name_i), in parameter order."""
-    return [name.rsplit("_", 1)[0] for name in chain.param_index if name.rsplit("_", 1)[-1] == str(i)]
+    return [kind for kind, owner in map(split_parameter_name, chain.param_index) if owner == i]
 
 
 def _signature(chain: ChainSymbols, k: int):
@@ -214,7 +215,7 @@ def _signature(chain: ChainSymbols, k: int):
     for i in (k - 1, k):
         names = _link_params(chain, i)
         parts.append((scene.links[i - 1].kind, tuple(names),
-                      tuple(v if v.is_Number else None for v in (chain.param(f"{b}_{i}") for b in names))))
+                      tuple(v if v.is_Number else None for v in (chain.param(parameter_name(b, i)) for b in names))))
     parts.append((chain.twists[k + 1], chain.twists[k + 2], (k + 1) in chain.layout.free,
                   sum(c == k + 1 for c in chain.input_coordinate)))
     return tuple(parts)

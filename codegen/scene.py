@@ -22,6 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import SceneError
+from .urdf import urdf_links
+
 try:  # Python >= 3.11
     import tomllib
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
@@ -53,10 +56,6 @@ GRAVITY_MAX = 1e6                 # |gravity| (m/s^2)
 UNITS_LENGTH = (1e-4, 1e2)        # m: a link length outside it suggests mm or km given as m
 UNITS_MASS = (1e-6, 1e4)          # kg: a link mass outside it suggests g or t given as kg
 UNITS_ANGLE = 2 * math.pi         # rad: an angle beyond it in magnitude suggests degrees given as radians
-
-
-class SceneError(ValueError):
-    """A scene field has a bad value; the message names the field and the allowed range."""
 
 
 # ---------------------------------------------------------------------------
@@ -273,7 +272,7 @@ class JointStop:
 
     @property
     def parameter(self) -> str:
-        return f"{'lower' if self.side < 0 else 'upper'}_{self.joint}"
+        return parameter_name("lower" if self.side < 0 else "upper", self.joint)
 
 
 FREE_JOINT = Joint()
@@ -290,7 +289,7 @@ class Wall:
     position: float
     restitution: float = 1.0
     points: tuple[int, ...] = ()  # contact points O_i (1-based) that may touch it
-    friction: float = 0.0         # Coulomb coefficient mu >= 0 of a point resting on it (0: frictionless)
+    friction: float = 0.0         # Coulomb (friction) coefficient c_f >= 0 of a point resting on it (0: frictionless)
 
     @property
     def axis(self) -> int:
@@ -345,6 +344,31 @@ def twist_about_x(angle: float) -> tuple[tuple[float, ...], ...]:
 
 
 # ---------------------------------------------------------------------------
+# parameter names: composed by parameter_name only, read back by split_parameter_name
+# ---------------------------------------------------------------------------
+WALL_KINDS = ("wall", "e", "friction")      # a wall's parameters, named by the wall: 'e_x2_min'
+
+
+def parameter_name(kind: str, owner: int | str | None = None) -> str:
+    """The name of one runtime parameter: its kind ('l', 'mu', 'Ixx', 'wall', 'e', 'friction', 'stiffness',
+    'rest_angle', 'damping', 'lower', 'upper', 'e_limit') and its owner, a link or joint number or a wall's name:
+    'l_3', 'wall_x1_max', 'friction_x2_min', 'e_limit_2', 'stiffness_2'; 'g' has no owner."""
+    return kind if owner is None else f"{kind}_{owner}"
+
+
+def split_parameter_name(name: str) -> tuple[str, int | str | None]:
+    """(kind, owner) of a parameter's name, the inverse of parameter_name: 'e_limit_3' -> ('e_limit', 3),
+    'e_x2_min' -> ('e', 'x2_min'), 'Jxx_2' -> ('Jxx', 2), 'g' -> ('g', None)."""
+    if name[-1].isdigit():
+        kind, owner = name.rsplit("_", 1)
+        return kind, int(owner)
+    for kind in WALL_KINDS:
+        if name.startswith(kind + "_"):
+            return kind, name[len(kind) + 1:]
+    return name, None
+
+
+# ---------------------------------------------------------------------------
 # the scene
 # ---------------------------------------------------------------------------
 _NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,47}$")
@@ -367,8 +391,8 @@ class Scene:
     joints     springs and dampers of the joints 2..n (Joint; n - 1 entries, or () for none)
     inputs     the actuated coordinates by name ("theta_2", "X2", ...): input u_i is the generalised force
                of inputs[i] (N m on an angle, N on a translation), added to the flight equations
-    friction_velocity  v_s (m/s): a point resting on a wall with friction mu slides against the Coulomb force
-               -mu lambda v_t / max(|v_t|, v_s) (lambda its normal force, v_t its tangential velocity): exact
+    friction_velocity  v_s (m/s): a point resting on a wall with friction coefficient c_f slides against the Coulomb force
+               -c_f lambda v_t / max(|v_t|, v_s) (lambda its normal force, v_t its tangential velocity): exact
                Coulomb sliding above v_s, a stiff viscous regime below it in place of sticking
     """
 
@@ -460,10 +484,10 @@ class Scene:
                                      f"(O_1..O_{n + 1}), got {p!r}")
             if len(set(points)) != len(points):
                 raise SceneError(f"contacts.{w.name}: repeated point index in {list(points)}")
-            mu = _number(w.friction, f"friction.{w.name}")
-            if not 0.0 <= mu <= FRICTION_MAX:
-                raise SceneError(f"friction.{w.name}: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {mu!r}")
-            walls.append(Wall(w.name, float(w.position), e, tuple(sorted(points)), float(mu)))
+            c_f = _number(w.friction, f"friction.{w.name}")
+            if not 0.0 <= c_f <= FRICTION_MAX:
+                raise SceneError(f"friction.{w.name}: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {c_f!r}")
+            walls.append(Wall(w.name, float(w.position), e, tuple(sorted(points)), float(c_f)))
         walls.sort(key=lambda w: WALL_NAMES.index(w.name))
         for axis in range(3):
             lo = self._find(walls, f"x{axis + 1}_min")
@@ -542,24 +566,32 @@ class Scene:
     # -- parameters ----------------------------------------------------------
     def parameter_names(self) -> list[str]:
         """Names of the runtime parameter vector p (see the generated header for units)."""
-        names = ["g"]
+        names = [parameter_name("g")]
         for i, link in enumerate(self.links, start=1):
-            names += [f"{name}_{i}" for name in link.param_names]
-        names += [f"wall_{w.name}" for w in self.walls]
-        names += [f"e_{w.name}" for w in self.walls]
-        names += [f"friction_{w.name}" for w in self.walls if w.friction > 0.0]
+            names += [parameter_name(kind, i) for kind in link.param_names]
+        names += [parameter_name("wall", w.name) for w in self.walls]
+        names += [parameter_name("e", w.name) for w in self.walls]
+        names += [parameter_name("friction", w.name) for w in self.walls if w.friction > 0.0]
         for k, joint in enumerate(self.joints, start=2):
             if joint.stiffness is not None:
-                names += [f"stiffness_{k}", f"rest_angle_{k}"]
+                names += [parameter_name("stiffness", k), parameter_name("rest_angle", k)]
             if joint.damping is not None:
-                names.append(f"damping_{k}")
+                names.append(parameter_name("damping", k))
             if joint.lower is not None:
-                names.append(f"lower_{k}")
+                names.append(parameter_name("lower", k))
             if joint.upper is not None:
-                names.append(f"upper_{k}")
+                names.append(parameter_name("upper", k))
             if joint.lower is not None or joint.upper is not None:
-                names.append(f"e_limit_{k}")
+                names.append(parameter_name("e_limit", k))
         return names
+
+    def parameter_index(self, kind: str, owner: int | str | None = None) -> int:
+        """The index in p of parameter ``kind`` of ``owner`` (parameter_name), or SceneError if the scene has none."""
+        name = parameter_name(kind, owner)
+        names = self.parameter_names()
+        if name not in names:
+            raise SceneError(f"{name}: this scene has no such parameter (it has {', '.join(names)})")
+        return names.index(name)
 
     def parameter_vector(self) -> np.ndarray:
         values = [self.gravity]
@@ -580,15 +612,6 @@ class Scene:
             if joint.lower is not None or joint.upper is not None:
                 values.append(joint.limit_restitution)
         return np.array(values, dtype=float)
-
-    def check_parameters(self, p, changed=None) -> None:
-        """Refuse a parameter vector p (layout of parameter_names()) that a scene file could not give: every value in
-        its range, rigid links' inertias physical, each wall pair and joint's limits ordered (min < max, lower <
-        upper); the rules of codegen.parameters, which the generated C checks too.  ``changed``: the names whose
-        values may differ from the scene's (the others were checked when the scene was built; default: all).
-        (Whether the start lies inside the walls is the caller's check: it depends on the state too.)"""
-        from .parameters import check_vector, parameter_rules
-        check_vector(parameter_rules(self), p, changed)
 
     @property
     def warnings(self) -> list[str]:
@@ -883,7 +906,6 @@ def _link_tables(data: dict, folder) -> list:
         return data.get("links")
     if "links" in data:
         raise SceneError("urdf: give either links or a urdf file, not both")
-    from .urdf import urdf_links
     if not isinstance(data["urdf"], str) or not data["urdf"]:
         raise SceneError(f"urdf: expected the path of a URDF file, got {data['urdf']!r}")
     path = Path(folder or ".") / data["urdf"]
@@ -994,11 +1016,11 @@ def _walls_from_data(walls, restitution, contacts, friction=0.0) -> tuple[Wall, 
             raise SceneError(f"contacts.{name}: expected a non-empty list of point indices "
                              f"(O_1 is 1), got {points!r}")
         if isinstance(friction, dict):
-            mu, where = friction.get(name, friction.get("default", 0.0)), f"friction.{name}"
+            c_f, where = friction.get(name, friction.get("default", 0.0)), f"friction.{name}"
         else:
-            mu, where = friction, "friction"
-        mu = _number(mu, where)
-        if not 0.0 <= mu <= FRICTION_MAX:
-            raise SceneError(f"{where}: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {mu!r}")
-        out.append(Wall(name, _number(walls[name], f"walls.{name}"), e, tuple(points), mu))
+            c_f, where = friction, "friction"
+        c_f = _number(c_f, where)
+        if not 0.0 <= c_f <= FRICTION_MAX:
+            raise SceneError(f"{where}: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {c_f!r}")
+        out.append(Wall(name, _number(walls[name], f"walls.{name}"), e, tuple(points), c_f))
     return tuple(out)

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scene import RigidLink, Scene, SceneError, coordinate_names, frames, stop_rows
+from .scene import RigidLink, Scene, SceneError, coordinate_names, frames, split_parameter_name, stop_rows
 
 ANGLE_SNAP = 1e-12       # an angle within this of a multiple of pi/2 counts as exactly that multiple
 
@@ -102,7 +102,7 @@ def layout_for(scene: Scene, specialise: bool = True) -> Layout:
         notes.append(f"joint stops: {len(stops)} ({', '.join(stop.name for _, stop in stops)}), after the walls' "
                      "contacts, with a row of the identity each joint")
     zero_params = tuple(name for name, value in zip(scene.parameter_names(), scene.parameter_vector())
-                        if value == 0.0 and not name.startswith(("wall_", "e_", "friction_")))
+                        if value == 0.0 and split_parameter_name(name)[0] not in ("wall", "e", "e_limit", "friction"))
     if zero_params:
         notes.append(f"zero parameters built in (their terms vanish; they cannot be changed at run time): "
                      f"{', '.join(zero_params)}")

@@ -26,7 +26,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from .scene import LineLink, Scene, SceneError
+from .errors import SceneError
 
 PERPENDICULAR_TOL = 1e-9      # |cos| between a joint axis and the direction to the next joint
 SNAP = 1e-14                  # twist entries this close to 0 or +-1 are made exact (planar chains stay planar)
@@ -264,17 +264,18 @@ def _numbers(values) -> str:
 
 
 def link_inertial(link) -> tuple[float, np.ndarray, np.ndarray]:
-    """mass, centre of mass and inertia about it (link frame) of a line or rigid link."""
-    if isinstance(link, LineLink):
+    """mass, centre of mass and inertia about it (link frame) of a line or rigid link (codegen.scene)."""
+    if link.kind == "line":
         l, mu, J = float(link.length), float(link.mu), [float(v) for v in link.J]
         m = mu * l
         return m, np.array([l / 2, 0.0, 0.0]), np.diag([l * J[0], m * l * l / 12 + l * J[1], m * l * l / 12 + l * J[2]])
     return float(link.mass), np.array(link.com, dtype=float), np.array(link.inertia, dtype=float)
 
 
-def scene_to_urdf(scene: Scene) -> tuple[str, list[str]]:
-    """The scene's chain as URDF (root link1 floating, revolute or continuous joints theta_2..theta_n about z, a
-    fixed tip link at the end of link n), and notes on what URDF cannot hold (springs, the restitution of stops)."""
+def scene_to_urdf(scene) -> tuple[str, list[str]]:
+    """A scene's (codegen.scene.Scene) chain as URDF (root link1 floating, revolute or continuous joints
+    theta_2..theta_n about z, a fixed tip link at the end of link n), and notes on what URDF cannot hold (springs,
+    the restitution of stops)."""
     notes = []
     parts = [f'<robot name="{scene.name}">']
     for i, link in enumerate(scene.links, start=1):

@@ -49,8 +49,8 @@
 #define GAC_ERR_SINGULAR_IMPACT   -3   /* active contact rows linearly dependent */
 #define GAC_ERR_LCP               -4   /* complementarity impact has no solution / too many contacts */
 #define GAC_ERR_GIMBAL_LOCK       -5   /* theta_0 too close to the gimbal lock of the base chart: the base
-                                          chart's measure mu = |det E| (|cos theta_0| for the default twists)
-                                          is below GAC_CHART_FLOOR, where I_f's solves lose 1e-6 (16 eps / mu^2);
+                                          chart's measure chi = |det E| (|cos theta_0| for the default twists)
+                                          is below GAC_CHART_FLOOR, where I_f's solves lose 1e-6 (16 eps / chi^2);
                                           the hybrid loop continues on the model's second chart (chart_b) below
                                           sqrt(16 eps / rtol), or, without one, stops there with this code */
 #define GAC_ERR_BAD_OPTION       -10   /* an option or argument is out of range (the ranges: gac_error_message) */
@@ -168,14 +168,14 @@ typedef struct {
     int kind;             /* GAC_CONTACT_WALL (0) or GAC_CONTACT_STOP (1) */
     int coordinate;       /* stop: the index into q of its joint's angle (0..nq-1); wall: unused */
     int has_friction;     /* wall: 1 if the wall has Coulomb friction (0: frictionless; a zero-initialised entry) */
-    int mu_index;         /* its coefficient mu: p[mu_index], or mu_value when mu_index < 0 */
-    double mu_value;
+    int friction_index;         /* its friction coefficient c_f: p[friction_index], or friction_value when < 0 */
+    double friction_value;
     int trow[2];          /* the Jacobian rows of the point along the wall's two tangential axes (ascending), -1 for
                              an axis the model does not move along (the normal of a planar model) */
 } gac_contact;
 
-/* The base chart's measure mu(q) = |a . (e_z x Rz(theta_0) b)| (|det E|; |cos theta_0| for the default
- * twists): a = T_0^T e_z, b = T_1 e_z, only their first two components enter.  mu = 0 is the gimbal lock. */
+/* The base chart's measure chi(q) = |a . (e_z x Rz(theta_0) b)| (|det E|; |cos theta_0| for the default
+ * twists): a = T_0^T e_z, b = T_1 e_z, only their first two components enter.  chi = 0 is the gimbal lock. */
 typedef struct {
     double a[2], b[2];
     int theta0_index;     /* theta_0 = q[theta0_index], or theta0_value when theta0_index < 0 */
@@ -246,7 +246,7 @@ struct gac_model {
     gac_kernel_qqdu power;             /* q, qd, u, p -> P[0] power of the inputs, P[1] dissipation of the
                                           dampers (W, >= 0); NULL: nothing in flight does work but gravity */
     double friction_velocity;          /* v_s (m/s, > 0 when a contact has friction): a resting point slides against
-                                          -mu lambda v_t / max(|v_t|, v_s), lambda its normal force, v_t its
+                                          -c_f lambda v_t / max(|v_t|, v_s), lambda its normal force, v_t its
                                           velocity along the wall (Coulomb above v_s, viscous below) */
     gac_parameter_check check_parameters;  /* the ranges of parameter_info and the relations between parameters;
                                           called by gac_sim_init (NULL: parameters need only be finite) */
@@ -297,21 +297,37 @@ void gac_bias(const gac_model *m, const double *q, const double *qd, const doubl
 /* J (njrow x nq, row-major): row r = contact_generalized_force(q, e_r). */
 void gac_contact_jacobian(const gac_model *m, const double *q, const double *p, double *J);
 
-/* ---- workspace sizes (one formula each; the generated NAME.h has them as macros) ---------------- */
+/* ---- workspace sizes ------------------------------------------------------------------------------ */
+/* One formula each, as macros of the model's sizes: the functions below apply them to a descriptor, and a
+ * generated NAME.h defines its storage sizes by them (NAME_SIM_NDOUBLE is GAC_SIM_NDOUBLE(NAME_NQ, ...)), so
+ * that a model's arrays can be sized at compile time.  friction: 1 if some contact has has_friction, else 0. */
+
+/* max(n, 1): the length of an array with one entry per contact or per Jacobian row, never 0. */
+#define GAC_AT_LEAST_1(n) ((n) > 0 ? (n) : 1)
 
 /* Doubles of the work array of gac_impact, gac_impact_complementarity and gac_constrained_dynamics:
  * 2 nq^2 + nq + 3 npoint + max(njrow, 1), laid out as Y (nq*nq: row a = I_f^-1 n_a of active contact a) |
  * A (nq*nq: N I_f^-1 N^T, nactive x nactive) | g (nq) | vel (3 npoint) | f (max(njrow, 1)); a model with
- * friction (some contact has has_friction) needs 2 nq^2 more: Z (nq*nq) | B (nq*nq). */
-long gac_impact_nwork(const gac_model *m);
-/* Doubles and ints of one simulation (gac_sim_init): dwork = x (nx) | p (nparam) | u (nu) | private;
- * iwork = active (nq) | private.
- *   ndouble = 28 nx + nparam + 2 nu + 7 max(ncontact, 1) + gac_impact_nwork + nq^2,
- *   nint = nq + 2 max(ncontact, 1) */
-long gac_sim_ndouble(const gac_model *m);
-long gac_sim_nint(const gac_model *m);
+ * friction needs 2 nq^2 more: Z (nq*nq) | B (nq*nq). */
+#define GAC_IMPACT_NWORK(nq, npoint, njrow, friction) \
+    (((friction) ? 4L : 2L) * (nq) * (nq) + (nq) + 3L * (npoint) + GAC_AT_LEAST_1(njrow))
+/* Doubles and ints of one simulation (gac_sim_init): dwork = x (nx = 2 nq) | p (nparam) | u (nu) | private;
+ * iwork = active (nq) | private.  The doubles: x, p, u and the controller's u, f, 16 stages, x1, xs, 8 dense-output
+ * rows (28 nx in all), 7 per-contact arrays, the impact work and an nq x nq scratch; the ints: active, then
+ * is_active and n_shrink per contact. */
+#define GAC_SIM_NDOUBLE(nq, nparam, nu, npoint, ncontact, njrow, friction) \
+    (28L * 2 * (nq) + (nparam) + 2L * (nu) + 7L * GAC_AT_LEAST_1(ncontact) \
+     + GAC_IMPACT_NWORK(nq, npoint, njrow, friction) + (long)(nq) * (nq))
+#define GAC_SIM_NINT(nq, ncontact) ((long)(nq) + 2L * GAC_AT_LEAST_1(ncontact))
 /* Doubles and ints of one impact record (gac_record_bind): dwork = impulse | q | qd_before | qd_after
  * (nq each), iwork = contact | activated | released (nq each). */
+#define GAC_RECORD_NDOUBLE(nq) (4L * (nq))
+#define GAC_RECORD_NINT(nq) (3L * (nq))
+
+/* The macros above for model m. */
+long gac_impact_nwork(const gac_model *m);
+long gac_sim_ndouble(const gac_model *m);
+long gac_sim_nint(const gac_model *m);
 long gac_record_ndouble(const gac_model *m);
 long gac_record_nint(const gac_model *m);
 
@@ -347,8 +363,8 @@ int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q,
 /* Generalised accelerations with the contacts active[0..nactive-1] held as bilateral constraints:
  * I_f qdd = R + N^T lambda, N qdd = -Ndot qd (N: Jacobian rows signed along the inward normal), solved as
  * qdd = qdd_free + I_f^-1 N^T lambda with (N I_f^-1 N^T) lambda = -(N qdd_free + Ndot qd).  On a wall with
- * Coulomb friction (has_friction) the point also takes -mu lambda v_t / max(|v_t|, friction_velocity) along the
- * wall (v_t its velocity there): the system for lambda is then N I_f^-1 (N^T + mu J_t^T (-phi)) lambda = ...,
+ * Coulomb friction (has_friction) the point also takes -c_f lambda v_t / max(|v_t|, friction_velocity) along the
+ * wall (v_t its velocity there): the system for lambda is then N I_f^-1 (N^T + c_f J_t^T (-phi)) lambda = ...,
  * not symmetric, and GAC_ERR_FRICTION where it is not a P-matrix (the Painleve paradox: B + B^T positive
  * definite suffices; otherwise, for up to 10 contacts, every principal minor is checked).
  * qdd (nq, rad/s^2 or m/s^2 by coordinate) and lambda (nactive) out; lambda[k] (N) is the force of contact
@@ -363,7 +379,7 @@ int gac_constrained_dynamics(const gac_model *m, const double *q, const double *
  * a joint stop: its joint k, axis -1 and +1 (lower) or -1 (upper); c outside 0..ncontact-1: 0, -1, 0. */
 void gac_contact_info(const gac_model *m, int c, int *point, int *axis, int *normal_sign);
 
-/* The base chart's measure mu(q) (gac_chart), in [0, 1] for the default twists. */
+/* The base chart's measure chi(q) (gac_chart), in [0, 1] for the default twists. */
 double gac_chart_measure(const gac_model *m, const double *q);
 
 /* Message for a return code (a static string). */
@@ -374,7 +390,7 @@ const char *gac_error_message(int code);
  * (gac_model.chart_b).  Link 1's frame, the inner joint angles theta_2..theta_n and the base position X are the
  * same in both; only (theta_-1, theta_0, theta_1) and their rates differ, through the orientation R = ^{ref}R_1
  * and the angular velocity omega = E thetadot, which both charts share.  Because C turns u_-1 by a right angle,
- * z_1 cannot be near both charts' first axes: on B (mu_A <= 2 chart_switch <= 0.7) mu_B >= sqrt(1 - 0.7^2). */
+ * z_1 cannot be near both charts' first axes: on B (chi_A <= 2 chart_switch <= 0.7) chi_B >= sqrt(1 - 0.7^2). */
 #define GAC_CHART_SWITCH_MIN 0.1
 #define GAC_CHART_SWITCH_MAX 0.35
 #define GAC_CHART_LOCK 1e-12    /* a measure below this is the chart's own lock: theta_-1 is kept from `near` */
@@ -463,8 +479,8 @@ int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const do
  * component alone does not bound the energy's, which accumulates over many steps.
  *
  * Base charts.  With a second chart (gac_model.chart_b) and opt.chart_switch > 0, the loop leaves chart A at
- * the end of an accepted step where mu_A < chart_switch (at the start of the run too) and comes back at the end
- * of one where mu_A > 2 chart_switch: the state is converted (gac_chart_convert) and the integrator restarts from
+ * the end of an accepted step where chi_A < chart_switch (at the start of the run too) and comes back at the end
+ * of one where chi_A > 2 chart_switch: the state is converted (gac_chart_convert) and the integrator restarts from
  * it with a fresh first step.  A step whose end falls below the chart's floor, or whose theta_0 passes the lock,
  * is rejected and retried shorter (RK4: the switch is made at its start).  Resting contacts, held gaps, the
  * work integrals and the counters carry over.  Samples, impact records and gac_sim_state are in chart A's
@@ -515,7 +531,7 @@ typedef struct {
                               min(0.1, max(1e-8, 1e4 rtol)) for the adaptive methods and off for RK4 (a fixed
                               step has no tolerance to hold it to); 0: off; else 0 < energy_tol < 1 */
     double chart_switch;   /* a model with a second base chart (gac_model.chart_b) integrates on it where chart A's
-                              measure mu_A falls below this, and back on A where mu_A exceeds twice this (the
+                              measure chi_A falls below this, and back on A where chi_A exceeds twice this (the
                               hysteresis); 0: never (GAC_ERR_GIMBAL_LOCK near the lock), else within
                               [GAC_CHART_SWITCH_MIN, GAC_CHART_SWITCH_MAX] (default 0.3) */
 } gac_options;
@@ -566,14 +582,14 @@ typedef struct {
     double *u;                   /* the inputs held over the next advance call (nu; gac_sim_set_input) */
     double work_input;           /* J: work of the inputs since gac_sim_init, int u . qd_actuated dt */
     double work_damping;         /* J: energy the joint dampers took since gac_sim_init, int C theta_dot^2 dt */
-    double work_friction;        /* J: energy sliding friction took since gac_sim_init, int mu lambda |v_t| ... dt */
+    double work_friction;        /* J: energy sliding friction took since gac_sim_init, int c_f lambda |v_t| ... dt */
     double wall_time;            /* s of the run's clock used, as of the last look (GAC_LOOK_STEPS) */
     double rk4_h_rho;            /* RK4: h rho of the last step, rho the rate of the chain's fastest mode seen in it
                                     (the stability rule: 3 steps in a row above 2.5, or one above 10, stop the run
                                     with GAC_ERR_UNSTABLE) */
     long n_slow_sliding;         /* accepted steps begun with a point resting on a wall with friction and sliding
                                     slower than GAC_SLOW_SLIDING friction_velocity, where the regularisation is
-                                    stiff (time constant about friction_velocity / (mu g)) and may limit the step */
+                                    stiff (time constant about friction_velocity / (c_f g)) and may limit the step */
     double t_slow_sliding;       /* s: the time those steps covered */
     double energy_initial;       /* J: T + V at gac_sim_init */
     double energy_impacts;       /* J: energy the impacts took since gac_sim_init, sum of energy_before - energy_after */

@@ -86,10 +86,10 @@ static double shift_near(double angle, double reference)
 
 int gac_base_angles(const gac_base *c, const double *R, const double *near, double *angles)
 {
-    /* w = T_0^T e_z, v = T_1 e_z: theta_0 = phi puts z_1 along +u_-1 (the chart's lock, mu = |sin(theta_0 - phi)|) */
+    /* w = T_0^T e_z, v = T_1 e_z: theta_0 = phi puts z_1 along +u_-1 (the chart's lock, chi = |sin(theta_0 - phi)|) */
     const double w[3] = {c->T_0[6], c->T_0[7], c->T_0[8]}, v[3] = {c->T_1[2], c->T_1[5], c->T_1[8]};
     const double phi = atan2(w[1] * v[0] - w[0] * v[1], w[0] * v[0] + w[1] * v[1]);
-    /* t = T_-1^T z_1: z_1 in frame -1 before Rz(theta_-1); |t_xy| = mu, t_z = u_-1 . z_1 */
+    /* t = T_-1^T z_1: z_1 in frame -1 before Rz(theta_-1); |t_xy| = chi, t_z = u_-1 . z_1 */
     const double t[3] = {c->T_m1[0] * R[2] + c->T_m1[3] * R[5] + c->T_m1[6] * R[8],
                          c->T_m1[1] * R[2] + c->T_m1[4] * R[5] + c->T_m1[7] * R[8],
                          c->T_m1[2] * R[2] + c->T_m1[5] * R[5] + c->T_m1[8] * R[8]};

@@ -128,7 +128,7 @@ void gac_add_work(gac_sim *s, double t_b)
 
 /* 1 if at x a persistent contact on a wall with friction slides slower than GAC_SLOW_SLIDING friction_velocity
  * (its velocity along the wall, as in gac_constrained_dynamics_friction): the regularised friction force is then
- * (nearly) viscous, -mu lambda v_t / friction_velocity, a stiff term that bounds an explicit method's step. */
+ * (nearly) viscous, -c_f lambda v_t / friction_velocity, a stiff term that bounds an explicit method's step. */
 int gac_slow_sliding(const gac_sim *s, const double *x)
 {
     const gac_model *md = s->model;
@@ -139,10 +139,10 @@ int gac_slow_sliding(const gac_sim *s, const double *x)
     md->contact_velocities(x, x + md->nq, s->p, vq);
     for (a = 0; a < s->nactive; ++a) {
         const gac_contact *k = &md->contacts[s->active[a]];
-        const double mu = k->mu_index >= 0 ? s->p[k->mu_index] : k->mu_value;
+        const double cf = k->friction_index >= 0 ? s->p[k->friction_index] : k->friction_value;
         double speed2 = 0.0;
         int axis = 0;
-        if (k->kind != GAC_CONTACT_WALL || !k->has_friction || !(mu > 0.0)) continue;
+        if (k->kind != GAC_CONTACT_WALL || !k->has_friction || !(cf > 0.0)) continue;
         for (j = 0; j < 2; ++j, ++axis) {             /* the two tangential axes, ascending */
             if (axis == k->axis) ++axis;
             if (k->trow[j] >= 0) speed2 += vq[3 * (k->point - 1) + axis] * vq[3 * (k->point - 1) + axis];

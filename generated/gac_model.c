@@ -42,7 +42,7 @@ int gac_model_check(const gac_model *m)
             || k->e_index >= m->nparam)
             return GAC_ERR_BAD_MODEL;
         if (k->has_friction) {
-            if (k->kind != GAC_CONTACT_WALL || k->mu_index >= m->nparam || !(m->friction_velocity > 0.0)
+            if (k->kind != GAC_CONTACT_WALL || k->friction_index >= m->nparam || !(m->friction_velocity > 0.0)
                 || k->trow[0] < -1 || k->trow[0] >= m->njrow || k->trow[1] < -1 || k->trow[1] >= m->njrow)
                 return GAC_ERR_BAD_MODEL;
         }
@@ -161,29 +161,27 @@ int gac_has_friction(const gac_model *m)
 
 long gac_impact_nwork(const gac_model *m)
 {
-    const long nq = m->nq;
-    return (gac_has_friction(m) ? 4 : 2) * nq * nq + nq + 3L * m->npoint + GAC_AT_LEAST_1(m->njrow);
+    return GAC_IMPACT_NWORK(m->nq, m->npoint, m->njrow, gac_has_friction(m));
 }
 
 long gac_sim_ndouble(const gac_model *m)
 {
-    const long nq = m->nq;
-    return 28L * m->nx + m->nparam + 2L * m->nu + 7L * GAC_AT_LEAST_1(m->ncontact) + gac_impact_nwork(m) + nq * nq;
+    return GAC_SIM_NDOUBLE(m->nq, m->nparam, m->nu, m->npoint, m->ncontact, m->njrow, gac_has_friction(m));
 }
 
 long gac_sim_nint(const gac_model *m)
 {
-    return (long)m->nq + 2L * GAC_AT_LEAST_1(m->ncontact);
+    return GAC_SIM_NINT(m->nq, m->ncontact);
 }
 
 long gac_record_ndouble(const gac_model *m)
 {
-    return 4L * m->nq;
+    return GAC_RECORD_NDOUBLE(m->nq);
 }
 
 long gac_record_nint(const gac_model *m)
 {
-    return 3L * m->nq;
+    return GAC_RECORD_NINT(m->nq);
 }
 
 const char *gac_error_message(int code)

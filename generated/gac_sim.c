@@ -261,7 +261,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         }
         steps++;
         s->n_steps++;
-        if (gac_slow_sliding(s, s->x)) {
+        if (s->nactive > 0 && gac_slow_sliding(s, s->x)) {     /* (only resting points slide) */
             s->n_slow_sliding++;
             s->t_slow_sliding += h;
         }

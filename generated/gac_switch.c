@@ -13,7 +13,7 @@ int gac_can_switch(const gac_sim *s)
     return s->opt.chart_switch > 0.0 && s->model_a->chart_b != 0;
 }
 
-/* Chart A's measure mu_A of the state x of the chart integrated now. */
+/* Chart A's measure chi_A of the state x of the chart integrated now. */
 static double gac_measure_a(const gac_sim *s, const double *x)
 {
     const gac_model *md = s->model;
@@ -25,7 +25,7 @@ static double gac_measure_a(const gac_sim *s, const double *x)
     return gac_base_measure(&s->model_a->base, R);
 }
 
-/* 1 if the run should leave the chart it is on at its current state: mu_A below opt.chart_switch on A, above
+/* 1 if the run should leave the chart it is on at its current state: chi_A below opt.chart_switch on A, above
  * twice that on B (the hysteresis keeps a motion near the threshold from switching at every step). */
 int gac_wants_switch(const gac_sim *s)
 {

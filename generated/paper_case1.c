@@ -1414,15 +1414,6 @@ const gac_model paper_case1_model = {
     .chart_b = 0   /* no second base chart (a planar model, or an input on a base angle) */
 };
 
-/* The storage of paper_case1.h agrees with the library's formulas (both come from one formula). */
-static int paper_case1_sizes_agree(void)
-{
-    const gac_model *m = &paper_case1_model;
-    return gac_sim_ndouble(m) == PAPER_CASE1_SIM_NDOUBLE && gac_sim_nint(m) == PAPER_CASE1_SIM_NINT
-           && gac_record_ndouble(m) == PAPER_CASE1_RECORD_NDOUBLE && gac_record_nint(m) == PAPER_CASE1_RECORD_NINT
-           && gac_impact_nwork(m) == PAPER_CASE1_IMPACT_NWORK;
-}
-
 /* Point the arrays of a simulation and of a record at their own storage. */
 static void paper_case1_bind(gac_sim *base, double *dwork, int *iwork)
 {
@@ -1508,7 +1499,6 @@ int paper_case1_sim_init(paper_case1_sim *sim, double t0, const double *q, const
                    const paper_case1_options *opt)
 {
     if (sim == 0) return GAC_ERR_NULL_ARGUMENT;
-    if (!paper_case1_sizes_agree()) return GAC_ERR_BAD_MODEL;
     return gac_sim_init(&sim->base, &paper_case1_model, sim->dwork, sim->iwork, t0, q, qd, p, opt);
 }
 

@@ -153,11 +153,11 @@
 #define PAPER_CASE1_NPOINT           5      /* contact points O_1..O_NPOINT */
 #define PAPER_CASE1_NCONTACT         20     /* contacts (point, wall) */
 #define PAPER_CASE1_NJROW            10     /* contact Jacobian rows */
-#define PAPER_CASE1_IMPACT_NWORK     103    /* doubles of the work array of impact, impact_complementarity, constrained_dynamics */
-#define PAPER_CASE1_SIM_NDOUBLE      644    /* doubles of a simulation's storage (gac_sim_ndouble) */
-#define PAPER_CASE1_SIM_NINT         46     /* ints of a simulation's storage (gac_sim_nint) */
-#define PAPER_CASE1_RECORD_NDOUBLE   24     /* doubles of an impact record's storage (gac_record_ndouble) */
-#define PAPER_CASE1_RECORD_NINT      18     /* ints of an impact record's storage (gac_record_nint) */
+#define PAPER_CASE1_IMPACT_NWORK     GAC_IMPACT_NWORK(PAPER_CASE1_NQ, PAPER_CASE1_NPOINT, PAPER_CASE1_NJROW, 0) /* doubles of the work array of impact, impact_complementarity, constrained_dynamics (last argument: 1 if a wall has friction) */
+#define PAPER_CASE1_SIM_NDOUBLE      GAC_SIM_NDOUBLE(PAPER_CASE1_NQ, PAPER_CASE1_NPARAM, PAPER_CASE1_NU, PAPER_CASE1_NPOINT, PAPER_CASE1_NCONTACT, PAPER_CASE1_NJROW, 0) /* doubles of a simulation's storage (gac_sim_ndouble; last argument: 1 if a wall has friction) */
+#define PAPER_CASE1_SIM_NINT         GAC_SIM_NINT(PAPER_CASE1_NQ, PAPER_CASE1_NCONTACT) /* ints of a simulation's storage (gac_sim_nint) */
+#define PAPER_CASE1_RECORD_NDOUBLE   GAC_RECORD_NDOUBLE(PAPER_CASE1_NQ) /* doubles of an impact record's storage (gac_record_ndouble) */
+#define PAPER_CASE1_RECORD_NINT      GAC_RECORD_NINT(PAPER_CASE1_NQ) /* ints of an impact record's storage (gac_record_nint) */
 
 /* Coordinate indices into q and qd: x[PAPER_CASE1_Q_...] is a coordinate, x[PAPER_CASE1_NQ + PAPER_CASE1_Q_...] its rate. */
 #define PAPER_CASE1_Q_THETA_1                    0

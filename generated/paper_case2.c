@@ -1776,15 +1776,6 @@ const gac_model paper_case2_model = {
     .chart_b = &paper_case2_model_b
 };
 
-/* The storage of paper_case2.h agrees with the library's formulas (both come from one formula). */
-static int paper_case2_sizes_agree(void)
-{
-    const gac_model *m = &paper_case2_model;
-    return gac_sim_ndouble(m) == PAPER_CASE2_SIM_NDOUBLE && gac_sim_nint(m) == PAPER_CASE2_SIM_NINT
-           && gac_record_ndouble(m) == PAPER_CASE2_RECORD_NDOUBLE && gac_record_nint(m) == PAPER_CASE2_RECORD_NINT
-           && gac_impact_nwork(m) == PAPER_CASE2_IMPACT_NWORK;
-}
-
 /* Point the arrays of a simulation and of a record at their own storage. */
 static void paper_case2_bind(gac_sim *base, double *dwork, int *iwork)
 {
@@ -1871,7 +1862,6 @@ int paper_case2_sim_init(paper_case2_sim *sim, double t0, const double *q, const
                    const paper_case2_options *opt)
 {
     if (sim == 0) return GAC_ERR_NULL_ARGUMENT;
-    if (!paper_case2_sizes_agree()) return GAC_ERR_BAD_MODEL;
     return gac_sim_init(&sim->base, &paper_case2_model, sim->dwork, sim->iwork, t0, q, qd, p, opt);
 }
 

@@ -134,11 +134,11 @@
 #define PAPER_CASE2_NPOINT           2      /* contact points O_1..O_NPOINT */
 #define PAPER_CASE2_NCONTACT         12     /* contacts (point, wall) */
 #define PAPER_CASE2_NJROW            6      /* contact Jacobian rows */
-#define PAPER_CASE2_IMPACT_NWORK     90     /* doubles of the work array of impact, impact_complementarity, constrained_dynamics */
-#define PAPER_CASE2_SIM_NDOUBLE      564    /* doubles of a simulation's storage (gac_sim_ndouble) */
-#define PAPER_CASE2_SIM_NINT         30     /* ints of a simulation's storage (gac_sim_nint) */
-#define PAPER_CASE2_RECORD_NDOUBLE   24     /* doubles of an impact record's storage (gac_record_ndouble) */
-#define PAPER_CASE2_RECORD_NINT      18     /* ints of an impact record's storage (gac_record_nint) */
+#define PAPER_CASE2_IMPACT_NWORK     GAC_IMPACT_NWORK(PAPER_CASE2_NQ, PAPER_CASE2_NPOINT, PAPER_CASE2_NJROW, 0) /* doubles of the work array of impact, impact_complementarity, constrained_dynamics (last argument: 1 if a wall has friction) */
+#define PAPER_CASE2_SIM_NDOUBLE      GAC_SIM_NDOUBLE(PAPER_CASE2_NQ, PAPER_CASE2_NPARAM, PAPER_CASE2_NU, PAPER_CASE2_NPOINT, PAPER_CASE2_NCONTACT, PAPER_CASE2_NJROW, 0) /* doubles of a simulation's storage (gac_sim_ndouble; last argument: 1 if a wall has friction) */
+#define PAPER_CASE2_SIM_NINT         GAC_SIM_NINT(PAPER_CASE2_NQ, PAPER_CASE2_NCONTACT) /* ints of a simulation's storage (gac_sim_nint) */
+#define PAPER_CASE2_RECORD_NDOUBLE   GAC_RECORD_NDOUBLE(PAPER_CASE2_NQ) /* doubles of an impact record's storage (gac_record_ndouble) */
+#define PAPER_CASE2_RECORD_NINT      GAC_RECORD_NINT(PAPER_CASE2_NQ) /* ints of an impact record's storage (gac_record_nint) */
 
 /* Coordinate indices into q and qd: x[PAPER_CASE2_Q_...] is a coordinate, x[PAPER_CASE2_NQ + PAPER_CASE2_Q_...] its rate. */
 #define PAPER_CASE2_Q_THETA_M1                   0

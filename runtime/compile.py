@@ -1,7 +1,9 @@
 """Compile generated C with cffi (API mode) and cache the extension module.
 
-A module is the model's NAME.c compiled together with the library in ``runtime/c`` (``gac.h`` and
-``gac_*.c``: the hybrid loop for any model descriptor).  Modules live in the shared cache directory
+A module is the model's NAME.c linked with the library in ``runtime/c`` (``gac.h`` and ``gac_*.c``: the hybrid
+loop for any model descriptor); cffi is given gac.h's own declarations (``runtime.header``) and the model's.  The
+library is compiled once per library text and flags into a cached object
+(``library_object``) shared by every model.  Modules live in the shared cache directory
 (``codegen.cache.cache_dir``) as ``_gac_KEY<ext>``, KEY a hash of the C source, the header, the cffi
 declarations, the library's text, the compiler flags, the Python version and the cffi version; each hash
 gets its own module name, so different models never clash in one process.  Beside each module,
@@ -29,23 +31,49 @@ from pathlib import Path
 
 import cffi
 
-from codegen.artifact import library_files, text_digest
+from codegen.options import DEFAULT_FLAGS      # the compiler flags of a model that asks for none
+from codegen.artifact import text_digest
 from codegen.cache import (CacheError, cache_dir, clear_entry, entry_lock, report_corrupted, sha256_of,  # noqa: F401
                            write_atomic)
 
-DEFAULT_FLAGS = ("-O2",)
+from .header import library_cdef
 SUFFIX = sysconfig.get_config_var("EXT_SUFFIX") or ".so"
-LIBRARY_DIR = Path(__file__).resolve().parent / "c"      # the C library every model is compiled with
+LIBRARY_DIR = Path(__file__).resolve().parent / "c"      # the C library every model is compiled with (package data)
+
+
+def library_files(folder: Path | None = None) -> list[Path]:
+    """The library's headers and sources (gac*.h, gac*.c) in ``folder`` (default LIBRARY_DIR), by name."""
+    folder = LIBRARY_DIR if folder is None else Path(folder)
+    return sorted(path for path in folder.iterdir()
+                  if path.name.startswith("gac") and path.suffix in (".c", ".h") and path.is_file())
+
+
+def copy_library(out_dir: str | Path) -> list[Path]:
+    """Copy the library (gac.h, gac_internal.h, gac_*.c) into out_dir (created if needed), beside a model's NAME.c
+    (codegen.pipeline.write_model), so that the folder builds with no Python; returns the paths.  Every file goes
+    to a temporary name first and all are renamed into place together: a failure leaves no half-written file."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    staged = [(path, out / f".{path.name}.{os.getpid()}.tmp", out / path.name) for path in library_files()]
+    try:
+        for source, tmp, _ in staged:
+            shutil.copyfile(source, tmp)
+        for _, tmp, target in staged:
+            tmp.replace(target)
+    finally:
+        for _, tmp, _ in staged:
+            tmp.unlink(missing_ok=True)
+    return [target for _, _, target in staged]
 
 
 def library_sources() -> list[Path]:
     """The library's C sources (gac_*.c), compiled beside each model's NAME.c."""
-    return [path for path in library_files(LIBRARY_DIR) if path.suffix == ".c"]
+    return [path for path in library_files() if path.suffix == ".c"]
 
 
 def library_text() -> str:
     """Every library file's name and text, in one string (part of the build key)."""
-    return "".join(f"{path.name}\0{path.read_text()}\0" for path in library_files(LIBRARY_DIR))
+    return "".join(f"{path.name}\0{path.read_text()}\0" for path in library_files())
 
 
 class CompilerNotFound(RuntimeError):
@@ -184,26 +212,64 @@ def compile_objects(sources: list[Path], folder: Path, flags) -> list[Path]:
         return list(pool.map(one, sources))
 
 
+def library_object(flags, progress=None) -> Path:
+    """The C library compiled once per library text, flags, compiler and Python: one position-independent object
+    in the cache (``gac_lib_KEY.o`` with its sha256 sidecar, checked before use), linked into every model's
+    module.  The library's files are compiled as one translation unit (each gac_*.c included in name order), so
+    that the loop's calls across them (integrators, events, the impact law) can be inlined as in one file."""
+    flags = tuple(flags)
+    digest = hashlib.sha256()
+    for part in (library_text(), " ".join(flags), " ".join(compiler_command()), sys.version, "one unit"):
+        digest.update(part.encode())
+        digest.update(b"\0")
+    entry = f"gac_lib_{digest.hexdigest()[:20]}"
+    folder = cache_dir()
+    target, sidecar = folder / f"{entry}.o", folder / f"sha256_{entry}.txt"
+    with entry_lock(folder, entry):
+        if target.exists():
+            problem = verify_module(target, sidecar)
+            if problem is None:
+                return target
+            report_corrupted(target.name, problem, progress)
+        start = time.perf_counter()
+        workdir = Path(tempfile.mkdtemp(prefix=f"{entry}-", dir=folder))
+        try:
+            unit = workdir / "gac_library.c"
+            unit.write_text("".join(f'#include "{path.name}"\n' for path in library_sources()))
+            built = compile_objects([unit], workdir, flags)[0]
+            data = built.read_bytes()
+            clear_entry(target)
+            os.replace(built, target)
+            write_atomic(sidecar, f"{sha256_of(data)}  {target.name}\n".encode())
+        finally:
+            shutil.rmtree(workdir, ignore_errors=True)
+        if progress:
+            progress(f"compile: built the C library {target.name} in {time.perf_counter() - start:.2f} s")
+    return target
+
+
 def _build(name, header, source, cdef, flags, module_name: str, target: Path, sidecar: Path) -> float:
-    """Build the module in a temporary directory, move it to ``target``, then write its sidecar.  A long
-    model (PARALLEL_LINES) is compiled as several units, with the library, one per core, then linked."""
+    """Build the module in a temporary directory, move it to ``target``, then write its sidecar: the model's
+    source with the library's cached object (library_object).  A long model (PARALLEL_LINES) is compiled as
+    several units, one per core, then linked."""
     find_compiler()
     start = time.perf_counter()
+    library = library_object(flags)
     workdir = Path(tempfile.mkdtemp(prefix=f"{module_name}-", dir=target.parent))
     try:
         (workdir / f"{name}.h").write_text(header)
         (workdir / f"{name}.c").write_text(source)
         cores = os.cpu_count() or 1
-        sources, objects = [str(workdir / f"{name}.c"), *map(str, library_sources())], []
+        sources, objects = [str(workdir / f"{name}.c")], [library]
         if cores > 1 and source.count("\n") > PARALLEL_LINES:
             units = []
             for k, text in enumerate(translation_units(source, cores)):
                 units.append(workdir / f"{name}_unit{k}.c")
                 units[-1].write_text(text)
-            objects = compile_objects([*units, *library_sources()], workdir, flags)
+            objects += compile_objects(units, workdir, flags)
             sources = []
         ffi = cffi.FFI()
-        ffi.cdef(cdef)
+        ffi.cdef(library_cdef() + cdef)           # the library's declarations from gac.h, then the model's
         ffi.set_source(module_name, f'#include "{name}.h"', sources=sources, extra_objects=list(map(str, objects)),
                        include_dirs=[str(workdir), str(LIBRARY_DIR)], extra_compile_args=list(flags), libraries=["m"])
         try:

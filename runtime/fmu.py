@@ -15,10 +15,12 @@ import time
 import zipfile
 from pathlib import Path
 
-from codegen.artifact import library_files
+from codegen.options import build_options
 from codegen.scene import Scene, SceneError, load_scene
 
-from .compile import LIBRARY_DIR, PARALLEL_LINES, BuildError, compile_objects, compiler_command, translation_units
+from .compile import (LIBRARY_DIR, PARALLEL_LINES, BuildError, compile_objects, compiler_command, library_files,
+                      translation_units)
+from .header import fmi2_rows, library_constants
 from .horizon import DEFAULT_T_END
 
 FMI2_DIR = LIBRARY_DIR / "fmi2"          # gac_fmi2.c, gac_fmi2.h, fmi2_types.h: the slave, for any model
@@ -61,12 +63,13 @@ def build_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", *, name:
             raise SceneError(f"{label}: must be a finite number of seconds > 0, got {value!r}")
     folder, suffix = fmi_platform()
     compiler = compiler_command()
-    model = generate_cached(scene, name=name, bake_params=bake_params, specialise=specialise, rolled=rolled,
-                            progress=progress)
+    options = build_options(scene, bake_params=bake_params, specialise=specialise, rolled=rolled)
+    model = generate_cached(scene, options, name=name, progress=progress)
     files = {f"{model.name}.h": model.header, f"{model.name}.c": model.source}
     files.update((path.name, path.read_text()) for path in [*library_files(), *fmi2_sources()])
     sources = [*files, f"{model.name}_fmi2.c"]
-    files.update(fmu_texts(model, scene, [s for s in sources if s.endswith(".c")], stop_time, step_size))
+    files.update(fmu_texts(model, scene, [s for s in sources if s.endswith(".c")], stop_time, step_size,
+                            fmi2_rows(), library_constants()))
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -15,10 +15,11 @@ import numpy as np
 
 from codegen import interface
 from codegen.cache import generate_cached
+from codegen.options import BuildOptions, build_options
 from codegen.artifact import GeneratedModel
 from codegen.scene import Scene, load_scene, scene_file
 
-from .compile import DEFAULT_FLAGS, compile_model
+from .compile import compile_model
 
 
 class ImpactError(RuntimeError):
@@ -69,9 +70,9 @@ class CompiledModel:
     the model's own coordinates: ``layout.free`` of the full layout of Eq. 13 (all of it for the general
     model; ``layout.reduce`` / ``layout.expand`` convert)."""
 
-    def __init__(self, scene: Scene, generated: GeneratedModel, module, build_options: tuple = ()):
+    def __init__(self, scene: Scene, generated: GeneratedModel, module):
         self.scene = scene
-        self.build_options = build_options            # (bake_params, flags, specialise, dense, rolled) of load_model
+        self.options = generated.options              # every choice it was generated and compiled with
         self.generated = generated
         self.layout = generated.layout
         self.ffi, self.lib = module.ffi, module.lib
@@ -90,9 +91,7 @@ class CompiledModel:
     def __reduce__(self):
         """Pickled as the scene and build options: another process (a Dask worker) loads the model from the
         shared build cache, once per process (runtime.model.model_of)."""
-        if not self.build_options:
-            raise TypeError("this model was not built by load_model, so it cannot be rebuilt elsewhere")
-        return model_of, (self.scene, *self.build_options)
+        return model_of, (self.scene, self.options)
 
     def size(self, suffix: str) -> int:
         """The model's size NAME_<suffix> (codegen.interface.SIZES), read from the compiled module."""
@@ -267,48 +266,48 @@ def load_model(scene: Scene | str | Path, bake_params: bool = False, flags=None,
     model.  ``dense``: generate the dense kernels (mass_matrix, bias, contact_jacobian; O(n^2) code, not
     needed by simulations); None (default) does up to codegen.interface.DENSE_MAX_LINKS links, and otherwise
     they are formed at run time from the O(n) kernels.  ``rolled``: emit the forward dynamics with loops over the
-    links (codegen.rolled); None (default) does from codegen.interface.ROLLED_MIN_LINKS links on.  For a name or a file, the same model object is
-    returned again while the file is unchanged (same path, modification time and size) and the options are
-    the same."""
-    flags = DEFAULT_FLAGS if flags is None else tuple(flags)
+    links (codegen.rolled); None (default) does from codegen.interface.ROLLED_MIN_LINKS links on.  The choices
+    are resolved once, here (codegen.options.build_options), into the model's ``options``.  For a name or a file,
+    the same model object is returned again while the file is unchanged (same path, modification time and size)
+    and the options are the same."""
     for option, value in (("dense", dense), ("rolled", rolled)):
         if value is not None and not isinstance(value, bool):
             raise TypeError(f"{option}: expected True, False or None, got {value!r}")
+    choices = dict(bake_params=bake_params, specialise=specialise, dense=dense, rolled=rolled, flags=flags)
     if isinstance(scene, Scene):
-        return _build_model(scene, bake_params, flags, progress, specialise, dense, rolled)
+        return _build_model(scene, build_options(scene, **choices), progress)
     if not isinstance(scene, (str, os.PathLike)):
         raise TypeError("scene: expected a Scene, a shipped scene name or a path to a .toml/.json scene "
                         f"file, got {reprlib.repr(scene)} ({type(scene).__name__})")
     path = scene_file(scene)
     stat = path.stat()
-    key = (path, stat.st_mtime_ns, stat.st_size, bool(bake_params), flags, bool(specialise), dense, rolled)
+    key = (path, stat.st_mtime_ns, stat.st_size, bool(bake_params), tuple(flags or ()), bool(specialise), dense,
+           rolled)
     model = _MODELS.get(key)
     if model is None:
-        model = _build_model(load_scene(path), bake_params, flags, progress, specialise, dense, rolled)
+        loaded = load_scene(path)
+        model = _build_model(loaded, build_options(loaded, **choices), progress)
         _MODELS[key] = model
     return model
 
 
-_MODELS: dict[tuple, CompiledModel] = {}      # (scene file, mtime, size, options) -> model
+_MODELS: dict[tuple, CompiledModel] = {}      # (scene file, mtime, size, what was asked) -> model
 
 
-def _build_model(scene: Scene, bake_params: bool, flags: tuple, progress, specialise: bool,
-                 dense: bool | None = None, rolled: bool | None = None) -> CompiledModel:
-    generated = generate_cached(scene, bake_params=bake_params, specialise=specialise, progress=progress,
-                                dense=dense, rolled=rolled)
+def _build_model(scene: Scene, options: BuildOptions, progress) -> CompiledModel:
+    generated = generate_cached(scene, options, progress=progress)
     module = compile_model(generated.name, generated.header, generated.source, generated.cdef,
-                           flags=flags, progress=progress, digest=generated.text_digest())
-    return CompiledModel(scene, generated, module, (bool(bake_params), tuple(flags), bool(specialise), dense, rolled))
+                           flags=options.flags, progress=progress, digest=generated.text_digest())
+    return CompiledModel(scene, generated, module)
 
 
 _BY_SCENE: dict[tuple, CompiledModel] = {}    # (scene, options) -> model, for model_of
 
 
-def model_of(scene: Scene, bake_params: bool, flags: tuple, specialise: bool,
-             dense: bool | None = None, rolled: bool | None = None) -> CompiledModel:
+def model_of(scene: Scene, options: BuildOptions) -> CompiledModel:
     """The model of a scene, built (or loaded from the build cache) once per process: what an unpickled
     CompiledModel is."""
-    key = (scene, bool(bake_params), tuple(flags), bool(specialise), dense, rolled)
+    key = (scene, options)
     if key not in _BY_SCENE:
-        _BY_SCENE[key] = _build_model(scene, bake_params, tuple(flags), None, specialise, dense, rolled)
+        _BY_SCENE[key] = _build_model(scene, options, None)
     return _BY_SCENE[key]

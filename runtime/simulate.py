@@ -9,7 +9,8 @@ Flight segments run in compiled code (``NAME_sim_advance``, the C library in ``r
 next impact, which is located, resolved, applied and checked in C (no pulling impulse, no contact still
 approaching its wall, no energy gain); the budgets (steps, wall time) and RK4's stability rule are the C loop's
 too.  Python validates the arguments, talks to C once per flight segment, and collects and reports the result.
-Codes and sizes come from the compiled module (``lib.GAC_...``), never from header text.
+Codes and sizes come from the compiled module (``lib.GAC_...``); GAC_RTOL_MIN, needed before a model is built,
+from gac.h's parse (runtime.header).
 """
 from __future__ import annotations
 
@@ -19,14 +20,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from codegen.scene import JointStop, Scene, SceneError
-from codegen.interface import RTOL_MIN  # the smallest rtol the C loop accepts (GAC_RTOL_MIN)
+from codegen.scene import JointStop, Scene, SceneError, parameter_name, split_parameter_name
+from codegen.parameters import check_vector, parameter_rules
 from codegen.specialise import coordinate_names
 
+from .header import library_constants
 from .inputs import InputSchedule, attach, input_source  # noqa: F401  (InputSchedule: re-export)
 from .model import CompiledModel, load_model
 
 METHODS = ("dopri5", "dop853", "rk4")
+RTOL_MIN = float(library_constants()["GAC_RTOL_MIN"])   # the smallest rtol the C loop accepts (gac.h)
 DEFAULT_RTOL, DEFAULT_ATOL = 1e-8, 1e-10   # the adaptive methods' tolerances, here, in the CLI and in C
 ROUNDOFF_WARN = 1e-6    # an impact whose energy round-off bound exceeds this is named in result.warnings
 FRICTION_WARN_STEPS = 10_000   # a run with at least this many steps begun in the regularised friction regime, and
@@ -485,13 +488,14 @@ def _option_value(opt, name: str):
 def weight_scale(scene: Scene, p: np.ndarray) -> float:
     """M g L: the work to lift the whole chain by its own length (an energy scale that is not 0 for a
     chain at rest on the floor, where T + V can be exactly 0)."""
-    names = scene.parameter_names()
+    def value(kind, owner=None):
+        return p[scene.parameter_index(kind, owner)]
     mass = length = 0.0
     for i, link in enumerate(scene.links, start=1):
-        l = p[names.index(f"l_{i}")]
-        mass += p[names.index(f"mu_{i}")] * l if link.kind == "line" else p[names.index(f"m_{i}")]
+        l = value("l", i)
+        mass += value("mu", i) * l if link.kind == "line" else value("m", i)
         length += l
-    return float(mass * abs(p[names.index("g")]) * length)
+    return float(mass * abs(value("g")) * length)
 
 
 def energy_scale(scene: Scene, p: np.ndarray, T0: float, V0: float) -> float:
@@ -517,19 +521,22 @@ def ill_conditioning(scene: Scene, p, planar: bool) -> str:
     turns its links about their joint axes only, so only those count), and that of the whole chain's moment of
     inertia (straight, about its end: M L^2 / 3) to its largest link's, which measures how I_f grows with the
     number of links (docs/simulation.md).  p: the parameters (scene.parameter_names()); planar: the model is."""
-    value = dict(zip(scene.parameter_names(), np.asarray(p, dtype=float).tolist()))
+    values = dict(zip(scene.parameter_names(), np.asarray(p, dtype=float).tolist()))
+
+    def value(kind, owner):
+        return values[parameter_name(kind, owner)]
     masses, lengths, moments = [], [], []          # (value, link); moments: (value, link, which one)
     for i, link in enumerate(scene.links, start=1):
-        l = value[f"l_{i}"]
+        l = value("l", i)
         if link.kind == "line":
-            m = value[f"mu_{i}"] * l
-            axial = l * value[f"Jxx_{i}"]
-            across_y, across_z = (m * l * l / 12 + l * value[f"{key}_{i}"] for key in ("Jyy", "Jzz"))
+            m = value("mu", i) * l
+            axial = l * value("Jxx", i)
+            across_y, across_z = (m * l * l / 12 + l * value(key, i) for key in ("Jyy", "Jzz"))
             found = [(across_z, "about its joint axis")] if planar else \
                 [(axial, "axial"), (across_y, "transverse"), (across_z, "transverse")]
         else:
-            m = value[f"m_{i}"]
-            Ixx, Iyy, Izz, Ixy, Ixz, Iyz = (value[f"{key}_{i}"] for key in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"))
+            m = value("m", i)
+            Ixx, Iyy, Izz, Ixy, Ixz, Iyz = (value(key, i) for key in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"))
             inertia = np.array([[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]])
             found = [(Izz, "about its joint axis")] if planar else \
                 [(v, "principal") for v in np.linalg.eigvalsh(inertia)]
@@ -567,7 +574,8 @@ def friction_warnings(model: CompiledModel, p, sim, method: str) -> list[str]:
         return []
     v_s = model.scene.friction_velocity
     names = model.scene.parameter_names()
-    mu = max((float(p[k]) for k, name in enumerate(names) if name.startswith("friction_")), default=0.0)
+    mu = max((float(p[k]) for k, name in enumerate(names) if split_parameter_name(name)[0] == "friction"),
+             default=0.0)
     h = float(sim.t_slow_sliding) / slow
     tau = v_s / (mu * abs(float(p[0]))) if mu * abs(float(p[0])) > 0.0 else None
     if tau is not None and h < 0.01 * tau:
@@ -638,7 +646,7 @@ def _check_parameters(model: CompiledModel, p: np.ndarray) -> None:
     if np.array_equal(p, model.p):              # the scene's own values, checked when it was loaded
         return
     try:
-        model.scene.check_parameters(p, changed=[names[k] for k in np.flatnonzero(p != model.p)])
+        check_vector(parameter_rules(model.scene), p, changed=[names[k] for k in np.flatnonzero(p != model.p)])
     except SceneError as exc:
         raise ValueError(str(exc)) from None
     for k, name in enumerate(names):
@@ -665,7 +673,7 @@ def _check_inside(model: CompiledModel, q: np.ndarray, p: np.ndarray, name: str)
             raise ValueError(f"{name}: joint {point} is beyond its {'lower' if wall.side < 0 else 'upper'} limit "
                              f"{wall.parameter} by {-gaps[c]:.3g} rad")
         axis = f"X{wall.axis + 1}"
-        position = p[model.scene.parameter_names().index(f"wall_{wall.name}")]
+        position = p[model.scene.parameter_index("wall", wall.name)]
         raise ValueError(f"{name}: contact point O_{point} is outside the wall {wall.name}: {axis} = "
                          f"{points[point - 1, wall.axis]:.6g} m, allowed {axis} {'>=' if wall.side < 0 else '<='} "
                          f"{position:g} (gap {gaps[c]:.3g} m)")

@@ -56,7 +56,7 @@ def lock_table(max_steps: int = 20000, methods=("dopri5", "dop853"), rtols=(1e-6
 
 
 def long_table() -> str:
-    lines = ["| scene | t_end (s) | run | status | impacts | switches | min mu_A on samples | energy drift | "
+    lines = ["| scene | t_end (s) | run | status | impacts | switches | min chi_A on samples | energy drift | "
              "steps | ms |", "|---|---|---|---|---|---|---|---|---|---|"]
     opts = {"method": "dop853", "rtol": 1e-10, "atol": 1e-12}
     for name, t_end in (("gimbal-lock", 10.0), ("paper-case2", 20.0)):

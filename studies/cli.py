@@ -12,7 +12,7 @@ STUDIES = {
     "scaling": ("studies.scaling", "generator stage times and operation counts against n"),
     "embed": ("studies.embed_report", "the embeddable C: object size, stack use, ms per simulated second"),
     "precision": ("studies.precision", "work-precision: error against CPU time of every integrator"),
-    "stress": ("studies.stress", "the stress suite: stiff and extreme scenes, pass/fail table"),
+    "stress": ("studies.stress_suite", "the stress suite: stiff and extreme scenes, pass/fail table"),
     "fuzz": ("studies.fuzz", "random admissible scenes through the hybrid loop, each run checked"),
     "benchmark": ("studies.benchmark", "the compiled hybrid loop against scipy's solve_ivp with events"),
     "charts": ("studies.charts_report", "chart switching near the gimbal lock, against an independent run"),

@@ -24,11 +24,12 @@ from .toolchain import compile_c, compiler_version
 
 
 def measure(n: int, t_end: float, runs: int, folder: Path) -> dict:
-    from runtime.compile import LIBRARY_DIR, library_sources
+    from runtime.compile import LIBRARY_DIR, copy_library, library_sources
     scene = default_scene(n)
     model = generate(scene)
     write_model(model, folder)
-    write_standalone(model, scene, folder)
+    copy_library(folder)
+    write_standalone(model, scene, folder, [path.name for path in library_sources()])
     name = model.name
     objects = folder / "objects"
     compile_c([folder / f"{name}.c", *library_sources()], objects, flags=("-O2", "-fstack-usage"),

@@ -47,15 +47,17 @@ def measure(n: int, formulation: str, specialise: bool = False, progress=None, k
     """Generate, count and compile one model; returns a JSON-able row.  With ``keep`` the model's text is
     written there (``NAME.h``, ``NAME.c``, NAME = ``model_name(n, formulation)``) for the timing, which
     run_all does for both formulations of one n together."""
-    from codegen.pipeline import generate
+    from codegen.options import build_options
+    from codegen.pipeline import generate, raw_dynamics_ops
     from codegen.scene import default_scene
 
     say = progress or (lambda message: None)
     scene = default_scene(n)
+    options = build_options(scene, specialise=specialise, formulation=formulation, dense=True)
     start = time.perf_counter()
-    model = generate(scene, name=model_name(n, formulation), specialise=specialise, formulation=formulation,
-                     raw_ops=True, progress=say, dense=True)
+    model = generate(scene, options, name=model_name(n, formulation), progress=say)
     generation = time.perf_counter() - start
+    raw = raw_dynamics_ops(scene, options, progress=say)
     ops = {f.name: f.ops for f in model.functions}
     say("compile (cc -std=c99 -O2 -c)")
     compile_seconds = _compile_seconds(model)
@@ -67,7 +69,7 @@ def measure(n: int, formulation: str, specialise: bool = False, progress=None, k
         "derive_s": model.timings["derive"], "cse_s": model.timings["cse"], "render_s": model.timings["render"],
         "generation_s": generation,
         "ops": {name: _op_dict(ops[name]) for name in ("mass_matrix", "bias", "forward_dynamics")},
-        "raw_ops": dict(model.raw_ops), "c_lines": len(model.source.splitlines()),
+        "raw_ops": raw, "c_lines": len(model.source.splitlines()),
         "compile_s": compile_seconds,
     }
 

@@ -202,14 +202,15 @@ def random_states(scene, rng) -> tuple[np.ndarray, np.ndarray]:
 
 
 def measure(n: int, flag_sets, batches: int, peer_python: str, progress=print) -> list[dict]:
+    from codegen.options import build_options
     from codegen.pipeline import generate
     from codegen.scene import default_scene
     from runtime.compile import LIBRARY_DIR, library_sources
     from .toolchain import compile_c
     scene = default_scene(n)
     start = time.perf_counter()
-    model = generate(scene, specialise=False, dense=False, rolled=False)
-    looped = generate(scene, name=f"{scene.name}_rolled", specialise=False, dense=False, rolled=None)
+    model = generate(scene, build_options(scene, specialise=False, dense=False, rolled=False))
+    looped = generate(scene, build_options(scene, specialise=False, dense=False), name=f"{scene.name}_rolled")
     ours_ops = {f.name: f.ops for f in model.functions}["forward_dynamics"]
     has_loops = "in loops" in {f.name: f.summary for f in looped.functions}["forward_dynamics"]
     rows = []

@@ -29,6 +29,7 @@ print(time.perf_counter() - start)
 def measure(n: int, progress=print, specialise: bool = True) -> dict:
     """One cold build of the n-link model into a new, empty cache, and its warm load from there."""
     from codegen.cache import generate_cached
+    from codegen.options import build_options
     from codegen.scene import default_scene
     scene = default_scene(n)
     with tempfile.TemporaryDirectory(prefix="scaling-") as cache:
@@ -37,7 +38,7 @@ def measure(n: int, progress=print, specialise: bool = True) -> dict:
         try:
             from runtime.compile import compile_model
             start = time.perf_counter()
-            model = generate_cached(scene, specialise=specialise, refresh=True,
+            model = generate_cached(scene, build_options(scene, specialise=specialise), refresh=True,
                                     progress=lambda m: progress(f"  n={n}: {m}"))
             generated = time.perf_counter() - start
             compile_model(model.name, model.header, model.source, model.cdef)

@@ -17,6 +17,7 @@ import sys
 import numpy as np
 
 import codegen
+from codegen.options import build_options
 from codegen.scene import load_scene
 from runtime.model import load_model
 from runtime.simulate import simulate
@@ -50,7 +51,8 @@ def main(argv=None) -> int:
     for name, t_end in T_END.items():
         scene = load_scene(name)
         kinds = (("general", False), ("specialised", True))
-        generated = {label: codegen.generate(scene, name=f"{scene.name}_{label}", specialise=specialise)
+        generated = {label: codegen.generate(scene, build_options(scene, specialise=specialise),
+                                                    name=f"{scene.name}_{label}")
                      for label, specialise in kinds}
         rhs = dict(zip(generated, time_rhs_side_by_side(list(generated.values()), [100000, 100000])))
         rhs_ratio = ratios(rhs["general"], rhs["specialised"])

@@ -77,7 +77,7 @@ def axial_spin_constant(tol: float):
         states = list(zip(r.q, r.qd)) + [(i.q, i.qd_after) for i in r.impacts]
         motions = [link_motion(scene, q, qd)[0] for q, qd in states]
         spins = np.array([m.omega @ m.R[:, 0] for m in motions])
-        axial = float(run.p[scene.parameter_names().index("Jxx_1")]) * scene.links[0].length
+        axial = float(run.p[scene.parameter_index("Jxx", 1)]) * scene.links[0].length
         L = max(np.linalg.norm(m.inertia @ m.omega) for m in motions)
         drift = np.abs(spins - spins[0]).max()
         relative = axial * drift / L
@@ -147,8 +147,9 @@ def chain_stays_straight(tol: float = 1e-9):
     return check
 
 
-def param(run: CaseRun, name: str) -> float:
-    return float(run.p[run.scene.parameter_names().index(name)])
+def param(run: CaseRun, kind: str, owner=None) -> float:
+    """The run's value of parameter ``kind`` of ``owner`` (codegen.scene.parameter_name)."""
+    return float(run.p[run.scene.parameter_index(kind, owner)])
 
 
 # ---------------------------------------------------------------------------
@@ -270,7 +271,7 @@ def _corner3d_after(run: CaseRun):
     impact = run.result.impacts[0]
     n = run.scene.n
     before, after = impact.qd_before[n + 2:n + 5], impact.qd_after[n + 2:n + 5]     # O_1's velocity
-    e = np.array([param(run, f"e_{w}") for w in ("x1_min", "x2_min", "x3_min")])
+    e = np.array([param(run, "e", w) for w in ("x1_min", "x2_min", "x3_min")])
     error = np.abs(after + e * before).max()
     return Check(error <= 1e-9, f"O_1's velocity {before.tolist()} -> {after.round(12).tolist()} m/s: each "
                                 f"component reversed and scaled by its wall's e = {e.tolist()} (error {error:.1e})")
@@ -279,7 +280,7 @@ def _corner3d_after(run: CaseRun):
 
 def _flat_drop_times(run: CaseRun):
     """Free fall from h: first impact at T = sqrt(2 h / g), then flights of 2 e^k T."""
-    h, g, e = run.scene.q0[run.scene.n + 3], param(run, "g"), param(run, "e_x2_min")
+    h, g, e = run.scene.q0[run.scene.n + 3], param(run, "g"), param(run, "e", "x2_min")
     T = math.sqrt(2 * h / g)
     everyone = {(p, "x2_min") for p in range(1, run.scene.n + 2)}
     times, t, k = [], T, 0
@@ -292,7 +293,7 @@ def _flat_drop_times(run: CaseRun):
 
 def _flat_drop_energy(run: CaseRun):
     """After the k-th impact only kinetic energy is left (the chain is at X2 = 0): e^2k m g h."""
-    h, g, e = run.scene.q0[run.scene.n + 3], param(run, "g"), param(run, "e_x2_min")
+    h, g, e = run.scene.q0[run.scene.n + 3], param(run, "g"), param(run, "e", "x2_min")
     mass = sum(link.mu * link.length for link in run.scene.links)
     errors = [abs(i.energy_after - e ** (2 * k) * mass * g * h) / (mass * g * h)
               for k, i in enumerate(run.result.impacts, start=1)]

@@ -23,7 +23,7 @@ GIMBAL_RUN = {"method": "dop853", "rtol": 1e-10, "atol": 1e-12}
 def charts_complete(energy_tol: float = 1e-9):
     """The chart-switching run of the case's scene: status 0 to t_end, at least one switch each way, no
     NaN, no penetration, and energy conserved at every impact, at the end and on every sample where chart A is
-    well conditioned (mu_A >= 0.1: the samples are in chart A's coordinates, whose rates grow like 1/mu_A)."""
+    well conditioned (chi_A >= 0.1: the samples are in chart A's coordinates, whose rates grow like 1/chi_A)."""
     def check(run: CaseRun):
         case = run.case
         t_end = case.simulate.get("t_end", 1.0)

@@ -5,8 +5,9 @@ import subprocess
 
 import pytest
 
-from codegen import interface
 from codegen.pipeline import generate, write_model, write_standalone
+from runtime.compile import copy_library, library_sources
+from runtime.header import return_codes
 from codegen.scene import load_scene
 from runtime import simulate
 
@@ -191,7 +192,8 @@ def built(tmp_path_factory, compiled):
     scene = load_scene("paper-case1")
     model = generate(scene)
     write_model(model, out)
-    write_standalone(model, scene, out)
+    copy_library(out)
+    write_standalone(model, scene, out, [path.name for path in library_sources()])
     library = sorted(str(path) for path in out.glob("gac_*.c"))
     (out / "driver.c").write_text(DRIVER)
     subprocess.run(["gcc", *STRICT, *SANITIZE, "-I", str(out),
@@ -269,8 +271,8 @@ def test_sim_init_refuses_a_point_beyond_its_wall(built, depth, contact_tol, exp
 
 
 def test_start_outside_is_a_new_code(built):
-    codes = [int(getattr(built[1].lib, name)) for name in interface.CODES]
-    assert len(codes) == len(set(codes)) == len(interface.CODES)
+    codes = [int(getattr(built[1].lib, name)) for name in return_codes()]
+    assert len(codes) == len(set(codes)) == len(return_codes())
     assert code_of(built, "ERR_START_OUTSIDE") < 0 and code_of(built, "ERR_NULL_ARGUMENT") < 0
 
 
@@ -286,7 +288,8 @@ def test_copies_are_bound_to_their_own_storage(built):
 
 
 def test_header_sizes_are_the_library_formulas(built):
-    """NAME_<size> (from codegen.interface's formulas) equals what the library computes for the descriptor."""
+    """NAME_<size> (gac.h's storage macros over the model's counts) equals what the library's functions compute for
+    the descriptor."""
     model = built[1]
     lib, ffi = model.lib, model.ffi
     descriptor = ffi.addressof(lib.paper_case1_model)            # the const descriptor itself
@@ -296,9 +299,6 @@ def test_header_sizes_are_the_library_formulas(built):
                             ("SIM_NINT", lib.gac_sim_nint), ("RECORD_NDOUBLE", lib.gac_record_ndouble),
                             ("RECORD_NINT", lib.gac_record_nint)):
         assert formula(descriptor) == getattr(lib, f"PAPER_CASE1_{suffix}") == model.size(suffix), suffix
-    sizes = interface.size_values(n=4, nq=model.nq, nparam=len(model.p), nu=0, npoint=5, ncontact=len(model.contacts),
-                                  njrow=len(model.contact_rows))
-    assert sizes == {s.suffix: model.size(s.suffix) for s in interface.SIZES}
 
 
 def test_sim_state_and_default_options_ignore_null(built):

@@ -152,7 +152,11 @@ def test_eight_processes_build_one_model_into_an_empty_cache(tmp_path):
         assert NOTICE not in err
     names = sorted(p.name for p in folder.iterdir() if not p.name.startswith(".lock_"))
     gen, module, sidecar = entries(folder)
-    assert names == sorted([gen.name, module.name, sidecar.name])     # one entry each, no leftovers
+    library = [folder / name for name in names if name.startswith("gac_lib_")]    # the C library, compiled once
+    assert len(library) == 1 and library[0].suffix == ".o"
+    library_sidecar = folder / f"sha256_{library[0].stem}.txt"
+    assert names == sorted([gen.name, module.name, sidecar.name, library[0].name, library_sidecar.name])   # one
+    assert verify_module(library[0], library_sidecar) is None                    # entry each, no leftovers
     assert_valid(folder)
 
 
@@ -229,8 +233,8 @@ def builds(monkeypatch):
     """Stand-in for building a model: records (scene, options) and returns a new object each time."""
     made = []
 
-    def build(scene, bake_params, flags, progress, specialise, dense=None, rolled=None):
-        made.append((scene, bake_params, flags, specialise))
+    def build(scene, options, progress):
+        made.append((scene, options))
         return object()
     monkeypatch.setattr(runtime.model, "_build_model", build)
     monkeypatch.setattr(runtime.model, "_MODELS", {})
@@ -287,3 +291,18 @@ def test_codegen_cli_fills_the_cache_load_model_reads(tmp_path, monkeypatch):
     model = load_model(default_scene(1))
     assert model.forward_dynamics(model.q0, model.qd0)[-1] == pytest.approx(-9.81)
     assert {p.name: p.stat().st_mtime_ns for p in folder.iterdir()} == before
+
+
+def test_the_c_library_is_compiled_once_and_a_corrupted_object_rebuilt(tmp_path, monkeypatch):
+    """The library's object is one cache entry per flags, reused as it is, and rebuilt (with the notice) when its
+    sha256 no longer matches."""
+    monkeypatch.setenv("GIBBS_APPELL_CACHE", str(tmp_path))
+    messages = []
+    first = runtime.compile.library_object(("-O2",), progress=messages.append)
+    stamp = first.stat().st_mtime_ns
+    assert runtime.compile.library_object(("-O2",)) == first and first.stat().st_mtime_ns == stamp   # reused
+    assert runtime.compile.library_object(("-O1",)) != first                                         # per flags
+    first.write_bytes(first.read_bytes()[:100])                                                      # truncated
+    again = runtime.compile.library_object(("-O2",), progress=messages.append)
+    assert again == first and verify_module(again, tmp_path / f"sha256_{again.stem}.txt") is None
+    assert any(m.startswith(NOTICE + first.name) for m in messages)

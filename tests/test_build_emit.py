@@ -12,11 +12,12 @@ import pytest
 import sympy as sp
 
 import codegen
-from codegen.artifact import library_files
 from codegen.emit import c_expression
 from codegen.pipeline import write_model
 from codegen.ops import count_ops
 from codegen.scene import MAX_LINKS, Scene, LineLink, load_scene
+from codegen.options import build_options
+from runtime.compile import copy_library, library_files
 from conftest import chain
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -30,13 +31,14 @@ def generated(scene, bake_params: bool = False):
     """codegen.generate(scene), each (scene, bake_params) derived once in this file (the tests only read it)."""
     key = (scene, bake_params)
     if key not in _GENERATED:
-        _GENERATED[key] = codegen.generate(scene, bake_params=bake_params)
+        _GENERATED[key] = codegen.generate(scene, build_options(scene, bake_params=bake_params))
     return _GENERATED[key]
 
 
 def write(model, folder: Path) -> Path:
     """NAME.h, NAME.c and the library's files in folder; the path of NAME.c."""
     write_model(model, folder)
+    copy_library(folder)
     return folder / f"{model.name}.c"
 
 

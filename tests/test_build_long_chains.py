@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from codegen import interface
+from codegen.options import build_options
 from codegen.pipeline import PARALLEL_MIN_LINKS, generate
 from codegen.scene import default_scene
 from conftest import chain, reference_of
@@ -44,7 +45,8 @@ def test_workers_give_the_same_text():
 
 
 def test_translation_units_hold_every_kernel_once():
-    model = generate(default_scene(6), dense=True)
+    scene = default_scene(6)
+    model = generate(scene, build_options(scene, dense=True))
     units = translation_units(model.source, 3)
     assert len(units) == 3
     kernels = [line for line in model.source.splitlines() if line.startswith(KERNEL_MARK)]

@@ -13,6 +13,7 @@ import pytest
 from studies import reference
 from conftest import chain, random_parameters, reference_of
 from codegen.scene import default_scene
+from codegen.options import build_options
 from runtime import load_model, simulate
 
 # (scene, dense): the generated dense kernels, or the matrices the library forms from the operators
@@ -120,17 +121,18 @@ def test_kernels_cut_into_parts_compute_the_same(tmp_path):
     """Every kernel cut into parts of 25 lines (values crossing parts through s[]) gives what the whole
     kernels give, on random states of a 3D chain."""
     from codegen.pipeline import generate, write_model
-    from runtime.compile import compile_model
+    from runtime.compile import compile_model, copy_library
     from runtime.model import CompiledModel
     scene = chain(3, ("rigid", "line"), twists=True)
     models = []
     for split in (None, 25):
-        generated = generate(scene, specialise=False, dense=True, split_lines=split)
+        generated = generate(scene, build_options(scene, specialise=False, dense=True, split_lines=split))
         module = compile_model(generated.name, generated.header, generated.source, generated.cdef)
         models.append(CompiledModel(scene, generated, module))
     whole, parts = models
     assert "_forward_dynamics_2(" in parts.generated.source and "_forward_dynamics_2(" not in whole.generated.source
     write_model(parts.generated, tmp_path)             # and the parts are strict C99
+    copy_library(tmp_path)
     subprocess.run(["gcc", "-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror", "-O2", "-c",
                     str(tmp_path / f"{parts.name}.c"), "-o", str(tmp_path / "parts.o")], check=True)
     rng = np.random.default_rng(5)

@@ -14,6 +14,7 @@ from codegen import generate, rolled
 from codegen.kinematics import ChainSymbols
 from codegen.scene import Joint, LineLink, Scene, SceneError, Wall, default_scene
 from codegen.specialise import layout_for
+from codegen.options import build_options
 from conftest import FAR, random_link
 from runtime import load_model, simulate
 from studies import reference
@@ -149,14 +150,15 @@ def test_baked_parameters_that_differ_per_link_do_not_roll():
     scene = run_chain(7, ("line",) * 7, seed=21)                # the shortest chain with a run (links 3..6)
     assert _run(scene, bake=True) is None and _run(scene) is not None
     with pytest.raises(SceneError, match="rolled: .* no run"):
-        generate(scene, bake_params=True, rolled=True)
-    model = generate(scene, bake_params=True)                   # the default falls back to straight-line code
+        generate(scene, build_options(scene, bake_params=True, rolled=True))
+    model = generate(scene, build_options(scene, bake_params=True))   # the default falls back to straight-line code
     assert "in loops" not in summary(model)
 
 
 def test_rolled_kernel_is_strict_c99_and_costs_what_the_unrolled_does(tmp_path):
     scene = run_chain(12, ("rigid",) * 12, seed=31)
-    loops, straight = generate(scene, specialise=False, rolled=True), generate(scene, specialise=False, rolled=False)
+    loops = generate(scene, build_options(scene, specialise=False, rolled=True))
+    straight = generate(scene, build_options(scene, specialise=False, rolled=False))
     a, b = ({f.name: f for f in m.functions}["forward_dynamics"] for m in (loops, straight))
     assert "for (int k = " in "\n".join(a.lines)
     assert b.ops.total <= a.ops.total <= 1.01 * b.ops.total       # the same steps (CSE's choices differ a little)

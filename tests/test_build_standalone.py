@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from codegen.artifact import library_files
 from codegen.scene import load_scene
 from runtime import simulate
+from runtime.compile import library_files
 
 ROOT = Path(__file__).resolve().parent.parent
 STRICT = "-std=c99 -O2 -Wall -Wextra -pedantic -Werror"

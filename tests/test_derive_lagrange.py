@@ -12,6 +12,7 @@ from studies import reference
 from codegen.kinematics import ChainSymbols
 from codegen.lagrange import Differentiator, energies
 from codegen.scene import LineLink, RigidLink, Scene
+from codegen.options import build_options
 from conftest import chain, random_parameters, random_planar_scene, random_scene, reference_of
 from runtime.compile import LIBRARY_DIR
 
@@ -25,7 +26,7 @@ def lagrangian(scene, specialise=False):
     from runtime.model import CompiledModel
     key = (scene, specialise)
     if key not in _MODELS:
-        generated = codegen.generate(scene, specialise=specialise, formulation="lagrange")
+        generated = codegen.generate(scene, build_options(scene, specialise=specialise, formulation="lagrange"))
         module = compile_model(generated.name, generated.header, generated.source, generated.cdef)
         _MODELS[key] = CompiledModel(scene, generated, module)
     return _MODELS[key]
@@ -140,4 +141,4 @@ def test_lagrangian_c_is_strict_c99(tmp_path):
 
 def test_unknown_formulation_is_a_clear_error():
     with pytest.raises(ValueError, match="formulation: must be one of gibbs_appell, lagrange, got 'newton'"):
-        codegen.generate(random_scene(1, seed=1), formulation="newton")
+        build_options(random_scene(1, seed=1), formulation="newton")

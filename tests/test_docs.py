@@ -99,7 +99,8 @@ def test_readme_python_snippet_runs(tmp_path):
 
 
 def test_readme_use_commands_run(tmp_path):
-    """The README's command-line examples, run as written in an empty folder."""
+    """The README's command-line examples, run as written in an empty folder (the studies, which are not
+    installed, from the repository's root)."""
     text = (ROOT / "README.md").read_text()
     block = re.search(r"From the command line:\n\n```bash\n(.*?)```", text, re.S)
     assert block, "README: the command-line examples are missing"
@@ -107,8 +108,8 @@ def test_readme_use_commands_run(tmp_path):
     assert len(lines) >= 3
     for words in lines:
         assert words[:2] == ["python", "-m"], words
-        out = subprocess.run([sys.executable, *words[1:]], cwd=tmp_path, capture_output=True, text=True,
-                             timeout=600)
+        out = subprocess.run([sys.executable, *words[1:]], cwd=ROOT if words[2] == "studies" else tmp_path,
+                             capture_output=True, text=True, timeout=600)
         assert out.returncode == 0, f"{shlex.join(words)}: {out.stderr[-2000:]}"
     assert (tmp_path / "case2.json").is_file()
     assert {"chain3.c", "chain3.h", "gac.h", "gac_sim.c", "Makefile", "CMakeLists.txt"} <= \
@@ -218,3 +219,34 @@ def test_build_times_agree_across_pages():
         for page, seconds in figures:
             assert abs(seconds - reference) <= 0.05 * reference, \
                 f"{page}: n = {n} builds in {seconds} s, but {reference} s elsewhere ({figures}, table {table.get(n)})"
+
+
+def rendered_tables() -> dict[Path, str]:
+    """The tables the docs render from the interfaces' one description: docs/generated-c.md's functions
+    (codegen.interface), docs/fmi.md's FMU variables (gac_fmi2.h's rows)."""
+    from codegen.fmu import variable_table
+    from codegen.interface import function_table
+    from runtime.header import fmi2_rows, library_constants
+    return {ROOT / "docs" / "generated-c.md": function_table(),
+            ROOT / "docs" / "fmi.md": variable_table(fmi2_rows(), library_constants())}
+
+
+TABLE_START = re.compile(r"^<!-- the table below is rendered from .*-->\n", re.M)
+TABLE_END = "<!-- end of the rendered table -->\n"
+
+
+@pytest.mark.parametrize("page", sorted(rendered_tables(), key=str), ids=lambda page: page.name)
+def test_rendered_tables_are_up_to_date(page):
+    """The committed table between the page's markers is what its description renders now; GAC_UPDATE_DOCS=1
+    rewrites it."""
+    import os
+    text = page.read_text()
+    start = TABLE_START.search(text)
+    assert start is not None and TABLE_END in text[start.end():], f"{page.name}: no rendered-table markers"
+    end = text.index(TABLE_END, start.end())
+    table = rendered_tables()[page]
+    if os.environ.get("GAC_UPDATE_DOCS") == "1":
+        page.write_text(text[:start.end()] + table + text[end:])
+        return
+    assert text[start.end():end] == table, f"{page.name}: the rendered table is out of date (GAC_UPDATE_DOCS=1 " \
+        f"python -m pytest tests/test_docs.py -k rendered rewrites it)"

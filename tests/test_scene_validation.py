@@ -137,3 +137,15 @@ def test_default_scene_for_four_links_is_case_one():
     for n in (1, 2, 3, 8, 32):
         scene = default_scene(n)                                 # always starts inside its box
         assert scene.n == n
+
+
+@pytest.mark.parametrize("name", ["paper-case1", "driven-fold", "rough-floor", "urdf-arm"])
+def test_parameter_names_compose_and_split_back(name):
+    """Every parameter name is codegen.scene.parameter_name(kind, owner), and split_parameter_name reads it back."""
+    from codegen.scene import parameter_name, split_parameter_name
+    scene = load_scene(name)
+    for index, pname in enumerate(scene.parameter_names()):
+        kind, owner = split_parameter_name(pname)
+        assert parameter_name(kind, owner) == pname and scene.parameter_index(kind, owner) == index
+    with pytest.raises(SceneError, match="friction_x2_max: this scene has no such parameter"):
+        scene.parameter_index("friction", "x2_max")

@@ -128,7 +128,7 @@ def test_energy_is_kept_through_the_lock(through_lock, scene, model):
 
 def test_start_near_the_lock_begins_on_chart_b(through_lock, scene, model):
     k = int(np.searchsorted(through_lock.t, 0.249))
-    q0, qd0 = through_lock.q[k], through_lock.qd[k]          # mu_A = 2.5e-3: chart A is poor at the start
+    q0, qd0 = through_lock.q[k], through_lock.qd[k]          # chi_A = 2.5e-3: chart A is poor at the start
     assert measure_a(scene, q0) < 0.01
     r = simulate(model, 0.05, q0=q0, qd0=qd0, t_eval=[0.0, 0.05], **ACCURATE)
     assert r.status == 0 and r.n_chart_switches >= 1, r.message
@@ -182,7 +182,7 @@ def test_long_run_agrees_with_the_same_motion_in_a_turned_frame(scene, model):
 
 
 def test_case2_switches_and_agrees_with_a_single_chart():
-    """Case 2 reaches mu_A = 0.17 at 1.4 s, where a single chart is still accurate: the run switches there and
+    """Case 2 reaches chi_A = 0.17 at 1.4 s, where a single chart is still accurate: the run switches there and
     back and finds the same impacts and final state as the single-chart run (no chart B code involved)."""
     tight = {"method": "dop853", "rtol": 1e-12, "atol": 1e-14}
     case2 = load_model("paper-case2")
@@ -198,9 +198,9 @@ def test_case2_switches_and_agrees_with_a_single_chart():
 
 
 def test_resting_contacts_start_on_chart_b_and_carry_over_a_switch(model):
-    """Link 1 lying on the floor with its joint axis z_1 vertical: chart A's lock itself (mu_A = 1e-7).  The run
+    """Link 1 lying on the floor with its joint axis z_1 vertical: chart A's lock itself (chi_A = 1e-7).  The run
     starts on chart B with O_1 and O_2 resting on the floor (e = 0), link 2 falls and lands, rolling link 1 about
-    its own axis until mu_A passes 0.6: back on chart A with the three contacts held.  No point sinks, the
+    its own axis until chi_A passes 0.6: back on chart A with the three contacts held.  No point sinks, the
     energy balance closes, the rests at the start are reported at t = 0 in chart A's coordinates."""
     p = model.parameters({"e_x2_min": 0.0})
     q0 = np.array([0.3, np.pi / 2 - 1e-7, -0.4, 0.5, 1.0, 0.0, 1.0])     # theta_2 = 0.5: O_3 above the floor
@@ -212,7 +212,7 @@ def test_resting_contacts_start_on_chart_b_and_carry_over_a_switch(model):
     assert r.n_chart_switches >= 2                       # on B from the start, back on A once link 1 rolls
     assert [(e.t, e.kind, e.point) for e in r.contact_events[:2]] == [(0.0, "persist", 1), (0.0, "persist", 2)]
     assert sorted(r.persistent_final) == [(1, "x2_min"), (2, "x2_min"), (3, "x2_min")]
-    assert np.abs(r.q[0] - q0).max() < 1e-9             # theta_-1, theta_1 alone are conditioned like eps / mu_A
+    assert np.abs(r.q[0] - q0).max() < 1e-9             # theta_-1, theta_1 alone are conditioned like eps / chi_A
     A = Chart.of(model.scene.base_twists)
     assert np.abs(A.rotation(r.q[0, :3]) - A.rotation(q0[:3])).max() < 1e-14
     assert np.array([model.contact_gaps(q, p) for q in r.q]).min() > -1e-9
@@ -302,7 +302,7 @@ def test_fmu_passes_the_lock_and_agrees_with_python(tmp_path, scene, driven):
     A = Chart.of(chosen.base_twists)
     assert np.abs(A.rotation(rows[:, :3]) - A.rotation(r.q[:, :3])).max() < 1e-8
     omega = [np.einsum("nij,nj->ni", A.axes(x[:, :3]), v[:, :3]) for x, v in ((rows[:, :nq], rows[:, nq:]), (r.q, r.qd))]
-    good = measure_a(chosen, r.q) > 0.05                 # E_A thetadot_A cancels like 1/mu_A near the lock
+    good = measure_a(chosen, r.q) > 0.05                 # E_A thetadot_A cancels like 1/chi_A near the lock
     assert np.abs(omega[0] - omega[1])[good].max() < 1e-7
     assert np.abs(rows[:, 3:nq] - r.q[:, 3:]).max() < 1e-8
     assert np.abs(rows[:, nq + 3:] - r.qd[:, 3:]).max() < 1e-7

@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from codegen import interface
 from codegen.parameters import check_inertia
 from codegen.scene import SceneError, scene_from_dict
 from runtime import load_model, simulate
+from runtime.header import library_constants, return_codes
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -208,13 +208,43 @@ def test_c_inertia_test_agrees_with_the_scene_loader(model):
         assert c == python == expected, (trial, moments, c, python)
 
 
-def test_return_codes_table_is_gac_h():
-    """codegen.interface.CODES, the codes Python reads from the compiled module, are exactly gac.h's."""
+def _struct_fields(body: str) -> list[str]:
+    """The field names of a C struct body: the declarators of each declaration, comments dropped."""
+    body = re.sub(r"/\*.*?\*/", "", body, flags=re.S)
+    names = []
+    for declaration in filter(str.strip, body.split(";")):
+        if "(" in declaration:                                      # a function pointer: (*name)(...)
+            names.append(re.search(r"\(\s*\*\s*(\w+)\s*\)", declaration).group(1))
+            continue
+        first, *rest = declaration.split(",")
+        for declarator in [first.split()[-1], *rest]:
+            names.append(re.sub(r"[\s*]|\[.*?\]", "", declarator))
+    return names
+
+
+def test_cffi_declarations_are_gac_h(model):
+    """gac.h is the library's one description: its parse (runtime.header) finds every return code gac.h defines,
+    the compiled module holds each constant with gac.h's value, and cffi's types and functions are gac.h's (every
+    struct complete, with gac.h's fields in order: cffi checks their layout against the compiler's)."""
     header = (ROOT / "runtime" / "c" / "gac.h").read_text()
-    defined = re.findall(r"#define (GAC_OK|GAC_ERR_\w+)\s+-?\d+", header)
-    assert sorted(defined) == sorted(interface.CODES)
-    assert "GAC_ERR_BAD_PARAMETER" in interface.CODES
-    assert float(re.search(r"#define GAC_RTOL_MIN (\S+)", header).group(1)) == interface.RTOL_MIN
+    constants = library_constants()
+    errors = set(re.findall(r"^#define (GAC_ERR_\w+)\s", header, flags=re.M))
+    assert len(errors) > 20 and set(return_codes()) == errors | {"GAC_OK"}
+    assert "GAC_ERR_BAD_PARAMETER" in return_codes() and constants["GAC_RTOL_MIN"] == 1e-14
+    for name, value in constants.items():
+        assert getattr(model.lib, name) == value, name
+    assert len(set(return_codes().values())) == len(return_codes())
+    structs = {name: body for body, name in re.findall(r"typedef struct \{(.*?)\} (gac_\w+);", header, flags=re.S)}
+    structs["gac_model"] = re.search(r"struct gac_model \{(.*?)\};", header, flags=re.S).group(1)
+    assert {"gac_options", "gac_impact_record", "gac_contact", "gac_run_summary", "gac_parameter_info",
+            "gac_sim", "gac_model"} <= set(structs)
+    for name, body in structs.items():
+        fields = [field for field, _ in model.ffi.typeof(f"{name} *").item.fields]
+        assert fields == _struct_fields(body), name
+        assert model.ffi.sizeof(name) > 0
+    functions = set(re.findall(r"^[a-z][\w ]*?\**\s*\b(gac_\w+)\(", header, flags=re.M))
+    assert "gac_sim_ndouble" in functions and "gac_sim_run" in functions
+    assert all(hasattr(model.lib, f) for f in functions), sorted(f for f in functions if not hasattr(model.lib, f))
 
 
 def test_scene_loader_refuses_a_negative_moment():

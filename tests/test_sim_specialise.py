@@ -7,6 +7,7 @@ import pytest
 import codegen
 from codegen.scene import LineLink, RigidLink, Scene, SceneError, Wall, contact_points, load_scene
 from codegen.specialise import layout_for
+from codegen.options import build_options
 from runtime import simulate
 from conftest import random_planar_scene
 
@@ -41,7 +42,7 @@ def test_random_planar_scenes(compiled, n, seed, normal):
 
 def test_specialised_model_is_smaller():
     scene = load_scene("paper-case1")
-    general = {f.name: f.ops.total for f in codegen.generate(scene, specialise=False).functions}
+    general = {f.name: f.ops.total for f in codegen.generate(scene, build_options(scene, specialise=False)).functions}
     special = {f.name: f.ops.total for f in codegen.generate(scene).functions}
     assert special["forward_dynamics"] < general["forward_dynamics"] / 2
     assert all(special[name] <= general[name] for name in general)

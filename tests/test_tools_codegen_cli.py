@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from codegen.artifact import library_files
+from runtime.compile import library_files
 
 ROOT = Path(__file__).resolve().parent.parent
 FIX = "give a directory that exists or can be created"

@@ -59,7 +59,7 @@ def test_a_dask_cluster_gives_the_serial_results(model):
 
 def test_the_model_pickles_as_its_scene(model):
     again = pickle.loads(pickle.dumps(model))
-    assert again.scene == model.scene and again.build_options == model.build_options
+    assert again.scene == model.scene and again.options == model.options
     assert np.array_equal(again.forward_dynamics(model.q0, model.qd0), model.forward_dynamics(model.q0, model.qd0))
 
 

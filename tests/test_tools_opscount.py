@@ -14,6 +14,7 @@ from codegen.lagrange import build_kernels as lagrange_kernels
 from codegen.kernels import build_kernels as gibbs_appell_kernels
 from codegen.ops import raw_count_ops
 from codegen.scene import MAX_LINKS, default_scene
+from codegen.options import build_options
 from conftest import random_scene
 from studies import opscount
 from studies.cli import parse_links
@@ -117,7 +118,8 @@ def check_report(out: Path, ns, lagrange_ns):
     assert set(ok) == {(n, "gibbs_appell") for n in ns} | {(n, "lagrange") for n in lagrange_ns}
     for (n, formulation), r in ok.items():
         # the report's counts are the generator's own
-        model = codegen.generate(default_scene(n), specialise=False, formulation=formulation)
+        scene = default_scene(n)
+        model = codegen.generate(scene, build_options(scene, specialise=False, formulation=formulation))
         counts = {f.name: f.ops.total for f in model.functions}
         for name in ("mass_matrix", "bias", "forward_dynamics"):
             assert r["ops"][name]["total"] == counts[name]

@@ -42,6 +42,7 @@ import pytest
 
 from codegen.scene import LineLink, default_scene, load_scene
 from runtime import load_model, simulate
+from runtime.header import library_constants
 
 ROOT = Path(__file__).resolve().parents[1]
 RELATIVE = 1e-9                                     # final states, impact times and impulses (round-off)
@@ -49,7 +50,7 @@ FMU_OPTIONS = {"method", "rtol", "atol", "dt", "h_max"}           # what the FMU
 EXAMPLE_FLAGS = {"rtol": "--rtol", "atol": "--atol", "dt": "--dt", "h_max": "--h-max",
                  "event_samples": "--event-samples", "event_tol": "--event-tol", "contact_tol": "--contact-tol",
                  "rest_height": "--rest-height", "zeno_impacts": "--zeno-impacts", "max_steps": "--max-steps"}
-METHOD_CODES = {"rk4": 0, "dopri5": 1, "dop853": 2}                # GAC_METHOD_*
+METHOD_CODES = {method: library_constants()[f"GAC_METHOD_{method.upper()}"] for method in ("rk4", "dopri5", "dop853")}
 
 
 @dataclass(frozen=True)

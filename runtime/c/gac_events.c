@@ -286,7 +286,7 @@ int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
 }
 
 /* The smallest chart measure at which the run's results keep its tolerance: impacts and accelerations
- * computed with I_f carry a relative error of about 16 eps / mu^2 from the chart alone, so
+ * computed with I_f carry a relative error of about 16 eps / chi^2 from the chart alone, so
  * mu_min = sqrt(16 eps / tol), tol = rtol (adaptive) or 1e-10 (RK4).  Below it the loop stops with
  * GAC_ERR_GIMBAL_LOCK (continue on another chart). */
 double gac_chart_floor(const gac_sim *s)

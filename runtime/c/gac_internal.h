@@ -13,9 +13,6 @@
 /* Contacts one complementarity solve takes: min(nq, GAC_LCP_CAP). */
 #define GAC_MAX_LCP(m) ((m)->nq < GAC_LCP_CAP ? (m)->nq : GAC_LCP_CAP)
 
-/* max(n, 1): the length of an array with one entry per contact or per Jacobian row, never 0. */
-#define GAC_AT_LEAST_1(n) ((n) > 0 ? (n) : 1)
-
 /* The impact work array (gac_impact_nwork doubles): Y (nq*nq; row a = I_f^-1 n_a of active contact a) |
  * A (nq*nq; N I_f^-1 N^T, nactive x nactive, row-major) | g (nq) | vel (3 npoint) | f (max(njrow, 1)). */
 #define GAC_WORK_Y(m, w)   (w)

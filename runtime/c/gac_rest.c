@@ -369,7 +369,7 @@ static double gac_friction(const gac_model *m, const double *p, int c)
 {
     const gac_contact *k = &m->contacts[c];
     if (!k->has_friction) return 0.0;
-    return k->mu_index >= 0 ? p[k->mu_index] : k->mu_value;
+    return k->friction_index >= 0 ? p[k->friction_index] : k->friction_value;
 }
 
 /* 1 if the n x n row-major B (n <= GAC_PMATRIX_MAX) is a P-matrix with margin: every principal minor above
@@ -417,7 +417,7 @@ static int gac_is_p_matrix(int n, const double *B, double tol)
 }
 
 /* The constrained dynamics of the contacts held at their walls (active), with Coulomb friction on the walls
- * that have it: a held point with velocity v_t along its wall takes the force -mu lambda phi, phi = v_t /
+ * that have it: a held point with velocity v_t along its wall takes the force -c_f lambda phi, phi = v_t /
  * max(|v_t|, v_s) (v_s = m->friction_velocity), lambda >= 0 its normal force.  With d_a = n_a + mu_a J^T(-phi_a)
  * the generalised direction of contact a's force, qdd = qdd_free + sum_a I_f^-1 d_a lambda_a and the normal
  * rows n_b . qdd + ndot_b qd = 0 give B lambda = -(N qdd_free + Ndot qd), B_ba = n_b I_f^-1 d_a (not symmetric
@@ -432,7 +432,7 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
 {
     const int nq = m->nq;
     double v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)], bias[GAC_AT_LEAST_1(m->njrow)];
-    double mu[GAC_AT_LEAST_1(nq)], slide[GAC_AT_LEAST_1(nq)];
+    double cf[GAC_AT_LEAST_1(nq)], slide[GAC_AT_LEAST_1(nq)];
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work), *vel = GAC_WORK_VEL(m, work);
     int a, b, i, code, friction = 0;
     if (dissipation) *dissipation = 0.0;
@@ -447,8 +447,8 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
         double sign;
         gac_contact_row(m, active[a], &row, &sign);
         lambda[a] = -sign * (bias[row] + gac_row_value(m, active[a], qdd, vel));
-        mu[a] = gac_friction(m, p, active[a]);
-        if (mu[a] > 0.0) friction = 1;
+        cf[a] = gac_friction(m, p, active[a]);
+        if (cf[a] > 0.0) friction = 1;
     }
     if (!friction) {
         if (gac_ldlt_drop(nactive, A, 1e-12) < 0) return GAC_ERR_SINGULAR_CONTACT;
@@ -463,7 +463,7 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
             double vt[2] = {0.0, 0.0}, speed, scale;
             int j, axis = 0, r;
             slide[a] = 0.0;
-            if (!(mu[a] > 0.0)) continue;
+            if (!(cf[a] > 0.0)) continue;
             for (j = 0; j < 2; ++j, ++axis) {        /* the two tangential axes, ascending */
                 if (axis == k->axis) ++axis;
                 if (k->trow[j] >= 0) vt[j] = vq[3 * (k->point - 1) + axis];
@@ -482,7 +482,7 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
                 int row;
                 double sign;
                 gac_contact_row(m, active[b], &row, &sign);
-                B[b*nactive + a] += mu[a] * sign * gac_row_value(m, active[b], Z + (long)a * nq, vel);
+                B[b*nactive + a] += cf[a] * sign * gac_row_value(m, active[b], Z + (long)a * nq, vel);
             }
         }
         if (gac_ldlt_drop(nactive, A, 1e-12) < 0) return GAC_ERR_SINGULAR_CONTACT;
@@ -503,9 +503,9 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
         if (gac_ldlt(nactive, A, 1e-8) != 0 && !gac_is_p_matrix(nactive, B, 1e-8)) return GAC_ERR_FRICTION;
         if (gac_lu_solve(nactive, B, lambda, 1e-12) != 0) return GAC_ERR_FRICTION;
         for (a = 0; a < nactive; ++a) {
-            if (!(mu[a] > 0.0)) continue;
-            for (i = 0; i < nq; ++i) qdd[i] += mu[a] * Z[(long)a * nq + i] * lambda[a];
-            if (dissipation) *dissipation += mu[a] * lambda[a] * slide[a];
+            if (!(cf[a] > 0.0)) continue;
+            for (i = 0; i < nq; ++i) qdd[i] += cf[a] * Z[(long)a * nq + i] * lambda[a];
+            if (dissipation) *dissipation += cf[a] * lambda[a] * slide[a];
         }
     }
     for (i = 0; i < nq; ++i) {

@@ -1077,7 +1077,7 @@ static void test_charts(void)
         worst_angles = fmax(worst_angles, max_diff(x, z, 6) + (broken && k < 3 ? 1.0 : 0.0));
         /* |det E| of each chart is its measure of R */
         CHECK(NEAR(fabs(EA[0] * (EA[4] * EA[8] - EA[5] * EA[7]) - EA[1] * (EA[3] * EA[8] - EA[5] * EA[6])
-                        + EA[2] * (EA[3] * EA[7] - EA[4] * EA[6])), gac_base_measure(&A, RA), 1e-12), "det E_A = mu_A");
+                        + EA[2] * (EA[3] * EA[7] - EA[4] * EA[6])), gac_base_measure(&A, RA), 1e-12), "det E_A = chi_A");
     }
     CHECK(worst_angles <= 1e-12, "angles and rates round trip A -> B -> A: %.3g", worst_angles);
     CHECK(worst_R <= 1e-12, "the same orientation on both charts: %.3g", worst_R);

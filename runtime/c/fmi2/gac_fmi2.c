@@ -31,10 +31,8 @@
 
 enum { MODE_INSTANTIATED, MODE_INITIALIZATION, MODE_STEPPING, MODE_TERMINATED, MODE_ERROR };
 
-/* Indices of the solver parameters and the energy outputs within their blocks. */
-enum { SOLVER_RTOL, SOLVER_ATOL, SOLVER_DT, SOLVER_HMAX };
-enum { OUT_KINETIC, OUT_POTENTIAL, OUT_WORK_INPUT, OUT_WORK_DAMPING, OUT_IMPACT_LOSS, OUT_FRICTION };
-enum { INT_METHOD, INT_IMPACTS, INT_RESTING };
+/* The index of solver row `row` (GAC_FMI2_RTOL .. GAC_FMI2_HMAX) in Instance.solver. */
+#define SOLVER(row) ((row) - GAC_FMI2_RTOL)
 
 typedef struct {
     const gac_model *m;
@@ -73,9 +71,26 @@ typedef struct {
     int *iwork;
 } Snapshot;
 
+/* The first value reference of Real row `row` of model m (the counts of the rows before it, gac_fmi2.h). */
+static long vr_first(const gac_model *m, int row)
+{
+    long first = 0;
+#define GAC_FMI2_ADD_COUNT(id, name, count, causality, variability, unit, start, what) \
+    if (GAC_FMI2_##id < row) first += GAC_FMI2_COUNT_##count(m);
+    GAC_FMI2_REALS(GAC_FMI2_ADD_COUNT)
+#undef GAC_FMI2_ADD_COUNT
+    return first;
+}
+
+#define GAC_FMI2_ROW_NAME(id, name, count, causality, variability, unit, start, what) name,
+#define GAC_FMI2_ROW_START(id, name, count, causality, variability, unit, start, what) start,
+static const char *const real_names[] = { GAC_FMI2_REALS(GAC_FMI2_ROW_NAME) };
+static const double real_starts[] = { GAC_FMI2_REALS(GAC_FMI2_ROW_START) };
+static const int integer_starts[] = { GAC_FMI2_INTEGERS(GAC_FMI2_ROW_START) };
+
 long gac_fmi2_nreal(const gac_model *m)
 {
-    return 2L * m->nq + m->nu + m->nparam + 2L * m->nq + GAC_FMI2_NSOLVER_REAL + GAC_FMI2_NOUT_REAL;
+    return vr_first(m, GAC_FMI2_NREAL_ROWS);
 }
 
 /* ---- logging ------------------------------------------------------------------------------------ */
@@ -134,12 +149,12 @@ static void parameter_problem(const gac_model *m, int i, double v, char *why, si
 
 /* ---- value references --------------------------------------------------------------------------- */
 
-static long vr_u(const gac_model *m) { return 2L * m->nq; }
-static long vr_p(const gac_model *m) { return vr_u(m) + m->nu; }
-static long vr_q0(const gac_model *m) { return vr_p(m) + m->nparam; }
-static long vr_qd0(const gac_model *m) { return vr_q0(m) + m->nq; }
-static long vr_solver(const gac_model *m) { return vr_qd0(m) + m->nq; }
-static long vr_out(const gac_model *m) { return vr_solver(m) + GAC_FMI2_NSOLVER_REAL; }
+static long vr_u(const gac_model *m) { return vr_first(m, GAC_FMI2_U); }
+static long vr_p(const gac_model *m) { return vr_first(m, GAC_FMI2_P); }
+static long vr_q0(const gac_model *m) { return vr_first(m, GAC_FMI2_Q0); }
+static long vr_qd0(const gac_model *m) { return vr_first(m, GAC_FMI2_QD0); }
+static long vr_solver(const gac_model *m) { return vr_first(m, GAC_FMI2_RTOL); }
+static long vr_out(const gac_model *m) { return vr_first(m, GAC_FMI2_KINETIC); }
 
 /* The state the outputs show: the simulation's once it runs (in chart A's coordinates, whichever base chart the
  * loop integrates: gac_sim_state), the initial values before.  q, qd: nq each. */
@@ -168,21 +183,21 @@ static double real_value(const Instance *in, long r)
     if (r < vr_qd0(m)) return in->q0[r - vr_q0(m)];
     if (r < vr_solver(m)) return in->qd0[r - vr_qd0(m)];
     if (r < vr_out(m)) return in->solver[r - vr_solver(m)];
-    r -= vr_out(m);
-    if (r == OUT_KINETIC || r == OUT_POTENTIAL) {
+    r = GAC_FMI2_KINETIC + (r - vr_out(m));          /* a row of one variable from here on */
+    if (r == GAC_FMI2_KINETIC || r == GAC_FMI2_POTENTIAL) {
         double E[2];
         if (in->mode == MODE_INSTANTIATED || in->mode == MODE_INITIALIZATION) {
             m->energy(q, qd, in->p, E);
         } else {                        /* on the chart integrated now: chart A's rates grow near its lock */
             in->sim.model->energy(in->sim.x, in->sim.x + m->nq, in->p, E);
         }
-        return E[r];
+        return E[r - GAC_FMI2_KINETIC];
     }
     if (in->mode == MODE_INSTANTIATED || in->mode == MODE_INITIALIZATION) return 0.0;
-    if (r == OUT_WORK_INPUT) return in->sim.work_input;
-    if (r == OUT_WORK_DAMPING) return in->sim.work_damping;
-    if (r == OUT_FRICTION) return in->sim.work_friction;
-    return in->impact_loss;
+    if (r == GAC_FMI2_WORK_INPUT) return in->sim.work_input;
+    if (r == GAC_FMI2_DISSIPATED) return in->sim.work_damping;
+    if (r == GAC_FMI2_FRICTION) return in->sim.work_friction;
+    return in->impact_loss;                                   /* GAC_FMI2_IMPACT_LOSS */
 }
 
 /* ---- instances ---------------------------------------------------------------------------------- */
@@ -203,11 +218,11 @@ GAC_FMI2_EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean logg
     return fmi2OK;
 }
 
-/* Back to the state after fmi2Instantiate: the scene's parameters and initial state, default options. */
+/* Back to the state after fmi2Instantiate: the scene's parameters and initial state, the solver settings' starts
+ * (their rows in gac_fmi2.h, gac_default_options' values). */
 static void reset(Instance *in)
 {
     const gac_model *m;
-    gac_options opt;
     int i;
     m = in->m;
     for (i = 0; i < m->nparam; i++) in->p[i] = m->default_parameters[i];
@@ -216,12 +231,8 @@ static void reset(Instance *in)
         in->qd0[i] = m->qd0[i];
     }
     for (i = 0; i < m->nu; i++) in->u[i] = 0.0;
-    gac_default_options(&opt);
-    in->solver[SOLVER_RTOL] = opt.rtol;
-    in->solver[SOLVER_ATOL] = opt.atol;
-    in->solver[SOLVER_DT] = opt.dt;
-    in->solver[SOLVER_HMAX] = opt.h_max;
-    in->method = opt.method;
+    for (i = GAC_FMI2_RTOL; i < GAC_FMI2_KINETIC; i++) in->solver[SOLVER(i)] = real_starts[i];
+    in->method = integer_starts[GAC_FMI2_METHOD];
     in->tolerance_defined = 0;
     in->tolerance = 0.0;
     in->rtol_set = in->atol_set = 0;
@@ -355,14 +366,14 @@ GAC_FMI2_EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c)
         snprintf(why, sizeof why, "the simulation cannot start: %s", problem);
         return fail(in, "fmi2ExitInitializationMode", why);
     }
-    if (in->tolerance_defined && !in->rtol_set) in->solver[SOLVER_RTOL] = in->tolerance;
-    if (in->tolerance_defined && !in->atol_set) in->solver[SOLVER_ATOL] = in->tolerance / 100.0;
+    if (in->tolerance_defined && !in->rtol_set) in->solver[SOLVER(GAC_FMI2_RTOL)] = in->tolerance;
+    if (in->tolerance_defined && !in->atol_set) in->solver[SOLVER(GAC_FMI2_ATOL)] = in->tolerance / 100.0;
     gac_default_options(&opt);
     opt.method = in->method;
-    opt.rtol = in->solver[SOLVER_RTOL];
-    opt.atol = in->solver[SOLVER_ATOL];
-    opt.dt = in->solver[SOLVER_DT];
-    opt.h_max = in->solver[SOLVER_HMAX];
+    opt.rtol = in->solver[SOLVER(GAC_FMI2_RTOL)];
+    opt.atol = in->solver[SOLVER(GAC_FMI2_ATOL)];
+    opt.dt = in->solver[SOLVER(GAC_FMI2_DT)];
+    opt.h_max = in->solver[SOLVER(GAC_FMI2_HMAX)];
     opt.max_impacts = 0;          /* a co-simulation has no end the FMU knows of: the master bounds each step */
     code = gac_sim_init(&in->sim, in->m, in->dwork, in->iwork, in->t0, in->q0, in->qd0, in->p, &opt);
     if (code == GAC_OK && in->m->nu > 0) code = gac_sim_set_input(&in->sim, in->u);
@@ -435,19 +446,18 @@ static const char *set_real(Instance *in, long r, double v, char *why, size_t si
     } else if (r < vr_solver(m)) {
         in->qd0[r - vr_qd0(m)] = v;
     } else {
-        long s = r - vr_solver(m);
-        if (s < 0 || s >= GAC_FMI2_NSOLVER_REAL) return "no such solver setting";
-        if (s == SOLVER_RTOL && !(v >= GAC_RTOL_MIN && v < 1.0))
+        const long row = GAC_FMI2_RTOL + (r - vr_solver(m));
+        if (row < GAC_FMI2_RTOL || row >= GAC_FMI2_KINETIC) return "no such solver setting";
+        if (row == GAC_FMI2_RTOL && !(v >= GAC_RTOL_MIN && v < 1.0))
             return "solver.rtol must be in [1e-14, 1) (GAC_RTOL_MIN: below it round-off stops the steps)";
-        if (s == SOLVER_ATOL && !(v > 0.0 && v < 1e300)) return "solver.atol must be in (0, 1e300)";
-        if ((s == SOLVER_DT || s == SOLVER_HMAX) && v < 0.0) {
-            snprintf(why, size, "solver.%s must be >= 0 s (0: automatic / unbounded), got %g",
-                     s == SOLVER_DT ? "dt" : "h_max", v);
+        if (row == GAC_FMI2_ATOL && !(v > 0.0 && v < 1e300)) return "solver.atol must be in (0, 1e300)";
+        if ((row == GAC_FMI2_DT || row == GAC_FMI2_HMAX) && v < 0.0) {
+            snprintf(why, size, "%s must be >= 0 s (0: automatic / unbounded), got %g", real_names[row], v);
             return why;
         }
-        in->solver[s] = v;
-        if (s == SOLVER_RTOL) in->rtol_set = 1;
-        if (s == SOLVER_ATOL) in->atol_set = 1;
+        in->solver[SOLVER(row)] = v;
+        if (row == GAC_FMI2_RTOL) in->rtol_set = 1;
+        if (row == GAC_FMI2_ATOL) in->atol_set = 1;
     }
     return 0;
 }
@@ -485,9 +495,9 @@ GAC_FMI2_EXPORT fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueRefere
     if (nvr > 0 && (vr == 0 || value == 0)) return fail(in, "fmi2GetInteger", "vr and value must not be NULL");
     for (k = 0; k < nvr; k++) {
         int stepping = in->mode != MODE_INSTANTIATED && in->mode != MODE_INITIALIZATION;
-        if (vr[k] == INT_METHOD) value[k] = in->method;
-        else if (vr[k] == INT_IMPACTS) value[k] = (fmi2Integer)in->n_impacts;
-        else if (vr[k] == INT_RESTING) value[k] = stepping ? in->sim.nactive : 0;
+        if (vr[k] == GAC_FMI2_METHOD) value[k] = in->method;
+        else if (vr[k] == GAC_FMI2_IMPACTS) value[k] = (fmi2Integer)in->n_impacts;
+        else if (vr[k] == GAC_FMI2_RESTING) value[k] = stepping ? in->sim.nactive : 0;
         else return fail(in, "fmi2GetInteger", "no Integer variable has this value reference (0..2)");
     }
     return fmi2OK;
@@ -501,7 +511,7 @@ GAC_FMI2_EXPORT fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueRefere
     if (in == 0) return fmi2Error;
     if (nvr > 0 && (vr == 0 || value == 0)) return fail(in, "fmi2SetInteger", "vr and value must not be NULL");
     for (k = 0; k < nvr; k++) {
-        if (vr[k] != INT_METHOD) return fail(in, "fmi2SetInteger", "only solver.method (value reference 0) can be set");
+        if (vr[k] != GAC_FMI2_METHOD) return fail(in, "fmi2SetInteger", "only solver.method (value reference 0) can be set");
         if (in->mode != MODE_INSTANTIATED && in->mode != MODE_INITIALIZATION)
             return fail(in, "fmi2SetInteger", "solver.method is fixed after initialization");
         if (value[k] != GAC_METHOD_RK4 && value[k] != GAC_METHOD_DOPRI5 && value[k] != GAC_METHOD_DOP853)

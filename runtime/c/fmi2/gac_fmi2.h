@@ -7,22 +7,9 @@
  * end of the communication step.  A model's FMU adds one small generated file that defines
  * gac_fmi2_describe() (which model, its GUID) and a modelDescription.xml that names the variables below.
  *
- * Value references.  With nq, nu, nparam of the model (gac_model), Real variables are numbered
- *
- *   [0, nq)                     q        output      the generalised coordinates (m or rad)
- *   [nq, 2 nq)                  qd       output      their rates (m/s or rad/s)
- *   [2 nq, 2 nq + nu)           u        input       generalised forces of the actuated coordinates (N or N m),
- *                                                    held over each communication step (start 0)
- *   then nparam                 p        parameter   the model's parameters (fixed; start: the scene's)
- *   then nq                     q0       parameter   initial coordinates (fixed; start: the scene's)
- *   then nq                     qd0      parameter   initial rates (fixed; start: the scene's)
- *   then GAC_FMI2_NSOLVER_REAL  solver   parameter   rtol, atol, dt (s), h_max (s) of gac_options (fixed)
- *   then GAC_FMI2_NOUT_REAL     energy   output      kinetic, potential (J), the inputs' work, the dampers'
- *                                                    dissipation, the impacts' losses and what sliding friction
- *                                                    took since the start (J)
- *
- * and Integer variables 0 = solver method (parameter, GAC_METHOD_*), 1 = impacts since the start (output),
- * 2 = resting contacts now (output).  There are no Boolean or String variables.
+ * Variables: the rows of GAC_FMI2_REALS and GAC_FMI2_INTEGERS below, their one description.  Real value references
+ * run through the Real rows in order (a row of count nq takes nq of them, ...), Integer ones likewise from 0.  There
+ * are no Boolean or String variables.
  *
  * Energy balance: kinetic + potential + impact losses + dissipation + friction - work of the inputs stays equal
  * to its value at the start (to the integration tolerance).
@@ -35,9 +22,59 @@
 
 #include "gac.h"
 
-#define GAC_FMI2_NSOLVER_REAL 4   /* rtol, atol, dt, h_max */
-#define GAC_FMI2_NOUT_REAL    6   /* kinetic, potential, work_input, work_damping, impact_loss, friction */
-#define GAC_FMI2_NINTEGER     3   /* method, impacts, resting contacts */
+/* ---- the variables, described once --------------------------------------------------------------------------
+ * The slave numbers its value references by these rows; runtime/fmu.py reads them (runtime.header.fmi2_rows) for
+ * the FMU's modelDescription.xml (codegen/fmu.py), and docs/fmi.md's variable table is rendered from them.
+ * One row per variable or block of variables, in value-reference order:
+ *     X(id, name, count, causality, variability, unit, start, what)
+ *   name         the variable's name; in a block ("q.C", "p.NAME") C is each of the model's coordinates (those the
+ *                specialised model keeps, or for u.C each actuated one) and NAME each parameter's name
+ *   count        how many: nq, nu, nparam (the model's) or 1
+ *   unit         an FMI unit ("s", "J"), "" for none, or each variable's own: "coordinate" (m or rad), "rate"
+ *                (m/s or rad/s), "force" (N or N m), "parameter" (the parameter's)
+ *   start        the value after fmi2Instantiate (the slave's reset); p, q0, qd0 start at the scene's values, and
+ *                outputs have none
+ *   what         the variable's description; in a block "%s" is its coordinate, or its parameter's description */
+#define GAC_FMI2_REALS(X) \
+    X(Q, "q.C", nq, "output", "continuous", "coordinate", 0.0, "coordinate %s") \
+    X(QD, "qd.C", nq, "output", "continuous", "rate", 0.0, "rate of %s") \
+    X(U, "u.C", nu, "input", "continuous", "force", 0.0, "generalised force on %s, held over each step") \
+    X(P, "p.NAME", nparam, "parameter", "fixed", "parameter", 0.0, "%s") \
+    X(Q0, "q0.C", nq, "parameter", "fixed", "coordinate", 0.0, "initial %s") \
+    X(QD0, "qd0.C", nq, "parameter", "fixed", "rate", 0.0, "initial rate of %s") \
+    X(RTOL, "solver.rtol", 1, "parameter", "fixed", "", 1e-8, \
+      "relative tolerance of DOPRI5/DOP853 (default: the experiment's tolerance if one is given)") \
+    X(ATOL, "solver.atol", 1, "parameter", "fixed", "", 1e-10, \
+      "absolute tolerance of DOPRI5/DOP853 (default: the experiment's tolerance / 100 if one is given)") \
+    X(DT, "solver.dt", 1, "parameter", "fixed", "s", 0.0, "RK4 step; the first step of DOPRI5/DOP853 (0: automatic)") \
+    X(HMAX, "solver.h_max", 1, "parameter", "fixed", "s", 0.0, "largest step (0: unbounded)") \
+    X(KINETIC, "energy.kinetic", 1, "output", "continuous", "J", 0.0, "kinetic energy T") \
+    X(POTENTIAL, "energy.potential", 1, "output", "continuous", "J", 0.0, \
+      "potential energy V (gravity and joint springs)") \
+    X(WORK_INPUT, "energy.work_input", 1, "output", "continuous", "J", 0.0, "work of the inputs since the start") \
+    X(DISSIPATED, "energy.dissipated", 1, "output", "continuous", "J", 0.0, \
+      "energy the joint dampers took since the start") \
+    X(IMPACT_LOSS, "energy.impact_loss", 1, "output", "continuous", "J", 0.0, \
+      "kinetic energy the impacts took since the start") \
+    X(FRICTION, "energy.friction", 1, "output", "continuous", "J", 0.0, \
+      "energy sliding friction took at resting contacts since the start")
+#define GAC_FMI2_INTEGERS(X) \
+    X(METHOD, "solver.method", 1, "parameter", "fixed", "", GAC_METHOD_DOPRI5, \
+      "integrator: GAC_METHOD_RK4 RK4 (fixed step solver.dt), GAC_METHOD_DOPRI5 DOPRI5, GAC_METHOD_DOP853 DOP853") \
+    X(IMPACTS, "impacts", 1, "output", "discrete", "", 0, "impacts since the start") \
+    X(RESTING, "resting_contacts", 1, "output", "discrete", "", 0, "contacts resting on their wall now")
+
+/* The rows' ids: GAC_FMI2_Q .. GAC_FMI2_FRICTION (Real rows), GAC_FMI2_METHOD .. GAC_FMI2_RESTING (Integer rows,
+ * which are their value references). */
+#define GAC_FMI2_ROW_ID(id, name, count, causality, variability, unit, start, what) GAC_FMI2_##id,
+enum { GAC_FMI2_REALS(GAC_FMI2_ROW_ID) GAC_FMI2_NREAL_ROWS };
+enum { GAC_FMI2_INTEGERS(GAC_FMI2_ROW_ID) GAC_FMI2_NINTEGER };
+#define GAC_FMI2_NSOLVER_REAL (GAC_FMI2_KINETIC - GAC_FMI2_RTOL)     /* rtol, atol, dt, h_max */
+/* A row's count for model m. */
+#define GAC_FMI2_COUNT_nq(m) ((long)(m)->nq)
+#define GAC_FMI2_COUNT_nu(m) ((long)(m)->nu)
+#define GAC_FMI2_COUNT_nparam(m) ((long)(m)->nparam)
+#define GAC_FMI2_COUNT_1(m) 1L
 
 /* What the generated glue tells the slave about its model. */
 typedef struct {

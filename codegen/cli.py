@@ -10,6 +10,7 @@ from pathlib import Path
 from runtime.compile import BuildError, CompilerNotFound, compile_model, copy_library, library_sources
 
 from .cache import CacheError, cache_dir, generate_cached
+from .charts import chart_b_scene
 from .interface import ROLLED_MIN_LINKS
 from .options import build_options
 from .outputs import output_dir_problem
@@ -52,6 +53,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--general", action="store_true",
                         help="generate the general model: no scene-driven specialisation (planar reduction, "
                              "zero parameters built in)")
+    parser.add_argument("--one-chart", action="store_true",
+                        help="leave a free base's second chart out (half the code; a run that reaches the gimbal "
+                             "lock then stops there)")
     parser.add_argument("--explain", action="store_true",
                         help="print what the model leaves out for this scene and why, then stop")
     parser.add_argument("--urdf", metavar="FILE",
@@ -149,7 +153,8 @@ def main(argv=None) -> int:
     for warning in scene.warnings:                # values that suggest a slip of units: said, not refused
         print(f"warning: {warning}", file=sys.stderr)
 
-    options = build_options(scene, bake_params=args.bake_params, specialise=not args.general, rolled=args.rolled)
+    options = build_options(scene, bake_params=args.bake_params, specialise=not args.general, rolled=args.rolled,
+                            chart_b=not args.one_chart)
     try:
         layout = layout_for(scene, specialise=options.specialise)
         check_not_singular(scene, layout)
@@ -167,6 +172,9 @@ def main(argv=None) -> int:
             print(f"  - {note}")
         print(f"  - parameters: {'baked in as constants' if options.bake_params else 'a runtime array p'}")
         print(f"  - forward dynamics: {loops_note(scene, layout, options, args)}")
+        if chart_b_scene(scene, layout) is not None:
+            print("  - a second base chart for the gimbal lock: " + ("left out (--one-chart)" if args.one_chart else
+                                                                      "generated (NAME_b_*, NAME_model_b)"))
         return 0
 
     out = args.out if args.out is not None else default_out(args)

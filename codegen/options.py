@@ -26,6 +26,9 @@ class BuildOptions:
     rolled: bool = False                  # emit forward_dynamics with loops over the scene's run of identical links
     rolled_required: bool = False         # ... and refuse a scene without such a run (asked for, not the default,
                                           # which falls back to straight-line code)
+    chart_b: bool = True                  # a free base's second chart (codegen.charts), for the loop near the gimbal
+                                          # lock; False: none (a run that reaches the lock stops there with
+                                          # GAC_ERR_GIMBAL_LOCK) and half the code of such a model
     formulation: str = "gibbs_appell"     # the dynamics kernels: the paper's recursion, or "lagrange" (an explicit
                                           # Euler-Lagrange expansion, for comparison)
     split_lines: int = interface.SPLIT_LINES          # a kernel longer than this is cut into parts ...
@@ -35,7 +38,7 @@ class BuildOptions:
     def generation_text(self) -> str:
         """The choices that shape the C text (not the compiler's flags), for the generated text's cache key."""
         return (f"{self.bake_params}|{self.specialise}|{self.dense}|{self.rolled}|{self.rolled_required}|"
-                f"{self.formulation}|{self.split_lines}|{self.split_lines_hot}")
+                f"{self.chart_b}|{self.formulation}|{self.split_lines}|{self.split_lines_hot}")
 
     def split_size(self, kernel_name: str) -> int:
         """The part length of a kernel (split_lines_hot for the right-hand side's forward_dynamics)."""
@@ -43,12 +46,12 @@ class BuildOptions:
 
 
 def build_options(scene, *, bake_params: bool = False, specialise: bool = True, dense: bool | None = None,
-                  rolled: bool | None = None, formulation: str = "gibbs_appell", split_lines: int | None = None,
-                  flags=None) -> BuildOptions:
+                  rolled: bool | None = None, chart_b: bool = True, formulation: str = "gibbs_appell",
+                  split_lines: int | None = None, flags=None) -> BuildOptions:
     """The options of a model of ``scene`` (n links): ``dense`` None generates the dense kernels up to
     interface.DENSE_MAX_LINKS links (always for the Lagrangian formulation), ``rolled`` None loops from
     interface.ROLLED_MIN_LINKS links on where the scene has a run (the Gibbs-Appell formulation only; True
-    requires a run), ``split_lines`` None keeps the emitter's part lengths (one value sets both), ``flags`` None
+    requires a run), ``chart_b`` False leaves a free base's second chart out, ``split_lines`` None keeps the emitter's part lengths (one value sets both), ``flags`` None
     is DEFAULT_FLAGS."""
     if formulation not in FORMULATIONS:
         raise ValueError(f"formulation: must be one of {', '.join(FORMULATIONS)}, got {formulation!r}")
@@ -62,7 +65,7 @@ def build_options(scene, *, bake_params: bool = False, specialise: bool = True, 
     loops = formulation == "gibbs_appell" and interface.wants_rolled(n, rolled)
     return BuildOptions(
         bake_params=bool(bake_params), specialise=bool(specialise), dense=interface.wants_dense(n, dense),
-        rolled=loops, rolled_required=loops and rolled is True, formulation=formulation,
+        rolled=loops, rolled_required=loops and rolled is True, chart_b=bool(chart_b), formulation=formulation,
         split_lines=interface.SPLIT_LINES if split_lines is None else split_lines,
         split_lines_hot=interface.SPLIT_LINES_HOT if split_lines is None else split_lines,
         flags=DEFAULT_FLAGS if flags is None else tuple(str(f) for f in flags))

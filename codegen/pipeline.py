@@ -38,7 +38,8 @@ def generate(scene: Scene, options: BuildOptions | None = None, *, name: str | N
     options = build_options(scene) if options is None else options
     name = name or scene.name
     model = _generate(scene, name, options, progress, workers, layout_for(scene, options.specialise))
-    scene_b = chart_b_scene(scene, model.layout) if options.formulation == "gibbs_appell" else None
+    wanted = options.chart_b and options.formulation == "gibbs_appell"
+    scene_b = chart_b_scene(scene, model.layout) if wanted else None
     if scene_b is None:
         return model
     # chart B: the same chain with T_-1 turned a right angle (codegen.charts), its loop kernels only (no dense

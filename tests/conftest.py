@@ -157,13 +157,16 @@ def derived():
 
 @pytest.fixture(scope="session")
 def compiled():
-    """compiled(scene, bake_params=False, specialise=False, dense=None) -> runtime.CompiledModel, built once per
-    session.  Tests get the general model unless they ask for the specialised one."""
+    """compiled(scene, bake_params=False, specialise=False, dense=None, chart_b=False) -> runtime.CompiledModel,
+    built once per session.  Tests get the general model unless they ask for the specialised one, and without a free
+    base's second chart (half the code to build) unless they ask for it: the tests that pass through the gimbal lock
+    (test_sim_charts, test_tools_parity) build their models with it."""
     from runtime import load_model
 
-    def get(scene: Scene, bake_params: bool = False, specialise: bool = False, dense=None):
-        key = (scene, bake_params, specialise, dense)
+    def get(scene: Scene, bake_params: bool = False, specialise: bool = False, dense=None, chart_b: bool = False):
+        key = (scene, bake_params, specialise, dense, chart_b)
         if key not in _MODELS:
-            _MODELS[key] = load_model(scene, bake_params=bake_params, specialise=specialise, dense=dense)
+            _MODELS[key] = load_model(scene, bake_params=bake_params, specialise=specialise, dense=dense,
+                                      chart_b=chart_b)
         return _MODELS[key]
     return get

@@ -1,5 +1,5 @@
 """Long chains: the derivation in worker processes gives the same text as a serial one, the source cut into
-translation units holds every kernel once, and a long 3D chain (no dense kernels, compiled in units: 16 links by
+translation units holds every kernel once, and a long 3D chain (no dense kernels: 13 links, the fewest without them, by
 default, 30 with -m slow) agrees with the independent reference model and keeps its energy in flight."""
 from __future__ import annotations
 
@@ -57,11 +57,11 @@ def test_translation_units_hold_every_kernel_once():
     assert translation_units(model.source, 1) == [model.source]
 
 
-@pytest.fixture(scope="module", params=[16, pytest.param(30, marks=pytest.mark.slow)])
+@pytest.fixture(scope="module", params=[13, pytest.param(30, marks=pytest.mark.slow)])
 def long_chain(request):
     scene = chain(request.param, twists=True, walls=False)     # straight out: no box
     assert scene.n > interface.DENSE_MAX_LINKS                 # no dense kernels generated
-    return scene, load_model(scene, specialise=False)
+    return scene, load_model(scene, specialise=False, chart_b=False)   # (never near the gimbal lock)
 
 
 def test_long_chain_against_the_reference(long_chain):

@@ -85,6 +85,19 @@ def test_single_chart_stops_before_the_lock_with_a_clear_message(model):
     assert run.n_chart_switches == 0
 
 
+def test_a_model_built_with_one_chart_has_no_second_chart_and_stops_at_the_lock(scene, model):
+    """chart_b=False (--one-chart): no NAME_b_* kernels and no NAME_model_b; the run stops where charts=False
+    stops the full model."""
+    one = load_model(scene, chart_b=False)
+    assert one.options.chart_b is False and "_model_b" not in one.generated.source
+    assert "_model_b" in model.generated.source
+    assert len(one.generated.source) < 0.7 * len(model.generated.source)
+    run = simulate(one, 0.6, max_steps=20000, **ACCURATE)
+    full = simulate(model, 0.6, max_steps=20000, charts=False, **ACCURATE)
+    assert run.status == -1 and "gimbal lock" in run.message
+    assert run.t_final == full.t_final and np.array_equal(run.q_final, full.q_final)
+
+
 def test_the_loop_passes_the_lock_on_the_second_chart(through_lock, scene):
     r = through_lock
     assert r.status == 0 and r.t_final == 0.6, r.message

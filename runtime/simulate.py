@@ -63,7 +63,7 @@ class Impact:
     qd_after: np.ndarray
     rounds: int = 1                     # rounds of the impact law (Newton's law with complementarity)
     plastic: bool = False               # the rounds were closed by a plastic round (energy lost, also at e = 1)
-    energy_rest: float = 0.0            # J: kinetic energy taken by contacts that landed (made persistent)
+    energy_rest: float = 0.0            # J: kinetic energy taken by contacts that landed (come to rest)
     roundoff: float = 1e-10             # the law's relative round-off bound on the energy (grows with cond(I_f))
     law_elastic: bool = False           # the law (each contact's own e, before landings) had only e = 1 contacts
                                         # take impulses, no plastic round: energy_after + energy_rest = energy_before
@@ -71,13 +71,13 @@ class Impact:
 
 @dataclass
 class ContactEvent:
-    """A change of the persistent (resting) contact set: point O_point (1-based) on a wall became
-    persistent ('persist') or was released ('release') at time t."""
+    """A change of the resting contact set: point O_point (1-based) on a wall became
+    resting ('rest') or was released ('release') at time t."""
 
     t: float
     point: int
     wall: str
-    kind: str             # 'persist' | 'release'
+    kind: str             # 'rest' | 'release'
 
     @property
     def label(self) -> str:
@@ -105,7 +105,7 @@ class SimulationResult:
     method: str
     options: dict = field(default_factory=dict)
     contact_events: list = field(default_factory=list)   # ContactEvent, in time order
-    persistent_final: list = field(default_factory=list)  # (point, wall) of the contacts resting at t_final
+    resting_final: list = field(default_factory=list)  # (point, wall) of the contacts resting at t_final
     warnings: list = field(default_factory=list)          # results of limited accuracy, one sentence each
     energy_scale: float = 1.0     # J: max(T0 + |V0|, M g L, |W_inputs|, D_dampers), what energy_drift is measured on
     energy_input_work: float = 0.0     # J: work of the inputs, int u . qd_actuated dt
@@ -196,7 +196,7 @@ class SimulationResult:
             "status": self.status, "message": self.message, "method": self.method, "options": self.options,
             "contact_events": [{"t": e.t, "point": e.point, "wall": e.wall, "kind": e.kind}
                                for e in self.contact_events],
-            "persistent_final": [{"point": point, "wall": wall} for point, wall in self.persistent_final],
+            "resting_final": [{"point": point, "wall": wall} for point, wall in self.resting_final],
             "warnings": list(self.warnings),
         }
 
@@ -469,8 +469,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         method=method, contact_events=contact_events, warnings=warnings,
         energy_scale=max(energy_scale(model.scene, p, T0, V0), abs(float(state.work_input)), float(state.work_damping),
                          float(state.work_friction)),
-        persistent_final=[(model.contacts[state.active[k]][0], model.contacts[state.active[k]][1].name)
-                          for k in range(state.nactive)],
+        resting_final=[(model.contacts[state.resting[k]][0], model.contacts[state.resting[k]][1].name)
+                          for k in range(state.nresting)],
         options={"t_end": t_end, **{name: _option_value(opt, name) for name in LOOP_OPTIONS},
                  "chart_switch": float(opt.chart_switch)},
         n_chart_switches=int(state.n_chart_switches))
@@ -603,7 +603,7 @@ def _read_impact(model: CompiledModel, r) -> Impact:
 
 def _read_contact_events(model: CompiledModel, r) -> list[ContactEvent]:
     events = []
-    for kind, count, indices in (("persist", r.nactivated, r.activated), ("release", r.nreleased, r.released)):
+    for kind, count, indices in (("rest", r.nlanded, r.landed), ("release", r.nreleased, r.released)):
         for k in range(count):
             point, wall = model.contacts[indices[k]]
             events.append(ContactEvent(float(r.t), point, wall.name, kind))

@@ -210,8 +210,8 @@ def test_resting_contacts_start_on_chart_b_and_carry_over_a_switch(model):
     r = simulate(model, 1.5, q0=q0, qd0=qd0, p=p, **ACCURATE)
     assert r.status == 0, r.message
     assert r.n_chart_switches >= 2                       # on B from the start, back on A once link 1 rolls
-    assert [(e.t, e.kind, e.point) for e in r.contact_events[:2]] == [(0.0, "persist", 1), (0.0, "persist", 2)]
-    assert sorted(r.persistent_final) == [(1, "x2_min"), (2, "x2_min"), (3, "x2_min")]
+    assert [(e.t, e.kind, e.point) for e in r.contact_events[:2]] == [(0.0, "rest", 1), (0.0, "rest", 2)]
+    assert sorted(r.resting_final) == [(1, "x2_min"), (2, "x2_min"), (3, "x2_min")]
     assert np.abs(r.q[0] - q0).max() < 1e-9             # theta_-1, theta_1 alone are conditioned like eps / chi_A
     A = Chart.of(model.scene.base_twists)
     assert np.abs(A.rotation(r.q[0, :3]) - A.rotation(q0[:3])).max() < 1e-14

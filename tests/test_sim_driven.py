@@ -307,8 +307,8 @@ def test_a_plastic_stop_holds_the_joint_until_the_input_pulls_it_off(compiled):
     first = run.impacts[0]
     assert first.contacts[0].wall == "theta_2_upper" and first.qd_after[3] == pytest.approx(0.0, abs=1e-12)
     kinds = [(e.kind, e.wall) for e in run.contact_events]
-    assert ("persist", "theta_2_upper") in kinds and ("release", "theta_2_upper") in kinds
-    rest = next(e.t for e in run.contact_events if e.kind == "persist")
+    assert ("rest", "theta_2_upper") in kinds and ("release", "theta_2_upper") in kinds
+    rest = next(e.t for e in run.contact_events if e.kind == "rest")
     held = (run.t > rest) & (run.t <= 0.6)
     assert held.sum() > 10 and np.abs(run.q[held, 3] - 0.2).max() < 1e-6      # at its stop while pushed
     assert run.q[-1, 3] < 0.19                                                   # and off it once pulled

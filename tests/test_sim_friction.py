@@ -36,7 +36,7 @@ def test_a_sliding_rod_stops_as_coulomb_says(specialise):
     t = np.linspace(0.0, 0.6, 61)
     result = simulate(model, 0.6, t_eval=t, rtol=1e-10, atol=1e-12)
     assert result.success, result.message
-    assert [e.kind for e in result.contact_events] == ["persist", "persist"] and not result.impacts
+    assert [e.kind for e in result.contact_events] == ["rest", "rest"] and not result.impacts
     x = result.q[:, scene.n + 2]
     exact = np.where(t < t_stop, 1.0 + v0 * t - 0.5 * mu * G * t * t, 1.0 + v0 * v0 / (2 * mu * G))
     assert np.abs(x - exact).max() < 1e-8                 # the regularisation below 1e-4 m/s moves it by 1e-9
@@ -65,7 +65,7 @@ def test_a_diagonal_slide_keeps_its_direction():
 
 @pytest.mark.parametrize("force", [2.0, 7.0])
 def test_a_pushed_rod_creeps_below_the_limit_and_slides_above_it(force):
-    """A horizontal force F on the resting rod (mu m g = 4.905 N): below the limit it creeps at the regularised
+    """A horizontal force F on the resting rod (c_f m g = 4.905 N): below the limit it creeps at the regularised
     rate v_s F / (mu m g); above it, it accelerates at (F - mu m g) / m from rest."""
     mu, vs = 0.5, 1e-4
     scene = rod(mu, (0.0, 0.0), inputs=("X1",), friction_velocity=vs)
@@ -83,11 +83,11 @@ def test_a_pushed_rod_creeps_below_the_limit_and_slides_above_it(force):
     assert abs(result.energy_residual) < 1e-9 * max(1.0, result.energy_input_work)
 
 
-def contact_directions(scene, contacts, active, J, qd):
+def contact_directions(scene, contacts, resting, J, qd):
     """The signed normal rows N and the generalised directions D = N + mu J_t^T(-phi) of the held contacts, from
     the reference model's point Jacobians J (n + 1, 3, nq): the friction law written out independently."""
     N, D = [], []
-    for c in active:
+    for c in resting:
         point, wall = contacts[c]
         n_row = wall.normal_sign * J[point - 1, wall.axis]
         d = n_row.copy()
@@ -121,17 +121,17 @@ def test_constrained_dynamics_with_friction_against_a_dense_solve():
     for trial in range(12):
         q = np.r_[rng.uniform(-1.2, 1.2, scene.n + 2), rng.uniform(-1, 1, 3)]
         qd = rng.uniform(-1, 1, scene.nq) * (1e-4 if trial == 0 else 1.0)      # trial 0: below v_s
-        active = sorted(rng.choice(len(contacts), size=rng.integers(1, 4), replace=False).tolist())
-        points = {contacts[c][0] for c in active}
-        if len(points) < len(active):
+        resting = sorted(rng.choice(len(contacts), size=rng.integers(1, 4), replace=False).tolist())
+        points = {contacts[c][0] for c in resting}
+        if len(points) < len(resting):
             continue                                   # one point on two walls: keep the sets simple
-        qdd, lam = model.constrained_dynamics(q, qd, active)
+        qdd, lam = model.constrained_dynamics(q, qd, resting)
 
         M, R, J = ref.mass_matrix(q), ref.bias(q, qd), ref.point_jacobian(q)
         bias = model.contact_bias(q, qd)
-        N, D = contact_directions(scene, contacts, active, J, qd)
+        N, D = contact_directions(scene, contacts, resting, J, qd)
         rhs = [-contacts[c][1].normal_sign * bias[model.contact_rows.index((contacts[c][0], contacts[c][1].axis))]
-               for c in active]
+               for c in resting]
         Minv_R, Minv_D = np.linalg.solve(M, R), np.linalg.solve(M, D.T)
         lam_ref = np.linalg.solve(N @ Minv_D, np.array(rhs) - N @ Minv_R)
         qdd_ref = Minv_R + Minv_D @ lam_ref
@@ -170,18 +170,18 @@ def test_the_painleve_guard_follows_the_p_matrix_rule():
     for _ in range(60):
         q = np.r_[rng.uniform(-1.5, 1.5, scene.n + 2), rng.uniform(-1, 1, 3)]
         qd = rng.uniform(-2, 2, scene.nq)
-        active = sorted(rng.choice(len(contacts), size=rng.integers(1, 4), replace=False).tolist())
-        if len({contacts[c][0] for c in active}) < len(active):
+        resting = sorted(rng.choice(len(contacts), size=rng.integers(1, 4), replace=False).tolist())
+        if len({contacts[c][0] for c in resting}) < len(resting):
             continue
         M, J = ref.mass_matrix(q), ref.point_jacobian(q)
-        N, D = contact_directions(scene, contacts, active, J, qd)
+        N, D = contact_directions(scene, contacts, resting, J, qd)
         B = N @ np.linalg.solve(M, D.T)
         if p_matrix(B):
-            model.constrained_dynamics(q, qd, active)
+            model.constrained_dynamics(q, qd, resting)
             accepted += 1
         else:
             with pytest.raises(ImpactError, match="Painleve paradox"):
-                model.constrained_dynamics(q, qd, active)
+                model.constrained_dynamics(q, qd, resting)
             refused += 1
     assert refused >= 3 and accepted >= 10
 
@@ -245,4 +245,4 @@ def test_the_painleve_paradox_is_named(mu, v, paradox):
     else:
         result = simulate(model, 0.3, rtol=1e-10, atol=1e-12)
         assert result.success, result.message
-        assert result.contact_events[0].kind == "persist"
+        assert result.contact_events[0].kind == "rest"

@@ -80,7 +80,7 @@ double gac_step_energy_error(gac_sim *s)
     const gac_model *md = s->model;
     const double *E = s->energy_x1;
     double change;
-    if (md->power != 0 || s->nactive > 0 || !(s->energy_scale > 0.0)) return 0.0;
+    if (md->power != 0 || s->nresting > 0 || !(s->energy_scale > 0.0)) return 0.0;
     if (!s->energy_x1_valid) {                           /* (not already from the step's end, gac_f_end) */
         md->energy(s->x1, s->x1 + md->nq, s->p, s->energy_x1);
         s->energy_x1_valid = 1;                          /* the step end's energies, for gac_energy_check */
@@ -102,7 +102,7 @@ void gac_add_work(gac_sim *s, double t_b)
                                      0.23931433524968324, 0.11846344252809454};
     const gac_model *md = s->model;
     const double h = t_b - s->t;
-    const int friction = s->nactive > 0 && gac_has_friction(md);
+    const int friction = s->nresting > 0 && gac_has_friction(md);
     double x[md->nx], P[2], w_in = 0.0, w_damp = 0.0, w_friction = 0.0;
     int j;
     if ((md->power == 0 && !friction) || !(h > 0.0)) return;
@@ -116,7 +116,7 @@ void gac_add_work(gac_sim *s, double t_b)
         }
         if (friction) {
             double qdd[md->nq], lambda[md->nq], D = 0.0;
-            if (gac_constrained_dynamics_friction(md, x, x + md->nq, gac_input(s, t, x), s->p, s->nactive, s->active,
+            if (gac_constrained_dynamics_friction(md, x, x + md->nq, gac_input(s, t, x), s->p, s->nresting, s->resting,
                                                   qdd, lambda, s->work, &D) == GAC_OK)
                 w_friction += weight[j] * D;
         }
@@ -126,7 +126,7 @@ void gac_add_work(gac_sim *s, double t_b)
     s->work_friction += h * w_friction;
 }
 
-/* 1 if at x a persistent contact on a wall with friction slides slower than GAC_SLOW_SLIDING friction_velocity
+/* 1 if at x a resting contact on a wall with friction slides slower than GAC_SLOW_SLIDING friction_velocity
  * (its velocity along the wall, as in gac_constrained_dynamics_friction): the regularised friction force is then
  * (nearly) viscous, -c_f lambda v_t / friction_velocity, a stiff term that bounds an explicit method's step. */
 int gac_slow_sliding(const gac_sim *s, const double *x)
@@ -135,10 +135,10 @@ int gac_slow_sliding(const gac_sim *s, const double *x)
     const double slow = GAC_SLOW_SLIDING * md->friction_velocity;
     double vq[3 * GAC_AT_LEAST_1(md->npoint)];
     int a, j;
-    if (s->nactive == 0 || !gac_has_friction(md)) return 0;
+    if (s->nresting == 0 || !gac_has_friction(md)) return 0;
     md->contact_velocities(x, x + md->nq, s->p, vq);
-    for (a = 0; a < s->nactive; ++a) {
-        const gac_contact *k = &md->contacts[s->active[a]];
+    for (a = 0; a < s->nresting; ++a) {
+        const gac_contact *k = &md->contacts[s->resting[a]];
         const double cf = k->friction_index >= 0 ? s->p[k->friction_index] : k->friction_value;
         double speed2 = 0.0;
         int axis = 0;

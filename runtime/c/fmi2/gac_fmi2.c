@@ -497,7 +497,7 @@ GAC_FMI2_EXPORT fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueRefere
         int stepping = in->mode != MODE_INSTANTIATED && in->mode != MODE_INITIALIZATION;
         if (vr[k] == GAC_FMI2_METHOD) value[k] = in->method;
         else if (vr[k] == GAC_FMI2_IMPACTS) value[k] = (fmi2Integer)in->n_impacts;
-        else if (vr[k] == GAC_FMI2_RESTING) value[k] = stepping ? in->sim.nactive : 0;
+        else if (vr[k] == GAC_FMI2_RESTING) value[k] = stepping ? in->sim.nresting : 0;
         else return fail(in, "fmi2GetInteger", "no Integer variable has this value reference (0..2)");
     }
     return fmi2OK;

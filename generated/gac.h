@@ -460,15 +460,15 @@ int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const do
  * FMI co-simulation): change them between calls with gac_sim_set_input, so that a change falls on a step
  * boundary.  Or give a controller (gac_sim_set_controller): the loop then asks it for u at every stage.
  * The energy the inputs put in and the dampers take out is integrated over every step on the dense output
- * (5-point Gauss-Legendre on the step's interpolant): sim.work_input, sim.work_damping; with the impacts'
- * losses they close the energy balance E(t) - E(0) = work_input - work_damping - (impact losses).
+ * (5-point Gauss-Legendre on the step's interpolant): sim.work_input, sim.loss_damping; with the impacts'
+ * losses they close the energy balance E(t) - E(0) = work_input - loss_damping - (impact losses).
  *
  * Energy balance.  The loop keeps the balance's residual (J)
- *     sim.energy_residual = E - E(0) - work_input + work_damping + work_friction + energy_impacts,
+ *     sim.energy_residual = E - E(0) - work_input + loss_damping + loss_friction + loss_impacts,
  * E = T + V at the current state, and checks it at every step end (after the projection onto the resting
  * contacts) and after every impact: beyond energy_tol x sim.energy_scale (the largest of M g L, the model's
- * weight_scale, and T + |V| at a step end so far, plus |work_input| + work_damping + work_friction +
- * energy_impacts), plus what the impacts' laws may change by round-off (sim.energy_roundoff, the sum of each
+ * weight_scale, and T + |V| at a step end so far, plus |work_input| + loss_damping + loss_friction +
+ * loss_impacts), plus what the impacts' laws may change by round-off (sim.energy_roundoff, the sum of each
  * record's roundoff x T), the run stops with GAC_ERR_DRIFT at that state.  opt.energy_tol < 0 (default) is
  * min(0.1, max(1e-8, 1e4 rtol)) for the adaptive methods, a budget of 1e4 steps' worth of tolerance, and off for RK4; 0 turns the check off.  What a projection onto
  * the resting contacts changes in E is in the residual (it should keep the energy) and summed in
@@ -581,8 +581,8 @@ typedef struct {
                                     adaptive step: what limits the step size */
     double *u;                   /* the inputs held over the next advance call (nu; gac_sim_set_input) */
     double work_input;           /* J: work of the inputs since gac_sim_init, int u . qd_actuated dt */
-    double work_damping;         /* J: energy the joint dampers took since gac_sim_init, int C theta_dot^2 dt */
-    double work_friction;        /* J: energy sliding friction took since gac_sim_init, int c_f lambda |v_t| ... dt */
+    double loss_damping;         /* J: energy the joint dampers took since gac_sim_init, int C theta_dot^2 dt */
+    double loss_friction;        /* J: energy sliding friction took since gac_sim_init, int c_f lambda |v_t| ... dt */
     double wall_time;            /* s of the run's clock used, as of the last look (GAC_LOOK_STEPS) */
     double rk4_h_rho;            /* RK4: h rho of the last step, rho the rate of the chain's fastest mode seen in it
                                     (the stability rule: 3 steps in a row above 2.5, or one above 10, stop the run
@@ -592,14 +592,14 @@ typedef struct {
                                     stiff (time constant about friction_velocity / (c_f g)) and may limit the step */
     double t_slow_sliding;       /* s: the time those steps covered */
     double energy_initial;       /* J: T + V at gac_sim_init */
-    double energy_impacts;       /* J: energy the impacts took since gac_sim_init, sum of energy_before - energy_after */
+    double loss_impacts;         /* J: energy the impacts took since gac_sim_init, sum of energy_before - energy_after */
     double energy_roundoff;      /* J: what the impacts' energies are known to, sum of roundoff x T before each */
     double energy_projection;    /* J: energy change of the projections onto the resting contacts since gac_sim_init
                                     (part of energy_residual: a projection should keep the energy) */
     double energy_residual;      /* J: the energy balance at the current state, E - energy_initial - work_input
-                                    + work_damping + work_friction + energy_impacts */
+                                    + loss_damping + loss_friction + loss_impacts */
     double energy_scale;         /* J: what energy_residual is measured on: the largest of M g L (weight_scale) and
-                                    T + |V| at a step end so far, plus |work_input| + work_damping + work_friction + energy_impacts */
+                                    T + |V| at a step end so far, plus |work_input| + loss_damping + loss_friction + loss_impacts */
     int chart;                   /* the base chart integrated now: 0 = A (the model given to gac_sim_init), 1 = B
                                     (its chart_b).  x is in this chart's coordinates; gac_sim_state, the samples
                                     and the impact records are always in chart A's */
@@ -733,7 +733,7 @@ int gac_sim_advance(gac_sim *sim, double t_end, const double *t_eval, int n_eval
 typedef struct {
     long n_impacts;              /* impacts applied */
     double t_first_impact;       /* s; -1 when there was none */
-    double energy_impact_loss;   /* J: sum of (energy_before - energy_after) over the impacts */
+    double loss_impacts;         /* J: sum of (energy_before - energy_after) over the impacts */
     long n_contact_events;       /* GAC_SIM_CONTACT stops (resting contacts made or released) */
 } gac_run_summary;
 

@@ -401,7 +401,7 @@ static int gac_finish(gac_sim *s, gac_impact_event *ev, int nset, const int *set
         s->t_last[c] = ev->t;
     }
     gac_set_resting(s, nset, set, r);
-    s->energy_impacts += r->energy_before - r->energy_after;
+    s->loss_impacts += r->energy_before - r->energy_after;
     s->energy_roundoff += r->roundoff * ev->T_before;   /* what this impact's energy is known to */
     return 1;
 }

@@ -105,12 +105,12 @@ class SimulationResult:
     method: str
     options: dict = field(default_factory=dict)
     contact_events: list = field(default_factory=list)   # ContactEvent, in time order
-    resting_final: list = field(default_factory=list)  # (point, wall) of the contacts resting at t_final
+    resting_final: list = field(default_factory=list)     # (point, wall) of the contacts resting at t_final
     warnings: list = field(default_factory=list)          # results of limited accuracy, one sentence each
-    energy_scale: float = 1.0     # J: max(T0 + |V0|, M g L, |W_inputs|, D_dampers), what energy_drift is measured on
-    energy_input_work: float = 0.0     # J: work of the inputs, int u . qd_actuated dt
-    energy_damping_loss: float = 0.0   # J: energy the joint dampers took, int C theta_dot^2 dt (>= 0)
-    energy_friction_loss: float = 0.0  # J: energy sliding friction took at resting contacts (>= 0)
+    energy_scale: float = 1.0     # J: max(T0 + |V0|, M g L, |work_input|, the losses), what energy_drift is measured on
+    work_input: float = 0.0       # J: work of the inputs, int u . qd_actuated dt
+    loss_damping: float = 0.0     # J: energy the joint dampers took, int C theta_dot^2 dt (>= 0)
+    loss_friction: float = 0.0    # J: energy sliding friction took at resting contacts (>= 0)
     u: np.ndarray | None = None        # (len(t), nu) the inputs at the sample times (None: no inputs)
     n_chart_switches: int = 0          # switches between the base charts near the gimbal lock (gac_sim.n_chart_switches)
 
@@ -128,18 +128,18 @@ class SimulationResult:
         return self.status == 0
 
     @property
-    def energy_impact_loss(self) -> float:
+    def loss_impacts(self) -> float:
         """J: the energy the impacts took, sum of (E before - E after) over the impacts (>= 0; it includes
         what landings on a wall took, Impact.energy_rest)."""
         return self.impacts.energy_loss
 
     @property
     def energy_residual(self) -> float:
-        """J: what the energy balance leaves, E_final - E_initial + energy_impact_loss + energy_damping_loss +
-        energy_friction_loss - energy_input_work (E = T + V, springs' potential included): the integration error of
+        """J: what the energy balance leaves, E_final - E_initial + loss_impacts + loss_damping +
+        loss_friction - work_input (E = T + V, springs' potential included): the integration error of
         the flight phases."""
-        return (self.energy_final - self.energy_initial + self.energy_impact_loss + self.energy_damping_loss
-                + self.energy_friction_loss - self.energy_input_work)
+        return (self.energy_final - self.energy_initial + self.loss_impacts + self.loss_damping
+                + self.loss_friction - self.work_input)
 
     @property
     def energy_drift(self) -> float:
@@ -149,12 +149,12 @@ class SimulationResult:
 
     def energy_summary(self) -> str:
         """One line: initial and final energy, inputs' work, losses in dampers and at impacts, and the residual."""
-        driven = (f"work of the inputs {self.energy_input_work:.6g} J, taken by dampers {self.energy_damping_loss:.6g} J, "
-                  if self.energy_input_work or self.energy_damping_loss else "")
-        if self.energy_friction_loss:
-            driven += f"taken by friction {self.energy_friction_loss:.6g} J, "
+        driven = (f"work of the inputs {self.work_input:.6g} J, taken by dampers {self.loss_damping:.6g} J, "
+                  if self.work_input or self.loss_damping else "")
+        if self.loss_friction:
+            driven += f"taken by friction {self.loss_friction:.6g} J, "
         return (f"energy: initial {self.energy_initial:.12g} J, final {self.energy_final:.12g} J, {driven}lost at impacts "
-                f"{self.energy_impact_loss:.6g} J; balance residual {self.energy_residual:.3e} J = "
+                f"{self.loss_impacts:.6g} J; balance residual {self.energy_residual:.3e} J = "
                 f"{self.energy_drift:.3e} of {self.energy_scale:.6g} J (max(T0 + |V0|, M g L"
                 f"{', |W_in|, D_damp' if driven else ''}))")
 
@@ -187,10 +187,10 @@ class SimulationResult:
                          "complementarity": i.complementarity} for i in self.impacts],
             "t_final": self.t_final, "q_final": self.q_final.tolist(), "qd_final": self.qd_final.tolist(),
             "energy_initial": self.energy_initial, "energy_final": self.energy_final,
-            "energy_impact_loss": self.energy_impact_loss, "energy_residual": self.energy_residual,
+            "loss_impacts": self.loss_impacts, "energy_residual": self.energy_residual,
             "energy_scale": self.energy_scale, "energy_drift": self.energy_drift,
-            "energy_input_work": self.energy_input_work, "energy_damping_loss": self.energy_damping_loss,
-            "energy_friction_loss": self.energy_friction_loss,
+            "work_input": self.work_input, "loss_damping": self.loss_damping,
+            "loss_friction": self.loss_friction,
             "n_rhs": self.n_rhs, "n_steps": self.n_steps, "n_rejected": self.n_rejected,
             "n_chart_switches": self.n_chart_switches,
             "status": self.status, "message": self.message, "method": self.method, "options": self.options,
@@ -369,7 +369,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     check_start   refuse q0/p overrides that put a contact point outside its wall beyond round-off (False:
                   a restart from a state the loop itself produced, with its resting contacts held at
                   their landing gaps)
-    keep_impacts  False: count the impacts (len(result.impacts), t_first_impact, energy_impact_loss) without
+    keep_impacts  False: count the impacts (len(result.impacts), t_first_impact, loss_impacts) without
                   keeping their records, for studies of many runs
     **options     the C loop's options (LOOP_OPTIONS: rtol, atol, dt, h_max, event_samples, event_tol, contact_tol,
                   max_steps, max_impacts, max_wall_time, rest_height, zeno_impacts, energy_tol), with the C library's
@@ -459,16 +459,16 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         u_samples = u_samples.reshape(n, model.nu)
     return SimulationResult(
         t=t_eval[:n].copy(), q=q_samples, qd=qd_samples, u=u_samples,
-        energy_input_work=float(state.work_input), energy_damping_loss=float(state.work_damping),
-        energy_friction_loss=float(state.work_friction),
+        work_input=float(state.work_input), loss_damping=float(state.loss_damping),
+        loss_friction=float(state.loss_friction),
         impacts=impacts, t_final=float(state.t), q_final=layout.expand(x_final[:nq]),
         qd_final=layout.expand(x_final[nq:], velocity=True),
         energy_initial=T0 + V0, energy_final=sum(model.energy(x_final[:nq], x_final[nq:], p)),
         n_steps=int(state.n_steps), n_rejected=int(state.n_rejected), n_rhs=int(state.n_rhs), status=status,
         message=message + (f"; {len(accuracy)} impact(s) of limited accuracy (see warnings)" if accuracy else ""),
         method=method, contact_events=contact_events, warnings=warnings,
-        energy_scale=max(energy_scale(model.scene, p, T0, V0), abs(float(state.work_input)), float(state.work_damping),
-                         float(state.work_friction)),
+        energy_scale=max(energy_scale(model.scene, p, T0, V0), abs(float(state.work_input)), float(state.loss_damping),
+                         float(state.loss_friction)),
         resting_final=[(model.contacts[state.resting[k]][0], model.contacts[state.resting[k]][1].name)
                           for k in range(state.nresting)],
         options={"t_end": t_end, **{name: _option_value(opt, name) for name in LOOP_OPTIONS},
@@ -723,7 +723,7 @@ def _stop_message(model: CompiledModel, sim, code: int, segment_t: float, segmen
         residual, scale = float(sim.energy_residual), float(sim.energy_scale)
         message += (f" (the balance's residual is {residual:.3g} J, {abs(residual) / scale:.3g} of the scale "
                     f"{scale:.6g} J; projections onto resting contacts changed the energy by "
-                    f"{float(sim.energy_projection):.3g} J in all, impacts took {float(sim.energy_impacts):.6g} J)")
+                    f"{float(sim.energy_projection):.3g} J in all, impacts took {float(sim.loss_impacts):.6g} J)")
     if code == lib.GAC_ERR_IMPACT_ACCURACY and record is not None:
         message += (f" (this impact's energy is known only to {float(record.roundoff):.3g} relative, its law's "
                     "round-off bound)")

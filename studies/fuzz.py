@@ -235,8 +235,8 @@ def check_run(model, run: Run, result, seconds: float, budget: float) -> list[st
             if abs(T1 + impact.energy_rest - T0) > tol * T0:
                 violations.append(f"elastic impact at t = {impact.t:.6g} s changed T: {T0!r} -> {T1!r} J")
                 break
-    if result.energy_friction_loss < -ENERGY_TOL * result.energy_scale:
-        violations.append(f"friction gave energy: {result.energy_friction_loss!r} J")
+    if result.loss_friction < -ENERGY_TOL * result.energy_scale:
+        violations.append(f"friction gave energy: {result.loss_friction!r} J")
     if seconds > budget + BUDGET_SLACK:
         violations.append(f"over budget: {seconds:.1f} s")
     return violations

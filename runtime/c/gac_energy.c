@@ -29,7 +29,7 @@ void gac_energy_start(gac_sim *s)
         const double weight = s->model->weight_scale(s->p);
         if (weight > s->energy_scale) s->energy_scale = weight;
     }
-    s->energy_impacts = s->energy_projection = s->energy_residual = s->energy_roundoff = 0.0;
+    s->loss_impacts = s->energy_projection = s->energy_residual = s->energy_roundoff = 0.0;
     s->energy_x1_valid = 0;
     s->energy_tol = gac_energy_tolerance(&s->opt);
 }
@@ -47,9 +47,9 @@ int gac_energy_check(gac_sim *s, const double *E_known)
     }
     s->energy_x = E[0] + E[1];
     if (E[0] + fabs(E[1]) > s->energy_scale) s->energy_scale = E[0] + fabs(E[1]);
-    s->energy_residual = s->energy_x - s->energy_initial - s->work_input + s->work_damping + s->work_friction
-                         + s->energy_impacts;
-    scale = s->energy_scale + fabs(s->work_input) + s->work_damping + s->work_friction + fabs(s->energy_impacts);
+    s->energy_residual = s->energy_x - s->energy_initial - s->work_input + s->loss_damping + s->loss_friction
+                         + s->loss_impacts;
+    scale = s->energy_scale + fabs(s->work_input) + s->loss_damping + s->loss_friction + fabs(s->loss_impacts);
     /* the integration's share (energy_tol of the scale) and what the impacts' laws may change by round-off */
     if (s->energy_tol > 0.0 && fabs(s->energy_residual) > s->energy_tol * scale + s->energy_roundoff)
         return GAC_ERR_DRIFT;
@@ -61,8 +61,8 @@ int gac_energy_check(gac_sim *s, const double *E_known)
 int gac_energy_projected(gac_sim *s, double E_before, const double *x)
 {
     const double change = gac_total_energy(s->model, x, s->p) - E_before;
-    const double scale = s->energy_scale + fabs(s->work_input) + s->work_damping + s->work_friction
-                         + fabs(s->energy_impacts);
+    const double scale = s->energy_scale + fabs(s->work_input) + s->loss_damping + s->loss_friction
+                         + fabs(s->loss_impacts);
     s->energy_projection += change;
     if (s->energy_tol > 0.0 && fabs(change) > 0.1 * s->energy_tol * scale) return GAC_ERR_PROJECTION;
     return GAC_OK;
@@ -92,8 +92,8 @@ double gac_step_energy_error(gac_sim *s)
 }
 
 /* Add the work of the inputs, the dissipation of the dampers and (with resting contacts on walls with friction)
- * that of sliding friction over [s->t, t_b] of the current step to s->work_input, s->work_damping and
- * s->work_friction: 5-point Gauss-Legendre (exact for polynomials of degree 9) on the step's dense output. */
+ * that of sliding friction over [s->t, t_b] of the current step to s->work_input, s->loss_damping and
+ * s->loss_friction: 5-point Gauss-Legendre (exact for polynomials of degree 9) on the step's dense output. */
 void gac_add_work(gac_sim *s, double t_b)
 {
     static const double node[5] = {0.04691007703066800, 0.23076534494715845, 0.5, 0.76923465505284155,
@@ -122,8 +122,8 @@ void gac_add_work(gac_sim *s, double t_b)
         }
     }
     s->work_input += h * w_in;
-    s->work_damping += h * w_damp;
-    s->work_friction += h * w_friction;
+    s->loss_damping += h * w_damp;
+    s->loss_friction += h * w_friction;
 }
 
 /* 1 if at x a resting contact on a wall with friction slides slower than GAC_SLOW_SLIDING friction_velocity

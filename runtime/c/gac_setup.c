@@ -168,7 +168,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     s->n_look = 0;
     s->rk4_h_rho = 0.0;
     s->input_changed = 0;
-    s->work_input = s->work_damping = s->work_friction = 0.0;
+    s->work_input = s->loss_damping = s->loss_friction = 0.0;
     s->n_slow_sliding = 0;
     s->t_slow_sliding = 0.0;
     for (i = 0; i < md->nx; ++i) s->x[i] = x[i];

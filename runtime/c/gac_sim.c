@@ -353,7 +353,7 @@ int gac_sim_run(gac_sim *s, double t_end, gac_impact_record *record, gac_run_sum
     if (s == 0 || record == 0 || summary == 0) return GAC_ERR_NULL_ARGUMENT;
     summary->n_impacts = summary->n_contact_events = 0;
     summary->t_first_impact = -1.0;
-    summary->energy_impact_loss = 0.0;
+    summary->loss_impacts = 0.0;
     for (;;) {
         code = gac_sim_advance(s, t_end, 0, 0, 0, 0, record);
         if (code == GAC_SIM_CONTACT) {
@@ -363,6 +363,6 @@ int gac_sim_run(gac_sim *s, double t_end, gac_impact_record *record, gac_run_sum
         if (code != GAC_SIM_IMPACT) return code;
         if (summary->n_impacts == 0) summary->t_first_impact = record->t;
         summary->n_impacts++;
-        summary->energy_impact_loss += record->energy_before - record->energy_after;
+        summary->loss_impacts += record->energy_before - record->energy_after;
     }
 }

@@ -599,7 +599,7 @@ static void test_sled(void)
     CHECK(NEAR(x_eval[0], v0 * 0.3 - 0.5 * mu * g * 0.09, 1e-8), "x(0.3) %.17g", x_eval[0]);
     CHECK(t_stop < 1.0 && NEAR(x_eval[4], v0 * v0 / (2.0 * mu * g), 1e-8), "x(1) %.17g, expected %.17g", x_eval[4],
           v0 * v0 / (2.0 * mu * g));
-    CHECK(NEAR(sim.work_friction, 0.5 * m * v0 * v0, 1e-9), "friction loss %.17g", sim.work_friction);
+    CHECK(NEAR(sim.loss_friction, 0.5 * m * v0 * v0, 1e-9), "friction loss %.17g", sim.loss_friction);
     /* the steps in the regularised regime: those begun after the stop or within GAC_SLOW_SLIDING v_s of it */
     CHECK(sim.n_slow_sliding > 0 && sim.t_slow_sliding > 0.5 * (1.0 - t_stop)
           && sim.t_slow_sliding <= 1.0 - t_stop + GAC_SLOW_SLIDING * sled.friction_velocity / (mu * g) + 1e-12,

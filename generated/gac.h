@@ -81,7 +81,7 @@
                                           (gac_check_parameters gives its index; the model's parameter_info its
                                           name and what it allows) */
 
-/* ---- what gac_sim_advance stops at (> 0) ------------------------------------------------------ */
+/* ---- how gac_sim_advance ends: the run's budgets (< 0) and status (> 0) ------------------------ */
 #define GAC_ERR_WALL_TIME        -25   /* the run used opt.max_wall_time seconds of its clock (gac_sim_set_clock)
                                           since gac_sim_init or the last gac_sim_set_clock */
 #define GAC_ERR_STOPPED          -26   /* the progress callback (gac_sim_set_progress) asked the run to stop */
@@ -94,9 +94,9 @@
                                           the energy by more than opt.energy_tol of the energy scale: the step left
                                           the constraints too far (tighten rtol) */
 #define GAC_SIM_END      1    /* reached t_end */
-#define GAC_SIM_IMPACT   2    /* stopped at an impact, already applied; see the record (which may also list
+#define GAC_SIM_IMPACT   2    /* ended at an impact, already applied; see the record (which may also list
                                  contacts come to rest or released by the impact) */
-#define GAC_SIM_CONTACT  3    /* stopped where the resting set changed without an impact: a contact
+#define GAC_SIM_CONTACT  3    /* ended where the resting set changed without an impact: a contact
                                  released (its force reached 0), or the contacts gac_sim_init puts at rest;
                                  record.t, landed[], released[] are filled, ncontact = 0 */
 
@@ -494,15 +494,15 @@ int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const do
  * GAC_ERR_DRIFT and GAC_ERR_PROJECTION (the energy balance, above).
  */
 
-/* An input schedule: values u_k (nu each) at times t_k (n >= 1, strictly increasing), held (linear = 0: u(t) =
- * u_k for t_k <= t < t_k+1) or interpolated linearly between the times (linear = 1); u_0 before t_0 and
+/* An input schedule: values u_k (nu each) at breakpoints t_k (n >= 1, strictly increasing), held (linear = 0:
+ * u(t) = u_k for t_k <= t < t_k+1) or interpolated linearly between the breakpoints (linear = 1); u_0 before t_0 and
  * u_(n-1) after t_(n-1).  The caller owns both arrays. */
 typedef struct {
-    int n;                /* number of times */
-    int nu;               /* inputs per time */
-    const double *t;      /* [n] times (s) */
+    int n;                /* number of breakpoints */
+    int nu;               /* inputs per breakpoint */
+    const double *t;      /* [n] breakpoints (s) */
     const double *u;      /* [n * nu] values, row k at u + k nu */
-    int linear;           /* 0: held, 1: linear between the times */
+    int linear;           /* 0: held, 1: linear between the breakpoints */
 } gac_schedule;
 
 typedef struct {
@@ -690,18 +690,18 @@ int gac_sim_set_clock(gac_sim *sim, gac_clock clock, void *user);
 int gac_sim_set_progress(gac_sim *sim, gac_progress progress, void *user);
 
 /* A gac_controller giving the schedule's value at t (user: a const gac_schedule *).  With gac_sim_set_controller
- * the loop does not know the schedule's times; gac_sim_set_schedule is the exact way to drive a run by it. */
+ * the loop does not know the schedule's breakpoints; gac_sim_set_schedule is the exact way to drive a run by it. */
 void gac_schedule_input(double t, const double *q, const double *qd, double *u, void *schedule);
 
 /* Drive the run by the schedule s (checked by gac_schedule_check; the caller keeps it alive) from now on: every
- * gac_sim_advance ends a step at each of the schedule's times, so that a jump (held) or a kink (linear) falls on a
+ * gac_sim_advance ends a step at each of the schedule's breakpoints, so that a jump (held) or a kink (linear) falls on a
  * step boundary, and starts the next step from a fresh derivative with the resting contacts re-checked; a held
  * schedule's value is held over each interval [t_k, t_k+1) (gac_sim_set_input at t_k), a linear one is evaluated
  * at every stage.  s NULL: no schedule (the inputs stay as they are).  A later gac_sim_set_controller replaces it.
  * Returns GAC_OK, GAC_ERR_NULL_ARGUMENT (sim NULL), or the error of gac_schedule_check (nothing changed). */
 int gac_sim_set_schedule(gac_sim *sim, const gac_schedule *s);
 
-/* GAC_OK if the schedule is usable: pointers set, n >= 1, times finite and strictly increasing
+/* GAC_OK if the schedule is usable: pointers set, n >= 1, breakpoints finite and strictly increasing
  * (GAC_ERR_BAD_OPTION), values finite (GAC_ERR_BAD_INPUT). */
 int gac_schedule_check(const gac_schedule *s);
 
@@ -734,7 +734,7 @@ typedef struct {
     long n_impacts;              /* impacts applied */
     double t_first_impact;       /* s; -1 when there was none */
     double loss_impacts;         /* J: sum of (energy_before - energy_after) over the impacts */
-    long n_contact_events;       /* GAC_SIM_CONTACT stops (resting contacts made or released) */
+    long n_contact_events;       /* GAC_SIM_CONTACT ends (contacts come to rest or released) */
 } gac_run_summary;
 
 /* Run to t_end in one call: gac_sim_advance until GAC_SIM_END or an error (GAC_ERR_MAX_IMPACTS once

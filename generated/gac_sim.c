@@ -122,8 +122,8 @@ static void gac_emit(gac_sim *s, double t_b, const double *t_eval, int n_eval, i
     }
 }
 
-/* The end of the stretch the loop integrates next: the schedule's first time after t, or t_end. */
-static double gac_next_stop(const gac_sim *s, double t_end)
+/* The end of the stretch the loop integrates next: the schedule's first breakpoint after t, or t_end. */
+static double gac_next_breakpoint(const gac_sim *s, double t_end)
 {
     int k;
     if (s->schedule == 0) return t_end;
@@ -146,15 +146,15 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
         return GAC_ERR_BAD_OPTION;                /* t_end NaN, infinite or before t; bad sample index */
     if (s->opt.max_impacts > 0 && s->n_impacts >= s->opt.max_impacts && s->t < t_end && !s->pending)
         return GAC_ERR_MAX_IMPACTS;
-    for (;;) {                                    /* stretches between the schedule's times */
-        const double t_stop = gac_next_stop(s, t_end);
-        const int code = gac_advance_to(s, t_stop, t_eval, n_eval, i_eval, x_eval, record);
-        if (code != GAC_SIM_END || t_stop >= t_end) return code;
+    for (;;) {                                    /* stretches between the schedule's breakpoints */
+        const double t_break = gac_next_breakpoint(s, t_end);
+        const int code = gac_advance_to(s, t_break, t_eval, n_eval, i_eval, x_eval, record);
+        if (code != GAC_SIM_END || t_break >= t_end) return code;
         gac_schedule_begin(s);
     }
 }
 
-/* The loop from s->t to t_end (no schedule time inside): flight steps up to the next event. */
+/* The loop from s->t to t_end (no breakpoint inside): flight steps up to the next event. */
 static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_eval, int *i_eval,
                           double *x_eval, gac_impact_record *record)
 {

@@ -86,7 +86,7 @@ class ContactEvent:
 
 @dataclass
 class SimulationResult:
-    """What simulate() returns.  status 0: reached t_end; -1: stopped early (see message)."""
+    """What simulate() returns.  status 0: reached t_end; -1: ended early (see message)."""
 
     t: np.ndarray                 # sample times (s)
     q: np.ndarray                 # (len(t), nq) configuration samples, layout of Eq. 13
@@ -415,7 +415,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     keep_alive = attach(model, sim, source)   # noqa: F841  (the schedule or handle the C loop points at)
     watch = _watch(model, sim, opt.max_wall_time, progress)   # noqa: F841  (the clock and progress handles)
 
-    # the loop: one C call per impact or change of the resting contacts, up to t_end or the loop's stop
+    # the loop: one C call per impact or change of the resting contacts, up to t_end or the loop's end
     x_eval = np.zeros((len(t_eval), nx))
     i_eval = ffi.new("int *", 0)
     while i_eval[0] < len(t_eval) and t_eval[i_eval[0]] <= 0.0:      # samples at the start (as sim_init left it)
@@ -442,7 +442,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     if code == lib.GAC_ERR_BAD_INPUT and source.error is not None:
         raise source.error
     status, message = (0, "reached t_end") if code == lib.GAC_SIM_END else \
-        (-1, _stop_message(model, state, code, segment_t, segment_steps, len(impacts), rec))
+        (-1, _end_message(model, state, code, segment_t, segment_steps, len(impacts), rec))
     if status == 0 and int(state.n_chart_switches):
         message += f"; {int(state.n_chart_switches)} chart switch(es)"
 
@@ -695,7 +695,7 @@ def _step_diagnosis(model: CompiledModel, sim, t_from: float, steps: int) -> str
             "max_steps / max_wall_time or loosen rtol/atol")
 
 
-def _stop_message(model: CompiledModel, sim, code: int, segment_t: float, segment_steps: int, n_impacts: int,
+def _end_message(model: CompiledModel, sim, code: int, segment_t: float, segment_steps: int, n_impacts: int,
                   record=None) -> str:
     """The result's message for a run the C loop stopped with ``code``: the loop's reason, and for the budgets,
     RK4's stability rule, the energy balance and an impact's accuracy what the run was doing (the loop decided;

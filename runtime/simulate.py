@@ -566,7 +566,7 @@ def friction_warnings(model: CompiledModel, p, sim, method: str) -> list[str]:
     """A sentence when the regularised friction limited the steps: at least FRICTION_WARN_STEPS of the run's
     accepted steps, and FRICTION_WARN_SHARE of them, began with a point resting on a rough wall and sliding slower
     than GAC_SLOW_SLIDING friction_velocity (sim.n_slow_sliding), where the friction force is nearly viscous,
-    -mu lambda v_t / friction_velocity: a stiff term of time constant about tau = friction_velocity / (mu g) that
+    -c_f lambda v_t / friction_velocity: a stiff term of time constant about tau = friction_velocity / (c_f g) that
     caps an explicit step near a few tau.  Steps far shorter than tau are limited by something else, and RK4's
     step is the caller's: neither is named."""
     slow, steps = int(sim.n_slow_sliding), int(sim.n_steps)
@@ -574,13 +574,13 @@ def friction_warnings(model: CompiledModel, p, sim, method: str) -> list[str]:
         return []
     v_s = model.scene.friction_velocity
     names = model.scene.parameter_names()
-    mu = max((float(p[k]) for k, name in enumerate(names) if split_parameter_name(name)[0] == "friction"),
+    c_f = max((float(p[k]) for k, name in enumerate(names) if split_parameter_name(name)[0] == "friction"),
              default=0.0)
     h = float(sim.t_slow_sliding) / slow
-    tau = v_s / (mu * abs(float(p[0]))) if mu * abs(float(p[0])) > 0.0 else None
+    tau = v_s / (c_f * abs(float(p[0]))) if c_f * abs(float(p[0])) > 0.0 else None
     if tau is not None and h < 0.01 * tau:
         return []
-    scale = f" (time constant about friction_velocity / (mu g) = {tau:.2g} s)" if tau is not None else ""
+    scale = f" (time constant about friction_velocity / (c_f g) = {tau:.2g} s)" if tau is not None else ""
     return [f"{slow:,} of the run's {steps:,} steps ({slow / max(steps, 1):.0%}) began with a point resting on a rough "
             f"wall and sliding slower than {model.lib.GAC_SLOW_SLIDING} friction_velocity, at a mean step of "
             f"{h:.2g} s: there the regularised friction is a stiff viscous force{scale} that limits the step. The "

@@ -208,7 +208,7 @@ static gac_model box_with_fused(void)
     return m;
 }
 
-/* ---- sled: the box's point on a rough floor, p = [g, m, e, mu]; friction along x (row 0) ------------------ */
+/* ---- sled: the box's point on a rough floor, p = [g, m, e, c_f]; friction along x (row 0) ----------------- */
 static void sled_gaps(const double *q, const double *p, double *gap)
 {
     (void)p;
@@ -570,11 +570,11 @@ static void test_budget_and_progress(void)
           "a negative budget refused");
 }
 
-/* A point sliding on a rough floor (Coulomb mu, resting from the start): the normal force m g, the deceleration
- * mu g, x(t) = v0 t - mu g t^2 / 2 until it stops at v0^2 / (2 mu g), and the friction loss m v0^2 / 2. */
+/* A point sliding on a rough floor (Coulomb c_f, resting from the start): the normal force m g, the deceleration
+ * c_f g, x(t) = v0 t - c_f g t^2 / 2 until it stops at v0^2 / (2 c_f g), and the friction loss m v0^2 / 2. */
 static void test_sled(void)
 {
-    const double g = sled_p[0], m = sled_p[1], mu = sled_p[3], v0 = sled_qd0[0], t_stop = v0 / (mu * g);
+    const double g = sled_p[0], m = sled_p[1], c_f = sled_p[3], v0 = sled_qd0[0], t_stop = v0 / (c_f * g);
     const double t_eval[2] = {0.3, 1.0};
     double x_eval[8], qdd[2], lambda[2], swork[64];
     const int contact_set[1] = {0};
@@ -585,7 +585,7 @@ static void test_sled(void)
     CHECK(gac_model_check(&sled) == GAC_OK && gac_impact_nwork(&sled) == 4 * 4 + 2 + 3 + 2, "sled model, work %ld",
           gac_impact_nwork(&sled));
     code = gac_constrained_dynamics(&sled, sled_q0, sled_qd0, 0, sled_p, 1, contact_set, qdd, lambda, swork);
-    CHECK(code == GAC_OK && NEAR(lambda[0], m * g, 1e-12) && NEAR(qdd[0], -mu * g, 1e-12) && NEAR(qdd[1], 0.0, 1e-12),
+    CHECK(code == GAC_OK && NEAR(lambda[0], m * g, 1e-12) && NEAR(qdd[0], -c_f * g, 1e-12) && NEAR(qdd[1], 0.0, 1e-12),
           "sliding: lambda %.17g, qdd %.17g %.17g", lambda[0], qdd[0], qdd[1]);
     gac_default_options(&opt);
     opt.rtol = 1e-10;
@@ -596,13 +596,13 @@ static void test_sled(void)
     while ((code = gac_sim_advance(&sim, 1.0, t_eval, 2, &i_eval, x_eval, &rec)) == GAC_SIM_CONTACT) {
     }
     CHECK(code == GAC_SIM_END && sim.nresting == 1 && i_eval == 2, "end %d, resting %d", code, sim.nresting);
-    CHECK(NEAR(x_eval[0], v0 * 0.3 - 0.5 * mu * g * 0.09, 1e-8), "x(0.3) %.17g", x_eval[0]);
-    CHECK(t_stop < 1.0 && NEAR(x_eval[4], v0 * v0 / (2.0 * mu * g), 1e-8), "x(1) %.17g, expected %.17g", x_eval[4],
-          v0 * v0 / (2.0 * mu * g));
+    CHECK(NEAR(x_eval[0], v0 * 0.3 - 0.5 * c_f * g * 0.09, 1e-8), "x(0.3) %.17g", x_eval[0]);
+    CHECK(t_stop < 1.0 && NEAR(x_eval[4], v0 * v0 / (2.0 * c_f * g), 1e-8), "x(1) %.17g, expected %.17g", x_eval[4],
+          v0 * v0 / (2.0 * c_f * g));
     CHECK(NEAR(sim.loss_friction, 0.5 * m * v0 * v0, 1e-9), "friction loss %.17g", sim.loss_friction);
     /* the steps in the regularised regime: those begun after the stop or within GAC_SLOW_SLIDING v_s of it */
     CHECK(sim.n_slow_sliding > 0 && sim.t_slow_sliding > 0.5 * (1.0 - t_stop)
-          && sim.t_slow_sliding <= 1.0 - t_stop + GAC_SLOW_SLIDING * sled.friction_velocity / (mu * g) + 1e-12,
+          && sim.t_slow_sliding <= 1.0 - t_stop + GAC_SLOW_SLIDING * sled.friction_velocity / (c_f * g) + 1e-12,
           "slow sliding: %ld steps over %.17g s, at rest for %.17g s", sim.n_slow_sliding, sim.t_slow_sliding,
           1.0 - t_stop);
     CHECK(fabs(x_eval[5]) < 1e-12 && fabs(x_eval[7]) < 1e-12, "on the floor");

@@ -200,7 +200,7 @@ def test_case2_switches_and_agrees_with_a_single_chart():
 def test_resting_contacts_start_on_chart_b_and_carry_over_a_switch(model):
     """Link 1 lying on the floor with its joint axis z_1 vertical: chart A's lock itself (chi_A = 1e-7).  The run
     starts on chart B with O_1 and O_2 resting on the floor (e = 0), link 2 falls and lands, rolling link 1 about
-    its own axis until chi_A passes 0.6: back on chart A with the three contacts held.  No point sinks, the
+    its own axis until chi_A passes 0.6: back on chart A with the three contacts resting.  No point sinks, the
     energy balance closes, the rests at the start are reported at t = 0 in chart A's coordinates."""
     p = model.parameters({"e_x2_min": 0.0})
     q0 = np.array([0.3, np.pi / 2 - 1e-7, -0.4, 0.5, 1.0, 0.0, 1.0])     # theta_2 = 0.5: O_3 above the floor

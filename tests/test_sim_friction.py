@@ -84,7 +84,7 @@ def test_a_pushed_rod_creeps_below_the_limit_and_slides_above_it(force):
 
 
 def contact_directions(scene, contacts, resting, J, qd):
-    """The signed normal rows N and the generalised directions D = N + c_f J_t^T(-phi) of the held contacts, from
+    """The signed normal rows N and the generalised directions D = N + c_f J_t^T(-phi) of the resting contacts, from
     the reference model's point Jacobians J (n + 1, 3, nq): the friction law written out independently."""
     N, D = [], []
     for c in resting:
@@ -153,7 +153,7 @@ def p_matrix(B, tol=1e-8):
 
 
 def test_the_painleve_guard_follows_the_p_matrix_rule():
-    """Rough walls (c_f = 3) and random held sets of a 3D chain: the C solve refuses exactly the states whose
+    """Rough walls (c_f = 3) and random resting sets of a 3D chain: the C solve refuses exactly the states whose
     system B (formed here with the reference model) is no P-matrix, and solves the others."""
     from runtime.model import ImpactError
     data = {"name": "very_rough", "gravity": G,

@@ -151,8 +151,10 @@ def wants_rolled(n: int, rolled: bool | None) -> bool:
 
 
 _WORK = Arg("work", "double *", "scratch, {NAME}_IMPACT_NWORK doubles", restrict=True)
-_ACTIVE = (Arg("nactive", "int", "number of contacts"),
-           Arg("active", "const int *", "their indices 0..NCONTACT-1", restrict=True))
+_CONTACT_SET = (Arg("ncontact_set", "int", "number of contacts taking part in the impact"),
+                Arg("contact_set", "const int *", "their indices 0..NCONTACT-1", restrict=True))
+_RESTING = (Arg("nresting", "int", "number of resting contacts, held at their walls"),
+            Arg("resting", "const int *", "their indices 0..NCONTACT-1", restrict=True))
 
 # ---------------------------------------------------------------------------------------------------
 # the rest of the per-model API: NAME_rhs and the wrappers of the library (runtime/c/gac.h)
@@ -163,23 +165,23 @@ FUNCTIONS = (
               _u(), _p(), _out("xdot", "[qd, qdd] (NX)")),
              "ODE right-hand side of the flight phase."),
     Function("impact", "int",
-             (_q(), _qd(), _p(), *_ACTIVE, _out("qd_plus", "velocities after (NQ)"),
-              _out("impulse", "impulse of each active contact along its inward normal (nactive; N s)"), _WORK),
-             "Impact law, Eq. 44-48, all active contacts together (gac_impact).",
+             (_q(), _qd(), _p(), *_CONTACT_SET, _out("qd_plus", "velocities after (NQ)"),
+              _out("impulse", "impulse of each contact of the set along its inward normal (ncontact_set; N s)"), _WORK),
+             "Impact law, Eq. 44-48, all contacts of the set together (gac_impact).",
              "Solved as (J I_f^-1 J^T) F = -(1 + e) J qd, qd_plus = qd + I_f^-1 J^T F (Eq. 48 with the "
-             "velocity unknowns eliminated); impulse[k] > 0 pushes contact active[k] away from its wall. "
+             "velocity unknowns eliminated); impulse[k] > 0 pushes contact contact_set[k] away from its wall. "
              "Returns GAC_OK or GAC_ERR_*."),
     Function("impact_complementarity", "int",
-             (_q(), _qd(), _p(), *_ACTIVE, _out("qd_plus", "velocities after (NQ)"),
-              _out("impulse", "total impulse of each active contact (nactive; N s, >= 0)"), _WORK),
+             (_q(), _qd(), _p(), *_CONTACT_SET, _out("qd_plus", "velocities after (NQ)"),
+              _out("impulse", "total impulse of each contact of the set (ncontact_set; N s, >= 0)"), _WORK),
              "Newton's law (Eq. 47) with complementarity, in rounds (gac_impact_complementarity).",
              "No contact pulls or approaches its wall afterwards, the kinetic energy never grows; the law the "
              "hybrid loop applies.  Returns GAC_OK or GAC_ERR_*."),
     Function("constrained_dynamics", "int",
-             (_q(), _qd(), _u(), _p(), *_ACTIVE, _out("qdd", "accelerations (NQ)"),
-              _out("lambda", "force of each active contact along its inward normal (nactive; N)"), _WORK),
-             "Accelerations with the active contacts held at their walls (gac_constrained_dynamics).",
-             "I_f qdd = R + N^T lambda, N qdd = -Ndot qd; nactive = 0 gives forward_dynamics.  Returns GAC_OK or "
+             (_q(), _qd(), _u(), _p(), *_RESTING, _out("qdd", "accelerations (NQ)"),
+              _out("lambda", "force of each resting contact along its inward normal (nresting; N)"), _WORK),
+             "Accelerations with the resting contacts held at their walls (gac_constrained_dynamics).",
+             "I_f qdd = R + N^T lambda, N qdd = -Ndot qd; nresting = 0 gives forward_dynamics.  Returns GAC_OK or "
              "GAC_ERR_*."),
     Function("contact_info", "void",
              (Arg("c", "int", "contact index 0..NCONTACT-1"),
@@ -207,7 +209,7 @@ FUNCTIONS = (
     Function("error_message", "const char *", (Arg("code", "int", "a return code"),),
              "Message for a return code (gac_error_message)."),
     Function("default_options", "void", (Arg("opt", "{name}_options *", "out (NULL: nothing is done)"),),
-             "Default options: DOPRI5, rtol 1e-8, atol 1e-10, persistent contact on."),
+             "Default options: DOPRI5, rtol 1e-8, atol 1e-10, resting contact on."),
     Function("sim_init", "int",
              (Arg("sim", "{name}_sim *", "the simulation (not NULL)"),
               Arg("t0", "double", "start time (s)"),

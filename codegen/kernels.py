@@ -166,7 +166,7 @@ def contact_jacobian_kernel(chain: ChainSymbols) -> Kernel:
 
 def contact_bias_kernel(chain: ChainSymbols) -> Kernel:
     """J_dot qd: the accelerations of the contact Jacobian's (point, axis) rows at Theta_ddot = 0, so that
-    the point accelerations are J Theta_ddot + J_dot qd (the persistent-contact constraint of the runtime).
+    the point accelerations are J Theta_ddot + J_dot qd (the resting-contact constraint of the runtime).
     World-frame recursion: omega_k = omega_{k-1} + theta_dot_k z_k, omega_dot_k = omega_dot_{k-1} +
     theta_dot_k omega_{k-1} x z_k (z_k turns with frame k-1), and
     r_ddot_{O_{i+1}} = r_ddot_{O_i} + l_i (omega_dot_i x x_i + omega_i x (omega_i x x_i)), r_ddot_{O_1} = 0."""

@@ -4,7 +4,7 @@
  *
  * The library holds everything that does not depend on the scene: the small LDL^T solves in contact space, the impact law of
  * Eq. 44-48 with complementarity (and its LCP), the constrained dynamics of resting contacts, the
- * integrators RK4, DOPRI5 and DOP853 with dense output, event location, resting (persistent) contact and
+ * integrators RK4, DOPRI5 and DOP853 with dense output, event location, resting contact and
  * the floor on the base chart's measure.  A model (NAME.c, written by the generator, or written by hand)
  * supplies the kernels and tables through a gac_model.
  *
@@ -43,10 +43,10 @@
 
 /* ---- return codes ------------------------------------------------------------------------------ */
 #define GAC_OK                     0
-#define GAC_ERR_BAD_CONTACT       -1   /* active contact list empty, too long, repeated or out of range */
+#define GAC_ERR_BAD_CONTACT       -1   /* contact set empty, too long, repeated or out of range */
 #define GAC_ERR_SINGULAR_MASS     -2   /* I_f singular to double precision: its solve (inertia_solve) is not
                                           finite (mass, length and inertia ratios beyond 15 digits) */
-#define GAC_ERR_SINGULAR_IMPACT   -3   /* active contact rows linearly dependent */
+#define GAC_ERR_SINGULAR_IMPACT   -3   /* rows of the contact set linearly dependent */
 #define GAC_ERR_LCP               -4   /* complementarity impact has no solution / too many contacts */
 #define GAC_ERR_GIMBAL_LOCK       -5   /* theta_0 too close to the gimbal lock of the base chart: the base
                                           chart's measure chi = |det E| (|cos theta_0| for the default twists)
@@ -58,7 +58,7 @@
 #define GAC_ERR_STEP_SIZE        -12   /* adaptive step size fell below round-off */
 #define GAC_ERR_NONFINITE        -13   /* the state became NaN or infinite */
 #define GAC_ERR_TOO_MANY_CONTACTS -14  /* more approaching contacts at once than nq */
-#define GAC_ERR_SINGULAR_CONTACT -15   /* the persistent contact constraints are dependent */
+#define GAC_ERR_SINGULAR_CONTACT -15   /* the resting contact constraints are dependent */
 #define GAC_ERR_IMPACT_ACCURACY  -16   /* an impact failed its post-conditions (F >= 0, no approach, no energy
                                           gain, e = 1 energy kept) beyond round-off, or its round-off bound
                                           (record.roundoff) exceeds GAC_IMPACT_ROUNDOFF_MAX, or its
@@ -81,7 +81,7 @@
                                           (gac_check_parameters gives its index; the model's parameter_info its
                                           name and what it allows) */
 
-/* ---- what gac_sim_advance stops at (> 0) ------------------------------------------------------ */
+/* ---- how gac_sim_advance ends: the run's budgets (< 0) and status (> 0) ------------------------ */
 #define GAC_ERR_WALL_TIME        -25   /* the run used opt.max_wall_time seconds of its clock (gac_sim_set_clock)
                                           since gac_sim_init or the last gac_sim_set_clock */
 #define GAC_ERR_STOPPED          -26   /* the progress callback (gac_sim_set_progress) asked the run to stop */
@@ -94,11 +94,11 @@
                                           the energy by more than opt.energy_tol of the energy scale: the step left
                                           the constraints too far (tighten rtol) */
 #define GAC_SIM_END      1    /* reached t_end */
-#define GAC_SIM_IMPACT   2    /* stopped at an impact, already applied; see the record (which may also list
-                                 contacts made persistent or released by the impact) */
-#define GAC_SIM_CONTACT  3    /* stopped where the persistent set changed without an impact: a contact
-                                 released (its force reached 0), or the activations of gac_sim_init;
-                                 record.t, activated[], released[] are filled, ncontact = 0 */
+#define GAC_SIM_IMPACT   2    /* ended at an impact, already applied; see the record (which may also list
+                                 contacts come to rest or released by the impact) */
+#define GAC_SIM_CONTACT  3    /* ended where the resting set changed without an impact: a contact
+                                 released (its force reached 0), or the contacts gac_sim_init puts at rest;
+                                 record.t, landed[], released[] are filled, ncontact = 0 */
 
 /* ---- integrators (gac_options.method) -------------------------------------------------------- */
 #define GAC_METHOD_RK4     0   /* classical fixed-step RK4 (opt.dt), cubic Hermite dense output */
@@ -306,21 +306,21 @@ void gac_contact_jacobian(const gac_model *m, const double *q, const double *p, 
 #define GAC_AT_LEAST_1(n) ((n) > 0 ? (n) : 1)
 
 /* Doubles of the work array of gac_impact, gac_impact_complementarity and gac_constrained_dynamics:
- * 2 nq^2 + nq + 3 npoint + max(njrow, 1), laid out as Y (nq*nq: row a = I_f^-1 n_a of active contact a) |
- * A (nq*nq: N I_f^-1 N^T, nactive x nactive) | g (nq) | vel (3 npoint) | f (max(njrow, 1)); a model with
+ * 2 nq^2 + nq + 3 npoint + max(njrow, 1), laid out as Y (nq*nq: row a = I_f^-1 n_a of contact a of the set) |
+ * A (nq*nq: N I_f^-1 N^T, ncontact_set x ncontact_set) | g (nq) | vel (3 npoint) | f (max(njrow, 1)); a model with
  * friction needs 2 nq^2 more: Z (nq*nq) | B (nq*nq). */
 #define GAC_IMPACT_NWORK(nq, npoint, njrow, friction) \
     (((friction) ? 4L : 2L) * (nq) * (nq) + (nq) + 3L * (npoint) + GAC_AT_LEAST_1(njrow))
 /* Doubles and ints of one simulation (gac_sim_init): dwork = x (nx = 2 nq) | p (nparam) | u (nu) | private;
- * iwork = active (nq) | private.  The doubles: x, p, u and the controller's u, f, 16 stages, x1, xs, 8 dense-output
- * rows (28 nx in all), 7 per-contact arrays, the impact work and an nq x nq scratch; the ints: active, then
- * is_active and n_shrink per contact. */
+ * iwork = resting (nq) | private.  The doubles: x, p, u and the controller's u, f, 16 stages, x1, xs, 8 dense-output
+ * rows (28 nx in all), 7 per-contact arrays, the impact work and an nq x nq scratch; the ints: resting, then
+ * is_resting and n_shrink per contact. */
 #define GAC_SIM_NDOUBLE(nq, nparam, nu, npoint, ncontact, njrow, friction) \
     (28L * 2 * (nq) + (nparam) + 2L * (nu) + 7L * GAC_AT_LEAST_1(ncontact) \
      + GAC_IMPACT_NWORK(nq, npoint, njrow, friction) + (long)(nq) * (nq))
 #define GAC_SIM_NINT(nq, ncontact) ((long)(nq) + 2L * GAC_AT_LEAST_1(ncontact))
 /* Doubles and ints of one impact record (gac_record_bind): dwork = impulse | q | qd_before | qd_after
- * (nq each), iwork = contact | activated | released (nq each). */
+ * (nq each), iwork = contact | landed | released (nq each). */
 #define GAC_RECORD_NDOUBLE(nq) (4L * (nq))
 #define GAC_RECORD_NINT(nq) (3L * (nq))
 
@@ -333,15 +333,15 @@ long gac_record_nint(const gac_model *m);
 
 /* ---- kernels of the impact phase (no simulation state) ----------------------------------------- */
 
-/* Impact law, Eq. 44-48: all `nactive` contacts in `active` (indices 0..ncontact-1) together, Newton
+/* Impact law, Eq. 44-48: all `ncontact_set` contacts in `contact_set` (indices 0..ncontact-1) together, Newton
  * restitution e of each contact's wall, configuration unchanged.  Solved as
  *   (J I_f^-1 J^T) F = -(1 + e) J qd,   qd_plus = qd + I_f^-1 J^T F,
  * which is Eq. 48 with the velocity unknowns eliminated.  J rows are signed along the inward normal, so
- * impulse[k] > 0 (N s) pushes contact active[k] away from its wall (a negative value pulls).
- * q, qd, p in; qd_plus (nq) and impulse (nactive) out; work: gac_impact_nwork(m) doubles.
+ * impulse[k] > 0 (N s) pushes contact contact_set[k] away from its wall (a negative value pulls).
+ * q, qd, p in; qd_plus (nq) and impulse (ncontact_set) out; work: gac_impact_nwork(m) doubles.
  * Returns GAC_OK or GAC_ERR_BAD_CONTACT, _SINGULAR_MASS, _SINGULAR_IMPACT, _GIMBAL_LOCK. */
 int gac_impact(const gac_model *m, const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd,
-               const double *GAC_RESTRICT p, int nactive, const int *GAC_RESTRICT active,
+               const double *GAC_RESTRICT p, int ncontact_set, const int *GAC_RESTRICT contact_set,
                double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse, double *GAC_RESTRICT work);
 
 /* The impact law with complementarity, for contacts at their walls that may approach, rest or separate:
@@ -352,27 +352,27 @@ int gac_impact(const gac_model *m, const double *GAC_RESTRICT q, const double *G
  * until none approaches; a separating contact takes no impulse unless the others drive it into its wall,
  * and is then struck by its own law in the next round.  When every approaching contact pushes, one round
  * is Eq. 47 exactly (same result as gac_impact).  After GAC_MAX_ROUNDS rounds a plastic round over all
- * contacts ends the sequence.  impulse[k]: total impulse of contact active[k] (N s, >= 0).  Same arguments
+ * contacts ends the sequence.  impulse[k]: total impulse of contact contact_set[k] (N s, >= 0).  Same arguments
  * as gac_impact; at most min(nq, GAC_LCP_CAP) contacts take part in one round (solved exactly by
  * enumerating the pushing sets; more: GAC_ERR_LCP). */
 int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd,
-                               const double *GAC_RESTRICT p, int nactive, const int *GAC_RESTRICT active,
+                               const double *GAC_RESTRICT p, int ncontact_set, const int *GAC_RESTRICT contact_set,
                                double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse,
                                double *GAC_RESTRICT work);
 
-/* Generalised accelerations with the contacts active[0..nactive-1] held as bilateral constraints:
+/* Generalised accelerations with the resting contacts resting[0..nresting-1] held as bilateral constraints:
  * I_f qdd = R + N^T lambda, N qdd = -Ndot qd (N: Jacobian rows signed along the inward normal), solved as
  * qdd = qdd_free + I_f^-1 N^T lambda with (N I_f^-1 N^T) lambda = -(N qdd_free + Ndot qd).  On a wall with
  * Coulomb friction (has_friction) the point also takes -c_f lambda v_t / max(|v_t|, friction_velocity) along the
  * wall (v_t its velocity there): the system for lambda is then N I_f^-1 (N^T + c_f J_t^T (-phi)) lambda = ...,
  * not symmetric, and GAC_ERR_FRICTION where it is not a P-matrix (the Painleve paradox: B + B^T positive
  * definite suffices; otherwise, for up to 10 contacts, every principal minor is checked).
- * qdd (nq, rad/s^2 or m/s^2 by coordinate) and lambda (nactive) out; lambda[k] (N) is the force of contact
- * active[k] along its inward normal (> 0 pushes); a contact whose row depends on the earlier ones' (held
- * by them already) gets lambda = 0.  work: gac_impact_nwork(m) doubles.  nactive = 0 gives
+ * qdd (nq, rad/s^2 or m/s^2 by coordinate) and lambda (nresting) out; lambda[k] (N) is the force of contact
+ * resting[k] along its inward normal (> 0 pushes); a contact whose row depends on the earlier ones' (held
+ * by them already) gets lambda = 0.  work: gac_impact_nwork(m) doubles.  nresting = 0 gives
  * forward_dynamics.  u: the inputs (nu; may be NULL when nu = 0).  Returns GAC_OK or an error (< 0). */
 int gac_constrained_dynamics(const gac_model *m, const double *q, const double *qd, const double *u,
-                             const double *p, int nactive, const int *active, double *qdd, double *lambda,
+                             const double *p, int nresting, const int *resting, double *qdd, double *lambda,
                              double *work);
 
 /* Contact c's point index (1-based, O_1 = 1), wall axis (0..2 for X1..X3) and inward normal sign (+1/-1);
@@ -427,7 +427,7 @@ int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const do
  * within the integration error, is a graze and no impact.
  *
  * Impacts.  Every contact within contact_tol of its wall, every approaching one within the simultaneity
- * window (100 x the adaptive method's position tolerance, or contact_tol if larger) and every persistent
+ * window (100 x the adaptive method's position tolerance, or contact_tol if larger) and every resting
  * one take part.  The law (gac_impact_complementarity) is Newton's law, Eq. 47, with complementarity, in
  * rounds until no contact approaches: F >= 0, no energy gain, e = 1 keeps the energy exactly; a contact
  * that separates takes an impulse only if the others drive it into its wall.  Its post-conditions are
@@ -440,35 +440,35 @@ int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const do
  * (the bounces shrink geometrically).  At an impact on a wall with e < 1, a contact whose bounce would rise
  * less than opt.rest_height (v+^2 <= 2 a rest_height, a = its normal acceleration towards the wall), or
  * that has had opt.zeno_impacts impacts at shrinking intervals, LANDS: it is struck with e = 0 (a plastic
- * impact, still F >= 0), and if it ends at rest it becomes PERSISTENT, held at the gap it landed at (no
+ * impact, still F >= 0), and if it ends at rest it becomes a RESTING contact, held at the gap it landed at (no
  * position moves at an impact), a bilateral, frictionless constraint of the flight equations,
- *     I_f qdd = R + N_a^T lambda,    N_a qdd = -Ndot_a qd     (N_a: signed Jacobian rows of the active set),
+ *     I_f qdd = R + N_a^T lambda,    N_a qdd = -Ndot_a qd     (N_a: signed Jacobian rows of the resting set),
  * with positions and velocities projected back onto the constraint (gaps to their held values, normal
  * velocity = 0, mass metric; no free contact pushed deeper into its wall) after every accepted step.
  * record.energy_rest is the kinetic energy the landings took.  On a wall with e = 1 a contact lands only
- * if that energy is round-off.  A persistent contact is released when its force lambda (along the inward
+ * if that energy is round-off.  A resting contact is released when its force lambda (along the inward
  * normal) falls through 0: that crossing is located on the dense output like a wall crossing.
  * Only forces lambda > 0 are kept (an acceleration-level complementarity solve when the set changes), and
  * only contacts with independent rows (a dependent one is held by the others; one that becomes dependent
- * in flight gets lambda = 0 and is released).  A persistent contact takes part in another impact with its
+ * in flight gets lambda = 0 and is released).  A resting contact takes part in another impact with its
  * own e; one the impact lifts by less than rest_height stays, one lifted higher is released.
- * gac_sim_init also makes persistent the contacts that start at their wall (gap <= contact_tol) with a normal
+ * gac_sim_init also puts at rest the contacts that start at their wall (gap <= contact_tol) with a normal
  * velocity under the same bound and a positive force (a chain started at rest on the floor).
- * Every activation and release is reported in the record (activated[], released[]).
+ * Every landing and release is reported in the record (landed[], released[]).
  *
  * Inputs.  The inputs u (nu) are held over each gac_sim_advance call (a zero-order hold, the convention of
  * FMI co-simulation): change them between calls with gac_sim_set_input, so that a change falls on a step
  * boundary.  Or give a controller (gac_sim_set_controller): the loop then asks it for u at every stage.
  * The energy the inputs put in and the dampers take out is integrated over every step on the dense output
- * (5-point Gauss-Legendre on the step's interpolant): sim.work_input, sim.work_damping; with the impacts'
- * losses they close the energy balance E(t) - E(0) = work_input - work_damping - (impact losses).
+ * (5-point Gauss-Legendre on the step's interpolant): sim.work_input, sim.loss_damping; with the impacts'
+ * losses they close the energy balance E(t) - E(0) = work_input - loss_damping - (impact losses).
  *
  * Energy balance.  The loop keeps the balance's residual (J)
- *     sim.energy_residual = E - E(0) - work_input + work_damping + work_friction + energy_impacts,
+ *     sim.energy_residual = E - E(0) - work_input + loss_damping + loss_friction + loss_impacts,
  * E = T + V at the current state, and checks it at every step end (after the projection onto the resting
  * contacts) and after every impact: beyond energy_tol x sim.energy_scale (the largest of M g L, the model's
- * weight_scale, and T + |V| at a step end so far, plus |work_input| + work_damping + work_friction +
- * energy_impacts), plus what the impacts' laws may change by round-off (sim.energy_roundoff, the sum of each
+ * weight_scale, and T + |V| at a step end so far, plus |work_input| + loss_damping + loss_friction +
+ * loss_impacts), plus what the impacts' laws may change by round-off (sim.energy_roundoff, the sum of each
  * record's roundoff x T), the run stops with GAC_ERR_DRIFT at that state.  opt.energy_tol < 0 (default) is
  * min(0.1, max(1e-8, 1e4 rtol)) for the adaptive methods, a budget of 1e4 steps' worth of tolerance, and off for RK4; 0 turns the check off.  What a projection onto
  * the resting contacts changes in E is in the residual (it should keep the energy) and summed in
@@ -494,15 +494,15 @@ int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const do
  * GAC_ERR_DRIFT and GAC_ERR_PROJECTION (the energy balance, above).
  */
 
-/* An input schedule: values u_k (nu each) at times t_k (n >= 1, strictly increasing), held (linear = 0: u(t) =
- * u_k for t_k <= t < t_k+1) or interpolated linearly between the times (linear = 1); u_0 before t_0 and
+/* An input schedule: values u_k (nu each) at breakpoints t_k (n >= 1, strictly increasing), held (linear = 0:
+ * u(t) = u_k for t_k <= t < t_k+1) or interpolated linearly between the breakpoints (linear = 1); u_0 before t_0 and
  * u_(n-1) after t_(n-1).  The caller owns both arrays. */
 typedef struct {
-    int n;                /* number of times */
-    int nu;               /* inputs per time */
-    const double *t;      /* [n] times (s) */
+    int n;                /* number of breakpoints */
+    int nu;               /* inputs per breakpoint */
+    const double *t;      /* [n] breakpoints (s) */
     const double *u;      /* [n * nu] values, row k at u + k nu */
-    int linear;           /* 0: held, 1: linear between the times */
+    int linear;           /* 0: held, 1: linear between the breakpoints */
 } gac_schedule;
 
 typedef struct {
@@ -516,9 +516,9 @@ typedef struct {
     double event_tol;      /* time tolerance of event location on the interpolant (default 1e-13 s) */
     double contact_tol;    /* approaching contacts within this gap (m) join a simultaneous impact (1e-6) */
     long max_steps;        /* steps allowed per advance call, 0 = unbounded (default 10^7) */
-    double rest_height;    /* m: a bounce rising less than this ends in persistent contact; < 0 (default):
+    double rest_height;    /* m: a bounce rising less than this ends in resting contact; < 0 (default):
                               10 contact_tol; 0: never by this rule */
-    int zeno_impacts;      /* persistent after this many impacts of one contact at shrinking intervals
+    int zeno_impacts;      /* resting after this many impacts of one contact at shrinking intervals
                               (default 20; 0: never by this rule) */
     double max_wall_time;  /* s of the run's clock (gac_sim_set_clock) allowed since gac_sim_init or the last
                               gac_sim_set_clock, looked at every GAC_LOOK_STEPS steps and at the start of every
@@ -562,27 +562,27 @@ typedef struct {
                                     cond(I_f) and with velocities along its soft directions) */
     double approach_before;      /* largest |normal velocity| of any contact before (m/s) */
     double approach_after;       /* fastest approach of a contact within contact_tol after (m/s) */
-    int nactivated, *activated;  /* contacts made persistent at this event */
-    int nreleased, *released;    /* persistent contacts released at this event */
+    int nlanded, *landed;        /* contacts come to rest at this event */
+    int nreleased, *released;    /* resting contacts released at this event */
 } gac_impact_record;
 
-/* The state of one simulation.  Read t, x, the counters and the persistent set; write nothing but
- * opt.max_steps between gac_sim_advance calls.  x and p point into dwork, active into iwork. */
+/* The state of one simulation.  Read t, x, the counters and the resting set; write nothing but
+ * opt.max_steps between gac_sim_advance calls.  x and p point into dwork, resting into iwork. */
 typedef struct {
     gac_options opt;
     double t;                    /* current time (s) */
     double *x;                   /* current state [q, qd] (nx) */
     double *p;                   /* the parameters (nparam, a copy) */
     long n_steps, n_rejected, n_rhs, n_impacts;
-    int nactive;                 /* persistent contacts: their indices active[0..nactive-1] */
-    int *active;
-    long n_activations, n_releases;
+    int nresting;                /* resting contacts: their indices resting[0..nresting-1] */
+    int *resting;
+    long n_landings, n_releases;
     int err_index;               /* state component (0..nx-1) that dominated the error estimate of the last
                                     adaptive step: what limits the step size */
     double *u;                   /* the inputs held over the next advance call (nu; gac_sim_set_input) */
     double work_input;           /* J: work of the inputs since gac_sim_init, int u . qd_actuated dt */
-    double work_damping;         /* J: energy the joint dampers took since gac_sim_init, int C theta_dot^2 dt */
-    double work_friction;        /* J: energy sliding friction took since gac_sim_init, int c_f lambda |v_t| ... dt */
+    double loss_damping;         /* J: energy the joint dampers took since gac_sim_init, int C theta_dot^2 dt */
+    double loss_friction;        /* J: energy sliding friction took since gac_sim_init, int c_f lambda |v_t| ... dt */
     double wall_time;            /* s of the run's clock used, as of the last look (GAC_LOOK_STEPS) */
     double rk4_h_rho;            /* RK4: h rho of the last step, rho the rate of the chain's fastest mode seen in it
                                     (the stability rule: 3 steps in a row above 2.5, or one above 10, stop the run
@@ -592,14 +592,14 @@ typedef struct {
                                     stiff (time constant about friction_velocity / (c_f g)) and may limit the step */
     double t_slow_sliding;       /* s: the time those steps covered */
     double energy_initial;       /* J: T + V at gac_sim_init */
-    double energy_impacts;       /* J: energy the impacts took since gac_sim_init, sum of energy_before - energy_after */
+    double loss_impacts;         /* J: energy the impacts took since gac_sim_init, sum of energy_before - energy_after */
     double energy_roundoff;      /* J: what the impacts' energies are known to, sum of roundoff x T before each */
     double energy_projection;    /* J: energy change of the projections onto the resting contacts since gac_sim_init
                                     (part of energy_residual: a projection should keep the energy) */
     double energy_residual;      /* J: the energy balance at the current state, E - energy_initial - work_input
-                                    + work_damping + work_friction + energy_impacts */
+                                    + loss_damping + loss_friction + loss_impacts */
     double energy_scale;         /* J: what energy_residual is measured on: the largest of M g L (weight_scale) and
-                                    T + |V| at a step end so far, plus |work_input| + work_damping + work_friction + energy_impacts */
+                                    T + |V| at a step end so far, plus |work_input| + loss_damping + loss_friction + loss_impacts */
     int chart;                   /* the base chart integrated now: 0 = A (the model given to gac_sim_init), 1 = B
                                     (its chart_b).  x is in this chart's coordinates; gac_sim_state, the samples
                                     and the impact records are always in chart A's */
@@ -631,10 +631,10 @@ typedef struct {
     double *sub;                 /* nq*nq doubles: sub-problems of the resting contacts */
     double rest_height;          /* resolved opt.rest_height */
     double lever;                /* max(1 m, the chain's length): |dO/dq| bound */
-    int *is_active, pending, fail, fail_seen, n_unstable;
+    int *is_resting, pending, fail, fail_seen, n_unstable;
     int *n_shrink;               /* impacts of each contact at shrinking intervals */
     double *t_last, *dt_last;
-    double *gap_held;            /* gap (m) a persistent contact is held at: its gap when it landed (within
+    double *gap_held;            /* gap (m) a resting contact is held at: its gap when it landed (within
                                     contact_tol, or the integration's position error below its wall) */
     double energy_x;             /* J: T + V at x (kept by gac_energy_check) */
     double energy_x1[2];         /* J: T and V at s->x1 (a step's end, or the state an impact left), if
@@ -643,7 +643,7 @@ typedef struct {
     double energy_tol;           /* resolved opt.energy_tol (0: off) */
 } gac_sim;
 
-/* Default options (DOPRI5, rtol 1e-8, atol 1e-10, persistent contact on).  opt NULL: nothing is done. */
+/* Default options (DOPRI5, rtol 1e-8, atol 1e-10, resting contact on).  opt NULL: nothing is done. */
 void gac_default_options(gac_options *opt);
 
 /* GAC_OK if every option is in its range, else GAC_ERR_BAD_OPTION with *field (if field is not NULL) a static
@@ -653,7 +653,7 @@ int gac_check_options(const gac_options *opt, const char **field);
 
 /* Start a simulation of model m at time t0 from (q, qd) with parameters p (copied into dwork), inputs 0 and
  * no controller.  Contacts
- * resting at their wall become persistent (reported by the first gac_sim_advance, GAC_SIM_CONTACT).
+ * resting at their wall come to rest (reported by the first gac_sim_advance, GAC_SIM_CONTACT).
  * dwork: gac_sim_ndouble(m) doubles, iwork: gac_sim_nint(m) ints, owned by the caller for the life of sim.
  * Pointers: sim, m, dwork, iwork, q and qd must not be NULL (GAC_ERR_NULL_ARGUMENT); opt NULL means the
  * default options (gac_default_options), p NULL the model's default_parameters.
@@ -690,18 +690,18 @@ int gac_sim_set_clock(gac_sim *sim, gac_clock clock, void *user);
 int gac_sim_set_progress(gac_sim *sim, gac_progress progress, void *user);
 
 /* A gac_controller giving the schedule's value at t (user: a const gac_schedule *).  With gac_sim_set_controller
- * the loop does not know the schedule's times; gac_sim_set_schedule is the exact way to drive a run by it. */
+ * the loop does not know the schedule's breakpoints; gac_sim_set_schedule is the exact way to drive a run by it. */
 void gac_schedule_input(double t, const double *q, const double *qd, double *u, void *schedule);
 
 /* Drive the run by the schedule s (checked by gac_schedule_check; the caller keeps it alive) from now on: every
- * gac_sim_advance ends a step at each of the schedule's times, so that a jump (held) or a kink (linear) falls on a
+ * gac_sim_advance ends a step at each of the schedule's breakpoints, so that a jump (held) or a kink (linear) falls on a
  * step boundary, and starts the next step from a fresh derivative with the resting contacts re-checked; a held
  * schedule's value is held over each interval [t_k, t_k+1) (gac_sim_set_input at t_k), a linear one is evaluated
  * at every stage.  s NULL: no schedule (the inputs stay as they are).  A later gac_sim_set_controller replaces it.
  * Returns GAC_OK, GAC_ERR_NULL_ARGUMENT (sim NULL), or the error of gac_schedule_check (nothing changed). */
 int gac_sim_set_schedule(gac_sim *sim, const gac_schedule *s);
 
-/* GAC_OK if the schedule is usable: pointers set, n >= 1, times finite and strictly increasing
+/* GAC_OK if the schedule is usable: pointers set, n >= 1, breakpoints finite and strictly increasing
  * (GAC_ERR_BAD_OPTION), values finite (GAC_ERR_BAD_INPUT). */
 int gac_schedule_check(const gac_schedule *s);
 
@@ -718,7 +718,7 @@ void gac_record_bind(gac_impact_record *record, const gac_model *m, double *dwor
 void gac_sim_state(const gac_sim *sim, double *t, double *q, double *qd);
 
 /* Integrate until t_end, the first impact (which is located, resolved and applied; record filled) or the
- * first release of a persistent contact.
+ * first release of a resting contact.
  * Samples: for each t_eval[i] (ascending) with i >= *i_eval that is passed, x_eval[i*nx ..] receives the
  * state [q, qd] (pre-impact at an impact time) and *i_eval advances.
  * Pointers: sim and record (bound) must not be NULL, nor t_eval, i_eval and x_eval (n_eval doubles,
@@ -733,8 +733,8 @@ int gac_sim_advance(gac_sim *sim, double t_end, const double *t_eval, int n_eval
 typedef struct {
     long n_impacts;              /* impacts applied */
     double t_first_impact;       /* s; -1 when there was none */
-    double energy_impact_loss;   /* J: sum of (energy_before - energy_after) over the impacts */
-    long n_contact_events;       /* GAC_SIM_CONTACT stops (resting contacts made or released) */
+    double loss_impacts;         /* J: sum of (energy_before - energy_after) over the impacts */
+    long n_contact_events;       /* GAC_SIM_CONTACT ends (contacts come to rest or released) */
 } gac_run_summary;
 
 /* Run to t_end in one call: gac_sim_advance until GAC_SIM_END or an error (GAC_ERR_MAX_IMPACTS once

@@ -29,7 +29,7 @@ void gac_energy_start(gac_sim *s)
         const double weight = s->model->weight_scale(s->p);
         if (weight > s->energy_scale) s->energy_scale = weight;
     }
-    s->energy_impacts = s->energy_projection = s->energy_residual = s->energy_roundoff = 0.0;
+    s->loss_impacts = s->energy_projection = s->energy_residual = s->energy_roundoff = 0.0;
     s->energy_x1_valid = 0;
     s->energy_tol = gac_energy_tolerance(&s->opt);
 }
@@ -47,9 +47,9 @@ int gac_energy_check(gac_sim *s, const double *E_known)
     }
     s->energy_x = E[0] + E[1];
     if (E[0] + fabs(E[1]) > s->energy_scale) s->energy_scale = E[0] + fabs(E[1]);
-    s->energy_residual = s->energy_x - s->energy_initial - s->work_input + s->work_damping + s->work_friction
-                         + s->energy_impacts;
-    scale = s->energy_scale + fabs(s->work_input) + s->work_damping + s->work_friction + fabs(s->energy_impacts);
+    s->energy_residual = s->energy_x - s->energy_initial - s->work_input + s->loss_damping + s->loss_friction
+                         + s->loss_impacts;
+    scale = s->energy_scale + fabs(s->work_input) + s->loss_damping + s->loss_friction + fabs(s->loss_impacts);
     /* the integration's share (energy_tol of the scale) and what the impacts' laws may change by round-off */
     if (s->energy_tol > 0.0 && fabs(s->energy_residual) > s->energy_tol * scale + s->energy_roundoff)
         return GAC_ERR_DRIFT;
@@ -61,8 +61,8 @@ int gac_energy_check(gac_sim *s, const double *E_known)
 int gac_energy_projected(gac_sim *s, double E_before, const double *x)
 {
     const double change = gac_total_energy(s->model, x, s->p) - E_before;
-    const double scale = s->energy_scale + fabs(s->work_input) + s->work_damping + s->work_friction
-                         + fabs(s->energy_impacts);
+    const double scale = s->energy_scale + fabs(s->work_input) + s->loss_damping + s->loss_friction
+                         + fabs(s->loss_impacts);
     s->energy_projection += change;
     if (s->energy_tol > 0.0 && fabs(change) > 0.1 * s->energy_tol * scale) return GAC_ERR_PROJECTION;
     return GAC_OK;
@@ -80,7 +80,7 @@ double gac_step_energy_error(gac_sim *s)
     const gac_model *md = s->model;
     const double *E = s->energy_x1;
     double change;
-    if (md->power != 0 || s->nactive > 0 || !(s->energy_scale > 0.0)) return 0.0;
+    if (md->power != 0 || s->nresting > 0 || !(s->energy_scale > 0.0)) return 0.0;
     if (!s->energy_x1_valid) {                           /* (not already from the step's end, gac_f_end) */
         md->energy(s->x1, s->x1 + md->nq, s->p, s->energy_x1);
         s->energy_x1_valid = 1;                          /* the step end's energies, for gac_energy_check */
@@ -92,8 +92,8 @@ double gac_step_energy_error(gac_sim *s)
 }
 
 /* Add the work of the inputs, the dissipation of the dampers and (with resting contacts on walls with friction)
- * that of sliding friction over [s->t, t_b] of the current step to s->work_input, s->work_damping and
- * s->work_friction: 5-point Gauss-Legendre (exact for polynomials of degree 9) on the step's dense output. */
+ * that of sliding friction over [s->t, t_b] of the current step to s->work_input, s->loss_damping and
+ * s->loss_friction: 5-point Gauss-Legendre (exact for polynomials of degree 9) on the step's dense output. */
 void gac_add_work(gac_sim *s, double t_b)
 {
     static const double node[5] = {0.04691007703066800, 0.23076534494715845, 0.5, 0.76923465505284155,
@@ -102,7 +102,7 @@ void gac_add_work(gac_sim *s, double t_b)
                                      0.23931433524968324, 0.11846344252809454};
     const gac_model *md = s->model;
     const double h = t_b - s->t;
-    const int friction = s->nactive > 0 && gac_has_friction(md);
+    const int friction = s->nresting > 0 && gac_has_friction(md);
     double x[md->nx], P[2], w_in = 0.0, w_damp = 0.0, w_friction = 0.0;
     int j;
     if ((md->power == 0 && !friction) || !(h > 0.0)) return;
@@ -116,17 +116,17 @@ void gac_add_work(gac_sim *s, double t_b)
         }
         if (friction) {
             double qdd[md->nq], lambda[md->nq], D = 0.0;
-            if (gac_constrained_dynamics_friction(md, x, x + md->nq, gac_input(s, t, x), s->p, s->nactive, s->active,
+            if (gac_constrained_dynamics_friction(md, x, x + md->nq, gac_input(s, t, x), s->p, s->nresting, s->resting,
                                                   qdd, lambda, s->work, &D) == GAC_OK)
                 w_friction += weight[j] * D;
         }
     }
     s->work_input += h * w_in;
-    s->work_damping += h * w_damp;
-    s->work_friction += h * w_friction;
+    s->loss_damping += h * w_damp;
+    s->loss_friction += h * w_friction;
 }
 
-/* 1 if at x a persistent contact on a wall with friction slides slower than GAC_SLOW_SLIDING friction_velocity
+/* 1 if at x a resting contact on a wall with friction slides slower than GAC_SLOW_SLIDING friction_velocity
  * (its velocity along the wall, as in gac_constrained_dynamics_friction): the regularised friction force is then
  * (nearly) viscous, -c_f lambda v_t / friction_velocity, a stiff term that bounds an explicit method's step. */
 int gac_slow_sliding(const gac_sim *s, const double *x)
@@ -135,10 +135,10 @@ int gac_slow_sliding(const gac_sim *s, const double *x)
     const double slow = GAC_SLOW_SLIDING * md->friction_velocity;
     double vq[3 * GAC_AT_LEAST_1(md->npoint)];
     int a, j;
-    if (s->nactive == 0 || !gac_has_friction(md)) return 0;
+    if (s->nresting == 0 || !gac_has_friction(md)) return 0;
     md->contact_velocities(x, x + md->nq, s->p, vq);
-    for (a = 0; a < s->nactive; ++a) {
-        const gac_contact *k = &md->contacts[s->active[a]];
+    for (a = 0; a < s->nresting; ++a) {
+        const gac_contact *k = &md->contacts[s->resting[a]];
         const double cf = k->friction_index >= 0 ? s->p[k->friction_index] : k->friction_value;
         double speed2 = 0.0;
         int axis = 0;

@@ -149,7 +149,7 @@ static int gac_dip(gac_sim *s, int c, double t_a, double g_a, double v_a, double
     return 0;
 }
 
-/* The contacts that may dip through their wall inside the step [s->t, t1] (not persistent, gap at the
+/* The contacts that may dip through their wall inside the step [s->t, t1] (not resting, gap at the
  * step start below speed x the step, speed = 2 (|v(t0)| + |v(t1)|) from their normal velocities at the
  * step ends): cand[0..return-1], their speeds, and the normal velocities at the step start (v0).
  * Cheap when the chain is far from every wall: nothing is evaluated when every gap at the step start
@@ -163,7 +163,7 @@ static int gac_dip_candidates(gac_sim *s, double t1, int *cand, double *speed, d
     double bound = 0.0;
     for (i = 0; i < md->nq; ++i) bound += fabs(s->x[md->nq + i]) + fabs(s->x1[md->nq + i]);
     bound *= 2.0 * s->lever * (t1 - s->t);
-    for (c = 0; c < md->ncontact && !nearby; ++c) nearby = !s->is_active[c] && s->ev[c] < bound;
+    for (c = 0; c < md->ncontact && !nearby; ++c) nearby = !s->is_resting[c] && s->ev[c] < bound;
     if (!nearby) {
         s->vn_valid = 0;
         return 0;
@@ -174,7 +174,7 @@ static int gac_dip_candidates(gac_sim *s, double t1, int *cand, double *speed, d
     s->vn_valid = 1;                             /* (gac_sim_advance clears it if x becomes anything else) */
     for (c = 0; c < md->ncontact; ++c) {
         speed[c] = 2.0 * (fabs(v0[c]) + fabs(s->vn[c]));
-        if (!s->is_active[c] && s->ev[c] < speed[c] * (t1 - s->t)) cand[n++] = c;
+        if (!s->is_resting[c] && s->ev[c] < speed[c] * (t1 - s->t)) cand[n++] = c;
     }
     return n;
 }
@@ -190,7 +190,7 @@ static int gac_lost_contact(gac_sim *s, double t, const double *g)
     double depth = -1.0;
     int c;
     for (c = 0; c < md->ncontact; ++c) {
-        if (!(g[c] < shallow) || s->is_active[c]) continue;      /* most contacts: inside, one comparison */
+        if (!(g[c] < shallow) || s->is_resting[c]) continue;      /* most contacts: inside, one comparison */
         if (depth < 0.0) {
             gac_dense(s, t, s->xs);
             depth = s->opt.contact_tol + gac_simultaneity_window(s, s->xs);
@@ -204,7 +204,7 @@ static int gac_lost_contact(gac_sim *s, double t, const double *g)
  * included), so that a dip through a wall and back inside one step is still seen.  Events: a wall
  * crossing (gap from > 0 to <= 0 between samples, or below 0 at a gap minimum between two samples where
  * it is > 0: a dip shorter than the sample spacing, see gac_dip); a contact that left its wall from gap <= 0
- * and is back at gap <= 0, approaching (a small bounce); a persistent contact's force from > 0 to <= 0.
+ * and is back at gap <= 0, approaching (a small bounce); a resting contact's force from > 0 to <= 0.
  * Dips are looked for only for the step's candidates (gac_dip_candidates) in intervals whose gaps are both
  * below reach = speed x the interval (a contact farther from its wall cannot dip to it unless its normal
  * speed inside the step exceeds twice the sum of those at the step ends); only there are the normal
@@ -230,11 +230,11 @@ int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
         for (c = 0; c < md->ncontact; ++c) {           /* crossings and returns at the samples */
             double tc;
             if (gj[c] > 0.0) continue;
-            if (gj[c] < -s->opt.contact_tol && !s->is_active[c]) deep = 1;   /* maybe beyond its wall */
+            if (gj[c] < -s->opt.contact_tol && !s->is_resting[c]) deep = 1;   /* maybe beyond its wall */
             if (s->eprev[c] > 0.0) {
                 tc = gac_locate(s, 0, c, t_prev, s->eprev[c], tj, gj[c]);
             } else {
-                if (s->is_active[c]) continue;
+                if (s->is_resting[c]) continue;
                 if (!have_v) {
                     gac_dense(s, tj, s->xs);
                     gac_normal_velocities(md, s->xs, s->p, vj);

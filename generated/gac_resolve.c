@@ -72,25 +72,25 @@ int gac_impact_inaccurate(const gac_sim *s, double b)
 
 /* Resolve the impact at state s->xs (time t).
  * Who takes part: every contact within contact_tol of its wall (c_event whatever its gap), every
- * approaching contact within the simultaneity window, and every persistent contact, approaching ones
+ * approaching contact within the simultaneity window, and every resting contact, approaching ones
  * first (at most nq).  It is an impact when a contact that is not
- * persistent approaches its wall there faster than gac_v_round (or c_event came back to it at its apex) and
- * either an impulse is applied or the persistent set changes; else a graze (returns 0).
+ * resting approaches its wall there faster than gac_v_round (or c_event came back to it at its apex) and
+ * either an impulse is applied or the resting set changes; else a graze (returns 0).
  * The law: gac_impact_rounds (Newton's law, Eq. 47, with complementarity, in rounds until no contact
  * approaches; a contact that rests or separates takes an impulse only when the others drive it into its
  * wall).
  * Resting contact: a contact that approaches a wall with e < 1 and whose bounce would rise less than h
- * ((e v-)^2 <= 2 a h, a = its normal acceleration towards the wall with the persistent contacts held;
+ * ((e v-)^2 <= 2 a h, a = its normal acceleration towards the wall with the resting contacts held;
  * h = rest_height, but never below the resolution of the positions, graze_depth + 16 eps l, unless both
  * rules are off), or that has had zeno_impacts impacts at shrinking intervals, lands: it is struck with
  * e = 0 (a plastic impact: F >= 0, no pull); r->energy_rest is the kinetic energy the landings take (the
  * law with every contact's own e minus the law with the landings plastic).  On a wall with e = 1 a
  * contact lands only if it arrives at rest: v-^2 <= 2 a h and its landing takes no more than the
- * round-off bound of the energy, so that an elastic chain keeps its energy.  Persistent contacts take part
+ * round-off bound of the energy, so that an elastic chain keeps its energy.  Resting contacts take part
  * with their own e (at rest it does not matter; one driven into its wall in a later round bounces).
- * Landing and persistent contacts that end at rest (normal velocity below round-off) form the new
- * persistent set (independent rows only, held at their landing gap, only those that push kept), and so
- * does a persistent contact of a wall with e < 1 that the impact lifts by less than h (a bounce the rest
+ * Landing and resting contacts that end at rest (normal velocity below round-off) form the new
+ * resting set (independent rows only, held at their landing gap, only those that push kept), and so
+ * does a resting contact of a wall with e < 1 that the impact lifts by less than h (a bounce the rest
  * rule would end: its lift velocity is removed with the others' round-off, a bilateral resting
  * constraint, not an impact impulse; the energy it takes is in energy_rest); one lifted higher is
  * released.  The set is brought to rest by gac_hold, which drives no other contact into its wall.
@@ -110,7 +110,7 @@ typedef struct {
     int first;             /* the position of c_event in list, or -1 */
     int *list, *landing, *shrinking;
     double *gaps, *vn, *an; /* per model contact: gap, normal velocity (before; after, once the law is applied),
-                               normal acceleration towards the wall with the persistent contacts held */
+                               normal acceleration towards the wall with the resting contacts held */
     double *e, *e_law;     /* per contact taking part: the restitution applied, and its wall's own */
     double *qd_plus, *F;   /* the law's velocities and impulses */
     double scale;          /* the largest |normal velocity| before (m/s) */
@@ -121,7 +121,7 @@ typedef struct {
     int rounds, plastic;
 } gac_impact_event;
 
-/* 1 if the event at ev->x is an impact: a contact that is not persistent approaches its wall faster than
+/* 1 if the event at ev->x is an impact: a contact that is not resting approaches its wall faster than
  * gac_v_round within contact_tol (c_event whatever its gap), or c_event came back to its wall at its apex; 0: a
  * grazing touch, nothing to resolve. */
 static int gac_is_impact(const gac_sim *s, gac_impact_event *ev)
@@ -133,7 +133,7 @@ static int gac_is_impact(const gac_sim *s, gac_impact_event *ev)
     for (c = 0; c < md->ncontact; ++c) {
         const double gap = ev->gaps[c], v = ev->vn[c];
         if (fabs(v) > ev->scale) ev->scale = fabs(v);
-        if (!s->is_active[c] && (((c == ev->c_event || gap <= s->opt.contact_tol) && v < -v_rest)
+        if (!s->is_resting[c] && (((c == ev->c_event || gap <= s->opt.contact_tol) && v < -v_rest)
                                  || (c == ev->c_event && gap <= 0.0 && v <= 0.0)))   /* back at the apex */
             impact = 1;
     }
@@ -141,7 +141,7 @@ static int gac_is_impact(const gac_sim *s, gac_impact_event *ev)
 }
 
 /* Who takes part: every contact within contact_tol of its wall, c_event, every approaching contact within the
- * simultaneity window and every persistent one, approaching ones first, then those at rest, then separating ones
+ * simultaneity window and every resting one, approaching ones first, then those at rest, then separating ones
  * (at most nq: more approaching ones is GAC_ERR_TOO_MANY_CONTACTS; resting or leaving ones beyond nq are held by the
  * others).  Before that, every other point must be on the right side of its wall to the event search's tolerance
  * (GAC_ERR_LOST_CONTACT) and the base chart usable (GAC_ERR_GIMBAL_LOCK). */
@@ -160,7 +160,7 @@ static int gac_gather(const gac_sim *s, gac_impact_event *ev)
     ev->first = -1;
     for (pass = 0; pass < 3; ++pass) {                   /* approaching, then at rest, then separating */
         for (c = 0; c < md->ncontact; ++c) {
-            const int near = s->is_active[c] || c == ev->c_event || ev->gaps[c] <= s->opt.contact_tol
+            const int near = s->is_resting[c] || c == ev->c_event || ev->gaps[c] <= s->opt.contact_tol
                              || (ev->vn[c] < -v_rest && ev->gaps[c] <= window);
             const int kind = ev->vn[c] < 0.0 ? 0 : ev->vn[c] == 0.0 ? 1 : 2;
             if (!near || kind != pass) continue;
@@ -176,10 +176,10 @@ static int gac_gather(const gac_sim *s, gac_impact_event *ev)
 }
 
 /* Who lands: a contact that approaches a wall with e < 1 and whose bounce would rise less than the rest height h
- * ((e v-)^2 <= 2 a h, a its normal acceleration towards the wall with the persistent contacts held; h = rest_height,
+ * ((e v-)^2 <= 2 a h, a its normal acceleration towards the wall with the resting contacts held; h = rest_height,
  * never below the resolution of the positions, graze_depth + 16 eps l, unless both rules are off), or that has had
  * zeno_impacts impacts at shrinking intervals, is struck with e = 0.  On a wall with e = 1 a contact lands only if
- * it arrives at rest (v-^2 <= 2 a h).  A persistent contact takes part with its own e (at rest e does not matter;
+ * it arrives at rest (v-^2 <= 2 a h).  A resting contact takes part with its own e (at rest e does not matter;
  * driven into its wall in a later round, it bounces) and stays if it ends at rest. */
 static int gac_who_lands(gac_sim *s, gac_impact_event *ev)
 {
@@ -192,15 +192,15 @@ static int gac_who_lands(gac_sim *s, gac_impact_event *ev)
     ev->height = 0.0;
     if (s->rest_height > 0.0 || s->opt.zeno_impacts > 0) {
         const double floor = gac_graze_depth(s, ev->x) + 16.0 * GAC_EPS * gac_extent(s, ev->x);
-        const int code = gac_normal_accelerations(s, ev->t, ev->x, s->nactive, s->active, ev->an);
+        const int code = gac_normal_accelerations(s, ev->t, ev->x, s->nresting, s->resting, ev->an);
         if (code != GAC_OK) return code;
         ev->height = s->rest_height > floor ? s->rest_height : floor;
     }
     for (k = 0; k < ev->n; ++k) {
         c = ev->list[k];
         ev->e_law[k] = ev->e[k] = gac_restitution(md, s->p, c);
-        ev->landing[k] = s->is_active[c];
-        if (!s->is_active[c] && ev->vn[c] <= 0.0 && ev->gaps[c] <= s->opt.contact_tol) {
+        ev->landing[k] = s->is_resting[c];
+        if (!s->is_resting[c] && ev->vn[c] <= 0.0 && ev->gaps[c] <= s->opt.contact_tol) {
             const double reach = 2.0 * (-ev->an[c]) * ev->height;   /* v^2 of a bounce that rises that high */
             const double bounce = ev->e_law[k] < 1.0 ? ev->e_law[k] * ev->vn[c] : ev->vn[c];   /* e = 1: at rest */
             const int rests = ev->an[c] < 0.0 && bounce * bounce <= reach;
@@ -249,7 +249,7 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
         if (code != GAC_OK) return code;
         md->energy(x, ev->qd_plus, s->p, ev->E_plus);
         for (k = 0; k < ev->n; ++k) {
-            if (ev->landing[k] && !s->is_active[ev->list[k]] && ev->e_law[k] == 1.0
+            if (ev->landing[k] && !s->is_resting[ev->list[k]] && ev->e_law[k] == 1.0
                 && ev->T_law - ev->E_plus[0] > ev->bound * ev->T_before) {
                 ev->landing[k] = 0;
                 ev->e[k] = 1.0;
@@ -282,7 +282,7 @@ static int gac_check_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
     r->complementarity = ev->rounds > 1;
     for (k = 0; k < ev->n; ++k) {
         const int c = ev->list[k];
-        if (ev->F[k] > 0.0 || (!s->is_active[c] && ev->vn[c] < 0.0)) {
+        if (ev->F[k] > 0.0 || (!s->is_resting[c] && ev->vn[c] < 0.0)) {
             r->contact[r->ncontact] = c;
             r->impulse[r->ncontact++] = ev->F[k];
             if (!(ev->F[k] > 0.0) || !(ev->vn[c] < 0.0)) r->complementarity = 1;
@@ -296,10 +296,10 @@ static int gac_check_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
     return GAC_OK;
 }
 
-/* The resting set after the impact, set[0..*nset-1]: landing and persistent contacts that end at rest, any other
+/* The resting set after the impact, set[0..*nset-1]: landing and resting contacts that end at rest, any other
  * contact within contact_tol of its wall that the law leaves at rest (after a plastic round, or rounds that end at
  * round-off, whatever its approach speed; holding it takes no energy; left free, a contact pressed into its wall
- * would sink from gap <= 0, where no crossing is looked for), and a persistent contact of a wall with e < 1 that the
+ * would sink from gap <= 0, where no crossing is looked for), and a resting contact of a wall with e < 1 that the
  * impact lifts by less than h (its small lift velocity, what the bounces of the accumulation it stands for would
  * carry, is removed with the others'); one lifted higher is released.  Independent rows only.  ev->vn: the normal
  * velocities after the law. */
@@ -311,15 +311,15 @@ static int gac_choose_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *
     int k, code;
     for (k = 0; k < ev->n; ++k) {
         const int c = ev->list[k];
-        const int left_at_rest = ev->height > 0.0 && !s->is_active[c] && ev->gaps[c] <= s->opt.contact_tol
+        const int left_at_rest = ev->height > 0.0 && !s->is_resting[c] && ev->gaps[c] <= s->opt.contact_tol
                                  && fabs(ev->vn[c]) <= v_hold;
         int held_lift = 0;
-        if (s->is_active[c] && ev->vn[c] > v_hold && ev->e_law[k] < 1.0 && ev->height > 0.0) {
-            /* its acceleration towards the wall with the other persistent contacts held */
+        if (s->is_resting[c] && ev->vn[c] > v_hold && ev->e_law[k] < 1.0 && ev->height > 0.0) {
+            /* its acceleration towards the wall with the other resting contacts held */
             double a_free[nc1];
             int others[md->nq], m = 0, a;
-            for (a = 0; a < s->nactive; ++a) {
-                if (s->active[a] != c) others[m++] = s->active[a];
+            for (a = 0; a < s->nresting; ++a) {
+                if (s->resting[a] != c) others[m++] = s->resting[a];
             }
             code = gac_normal_accelerations(s, ev->t, s->x1, m, others, a_free);
             if (code != GAC_OK) return code;
@@ -344,7 +344,7 @@ static int gac_hold_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *se
     const int nq = md->nq;
     int i, k, code;
     for (k = 0; k < *nset; ++k) {
-        if (!s->is_active[set[k]]) s->gap_held[set[k]] = ev->gaps[set[k]];
+        if (!s->is_resting[set[k]]) s->gap_held[set[k]] = ev->gaps[set[k]];
     }
     code = gac_hold(s, s->x1, *nset, set, ev->n, ev->list);
     if (code == GAC_OK) code = gac_settle(s, ev->t, s->x1, nset, set);
@@ -395,13 +395,13 @@ static int gac_finish(gac_sim *s, gac_impact_event *ev, int nset, const int *set
     if (r->approach_after > 10.0 * ev->bound * ev->scale + 1e-15) return GAC_ERR_IMPACT_ACCURACY;
     for (k = 0; k < r->ncontact; ++k) {                    /* impact history of each new contact */
         c = r->contact[k];
-        if (s->is_active[c]) continue;
+        if (s->is_resting[c]) continue;
         s->n_shrink[c] = ev->shrinking[c] ? s->n_shrink[c] + 1 : 0;
         s->dt_last[c] = s->dt_last[c] < -1.5 ? -1.0 : ev->t - s->t_last[c];
         s->t_last[c] = ev->t;
     }
-    gac_set_active(s, nset, set, r);
-    s->energy_impacts += r->energy_before - r->energy_after;
+    gac_set_resting(s, nset, set, r);
+    s->loss_impacts += r->energy_before - r->energy_after;
     s->energy_roundoff += r->roundoff * ev->T_before;   /* what this impact's energy is known to */
     return 1;
 }
@@ -433,7 +433,7 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     md->contact_gaps(ev.x, s->p, gaps);
     gac_normal_velocities(md, ev.x, s->p, vn);
     r->ncontact = 0;
-    r->nactivated = r->nreleased = 0;
+    r->nlanded = r->nreleased = 0;
     r->rounds = r->plastic = r->law_elastic = 0;
     r->energy_rest = 0.0;
     r->roundoff = 1e-10;
@@ -458,8 +458,8 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     if (code == GAC_OK && nset > 0) code = gac_hold_resting(s, &ev, &nset, set, r);
     if (code != GAC_OK) return code;
     if (ev.rounds == 0) {                               /* no impulse: an impact only if a contact lands */
-        int same = nset == s->nactive;
-        for (k = 0; same && k < nset; ++k) same = s->is_active[set[k]];
+        int same = nset == s->nresting;
+        for (k = 0; same && k < nset; ++k) same = s->is_resting[set[k]];
         if (same) return 0;
     }
     return gac_finish(s, &ev, nset, set, r);

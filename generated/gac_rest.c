@@ -1,5 +1,5 @@
 /*
- * gac_rest.c -- resting (persistent) contact: points held at their walls as bilateral constraints.  The
+ * gac_rest.c -- resting contact: points held at their walls as bilateral constraints.  The
  * constrained dynamics (with Coulomb friction on rough walls and the P-matrix test of the Painleve paradox),
  * landing (project a state onto the constraints, settle the set that pushes, hold it at rest without driving
  * another contact into its wall), contacts at rest at the start, and release when a force would pull.
@@ -71,7 +71,7 @@ int gac_add_independent(gac_sim *s, const double *x, int *n, int *set, int c)
 /* Project the state x onto the contacts set[0..n-1] held at their walls: (positions = 1) the gaps to
  * s->gap_held (the gap each had when it landed) by Newton steps dq = -Y (N Y)^-1 (g - g_held)
  * (Y = I_f^-1 N^T, the smallest correction in the mass metric), a contact outside the set that the
- * correction would push deeper into its wall being held where it is (an active set); then the normal
+ * correction would push deeper into its wall being held where it is (an active-set method); then the normal
  * velocities to 0, qd -= Y (N Y)^-1 N qd: a plastic impact, so the kinetic energy cannot grow.  With positions,
  * the energy change is what the step left off the constraints (gac_energy_projected: summed, and
  * GAC_ERR_PROJECTION beyond its tolerance). */
@@ -256,32 +256,32 @@ int gac_hold(gac_sim *s, double *x, int nset, const int *set, int n, const int *
     return GAC_ERR_LCP;
 }
 
-/* Make set[0..n-1] the persistent contacts; record (if not NULL) lists the activations and releases. */
-void gac_set_active(gac_sim *s, int n, const int *set, gac_impact_record *r)
+/* Make set[0..n-1] the resting contacts; record (if not NULL) lists the landings and releases. */
+void gac_set_resting(gac_sim *s, int n, const int *set, gac_impact_record *r)
 {
     const gac_model *md = s->model;
     int now[GAC_AT_LEAST_1(md->ncontact)], a, c;
     for (c = 0; c < md->ncontact; ++c) now[c] = 0;
     for (a = 0; a < n; ++a) now[set[a]] = 1;
     if (r) {
-        r->nactivated = r->nreleased = 0;
+        r->nlanded = r->nreleased = 0;
         for (a = 0; a < n; ++a) {
-            if (!s->is_active[set[a]]) r->activated[r->nactivated++] = set[a];
+            if (!s->is_resting[set[a]]) r->landed[r->nlanded++] = set[a];
         }
-        for (a = 0; a < s->nactive; ++a) {
-            if (!now[s->active[a]]) r->released[r->nreleased++] = s->active[a];
+        for (a = 0; a < s->nresting; ++a) {
+            if (!now[s->resting[a]]) r->released[r->nreleased++] = s->resting[a];
         }
-        s->n_activations += r->nactivated;
+        s->n_landings += r->nlanded;
         s->n_releases += r->nreleased;
     }
-    for (c = 0; c < md->ncontact; ++c) s->is_active[c] = now[c];
-    for (a = 0; a < n; ++a) s->active[a] = set[a];
-    s->nactive = n;
+    for (c = 0; c < md->ncontact; ++c) s->is_resting[c] = now[c];
+    for (a = 0; a < n; ++a) s->resting[a] = set[a];
+    s->nresting = n;
 }
 
 /* gac_sim_init: contacts that start at their wall (|gap| <= contact_tol) with a normal velocity whose bounce
  * would rise less than rest_height (under the largest free-flight normal acceleration of any contact, so
- * that a contact pressed only through the others, like the top of a ladder, counts) become persistent:
+ * that a contact pressed only through the others, like the top of a ladder, counts) come to rest:
  * positions and velocities projected, then only those with a pushing force kept.  On a wall with e = 1 a
  * contact must start at rest to round-off (gac_v_round), as it must arrive at rest to land there: the bounce
  * rule alone would let the projection take kinetic energy from an elastic chain (a chain spinning fast has a
@@ -312,20 +312,20 @@ int gac_rest_at_start(gac_sim *s)
     code = gac_project(s, s->x, n, set, 0);
     if (code == GAC_OK) code = gac_settle(s, s->t, s->x, &n, set);
     if (code != GAC_OK) return code;
-    s->n_activations += n;
-    gac_set_active(s, n, set, 0);
+    s->n_landings += n;
+    gac_set_resting(s, n, set, 0);
     s->pending = n > 0;
     return GAC_OK;
 }
 
-/* Release the persistent contact c_event, whose force fell to 0 at state s->xs (time t); any other
- * persistent contact that would then pull goes too.  Fills the record (no impact: ncontact = 0). */
+/* Release the resting contact c_event, whose force fell to 0 at state s->xs (time t); any other
+ * resting contact that would then pull goes too.  Fills the record (no impact: ncontact = 0). */
 int gac_release(gac_sim *s, double t, int c_event, gac_impact_record *r)
 {
     const gac_model *md = s->model;
     int set[md->nq], n = 0, a, i, code;
-    for (a = 0; a < s->nactive; ++a) {
-        if (s->active[a] != c_event) set[n++] = s->active[a];
+    for (a = 0; a < s->nresting; ++a) {
+        if (s->resting[a] != c_event) set[n++] = s->resting[a];
     }
     code = gac_settle(s, t, s->xs, &n, set);
     if (code != GAC_OK) return code;
@@ -338,7 +338,7 @@ int gac_release(gac_sim *s, double t, int c_event, gac_impact_record *r)
         r->qd_before[i] = r->qd_after[i] = s->xs[md->nq + i];
     }
     r->approach_before = r->approach_after = 0.0;
-    gac_set_active(s, n, set, r);
+    gac_set_resting(s, n, set, r);
     return GAC_OK;
 }
 
@@ -349,15 +349,15 @@ int gac_recheck_rest(gac_sim *s, gac_impact_record *record)
     const gac_model *md = s->model;
     int a, code;
     s->input_changed = 0;
-    if (s->nactive == 0) return 0;
+    if (s->nresting == 0) return 0;
     gac_events(s, s->t, s->x, s->ev);
     if (s->fail) return s->fail;
-    for (a = 0; a < s->nactive; ++a) {
-        if (s->ev[s->active[a]] <= 0.0) break;
+    for (a = 0; a < s->nresting; ++a) {
+        if (s->ev[s->resting[a]] <= 0.0) break;
     }
-    if (a == s->nactive) return 0;
+    if (a == s->nresting) return 0;
     gac_copy(s->xs, s->x, md->nx);
-    code = gac_release(s, s->t, s->active[a], record);
+    code = gac_release(s, s->t, s->resting[a], record);
     if (code < 0) return code;
     s->f_valid = s->vn_valid = 0;
     gac_events(s, s->t, s->x, s->ev);
@@ -416,7 +416,7 @@ static int gac_is_p_matrix(int n, const double *B, double tol)
     return 1;
 }
 
-/* The constrained dynamics of the contacts held at their walls (active), with Coulomb friction on the walls
+/* The constrained dynamics of the contacts held at their walls (resting), with Coulomb friction on the walls
  * that have it: a held point with velocity v_t along its wall takes the force -c_f lambda phi, phi = v_t /
  * max(|v_t|, v_s) (v_s = m->friction_velocity), lambda >= 0 its normal force.  With d_a = n_a + mu_a J^T(-phi_a)
  * the generalised direction of contact a's force, qdd = qdd_free + sum_a I_f^-1 d_a lambda_a and the normal
@@ -427,7 +427,7 @@ static int gac_is_p_matrix(int n, const double *B, double tol)
  * the earlier ones (found by the LDL^T of the frictionless N I_f^-1 N^T) take no force.  dissipation (if not
  * NULL): the power friction takes, sum_a mu_a lambda_a phi_a . v_t,a (W). */
 int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const double *qd, const double *u,
-                                      const double *p, int nactive, const int *active, double *qdd, double *lambda,
+                                      const double *p, int nresting, const int *resting, double *qdd, double *lambda,
                                       double *work, double *dissipation)
 {
     const int nq = m->nq;
@@ -437,29 +437,29 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
     int a, b, i, code, friction = 0;
     if (dissipation) *dissipation = 0.0;
     m->forward_dynamics(q, qd, u, p, qdd);
-    if (nactive == 0) return GAC_OK;
-    code = gac_impact_system(m, q, qd, p, nactive, active, work, v, e);
+    if (nresting == 0) return GAC_OK;
+    code = gac_impact_system(m, q, qd, p, nresting, resting, work, v, e);
     if (code != GAC_OK) return code;
     m->contact_bias(q, qd, p, bias);
     m->contact_velocities(q, qdd, p, vel);       /* J qdd_free, read row by row */
-    for (a = 0; a < nactive; ++a) {              /* lambda = -(N qdd_free + Ndot qd) */
+    for (a = 0; a < nresting; ++a) {              /* lambda = -(N qdd_free + Ndot qd) */
         int row;
         double sign;
-        gac_contact_row(m, active[a], &row, &sign);
-        lambda[a] = -sign * (bias[row] + gac_row_value(m, active[a], qdd, vel));
-        cf[a] = gac_friction(m, p, active[a]);
+        gac_contact_row(m, resting[a], &row, &sign);
+        lambda[a] = -sign * (bias[row] + gac_row_value(m, resting[a], qdd, vel));
+        cf[a] = gac_friction(m, p, resting[a]);
         if (cf[a] > 0.0) friction = 1;
     }
     if (!friction) {
-        if (gac_ldlt_drop(nactive, A, 1e-12) < 0) return GAC_ERR_SINGULAR_CONTACT;
-        gac_ldlt_solve(nactive, A, lambda);
+        if (gac_ldlt_drop(nresting, A, 1e-12) < 0) return GAC_ERR_SINGULAR_CONTACT;
+        gac_ldlt_solve(nresting, A, lambda);
     } else {
         double *Z = GAC_WORK_Z(m, work), *B = GAC_WORK_B(m, work), *g = GAC_WORK_G(m, work), *f = GAC_WORK_F(m, work);
         double vq[3 * m->npoint];
         m->contact_velocities(q, qd, p, vq);
-        for (a = 0; a < nactive * nactive; ++a) B[a] = A[a];
-        for (a = 0; a < nactive; ++a) {
-            const gac_contact *k = &m->contacts[active[a]];
+        for (a = 0; a < nresting * nresting; ++a) B[a] = A[a];
+        for (a = 0; a < nresting; ++a) {
+            const gac_contact *k = &m->contacts[resting[a]];
             double vt[2] = {0.0, 0.0}, speed, scale;
             int j, axis = 0, r;
             slide[a] = 0.0;
@@ -478,18 +478,18 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
             m->contact_generalized_force(q, f, p, g);
             m->inertia_solve(q, g, p, Z + (long)a * nq);
             m->contact_velocities(q, Z + (long)a * nq, p, vel);
-            for (b = 0; b < nactive; ++b) {
+            for (b = 0; b < nresting; ++b) {
                 int row;
                 double sign;
-                gac_contact_row(m, active[b], &row, &sign);
-                B[b*nactive + a] += cf[a] * sign * gac_row_value(m, active[b], Z + (long)a * nq, vel);
+                gac_contact_row(m, resting[b], &row, &sign);
+                B[b*nresting + a] += cf[a] * sign * gac_row_value(m, resting[b], Z + (long)a * nq, vel);
             }
         }
-        if (gac_ldlt_drop(nactive, A, 1e-12) < 0) return GAC_ERR_SINGULAR_CONTACT;
-        for (b = 0; b < nactive; ++b) {
-            if (A[b*nactive + b] == 1e300) {         /* dependent on the others: no force */
-                for (a = 0; a < nactive; ++a) B[b*nactive + a] = B[a*nactive + b] = 0.0;
-                B[b*nactive + b] = 1.0;
+        if (gac_ldlt_drop(nresting, A, 1e-12) < 0) return GAC_ERR_SINGULAR_CONTACT;
+        for (b = 0; b < nresting; ++b) {
+            if (A[b*nresting + b] == 1e300) {         /* dependent on the others: no force */
+                for (a = 0; a < nresting; ++a) B[b*nresting + a] = B[a*nresting + b] = 0.0;
+                B[b*nresting + b] = 1.0;
                 lambda[b] = 0.0;
             }
         }
@@ -497,26 +497,26 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
          * positive definite (checked by LDL^T in A's place, which is no longer needed) ensures it; where that
          * fails, up to GAC_PMATRIX_MAX contacts are checked exactly, minor by minor.  Where B is no P-matrix the
          * friction is strong enough for the Painleve paradox (one contact: B_aa <= 0), and the model stops. */
-        for (a = 0; a < nactive; ++a) {
-            for (b = 0; b < nactive; ++b) A[a*nactive + b] = 0.5 * (B[a*nactive + b] + B[b*nactive + a]);
+        for (a = 0; a < nresting; ++a) {
+            for (b = 0; b < nresting; ++b) A[a*nresting + b] = 0.5 * (B[a*nresting + b] + B[b*nresting + a]);
         }
-        if (gac_ldlt(nactive, A, 1e-8) != 0 && !gac_is_p_matrix(nactive, B, 1e-8)) return GAC_ERR_FRICTION;
-        if (gac_lu_solve(nactive, B, lambda, 1e-12) != 0) return GAC_ERR_FRICTION;
-        for (a = 0; a < nactive; ++a) {
+        if (gac_ldlt(nresting, A, 1e-8) != 0 && !gac_is_p_matrix(nresting, B, 1e-8)) return GAC_ERR_FRICTION;
+        if (gac_lu_solve(nresting, B, lambda, 1e-12) != 0) return GAC_ERR_FRICTION;
+        for (a = 0; a < nresting; ++a) {
             if (!(cf[a] > 0.0)) continue;
             for (i = 0; i < nq; ++i) qdd[i] += cf[a] * Z[(long)a * nq + i] * lambda[a];
             if (dissipation) *dissipation += cf[a] * lambda[a] * slide[a];
         }
     }
     for (i = 0; i < nq; ++i) {
-        for (a = 0; a < nactive; ++a) qdd[i] += Y[a*nq + i] * lambda[a];
+        for (a = 0; a < nresting; ++a) qdd[i] += Y[a*nq + i] * lambda[a];
     }
     return GAC_OK;
 }
 
 int gac_constrained_dynamics(const gac_model *m, const double *q, const double *qd, const double *u,
-                             const double *p, int nactive, const int *active, double *qdd, double *lambda,
+                             const double *p, int nresting, const int *resting, double *qdd, double *lambda,
                              double *work)
 {
-    return gac_constrained_dynamics_friction(m, q, qd, u, p, nactive, active, qdd, lambda, work, 0);
+    return gac_constrained_dynamics_friction(m, q, qd, u, p, nresting, resting, qdd, lambda, work, 0);
 }

@@ -111,8 +111,8 @@ void gac_sim_bind(gac_sim *s, const gac_model *md, double *dwork, int *iwork)
     s->gap_held = d;      d += nc1;
     s->work = d;          d += gac_impact_nwork(md);   /* | work | sub */
     s->sub = d;
-    s->active = iwork;                         /* iwork: active | is_active | n_shrink */
-    s->is_active = iwork + md->nq;
+    s->resting = iwork;                         /* iwork: resting | is_resting | n_shrink */
+    s->is_resting = iwork + md->nq;
     s->n_shrink = iwork + md->nq + nc1;
 }
 
@@ -168,7 +168,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     s->n_look = 0;
     s->rk4_h_rho = 0.0;
     s->input_changed = 0;
-    s->work_input = s->work_damping = s->work_friction = 0.0;
+    s->work_input = s->loss_damping = s->loss_friction = 0.0;
     s->n_slow_sliding = 0;
     s->t_slow_sliding = 0.0;
     for (i = 0; i < md->nx; ++i) s->x[i] = x[i];
@@ -178,8 +178,8 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     s->h = opt->dt;                               /* RK4 step, or the first adaptive step (0: automatic) */
     s->f_valid = 0;
     s->n_steps = s->n_rejected = s->n_rhs = s->n_impacts = 0;
-    s->nactive = 0;
-    s->n_activations = s->n_releases = 0;
+    s->nresting = 0;
+    s->n_landings = s->n_releases = 0;
     s->pending = s->fail = s->fail_seen = 0;
     s->vn_valid = 0;
     s->err_index = s->n_unstable = 0;
@@ -196,7 +196,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
         s->lever = length > 1.0 ? length : 1.0;
     }
     for (i = 0; i < nc1; ++i) {
-        s->is_active[i] = 0;
+        s->is_resting[i] = 0;
         s->n_shrink[i] = 0;
         s->t_last[i] = t0;
         s->dt_last[i] = -2.0;                     /* -2: no impact of this contact yet, -1: one */
@@ -237,8 +237,8 @@ void gac_record_bind(gac_impact_record *r, const gac_model *m, double *dwork, in
     r->q = dwork + nq;
     r->qd_before = dwork + 2 * nq;
     r->qd_after = dwork + 3 * nq;
-    r->contact = iwork;                        /* iwork: contact | activated | released */
-    r->activated = iwork + nq;
+    r->contact = iwork;                        /* iwork: contact | landed | released */
+    r->landed = iwork + nq;
     r->released = iwork + 2 * nq;
 }
 

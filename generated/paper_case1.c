@@ -1426,24 +1426,24 @@ static void paper_case1_bind_record(paper_case1_impact_record *record)
 }
 
 int paper_case1_impact(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p,
-                 int nactive, const int *GAC_RESTRICT active,
+                 int ncontact_set, const int *GAC_RESTRICT contact_set,
                  double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse, double *GAC_RESTRICT work)
 {
-    return gac_impact(&paper_case1_model, q, qd, p, nactive, active, qd_plus, impulse, work);
+    return gac_impact(&paper_case1_model, q, qd, p, ncontact_set, contact_set, qd_plus, impulse, work);
 }
 
 int paper_case1_impact_complementarity(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p,
-                 int nactive, const int *GAC_RESTRICT active,
+                 int ncontact_set, const int *GAC_RESTRICT contact_set,
                  double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse, double *GAC_RESTRICT work)
 {
-    return gac_impact_complementarity(&paper_case1_model, q, qd, p, nactive, active, qd_plus, impulse, work);
+    return gac_impact_complementarity(&paper_case1_model, q, qd, p, ncontact_set, contact_set, qd_plus, impulse, work);
 }
 
 int paper_case1_constrained_dynamics(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u,
-                 const double *GAC_RESTRICT p, int nactive, const int *GAC_RESTRICT active,
+                 const double *GAC_RESTRICT p, int nresting, const int *GAC_RESTRICT resting,
                  double *GAC_RESTRICT qdd, double *GAC_RESTRICT lambda, double *GAC_RESTRICT work)
 {
-    return gac_constrained_dynamics(&paper_case1_model, q, qd, u, p, nactive, active, qdd, lambda, work);
+    return gac_constrained_dynamics(&paper_case1_model, q, qd, u, p, nresting, resting, qdd, lambda, work);
 }
 
 void paper_case1_contact_info(int c, int *point, int *axis, int *normal_sign)

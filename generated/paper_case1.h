@@ -130,9 +130,9 @@
  *   code is GAC_SIM_END or an error (< 0, paper_case1_error_message(code)).  Codes, options and the loop's
  *   behaviour: gac.h.
  * Reading the state: sim.base.t (s), sim.base.x[0..NX-1] = [q, qd], sim.base.n_steps, .n_rejected,
- *   .n_rhs, .n_impacts, .nactive and .active[0..nactive-1] (the resting contacts), sim.base.opt; or
+ *   .n_rhs, .n_impacts, .nresting and .resting[0..nresting-1] (the resting contacts), sim.base.opt; or
  *   paper_case1_sim_state.  The record: rec.base.t, .ncontact, .contact[k], .impulse[k] (N s), .q[i],
- *   .qd_before[i], .qd_after[i], .energy_before, .energy_after (J), .nactivated, .activated[k], .nreleased,
+ *   .qd_before[i], .qd_after[i], .energy_before, .energy_after (J), .nlanded, .landed[k], .nreleased,
  *   .released[k], ... (gac_impact_record).
  * Storage: the arrays of sim.base and rec.base point into the struct's own dwork / iwork; every
  *   paper_case1_sim_* call points them there again.  A struct copied by assignment or memcpy points at the
@@ -342,19 +342,19 @@ void paper_case1_forward_dynamics_energy(const double *GAC_RESTRICT q, const dou
  */
 void paper_case1_rhs(double t, const double *GAC_RESTRICT x, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT xdot);
 
-/* Impact law, Eq. 44-48, all active contacts together (gac_impact).  Solved as (J I_f^-1 J^T) F = -(1 + e)
- * J qd, qd_plus = qd + I_f^-1 J^T F (Eq. 48 with the velocity unknowns eliminated); impulse[k] > 0 pushes
- * contact active[k] away from its wall. Returns GAC_OK or GAC_ERR_*.
+/* Impact law, Eq. 44-48, all contacts of the set together (gac_impact).  Solved as (J I_f^-1 J^T) F = -(1
+ * + e) J qd, qd_plus = qd + I_f^-1 J^T F (Eq. 48 with the velocity unknowns eliminated); impulse[k] > 0
+ * pushes contact contact_set[k] away from its wall. Returns GAC_OK or GAC_ERR_*.
  *   q            generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
  *   qd           generalised velocities Theta_dot (NQ; rad/s, m/s)
  *   p            parameters (NPARAM, layout in the header)
- *   nactive      number of contacts
- *   active       their indices 0..NCONTACT-1
+ *   ncontact_set number of contacts taking part in the impact
+ *   contact_set  their indices 0..NCONTACT-1
  *   qd_plus      velocities after (NQ)
- *   impulse      impulse of each active contact along its inward normal (nactive; N s)
+ *   impulse      impulse of each contact of the set along its inward normal (ncontact_set; N s)
  *   work         scratch, PAPER_CASE1_IMPACT_NWORK doubles
  */
-int paper_case1_impact(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, int nactive, const int *GAC_RESTRICT active, double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse, double *GAC_RESTRICT work);
+int paper_case1_impact(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, int ncontact_set, const int *GAC_RESTRICT contact_set, double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse, double *GAC_RESTRICT work);
 
 /* Newton's law (Eq. 47) with complementarity, in rounds (gac_impact_complementarity).  No contact pulls or
  * approaches its wall afterwards, the kinetic energy never grows; the law the hybrid loop applies.
@@ -362,27 +362,27 @@ int paper_case1_impact(const double *GAC_RESTRICT q, const double *GAC_RESTRICT 
  *   q            generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
  *   qd           generalised velocities Theta_dot (NQ; rad/s, m/s)
  *   p            parameters (NPARAM, layout in the header)
- *   nactive      number of contacts
- *   active       their indices 0..NCONTACT-1
+ *   ncontact_set number of contacts taking part in the impact
+ *   contact_set  their indices 0..NCONTACT-1
  *   qd_plus      velocities after (NQ)
- *   impulse      total impulse of each active contact (nactive; N s, >= 0)
+ *   impulse      total impulse of each contact of the set (ncontact_set; N s, >= 0)
  *   work         scratch, PAPER_CASE1_IMPACT_NWORK doubles
  */
-int paper_case1_impact_complementarity(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, int nactive, const int *GAC_RESTRICT active, double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse, double *GAC_RESTRICT work);
+int paper_case1_impact_complementarity(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, int ncontact_set, const int *GAC_RESTRICT contact_set, double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse, double *GAC_RESTRICT work);
 
-/* Accelerations with the active contacts held at their walls (gac_constrained_dynamics).  I_f qdd = R +
- * N^T lambda, N qdd = -Ndot qd; nactive = 0 gives forward_dynamics.  Returns GAC_OK or GAC_ERR_*.
+/* Accelerations with the resting contacts held at their walls (gac_constrained_dynamics).  I_f qdd = R +
+ * N^T lambda, N qdd = -Ndot qd; nresting = 0 gives forward_dynamics.  Returns GAC_OK or GAC_ERR_*.
  *   q            generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
  *   qd           generalised velocities Theta_dot (NQ; rad/s, m/s)
  *   u            inputs (NU, layout in the header; N m on an angle, N on a translation; NULL when NU = 0)
  *   p            parameters (NPARAM, layout in the header)
- *   nactive      number of contacts
- *   active       their indices 0..NCONTACT-1
+ *   nresting     number of resting contacts, held at their walls
+ *   resting      their indices 0..NCONTACT-1
  *   qdd          accelerations (NQ)
- *   lambda       force of each active contact along its inward normal (nactive; N)
+ *   lambda       force of each resting contact along its inward normal (nresting; N)
  *   work         scratch, PAPER_CASE1_IMPACT_NWORK doubles
  */
-int paper_case1_constrained_dynamics(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, int nactive, const int *GAC_RESTRICT active, double *GAC_RESTRICT qdd, double *GAC_RESTRICT lambda, double *GAC_RESTRICT work);
+int paper_case1_constrained_dynamics(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, int nresting, const int *GAC_RESTRICT resting, double *GAC_RESTRICT qdd, double *GAC_RESTRICT lambda, double *GAC_RESTRICT work);
 
 /* Point, wall axis and inward normal of contact c (0, -1, 0 outside the range).
  *   c            contact index 0..NCONTACT-1
@@ -424,7 +424,7 @@ int paper_case1_check_parameters(const double *p, int *bad_index);
  */
 const char *paper_case1_error_message(int code);
 
-/* Default options: DOPRI5, rtol 1e-8, atol 1e-10, persistent contact on.
+/* Default options: DOPRI5, rtol 1e-8, atol 1e-10, resting contact on.
  *   opt          out (NULL: nothing is done)
  */
 void paper_case1_default_options(paper_case1_options *opt);

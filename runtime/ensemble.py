@@ -39,7 +39,7 @@ from .simulate import simulate
 KEEP = ("summary", "final", "samples")
 RUN_KEYS = ("p", "q0", "qd0", "u", "t_end")
 COLUMNS = ("run", "status", "message", "t_final", "n_impacts", "t_first_impact", "energy_initial", "energy_final",
-           "energy_impact_loss", "energy_drift", "n_steps", "n_rhs")
+           "loss_impacts", "energy_drift", "n_steps", "n_rhs")
 
 
 @dataclass
@@ -143,13 +143,13 @@ def run_one(model: CompiledModel, run: dict, index: int, t_end: float, keep: str
                           **options)
     except (ValueError, RuntimeError) as exc:
         row.update(status=-2, message=f"refused: {exc}", t_final=math.nan, n_impacts=0, t_first_impact=math.nan,
-                   energy_initial=math.nan, energy_final=math.nan, energy_impact_loss=math.nan,
+                   energy_initial=math.nan, energy_final=math.nan, loss_impacts=math.nan,
                    energy_drift=math.nan, n_steps=0, n_rhs=0)
         return row, None, time.perf_counter() - start
     row.update(status=result.status, message=result.message, t_final=result.t_final, n_impacts=result.n_impacts,
                t_first_impact=result.t_first_impact,
                energy_initial=result.energy_initial, energy_final=result.energy_final,
-               energy_impact_loss=result.energy_impact_loss, energy_drift=result.energy_drift,
+               loss_impacts=result.loss_impacts, energy_drift=result.energy_drift,
                n_steps=result.n_steps, n_rhs=result.n_rhs)
     arrays = None
     if keep == "final":

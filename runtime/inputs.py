@@ -1,11 +1,11 @@
 """Inputs of a driven model at run time: what ``simulate(..., u=...)`` accepts and how it reaches the C loop.
 
     u = [0.5, -0.2]                                  constant inputs (one per actuated coordinate)
-    u = InputSchedule([0, 1, 2], [[0, 0], [1, 0], [1, 1]], mode="hold")    values at times
+    u = InputSchedule([0, 1, 2], [[0, 0], [1, 0], [1, 1]], mode="hold")    values at breakpoints
     u = lambda t, q, qd: -k * (q[4] - 0.3)           state feedback from Python (q, qd: the full layout of Eq. 13)
 
 Constant inputs are held by the C loop (``NAME_sim_set_input``).  A schedule is given to the C loop as it is
-(``NAME_sim_set_schedule``): the loop ends a step at each of its times, so that every jump of a held schedule (the
+(``NAME_sim_set_schedule``): the loop ends a step at each of its breakpoints, so that every jump of a held schedule (the
 zero-order hold of FMI co-simulation) and every kink of a linear one falls on a step boundary, and evaluates it
 in C.  A Python function is called back from C at every stage: the most general and the slowest (a Python call
 per stage, about 1-2 us each).
@@ -21,9 +21,9 @@ MODES = ("hold", "linear")
 
 @dataclass(frozen=True)
 class InputSchedule:
-    """Inputs given as values at times: ``values[k]`` (one per input) from ``times[k]`` on, held until the next
-    time (mode 'hold') or interpolated linearly to it (mode 'linear'); ``values[0]`` before ``times[0]`` and
-    the last values after the last time."""
+    """Inputs given as values at breakpoints: ``values[k]`` (one per input) from ``times[k]`` on, held until the
+    next breakpoint (mode 'hold') or interpolated linearly to it (mode 'linear'); ``values[0]`` before ``times[0]`` and
+    the last values after the last breakpoint."""
 
     times: tuple
     values: tuple

@@ -226,37 +226,37 @@ class CompiledModel:
         E = self._call("energy", 2, self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd"), self._params(p))
         return float(E[0]), float(E[1])
 
-    def impact(self, q, qd, active, p=None, mode: str = "equality") -> tuple[np.ndarray, np.ndarray]:
-        """Post-impact velocities and impulses for the contacts with indices ``active``:
+    def impact(self, q, qd, contact_set, p=None, mode: str = "equality") -> tuple[np.ndarray, np.ndarray]:
+        """Post-impact velocities and impulses for the contacts with indices ``contact_set``:
         mode 'equality' is Eq. 48 as printed, 'complementarity' forbids pulling impulses."""
         if mode not in ("equality", "complementarity"):
             raise ValueError(f"mode: must be 'equality' or 'complementarity', got {mode!r}")
         q, qd = self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd")
-        active = np.ascontiguousarray(active, dtype=np.int32)
-        qd_plus, impulse = np.zeros(self.nq), np.zeros(max(len(active), 1))
+        contact_set = np.ascontiguousarray(contact_set, dtype=np.int32)
+        qd_plus, impulse = np.zeros(self.nq), np.zeros(max(len(contact_set), 1))
         solve = self.c.impact if mode == "equality" else self.c.impact_complementarity
-        code = solve(self._ptr(q), self._ptr(qd), self._ptr(self._params(p)), len(active),
-                                  self.ffi.cast("int *", self.ffi.from_buffer(active)),
+        code = solve(self._ptr(q), self._ptr(qd), self._ptr(self._params(p)), len(contact_set),
+                                  self.ffi.cast("int *", self.ffi.from_buffer(contact_set)),
                                   self._ptr(qd_plus), self._ptr(impulse), self._ptr(self._work))
         if code != self.lib.GAC_OK:
-            raise ImpactError(f"impact with contacts {active.tolist()}: {self.error_message(code)}")
-        return qd_plus, impulse[:len(active)]
+            raise ImpactError(f"impact with contacts {contact_set.tolist()}: {self.error_message(code)}")
+        return qd_plus, impulse[:len(contact_set)]
 
 
-    def constrained_dynamics(self, q, qd, active, p=None, u=None) -> tuple[np.ndarray, np.ndarray]:
-        """Accelerations and contact forces with the contacts ``active`` held at their walls (bilateral, with
+    def constrained_dynamics(self, q, qd, resting, p=None, u=None) -> tuple[np.ndarray, np.ndarray]:
+        """Accelerations and contact forces with the contacts ``resting`` held at their walls (bilateral, with
         Coulomb friction on walls that have it): I_f qdd = R + N^T lambda + friction, N qdd = -Ndot qd (the
-        runtime's persistent contact)."""
+        runtime's resting contact)."""
         q, qd = self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd")
-        active = np.ascontiguousarray(active, dtype=np.int32)
-        qdd, lam = np.zeros(self.nq), np.zeros(max(len(active), 1))
+        resting = np.ascontiguousarray(resting, dtype=np.int32)
+        qdd, lam = np.zeros(self.nq), np.zeros(max(len(resting), 1))
         code = self.c.constrained_dynamics(self._ptr(q), self._ptr(qd), self._ptr(self._inputs(u)),
-                                                self._ptr(self._params(p)), len(active),
-                                                self.ffi.cast("int *", self.ffi.from_buffer(active)),
+                                                self._ptr(self._params(p)), len(resting),
+                                                self.ffi.cast("int *", self.ffi.from_buffer(resting)),
                                                 self._ptr(qdd), self._ptr(lam), self._ptr(self._work))
         if code != self.lib.GAC_OK:
-            raise ImpactError(f"constrained dynamics with contacts {active.tolist()}: {self.error_message(code)}")
-        return qdd, lam[:len(active)]
+            raise ImpactError(f"constrained dynamics with contacts {resting.tolist()}: {self.error_message(code)}")
+        return qdd, lam[:len(resting)]
 
 
 def load_model(scene: Scene | str | Path, bake_params: bool = False, flags=None, progress=None,

@@ -63,7 +63,7 @@ class Impact:
     qd_after: np.ndarray
     rounds: int = 1                     # rounds of the impact law (Newton's law with complementarity)
     plastic: bool = False               # the rounds were closed by a plastic round (energy lost, also at e = 1)
-    energy_rest: float = 0.0            # J: kinetic energy taken by contacts that landed (made persistent)
+    energy_rest: float = 0.0            # J: kinetic energy taken by contacts that landed (come to rest)
     roundoff: float = 1e-10             # the law's relative round-off bound on the energy (grows with cond(I_f))
     law_elastic: bool = False           # the law (each contact's own e, before landings) had only e = 1 contacts
                                         # take impulses, no plastic round: energy_after + energy_rest = energy_before
@@ -71,13 +71,13 @@ class Impact:
 
 @dataclass
 class ContactEvent:
-    """A change of the persistent (resting) contact set: point O_point (1-based) on a wall became
-    persistent ('persist') or was released ('release') at time t."""
+    """A change of the resting contact set: point O_point (1-based) on a wall became
+    resting ('rest') or was released ('release') at time t."""
 
     t: float
     point: int
     wall: str
-    kind: str             # 'persist' | 'release'
+    kind: str             # 'rest' | 'release'
 
     @property
     def label(self) -> str:
@@ -86,7 +86,7 @@ class ContactEvent:
 
 @dataclass
 class SimulationResult:
-    """What simulate() returns.  status 0: reached t_end; -1: stopped early (see message)."""
+    """What simulate() returns.  status 0: reached t_end; -1: ended early (see message)."""
 
     t: np.ndarray                 # sample times (s)
     q: np.ndarray                 # (len(t), nq) configuration samples, layout of Eq. 13
@@ -105,12 +105,12 @@ class SimulationResult:
     method: str
     options: dict = field(default_factory=dict)
     contact_events: list = field(default_factory=list)   # ContactEvent, in time order
-    persistent_final: list = field(default_factory=list)  # (point, wall) of the contacts resting at t_final
+    resting_final: list = field(default_factory=list)     # (point, wall) of the contacts resting at t_final
     warnings: list = field(default_factory=list)          # results of limited accuracy, one sentence each
-    energy_scale: float = 1.0     # J: max(T0 + |V0|, M g L, |W_inputs|, D_dampers), what energy_drift is measured on
-    energy_input_work: float = 0.0     # J: work of the inputs, int u . qd_actuated dt
-    energy_damping_loss: float = 0.0   # J: energy the joint dampers took, int C theta_dot^2 dt (>= 0)
-    energy_friction_loss: float = 0.0  # J: energy sliding friction took at resting contacts (>= 0)
+    energy_scale: float = 1.0     # J: max(T0 + |V0|, M g L, |work_input|, the losses), what energy_drift is measured on
+    work_input: float = 0.0       # J: work of the inputs, int u . qd_actuated dt
+    loss_damping: float = 0.0     # J: energy the joint dampers took, int C theta_dot^2 dt (>= 0)
+    loss_friction: float = 0.0    # J: energy sliding friction took at resting contacts (>= 0)
     u: np.ndarray | None = None        # (len(t), nu) the inputs at the sample times (None: no inputs)
     n_chart_switches: int = 0          # switches between the base charts near the gimbal lock (gac_sim.n_chart_switches)
 
@@ -128,18 +128,18 @@ class SimulationResult:
         return self.status == 0
 
     @property
-    def energy_impact_loss(self) -> float:
+    def loss_impacts(self) -> float:
         """J: the energy the impacts took, sum of (E before - E after) over the impacts (>= 0; it includes
         what landings on a wall took, Impact.energy_rest)."""
         return self.impacts.energy_loss
 
     @property
     def energy_residual(self) -> float:
-        """J: what the energy balance leaves, E_final - E_initial + energy_impact_loss + energy_damping_loss +
-        energy_friction_loss - energy_input_work (E = T + V, springs' potential included): the integration error of
+        """J: what the energy balance leaves, E_final - E_initial + loss_impacts + loss_damping +
+        loss_friction - work_input (E = T + V, springs' potential included): the integration error of
         the flight phases."""
-        return (self.energy_final - self.energy_initial + self.energy_impact_loss + self.energy_damping_loss
-                + self.energy_friction_loss - self.energy_input_work)
+        return (self.energy_final - self.energy_initial + self.loss_impacts + self.loss_damping
+                + self.loss_friction - self.work_input)
 
     @property
     def energy_drift(self) -> float:
@@ -149,12 +149,12 @@ class SimulationResult:
 
     def energy_summary(self) -> str:
         """One line: initial and final energy, inputs' work, losses in dampers and at impacts, and the residual."""
-        driven = (f"work of the inputs {self.energy_input_work:.6g} J, taken by dampers {self.energy_damping_loss:.6g} J, "
-                  if self.energy_input_work or self.energy_damping_loss else "")
-        if self.energy_friction_loss:
-            driven += f"taken by friction {self.energy_friction_loss:.6g} J, "
+        driven = (f"work of the inputs {self.work_input:.6g} J, taken by dampers {self.loss_damping:.6g} J, "
+                  if self.work_input or self.loss_damping else "")
+        if self.loss_friction:
+            driven += f"taken by friction {self.loss_friction:.6g} J, "
         return (f"energy: initial {self.energy_initial:.12g} J, final {self.energy_final:.12g} J, {driven}lost at impacts "
-                f"{self.energy_impact_loss:.6g} J; balance residual {self.energy_residual:.3e} J = "
+                f"{self.loss_impacts:.6g} J; balance residual {self.energy_residual:.3e} J = "
                 f"{self.energy_drift:.3e} of {self.energy_scale:.6g} J (max(T0 + |V0|, M g L"
                 f"{', |W_in|, D_damp' if driven else ''}))")
 
@@ -187,16 +187,16 @@ class SimulationResult:
                          "complementarity": i.complementarity} for i in self.impacts],
             "t_final": self.t_final, "q_final": self.q_final.tolist(), "qd_final": self.qd_final.tolist(),
             "energy_initial": self.energy_initial, "energy_final": self.energy_final,
-            "energy_impact_loss": self.energy_impact_loss, "energy_residual": self.energy_residual,
+            "loss_impacts": self.loss_impacts, "energy_residual": self.energy_residual,
             "energy_scale": self.energy_scale, "energy_drift": self.energy_drift,
-            "energy_input_work": self.energy_input_work, "energy_damping_loss": self.energy_damping_loss,
-            "energy_friction_loss": self.energy_friction_loss,
+            "work_input": self.work_input, "loss_damping": self.loss_damping,
+            "loss_friction": self.loss_friction,
             "n_rhs": self.n_rhs, "n_steps": self.n_steps, "n_rejected": self.n_rejected,
             "n_chart_switches": self.n_chart_switches,
             "status": self.status, "message": self.message, "method": self.method, "options": self.options,
             "contact_events": [{"t": e.t, "point": e.point, "wall": e.wall, "kind": e.kind}
                                for e in self.contact_events],
-            "persistent_final": [{"point": point, "wall": wall} for point, wall in self.persistent_final],
+            "resting_final": [{"point": point, "wall": wall} for point, wall in self.resting_final],
             "warnings": list(self.warnings),
         }
 
@@ -369,7 +369,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     check_start   refuse q0/p overrides that put a contact point outside its wall beyond round-off (False:
                   a restart from a state the loop itself produced, with its resting contacts held at
                   their landing gaps)
-    keep_impacts  False: count the impacts (len(result.impacts), t_first_impact, energy_impact_loss) without
+    keep_impacts  False: count the impacts (len(result.impacts), t_first_impact, loss_impacts) without
                   keeping their records, for studies of many runs
     **options     the C loop's options (LOOP_OPTIONS: rtol, atol, dt, h_max, event_samples, event_tol, contact_tol,
                   max_steps, max_impacts, max_wall_time, rest_height, zeno_impacts, energy_tol), with the C library's
@@ -415,7 +415,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     keep_alive = attach(model, sim, source)   # noqa: F841  (the schedule or handle the C loop points at)
     watch = _watch(model, sim, opt.max_wall_time, progress)   # noqa: F841  (the clock and progress handles)
 
-    # the loop: one C call per impact or change of the resting contacts, up to t_end or the loop's stop
+    # the loop: one C call per impact or change of the resting contacts, up to t_end or the loop's end
     x_eval = np.zeros((len(t_eval), nx))
     i_eval = ffi.new("int *", 0)
     while i_eval[0] < len(t_eval) and t_eval[i_eval[0]] <= 0.0:      # samples at the start (as sim_init left it)
@@ -442,7 +442,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     if code == lib.GAC_ERR_BAD_INPUT and source.error is not None:
         raise source.error
     status, message = (0, "reached t_end") if code == lib.GAC_SIM_END else \
-        (-1, _stop_message(model, state, code, segment_t, segment_steps, len(impacts), rec))
+        (-1, _end_message(model, state, code, segment_t, segment_steps, len(impacts), rec))
     if status == 0 and int(state.n_chart_switches):
         message += f"; {int(state.n_chart_switches)} chart switch(es)"
 
@@ -459,18 +459,18 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         u_samples = u_samples.reshape(n, model.nu)
     return SimulationResult(
         t=t_eval[:n].copy(), q=q_samples, qd=qd_samples, u=u_samples,
-        energy_input_work=float(state.work_input), energy_damping_loss=float(state.work_damping),
-        energy_friction_loss=float(state.work_friction),
+        work_input=float(state.work_input), loss_damping=float(state.loss_damping),
+        loss_friction=float(state.loss_friction),
         impacts=impacts, t_final=float(state.t), q_final=layout.expand(x_final[:nq]),
         qd_final=layout.expand(x_final[nq:], velocity=True),
         energy_initial=T0 + V0, energy_final=sum(model.energy(x_final[:nq], x_final[nq:], p)),
         n_steps=int(state.n_steps), n_rejected=int(state.n_rejected), n_rhs=int(state.n_rhs), status=status,
         message=message + (f"; {len(accuracy)} impact(s) of limited accuracy (see warnings)" if accuracy else ""),
         method=method, contact_events=contact_events, warnings=warnings,
-        energy_scale=max(energy_scale(model.scene, p, T0, V0), abs(float(state.work_input)), float(state.work_damping),
-                         float(state.work_friction)),
-        persistent_final=[(model.contacts[state.active[k]][0], model.contacts[state.active[k]][1].name)
-                          for k in range(state.nactive)],
+        energy_scale=max(energy_scale(model.scene, p, T0, V0), abs(float(state.work_input)), float(state.loss_damping),
+                         float(state.loss_friction)),
+        resting_final=[(model.contacts[state.resting[k]][0], model.contacts[state.resting[k]][1].name)
+                          for k in range(state.nresting)],
         options={"t_end": t_end, **{name: _option_value(opt, name) for name in LOOP_OPTIONS},
                  "chart_switch": float(opt.chart_switch)},
         n_chart_switches=int(state.n_chart_switches))
@@ -566,7 +566,7 @@ def friction_warnings(model: CompiledModel, p, sim, method: str) -> list[str]:
     """A sentence when the regularised friction limited the steps: at least FRICTION_WARN_STEPS of the run's
     accepted steps, and FRICTION_WARN_SHARE of them, began with a point resting on a rough wall and sliding slower
     than GAC_SLOW_SLIDING friction_velocity (sim.n_slow_sliding), where the friction force is nearly viscous,
-    -mu lambda v_t / friction_velocity: a stiff term of time constant about tau = friction_velocity / (mu g) that
+    -c_f lambda v_t / friction_velocity: a stiff term of time constant about tau = friction_velocity / (c_f g) that
     caps an explicit step near a few tau.  Steps far shorter than tau are limited by something else, and RK4's
     step is the caller's: neither is named."""
     slow, steps = int(sim.n_slow_sliding), int(sim.n_steps)
@@ -574,13 +574,13 @@ def friction_warnings(model: CompiledModel, p, sim, method: str) -> list[str]:
         return []
     v_s = model.scene.friction_velocity
     names = model.scene.parameter_names()
-    mu = max((float(p[k]) for k, name in enumerate(names) if split_parameter_name(name)[0] == "friction"),
+    c_f = max((float(p[k]) for k, name in enumerate(names) if split_parameter_name(name)[0] == "friction"),
              default=0.0)
     h = float(sim.t_slow_sliding) / slow
-    tau = v_s / (mu * abs(float(p[0]))) if mu * abs(float(p[0])) > 0.0 else None
+    tau = v_s / (c_f * abs(float(p[0]))) if c_f * abs(float(p[0])) > 0.0 else None
     if tau is not None and h < 0.01 * tau:
         return []
-    scale = f" (time constant about friction_velocity / (mu g) = {tau:.2g} s)" if tau is not None else ""
+    scale = f" (time constant about friction_velocity / (c_f g) = {tau:.2g} s)" if tau is not None else ""
     return [f"{slow:,} of the run's {steps:,} steps ({slow / max(steps, 1):.0%}) began with a point resting on a rough "
             f"wall and sliding slower than {model.lib.GAC_SLOW_SLIDING} friction_velocity, at a mean step of "
             f"{h:.2g} s: there the regularised friction is a stiff viscous force{scale} that limits the step. The "
@@ -603,7 +603,7 @@ def _read_impact(model: CompiledModel, r) -> Impact:
 
 def _read_contact_events(model: CompiledModel, r) -> list[ContactEvent]:
     events = []
-    for kind, count, indices in (("persist", r.nactivated, r.activated), ("release", r.nreleased, r.released)):
+    for kind, count, indices in (("rest", r.nlanded, r.landed), ("release", r.nreleased, r.released)):
         for k in range(count):
             point, wall = model.contacts[indices[k]]
             events.append(ContactEvent(float(r.t), point, wall.name, kind))
@@ -695,7 +695,7 @@ def _step_diagnosis(model: CompiledModel, sim, t_from: float, steps: int) -> str
             "max_steps / max_wall_time or loosen rtol/atol")
 
 
-def _stop_message(model: CompiledModel, sim, code: int, segment_t: float, segment_steps: int, n_impacts: int,
+def _end_message(model: CompiledModel, sim, code: int, segment_t: float, segment_steps: int, n_impacts: int,
                   record=None) -> str:
     """The result's message for a run the C loop stopped with ``code``: the loop's reason, and for the budgets,
     RK4's stability rule, the energy balance and an impact's accuracy what the run was doing (the loop decided;
@@ -723,7 +723,7 @@ def _stop_message(model: CompiledModel, sim, code: int, segment_t: float, segmen
         residual, scale = float(sim.energy_residual), float(sim.energy_scale)
         message += (f" (the balance's residual is {residual:.3g} J, {abs(residual) / scale:.3g} of the scale "
                     f"{scale:.6g} J; projections onto resting contacts changed the energy by "
-                    f"{float(sim.energy_projection):.3g} J in all, impacts took {float(sim.energy_impacts):.6g} J)")
+                    f"{float(sim.energy_projection):.3g} J in all, impacts took {float(sim.loss_impacts):.6g} J)")
     if code == lib.GAC_ERR_IMPACT_ACCURACY and record is not None:
         message += (f" (this impact's energy is known only to {float(record.roundoff):.3g} relative, its law's "
                     "round-off bound)")

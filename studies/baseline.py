@@ -55,18 +55,18 @@ def _approaching(model: CompiledModel, q, qd, p, contact_tol: float) -> list:
             if gaps[c] <= contact_tol and wall.normal_sign * v[point - 1, wall.axis] < 0]
 
 
-def _resolve(model: CompiledModel, q, qd, p, active: list, contact_tol: float) -> tuple[np.ndarray, list]:
-    """Eq. 48 for the active set, growing it while some contact at its wall still approaches."""
-    active = sorted(active)
+def _resolve(model: CompiledModel, q, qd, p, contact_set: list, contact_tol: float) -> tuple[np.ndarray, list]:
+    """Eq. 48 for the contact set, growing it while some contact at its wall still approaches."""
+    contact_set = sorted(contact_set)
     for _ in range(len(model.contacts) + 1):
-        qd_plus, impulse = model.impact(q, qd, active, p)
+        qd_plus, impulse = model.impact(q, qd, contact_set, p)
         if np.any(impulse < 0):
-            qd_plus, impulse = model.impact(q, qd, active, p, mode="complementarity")
-        more = sorted(set(_approaching(model, q, qd_plus, p, contact_tol)) - set(active))
+            qd_plus, impulse = model.impact(q, qd, contact_set, p, mode="complementarity")
+        more = sorted(set(_approaching(model, q, qd_plus, p, contact_tol)) - set(contact_set))
         if not more:
-            return qd_plus, active
-        active = sorted(set(active) | set(more))
-    raise RuntimeError("impact: the active set did not settle")
+            return qd_plus, contact_set
+        contact_set = sorted(set(contact_set) | set(more))
+    raise RuntimeError("impact: the contact set did not settle")
 
 
 def scipy_hybrid(model: CompiledModel, t_end: float, rtol: float, atol: float, method: str = "RK45",
@@ -99,18 +99,18 @@ def scipy_hybrid(model: CompiledModel, t_end: float, rtol: float, atol: float, m
         if solution.status != 1:
             break
         q, qd = x[:nq], x[nq:]
-        active = _approaching(model, q, qd, p, contact_tol)
-        if not active:
+        contact_set = _approaching(model, q, qd, p, contact_tol)
+        if not contact_set:
             # scipy stopped on a crossing of a point that is not approaching: step past it
             t_next = min(t + 1e-9, t_end)
             x = solve_ivp(rhs, (t, t_next), x, method=method, rtol=rtol, atol=atol).y[:, -1]
             t = t_next
             continue
-        qd_plus, active = _resolve(model, q, qd, p, active, contact_tol)
+        qd_plus, contact_set = _resolve(model, q, qd, p, contact_set, contact_tol)
         energy_before = sum(model.energy(q, qd, p))
         x[nq:] = qd_plus
         impacts.append(BaselineImpact(t, frozenset((model.contacts[c][0], model.contacts[c][1].name)
-                                                   for c in active),
+                                                   for c in contact_set),
                                       energy_before, sum(model.energy(q, qd_plus, p))))
         if len(impacts) >= max_impacts:
             status, message = -1, f"stopped after {len(impacts)} impacts at t = {t:.12g} s (max_impacts)"

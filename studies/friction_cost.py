@@ -61,7 +61,7 @@ def main(argv=None) -> int:
             print(f"error: {label}: {result.message}", file=sys.stderr)
             return 1
         print(f"| {label} | {result.n_steps} | {result.n_rhs} | {1e3 * timing.median:.1f} ({1e3 * timing.spread:.1f}) "
-              f"| {len(result.impacts)} | {result.energy_friction_loss:.4g} | {result.q[-1, n + 2]:.6f} "
+              f"| {len(result.impacts)} | {result.loss_friction:.4g} | {result.q[-1, n + 2]:.6f} "
               f"| {result.energy_residual:.1e} |")
     return 0
 

@@ -10,7 +10,7 @@ rigid bodies (a random box, centre of mass off the axis, principal axes turned);
 joint axes, start in the X1-X2 plane) and spatial ones with random twists; gravity 0 or 9.81; a box around
 the start, often cramped (margins 1e-3 ... 1 of the chain's extent, so that a side can be shorter than the
 chain); restitution per wall 0, 1 or uniform in [0, 1]; Coulomb friction on the walls of 30 % of the structures
-(mu uniform in [0, 1.5] per wall and run, drawn so that the other structures' runs are unchanged); rates up to
+(c_f uniform in [0, 1.5] per wall and run, drawn so that the other structures' runs are unchanged); rates up to
 20 rad/s; DOPRI5 and DOP853 at
 rtol 1e-11 ... 1e-6 (atol = rtol x the shortest link, at least 1e-16) and RK4 at dt 1e-5 ... 1e-3 s.  A
 *structure* (n, link kinds, twists, planar or not) is compiled once; its runs draw new lengths, masses,
@@ -53,7 +53,7 @@ ENERGY_TOL = 1e-7         # relative energy change allowed at an impact (round-o
 BUDGET = 20.0             # s of wall time per run
 BUDGET_SLACK = 5.0        # s beyond the budget before a run counts as over it
 T_END_MAX = 2.0           # s
-ROUGH_SHARE = 0.3         # structures whose walls have Coulomb friction (mu uniform in [0, 1.5] per run and wall)
+ROUGH_SHARE = 0.3         # structures whose walls have Coulomb friction (c_f uniform in [0, 1.5] per run and wall)
 ROUGH_STREAM = 7919       # the random stream that decides it, apart from the structure's own
 
 # Stops that are failures of the engine: its own post-impact checks and non-finite states.
@@ -235,8 +235,8 @@ def check_run(model, run: Run, result, seconds: float, budget: float) -> list[st
             if abs(T1 + impact.energy_rest - T0) > tol * T0:
                 violations.append(f"elastic impact at t = {impact.t:.6g} s changed T: {T0!r} -> {T1!r} J")
                 break
-    if result.energy_friction_loss < -ENERGY_TOL * result.energy_scale:
-        violations.append(f"friction gave energy: {result.energy_friction_loss!r} J")
+    if result.loss_friction < -ENERGY_TOL * result.energy_scale:
+        violations.append(f"friction gave energy: {result.loss_friction!r} J")
     if seconds > budget + BUDGET_SLACK:
         violations.append(f"over budget: {seconds:.1f} s")
     return violations

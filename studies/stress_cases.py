@@ -430,15 +430,15 @@ GRAZING = (
 # ---------------------------------------------------------------------------
 # at rest on the floor, impossible states, bad options
 # ---------------------------------------------------------------------------
-# A chain at rest on the floor needs persistent (resting) contact: it must stay where it is, resting on
-# all four points.  (Before persistent contact it sank through the floor with status 0.)
+# A chain at rest on the floor needs resting contact: it must stay where it is, resting on
+# all four points.  (Before resting contact it sank through the floor with status 0.)
 def stays_at_rest(tol: float = 1e-9):
     def check(run: CaseRun):
         r, scene = run.result, run.scene
         start = contact_points(scene, r.q[0])
         moved = max(np.abs(contact_points(scene, q) - start).max() for q in r.q)
         speed = float(np.abs(r.qd).max())
-        resting = sorted(r.persistent_final)
+        resting = sorted(r.resting_final)
         everyone = sorted((p, "x2_min") for p in range(1, scene.n + 2))
         return [Check(moved <= tol and speed <= tol, f"points move {moved:.1e} m, speeds {speed:.1e} (tol {tol:g})"),
                 Check(resting == everyone, f"resting contacts at the end: {resting}")]

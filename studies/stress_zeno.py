@@ -1,7 +1,7 @@
 """Stress cases for impact accumulation (Zeno behaviour) and resting contact (``CASES``, taken into
 studies.stress_cases.CASES; see studies/stress.py).  A chain dropped onto the floor with e = 0 and e = 0.5
 must finish within a bounded number of impacts, with T + V never rising over the samples, and end flat on
-the floor at rest: every point in persistent contact, gaps 0, speeds 0, energy 0 (V = 0 on the floor)."""
+the floor at rest: every point in resting contact, gaps 0, speeds 0, energy 0 (V = 0 on the floor)."""
 from __future__ import annotations
 
 import numpy as np
@@ -28,8 +28,8 @@ def ends_at_rest(speed_tol: float = 1e-6, gap_tol: float = 1e-9):
         gaps = model.contact_gaps(model.layout.reduce(r.q_final), run.p)
         speed = float(np.abs(r.qd_final).max())
         events = len(r.contact_events)
-        return [Check(sorted(r.persistent_final) == everyone,
-                      f"resting at the end: {sorted(r.persistent_final)} ({events} contact events)"),
+        return [Check(sorted(r.resting_final) == everyone,
+                      f"resting at the end: {sorted(r.resting_final)} ({events} contact events)"),
                 Check(speed <= speed_tol and np.abs(gaps).max() <= gap_tol,
                       f"final speeds {speed:.1e} (tol {speed_tol:g}), gaps {np.abs(gaps).max():.1e} m "
                       f"(tol {gap_tol:g})"),

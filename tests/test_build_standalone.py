@@ -153,6 +153,6 @@ def test_driven_example_with_a_pd_controller_matches_the_python_runtime(tmp_path
     assert len(c_times) == len(python.impacts) >= 5
     assert max(abs(a - b.t) for a, b in zip(c_times, python.impacts)) < 1e-9
     work = float(re.search(r"work of the inputs (\S+) J", result.stdout).group(1))
-    assert work == pytest.approx(python.energy_input_work, rel=1e-8)
+    assert work == pytest.approx(python.work_input, rel=1e-8)
     bad = subprocess.run(["./driven_fold_example", "1", "--pd", "1", "-2"], cwd=tmp_path, capture_output=True, text=True)
     assert bad.returncode == 2 and "--pd KD: got '-2', allowed a finite gain >= 0" in bad.stderr

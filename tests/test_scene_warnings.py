@@ -130,8 +130,8 @@ def test_a_long_chain_of_slender_links_is_ill_conditioned_by_its_length_not_its_
 # friction regularisation
 # ---------------------------------------------------------------------------------------------------------------
 def rough_rod(friction_velocity: float):
-    """A 0.5 m rod lying on a floor of Coulomb mu = 0.5, sliding at 0.05 m/s: it stops after about 0.01 s and then
-    rests, in the regularisation's viscous regime (time constant friction_velocity / (mu g))."""
+    """A 0.5 m rod lying on a floor of Coulomb c_f = 0.5, sliding at 0.05 m/s: it stops after about 0.01 s and then
+    rests, in the regularisation's viscous regime (time constant friction_velocity / (c_f g))."""
     return scene_from_dict({
         "name": "rough_rod", "links": [{"length": 0.5, "mu": 1.0}], "friction": {"x2_min": 0.5},
         "friction_velocity": friction_velocity, "restitution": 0.0, "walls": {"x1_min": 0.0, "x1_max": 2.0, "x2_min": 0.0},
@@ -148,7 +148,7 @@ def test_steps_held_back_by_the_friction_regularisation_are_said_to_be_and_frict
     assert slow.success and slow.n_steps > 10_000 and len(friction) == 1, slow.warnings
     warning, = friction
     assert "began with a point resting on a rough wall and sliding slower than 4 friction_velocity" in warning
-    assert f"friction_velocity / (mu g) = {tau:.2g} s" in warning
+    assert f"friction_velocity / (c_f g) = {tau:.2g} s" in warning
     assert "The scene's friction_velocity = 1e-06 m/s: a larger one takes proportionally fewer steps" in warning
     share = float(warning.split("steps (")[1].split("%")[0])
     assert share >= 90

@@ -213,7 +213,7 @@ def test_case2_switches_and_agrees_with_a_single_chart():
 def test_resting_contacts_start_on_chart_b_and_carry_over_a_switch(model):
     """Link 1 lying on the floor with its joint axis z_1 vertical: chart A's lock itself (chi_A = 1e-7).  The run
     starts on chart B with O_1 and O_2 resting on the floor (e = 0), link 2 falls and lands, rolling link 1 about
-    its own axis until chi_A passes 0.6: back on chart A with the three contacts held.  No point sinks, the
+    its own axis until chi_A passes 0.6: back on chart A with the three contacts resting.  No point sinks, the
     energy balance closes, the rests at the start are reported at t = 0 in chart A's coordinates."""
     p = model.parameters({"e_x2_min": 0.0})
     q0 = np.array([0.3, np.pi / 2 - 1e-7, -0.4, 0.5, 1.0, 0.0, 1.0])     # theta_2 = 0.5: O_3 above the floor
@@ -223,8 +223,8 @@ def test_resting_contacts_start_on_chart_b_and_carry_over_a_switch(model):
     r = simulate(model, 1.5, q0=q0, qd0=qd0, p=p, **ACCURATE)
     assert r.status == 0, r.message
     assert r.n_chart_switches >= 2                       # on B from the start, back on A once link 1 rolls
-    assert [(e.t, e.kind, e.point) for e in r.contact_events[:2]] == [(0.0, "persist", 1), (0.0, "persist", 2)]
-    assert sorted(r.persistent_final) == [(1, "x2_min"), (2, "x2_min"), (3, "x2_min")]
+    assert [(e.t, e.kind, e.point) for e in r.contact_events[:2]] == [(0.0, "rest", 1), (0.0, "rest", 2)]
+    assert sorted(r.resting_final) == [(1, "x2_min"), (2, "x2_min"), (3, "x2_min")]
     assert np.abs(r.q[0] - q0).max() < 1e-9             # theta_-1, theta_1 alone are conditioned like eps / chi_A
     A = Chart.of(model.scene.base_twists)
     assert np.abs(A.rotation(r.q[0, :3]) - A.rotation(q0[:3])).max() < 1e-14
@@ -244,7 +244,7 @@ def test_driven_chain_crosses_the_lock(scene):
     r = simulate(model, 1.0, u=[1e-4], **ACCURATE)
     assert r.status == 0 and r.t_final == 1.0, r.message
     assert r.n_chart_switches >= 1
-    assert r.energy_damping_loss > 0.0 and r.energy_input_work != 0.0
+    assert r.loss_damping > 0.0 and r.work_input != 0.0
     assert abs(r.energy_drift) < 1e-9
 
 

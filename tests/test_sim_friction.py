@@ -1,7 +1,7 @@
 """Coulomb friction at resting contacts (walls with `friction`): the constrained dynamics against a dense solve with
 the independent reference model (studies/reference.py) on random 3D states; a rod sliding to rest against the
-closed form x(t) = x0 + v0 t - mu g t^2 / 2; a diagonal slide in 3D; a pushed rod that creeps below the Coulomb
-limit at the regularised rate and accelerates above it at (F - mu m g) / m; the energy balance with the friction
+closed form x(t) = x0 + v0 t - c_f g t^2 / 2; a diagonal slide in 3D; a pushed rod that creeps below the Coulomb
+limit at the regularised rate and accelerates above it at (F - c_f m g) / m; the energy balance with the friction
 loss closing; a frictionless scene's code unchanged."""
 from __future__ import annotations
 
@@ -29,65 +29,65 @@ def rod(friction=0.5, v=(2.0, 0.0), inputs=(), friction_velocity=1e-4, restituti
 
 @pytest.mark.parametrize("specialise", [True, False])
 def test_a_sliding_rod_stops_as_coulomb_says(specialise):
-    mu, v0 = 0.5, 2.0
-    scene = rod(mu, (v0, 0.0))
+    c_f, v0 = 0.5, 2.0
+    scene = rod(c_f, (v0, 0.0))
     model = load_model(scene, specialise=specialise)
-    t_stop = v0 / (mu * G)
+    t_stop = v0 / (c_f * G)
     t = np.linspace(0.0, 0.6, 61)
     result = simulate(model, 0.6, t_eval=t, rtol=1e-10, atol=1e-12)
     assert result.success, result.message
-    assert [e.kind for e in result.contact_events] == ["persist", "persist"] and not result.impacts
+    assert [e.kind for e in result.contact_events] == ["rest", "rest"] and not result.impacts
     x = result.q[:, scene.n + 2]
-    exact = np.where(t < t_stop, 1.0 + v0 * t - 0.5 * mu * G * t * t, 1.0 + v0 * v0 / (2 * mu * G))
+    exact = np.where(t < t_stop, 1.0 + v0 * t - 0.5 * c_f * G * t * t, 1.0 + v0 * v0 / (2 * c_f * G))
     assert np.abs(x - exact).max() < 1e-8                 # the regularisation below 1e-4 m/s moves it by 1e-9
-    assert result.energy_friction_loss == pytest.approx(0.5 * v0 * v0, rel=1e-9)
+    assert result.loss_friction == pytest.approx(0.5 * v0 * v0, rel=1e-9)
     assert abs(result.energy_residual) < 1e-9
     assert np.abs(result.q[:, scene.n + 3]).max() < 1e-12                  # still on the floor
 
 
 def test_a_diagonal_slide_keeps_its_direction():
     """Sliding along (3, 4)/5 in the floor's plane (general model: both tangential axes): friction opposes the
-    velocity, so the rod decelerates along a straight line by mu g and stops after |v0|^2 / (2 mu g)."""
-    mu, v = 0.4, (1.2, 1.6)
-    scene = rod(mu, v)
+    velocity, so the rod decelerates along a straight line by c_f g and stops after |v0|^2 / (2 c_f g)."""
+    c_f, v = 0.4, (1.2, 1.6)
+    scene = rod(c_f, v)
     model = load_model(scene, specialise=False)
     result = simulate(model, 0.6, rtol=1e-10, atol=1e-12, t_eval=[0.1, 0.6])
     assert result.success, result.message
     speed0 = math.hypot(*v)
-    s = speed0 * 0.1 - 0.5 * mu * G * 0.01
+    s = speed0 * 0.1 - 0.5 * c_f * G * 0.01
     n = scene.n
     assert result.q[0, n + 2] - 1.0 == pytest.approx(s * v[0] / speed0, abs=1e-9)
     assert result.q[0, n + 4] == pytest.approx(s * v[1] / speed0, abs=1e-9)
-    distance = speed0 ** 2 / (2 * mu * G)
+    distance = speed0 ** 2 / (2 * c_f * G)
     assert result.q[1, n + 2] - 1.0 == pytest.approx(distance * v[0] / speed0, abs=1e-8)
     assert result.q[1, n + 4] == pytest.approx(distance * v[1] / speed0, abs=1e-8)
 
 
 @pytest.mark.parametrize("force", [2.0, 7.0])
 def test_a_pushed_rod_creeps_below_the_limit_and_slides_above_it(force):
-    """A horizontal force F on the resting rod (mu m g = 4.905 N): below the limit it creeps at the regularised
-    rate v_s F / (mu m g); above it, it accelerates at (F - mu m g) / m from rest."""
-    mu, vs = 0.5, 1e-4
-    scene = rod(mu, (0.0, 0.0), inputs=("X1",), friction_velocity=vs)
+    """A horizontal force F on the resting rod (c_f m g = 4.905 N): below the limit it creeps at the regularised
+    rate v_s F / (c_f m g); above it, it accelerates at (F - c_f m g) / m from rest."""
+    c_f, vs = 0.5, 1e-4
+    scene = rod(c_f, (0.0, 0.0), inputs=("X1",), friction_velocity=vs)
     model = load_model(scene)
     result = simulate(model, 0.5, u=[force], rtol=1e-10, atol=1e-12, t_eval=[0.5])
     assert result.success, result.message
     n = scene.n
-    limit = mu * 1.0 * G
+    limit = c_f * 1.0 * G
     if force < limit:
         assert result.qd[-1, n + 2] == pytest.approx(vs * force / limit, rel=1e-6)
     else:
         a = force - limit
         # the first v_s of speed is reached in the viscous regime; after it, exactly Coulomb
         assert result.qd[-1, n + 2] == pytest.approx(a * 0.5, abs=2 * vs)
-    assert abs(result.energy_residual) < 1e-9 * max(1.0, result.energy_input_work)
+    assert abs(result.energy_residual) < 1e-9 * max(1.0, result.work_input)
 
 
-def contact_directions(scene, contacts, active, J, qd):
-    """The signed normal rows N and the generalised directions D = N + mu J_t^T(-phi) of the held contacts, from
+def contact_directions(scene, contacts, resting, J, qd):
+    """The signed normal rows N and the generalised directions D = N + c_f J_t^T(-phi) of the resting contacts, from
     the reference model's point Jacobians J (n + 1, 3, nq): the friction law written out independently."""
     N, D = [], []
-    for c in active:
+    for c in resting:
         point, wall = contacts[c]
         n_row = wall.normal_sign * J[point - 1, wall.axis]
         d = n_row.copy()
@@ -121,17 +121,17 @@ def test_constrained_dynamics_with_friction_against_a_dense_solve():
     for trial in range(12):
         q = np.r_[rng.uniform(-1.2, 1.2, scene.n + 2), rng.uniform(-1, 1, 3)]
         qd = rng.uniform(-1, 1, scene.nq) * (1e-4 if trial == 0 else 1.0)      # trial 0: below v_s
-        active = sorted(rng.choice(len(contacts), size=rng.integers(1, 4), replace=False).tolist())
-        points = {contacts[c][0] for c in active}
-        if len(points) < len(active):
+        resting = sorted(rng.choice(len(contacts), size=rng.integers(1, 4), replace=False).tolist())
+        points = {contacts[c][0] for c in resting}
+        if len(points) < len(resting):
             continue                                   # one point on two walls: keep the sets simple
-        qdd, lam = model.constrained_dynamics(q, qd, active)
+        qdd, lam = model.constrained_dynamics(q, qd, resting)
 
         M, R, J = ref.mass_matrix(q), ref.bias(q, qd), ref.point_jacobian(q)
         bias = model.contact_bias(q, qd)
-        N, D = contact_directions(scene, contacts, active, J, qd)
+        N, D = contact_directions(scene, contacts, resting, J, qd)
         rhs = [-contacts[c][1].normal_sign * bias[model.contact_rows.index((contacts[c][0], contacts[c][1].axis))]
-               for c in active]
+               for c in resting]
         Minv_R, Minv_D = np.linalg.solve(M, R), np.linalg.solve(M, D.T)
         lam_ref = np.linalg.solve(N @ Minv_D, np.array(rhs) - N @ Minv_R)
         qdd_ref = Minv_R + Minv_D @ lam_ref
@@ -153,7 +153,7 @@ def p_matrix(B, tol=1e-8):
 
 
 def test_the_painleve_guard_follows_the_p_matrix_rule():
-    """Rough walls (mu = 3) and random held sets of a 3D chain: the C solve refuses exactly the states whose
+    """Rough walls (c_f = 3) and random resting sets of a 3D chain: the C solve refuses exactly the states whose
     system B (formed here with the reference model) is no P-matrix, and solves the others."""
     from runtime.model import ImpactError
     data = {"name": "very_rough", "gravity": G,
@@ -170,18 +170,18 @@ def test_the_painleve_guard_follows_the_p_matrix_rule():
     for _ in range(60):
         q = np.r_[rng.uniform(-1.5, 1.5, scene.n + 2), rng.uniform(-1, 1, 3)]
         qd = rng.uniform(-2, 2, scene.nq)
-        active = sorted(rng.choice(len(contacts), size=rng.integers(1, 4), replace=False).tolist())
-        if len({contacts[c][0] for c in active}) < len(active):
+        resting = sorted(rng.choice(len(contacts), size=rng.integers(1, 4), replace=False).tolist())
+        if len({contacts[c][0] for c in resting}) < len(resting):
             continue
         M, J = ref.mass_matrix(q), ref.point_jacobian(q)
-        N, D = contact_directions(scene, contacts, active, J, qd)
+        N, D = contact_directions(scene, contacts, resting, J, qd)
         B = N @ np.linalg.solve(M, D.T)
         if p_matrix(B):
-            model.constrained_dynamics(q, qd, active)
+            model.constrained_dynamics(q, qd, resting)
             accepted += 1
         else:
             with pytest.raises(ImpactError, match="Painleve paradox"):
-                model.constrained_dynamics(q, qd, active)
+                model.constrained_dynamics(q, qd, resting)
             refused += 1
     assert refused >= 3 and accepted >= 10
 
@@ -196,7 +196,7 @@ def test_energy_balance_closes_with_impacts_and_sliding():
     scene = scene_from_dict(data)
     result = simulate(load_model(scene), 2.0, rtol=1e-10, atol=1e-12, t_eval=[])
     assert result.success, result.message
-    assert result.impacts and result.energy_friction_loss > 1.0
+    assert result.impacts and result.loss_friction > 1.0
     assert abs(result.energy_drift) < 1e-8
 
 
@@ -226,23 +226,23 @@ def test_frictionless_scenes_have_no_friction_rows():
     assert sorted(load_model(rough, specialise=False).contact_rows) == [(p, a) for p in (1, 2) for a in range(3)]
 
 
-@pytest.mark.parametrize("mu, v, paradox", [(2.0, -1.0, True), (2.0, 1.0, False), (1.0, -1.0, False)])
-def test_the_painleve_paradox_is_named(mu, v, paradox):
+@pytest.mark.parametrize("c_f, v, paradox", [(2.0, -1.0, True), (2.0, 1.0, False), (1.0, -1.0, False)])
+def test_the_painleve_paradox_is_named(c_f, v, paradox):
     """A uniform rod leaning at tan(theta) = 2 with its lower end sliding on a rough floor: its normal force obeys
-    m B N = ..., m B = 1 + 3 cos(theta) (cos(theta) + mu s sin(theta)) (s: the sliding direction's sign, towards the
-    rod's lean +1), negative for s = -1 and mu > 4/3 at this angle (Painleve): the model says so and does not
+    m B N = ..., m B = 1 + 3 cos(theta) (cos(theta) + c_f s sin(theta)) (s: the sliding direction's sign, towards the
+    rod's lean +1), negative for s = -1 and c_f > 4/3 at this angle (Painleve): the model says so and does not
     run; otherwise it runs."""
     theta = math.atan(2.0)
     data = {"name": "painleve", "gravity": G, "links": [{"length": 1.0, "mu": 1.0, "J": [0.0, 0.0, 0.0]}],
-            "walls": {"x2_min": 0.0}, "restitution": 0.0, "friction": mu,
+            "walls": {"x2_min": 0.0}, "restitution": 0.0, "friction": c_f,
             "initial": {"q": [-math.pi / 2, 0.0, math.atan2(-math.cos(theta), math.sin(theta)), 1.0, 0.0, 0.0],
                         "qd": [0.0, 0.0, 0.0, v, 0.0, 0.0]}}
     model = load_model(scene_from_dict(data))
-    assert (1 + 3 * math.cos(theta) * (math.cos(theta) + mu * math.copysign(1.0, v) * math.sin(theta)) < 0) == paradox
+    assert (1 + 3 * math.cos(theta) * (math.cos(theta) + c_f * math.copysign(1.0, v) * math.sin(theta)) < 0) == paradox
     if paradox:
         with pytest.raises(ValueError, match="Painleve paradox"):
             simulate(model, 0.3)
     else:
         result = simulate(model, 0.3, rtol=1e-10, atol=1e-12)
         assert result.success, result.message
-        assert result.contact_events[0].kind == "persist"
+        assert result.contact_events[0].kind == "rest"

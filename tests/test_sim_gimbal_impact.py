@@ -1,10 +1,10 @@
 """Impacts near the gimbal lock of the base chart against a 40-digit solve.
 
-Near theta_0 = pi/2 the smallest eigenvalue of I_f falls like mu^2 (mu = |det E| = |cos theta_0| for the
-default twists), so a double-precision impact carries a relative error of about 16 eps / mu^2.  The
+Near theta_0 = pi/2 the smallest eigenvalue of I_f falls like chi^2 (chi = |det E| = |cos theta_0| for the
+default twists), so a double-precision impact carries a relative error of about 16 eps / chi^2.  The
 reference evaluates the same derived expressions for I_f and the contact Jacobian (the kernels' straight-
 line programs, before C) in 40-digit arithmetic with mpmath and solves Eq. 47 there.  The compiled impact
-must either agree to the bound 16 eps / mu^2 (<= 1e-6 where it answers) or refuse with ERR_GIMBAL_LOCK.
+must either agree to the bound 16 eps / chi^2 (<= 1e-6 where it answers) or refuse with ERR_GIMBAL_LOCK.
 """
 import mpmath as mp
 import numpy as np
@@ -49,7 +49,7 @@ def test_impact_near_the_lock_is_accurate_or_refused(lock_case, cos_theta0):
     q = np.array(scene.q0, dtype=float)
     q[1] = np.pi / 2 - cos_theta0
     qd = rng.normal(size=nq)
-    mu = abs(np.cos(q[1]))
+    chi = abs(np.cos(q[1]))
     c = 0
     point, wall = model.contacts[c]
     row = model.contact_rows.index((point, wall.axis))
@@ -63,7 +63,7 @@ def test_impact_near_the_lock_is_accurate_or_refused(lock_case, cos_theta0):
     Y = mp.lu_solve(M, normal)
     F = -(1 + e) * (normal.T * qd_mp)[0] / (normal.T * Y)[0]          # Eq. 47, one contact
     exact = np.array([float(x) for x in qd_mp + Y * F])
-    bound = 16 * EPS / mu ** 2
+    bound = 16 * EPS / chi ** 2
     try:
         qd_plus, _ = model.impact(q, qd, [c])
     except ImpactError as exc:

@@ -8,17 +8,17 @@ from conftest import chain, random_parameters
 from runtime import ImpactError
 
 
-def solve_eq48(model, q, qd, active, p):
+def solve_eq48(model, q, qd, contact_set, p):
     """[[I_f, -J^T], [J, 0]] [qd+; F] = [I_f qd-; -e J qd-]  (Eq. 48), J rows along inward normals."""
     M = model.mass_matrix(q, p)
     Jall = model.contact_jacobian(q, p)
     rows, e = [], []
-    for c in active:
+    for c in contact_set:
         point, wall = model.contacts[c]
         rows.append(wall.normal_sign * Jall[model.contact_rows.index((point, wall.axis))])
         e.append(p[model.scene.parameter_names().index(f"e_{wall.name}")])
     J = np.array(rows)
-    k, nq = len(active), model.nq
+    k, nq = len(contact_set), model.nq
     A = np.block([[M, -J.T], [J, np.zeros((k, k))]])
     b = np.r_[M @ qd, -np.array(e) * (J @ qd)]
     x = np.linalg.solve(A, b)
@@ -33,12 +33,12 @@ def test_impact_matches_block_system(compiled, n, k):
     p = random_parameters(scene, seed=80 + n)
     q, qd = reference.random_state(n, rng)
     # k contacts on distinct points and walls of distinct axes where possible
-    active = []
+    contact_set = []
     for point in range(1, k + 1):
         wall_index = [i for i, (pt, w) in enumerate(model.contacts) if pt == point][point % 6]
-        active.append(wall_index)
-    qd_plus, impulse = model.impact(q, qd, active, p)
-    qd_ref, F_ref, J, e = solve_eq48(model, q, qd, active, p)
+        contact_set.append(wall_index)
+    qd_plus, impulse = model.impact(q, qd, contact_set, p)
+    qd_ref, F_ref, J, e = solve_eq48(model, q, qd, contact_set, p)
     assert np.allclose(qd_plus, qd_ref, rtol=1e-10, atol=1e-10 * np.abs(qd).max())
     assert np.allclose(impulse, F_ref, rtol=1e-9, atol=1e-10 * np.abs(F_ref).max())
     # Newton's law (Eq. 47) holds and the configuration is untouched
@@ -66,9 +66,9 @@ def test_impact_errors_are_reported(compiled):
     scene = load_scene("paper-case2")
     model = compiled(scene)
     q, qd = np.array(scene.q0), np.ones(scene.nq)
-    with pytest.raises(ImpactError, match="bad active-contact list"):
+    with pytest.raises(ImpactError, match="bad contact set"):
         model.impact(q, qd, [len(model.contacts)])
-    with pytest.raises(ImpactError, match="bad active-contact list"):
+    with pytest.raises(ImpactError, match="bad contact set"):
         model.impact(q, qd, [0, 0])
     # O_1 on x1_min and on x1_max: the same Jacobian row twice -> dependent constraints
     lo = next(c for c, (pt, w) in enumerate(model.contacts) if pt == 1 and w.name == "x1_min")

@@ -14,11 +14,11 @@ from studies import reference
 from conftest import chain, random_parameters, reference_of
 
 
-def contact_rows(model, ref, q, active):
+def contact_rows(model, ref, q, contact_set):
     """Rows of the contacts along their inward normals, from the reference model's point Jacobian."""
     Jp = ref.point_jacobian(q)
     return np.array([model.contacts[c][1].normal_sign * Jp[model.contacts[c][0] - 1, model.contacts[c][1].axis]
-                     for c in active])
+                     for c in contact_set])
 
 
 def block_solve(M, N, qd, target):
@@ -81,17 +81,17 @@ def test_law_matches_the_reference_on_mixed_contact_sets(compiled, n, seed):
         q, qd = reference.random_state(n, rng)
         k = int(rng.integers(1, min(n + 1, 3) + 1))
         points = rng.choice(np.arange(1, n + 2), size=k, replace=False)
-        active = [int(rng.choice([c for c, (pt, w) in enumerate(model.contacts) if pt == point]))
+        contact_set = [int(rng.choice([c for c, (pt, w) in enumerate(model.contacts) if pt == point]))
                   for point in points]
-        N = contact_rows(model, ref, q, active)
-        if np.linalg.matrix_rank(N) < len(active):
+        N = contact_rows(model, ref, q, contact_set)
+        if np.linalg.matrix_rank(N) < len(contact_set):
             continue
-        e = np.array([p[names.index(f"e_{model.contacts[c][1].name}")] for c in active])
+        e = np.array([p[names.index(f"e_{model.contacts[c][1].name}")] for c in contact_set])
         qd_ref, F_ref = reference_law(ref.mass_matrix(q), N, qd, e)
-        qd_plus, F = model.impact(q, qd, active, p, mode="complementarity")
+        qd_plus, F = model.impact(q, qd, contact_set, p, mode="complementarity")
         scale = np.abs(qd).max()
-        assert np.allclose(qd_plus, qd_ref, rtol=1e-9, atol=1e-10 * scale), (trial, active)
-        assert np.allclose(F, F_ref, rtol=1e-8, atol=1e-10 * np.abs(F_ref).max() + 1e-300), (trial, active)
+        assert np.allclose(qd_plus, qd_ref, rtol=1e-9, atol=1e-10 * scale), (trial, contact_set)
+        assert np.allclose(F, F_ref, rtol=1e-8, atol=1e-10 * np.abs(F_ref).max() + 1e-300), (trial, contact_set)
         checked += 1
     assert checked >= 15
 
@@ -113,10 +113,10 @@ def test_post_conditions_on_random_contact_sets(compiled):
                 p[i] = 1.0 if elastic else rng.uniform()
         q, qd = reference.random_state(3, rng)
         points = rng.choice(np.arange(1, 5), size=int(rng.integers(1, 5)), replace=False)
-        active = [int(rng.choice([c for c, (pt, w) in enumerate(model.contacts) if pt == point]))
+        contact_set = [int(rng.choice([c for c, (pt, w) in enumerate(model.contacts) if pt == point]))
                   for point in points]
-        qd_plus, F = model.impact(q, qd, active, p, mode="complementarity")
-        N = contact_rows(model, ref, q, active)
+        qd_plus, F = model.impact(q, qd, contact_set, p, mode="complementarity")
+        N = contact_rows(model, ref, q, contact_set)
         v0, v1 = N @ qd, N @ qd_plus
         T0, T1 = ref.energy(q, qd)[0], ref.energy(q, qd_plus)[0]
         assert F.min() >= 0.0
@@ -136,15 +136,15 @@ def test_one_round_is_eq47_when_every_approaching_contact_pushes(compiled):
     found = 0
     for trial in range(300):
         q, qd = reference.random_state(2, rng)
-        active = sorted(rng.choice(len(model.contacts), size=2, replace=False).tolist())
-        if model.contacts[active[0]][0] == model.contacts[active[1]][0]:
+        contact_set = sorted(rng.choice(len(model.contacts), size=2, replace=False).tolist())
+        if model.contacts[contact_set[0]][0] == model.contacts[contact_set[1]][0]:
             continue
-        qd_eq, F_eq = model.impact(q, qd, active)
+        qd_eq, F_eq = model.impact(q, qd, contact_set)
         ref = reference_of(scene)
-        v = contact_rows(model, ref, q, active) @ qd
+        v = contact_rows(model, ref, q, contact_set) @ qd
         if v.max() >= 0 or F_eq.min() <= 0:
             continue
-        qd_plus, F = model.impact(q, qd, active, mode="complementarity")
+        qd_plus, F = model.impact(q, qd, contact_set, mode="complementarity")
         assert np.allclose(qd_plus, qd_eq, rtol=1e-12, atol=1e-12 * np.abs(qd).max())
         assert np.allclose(F, F_eq, rtol=1e-10)
         found += 1

@@ -65,7 +65,7 @@ def test_separating_contact_scene_runs_to_the_end_across_the_lock():
 def test_elastic_chain_keeps_its_energy_at_every_impact(compiled):
     """Five links, e = 1 on every wall, hundreds of impacts in a cramped box, I_f conditioned ~1e11 (an axial
     inertia of 1e-16): used to stop with 'elastic impact changed the energy', or lose 22 % of the kinetic
-    energy silently when a contact became persistent.  Every impact it applies keeps the energy to its round-off
+    energy silently when a contact came to rest.  Every impact it applies keeps the energy to its round-off
     bound, and over the run the energy drifts only by the integration error; after some 0.03 s of this chaotic motion
     an impact's own round-off bound exceeds 1 % of the energy, GAC_IMPACT_ROUNDOFF_MAX, and the loop stops there,
     saying so, rather than apply an impact it cannot vouch for."""

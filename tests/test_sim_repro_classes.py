@@ -51,8 +51,8 @@ def test_an_impact_that_leaves_a_contact_at_rest_on_its_wall_holds_it_there(comp
     impulses = {c.point: c.impulse for c in result.impacts[0].contacts}
     assert impulses[1] == pytest.approx((total + difference) / 2, abs=1e-9)
     assert impulses[2] == pytest.approx((total - difference) / 2, abs=1e-9)
-    assert sorted((e.t, e.point, e.kind) for e in result.contact_events) == [(0.0, 1, "persist"), (0.0, 2, "persist")]
-    assert sorted(result.persistent_final) == [(1, "x2_min"), (2, "x2_min")]
+    assert sorted((e.t, e.point, e.kind) for e in result.contact_events) == [(0.0, 1, "rest"), (0.0, 2, "rest")]
+    assert sorted(result.resting_final) == [(1, "x2_min"), (2, "x2_min")]
     gaps = np.array([model.contact_gaps(model.layout.reduce(q)) for q in result.q])
     assert np.abs(gaps).max() < 1e-12                                 # flat on the floor throughout
     assert np.abs(result.qd_final).max() < 1e-9
@@ -72,7 +72,7 @@ def test_elastic_chain_started_at_its_wall_keeps_its_energy():
     assert abs(result.energy_final - result.energy_initial) < 1e-12 * result.energy_initial
     # at rest it does rest: the same rod standing still on the floor is held there from the start
     still = simulate(dataclasses.replace(scene, name="still_start", qd0=(0.0,) * 6), 0.1, method="dop853")
-    assert [e.kind for e in still.contact_events][:1] == ["persist"] and still.q_final[4] == pytest.approx(0.0, abs=1e-9)
+    assert [e.kind for e in still.contact_events][:1] == ["rest"] and still.q_final[4] == pytest.approx(0.0, abs=1e-9)
 
 
 # --- the energy balance, watched by the loop ---------------------------------------------------------------------

@@ -262,7 +262,7 @@ def test_energy_lost_at_impacts_is_not_drift(compiled, tmp_path, capsys):
     E0, E1, lost = _independent_balance(model, result)
     assert result.success and len(result.impacts) >= 3
     assert lost > 0.05 * abs(E0)                                    # the impacts took a lot ...
-    assert result.energy_impact_loss == pytest.approx(lost, rel=1e-9)
+    assert result.loss_impacts == pytest.approx(lost, rel=1e-9)
     assert result.energy_residual == pytest.approx(E1 - E0 + lost, abs=1e-9 * result.energy_scale)
     assert abs(result.energy_drift) < 1e-7                          # ... and none of it is drift
     assert abs((E1 - E0) / abs(E0)) > 0.05                          # (the old E_final / E0 - 1 was not)
@@ -283,11 +283,11 @@ def test_energy_figures_agree_in_result_json_and_cli(tmp_path, capsys):
     printed = capsys.readouterr().out
     data = json.loads(out.read_text())
     result = simulate("paper-case2", 0.5, t_eval=np.arange(0.0, 0.5, 1e-3).tolist() + [0.5])
-    for key in ("energy_initial", "energy_final", "energy_impact_loss", "energy_residual", "energy_scale",
+    for key in ("energy_initial", "energy_final", "loss_impacts", "energy_residual", "energy_scale",
                 "energy_drift"):
         assert data[key] == pytest.approx(getattr(result, key), rel=1e-12, abs=1e-300)
     assert f"balance residual {data['energy_residual']:.3e} J = {data['energy_drift']:.3e}" in printed
-    assert f"lost at impacts {data['energy_impact_loss']:.6g} J" in printed
+    assert f"lost at impacts {data['loss_impacts']:.6g} J" in printed
 
 
 # ---------------------------------------------------------------------------

@@ -54,7 +54,7 @@ class FakeResult:
     qd_final: np.ndarray
     impacts: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
-    energy_friction_loss: float = 0.0
+    loss_friction: float = 0.0
     energy_scale: float = 1.0
 
 
@@ -93,7 +93,7 @@ def test_each_independent_check_can_fail(compiled):
     assert "elastic impact" in fuzz.check_run(model, run, FakeResult(np.array([q]), np.array([qd]), q, qd, [loss]),
                                               0.1, 20.0)[0]
     assert "over budget" in fuzz.check_run(model, run, clean, 30.0, 20.0)[0]
-    gift = FakeResult(np.array([q]), np.array([qd]), q, qd, energy_friction_loss=-1e-3)
+    gift = FakeResult(np.array([q]), np.array([qd]), q, qd, loss_friction=-1e-3)
     assert "friction gave energy" in fuzz.check_run(model, run, gift, 0.1, 20.0)[0]
 
 

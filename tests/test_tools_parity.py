@@ -152,7 +152,7 @@ def scene_source(row: Row, folder: Path):
 @dataclass
 class Run:
     impacts: list          # (t, [contact names], [impulses])
-    events: list           # (kind, t, contact name): resting contacts made ('persist') or released
+    events: list           # (kind, t, contact name): resting contacts made ('rest') or released
     t: float
     q: np.ndarray          # the model's coordinates (NAME.h)
     qd: np.ndarray
@@ -168,7 +168,7 @@ def python_run(model, row: Row) -> Run:
                [(e.kind, e.t, e.wall if e.wall.startswith("theta_") else f"O{e.point}/{e.wall}")
                 for e in result.contact_events],
                result.t_final, layout.reduce(result.q_final), layout.reduce(result.qd_final),
-               (result.n_steps, result.n_rejected, result.n_rhs), len(result.persistent_final))
+               (result.n_steps, result.n_rejected, result.n_rhs), len(result.resting_final))
 
 
 def example_arguments(row: Row) -> list[str]:
@@ -185,7 +185,7 @@ def parse_exact(text: str) -> Run:
         word, *rest = line.split()
         if word == "impact":
             run.impacts.append((float(rest[0]), rest[1::2], [float(v) for v in rest[2::2]]))
-        elif word in ("persist", "release"):
+        elif word in ("rest", "release"):
             run.events.append((word, float(rest[0]), rest[1]))
         elif word == "end":
             run.t = float(rest[0])

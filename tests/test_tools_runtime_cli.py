@@ -24,7 +24,7 @@ def test_simulate_writes_json_and_plots(tmp_path):
     assert first["contacts"][0]["point"] == 1 and first["contacts"][0]["wall"] == "x2_min"
     assert first["contacts"][0]["impulse"] > 0
     assert abs(first["t"] - (2 * 0.4 / 9.81) ** 0.5) < 1e-9
-    for key in ("t_final", "q_final", "qd_final", "energy_initial", "energy_final", "energy_impact_loss",
+    for key in ("t_final", "q_final", "qd_final", "energy_initial", "energy_final", "loss_impacts",
                 "energy_residual", "energy_scale", "energy_drift", "n_rhs"):
         assert key in data
     assert data["t_final"] == 0.5 and len(data["q_final"]) == 6

@@ -1,5 +1,5 @@
 /*
- * gac_impact.c -- the impact phase (Eq. 42-48 of the paper): the impact system of the active contacts,
+ * gac_impact.c -- the impact phase (Eq. 42-48 of the paper): the impact system of the contacts in the contact set,
  * Newton's law (Eq. 47) solved as in Eq. 48, and its complementarity form in rounds with an exact LCP solve.
  */
 #include "gac_internal.h"
@@ -51,31 +51,31 @@ static void gac_contact_direction(const gac_model *m, const double *q, const dou
     m->contact_generalized_force(q, f, p, g);
 }
 
-/* Assemble the impact problem of the active contacts (Eq. 44-48 with the velocities eliminated):
+/* Assemble the impact problem of the contacts in the contact set (Eq. 44-48 with the velocities eliminated):
  *   Y_a = I_f^-1 n_a (n_a = signed Jacobian row of contact a),  A = N I_f^-1 N^T,  v_a = n_a . qd,
  * with O(n) operators of the model: n_a = J^T (sign e_row) (contact_generalized_force), Y_a by inertia_solve
- * (the articulated-body recursion); neither I_f nor J is formed, so the cost is O(nactive n + nactive^2 nq).
+ * (the articulated-body recursion); neither I_f nor J is formed, so the cost is O(ncontact_set n + ncontact_set^2 nq).
  * work layout: GAC_WORK_Y, GAC_WORK_A, ... (gac_internal.h).
- * v[a] (m/s) and e[a] receive the normal velocity and the restitution of contact active[a]. */
-int gac_impact_system(const gac_model *m, const double *q, const double *qd, const double *p, int nactive,
-                      const int *active, double *work, double *v, double *e)
+ * v[a] (m/s) and e[a] receive the normal velocity and the restitution of contact contact_set[a]. */
+int gac_impact_system(const gac_model *m, const double *q, const double *qd, const double *p, int ncontact_set,
+                      const int *contact_set, double *work, double *v, double *e)
 {
     const int nq = m->nq;
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work), *g = GAC_WORK_G(m, work), *f = GAC_WORK_F(m, work);
     int a, c, i;
     if (m->ncontact == 0) return GAC_ERR_BAD_CONTACT;   /* the scene has no walls */
-    if (nactive < 1 || nactive > nq) return GAC_ERR_BAD_CONTACT;
-    for (a = 0; a < nactive; ++a) {
-        if (active[a] < 0 || active[a] >= m->ncontact) return GAC_ERR_BAD_CONTACT;
+    if (ncontact_set < 1 || ncontact_set > nq) return GAC_ERR_BAD_CONTACT;
+    for (a = 0; a < ncontact_set; ++a) {
+        if (contact_set[a] < 0 || contact_set[a] >= m->ncontact) return GAC_ERR_BAD_CONTACT;
         for (c = 0; c < a; ++c) {
-            if (active[c] == active[a]) return GAC_ERR_BAD_CONTACT;
+            if (contact_set[c] == contact_set[a]) return GAC_ERR_BAD_CONTACT;
         }
     }
     if (gac_chart_measure(m, q) < GAC_CHART_FLOOR) return GAC_ERR_GIMBAL_LOCK;
-    for (a = 0; a < nactive; ++a) {
+    for (a = 0; a < ncontact_set; ++a) {
         double rate = 0.0;
         double *Ya = Y + (long)a * nq;
-        gac_contact_direction(m, q, p, active[a], f, g);
+        gac_contact_direction(m, q, p, contact_set[a], f, g);
         m->inertia_solve(q, g, p, Ya);
         for (i = 0; i < nq; ++i) {
             if (!isfinite(Ya[i])) return GAC_ERR_SINGULAR_MASS;
@@ -84,40 +84,40 @@ int gac_impact_system(const gac_model *m, const double *q, const double *qd, con
         for (c = 0; c <= a; ++c) {             /* A is symmetric: n_a . Y_c = n_a I_f^-1 n_c */
             double s = 0.0;
             for (i = 0; i < nq; ++i) s += g[i] * Y[(long)c * nq + i];
-            A[a*nactive + c] = A[c*nactive + a] = s;
+            A[a*ncontact_set + c] = A[c*ncontact_set + a] = s;
         }
         v[a] = rate;
-        e[a] = gac_restitution(m, p, active[a]);
+        e[a] = gac_restitution(m, p, contact_set[a]);
     }
     return GAC_OK;
 }
 
 /* qd_plus = qd + sum_a Y_a F_a. */
-static void gac_apply_impulse(int nq, const double *qd, int nactive, const double *Y, const double *F,
+static void gac_apply_impulse(int nq, const double *qd, int ncontact_set, const double *Y, const double *F,
                               double *qd_plus)
 {
     int a, i;
     for (i = 0; i < nq; ++i) {
         double v = qd[i];
-        for (a = 0; a < nactive; ++a) v += Y[a*nq + i] * F[a];
+        for (a = 0; a < ncontact_set; ++a) v += Y[a*nq + i] * F[a];
         qd_plus[i] = v;
     }
 }
 
 int gac_impact(const gac_model *m, const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd,
-               const double *GAC_RESTRICT p, int nactive, const int *GAC_RESTRICT active,
+               const double *GAC_RESTRICT p, int ncontact_set, const int *GAC_RESTRICT contact_set,
                double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse, double *GAC_RESTRICT work)
 {
     const int nq = m->nq;
     double v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)];
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work);
     int a;
-    int code = gac_impact_system(m, q, qd, p, nactive, active, work, v, e);
+    int code = gac_impact_system(m, q, qd, p, ncontact_set, contact_set, work, v, e);
     if (code != GAC_OK) return code;
-    for (a = 0; a < nactive; ++a) impulse[a] = -(1.0 + e[a]) * v[a];     /* A F = -(1 + e) v  (Eq. 47) */
-    if (gac_ldlt(nactive, A, 1e-12) != 0) return GAC_ERR_SINGULAR_IMPACT;
-    gac_ldlt_solve(nactive, A, impulse);
-    gac_apply_impulse(nq, qd, nactive, Y, impulse, qd_plus);
+    for (a = 0; a < ncontact_set; ++a) impulse[a] = -(1.0 + e[a]) * v[a];     /* A F = -(1 + e) v  (Eq. 47) */
+    if (gac_ldlt(ncontact_set, A, 1e-12) != 0) return GAC_ERR_SINGULAR_IMPACT;
+    gac_ldlt_solve(ncontact_set, A, impulse);
+    gac_apply_impulse(nq, qd, ncontact_set, Y, impulse, qd_plus);
     return GAC_OK;
 }
 
@@ -245,15 +245,15 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
 }
 
 int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd,
-                               const double *GAC_RESTRICT p, int nactive, const int *GAC_RESTRICT active,
+                               const double *GAC_RESTRICT p, int ncontact_set, const int *GAC_RESTRICT contact_set,
                                double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse,
                                double *GAC_RESTRICT work)
 {
     double v[GAC_AT_LEAST_1(m->nq)], e[GAC_AT_LEAST_1(m->nq)];
     int rounds, plastic;
-    int code = gac_impact_system(m, q, qd, p, nactive, active, work, v, e);
+    int code = gac_impact_system(m, q, qd, p, ncontact_set, contact_set, work, v, e);
     if (code != GAC_OK) return code;
-    return gac_impact_rounds(m, q, qd, p, nactive, active, e, -1, qd_plus, impulse, work, &rounds, &plastic);
+    return gac_impact_rounds(m, q, qd, p, ncontact_set, contact_set, e, -1, qd_plus, impulse, work, &rounds, &plastic);
 }
 
 void gac_contact_info(const gac_model *m, int c, int *point, int *axis, int *normal_sign)

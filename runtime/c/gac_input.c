@@ -1,5 +1,5 @@
 /*
- * gac_input.c -- input schedules: inputs given as values at times, held or interpolated, as a controller.
+ * gac_input.c -- input schedules: inputs given as values at breakpoints, held or interpolated, as a controller.
  */
 #include "gac_internal.h"
 

@@ -13,15 +13,15 @@
 /* Contacts one complementarity solve takes: min(nq, GAC_LCP_CAP). */
 #define GAC_MAX_LCP(m) ((m)->nq < GAC_LCP_CAP ? (m)->nq : GAC_LCP_CAP)
 
-/* The impact work array (gac_impact_nwork doubles): Y (nq*nq; row a = I_f^-1 n_a of active contact a) |
- * A (nq*nq; N I_f^-1 N^T, nactive x nactive, row-major) | g (nq) | vel (3 npoint) | f (max(njrow, 1)). */
+/* The impact work array (gac_impact_nwork doubles): Y (nq*nq; row a = I_f^-1 n_a of contact a of the set) |
+ * A (nq*nq; N I_f^-1 N^T, ncontact_set x ncontact_set, row-major) | g (nq) | vel (3 npoint) | f (max(njrow, 1)). */
 #define GAC_WORK_Y(m, w)   (w)
 #define GAC_WORK_A(m, w)   ((w) + (long)(m)->nq * (m)->nq)
 #define GAC_WORK_G(m, w)   ((w) + 2L * (m)->nq * (m)->nq)
 #define GAC_WORK_VEL(m, w) (GAC_WORK_G(m, w) + (m)->nq)
 #define GAC_WORK_F(m, w)   (GAC_WORK_VEL(m, w) + 3L * (m)->npoint)
 /* and for a model with friction: Z (nq*nq; row a = I_f^-1 J_t^T phi_a, the response to contact a's unit friction
- * force) | B (nq*nq; the normal rows applied to the normal and friction directions, nactive x nactive). */
+ * force) | B (nq*nq; the normal rows applied to the normal and friction directions, ncontact_set x ncontact_set). */
 #define GAC_WORK_Z(m, w)   (GAC_WORK_F(m, w) + GAC_AT_LEAST_1((m)->njrow))
 #define GAC_WORK_B(m, w)   (GAC_WORK_Z(m, w) + (long)(m)->nq * (m)->nq)
 
@@ -74,7 +74,7 @@ int gac_add_independent(gac_sim *s, const double *x, int *n, int *set, int c);
 int gac_project(gac_sim *s, double *x, int n, const int *set, int positions);
 int gac_settle(gac_sim *s, double t, const double *x, int *n, int *set);
 int gac_hold(gac_sim *s, double *x, int nset, const int *set, int n, const int *list);
-void gac_set_active(gac_sim *s, int n, const int *set, gac_impact_record *r);
+void gac_set_resting(gac_sim *s, int n, const int *set, gac_impact_record *r);
 int gac_rest_at_start(gac_sim *s);
 int gac_release(gac_sim *s, double t, int c_event, gac_impact_record *r);
 int gac_recheck_rest(gac_sim *s, gac_impact_record *record);
@@ -103,10 +103,10 @@ int gac_ldlt_drop(int n, double *A, double tol);
 void gac_contact_row(const gac_model *m, int c, int *row, double *sign);
 double gac_row_value(const gac_model *m, int c, const double *w, const double *vel);
 double gac_restitution(const gac_model *m, const double *p, int c);
-int gac_impact_system(const gac_model *m, const double *q, const double *qd, const double *p, int nactive,
-                      const int *active, double *work, double *v, double *e);
+int gac_impact_system(const gac_model *m, const double *q, const double *qd, const double *p, int ncontact_set,
+                      const int *contact_set, double *work, double *v, double *e);
 int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const double *qd, const double *u,
-                                      const double *p, int nactive, const int *active, double *qdd, double *lambda,
+                                      const double *p, int nresting, const int *resting, double *qdd, double *lambda,
                                       double *work, double *dissipation);
 int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                       const int *list, const double *e, int first, double *qd_plus, double *F, double *work,

@@ -188,9 +188,9 @@ const char *gac_error_message(int code)
 {
     switch (code) {
     case GAC_OK: return "ok";
-    case GAC_ERR_BAD_CONTACT: return "bad active-contact list: empty, longer than NQ, repeated, or index outside 0..NCONTACT-1";
+    case GAC_ERR_BAD_CONTACT: return "bad contact set: empty, longer than NQ, repeated, or index outside 0..NCONTACT-1";
     case GAC_ERR_SINGULAR_MASS: return "inertia matrix I_f is singular to double precision (its solve by the articulated-body recursion is not finite): the chain's ratios of masses, lengths and inertias span more than 15 digits at this state";
-    case GAC_ERR_SINGULAR_IMPACT: return "impact matrix J I_f^-1 J^T is singular: the active contact constraints are dependent";
+    case GAC_ERR_SINGULAR_IMPACT: return "impact matrix J I_f^-1 J^T is singular: the constraints of the contact set are dependent";
     case GAC_ERR_LCP: return "impact complementarity problem has no solution (too many or degenerate contacts)";
     case GAC_ERR_GIMBAL_LOCK: return "gimbal lock: theta_0 is too close to the singularity of the base chart (|det E| below sqrt(16 eps / tol)) for results to the tolerance, and the run has no second chart to continue on (opt.chart_switch = 0, or a model without one: a base angle with an input, spring, damper or stop, or a planar model)";
     case GAC_ERR_BAD_OPTION: return "bad option or argument: allowed are method RK4, DOPRI5 or DOP853; RK4: 0 < dt < 1e300; DOPRI5, DOP853: 1e-14 (GAC_RTOL_MIN) <= rtol < 1, 0 < atol < 1e300, dt >= 0; h_max >= 0, event_samples >= 1, event_tol > 0, contact_tol >= 0, max_steps >= 0, rest_height < 1e300 (not NaN), zeno_impacts >= 0, 0 <= max_wall_time < 1e300, max_impacts >= 0, energy_tol < 1 (< 0: automatic, 0: off), chart_switch 0 or within [0.1, 0.35] (GAC_CHART_SWITCH_MIN, _MAX) (gac_check_options names the option); t0, q and qd finite; sim_advance: t_end finite and >= the current time, n_eval >= 0, 0 <= *i_eval <= n_eval";
@@ -200,7 +200,7 @@ const char *gac_error_message(int code)
     case GAC_ERR_STEP_SIZE: return "step size underflow: the adaptive integrator cannot meet the tolerance";
     case GAC_ERR_NONFINITE: return "the state became NaN or infinite";
     case GAC_ERR_TOO_MANY_CONTACTS: return "more simultaneous approaching contacts than degrees of freedom";
-    case GAC_ERR_SINGULAR_CONTACT: return "the persistent contact constraints are dependent (N I_f^-1 N^T is singular)";
+    case GAC_ERR_SINGULAR_CONTACT: return "the resting contact constraints are dependent (N I_f^-1 N^T is singular)";
     case GAC_ERR_IMPACT_ACCURACY: return "the impact law could not be solved to round-off (an impulse < 0, a contact still approaching, an energy gain or an elastic energy change), or only to a round-off bound above GAC_IMPACT_ROUNDOFF_MAX = 1e-2 of the energy, or its elastic rounds (every contact e = 1) did not end: the impact system is ill-conditioned";
     case GAC_ERR_UNSTABLE: return "RK4 is unstable at this step: the chain's fastest mode needs dt below about 2.8 / its rate; reduce dt or use an adaptive method";
     case GAC_ERR_LOST_CONTACT: return "a point lies beyond its wall at an impact: a wall crossing was missed, the motion is too fast or I_f too ill-conditioned (extreme mass, length or inertia ratios) for the tolerance";

@@ -42,20 +42,20 @@ const double *gac_input(gac_sim *s, double t, const double *x)
     return s->u_eval;
 }
 
-/* The flight right-hand side: free, or with the persistent contacts held (an error is kept in s->fail;
+/* The flight right-hand side: free, or with the resting contacts held (an error is kept in s->fail;
  * in a trial stage of an adaptive step it only rejects the step). */
 void gac_f(gac_sim *s, double t, const double *x, double *f)
 {
     const gac_model *md = s->model;
     const double *u = gac_input(s, t, x);
     s->n_rhs++;
-    if (s->nactive == 0) {
+    if (s->nresting == 0) {
         md->rhs(t, x, u, s->p, f);
     } else {
         double lambda[md->nq];
         int i, code;
         for (i = 0; i < md->nq; ++i) f[i] = x[md->nq + i];
-        code = gac_constrained_dynamics(md, x, x + md->nq, u, s->p, s->nactive, s->active, f + md->nq, lambda,
+        code = gac_constrained_dynamics(md, x, x + md->nq, u, s->p, s->nresting, s->resting, f + md->nq, lambda,
                                         s->work);
         if (code != GAC_OK && s->fail == 0) s->fail = code;
     }
@@ -68,7 +68,7 @@ void gac_f_end(gac_sim *s, double t, const double *x, double *f)
 {
     const gac_model *md = s->model;
     s->energy_x1_valid = 0;
-    if (s->nactive == 0 && md->forward_dynamics_energy != 0) {
+    if (s->nresting == 0 && md->forward_dynamics_energy != 0) {
         const int nq = md->nq;
         const double *u = gac_input(s, t, x);
         double y[md->nq + 2];
@@ -87,20 +87,20 @@ void gac_f_end(gac_sim *s, double t, const double *x, double *f)
     gac_f(s, t, x, f);
 }
 
-/* Event value of every contact at time t and state x: its gap, or for a persistent contact its force lambda.
- * An event is a value falling from > 0 to <= 0: a wall crossing, or a persistent contact that would pull. */
+/* Event value of every contact at time t and state x: its gap, or for a resting contact its force lambda.
+ * An event is a value falling from > 0 to <= 0: a wall crossing, or a resting contact that would pull. */
 void gac_events(gac_sim *s, double t, const double *x, double *ev)
 {
     const gac_model *md = s->model;
     md->contact_gaps(x, s->p, ev);
-    if (s->nactive > 0) {
+    if (s->nresting > 0) {
         double qdd[md->nq], lambda[md->nq];
         const double *u = gac_input(s, t, x);
         int a, code;
         for (a = 0; a < md->nq; ++a) lambda[a] = 0.0;
-        code = gac_constrained_dynamics(md, x, x + md->nq, u, s->p, s->nactive, s->active, qdd, lambda, s->work);
+        code = gac_constrained_dynamics(md, x, x + md->nq, u, s->p, s->nresting, s->resting, qdd, lambda, s->work);
         if (code != GAC_OK && s->fail == 0) s->fail = code;
-        for (a = 0; a < s->nactive; ++a) ev[s->active[a]] = lambda[a];
+        for (a = 0; a < s->nresting; ++a) ev[s->resting[a]] = lambda[a];
     }
 }
 
@@ -122,8 +122,8 @@ static void gac_emit(gac_sim *s, double t_b, const double *t_eval, int n_eval, i
     }
 }
 
-/* The end of the stretch the loop integrates next: the schedule's first time after t, or t_end. */
-static double gac_next_stop(const gac_sim *s, double t_end)
+/* The end of the stretch the loop integrates next: the schedule's first breakpoint after t, or t_end. */
+static double gac_next_breakpoint(const gac_sim *s, double t_end)
 {
     int k;
     if (s->schedule == 0) return t_end;
@@ -146,15 +146,15 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
         return GAC_ERR_BAD_OPTION;                /* t_end NaN, infinite or before t; bad sample index */
     if (s->opt.max_impacts > 0 && s->n_impacts >= s->opt.max_impacts && s->t < t_end && !s->pending)
         return GAC_ERR_MAX_IMPACTS;
-    for (;;) {                                    /* stretches between the schedule's times */
-        const double t_stop = gac_next_stop(s, t_end);
-        const int code = gac_advance_to(s, t_stop, t_eval, n_eval, i_eval, x_eval, record);
-        if (code != GAC_SIM_END || t_stop >= t_end) return code;
+    for (;;) {                                    /* stretches between the schedule's breakpoints */
+        const double t_break = gac_next_breakpoint(s, t_end);
+        const int code = gac_advance_to(s, t_break, t_eval, n_eval, i_eval, x_eval, record);
+        if (code != GAC_SIM_END || t_break >= t_end) return code;
         gac_schedule_begin(s);
     }
 }
 
-/* The loop from s->t to t_end (no schedule time inside): flight steps up to the next event. */
+/* The loop from s->t to t_end (no breakpoint inside): flight steps up to the next event. */
 static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_eval, int *i_eval,
                           double *x_eval, gac_impact_record *record)
 {
@@ -163,7 +163,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
     double fac_max = 10.0;
     int i;
     md = s->model;
-    if (s->pending) {                                        /* the activations of gac_sim_init */
+    if (s->pending) {                                        /* the contacts gac_sim_init puts at rest */
         s->pending = 0;
         record->t = s->t;
         record->ncontact = 0;
@@ -174,9 +174,9 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             record->qd_before[i] = record->qd_after[i] = s->x[md->nq + i];
         }
         record->approach_before = record->approach_after = 0.0;
-        record->nactivated = s->nactive;
+        record->nlanded = s->nresting;
         record->nreleased = 0;
-        for (i = 0; i < s->nactive; ++i) record->activated[i] = s->active[i];
+        for (i = 0; i < s->nresting; ++i) record->landed[i] = s->resting[i];
         return gac_report(s, record, GAC_SIM_CONTACT);
     }
     if (s->input_changed) {
@@ -261,7 +261,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         }
         steps++;
         s->n_steps++;
-        if (s->nactive > 0 && gac_slow_sliding(s, s->x)) {     /* (only resting points slide) */
+        if (s->nresting > 0 && gac_slow_sliding(s, s->x)) {     /* (only resting points slide) */
             s->n_slow_sliding++;
             s->t_slow_sliding += h;
         }
@@ -270,7 +270,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         t1 = last ? t_end : s->t + h;
         gac_prepare_dense(s, h);
         if (gac_find_event(s, t1, &t_event, &c_event)) {
-            int code, released = s->is_active[c_event];
+            int code, released = s->is_resting[c_event];
             if (s->fail) return s->fail;
             gac_add_work(s, t_event);
             gac_emit(s, t_event, t_eval, n_eval, i_eval, x_eval);
@@ -314,15 +314,15 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         }
         gac_copy(s->ev, s->eprev, md->ncontact);
         s->t = t1;
-        if (s->nactive > 0) {                     /* back onto the persistent constraints */
-            int code = gac_project(s, s->x, s->nactive, s->active, 1);
+        if (s->nresting > 0) {                     /* back onto the resting-contact constraints */
+            int code = gac_project(s, s->x, s->nresting, s->resting, 1);
             if (code != GAC_OK) return code;
             s->f_valid = s->vn_valid = 0;
             gac_events(s, s->t, s->x, s->ev);
             if (s->fail) return s->fail;
         }
         {                                         /* T and V at x: known from the step's energy error unless projected */
-            const int known = s->energy_x1_valid && s->nactive == 0;
+            const int known = s->energy_x1_valid && s->nresting == 0;
             const int code = gac_energy_check(s, known ? s->energy_x1 : 0);
             s->energy_x1_valid = 0;
             if (code != GAC_OK) return code;
@@ -353,7 +353,7 @@ int gac_sim_run(gac_sim *s, double t_end, gac_impact_record *record, gac_run_sum
     if (s == 0 || record == 0 || summary == 0) return GAC_ERR_NULL_ARGUMENT;
     summary->n_impacts = summary->n_contact_events = 0;
     summary->t_first_impact = -1.0;
-    summary->energy_impact_loss = 0.0;
+    summary->loss_impacts = 0.0;
     for (;;) {
         code = gac_sim_advance(s, t_end, 0, 0, 0, 0, record);
         if (code == GAC_SIM_CONTACT) {
@@ -363,6 +363,6 @@ int gac_sim_run(gac_sim *s, double t_end, gac_impact_record *record, gac_run_sum
         if (code != GAC_SIM_IMPACT) return code;
         if (summary->n_impacts == 0) summary->t_first_impact = record->t;
         summary->n_impacts++;
-        summary->energy_impact_loss += record->energy_before - record->energy_after;
+        summary->loss_impacts += record->energy_before - record->energy_after;
     }
 }

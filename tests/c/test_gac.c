@@ -208,7 +208,7 @@ static gac_model box_with_fused(void)
     return m;
 }
 
-/* ---- sled: the box's point on a rough floor, p = [g, m, e, mu]; friction along x (row 0) ------------------ */
+/* ---- sled: the box's point on a rough floor, p = [g, m, e, c_f]; friction along x (row 0) ----------------- */
 static void sled_gaps(const double *q, const double *p, double *gap)
 {
     (void)p;
@@ -264,18 +264,18 @@ static void test_dense(void)
 static void test_impact_kernels(void)
 {
     const double q[1] = {0.0}, down[1] = {-3.0}, up[1] = {1.0}, rest[1] = {0.0};
-    const int active[1] = {0}, bad[2] = {0, 0};
+    const int contact_set[1] = {0}, bad[2] = {0, 0};
     double qd_plus[1], F[2], qdd[1], lambda[1];
-    int code = gac_impact(&ball, q, down, ball_p, 1, active, qd_plus, F, work);
+    int code = gac_impact(&ball, q, down, ball_p, 1, contact_set, qd_plus, F, work);
     CHECK(code == GAC_OK && NEAR(qd_plus[0], 2.4, 1e-15) && NEAR(F[0], 2.0 * 1.8 * 3.0, 1e-14),
           "impact: code %d, qd+ %.17g, F %.17g", code, qd_plus[0], F[0]);
-    code = gac_impact_complementarity(&ball, q, up, ball_p, 1, active, qd_plus, F, work);
+    code = gac_impact_complementarity(&ball, q, up, ball_p, 1, contact_set, qd_plus, F, work);
     CHECK(code == GAC_OK && qd_plus[0] == 1.0 && F[0] == 0.0, "separating: no impulse (F %g)", F[0]);
-    code = gac_impact_complementarity(&ball, q, down, ball_p, 1, active, qd_plus, F, work);
+    code = gac_impact_complementarity(&ball, q, down, ball_p, 1, contact_set, qd_plus, F, work);
     CHECK(code == GAC_OK && NEAR(qd_plus[0], 2.4, 1e-15), "complementarity = Eq. 47 here (%.17g)", qd_plus[0]);
     CHECK(gac_impact(&ball, q, down, ball_p, 2, bad, qd_plus, F, work) == GAC_ERR_BAD_CONTACT, "repeated contact");
-    CHECK(gac_impact(&ball, q, down, ball_p, 0, active, qd_plus, F, work) == GAC_ERR_BAD_CONTACT, "no contact");
-    code = gac_constrained_dynamics(&ball, q, rest, zero_input, ball_p, 1, active, qdd, lambda, work);
+    CHECK(gac_impact(&ball, q, down, ball_p, 0, contact_set, qd_plus, F, work) == GAC_ERR_BAD_CONTACT, "no contact");
+    code = gac_constrained_dynamics(&ball, q, rest, zero_input, ball_p, 1, contact_set, qdd, lambda, work);
     CHECK(code == GAC_OK && NEAR(qdd[0], 0.0, 1e-15) && NEAR(lambda[0], 2.0 * 9.81, 1e-13),
           "resting: qdd %g, lambda %.17g (m g)", qdd[0], lambda[0]);
 }
@@ -298,7 +298,7 @@ static void test_ball(int method)
     gac_record_bind(&rec, &ball, rdwork, riwork);
     while ((code = gac_sim_advance(&sim, 10.0, t_eval, 3, &i_eval, x_eval, &rec)) == GAC_SIM_IMPACT
            || code == GAC_SIM_CONTACT) {
-        if (rec.nactivated > 0) rested = 1;
+        if (rec.nlanded > 0) rested = 1;
         if (code != GAC_SIM_IMPACT) continue;
         ++k;
         if (k <= 8) {                                     /* well above the resting threshold */
@@ -317,7 +317,7 @@ static void test_ball(int method)
     }
     CHECK(code == GAC_SIM_END && sim.t == 10.0, "method %d ends at t_end: code %d (%s)", method, code,
           gac_error_message(code));
-    CHECK(k >= 10 && rested && sim.nactive == 1 && sim.active[0] == 0, "accumulation ends resting (%d impacts)", k);
+    CHECK(k >= 10 && rested && sim.nresting == 1 && sim.resting[0] == 0, "accumulation ends resting (%d impacts)", k);
     CHECK(fabs(sim.x[0]) <= 1e-5 && fabs(sim.x[1]) < 1e-12, "at rest on the floor: y %g, v %g", sim.x[0],
           sim.x[1]);
     CHECK(i_eval == 3, "samples %d", i_eval);
@@ -458,7 +458,7 @@ static void test_box(void)
     box_energy(sim.x, sim.x + 2, sim.p, E1);
     CHECK(NEAR(E1[0] + E1[1], E0[0] + E0[1], 1e-12 * (E0[0] + E0[1])), "energy %.17g -> %.17g", E0[0] + E0[1],
           E1[0] + E1[1]);
-    CHECK(sim.x[0] > 0.0 && sim.x[0] < 2.0 && sim.x[1] > 0.0 && sim.x[1] < 2.0 && sim.nactive == 0, "inside");
+    CHECK(sim.x[0] > 0.0 && sim.x[0] < 2.0 && sim.x[1] > 0.0 && sim.x[1] < 2.0 && sim.nresting == 0, "inside");
 }
 
 /* The budget and the progress callback: a fake clock that advances 1 s per reading, a callback that asks to stop
@@ -570,22 +570,22 @@ static void test_budget_and_progress(void)
           "a negative budget refused");
 }
 
-/* A point sliding on a rough floor (Coulomb mu, resting from the start): the normal force m g, the deceleration
- * mu g, x(t) = v0 t - mu g t^2 / 2 until it stops at v0^2 / (2 mu g), and the friction loss m v0^2 / 2. */
+/* A point sliding on a rough floor (Coulomb c_f, resting from the start): the normal force m g, the deceleration
+ * c_f g, x(t) = v0 t - c_f g t^2 / 2 until it stops at v0^2 / (2 c_f g), and the friction loss m v0^2 / 2. */
 static void test_sled(void)
 {
-    const double g = sled_p[0], m = sled_p[1], mu = sled_p[3], v0 = sled_qd0[0], t_stop = v0 / (mu * g);
+    const double g = sled_p[0], m = sled_p[1], c_f = sled_p[3], v0 = sled_qd0[0], t_stop = v0 / (c_f * g);
     const double t_eval[2] = {0.3, 1.0};
     double x_eval[8], qdd[2], lambda[2], swork[64];
-    const int active[1] = {0};
+    const int contact_set[1] = {0};
     gac_options opt;
     gac_sim sim;
     gac_impact_record rec;
     int code, i_eval = 0;
     CHECK(gac_model_check(&sled) == GAC_OK && gac_impact_nwork(&sled) == 4 * 4 + 2 + 3 + 2, "sled model, work %ld",
           gac_impact_nwork(&sled));
-    code = gac_constrained_dynamics(&sled, sled_q0, sled_qd0, 0, sled_p, 1, active, qdd, lambda, swork);
-    CHECK(code == GAC_OK && NEAR(lambda[0], m * g, 1e-12) && NEAR(qdd[0], -mu * g, 1e-12) && NEAR(qdd[1], 0.0, 1e-12),
+    code = gac_constrained_dynamics(&sled, sled_q0, sled_qd0, 0, sled_p, 1, contact_set, qdd, lambda, swork);
+    CHECK(code == GAC_OK && NEAR(lambda[0], m * g, 1e-12) && NEAR(qdd[0], -c_f * g, 1e-12) && NEAR(qdd[1], 0.0, 1e-12),
           "sliding: lambda %.17g, qdd %.17g %.17g", lambda[0], qdd[0], qdd[1]);
     gac_default_options(&opt);
     opt.rtol = 1e-10;
@@ -595,14 +595,14 @@ static void test_sled(void)
     gac_record_bind(&rec, &sled, rdwork, riwork);
     while ((code = gac_sim_advance(&sim, 1.0, t_eval, 2, &i_eval, x_eval, &rec)) == GAC_SIM_CONTACT) {
     }
-    CHECK(code == GAC_SIM_END && sim.nactive == 1 && i_eval == 2, "end %d, resting %d", code, sim.nactive);
-    CHECK(NEAR(x_eval[0], v0 * 0.3 - 0.5 * mu * g * 0.09, 1e-8), "x(0.3) %.17g", x_eval[0]);
-    CHECK(t_stop < 1.0 && NEAR(x_eval[4], v0 * v0 / (2.0 * mu * g), 1e-8), "x(1) %.17g, expected %.17g", x_eval[4],
-          v0 * v0 / (2.0 * mu * g));
-    CHECK(NEAR(sim.work_friction, 0.5 * m * v0 * v0, 1e-9), "friction loss %.17g", sim.work_friction);
+    CHECK(code == GAC_SIM_END && sim.nresting == 1 && i_eval == 2, "end %d, resting %d", code, sim.nresting);
+    CHECK(NEAR(x_eval[0], v0 * 0.3 - 0.5 * c_f * g * 0.09, 1e-8), "x(0.3) %.17g", x_eval[0]);
+    CHECK(t_stop < 1.0 && NEAR(x_eval[4], v0 * v0 / (2.0 * c_f * g), 1e-8), "x(1) %.17g, expected %.17g", x_eval[4],
+          v0 * v0 / (2.0 * c_f * g));
+    CHECK(NEAR(sim.loss_friction, 0.5 * m * v0 * v0, 1e-9), "friction loss %.17g", sim.loss_friction);
     /* the steps in the regularised regime: those begun after the stop or within GAC_SLOW_SLIDING v_s of it */
     CHECK(sim.n_slow_sliding > 0 && sim.t_slow_sliding > 0.5 * (1.0 - t_stop)
-          && sim.t_slow_sliding <= 1.0 - t_stop + GAC_SLOW_SLIDING * sled.friction_velocity / (mu * g) + 1e-12,
+          && sim.t_slow_sliding <= 1.0 - t_stop + GAC_SLOW_SLIDING * sled.friction_velocity / (c_f * g) + 1e-12,
           "slow sliding: %ld steps over %.17g s, at rest for %.17g s", sim.n_slow_sliding, sim.t_slow_sliding,
           1.0 - t_stop);
     CHECK(fabs(x_eval[5]) < 1e-12 && fabs(x_eval[7]) < 1e-12, "on the floor");
@@ -909,7 +909,7 @@ static void test_events(void)
 }
 
 /* Resting contact: the ball (m = 2 kg, g = 9.81) with e = 0 dropped from 1 m lands at t1 = sqrt(2 / g) and stays on
- * the floor (persistent contact, force m g); an upward input u = m (g + a), a = 2 m/s^2, set at t = 1 s releases it
+ * the floor (resting contact, force m g); an upward input u = m (g + a), a = 2 m/s^2, set at t = 1 s releases it
  * and it rises as y = a (t - 1)^2 / 2: y(1.5) = 0.25 m, v(1.5) = 1 m/s. */
 static void test_resting_contact(void)
 {
@@ -923,18 +923,18 @@ static void test_resting_contact(void)
         code = gac_sim_advance(&sim, 1.0, 0, 0, 0, 0, &rec);
         if (code == GAC_SIM_IMPACT) {
             CHECK(NEAR(rec.t, sqrt(2.0 / 9.81), 1e-12), "landing at %.17g", rec.t);
-            landed += rec.nactivated;
+            landed += rec.nlanded;
         }
-        if (code == GAC_SIM_CONTACT) landed += rec.nactivated;
+        if (code == GAC_SIM_CONTACT) landed += rec.nlanded;
         if (code == GAC_SIM_END) break;
     }
-    CHECK(code == GAC_SIM_END && landed == 1 && sim.nactive == 1 && fabs(sim.x[0]) < 1e-12 && fabs(sim.x[1]) < 1e-12,
-          "at rest on the floor: code %d, landed %d, nactive %d, y %.3g, v %.3g", code, landed, sim.nactive, sim.x[0],
+    CHECK(code == GAC_SIM_END && landed == 1 && sim.nresting == 1 && fabs(sim.x[0]) < 1e-12 && fabs(sim.x[1]) < 1e-12,
+          "at rest on the floor: code %d, landed %d, nresting %d, y %.3g, v %.3g", code, landed, sim.nresting, sim.x[0],
           sim.x[1]);
     CHECK(gac_sim_set_input(&sim, up) == GAC_OK, "input set");
     code = gac_sim_advance(&sim, 1.5, 0, 0, 0, 0, &rec);
     if (code == GAC_SIM_CONTACT) released = rec.nreleased;
-    CHECK(code == GAC_SIM_CONTACT && released == 1 && rec.t == 1.0 && sim.nactive == 0,
+    CHECK(code == GAC_SIM_CONTACT && released == 1 && rec.t == 1.0 && sim.nresting == 0,
           "released by the upward force at t = 1: code %d, released %d, t %.17g", code, released, rec.t);
     code = gac_sim_advance(&sim, 1.5, 0, 0, 0, 0, &rec);
     CHECK(code == GAC_SIM_END && NEAR(sim.x[0], 0.25, 1e-12) && NEAR(sim.x[1], 1.0, 1e-12),
@@ -951,15 +951,15 @@ static void test_resting_contact(void)
 static void test_impact_law(void)
 {
     const double q[2] = {0.0, 0.0}, both[2] = {-1.0, -1.0}, one[2] = {-2.0, 0.5};
-    const int active[2] = {0, 1};
+    const int contact_set[2] = {0, 1};
     double qd_plus[2], F[2];
-    int code = gac_impact(&skew, q, both, skew_p, 2, active, qd_plus, F, work);
+    int code = gac_impact(&skew, q, both, skew_p, 2, contact_set, qd_plus, F, work);
     CHECK(code == GAC_OK && NEAR(F[0], 4.5, 1e-14) && NEAR(F[1], 4.5, 1e-14) && NEAR(qd_plus[0], 0.5, 1e-15)
           && NEAR(qd_plus[1], 0.5, 1e-15), "Eq. 47, two contacts: code %d, F (%.17g, %.17g), v+ (%.17g, %.17g)", code,
           F[0], F[1], qd_plus[0], qd_plus[1]);
-    code = gac_impact_complementarity(&skew, q, both, skew_p, 2, active, qd_plus, F, work);
+    code = gac_impact_complementarity(&skew, q, both, skew_p, 2, contact_set, qd_plus, F, work);
     CHECK(code == GAC_OK && NEAR(F[0], 4.5, 1e-14) && NEAR(F[1], 4.5, 1e-14), "complementarity = Eq. 47 when both push");
-    code = gac_impact_complementarity(&skew, q, one, skew_p, 2, active, qd_plus, F, work);
+    code = gac_impact_complementarity(&skew, q, one, skew_p, 2, contact_set, qd_plus, F, work);
     CHECK(code == GAC_OK && NEAR(F[0], 4.5, 1e-14) && NEAR(F[1], 2.25, 1e-14) && NEAR(qd_plus[0], 0.25, 1e-15)
           && NEAR(qd_plus[1], 0.5, 1e-15), "two rounds: code %d, F (%.17g, %.17g), v+ (%.17g, %.17g)", code, F[0], F[1],
           qd_plus[0], qd_plus[1]);

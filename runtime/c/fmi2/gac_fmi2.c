@@ -52,7 +52,7 @@ typedef struct {
     double solver[GAC_FMI2_NSOLVER_REAL];
     int method;
     long n_impacts;
-    double impact_loss;
+    double loss_impacts;
     gac_sim sim;
     double *dwork;               /* gac_sim_ndouble(m) */
     int *iwork;                  /* gac_sim_nint(m) */
@@ -65,7 +65,7 @@ typedef struct {
 typedef struct {
     int mode;
     long n_impacts;
-    double impact_loss;
+    double loss_impacts;
     gac_sim sim;
     double *dwork, *u;
     int *iwork;
@@ -195,9 +195,9 @@ static double real_value(const Instance *in, long r)
     }
     if (in->mode == MODE_INSTANTIATED || in->mode == MODE_INITIALIZATION) return 0.0;
     if (r == GAC_FMI2_WORK_INPUT) return in->sim.work_input;
-    if (r == GAC_FMI2_DISSIPATED) return in->sim.work_damping;
-    if (r == GAC_FMI2_FRICTION) return in->sim.work_friction;
-    return in->impact_loss;                                   /* GAC_FMI2_IMPACT_LOSS */
+    if (r == GAC_FMI2_LOSS_DAMPING) return in->sim.loss_damping;
+    if (r == GAC_FMI2_LOSS_FRICTION) return in->sim.loss_friction;
+    return in->loss_impacts;                                  /* GAC_FMI2_LOSS_IMPACTS */
 }
 
 /* ---- instances ---------------------------------------------------------------------------------- */
@@ -238,7 +238,7 @@ static void reset(Instance *in)
     in->rtol_set = in->atol_set = 0;
     in->t0 = 0.0;
     in->n_impacts = 0;
-    in->impact_loss = 0.0;
+    in->loss_impacts = 0.0;
     in->mode = MODE_INSTANTIATED;
 }
 
@@ -383,7 +383,7 @@ GAC_FMI2_EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     }
     gac_record_bind(&in->record, in->m, in->rdwork, in->riwork);
     in->n_impacts = 0;
-    in->impact_loss = 0.0;
+    in->loss_impacts = 0.0;
     in->mode = MODE_STEPPING;
     return fmi2OK;
 }
@@ -497,7 +497,7 @@ GAC_FMI2_EXPORT fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueRefere
         int stepping = in->mode != MODE_INSTANTIATED && in->mode != MODE_INITIALIZATION;
         if (vr[k] == GAC_FMI2_METHOD) value[k] = in->method;
         else if (vr[k] == GAC_FMI2_IMPACTS) value[k] = (fmi2Integer)in->n_impacts;
-        else if (vr[k] == GAC_FMI2_RESTING) value[k] = stepping ? in->sim.nactive : 0;
+        else if (vr[k] == GAC_FMI2_RESTING) value[k] = stepping ? in->sim.nresting : 0;
         else return fail(in, "fmi2GetInteger", "no Integer variable has this value reference (0..2)");
     }
     return fmi2OK;
@@ -588,7 +588,7 @@ GAC_FMI2_EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUsta
     }
     s->mode = in->mode;
     s->n_impacts = in->n_impacts;
-    s->impact_loss = in->impact_loss;
+    s->loss_impacts = in->loss_impacts;
     s->sim = in->sim;
     memcpy(s->dwork, in->dwork, nd * sizeof(double));
     memcpy(s->iwork, in->iwork, ni * sizeof(int));
@@ -609,7 +609,7 @@ GAC_FMI2_EXPORT fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstat
     m = in->m;
     in->mode = s->mode;
     in->n_impacts = s->n_impacts;
-    in->impact_loss = s->impact_loss;
+    in->loss_impacts = s->loss_impacts;
     in->sim = s->sim;
     memcpy(in->dwork, s->dwork, (size_t)gac_sim_ndouble(m) * sizeof(double));
     memcpy(in->iwork, s->iwork, (size_t)gac_sim_nint(m) * sizeof(int));
@@ -746,7 +746,7 @@ GAC_FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunica
         code = gac_sim_advance(&in->sim, t_end, 0, 0, &i_eval, 0, &in->record);
         if (code == GAC_SIM_IMPACT) {
             in->n_impacts++;
-            in->impact_loss += in->record.energy_before - in->record.energy_after;
+            in->loss_impacts += in->record.energy_before - in->record.energy_after;
             if (in->logging) {
                 char line[1024];
                 impact_message(in->m, &in->record, line, sizeof line);

@@ -11,7 +11,7 @@
  * run through the Real rows in order (a row of count nq takes nq of them, ...), Integer ones likewise from 0.  There
  * are no Boolean or String variables.
  *
- * Energy balance: kinetic + potential + impact losses + dissipation + friction - work of the inputs stays equal
+ * Energy balance: kinetic + potential + loss_impacts + loss_damping + loss_friction - work_input stays equal
  * to its value at the start (to the integration tolerance).
  *
  * Memory: every allocation goes through the importer's allocateMemory / freeMemory (at fmi2Instantiate and
@@ -52,11 +52,11 @@
     X(POTENTIAL, "energy.potential", 1, "output", "continuous", "J", 0.0, \
       "potential energy V (gravity and joint springs)") \
     X(WORK_INPUT, "energy.work_input", 1, "output", "continuous", "J", 0.0, "work of the inputs since the start") \
-    X(DISSIPATED, "energy.dissipated", 1, "output", "continuous", "J", 0.0, \
+    X(LOSS_DAMPING, "energy.loss_damping", 1, "output", "continuous", "J", 0.0, \
       "energy the joint dampers took since the start") \
-    X(IMPACT_LOSS, "energy.impact_loss", 1, "output", "continuous", "J", 0.0, \
+    X(LOSS_IMPACTS, "energy.loss_impacts", 1, "output", "continuous", "J", 0.0, \
       "kinetic energy the impacts took since the start") \
-    X(FRICTION, "energy.friction", 1, "output", "continuous", "J", 0.0, \
+    X(LOSS_FRICTION, "energy.loss_friction", 1, "output", "continuous", "J", 0.0, \
       "energy sliding friction took at resting contacts since the start")
 #define GAC_FMI2_INTEGERS(X) \
     X(METHOD, "solver.method", 1, "parameter", "fixed", "", GAC_METHOD_DOPRI5, \
@@ -64,7 +64,7 @@
     X(IMPACTS, "impacts", 1, "output", "discrete", "", 0, "impacts since the start") \
     X(RESTING, "resting_contacts", 1, "output", "discrete", "", 0, "contacts resting on their wall now")
 
-/* The rows' ids: GAC_FMI2_Q .. GAC_FMI2_FRICTION (Real rows), GAC_FMI2_METHOD .. GAC_FMI2_RESTING (Integer rows,
+/* The rows' ids: GAC_FMI2_Q .. GAC_FMI2_LOSS_FRICTION (Real rows), GAC_FMI2_METHOD .. GAC_FMI2_RESTING (Integer rows,
  * which are their value references). */
 #define GAC_FMI2_ROW_ID(id, name, count, causality, variability, unit, start, what) GAC_FMI2_##id,
 enum { GAC_FMI2_REALS(GAC_FMI2_ROW_ID) GAC_FMI2_NREAL_ROWS };

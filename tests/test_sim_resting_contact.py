@@ -1,4 +1,4 @@
-"""Resting contact and Zeno behaviour: impacts that accumulate end in persistent frictionless
+"""Resting contact and Zeno behaviour: impacts that accumulate end in resting frictionless
 contact, a bilateral constraint of the flight equations released when its force would pull.
 
 Independent checks: the contact bias J_dot qd against finite differences of the Jacobian and of the point
@@ -59,30 +59,30 @@ def energies(model, result) -> np.ndarray:
     return np.array([sum(model.energy(q, qd)) for q, qd in zip(qs, qds)])
 
 
-def active_sets(model, result):
-    """The persistent set at each sample, rebuilt from the reported events (None next to an event)."""
+def resting_sets(model, result):
+    """The resting set at each sample, rebuilt from the reported events (None next to an event)."""
     index = {(point, wall.name): c for c, (point, wall) in enumerate(model.contacts)}
     events = sorted(result.contact_events, key=lambda e: e.t)
     times = sorted({e.t for e in events} | {i.t for i in result.impacts})
-    sets, active, k = [], set(), 0
+    sets, resting, k = [], set(), 0
     for t in result.t:
         while k < len(events) and (events[k].t < t or events[k].t == 0.0 == t):
             c = index[(events[k].point, events[k].wall)]
-            active = active | {c} if events[k].kind == "persist" else active - {c}
+            resting = resting | {c} if events[k].kind == "rest" else resting - {c}
             k += 1
         near = any(abs(t - te) < 1e-9 for te in times) and t > 0.0
-        sets.append(None if near else sorted(active))
+        sets.append(None if near else sorted(resting))
     return sets
 
 
-def kkt(model, q, qd, active):
+def kkt(model, q, qd, resting):
     """Numpy solve of [[I_f, -N^T], [N, 0]] [qdd, lambda] = [R, -Ndot qd] (N: signed Jacobian rows)."""
     M, R = model.mass_matrix(q), model.bias(q, qd)
     J, b = model.contact_jacobian(q), model.contact_bias(q, qd)
-    rows = [model.contact_rows.index((model.contacts[c][0], model.contacts[c][1].axis)) for c in active]
-    sign = np.array([model.contacts[c][1].normal_sign for c in active], dtype=float)
+    rows = [model.contact_rows.index((model.contacts[c][0], model.contacts[c][1].axis)) for c in resting]
+    sign = np.array([model.contacts[c][1].normal_sign for c in resting], dtype=float)
     N, nb = sign[:, None] * J[rows], sign * b[rows]
-    k, nq = len(active), model.nq
+    k, nq = len(resting), model.nq
     K = np.block([[M, -N.T], [N, np.zeros((k, k))]])
     solution = np.linalg.solve(K, np.r_[R, -nb])
     return solution[:nq], solution[nq:], N
@@ -112,16 +112,16 @@ def test_constrained_dynamics_holds_the_contacts(compiled):
     rng = np.random.default_rng(7)
     floor = [c for c, (point, wall) in enumerate(model.contacts) if wall.name == "x2_min"]
     side = [c for c, (point, wall) in enumerate(model.contacts) if wall.name == "x1_max"]
-    for active in ([floor[2]], [floor[1], floor[3]], [floor[0], side[3], floor[3]]):
+    for resting in ([floor[2]], [floor[1], floor[3]], [floor[0], side[3], floor[3]]):
         q, qd = rng.normal(size=model.nq), rng.normal(size=model.nq)
-        qdd, lam = model.constrained_dynamics(q, qd, active)
-        qdd_ref, lam_ref, N = kkt(model, q, qd, active)
+        qdd, lam = model.constrained_dynamics(q, qd, resting)
+        qdd_ref, lam_ref, N = kkt(model, q, qd, resting)
         assert np.abs(qdd - qdd_ref).max() < 1e-9 * np.abs(qdd_ref).max()
         assert np.abs(lam - lam_ref).max() < 1e-9 * np.abs(lam_ref).max()
         residual = model.mass_matrix(q) @ qdd - model.bias(q, qd) - N.T @ lam
         assert np.abs(residual).max() < 1e-9 * np.abs(model.bias(q, qd)).max()
         eps = 1e-5
-        Ndot_qd = (kkt(model, q + eps * qd, qd, active)[2] - kkt(model, q - eps * qd, qd, active)[2]) @ qd / (2 * eps)
+        Ndot_qd = (kkt(model, q + eps * qd, qd, resting)[2] - kkt(model, q - eps * qd, qd, resting)[2]) @ qd / (2 * eps)
         assert np.abs(N @ qdd + Ndot_qd).max() < 1e-7 * np.abs(Ndot_qd).max()
     q, qd = rng.normal(size=model.nq), rng.normal(size=model.nq)
     assert np.array_equal(model.constrained_dynamics(q, qd, [])[0], model.forward_dynamics(q, qd))
@@ -147,33 +147,33 @@ def test_drop_ends_at_rest_with_energy_falling(compiled, label, make, specialise
         assert impact.energy_after <= impact.energy_before + 1e-12 * E[0]
     # at rest on the floor: every point resting, still, at gap 0; nothing ever below the wall
     q = model.layout.reduce(result.q_final)
-    assert sorted(result.persistent_final) == [(p, "x2_min") for p in range(1, model.n + 2)]
+    assert sorted(result.resting_final) == [(p, "x2_min") for p in range(1, model.n + 2)]
     assert np.abs(result.qd_final).max() < 1e-6
     assert np.abs(model.contact_gaps(q)).max() < 1e-9
     gaps = np.array([model.contact_gaps(x) for x in reduced(model, result)[0]])
     assert gaps.min() > -1e-9
     assert abs(E[-1]) < 1e-9 * E[0]                    # V = 0 flat on the floor, T = 0
     kinds = {ev.kind for ev in result.contact_events}
-    assert "persist" in kinds
+    assert "rest" in kinds
     table = result.contact_event_table().splitlines()           # what python -m runtime simulate prints
     assert len(table) == 1 + len(result.contact_events) and table[1].split()[0] in kinds
 
 
 @pytest.mark.parametrize("e", [0.0, 0.5])
 def test_forces_push_and_the_resting_points_stay_on_the_wall(compiled, e):
-    """Along the whole run, each persistent contact has gap 0, normal velocity 0 and a force >= 0, the
+    """Along the whole run, each resting contact has gap 0, normal velocity 0 and a force >= 0, the
     force recomputed in numpy from the kernels (KKT) at every sample."""
     model = compiled(planar_drop(3), specialise=True)
     result = run(model, 2.5, p={"e_x2_min": e})
     qs, qds = reduced(model, result)
     weight = G * sum(link.mass for link in model.scene.links)
     checked = 0
-    for q, qd, active in zip(qs, qds, active_sets(model, result)):
-        if not active:
+    for q, qd, resting in zip(qs, qds, resting_sets(model, result)):
+        if not resting:
             continue
-        _, lam, N = kkt(model, q, qd, active)
+        _, lam, N = kkt(model, q, qd, resting)
         assert lam.min() > -1e-6 * weight
-        assert np.abs(model.contact_gaps(q)[active]).max() < 1e-9
+        assert np.abs(model.contact_gaps(q)[resting]).max() < 1e-9
         assert np.abs(N @ qd).max() < 1e-6
         checked += 1
     assert checked > 500
@@ -188,7 +188,7 @@ def test_spatial_chain_ends_flat_on_the_floor(compiled):
     assert result.success, result.message
     E = energies(model, result)
     assert np.diff(E).max() <= ENERGY_TOL * E[0]
-    assert sorted(result.persistent_final) == [(1, "x2_min"), (2, "x2_min"), (3, "x2_min")]
+    assert sorted(result.resting_final) == [(1, "x2_min"), (2, "x2_min"), (3, "x2_min")]
     last = max([ev.t for ev in result.contact_events] + [i.t for i in result.impacts])
     after = result.t > last + 1e-3
     assert after.sum() > 100
@@ -213,7 +213,7 @@ def test_paper_case1_with_inelastic_walls_collapses_flat_and_rests(compiled, e):
             p[k] = e
     result = run(model, 3.0, p=p)
     assert result.success, result.message
-    assert sorted(result.persistent_final) == [(k, "x2_min") for k in range(1, 6)]
+    assert sorted(result.resting_final) == [(k, "x2_min") for k in range(1, 6)]
     assert np.abs(result.qd_final).max() < 1e-6
     E = np.array([sum(model.energy(q, qd, p)) for q, qd in zip(*reduced(model, result))])
     assert np.diff(E).max() <= ENERGY_TOL * E[0]
@@ -229,30 +229,30 @@ def test_swinging_link_lifts_the_resting_points_off(compiled, e):
     result = run(model, 3.0, t_eval=np.linspace(0.0, 3.0, 30001), p={"e_x2_min": e})
     assert result.success, result.message
     events = [(ev.point, ev.kind) for ev in result.contact_events]
-    assert events[:4] == [(1, "persist"), (2, "persist"), (2, "release"), (1, "release")]
+    assert events[:4] == [(1, "rest"), (2, "rest"), (2, "release"), (1, "release")]
     assert all(ev.t == 0.0 for ev in result.contact_events[:2])
     index = {point: c for c, (point, wall) in enumerate(model.contacts)}
     for release in result.contact_events[2:4]:
-        active = sorted(index[p] for p in (1, 2) if (p, "release") not in
+        resting = sorted(index[p] for p in (1, 2) if (p, "release") not in
                         [(ev.point, ev.kind) for ev in result.contact_events[2:4] if ev.t < release.t])
         k = np.searchsorted(result.t, release.t) - 1         # the last sample before the release
         q, qd = model.layout.reduce(result.q[k]), model.layout.reduce(result.qd[k])
-        _, lam, _ = kkt(model, q, qd, active)
-        assert lam[active.index(index[release.point])] > 0.0
+        _, lam, _ = kkt(model, q, qd, resting)
+        assert lam[resting.index(index[release.point])] > 0.0
         # at the event the force is 0: continue the held motion to the event time and solve again
-        qdd, lam_event = model.constrained_dynamics(q, qd, active)
+        qdd, lam_event = model.constrained_dynamics(q, qd, resting)
         dt = release.t - result.t[k]
         assert dt < 1e-4
-        lam_at = model.constrained_dynamics(q + dt * qd + 0.5 * dt * dt * qdd, qd + dt * qdd, active)[1]
+        lam_at = model.constrained_dynamics(q + dt * qd + 0.5 * dt * dt * qdd, qd + dt * qdd, resting)[1]
         weight = G * 1.0
-        assert abs(lam_at[active.index(index[release.point])]) < 1e-3 * weight
+        assert abs(lam_at[resting.index(index[release.point])]) < 1e-3 * weight
         after = (result.t > release.t) & (result.t < release.t + 0.01)
         gaps = [model.contact_gaps(model.layout.reduce(x))[index[release.point]] for x in result.q[after]]
         assert max(gaps) > 0.0                                  # it leaves the floor
     E = energies(model, result)
     assert np.diff(E).max() <= ENERGY_TOL * E[0]
     assert np.abs(result.qd_final).max() < 1e-6
-    assert sorted(result.persistent_final) == [(1, "x2_min"), (2, "x2_min"), (3, "x2_min")]
+    assert sorted(result.resting_final) == [(1, "x2_min"), (2, "x2_min"), (3, "x2_min")]
 
 
 def test_sliding_ladder_leaves_the_wall_at_two_thirds_of_its_height(compiled):
@@ -268,7 +268,7 @@ def test_sliding_ladder_leaves_the_wall_at_two_thirds_of_its_height(compiled):
     result = run(model, 0.5, rtol=1e-12, atol=1e-14)
     assert result.success, result.message
     events = [(ev.point, ev.wall, ev.kind) for ev in result.contact_events]
-    assert sorted(events[:2]) == [(1, "x2_min", "persist"), (2, "x1_min", "persist")]
+    assert sorted(events[:2]) == [(1, "x2_min", "rest"), (2, "x1_min", "rest")]
     assert events[2] == (2, "x1_min", "release")
     w_release = math.sqrt(math.sin(phi0) / 3.0)
     integral = quad(lambda w: 1.0 / math.cos(math.asin(math.sin(phi0) - w * w)), 0.0, w_release, epsabs=1e-15)[0]
@@ -332,7 +332,7 @@ def test_at_rest_the_integrator_takes_large_steps(compiled):
     assert np.abs(long.qd_final).max() < 1e-6
 
 
-def test_without_persistent_contact_impacts_accumulate_to_the_backstop(compiled):
+def test_without_resting_contact_impacts_accumulate_to_the_backstop(compiled):
     model = compiled(planar_drop(3, 0.5), specialise=True)
     result = run(model, 4.0, rest_height=0.0, zeno_impacts=0, max_impacts=300)
     assert result.status == -1 and "max_impacts" in result.message
@@ -341,7 +341,7 @@ def test_without_persistent_contact_impacts_accumulate_to_the_backstop(compiled)
 
 def test_accumulation_rule_alone_also_ends_the_cascade(compiled):
     """With the bounce-height rule off, a contact that has impacted 8 times at shrinking intervals becomes
-    persistent: the run finishes at rest."""
+    resting: the run finishes at rest."""
     model = compiled(planar_drop(2, 0.5), specialise=True)
     result = run(model, 4.0, rest_height=0.0, zeno_impacts=8)
     assert result.success, result.message
@@ -356,13 +356,13 @@ def test_a_chain_started_at_rest_on_the_floor_stays_there(compiled):
     model = compiled(scene, specialise=True)
     result = run(model, 2.0)
     assert result.success, result.message
-    assert [(ev.t, ev.kind) for ev in result.contact_events] == [(0.0, "persist")] * 4
+    assert [(ev.t, ev.kind) for ev in result.contact_events] == [(0.0, "rest")] * 4
     assert result.impacts == [] and result.n_steps < 30
     assert np.abs(result.q_final - scene.q0).max() < 1e-12 and np.abs(result.qd_final).max() < 1e-12
 
 
 def test_elastic_scenes_never_rest(compiled):
-    """e = 1: no contact becomes persistent, and switching the feature off changes nothing, bit for bit."""
+    """e = 1: no contact comes to rest, and switching the feature off changes nothing, bit for bit."""
     from codegen.scene import load_scene
     model = compiled(load_scene("paper-case1"), specialise=True)
     on = run(model, 1.5)
@@ -372,7 +372,7 @@ def test_elastic_scenes_never_rest(compiled):
     assert np.array_equal(on.q, off.q) and on.n_rhs == off.n_rhs
 
 
-def test_bad_persistence_options_are_named(compiled):
+def test_bad_resting_options_are_named(compiled):
     model = compiled(planar_drop(2, 0.5), specialise=True)
     with pytest.raises(ValueError, match=r"^rest_height: must be < 1e300 m and not NaN"):
         run(model, 1.0, rest_height=float("nan"))
@@ -424,7 +424,7 @@ def test_standalone_example_rests_cleanly_under_sanitizers(zeno_c, method):
                             capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
     assert "runtime error" not in result.stderr
-    assert result.stdout.count("rests (persistent contact)") >= 4
+    assert result.stdout.count("comes to rest") >= 4
     final = [line for line in result.stdout.splitlines() if line.startswith("# impacts")][0]
     assert abs(float(final.split()[-2])) < 1e-6          # final energy: flat on the floor, at rest
 
@@ -437,4 +437,4 @@ def test_standalone_example_is_clean_under_valgrind(zeno_c):
     checked = subprocess.run(["valgrind", "--error-exitcode=9", "-q", str(zeno_c / "plain"), "4.0"],
                              capture_output=True, text=True)
     assert checked.returncode == 0, checked.stderr
-    assert checked.stdout.count("rests (persistent contact)") >= 4
+    assert checked.stdout.count("comes to rest") >= 4

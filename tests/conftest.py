@@ -160,7 +160,7 @@ def compiled():
     """compiled(scene, bake_params=False, specialise=False, dense=None, chart_b=False) -> runtime.CompiledModel,
     built once per session.  Tests get the general model unless they ask for the specialised one, and without a free
     base's second chart (half the code to build) unless they ask for it: the tests that pass through the gimbal lock
-    (test_sim_charts, test_tools_parity) build their models with it."""
+    (test_sim_charts, test_sim_gimbal_impact, test_tools_parity) build their models with it."""
     from runtime import load_model
 
     def get(scene: Scene, bake_params: bool = False, specialise: bool = False, dense=None, chart_b: bool = False):

@@ -97,14 +97,13 @@ def c_expression(expr: sp.Expr) -> str:
 # A kernel longer than this is emitted as parts of at most this many lines.  Parts compile about 1.5 times
 # faster per line at n = 64 but run 2-9 % slower, so the right-hand side's forward_dynamics (called at every
 # integrator stage) is cut only when it is very long.
-SPLIT_LINES, SPLIT_LINES_HOT, HOT_KERNELS = interface.SPLIT_LINES, interface.SPLIT_LINES_HOT, interface.HOT_KERNELS
 
 
-def render_function(program: Program, split_lines: int | None = SPLIT_LINES) -> RenderedFunction:
+def render_function(program: Program, split_lines: int | None = interface.SPLIT_LINES) -> RenderedFunction:
     """The C lines of one kernel, and its operation count.  A kernel of more than ``split_lines`` lines (None:
     never) is also cut into parts of at most that many lines, called one after the other: the compiler's
     register allocation and scheduling grow faster than a function's length, so parts compile faster (at a
-    cost of 2-9 % per call, measured: hence SPLIT_LINES_HOT for the right-hand side; docs/performance.md)."""
+    cost of 2-9 % per call, measured: hence interface.SPLIT_LINES_HOT for the right-hand side; docs/performance.md)."""
     kernel = program.kernel
     lines = [f"const double {symbol.name} = {c_expression(expr)};" for symbol, expr in program.assignments]
     for i, expr in enumerate(program.outputs):

@@ -15,9 +15,9 @@ import subprocess
 import time
 from pathlib import Path
 
+from codegen.options import DEFAULT_FLAGS
 from runtime.compile import BuildError, CompilerNotFound, compiler_command  # noqa: F401
 
-DEFAULT_FLAGS = ("-O2",)
 STANDARD = "-std=c99"
 
 

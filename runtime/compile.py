@@ -85,10 +85,10 @@ class BuildError(RuntimeError):
 
 
 def build_key(texts: str, flags) -> str:
-    """The compiled module's key: the model's texts (their codegen.artifact.text_digest), the library, the flags,
-    Python and cffi."""
+    """The compiled module's key: the model's texts (their codegen.artifact.text_digest), the library and the
+    declarations cffi wraps from it, the flags, Python and cffi."""
     digest = hashlib.sha256()
-    for part in (texts, library_text(), " ".join(flags), sys.version, cffi.__version__):
+    for part in (texts, library_text(), library_cdef(), " ".join(flags), sys.version, cffi.__version__):
         digest.update(part.encode())
         digest.update(b"\0")
     return digest.hexdigest()[:20]

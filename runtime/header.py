@@ -2,7 +2,9 @@
 
 gac.h declares the library's codes, constants, types, storage formulas and functions once.  This module reads it
 for the build: ``library_cdef`` turns its declarations into cffi's (every model's module is built with them, so
-cffi checks each struct against the compiled C), and ``library_constants`` gives its numeric constants by name
+cffi checks each struct against the compiled C; of its functions, the checks and storage sizes PYTHON_FUNCTIONS:
+Python reaches the rest through the model's own NAME_* functions, and a wrapper for each would cost every model's
+build time), and ``library_constants`` gives its numeric constants by name
 (``GAC_ERR_BAD_PARAMETER``, ``GAC_RTOL_MIN``) where Python needs one before a model is compiled.  The reading is
 a small preprocessor of what gac.h uses: include guards, ``#if``/``#ifdef`` on ``__cplusplus`` (taken as a C
 compiler does), constant ``#define``s and function-like macros (left to C).
@@ -16,6 +18,11 @@ from pathlib import Path
 LIBRARY_HEADER = Path(__file__).resolve().parent / "c" / "gac.h"
 FMI2_HEADER = Path(__file__).resolve().parent / "c" / "fmi2" / "gac_fmi2.h"
 FMI2_FIELDS = ("id", "name", "count", "causality", "variability", "unit", "start", "what")   # a row of X(...)
+
+# The library functions a compiled module offers Python as lib.gac_*: the checks of options, descriptor and inertia,
+# and the storage sizes.  Their signatures come from gac.h like everything else.
+PYTHON_FUNCTIONS = ("gac_check_options", "gac_impact_nwork", "gac_inertia_admissible", "gac_model_check",
+                      "gac_record_ndouble", "gac_record_nint", "gac_sim_ndouble", "gac_sim_nint")
 
 _NUMBER = r"-?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?"
 _DEFINE = re.compile(rf"#\s*define\s+(\w+)(\(?)\s*(.*)$")
@@ -79,10 +86,46 @@ def library_constants() -> dict[str, int | float]:
     return dict(_library(LIBRARY_HEADER.read_text())[0])
 
 
-def library_cdef() -> str:
-    """gac.h's declarations as cffi takes them: its typedefs, structs (complete: cffi checks their layout) and
-    functions, its integer constants as ``#define NAME ...`` and its doubles as ``static const double NAME;``."""
-    return _library(LIBRARY_HEADER.read_text())[1]
+def library_cdef(functions=PYTHON_FUNCTIONS) -> str:
+    """gac.h's declarations as cffi takes them: its typedefs, structs (complete: cffi checks their layout), its
+    integer constants as ``#define NAME ...``, its doubles as ``static const double NAME;``, and the declarations
+    of the named ``functions`` (all of gac.h's with ``functions=None``)."""
+    cdef = _library(LIBRARY_HEADER.read_text())[1]
+    if functions is None:
+        return cdef
+    missing = set(functions) - set(library_functions(cdef))
+    if missing:
+        raise ValueError(f"gac.h declares no function {sorted(missing)}")
+    return "".join(statement for statement in _statements(cdef)
+                   if _function_name(statement) in (None, *functions))
+
+
+def _statements(cdef: str) -> list[str]:
+    """cdef cut after each top-level ';' (a struct's fields stay inside its statement)."""
+    statements, depth, start = [], 0, 0
+    for i, ch in enumerate(cdef):
+        depth += (ch == "{") - (ch == "}")
+        if ch == ";" and depth == 0:
+            end = cdef.find("\n", i)
+            end = len(cdef) if end < 0 else end + 1
+            statements.append(cdef[start:end])
+            start = end
+    return statements + [cdef[start:]]
+
+
+def _function_name(statement: str) -> str | None:
+    """The name a function declaration declares; None for a typedef, a struct or a constant."""
+    text = statement.strip()
+    if text.startswith(("typedef", "struct", "#define", "static const")) or "{" in text:
+        return None
+    match = re.search(r"(\w+)\s*\(", text)
+    return None if match is None else match.group(1)
+
+
+def library_functions(cdef: str | None = None) -> list[str]:
+    """The functions gac.h declares, in order."""
+    cdef = _library(LIBRARY_HEADER.read_text())[1] if cdef is None else cdef
+    return [name for name in map(_function_name, _statements(cdef)) if name is not None]
 
 
 def return_codes(constants: dict[str, int | float] | None = None) -> dict[str, int]:

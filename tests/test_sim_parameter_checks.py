@@ -14,7 +14,7 @@ import pytest
 from codegen.parameters import check_inertia
 from codegen.scene import SceneError, scene_from_dict
 from runtime import load_model, simulate
-from runtime.header import library_constants, return_codes
+from runtime.header import PYTHON_FUNCTIONS, library_constants, library_functions, return_codes
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -225,7 +225,8 @@ def _struct_fields(body: str) -> list[str]:
 def test_cffi_declarations_are_gac_h(model):
     """gac.h is the library's one description: its parse (runtime.header) finds every return code gac.h defines,
     the compiled module holds each constant with gac.h's value, and cffi's types and functions are gac.h's (every
-    struct complete, with gac.h's fields in order: cffi checks their layout against the compiler's)."""
+    struct complete, with gac.h's fields in order: cffi checks their layout against the compiler's).  Of its functions
+    cffi wraps the checks and sizes Python calls."""
     header = (ROOT / "runtime" / "c" / "gac.h").read_text()
     constants = library_constants()
     errors = set(re.findall(r"^#define (GAC_ERR_\w+)\s", header, flags=re.M))
@@ -244,7 +245,13 @@ def test_cffi_declarations_are_gac_h(model):
         assert model.ffi.sizeof(name) > 0
     functions = set(re.findall(r"^[a-z][\w ]*?\**\s*\b(gac_\w+)\(", header, flags=re.M))
     assert "gac_sim_ndouble" in functions and "gac_sim_run" in functions
-    assert all(hasattr(model.lib, f) for f in functions), sorted(f for f in functions if not hasattr(model.lib, f))
+    assert set(library_functions()) == functions
+    # the module wraps the functions Python calls (lib.gac_* in the runtime and the tests), and no others
+    called = {name for folder in ("runtime", "tests") for path in (ROOT / folder).glob("*.py")
+              for name in re.findall(r"\blib\.(gac_\w+)", path.read_text())}
+    assert "gac_check_options" in called and called <= set(PYTHON_FUNCTIONS) <= functions
+    assert all(hasattr(model.lib, f) for f in PYTHON_FUNCTIONS)
+    assert not any(hasattr(model.lib, f) for f in functions - set(PYTHON_FUNCTIONS))
 
 
 def test_scene_loader_refuses_a_negative_moment():

@@ -5,6 +5,7 @@ other; and the dense matrices a model without dense kernels forms from them (gac
 gac_contact_jacobian) against the generated dense kernels."""
 from __future__ import annotations
 
+import dataclasses
 import subprocess
 
 import numpy as np
@@ -117,19 +118,18 @@ def test_dense_option_is_checked():
         load_model(default_scene(2), dense="yes")
 
 
-def test_kernels_cut_into_parts_compute_the_same(tmp_path):
+def test_kernels_cut_into_parts_compute_the_same(compiled, tmp_path):
     """Every kernel cut into parts of 25 lines (values crossing parts through s[]) gives what the whole
     kernels give, on random states of a 3D chain."""
     from codegen.pipeline import generate, write_model
     from runtime.compile import compile_model, copy_library
     from runtime.model import CompiledModel
     scene = chain(3, ("rigid", "line"), twists=True)
-    models = []
-    for split in (None, 25):
-        generated = generate(scene, build_options(scene, specialise=False, dense=True, split_lines=split))
-        module = compile_model(generated.name, generated.header, generated.source, generated.cdef)
-        models.append(CompiledModel(scene, generated, module))
-    whole, parts = models
+    whole = compiled(scene, dense=True)                                   # the suite's model of the scene
+    generated = generate(scene, dataclasses.replace(whole.options, split_lines=25, split_lines_hot=25))
+    parts = CompiledModel(scene, generated, compile_model(generated.name, generated.header, generated.source,
+                                                          generated.cdef))
+    assert parts.options.split_lines == 25 and whole.options.split_lines != 25
     assert "_forward_dynamics_2(" in parts.generated.source and "_forward_dynamics_2(" not in whole.generated.source
     write_model(parts.generated, tmp_path)             # and the parts are strict C99
     copy_library(tmp_path)

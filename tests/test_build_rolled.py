@@ -80,7 +80,7 @@ def test_the_run_is_the_longest_range_of_identical_links():
 
 
 CASES = {
-    "3d line run, springs, dampers, inputs": lambda seed: run_chain(10, ("line",) * 10, seed=seed),
+    "3d line run, springs, dampers, inputs": lambda seed: run_chain(8, ("line",) * 8, seed=seed),
     "3d rigid run between line links": lambda seed: run_chain(11, ("line", "line") + ("rigid",) * 7 + ("line", "line"),
                                                               seed=seed),
     "3d rigid run, no joints or inputs": lambda seed: run_chain(9, ("rigid",) * 9, seed=seed, joints=False,
@@ -159,14 +159,14 @@ def test_baked_parameters_that_differ_per_link_do_not_roll():
 
 
 def test_rolled_kernel_is_strict_c99_and_costs_what_the_unrolled_does(tmp_path):
-    scene = run_chain(12, ("rigid",) * 12, seed=31)
+    scene = run_chain(9, ("rigid",) * 9, seed=31)                # links 3..8 in loops
     loops = generate(scene, build_options(scene, specialise=False, rolled=True, chart_b=False))
     chain = ChainSymbols(scene, False, loops.layout)             # the same kernel as straight-line code
     b = render_function(flatten(forward_dynamics_kernel(chain)), None)
     a = {f.name: f for f in loops.functions}["forward_dynamics"]
     assert "for (int k = " in "\n".join(a.lines)
     assert b.ops.total <= a.ops.total <= 1.01 * b.ops.total       # the same steps (CSE's choices differ a little)
-    assert len(a.lines) < len(b.lines) / 2
+    assert len(a.lines) < 0.6 * len(b.lines)                    # six links' straight-line code in one loop body
     (tmp_path / f"{loops.name}.h").write_text(loops.header)
     (tmp_path / f"{loops.name}.c").write_text(loops.source)
     from runtime.compile import LIBRARY_DIR

@@ -24,6 +24,9 @@
  * force) | B (nq*nq; the normal rows applied to the normal and friction directions, ncontact_set x ncontact_set). */
 #define GAC_WORK_Z(m, w)   (GAC_WORK_F(m, w) + GAC_AT_LEAST_1((m)->njrow))
 #define GAC_WORK_B(m, w)   (GAC_WORK_Z(m, w) + (long)(m)->nq * (m)->nq)
+/* and W (9 nq*nq): the contact-space inverse inertia of a frictional impact's normal and tangential directions
+ * (Z and B then hold those directions' responses I_f^-1 d, up to 2 nq rows). */
+#define GAC_WORK_W(m, w)   (GAC_WORK_B(m, w) + (long)(m)->nq * (m)->nq)
 
 #define GAC_V_FLOOR 1e-12   /* m/s: a contact at its wall approaching slower than this, or than 1e-10 of
                                the fastest contact's normal speed (gac_v_round), is at rest: round-off */
@@ -112,6 +115,12 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
                       const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
                       int *rounds, int *plastic);
 
+
+/* gac_impact_friction.c */
+double gac_friction_coefficient(const gac_model *m, const double *p, int c);
+int gac_impact_rounds_friction(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                               const int *list, const double *e, int first, int law, double *qd_plus, double *F,
+                               double *Ft, double *work, int *rounds, int *plastic, int *law_used, double *residual);
 
 /* gac_setup.c */
 double gac_clock_now(const gac_sim *s);          /* the run's clock (s): the embedder's, or C's processor time */

@@ -28,6 +28,7 @@ void gac_default_options(gac_options *opt)
     opt->max_impacts = 10000;
     opt->energy_tol = -1.0;
     opt->chart_switch = 0.3;
+    opt->impact_law = GAC_IMPACT_LAW_GDI;
 }
 
 int gac_check_options(const gac_options *opt, const char **field)
@@ -69,6 +70,10 @@ int gac_check_options(const gac_options *opt, const char **field)
                || (opt->chart_switch >= GAC_CHART_SWITCH_MIN && opt->chart_switch <= GAC_CHART_SWITCH_MAX)))
         bad = "chart_switch: must be 0 (never) or within [0.1, 0.35] (GAC_CHART_SWITCH_MIN, _MAX: chart A's measure "
               "below which the loop integrates on the second base chart)";
+    else if (opt->impact_law != GAC_IMPACT_LAW_GDI && opt->impact_law != GAC_IMPACT_LAW_NEWTON_COULOMB
+             && opt->impact_law != GAC_IMPACT_LAW_FRICTIONLESS)
+        bad = "impact_law: must be GAC_IMPACT_LAW_GDI (1), GAC_IMPACT_LAW_NEWTON_COULOMB (2) or "
+              "GAC_IMPACT_LAW_FRICTIONLESS (0)";
     if (field != 0) *field = bad;
     return bad == 0 ? GAC_OK : GAC_ERR_BAD_OPTION;
 }
@@ -233,10 +238,11 @@ int gac_sim_init(gac_sim *s, const gac_model *m, double *dwork, int *iwork, doub
 void gac_record_bind(gac_impact_record *r, const gac_model *m, double *dwork, int *iwork)
 {
     const int nq = m->nq;
-    r->impulse = dwork;                        /* dwork: impulse | q | qd_before | qd_after */
+    r->impulse = dwork;                        /* dwork: impulse | q | qd_before | qd_after | impulse_t */
     r->q = dwork + nq;
     r->qd_before = dwork + 2 * nq;
     r->qd_after = dwork + 3 * nq;
+    r->impulse_t = dwork + 4 * nq;
     r->contact = iwork;                        /* iwork: contact | landed | released */
     r->landed = iwork + nq;
     r->released = iwork + 2 * nq;

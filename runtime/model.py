@@ -9,6 +9,7 @@ from __future__ import annotations
 import os
 import reprlib
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +25,23 @@ from .compile import compile_model
 
 class ImpactError(RuntimeError):
     """The generated impact solver returned an error code (message from the C side)."""
+
+
+# The impact laws at walls with friction by name, and the library's constant of each (gac.h, GAC_IMPACT_LAW_*)
+IMPACT_LAWS = {"frictionless": "GAC_IMPACT_LAW_FRICTIONLESS", "gdi": "GAC_IMPACT_LAW_GDI",
+               "newton-coulomb": "GAC_IMPACT_LAW_NEWTON_COULOMB", "gdi-common-e": "GAC_IMPACT_LAW_GDI_COMMON_E"}
+CHOSEN_LAWS = ("gdi", "newton-coulomb", "frictionless")     # what a user may ask for; gdi-common-e: a record's only
+
+
+@dataclass(frozen=True)
+class FrictionalImpact:
+    """What CompiledModel.impact_friction returns."""
+
+    qd_plus: np.ndarray       # velocities after the impact (nq)
+    impulse: np.ndarray       # N s along each contact's inward normal (>= 0)
+    impulse_t: np.ndarray     # (ncontact_set, 2) N s along each wall's two tangential axes, ascending
+    law: str                  # the law applied ('gdi', 'gdi-common-e', 'newton-coulomb', 'frictionless')
+    residual: float           # the law's largest relative violation of its conditions
 
 
 _DEFINED: dict[int, set] = {}      # id(compiled module) -> the callbacks defined in it
@@ -242,6 +260,36 @@ class CompiledModel:
             raise ImpactError(f"impact with contacts {contact_set.tolist()}: {self.error_message(code)}")
         return qd_plus, impulse[:len(contact_set)]
 
+
+    def impact_law_code(self, law: str) -> int:
+        """The library's code (GAC_IMPACT_LAW_*) of an impact law named in IMPACT_LAWS."""
+        return int(getattr(self.lib, IMPACT_LAWS[law]))
+
+    def impact_law_name(self, code: int) -> str:
+        """The name (IMPACT_LAWS) of a library impact-law code."""
+        return next(name for name in IMPACT_LAWS if self.impact_law_code(name) == code)
+
+    def impact_friction(self, q, qd, contact_set, p=None, law: str = "gdi") -> FrictionalImpact:
+        """The impact law at walls with Coulomb friction (gac_impact_friction): the rounds of the complementarity
+        law, each round with Coulomb's cone on gamma+ + e gamma- ('gdi', never gains energy), on the tangential
+        velocity after the impact ('newton-coulomb', can gain energy), or without friction ('frictionless')."""
+        if law not in CHOSEN_LAWS:
+            raise ValueError(f"law: must be one of {CHOSEN_LAWS}, got {law!r}")
+        q, qd = self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd")
+        contact_set = np.ascontiguousarray(contact_set, dtype=np.int32)
+        k = max(len(contact_set), 1)
+        qd_plus, impulse, impulse_t = np.zeros(self.nq), np.zeros(k), np.zeros(2 * k)
+        law_used, residual = self.ffi.new("int *"), self.ffi.new("double *")
+        code = self.lib.gac_impact_friction(
+            self.ffi.addressof(self.c.model), self._ptr(q), self._ptr(qd),
+            self._ptr(self._params(p)), len(contact_set), self.ffi.cast("int *", self.ffi.from_buffer(contact_set)),
+            self.impact_law_code(law), self._ptr(qd_plus), self._ptr(impulse), self._ptr(impulse_t), law_used,
+            residual, self._ptr(self._work))
+        if code != self.lib.GAC_OK:
+            raise ImpactError(f"impact with contacts {contact_set.tolist()}: {self.error_message(code)}")
+        n = len(contact_set)
+        return FrictionalImpact(qd_plus, impulse[:n], impulse_t[:2 * n].reshape(n, 2),
+                                self.impact_law_name(law_used[0]), float(residual[0]))
 
     def constrained_dynamics(self, q, qd, resting, p=None, u=None) -> tuple[np.ndarray, np.ndarray]:
         """Accelerations and contact forces with the contacts ``resting`` held at their walls (bilateral, with

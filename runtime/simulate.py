@@ -26,7 +26,7 @@ from codegen.specialise import coordinate_names
 
 from .header import library_constants
 from .inputs import InputSchedule, attach, input_source  # noqa: F401  (InputSchedule: re-export)
-from .model import CompiledModel, load_model
+from .model import CHOSEN_LAWS, CompiledModel, load_model
 
 METHODS = ("dopri5", "dop853", "rk4")
 RTOL_MIN = float(library_constants()["GAC_RTOL_MIN"])   # the smallest rtol the C loop accepts (gac.h)
@@ -45,6 +45,8 @@ class Contact:
     wall: str
     impulse: float        # N s along the wall's inward normal (>= 0: it pushes); N m s for a stop
     kind: str = "wall"    # 'wall' | 'stop'
+    impulse_t: tuple = (0.0, 0.0)   # N s along the wall's two tangential axes, ascending (X1, X2 for a x3 wall):
+                                    # friction at the impact (0 on a frictionless wall)
 
     @property
     def label(self) -> str:
@@ -67,6 +69,9 @@ class Impact:
     roundoff: float = 1e-10             # the law's relative round-off bound on the energy (grows with cond(I_f))
     law_elastic: bool = False           # the law (each contact's own e, before landings) had only e = 1 contacts
                                         # take impulses, no plastic round: energy_after + energy_rest = energy_before
+    law: str = "frictionless"           # the law applied: 'frictionless' (no contact with friction took part), 'gdi',
+                                        # 'gdi-common-e' (a round solved with its smallest e), 'newton-coulomb'
+    residual: float = 0.0               # the frictional law's largest relative violation of its conditions
 
 
 @dataclass
@@ -251,7 +256,15 @@ LOOP_OPTIONS = {
     "rest_height": "m: a bounce rising less than this ends in resting contact (None: 10 contact_tol; 0: never)",
     "zeno_impacts": "a contact rests after this many impacts at shrinking intervals (0: never)",
     "energy_tol": "the energy balance's allowed residual per energy scale (None: automatic; 0: off)",
+    "impact_law": "the impact law at walls with friction: 'gdi' (default; never gains energy), 'newton-coulomb' "
+                  "(can gain energy: the run then stops) or 'frictionless' (friction only on resting contacts)",
 }
+def impact_law_code(model: CompiledModel, law) -> int:
+    """The library's code of an impact law named by the user ('gdi', 'newton-coulomb', 'frictionless')."""
+    _check(law in CHOSEN_LAWS, "impact_law", f"must be one of {CHOSEN_LAWS}, got {law!r}")
+    return model.impact_law_code(law)
+
+
 _INTEGER_OPTIONS = ("event_samples", "max_steps", "max_impacts", "zeno_impacts")
 
 
@@ -269,7 +282,9 @@ def _loop_options(model: CompiledModel, method: str, given: dict, chart_switch: 
     for name, value in given.items():
         if value is None:
             continue
-        if name in _INTEGER_OPTIONS:
+        if name == "impact_law":
+            value = impact_law_code(model, value)
+        elif name in _INTEGER_OPTIONS:
             whole = not isinstance(value, bool) and isinstance(value, (int, np.integer, float, np.floating)) \
                 and np.isfinite(value) and int(value) == value
             _check(whole and abs(value) < 2 ** 31, name, f"must be an integer ({LOOP_OPTIONS[name]}), got {value!r}")
@@ -593,12 +608,14 @@ def _read_impact(model: CompiledModel, r) -> Impact:
     contacts = []
     for k in range(r.ncontact):
         point, wall = model.contacts[r.contact[k]]
-        contacts.append(Contact(point, wall.name, float(r.impulse[k]), "stop" if isinstance(wall, JointStop) else "wall"))
+        contacts.append(Contact(point, wall.name, float(r.impulse[k]), "stop" if isinstance(wall, JointStop) else "wall",
+                                (float(r.impulse_t[2 * k]), float(r.impulse_t[2 * k + 1]))))
     unpack, layout = model.ffi.unpack, model.layout
     return Impact(float(r.t), contacts, float(r.energy_before), float(r.energy_after), bool(r.complementarity),
                   layout.expand(unpack(r.q, nq)), layout.expand(unpack(r.qd_before, nq), velocity=True),
                   layout.expand(unpack(r.qd_after, nq), velocity=True), int(r.rounds), bool(r.plastic),
-                  float(r.energy_rest), float(r.roundoff), bool(r.law_elastic))
+                  float(r.energy_rest), float(r.roundoff), bool(r.law_elastic), model.impact_law_name(int(r.law)),
+                  float(r.residual))
 
 
 def _read_contact_events(model: CompiledModel, r) -> list[ContactEvent]:

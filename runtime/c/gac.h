@@ -80,6 +80,11 @@
 #define GAC_ERR_BAD_PARAMETER    -24   /* a parameter is outside its allowed range or breaks a relation with others
                                           (gac_check_parameters gives its index; the model's parameter_info its
                                           name and what it allows) */
+#define GAC_ERR_IMPACT_FRICTION  -30   /* the frictional impact law's solve did not bring its conditions below
+                                          GAC_FRICTION_RESIDUAL_MAX (record.residual says how far it got) */
+#define GAC_ERR_IMPACT_ENERGY    -31   /* an impact gained kinetic energy: the Newton + Coulomb law
+                                          (opt.impact_law), whose slip reversal during the impact can (Kane's
+                                          rod); the default law cannot */
 
 /* ---- how gac_sim_advance ends: the run's budgets (< 0) and status (> 0) ------------------------ */
 #define GAC_ERR_WALL_TIME        -25   /* the run used opt.max_wall_time seconds of its clock (gac_sim_set_clock)
@@ -109,12 +114,27 @@
 #define GAC_METHOD_DOPRI5  1   /* Dormand-Prince 5(4), adaptive (opt.rtol, opt.atol), 4th-order dense output */
 #define GAC_METHOD_DOP853  2   /* Dormand-Prince 8(5,3), adaptive, 7th-order dense output */
 
+/* ---- impact laws at walls with Coulomb friction (gac_options.impact_law, gac_impact_record.law) ---- */
+#define GAC_IMPACT_LAW_FRICTIONLESS   0   /* Newton's law with complementarity (Eq. 47), the walls' friction acting
+                                             only on resting contacts; a record's law when no contact with
+                                             friction took part */
+#define GAC_IMPACT_LAW_GDI            1   /* the default: Coulomb's cone on gamma+ + e gamma- (normal and tangential
+                                             velocities, one restitution e per contact): never gains energy
+                                             (gac_impact_friction) */
+#define GAC_IMPACT_LAW_NEWTON_COULOMB 2   /* Newton's restitution on the normal velocity, Coulomb's cone on the
+                                             tangential velocity after the impact: can gain energy (Kane's rod);
+                                             for comparison */
+#define GAC_IMPACT_LAW_GDI_COMMON_E   3   /* a record's law only: GDI, a round solved with the smallest e of its
+                                             contacts for all of them (its own e's would have gained energy) */
+
 /* ---- limits ----------------------------------------------------------------------------------- */
 #define GAC_CHART_FLOOR  5.96e-5   /* sqrt(16 eps / 1e-6): gac_impact refuses a base chart measure below it */
 #define GAC_LCP_CAP      16        /* contacts one complementarity solve takes at most: min(nq, 16) */
 #define GAC_MAX_ROUNDS   256       /* rounds of the impact law before its plastic closing round */
 #define GAC_IMPACT_ROUNDOFF_MAX 1e-2  /* an impact whose round-off bound (record.roundoff) exceeds this stops the
                                          run (GAC_ERR_IMPACT_ACCURACY): its energy is not known */
+#define GAC_FRICTION_RESIDUAL_MAX 1e-9  /* the frictional impact law's conditions, relative: beyond it the impact
+                                         is refused (GAC_ERR_IMPACT_FRICTION) */
 #define GAC_SLOW_SLIDING 4         /* a resting point sliding slower than this many friction_velocity is in (or
                                       near) the regularised friction's stiff, viscous regime: sim.n_slow_sliding */
 
@@ -305,12 +325,14 @@ void gac_contact_jacobian(const gac_model *m, const double *q, const double *p, 
 /* max(n, 1): the length of an array with one entry per contact or per Jacobian row, never 0. */
 #define GAC_AT_LEAST_1(n) ((n) > 0 ? (n) : 1)
 
-/* Doubles of the work array of gac_impact, gac_impact_complementarity and gac_constrained_dynamics:
- * 2 nq^2 + nq + 3 npoint + max(njrow, 1), laid out as Y (nq*nq: row a = I_f^-1 n_a of contact a of the set) |
- * A (nq*nq: N I_f^-1 N^T, ncontact_set x ncontact_set) | g (nq) | vel (3 npoint) | f (max(njrow, 1)); a model with
- * friction needs 2 nq^2 more: Z (nq*nq) | B (nq*nq). */
+/* Doubles of the work array of gac_impact, gac_impact_complementarity, gac_impact_friction and
+ * gac_constrained_dynamics: 2 nq^2 + nq + 3 npoint + max(njrow, 1), laid out as Y (nq*nq: row a = I_f^-1 n_a of
+ * contact a of the set) | A (nq*nq: N I_f^-1 N^T, ncontact_set x ncontact_set) | g (nq) | vel (3 npoint) |
+ * f (max(njrow, 1)); a model with friction needs 11 nq^2 more: Z (nq*nq) | B (nq*nq) (the responses to the
+ * tangential directions, up to 2 nq of them) | W (9 nq*nq: the contact-space inverse inertia of the normal and
+ * tangential directions, up to 3 nq square). */
 #define GAC_IMPACT_NWORK(nq, npoint, njrow, friction) \
-    (((friction) ? 4L : 2L) * (nq) * (nq) + (nq) + 3L * (npoint) + GAC_AT_LEAST_1(njrow))
+    (((friction) ? 13L : 2L) * (nq) * (nq) + (nq) + 3L * (npoint) + GAC_AT_LEAST_1(njrow))
 /* Doubles and ints of one simulation (gac_sim_init): dwork = x (nx = 2 nq) | p (nparam) | u (nu) | private;
  * iwork = resting (nq) | private.  The doubles: x, p, u and the controller's u, f, 16 stages, x1, xs, 8 dense-output
  * rows (28 nx in all), 7 per-contact arrays, the impact work and an nq x nq scratch; the ints: resting, then
@@ -320,8 +342,8 @@ void gac_contact_jacobian(const gac_model *m, const double *q, const double *p, 
      + GAC_IMPACT_NWORK(nq, npoint, njrow, friction) + (long)(nq) * (nq))
 #define GAC_SIM_NINT(nq, ncontact) ((long)(nq) + 2L * GAC_AT_LEAST_1(ncontact))
 /* Doubles and ints of one impact record (gac_record_bind): dwork = impulse | q | qd_before | qd_after
- * (nq each), iwork = contact | landed | released (nq each). */
-#define GAC_RECORD_NDOUBLE(nq) (4L * (nq))
+ * (nq each) | impulse_t (2 nq), iwork = contact | landed | released (nq each). */
+#define GAC_RECORD_NDOUBLE(nq) (6L * (nq))
 #define GAC_RECORD_NINT(nq) (3L * (nq))
 
 /* The macros above for model m. */
@@ -359,6 +381,27 @@ int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q,
                                const double *GAC_RESTRICT p, int ncontact_set, const int *GAC_RESTRICT contact_set,
                                double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse,
                                double *GAC_RESTRICT work);
+
+/* The impact law at walls with Coulomb friction: gac_impact_complementarity's rounds, each round's problem on the
+ * contacts that approach or rest being, for law GAC_IMPACT_LAW_GDI,
+ *     xi = gamma+ + e gamma-,   0 <= Lambda_N _|_ xi_N >= 0,   Lambda_T = -c_f Lambda_N xi_T / |xi_T| (xi_T != 0),
+ *     |Lambda_T| <= c_f Lambda_N (xi_T = 0),
+ * gamma = (normal velocity, velocities along the wall's tangential axes) of a contact, Lambda its impulse, e its
+ * wall's restitution (0 for a contact at rest), c_f its wall's friction coefficient (a stop or a frictionless wall:
+ * no tangential part).  T+ - T- = Lambda^T (gamma+ + gamma-) / 2 <= 0: no energy gain, for any slip, stick or slip
+ * reversal during the impact; c_f = 0 is Newton's law (Eq. 47).  A round whose contacts' different e would gain
+ * energy is solved with their smallest e (*law_used GAC_IMPACT_LAW_GDI_COMMON_E).  GAC_IMPACT_LAW_NEWTON_COULOMB:
+ * e on the normal velocity only (xi_T = gamma_T+), which can gain energy; GAC_IMPACT_LAW_FRICTIONLESS: c_f ignored.
+ * Each round is solved by projected Gauss-Seidel with every contact's own problem solved exactly.
+ * impulse[k] (N s, >= 0) along contact contact_set[k]'s inward normal, impulse_t[2k], impulse_t[2k + 1] (N s) along
+ * its wall's two tangential axes in ascending order (X1, X2 for a X3 wall; 0 where the model has no motion or the
+ * wall no friction); *law_used the law applied (GAC_IMPACT_LAW_*), *residual the largest relative violation of the
+ * law's conditions.  work: gac_impact_nwork(m) doubles.  Returns GAC_OK or GAC_ERR_BAD_CONTACT, _SINGULAR_MASS,
+ * _GIMBAL_LOCK, _BAD_OPTION (law), _IMPACT_FRICTION (residual above GAC_FRICTION_RESIDUAL_MAX). */
+int gac_impact_friction(const gac_model *m, const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd,
+                        const double *GAC_RESTRICT p, int ncontact_set, const int *GAC_RESTRICT contact_set, int law,
+                        double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse, double *GAC_RESTRICT impulse_t,
+                        int *law_used, double *residual, double *GAC_RESTRICT work);
 
 /* Generalised accelerations with the resting contacts resting[0..nresting-1] held as bilateral constraints:
  * I_f qdd = R + N^T lambda, N qdd = -Ndot qd (N: Jacobian rows signed along the inward normal), solved as
@@ -430,7 +473,9 @@ int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const do
  * window (100 x the adaptive method's position tolerance, or contact_tol if larger) and every resting
  * one take part.  The law (gac_impact_complementarity) is Newton's law, Eq. 47, with complementarity, in
  * rounds until no contact approaches: F >= 0, no energy gain, e = 1 keeps the energy exactly; a contact
- * that separates takes an impulse only if the others drive it into its wall.  Its post-conditions are
+ * that separates takes an impulse only if the others drive it into its wall.  Where a contact taking part is on
+ * a wall with Coulomb friction (c_f > 0), each round is the frictional law of opt.impact_law (gac_impact_friction;
+ * by default Coulomb's cone on gamma+ + e gamma-, which never gains energy; record.law, impulse_t, residual).  Its post-conditions are
  * checked to the law's round-off bound (record.roundoff; GAC_ERR_IMPACT_ACCURACY otherwise), and that bound must
  * not exceed GAC_IMPACT_ROUNDOFF_MAX (1e-2): an impact known only to a larger error of its energy stops the run
  * (GAC_ERR_IMPACT_ACCURACY, record.roundoff says its bound), as does the plastic closing round of
@@ -534,6 +579,10 @@ typedef struct {
                               measure chi_A falls below this, and back on A where chi_A exceeds twice this (the
                               hysteresis); 0: never (GAC_ERR_GIMBAL_LOCK near the lock), else within
                               [GAC_CHART_SWITCH_MIN, GAC_CHART_SWITCH_MAX] (default 0.3) */
+    int impact_law;        /* the impact law at walls with Coulomb friction: GAC_IMPACT_LAW_GDI (default; never
+                              gains energy), GAC_IMPACT_LAW_NEWTON_COULOMB (can gain energy: the run then stops with
+                              GAC_ERR_IMPACT_ENERGY) or GAC_IMPACT_LAW_FRICTIONLESS (friction only on resting
+                              contacts) */
 } gac_options;
 
 /* What gac_sim_advance reports.  Scalars are fields; the arrays (nq entries each) point into the arrays
@@ -543,6 +592,12 @@ typedef struct {
     int ncontact;                /* simultaneous contacts */
     int *contact;                /* their indices 0..ncontact-1 of the model (see gac_contact_info) */
     double *impulse;             /* impulse along the inward normal (N s), >= 0 */
+    double *impulse_t;           /* 2 per contact: impulse along its wall's two tangential axes, ascending (N s;
+                                    0 without friction) */
+    int law;                     /* the impact law applied (GAC_IMPACT_LAW_*: FRICTIONLESS when no contact with
+                                    friction took part) */
+    double residual;             /* the frictional law's largest relative violation of its conditions (0 without
+                                    friction) */
     double energy_before, energy_after;   /* T + V (J) */
     double *q;                   /* configuration at impact */
     double *qd_before, *qd_after;

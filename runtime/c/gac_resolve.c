@@ -113,6 +113,11 @@ typedef struct {
                                normal acceleration towards the wall with the resting contacts held */
     double *e, *e_law;     /* per contact taking part: the restitution applied, and its wall's own */
     double *qd_plus, *F;   /* the law's velocities and impulses */
+    double *Ft;            /* the law's tangential impulses (2 per contact taking part) */
+    int friction;          /* 1 if the frictional law applies: opt.impact_law not frictionless and some contact
+                              taking part is on a wall with c_f > 0 */
+    int law;               /* the law applied (GAC_IMPACT_LAW_*) */
+    double residual;       /* the frictional law's residual */
     double scale;          /* the largest |normal velocity| before (m/s) */
     double height;         /* the rest height in force (m; 0: no landings by it) */
     double T_before, T_law, bound;
@@ -215,6 +220,33 @@ static int gac_who_lands(gac_sim *s, gac_impact_event *ev)
     return GAC_OK;
 }
 
+/* The impact law with restitutions e: gac_impact_rounds_friction where friction acts, else gac_impact_rounds. */
+static int gac_law(gac_sim *s, gac_impact_event *ev, const double *e)
+{
+    const gac_model *md = s->model;
+    const double *x = ev->x;
+    int k;
+    if (ev->friction)
+        return gac_impact_rounds_friction(md, x, x + md->nq, s->p, ev->n, ev->list, e, ev->first, s->opt.impact_law,
+                                          ev->qd_plus, ev->F, ev->Ft, s->work, &ev->rounds, &ev->plastic, &ev->law,
+                                          &ev->residual);
+    ev->law = GAC_IMPACT_LAW_FRICTIONLESS;
+    ev->residual = 0.0;
+    for (k = 0; k < 2 * ev->n; ++k) ev->Ft[k] = 0.0;
+    return gac_impact_rounds(md, x, x + md->nq, s->p, ev->n, ev->list, e, ev->first, ev->qd_plus, ev->F, s->work,
+                             &ev->rounds, &ev->plastic);
+}
+
+/* 1 if the law gave some contact a tangential impulse (then e = 1 need not keep the energy: friction took some). */
+static int gac_tangential(const gac_impact_event *ev)
+{
+    int k;
+    for (k = 0; k < 2 * ev->n; ++k) {
+        if (ev->Ft[k] != 0.0) return 1;
+    }
+    return 0;
+}
+
 /* The law (gac_impact_rounds: Newton's law, Eq. 47, with complementarity, in rounds) with every contact's own e,
  * its round-off bound and its own verdict (refused: a bound gac_impact_inaccurate refuses, a plastic closing round
  * when every contact has e = 1, an elastic law that changed the energy beyond its bound); then, if some contact
@@ -226,17 +258,24 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
     const int nq = md->nq;
     const double *x = ev->x;
     int k, pass, changed = 0, all_elastic = 1, code;
-    code = gac_impact_rounds(md, x, x + nq, s->p, ev->n, ev->list, ev->e_law, ev->first, ev->qd_plus, ev->F,
-                             s->work, &ev->rounds, &ev->plastic);
+    ev->friction = 0;
+    for (k = 0; k < ev->n; ++k) {
+        if (s->opt.impact_law != GAC_IMPACT_LAW_FRICTIONLESS && gac_friction_coefficient(md, s->p, ev->list[k]) > 0.0)
+            ev->friction = 1;
+    }
+    code = gac_law(s, ev, ev->e_law);
+    r->residual = ev->residual;
     if (code != GAC_OK) return code;
     ev->bound = r->roundoff = gac_impact_roundoff(md, x, s->p, s->work, ev->n, ev->F, x + nq, ev->qd_plus,
                                                   ev->T_before);
     if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;   /* no useful accuracy left */
     for (k = 0; k < ev->n; ++k) all_elastic &= ev->e_law[k] == 1.0;
-    if (ev->plastic && all_elastic) return GAC_ERR_IMPACT_ACCURACY;   /* the plastic closing round takes energy */
+    if (ev->plastic && all_elastic && !ev->friction) return GAC_ERR_IMPACT_ACCURACY;   /* the plastic closing round
+                                                                                         takes energy */
     md->energy(x, ev->qd_plus, s->p, ev->E_plus);
     ev->T_law = ev->E_plus[0];
-    r->law_elastic = !ev->plastic;              /* contacts on walls with e < 1 may take part, without impulse */
+    r->law_elastic = !ev->plastic && !gac_tangential(ev);   /* contacts on walls with e < 1 may take part, without
+                                                               impulse; friction may take energy at e = 1 */
     for (k = 0; k < ev->n; ++k) {
         if (ev->F[k] > 0.0 && ev->e_law[k] != 1.0) r->law_elastic = 0;
     }
@@ -244,8 +283,8 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
     for (k = 0; k < ev->n; ++k) changed |= ev->e[k] != ev->e_law[k];
     for (pass = 0; changed && pass < 2; ++pass) {
         int elastic_landing = 0;
-        code = gac_impact_rounds(md, x, x + nq, s->p, ev->n, ev->list, ev->e, ev->first, ev->qd_plus, ev->F,
-                                 s->work, &ev->rounds, &ev->plastic);
+        code = gac_law(s, ev, ev->e);
+        if (ev->residual > r->residual) r->residual = ev->residual;
         if (code != GAC_OK) return code;
         md->energy(x, ev->qd_plus, s->p, ev->E_plus);
         for (k = 0; k < ev->n; ++k) {
@@ -260,6 +299,7 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
     }
     r->rounds = ev->rounds;
     r->plastic = ev->plastic;
+    r->law = ev->law;
     return GAC_OK;
 }
 
@@ -284,14 +324,17 @@ static int gac_check_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
         const int c = ev->list[k];
         if (ev->F[k] > 0.0 || (!s->is_resting[c] && ev->vn[c] < 0.0)) {
             r->contact[r->ncontact] = c;
+            r->impulse_t[2 * r->ncontact] = ev->Ft[2 * k];
+            r->impulse_t[2 * r->ncontact + 1] = ev->Ft[2 * k + 1];
             r->impulse[r->ncontact++] = ev->F[k];
             if (!(ev->F[k] > 0.0) || !(ev->vn[c] < 0.0)) r->complementarity = 1;
             if (ev->F[k] > 0.0 && ev->e[k] != 1.0) elastic = 0;
         }
         if (ev->F[k] < 0.0) return GAC_ERR_IMPACT_ACCURACY;
     }
-    if (T_after > ev->T_before * (1.0 + ev->bound) + 1e-300) return GAC_ERR_IMPACT_ACCURACY;
-    if (elastic && !ev->plastic && fabs(T_after - ev->T_before) > ev->bound * ev->T_before)
+    if (T_after > ev->T_before * (1.0 + ev->bound) + 1e-300)
+        return ev->law == GAC_IMPACT_LAW_NEWTON_COULOMB ? GAC_ERR_IMPACT_ENERGY : GAC_ERR_IMPACT_ACCURACY;
+    if (elastic && !ev->plastic && !gac_tangential(ev) && fabs(T_after - ev->T_before) > ev->bound * ev->T_before)
         return GAC_ERR_IMPACT_ACCURACY;
     return GAC_OK;
 }
@@ -419,7 +462,7 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     const gac_model *md = s->model;
     const int nc1 = GAC_AT_LEAST_1(md->ncontact);
     const int nq = md->nq;
-    double gaps[nc1], vn[nc1], an[nc1], e[nq], e_law[nq], qd_plus[nq], F[nq], E[2];
+    double gaps[nc1], vn[nc1], an[nc1], e[nq], e_law[nq], qd_plus[nq], F[nq], Ft[2 * nq], E[2];
     int list[nq], landing[nq], shrinking[nc1], set[nq];
     int i, k, code, nset = 0;
     gac_impact_event ev;
@@ -429,7 +472,8 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     ev.list = list, ev.landing = landing, ev.shrinking = shrinking;
     ev.held = 0;
     s->energy_x1_valid = 0;                              /* set again by gac_finish, for the state it leaves */
-    ev.gaps = gaps, ev.vn = vn, ev.an = an, ev.e = e, ev.e_law = e_law, ev.qd_plus = qd_plus, ev.F = F;
+    ev.gaps = gaps, ev.vn = vn, ev.an = an, ev.e = e, ev.e_law = e_law, ev.qd_plus = qd_plus, ev.F = F, ev.Ft = Ft;
+    ev.friction = 0, ev.law = GAC_IMPACT_LAW_FRICTIONLESS, ev.residual = 0.0;
     md->contact_gaps(ev.x, s->p, gaps);
     gac_normal_velocities(md, ev.x, s->p, vn);
     r->ncontact = 0;
@@ -437,6 +481,8 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     r->rounds = r->plastic = r->law_elastic = 0;
     r->energy_rest = 0.0;
     r->roundoff = 1e-10;
+    r->law = GAC_IMPACT_LAW_FRICTIONLESS;
+    r->residual = 0.0;
     if (!gac_is_impact(s, &ev)) return 0;                /* grazing touch: nothing to resolve */
     code = gac_gather(s, &ev);
     if (code != GAC_OK) return code;

@@ -242,7 +242,7 @@ static void test_sizes(void)
     CHECK(gac_impact_nwork(&box) == 2 * 4 + 2 + 3 * 1 + 2, "impact work %ld", gac_impact_nwork(&box));
     CHECK(gac_sim_ndouble(&box) == 28 * 4 + 3 + 7 * 4 + gac_impact_nwork(&box) + 4, "sim doubles %ld",
           gac_sim_ndouble(&box));
-    CHECK(gac_sim_nint(&box) == 2 + 2 * 4 && gac_record_ndouble(&box) == 8 && gac_record_nint(&box) == 6, "ints");
+    CHECK(gac_sim_nint(&box) == 2 + 2 * 4 && gac_record_ndouble(&box) == 12 && gac_record_nint(&box) == 6, "ints");
     CHECK(gac_sim_ndouble(&box) <= NDOUBLE && gac_sim_nint(&box) <= NINT, "test arrays large enough");
     CHECK(NEAR(gac_chart_measure(&box, box_q0), 1.0, 0.0), "chart measure 1");
 }
@@ -582,7 +582,7 @@ static void test_sled(void)
     gac_sim sim;
     gac_impact_record rec;
     int code, i_eval = 0;
-    CHECK(gac_model_check(&sled) == GAC_OK && gac_impact_nwork(&sled) == 4 * 4 + 2 + 3 + 2, "sled model, work %ld",
+    CHECK(gac_model_check(&sled) == GAC_OK && gac_impact_nwork(&sled) == 13 * 4 + 2 + 3 + 2, "sled model, work %ld",
           gac_impact_nwork(&sled));
     code = gac_constrained_dynamics(&sled, sled_q0, sled_qd0, 0, sled_p, 1, contact_set, qdd, lambda, swork);
     CHECK(code == GAC_OK && NEAR(lambda[0], m * g, 1e-12) && NEAR(qdd[0], -c_f * g, 1e-12) && NEAR(qdd[1], 0.0, 1e-12),

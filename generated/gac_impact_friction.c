@@ -1,0 +1,403 @@
+/*
+ * gac_impact_friction.c -- impacts at walls with Coulomb friction.
+ *
+ * The law (the "global dissipation index" form of Moreau's and Glocker's impact laws): at each contact the
+ * normal and tangential velocities gamma = (gamma_N, gamma_T) share one restitution e, and Coulomb's cone holds
+ * on their weighted sum xi = gamma+ + e gamma-:
+ *     0 <= Lambda_N  _|_  xi_N >= 0,
+ *     Lambda_T = -c_f Lambda_N xi_T / |xi_T|  where xi_T != 0,   |Lambda_T| <= c_f Lambda_N  where xi_T = 0,
+ * Lambda the impulse (normal, and along the wall's tangential axes).  With gamma+ = gamma- + W Lambda (W the
+ * contact-space inverse inertia, positive semidefinite) the kinetic energy changes by
+ *     T+ - T- = 1/2 Lambda^T (gamma+ + gamma-)
+ *             = 1/2 Lambda^T xi (1 + (1 - e)/(1 + e)) - (1 - e)/(2 (1 + e)) Lambda^T W Lambda  <= 0
+ * for a common e in [0, 1], since Lambda^T xi = -c_f Lambda_N |xi_T| <= 0 contact by contact: the law never
+ * gains energy, it stops, sticks, slides and reverses the slip as the impulses require, and with c_f = 0 it is
+ * Newton's law with complementarity (Eq. 47).  With different e at simultaneous contacts the identity no longer
+ * bounds the sign; a round whose energy would grow is solved again with the smallest e of its contacts for all of
+ * them (the record's law says so).  Newton + Coulomb (Newton's restitution on the normal velocity, Coulomb's cone
+ * on the tangential velocity after the impact) is kept as an option: it gains energy when the slip reverses
+ * during the impact (Kane's rod), and the loop then stops (GAC_ERR_IMPACT_ENERGY).
+ *
+ * Each round of the rounds (gac_impact_rounds) is this frictional contact problem on the contacts that approach
+ * or rest, solved by projected Gauss-Seidel over the contacts, each contact's own problem solved exactly
+ * (separate, stick, or slide: a sign for one tangential axis, the direction found by bisection on the circle for
+ * two); its residual is reported, and a problem the sweeps do not bring below GAC_FRICTION_RESIDUAL_MAX is
+ * GAC_ERR_IMPACT_FRICTION.
+ */
+#include "gac_internal.h"
+
+#include <math.h>
+
+#define GAC_PGS_SWEEPS 20000      /* Gauss-Seidel sweeps allowed for one round */
+#define GAC_SLIP_SAMPLES 72       /* directions sampled on the circle before bisection (two tangential axes) */
+
+/* Coulomb coefficient of contact c at an impact: its wall's c_f (0 for a frictionless wall or a stop). */
+double gac_friction_coefficient(const gac_model *m, const double *p, int c)
+{
+    const gac_contact *k = &m->contacts[c];
+    if (k->kind != GAC_CONTACT_WALL || !k->has_friction) return 0.0;
+    return k->friction_index >= 0 ? p[k->friction_index] : k->friction_value;
+}
+
+/* x = A^-1 b for a d x d (d <= 3) row-major A by Gaussian elimination with partial pivoting; 0 if singular. */
+static int gac_small_solve(int d, const double *A, const double *b, double *x)
+{
+    double M[9], y[3];
+    int i, j, c;
+    for (i = 0; i < d * d; ++i) M[i] = A[i];
+    for (i = 0; i < d; ++i) y[i] = b[i];
+    for (c = 0; c < d; ++c) {
+        int p = c;
+        for (i = c + 1; i < d; ++i) {
+            if (fabs(M[i*d + c]) > fabs(M[p*d + c])) p = i;
+        }
+        if (!(fabs(M[p*d + c]) > 1e-300)) return 0;
+        if (p != c) {
+            for (j = 0; j < d; ++j) {
+                const double t = M[c*d + j];
+                M[c*d + j] = M[p*d + j];
+                M[p*d + j] = t;
+            }
+            { const double t = y[c]; y[c] = y[p]; y[p] = t; }
+        }
+        for (i = c + 1; i < d; ++i) {
+            const double f = M[i*d + c] / M[c*d + c];
+            for (j = c; j < d; ++j) M[i*d + j] -= f * M[c*d + j];
+            y[i] -= f * y[c];
+        }
+    }
+    for (i = d - 1; i >= 0; --i) {
+        double s = y[i];
+        for (j = i + 1; j < d; ++j) s -= M[i*d + j] * x[j];
+        x[i] = s / M[i*d + i];
+    }
+    return 1;
+}
+
+/* Sliding along the unit direction (dx, dy) of xi_T (two tangential axes; dy = 0 for one): the impulse
+ * L = L_N (1, -c_f d) with xi_N = 0, and xi_T's components across and along d.  0 if L_N would not push. */
+static int gac_slide(int d, const double *W, const double *r, double cf, double dx, double dy, double *L,
+                     double *across, double *along)
+{
+    double denom = W[0] - cf * (W[1] * dx + (d > 2 ? W[2] * dy : 0.0)), xt[2] = {0.0, 0.0};
+    int j;
+    if (!(denom > 0.0)) return 0;
+    L[0] = -r[0] / denom;
+    L[1] = -cf * L[0] * dx;
+    if (d > 2) L[2] = -cf * L[0] * dy;
+    for (j = 1; j < d; ++j) {
+        int i;
+        double s = r[j];
+        for (i = 0; i < d; ++i) s += W[j*d + i] * L[i];
+        xt[j - 1] = s;
+    }
+    *across = xt[0] * dy - xt[1] * dx;
+    *along = xt[0] * dx + xt[1] * dy;
+    return L[0] > 0.0;
+}
+
+/* One contact's frictional problem, exactly: xi = W L + r (d = 1 + its tangential axes, W d x d row-major), the
+ * cone of coefficient cf.  Separate (L = 0) when r_N >= 0, else stick (xi = 0) when that impulse lies in the cone,
+ * else slide (xi_N = 0, L_T = -cf L_N xi_T / |xi_T|).  Where sliding has several solutions (friction strong enough
+ * for the Painleve paradox at an impact), the one nearest the direction of r_T is taken. */
+static void gac_local_contact(int d, const double *W, const double *r, double cf, double *L)
+{
+    double Ls[3] = {0.0, 0.0, 0.0}, best[3] = {0.0, 0.0, 0.0}, best_score = -1e300, mr[3] = {0.0, 0.0, 0.0};
+    int i, found = 0;
+    for (i = 0; i < d; ++i) L[i] = 0.0;
+    if (r[0] >= 0.0) return;                                   /* separates: no impulse */
+    if (d == 1 || !(cf > 0.0)) {
+        L[0] = -r[0] / W[0];
+        return;
+    }
+    for (i = 0; i < d; ++i) mr[i] = -r[i];
+    if (gac_small_solve(d, W, mr, Ls) && Ls[0] > 0.0) {       /* sticks */
+        double t2 = 0.0;
+        for (i = 1; i < d; ++i) t2 += Ls[i] * Ls[i];
+        if (sqrt(t2) <= cf * Ls[0]) {
+            for (i = 0; i < d; ++i) L[i] = Ls[i];
+            return;
+        }
+    }
+    if (d == 2) {                                              /* slides one way or the other */
+        int s;
+        for (s = -1; s <= 1; s += 2) {
+            double across, along, score;
+            if (!gac_slide(d, W, r, cf, (double)s, 0.0, Ls, &across, &along) || along < 0.0) continue;
+            score = s * r[1];
+            if (!found || score > best_score) {
+                for (i = 0; i < d; ++i) best[i] = Ls[i];
+                best_score = score;
+                found = 1;
+            }
+        }
+    } else {                                                   /* the sliding direction on the circle */
+        double prev_phi = 0.0, prev_f = 0.0, rt = sqrt(r[1] * r[1] + r[2] * r[2]);
+        int prev_ok = 0, k;
+        for (k = 0; k <= GAC_SLIP_SAMPLES; ++k) {
+            const double phi = 2.0 * 3.14159265358979323846 * k / GAC_SLIP_SAMPLES;
+            double across, along;
+            const int ok = gac_slide(d, W, r, cf, cos(phi), sin(phi), Ls, &across, &along);
+            if (ok && prev_ok && (across == 0.0 || (across > 0.0) != (prev_f > 0.0))) {
+                double lo = prev_phi, hi = phi, f_lo = prev_f;
+                int it;
+                for (it = 0; it < 80; ++it) {                  /* bisection to the double's resolution */
+                    const double mid = 0.5 * (lo + hi);
+                    double a2, b2;
+                    if (!gac_slide(d, W, r, cf, cos(mid), sin(mid), Ls, &a2, &b2)) break;
+                    if ((a2 > 0.0) == (f_lo > 0.0)) {
+                        lo = mid;
+                        f_lo = a2;
+                    } else {
+                        hi = mid;
+                    }
+                    if (hi - lo <= 4.0 * GAC_EPS * (1.0 + hi)) break;
+                }
+                {
+                    const double mid = 0.5 * (lo + hi);
+                    double a2, b2;
+                    if (gac_slide(d, W, r, cf, cos(mid), sin(mid), Ls, &a2, &b2) && b2 >= 0.0) {
+                        const double score = rt > 0.0 ? (cos(mid) * r[1] + sin(mid) * r[2]) / rt : 0.0;
+                        if (!found || score > best_score) {
+                            for (i = 0; i < d; ++i) best[i] = Ls[i];
+                            best_score = score;
+                            found = 1;
+                        }
+                    }
+                }
+            }
+            prev_phi = phi;
+            prev_f = across;
+            prev_ok = ok;
+        }
+    }
+    if (found) {
+        for (i = 0; i < d; ++i) L[i] = best[i];
+    } else {                                                   /* no sliding solution: the frictionless push, */
+        L[0] = -r[0] / W[0];                                   /* which the residual then reports */
+    }
+}
+
+/* The frictional contact problem of one round: rows rows[0..nr-1] of the full system (W, nd x nd), grouped by
+ * contact (contact k's rows at start[k] .. start[k] + dim[k] - 1, its normal first), xi = W L + q, the cone of
+ * coefficient cf[k].  Projected Gauss-Seidel over the contacts with each one's exact solve; L (nr) out, the
+ * residual (relative: velocities to max |q|, impulses to max |L|) returned through *residual. */
+static void gac_round_friction(int nd, const double *W, int ncon, const int *start, const int *dim,
+                               const double *cf, const int *rows, const double *q, double *L, double *residual)
+{
+    const int nr = start[ncon - 1] + dim[ncon - 1];
+    double vscale = 0.0, lscale = 0.0, res = 0.0;
+    int k, i, j, sweep;
+    for (i = 0; i < nr; ++i) {
+        L[i] = 0.0;
+        if (fabs(q[i]) > vscale) vscale = fabs(q[i]);
+    }
+    for (sweep = 0; sweep < GAC_PGS_SWEEPS; ++sweep) {
+        double change = 0.0, size = 0.0;
+        for (k = 0; k < ncon; ++k) {
+            const int s = start[k], d = dim[k];
+            double Wl[9] = {0.0}, r[3] = {0.0, 0.0, 0.0}, Lk[3] = {0.0, 0.0, 0.0};
+            for (i = 0; i < d; ++i) {
+                double v = q[s + i];
+                for (j = 0; j < nr; ++j) {
+                    if (j < s || j >= s + d) v += W[rows[s + i] * nd + rows[j]] * L[j];
+                }
+                r[i] = v;
+                for (j = 0; j < d; ++j) Wl[i*d + j] = W[rows[s + i] * nd + rows[s + j]];
+            }
+            gac_local_contact(d, Wl, r, cf[k], Lk);
+            for (i = 0; i < d; ++i) {
+                if (fabs(Lk[i] - L[s + i]) > change) change = fabs(Lk[i] - L[s + i]);
+                if (fabs(Lk[i]) > size) size = fabs(Lk[i]);
+                L[s + i] = Lk[i];
+            }
+        }
+        if (ncon == 1 || change <= 4.0 * GAC_EPS * size) break;
+    }
+    for (i = 0; i < nr; ++i) {
+        if (fabs(L[i]) > lscale) lscale = fabs(L[i]);
+    }
+    if (!(vscale > 0.0)) vscale = 1.0;
+    if (!(lscale > 0.0)) lscale = 1.0;
+    for (k = 0; k < ncon; ++k) {                               /* the law's conditions, contact by contact */
+        const int s = start[k], d = dim[k];
+        double xi[3], lt = 0.0, xt = 0.0, dot = 0.0, r;
+        for (i = 0; i < d; ++i) {
+            double v = q[s + i];
+            for (j = 0; j < nr; ++j) v += W[rows[s + i] * nd + rows[j]] * L[j];
+            xi[i] = v;
+        }
+        r = fmin(L[s] / lscale, xi[0] / vscale);              /* 0 <= L_N _|_ xi_N >= 0 */
+        if (fabs(r) > res) res = fabs(r);
+        if (d == 1 || !(cf[k] > 0.0)) continue;
+        for (i = 1; i < d; ++i) {
+            lt += L[s + i] * L[s + i];
+            xt += xi[i] * xi[i];
+            dot += -L[s + i] * xi[i];
+        }
+        lt = sqrt(lt);
+        xt = sqrt(xt);
+        r = (lt - cf[k] * L[s]) / lscale;                     /* inside the cone */
+        if (r > res) res = r;
+        if (lt < cf[k] * L[s] * (1.0 - 1e-9)) {
+            r = xt / vscale;                                   /* sticks: xi_T = 0 */
+        } else if (lt > 0.0) {
+            r = (lt * xt - dot) / (lt * vscale);               /* slides: xi_T along -L_T */
+        } else {
+            r = 0.0;                                           /* L = 0 at the cone's tip */
+        }
+        if (r > res) res = r;
+    }
+    *residual = res;
+}
+
+int gac_impact_rounds_friction(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                               const int *list, const double *e, int first, int law, double *qd_plus, double *F,
+                               double *Ft, double *work, int *rounds, int *plastic, int *law_used, double *residual)
+{
+    const int nq = m->nq, nd_max = 3 * n;
+    double v_unused[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)];
+    double *Y = GAC_WORK_Y(m, work), *g = GAC_WORK_G(m, work), *vel = GAC_WORK_VEL(m, work);
+    double *f = GAC_WORK_F(m, work), *Z = GAC_WORK_Z(m, work), *W = GAC_WORK_W(m, work);
+    double cf[GAC_AT_LEAST_1(nq)], gam[nd_max], total[nd_max], scale = 0.0, v_tol;
+    int start[GAC_AT_LEAST_1(nq)], dim[GAC_AT_LEAST_1(nq)], owner[nd_max], comp[nd_max], axis_of[nd_max];
+    const double *resp[nd_max];
+    int a, b, i, j, nd = 0, nt = 0, round, code;
+    *rounds = *plastic = 0;
+    *residual = 0.0;
+    *law_used = GAC_IMPACT_LAW_FRICTIONLESS;
+    code = gac_impact_system(m, q, qd, p, n, list, work, v_unused, e_wall);  /* Y_a = I_f^-1 n_a */
+    if (code != GAC_OK) return code;
+    for (a = 0; a < n; ++a) {                 /* the directions: each contact's normal, then its tangential axes */
+        const gac_contact *k = &m->contacts[list[a]];
+        int axis = 0;
+        cf[a] = law == GAC_IMPACT_LAW_FRICTIONLESS ? 0.0 : gac_friction_coefficient(m, p, list[a]);
+        start[a] = nd;
+        owner[nd] = a, comp[nd] = -1, axis_of[nd] = -1, resp[nd++] = Y + (long)a * nq;
+        if (!(cf[a] > 0.0)) {
+            dim[a] = 1;
+            continue;
+        }
+        for (j = 0; j < 2; ++j, ++axis) {
+            if (axis == k->axis) ++axis;
+            if (k->trow[j] < 0) continue;
+            for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
+            f[k->trow[j]] = 1.0;                            /* a unit force along +X_axis */
+            m->contact_generalized_force(q, f, p, g);
+            m->inertia_solve(q, g, p, Z + (long)nt * nq);
+            for (i = 0; i < nq; ++i) {
+                if (!isfinite(Z[(long)nt * nq + i])) return GAC_ERR_SINGULAR_MASS;
+            }
+            owner[nd] = a, comp[nd] = 3 * (k->point - 1) + axis, axis_of[nd] = j, resp[nd++] = Z + (long)nt * nq;
+            ++nt;
+        }
+        dim[a] = nd - start[a];
+    }
+    /* W[r][s] = d_r . I_f^-1 d_s, read off the velocities of the rows for the response of s; gam = velocities */
+    for (b = 0; b <= nd; ++b) {
+        const double *w = b < nd ? resp[b] : qd;
+        m->contact_velocities(q, w, p, vel);
+        for (a = 0; a < nd; ++a) {
+            const double value = comp[a] < 0
+                ? m->contacts[list[owner[a]]].normal_sign * gac_row_value(m, list[owner[a]], w, vel)
+                : vel[comp[a]];
+            if (b < nd) W[a*nd + b] = value;
+            else gam[a] = value;
+        }
+    }
+    for (a = 0; a < nd; ++a) {                 /* symmetric up to round-off: make it exactly so */
+        for (b = 0; b < a; ++b) W[a*nd + b] = W[b*nd + a] = 0.5 * (W[a*nd + b] + W[b*nd + a]);
+        total[a] = 0.0;
+    }
+    for (a = 0; a < n; ++a) {
+        if (fabs(gam[start[a]]) > scale) scale = fabs(gam[start[a]]);
+        if (dim[a] > 1 && *law_used == GAC_IMPACT_LAW_FRICTIONLESS)
+            *law_used = law == GAC_IMPACT_LAW_NEWTON_COULOMB ? GAC_IMPACT_LAW_NEWTON_COULOMB : GAC_IMPACT_LAW_GDI;
+    }
+    v_tol = 1e-11 * scale;
+    for (round = 0; ; ++round) {
+        int rows[nd_max], st[GAC_AT_LEAST_1(nq)], dm[GAC_AT_LEAST_1(nq)];
+        double ek[GAC_AT_LEAST_1(nq)], cfk[GAC_AT_LEAST_1(nq)], qv[nd_max], L[nd_max], res = 0.0;
+        int k = 0, nr = 0, approaching = 0, pass;
+        const int last = round >= GAC_MAX_ROUNDS;
+        for (a = 0; a < n; ++a) {
+            const double v = gam[start[a]];
+            const int struck = v < -v_tol || (round == 0 && a == first && v < 0.0);
+            if (struck) approaching = 1;
+            if (last || struck || v <= v_tol) {
+                ek[k] = !last && struck ? e[a] : 0.0;
+                cfk[k] = cf[a];
+                st[k] = nr;
+                dm[k] = dim[a];
+                for (i = 0; i < dim[a]; ++i) rows[nr++] = start[a] + i;
+                ++k;
+            }
+        }
+        if (!approaching) break;
+        for (pass = 0; pass < 2; ++pass) {
+            double dT = 0.0, size = 0.0;
+            for (b = 0; b < k; ++b) {           /* q = (1 + e) gamma- (GDI); Newton + Coulomb: e on the normal only */
+                for (i = 0; i < dm[b]; ++i) {
+                    const double gm = gam[rows[st[b] + i]];
+                    const int restitutes = i == 0 || law != GAC_IMPACT_LAW_NEWTON_COULOMB;
+                    qv[st[b] + i] = restitutes ? (1.0 + ek[b]) * gm : gm;
+                }
+            }
+            gac_round_friction(nd, W, k, st, dm, cfk, rows, qv, L, &res);
+            if (law == GAC_IMPACT_LAW_NEWTON_COULOMB || pass == 1) break;
+            for (i = 0; i < nr; ++i) {           /* dT = L . gamma- + L W L / 2 over the round's rows */
+                double wl = 0.0;
+                for (j = 0; j < nr; ++j) wl += W[rows[i] * nd + rows[j]] * L[j];
+                dT += L[i] * (gam[rows[i]] + 0.5 * wl);
+                size += fabs(L[i]) * (fabs(gam[rows[i]]) + 0.5 * fabs(wl));
+            }
+            if (dT <= 1e-12 * size) break;
+            {                                    /* a common restitution, the smallest of the round's */
+                double e_min = 1.0;
+                for (b = 0; b < k; ++b) e_min = ek[b] < e_min ? ek[b] : e_min;
+                for (b = 0; b < k; ++b) ek[b] = e_min;
+                *law_used = GAC_IMPACT_LAW_GDI_COMMON_E;
+            }
+        }
+        if (res > *residual) *residual = res;
+        if (res > GAC_FRICTION_RESIDUAL_MAX) return GAC_ERR_IMPACT_FRICTION;
+        for (i = 0; i < nr; ++i) total[rows[i]] += L[i];
+        for (a = 0; a < nd; ++a) {
+            for (i = 0; i < nr; ++i) gam[a] += W[a*nd + rows[i]] * L[i];
+        }
+        *rounds = round + 1;
+        if (last) {
+            *plastic = 1;
+            break;
+        }
+    }
+    for (i = 0; i < nq; ++i) {
+        double value = qd[i];
+        for (a = 0; a < nd; ++a) value += resp[a][i] * total[a];
+        qd_plus[i] = value;
+    }
+    for (a = 0; a < n; ++a) {
+        F[a] = total[start[a]];
+        Ft[2*a] = Ft[2*a + 1] = 0.0;
+        for (i = 1; i < dim[a]; ++i) Ft[2*a + axis_of[start[a] + i]] = total[start[a] + i];
+    }
+    return GAC_OK;
+}
+
+int gac_impact_friction(const gac_model *m, const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd,
+                        const double *GAC_RESTRICT p, int ncontact_set, const int *GAC_RESTRICT contact_set, int law,
+                        double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse, double *GAC_RESTRICT impulse_t,
+                        int *law_used, double *residual, double *GAC_RESTRICT work)
+{
+    double e[GAC_AT_LEAST_1(m->nq)];
+    int a, rounds, plastic;
+    if (law != GAC_IMPACT_LAW_GDI && law != GAC_IMPACT_LAW_NEWTON_COULOMB && law != GAC_IMPACT_LAW_FRICTIONLESS)
+        return GAC_ERR_BAD_OPTION;
+    if (ncontact_set < 1 || ncontact_set > m->nq) return GAC_ERR_BAD_CONTACT;
+    for (a = 0; a < ncontact_set; ++a) {
+        if (contact_set[a] < 0 || contact_set[a] >= m->ncontact) return GAC_ERR_BAD_CONTACT;
+        e[a] = gac_restitution(m, p, contact_set[a]);
+    }
+    return gac_impact_rounds_friction(m, q, qd, p, ncontact_set, contact_set, e, -1, law, qd_plus, impulse,
+                                      impulse_t, work, &rounds, &plastic, law_used, residual);
+}

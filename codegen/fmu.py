@@ -88,7 +88,7 @@ def fmi2_variables(model: GeneratedModel, scene: Scene, rows: dict, constants: d
     """Every variable of the FMU, in the order of its value references (Real, then Integer), from the rows that
     describe them once (gac_fmi2.h's GAC_FMI2_REALS and GAC_FMI2_INTEGERS, read by runtime.header.fmi2_rows):
     a row of count 1 is one variable, a block (count nq, nu or nparam) one per coordinate, input or parameter, with
-    its start from the scene.  ``constants``: the library's (gac.h), for the smallest rtol and the methods' codes."""
+    its start from the scene.  ``constants``: the library's (gac.h), for the smallest rtol and the codes of the methods and impact laws."""
     layout = model.layout
     names = coordinate_names(scene.n)
     coordinates = [names[i] for i in layout.free]
@@ -107,6 +107,8 @@ def fmi2_variables(model: GeneratedModel, scene: Scene, rows: dict, constants: d
     bounds["solver.rtol"] = (_double_literal(float(constants["GAC_RTOL_MIN"])), "1.0")   # fmi2SetReal refuses 1
     methods = [int(constants[f"GAC_METHOD_{m}"]) for m in ("RK4", "DOPRI5", "DOP853")]
     bounds["solver.method"] = (str(min(methods)), str(max(methods)))
+    laws = [int(constants[f"GAC_IMPACT_LAW_{law}"]) for law in ("FRICTIONLESS", "GDI", "NEWTON_COULOMB")]
+    bounds["solver.impact_law"] = (str(min(laws)), str(max(laws)))
 
     variables = []
     for vtype in ("Real", "Integer"):

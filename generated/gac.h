@@ -473,7 +473,9 @@ int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const do
  * window (100 x the adaptive method's position tolerance, or contact_tol if larger) and every resting
  * one take part.  The law (gac_impact_complementarity) is Newton's law, Eq. 47, with complementarity, in
  * rounds until no contact approaches: F >= 0, no energy gain, e = 1 keeps the energy exactly; a contact
- * that separates takes an impulse only if the others drive it into its wall.  Its post-conditions are
+ * that separates takes an impulse only if the others drive it into its wall.  Where a contact taking part is on
+ * a wall with Coulomb friction (c_f > 0), each round is the frictional law of opt.impact_law (gac_impact_friction;
+ * by default Coulomb's cone on gamma+ + e gamma-, which never gains energy; record.law, impulse_t, residual).  Its post-conditions are
  * checked to the law's round-off bound (record.roundoff; GAC_ERR_IMPACT_ACCURACY otherwise), and that bound must
  * not exceed GAC_IMPACT_ROUNDOFF_MAX (1e-2): an impact known only to a larger error of its energy stops the run
  * (GAC_ERR_IMPACT_ACCURACY, record.roundoff says its bound), as does the plastic closing round of

@@ -21,8 +21,9 @@
  * Each round of the rounds (gac_impact_rounds) is this frictional contact problem on the contacts that approach
  * or rest, solved by projected Gauss-Seidel over the contacts, each contact's own problem solved exactly
  * (separate, stick, or slide: a sign for one tangential axis, the direction found by bisection on the circle for
- * two); its residual is reported, and a problem the sweeps do not bring below GAC_FRICTION_RESIDUAL_MAX is
- * GAC_ERR_IMPACT_FRICTION.
+ * two); where the sweeps stall (coupled contacts with friction are not a monotone problem), the contacts' modes
+ * are enumerated exactly (up to GAC_ENUM_MAX contacts).  Its residual is reported, and a round left above
+ * GAC_FRICTION_RESIDUAL_MAX is GAC_ERR_IMPACT_FRICTION.
  */
 #include "gac_internal.h"
 
@@ -30,6 +31,7 @@
 
 #define GAC_PGS_SWEEPS 20000      /* Gauss-Seidel sweeps allowed for one round */
 #define GAC_SLIP_SAMPLES 72       /* directions sampled on the circle before bisection (two tangential axes) */
+#define GAC_ENUM_MAX 6            /* contacts of a round whose modes are enumerated where Gauss-Seidel stalls */
 
 /* Coulomb coefficient of contact c at an impact: its wall's c_f (0 for a frictionless wall or a stop). */
 double gac_friction_coefficient(const gac_model *m, const double *p, int c)
@@ -178,20 +180,175 @@ static void gac_local_contact(int d, const double *W, const double *r, double cf
     }
 }
 
+/* The largest relative violation of the law's conditions by L (nr rows of contacts start[k] .. + dim[k], the
+ * round's rows rows[] of the full W, nd x nd): 0 <= L_N _|_ xi_N >= 0, |L_T| <= cf L_N, xi_T = 0 where it sticks,
+ * xi_T along -L_T where it slides; velocities relative to max |q|, impulses to max |L|. */
+static double gac_round_residual(int nd, const double *W, int ncon, const int *start, const int *dim,
+                                 const double *cf, const int *rows, const double *q, const double *L)
+{
+    const int nr = start[ncon - 1] + dim[ncon - 1];
+    double vscale = 0.0, lscale = 0.0, res = 0.0;
+    int k, i, j;
+    for (i = 0; i < nr; ++i) {
+        if (fabs(q[i]) > vscale) vscale = fabs(q[i]);
+        if (fabs(L[i]) > lscale) lscale = fabs(L[i]);
+    }
+    if (!(vscale > 0.0)) vscale = 1.0;
+    if (!(lscale > 0.0)) lscale = 1.0;
+    for (k = 0; k < ncon; ++k) {
+        const int s = start[k], d = dim[k];
+        double xi[3], lt = 0.0, xt = 0.0, dot = 0.0, r;
+        for (i = 0; i < d; ++i) {
+            double v = q[s + i];
+            for (j = 0; j < nr; ++j) v += W[rows[s + i] * nd + rows[j]] * L[j];
+            xi[i] = v;
+        }
+        r = L[s] / lscale < xi[0] / vscale ? L[s] / lscale : xi[0] / vscale;     /* min(L_N, xi_N) */
+        if (fabs(r) > res) res = fabs(r);
+        if (d == 1 || !(cf[k] > 0.0)) continue;
+        for (i = 1; i < d; ++i) {
+            lt += L[s + i] * L[s + i];
+            xt += xi[i] * xi[i];
+            dot += -L[s + i] * xi[i];
+        }
+        lt = sqrt(lt);
+        xt = sqrt(xt);
+        r = (lt - cf[k] * L[s]) / lscale;                     /* inside the cone */
+        if (r > res) res = r;
+        if (lt < cf[k] * L[s] * (1.0 - 1e-9)) {
+            r = xt / vscale;                                   /* sticks: xi_T = 0 */
+        } else if (lt > 0.0) {
+            r = (lt * xt - dot) / (lt * vscale);               /* slides: xi_T along -L_T */
+        } else {
+            r = 0.0;                                           /* L = 0 at the cone's tip */
+        }
+        if (r > res) res = r;
+    }
+    return res;
+}
+
+/* The round's problem for given modes: mode[k] 0 separates (L = 0), 1 sticks (xi = 0 on all its rows), 2 slides
+ * along dir[k] (xi_N = 0, L_T = -cf L_N dir); one linear solve for the unknowns.  0 if it is singular. */
+static int gac_round_modes(int nd, const double *W, int ncon, const int *start, const int *dim, const double *cf,
+                           const int *rows, const double *q, const int *mode, const double *dir, double *L)
+{
+    const int nr = start[ncon - 1] + dim[ncon - 1];
+    double P[3 * GAC_ENUM_MAX * 3 * GAC_ENUM_MAX], A[9 * GAC_ENUM_MAX * GAC_ENUM_MAX], b[3 * GAC_ENUM_MAX];
+    int eq[3 * GAC_ENUM_MAX], nz = 0, i, j, k, c;
+    for (i = 0; i < nr * nr; ++i) P[i] = 0.0;
+    for (k = 0; k < ncon; ++k) {                 /* L = P z: the unknowns z of each contact, and its equations */
+        const int s = start[k], d = dim[k];
+        if (mode[k] == 1) {
+            for (i = 0; i < d; ++i) {
+                P[(s + i) * nr + nz] = 1.0;
+                eq[nz++] = s + i;
+            }
+        } else if (mode[k] == 2) {
+            P[s * nr + nz] = 1.0;
+            for (i = 1; i < d; ++i) P[(s + i) * nr + nz] = -cf[k] * dir[2 * k + i - 1];
+            eq[nz++] = s;
+        }
+    }
+    for (i = 0; i < nz; ++i) {                  /* (E W P) z = -E q */
+        for (c = 0; c < nz; ++c) {
+            double v = 0.0;
+            for (j = 0; j < nr; ++j) v += W[rows[eq[i]] * nd + rows[j]] * P[j * nr + c];
+            A[i * nz + c] = v;
+        }
+        b[i] = -q[eq[i]];
+    }
+    if (nz > 0 && gac_lu_solve(nz, A, b, 1e-13) != 0) return 0;
+    for (j = 0; j < nr; ++j) {
+        double v = 0.0;
+        for (c = 0; c < nz; ++c) v += P[j * nr + c] * b[c];
+        L[j] = v;
+    }
+    return 1;
+}
+
+/* The round's problem solved exactly by its modes (at most GAC_ENUM_MAX contacts): every combination of separate,
+ * stick and slide (one tangential axis: each sign; two: the direction by fixed-point iteration on xi_T from the
+ * guess), the guess L's own modes first.  1 with L (its residual in *residual) if a combination meets the law. */
+static int gac_round_enumerate(int nd, const double *W, int ncon, const int *start, const int *dim,
+                               const double *cf, const int *rows, const double *q, double *L, double *residual)
+{
+    const int nr = start[ncon - 1] + dim[ncon - 1];
+    double guess[3 * GAC_ENUM_MAX], trial[3 * GAC_ENUM_MAX], dir[2 * GAC_ENUM_MAX];
+    int mode[GAC_ENUM_MAX], base[GAC_ENUM_MAX], choices[GAC_ENUM_MAX], i, k;
+    long combo, total = 1;
+    if (ncon > GAC_ENUM_MAX) return 0;
+    for (i = 0; i < nr; ++i) guess[i] = L[i];
+    for (k = 0; k < ncon; ++k) {                 /* the guess's modes; choices: 0 separate, 1 stick, 2.. slide */
+        const int s = start[k], d = dim[k];
+        double lt = 0.0;
+        for (i = 1; i < d; ++i) lt += guess[s + i] * guess[s + i];
+        lt = sqrt(lt);
+        choices[k] = d == 1 || !(cf[k] > 0.0) ? 2 : d == 2 ? 4 : 3;
+        base[k] = !(guess[s] > 0.0) ? 0 : choices[k] == 2 || lt < cf[k] * guess[s] * (1.0 - 1e-6) ? 1
+                : d == 2 ? (guess[s + 1] < 0.0 ? 2 : 3) : 2;
+        total *= choices[k];
+    }
+    for (combo = 0; combo < total; ++combo) {
+        long rest = combo;
+        int iter;
+        for (k = 0; k < ncon; ++k) {             /* combo 0 is the guess's modes */
+            const int c = (int)((base[k] + rest % choices[k]) % choices[k]);
+            rest /= choices[k];
+            mode[k] = c >= 2 ? 2 : c;
+            dir[2 * k] = dir[2 * k + 1] = 0.0;
+            if (c >= 2 && dim[k] == 2) dir[2 * k] = c == 2 ? 1.0 : -1.0;       /* xi_T along +X or -X */
+            if (c >= 2 && dim[k] == 3) {         /* the guess's direction, or the velocity's before */
+                const int s = start[k];
+                double x = -guess[s + 1], y = -guess[s + 2], norm;
+                if (!(fabs(x) + fabs(y) > 0.0)) x = q[s + 1], y = q[s + 2];
+                norm = sqrt(x * x + y * y);
+                dir[2 * k] = norm > 0.0 ? x / norm : 1.0;
+                dir[2 * k + 1] = norm > 0.0 ? y / norm : 0.0;
+            }
+        }
+        for (iter = 0; iter < 60; ++iter) {      /* two tangential axes: the slide direction follows xi_T */
+            double moved = 0.0;
+            if (!gac_round_modes(nd, W, ncon, start, dim, cf, rows, q, mode, dir, trial)) break;
+            for (k = 0; k < ncon; ++k) {
+                const int s = start[k];
+                double x = q[s + 1], y = q[s + 2], norm;
+                int j;
+                if (mode[k] != 2 || dim[k] != 3) continue;
+                for (j = 0; j < nr; ++j) {
+                    x += W[rows[s + 1] * nd + rows[j]] * trial[j];
+                    y += W[rows[s + 2] * nd + rows[j]] * trial[j];
+                }
+                norm = sqrt(x * x + y * y);
+                if (!(norm > 0.0)) continue;
+                moved += fabs(x / norm - dir[2 * k]) + fabs(y / norm - dir[2 * k + 1]);
+                dir[2 * k] = x / norm;
+                dir[2 * k + 1] = y / norm;
+            }
+            if (moved <= 1e-15) {
+                const double res = gac_round_residual(nd, W, ncon, start, dim, cf, rows, q, trial);
+                if (res <= GAC_FRICTION_RESIDUAL_MAX * 1e-3) {
+                    for (i = 0; i < nr; ++i) L[i] = trial[i];
+                    *residual = res;
+                    return 1;
+                }
+                break;
+            }
+        }
+    }
+    return 0;
+}
+
 /* The frictional contact problem of one round: rows rows[0..nr-1] of the full system (W, nd x nd), grouped by
  * contact (contact k's rows at start[k] .. start[k] + dim[k] - 1, its normal first), xi = W L + q, the cone of
- * coefficient cf[k].  Projected Gauss-Seidel over the contacts with each one's exact solve; L (nr) out, the
- * residual (relative: velocities to max |q|, impulses to max |L|) returned through *residual. */
+ * coefficient cf[k].  Projected Gauss-Seidel over the contacts with each one's exact solve; where that leaves the
+ * law's conditions violated by more than round-off, the contacts' modes are enumerated (gac_round_enumerate).  L
+ * (nr) out, the residual (gac_round_residual) through *residual. */
 static void gac_round_friction(int nd, const double *W, int ncon, const int *start, const int *dim,
                                const double *cf, const int *rows, const double *q, double *L, double *residual)
 {
     const int nr = start[ncon - 1] + dim[ncon - 1];
-    double vscale = 0.0, lscale = 0.0, res = 0.0;
     int k, i, j, sweep;
-    for (i = 0; i < nr; ++i) {
-        L[i] = 0.0;
-        if (fabs(q[i]) > vscale) vscale = fabs(q[i]);
-    }
+    for (i = 0; i < nr; ++i) L[i] = 0.0;
     for (sweep = 0; sweep < GAC_PGS_SWEEPS; ++sweep) {
         double change = 0.0, size = 0.0;
         for (k = 0; k < ncon; ++k) {
@@ -214,41 +371,15 @@ static void gac_round_friction(int nd, const double *W, int ncon, const int *sta
         }
         if (ncon == 1 || change <= 4.0 * GAC_EPS * size) break;
     }
-    for (i = 0; i < nr; ++i) {
-        if (fabs(L[i]) > lscale) lscale = fabs(L[i]);
+    *residual = gac_round_residual(nd, W, ncon, start, dim, cf, rows, q, L);
+    if (*residual > 1e-12) {
+        double exact[3 * GAC_ENUM_MAX], res;
+        for (i = 0; i < nr && i < 3 * GAC_ENUM_MAX; ++i) exact[i] = L[i];
+        if (gac_round_enumerate(nd, W, ncon, start, dim, cf, rows, q, exact, &res) && res < *residual) {
+            for (i = 0; i < nr; ++i) L[i] = exact[i];
+            *residual = res;
+        }
     }
-    if (!(vscale > 0.0)) vscale = 1.0;
-    if (!(lscale > 0.0)) lscale = 1.0;
-    for (k = 0; k < ncon; ++k) {                               /* the law's conditions, contact by contact */
-        const int s = start[k], d = dim[k];
-        double xi[3], lt = 0.0, xt = 0.0, dot = 0.0, r;
-        for (i = 0; i < d; ++i) {
-            double v = q[s + i];
-            for (j = 0; j < nr; ++j) v += W[rows[s + i] * nd + rows[j]] * L[j];
-            xi[i] = v;
-        }
-        r = fmin(L[s] / lscale, xi[0] / vscale);              /* 0 <= L_N _|_ xi_N >= 0 */
-        if (fabs(r) > res) res = fabs(r);
-        if (d == 1 || !(cf[k] > 0.0)) continue;
-        for (i = 1; i < d; ++i) {
-            lt += L[s + i] * L[s + i];
-            xt += xi[i] * xi[i];
-            dot += -L[s + i] * xi[i];
-        }
-        lt = sqrt(lt);
-        xt = sqrt(xt);
-        r = (lt - cf[k] * L[s]) / lscale;                     /* inside the cone */
-        if (r > res) res = r;
-        if (lt < cf[k] * L[s] * (1.0 - 1e-9)) {
-            r = xt / vscale;                                   /* sticks: xi_T = 0 */
-        } else if (lt > 0.0) {
-            r = (lt * xt - dot) / (lt * vscale);               /* slides: xi_T along -L_T */
-        } else {
-            r = 0.0;                                           /* L = 0 at the cone's tip */
-        }
-        if (r > res) res = r;
-    }
-    *residual = res;
 }
 
 int gac_impact_rounds_friction(const gac_model *m, const double *q, const double *qd, const double *p, int n,

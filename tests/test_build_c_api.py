@@ -342,7 +342,8 @@ def test_example_help(built, flag):
     assert result.returncode == 0, result.stderr
     assert result.stdout.startswith("usage: ") and "# paper_case1" not in result.stdout     # nothing simulated
     for text in ("t_end", "tol_or_dt", "dopri5", "dop853", "rk4", "--time N", "rtol 1e-8", "atol 1e-10", "--exact",
-                 "--rtol R", "--event-samples K", "--contact-tol C", "--rest-height H", "--zeno-impacts K"):
+                 "--rtol R", "--event-samples K", "--contact-tol C", "--rest-height H", "--zeno-impacts K",
+                 "--impact-law L", "newton-coulomb"):
         assert text in result.stdout
 
 
@@ -372,13 +373,15 @@ def test_example_help(built, flag):
     (["1", "--rest-height", "-2"], "--rest-height"),
     (["1", "--zeno-impacts", "1.5"], "--zeno-impacts"),
     (["1", "--max-steps", "-1"], "--max-steps"),
+    (["1", "--impact-law", "coulomb"], "--impact-law"),
+    (["1", "--impact-law"], "--impact-law"),
 ])
 def test_example_refuses_bad_arguments(built, args, named):
     result = example(built, *args)
     assert result.returncode == 2, (result.stdout, result.stderr)
     assert result.stdout == ""                                           # nothing simulated
     first, usage = result.stderr.splitlines()[:2]
-    shown = "(nothing)" if args == ["1", "--time"] else args[-1]         # the value refused, quoted
+    shown = "(nothing)" if args in (["1", "--time"], ["1", "--impact-law"]) else args[-1]   # the value refused
     assert f": {named}" in first and f": got '{shown}', allowed " in first
     assert usage.startswith("usage: ")
 

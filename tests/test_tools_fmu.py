@@ -277,6 +277,22 @@ def test_bad_calls_fail_with_a_message(case1_fmu, capsys):
     with pytest.raises(FMICallException):
         slave.fmu.setInteger(slave.refs(["impacts"]), [3])
     assert "only solver.method" in capsys.readouterr().out
+    with pytest.raises(FMICallException):
+        slave.fmu.setInteger(slave.refs(["solver.impact_law"]), [0])
+    assert "solver.impact_law is fixed after initialization" in capsys.readouterr().out
+    slave.close()
+
+    slave = Slave(case1_fmu)
+    slave.fmu.instantiate()
+    slave.fmu.setupExperiment(startTime=0.0)
+    slave.fmu.enterInitializationMode()
+    assert slave.fmu.getInteger(slave.refs(["solver.impact_law"])) == [1]          # GAC_IMPACT_LAW_GDI
+    with pytest.raises(FMICallException):
+        slave.fmu.setInteger(slave.refs(["solver.impact_law"]), [7])
+    assert "solver.impact_law must be 0 (frictionless), 1 (GDI) or 2" in capsys.readouterr().out
+    slave.fmu.setInteger(slave.refs(["solver.impact_law"]), [2])
+    slave.fmu.exitInitializationMode()
+    assert slave.fmu.getInteger(slave.refs(["solver.impact_law"])) == [2]
     slave.close()
 
 

@@ -51,6 +51,7 @@ typedef struct {
     double *p, *q0, *qd0, *u;    /* nparam, nq, nq, nu */
     double solver[GAC_FMI2_NSOLVER_REAL];
     int method;
+    int impact_law;
     long n_impacts;
     double loss_impacts;
     gac_sim sim;
@@ -233,6 +234,7 @@ static void reset(Instance *in)
     for (i = 0; i < m->nu; i++) in->u[i] = 0.0;
     for (i = GAC_FMI2_RTOL; i < GAC_FMI2_KINETIC; i++) in->solver[SOLVER(i)] = real_starts[i];
     in->method = integer_starts[GAC_FMI2_METHOD];
+    in->impact_law = integer_starts[GAC_FMI2_IMPACT_LAW];
     in->tolerance_defined = 0;
     in->tolerance = 0.0;
     in->rtol_set = in->atol_set = 0;
@@ -370,6 +372,7 @@ GAC_FMI2_EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     if (in->tolerance_defined && !in->atol_set) in->solver[SOLVER(GAC_FMI2_ATOL)] = in->tolerance / 100.0;
     gac_default_options(&opt);
     opt.method = in->method;
+    opt.impact_law = in->impact_law;
     opt.rtol = in->solver[SOLVER(GAC_FMI2_RTOL)];
     opt.atol = in->solver[SOLVER(GAC_FMI2_ATOL)];
     opt.dt = in->solver[SOLVER(GAC_FMI2_DT)];
@@ -496,9 +499,10 @@ GAC_FMI2_EXPORT fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueRefere
     for (k = 0; k < nvr; k++) {
         int stepping = in->mode != MODE_INSTANTIATED && in->mode != MODE_INITIALIZATION;
         if (vr[k] == GAC_FMI2_METHOD) value[k] = in->method;
+        else if (vr[k] == GAC_FMI2_IMPACT_LAW) value[k] = in->impact_law;
         else if (vr[k] == GAC_FMI2_IMPACTS) value[k] = (fmi2Integer)in->n_impacts;
         else if (vr[k] == GAC_FMI2_RESTING) value[k] = stepping ? in->sim.nresting : 0;
-        else return fail(in, "fmi2GetInteger", "no Integer variable has this value reference (0..2)");
+        else return fail(in, "fmi2GetInteger", "no Integer variable has this value reference (0..3)");
     }
     return fmi2OK;
 }
@@ -511,12 +515,22 @@ GAC_FMI2_EXPORT fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueRefere
     if (in == 0) return fmi2Error;
     if (nvr > 0 && (vr == 0 || value == 0)) return fail(in, "fmi2SetInteger", "vr and value must not be NULL");
     for (k = 0; k < nvr; k++) {
-        if (vr[k] != GAC_FMI2_METHOD) return fail(in, "fmi2SetInteger", "only solver.method (value reference 0) can be set");
+        if (vr[k] != GAC_FMI2_METHOD && vr[k] != GAC_FMI2_IMPACT_LAW)
+            return fail(in, "fmi2SetInteger", "only solver.method (value reference 0) and solver.impact_law (1) can be set");
         if (in->mode != MODE_INSTANTIATED && in->mode != MODE_INITIALIZATION)
-            return fail(in, "fmi2SetInteger", "solver.method is fixed after initialization");
-        if (value[k] != GAC_METHOD_RK4 && value[k] != GAC_METHOD_DOPRI5 && value[k] != GAC_METHOD_DOP853)
-            return fail(in, "fmi2SetInteger", "solver.method must be 0 (RK4), 1 (DOPRI5) or 2 (DOP853)");
-        in->method = value[k];
+            return fail(in, "fmi2SetInteger", vr[k] == GAC_FMI2_METHOD ? "solver.method is fixed after initialization"
+                                                                      : "solver.impact_law is fixed after initialization");
+        if (vr[k] == GAC_FMI2_METHOD) {
+            if (value[k] != GAC_METHOD_RK4 && value[k] != GAC_METHOD_DOPRI5 && value[k] != GAC_METHOD_DOP853)
+                return fail(in, "fmi2SetInteger", "solver.method must be 0 (RK4), 1 (DOPRI5) or 2 (DOP853)");
+            in->method = value[k];
+        } else {
+            if (value[k] != GAC_IMPACT_LAW_FRICTIONLESS && value[k] != GAC_IMPACT_LAW_GDI
+                && value[k] != GAC_IMPACT_LAW_NEWTON_COULOMB)
+                return fail(in, "fmi2SetInteger", "solver.impact_law must be 0 (frictionless), 1 (GDI) or 2 (Newton + "
+                                                  "Coulomb)");
+            in->impact_law = value[k];
+        }
     }
     return fmi2OK;
 }

@@ -59,7 +59,8 @@ ROUGH_STREAM = 7919       # the random stream that decides it, apart from the st
 # Stops that are failures of the engine: its own post-impact checks and non-finite states.
 FAILURE_PATTERNS = (
     "still approaches", "energy increased", "elastic impact changed", "could not be solved to round-off",
-    "NaN or infinite", "complementarity problem has no solution",
+    "NaN or infinite", "complementarity problem has no solution", "frictional impact law's solve",
+    "gained kinetic energy",
 )
 
 

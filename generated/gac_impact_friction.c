@@ -384,7 +384,8 @@ static void gac_round_friction(int nd, const double *W, int ncon, const int *sta
 
 int gac_impact_rounds_friction(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                                const int *list, const double *e, int first, int law, double *qd_plus, double *F,
-                               double *Ft, double *work, int *rounds, int *plastic, int *law_used, double *residual)
+                               double *Ft, double *work, int *rounds, int *plastic, int *law_used, double *residual,
+                               double *tangential_parts)
 {
     const int nq = m->nq, nd_max = 3 * n;
     double v_unused[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)];
@@ -507,6 +508,13 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
         for (a = 0; a < nd; ++a) value += resp[a][i] * total[a];
         qd_plus[i] = value;
     }
+    *tangential_parts = 0.0;                     /* sum |L_T| |I_f^-1 t|: the tangential changes before they cancel */
+    for (a = 0; a < nd; ++a) {
+        double column = 0.0;
+        if (axis_of[a] < 0) continue;
+        for (i = 0; i < nq; ++i) column += resp[a][i] * resp[a][i];
+        *tangential_parts += fabs(total[a]) * sqrt(column);
+    }
     for (a = 0; a < n; ++a) {
         F[a] = total[start[a]];
         Ft[2*a] = Ft[2*a + 1] = 0.0;
@@ -520,7 +528,7 @@ int gac_impact_friction(const gac_model *m, const double *GAC_RESTRICT q, const 
                         double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse, double *GAC_RESTRICT impulse_t,
                         int *law_used, double *residual, double *GAC_RESTRICT work)
 {
-    double e[GAC_AT_LEAST_1(m->nq)];
+    double e[GAC_AT_LEAST_1(m->nq)], parts;
     int a, rounds, plastic;
     if (law != GAC_IMPACT_LAW_GDI && law != GAC_IMPACT_LAW_NEWTON_COULOMB && law != GAC_IMPACT_LAW_FRICTIONLESS)
         return GAC_ERR_BAD_OPTION;
@@ -530,5 +538,5 @@ int gac_impact_friction(const gac_model *m, const double *GAC_RESTRICT q, const 
         e[a] = gac_restitution(m, p, contact_set[a]);
     }
     return gac_impact_rounds_friction(m, q, qd, p, ncontact_set, contact_set, e, -1, law, qd_plus, impulse,
-                                      impulse_t, work, &rounds, &plastic, law_used, residual);
+                                      impulse_t, work, &rounds, &plastic, law_used, residual, &parts);
 }

@@ -120,7 +120,8 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
 double gac_friction_coefficient(const gac_model *m, const double *p, int c);
 int gac_impact_rounds_friction(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                                const int *list, const double *e, int first, int law, double *qd_plus, double *F,
-                               double *Ft, double *work, int *rounds, int *plastic, int *law_used, double *residual);
+                               double *Ft, double *work, int *rounds, int *plastic, int *law_used, double *residual,
+                               double *tangential_parts);
 
 /* gac_setup.c */
 double gac_clock_now(const gac_sim *s);          /* the run's clock (s): the embedder's, or C's processor time */

@@ -14,19 +14,19 @@
  * leave differs from the law's by dI_f's work on the velocities, |qd^T dI_f dqd| + |dqd^T dI_f dqd| / 2
  * (dqd = qd_plus - qd).  So b = max(1e-10, 4 (nq + 1) eps |I_f| (|qd| |dqd| + |dqd|^2 / 2) / T), |I_f|
  * (2-norm) by power iteration with the model's I_f v (generalized_momentum, O(n) each; at most 16, until it
- * settles to 1e-3), with |dqd| taken
- * as sum_a |F_a| |I_f^-1 n_a| when the contacts' changes cancel (nearly dependent contacts pushing against
- * each other).  The energies the post-conditions compare are themselves evaluated with an error of about
+ * settles to 1e-3), with |dqd| taken as sum_a |F_a| |I_f^-1 n_a| (plus friction's sum |L_T| |I_f^-1 t|) when
+ * the contacts' changes cancel (nearly dependent contacts pushing against each other).  The energies the post-conditions compare are themselves evaluated with an error of about
  * (nq + 1) eps |I_f| |v|^2 / 2 at velocities v, so b also holds (nq + 1) eps |I_f| (|qd|^2 + |qd_plus|^2) / (2 T)
  * (far below 1e-10 unless the velocities lie along a soft direction of I_f).  b grows where a large velocity
  * change meets a soft direction of I_f (a slender link with a tiny axial inertia, a state near the gimbal
  * lock). */
 static double gac_impact_roundoff(const gac_model *md, const double *q, const double *p, const double *work, int n,
-                                  const double *F, const double *qd, const double *qd_plus, double T)
+                                  const double *F, double tangential_parts, const double *qd, const double *qd_plus,
+                                  double T)
 {
     const int nq = md->nq;
     const double *Y = GAC_WORK_Y(md, work);
-    double x[nq], y[nq], norm_M = 0.0, size = 0.0, change = 0.0, parts = 0.0, after = 0.0, b;
+    double x[nq], y[nq], norm_M = 0.0, size = 0.0, change = 0.0, parts, after = 0.0, b;
     int a, i, it;
     for (i = 0; i < nq; ++i) {
         x[i] = 1.0 + 0.1 * i * (i % 2 ? -1.0 : 1.0);      /* a fixed, generic start */
@@ -34,6 +34,7 @@ static double gac_impact_roundoff(const gac_model *md, const double *q, const do
         after += qd_plus[i] * qd_plus[i];
         change += (qd_plus[i] - qd[i]) * (qd_plus[i] - qd[i]);
     }
+    parts = tangential_parts;                            /* friction's part (gac_impact_rounds_friction) */
     for (a = 0; a < n; ++a) {                            /* sum |F_a| |Y_a|: the changes before they cancel */
         double column = 0.0;
         for (i = 0; i < nq; ++i) column += Y[a*nq + i] * Y[a*nq + i];
@@ -118,6 +119,7 @@ typedef struct {
                               taking part is on a wall with c_f > 0 */
     int law;               /* the law applied (GAC_IMPACT_LAW_*) */
     double residual;       /* the frictional law's residual */
+    double parts;          /* the frictional law's sum |L_T| |I_f^-1 t| (for the round-off bound) */
     double scale;          /* the largest |normal velocity| before (m/s) */
     double height;         /* the rest height in force (m; 0: no landings by it) */
     double T_before, T_law, bound;
@@ -229,9 +231,9 @@ static int gac_law(gac_sim *s, gac_impact_event *ev, const double *e)
     if (ev->friction)
         return gac_impact_rounds_friction(md, x, x + md->nq, s->p, ev->n, ev->list, e, ev->first, s->opt.impact_law,
                                           ev->qd_plus, ev->F, ev->Ft, s->work, &ev->rounds, &ev->plastic, &ev->law,
-                                          &ev->residual);
+                                          &ev->residual, &ev->parts);
     ev->law = GAC_IMPACT_LAW_FRICTIONLESS;
-    ev->residual = 0.0;
+    ev->residual = ev->parts = 0.0;
     for (k = 0; k < 2 * ev->n; ++k) ev->Ft[k] = 0.0;
     return gac_impact_rounds(md, x, x + md->nq, s->p, ev->n, ev->list, e, ev->first, ev->qd_plus, ev->F, s->work,
                              &ev->rounds, &ev->plastic);
@@ -266,7 +268,7 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
     code = gac_law(s, ev, ev->e_law);
     r->residual = ev->residual;
     if (code != GAC_OK) return code;
-    ev->bound = r->roundoff = gac_impact_roundoff(md, x, s->p, s->work, ev->n, ev->F, x + nq, ev->qd_plus,
+    ev->bound = r->roundoff = gac_impact_roundoff(md, x, s->p, s->work, ev->n, ev->F, ev->parts, x + nq, ev->qd_plus,
                                                   ev->T_before);
     if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;   /* no useful accuracy left */
     for (k = 0; k < ev->n; ++k) all_elastic &= ev->e_law[k] == 1.0;
@@ -403,7 +405,7 @@ static int gac_hold_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *se
     gac_normal_velocities(md, s->x1, s->p, ev->vn);
     ev->held = *nset > 0;
     if (*nset > 0) {
-        const double held = gac_impact_roundoff(md, ev->x, s->p, s->work, 0, ev->F, ev->x + nq, s->x1 + nq,
+        const double held = gac_impact_roundoff(md, ev->x, s->p, s->work, 0, ev->F, 0.0, ev->x + nq, s->x1 + nq,
                                                 ev->T_before);
         if (held > ev->bound) ev->bound = r->roundoff = held;
         if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;
@@ -473,7 +475,7 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     ev.held = 0;
     s->energy_x1_valid = 0;                              /* set again by gac_finish, for the state it leaves */
     ev.gaps = gaps, ev.vn = vn, ev.an = an, ev.e = e, ev.e_law = e_law, ev.qd_plus = qd_plus, ev.F = F, ev.Ft = Ft;
-    ev.friction = 0, ev.law = GAC_IMPACT_LAW_FRICTIONLESS, ev.residual = 0.0;
+    ev.friction = 0, ev.law = GAC_IMPACT_LAW_FRICTIONLESS, ev.residual = ev.parts = 0.0;
     md->contact_gaps(ev.x, s->p, gaps);
     gac_normal_velocities(md, ev.x, s->p, vn);
     r->ncontact = 0;

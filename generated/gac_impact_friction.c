@@ -13,8 +13,8 @@
  * for a common e in [0, 1], since Lambda^T xi = -c_f Lambda_N |xi_T| <= 0 contact by contact: the law never
  * gains energy, it stops, sticks, slides and reverses the slip as the impulses require, and with c_f = 0 it is
  * Newton's law with complementarity (Eq. 47).  With different e at simultaneous contacts the identity no longer
- * bounds the sign; a round whose energy would grow is solved again with the smallest e of its contacts for all of
- * them (the record's law says so).  Newton + Coulomb (Newton's restitution on the normal velocity, Coulomb's cone
+ * bounds the sign; a round whose energy would grow, or that has no solution with its contacts' own e (dependent
+ * contacts), is solved again with the smallest e of its contacts for all of them (the record's law says so).  Newton + Coulomb (Newton's restitution on the normal velocity, Coulomb's cone
  * on the tangential velocity after the impact) is kept as an option: it gains energy when the slip reverses
  * during the impact (Kane's rod), and the loop then stops (GAC_ERR_IMPACT_ENERGY).
  *
@@ -32,6 +32,7 @@
 #define GAC_PGS_SWEEPS 20000      /* Gauss-Seidel sweeps allowed for one round */
 #define GAC_SLIP_SAMPLES 72       /* directions sampled on the circle before bisection (two tangential axes) */
 #define GAC_ENUM_MAX 6            /* contacts of a round whose modes are enumerated where Gauss-Seidel stalls */
+#define GAC_SLIDE_STARTS 144      /* starts on a grid of the slide angles for Newton's method, per combination */
 
 /* Coulomb coefficient of contact c at an impact: its wall's c_f (0 for a frictionless wall or a stop). */
 double gac_friction_coefficient(const gac_model *m, const double *p, int c)
@@ -266,18 +267,50 @@ static int gac_round_modes(int nd, const double *W, int ncon, const int *start, 
     return 1;
 }
 
+/* For the modes mode[] with the 3D sliding contacts slide[0..ns-1] at angles phi (their slide directions
+ * (cos, sin)): the impulses (trial) and, for each of them, xi_T's component across its direction (cross).  0 if
+ * the modes' system is singular. */
+static int gac_slide_cross(int nd, const double *W, int ncon, const int *start, const int *dim, const double *cf,
+                           const int *rows, const double *q, const int *mode, int ns, const int *slide,
+                           const double *phi, double *dir, double *trial, double *cross)
+{
+    const int nr = start[ncon - 1] + dim[ncon - 1];
+    int j, i;
+    for (j = 0; j < ns; ++j) {
+        dir[2 * slide[j]] = cos(phi[j]);
+        dir[2 * slide[j] + 1] = sin(phi[j]);
+    }
+    if (!gac_round_modes(nd, W, ncon, start, dim, cf, rows, q, mode, dir, trial)) return 0;
+    for (j = 0; j < ns; ++j) {
+        const int s = start[slide[j]];
+        double x = q[s + 1], y = q[s + 2];
+        for (i = 0; i < nr; ++i) {
+            x += W[rows[s + 1] * nd + rows[i]] * trial[i];
+            y += W[rows[s + 2] * nd + rows[i]] * trial[i];
+        }
+        cross[j] = x * sin(phi[j]) - y * cos(phi[j]);
+    }
+    return 1;
+}
+
 /* The round's problem solved exactly by its modes (at most GAC_ENUM_MAX contacts): every combination of separate,
- * stick and slide (one tangential axis: each sign; two: the direction by fixed-point iteration on xi_T from the
- * guess), the guess L's own modes first.  1 with L (its residual in *residual) if a combination meets the law. */
+ * stick and slide, the guess L's own modes first.  One tangential axis: a slide is one of two signs, one linear
+ * solve.  Two: the slide directions are the roots of xi_T x d = 0, found by Newton's method on their angles
+ * (Jacobian by central differences, steps halved until |xi_T x d| falls) from the guess's direction, the velocity's
+ * before, and a grid of about GAC_SLIDE_STARTS starts around the circle(s).  1 with L (its residual in *residual) if a combination
+ * meets the law to GAC_FRICTION_RESIDUAL_MAX / 1000. */
 static int gac_round_enumerate(int nd, const double *W, int ncon, const int *start, const int *dim,
                                const double *cf, const int *rows, const double *q, double *L, double *residual)
 {
     const int nr = start[ncon - 1] + dim[ncon - 1];
-    double guess[3 * GAC_ENUM_MAX], trial[3 * GAC_ENUM_MAX], dir[2 * GAC_ENUM_MAX];
-    int mode[GAC_ENUM_MAX], base[GAC_ENUM_MAX], choices[GAC_ENUM_MAX], i, k;
+    double guess[3 * GAC_ENUM_MAX], trial[3 * GAC_ENUM_MAX], dir[2 * GAC_ENUM_MAX], scale = 0.0;
+    int mode[GAC_ENUM_MAX], base[GAC_ENUM_MAX], choices[GAC_ENUM_MAX], slide[GAC_ENUM_MAX], i, k;
     long combo, total = 1;
     if (ncon > GAC_ENUM_MAX) return 0;
-    for (i = 0; i < nr; ++i) guess[i] = L[i];
+    for (i = 0; i < nr; ++i) {
+        guess[i] = L[i];
+        if (fabs(q[i]) > scale) scale = fabs(q[i]);
+    }
     for (k = 0; k < ncon; ++k) {                 /* the guess's modes; choices: 0 separate, 1 stick, 2.. slide */
         const int s = start[k], d = dim[k];
         double lt = 0.0;
@@ -290,7 +323,9 @@ static int gac_round_enumerate(int nd, const double *W, int ncon, const int *sta
     }
     for (combo = 0; combo < total; ++combo) {
         long rest = combo;
-        int iter;
+        double phi0[GAC_ENUM_MAX];
+        long grid;
+        int ns = 0, attempt, per;
         for (k = 0; k < ncon; ++k) {             /* combo 0 is the guess's modes */
             const int c = (int)((base[k] + rest % choices[k]) % choices[k]);
             rest /= choices[k];
@@ -299,39 +334,68 @@ static int gac_round_enumerate(int nd, const double *W, int ncon, const int *sta
             if (c >= 2 && dim[k] == 2) dir[2 * k] = c == 2 ? 1.0 : -1.0;       /* xi_T along +X or -X */
             if (c >= 2 && dim[k] == 3) {         /* the guess's direction, or the velocity's before */
                 const int s = start[k];
-                double x = -guess[s + 1], y = -guess[s + 2], norm;
+                double x = -guess[s + 1], y = -guess[s + 2];
                 if (!(fabs(x) + fabs(y) > 0.0)) x = q[s + 1], y = q[s + 2];
-                norm = sqrt(x * x + y * y);
-                dir[2 * k] = norm > 0.0 ? x / norm : 1.0;
-                dir[2 * k + 1] = norm > 0.0 ? y / norm : 0.0;
+                phi0[ns] = fabs(x) + fabs(y) > 0.0 ? atan2(y, x) : 0.0;
+                slide[ns++] = k;
             }
         }
-        for (iter = 0; iter < 60; ++iter) {      /* two tangential axes: the slide direction follows xi_T */
-            double moved = 0.0;
-            if (!gac_round_modes(nd, W, ncon, start, dim, cf, rows, q, mode, dir, trial)) break;
-            for (k = 0; k < ncon; ++k) {
-                const int s = start[k];
-                double x = q[s + 1], y = q[s + 2], norm;
-                int j;
-                if (mode[k] != 2 || dim[k] != 3) continue;
-                for (j = 0; j < nr; ++j) {
-                    x += W[rows[s + 1] * nd + rows[j]] * trial[j];
-                    y += W[rows[s + 2] * nd + rows[j]] * trial[j];
-                }
-                norm = sqrt(x * x + y * y);
-                if (!(norm > 0.0)) continue;
-                moved += fabs(x / norm - dir[2 * k]) + fabs(y / norm - dir[2 * k + 1]);
-                dir[2 * k] = x / norm;
-                dir[2 * k + 1] = y / norm;
+        per = 1;                                 /* starts per angle on a grid: about GAC_SLIDE_STARTS in all */
+        while (ns > 0 && pow((double)(per + 1), (double)ns) <= GAC_SLIDE_STARTS) ++per;
+        grid = 1;
+        for (k = 0; k < ns; ++k) grid *= per;
+        for (attempt = 0; attempt < (ns > 0 ? 2 + grid : 1); ++attempt) {
+            double phi[GAC_ENUM_MAX], cross[GAC_ENUM_MAX], res;
+            long cell = attempt - 2;
+            int iter, ok = 1;
+            for (k = 0; k < ns; ++k) {           /* the guess's direction, the velocity's before, then the grid */
+                const int s = start[slide[k]];
+                phi[k] = attempt == 0 ? phi0[k] : attempt == 1 ? atan2(q[s + 2], q[s + 1])
+                       : phi0[k] + 6.283185307179586 * (double)(cell % per) / per;
+                if (attempt > 1) cell /= per;
             }
-            if (moved <= 1e-15) {
-                const double res = gac_round_residual(nd, W, ncon, start, dim, cf, rows, q, trial);
-                if (res <= GAC_FRICTION_RESIDUAL_MAX * 1e-3) {
-                    for (i = 0; i < nr; ++i) L[i] = trial[i];
-                    *residual = res;
-                    return 1;
+            if (!gac_slide_cross(nd, W, ncon, start, dim, cf, rows, q, mode, ns, slide, phi, dir, trial, cross))
+                continue;
+            for (iter = 0; ns > 0 && iter < 50; ++iter) {    /* Newton on the angles */
+                double J[GAC_ENUM_MAX * GAC_ENUM_MAX], step[GAC_ENUM_MAX], norm = 0.0, t = 1.0;
+                int a, b;
+                for (a = 0; a < ns; ++a) norm = fabs(cross[a]) > norm ? fabs(cross[a]) : norm;
+                if (norm <= 1e-15 * scale) break;
+                for (b = 0; b < ns && ok; ++b) {
+                    double hi[GAC_ENUM_MAX], lo[GAC_ENUM_MAX], ch[GAC_ENUM_MAX], cl[GAC_ENUM_MAX];
+                    const double h = 1e-7;
+                    for (a = 0; a < ns; ++a) hi[a] = lo[a] = phi[a];
+                    hi[b] += h;
+                    lo[b] -= h;
+                    ok = gac_slide_cross(nd, W, ncon, start, dim, cf, rows, q, mode, ns, slide, hi, dir, trial, ch)
+                         && gac_slide_cross(nd, W, ncon, start, dim, cf, rows, q, mode, ns, slide, lo, dir, trial, cl);
+                    for (a = 0; ok && a < ns; ++a) J[a * ns + b] = (ch[a] - cl[a]) / (2.0 * h);
                 }
-                break;
+                for (a = 0; a < ns; ++a) step[a] = -cross[a];
+                if (!ok || gac_lu_solve(ns, J, step, 1e-14) != 0) {
+                    ok = 0;
+                    break;
+                }
+                for (; t > 1e-4; t *= 0.5) {     /* halve the step until |xi_T x d| falls */
+                    double trial_phi[GAC_ENUM_MAX], next = 0.0;
+                    for (a = 0; a < ns; ++a) trial_phi[a] = phi[a] + t * step[a];
+                    if (!gac_slide_cross(nd, W, ncon, start, dim, cf, rows, q, mode, ns, slide, trial_phi, dir,
+                                         trial, cross)) continue;
+                    for (a = 0; a < ns; ++a) next = fabs(cross[a]) > next ? fabs(cross[a]) : next;
+                    if (next < norm) {
+                        for (a = 0; a < ns; ++a) phi[a] = trial_phi[a];
+                        break;
+                    }
+                }
+                if (!(t > 1e-4)) break;
+            }
+            if (!ok || !gac_slide_cross(nd, W, ncon, start, dim, cf, rows, q, mode, ns, slide, phi, dir, trial, cross))
+                continue;
+            res = gac_round_residual(nd, W, ncon, start, dim, cf, rows, q, trial);
+            if (res <= GAC_FRICTION_RESIDUAL_MAX * 1e-3) {
+                for (i = 0; i < nr; ++i) L[i] = trial[i];
+                *residual = res;
+                return 1;
             }
         }
     }
@@ -483,8 +547,8 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
                 dT += L[i] * (gam[rows[i]] + 0.5 * wl);
                 size += fabs(L[i]) * (fabs(gam[rows[i]]) + 0.5 * fabs(wl));
             }
-            if (dT <= 1e-12 * size) break;
-            {                                    /* a common restitution, the smallest of the round's */
+            if (dT <= 1e-12 * size && res <= GAC_FRICTION_RESIDUAL_MAX) break;      /* solved, no gain */
+            {                                    /* else a common restitution, the smallest of the round's */
                 double e_min = 1.0;
                 for (b = 0; b < k; ++b) e_min = ek[b] < e_min ? ek[b] : e_min;
                 for (b = 0; b < k; ++b) ek[b] = e_min;

@@ -317,6 +317,15 @@ void gac_bias(const gac_model *m, const double *q, const double *qd, const doubl
 /* J (njrow x nq, row-major): row r = contact_generalized_force(q, e_r). */
 void gac_contact_jacobian(const gac_model *m, const double *q, const double *p, double *J);
 
+/* ---- inverse dynamics (gac_inverse.c) --------------------------------------------------------- */
+
+/* tau (nq): the generalised forces that, added to the model's own (gravity, inputs u, joint springs and dampers),
+ * give the accelerations qdd (nq) at (q, qd) in flight: tau = I_f qdd - R(q, qd, u) = I_f (qdd - qdd_free), by one
+ * forward_dynamics and one generalized_momentum (O(n) each).  N for X1..X3, N m for the angles.  u may be NULL when
+ * nu = 0. */
+void gac_inverse_dynamics(const gac_model *m, const double *q, const double *qd, const double *qdd, const double *u,
+                          const double *p, double *tau);
+
 /* ---- workspace sizes ------------------------------------------------------------------------------ */
 /* One formula each, as macros of the model's sizes: the functions below apply them to a descriptor, and a
  * generated NAME.h defines its storage sizes by them (NAME_SIM_NDOUBLE is GAC_SIM_NDOUBLE(NAME_NQ, ...)), so

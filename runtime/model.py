@@ -261,6 +261,16 @@ class CompiledModel:
         return qd_plus, impulse[:len(contact_set)]
 
 
+    def inverse_dynamics(self, q, qd, qdd, p=None, u=None) -> np.ndarray:
+        """tau: the generalised forces (N on X1..X3, N m on the angles) that, with the model's own (gravity, inputs
+        u, joint springs and dampers), give the accelerations qdd at (q, qd) in flight: I_f qdd = R + tau
+        (gac_inverse_dynamics: O(n), exact)."""
+        q, qd, qdd = self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd"), self._vec(qdd, self.nq, "qdd")
+        tau = np.zeros(self.nq)
+        self.lib.gac_inverse_dynamics(self.ffi.addressof(self.c.model), self._ptr(q), self._ptr(qd), self._ptr(qdd),
+                                      self._ptr(self._inputs(u)), self._ptr(self._params(p)), self._ptr(tau))
+        return tau
+
     def impact_law_code(self, law: str) -> int:
         """The library's code (GAC_IMPACT_LAW_*) of an impact law named in IMPACT_LAWS."""
         return int(getattr(self.lib, IMPACT_LAWS[law]))

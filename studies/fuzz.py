@@ -250,6 +250,7 @@ def run_structure(args) -> list[Outcome]:
     from runtime.simulate import simulate
     rng = np.random.default_rng([seed, index])
     scene = random_structure(rng, index, n_max)
+    planar = not any(wall.name.startswith("x3") for wall in scene.walls)   # a planar structure has no X3 walls
     outcomes = []
     try:
         model = load_model(scene, specialise=False)

@@ -8,6 +8,12 @@
 
 #include <math.h>
 
+/* A held row whose pivot in the LDL^T of R I_f^-1 R^T is below this fraction of the largest diagonal entry depends on
+ * the rows before it (a link lying flat holds the same tangential row at both ends): it drops out and the forces are
+ * shared among the rest.  A nearly dependent row is kept (a shallow arch between two stuck points pushes them apart
+ * with a large force, and they slip). */
+#define GAC_HELD_DEPENDENT 1e-12
+
 /* phi of a sliding point with tangential velocity vt (2): v_t / max(|v_t|, v_s), and, below v_s with a slip
  * direction d (2, unit, or NULL / zero: none) that v_t does not oppose, (1 - |v_t| / v_s) d added, so that a slip
  * begins against the full Coulomb force and phi is continuous at |v_t| = v_s (|phi| <= 1).  Returns phi . v_t
@@ -120,7 +126,8 @@ static void gac_held_gram(const gac_model *m, const double *q, const double *p, 
  * B lambda = -(R qdd_free + Rdot qd), B_rs = r . I_f^-1 d_s (symmetric, solved by LDL^T, without sliding friction;
  * LU with it).  Rows dependent on the others (found by the LDL^T of R I_f^-1 R^T: a rod lying flat holds the same
  * tangential row at both ends) share the force: the least-norm solution of the independent rows' equations,
- * lambda = B_K^T (B_K B_K^T)^-1 b_K.  lambda (n): the normal forces; lambda_t (2 n, or NULL): the stuck points'
+ * lambda = B_K^T (B_K B_K^T)^-1 b_K, which must hold the dropped rows too (to 1e-8 of the right-hand side; else
+ * GAC_ERR_SINGULAR_CONTACT: the stuck set cannot be held).  lambda (n): the normal forces; lambda_t (2 n, or NULL): the stuck points'
  * tangential forces along their wall's axes (0 for a sliding point); dissipation: the sliding points' power. */
 int gac_stuck_dynamics(const gac_model *m, const double *q, const double *qd, const double *u, const double *p,
                        int n, const int *set, const int *stuck, const double *slip, double *qdd, double *lambda,
@@ -163,7 +170,7 @@ int gac_stuck_dynamics(const gac_model *m, const double *q, const double *qd, co
     for (r = 0; r < nr; ++r)
         b[r] = -(sgn[r] * bias[brow[r]] + gac_held_value(m, set, owner[r], comp[r], sgn[r], qdd, vel));
     for (i = 0; i < nr * nr; ++i) L[i] = G[i];
-    dropped = gac_ldlt_drop(nr, L, 1e-12);
+    dropped = gac_ldlt_drop(nr, L, GAC_HELD_DEPENDENT);
     if (dropped < 0) return GAC_ERR_SINGULAR_CONTACT;
     for (a = 0; a < n; ++a) {                     /* B: sliding friction bends the normal columns (column a) */
         if (!sliding[a]) continue;
@@ -194,6 +201,16 @@ int gac_stuck_dynamics(const gac_model *m, const double *q, const double *qd, co
         for (c = 0; c < nr; ++c) {
             lam[c] = 0.0;
             for (i = 0; i < nk; ++i) lam[c] += G[idx[i]*nr + c] * y[i];
+        }
+        {                                         /* the dropped rows must be held by the others' forces */
+            double worst = 0.0, size = 0.0;
+            for (r = 0; r < nr; ++r) {
+                double sum = -b[r];
+                for (c = 0; c < nr; ++c) sum += G[r*nr + c] * lam[c];
+                if (fabs(sum) > worst) worst = fabs(sum);
+                if (fabs(b[r]) > size) size = fabs(b[r]);
+            }
+            if (worst > 1e-8 * size + 1e-300) return GAC_ERR_SINGULAR_CONTACT;
         }
     }
     if (!gac_finite(lam, nr)) return GAC_ERR_FRICTION;
@@ -230,7 +247,7 @@ int gac_project_stuck(gac_sim *s, double *x, int n, const int *set)
     gac_held_gram(md, x, s->p, set, nr, owner, comp, sgn, resp, G, vel);
     md->contact_velocities(x, x + nq, s->p, vel);
     for (r = 0; r < nr; ++r) corr[r] = -gac_held_value(md, set, owner[r], comp[r], sgn[r], x + nq, vel);
-    if (gac_ldlt_drop(nr, G, 1e-12) < 0) return GAC_ERR_SINGULAR_CONTACT;
+    if (gac_ldlt_drop(nr, G, GAC_HELD_DEPENDENT) < 0) return GAC_ERR_SINGULAR_CONTACT;
     gac_ldlt_solve(nr, G, corr);
     for (i = 0; i < nq; ++i) {
         for (r = 0; r < nr; ++r) x[nq + i] += resp[r][i] * corr[r];
@@ -281,38 +298,48 @@ void gac_tangential_speeds(const gac_sim *s, const double *x, double *vt)
 }
 
 /* 1 if every stuck resting contact at s->x lies strictly inside its cone, |lambda_T| < c_f lambda_N (its slip
- * event's value lambda_N - |lambda_T| / c_f > 0), with the set of stuck points as it is now. */
-static int gac_stuck_feasible(gac_sim *s)
+ * event's value lambda_N - |lambda_T| / c_f > 0), with the set of stuck points as it is now.  d (2): the direction
+ * contact c would slip in, -lambda_T / |lambda_T| (0 when its normal force is not positive). */
+static int gac_stuck_feasible(gac_sim *s, int c_try, double *d)
 {
     const gac_model *md = s->model;
     const int nq1 = GAC_AT_LEAST_1(md->nq);
     double qdd[nq1], lambda[nq1], lambda_t[2 * nq1];
-    int a;
+    int a, ok = 1;
+    d[0] = d[1] = 0.0;
     if (gac_rest_forces(s, s->t, s->x, qdd, lambda, lambda_t, 0) != GAC_OK || s->fail) {
         if (s->fail != GAC_ERR_BAD_INPUT) s->fail = 0;
         return 0;
+    }
+    for (a = 0; a < s->nresting; ++a) {
+        const double norm = sqrt(lambda_t[2*a] * lambda_t[2*a] + lambda_t[2*a + 1] * lambda_t[2*a + 1]);
+        if (s->resting[a] == c_try && lambda[a] > 0.0 && norm > 0.0) {
+            d[0] = -lambda_t[2*a] / norm;
+            d[1] = -lambda_t[2*a + 1] / norm;
+        }
     }
     for (a = 0; a < s->nresting; ++a) {
         const int c = s->resting[a];
         const double cf = gac_friction_coefficient(md, s->p, c);
         if (!s->is_stuck[c]) continue;
         if (!(lambda[a] - sqrt(lambda_t[2*a] * lambda_t[2*a] + lambda_t[2*a + 1] * lambda_t[2*a + 1]) / cf > 0.0))
-            return 0;
+            ok = 0;
     }
-    return 1;
+    return ok;
 }
 
 /* Sliding -> stuck at s->x (a step's end, after an impact, at the start): each resting point on a rough wall that is
  * not stuck, slower than friction_velocity along its wall or (one tangential axis) whose velocity changed sign since
  * vt_start (2 per contact, the step's start; NULL: no such test), sticks if the stuck solve keeps every stuck point
  * inside its cone.  The velocities are then projected onto the held rows (the stuck tangential velocities to 0, mass
- * metric); with count_loss the kinetic energy that takes is added to loss_friction.  A slip's direction is forgotten
- * once its point is faster than friction_velocity.  Returns the number of points that stuck, or an error. */
+ * metric); with count_loss the kinetic energy that takes is added to loss_friction.  A slow point that cannot stick
+ * slides on with the direction its stuck solve would slip in (s->slip); a slip's direction is forgotten once its point
+ * is faster than friction_velocity or moves against it.  Returns the number of points that stuck, or an error. */
 int gac_try_stick(gac_sim *s, const double *vt_start, int count_loss)
 {
     const gac_model *md = s->model;
     const double vs = md->friction_velocity;
-    double vt[2 * GAC_AT_LEAST_1(md->ncontact)], E_before;
+    double vt[2 * GAC_AT_LEAST_1(md->ncontact)], E_before, d[2];
     int a, added = 0, code;
     if (!s->opt.stick || s->nresting == 0 || !gac_has_friction(md)) return 0;
     gac_tangential_speeds(s, s->x, vt);
@@ -323,13 +350,14 @@ int gac_try_stick(gac_sim *s, const double *vt_start, int count_loss)
         const int one_axis = (k->trow[0] >= 0) + (k->trow[1] >= 0) == 1;
         const int turned = vt_start != 0 && one_axis && w[0] * vt_start[2*c] + w[1] * vt_start[2*c + 1] < 0.0;
         if (s->is_stuck[c] || !(gac_friction_coefficient(md, s->p, c) > 0.0)) continue;
-        if (!(speed < vs) && !turned) {
-            s->slip[2 * c] = s->slip[2 * c + 1] = 0.0;     /* past the passage through zero speed */
-            continue;
-        }
+        if ((!(speed < vs) && !turned) || w[0] * s->slip[2*c] + w[1] * s->slip[2*c + 1] < 0.0)
+            s->slip[2 * c] = s->slip[2 * c + 1] = 0.0;     /* past the passage through zero speed, or turned back */
+        if (!(speed < vs) && !turned) continue;
         s->is_stuck[c] = 1;
-        if (!gac_stuck_feasible(s)) {
+        if (!gac_stuck_feasible(s, c, d)) {           /* it slides on: along the way its load drives it */
             s->is_stuck[c] = 0;
+            s->slip[2 * c] = d[0];
+            s->slip[2 * c + 1] = d[1];
             continue;
         }
         s->slip[2 * c] = s->slip[2 * c + 1] = 0.0;

@@ -15,16 +15,16 @@
 #define GAC_HELD_DEPENDENT 1e-12
 
 /* phi of a sliding point with tangential velocity vt (2): v_t / max(|v_t|, v_s), and, below v_s with a slip
- * direction d (2, unit, or NULL / zero: none) that v_t does not oppose, (1 - |v_t| / v_s) d added, so that a slip
- * begins against the full Coulomb force and phi is continuous at |v_t| = v_s (|phi| <= 1).  Returns phi . v_t
- * (>= 0: friction never does positive work). */
+ * direction d (2, unit, or NULL / zero: none), (1 - |v_t| / v_s) d added, so that a slip begins against the full
+ * Coulomb force; phi is continuous in v_t (|phi| <= 1), the loop forgetting d at a step's end where v_t opposes it
+ * (within that step phi . v_t >= -|v_t| (1 - |v_t| / v_s) >= -v_s / 4).  Returns phi . v_t. */
 double gac_slide_phi(const double *vt, double vs, const double *d, double *phi)
 {
     const double speed = sqrt(vt[0] * vt[0] + vt[1] * vt[1]);
     const double scale = speed > vs ? speed : vs;
     int j;
     for (j = 0; j < 2; ++j) phi[j] = vt[j] / scale;
-    if (d != 0 && speed < vs && vt[0] * d[0] + vt[1] * d[1] >= 0.0) {
+    if (d != 0 && speed < vs) {
         for (j = 0; j < 2; ++j) phi[j] += (1.0 - speed / vs) * d[j];
     }
     return phi[0] * vt[0] + phi[1] * vt[1];
@@ -297,17 +297,17 @@ void gac_tangential_speeds(const gac_sim *s, const double *x, double *vt)
     for (c = 0; c < md->ncontact; ++c) gac_tangential_velocity(md, c, vq, vt + 2 * c);
 }
 
-/* 1 if every stuck resting contact at s->x lies strictly inside its cone, |lambda_T| < c_f lambda_N (its slip
+/* 1 if every stuck resting contact at x lies strictly inside its cone, |lambda_T| < c_f lambda_N (its slip
  * event's value lambda_N - |lambda_T| / c_f > 0), with the set of stuck points as it is now.  d (2): the direction
  * contact c would slip in, -lambda_T / |lambda_T| (0 when its normal force is not positive). */
-static int gac_stuck_feasible(gac_sim *s, int c_try, double *d)
+static int gac_stuck_feasible(gac_sim *s, const double *x, int c_try, double *d)
 {
     const gac_model *md = s->model;
     const int nq1 = GAC_AT_LEAST_1(md->nq);
     double qdd[nq1], lambda[nq1], lambda_t[2 * nq1];
     int a, ok = 1;
     d[0] = d[1] = 0.0;
-    if (gac_rest_forces(s, s->t, s->x, qdd, lambda, lambda_t, 0) != GAC_OK || s->fail) {
+    if (gac_rest_forces(s, s->t, x, qdd, lambda, lambda_t, 0) != GAC_OK || s->fail) {
         if (s->fail != GAC_ERR_BAD_INPUT) s->fail = 0;
         return 0;
     }
@@ -339,7 +339,7 @@ int gac_try_stick(gac_sim *s, const double *vt_start, int count_loss)
 {
     const gac_model *md = s->model;
     const double vs = md->friction_velocity;
-    double vt[2 * GAC_AT_LEAST_1(md->ncontact)], E_before, d[2];
+    double vt[2 * GAC_AT_LEAST_1(md->ncontact)], E_before, d[2], x[md->nx];
     int a, added = 0, code;
     if (!s->opt.stick || s->nresting == 0 || !gac_has_friction(md)) return 0;
     gac_tangential_speeds(s, s->x, vt);
@@ -354,7 +354,10 @@ int gac_try_stick(gac_sim *s, const double *vt_start, int count_loss)
             s->slip[2 * c] = s->slip[2 * c + 1] = 0.0;     /* past the passage through zero speed, or turned back */
         if (!(speed < vs) && !turned) continue;
         s->is_stuck[c] = 1;
-        if (!gac_stuck_feasible(s, c, d)) {           /* it slides on: along the way its load drives it */
+        d[0] = d[1] = 0.0;
+        gac_copy(x, s->x, md->nx);                    /* judged with its tangential velocity at 0 */
+        code = gac_project_stuck(s, x, s->nresting, s->resting);
+        if (code != GAC_OK || !gac_stuck_feasible(s, x, c, d)) {           /* it slides on: along the way its load drives it */
             s->is_stuck[c] = 0;
             s->slip[2 * c] = d[0];
             s->slip[2 * c + 1] = d[1];

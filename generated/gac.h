@@ -508,7 +508,8 @@ int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const do
  * dependent on the others share the force by the least-norm solution, e.g. a rod lying flat).  Sliding: the force
  * -c_f lambda phi, phi = v_t / max(|v_t|, v_s) (v_s = friction_velocity), with, just after a slip began and while
  * the point is slower than v_s, (1 - |v_t| / v_s) d added to phi along the slip's direction d (the friction
- * continues from c_f lambda_N opposite d, never doing positive work).  Stuck -> sliding: when |lambda_T| reaches
+ * continues from c_f lambda_N opposite d; d is forgotten at a step's end where the point is faster than v_s or moves
+ * against it).  Stuck -> sliding: when |lambda_T| reaches
  * c_f lambda_N, located on the dense output like a release (the event value lambda_N - |lambda_T| / c_f falling
  * through 0), the slip starting along -lambda_T; a force lambda_N falling through 0 first releases it.  Sliding ->
  * stuck: at an accepted step's end, after an impact (every resting point re-decided) and at the start, a point

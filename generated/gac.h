@@ -337,19 +337,20 @@ void gac_inverse_dynamics(const gac_model *m, const double *q, const double *qd,
 /* Doubles of the work array of gac_impact, gac_impact_complementarity, gac_impact_friction and
  * gac_constrained_dynamics: 2 nq^2 + nq + 3 npoint + max(njrow, 1), laid out as Y (nq*nq: row a = I_f^-1 n_a of
  * contact a of the set) | A (nq*nq: N I_f^-1 N^T, ncontact_set x ncontact_set) | g (nq) | vel (3 npoint) |
- * f (max(njrow, 1)); a model with friction needs 11 nq^2 more: Z (nq*nq) | B (nq*nq) (the responses to the
+ * f (max(njrow, 1)); a model with friction needs 22 nq^2 more: Z (nq*nq) | B (nq*nq) (the responses to the
  * tangential directions, up to 2 nq of them) | W (9 nq*nq: the contact-space inverse inertia of the normal and
- * tangential directions, up to 3 nq square). */
+ * tangential directions, up to 3 nq square) | T (2 nq*nq: the responses to stuck points' tangential rows) |
+ * L (9 nq*nq: the factor of the held rows' system). */
 #define GAC_IMPACT_NWORK(nq, npoint, njrow, friction) \
-    (((friction) ? 13L : 2L) * (nq) * (nq) + (nq) + 3L * (npoint) + GAC_AT_LEAST_1(njrow))
+    (((friction) ? 24L : 2L) * (nq) * (nq) + (nq) + 3L * (npoint) + GAC_AT_LEAST_1(njrow))
 /* Doubles and ints of one simulation (gac_sim_init): dwork = x (nx = 2 nq) | p (nparam) | u (nu) | private;
  * iwork = resting (nq) | private.  The doubles: x, p, u and the controller's u, f, 16 stages, x1, xs, 8 dense-output
- * rows (28 nx in all), 7 per-contact arrays, the impact work and an nq x nq scratch; the ints: resting, then
- * is_resting and n_shrink per contact. */
+ * rows (28 nx in all), 9 per-contact doubles (7 arrays and the 2-vector slip), the impact work and an nq x nq
+ * scratch; the ints: resting, then is_resting, n_shrink and is_stuck per contact. */
 #define GAC_SIM_NDOUBLE(nq, nparam, nu, npoint, ncontact, njrow, friction) \
-    (28L * 2 * (nq) + (nparam) + 2L * (nu) + 7L * GAC_AT_LEAST_1(ncontact) \
+    (28L * 2 * (nq) + (nparam) + 2L * (nu) + 9L * GAC_AT_LEAST_1(ncontact) \
      + GAC_IMPACT_NWORK(nq, npoint, njrow, friction) + (long)(nq) * (nq))
-#define GAC_SIM_NINT(nq, ncontact) ((long)(nq) + 2L * GAC_AT_LEAST_1(ncontact))
+#define GAC_SIM_NINT(nq, ncontact) ((long)(nq) + 3L * GAC_AT_LEAST_1(ncontact))
 /* Doubles and ints of one impact record (gac_record_bind): dwork = impulse | q | qd_before | qd_after
  * (nq each) | impulse_t (2 nq), iwork = contact | landed | released (nq each). */
 #define GAC_RECORD_NDOUBLE(nq) (6L * (nq))
@@ -510,6 +511,23 @@ int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const do
  * velocity under the same bound and a positive force (a chain started at rest on the floor).
  * Every landing and release is reported in the record (landed[], released[]).
  *
+ * Sticking (opt.stick = 1, the default).  A point resting on a wall with Coulomb friction c_f > 0 is STUCK or
+ * SLIDING.  Stuck: its tangential Jacobian rows (gac_contact.trow) are held with the normal rows as bilateral
+ * constraints, J_t qdd + Jdot_t qd = 0, their forces lambda_T solved with the normal forces in one system (rows
+ * dependent on the others share the force by the least-norm solution, e.g. a rod lying flat).  Sliding: the force
+ * -c_f lambda phi, phi = v_t / max(|v_t|, v_s) (v_s = friction_velocity), with, just after a slip began and while
+ * the point is slower than v_s, (1 - |v_t| / v_s) d added to phi along the slip's direction d (the friction
+ * continues from c_f lambda_N opposite d; d is forgotten at a step's end where the point is faster than v_s or moves
+ * against it).  Stuck -> sliding: when |lambda_T| reaches
+ * c_f lambda_N, located on the dense output like a release (the event value lambda_N - |lambda_T| / c_f falling
+ * through 0), the slip starting along -lambda_T; a force lambda_N falling through 0 first releases it.  Sliding ->
+ * stuck: at an accepted step's end, after an impact (every resting point re-decided) and at the start, a point
+ * slower than v_s along its wall (or whose one tangential velocity changed sign within the step) whose stuck solve
+ * gives |lambda_T| <= c_f lambda_N (and keeps the other stuck points inside their cones); its tangential velocity is
+ * then projected to 0 in the mass metric, the kinetic energy that takes added to loss_friction.  The projection
+ * after every step holds stuck points' tangential velocities at 0 too.  sim.n_sticks and sim.n_slips count the
+ * transitions; no record is made (the loop goes on).  The stuck constraint does no work.
+ *
  * Inputs.  The inputs u (nu) are held over each gac_sim_advance call (a zero-order hold, the convention of
  * FMI co-simulation): change them between calls with gac_sim_set_input, so that a change falls on a step
  * boundary.  Or give a controller (gac_sim_set_controller): the loop then asks it for u at every stage.
@@ -592,6 +610,9 @@ typedef struct {
                               gains energy), GAC_IMPACT_LAW_NEWTON_COULOMB (can gain energy: the run then stops with
                               GAC_ERR_IMPACT_ENERGY) or GAC_IMPACT_LAW_FRICTIONLESS (friction only on resting
                               contacts) */
+    int stick;             /* 1 (default): a point resting on a wall with friction is STUCK (its tangential rows
+                              held as constraints, see "Sticking" above) or SLIDING; 0: every resting point slides
+                              against the regularised force alone (sticking only approximated by it) */
 } gac_options;
 
 /* What gac_sim_advance reports.  Scalars are fields; the arrays (nq entries each) point into the arrays
@@ -655,6 +676,8 @@ typedef struct {
                                     slower than GAC_SLOW_SLIDING friction_velocity, where the regularisation is
                                     stiff (time constant about friction_velocity / (c_f g)) and may limit the step */
     double t_slow_sliding;       /* s: the time those steps covered */
+    long n_sticks, n_slips;      /* resting points on rough walls that came to stick (sliding -> stuck, at a step
+                                    end, an impact or the start) and that began to slip (stuck -> sliding) */
     double energy_initial;       /* J: T + V at gac_sim_init */
     double loss_impacts;         /* J: energy the impacts took since gac_sim_init, sum of energy_before - energy_after */
     double energy_roundoff;      /* J: what the impacts' energies are known to, sum of roundoff x T before each */
@@ -696,6 +719,10 @@ typedef struct {
     double rest_height;          /* resolved opt.rest_height */
     double lever;                /* max(1 m, the chain's length): |dO/dq| bound */
     int *is_resting, pending, fail, fail_seen, n_unstable;
+    int *is_stuck;               /* per contact: 1 if it rests stuck (its tangential rows held; opt.stick) */
+    double *slip;                /* 2 per contact: the unit direction a point began to slip in (along its wall's
+                                    tangential axes), the friction's direction while it is slower than
+                                    friction_velocity; 0 when none */
     int *n_shrink;               /* impacts of each contact at shrinking intervals */
     double *t_last, *dt_last;
     double *gap_held;            /* gap (m) a resting contact is held at: its gap when it landed (within

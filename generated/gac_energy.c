@@ -116,8 +116,7 @@ void gac_add_work(gac_sim *s, double t_b)
         }
         if (friction) {
             double qdd[md->nq], lambda[md->nq], D = 0.0;
-            if (gac_constrained_dynamics_friction(md, x, x + md->nq, gac_input(s, t, x), s->p, s->nresting, s->resting,
-                                                  qdd, lambda, s->work, &D) == GAC_OK)
+            if (gac_rest_forces(s, t, x, qdd, lambda, 0, &D) == GAC_OK)
                 w_friction += weight[j] * D;
         }
     }
@@ -126,7 +125,7 @@ void gac_add_work(gac_sim *s, double t_b)
     s->loss_friction += h * w_friction;
 }
 
-/* 1 if at x a resting contact on a wall with friction slides slower than GAC_SLOW_SLIDING friction_velocity
+/* 1 if at x a resting contact on a wall with friction (not stuck) slides slower than GAC_SLOW_SLIDING friction_velocity
  * (its velocity along the wall, as in gac_constrained_dynamics_friction): the regularised friction force is then
  * (nearly) viscous, -c_f lambda v_t / friction_velocity, a stiff term that bounds an explicit method's step. */
 int gac_slow_sliding(const gac_sim *s, const double *x)
@@ -142,7 +141,7 @@ int gac_slow_sliding(const gac_sim *s, const double *x)
         const double cf = k->friction_index >= 0 ? s->p[k->friction_index] : k->friction_value;
         double speed2 = 0.0;
         int axis = 0;
-        if (k->kind != GAC_CONTACT_WALL || !k->has_friction || !(cf > 0.0)) continue;
+        if (k->kind != GAC_CONTACT_WALL || !k->has_friction || !(cf > 0.0) || s->is_stuck[s->resting[a]]) continue;
         for (j = 0; j < 2; ++j, ++axis) {             /* the two tangential axes, ascending */
             if (axis == k->axis) ++axis;
             if (k->trow[j] >= 0) speed2 += vq[3 * (k->point - 1) + axis] * vq[3 * (k->point - 1) + axis];

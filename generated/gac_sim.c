@@ -55,8 +55,8 @@ void gac_f(gac_sim *s, double t, const double *x, double *f)
         double lambda[md->nq];
         int i, code;
         for (i = 0; i < md->nq; ++i) f[i] = x[md->nq + i];
-        code = gac_constrained_dynamics(md, x, x + md->nq, u, s->p, s->nresting, s->resting, f + md->nq, lambda,
-                                        s->work);
+        code = gac_constrained_dynamics_friction(md, x, x + md->nq, u, s->p, s->nresting, s->resting, s->is_stuck,
+                                                 s->slip, f + md->nq, lambda, 0, s->work, 0);
         if (code != GAC_OK && s->fail == 0) s->fail = code;
     }
 }
@@ -87,20 +87,27 @@ void gac_f_end(gac_sim *s, double t, const double *x, double *f)
     gac_f(s, t, x, f);
 }
 
-/* Event value of every contact at time t and state x: its gap, or for a resting contact its force lambda.
- * An event is a value falling from > 0 to <= 0: a wall crossing, or a resting contact that would pull. */
+/* Event value of every contact at time t and state x: its gap, or for a resting contact its force lambda, for a
+ * stuck one lambda - |lambda_T| / c_f (<= lambda: its slip comes first, where |lambda_T| reaches c_f lambda).
+ * An event is a value falling from > 0 to <= 0: a wall crossing, a resting contact that would pull, a stuck point
+ * that slips. */
 void gac_events(gac_sim *s, double t, const double *x, double *ev)
 {
     const gac_model *md = s->model;
     md->contact_gaps(x, s->p, ev);
     if (s->nresting > 0) {
-        double qdd[md->nq], lambda[md->nq];
-        const double *u = gac_input(s, t, x);
+        double qdd[md->nq], lambda[md->nq], lambda_t[2 * md->nq];
         int a, code;
-        for (a = 0; a < md->nq; ++a) lambda[a] = 0.0;
-        code = gac_constrained_dynamics(md, x, x + md->nq, u, s->p, s->nresting, s->resting, qdd, lambda, s->work);
+        for (a = 0; a < md->nq; ++a) lambda[a] = lambda_t[2 * a] = lambda_t[2 * a + 1] = 0.0;
+        code = gac_rest_forces(s, t, x, qdd, lambda, lambda_t, 0);
         if (code != GAC_OK && s->fail == 0) s->fail = code;
-        for (a = 0; a < s->nresting; ++a) ev[s->resting[a]] = lambda[a];
+        for (a = 0; a < s->nresting; ++a) {
+            const int c = s->resting[a];
+            ev[c] = lambda[a];
+            if (s->is_stuck[c])
+                ev[c] -= sqrt(lambda_t[2*a] * lambda_t[2*a] + lambda_t[2*a + 1] * lambda_t[2*a + 1])
+                         / gac_friction_coefficient(md, s->p, c);
+        }
     }
 }
 
@@ -188,8 +195,8 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         if (code != GAC_OK) return code;
     }
     while (s->t < t_end) {
-        double h, t1, t_event = 0.0, err = 0.0;
-        int c_event = -1, last;
+        double h, t1, t_event = 0.0, err = 0.0, vt_start[2 * GAC_AT_LEAST_1(md->ncontact)];
+        int c_event = -1, last, sticking;
         if (!s->f_valid) {
             gac_f(s, s->t, s->x, s->f);
             s->f_valid = 1;
@@ -275,12 +282,37 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             gac_add_work(s, t_event);
             gac_emit(s, t_event, t_eval, n_eval, i_eval, x_eval);
             gac_dense(s, t_event, s->xs);
+            if (released && s->is_stuck[c_event]) {   /* |lambda_T| reached c_f lambda: the point slips there */
+                code = gac_slip(s, t_event, s->xs, c_event);
+                if (code < 0) return code;
+            } else {
+                code = 0;
+            }
+            if (code == 1) {
+                gac_copy(s->x, s->xs, md->nx);
+                s->t = t_event;
+                s->f_valid = s->vn_valid = 0;
+                code = gac_recheck_rest(s, record);   /* others beyond their cones or pulling there */
+                if (code < 0) return code;
+                if (s->fail) return s->fail;
+                if (gac_energy_check(s, 0) != GAC_OK) return GAC_ERR_DRIFT;
+                if (s->opt.method == GAC_METHOD_RK4) s->h = s->opt.dt;
+                if (code == 1) return gac_report(s, record, GAC_SIM_CONTACT);
+                continue;
+            }
             code = released ? gac_release(s, t_event, c_event, record)
                             : gac_resolve(s, t_event, c_event, record);
             if (code < 0) return code;
             for (i = 0; i < md->nx; ++i) s->x[i] = code == 1 ? s->x1[i] : s->xs[i];
             s->t = t_event;
             s->f_valid = s->vn_valid = 0;
+            if (code == 1 && !released && s->opt.stick) {   /* after an impact every resting point re-decided */
+                int stuck;
+                for (i = 0; i < md->ncontact; ++i) s->is_stuck[i] = 0;
+                stuck = gac_try_stick(s, 0, 1);
+                if (stuck < 0) return stuck;
+                if (stuck > 0) s->energy_x1_valid = 0;
+            }
             gac_events(s, s->t, s->x, s->ev);
             if (s->fail) return s->fail;
             {                                     /* T and V after an impact: known from gac_resolve */
@@ -306,6 +338,8 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         if (s->fail) return s->fail;
         gac_emit(s, t1, t_eval, n_eval, i_eval, x_eval);
         if (s->fail) return s->fail;
+        sticking = s->opt.stick && s->nresting > 0 && gac_has_friction(md);
+        if (sticking) gac_tangential_speeds(s, s->x, vt_start);   /* (a sign change within the step) */
         gac_copy(s->x, s->x1, md->nx);
         {
             const double *f_end = s->opt.method == GAC_METHOD_RK4 ? s->k[4]
@@ -317,6 +351,10 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         if (s->nresting > 0) {                     /* back onto the resting-contact constraints */
             int code = gac_project(s, s->x, s->nresting, s->resting, 1);
             if (code != GAC_OK) return code;
+            if (sticking) {                       /* sliding -> stuck: slow points that can stick */
+                code = gac_try_stick(s, vt_start, 1);
+                if (code < 0) return code;
+            }
             s->f_valid = s->vn_valid = 0;
             gac_events(s, s->t, s->x, s->ev);
             if (s->fail) return s->fail;

@@ -118,6 +118,8 @@ class SimulationResult:
     loss_friction: float = 0.0    # J: energy sliding friction took at resting contacts (>= 0)
     u: np.ndarray | None = None        # (len(t), nu) the inputs at the sample times (None: no inputs)
     n_chart_switches: int = 0          # switches between the base charts near the gimbal lock (gac_sim.n_chart_switches)
+    n_sticks: int = 0                  # resting points on rough walls that came to stick (sliding -> stuck)
+    n_slips: int = 0                   # stuck points that began to slip (|lambda_T| reached c_f lambda_N)
 
     @property
     def n_impacts(self) -> int:
@@ -258,6 +260,8 @@ LOOP_OPTIONS = {
     "energy_tol": "the energy balance's allowed residual per energy scale (None: automatic; 0: off)",
     "impact_law": "the impact law at walls with friction: 'gdi' (default; never gains energy), 'newton-coulomb' "
                   "(can gain energy: the run then stops) or 'frictionless' (friction only on resting contacts)",
+    "stick": "True (default): a point resting on a rough wall sticks as a constraint until |lambda_T| reaches "
+             "c_f lambda_N; False: the regularised friction alone (it creeps below friction_velocity)",
 }
 def impact_law_code(model: CompiledModel, law) -> int:
     """The library's code of an impact law named by the user ('gdi', 'newton-coulomb', 'frictionless')."""
@@ -284,6 +288,10 @@ def _loop_options(model: CompiledModel, method: str, given: dict, chart_switch: 
             continue
         if name == "impact_law":
             value = impact_law_code(model, value)
+        elif name == "stick":
+            _check(isinstance(value, (bool, np.bool_)) or value in (0, 1), name,
+                   f"must be True or False ({LOOP_OPTIONS[name]}), got {value!r}")
+            value = int(bool(value))
         elif name in _INTEGER_OPTIONS:
             whole = not isinstance(value, bool) and isinstance(value, (int, np.integer, float, np.floating)) \
                 and np.isfinite(value) and int(value) == value
@@ -488,7 +496,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                           for k in range(state.nresting)],
         options={"t_end": t_end, **{name: _option_value(opt, name) for name in LOOP_OPTIONS},
                  "chart_switch": float(opt.chart_switch)},
-        n_chart_switches=int(state.n_chart_switches))
+        n_chart_switches=int(state.n_chart_switches), n_sticks=int(state.n_sticks), n_slips=int(state.n_slips))
 
 
 def _option_value(opt, name: str):
@@ -497,6 +505,8 @@ def _option_value(opt, name: str):
     value = getattr(opt, name)
     if name in ("dt", "max_wall_time") and value == 0.0 or name in ("rest_height", "energy_tol") and value < 0.0:
         return None
+    if name == "stick":
+        return bool(value)
     return int(value) if name in _INTEGER_OPTIONS else float(value)
 
 

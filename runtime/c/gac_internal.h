@@ -27,6 +27,10 @@
 /* and W (9 nq*nq): the contact-space inverse inertia of a frictional impact's normal and tangential directions
  * (Z and B then hold those directions' responses I_f^-1 d, up to 2 nq rows). */
 #define GAC_WORK_W(m, w)   (GAC_WORK_B(m, w) + (long)(m)->nq * (m)->nq)
+/* and T (2 nq*nq: the responses I_f^-1 J^T e_r to stuck points' tangential rows r) | L (9 nq*nq: the factor of the
+ * held rows' system, gac_stick.c; W then holds that system, up to 3 nq square). */
+#define GAC_WORK_T(m, w)   (GAC_WORK_W(m, w) + 9L * (m)->nq * (m)->nq)
+#define GAC_WORK_L(m, w)   (GAC_WORK_T(m, w) + 2L * (m)->nq * (m)->nq)
 
 #define GAC_V_FLOOR 1e-12   /* m/s: a contact at its wall approaching slower than this, or than 1e-10 of
                                the fastest contact's normal speed (gac_v_round), is at rest: round-off */
@@ -109,8 +113,9 @@ double gac_restitution(const gac_model *m, const double *p, int c);
 int gac_impact_system(const gac_model *m, const double *q, const double *qd, const double *p, int ncontact_set,
                       const int *contact_set, double *work, double *v, double *e);
 int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const double *qd, const double *u,
-                                      const double *p, int nresting, const int *resting, double *qdd, double *lambda,
-                                      double *work, double *dissipation);
+                                      const double *p, int nresting, const int *resting, const int *stuck,
+                                      const double *slip, double *qdd, double *lambda, double *lambda_t, double *work,
+                                      double *dissipation);
 int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                       const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
                       int *rounds, int *plastic);
@@ -135,6 +140,20 @@ int gac_switch_chart(gac_sim *s);                /* continue on the other chart 
 void gac_to_chart_a(gac_sim *s, double *x);      /* a state of the chart integrated now, in chart A's coordinates
                                                     (a conversion that fails is kept in s->fail) */
 int gac_report(gac_sim *s, gac_impact_record *record, int code);   /* the record in chart A's coordinates */
+
+/* gac_stick.c: stuck and sliding points at resting contacts on rough walls */
+double gac_slide_phi(const double *vt, double vs, const double *d, double *phi);
+void gac_tangential_velocity(const gac_model *m, int c, const double *vq, double *vt);
+int gac_any_stuck(const int *stuck, int n, const int *set);
+int gac_stuck_dynamics(const gac_model *m, const double *q, const double *qd, const double *u, const double *p,
+                       int n, const int *set, const int *stuck, const double *slip, double *qdd, double *lambda,
+                       double *lambda_t, double *work, double *dissipation);
+int gac_project_stuck(gac_sim *s, double *x, int n, const int *set);
+int gac_rest_forces(gac_sim *s, double t, const double *x, double *qdd, double *lambda, double *lambda_t,
+                    double *dissipation);
+int gac_slip(gac_sim *s, double t, const double *x, int c);
+void gac_tangential_speeds(const gac_sim *s, const double *x, double *vt);
+int gac_try_stick(gac_sim *s, const double *vt_start, int count_loss);
 
 /* gac_energy.c: work and sliding */
 void gac_add_work(gac_sim *s, double t_b);       /* the work of inputs, dampers and friction over [s->t, t_b] */

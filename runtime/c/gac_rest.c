@@ -39,7 +39,8 @@ int gac_normal_accelerations(gac_sim *s, double t, const double *x, int n, const
     double qdd[nq], lambda[nq], bias[GAC_AT_LEAST_1(md->njrow)];
     double *vel = GAC_WORK_VEL(md, s->work);
     const double *u = gac_input(s, t, x);
-    int c, code = gac_constrained_dynamics(md, x, x + nq, u, s->p, n, set, qdd, lambda, s->work);
+    int c, code = gac_constrained_dynamics_friction(md, x, x + nq, u, s->p, n, set, set == s->resting ? s->is_stuck : 0,
+                                                    s->slip, qdd, lambda, 0, s->work, 0);
     if (code != GAC_OK) return code;
     md->contact_bias(x, x + nq, s->p, bias);
     md->contact_velocities(x, qdd, s->p, vel);           /* J qdd, read row by row */
@@ -72,7 +73,8 @@ int gac_add_independent(gac_sim *s, const double *x, int *n, int *set, int c)
  * s->gap_held (the gap each had when it landed) by Newton steps dq = -Y (N Y)^-1 (g - g_held)
  * (Y = I_f^-1 N^T, the smallest correction in the mass metric), a contact outside the set that the
  * correction would push deeper into its wall being held where it is (an active-set method); then the normal
- * velocities to 0, qd -= Y (N Y)^-1 N qd: a plastic impact, so the kinetic energy cannot grow.  With positions,
+ * velocities to 0, qd -= Y (N Y)^-1 N qd: a plastic impact, so the kinetic energy cannot grow (with the stuck points'
+ * tangential velocities, gac_project_stuck).  With positions,
  * the energy change is what the step left off the constraints (gac_energy_projected: summed, and
  * GAC_ERR_PROJECTION beyond its tolerance). */
 int gac_project(gac_sim *s, double *x, int n, const int *set, int positions)
@@ -122,6 +124,11 @@ int gac_project(gac_sim *s, double *x, int n, const int *set, int positions)
         for (i = 0; i < nq; ++i) {
             for (a = 0; a < m; ++a) x[i] += Y[a*nq + i] * corr[a];
         }
+    }
+    if (gac_any_stuck(s->is_stuck, n, set)) {             /* stuck points' tangential velocities to 0 too */
+        code = gac_project_stuck(s, x, n, set);
+        if (code != GAC_OK) return code;
+        return positions ? gac_energy_projected(s, E_before, x) : GAC_OK;
     }
     code = gac_impact_system(md, x, x + nq, s->p, n, set, s->work, v, e);
     if (code != GAC_OK) return code;
@@ -274,7 +281,13 @@ void gac_set_resting(gac_sim *s, int n, const int *set, gac_impact_record *r)
         s->n_landings += r->nlanded;
         s->n_releases += r->nreleased;
     }
-    for (c = 0; c < md->ncontact; ++c) s->is_resting[c] = now[c];
+    for (c = 0; c < md->ncontact; ++c) {
+        s->is_resting[c] = now[c];
+        if (!now[c]) {                                /* free again: neither stuck nor slipping */
+            s->is_stuck[c] = 0;
+            s->slip[2 * c] = s->slip[2 * c + 1] = 0.0;
+        }
+    }
     for (a = 0; a < n; ++a) s->resting[a] = set[a];
     s->nresting = n;
 }
@@ -315,7 +328,8 @@ int gac_rest_at_start(gac_sim *s)
     s->n_landings += n;
     gac_set_resting(s, n, set, 0);
     s->pending = n > 0;
-    return GAC_OK;
+    code = gac_try_stick(s, 0, 0);                   /* at rest on a rough wall: stuck where it can be */
+    return code < 0 ? code : GAC_OK;
 }
 
 /* Release the resting contact c_event, whose force fell to 0 at state s->xs (time t); any other
@@ -342,20 +356,28 @@ int gac_release(gac_sim *s, double t, int c_event, gac_impact_record *r)
     return GAC_OK;
 }
 
-/* After the inputs changed: release the resting contacts that the new inputs pull off their walls (their
- * force lambda <= 0 at the current state).  Returns 1 (record filled: GAC_SIM_CONTACT), 0 or an error. */
+/* After the inputs changed (or a point slipped): the stuck points the forces now push beyond their cones slip
+ * (gac_slip), and the resting contacts they pull off their walls (their force lambda <= 0 at the current state) are
+ * released.  Returns 1 (record filled: GAC_SIM_CONTACT), 0 or an error. */
 int gac_recheck_rest(gac_sim *s, gac_impact_record *record)
 {
     const gac_model *md = s->model;
     int a, code;
     s->input_changed = 0;
-    if (s->nresting == 0) return 0;
-    gac_events(s, s->t, s->x, s->ev);
-    if (s->fail) return s->fail;
-    for (a = 0; a < s->nresting; ++a) {
-        if (s->ev[s->resting[a]] <= 0.0) break;
+    for (;;) {
+        if (s->nresting == 0) return 0;
+        gac_events(s, s->t, s->x, s->ev);
+        if (s->fail) return s->fail;
+        for (a = 0; a < s->nresting; ++a) {
+            if (s->ev[s->resting[a]] <= 0.0) break;
+        }
+        if (a == s->nresting) return 0;
+        if (!s->is_stuck[s->resting[a]]) break;
+        code = gac_slip(s, s->t, s->x, s->resting[a]);
+        if (code < 0) return code;
+        if (code == 0) break;                         /* no normal force left: released */
+        s->f_valid = s->vn_valid = 0;
     }
-    if (a == s->nresting) return 0;
     gac_copy(s->xs, s->x, md->nx);
     code = gac_release(s, s->t, s->resting[a], record);
     if (code < 0) return code;
@@ -427,14 +449,21 @@ static int gac_is_p_matrix(int n, const double *B, double tol)
  * the earlier ones (found by the LDL^T of the frictionless N I_f^-1 N^T) take no force.  dissipation (if not
  * NULL): the power friction takes, sum_a mu_a lambda_a phi_a . v_t,a (W). */
 int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const double *qd, const double *u,
-                                      const double *p, int nresting, const int *resting, double *qdd, double *lambda,
-                                      double *work, double *dissipation)
+                                      const double *p, int nresting, const int *resting, const int *stuck,
+                                      const double *slip, double *qdd, double *lambda, double *lambda_t, double *work,
+                                      double *dissipation)
 {
     const int nq = m->nq;
     double v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)], bias[GAC_AT_LEAST_1(m->njrow)];
     double cf[GAC_AT_LEAST_1(nq)], slide[GAC_AT_LEAST_1(nq)];
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work), *vel = GAC_WORK_VEL(m, work);
     int a, b, i, code, friction = 0;
+    if (gac_any_stuck(stuck, nresting, resting))          /* stuck points: their tangential rows held too */
+        return gac_stuck_dynamics(m, q, qd, u, p, nresting, resting, stuck, slip, qdd, lambda, lambda_t, work,
+                                  dissipation);
+    if (lambda_t != 0) {
+        for (a = 0; a < 2 * nresting; ++a) lambda_t[a] = 0.0;
+    }
     if (dissipation) *dissipation = 0.0;
     m->forward_dynamics(q, qd, u, p, qdd);
     if (nresting == 0) return GAC_OK;
@@ -460,21 +489,16 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
         for (a = 0; a < nresting * nresting; ++a) B[a] = A[a];
         for (a = 0; a < nresting; ++a) {
             const gac_contact *k = &m->contacts[resting[a]];
-            double vt[2] = {0.0, 0.0}, speed, scale;
-            int j, axis = 0, r;
+            double vt[2], phi[2];
+            int j, r;
             slide[a] = 0.0;
             if (!(cf[a] > 0.0)) continue;
-            for (j = 0; j < 2; ++j, ++axis) {        /* the two tangential axes, ascending */
-                if (axis == k->axis) ++axis;
-                if (k->trow[j] >= 0) vt[j] = vq[3 * (k->point - 1) + axis];
-            }
-            speed = sqrt(vt[0] * vt[0] + vt[1] * vt[1]);
-            scale = speed > m->friction_velocity ? speed : m->friction_velocity;
+            gac_tangential_velocity(m, resting[a], vq, vt);                  /* the two tangential axes, ascending */
+            slide[a] = gac_slide_phi(vt, m->friction_velocity, slip ? slip + 2 * resting[a] : 0, phi);  /* >= 0 */
             for (r = 0; r < m->njrow; ++r) f[r] = 0.0;
             for (j = 0; j < 2; ++j) {
-                if (k->trow[j] >= 0) f[k->trow[j]] = -vt[j] / scale;          /* -phi: against the sliding */
+                if (k->trow[j] >= 0) f[k->trow[j]] = -phi[j];                 /* -phi: against the sliding */
             }
-            slide[a] = (vt[0] * vt[0] + vt[1] * vt[1]) / scale;               /* phi . v_t >= 0 */
             m->contact_generalized_force(q, f, p, g);
             m->inertia_solve(q, g, p, Z + (long)a * nq);
             m->contact_velocities(q, Z + (long)a * nq, p, vel);
@@ -518,5 +542,5 @@ int gac_constrained_dynamics(const gac_model *m, const double *q, const double *
                              const double *p, int nresting, const int *resting, double *qdd, double *lambda,
                              double *work)
 {
-    return gac_constrained_dynamics_friction(m, q, qd, u, p, nresting, resting, qdd, lambda, work, 0);
+    return gac_constrained_dynamics_friction(m, q, qd, u, p, nresting, resting, 0, 0, qdd, lambda, 0, work, 0);
 }

@@ -29,6 +29,7 @@ void gac_default_options(gac_options *opt)
     opt->energy_tol = -1.0;
     opt->chart_switch = 0.3;
     opt->impact_law = GAC_IMPACT_LAW_GDI;
+    opt->stick = 1;
 }
 
 int gac_check_options(const gac_options *opt, const char **field)
@@ -74,6 +75,9 @@ int gac_check_options(const gac_options *opt, const char **field)
              && opt->impact_law != GAC_IMPACT_LAW_FRICTIONLESS)
         bad = "impact_law: must be GAC_IMPACT_LAW_GDI (1), GAC_IMPACT_LAW_NEWTON_COULOMB (2) or "
               "GAC_IMPACT_LAW_FRICTIONLESS (0)";
+    else if (opt->stick != 0 && opt->stick != 1)
+        bad = "stick: must be 1 (a resting point on a rough wall sticks as a constraint) or 0 (the regularised "
+              "friction alone)";
     if (field != 0) *field = bad;
     return bad == 0 ? GAC_OK : GAC_ERR_BAD_OPTION;
 }
@@ -114,11 +118,13 @@ void gac_sim_bind(gac_sim *s, const gac_model *md, double *dwork, int *iwork)
     s->t_last = d;        d += nc1;
     s->dt_last = d;       d += nc1;
     s->gap_held = d;      d += nc1;
+    s->slip = d;          d += 2 * nc1;        /* | slip (2 per contact) */
     s->work = d;          d += gac_impact_nwork(md);   /* | work | sub */
     s->sub = d;
-    s->resting = iwork;                         /* iwork: resting | is_resting | n_shrink */
+    s->resting = iwork;                         /* iwork: resting | is_resting | n_shrink | is_stuck */
     s->is_resting = iwork + md->nq;
     s->n_shrink = iwork + md->nq + nc1;
+    s->is_stuck = iwork + md->nq + 2 * nc1;
 }
 
 /* gac_sim_init once its pointers and the model are checked: the options, the parameters, the state and the start
@@ -175,6 +181,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     s->input_changed = 0;
     s->work_input = s->loss_damping = s->loss_friction = 0.0;
     s->n_slow_sliding = 0;
+    s->n_sticks = s->n_slips = 0;
     s->t_slow_sliding = 0.0;
     for (i = 0; i < md->nx; ++i) s->x[i] = x[i];
     s->n_chart_switches = 0;
@@ -206,6 +213,8 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
         s->t_last[i] = t0;
         s->dt_last[i] = -2.0;                     /* -2: no impact of this contact yet, -1: one */
         s->gap_held[i] = 0.0;
+        s->is_stuck[i] = 0;
+        s->slip[2 * i] = s->slip[2 * i + 1] = 0.0;
     }
     if (gac_wants_switch(s)) {                    /* chart A already poor at the start: start on B */
         int code = gac_switch_chart(s);

@@ -240,9 +240,9 @@ static void test_sizes(void)
 {
     CHECK(gac_model_check(&ball) == GAC_OK && gac_model_check(&box) == GAC_OK, "models consistent");
     CHECK(gac_impact_nwork(&box) == 2 * 4 + 2 + 3 * 1 + 2, "impact work %ld", gac_impact_nwork(&box));
-    CHECK(gac_sim_ndouble(&box) == 28 * 4 + 3 + 7 * 4 + gac_impact_nwork(&box) + 4, "sim doubles %ld",
+    CHECK(gac_sim_ndouble(&box) == 28 * 4 + 3 + 9 * 4 + gac_impact_nwork(&box) + 4, "sim doubles %ld",
           gac_sim_ndouble(&box));
-    CHECK(gac_sim_nint(&box) == 2 + 2 * 4 && gac_record_ndouble(&box) == 12 && gac_record_nint(&box) == 6, "ints");
+    CHECK(gac_sim_nint(&box) == 2 + 3 * 4 && gac_record_ndouble(&box) == 12 && gac_record_nint(&box) == 6, "ints");
     CHECK(gac_sim_ndouble(&box) <= NDOUBLE && gac_sim_nint(&box) <= NINT, "test arrays large enough");
     CHECK(NEAR(gac_chart_measure(&box, box_q0), 1.0, 0.0), "chart measure 1");
 }
@@ -571,18 +571,19 @@ static void test_budget_and_progress(void)
 }
 
 /* A point sliding on a rough floor (Coulomb c_f, resting from the start): the normal force m g, the deceleration
- * c_f g, x(t) = v0 t - c_f g t^2 / 2 until it stops at v0^2 / (2 c_f g), and the friction loss m v0^2 / 2. */
-static void test_sled(void)
+ * c_f g, x(t) = v0 t - c_f g t^2 / 2 until it stops at v0^2 / (2 c_f g), and the friction loss m v0^2 / 2.  With
+ * stick = 0 the regularised friction holds it after the stop (slow, stiff steps); with stick = 1 it sticks once. */
+static void test_sled_run(int stick)
 {
     const double g = sled_p[0], m = sled_p[1], c_f = sled_p[3], v0 = sled_qd0[0], t_stop = v0 / (c_f * g);
     const double t_eval[2] = {0.3, 1.0};
-    double x_eval[8], qdd[2], lambda[2], swork[64];
+    double x_eval[8], qdd[2], lambda[2], swork[128];
     const int contact_set[1] = {0};
     gac_options opt;
     gac_sim sim;
     gac_impact_record rec;
     int code, i_eval = 0;
-    CHECK(gac_model_check(&sled) == GAC_OK && gac_impact_nwork(&sled) == 13 * 4 + 2 + 3 + 2, "sled model, work %ld",
+    CHECK(gac_model_check(&sled) == GAC_OK && gac_impact_nwork(&sled) == 24 * 4 + 2 + 3 + 2, "sled model, work %ld",
           gac_impact_nwork(&sled));
     code = gac_constrained_dynamics(&sled, sled_q0, sled_qd0, 0, sled_p, 1, contact_set, qdd, lambda, swork);
     CHECK(code == GAC_OK && NEAR(lambda[0], m * g, 1e-12) && NEAR(qdd[0], -c_f * g, 1e-12) && NEAR(qdd[1], 0.0, 1e-12),
@@ -590,6 +591,7 @@ static void test_sled(void)
     gac_default_options(&opt);
     opt.rtol = 1e-10;
     opt.atol = 1e-12;
+    opt.stick = stick;
     code = gac_sim_init(&sim, &sled, dwork, iwork, 0.0, sled_q0, sled_qd0, 0, &opt);
     CHECK(code == GAC_OK, "init %d", code);
     gac_record_bind(&rec, &sled, rdwork, riwork);
@@ -600,12 +602,27 @@ static void test_sled(void)
     CHECK(t_stop < 1.0 && NEAR(x_eval[4], v0 * v0 / (2.0 * c_f * g), 1e-8), "x(1) %.17g, expected %.17g", x_eval[4],
           v0 * v0 / (2.0 * c_f * g));
     CHECK(NEAR(sim.loss_friction, 0.5 * m * v0 * v0, 1e-9), "friction loss %.17g", sim.loss_friction);
-    /* the steps in the regularised regime: those begun after the stop or within GAC_SLOW_SLIDING v_s of it */
-    CHECK(sim.n_slow_sliding > 0 && sim.t_slow_sliding > 0.5 * (1.0 - t_stop)
-          && sim.t_slow_sliding <= 1.0 - t_stop + GAC_SLOW_SLIDING * sled.friction_velocity / (c_f * g) + 1e-12,
-          "slow sliding: %ld steps over %.17g s, at rest for %.17g s", sim.n_slow_sliding, sim.t_slow_sliding,
-          1.0 - t_stop);
+    if (!stick) {
+        /* the steps in the regularised regime: those begun after the stop or within GAC_SLOW_SLIDING v_s of it */
+        CHECK(sim.n_slow_sliding > 0 && sim.t_slow_sliding > 0.5 * (1.0 - t_stop)
+              && sim.t_slow_sliding <= 1.0 - t_stop + GAC_SLOW_SLIDING * sled.friction_velocity / (c_f * g) + 1e-12,
+              "slow sliding: %ld steps over %.17g s, at rest for %.17g s", sim.n_slow_sliding, sim.t_slow_sliding,
+              1.0 - t_stop);
+        CHECK(sim.n_sticks == 0 && sim.n_slips == 0, "no sticking: %ld, %ld", sim.n_sticks, sim.n_slips);
+    } else {
+        /* stuck at the stop: no creep, the steps after it not slowed by the regularisation */
+        CHECK(sim.n_sticks == 1 && sim.n_slips == 0 && sim.t_slow_sliding < 1e-3 && x_eval[6] == 0.0,
+              "stuck once: sticks %ld, slips %ld, slow for %.3g s, v(1) %.3g", sim.n_sticks, sim.n_slips,
+              sim.t_slow_sliding, x_eval[6]);
+        CHECK(fabs(sim.energy_residual) < 1e-12, "energy residual %.3g", sim.energy_residual);
+    }
     CHECK(fabs(x_eval[5]) < 1e-12 && fabs(x_eval[7]) < 1e-12, "on the floor");
+}
+
+static void test_sled(void)
+{
+    test_sled_run(0);
+    test_sled_run(1);
 }
 
 /* Refusals: NULL pointers, bad options, an inconsistent model, a start beyond a wall (sim unchanged). */

@@ -1,0 +1,377 @@
+/*
+ * gac_stick.c -- sticking at resting contacts on walls with Coulomb friction (gac.h, "Sticking"): a stuck point's
+ * tangential rows held with the normal rows as bilateral constraints and their forces solved in one system, the
+ * velocity projection that holds them, the slip of a stuck point (stuck -> sliding) and the test that lets a slow
+ * sliding point stick (sliding -> stuck).
+ */
+#include "gac_internal.h"
+
+#include <math.h>
+
+/* A held row whose pivot in the LDL^T of R I_f^-1 R^T is below this fraction of the largest diagonal entry depends on
+ * the rows before it (a link lying flat holds the same tangential row at both ends): it drops out and the forces are
+ * shared among the rest.  A nearly dependent row is kept (a shallow arch between two stuck points pushes them apart
+ * with a large force, and they slip). */
+#define GAC_HELD_DEPENDENT 1e-12
+
+/* phi of a sliding point with tangential velocity vt (2): v_t / max(|v_t|, v_s), and, below v_s with a slip
+ * direction d (2, unit, or NULL / zero: none), (1 - |v_t| / v_s) d added, so that a slip begins against the full
+ * Coulomb force; phi is continuous in v_t (|phi| <= 1), the loop forgetting d at a step's end where v_t opposes it
+ * (within that step phi . v_t >= -|v_t| (1 - |v_t| / v_s) >= -v_s / 4).  Returns phi . v_t. */
+double gac_slide_phi(const double *vt, double vs, const double *d, double *phi)
+{
+    const double speed = sqrt(vt[0] * vt[0] + vt[1] * vt[1]);
+    const double scale = speed > vs ? speed : vs;
+    int j;
+    for (j = 0; j < 2; ++j) phi[j] = vt[j] / scale;
+    if (d != 0 && speed < vs) {
+        for (j = 0; j < 2; ++j) phi[j] += (1.0 - speed / vs) * d[j];
+    }
+    return phi[0] * vt[0] + phi[1] * vt[1];
+}
+
+/* The velocity of contact c's point along its wall's two tangential axes (ascending; 0 for an axis the model does
+ * not move along, and for a stop), from the points' velocities vq (3 npoint). */
+void gac_tangential_velocity(const gac_model *m, int c, const double *vq, double *vt)
+{
+    const gac_contact *k = &m->contacts[c];
+    int j, axis = 0;
+    vt[0] = vt[1] = 0.0;
+    if (k->kind != GAC_CONTACT_WALL) return;
+    for (j = 0; j < 2; ++j, ++axis) {
+        if (axis == k->axis) ++axis;
+        if (k->trow[j] >= 0) vt[j] = vq[3 * (k->point - 1) + axis];
+    }
+}
+
+/* 1 if one of the contacts set[0..n-1] is stuck (stuck: per contact, or NULL: none). */
+int gac_any_stuck(const int *stuck, int n, const int *set)
+{
+    int a;
+    if (stuck == 0) return 0;
+    for (a = 0; a < n; ++a) {
+        if (stuck[set[a]]) return 1;
+    }
+    return 0;
+}
+
+/* The rows held at the contacts set[0..n-1]: first each one's normal row (its response I_f^-1 n_a, left in Y by
+ * gac_impact_system), then the tangential rows of each stuck one (responses I_f^-1 J^T e_trow into T).  Row r:
+ * owner[r] (its contact's position in set), comp[r] (-1 for a normal row, else the point velocity component
+ * 3 (point - 1) + axis it holds), brow[r] (its row of contact_bias), sgn[r] (the normal's sign, 1 along an axis),
+ * tj[r] (the tangential axis 0 or 1, -1 for a normal row), resp[r].  Returns the number of rows or an error (< 0). */
+static int gac_held_rows(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                         const int *set, const int *stuck, double *work, int *owner, int *comp, int *brow,
+                         double *sgn, int *tj, const double **resp)
+{
+    const int nq = m->nq;
+    double v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)];
+    double *Y = GAC_WORK_Y(m, work), *T = GAC_WORK_T(m, work), *g = GAC_WORK_G(m, work), *f = GAC_WORK_F(m, work);
+    int a, i, j, nr = 0, nt = 0;
+    const int code = gac_impact_system(m, q, qd, p, n, set, work, v, e);
+    if (code != GAC_OK) return code;
+    for (a = 0; a < n; ++a) {
+        int row;
+        double sign;
+        gac_contact_row(m, set[a], &row, &sign);
+        owner[nr] = a, comp[nr] = -1, brow[nr] = row, sgn[nr] = sign, tj[nr] = -1;
+        resp[nr++] = Y + (long)a * nq;
+    }
+    for (a = 0; a < n; ++a) {
+        const gac_contact *k = &m->contacts[set[a]];
+        int axis = 0;
+        if (stuck == 0 || !stuck[set[a]] || !(gac_friction_coefficient(m, p, set[a]) > 0.0)) continue;
+        for (j = 0; j < 2; ++j, ++axis) {
+            if (axis == k->axis) ++axis;
+            if (k->trow[j] < 0) continue;
+            for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
+            f[k->trow[j]] = 1.0;                            /* a unit force along +X_axis */
+            m->contact_generalized_force(q, f, p, g);
+            m->inertia_solve(q, g, p, T + (long)nt * nq);
+            for (i = 0; i < nq; ++i) {
+                if (!isfinite(T[(long)nt * nq + i])) return GAC_ERR_SINGULAR_MASS;
+            }
+            owner[nr] = a, comp[nr] = 3 * (k->point - 1) + axis, brow[nr] = k->trow[j], sgn[nr] = 1.0, tj[nr] = j;
+            resp[nr++] = T + (long)nt++ * nq;
+        }
+    }
+    return nr;
+}
+
+/* Row r's value of a generalised velocity w (vel = contact_velocities(q, w)). */
+static double gac_held_value(const gac_model *m, const int *set, int owner, int comp, double sgn, const double *w,
+                             const double *vel)
+{
+    return comp < 0 ? sgn * gac_row_value(m, set[owner], w, vel) : vel[comp];
+}
+
+/* G (nr x nr) = R I_f^-1 R^T of the held rows, symmetric (vel: scratch). */
+static void gac_held_gram(const gac_model *m, const double *q, const double *p, const int *set, int nr,
+                          const int *owner, const int *comp, const double *sgn, const double **resp, double *G,
+                          double *vel)
+{
+    int r, c;
+    for (c = 0; c < nr; ++c) {
+        m->contact_velocities(q, resp[c], p, vel);
+        for (r = 0; r < nr; ++r) G[r*nr + c] = gac_held_value(m, set, owner[r], comp[r], sgn[r], resp[c], vel);
+    }
+    for (r = 0; r < nr; ++r) {
+        for (c = 0; c < r; ++c) G[r*nr + c] = G[c*nr + r] = 0.5 * (G[r*nr + c] + G[c*nr + r]);
+    }
+}
+
+/* The constrained dynamics with some of the resting contacts stuck (stuck[c] = 1): the rows R (normal rows of all,
+ * tangential rows of the stuck ones) held, R qdd + Rdot qd = 0, with qdd = qdd_free + I_f^-1 sum_r d_r lambda_r,
+ * d_r the row itself, or for the normal row of a sliding point on a rough wall n_a + c_f J_t^T(-phi_a).  So
+ * B lambda = -(R qdd_free + Rdot qd), B_rs = r . I_f^-1 d_s (symmetric, solved by LDL^T, without sliding friction;
+ * LU with it).  Rows dependent on the others (found by the LDL^T of R I_f^-1 R^T: a rod lying flat holds the same
+ * tangential row at both ends) share the force: the least-norm solution of the independent rows' equations,
+ * lambda = B_K^T (B_K B_K^T)^-1 b_K, which must hold the dropped rows too (to 1e-8 of the right-hand side; else
+ * GAC_ERR_SINGULAR_CONTACT: the stuck set cannot be held).  lambda (n): the normal forces; lambda_t (2 n, or NULL): the stuck points'
+ * tangential forces along their wall's axes (0 for a sliding point); dissipation: the sliding points' power. */
+int gac_stuck_dynamics(const gac_model *m, const double *q, const double *qd, const double *u, const double *p,
+                       int n, const int *set, const int *stuck, const double *slip, double *qdd, double *lambda,
+                       double *lambda_t, double *work, double *dissipation)
+{
+    const int nq = m->nq, cap = 3 * GAC_AT_LEAST_1(nq), n1 = GAC_AT_LEAST_1(n);
+    double *G = GAC_WORK_W(m, work), *L = GAC_WORK_L(m, work), *Z = GAC_WORK_Z(m, work);
+    double *vel = GAC_WORK_VEL(m, work), *g = GAC_WORK_G(m, work), *f = GAC_WORK_F(m, work);
+    double bias[GAC_AT_LEAST_1(m->njrow)], vq[3 * GAC_AT_LEAST_1(m->npoint)], b[cap], lam[cap], sgn[cap];
+    double cf[n1], slide[n1];
+    int owner[cap], comp[cap], brow[cap], tj[cap], idx[cap], sliding[n1];
+    const double *resp[cap];
+    int nr, r, c, a, i, j, dropped, nk = 0, any_sliding = 0;
+    if (dissipation) *dissipation = 0.0;
+    m->forward_dynamics(q, qd, u, p, qdd);
+    if (n == 0) return GAC_OK;
+    nr = gac_held_rows(m, q, qd, p, n, set, stuck, work, owner, comp, brow, sgn, tj, resp);
+    if (nr < 0) return nr;
+    m->contact_bias(q, qd, p, bias);
+    m->contact_velocities(q, qd, p, vq);
+    for (a = 0; a < n; ++a) {                     /* sliding points: Z_a = I_f^-1 J_t^T (-phi_a) */
+        const gac_contact *k = &m->contacts[set[a]];
+        double vt[2], phi[2];
+        cf[a] = gac_friction_coefficient(m, p, set[a]);
+        sliding[a] = cf[a] > 0.0 && !stuck[set[a]];
+        slide[a] = 0.0;
+        if (!sliding[a]) continue;
+        any_sliding = 1;
+        gac_tangential_velocity(m, set[a], vq, vt);
+        slide[a] = gac_slide_phi(vt, m->friction_velocity, slip ? slip + 2 * set[a] : 0, phi);
+        for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
+        for (j = 0; j < 2; ++j) {
+            if (k->trow[j] >= 0) f[k->trow[j]] = -phi[j];
+        }
+        m->contact_generalized_force(q, f, p, g);
+        m->inertia_solve(q, g, p, Z + (long)a * nq);
+    }
+    gac_held_gram(m, q, p, set, nr, owner, comp, sgn, resp, G, vel);
+    m->contact_velocities(q, qdd, p, vel);        /* R qdd_free, row by row */
+    for (r = 0; r < nr; ++r)
+        b[r] = -(sgn[r] * bias[brow[r]] + gac_held_value(m, set, owner[r], comp[r], sgn[r], qdd, vel));
+    for (i = 0; i < nr * nr; ++i) L[i] = G[i];
+    dropped = gac_ldlt_drop(nr, L, GAC_HELD_DEPENDENT);
+    if (dropped < 0) return GAC_ERR_SINGULAR_CONTACT;
+    for (a = 0; a < n; ++a) {                     /* B: sliding friction bends the normal columns (column a) */
+        if (!sliding[a]) continue;
+        m->contact_velocities(q, Z + (long)a * nq, p, vel);
+        for (r = 0; r < nr; ++r)
+            G[r*nr + a] += cf[a] * gac_held_value(m, set, owner[r], comp[r], sgn[r], Z + (long)a * nq, vel);
+    }
+    for (r = 0; r < nr; ++r) lam[r] = b[r];
+    if (dropped == 0 && !any_sliding) {
+        gac_ldlt_solve(nr, L, lam);
+    } else if (dropped == 0) {
+        if (gac_lu_solve(nr, G, lam, 1e-12) != 0) return GAC_ERR_FRICTION;
+    } else {                                      /* least-norm forces of the independent rows' equations */
+        double y[cap];
+        for (r = 0; r < nr; ++r) {
+            if (L[r*nr + r] != 1e300) idx[nk++] = r;
+        }
+        for (i = 0; i < nk; ++i) {
+            y[i] = b[idx[i]];
+            for (j = 0; j < nk; ++j) {
+                double sum = 0.0;
+                for (c = 0; c < nr; ++c) sum += G[idx[i]*nr + c] * G[idx[j]*nr + c];
+                L[i*nk + j] = sum;
+            }
+        }
+        if (gac_ldlt_drop(nk, L, 1e-24) < 0) return GAC_ERR_FRICTION;
+        gac_ldlt_solve(nk, L, y);
+        for (c = 0; c < nr; ++c) {
+            lam[c] = 0.0;
+            for (i = 0; i < nk; ++i) lam[c] += G[idx[i]*nr + c] * y[i];
+        }
+        {                                         /* the dropped rows must be held by the others' forces */
+            double worst = 0.0, size = 0.0;
+            for (r = 0; r < nr; ++r) {
+                double sum = -b[r];
+                for (c = 0; c < nr; ++c) sum += G[r*nr + c] * lam[c];
+                if (fabs(sum) > worst) worst = fabs(sum);
+                if (fabs(b[r]) > size) size = fabs(b[r]);
+            }
+            if (worst > 1e-8 * size + 1e-300) return GAC_ERR_SINGULAR_CONTACT;
+        }
+    }
+    if (!gac_finite(lam, nr)) return GAC_ERR_FRICTION;
+    for (i = 0; i < nq; ++i) {
+        for (r = 0; r < nr; ++r) qdd[i] += resp[r][i] * lam[r];
+    }
+    for (a = 0; a < n; ++a) {
+        lambda[a] = lam[a];
+        if (!sliding[a]) continue;
+        for (i = 0; i < nq; ++i) qdd[i] += cf[a] * Z[(long)a * nq + i] * lam[a];
+        if (dissipation) *dissipation += cf[a] * lam[a] * slide[a];
+    }
+    if (lambda_t != 0) {
+        for (a = 0; a < 2 * n; ++a) lambda_t[a] = 0.0;
+        for (r = n; r < nr; ++r) lambda_t[2 * owner[r] + tj[r]] = lam[r];
+    }
+    return GAC_OK;
+}
+
+/* The velocities of x brought onto the held rows of the contacts set[0..n-1] (normal rows, and the tangential rows
+ * of the stuck ones): qd -= Y (R Y)^-1 R qd, Y = I_f^-1 R^T, the nearest velocities in the mass metric (so the
+ * kinetic energy cannot grow; rows dependent on the others drop out). */
+int gac_project_stuck(gac_sim *s, double *x, int n, const int *set)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, cap = 3 * GAC_AT_LEAST_1(nq);
+    double *G = GAC_WORK_W(md, s->work), *vel = GAC_WORK_VEL(md, s->work);
+    double sgn[cap], corr[cap];
+    int owner[cap], comp[cap], brow[cap], tj[cap];
+    const double *resp[cap];
+    int nr, r, i;
+    nr = gac_held_rows(md, x, x + nq, s->p, n, set, s->is_stuck, s->work, owner, comp, brow, sgn, tj, resp);
+    if (nr < 0) return nr;
+    gac_held_gram(md, x, s->p, set, nr, owner, comp, sgn, resp, G, vel);
+    md->contact_velocities(x, x + nq, s->p, vel);
+    for (r = 0; r < nr; ++r) corr[r] = -gac_held_value(md, set, owner[r], comp[r], sgn[r], x + nq, vel);
+    if (gac_ldlt_drop(nr, G, GAC_HELD_DEPENDENT) < 0) return GAC_ERR_SINGULAR_CONTACT;
+    gac_ldlt_solve(nr, G, corr);
+    for (i = 0; i < nq; ++i) {
+        for (r = 0; r < nr; ++r) x[nq + i] += resp[r][i] * corr[r];
+    }
+    return GAC_OK;
+}
+
+/* The forces of the resting contacts at time t and state x, their stuck points held: qdd (nq), lambda (nresting),
+ * lambda_t (2 nresting, or NULL), the sliding friction's power (dissipation, or NULL). */
+int gac_rest_forces(gac_sim *s, double t, const double *x, double *qdd, double *lambda, double *lambda_t,
+                    double *dissipation)
+{
+    const gac_model *md = s->model;
+    return gac_constrained_dynamics_friction(md, x, x + md->nq, gac_input(s, t, x), s->p, s->nresting, s->resting,
+                                             s->is_stuck, s->slip, qdd, lambda, lambda_t, s->work, dissipation);
+}
+
+/* The stuck resting contact c at state x (time t) whose |lambda_T| reached c_f lambda_N: it slips, along
+ * -lambda_T (s->slip, the friction's direction until it is faster than friction_velocity).  Returns 1 (it slips),
+ * 0 (its normal force is not positive: it is to be released instead) or an error. */
+int gac_slip(gac_sim *s, double t, const double *x, int c)
+{
+    const gac_model *md = s->model;
+    const int nq1 = GAC_AT_LEAST_1(md->nq);
+    double qdd[nq1], lambda[nq1], lambda_t[2 * nq1], norm;
+    int a, code;
+    for (a = 0; a < s->nresting && s->resting[a] != c; ++a) {}
+    if (a == s->nresting) return 0;
+    code = gac_rest_forces(s, t, x, qdd, lambda, lambda_t, 0);
+    if (code != GAC_OK) return code;
+    if (!(lambda[a] > 0.0)) return 0;
+    norm = sqrt(lambda_t[2 * a] * lambda_t[2 * a] + lambda_t[2 * a + 1] * lambda_t[2 * a + 1]);
+    s->is_stuck[c] = 0;
+    s->slip[2 * c] = norm > 0.0 ? -lambda_t[2 * a] / norm : 0.0;
+    s->slip[2 * c + 1] = norm > 0.0 ? -lambda_t[2 * a + 1] / norm : 0.0;
+    s->n_slips++;
+    return 1;
+}
+
+/* The tangential velocities vt (2 per contact) of every contact's point at state x. */
+void gac_tangential_speeds(const gac_sim *s, const double *x, double *vt)
+{
+    const gac_model *md = s->model;
+    double vq[3 * GAC_AT_LEAST_1(md->npoint)];
+    int c;
+    md->contact_velocities(x, x + md->nq, s->p, vq);
+    for (c = 0; c < md->ncontact; ++c) gac_tangential_velocity(md, c, vq, vt + 2 * c);
+}
+
+/* 1 if every stuck resting contact at x lies strictly inside its cone, |lambda_T| < c_f lambda_N (its slip
+ * event's value lambda_N - |lambda_T| / c_f > 0), with the set of stuck points as it is now.  d (2): the direction
+ * contact c would slip in, -lambda_T / |lambda_T| (0 when its normal force is not positive). */
+static int gac_stuck_feasible(gac_sim *s, const double *x, int c_try, double *d)
+{
+    const gac_model *md = s->model;
+    const int nq1 = GAC_AT_LEAST_1(md->nq);
+    double qdd[nq1], lambda[nq1], lambda_t[2 * nq1];
+    int a, ok = 1;
+    d[0] = d[1] = 0.0;
+    if (gac_rest_forces(s, s->t, x, qdd, lambda, lambda_t, 0) != GAC_OK || s->fail) {
+        if (s->fail != GAC_ERR_BAD_INPUT) s->fail = 0;
+        return 0;
+    }
+    for (a = 0; a < s->nresting; ++a) {
+        const double norm = sqrt(lambda_t[2*a] * lambda_t[2*a] + lambda_t[2*a + 1] * lambda_t[2*a + 1]);
+        if (s->resting[a] == c_try && lambda[a] > 0.0 && norm > 0.0) {
+            d[0] = -lambda_t[2*a] / norm;
+            d[1] = -lambda_t[2*a + 1] / norm;
+        }
+    }
+    for (a = 0; a < s->nresting; ++a) {
+        const int c = s->resting[a];
+        const double cf = gac_friction_coefficient(md, s->p, c);
+        if (!s->is_stuck[c]) continue;
+        if (!(lambda[a] - sqrt(lambda_t[2*a] * lambda_t[2*a] + lambda_t[2*a + 1] * lambda_t[2*a + 1]) / cf > 0.0))
+            ok = 0;
+    }
+    return ok;
+}
+
+/* Sliding -> stuck at s->x (a step's end, after an impact, at the start): each resting point on a rough wall that is
+ * not stuck, slower than friction_velocity along its wall or (one tangential axis) whose velocity changed sign since
+ * vt_start (2 per contact, the step's start; NULL: no such test), sticks if the stuck solve keeps every stuck point
+ * inside its cone.  The velocities are then projected onto the held rows (the stuck tangential velocities to 0, mass
+ * metric); with count_loss the kinetic energy that takes is added to loss_friction.  A slow point that cannot stick
+ * slides on with the direction its stuck solve would slip in (s->slip); a slip's direction is forgotten once its point
+ * is faster than friction_velocity or moves against it.  Returns the number of points that stuck, or an error. */
+int gac_try_stick(gac_sim *s, const double *vt_start, int count_loss)
+{
+    const gac_model *md = s->model;
+    const double vs = md->friction_velocity;
+    double vt[2 * GAC_AT_LEAST_1(md->ncontact)], E_before, d[2], x[md->nx];
+    int a, added = 0, code;
+    if (!s->opt.stick || s->nresting == 0 || !gac_has_friction(md)) return 0;
+    gac_tangential_speeds(s, s->x, vt);
+    for (a = 0; a < s->nresting; ++a) {
+        const int c = s->resting[a];
+        const gac_contact *k = &md->contacts[c];
+        const double *w = vt + 2 * c, speed = sqrt(w[0] * w[0] + w[1] * w[1]);
+        const int one_axis = (k->trow[0] >= 0) + (k->trow[1] >= 0) == 1;
+        const int turned = vt_start != 0 && one_axis && w[0] * vt_start[2*c] + w[1] * vt_start[2*c + 1] < 0.0;
+        if (s->is_stuck[c] || !(gac_friction_coefficient(md, s->p, c) > 0.0)) continue;
+        if ((!(speed < vs) && !turned) || w[0] * s->slip[2*c] + w[1] * s->slip[2*c + 1] < 0.0)
+            s->slip[2 * c] = s->slip[2 * c + 1] = 0.0;     /* past the passage through zero speed, or turned back */
+        if (!(speed < vs) && !turned) continue;
+        s->is_stuck[c] = 1;
+        d[0] = d[1] = 0.0;
+        gac_copy(x, s->x, md->nx);                    /* judged with its tangential velocity at 0 */
+        code = gac_project_stuck(s, x, s->nresting, s->resting);
+        if (code != GAC_OK || !gac_stuck_feasible(s, x, c, d)) {           /* it slides on: along the way its load drives it */
+            s->is_stuck[c] = 0;
+            s->slip[2 * c] = d[0];
+            s->slip[2 * c + 1] = d[1];
+            continue;
+        }
+        s->slip[2 * c] = s->slip[2 * c + 1] = 0.0;
+        ++added;
+    }
+    if (added == 0) return 0;
+    E_before = gac_total_energy(md, s->x, s->p);
+    code = gac_project_stuck(s, s->x, s->nresting, s->resting);
+    if (code != GAC_OK) return code;
+    if (count_loss) s->loss_friction += E_before - gac_total_energy(md, s->x, s->p);
+    s->n_sticks += added;
+    s->f_valid = s->vn_valid = 0;
+    return added;
+}

@@ -17,6 +17,7 @@ from .compile import BuildError, CacheError, CompilerNotFound
 from .model import load_model
 from codegen.outputs import output_dir_problem, output_file_problem
 from .horizon import scene_and_horizon
+from .model import CHOSEN_LAWS
 from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, METHODS, RTOL_MIN, simulate
 
 STUDIES = ("precision", "stress", "fuzz")     # studies: python -m studies STUDY
@@ -56,6 +57,11 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--charts", action="store_true", help="kept for old command lines: near the gimbal lock "
                      "theta_0 = +-pi/2 the C loop switches to the model's second base chart by default")
     sim.add_argument("--no-charts", action="store_true", help="stop at the gimbal lock of the base chart instead")
+    sim.add_argument("--impact-law", choices=CHOSEN_LAWS, default="gdi",
+                     help="the impact law at walls with friction: gdi (default; never gains energy), newton-coulomb "
+                          "(can gain energy: the run then stops) or frictionless")
+    sim.add_argument("--no-stick", action="store_true", help="points resting on rough walls take the regularised "
+                     "friction alone (below friction_velocity a viscous force) instead of sticking")
     sim.add_argument("--max-impacts", type=int, default=10000, metavar="N",
                      help="stop the run after this many impacts (default 10000)")
     sim.add_argument("--max-steps", type=int, default=10_000_000, metavar="N",
@@ -257,7 +263,8 @@ def main(argv=None) -> int:
         p = {name: float(value) for name, _, value in (item.partition("=") for item in args.param)} or None
         result = simulate(model, t_end, method=args.method, rtol=args.rtol, atol=args.atol, dt=args.dt,
                           t_eval=t_eval, charts=not args.no_charts, max_wall_time=args.max_wall_time, u=u, p=p,
-                          max_impacts=args.max_impacts, max_steps=args.max_steps)
+                          max_impacts=args.max_impacts, max_steps=args.max_steps, impact_law=args.impact_law,
+                          stick=not args.no_stick)
         elapsed = time.perf_counter() - start
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -139,10 +139,13 @@ def rough_rod(friction_velocity: float):
 
 
 def test_steps_held_back_by_the_friction_regularisation_are_said_to_be_and_friction_velocity_is_named(tmp_path):
-    """friction_velocity = 1e-6 m/s: the resting rod takes steps of a few 1e-7 s (its time constant 2e-7 s) over
-    nearly all of the run, which the warning says, naming friction_velocity; at 1e-2 m/s the run takes a few
-    dozen steps and no warning.  The command prints the warning."""
-    slow = simulate(load_model(rough_rod(1e-6)), 0.025, t_eval=[])
+    """With the regularisation alone (stick=False) and friction_velocity = 1e-6 m/s: the resting rod takes steps of a
+    few 1e-7 s (its time constant 2e-7 s) over nearly all of the run, which the warning says, naming
+    friction_velocity; at 1e-2 m/s the run takes a few dozen steps and no warning; sticking (the default) takes a few
+    dozen steps at 1e-6 m/s too.  The command (--no-stick) prints the warning."""
+    stuck = simulate(load_model(rough_rod(1e-6)), 0.025, t_eval=[])
+    assert stuck.success and stuck.n_steps < 1000 and stuck.n_sticks >= 1 and stuck.warnings == []
+    slow = simulate(load_model(rough_rod(1e-6)), 0.025, t_eval=[], stick=False)
     tau = 1e-6 / (0.5 * 9.81)
     friction = [w for w in slow.warnings if "friction_velocity" in w]
     assert slow.success and slow.n_steps > 10_000 and len(friction) == 1, slow.warnings
@@ -154,16 +157,16 @@ def test_steps_held_back_by_the_friction_regularisation_are_said_to_be_and_frict
     assert share >= 90
     mean_step = float(warning.split("at a mean step of ")[1].split(" s")[0])
     assert tau < mean_step < 10 * tau                   # an explicit method's steps on a stiff term of time tau
-    fast = simulate(load_model(rough_rod(1e-2)), 0.025, t_eval=[])
+    fast = simulate(load_model(rough_rod(1e-2)), 0.025, t_eval=[], stick=False)
     assert fast.success and fast.n_steps < 1000 and fast.warnings == []
-    rk4 = simulate(load_model(rough_rod(1e-6)), 0.025, t_eval=[], method="rk4", dt=5e-7)
+    rk4 = simulate(load_model(rough_rod(1e-6)), 0.025, t_eval=[], method="rk4", dt=5e-7, stick=False)
     assert not any("friction_velocity" in w for w in rk4.warnings)    # RK4's step is the caller's
     path = tmp_path / "rod.toml"
     path.write_text('name = "rough_rod"\nfriction = { x2_min = 0.5 }\nfriction_velocity = 1e-6\nrestitution = 0.0\n'
                     '[[links]]\nlength = 0.5\nmu = 1.0\n[walls]\nx1_min = 0.0\nx1_max = 2.0\nx2_min = 0.0\n'
                     f'[initial]\nq = [{-math.pi / 2!r}, 0.0, {-math.pi / 2!r}, 1.0, 0.0, 0.0]\n'
                     'qd = [0.0, 0.0, 0.0, 0.05, 0.0, 0.0]\n')
-    done = run_cli("simulate", "--scene", str(path), "--t-end", "0.025")
+    done = run_cli("simulate", "--scene", str(path), "--t-end", "0.025", "--no-stick")
     assert done.returncode == 0, done.stderr
     assert "warning: " in done.stderr and "The scene's friction_velocity = 1e-06 m/s" in done.stderr
 

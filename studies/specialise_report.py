@@ -35,6 +35,8 @@ def build_parser() -> argparse.ArgumentParser:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeat", type=int, default=21,
                         help=f"alternating turns of the two models' simulations, {RUNS_PER_TURN} runs each (default 21)")
+    parser.add_argument("--scenes", default=",".join(T_END),
+                        help=f"the shipped scenes to compare, separated by commas (default {','.join(T_END)})")
     return parser
 
 
@@ -43,12 +45,18 @@ def main(argv=None) -> int:
     if args.repeat < 1:
         print(f"error: --repeat: must be >= 1, got {args.repeat}", file=sys.stderr)
         return 2
+    scenes = args.scenes.split(",")
+    unknown = [name for name in scenes if name not in T_END]
+    if unknown:
+        print(f"error: --scenes: {unknown[0]!r} is not one of {', '.join(T_END)}", file=sys.stderr)
+        return 2
     print(f"Machine: {describe(compiler_version())}")
     print("| scene | model | coordinates | forward dynamics ops | all kernels ops | ns per rhs (C loop) "
           "| general / specialised per rhs | simulation ms (DOP853, rtol 1e-10) | general / specialised run "
           "| impacts | max impact-time difference s (rtol 1e-13) |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
-    for name, t_end in T_END.items():
+    for name in scenes:
+        t_end = T_END[name]
         scene = load_scene(name)
         kinds = (("general", False), ("specialised", True))
         generated = {label: codegen.generate(scene, build_options(scene, specialise=specialise),

@@ -131,3 +131,34 @@ def test_the_option_is_checked():
     with pytest.raises(ValueError, match="stick: must be True or False"):
         simulate(model, 0.1, stick=2)
     assert simulate(model, 0.1, stick=False).options["stick"] is False
+
+
+def test_a_leaning_rod_slips_where_the_friction_it_needs_reaches_c_f_N():
+    """A uniform rod (1 m, 1 kg) leaning 20 degrees from the vertical with its lower end stuck on a rough floor
+    (c_f = 0.5), released from rest: it pivots about that end, phi_dd = 3 g sin(phi) / 2L, phi_d^2 = 3 g (cos phi0 -
+    cos phi) / L, and the floor must supply F = m a_x and N = m (g + a_y) of its centre's acceleration; it slips
+    where |F| = c_f N (closed form of the pivot phase, the time by quadrature).  The loop's slip event falls within
+    1e-7 s of that time."""
+    from scipy.integrate import quad
+    from scipy.optimize import brentq
+    g, length, c_f, phi0 = 9.81, 1.0, 0.5, math.radians(20.0)
+
+    def floor_force(phi):                     # (F, N) per unit mass in the pivot phase
+        phi_dd = 1.5 * g / length * math.sin(phi)
+        phi_d2 = 3.0 * g / length * (math.cos(phi0) - math.cos(phi))
+        a_x = 0.5 * length * (phi_dd * math.cos(phi) - phi_d2 * math.sin(phi))
+        a_y = -0.5 * length * (phi_dd * math.sin(phi) + phi_d2 * math.cos(phi))
+        return a_x, g + a_y
+
+    phi_slip = brentq(lambda phi: abs(floor_force(phi)[0]) - c_f * floor_force(phi)[1], phi0 + 1e-6, math.radians(70))
+    t_slip = quad(lambda phi: 1.0 / math.sqrt(3.0 * g / length * (math.cos(phi0) - math.cos(phi))), phi0, phi_slip)[0]
+    assert 0.44 < t_slip < 0.45 and floor_force(phi_slip)[1] > 0          # it slips while pressing on the floor
+    scene = scene_from_dict({"name": "leaning_rod", "gravity": g,
+                             "links": [{"length": length, "mu": 1.0 / length, "J": [0.0, 0.0, 0.0]}],
+                             "walls": {"x2_min": 0.0}, "restitution": 0.0, "friction": c_f,
+                             "initial": {"q": [-math.pi / 2, 0.0, -phi0, 0.0, 0.0, 0.0]}})
+    model = load_model(scene)
+    before = simulate(model, t_slip - 1e-7, t_eval=[], rtol=1e-11, atol=1e-13)
+    after = simulate(model, t_slip + 1e-7, t_eval=[], rtol=1e-11, atol=1e-13)
+    assert before.success and before.n_sticks == 1 and before.n_slips == 0
+    assert after.success and after.n_slips == 1

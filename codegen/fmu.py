@@ -109,6 +109,7 @@ def fmi2_variables(model: GeneratedModel, scene: Scene, rows: dict, constants: d
     bounds["solver.method"] = (str(min(methods)), str(max(methods)))
     laws = [int(constants[f"GAC_IMPACT_LAW_{law}"]) for law in ("FRICTIONLESS", "GDI", "NEWTON_COULOMB")]
     bounds["solver.impact_law"] = (str(min(laws)), str(max(laws)))
+    bounds["solver.stick"] = ("0", "1")
 
     variables = []
     for vtype in ("Real", "Integer"):

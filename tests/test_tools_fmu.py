@@ -291,8 +291,16 @@ def test_bad_calls_fail_with_a_message(case1_fmu, capsys):
         slave.fmu.setInteger(slave.refs(["solver.impact_law"]), [7])
     assert "solver.impact_law must be 0 (frictionless), 1 (GDI) or 2" in capsys.readouterr().out
     slave.fmu.setInteger(slave.refs(["solver.impact_law"]), [2])
+    assert slave.fmu.getInteger(slave.refs(["solver.stick"])) == [1]
+    with pytest.raises(FMICallException):
+        slave.fmu.setInteger(slave.refs(["solver.stick"]), [2])
+    assert "solver.stick must be 1 (stick as a constraint) or 0" in capsys.readouterr().out
+    slave.fmu.setInteger(slave.refs(["solver.stick"]), [0])
     slave.fmu.exitInitializationMode()
-    assert slave.fmu.getInteger(slave.refs(["solver.impact_law"])) == [2]
+    assert slave.fmu.getInteger(slave.refs(["solver.impact_law", "solver.stick"])) == [2, 0]
+    with pytest.raises(FMICallException):
+        slave.fmu.setInteger(slave.refs(["solver.stick"]), [1])
+    assert "solver.stick is fixed after initialization" in capsys.readouterr().out
     slave.close()
 
 

@@ -52,6 +52,7 @@ typedef struct {
     double solver[GAC_FMI2_NSOLVER_REAL];
     int method;
     int impact_law;
+    int stick;
     long n_impacts;
     double loss_impacts;
     gac_sim sim;
@@ -235,6 +236,7 @@ static void reset(Instance *in)
     for (i = GAC_FMI2_RTOL; i < GAC_FMI2_KINETIC; i++) in->solver[SOLVER(i)] = real_starts[i];
     in->method = integer_starts[GAC_FMI2_METHOD];
     in->impact_law = integer_starts[GAC_FMI2_IMPACT_LAW];
+    in->stick = integer_starts[GAC_FMI2_STICK];
     in->tolerance_defined = 0;
     in->tolerance = 0.0;
     in->rtol_set = in->atol_set = 0;
@@ -373,6 +375,7 @@ GAC_FMI2_EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     gac_default_options(&opt);
     opt.method = in->method;
     opt.impact_law = in->impact_law;
+    opt.stick = in->stick;
     opt.rtol = in->solver[SOLVER(GAC_FMI2_RTOL)];
     opt.atol = in->solver[SOLVER(GAC_FMI2_ATOL)];
     opt.dt = in->solver[SOLVER(GAC_FMI2_DT)];
@@ -500,9 +503,10 @@ GAC_FMI2_EXPORT fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueRefere
         int stepping = in->mode != MODE_INSTANTIATED && in->mode != MODE_INITIALIZATION;
         if (vr[k] == GAC_FMI2_METHOD) value[k] = in->method;
         else if (vr[k] == GAC_FMI2_IMPACT_LAW) value[k] = in->impact_law;
+        else if (vr[k] == GAC_FMI2_STICK) value[k] = in->stick;
         else if (vr[k] == GAC_FMI2_IMPACTS) value[k] = (fmi2Integer)in->n_impacts;
         else if (vr[k] == GAC_FMI2_RESTING) value[k] = stepping ? in->sim.nresting : 0;
-        else return fail(in, "fmi2GetInteger", "no Integer variable has this value reference (0..3)");
+        else return fail(in, "fmi2GetInteger", "no Integer variable has this value reference (0..4)");
     }
     return fmi2OK;
 }
@@ -515,12 +519,19 @@ GAC_FMI2_EXPORT fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueRefere
     if (in == 0) return fmi2Error;
     if (nvr > 0 && (vr == 0 || value == 0)) return fail(in, "fmi2SetInteger", "vr and value must not be NULL");
     for (k = 0; k < nvr; k++) {
-        if (vr[k] != GAC_FMI2_METHOD && vr[k] != GAC_FMI2_IMPACT_LAW)
-            return fail(in, "fmi2SetInteger", "only solver.method (value reference 0) and solver.impact_law (1) can be set");
+        if (vr[k] != GAC_FMI2_METHOD && vr[k] != GAC_FMI2_IMPACT_LAW && vr[k] != GAC_FMI2_STICK)
+            return fail(in, "fmi2SetInteger", "only solver.method (value reference 0), solver.impact_law (1) and "
+                                              "solver.stick (2) can be set");
         if (in->mode != MODE_INSTANTIATED && in->mode != MODE_INITIALIZATION)
             return fail(in, "fmi2SetInteger", vr[k] == GAC_FMI2_METHOD ? "solver.method is fixed after initialization"
-                                                                      : "solver.impact_law is fixed after initialization");
-        if (vr[k] == GAC_FMI2_METHOD) {
+                        : vr[k] == GAC_FMI2_STICK ? "solver.stick is fixed after initialization"
+                                                  : "solver.impact_law is fixed after initialization");
+        if (vr[k] == GAC_FMI2_STICK) {
+            if (value[k] != 0 && value[k] != 1)
+                return fail(in, "fmi2SetInteger", "solver.stick must be 1 (stick as a constraint) or 0 (regularised "
+                                                  "friction alone)");
+            in->stick = value[k];
+        } else if (vr[k] == GAC_FMI2_METHOD) {
             if (value[k] != GAC_METHOD_RK4 && value[k] != GAC_METHOD_DOPRI5 && value[k] != GAC_METHOD_DOP853)
                 return fail(in, "fmi2SetInteger", "solver.method must be 0 (RK4), 1 (DOPRI5) or 2 (DOP853)");
             in->method = value[k];

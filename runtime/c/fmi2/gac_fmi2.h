@@ -63,6 +63,8 @@
       "integrator: GAC_METHOD_RK4 RK4 (fixed step solver.dt), GAC_METHOD_DOPRI5 DOPRI5, GAC_METHOD_DOP853 DOP853") \
     X(IMPACT_LAW, "solver.impact_law", 1, "parameter", "fixed", "", GAC_IMPACT_LAW_GDI, \
       "impact law at rough walls: GAC_IMPACT_LAW_FRICTIONLESS none, GAC_IMPACT_LAW_GDI GDI, GAC_IMPACT_LAW_NEWTON_COULOMB Newton + Coulomb") \
+    X(STICK, "solver.stick", 1, "parameter", "fixed", "", 1, \
+      "points resting on rough walls: 1 stick as a constraint, 0 regularised friction alone") \
     X(IMPACTS, "impacts", 1, "output", "discrete", "", 0, "impacts since the start") \
     X(RESTING, "resting_contacts", 1, "output", "discrete", "", 0, "contacts resting on their wall now")
 

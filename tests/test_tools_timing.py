@@ -24,11 +24,13 @@ def test_models_side_by_side_need_different_names_and_a_count_each():
 
 
 def test_each_model_is_timed_on_its_own_rhs():
-    """A 16-link chain's rhs (about 14 times the operations of a 1-link chain's) is timed slower in every
-    batch of the same program; every model gets one sample per batch."""
+    """A 16-link chain's rhs (about 14 times the operations of a 1-link chain's) is timed slower in the same program:
+    the median of the batches' ratios is above 5 (the same rhs timed twice would give 1; one batch disturbed by
+    another process on the machine does not move the median); every model gets one sample per batch."""
     short, long = generate(default_scene(1), name="short"), generate(default_scene(16), name="long")
     ops = [{f.name: f.ops.total for f in m.functions}["forward_dynamics"] for m in (short, long)]
     assert ops[1] > 10 * ops[0]
     a, b = time_rhs_side_by_side([short, long], [20000, 2000])
     assert a.runs == b.runs == BATCHES and min(a.samples) > 0
-    assert ratios(b, a).low > 2
+    per_batch = sorted(ratios(b, a).samples)
+    assert per_batch[len(per_batch) // 2] > 5

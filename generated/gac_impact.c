@@ -51,6 +51,22 @@ static void gac_contact_direction(const gac_model *m, const double *q, const dou
     m->contact_generalized_force(q, f, p, g);
 }
 
+/* out = I_f^-1 J^T e_row: the response (nq) to a unit force along Jacobian row `row` (+X_axis of its point, or a
+ * stop's joint); f (njrow) and g (nq) are scratch.  GAC_ERR_SINGULAR_MASS if the solve is not finite. */
+int gac_row_response(const gac_model *m, const double *q, const double *p, int row, double *f, double *g,
+                     double *out)
+{
+    int i;
+    for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
+    f[row] = 1.0;
+    m->contact_generalized_force(q, f, p, g);
+    m->inertia_solve(q, g, p, out);
+    for (i = 0; i < m->nq; ++i) {
+        if (!isfinite(out[i])) return GAC_ERR_SINGULAR_MASS;
+    }
+    return GAC_OK;
+}
+
 /* Assemble the impact problem of the contacts in the contact set (Eq. 44-48 with the velocities eliminated):
  *   Y_a = I_f^-1 n_a (n_a = signed Jacobian row of contact a),  A = N I_f^-1 N^T,  v_a = n_a . qd,
  * with O(n) operators of the model: n_a = J^T (sign e_row) (contact_generalized_force), Y_a by inertia_solve

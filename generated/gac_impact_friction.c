@@ -477,13 +477,8 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
         for (j = 0; j < 2; ++j, ++axis) {
             if (axis == k->axis) ++axis;
             if (k->trow[j] < 0) continue;
-            for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
-            f[k->trow[j]] = 1.0;                            /* a unit force along +X_axis */
-            m->contact_generalized_force(q, f, p, g);
-            m->inertia_solve(q, g, p, Z + (long)nt * nq);
-            for (i = 0; i < nq; ++i) {
-                if (!isfinite(Z[(long)nt * nq + i])) return GAC_ERR_SINGULAR_MASS;
-            }
+            code = gac_row_response(m, q, p, k->trow[j], f, g, Z + (long)nt * nq);   /* a unit force along +X_axis */
+            if (code != GAC_OK) return code;
             owner[nd] = a, comp[nd] = 3 * (k->point - 1) + axis, axis_of[nd] = j, resp[nd++] = Z + (long)nt * nq;
             ++nt;
         }

@@ -67,7 +67,7 @@ static int gac_held_rows(const gac_model *m, const double *q, const double *qd, 
     const int nq = m->nq;
     double v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)];
     double *Y = GAC_WORK_Y(m, work), *T = GAC_WORK_T(m, work), *g = GAC_WORK_G(m, work), *f = GAC_WORK_F(m, work);
-    int a, i, j, nr = 0, nt = 0;
+    int a, j, nr = 0, nt = 0;
     const int code = gac_impact_system(m, q, qd, p, n, set, work, v, e);
     if (code != GAC_OK) return code;
     for (a = 0; a < n; ++a) {
@@ -84,13 +84,8 @@ static int gac_held_rows(const gac_model *m, const double *q, const double *qd, 
         for (j = 0; j < 2; ++j, ++axis) {
             if (axis == k->axis) ++axis;
             if (k->trow[j] < 0) continue;
-            for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
-            f[k->trow[j]] = 1.0;                            /* a unit force along +X_axis */
-            m->contact_generalized_force(q, f, p, g);
-            m->inertia_solve(q, g, p, T + (long)nt * nq);
-            for (i = 0; i < nq; ++i) {
-                if (!isfinite(T[(long)nt * nq + i])) return GAC_ERR_SINGULAR_MASS;
-            }
+            const int response = gac_row_response(m, q, p, k->trow[j], f, g, T + (long)nt * nq);   /* along +X_axis */
+            if (response != GAC_OK) return response;
             owner[nr] = a, comp[nr] = 3 * (k->point - 1) + axis, brow[nr] = k->trow[j], sgn[nr] = 1.0, tj[nr] = j;
             resp[nr++] = T + (long)nt++ * nq;
         }

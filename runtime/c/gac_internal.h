@@ -110,6 +110,8 @@ int gac_ldlt_drop(int n, double *A, double tol);
 void gac_contact_row(const gac_model *m, int c, int *row, double *sign);
 double gac_row_value(const gac_model *m, int c, const double *w, const double *vel);
 double gac_restitution(const gac_model *m, const double *p, int c);
+int gac_row_response(const gac_model *m, const double *q, const double *p, int row, double *f, double *g,
+                     double *out);
 int gac_impact_system(const gac_model *m, const double *q, const double *qd, const double *p, int ncontact_set,
                       const int *contact_set, double *work, double *v, double *e);
 int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const double *qd, const double *u,

@@ -128,7 +128,7 @@ int gac_impact(const gac_model *m, const double *GAC_RESTRICT q, const double *G
     double v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)];
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work);
     int a;
-    int code = gac_impact_system(m, q, qd, p, ncontact_set, contact_set, work, v, e);
+    int code = gac_impact_system_refined(m, q, qd, p, ncontact_set, contact_set, work, v, e);
     if (code != GAC_OK) return code;
     for (a = 0; a < ncontact_set; ++a) impulse[a] = -(1.0 + e[a]) * v[a];     /* A F = -(1 + e) v  (Eq. 47) */
     if (gac_ldlt(ncontact_set, A, 1e-12) != 0) return GAC_ERR_SINGULAR_IMPACT;
@@ -216,7 +216,7 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work);
     int a, b, i, round, code;
     *rounds = *plastic = 0;
-    code = gac_impact_system(m, q, qd, p, n, list, work, v, e_wall);
+    code = gac_impact_system_refined(m, q, qd, p, n, list, work, v, e_wall);   /* Y_a refined (gac_impact_accuracy.c) */
     if (code != GAC_OK) return code;
     for (a = 0; a < n; ++a) {
         F[a] = 0.0;

@@ -462,7 +462,8 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
     *rounds = *plastic = 0;
     *residual = 0.0;
     *law_used = GAC_IMPACT_LAW_FRICTIONLESS;
-    code = gac_impact_system(m, q, qd, p, n, list, work, v_unused, e_wall);  /* Y_a = I_f^-1 n_a */
+    double r_scratch[GAC_AT_LEAST_1(nq)], dy_scratch[GAC_AT_LEAST_1(nq)];
+    code = gac_impact_system_refined(m, q, qd, p, n, list, work, v_unused, e_wall);   /* Y_a = I_f^-1 n_a, refined */
     if (code != GAC_OK) return code;
     for (a = 0; a < n; ++a) {                 /* the directions: each contact's normal, then its tangential axes */
         const gac_contact *k = &m->contacts[list[a]];
@@ -479,6 +480,7 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
             if (k->trow[j] < 0) continue;
             code = gac_row_response(m, q, p, k->trow[j], f, g, Z + (long)nt * nq);   /* a unit force along +X_axis */
             if (code != GAC_OK) return code;
+            gac_refine_response(m, q, p, g, Z + (long)nt * nq, r_scratch, dy_scratch);
             owner[nd] = a, comp[nd] = 3 * (k->point - 1) + axis, axis_of[nd] = j, resp[nd++] = Z + (long)nt * nq;
             ++nt;
         }

@@ -123,6 +123,15 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
                       int *rounds, int *plastic);
 
 
+/* gac_impact_accuracy.c: the impact's accuracy, measured after its law, and iterative refinement */
+void gac_refine_response(const gac_model *m, const double *q, const double *p, const double *g, double *y,
+                         double *r, double *dy);
+int gac_impact_system_refined(const gac_model *m, const double *q, const double *qd, const double *p,
+                              int ncontact_set, const int *contact_set, double *work, double *v, double *e);
+double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                           const double *e, const double *F, const double *Ft, int law, int rounds, int plastic,
+                           const double *qd, double *qd_plus, double T);
+
 /* gac_impact_friction.c */
 double gac_friction_coefficient(const gac_model *m, const double *p, int c);
 int gac_impact_rounds_friction(const gac_model *m, const double *q, const double *qd, const double *p, int n,

@@ -1,70 +1,15 @@
 /*
  * gac_resolve.c -- one impact event of the hybrid loop: which contacts take part, which land (rest height,
  * Zeno accumulation), the impact law (gac_impact.c) with each wall's restitution and then with the landings
- * plastic, the law's round-off bound and post-conditions (no pulling impulse, no energy gain, no contact left
+ * plastic, the law's measured accuracy (gac_impact_accuracy.c) and post-conditions (no pulling impulse, no energy gain, no contact left
  * approaching its wall), and the resting set that follows.
  */
 #include "gac_internal.h"
 
 #include <math.h>
 
-/* The round-off bound of the impact law on the kinetic energy, relative to T (the velocities qd -> qd_plus
- * at T = T(qd); work holds the rows Y_a = I_f^-1 n_a as left by gac_impact_system).  The law's solves are
- * backward stable: they are exact for I_f + dI_f with |dI_f| <= 4 (nq + 1) eps |I_f|, and the energy they
- * leave differs from the law's by dI_f's work on the velocities, |qd^T dI_f dqd| + |dqd^T dI_f dqd| / 2
- * (dqd = qd_plus - qd).  So b = max(1e-10, 4 (nq + 1) eps |I_f| (|qd| |dqd| + |dqd|^2 / 2) / T), |I_f|
- * (2-norm) by power iteration with the model's I_f v (generalized_momentum, O(n) each; at most 16, until it
- * settles to 1e-3), with |dqd| taken as sum_a |F_a| |I_f^-1 n_a| (plus friction's sum |L_T| |I_f^-1 t|) when
- * the contacts' changes cancel (nearly dependent contacts pushing against each other).  The energies the post-conditions compare are themselves evaluated with an error of about
- * (nq + 1) eps |I_f| |v|^2 / 2 at velocities v, so b also holds (nq + 1) eps |I_f| (|qd|^2 + |qd_plus|^2) / (2 T)
- * (far below 1e-10 unless the velocities lie along a soft direction of I_f).  b grows where a large velocity
- * change meets a soft direction of I_f (a slender link with a tiny axial inertia, a state near the gimbal
- * lock). */
-static double gac_impact_roundoff(const gac_model *md, const double *q, const double *p, const double *work, int n,
-                                  const double *F, double tangential_parts, const double *qd, const double *qd_plus,
-                                  double T)
-{
-    const int nq = md->nq;
-    const double *Y = GAC_WORK_Y(md, work);
-    double x[nq], y[nq], norm_M = 0.0, size = 0.0, change = 0.0, parts, after = 0.0, b;
-    int a, i, it;
-    for (i = 0; i < nq; ++i) {
-        x[i] = 1.0 + 0.1 * i * (i % 2 ? -1.0 : 1.0);      /* a fixed, generic start */
-        size += qd[i] * qd[i];
-        after += qd_plus[i] * qd_plus[i];
-        change += (qd_plus[i] - qd[i]) * (qd_plus[i] - qd[i]);
-    }
-    parts = tangential_parts;                            /* friction's part (gac_impact_rounds_friction) */
-    for (a = 0; a < n; ++a) {                            /* sum |F_a| |Y_a|: the changes before they cancel */
-        double column = 0.0;
-        for (i = 0; i < nq; ++i) column += Y[a*nq + i] * Y[a*nq + i];
-        parts += fabs(F[a]) * sqrt(column);
-    }
-    for (it = 0; it < 16; ++it) {                        /* |I_f| by power iteration */
-        const double previous = norm_M;
-        double sum = 0.0;
-        for (i = 0; i < nq; ++i) sum += x[i] * x[i];
-        sum = sqrt(sum);
-        if (!(sum > 0.0)) break;
-        for (i = 0; i < nq; ++i) y[i] = x[i] / sum;
-        md->generalized_momentum(q, y, p, x);            /* x = I_f y */
-        norm_M = 0.0;
-        for (i = 0; i < nq; ++i) norm_M += x[i] * x[i];
-        norm_M = sqrt(norm_M);
-        if (norm_M - previous <= 1e-3 * norm_M) break;   /* |I_f y| grows monotonically (I_f symmetric positive
-                                                            definite): settled to 1e-3, ample for a bound */
-    }
-    b = (nq + 1) * GAC_EPS * norm_M * 0.5 * (size + after);          /* evaluating T before and after */
-    size = sqrt(size);
-    change = sqrt(change) > parts ? sqrt(change) : parts;
-    b += 4.0 * (nq + 1) * GAC_EPS * norm_M * (size * change + 0.5 * change * change);
-    b /= T > 0.0 ? T : 1e-300;
-    return b > 1e-10 ? b : 1e-10;
-}
-
-/* 1 if an impact with the law's round-off bound b (relative to T) leaves the run without useful accuracy: b above
- * GAC_IMPACT_ROUNDOFF_MAX (the bound reaches 1e4 on a chain whose I_f is ill-conditioned along the impact's
- * directions). */
+/* 1 if an impact whose energy is known to b (relative to T; its measured accuracy, gac_impact_accuracy) leaves the
+ * run without useful accuracy: b above GAC_IMPACT_ROUNDOFF_MAX. */
 int gac_impact_inaccurate(const gac_sim *s, double b)
 {
     (void)s;
@@ -97,8 +42,8 @@ int gac_impact_inaccurate(const gac_sim *s, double b)
  * released.  The set is brought to rest by gac_hold, which drives no other contact into its wall.
  * Refused (GAC_ERR_IMPACT_ACCURACY): a bound b that gac_impact_inaccurate refuses, and a plastic closing round when every
  * contact has e = 1 (the sequence of elastic rounds did not end; a plastic round would take energy silently).
- * Post-conditions, checked here (GAC_ERR_IMPACT_ACCURACY if one fails), to the law's round-off bound b
- * (gac_impact_roundoff, 1e-10 for a well-conditioned I_f): every impulse >= 0; no contact within contact_tol
+ * Post-conditions, checked here (GAC_ERR_IMPACT_ACCURACY if one fails), to the law's measured accuracy b
+ * (gac_law_accuracy, at least 1e-10; its residuals refined to that where the chain allows): every impulse >= 0; no contact within contact_tol
  * of its wall approaches it faster than 10 b max|v-| + 1e-15 m/s; the kinetic energy does not grow by
  * more than b T and, when every contact that takes an impulse has e = 1, changes by at most b T.  The state
  * after the impact is in s->x1.  Returns 1 (impact applied), 0 (graze) or an error. */
@@ -119,7 +64,7 @@ typedef struct {
                               taking part is on a wall with c_f > 0 */
     int law;               /* the law applied (GAC_IMPACT_LAW_*) */
     double residual;       /* the frictional law's residual */
-    double parts;          /* the frictional law's sum |L_T| |I_f^-1 t| (for the round-off bound) */
+    double parts;          /* the frictional law's sum |L_T| |I_f^-1 t| (reported by it, unused here) */
     double scale;          /* the largest |normal velocity| before (m/s) */
     double height;         /* the rest height in force (m; 0: no landings by it) */
     double T_before, T_law, bound;
@@ -127,6 +72,45 @@ typedef struct {
     int held;              /* 1 once gac_hold_resting changed the velocities after the law */
     int rounds, plastic;
 } gac_impact_event;
+
+/* The accuracy of the law just solved (ev->qd_plus, ev->F, ev->Ft with restitutions e), relative to T before, at
+ * least 1e-10: measured after the solve, with qd_plus refined in place (gac_impact_accuracy: the momentum balance
+ * I_f (qd+ - qd-) = J^T Lambda and, for a law solved in one round, its contact conditions, as the energy their
+ * residuals can move, plus what evaluating them can resolve). */
+static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const double *e)
+{
+    const int nq = s->model->nq;
+    const double b = gac_impact_accuracy(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->Ft, ev->law,
+                                         ev->rounds, ev->plastic, ev->x + nq, ev->qd_plus, ev->T_before);
+    return b > 1e-10 ? b : 1e-10;
+}
+
+/* The accuracy of the whole change qd- -> s->x1's velocities once the resting set[0..nset-1] is held (gac_hold):
+ * the hold's impulses lambda, recovered from N_S I_f^-1 N_S^T lambda = N_S (qd_held - qd+) (refined responses),
+ * join the law's, and the momentum balance of the total is measured as in gac_law_accuracy (the contact law's
+ * conditions are not: holding replaces them on the set).  The held velocities are refined in place. */
+static double gac_held_accuracy(gac_sim *s, gac_impact_event *ev, int nset, const int *set)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq;
+    double change[nq], lambda[nq], e_unused[nq], F[nq], b;
+    double *A = GAC_WORK_A(md, s->work);
+    int a, k;
+    for (k = 0; k < nq; ++k) change[k] = s->x1[nq + k] - ev->qd_plus[k];
+    for (k = 0; k < ev->n; ++k) F[k] = ev->F[k];
+    if (gac_impact_system_refined(md, ev->x, change, s->p, nset, set, s->work, lambda, e_unused) == GAC_OK
+        && gac_ldlt(nset, A, 1e-12) == 0) {
+        gac_ldlt_solve(nset, A, lambda);                 /* lambda = A_SS^-1 N_S (qd_held - qd+) */
+        for (a = 0; a < nset; ++a) {
+            for (k = 0; k < ev->n; ++k) {
+                if (ev->list[k] == set[a]) F[k] += lambda[a];
+            }
+        }
+    }
+    b = gac_impact_accuracy(md, ev->x, s->p, ev->n, ev->list, ev->e, F, ev->Ft, ev->law, 0, 0, ev->x + nq,
+                            s->x1 + nq, ev->T_before);
+    return b > 1e-10 ? b : 1e-10;
+}
 
 /* 1 if the event at ev->x is an impact: a contact that is not resting approaches its wall faster than
  * gac_v_round within contact_tol (c_event whatever its gap), or c_event came back to its wall at its apex; 0: a
@@ -257,8 +241,8 @@ static int gac_tangential(const gac_impact_event *ev)
 static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
 {
     const gac_model *md = s->model;
-    const int nq = md->nq;
     const double *x = ev->x;
+    double accuracy;
     int k, pass, changed = 0, all_elastic = 1, code;
     ev->friction = 0;
     for (k = 0; k < ev->n; ++k) {
@@ -268,8 +252,7 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
     code = gac_law(s, ev, ev->e_law);
     r->residual = ev->residual;
     if (code != GAC_OK) return code;
-    ev->bound = r->roundoff = gac_impact_roundoff(md, x, s->p, s->work, ev->n, ev->F, ev->parts, x + nq, ev->qd_plus,
-                                                  ev->T_before);
+    ev->bound = r->roundoff = gac_law_accuracy(s, ev, ev->e_law);
     if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;   /* no useful accuracy left */
     for (k = 0; k < ev->n; ++k) all_elastic &= ev->e_law[k] == 1.0;
     if (ev->plastic && all_elastic && !ev->friction) return GAC_ERR_IMPACT_ACCURACY;   /* the plastic closing round
@@ -288,6 +271,9 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
         code = gac_law(s, ev, ev->e);
         if (ev->residual > r->residual) r->residual = ev->residual;
         if (code != GAC_OK) return code;
+        accuracy = gac_law_accuracy(s, ev, ev->e);
+        if (accuracy > ev->bound) ev->bound = r->roundoff = accuracy;
+        if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;
         md->energy(x, ev->qd_plus, s->p, ev->E_plus);
         for (k = 0; k < ev->n; ++k) {
             if (ev->landing[k] && !s->is_resting[ev->list[k]] && ev->e_law[k] == 1.0
@@ -382,7 +368,7 @@ static int gac_choose_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *
  * that push), each landing contact held at the gap it landed at (the configuration stays, so V does too).  If
  * holding them drives a contact whose row is (nearly) dependent on theirs into its wall, or the contacts are too
  * degenerate to say which push, nothing is held this time (the law's velocities stand).  Holding changes the
- * velocities too: the round-off bound then covers the whole change. */
+ * velocities too: the accuracy is then measured on the whole change (gac_held_accuracy). */
 static int gac_hold_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *set, gac_impact_record *r)
 {
     const gac_model *md = s->model;
@@ -405,10 +391,10 @@ static int gac_hold_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *se
     gac_normal_velocities(md, s->x1, s->p, ev->vn);
     ev->held = *nset > 0;
     if (*nset > 0) {
-        const double held = gac_impact_roundoff(md, ev->x, s->p, s->work, 0, ev->F, 0.0, ev->x + nq, s->x1 + nq,
-                                                ev->T_before);
+        const double held = gac_held_accuracy(s, ev, *nset, set);
         if (held > ev->bound) ev->bound = r->roundoff = held;
         if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;
+        gac_normal_velocities(md, s->x1, s->p, ev->vn);   /* (the refined velocities) */
     }
     return GAC_OK;
 }
@@ -454,8 +440,8 @@ static int gac_finish(gac_sim *s, gac_impact_event *ev, int nset, const int *set
 /* Resolve the impact at state s->xs (time t) in named steps: is it an impact (gac_is_impact), who takes part
  * (gac_gather), who lands (gac_who_lands), the law and its own verdict (gac_apply_law), its post-conditions
  * (gac_check_law), the resting set (gac_choose_resting, gac_hold_resting) and the record (gac_finish).  Refused
- * (GAC_ERR_IMPACT_ACCURACY): a post-condition that fails beyond the law's round-off bound b (gac_impact_roundoff,
- * 1e-10 for a well-conditioned I_f), a bound gac_impact_inaccurate refuses, a plastic closing round when every
+ * (GAC_ERR_IMPACT_ACCURACY): a post-condition that fails beyond the law's measured accuracy b (gac_law_accuracy,
+ * at least 1e-10), a bound gac_impact_inaccurate refuses, a plastic closing round when every
  * contact has e = 1.  r->energy_rest is the kinetic energy the landings take (the law with every contact's own e
  * minus the law with the landings plastic).  The state after the impact is in s->x1.  Returns 1 (impact applied),
  * 0 (graze) or an error. */

@@ -199,6 +199,8 @@ class Outcome:
     impacts: int = 0
     seconds: float = 0.0
     message: str = ""
+    roundoff: float = 0.0     # the largest relative accuracy an impact of the run states (record.roundoff), or 0
+    inaccurate: bool = False  # the run stopped with an impact whose accuracy is useless (GAC_ERR_IMPACT_ACCURACY)
 
 
 def classify(message: str) -> str:
@@ -277,8 +279,10 @@ def run_structure(args) -> list[Outcome]:
         violations = check_run(model, run, result, seconds, budget)
         text = "ok" if result.status == 0 else classify(result.message)
         failed = bool(violations) or any(pattern in result.message for pattern in FAILURE_PATTERNS)
+        roundoff = max([i.roundoff for i in result.impacts], default=0.0)
+        inaccurate = "could not be solved to round-off" in result.message   # GAC_ERR_IMPACT_ACCURACY
         outcomes.append(Outcome(case, scene.n, planar, run.options["method"], result.status, text, failed,
-                                violations, len(result.impacts), seconds, result.message))
+                                violations, len(result.impacts), seconds, result.message, roundoff, inaccurate))
     return outcomes
 
 
@@ -310,6 +314,17 @@ def table(outcomes: list[Outcome]) -> str:
     for (failed, text), count in sorted(counts.items(), key=lambda kv: (-kv[1], kv[0][1])):
         lines.append(f"| {text} | {count} | {'yes' if failed else ''} |")
     return "\n".join(lines)
+
+
+def accuracy_summary(outcomes: list[Outcome]) -> str:
+    """How many runs state an impact less accurate than 1e-10 and 1e-6 (record.roundoff) and how many stop with an
+    impact whose accuracy is useless (GAC_ERR_IMPACT_ACCURACY)."""
+    n = len(outcomes)
+    worse_10 = sum(o.roundoff > 1e-10 or o.inaccurate for o in outcomes)
+    worse_6 = sum(o.roundoff > 1e-6 or o.inaccurate for o in outcomes)
+    stopped = sum(o.inaccurate for o in outcomes)
+    return (f"impact accuracy: {worse_10} of {n} runs state an impact less accurate than 1e-10, {worse_6} than 1e-6; "
+            f"{stopped} stop with an impact of useless accuracy")
 
 
 # ---------------------------------------------------------------------------
@@ -371,6 +386,8 @@ def main(argv=None) -> int:
                     progress=lambda m: print(m, file=sys.stderr, flush=True))
     print(f"## Fuzz: {len(outcomes)} runs, seed {args.seed}, {time.perf_counter() - start:.0f} s\n")
     print(table(outcomes))
+    print()
+    print(accuracy_summary(outcomes))
     failed = [o for o in outcomes if o.failed]
     for o in failed[:50]:
         print(f"FAILED {o.case} ({o.method}, n = {o.n}): {o.violations or o.message[:200]}")

@@ -1,0 +1,181 @@
+/*
+ * gac_impact_accuracy.c -- how accurately an impact's law was solved, measured after the solve (a posteriori) and
+ * improved by iterative refinement:
+ *   the responses Y_a = I_f^-1 n_a the law works with are refined before it (r = n_a - I_f Y_a, Y_a += I_f^-1 r);
+ *   after it, the velocities qd+ are refined against the momentum balance I_f (qd+ - qd-) = J^T Lambda with the
+ *   law's impulses Lambda, and the energy the remaining residuals can move is the impact's accuracy.
+ * I_f v is the model's generalized_momentum and J^T Lambda its contact_generalized_force (O(n) each, neither is
+ * formed); the corrections use inertia_solve.
+ */
+#include "gac_internal.h"
+
+#include <math.h>
+
+#define GAC_REFINE_STEPS 4        /* refinement steps at most (each one O(n)); they stop once no longer improving */
+
+/* y = I_f^-1 g refined in place: r = g - I_f y, y += I_f^-1 r, while |r| (largest component) falls by half and is
+ * above round-off of g; a step that does not improve is undone.  r, dy: nq scratch. */
+void gac_refine_response(const gac_model *m, const double *q, const double *p, const double *g, double *y,
+                         double *r, double *dy)
+{
+    const int nq = m->nq;
+    double size = 0.0, previous = INFINITY;
+    int i, it;
+    for (i = 0; i < nq; ++i) size = fabs(g[i]) > size ? fabs(g[i]) : size;
+    for (it = 0; it <= GAC_REFINE_STEPS; ++it) {
+        double norm = 0.0;
+        m->generalized_momentum(q, y, p, r);
+        for (i = 0; i < nq; ++i) {
+            r[i] = g[i] - r[i];
+            norm = fabs(r[i]) > norm ? fabs(r[i]) : norm;
+        }
+        if (!(norm < previous)) {                        /* worse (or not finite): back to the previous y */
+            if (it > 0) {
+                for (i = 0; i < nq; ++i) y[i] += dy[i];
+            }
+            return;
+        }
+        if (norm <= 4.0 * GAC_EPS * size || norm > 0.5 * previous || it == GAC_REFINE_STEPS) return;
+        previous = norm;
+        m->inertia_solve(q, r, p, dy);
+        if (!gac_finite(dy, nq)) return;
+        for (i = 0; i < nq; ++i) y[i] += dy[i];
+        for (i = 0; i < nq; ++i) dy[i] = -dy[i];         /* to undo the step */
+    }
+}
+
+/* The impact system of gac_impact_system with its responses refined: Y_a = I_f^-1 n_a by gac_refine_response,
+ * then A = N I_f^-1 N^T again from them. */
+int gac_impact_system_refined(const gac_model *m, const double *q, const double *qd, const double *p,
+                              int ncontact_set, const int *contact_set, double *work, double *v, double *e)
+{
+    const int nq = m->nq;
+    double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work), *g = GAC_WORK_G(m, work), *f = GAC_WORK_F(m, work);
+    double r[GAC_AT_LEAST_1(nq)], dy[GAC_AT_LEAST_1(nq)];
+    int a, c, i, k;
+    const int code = gac_impact_system(m, q, qd, p, ncontact_set, contact_set, work, v, e);
+    if (code != GAC_OK) return code;
+    for (a = 0; a < ncontact_set; ++a) {
+        for (k = 0; k < m->njrow; ++k) f[k] = 0.0;
+        f[m->contacts[contact_set[a]].row] = (double)m->contacts[contact_set[a]].normal_sign;
+        m->contact_generalized_force(q, f, p, g);       /* n_a */
+        gac_refine_response(m, q, p, g, Y + (long)a * nq, r, dy);
+        for (c = 0; c < a; ++c) {
+            double s = 0.0;
+            for (i = 0; i < nq; ++i) s += g[i] * Y[(long)c * nq + i];
+            A[a*ncontact_set + c] = A[c*ncontact_set + a] = s;
+        }
+        {
+            double s = 0.0;
+            for (i = 0; i < nq; ++i) s += g[i] * Y[(long)a * nq + i];
+            A[a*ncontact_set + a] = s;
+        }
+    }
+    return GAC_OK;
+}
+
+/* The contact law's residual after the impact, as energy (J): the work its violated conditions leave, for a law
+ * solved in one round (none after several rounds or a plastic closing one, where the conditions are the rounds';
+ * nor for the law with a common e).  At contact a with normal velocities gamma-/+ (xi_N = gamma+ + e gamma-, e = 0
+ * for a contact that rested: |gamma-| <= 1e-11 of the fastest), |Lambda_N xi_N| (complementarity), and on a
+ * rough wall |Lambda_T . xi_T + c_f Lambda_N |xi_T|| (Coulomb's maximal dissipation: 0 when sliding against xi_T,
+ * and at the stick |xi_T| = 0), xi_T = gamma+_T + e gamma-_T (GDI) or gamma+_T (Newton + Coulomb). */
+static double gac_law_residual(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                               const double *e, const double *F, const double *Ft, int law, const double *qd,
+                               const double *qd_plus)
+{
+    double before[3 * GAC_AT_LEAST_1(m->npoint)], after[3 * GAC_AT_LEAST_1(m->npoint)], scale = 0.0, v_tol, work = 0.0;
+    int a;
+    m->contact_velocities(q, qd, p, before);
+    m->contact_velocities(q, qd_plus, p, after);
+    for (a = 0; a < n; ++a) {
+        const double v = m->contacts[list[a]].normal_sign * gac_row_value(m, list[a], qd, before);
+        scale = fabs(v) > scale ? fabs(v) : scale;
+    }
+    v_tol = 1e-11 * scale;
+    for (a = 0; a < n; ++a) {
+        const gac_contact *k = &m->contacts[list[a]];
+        const double sign = (double)k->normal_sign;
+        const double vm = sign * gac_row_value(m, list[a], qd, before);
+        const double vp = sign * gac_row_value(m, list[a], qd_plus, after);
+        const double ea = vm < -v_tol ? e[a] : 0.0;
+        const double cf = law == GAC_IMPACT_LAW_FRICTIONLESS ? 0.0 : gac_friction_coefficient(m, p, list[a]);
+        work += fabs(F[a] * (vp + ea * vm));
+        if (cf > 0.0 && k->kind == GAC_CONTACT_WALL) {
+            double xi2 = 0.0, power = 0.0;
+            int j, axis = 0;
+            for (j = 0; j < 2; ++j, ++axis) {
+                double xi;
+                int comp;
+                if (axis == k->axis) ++axis;
+                if (k->trow[j] < 0) continue;
+                comp = 3 * (k->point - 1) + axis;
+                xi = after[comp] + (law == GAC_IMPACT_LAW_NEWTON_COULOMB ? 0.0 : ea * before[comp]);
+                xi2 += xi * xi;
+                power += Ft[2*a + j] * xi;
+            }
+            work += fabs(power + cf * F[a] * sqrt(xi2));
+        }
+    }
+    return work;
+}
+
+/* The impact's accuracy, measured after its law (relative to T, the kinetic energy before), with qd_plus refined
+ * in place.  Lambda: the law's impulses F (along the inward normals) and Ft (along the tangential axes); g = J^T
+ * Lambda.  Momentum balance: r = I_f (qd+ - qd-) - g; were qd+ moved to the velocities that balance exactly,
+ * qd+ - I_f^-1 r, T would change by qd+ . r to first order (I_f symmetric: no solve enters the measure), so qd+ is
+ * refined by qd+ -= I_f^-1 r while |qd+ . r| falls by half and stands above what evaluating r can resolve,
+ *   E0 = 4 (nq + 1) eps sum_i |qd+_i| (|(I_f qd+)_i| + |(I_f qd-)_i| + |g_i|)
+ * (about 8 (nq + 1) eps T when the velocities' components do not cancel; large where they do, along a soft
+ * direction of I_f or near the base chart's singular pose).  The accuracy is (|qd+ . r| + E0 + the contact law's
+ * residual work, gac_law_residual) / T, for a law solved in one round; after several rounds the law's conditions
+ * are the rounds' and only the balance is measured. */
+double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                           const double *e, const double *F, const double *Ft, int law, int rounds, int plastic,
+                           const double *qd, double *qd_plus, double T)
+{
+    const int nq = m->nq;
+    double f[GAC_AT_LEAST_1(m->njrow)], g[GAC_AT_LEAST_1(nq)], p_minus[GAC_AT_LEAST_1(nq)];
+    double p_plus[GAC_AT_LEAST_1(nq)], r[GAC_AT_LEAST_1(nq)], dq[GAC_AT_LEAST_1(nq)], kept[GAC_AT_LEAST_1(nq)];
+    double previous = INFINITY, balance = 0.0, floor = 0.0, law_work = 0.0;
+    int a, i, it;
+    for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
+    for (a = 0; a < n; ++a) {                            /* Lambda in the Jacobian's rows */
+        const gac_contact *k = &m->contacts[list[a]];
+        int j;
+        f[k->row] += k->normal_sign * F[a];
+        for (j = 0; j < 2 && k->kind == GAC_CONTACT_WALL; ++j) {
+            if (k->trow[j] >= 0) f[k->trow[j]] += Ft[2*a + j];
+        }
+    }
+    m->contact_generalized_force(q, f, p, g);
+    m->generalized_momentum(q, qd, p, p_minus);
+    for (it = 0; ; ++it) {
+        long double work = 0.0L, size = 0.0L;
+        m->generalized_momentum(q, qd_plus, p, p_plus);
+        for (i = 0; i < nq; ++i) {
+            const long double ri = ((long double)p_plus[i] - p_minus[i]) - g[i];
+            r[i] = (double)ri;
+            work += qd_plus[i] * ri;
+            size += fabsl((long double)qd_plus[i]) * (fabs(p_plus[i]) + fabs(p_minus[i]) + fabs(g[i]));
+        }
+        balance = fabs((double)work);
+        floor = 4.0 * (nq + 1) * GAC_EPS * (double)size;
+        if (!(balance < previous)) {                     /* the last step did not improve: undo it */
+            if (it > 0) {
+                gac_copy(qd_plus, kept, nq);
+                balance = previous;
+            }
+            break;
+        }
+        if (balance <= floor || balance > 0.5 * previous || it == GAC_REFINE_STEPS) break;
+        previous = balance;
+        m->inertia_solve(q, r, p, dq);
+        if (!gac_finite(dq, nq)) break;
+        gac_copy(kept, qd_plus, nq);
+        for (i = 0; i < nq; ++i) qd_plus[i] -= dq[i];
+    }
+    if (rounds == 1 && !plastic && law != GAC_IMPACT_LAW_GDI_COMMON_E)
+        law_work = gac_law_residual(m, q, p, n, list, e, F, Ft, law, qd, qd_plus);
+    return (balance + floor + law_work) / (T > 0.0 ? T : 1e-300);
+}

@@ -120,6 +120,36 @@ static double gac_law_residual(const gac_model *m, const double *q, const double
     return work;
 }
 
+/* The energy identity's residual (J): |T(qd+) - T(qd-) - 1/2 Lambda . (gamma+ + gamma-)|, gamma the velocities
+ * along the rows Lambda acts on, T the model's energy; it holds exactly for velocities that balance the impulses,
+ * whatever the law, and measures what evaluating T and the rates resolves (the quantity the post-conditions
+ * compare). */
+static double gac_energy_identity(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                                  const double *F, const double *Ft, const double *qd, const double *qd_plus)
+{
+    double before[3 * GAC_AT_LEAST_1(m->npoint)], after[3 * GAC_AT_LEAST_1(m->npoint)], E0[2], E1[2];
+    long double work = 0.0L;
+    int a;
+    m->contact_velocities(q, qd, p, before);
+    m->contact_velocities(q, qd_plus, p, after);
+    m->energy(q, qd, p, E0);
+    m->energy(q, qd_plus, p, E1);
+    for (a = 0; a < n; ++a) {
+        const gac_contact *k = &m->contacts[list[a]];
+        int j, axis = 0;
+        work += (long double)F[a] * k->normal_sign
+                * (gac_row_value(m, list[a], qd, before) + gac_row_value(m, list[a], qd_plus, after));
+        for (j = 0; j < 2 && k->kind == GAC_CONTACT_WALL; ++j, ++axis) {
+            int comp;
+            if (axis == k->axis) ++axis;
+            if (k->trow[j] < 0) continue;
+            comp = 3 * (k->point - 1) + axis;
+            work += (long double)Ft[2*a + j] * (before[comp] + after[comp]);
+        }
+    }
+    return fabs((double)(((long double)E1[0] - E0[0]) - 0.5L * work));
+}
+
 /* The impact's accuracy, measured after its law (relative to T, the kinetic energy before), with qd_plus refined
  * in place.  Lambda: the law's impulses F (along the inward normals) and Ft (along the tangential axes); g = J^T
  * Lambda.  Momentum balance: r = I_f (qd+ - qd-) - g; were qd+ moved to the velocities that balance exactly,
@@ -128,8 +158,8 @@ static double gac_law_residual(const gac_model *m, const double *q, const double
  *   E0 = 4 (nq + 1) eps sum_i |qd+_i| (|(I_f qd+)_i| + |(I_f qd-)_i| + |g_i|)
  * (about 8 (nq + 1) eps T when the velocities' components do not cancel; large where they do, along a soft
  * direction of I_f or near the base chart's singular pose).  The accuracy is (|qd+ . r| + E0 + the contact law's
- * residual work, gac_law_residual) / T, for a law solved in one round; after several rounds the law's conditions
- * are the rounds' and only the balance is measured. */
+ * residual work, gac_law_residual, for a law solved in one round (after several rounds the law's conditions are
+ * the rounds') + the energy identity's residual, gac_energy_identity) / T. */
 double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                            const double *e, const double *F, const double *Ft, int law, int rounds, int plastic,
                            const double *qd, double *qd_plus, double T)
@@ -137,7 +167,7 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     const int nq = m->nq;
     double f[GAC_AT_LEAST_1(m->njrow)], g[GAC_AT_LEAST_1(nq)], p_minus[GAC_AT_LEAST_1(nq)];
     double p_plus[GAC_AT_LEAST_1(nq)], r[GAC_AT_LEAST_1(nq)], dq[GAC_AT_LEAST_1(nq)], kept[GAC_AT_LEAST_1(nq)];
-    double previous = INFINITY, balance = 0.0, floor = 0.0, law_work = 0.0;
+    double previous = INFINITY, balance = 0.0, floor = 0.0, law_work = 0.0, identity;
     int a, i, it;
     for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
     for (a = 0; a < n; ++a) {                            /* Lambda in the Jacobian's rows */
@@ -177,5 +207,6 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     }
     if (rounds == 1 && !plastic && law != GAC_IMPACT_LAW_GDI_COMMON_E)
         law_work = gac_law_residual(m, q, p, n, list, e, F, Ft, law, qd, qd_plus);
-    return (balance + floor + law_work) / (T > 0.0 ? T : 1e-300);
+    identity = gac_energy_identity(m, q, p, n, list, F, Ft, qd, qd_plus);
+    return (balance + floor + law_work + identity) / (T > 0.0 ? T : 1e-300);
 }

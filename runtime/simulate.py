@@ -14,6 +14,7 @@ from gac.h's parse (runtime.header).
 """
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -529,15 +530,77 @@ def energy_scale(scene: Scene, p: np.ndarray, T0: float, V0: float) -> float:
 
 
 def impact_warnings(impacts: list[Impact], model: CompiledModel | None = None, p=None) -> list[str]:
-    """One sentence for each impact whose energy round-off bound exceeds ROUNDOFF_WARN, naming the chain's most
-    extreme ratio (ill_conditioning) when the model and its parameters p are given."""
+    """One sentence for each impact whose measured accuracy (record.roundoff, refined after the law) stays above
+    ROUNDOFF_WARN, naming its cause (accuracy_cause) when the model and its parameters p are given."""
     flagged = [i for i in impacts if i.roundoff > ROUNDOFF_WARN]
-    if not flagged:
-        return []
-    cause = "extreme mass, length or inertia ratios" if model is None else \
-        ill_conditioning(model.scene, p, planar=model.layout.planar_normal is not None)
-    return [f"impact at t = {i.t:.9g} s: its energy is accurate only to {i.roundoff:.2g} (relative; I_f is "
-            f"ill-conditioned there: {cause})" for i in flagged]
+    if model is None:
+        return [f"impact at t = {i.t:.9g} s: its energy is accurate only to {i.roundoff:.2g} (relative; I_f is "
+                "ill-conditioned there: extreme mass, length or inertia ratios)" for i in flagged]
+    layout = model.layout
+    return [f"impact at t = {i.t:.9g} s: its energy is accurate only to {i.roundoff:.2g} (relative): "
+            + accuracy_cause(model, p, layout.reduce(i.q), layout.reduce(i.qd_before),
+                             [_contact_index(model, c) for c in i.contacts], i.law, i.residual)
+            for i in flagged]
+
+
+def _contact_index(model: CompiledModel, contact: Contact) -> int | None:
+    """The model's index of an impact's contact (None if not found)."""
+    for k, (point, wall) in enumerate(model.contacts):
+        if point == contact.point and wall.name == contact.wall:
+            return k
+    return None
+
+
+CHART_NEAR = 1e-2          # the base chart's measure chi below which an inaccurate impact is blamed on it
+DEPENDENT_CONTACTS = 1e8   # cond(J I_f^-1 J^T) over an impact's contacts above which they are nearly dependent
+CANCELLING = 1e3           # sum |qd_i| |(I_f qd)_i| / 2T above which the velocities' components cancel
+
+
+def accuracy_cause(model: CompiledModel, p, q, qd, contacts: list, law: str = "frictionless",
+                   residual: float = 0.0) -> str:
+    """Why an impact at (q, qd) (the model's coordinates; contacts: the model's contact indices) could not be solved
+    more accurately, as a phrase: the first that applies of the frictional law's own residual, the base chart near
+    its singular pose (chi = |det E| below CHART_NEAR: I_f's smallest eigenvalue falls like chi^2), contacts whose
+    rows are nearly dependent (cond(J I_f^-1 J^T) above DEPENDENT_CONTACTS), velocities whose components cancel in
+    the energy (along a soft direction of I_f), and else I_f's condition with the chain's most extreme ratio
+    (ill_conditioning)."""
+    p = model.parameters() if p is None else np.asarray(p, dtype=float)
+    planar = model.layout.planar_normal is not None
+    if law != "frictionless" and residual > 1e-11:
+        return (f"the frictional law's solve left its conditions at {residual:.2g} (relative; contacts whose "
+                "friction cones interact strongly)")
+    if not planar:
+        from codegen.charts import Chart
+        chi = float(Chart.of(model.scene.base_twists).measure(model.layout.expand(q)[1]))
+        if chi < CHART_NEAR:
+            return (f"the base chart is near its singular pose: its measure chi = |det E| = {chi:.2g} (I_f's "
+                    "smallest eigenvalue falls like chi^2)")
+    M = model.mass_matrix(q, p)
+    eigenvalues = np.linalg.eigvalsh(M)
+    cond = float(eigenvalues[-1] / eigenvalues[0]) if eigenvalues[0] > 0.0 else math.inf
+    rows = []
+    for c in contacts:
+        if c is None:
+            continue
+        point, wall = model.contacts[c]
+        if hasattr(wall, "axis") and (point, wall.axis) in model.contact_rows:
+            rows.append(model.contact_rows.index((point, wall.axis)))
+    if len(rows) > 1:
+        N = model.contact_jacobian(q, p)[rows]
+        A = N @ np.linalg.solve(M, N.T)
+        cond_A = float(np.linalg.cond(A))
+        if cond_A > DEPENDENT_CONTACTS:
+            return (f"its {len(rows)} contacts' rows are nearly dependent: cond(J I_f^-1 J^T) = {cond_A:.2g} over "
+                    "them")
+    momentum = M @ qd
+    energy2 = float(qd @ momentum)
+    if energy2 > 0.0:
+        cancel = float(np.abs(qd) @ np.abs(momentum)) / energy2
+        if cancel > CANCELLING:
+            return (f"the velocities' components cancel in the energy (sum |qd_i| |(I_f qd)_i| is {cancel:.2g} "
+                    f"times 2T): they lie along a soft direction of I_f (cond(I_f) = {cond:.2g})")
+    return (f"I_f is ill-conditioned there (cond(I_f) = {cond:.2g}); "
+            + ill_conditioning(model.scene, p, planar=planar))
 
 
 def ill_conditioning(scene: Scene, p, planar: bool) -> str:
@@ -752,8 +815,14 @@ def _end_message(model: CompiledModel, sim, code: int, segment_t: float, segment
                     f"{scale:.6g} J; projections onto resting contacts changed the energy by "
                     f"{float(sim.energy_projection):.3g} J in all, impacts took {float(sim.loss_impacts):.6g} J)")
     if code == lib.GAC_ERR_IMPACT_ACCURACY and record is not None:
-        message += (f" (this impact's energy is known only to {float(record.roundoff):.3g} relative, its law's "
-                    "round-off bound)")
+        nq, unpack = model.nq, model.ffi.unpack
+        p = np.array(unpack(sim.p, len(model.parameters())))
+        cause = accuracy_cause(model, p, np.array(unpack(record.q, nq)),
+                               np.array(unpack(record.qd_before, nq)),
+                               [int(record.contact[k]) for k in range(int(record.ncontact))],
+                               model.impact_law_name(int(record.law)), float(record.residual))
+        message += (f" (this impact's energy is known only to {float(record.roundoff):.3g} relative, its measured "
+                    f"accuracy: {cause})")
     if code == lib.GAC_ERR_NONFINITE and sim.opt.method == lib.GAC_METHOD_RK4:
         message += f" (rk4 with dt = {dt:g} s is unstable on this motion: reduce dt, or use an adaptive method)"
     return message

@@ -126,3 +126,9 @@ class DerivedModel:
     def forward_dynamics_energy(self, q, qd, p=None, u=None):
         y = self._call("forward_dynamics_energy", list(q), list(qd), self._inputs(u), self._params(p))
         return y[:self.nq], float(y[self.nq]), float(y[self.nq + 1])
+
+    def forward_dynamics_tangent(self, q, qd, dq, dqd, p=None, u=None, du=None, dp=None):
+        du = list(np.zeros(max(self.nu, 1)) if du is None else du)
+        dp = list(np.zeros(len(self.p)) if dp is None else dp)
+        return self._call("forward_dynamics_tangent", list(q), list(qd), self._inputs(u), self._params(p), list(dq),
+                          list(dqd), du, dp)

@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from . import articulated, gibbs_appell, interface, kinematics
+from . import articulated, gibbs_appell, interface, kinematics, tangent
 from .kinematics import ChainSymbols
 from .linalg import ldlt_solve
 from .scene import JointStop, Scene, parameter_name
@@ -330,10 +330,11 @@ def _points(tape: Tape, chain: ChainSymbols):
 def forward_dynamics_tangent_kernel(chain: ChainSymbols) -> Kernel:
     """d Theta_ddot along a direction (dq, dqd, du, dp): the forward-mode tangent (codegen.tangent) of the
     articulated forward dynamics' tape, O(n) like it."""
-    from .tangent import tangent_kernel
-    return tangent_kernel(forward_dynamics_kernel(chain), "forward_dynamics_tangent",
-                          "Directional derivative of Theta_ddot (forward dynamics) along (dq, dqd, du, dp): the "
-                          "forward-mode tangent of its O(n) tape.", "dqdd")
+    primal = forward_dynamics_kernel(chain)
+    tape, values, inputs = tangent.tangent(primal.tape, primal.values, primal.inputs)
+    return Kernel("forward_dynamics_tangent", "Directional derivative of Theta_ddot (forward dynamics) along (dq, "
+                  "dqd, du, dp): the forward-mode tangent of its O(n) tape.", inputs, "dqdd", primal.output_size,
+                  tape, values)
 
 
 KERNEL_BUILDERS = (mass_matrix_kernel, bias_kernel, forward_dynamics_kernel, inertia_solve_kernel,

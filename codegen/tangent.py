@@ -6,7 +6,8 @@ entry by entry, in tape order:
 
     ds = sum_i  df/dx_i (x_1..x_k) dx_i            (dx = the seed of an input, the tangent of an earlier entry)
 
-each partial derivative taken by sympy on the entry's own short expression, so the tangent program has a few
+each partial derivative taken on the entry's own short expression (the chain rule over its sums, products, powers,
+sin and cos; sympy.diff for anything else), so the tangent program has a few
 entries per entry of the original: its size is O(size of the tape), O(n) per direction for the O(n) articulated
 forward dynamics.  A partial derivative that is a primal entry's expression again (cos(q[1]) next to sin(q[1]),
 s**-1 of a division) is given that entry's symbol; a fractional power b**r differentiates as r s / b db, reusing s.
@@ -20,26 +21,24 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .flatten import live_assignments
-from .kernels import Kernel
 from .tape import Tape
 
 ZERO = sp.Integer(0)
 TANGENT_PREFIX = "d"           # the seed array of input array a is "d" + a (dq, dqd, du, dp), tangents d_<symbol>
 
 
-def seeds(kernel: Kernel) -> dict[sp.Symbol, sp.Symbol]:
-    """The seed of every input symbol the kernel's live tape or outputs read: a[i] -> da[i]."""
+def seeds(live, values, inputs: tuple[str, ...]) -> dict[sp.Symbol, sp.Symbol]:
+    """The seed of every input symbol the live tape entries or the outputs read: a[i] -> da[i] for each input
+    array a."""
     found: dict[sp.Symbol, sp.Symbol] = {}
-    expressions = [e for _, e in live_assignments(kernel)] + list(kernel.values)
-    defined = {s for s, _ in kernel.tape.assignments}
-    for expr in expressions:
-        for symbol in expr.free_symbols:
+    defined = {s for s, _ in live}
+    for expr in [e for _, e in live] + list(values):
+        for symbol in sp.sympify(expr).free_symbols:
             if symbol in defined or symbol in found:
                 continue
             array, bracket, index = symbol.name.partition("[")
-            if not bracket or array not in kernel.inputs:
-                raise ValueError(f"{kernel.name}: symbol {symbol} is neither a tape entry nor an input array's entry")
+            if not bracket or array not in inputs:
+                raise ValueError(f"symbol {symbol} is neither a tape entry nor an entry of an input array {inputs}")
             found[symbol] = sp.Symbol(f"{TANGENT_PREFIX}{array}[{index}", real=True)
     return found
 
@@ -84,24 +83,23 @@ def _d(expr: sp.Expr, tangents: dict) -> sp.Expr:
     return total
 
 
-def tangent_kernel(kernel: Kernel, name: str, summary: str, output: str) -> Kernel:
-    """The directional derivative of ``kernel``'s outputs: a kernel named ``name`` reading the same inputs and then
-    their seeds (d + each input array's name), writing ``output`` (same size).  The primal entries the outputs need
-    come first on its tape (dead ones dropped), then the tangent entries."""
-    seed = seeds(kernel)
-    live = live_assignments(kernel)
-    tape = Tape()
+def tangent(tape: Tape, values, inputs: tuple[str, ...]) -> tuple[Tape, list[sp.Expr], tuple[str, ...]]:
+    """The directional derivative of the outputs ``values`` of ``tape`` (reading the arrays ``inputs``): a new tape
+    holding the primal entries the outputs need (dead ones dropped) and then the tangent entries, the outputs'
+    tangents, and the inputs of the tangent program (``inputs``, then their seeds: d + each array's name)."""
+    live = tape.live(values)
+    seed = seeds(live, values, inputs)
+    out = Tape()
     primal = {}                                    # a primal entry's expression -> its symbol
     for symbol, expr in live:
-        tape.assignments.append((symbol, expr))
-        tape._used_names.add(symbol.name)
-        tape._memo[expr] = symbol
+        out.assignments.append((symbol, expr))
+        out._used_names.add(symbol.name)
+        out._memo[expr] = symbol
         primal[expr] = symbol
     tangents: dict[sp.Expr, sp.Expr] = dict(seed)
     for symbol, expr in live:
         d = _differential(expr, symbol, tangents).xreplace(primal)
         if d != 0:
-            tangents[symbol] = tape.let(d, f"{TANGENT_PREFIX}_{symbol.name}")
-    values = [_differential(v, None, tangents).xreplace(primal) for v in kernel.values]
-    inputs = kernel.inputs + tuple(TANGENT_PREFIX + a for a in kernel.inputs)
-    return Kernel(name, summary, inputs, output, kernel.output_size, tape, values)
+            tangents[symbol] = out.let(d, f"{TANGENT_PREFIX}_{symbol.name}")
+    derivatives = [_differential(sp.sympify(v), None, tangents).xreplace(primal) for v in values]
+    return out, derivatives, tuple(inputs) + tuple(TANGENT_PREFIX + a for a in inputs)

@@ -331,7 +331,7 @@ def forward_dynamics_tangent_kernel(chain: ChainSymbols) -> Kernel:
     """d Theta_ddot along a direction (dq, dqd, du, dp): the forward-mode tangent (codegen.tangent) of the
     articulated forward dynamics' tape, O(n) like it."""
     primal = forward_dynamics_kernel(chain)
-    tape, values, inputs = tangent.tangent(primal.tape, primal.values, primal.inputs)
+    tape, values, inputs, _ = tangent.tangent(primal.tape, primal.values, primal.inputs)
     return Kernel("forward_dynamics_tangent", "Directional derivative of Theta_ddot (forward dynamics) along (dq, "
                   "dqd, du, dp): the forward-mode tangent of its O(n) tape.", inputs, "dqdd", primal.output_size,
                   tape, values)

@@ -83,10 +83,11 @@ def _d(expr: sp.Expr, tangents: dict) -> sp.Expr:
     return total
 
 
-def tangent(tape: Tape, values, inputs: tuple[str, ...]) -> tuple[Tape, list[sp.Expr], tuple[str, ...]]:
+def tangent(tape: Tape, values, inputs: tuple[str, ...]):
     """The directional derivative of the outputs ``values`` of ``tape`` (reading the arrays ``inputs``): a new tape
     holding the primal entries the outputs need (dead ones dropped) and then the tangent entries, the outputs'
-    tangents, and the inputs of the tangent program (``inputs``, then their seeds: d + each array's name)."""
+    tangents, the inputs of the tangent program (``inputs``, then their seeds: d + each array's name), and the
+    tangent of every symbol (input or primal entry) that has a nonzero one: (tape, derivatives, inputs, tangents)."""
     live = tape.live(values)
     seed = seeds(live, values, inputs)
     out = Tape()
@@ -102,4 +103,4 @@ def tangent(tape: Tape, values, inputs: tuple[str, ...]) -> tuple[Tape, list[sp.
         if d != 0:
             tangents[symbol] = out.let(d, f"{TANGENT_PREFIX}_{symbol.name}")
     derivatives = [_differential(sp.sympify(v), None, tangents).xreplace(primal) for v in values]
-    return out, derivatives, tuple(inputs) + tuple(TANGENT_PREFIX + a for a in inputs)
+    return out, derivatives, tuple(inputs) + tuple(TANGENT_PREFIX + a for a in inputs), tangents

@@ -215,6 +215,7 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], o
         rows=list(layout.contact_rows), twists=scene.all_twists,
         chart=_chart_context(scene, layout), base=_base_context(scene, layout), layout_free=list(layout.free),
         fused=any(name in generated for name in interface.FUSED_KERNELS),
+        tangent=any(name in generated for name in interface.TANGENT_KERNELS),
         chart_b=None if chart_b is None else dict(
             functions=chart_b[1], fused=any(f.name in interface.FUSED_KERNELS for f in chart_b[1]), base=_base_context(chart_b[0], layout),
             rows=[[_double_literal(float(x)) for x in row] for row in chart_b[0].base_twists[0]],
@@ -280,13 +281,14 @@ def _c_string(text: str) -> str:
 
 
 def _check_kernels(functions: list[RenderedFunction]) -> bool:
-    """The generated kernels are those codegen.interface declares (all, or all but the dense ones, the fused ones
-    or both): same names, order, inputs and output.  Returns whether the dense kernels are among them."""
+    """The generated kernels are those codegen.interface declares (all, or all but some of the dense, fused and
+    tangent ones): same names, order, inputs and output.  Returns whether the dense kernels are among them."""
     names = {f.name for f in functions}
     dense = "mass_matrix" in names
     fused = any(name in names for name in interface.FUSED_KERNELS)
+    tangent = any(name in names for name in interface.TANGENT_KERNELS)
     declared = [(f.name, tuple(a.name for a in f.args[:-1]), f.args[-1].name) for f in interface.KERNELS
-                if (dense or not f.dense) and (fused or not f.fused)]
+                if (dense or not f.dense) and (fused or not f.fused) and (tangent or not f.tangent)]
     generated = [(f.name, tuple(f.inputs), f.output) for f in functions]
     if declared != generated:
         raise AssertionError(f"kernels {generated} differ from codegen.interface.KERNELS {declared}")

@@ -23,16 +23,7 @@ class Program:
 
 def live_assignments(kernel: Kernel) -> list[tuple[sp.Symbol, sp.Expr]]:
     """Dead-code elimination: the tape entries the outputs depend on, in tape order."""
-    definitions = dict(kernel.tape.assignments)
-    needed = set()
-    stack = [s for value in kernel.values for s in value.free_symbols if s in definitions]
-    while stack:
-        symbol = stack.pop()
-        if symbol in needed:
-            continue
-        needed.add(symbol)
-        stack.extend(s for s in definitions[symbol].free_symbols if s in definitions and s not in needed)
-    return [(s, e) for s, e in kernel.tape.assignments if s in needed]
+    return kernel.tape.live(kernel.values)
 
 
 def flatten(kernel: Kernel) -> Program:

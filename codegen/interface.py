@@ -43,6 +43,9 @@ class Function:
     dense: bool = False             # a dense kernel (O(n^2) code): generated, or formed by the library
     fused: bool = False             # two kernels on one tape: generated where forward_dynamics is straight-line
                                     # code, otherwise formed by the library from the two
+    tangent: bool = False           # a kernel's directional derivative (codegen.tangent): generated where
+                                    # forward_dynamics is straight-line code (unless options.tangent is False);
+                                    # otherwise NAME_<name> writes NaN and the descriptor's pointer is NULL
 
     def c_type(self, arg: Arg, name: str, restrict: str = "") -> str:
         ctype = arg.ctype.format(name=name, NAME=name.upper())
@@ -73,6 +76,10 @@ def _p(doc="parameters (NPARAM, layout in the header)"):
 
 def _u(doc="inputs (NU, layout in the header; N m on an angle, N on a translation; NULL when NU = 0)"):
     return Arg("u", "const double *", doc, restrict=True)
+
+
+def _seed(name, doc):
+    return Arg(name, "const double *", doc, restrict=True)
 
 
 def _out(name, doc):
@@ -122,10 +129,22 @@ KERNELS = (
              (_q(), _qd(), _u(), _p(), _out("y", "NQ + 2: qdd (NQ; rad/s^2, m/s^2), then T and V (J)")),
              "forward_dynamics and energy at one state in one call (the rotations computed once).", kernel=True,
              fused=True),
+    Function("forward_dynamics_tangent", "void",
+             (_q(), _qd(), _u(), _p(),
+              _seed("dq", "direction of q (NQ; rad, m)"), _seed("dqd", "direction of qd (NQ; rad/s, m/s)"),
+              _seed("du", "direction of u (NU; N m, N; NULL when NU = 0)"),
+              _seed("dp", "direction of p (NPARAM; ignored with baked parameters)"),
+              _out("dqdd", "d qdd along (dq, dqd, du, dp) (NQ; rad/s^2, m/s^2 per unit of the direction)")),
+             "Directional derivative of forward_dynamics (forward mode, exact: the tangent of its tape).",
+             "dqdd = (d qdd/dq) dq + (d qdd/dqd) dqd + (d qdd/du) du + (d qdd/dp) dp at (q, qd, u, p), O(n) per "
+             "direction; gac_linearize calls it once per column of A and B.  A model whose forward dynamics is "
+             "rolled code, or built with tangent=False, has none: this function then writes NaN and "
+             "NAME_model.forward_dynamics_tangent is NULL.", kernel=True, tangent=True),
 )
 
 DENSE_KERNELS = tuple(f.name for f in KERNELS if f.dense)
 FUSED_KERNELS = tuple(f.name for f in KERNELS if f.fused)
+TANGENT_KERNELS = tuple(f.name for f in KERNELS if f.tangent)
 DENSE_MAX_LINKS = 12        # up to this n the dense kernels are generated unless told otherwise
 
 
@@ -363,7 +382,8 @@ def function_table() -> str:
     lines = ["| function | kind | computes |", "|---|---|---|"]
     for f in ALL_FUNCTIONS:
         call = f"NAME_{f.name}({', '.join(a.name for a in f.args)})"
-        kind = ("fused kernel" if f.fused else "dense kernel" if f.dense else "kernel") if f.kernel else "wrapper"
+        kind = ("fused kernel" if f.fused else "dense kernel" if f.dense else "tangent kernel" if f.tangent
+                else "kernel") if f.kernel else "wrapper"
         summary = f.summary.replace("|", "/").replace("*", "\\*")
         lines.append(f"| `{call}` | {kind} | {summary} |")
     return "\n".join(lines) + "\n"

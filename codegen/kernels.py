@@ -22,6 +22,9 @@ CSE'd by :mod:`codegen.flatten`.  The kernels and their C signatures:
     forward_dynamics_energy(q, qd, u, p, y)  forward_dynamics and energy on one tape: y = [qdd, T, V]; generated
                                          where forward_dynamics is straight-line code, otherwise formed by the
                                          library from the two (gac_forward_dynamics_energy)
+    forward_dynamics_tangent(q, qd, u, p, dq, dqd, du, dp, dqdd)  d Theta_ddot along (dq, dqd, du, dp): the
+                                         forward-mode tangent of forward_dynamics' tape (codegen.tangent), O(n);
+                                         generated where forward_dynamics is straight-line code (gac_linearize)
 
 Every kernel but three costs O(n) for n links.  mass_matrix, bias and contact_jacobian form dense matrices
 (O(n^2) code); the hybrid loop does not use them (it applies I_f^-1, I_f and J^T through the three operators
@@ -34,7 +37,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from . import articulated, gibbs_appell, interface, kinematics
+from . import articulated, gibbs_appell, interface, kinematics, tangent
 from .kinematics import ChainSymbols
 from .linalg import ldlt_solve
 from .scene import JointStop, Scene, parameter_name
@@ -324,27 +327,42 @@ def _points(tape: Tape, chain: ChainSymbols):
     return kinematics.point_positions(tape, chain, frames, moments)
 
 
+def forward_dynamics_tangent_kernel(chain: ChainSymbols) -> Kernel:
+    """d Theta_ddot along a direction (dq, dqd, du, dp): the forward-mode tangent (codegen.tangent) of the
+    articulated forward dynamics' tape, O(n) like it."""
+    primal = forward_dynamics_kernel(chain)
+    tape, values, inputs, _ = tangent.tangent(primal.tape, primal.values, primal.inputs)
+    return Kernel("forward_dynamics_tangent", "Directional derivative of Theta_ddot (forward dynamics) along (dq, "
+                  "dqd, du, dp): the forward-mode tangent of its O(n) tape.", inputs, "dqdd", primal.output_size,
+                  tape, values)
+
+
 KERNEL_BUILDERS = (mass_matrix_kernel, bias_kernel, forward_dynamics_kernel, inertia_solve_kernel,
                    generalized_momentum_kernel, contact_points_kernel, contact_velocities_kernel,
                    contact_jacobian_kernel, contact_generalized_force_kernel, contact_gaps_kernel, energy_kernel,
-                   contact_bias_kernel, power_kernel, forward_dynamics_energy_kernel)
-def builders(dense: bool, fused: bool = True):
+                   contact_bias_kernel, power_kernel, forward_dynamics_energy_kernel, forward_dynamics_tangent_kernel)
+
+
+def builders(dense: bool, fused: bool = True, tangent: bool = True):
     """The kernel builders of a model, in the order of codegen.interface.KERNELS: the dense ones
-    (interface.DENSE_KERNELS) if ``dense``, the fused ones (interface.FUSED_KERNELS) if ``fused``."""
+    (interface.DENSE_KERNELS) if ``dense``, the fused ones (interface.FUSED_KERNELS) if ``fused``, the tangent ones
+    (interface.TANGENT_KERNELS) if ``tangent``."""
     def wanted(builder) -> bool:
         name = builder.__name__.removesuffix("_kernel")
-        return (dense or name not in interface.DENSE_KERNELS) and (fused or name not in interface.FUSED_KERNELS)
+        return ((dense or name not in interface.DENSE_KERNELS) and (fused or name not in interface.FUSED_KERNELS)
+                and (tangent or name not in interface.TANGENT_KERNELS))
     return [b for b in KERNEL_BUILDERS if wanted(b)]
 
 
 def build_kernels(scene: Scene, bake_params: bool = False, progress=None, layout=None,
-                  dense: bool | None = None, skip=(), fused: bool = True) -> list[Kernel]:
+                  dense: bool | None = None, skip=(), fused: bool = True, tangent: bool = True) -> list[Kernel]:
     """Derive every kernel of the scene (symbolic, per-intermediate symbols; no CSE yet); the dense ones
     (codegen.interface.DENSE_KERNELS) only if ``interface.wants_dense(n, dense)``, the fused ones
-    (codegen.interface.FUSED_KERNELS) only if ``fused``; none named in ``skip``."""
+    (codegen.interface.FUSED_KERNELS) only if ``fused``, the tangent ones (interface.TANGENT_KERNELS) only if
+    ``tangent``; none named in ``skip``."""
     chain = ChainSymbols(scene, bake_params, layout)
     kernels = []
-    for builder in builders(interface.wants_dense(scene.n, dense), fused):
+    for builder in builders(interface.wants_dense(scene.n, dense), fused, tangent):
         if builder.__name__.removesuffix("_kernel") in skip:
             continue
         if progress:

@@ -179,7 +179,8 @@ def build_kernels(scene: Scene, bake_params: bool = False, progress=None, layout
         progress("lagrange expansion")
     expansion = euler_lagrange(chain, progress)
     built = []
-    for builder in kernels.builders(dense=True, fused=False):     # the library forms the fused ones
+    for builder in kernels.builders(dense=True, fused=False, tangent=False):   # the library forms the fused ones;
+                                                                               # no tangent of this expansion
         name = builder.__name__.removesuffix("_kernel")
         if progress:
             progress(name)

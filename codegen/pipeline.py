@@ -46,7 +46,8 @@ def generate(scene: Scene, options: BuildOptions | None = None, *, name: str | N
     # ones), in the same NAME.c as NAME_b_* and the descriptor NAME_model_b
     start = time.perf_counter()
     progress("chart B")
-    model_b = _generate(scene_b, f"{name}_b", replace(options, dense=False), progress, workers, model.layout)
+    model_b = _generate(scene_b, f"{name}_b", replace(options, dense=False, tangent=False), progress, workers,
+                        model.layout)
     return assemble_model(scene, name, model.functions, options, model.layout, chart_b=(scene_b, model_b.functions),
                           timings=dict(model.timings, chart_b=time.perf_counter() - start))
 
@@ -61,7 +62,9 @@ def _generate(scene, name, options: BuildOptions, progress, workers, layout) -> 
     timings = {}
     start = time.perf_counter()
     looped = _rolled_function(scene, options, layout) if options.rolled else None
-    choices = {"fused": _wants_fused(scene, options, layout)} if options.formulation == "gibbs_appell" else {}
+    straight = _wants_fused(scene, options, layout)
+    choices = {"fused": straight, "tangent": straight and options.tangent} \
+        if options.formulation == "gibbs_appell" else {}
     if looped is not None:
         choices["skip"] = ("forward_dynamics",)
     derived = FORMULATIONS[options.formulation](scene, options.bake_params,
@@ -91,7 +94,8 @@ def raw_dynamics_ops(scene: Scene, options: BuildOptions | None = None, progress
     options = build_options(scene, dense=True) if options is None else options
     layout = layout_for(scene, options.specialise)
     derived = FORMULATIONS[options.formulation](scene, options.bake_params, layout=layout, dense=True,
-                                                **({"fused": False} if options.formulation == "gibbs_appell" else {}))
+                                                **({"fused": False, "tangent": False}
+                                                   if options.formulation == "gibbs_appell" else {}))
     raw = {}
     for kernel in derived:
         if kernel.name in DYNAMICS_KERNELS:
@@ -168,7 +172,8 @@ def _generate_in_parallel(scene, name, options: BuildOptions, layout, workers, p
     """_generate's kernels in ``workers`` processes."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
-    builders = kernels.builders(options.dense, _wants_fused(scene, options, layout))
+    straight = _wants_fused(scene, options, layout)
+    builders = kernels.builders(options.dense, straight, straight and options.tangent)
     start = time.perf_counter()
     progress(f"derive, cse and render {len(builders)} kernels in {workers} processes")
     functions, seconds = {}, [0.0, 0.0, 0.0]

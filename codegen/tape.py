@@ -46,6 +46,19 @@ class Tape:
         self._memo[expr] = symbol
         return symbol
 
+    def live(self, values) -> list[tuple[sp.Symbol, sp.Expr]]:
+        """Dead-code elimination: the entries the expressions ``values`` depend on, in tape order."""
+        definitions = dict(self.assignments)
+        needed = set()
+        stack = [s for value in values for s in sp.sympify(value).free_symbols if s in definitions]
+        while stack:
+            symbol = stack.pop()
+            if symbol in needed:
+                continue
+            needed.add(symbol)
+            stack.extend(s for s in definitions[symbol].free_symbols if s in definitions and s not in needed)
+        return [(s, e) for s, e in self.assignments if s in needed]
+
     def let_vec(self, v, name: str) -> Vec:
         return tuple(self.let(x, f"{name}_{axis}") for x, axis in zip(v, "xyz"))
 

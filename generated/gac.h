@@ -152,6 +152,10 @@ typedef void (*gac_kernel_qqdu)(const double *q, const double *qd, const double 
 typedef void (*gac_kernel_rhs)(double t, const double *x, const double *u, const double *p, double *xdot);
 /* q, a vector v (its size and meaning per kernel), p -> out: the linear operators of the model */
 typedef void (*gac_kernel_qv)(const double *q, const double *v, const double *p, double *out);
+/* q, qd, u, p and a direction (dq, dqd, du, dp) -> the directional derivative of a qqdu kernel's output */
+typedef void (*gac_kernel_tangent)(const double *q, const double *qd, const double *u, const double *p,
+                                   const double *dq, const double *dqd, const double *du, const double *dp,
+                                   double *out);
 
 /* A controller: writes the inputs u (nu) for time t (s) and state (q, qd).  On entry u holds the inputs
  * last given to gac_sim_set_input.  Called at every stage of the integrators and wherever the loop needs
@@ -263,6 +267,9 @@ struct gac_model {
     gac_kernel_qqdu forward_dynamics_energy; /* q, qd, u, p -> [qdd (nq), T, V]: forward_dynamics and energy in
                                           one call (the loop's derivative at a step's end, where it also wants the
                                           energy); NULL: none (the loop calls the two) */
+    gac_kernel_tangent forward_dynamics_tangent; /* q, qd, u, p, dq, dqd, du (nu), dp (nparam) -> d qdd (nq): the
+                                          directional derivative of forward_dynamics (forward mode, exact, O(n));
+                                          NULL: none (a rolled forward dynamics; gac_linearize refuses) */
     gac_kernel_qqdu power;             /* q, qd, u, p -> P[0] power of the inputs, P[1] dissipation of the
                                           dampers (W, >= 0); NULL: nothing in flight does work but gravity */
     double friction_velocity;          /* v_s (m/s, > 0 when a contact has friction): a resting point slides against
@@ -325,6 +332,18 @@ void gac_contact_jacobian(const gac_model *m, const double *q, const double *p, 
  * nu = 0. */
 void gac_inverse_dynamics(const gac_model *m, const double *q, const double *qd, const double *qdd, const double *u,
                           const double *p, double *tau);
+
+/* ---- linearisation (gac_linearize.c) ------------------------------------------------------------- */
+
+/* The flight dynamics x_dot = f(x, u), x = [q, qd] (nx = 2 nq), linearised at (q, qd, u) for parameters p:
+ * A = df/dx (nx x nx, row-major) and B = df/du (nx x nu, row-major), exact to round-off, by m->forward_dynamics_tangent
+ * once per column (nx + nu calls, O(n) each).  A = [[0, I], [d qdd/dq, d qdd/dqd]], B = [[0], [d qdd/du]]; A's
+ * columns are per rad or m (q) and per rad/s or m/s (qd), B's per N m or N.  Caller-owned A and B, not aliasing the
+ * inputs; B and u may be NULL when nu = 0.  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT (m, q, qd, p or A NULL, or B with
+ * nu > 0) or GAC_ERR_BAD_MODEL (the model has no tangent kernel: its forward dynamics is rolled code, or it was
+ * generated with tangent=False). */
+int gac_linearize(const gac_model *m, const double *q, const double *qd, const double *u, const double *p, double *A,
+                  double *B);
 
 /* ---- workspace sizes ------------------------------------------------------------------------------ */
 /* One formula each, as macros of the model's sizes: the functions below apply them to a descriptor, and a

@@ -100,6 +100,7 @@
  *   contact_bias             74 = 22 add + 46 mul + 0 div + 6 calls
  *   power                     0 = 0 add + 0 mul + 0 div + 0 calls
  *   forward_dynamics_energy    305 = 97 add + 196 mul + 6 div + 6 calls
+ *   forward_dynamics_tangent    708 = 273 add + 417 mul + 12 div + 6 calls
  *
  * USING IT
  *   paper_case2_options opt;  paper_case2_sim sim;  paper_case2_impact_record rec;  int code;
@@ -302,6 +303,23 @@ void paper_case2_power(const double *GAC_RESTRICT q, const double *GAC_RESTRICT 
  *   y    out: NQ + 2: qdd (NQ; rad/s^2, m/s^2), then T and V (J)
  *   8 outputs.   305 ops (97 add, 196 mul, 6 div, 6 calls) */
 void paper_case2_forward_dynamics_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT y);
+
+/* Directional derivative of Theta_ddot (forward dynamics) along (dq, dqd, du, dp): the forward-mode tangent of its O(n) tape.
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   u    in : inputs (NU, layout in the header; N m on an angle, N on a translation; NULL when NU = 0)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   dq   in : direction of q (NQ; rad, m)
+ *   dqd  in : direction of qd (NQ; rad/s, m/s)
+ *   du   in : direction of u (NU; N m, N; NULL when NU = 0)
+ *   dp   in : direction of p (NPARAM; ignored with baked parameters)
+ *   dqdd out: d qdd along (dq, dqd, du, dp) (NQ; rad/s^2, m/s^2 per unit of the direction)
+ *   dqdd = (d qdd/dq) dq + (d qdd/dqd) dqd + (d qdd/du) du + (d qdd/dp) dp at (q, qd, u, p), O(n) per
+ *   direction; gac_linearize calls it once per column of A and B.  A model whose forward dynamics is
+ *   rolled code, or built with tangent=False, has none: this function then writes NaN and
+ *   paper_case2_model.forward_dynamics_tangent is NULL.
+ *   6 outputs.   708 ops (273 add, 417 mul, 12 div, 6 calls) */
+void paper_case2_forward_dynamics_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT du, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dqdd);
 
 /* ODE right-hand side of the flight phase.
  *   t            time (s), unused

@@ -271,6 +271,62 @@ class CompiledModel:
                                       self._ptr(self._inputs(u)), self._ptr(self._params(p)), self._ptr(tau))
         return tau
 
+    def _tangent_available(self, what: str) -> None:
+        if self.c.model.forward_dynamics_tangent == self.ffi.NULL:
+            why = ("its forward dynamics is rolled code (loops over its links): load it with rolled=False"
+                   if self.options.rolled else "it was built with tangent=False: load it with tangent=None or True")
+            raise ValueError(f"{what}: this model has no tangent kernel (forward_dynamics_tangent); {why}")
+
+    def forward_dynamics_tangent(self, q, qd, dq, dqd, p=None, u=None, du=None, dp=None) -> np.ndarray:
+        """d qdd along the direction (dq, dqd, du, dp) at (q, qd, u, p): the directional derivative of
+        forward_dynamics, exact (its generated forward-mode tangent, O(n)); du and dp default to 0.  dp along a
+        parameter the model has built in (baked parameters, or a specialised model's zero) has no effect."""
+        self._tangent_available("forward_dynamics_tangent")
+        dq, dqd = self._vec(dq, self.nq, "dq"), self._vec(dqd, self.nq, "dqd")
+        du = np.zeros(max(self.nu, 1)) if du is None else self._vec(du, self.nu, "du")
+        dp = np.zeros(len(self.p)) if dp is None else self._vec(dp, len(self.p), "dp")
+        return self._call("forward_dynamics_tangent", self.nq, self._vec(q, self.nq, "q"),
+                          self._vec(qd, self.nq, "qd"), self._inputs(u), self._params(p), dq, dqd, du, dp)
+
+    def linearize(self, q, qd, p=None, u=None, parameters=None):
+        """The flight dynamics x_dot = f(x, u, p), x = [q, qd], linearised at (q, qd, u, p): (A, B) with
+        A = df/dx (2 nq x 2 nq) and B = df/du (2 nq x nu), exact (gac_linearize: the tangent kernel once per
+        column).  ``parameters``: names of ``parameter_names`` -> (A, B, P) with P = df/dp of those parameters
+        (2 nq x len(parameters), column k for parameters[k]); a parameter the model has built in is refused."""
+        self._tangent_available("linearize")
+        q, qd = self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd")
+        p, u = self._params(p), self._inputs(u)
+        nx = 2 * self.nq
+        A, B = np.zeros((nx, nx)), np.zeros((nx, max(self.nu, 1)))
+        code = self.lib.gac_linearize(self.ffi.addressof(self.c.model), self._ptr(q), self._ptr(qd), self._ptr(u),
+                                      self._ptr(p), self._ptr(A), self._ptr(B))
+        if code != self.lib.GAC_OK:
+            raise RuntimeError(f"linearize: {self.error_message(code)}")
+        B = B[:, :self.nu].copy()
+        if parameters is None:
+            return A, B
+        columns = [self._runtime_parameter(name) for name in parameters]
+        P = np.zeros((nx, len(columns)))
+        zero = np.zeros(self.nq)
+        for k, index in enumerate(columns):
+            dp = np.zeros(len(self.p))
+            dp[index] = 1.0
+            P[self.nq:, k] = self.forward_dynamics_tangent(q, qd, zero, zero, p, u if self.nu else None, dp=dp)
+        return A, B, P
+
+    def _runtime_parameter(self, name) -> int:
+        """The index of a parameter the model reads from p (linearize's ``parameters``)."""
+        if name not in self.parameter_names:
+            raise ValueError(f"parameters: no parameter {name!r}; this model's parameters are "
+                             f"{', '.join(self.parameter_names)}")
+        if self.options.bake_params:
+            raise ValueError(f"parameters: {name} is built into this model (bake_params): its derivative is not "
+                             "available; load the model without bake_params")
+        if name in self.layout.zero_params:
+            raise ValueError(f"parameters: {name} is built in as 0 by this specialised model: its derivative is not "
+                             "available; load the model with specialise=False")
+        return self.parameter_names.index(name)
+
     def impact_law_code(self, law: str) -> int:
         """The library's code (GAC_IMPACT_LAW_*) of an impact law named in IMPACT_LAWS."""
         return int(getattr(self.lib, IMPACT_LAWS[law]))
@@ -319,22 +375,24 @@ class CompiledModel:
 
 def load_model(scene: Scene | str | Path, bake_params: bool = False, flags=None, progress=None,
                specialise: bool = True, dense: bool | None = None, rolled: bool | None = None,
-               chart_b: bool = True) -> CompiledModel:
+               chart_b: bool = True, tangent: bool | None = None) -> CompiledModel:
     """Generate (cached) and compile (cached) the model of a scene, a shipped scene name or a scene
     file.  ``specialise`` (default) leaves out what the scene does not need; False gives the general
     model.  ``dense``: generate the dense kernels (mass_matrix, bias, contact_jacobian; O(n^2) code, not
     needed by simulations); None (default) does up to codegen.interface.DENSE_MAX_LINKS links, and otherwise
     they are formed at run time from the O(n) kernels.  ``rolled``: emit the forward dynamics with loops over the
     links (codegen.rolled); None (default) does from codegen.interface.ROLLED_MIN_LINKS links on.  ``chart_b``
-    False leaves a free base's second chart out (a run that reaches the gimbal lock then stops there).  The choices
+    False leaves a free base's second chart out (a run that reaches the gimbal lock then stops there).  ``tangent``:
+    generate the forward dynamics' tangent kernel (``linearize``); None (default) does wherever the forward dynamics
+    is straight-line code, True refuses a rolled model, False never.  The choices
     are resolved once, here (codegen.options.build_options), into the model's ``options``.  For a name or a file,
     the same model object is returned again while the file is unchanged (same path, modification time and size)
     and the options are the same."""
-    for option, value in (("dense", dense), ("rolled", rolled)):
+    for option, value in (("dense", dense), ("rolled", rolled), ("tangent", tangent)):
         if value is not None and not isinstance(value, bool):
             raise TypeError(f"{option}: expected True, False or None, got {value!r}")
     choices = dict(bake_params=bake_params, specialise=specialise, dense=dense, rolled=rolled, chart_b=chart_b,
-                   flags=flags)
+                   tangent=tangent, flags=flags)
     if isinstance(scene, Scene):
         return _build_model(scene, build_options(scene, **choices), progress)
     if not isinstance(scene, (str, os.PathLike)):
@@ -343,7 +401,7 @@ def load_model(scene: Scene | str | Path, bake_params: bool = False, flags=None,
     path = scene_file(scene)
     stat = path.stat()
     key = (path, stat.st_mtime_ns, stat.st_size, bool(bake_params), tuple(flags or ()), bool(specialise), dense,
-           rolled, bool(chart_b))
+           rolled, bool(chart_b), tangent)
     model = _MODELS.get(key)
     if model is None:
         loaded = load_scene(path)

@@ -28,12 +28,13 @@ class _Printer(PythonCodePrinter):
 _PRINTER = _Printer({"fully_qualified_modules": True, "standard": "python3"})
 
 
-def python_function(program, inputs: tuple[str, ...]):
-    """A flattened kernel (codegen.flatten.Program) as a Python function of its input arrays, returning a list."""
+def python_function(program, inputs: tuple[str, ...], math_module=math):
+    """A flattened kernel (codegen.flatten.Program) as a Python function of its input arrays, returning a list;
+    ``math_module`` cmath evaluates it in complex arithmetic (complex-step differentiation)."""
     lines = [f"def kernel({', '.join(inputs)}):"]
     lines += [f"    {symbol.name} = {_PRINTER.doprint(expr)}" for symbol, expr in program.assignments]
     lines.append("    return [" + ", ".join(_PRINTER.doprint(sp.sympify(o)) for o in program.outputs) + "]")
-    env = {"math": math}
+    env = {"math": math_module}
     exec("\n".join(lines), env)
     return env["kernel"]
 
@@ -126,3 +127,9 @@ class DerivedModel:
     def forward_dynamics_energy(self, q, qd, p=None, u=None):
         y = self._call("forward_dynamics_energy", list(q), list(qd), self._inputs(u), self._params(p))
         return y[:self.nq], float(y[self.nq]), float(y[self.nq + 1])
+
+    def forward_dynamics_tangent(self, q, qd, dq, dqd, p=None, u=None, du=None, dp=None):
+        du = list(np.zeros(max(self.nu, 1)) if du is None else du)
+        dp = list(np.zeros(len(self.p)) if dp is None else dp)
+        return self._call("forward_dynamics_tangent", list(q), list(qd), self._inputs(u), self._params(p), list(dq),
+                          list(dqd), du, dp)

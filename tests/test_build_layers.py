@@ -42,6 +42,7 @@ LAYERS = {
     "codegen.kernels": DERIVATION,
     "codegen.lagrange": DERIVATION,
     "codegen.flatten": DERIVATION,
+    "codegen.tangent": DERIVATION,
     "codegen.ops": DERIVATION,
     "codegen.rolled": DERIVATION,
     "codegen.emit": DERIVATION,

@@ -76,7 +76,9 @@
 #define GAC_ERR_BAD_INPUT        -22   /* an input u (set by gac_sim_set_input, or written by the controller)
                                           is NaN or infinite */
 #define GAC_ERR_FRICTION         -23   /* the resting contacts with Coulomb friction have no unique, bounded normal
-                                          forces (their system is no P-matrix: the Painleve paradox) */
+                                          forces (their system is no P-matrix: the Painleve paradox), and the
+                                          tangential impact the loop takes there has no solution either (or the
+                                          state after it is again no P-matrix); see "Tangential impact" below */
 #define GAC_ERR_BAD_PARAMETER    -24   /* a parameter is outside its allowed range or breaks a relation with others
                                           (gac_check_parameters gives its index; the model's parameter_info its
                                           name and what it allows) */
@@ -126,6 +128,10 @@
                                              for comparison */
 #define GAC_IMPACT_LAW_GDI_COMMON_E   3   /* a record's law only: GDI, a round solved with the smallest e of its
                                              contacts for all of them (its own e's would have gained energy) */
+#define GAC_IMPACT_LAW_GDI_TANGENTIAL 4   /* a record's law only: a tangential impact (impact without collision) at
+                                             resting contacts whose sliding system is no P-matrix (the Painleve
+                                             paradox, the dynamic jam): GDI with e = 0 and normal velocities 0
+                                             before, its non-trivial solution (see "Tangential impact" below) */
 
 /* ---- limits ----------------------------------------------------------------------------------- */
 #define GAC_CHART_FLOOR  5.96e-5   /* sqrt(16 eps / 1e-6): gac_impact refuses a base chart measure below it */
@@ -678,6 +684,9 @@ typedef struct {
     double t_slow_sliding;       /* s: the time those steps covered */
     long n_sticks, n_slips;      /* resting points on rough walls that came to stick (sliding -> stuck, at a step
                                     end, an impact or the start) and that began to slip (stuck -> sliding) */
+    long n_tangential_impacts;   /* tangential impacts (record.law GAC_IMPACT_LAW_GDI_TANGENTIAL) since gac_sim_init:
+                                    the Painleve paradox of sliding resting contacts resolved by an impact (also
+                                    counted in n_impacts) */
     double energy_initial;       /* J: T + V at gac_sim_init */
     double loss_impacts;         /* J: energy the impacts took since gac_sim_init, sum of energy_before - energy_after */
     double energy_roundoff;      /* J: what the impacts' energies are known to, sum of roundoff x T before each */
@@ -706,7 +715,8 @@ typedef struct {
     double wall_start;           /* the clock's reading when the budget started */
     long n_look;                 /* steps since the last look */
     double *u_eval;              /* nu: the controller's output at the current evaluation */
-    int input_changed;           /* gac_sim_set_input since the last advance: resting contacts re-checked */
+    int input_changed;           /* gac_sim_set_input (or a tangential impact) since the last advance: resting
+                                    contacts re-checked */
     double h;
     int f_valid;
     double *f, *k[16], *x1, *xs, *cont[8];

@@ -216,8 +216,11 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         if (last) h = t_end - s->t;
         if (!(h > 8.0 * GAC_EPS * fabs(s->t))) {
             if (last) { s->t = t_end; break; }
-            if (s->fail_seen == GAC_ERR_FRICTION && s->nresting > 0)   /* the steps shrank onto the dynamic jam, */
-                return gac_jam(s, record);                            /* beyond which B is no P-matrix */
+            if (s->nresting > 0) {              /* the steps shrank onto the dynamic jam, beyond which B is no */
+                const long before = s->n_tangential_impacts;      /* P-matrix, if the tangential impact has a */
+                const int code = gac_jam(s, record);              /* non-trivial solution here */
+                if (code != GAC_ERR_FRICTION || s->n_tangential_impacts != before) return code;
+            }
             return s->fail_seen ? s->fail_seen : GAC_ERR_STEP_SIZE;
         }
         if (s->opt.method == GAC_METHOD_RK4) {
@@ -234,7 +237,8 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             }
             s->fail_seen = 0;
             s->n_unstable = h_rho > 2.5 ? s->n_unstable + 1 : 0;
-            if (s->n_unstable >= 3 || !(h_rho < 10.0)) return GAC_ERR_UNSTABLE;
+            if ((s->n_unstable >= 3 || !(h_rho < 10.0)) && h >= s->opt.dt)   /* (halved steps: onto a jam, where */
+                return GAC_ERR_UNSTABLE;                                     /* the normal force grows unbounded) */
         } else {
             double fac;
             const int eighth = s->opt.method == GAC_METHOD_DOP853;

@@ -534,6 +534,21 @@ int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const do
  * after every step holds stuck points' tangential velocities at 0 too.  sim.n_sticks and sim.n_slips count the
  * transitions; no record is made (the loop goes on).  The stuck constraint does no work.
  *
+ * Tangential impact (gac_jam.c).  Where resting points slide on rough walls and their system B is no P-matrix (the
+ * Painleve paradox: one contact, its compliance with sliding B_aa <= 0), the loop takes an impact without collision:
+ * the GDI law on the resting contacts' normal and tangential rows with their normal velocities 0 and e = 0, its
+ * non-trivial solution (some normal impulse > 0, the first of the contacts' modes enumerated from all stuck on; for
+ * one contact the stick impulse -W^-1 gamma-, inside the cone exactly where B_aa <= 0).  Its post-conditions: every
+ * impulse >= 0, T+ <= T- (1 + 1e-10).  Afterwards contacts left at rest stick where their cones hold them and are
+ * re-checked at the next advance (one that would pull is released), a contact the impulse lifts is released.  It is
+ * taken where the state itself has no consistent forces (the start: gac_sim_init accepts it and the first advance
+ * after the contact event takes it; after a landing or a change of the inputs), and at the dynamic jam: sliding
+ * smoothly towards B_aa = 0 the normal force grows without bound, the trial stages beyond fail (GAC_ERR_FRICTION
+ * in a stage rejects the step; RK4 halves it), and where the steps underflow onto that instant the impact is taken
+ * if it has a non-trivial solution there.  The record's law is GAC_IMPACT_LAW_GDI_TANGENTIAL (complementarity 1);
+ * sim.n_tangential_impacts counts them (within n_impacts).  GAC_ERR_FRICTION stops the run only where the law has
+ * no non-trivial solution (or more than 6 contacts), or the state after it still has no consistent forces.
+ *
  * Inputs.  The inputs u (nu) are held over each gac_sim_advance call (a zero-order hold, the convention of
  * FMI co-simulation): change them between calls with gac_sim_set_input, so that a change falls on a step
  * boundary.  Or give a controller (gac_sim_set_controller): the loop then asks it for u at every stage.

@@ -20,8 +20,9 @@
  * The record says so (law GAC_IMPACT_LAW_GDI_TANGENTIAL, impulses, released contacts); the loop re-checks the resting
  * contacts at the next advance (those the new state pulls off their walls are released, as after a change of the
  * inputs).  Post-conditions: every impulse >= 0, no kinetic energy gained beyond the law's round-off (1e-10 of T).
- * Returns GAC_SIM_IMPACT (the record reported) or an error: GAC_ERR_FRICTION when the law has no non-trivial solution
- * or the state after it still has no consistent forces. */
+ * Returns GAC_SIM_IMPACT (the record reported) or an error: GAC_ERR_FRICTION when no resting contact slides on a
+ * rough wall, the law has no non-trivial solution, or the state after it still has no consistent forces (the first
+ * two leave the state as it was). */
 int gac_jam(gac_sim *s, gac_impact_record *r)
 {
     const gac_model *md = s->model;
@@ -52,8 +53,10 @@ int gac_jam(gac_sim *s, gac_impact_record *r)
     for (a = 0; a < n; ++a) {
         c = list[a];
         if (-vn[c] > r->approach_before) r->approach_before = -vn[c];
-        scale = fmax(scale, sqrt(vt[2*c] * vt[2*c] + vt[2*c + 1] * vt[2*c + 1]));
+        if (!s->is_stuck[c] && gac_friction_coefficient(md, s->p, c) > 0.0)     /* sliding on a rough wall */
+            scale = fmax(scale, sqrt(vt[2*c] * vt[2*c] + vt[2*c + 1] * vt[2*c + 1]));
     }
+    if (!(scale > 0.0)) return GAC_ERR_FRICTION;    /* nothing slides: no paradox of sliding friction here */
     code = gac_impact_tangential(md, x, x + nq, s->p, n, list, qd_plus, F, Ft, s->work, &residual, &parts);
     r->residual = residual;
     if (code != GAC_OK) return code;

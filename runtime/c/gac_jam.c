@@ -53,8 +53,10 @@ int gac_jam(gac_sim *s, gac_impact_record *r)
     for (a = 0; a < n; ++a) {
         c = list[a];
         if (-vn[c] > r->approach_before) r->approach_before = -vn[c];
-        if (!s->is_stuck[c] && gac_friction_coefficient(md, s->p, c) > 0.0)     /* sliding on a rough wall */
-            scale = fmax(scale, sqrt(vt[2*c] * vt[2*c] + vt[2*c + 1] * vt[2*c + 1]));
+        if (!s->is_stuck[c] && gac_friction_coefficient(md, s->p, c) > 0.0) {   /* sliding on a rough wall */
+            const double speed = sqrt(vt[2*c] * vt[2*c] + vt[2*c + 1] * vt[2*c + 1]);
+            if (speed > scale) scale = speed;
+        }
     }
     if (!(scale > 0.0)) return GAC_ERR_FRICTION;    /* nothing slides: no paradox of sliding friction here */
     code = gac_impact_tangential(md, x, x + nq, s->p, n, list, qd_plus, F, Ft, s->work, &residual, &parts);

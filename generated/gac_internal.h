@@ -138,6 +138,15 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
                                const int *list, const double *e, int first, int law, double *qd_plus, double *F,
                                double *Ft, double *work, int *rounds, int *plastic, int *law_used, double *residual,
                                double *tangential_parts);
+/* The tangential impact at the contacts list[0..n-1] (n <= 6), resting at their walls (normal velocities 0) with some
+ * sliding where their sliding system is no P-matrix: the frictional impact law (GDI, e = 0 at a contact at rest) on
+ * their normal and tangential rows, its non-trivial solution (some L_N > 0; the first of the contacts' modes from all
+ * stuck on).  qd_plus (nq), F (n), Ft (2 n) as gac_impact_rounds_friction, *residual the law's largest relative
+ * violation (an impulse at the cone's edge, the jam, put onto it).  GAC_ERR_FRICTION when no non-trivial solution
+ * meets the law to GAC_FRICTION_RESIDUAL_MAX. */
+int gac_impact_tangential(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                          const int *list, double *qd_plus, double *F, double *Ft, double *work, double *residual,
+                          double *tangential_parts);
 
 /* gac_setup.c */
 double gac_clock_now(const gac_sim *s);          /* the run's clock (s): the embedder's, or C's processor time */
@@ -151,6 +160,9 @@ int gac_switch_chart(gac_sim *s);                /* continue on the other chart 
 void gac_to_chart_a(gac_sim *s, double *x);      /* a state of the chart integrated now, in chart A's coordinates
                                                     (a conversion that fails is kept in s->fail) */
 int gac_report(gac_sim *s, gac_impact_record *record, int code);   /* the record in chart A's coordinates */
+
+/* gac_jam.c: the tangential impact where sliding resting contacts have no consistent forces (Painleve) */
+int gac_jam(gac_sim *s, gac_impact_record *r);   /* at s->x: GAC_SIM_IMPACT (record reported) or an error */
 
 /* gac_stick.c: stuck and sliding points at resting contacts on rough walls */
 double gac_slide_phi(const double *vt, double vs, const double *d, double *phi);

@@ -29,8 +29,10 @@ class ImpactError(RuntimeError):
 
 # The impact laws at walls with friction by name, and the library's constant of each (gac.h, GAC_IMPACT_LAW_*)
 IMPACT_LAWS = {"frictionless": "GAC_IMPACT_LAW_FRICTIONLESS", "gdi": "GAC_IMPACT_LAW_GDI",
-               "newton-coulomb": "GAC_IMPACT_LAW_NEWTON_COULOMB", "gdi-common-e": "GAC_IMPACT_LAW_GDI_COMMON_E"}
-CHOSEN_LAWS = ("gdi", "newton-coulomb", "frictionless")     # what a user may ask for; gdi-common-e: a record's only
+               "newton-coulomb": "GAC_IMPACT_LAW_NEWTON_COULOMB", "gdi-common-e": "GAC_IMPACT_LAW_GDI_COMMON_E",
+               "gdi-tangential": "GAC_IMPACT_LAW_GDI_TANGENTIAL"}
+CHOSEN_LAWS = ("gdi", "newton-coulomb", "frictionless")     # what a user may ask for; gdi-common-e and
+                                                            # gdi-tangential: a record's only
 
 
 @dataclass(frozen=True)

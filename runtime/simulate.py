@@ -71,7 +71,9 @@ class Impact:
     law_elastic: bool = False           # the law (each contact's own e, before landings) had only e = 1 contacts
                                         # take impulses, no plastic round: energy_after + energy_rest = energy_before
     law: str = "frictionless"           # the law applied: 'frictionless' (no contact with friction took part), 'gdi',
-                                        # 'gdi-common-e' (a round solved with its smallest e), 'newton-coulomb'
+                                        # 'gdi-common-e' (a round solved with its smallest e), 'newton-coulomb',
+                                        # 'gdi-tangential' (a tangential impact: sliding resting contacts in the
+                                        # Painleve paradox stopped by an impact without collision)
     residual: float = 0.0               # the frictional law's largest relative violation of its conditions
 
 
@@ -121,6 +123,8 @@ class SimulationResult:
     n_chart_switches: int = 0          # switches between the base charts near the gimbal lock (gac_sim.n_chart_switches)
     n_sticks: int = 0                  # resting points on rough walls that came to stick (sliding -> stuck)
     n_slips: int = 0                   # stuck points that began to slip (|lambda_T| reached c_f lambda_N)
+    n_tangential_impacts: int = 0      # tangential impacts (law 'gdi-tangential', also in impacts): sliding resting
+                                       # contacts with no consistent forces (Painleve paradox, the dynamic jam)
 
     @property
     def n_impacts(self) -> int:
@@ -469,6 +473,9 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         (-1, _end_message(model, state, code, segment_t, segment_steps, len(impacts), rec))
     if status == 0 and int(state.n_chart_switches):
         message += f"; {int(state.n_chart_switches)} chart switch(es)"
+    if int(state.n_tangential_impacts):
+        message += (f"; {int(state.n_tangential_impacts)} tangential impact(s): sliding friction in the Painleve "
+                    "paradox (the resting contacts' system no P-matrix) stopped by an impact without collision")
 
     # the result, in the full layout of Eq. 13 and chart A's coordinates, whichever base chart was integrated
     x_final = np.zeros(nx)
@@ -497,7 +504,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                           for k in range(state.nresting)],
         options={"t_end": t_end, **{name: _option_value(opt, name) for name in LOOP_OPTIONS},
                  "chart_switch": float(opt.chart_switch)},
-        n_chart_switches=int(state.n_chart_switches), n_sticks=int(state.n_sticks), n_slips=int(state.n_slips))
+        n_chart_switches=int(state.n_chart_switches), n_sticks=int(state.n_sticks), n_slips=int(state.n_slips),
+        n_tangential_impacts=int(state.n_tangential_impacts))
 
 
 def _option_value(opt, name: str):

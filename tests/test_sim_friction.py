@@ -234,8 +234,10 @@ def test_frictionless_scenes_have_no_friction_rows():
 def test_the_painleve_paradox_is_named(c_f, v, paradox):
     """A uniform rod leaning at tan(theta) = 2 with its lower end sliding on a rough floor: its normal force obeys
     m B N = ..., m B = 1 + 3 cos(theta) (cos(theta) + c_f s sin(theta)) (s: the sliding direction's sign, towards the
-    rod's lean +1), negative for s = -1 and c_f > 4/3 at this angle (Painleve): the model says so and does not
-    run; otherwise it runs."""
+    rod's lean +1), negative for s = -1 and c_f > 4/3 at this angle (Painleve): the constrained dynamics says so,
+    and the run resolves it by a tangential impact at the start (tests/test_sim_painleve.py checks its impulses);
+    otherwise it runs without one."""
+    from runtime.model import ImpactError
     theta = math.atan(2.0)
     data = {"name": "painleve", "gravity": G, "links": [{"length": 1.0, "mu": 1.0, "J": [0.0, 0.0, 0.0]}],
             "walls": {"x2_min": 0.0}, "restitution": 0.0, "friction": c_f,
@@ -243,10 +245,13 @@ def test_the_painleve_paradox_is_named(c_f, v, paradox):
                         "qd": [0.0, 0.0, 0.0, v, 0.0, 0.0]}}
     model = load_model(scene_from_dict(data))
     assert (1 + 3 * math.cos(theta) * (math.cos(theta) + c_f * math.copysign(1.0, v) * math.sin(theta)) < 0) == paradox
+    result = simulate(model, 0.3, rtol=1e-10, atol=1e-12)
+    assert result.success, result.message
+    assert result.contact_events[0].kind == "rest"
     if paradox:
-        with pytest.raises(ValueError, match="Painleve paradox"):
-            simulate(model, 0.3)
+        with pytest.raises(ImpactError, match="Painleve paradox"):
+            model.constrained_dynamics(model.q0, model.qd0, [0])
+        assert result.n_tangential_impacts == 1 and "tangential impact" in result.message
+        assert [(i.t, i.law) for i in result.impacts] == [(0.0, "gdi-tangential")]
     else:
-        result = simulate(model, 0.3, rtol=1e-10, atol=1e-12)
-        assert result.success, result.message
-        assert result.contact_events[0].kind == "rest"
+        assert result.n_tangential_impacts == 0 and not result.impacts

@@ -76,7 +76,9 @@
 #define GAC_ERR_BAD_INPUT        -22   /* an input u (set by gac_sim_set_input, or written by the controller)
                                           is NaN or infinite */
 #define GAC_ERR_FRICTION         -23   /* the resting contacts with Coulomb friction have no unique, bounded normal
-                                          forces (their system is no P-matrix: the Painleve paradox) */
+                                          forces (their system is no P-matrix: the Painleve paradox), and the
+                                          tangential impact the loop takes there has no solution either (or the
+                                          state after it is again no P-matrix); see "Tangential impact" below */
 #define GAC_ERR_BAD_PARAMETER    -24   /* a parameter is outside its allowed range or breaks a relation with others
                                           (gac_check_parameters gives its index; the model's parameter_info its
                                           name and what it allows) */
@@ -126,6 +128,10 @@
                                              for comparison */
 #define GAC_IMPACT_LAW_GDI_COMMON_E   3   /* a record's law only: GDI, a round solved with the smallest e of its
                                              contacts for all of them (its own e's would have gained energy) */
+#define GAC_IMPACT_LAW_GDI_TANGENTIAL 4   /* a record's law only: a tangential impact (impact without collision) at
+                                             resting contacts whose sliding system is no P-matrix (the Painleve
+                                             paradox, the dynamic jam): GDI with e = 0 and normal velocities 0
+                                             before, its non-trivial solution (see "Tangential impact" below) */
 
 /* ---- limits ----------------------------------------------------------------------------------- */
 #define GAC_CHART_FLOOR  5.96e-5   /* sqrt(16 eps / 1e-6): gac_impact refuses a base chart measure below it */
@@ -547,6 +553,21 @@ int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const do
  * after every step holds stuck points' tangential velocities at 0 too.  sim.n_sticks and sim.n_slips count the
  * transitions; no record is made (the loop goes on).  The stuck constraint does no work.
  *
+ * Tangential impact (gac_jam.c).  Where resting points slide on rough walls and their system B is no P-matrix (the
+ * Painleve paradox: one contact, its compliance with sliding B_aa <= 0), the loop takes an impact without collision:
+ * the GDI law on the resting contacts' normal and tangential rows with their normal velocities 0 and e = 0, its
+ * non-trivial solution (some normal impulse > 0, the first of the contacts' modes enumerated from all stuck on; for
+ * one contact the stick impulse -W^-1 gamma-, inside the cone exactly where B_aa <= 0).  Its post-conditions: every
+ * impulse >= 0, T+ <= T- (1 + 1e-10).  Afterwards contacts left at rest stick where their cones hold them and are
+ * re-checked at the next advance (one that would pull is released), a contact the impulse lifts is released.  It is
+ * taken where the state itself has no consistent forces (the start: gac_sim_init accepts it and the first advance
+ * after the contact event takes it; after a landing or a change of the inputs), and at the dynamic jam: sliding
+ * smoothly towards B_aa = 0 the normal force grows without bound, the trial stages beyond fail (GAC_ERR_FRICTION
+ * in a stage rejects the step; RK4 halves it), and where the steps underflow onto that instant the impact is taken
+ * if it has a non-trivial solution there.  The record's law is GAC_IMPACT_LAW_GDI_TANGENTIAL (complementarity 1);
+ * sim.n_tangential_impacts counts them (within n_impacts).  GAC_ERR_FRICTION stops the run only where the law has
+ * no non-trivial solution (or more than 6 contacts), or the state after it still has no consistent forces.
+ *
  * Inputs.  The inputs u (nu) are held over each gac_sim_advance call (a zero-order hold, the convention of
  * FMI co-simulation): change them between calls with gac_sim_set_input, so that a change falls on a step
  * boundary.  Or give a controller (gac_sim_set_controller): the loop then asks it for u at every stage.
@@ -697,6 +718,9 @@ typedef struct {
     double t_slow_sliding;       /* s: the time those steps covered */
     long n_sticks, n_slips;      /* resting points on rough walls that came to stick (sliding -> stuck, at a step
                                     end, an impact or the start) and that began to slip (stuck -> sliding) */
+    long n_tangential_impacts;   /* tangential impacts (record.law GAC_IMPACT_LAW_GDI_TANGENTIAL) since gac_sim_init:
+                                    the Painleve paradox of sliding resting contacts resolved by an impact (also
+                                    counted in n_impacts) */
     double energy_initial;       /* J: T + V at gac_sim_init */
     double loss_impacts;         /* J: energy the impacts took since gac_sim_init, sum of energy_before - energy_after */
     double energy_roundoff;      /* J: what the impacts' energies are known to, sum of roundoff x T before each */
@@ -725,7 +749,8 @@ typedef struct {
     double wall_start;           /* the clock's reading when the budget started */
     long n_look;                 /* steps since the last look */
     double *u_eval;              /* nu: the controller's output at the current evaluation */
-    int input_changed;           /* gac_sim_set_input since the last advance: resting contacts re-checked */
+    int input_changed;           /* gac_sim_set_input (or a tangential impact) since the last advance: resting
+                                    contacts re-checked */
     double h;
     int f_valid;
     double *f, *k[16], *x1, *xs, *cont[8];

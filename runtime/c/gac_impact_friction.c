@@ -298,9 +298,11 @@ static int gac_slide_cross(int nd, const double *W, int ncon, const int *start, 
  * solve.  Two: the slide directions are the roots of xi_T x d = 0, found by Newton's method on their angles
  * (Jacobian by central differences, steps halved until |xi_T x d| falls) from the guess's direction, the velocity's
  * before, and a grid of about GAC_SLIDE_STARTS starts around the circle(s).  1 with L (its residual in *residual) if a combination
- * meets the law to GAC_FRICTION_RESIDUAL_MAX / 1000. */
+ * meets the law to accept (the rounds: GAC_FRICTION_RESIDUAL_MAX / 1000).  nontrivial: only solutions in which some
+ * contact pushes (L_N > 0; the tangential impact, whose trivial solution L = 0 always exists). */
 static int gac_round_enumerate(int nd, const double *W, int ncon, const int *start, const int *dim,
-                               const double *cf, const int *rows, const double *q, double *L, double *residual)
+                               const double *cf, const int *rows, const double *q, int nontrivial, double accept,
+                               double *L, double *residual)
 {
     const int nr = start[ncon - 1] + dim[ncon - 1];
     double guess[3 * GAC_ENUM_MAX], trial[3 * GAC_ENUM_MAX], dir[2 * GAC_ENUM_MAX], scale = 0.0;
@@ -325,11 +327,12 @@ static int gac_round_enumerate(int nd, const double *W, int ncon, const int *sta
         long rest = combo;
         double phi0[GAC_ENUM_MAX];
         long grid;
-        int ns = 0, attempt, per;
+        int ns = 0, attempt, per, pushing = 0;
         for (k = 0; k < ncon; ++k) {             /* combo 0 is the guess's modes */
             const int c = (int)((base[k] + rest % choices[k]) % choices[k]);
             rest /= choices[k];
             mode[k] = c >= 2 ? 2 : c;
+            pushing |= mode[k] != 0;
             dir[2 * k] = dir[2 * k + 1] = 0.0;
             if (c >= 2 && dim[k] == 2) dir[2 * k] = c == 2 ? 1.0 : -1.0;       /* xi_T along +X or -X */
             if (c >= 2 && dim[k] == 3) {         /* the guess's direction, or the velocity's before */
@@ -340,6 +343,7 @@ static int gac_round_enumerate(int nd, const double *W, int ncon, const int *sta
                 slide[ns++] = k;
             }
         }
+        if (nontrivial && !pushing) continue;    /* every contact separates: L = 0 */
         per = 1;                                 /* starts per angle on a grid: about GAC_SLIDE_STARTS in all */
         while (ns > 0 && pow((double)(per + 1), (double)ns) <= GAC_SLIDE_STARTS) ++per;
         grid = 1;
@@ -392,7 +396,13 @@ static int gac_round_enumerate(int nd, const double *W, int ncon, const int *sta
             if (!ok || !gac_slide_cross(nd, W, ncon, start, dim, cf, rows, q, mode, ns, slide, phi, dir, trial, cross))
                 continue;
             res = gac_round_residual(nd, W, ncon, start, dim, cf, rows, q, trial);
-            if (res <= GAC_FRICTION_RESIDUAL_MAX * 1e-3) {
+            if (nontrivial) {                    /* some normal impulse beyond round-off of the impulses' size */
+                double push = 0.0, size = 0.0;
+                for (i = 0; i < nr; ++i) size = fabs(trial[i]) > size ? fabs(trial[i]) : size;
+                for (k = 0; k < ncon; ++k) push = trial[start[k]] > push ? trial[start[k]] : push;
+                if (!(push > 1e-9 * size)) continue;
+            }
+            if (res <= accept) {
                 for (i = 0; i < nr; ++i) L[i] = trial[i];
                 *residual = res;
                 return 1;
@@ -439,30 +449,30 @@ static void gac_round_friction(int nd, const double *W, int ncon, const int *sta
     if (*residual > 1e-12) {
         double exact[3 * GAC_ENUM_MAX], res;
         for (i = 0; i < nr && i < 3 * GAC_ENUM_MAX; ++i) exact[i] = L[i];
-        if (gac_round_enumerate(nd, W, ncon, start, dim, cf, rows, q, exact, &res) && res < *residual) {
+        if (gac_round_enumerate(nd, W, ncon, start, dim, cf, rows, q, 0, GAC_FRICTION_RESIDUAL_MAX * 1e-3, exact, &res)
+            && res < *residual) {
             for (i = 0; i < nr; ++i) L[i] = exact[i];
             *residual = res;
         }
     }
 }
 
-int gac_impact_rounds_friction(const gac_model *m, const double *q, const double *qd, const double *p, int n,
-                               const int *list, const double *e, int first, int law, double *qd_plus, double *F,
-                               double *Ft, double *work, int *rounds, int *plastic, int *law_used, double *residual,
-                               double *tangential_parts)
+/* The contact-space system of the contacts list[0..n-1] at (q, qd): each contact's directions (its normal, then,
+ * on a wall with friction under law, its tangential axes: start[a], dim[a], cf[a] its Coulomb coefficient, 0 where
+ * it has no tangential part), their responses resp[r] = I_f^-1 d_r (in work's Y and Z), W = D I_f^-1 D^T (nd x nd,
+ * in work's W, symmetric) and the velocities gam = D qd; axis_of[r] the tangential axis (0, 1) of row r, -1 for a
+ * normal.  *nd_out the rows.  GAC_OK or the error of gac_impact_system / gac_row_response. */
+static int gac_friction_system(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                               const int *list, int law, double *work, double *cf, int *start, int *dim,
+                               int *axis_of, const double **resp, double *gam, int *nd_out)
 {
     const int nq = m->nq, nd_max = 3 * n;
     double v_unused[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)];
     double *Y = GAC_WORK_Y(m, work), *g = GAC_WORK_G(m, work), *vel = GAC_WORK_VEL(m, work);
     double *f = GAC_WORK_F(m, work), *Z = GAC_WORK_Z(m, work), *W = GAC_WORK_W(m, work);
-    double cf[GAC_AT_LEAST_1(nq)], gam[nd_max], total[nd_max], scale = 0.0, v_tol;
-    int start[GAC_AT_LEAST_1(nq)], dim[GAC_AT_LEAST_1(nq)], owner[nd_max], comp[nd_max], axis_of[nd_max];
-    const double *resp[nd_max];
-    int a, b, i, j, nd = 0, nt = 0, round, code;
-    *rounds = *plastic = 0;
-    *residual = 0.0;
-    *law_used = GAC_IMPACT_LAW_FRICTIONLESS;
     double r_scratch[GAC_AT_LEAST_1(nq)], dy_scratch[GAC_AT_LEAST_1(nq)];
+    int owner[nd_max], comp[nd_max];
+    int a, b, j, nd = 0, nt = 0, code;
     code = gac_impact_system_refined(m, q, qd, p, n, list, work, v_unused, e_wall);   /* Y_a = I_f^-1 n_a, refined */
     if (code != GAC_OK) return code;
     for (a = 0; a < n; ++a) {                 /* the directions: each contact's normal, then its tangential axes */
@@ -500,8 +510,28 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
     }
     for (a = 0; a < nd; ++a) {                 /* symmetric up to round-off: make it exactly so */
         for (b = 0; b < a; ++b) W[a*nd + b] = W[b*nd + a] = 0.5 * (W[a*nd + b] + W[b*nd + a]);
-        total[a] = 0.0;
     }
+    *nd_out = nd;
+    return GAC_OK;
+}
+
+int gac_impact_rounds_friction(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                               const int *list, const double *e, int first, int law, double *qd_plus, double *F,
+                               double *Ft, double *work, int *rounds, int *plastic, int *law_used, double *residual,
+                               double *tangential_parts)
+{
+    const int nq = m->nq, nd_max = 3 * n;
+    double *W = GAC_WORK_W(m, work);
+    double cf[GAC_AT_LEAST_1(nq)], gam[nd_max], total[nd_max], scale = 0.0, v_tol;
+    int start[GAC_AT_LEAST_1(nq)], dim[GAC_AT_LEAST_1(nq)], axis_of[nd_max];
+    const double *resp[nd_max];
+    int a, b, i, j, nd = 0, round, code;
+    *rounds = *plastic = 0;
+    *residual = 0.0;
+    *law_used = GAC_IMPACT_LAW_FRICTIONLESS;
+    code = gac_friction_system(m, q, qd, p, n, list, law, work, cf, start, dim, axis_of, resp, gam, &nd);
+    if (code != GAC_OK) return code;
+    for (a = 0; a < nd; ++a) total[a] = 0.0;
     for (a = 0; a < n; ++a) {
         if (fabs(gam[start[a]]) > scale) scale = fabs(gam[start[a]]);
         if (dim[a] > 1 && *law_used == GAC_IMPACT_LAW_FRICTIONLESS)
@@ -600,4 +630,52 @@ int gac_impact_friction(const gac_model *m, const double *GAC_RESTRICT q, const 
     }
     return gac_impact_rounds_friction(m, q, qd, p, ncontact_set, contact_set, e, -1, law, qd_plus, impulse,
                                       impulse_t, work, &rounds, &plastic, law_used, residual, &parts);
+}
+
+int gac_impact_tangential(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                          const int *list, double *qd_plus, double *F, double *Ft, double *work, double *residual,
+                          double *tangential_parts)
+{
+    const int nq = m->nq, nd_max = 3 * GAC_AT_LEAST_1(n);
+    double cf[GAC_AT_LEAST_1(nq)], gam[nd_max], L[nd_max];
+    int start[GAC_AT_LEAST_1(nq)], dim[GAC_AT_LEAST_1(nq)], axis_of[nd_max], rows[nd_max];
+    const double *resp[nd_max];
+    int a, i, nd = 0, code;
+    *residual = *tangential_parts = 0.0;
+    if (n < 1 || n > GAC_ENUM_MAX) return GAC_ERR_FRICTION;
+    code = gac_friction_system(m, q, qd, p, n, list, GAC_IMPACT_LAW_GDI, work, cf, start, dim, axis_of, resp, gam, &nd);
+    if (code != GAC_OK) return code;
+    for (i = 0; i < nd; ++i) {                  /* every row takes part; the guess: every contact sticks */
+        rows[i] = i;
+        L[i] = axis_of[i] < 0 ? 1.0 : 0.0;
+    }
+    /* xi = gamma+ (e = 0: the contacts are at rest), 0 <= L_N _|_ gamma_N+ >= 0, Coulomb's cone on gamma_T+ */
+    if (!gac_round_enumerate(nd, GAC_WORK_W(m, work), n, start, dim, cf, rows, gam, 1, GAC_FRICTION_RESIDUAL_MAX, L, residual))
+        return GAC_ERR_FRICTION;
+    for (a = 0; a < n; ++a) {                   /* a stick at the cone's edge (the jam): onto the cone */
+        double lt = 0.0;
+        for (i = 1; i < dim[a]; ++i) lt += L[start[a] + i] * L[start[a] + i];
+        lt = sqrt(lt);
+        if (L[start[a]] < 0.0) L[start[a]] = 0.0;
+        if (lt > cf[a] * L[start[a]]) {
+            for (i = 1; i < dim[a]; ++i) L[start[a] + i] *= cf[a] * L[start[a]] / lt;
+        }
+    }
+    for (i = 0; i < nq; ++i) {
+        double value = qd[i];
+        for (a = 0; a < nd; ++a) value += resp[a][i] * L[a];
+        qd_plus[i] = value;
+    }
+    for (a = 0; a < nd; ++a) {                  /* sum |L_T| |I_f^-1 t|, as gac_impact_rounds_friction */
+        double column = 0.0;
+        if (axis_of[a] < 0) continue;
+        for (i = 0; i < nq; ++i) column += resp[a][i] * resp[a][i];
+        *tangential_parts += fabs(L[a]) * sqrt(column);
+    }
+    for (a = 0; a < n; ++a) {
+        F[a] = L[start[a]];
+        Ft[2*a] = Ft[2*a + 1] = 0.0;
+        for (i = 1; i < dim[a]; ++i) Ft[2*a + axis_of[start[a] + i]] = L[start[a] + i];
+    }
+    return GAC_OK;
 }

@@ -367,6 +367,11 @@ int gac_recheck_rest(gac_sim *s, gac_impact_record *record)
     for (;;) {
         if (s->nresting == 0) return 0;
         gac_events(s, s->t, s->x, s->ev);
+        if (s->fail == GAC_ERR_FRICTION) {            /* sliding in the Painleve paradox: the loop's tangential impact */
+            s->fail = 0;
+            s->f_valid = 0;
+            return 0;
+        }
         if (s->fail) return s->fail;
         for (a = 0; a < s->nresting; ++a) {
             if (s->ev[s->resting[a]] <= 0.0) break;

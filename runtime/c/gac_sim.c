@@ -201,6 +201,8 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             gac_f(s, s->t, s->x, s->f);
             s->f_valid = 1;
         }
+        if (s->fail == GAC_ERR_FRICTION && s->nresting > 0)   /* sliding with no consistent forces here (the start, */
+            return gac_jam(s, record);                       /* a landing): the tangential impact */
         if (s->fail) return s->fail;
         if (s->opt.max_steps > 0 && steps >= s->opt.max_steps) return GAC_ERR_MAX_STEPS;
         if (++s->n_look >= GAC_LOOK_STEPS) {      /* ... and every GAC_LOOK_STEPS steps, at a step end */
@@ -214,14 +216,29 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         if (last) h = t_end - s->t;
         if (!(h > 8.0 * GAC_EPS * fabs(s->t))) {
             if (last) { s->t = t_end; break; }
+            if (s->nresting > 0) {              /* the steps shrank onto the dynamic jam, beyond which B is no */
+                const long before = s->n_tangential_impacts;      /* P-matrix, if the tangential impact has a */
+                const int code = gac_jam(s, record);              /* non-trivial solution here */
+                if (code != GAC_ERR_FRICTION || s->n_tangential_impacts != before) return code;
+            }
             return s->fail_seen ? s->fail_seen : GAC_ERR_STEP_SIZE;
         }
         if (s->opt.method == GAC_METHOD_RK4) {
             /* RK4 has no error control: 3 steps in a row at h rho > 2.5, or one far past it, mean the step is
              * beyond its stability */
             const double h_rho = s->rk4_h_rho = gac_rk4_step(s, h);
+            if (s->fail == GAC_ERR_FRICTION && s->nresting > 0) {   /* a stage beyond the jam: halve the step */
+                s->fail_seen = s->fail;                            /* onto it (restored after the impact) */
+                s->fail = 0;
+                s->n_rejected++;
+                s->h = 0.5 * h;
+                steps++;
+                continue;
+            }
+            s->fail_seen = 0;
             s->n_unstable = h_rho > 2.5 ? s->n_unstable + 1 : 0;
-            if (s->n_unstable >= 3 || !(h_rho < 10.0)) return GAC_ERR_UNSTABLE;
+            if ((s->n_unstable >= 3 || !(h_rho < 10.0)) && h >= s->opt.dt)   /* (halved steps: onto a jam, where */
+                return GAC_ERR_UNSTABLE;                                     /* the normal force grows unbounded) */
         } else {
             double fac;
             const int eighth = s->opt.method == GAC_METHOD_DOP853;
@@ -314,6 +331,10 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
                 if (stuck > 0) s->energy_x1_valid = 0;
             }
             gac_events(s, s->t, s->x, s->ev);
+            if (s->fail == GAC_ERR_FRICTION && s->nresting > 0) {   /* landed sliding in the paradox: the tangential */
+                s->fail = 0;                                        /* impact at the next loop's start */
+                s->f_valid = 0;
+            }
             if (s->fail) return s->fail;
             {                                     /* T and V after an impact: known from gac_resolve */
                 const int known = code == 1 && !released && s->energy_x1_valid;
@@ -357,6 +378,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             }
             s->f_valid = s->vn_valid = 0;
             gac_events(s, s->t, s->x, s->ev);
+            if (s->fail == GAC_ERR_FRICTION) s->fail = 0;      /* (the next loop's start: the tangential impact) */
             if (s->fail) return s->fail;
         }
         {                                         /* T and V at x: known from the step's energy error unless projected */

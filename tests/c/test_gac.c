@@ -20,6 +20,9 @@
  *   skew  a point in a corner with the coupled inertia [[2, 1], [1, 2]]: Newton's law on two contacts by hand.
  *   checked_ball  the ball with a parameter table and a check of its own (g, m > 0, e in [0, 1]), as a generated
  *         model has: gac_sim_init refuses parameters outside it.
+ *   lever  a point on a rough floor whose inertia couples its two directions, I_f = [[2, 1], [1, 1]] (kg): sliding
+ *         towards -x with c_f = 3 its compliance with sliding W_yy - c_f sgn(v) W_xy is 2 - 3 < 0, the Painleve
+ *         paradox: the tangential impact by hand.
  * Exit status 0 if every check holds; with the argument --break one expected value is made wrong on
  * purpose, and the program must fail (the checks can fail).
  */
@@ -227,6 +230,49 @@ static const gac_model sled = {
     .contact_points = box_points, .contact_velocities = box_velocities, .contact_generalized_force = box_force,
     .contact_gaps = sled_gaps,
     .contact_bias = box_jbias, .energy = box_energy, .rhs = box_rhs, .friction_velocity = 1e-4
+};
+
+/* ---- lever: a point on a rough floor with I_f = [[2, 1], [1, 1]], W = I_f^-1 = [[1, -1], [-1, 2]], V = G y;
+ *      p = [G, unused, e, c_f]; friction along x (row 0) ---------------------------------------------------- */
+static void lever_solve(const double *q, const double *Q, const double *p, double *x)
+{
+    (void)q; (void)p;
+    x[0] = Q[0] - Q[1]; x[1] = -Q[0] + 2.0 * Q[1];
+}
+static void lever_momentum(const double *q, const double *qd, const double *p, double *h)
+{
+    (void)q; (void)p;
+    h[0] = 2.0 * qd[0] + qd[1]; h[1] = qd[0] + qd[1];
+}
+static void lever_fd(const double *q, const double *qd, const double *u, const double *p, double *qdd)
+{
+    const double Q[2] = {0.0, -p[0]};
+    (void)qd; (void)u;
+    lever_solve(q, Q, p, qdd);
+}
+static void lever_energy(const double *q, const double *qd, const double *p, double *E)
+{
+    E[0] = 0.5 * (2.0 * qd[0] * qd[0] + 2.0 * qd[0] * qd[1] + qd[1] * qd[1]);
+    E[1] = p[0] * q[1];
+}
+static void lever_rhs(double t, const double *x, const double *u, const double *p, double *xdot)
+{
+    (void)t;
+    xdot[0] = x[2]; xdot[1] = x[3];
+    lever_fd(x, x + 2, u, p, xdot + 2);
+}
+static const double lever_p[4] = {9.81, 0.0, 0.0, 3.0};
+static const double lever_q0[2] = {0.0, 0.0}, lever_qd0[2] = {-1.0, 0.0};
+
+static const gac_model lever = {
+    .name = "lever", .n = 0, .nq = 2, .nx = 4, .nparam = 4, .npoint = 1, .ncontact = 1, .njrow = 2,
+    .contacts = sled_contacts,
+    .chart = {.a = {0.0, 1.0}, .b = {1.0, 0.0}, .theta0_index = -1, .theta0_value = 0.0},
+    .default_parameters = lever_p, .q0 = lever_q0, .qd0 = lever_qd0,
+    .forward_dynamics = lever_fd, .inertia_solve = lever_solve, .generalized_momentum = lever_momentum,
+    .contact_points = box_points, .contact_velocities = box_velocities, .contact_generalized_force = box_force,
+    .contact_gaps = sled_gaps,
+    .contact_bias = box_jbias, .energy = lever_energy, .rhs = lever_rhs, .friction_velocity = 1e-4
 };
 
 /* ---- caller-owned memory, large enough for both models ------------------------------------------ */
@@ -623,6 +669,53 @@ static void test_sled(void)
 {
     test_sled_run(0);
     test_sled_run(1);
+}
+
+/* The Painleve paradox resolved by a tangential impact (the lever): sliding at v = -1 along x on the floor, the
+ * compliance with sliding W_yy - c_f sgn(v) W_xy = 2 - 3 = -1 < 0 (the constrained dynamics refuses it); the run
+ * starts, and the first advance after the contact event takes the tangential impact at t = 0: the stick impulse
+ * L = -W^-1 gamma- = -I_f (-1, 0) = (2, 1) (tangential, normal), |L_T| = 2 <= c_f L_N = 3, which stops the point
+ * (qd+ = qd + W L = 0) and takes its kinetic energy, T- = 1 = -L_T v / 2.  Then stuck (lambda_T = 0), at rest.
+ * Sliding the other way (B = 5 > 0) there is no impact. */
+static void test_tangential_impact(void)
+{
+    const int contact_set[1] = {0};
+    const double t_eval[1] = {0.5};
+    double qdd[2], lambda[2], swork[128], x_eval[4], qd_other[2] = {1.0, 0.0};
+    gac_options opt;
+    gac_sim sim;
+    gac_impact_record rec;
+    int code, i_eval = 0;
+    CHECK(gac_model_check(&lever) == GAC_OK, "lever model");
+    code = gac_constrained_dynamics(&lever, lever_q0, lever_qd0, 0, lever_p, 1, contact_set, qdd, lambda, swork);
+    CHECK(code == GAC_ERR_FRICTION, "sliding in the paradox refused by the constrained dynamics: %d", code);
+    gac_default_options(&opt);
+    opt.rtol = 1e-10;
+    opt.atol = 1e-12;
+    code = gac_sim_init(&sim, &lever, dwork, iwork, 0.0, lever_q0, lever_qd0, 0, &opt);
+    CHECK(code == GAC_OK && sim.nresting == 1, "init %d, resting %d", code, sim.nresting);
+    gac_record_bind(&rec, &lever, rdwork, riwork);
+    code = gac_sim_advance(&sim, 0.5, t_eval, 1, &i_eval, x_eval, &rec);
+    CHECK(code == GAC_SIM_CONTACT && rec.nlanded == 1, "at rest at the start: %d", code);
+    code = gac_sim_advance(&sim, 0.5, t_eval, 1, &i_eval, x_eval, &rec);
+    CHECK(code == GAC_SIM_IMPACT && rec.law == GAC_IMPACT_LAW_GDI_TANGENTIAL && rec.t == 0.0 && rec.ncontact == 1,
+          "the tangential impact: %d, law %d, t %.17g", code, rec.law, rec.t);
+    CHECK(NEAR(rec.impulse[0], 1.0, 1e-14) && NEAR(rec.impulse_t[0], 2.0, 1e-14) && rec.impulse_t[1] == 0.0,
+          "impulses %.17g, %.17g", rec.impulse[0], rec.impulse_t[0]);
+    CHECK(NEAR(rec.qd_after[0], 0.0, 1e-14) && NEAR(rec.qd_after[1], 0.0, 1e-14), "stopped: %.3g %.3g",
+          rec.qd_after[0], rec.qd_after[1]);
+    CHECK(NEAR(rec.energy_before - rec.energy_after, 1.0, 1e-14) && sim.n_tangential_impacts == 1
+          && sim.n_impacts == 1 && sim.n_sticks == 1, "energy taken %.17g, counts %ld %ld %ld",
+          rec.energy_before - rec.energy_after, sim.n_tangential_impacts, sim.n_impacts, sim.n_sticks);
+    while ((code = gac_sim_advance(&sim, 0.5, t_eval, 1, &i_eval, x_eval, &rec)) == GAC_SIM_CONTACT) {
+    }
+    CHECK(code == GAC_SIM_END && sim.nresting == 1 && sim.is_stuck[0] && i_eval == 1 && x_eval[0] == 0.0
+          && fabs(x_eval[1]) < 1e-12, "stuck at rest after: %d, x %.3g, y %.3g", code, x_eval[0], x_eval[1]);
+    code = gac_sim_init(&sim, &lever, dwork, iwork, 0.0, lever_q0, qd_other, 0, &opt);
+    i_eval = 0;
+    while (code >= 0 && (code = gac_sim_advance(&sim, 0.5, t_eval, 1, &i_eval, x_eval, &rec)) == GAC_SIM_CONTACT) {
+    }
+    CHECK(code == GAC_SIM_END && sim.n_impacts == 0 && sim.n_tangential_impacts == 0, "sliding towards +x: %d", code);
 }
 
 /* Refusals: NULL pointers, bad options, an inconsistent model, a start beyond a wall (sim unchanged). */
@@ -1156,6 +1249,7 @@ int main(int argc, char **argv)
     test_box();
     test_fused_kernel();
     test_sled();
+    test_tangential_impact();
     test_budget_and_progress();
     test_inputs();
     test_errors();

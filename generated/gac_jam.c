@@ -1,0 +1,121 @@
+/*
+ * gac_jam.c -- the tangential impact ("impact without collision"): resting contacts that slide on rough walls where
+ * their sliding system B is no P-matrix (the Painleve paradox: no unique, bounded normal forces) take an impact whose
+ * normal velocities before are 0 and whose tangential ones are not.  The loop meets such a state at the start (a chain
+ * started sliding in the paradox), after a landing, or at the end of a smooth approach to B's boundary while sliding,
+ * the dynamic jam (Genot & Brogliato 1999: the normal force grows without bound as B_aa passes through 0, and the steps
+ * shrink onto that instant, whose later stages find B no P-matrix).  There the frictional impact law (GDI,
+ * gac_impact_friction.c; Glocker, Pfeiffer & Glocker 1996) is applied with e = 0, as to any contact at rest: besides
+ * its trivial solution (no impulse, the sliding goes on, which has no consistent forces) it has a non-trivial one,
+ * a normal impulse that stops the sliding, within Coulomb's cone exactly where B_aa <= 0 (one contact: the stick
+ * impulse -W^-1 gamma- satisfies |L_T| <= c_f L_N iff W_NN - c_f sgn(v) W_NT <= 0).  The contacts then stick or
+ * separate, and the loop goes on.
+ */
+#include "gac_internal.h"
+
+#include <math.h>
+
+/* The tangential impact at s->x (time s->t) on the resting contacts, and the resting set after it: contacts left at
+ * rest (normal velocity within round-off of 0) stay and stick where they can (gac_try_stick), the others are released.
+ * The record says so (law GAC_IMPACT_LAW_GDI_TANGENTIAL, impulses, released contacts); the loop re-checks the resting
+ * contacts at the next advance (those the new state pulls off their walls are released, as after a change of the
+ * inputs).  Post-conditions: every impulse >= 0, no kinetic energy gained beyond the law's round-off (1e-10 of T).
+ * Returns GAC_SIM_IMPACT (the record reported) or an error: GAC_ERR_FRICTION when no resting contact slides on a
+ * rough wall, the law has no non-trivial solution, or the state after it still has no consistent forces (the first
+ * two leave the state as it was). */
+int gac_jam(gac_sim *s, gac_impact_record *r)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nc1 = GAC_AT_LEAST_1(md->ncontact), n = s->nresting;
+    double *x = s->x, qd_plus[nq], F[nq], Ft[2 * nq], E[2], vn[nc1], vt[2 * nc1];
+    double residual, parts, scale = 0.0, v_hold;
+    int list[nq], set[nq], nset = 0, a, c, i, code;
+    s->fail = 0;
+    for (a = 0; a < n; ++a) list[a] = s->resting[a];
+    md->energy(x, x + nq, s->p, E);
+    if (!gac_finite(E, 2)) return GAC_ERR_NONFINITE;
+    r->t = s->t;
+    r->ncontact = r->nlanded = r->nreleased = 0;
+    r->rounds = 1;
+    r->plastic = r->law_elastic = 0;
+    r->complementarity = 1;                          /* no contact approached: not Eq. 47 */
+    r->energy_rest = 0.0;
+    r->roundoff = 1e-10;
+    r->law = GAC_IMPACT_LAW_GDI_TANGENTIAL;
+    r->energy_before = E[0] + E[1];
+    for (i = 0; i < nq; ++i) {
+        r->q[i] = x[i];
+        r->qd_before[i] = x[nq + i];
+    }
+    gac_normal_velocities(md, x, s->p, vn);
+    gac_tangential_speeds(s, x, vt);
+    r->approach_before = 0.0;
+    for (a = 0; a < n; ++a) {
+        c = list[a];
+        if (-vn[c] > r->approach_before) r->approach_before = -vn[c];
+        if (!s->is_stuck[c] && gac_friction_coefficient(md, s->p, c) > 0.0) {   /* sliding on a rough wall */
+            const double speed = sqrt(vt[2*c] * vt[2*c] + vt[2*c + 1] * vt[2*c + 1]);
+            if (speed > scale) scale = speed;
+        }
+    }
+    if (!(scale > 0.0)) return GAC_ERR_FRICTION;    /* nothing slides: no paradox of sliding friction here */
+    code = gac_impact_tangential(md, x, x + nq, s->p, n, list, qd_plus, F, Ft, s->work, &residual, &parts);
+    r->residual = residual;
+    if (code != GAC_OK) return code;
+    for (a = 0; a < n; ++a) {                        /* the contacts that took an impulse */
+        if (F[a] < 0.0) return GAC_ERR_IMPACT_ACCURACY;
+        if (!(F[a] > 0.0)) continue;
+        r->contact[r->ncontact] = list[a];
+        r->impulse[r->ncontact] = F[a];
+        r->impulse_t[2 * r->ncontact] = Ft[2 * a];
+        r->impulse_t[2 * r->ncontact + 1] = Ft[2 * a + 1];
+        r->ncontact++;
+    }
+    {
+        double E_plus[2];
+        md->energy(x, qd_plus, s->p, E_plus);
+        if (!(E_plus[0] <= E[0] * (1.0 + r->roundoff))) return GAC_ERR_IMPACT_ACCURACY;    /* T+ <= T- */
+    }
+    for (i = 0; i < nq; ++i) x[nq + i] = qd_plus[i];
+    gac_normal_velocities(md, x, s->p, vn);          /* who stays at rest: lifted by round-off at most */
+    v_hold = 1e-9 * scale + 1e-15;
+    for (a = 0; a < n; ++a) {
+        if (vn[list[a]] <= v_hold) {
+            code = gac_add_independent(s, x, &nset, set, list[a]);
+            if (code != GAC_OK) return code;
+        }
+    }
+    for (c = 0; c < md->ncontact; ++c) s->is_stuck[c] = 0;
+    if (nset > 0) {                                  /* their normal velocities to 0: round-off, never a gain */
+        code = gac_project(s, x, nset, set, 0);
+        if (code != GAC_OK) return code;
+    }
+    gac_set_resting(s, nset, set, r);
+    code = gac_try_stick(s, 0, 0);                   /* stopped: stuck where the cone holds it */
+    if (code < 0) return code;
+    md->energy(x, x + nq, s->p, s->energy_x1);
+    r->energy_after = s->energy_x1[0] + s->energy_x1[1];
+    if (!(s->energy_x1[0] <= E[0] * (1.0 + r->roundoff))) return GAC_ERR_IMPACT_ACCURACY;
+    for (i = 0; i < nq; ++i) r->qd_after[i] = x[nq + i];
+    gac_normal_velocities(md, x, s->p, vn);
+    {
+        double gaps[nc1];
+        md->contact_gaps(x, s->p, gaps);
+        r->approach_after = 0.0;
+        for (c = 0; c < md->ncontact; ++c) {
+            if (gaps[c] <= s->opt.contact_tol && -vn[c] > r->approach_after) r->approach_after = -vn[c];
+        }
+    }
+    s->loss_impacts += r->energy_before - r->energy_after;
+    s->energy_roundoff += r->roundoff * E[0];
+    s->n_impacts++;
+    s->n_tangential_impacts++;
+    s->f_valid = s->vn_valid = 0;
+    s->input_changed = 1;                            /* the next advance re-checks the resting contacts */
+    gac_events(s, s->t, x, s->ev);
+    if (s->fail) return s->fail;                     /* still no consistent forces: GAC_ERR_FRICTION */
+    code = gac_energy_check(s, s->energy_x1);
+    if (code != GAC_OK) return GAC_ERR_DRIFT;
+    s->h = s->opt.method == GAC_METHOD_RK4 ? s->opt.dt : 0.0;   /* the steps shrank onto the jam: start afresh */
+    return gac_report(s, r, GAC_SIM_IMPACT);
+}

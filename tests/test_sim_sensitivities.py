@@ -180,3 +180,22 @@ def test_bad_direction_names_say_what_is_allowed(free_rod):
         simulate(free_rod, 0.1, sensitivities=["mass"])
     s = simulate(free_rod, 0.1, sensitivities=["q0[4]"], **TIGHT).sensitivities   # index 4 of Eq. 13: X2
     assert s["q[X2]", "q0[4]"] == pytest.approx(1.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("method, options", [("dop853", dict(rtol=1e-12, atol=1e-12)), ("rk4", dict(dt=2e-4))])
+def test_every_integrator_carries_them(compiled, method, options):
+    """DOP853's and RK4's own weights take the sensitivities over their steps as DOPRI5's do: a link length's column
+    against a central difference, on the box run of seed 6."""
+    model = compiled(chain(3, ("line", "rigid"), twists=True))
+    over, q0, qd0 = box_run(6)
+    p = model.parameters(over)
+    r = simulate(model, 1.5, method=method, p=p, q0=q0, qd0=qd0, sensitivities=["l_1"], **options)
+    assert r.success and len(r.impacts) == 3 and r.sensitivities.valid
+    index, h, ends = model.parameter_names.index("l_1"), 1e-6, []
+    for step in (h, -h):
+        p1 = p.copy()
+        p1[index] += step
+        run = simulate(model, 1.5, method=method, p=p1, q0=q0, qd0=qd0, **options)
+        ends.append(np.concatenate([model.layout.reduce(run.q_final), model.layout.reduce(run.qd_final)]))
+    fd = (ends[0] - ends[1]) / (2 * h)
+    assert np.abs(fd - r.sensitivities.matrix[:, 0]).max() <= 1e-6 * np.abs(fd).max()

@@ -918,6 +918,7 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
 #define GAC_SENS_CHART         7   /* the loop switched to (or ran on) the second base chart */
 #define GAC_SENS_CONTROLLER    8   /* a controller gives the inputs (they may depend on the state; du = 0 is assumed
                                       only for held inputs and schedules) */
+#define GAC_SENS_NONFINITE     9   /* the sensitivities overflowed (not finite) */
 
 /* The sensitivities of one run: pointers into the caller's dwork (gac_sens_ndouble(m, k) doubles), laid out as
  * S (k nx) | dp (k nparam) | dt_impact (k) | scratch.  Direction-major: S[j*nx + i] = d x_i / d direction j

@@ -8,6 +8,8 @@
 
 #include <math.h>
 
+#define GAC_SENS_STAGES 12    /* the most stages of a method's solution (DOP853); gac.h's GAC_SENS_NDOUBLE holds them */
+
 long gac_sens_ndouble(const gac_model *m, int k)
 {
     if (m == 0 || k < 1) return 0;
@@ -88,7 +90,7 @@ void gac_sens_flight(gac_sim *s, const double *x, double h)
     }
     {
         const int nq = md->nq, nx = md->nx, k = z->k;
-        double *K = z->work, *dK = K + 12L * nx, *Y = dK + 12L * k * nx, *dY = Y + nx;
+        double *K = z->work, *dK = K + (long)GAC_SENS_STAGES * nx, *Y = dK + (long)GAC_SENS_STAGES * k * nx, *dY = Y + nx;
         stages = gac_tableau(s->opt.method, &a, &lda, &b, &c);
         for (i = 0; i < stages; ++i) {
             const double *u;
@@ -100,10 +102,10 @@ void gac_sens_flight(gac_sim *s, const double *x, double h)
             u = gac_input(s, s->t + c[i] * h, Y);
             md->rhs(s->t + c[i] * h, Y, u, s->p, K + (long)i * nx);
             for (j = 0; j < k; ++j) {
-                double *dKi = dK + ((long)j * 12 + i) * nx;
+                double *dKi = dK + ((long)j * GAC_SENS_STAGES + i) * nx;
                 for (n = 0; n < nx; ++n) {
                     double sum = 0.0;
-                    for (l = 0; l < i; ++l) sum += a[i * lda + l] * dK[((long)j * 12 + l) * nx + n];
+                    for (l = 0; l < i; ++l) sum += a[i * lda + l] * dK[((long)j * GAC_SENS_STAGES + l) * nx + n];
                     dY[n] = z->S[(long)j * nx + n] + h * sum;
                 }
                 for (n = 0; n < nq; ++n) dKi[n] = dY[nq + n];
@@ -114,11 +116,11 @@ void gac_sens_flight(gac_sim *s, const double *x, double h)
         for (j = 0; j < k; ++j) {
             for (n = 0; n < nx; ++n) {
                 double sum = 0.0;
-                for (i = 0; i < stages; ++i) sum += b[i] * dK[((long)j * 12 + i) * nx + n];
+                for (i = 0; i < stages; ++i) sum += b[i] * dK[((long)j * GAC_SENS_STAGES + i) * nx + n];
                 z->S[(long)j * nx + n] += h * sum;
             }
         }
-        if (!gac_finite(z->S, k * nx)) gac_sens_stop(s, GAC_SENS_GRAZING, s->t + h, -1);
+        if (!gac_finite(z->S, k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, s->t + h, -1);
     }
 }
 
@@ -212,6 +214,6 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r)
             z->dt_impact[j] = tau;
         }
         z->n_impacts++;
-        if (!gac_finite(z->S, z->k * nx)) gac_sens_stop(s, GAC_SENS_GRAZING, r->t, c);
+        if (!gac_finite(z->S, z->k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, r->t, c);
     }
 }

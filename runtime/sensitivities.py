@@ -28,6 +28,7 @@ STATUS_WORDS = {
     6: "a tangential impact (Painleve)",
     7: "a switch to the second base chart",
     8: "inputs from a controller (they may depend on the state)",
+    9: "the sensitivities overflowed",
 }
 
 _STATE = re.compile(r"^(q0|qd0)\[([^\]]+)\]$")

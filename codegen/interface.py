@@ -46,6 +46,7 @@ class Function:
     tangent: bool = False           # a kernel's directional derivative (codegen.tangent): generated where
                                     # forward_dynamics is straight-line code (unless options.tangent is False);
                                     # otherwise NAME_<name> writes NaN and the descriptor's pointer is NULL
+    out_size: str = "NQ"            # the size macro of the output (without NAME_): what the NaN stub writes
 
     def c_type(self, arg: Arg, name: str, restrict: str = "") -> str:
         ctype = arg.ctype.format(name=name, NAME=name.upper())
@@ -140,6 +141,32 @@ KERNELS = (
              "direction; gac_linearize calls it once per column of A and B.  A model whose forward dynamics is "
              "rolled code, or built with tangent=False, has none: this function then writes NaN and "
              "NAME_model.forward_dynamics_tangent is NULL.", kernel=True, tangent=True),
+    Function("inertia_solve_tangent", "void",
+             (_q(), Arg("Q", "const double *", "generalised forces (NQ; N m on an angle, N on a translation)", True),
+              _p(), _seed("dq", "direction of q (NQ; rad, m)"), _seed("dQ", "direction of Q (NQ)"),
+              _seed("dp", "direction of p (NPARAM; ignored with baked parameters)"),
+              _out("dx", "d(I_f^-1 Q) along (dq, dQ, dp) (NQ)")),
+             "Directional derivative of inertia_solve (forward mode, exact: the tangent of its tape).",
+             "dx = d(I_f^-1 Q) = -I_f^-1 (dI_f) I_f^-1 Q + I_f^-1 dQ along (dq, dQ, dp), O(n); the sensitivities of "
+             "an impact (gac_sens.c).  Without a tangent kernel (as forward_dynamics_tangent): NaN, and "
+             "NAME_model.inertia_solve_tangent is NULL.", kernel=True, tangent=True),
+    Function("contact_generalized_force_tangent", "void",
+             (_q(), Arg("f", "const double *", "force along each contact Jacobian row (NJROW; N, N m on a stop)",
+                        True), _p(), _seed("dq", "direction of q (NQ; rad, m)"), _seed("df", "direction of f (NJROW)"),
+              _seed("dp", "direction of p (NPARAM; ignored with baked parameters)"),
+              _out("dQ", "d(J^T f) along (dq, df, dp) (NQ)")),
+             "Directional derivative of contact_generalized_force (forward mode, exact).",
+             "dQ = (dJ)^T f + J^T df along (dq, df, dp), O(n); with f a unit row, dJ's row along dq.  Without a "
+             "tangent kernel: NaN, and NAME_model.contact_generalized_force_tangent is NULL.", kernel=True,
+             tangent=True),
+    Function("contact_gaps_tangent", "void",
+             (_q(), _p(), _seed("dq", "direction of q (NQ; rad, m)"),
+              _seed("dp", "direction of p (NPARAM; ignored with baked parameters)"),
+              _out("dgap", "d gap along (dq, dp) (NCONTACT; m, rad on a stop)")),
+             "Directional derivative of contact_gaps (forward mode, exact).",
+             "dgap = (d gap/dq) dq + (d gap/dp) dp, O(n): an event time's sensitivity (gac_sens.c).  Without a "
+             "tangent kernel: NaN, and NAME_model.contact_gaps_tangent is NULL.", kernel=True, tangent=True,
+             out_size="NCONTACT"),
 )
 
 DENSE_KERNELS = tuple(f.name for f in KERNELS if f.dense)

@@ -25,6 +25,9 @@ CSE'd by :mod:`codegen.flatten`.  The kernels and their C signatures:
     forward_dynamics_tangent(q, qd, u, p, dq, dqd, du, dp, dqdd)  d Theta_ddot along (dq, dqd, du, dp): the
                                          forward-mode tangent of forward_dynamics' tape (codegen.tangent), O(n);
                                          generated where forward_dynamics is straight-line code (gac_linearize)
+    inertia_solve_tangent(q, Q, p, dq, dQ, dp, dx), contact_generalized_force_tangent(q, f, p, dq, df, dp, dQ),
+    contact_gaps_tangent(q, p, dq, dp, dgap)       the same tangents of three more kernels (the sensitivities
+                                         of an impact and of its event time, gac_sens.c)
 
 Every kernel but three costs O(n) for n links.  mass_matrix, bias and contact_jacobian form dense matrices
 (O(n^2) code); the hybrid loop does not use them (it applies I_f^-1, I_f and J^T through the three operators
@@ -337,10 +340,34 @@ def forward_dynamics_tangent_kernel(chain: ChainSymbols) -> Kernel:
                   tape, values)
 
 
+def _tangent_of(primal: Kernel, name: str, summary: str) -> Kernel:
+    tape, values, inputs, _ = tangent.tangent(primal.tape, primal.values, primal.inputs)
+    return Kernel(name, summary, inputs, "d" + primal.output, primal.output_size, tape, values)
+
+
+def inertia_solve_tangent_kernel(chain: ChainSymbols) -> Kernel:
+    """d(I_f^-1 Q) along (dq, dQ, dp): the tangent of inertia_solve's O(n) tape (an impact's sensitivity)."""
+    return _tangent_of(inertia_solve_kernel(chain), "inertia_solve_tangent",
+                       "Directional derivative of I_f^-1 Q along (dq, dQ, dp): the tangent of its O(n) tape.")
+
+
+def contact_generalized_force_tangent_kernel(chain: ChainSymbols) -> Kernel:
+    """d(J^T f) along (dq, df, dp): the tangent of contact_generalized_force's O(n) tape."""
+    return _tangent_of(contact_generalized_force_kernel(chain), "contact_generalized_force_tangent",
+                       "Directional derivative of J^T f along (dq, df, dp): the tangent of its O(n) tape.")
+
+
+def contact_gaps_tangent_kernel(chain: ChainSymbols) -> Kernel:
+    """d gap along (dq, dp): the tangent of contact_gaps' tape (an event time's sensitivity)."""
+    return _tangent_of(contact_gaps_kernel(chain), "contact_gaps_tangent",
+                       "Directional derivative of the contact gaps along (dq, dp): the tangent of their tape.")
+
+
 KERNEL_BUILDERS = (mass_matrix_kernel, bias_kernel, forward_dynamics_kernel, inertia_solve_kernel,
                    generalized_momentum_kernel, contact_points_kernel, contact_velocities_kernel,
                    contact_jacobian_kernel, contact_generalized_force_kernel, contact_gaps_kernel, energy_kernel,
-                   contact_bias_kernel, power_kernel, forward_dynamics_energy_kernel, forward_dynamics_tangent_kernel)
+                   contact_bias_kernel, power_kernel, forward_dynamics_energy_kernel, forward_dynamics_tangent_kernel,
+                   inertia_solve_tangent_kernel, contact_generalized_force_tangent_kernel, contact_gaps_tangent_kernel)
 
 
 def builders(dense: bool, fused: bool = True, tangent: bool = True):

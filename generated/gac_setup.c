@@ -170,6 +170,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     s->controller = 0;
     s->controller_data = 0;
     s->schedule = 0;
+    s->sens = 0;
     s->clock = 0;
     s->clock_data = 0;
     s->progress = 0;

@@ -120,6 +120,9 @@
  *   power                     0 = 0 add + 0 mul + 0 div + 0 calls
  *   forward_dynamics_energy    438 = 153 add + 271 mul + 6 div + 8 calls
  *   forward_dynamics_tangent    939 = 378 add + 541 mul + 12 div + 8 calls
+ *   inertia_solve_tangent    734 = 299 add + 415 mul + 12 div + 8 calls
+ *   contact_generalized_force_tangent    161 = 61 add + 92 mul + 0 div + 8 calls
+ *   contact_gaps_tangent    144 = 60 add + 76 mul + 0 div + 8 calls
  *
  * USING IT
  *   paper_case1_options opt;  paper_case1_sim sim;  paper_case1_impact_record rec;  int code;
@@ -350,6 +353,44 @@ void paper_case1_forward_dynamics_energy(const double *GAC_RESTRICT q, const dou
  *   paper_case1_model.forward_dynamics_tangent is NULL.
  *   6 outputs.   939 ops (378 add, 541 mul, 12 div, 8 calls) */
 void paper_case1_forward_dynamics_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT du, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dqdd);
+
+/* Directional derivative of I_f^-1 Q along (dq, dQ, dp): the tangent of its O(n) tape.
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   Q    in : generalised forces (NQ; N m on an angle, N on a translation)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   dq   in : direction of q (NQ; rad, m)
+ *   dQ   in : direction of Q (NQ)
+ *   dp   in : direction of p (NPARAM; ignored with baked parameters)
+ *   dx   out: d(I_f^-1 Q) along (dq, dQ, dp) (NQ)
+ *   dx = d(I_f^-1 Q) = -I_f^-1 (dI_f) I_f^-1 Q + I_f^-1 dQ along (dq, dQ, dp), O(n); the sensitivities
+ *   of an impact (gac_sens.c).  Without a tangent kernel (as forward_dynamics_tangent): NaN, and
+ *   paper_case1_model.inertia_solve_tangent is NULL.
+ *   6 outputs.   734 ops (299 add, 415 mul, 12 div, 8 calls) */
+void paper_case1_inertia_solve_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT Q, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dQ, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dx);
+
+/* Directional derivative of J^T f along (dq, df, dp): the tangent of its O(n) tape.
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   f    in : force along each contact Jacobian row (NJROW; N, N m on a stop)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   dq   in : direction of q (NQ; rad, m)
+ *   df   in : direction of f (NJROW)
+ *   dp   in : direction of p (NPARAM; ignored with baked parameters)
+ *   dQ   out: d(J^T f) along (dq, df, dp) (NQ)
+ *   dQ = (dJ)^T f + J^T df along (dq, df, dp), O(n); with f a unit row, dJ's row along dq.  Without a
+ *   tangent kernel: NaN, and paper_case1_model.contact_generalized_force_tangent is NULL.
+ *   6 outputs.   161 ops (61 add, 92 mul, 0 div, 8 calls) */
+void paper_case1_contact_generalized_force_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT f, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT df, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dQ);
+
+/* Directional derivative of the contact gaps along (dq, dp): the tangent of their tape.
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   dq   in : direction of q (NQ; rad, m)
+ *   dp   in : direction of p (NPARAM; ignored with baked parameters)
+ *   dgap out: d gap along (dq, dp) (NCONTACT; m, rad on a stop)
+ *   dgap = (d gap/dq) dq + (d gap/dp) dp, O(n): an event time's sensitivity (gac_sens.c).  Without a
+ *   tangent kernel: NaN, and paper_case1_model.contact_gaps_tangent is NULL.
+ *   20 outputs.   144 ops (60 add, 76 mul, 0 div, 8 calls) */
+void paper_case1_contact_gaps_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dgap);
 
 /* ODE right-hand side of the flight phase.
  *   t            time (s), unused

@@ -28,6 +28,7 @@ from codegen.specialise import coordinate_names
 from .header import library_constants
 from .inputs import InputSchedule, attach, input_source  # noqa: F401  (InputSchedule: re-export)
 from .model import CHOSEN_LAWS, CompiledModel, load_model
+from . import sensitivities as sensitivity
 
 METHODS = ("dopri5", "dop853", "rk4")
 RTOL_MIN = float(library_constants()["GAC_RTOL_MIN"])   # the smallest rtol the C loop accepts (gac.h)
@@ -75,6 +76,8 @@ class Impact:
                                         # 'gdi-tangential' (a tangential impact: sliding resting contacts in the
                                         # Painleve paradox stopped by an impact without collision)
     residual: float = 0.0               # the frictional law's largest relative violation of its conditions
+    dt_dp: dict | None = None           # simulate(sensitivities=...): d t_impact / d(direction) by direction name
+                                        # (NaN from the first event not differentiated on)
 
 
 @dataclass
@@ -125,6 +128,17 @@ class SimulationResult:
     n_slips: int = 0                   # stuck points that began to slip (|lambda_T| reached c_f lambda_N)
     n_tangential_impacts: int = 0      # tangential impacts (law 'gdi-tangential', also in impacts): sliding resting
                                        # contacts with no consistent forces (Painleve paradox, the dynamic jam)
+    sensitivities: "sensitivity.Sensitivities | None" = None   # simulate(sensitivities=...): d x(t_final)/d(direction)
+
+    @property
+    def sensitivity_status(self) -> str | None:
+        """'valid', or what ended the sensitivities (None: none asked for)."""
+        return None if self.sensitivities is None else self.sensitivities.status
+
+    @property
+    def sensitivity_message(self) -> str | None:
+        """The verdict in a sentence: the event not differentiated, its contact and time (None: none asked for)."""
+        return None if self.sensitivities is None else self.sensitivities.message
 
     @property
     def n_impacts(self) -> int:
@@ -377,7 +391,7 @@ class Impacts(Sequence):
 
 def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "dopri5", t_eval=None, *,
              p=None, q0=None, qd0=None, u=None, progress=None, charts: bool = True, check_start: bool = True,
-             keep_impacts: bool = True, **options) -> SimulationResult:
+             keep_impacts: bool = True, sensitivities=None, **options) -> SimulationResult:
     """Simulate the scene's hybrid dynamics from its initial state over [0, t_end].
 
     method        'dopri5' (adaptive Dormand-Prince 5(4), rtol/atol), 'dop853' (adaptive 8(5,3)),
@@ -402,6 +416,12 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                   their landing gaps)
     keep_impacts  False: count the impacts (len(result.impacts), t_first_impact, loss_impacts) without
                   keeping their records, for studies of many runs
+    sensitivities directions to differentiate the run along (runtime.sensitivities): "q0[NAME]", "qd0[NAME]"
+                  (a coordinate of Eq. 13's layout by name or index) and parameter names ("e_x2_min", "g");
+                  result.sensitivities holds d x(t_final)/d(direction) with named rows and columns, each
+                  impact's dt_dp the impact time's derivatives, result.sensitivity_status / _message the verdict
+                  (events the C loop does not differentiate make them NaN from there on: docs/simulation.md,
+                  "Sensitivities")
     **options     the C loop's options (LOOP_OPTIONS: rtol, atol, dt, h_max, event_samples, event_tol, contact_tol,
                   max_steps, max_impacts, max_wall_time, rest_height, zeno_impacts, energy_tol), with the C library's
                   defaults
@@ -444,6 +464,20 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     if code < 0:
         raise ValueError(f"simulate: {model.error_message(code)}")
     keep_alive = attach(model, sim, source)   # noqa: F841  (the schedule or handle the C loop points at)
+    sens = sens_work = directions = None
+    if sensitivities is not None:
+        directions, seed_x, seed_p = sensitivity.directions(model, sensitivities)
+        if c.model.inertia_solve_tangent == ffi.NULL:
+            raise ValueError("sensitivities: this model has no tangent kernels (its forward dynamics is rolled code, "
+                             "or it was built with tangent=False): load it with rolled=False and tangent=None")
+        k = len(directions)
+        sens = ffi.new("gac_sens *")
+        sens_work = np.zeros(lib.gac_sens_ndouble(ffi.addressof(c.model), k))
+        seed_x, seed_p = np.ascontiguousarray(seed_x), np.ascontiguousarray(seed_p)
+        code = lib.gac_sens_attach(ffi.addressof(sim, "base"), sens, k, model._ptr(seed_x), model._ptr(seed_p) if seed_p.size else ffi.NULL,
+                                   model._ptr(sens_work))
+        if code != lib.GAC_OK:
+            raise ValueError(f"sensitivities: {model.error_message(code)}")
     watch = _watch(model, sim, opt.max_wall_time, progress)   # noqa: F841  (the clock and progress handles)
 
     # the loop: one C call per impact or change of the resting contacts, up to t_end or the loop's end
@@ -465,6 +499,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         code = c.sim_advance(sim, float(t_end), t_eval_ptr, len(t_eval), i_eval, x_eval_ptr, record)
         if code == lib.GAC_SIM_IMPACT:
             impacts.add(model, rec)
+            if sens is not None and keep_impacts:
+                impacts[len(impacts) - 1].dt_dp = dict(zip(directions, ffi.unpack(sens.dt_impact, len(directions))))
         if code in (lib.GAC_SIM_IMPACT, lib.GAC_SIM_CONTACT):
             contact_events += _read_contact_events(model, rec)
             segment_t, segment_steps = float(state.t), int(state.n_steps) + int(state.n_rejected)
@@ -508,7 +544,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         options={"t_end": t_end, **{name: _option_value(opt, name) for name in LOOP_OPTIONS},
                  "chart_switch": float(opt.chart_switch)},
         n_chart_switches=int(state.n_chart_switches), n_sticks=int(state.n_sticks), n_slips=int(state.n_slips),
-        n_tangential_impacts=int(state.n_tangential_impacts))
+        n_tangential_impacts=int(state.n_tangential_impacts),
+        sensitivities=None if sens is None else sensitivity.read(model, sens, directions, status == 0, message))
 
 
 def _option_value(opt, name: str):

@@ -59,6 +59,7 @@ LAYERS = {
     "runtime.model": SIMULATION,
     "runtime.simulate": SIMULATION,
     "runtime.inputs": SIMULATION,
+    "runtime.sensitivities": SIMULATION,
     "runtime.horizon": SIMULATION,
     # 5. tools: command lines and what they drive
     "codegen.cli": TOOLS,

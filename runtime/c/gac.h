@@ -163,6 +163,13 @@ typedef void (*gac_kernel_tangent)(const double *q, const double *qd, const doub
                                    const double *dq, const double *dqd, const double *du, const double *dp,
                                    double *out);
 
+/* q, a vector v (its size per kernel), p and a direction (dq, dv, dp) -> the directional derivative of a qv kernel */
+typedef void (*gac_kernel_qv_tangent)(const double *q, const double *v, const double *p, const double *dq,
+                                      const double *dv, const double *dp, double *out);
+/* q, p and a direction (dq, dp) -> the directional derivative of a q kernel */
+typedef void (*gac_kernel_q_tangent)(const double *q, const double *p, const double *dq, const double *dp,
+                                     double *out);
+
 /* A controller: writes the inputs u (nu) for time t (s) and state (q, qd).  On entry u holds the inputs
  * last given to gac_sim_set_input.  Called at every stage of the integrators and wherever the loop needs
  * the flight dynamics (events, impacts, resting contact), so it must be a function of (t, q, qd) and of what
@@ -293,6 +300,11 @@ struct gac_model {
                                           every other entry the same (sizes, contacts, parameters); only theta_-1,
                                           theta_0, theta_1 and their rates differ.  The loop integrates on it
                                           near this chart's gimbal lock (gac_options.chart_switch) */
+    /* the tangents of three more kernels, for the sensitivities of impacts (gac_sens_attach); NULL: none (a rolled
+       forward dynamics, tangent=False, chart B) */
+    gac_kernel_qv_tangent inertia_solve_tangent;   /* q, Q, p, dq, dQ, dp -> d(I_f^-1 Q) (nq) */
+    gac_kernel_qv_tangent contact_generalized_force_tangent; /* q, f, p, dq, df (njrow), dp -> d(J^T f) (nq) */
+    gac_kernel_q_tangent contact_gaps_tangent;     /* q, p, dq, dp -> d gap (ncontact) */
 };
 
 /* GAC_OK if the descriptor is consistent (sizes > 0 where needed, nx = 2 nq, tables and kernels present,
@@ -776,6 +788,7 @@ typedef struct {
                                     energy_x1_valid */
     int energy_x1_valid;
     double energy_tol;           /* resolved opt.energy_tol (0: off) */
+    struct gac_sens_s *sens;     /* the sensitivities carried along (gac_sens_attach), NULL: none */
 } gac_sim;
 
 /* Default options (DOPRI5, rtol 1e-8, atol 1e-10, resting contact on).  opt NULL: nothing is done. */
@@ -876,6 +889,62 @@ typedef struct {
  * opt.max_impacts impacts were applied), counting into summary (zeroed first).  For studies of many runs: the whole run
  * stays in C.  record: a bound record (not NULL), overwritten at each impact.  Returns GAC_SIM_END or an error (< 0). */
 int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_summary *summary);
+
+/* ---- forward sensitivities of a run (gac_sens.c) ---------------------------------------------------- */
+
+/* Forward sensitivities S(t) = d x(t) / d(direction) of a hybrid run along k directions, each a seed of the
+ * initial state dx0 (nx) and of the parameters dp (nparam).  In flight S solves the variational equations
+ *     S' = (df/dx) S + (df/dp) dp,      column j: [dqd_j ; forward_dynamics_tangent(q, qd, u, p, dq_j, dqd_j, 0, dp_j)]
+ * integrated by the run's own Runge-Kutta formula (RK4, DOPRI5's or DOP853's weights) over the very steps the state
+ * takes, the stages' states recomputed from the step's start; S is not in the step's error norm (the state's error
+ * control alone chooses the steps).  At an impact of one contact c of the frictionless law at time t*:
+ *     dt*_j = -(dg_j) / (w . qd-),  dg_j = contact_gaps_tangent(q, p, dq_j, dp_j)[c],  w = J^T (sign e_row)
+ *     S+_j = D Delta (S-_j + f- dt*_j, dp_j) - f+ dt*_j
+ * (the saltation matrix of Hiskens & Pai 2000, with the parameters' direct part), Delta the impact map
+ * qd+ = qd - (1 + e) y (w . qd) / (w . y), y = I_f^-1 w, differentiated by inertia_solve_tangent and
+ * contact_generalized_force_tangent (e = p[e_index] is a parameter like any other).  Events this does not
+ * differentiate end the sensitivities (status below): S and dt_impact are then NaN from that event on, the run itself
+ * continues.  The status codes: */
+#define GAC_SENS_VALID         0   /* every event so far differentiated */
+#define GAC_SENS_RESTING       1   /* a contact came to rest (a landing, the start, Zeno's shrinking bounces) or was
+                                      released: resting contact is not differentiated */
+#define GAC_SENS_FRICTION      2   /* an impact by a frictional law (record.law not FRICTIONLESS) */
+#define GAC_SENS_STOP          3   /* an impact at a joint stop */
+#define GAC_SENS_SIMULTANEOUS  4   /* an impact of several contacts (within the simultaneity window), or of more than
+                                      one round or a plastic round */
+#define GAC_SENS_GRAZING       5   /* a contact met its wall with normal velocity ~ 0 (|w . qd-| below 1e-9 of the
+                                      chain's speed scale), or touched it without an impact: t* not differentiable */
+#define GAC_SENS_TANGENTIAL    6   /* a tangential impact (record.law GAC_IMPACT_LAW_GDI_TANGENTIAL) */
+#define GAC_SENS_CHART         7   /* the loop switched to (or ran on) the second base chart */
+#define GAC_SENS_CONTROLLER    8   /* a controller gives the inputs (they may depend on the state; du = 0 is assumed
+                                      only for held inputs and schedules) */
+#define GAC_SENS_NONFINITE     9   /* the sensitivities overflowed (not finite) */
+
+/* The sensitivities of one run: pointers into the caller's dwork (gac_sens_ndouble(m, k) doubles), laid out as
+ * S (k nx) | dp (k nparam) | dt_impact (k) | scratch.  Direction-major: S[j*nx + i] = d x_i / d direction j
+ * (chart A's coordinates, x = [q, qd] at sim.t), dp[j*nparam + i] the parameter seed of direction j. */
+typedef struct gac_sens_s {
+    int k;                       /* directions */
+    double *S;                   /* k x nx: the sensitivities at sim.t (NaN once status is not GAC_SENS_VALID) */
+    double *dp;                  /* k x nparam: the parameter seeds (constant) */
+    double *dt_impact;           /* k: d t* / d direction j of the last impact differentiated (s per unit) */
+    int status;                  /* GAC_SENS_VALID or the first event not differentiated (GAC_SENS_*) */
+    double t_status;             /* s: the time of that event */
+    int contact_status;          /* its contact (0..ncontact-1), -1: none */
+    long n_impacts;              /* impacts differentiated */
+    double *work;                /* scratch: the stages */
+} gac_sens;
+
+/* Doubles of a gac_sens's dwork: S, dp, dt_impact, and 12 stage derivatives of the state and of each direction. */
+#define GAC_SENS_NDOUBLE(nq, nparam, k) (13L * (k) * 2 * (nq) + (long)(k) * (nparam) + (k) + 14L * 2 * (nq))
+long gac_sens_ndouble(const gac_model *m, int k);
+
+/* Attach sensitivities along k directions to sim from its current time on: S = seed_x (k x nx, direction-major),
+ * dp = seed_p (k x nparam; NULL: 0).  The loop then carries them (sim.sens); sens and dwork owned by the caller for
+ * the life of the run.  sens NULL detaches.  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT (sim, seed_x or dwork NULL),
+ * GAC_ERR_BAD_OPTION (k < 1, a seed not finite) or GAC_ERR_BAD_MODEL (the model has no tangent kernels: rolled
+ * forward dynamics, or built with tangent=False). */
+int gac_sens_attach(gac_sim *sim, gac_sens *sens, int k, const double *seed_x, const double *seed_p, double *dwork);
 
 #ifdef __cplusplus
 }

@@ -374,3 +374,32 @@ void gac_dense(gac_sim *s, double t, double *out)
         gac_contd5(nq, out, s->cont[0], s->cont[1], s->cont[2], s->cont[3], s->cont[4], th, th1);
     }
 }
+
+/* The Butcher tableau of the method's solution (its stages up to the last with a nonzero weight): *a (row i's
+ * coefficients at a[i*lda .. ], i < stages), *b (stages weights), *c (stages nodes); returns the stages.  The
+ * sensitivities (gac_sens.c) take the state's steps with it. */
+int gac_tableau(int method, const double **a, int *lda, const double **b, const double **c)
+{
+    static const double rk4_a[4][4] = {{0.0}, {0.5}, {0.0, 0.5}, {0.0, 0.0, 1.0}};
+    static const double rk4_b[4] = {1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0}, rk4_c[4] = {0.0, 0.5, 0.5, 1.0};
+    static const double dopri5_a[6][6] = {
+        {0.0},
+        {1.0 / 5.0},
+        {3.0 / 40.0, 9.0 / 40.0},
+        {44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0},
+        {19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0},
+        {9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0}};
+    static const double dopri5_b[6] = {35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0,
+                                       11.0 / 84.0};
+    static const double dopri5_c[6] = {0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0};
+    if (method == GAC_METHOD_RK4) {
+        *a = &rk4_a[0][0], *lda = 4, *b = rk4_b, *c = rk4_c;
+        return 4;
+    }
+    if (method == GAC_METHOD_DOP853) {             /* the solution's weights are the row of stage 13 (c = 1) */
+        *a = &gac_dop853_a[0][0], *lda = 16, *b = gac_dop853_a[12], *c = gac_dop853_c;
+        return 12;
+    }
+    *a = &dopri5_a[0][0], *lda = 6, *b = dopri5_b, *c = dopri5_c;
+    return 6;
+}

@@ -59,6 +59,7 @@ int gac_switch_chart(gac_sim *s)
 {
     const gac_model *from = s->model, *to = s->chart == 0 ? s->model_a->chart_b : s->model_a;
     int i, code;
+    gac_sens_stop(s, GAC_SENS_CHART, s->t, -1);       /* the sensitivities are carried on chart A only */
     if (s->chart == 0) {
         for (i = 0; i < 3; ++i) s->near_a[i] = s->x[from->base.index[i]];
     }
@@ -97,6 +98,11 @@ int gac_report(gac_sim *s, gac_impact_record *record, int code)
 {
     const int nq = s->model->nq;
     double x[2 * nq], y[2 * nq];
+    if (s->sens != 0 && code == GAC_SIM_CONTACT)          /* resting contact: not differentiated */
+        gac_sens_stop(s, GAC_SENS_RESTING, record->t, record->nlanded > 0 ? record->landed[0]
+                                                      : record->nreleased > 0 ? record->released[0] : -1);
+    if (s->sens != 0 && code == GAC_SIM_IMPACT && record->law == GAC_IMPACT_LAW_GDI_TANGENTIAL)
+        gac_sens_stop(s, GAC_SENS_TANGENTIAL, record->t, record->ncontact > 0 ? record->contact[0] : -1);
     if (s->chart == 0) return code;
     gac_copy(x, record->q, nq);
     gac_copy(x + nq, record->qd_before, nq);

@@ -1,0 +1,219 @@
+/*
+ * gac_sens.c -- forward sensitivities of a hybrid run (gac.h, "forward sensitivities of a run"): the variational
+ * equations in flight, taken by the run's Runge-Kutta formula over the state's own steps (gac_sens_flight), the jump
+ * of the sensitivities at an impact of one contact by the frictionless law, the saltation matrix of Hiskens & Pai
+ * (2000) (gac_sens_impact), and the verdict: the first event not differentiated ends them (gac_sens_stop).
+ */
+#include "gac_internal.h"
+
+#include <math.h>
+
+#define GAC_SENS_STAGES 12    /* the most stages of a method's solution (DOP853); gac.h's GAC_SENS_NDOUBLE holds them */
+
+long gac_sens_ndouble(const gac_model *m, int k)
+{
+    if (m == 0 || k < 1) return 0;
+    return GAC_SENS_NDOUBLE(m->nq, m->nparam, k);
+}
+
+int gac_sens_attach(gac_sim *s, gac_sens *sens, int k, const double *seed_x, const double *seed_p, double *dwork)
+{
+    const gac_model *md;
+    int i;
+    if (s == 0) return GAC_ERR_NULL_ARGUMENT;
+    if (sens == 0) {                              /* detach */
+        s->sens = 0;
+        return GAC_OK;
+    }
+    if (seed_x == 0 || dwork == 0) return GAC_ERR_NULL_ARGUMENT;
+    md = s->model_a;
+    if (k < 1) return GAC_ERR_BAD_OPTION;
+    if (md->forward_dynamics_tangent == 0 || md->inertia_solve_tangent == 0
+        || md->contact_generalized_force_tangent == 0 || md->contact_gaps_tangent == 0)
+        return GAC_ERR_BAD_MODEL;
+    if (!gac_finite(seed_x, k * md->nx) || (seed_p != 0 && !gac_finite(seed_p, k * md->nparam)))
+        return GAC_ERR_BAD_OPTION;
+    sens->k = k;
+    sens->S = dwork;                              /* dwork: S | dp | dt_impact | work */
+    sens->dp = dwork + (long)k * md->nx;
+    sens->dt_impact = sens->dp + (long)k * md->nparam;
+    sens->work = sens->dt_impact + k;
+    gac_copy(sens->S, seed_x, k * md->nx);
+    for (i = 0; i < k * md->nparam; ++i) sens->dp[i] = seed_p != 0 ? seed_p[i] : 0.0;
+    for (i = 0; i < k; ++i) sens->dt_impact[i] = 0.0;
+    sens->status = GAC_SENS_VALID;
+    sens->t_status = s->t;
+    sens->contact_status = -1;
+    sens->n_impacts = 0;
+    s->sens = sens;
+    if (s->chart != 0) gac_sens_stop(s, GAC_SENS_CHART, s->t, -1);
+    return GAC_OK;
+}
+
+void gac_sens_stop(gac_sim *s, int status, double t, int contact)
+{
+    gac_sens *z = s->sens;
+    const double nan = NAN;
+    int i;
+    if (z == 0 || z->status != GAC_SENS_VALID) return;
+    z->status = status;
+    z->t_status = t;
+    z->contact_status = contact;
+    for (i = 0; i < z->k * s->model_a->nx; ++i) z->S[i] = nan;
+    for (i = 0; i < z->k; ++i) z->dt_impact[i] = nan;
+}
+
+/* The inputs' derivative is taken as 0: held inputs and schedules are functions of t alone, a controller may not be. */
+static int gac_sens_inputs_fixed(const gac_sim *s)
+{
+    return s->controller == 0 || s->controller == gac_schedule_input || s->model->nu == 0;
+}
+
+/* S over one step [t, t + h] from the state x at s->t: the method's stages Y_i = x + h sum_l a_il K_l, K_i = f(Y_i)
+ * again, and with them dY_i = S + h sum_l a_il dK_l, dK_i = [dY_i qd ; forward_dynamics_tangent(Y_i, dY_i, dp)]
+ * per direction; S += h sum_i b_i dK_i.  (The derivative of the Runge-Kutta step itself: the variational equations
+ * integrated by the same formula.) */
+void gac_sens_flight(gac_sim *s, const double *x, double h)
+{
+    gac_sens *z = s->sens;
+    const gac_model *md = s->model;
+    const double *a, *b, *c;
+    int lda, stages, i, j, l, n;
+    if (z == 0 || z->status != GAC_SENS_VALID || !(h > 0.0)) return;
+    if (s->nresting > 0) {
+        gac_sens_stop(s, GAC_SENS_RESTING, s->t, s->resting[0]);
+        return;
+    }
+    if (!gac_sens_inputs_fixed(s)) {
+        gac_sens_stop(s, GAC_SENS_CONTROLLER, s->t, -1);
+        return;
+    }
+    {
+        const int nq = md->nq, nx = md->nx, k = z->k;
+        double *K = z->work, *dK = K + (long)GAC_SENS_STAGES * nx, *Y = dK + (long)GAC_SENS_STAGES * k * nx, *dY = Y + nx;
+        stages = gac_tableau(s->opt.method, &a, &lda, &b, &c);
+        for (i = 0; i < stages; ++i) {
+            const double *u;
+            for (n = 0; n < nx; ++n) {
+                double sum = 0.0;
+                for (l = 0; l < i; ++l) sum += a[i * lda + l] * K[l * nx + n];
+                Y[n] = x[n] + h * sum;
+            }
+            u = gac_input(s, s->t + c[i] * h, Y);
+            md->rhs(s->t + c[i] * h, Y, u, s->p, K + (long)i * nx);
+            for (j = 0; j < k; ++j) {
+                double *dKi = dK + ((long)j * GAC_SENS_STAGES + i) * nx;
+                for (n = 0; n < nx; ++n) {
+                    double sum = 0.0;
+                    for (l = 0; l < i; ++l) sum += a[i * lda + l] * dK[((long)j * GAC_SENS_STAGES + l) * nx + n];
+                    dY[n] = z->S[(long)j * nx + n] + h * sum;
+                }
+                for (n = 0; n < nq; ++n) dKi[n] = dY[nq + n];
+                md->forward_dynamics_tangent(Y, Y + nq, u, s->p, dY, dY + nq, 0, z->dp + (long)j * md->nparam,
+                                             dKi + nq);
+            }
+        }
+        for (j = 0; j < k; ++j) {
+            for (n = 0; n < nx; ++n) {
+                double sum = 0.0;
+                for (i = 0; i < stages; ++i) sum += b[i] * dK[((long)j * GAC_SENS_STAGES + i) * nx + n];
+                z->S[(long)j * nx + n] += h * sum;
+            }
+        }
+        if (!gac_finite(z->S, k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, s->t + h, -1);
+    }
+}
+
+/* The impact map's differential along (dq, dqd, dp, de) at (q, qd): Delta(q, qd) = qd + y L, y = I_f^-1 w,
+ * w = J^T (sign e_row) (the struck contact's normal row), L = -(1 + e) v / a, v = w . qd, a = w . y:
+ *     dw = d(J^T f)[dq, dp],  dy = d(I_f^-1 w)[dq, dw, dp],  dv = dw . qd + w . dqd,  da = dw . y + w . dy,
+ *     dL = -de v / a - (1 + e) (dv / a - v da / a^2),  d qd+ = dqd + dy L + y dL. */
+static void gac_impact_differential(const gac_sim *s, const double *q, const double *qd, const double *f,
+                                    const double *w, const double *y, double e, const double *dq, const double *dqd,
+                                    const double *dp, double de, double *dqd_plus)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow);
+    double dw[nq], dy[nq], df[nr], v = 0.0, a = 0.0, dv = 0.0, da = 0.0, L, dL;
+    int i;
+    for (i = 0; i < nr; ++i) df[i] = 0.0;
+    md->contact_generalized_force_tangent(q, f, s->p, dq, df, dp, dw);
+    md->inertia_solve_tangent(q, w, s->p, dq, dw, dp, dy);
+    for (i = 0; i < nq; ++i) {
+        v += w[i] * qd[i];
+        a += w[i] * y[i];
+        dv += dw[i] * qd[i] + w[i] * dqd[i];
+        da += dw[i] * y[i] + w[i] * dy[i];
+    }
+    L = -(1.0 + e) * v / a;
+    dL = -de * v / a - (1.0 + e) * (dv / a - v * da / (a * a));
+    for (i = 0; i < nq; ++i) dqd_plus[i] = dqd[i] + dy[i] * L + y[i] * dL;
+}
+
+/* The jump at the impact record r just resolved (state before it s->xs, after it s->x1): for each direction j,
+ * dt*_j = -dg_j / (w . qd-) and S+_j = D Delta (S-_j + f- dt*_j, dp_j) - f+ dt*_j.  Impacts of another kind end the
+ * sensitivities (the verdict). */
+void gac_sens_impact(gac_sim *s, const gac_impact_record *r)
+{
+    gac_sens *z = s->sens;
+    const gac_model *md = s->model;
+    if (z == 0 || z->status != GAC_SENS_VALID) return;
+    if (r->law != GAC_IMPACT_LAW_FRICTIONLESS) {
+        gac_sens_stop(s, r->law == GAC_IMPACT_LAW_GDI_TANGENTIAL ? GAC_SENS_TANGENTIAL : GAC_SENS_FRICTION, r->t,
+                      r->ncontact > 0 ? r->contact[0] : -1);
+        return;
+    }
+    if (r->ncontact != 1 || r->rounds != 1 || r->plastic) {
+        gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, r->ncontact > 0 ? r->contact[0] : -1);
+        return;
+    }
+    if (r->nlanded > 0 || r->nreleased > 0 || s->nresting > 0) {
+        gac_sens_stop(s, GAC_SENS_RESTING, r->t, r->contact[0]);
+        return;
+    }
+    if (md->contacts[r->contact[0]].kind == GAC_CONTACT_STOP) {
+        gac_sens_stop(s, GAC_SENS_STOP, r->t, r->contact[0]);
+        return;
+    }
+    {
+        const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), c = r->contact[0];
+        const double *xm = s->xs, *xp = s->x1, *q = xm;
+        const gac_contact *ct = md->contacts + c;
+        const double e = ct->e_index >= 0 ? s->p[ct->e_index] : ct->e_value;
+        double f[nr], w[nq], y[nq], fm[nx], fp[nx], dgap[GAC_AT_LEAST_1(md->ncontact)], v = 0.0, speed = 0.0;
+        double dx[nx], dqd_plus[nq], zero_p[GAC_AT_LEAST_1(md->nparam)];
+        int i, j;
+        for (i = 0; i < nr; ++i) f[i] = 0.0;
+        f[ct->row] = ct->normal_sign;
+        md->contact_generalized_force(q, f, s->p, w);
+        md->inertia_solve(q, w, s->p, y);
+        for (i = 0; i < nq; ++i) {
+            v += w[i] * xm[nq + i];
+            if (fabs(xm[nq + i]) > speed) speed = fabs(xm[nq + i]);
+        }
+        if (!(fabs(v) > 1e-9 * speed * s->lever)) {            /* grazing: t* has no derivative */
+            gac_sens_stop(s, GAC_SENS_GRAZING, r->t, c);
+            return;
+        }
+        md->rhs(r->t, xm, gac_input(s, r->t, xm), s->p, fm);
+        md->rhs(r->t, xp, gac_input(s, r->t, xp), s->p, fp);
+        for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+        for (j = 0; j < z->k; ++j) {
+            double *S = z->S + (long)j * nx;
+            const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
+            const double de = ct->e_index >= 0 ? dp[ct->e_index] : 0.0;
+            double tau;
+            md->contact_gaps_tangent(q, s->p, S, dp, dgap);
+            tau = -dgap[c] / v;                                  /* dt*_j: the gap stays 0 at the event */
+            for (i = 0; i < nx; ++i) dx[i] = S[i] + fm[i] * tau; /* the perturbed state at the perturbed t* */
+            gac_impact_differential(s, q, xm + nq, f, w, y, e, dx, dx + nq, dp, de, dqd_plus);
+            for (i = 0; i < nq; ++i) {
+                S[i] = dx[i] - fp[i] * tau;                      /* back to the nominal t*: minus f+ dt*_j */
+                S[nq + i] = dqd_plus[i] - fp[nq + i] * tau;
+            }
+            z->dt_impact[j] = tau;
+        }
+        z->n_impacts++;
+        if (!gac_finite(z->S, z->k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, r->t, c);
+    }
+}

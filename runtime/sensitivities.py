@@ -1,0 +1,135 @@
+"""Forward sensitivities of a hybrid run, as Python names them: the directions (initial-state components and
+parameters by name), the seeds the C loop starts from (gac_sens_attach), and what a run returns (the final-state
+matrix, the verdict).  The C library carries them along the run (runtime/c/gac_sens.c; docs/simulation.md,
+"Sensitivities").
+
+A direction is named
+    q0[NAME] / qd0[NAME]   an initial coordinate or velocity, NAME a coordinate of the full layout of Eq. 13
+                           ("theta_1", "X2") or its index there ("q0[8]"); only the model's own (free) coordinates
+    PARAMETER              a runtime parameter by its name in model.parameter_names ("e_x2_min", "g", "l_1")
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from codegen.scene import coordinate_names
+
+# gac.h's GAC_SENS_* status codes, in words
+STATUS_WORDS = {
+    0: "valid",
+    1: "resting contact (a landing, a release, or contacts at rest at the start)",
+    2: "an impact by a frictional law",
+    3: "an impact at a joint stop",
+    4: "an impact of several contacts at once (or of several rounds)",
+    5: "a grazing contact (normal velocity ~ 0 at the wall)",
+    6: "a tangential impact (Painleve)",
+    7: "a switch to the second base chart",
+    8: "inputs from a controller (they may depend on the state)",
+    9: "the sensitivities overflowed",
+}
+
+_STATE = re.compile(r"^(q0|qd0)\[([^\]]+)\]$")
+
+
+def directions(model, names) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """The directions ``names`` as (names, seed_x (k x nx), seed_p (k x nparam)); a bad name is a ValueError naming
+    what is allowed."""
+    if isinstance(names, str):
+        names = [names]
+    names = list(names)
+    if not names:
+        raise ValueError("sensitivities: give at least one direction (q0[NAME], qd0[NAME] or a parameter name)")
+    full = coordinate_names(model.n)
+    free = list(model.layout.free)
+    nq = model.nq
+    seed_x = np.zeros((len(names), 2 * nq))
+    seed_p = np.zeros((len(names), len(model.parameter_names)))
+    allowed = (", ".join(f"q0[{full[i]}]" for i in free) + ", the same with qd0, or a parameter: "
+               + ", ".join(model.parameter_names))
+    for j, name in enumerate(names):
+        if not isinstance(name, str):
+            raise ValueError(f"sensitivities[{j}]: expected a name, got {name!r}; allowed: {allowed}")
+        match = _STATE.match(name.strip())
+        if match:
+            which, coordinate = match.groups()
+            index = int(coordinate) if coordinate.isdigit() else full.index(coordinate) if coordinate in full else -1
+            if index not in free:
+                raise ValueError(f"sensitivities[{j}] = {name!r}: not a coordinate of this model; allowed: {allowed}")
+            seed_x[j, free.index(index) + (nq if which == "qd0" else 0)] = 1.0
+        elif name in model.parameter_names:
+            seed_p[j, model.parameter_names.index(name)] = 1.0
+        else:
+            raise ValueError(f"sensitivities[{j}] = {name!r}: unknown direction; allowed: {allowed}")
+    if len(set(names)) != len(names):
+        raise ValueError(f"sensitivities: a direction is named twice in {names}")
+    return names, seed_x, seed_p
+
+
+def state_names(model) -> list[str]:
+    """The rows of a sensitivity matrix: q[NAME] then qd[NAME] of the model's own coordinates."""
+    full = coordinate_names(model.n)
+    coords = [full[i] for i in model.layout.free]
+    return [f"q[{c}]" for c in coords] + [f"qd[{c}]" for c in coords]
+
+
+@dataclass
+class Sensitivities:
+    """d x(t_final) / d(direction): ``matrix`` (2 nq x k; rows ``rows``, the model's own coordinates q then qd;
+    columns ``directions``), NaN when not valid.  ``status`` 'valid', or what ended them (``message``: the event,
+    its contact and time; ``t_event``)."""
+
+    rows: list[str]
+    directions: list[str]
+    matrix: np.ndarray
+    status: str = "valid"
+    message: str = "every event of the run differentiated"
+    t_event: float | None = None
+    n_impacts: int = 0                       # impacts differentiated
+    code: int = 0                            # GAC_SENS_* of gac.h
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def valid(self) -> bool:
+        return self.status == "valid"
+
+    def __getitem__(self, key) -> float:
+        """sens["q[X2]", "e_x2_min"]: one entry by row and direction name."""
+        row, column = key
+        if row not in self.rows:
+            raise KeyError(f"row {row!r}: one of {', '.join(self.rows)}")
+        if column not in self.directions:
+            raise KeyError(f"direction {column!r}: one of {', '.join(self.directions)}")
+        return float(self.matrix[self.rows.index(row), self.directions.index(column)])
+
+    def column(self, direction: str) -> dict:
+        """One direction's column, by row name."""
+        return {row: self[row, direction] for row in self.rows}
+
+
+def contact_label(model, contact: int) -> str:
+    if contact < 0:
+        return ""
+    point, wall = model.contacts[contact]
+    return wall.name if wall.name.startswith("theta_") else f"O{point}/{wall.name}"
+
+
+def read(model, sens, names: list[str], run_ok: bool, run_message: str) -> Sensitivities:
+    """The final Sensitivities from the C struct ``sens`` (gac_sens) after a run."""
+    nx, k = 2 * model.nq, len(names)
+    matrix = np.array(model.ffi.unpack(sens.S, k * nx)).reshape(k, nx).T.copy()
+    code = int(sens.status)
+    result = Sensitivities(state_names(model), list(names), matrix, n_impacts=int(sens.n_impacts), code=code)
+    if code != 0:
+        where = contact_label(model, int(sens.contact_status))
+        result.status = STATUS_WORDS.get(code, f"status {code}")
+        result.t_event = float(sens.t_status)
+        result.message = (f"not differentiated from t = {result.t_event:.9g} s on: {result.status}"
+                          + (f" at {where}" if where else "") + "; the sensitivities after it are NaN")
+        result.matrix[:] = np.nan
+    elif not run_ok:
+        result.status = "run ended early"
+        result.message = f"the run did not reach t_end ({run_message}): the sensitivities are those at t_final"
+    return result

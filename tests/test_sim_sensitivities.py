@@ -1,0 +1,201 @@
+"""Forward sensitivities of a whole hybrid run (simulate(sensitivities=...), gac_sens.c): against closed forms of a
+vertical rod striking a floor (with and without gravity: the final state's and the impact times' derivatives by
+the initial height, speed, restitution, the floor's position and g), against central finite differences of random
+3D chains bouncing in a box (the same event sequence across the stencil asserted), and the verdict where the run
+meets an event the loop does not differentiate."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from codegen.scene import coordinate_names, scene_from_dict
+from conftest import chain
+from runtime import simulate
+
+TIGHT = dict(rtol=1e-12, atol=1e-14)
+
+
+def rod_scene(gravity: float, e: float, h0: float, v0: float, friction: float = 0.0):
+    """A vertical uniform rod (a line link, 1 m) above the floor x2_min = 0, O_1 its lower end at height h0, moving
+    at v0 along X2: an impact at O_1 has its impulse through the centre of mass, so the rod never turns."""
+    walls = {"x2_min": 0.0}
+    return scene_from_dict({"name": "sens_rod", "gravity": gravity,
+                            "links": [{"length": 1.0, "mu": 1.0, "J": [0.0, 0.0, 0.0]}],
+                            "walls": walls, "restitution": e, "friction": friction,
+                            "initial": {"q": [-math.pi / 2, 0.0, 0.0, 0.0, h0, 0.0],
+                                        "qd": [0.0, 0.0, 0.0, 0.0, v0, 0.0]}})
+
+
+E, U, H0, T = 0.7, 2.0, 0.5, 0.6
+
+
+@pytest.fixture(scope="module")
+def free_rod(compiled):
+    return compiled(rod_scene(0.0, E, H0, -U), specialise=True)
+
+
+def test_rod_without_gravity_matches_the_closed_form(free_rod):
+    """g = 0, speed U down from H0: one bounce at t* = H0/U, then h(T) = e (U T - H0) and qd(T) = e U, so
+    dh/dh0 = -e, dh/dqd0 = -e T (qd0 = -U), dh/de = U T - H0, dh/d(floor) = 1 + e; dt*/dh0 = 1/U, dt*/dqd0 = H0/U^2."""
+    names = ["q0[X2]", "qd0[X2]", "e_x2_min", "wall_x2_min"]
+    r = simulate(free_rod, T, sensitivities=names, **TIGHT)
+    assert r.success and len(r.impacts) == 1
+    s = r.sensitivities
+    assert s.valid and r.sensitivity_status == "valid" and s.n_impacts == 1
+    assert s.matrix.shape == (2 * free_rod.nq, 4)
+    expected = {("q[X2]", "q0[X2]"): -E, ("q[X2]", "qd0[X2]"): -E * T, ("q[X2]", "e_x2_min"): U * T - H0,
+                ("q[X2]", "wall_x2_min"): 1 + E, ("qd[X2]", "q0[X2]"): 0.0, ("qd[X2]", "qd0[X2]"): -E,
+                ("qd[X2]", "e_x2_min"): U, ("qd[X2]", "wall_x2_min"): 0.0}
+    for key, value in expected.items():
+        assert s[key] == pytest.approx(value, abs=1e-8), key
+    for row in ("q[theta_1]", "q[X1]", "qd[theta_1]", "qd[X1]"):      # nothing turns or drifts
+        assert np.allclose([s[row, d] for d in names], 0.0, atol=1e-10)
+    dt = r.impacts[0].dt_dp
+    assert dt["q0[X2]"] == pytest.approx(1 / U, abs=1e-10)
+    assert dt["qd0[X2]"] == pytest.approx(H0 / U ** 2, abs=1e-10)
+    assert dt["e_x2_min"] == pytest.approx(0.0, abs=1e-12)
+    assert dt["wall_x2_min"] == pytest.approx(-1 / U, abs=1e-10)
+
+
+def test_the_saltation_term_is_what_gives_the_closed_form(free_rod):
+    """Without the saltation term (f+ - D Delta f-) dt* the jump would be S+ = D Delta S-: for the initial height
+    D Delta keeps dh = 1 and dqd = 0, so dh(T)/dh0 would stay 1; the closed form -e needs the term (it moves dh by
+    -(1 + e) U dt*/dh0 = -(1 + e))."""
+    s = simulate(free_rod, T, sensitivities=["q0[X2]"], **TIGHT).sensitivities
+    without_saltation = 1.0
+    assert s["q[X2]", "q0[X2]"] == pytest.approx(-E, abs=1e-8)
+    assert abs(s["q[X2]", "q0[X2]"] - without_saltation) > 1.0
+
+
+def test_bouncing_rod_impact_times_match_the_closed_form(compiled):
+    """Dropped from rest at h0 under g: t1 = sqrt(2 h0 / g), t2 = t1 (1 + 2 e), so dt1/dh0 = t1 / (2 h0),
+    dt1/dg = -t1 / (2 g), dt1/de = 0, dt2 = (1 + 2 e) dt1 along h0 and g, dt2/de = 2 t1."""
+    e, h0, g = 0.8, 1.0, 9.81
+    model = compiled(rod_scene(g, e, h0, 0.0), specialise=True)
+    t1 = math.sqrt(2 * h0 / g)
+    t2 = t1 * (1 + 2 * e)
+    r = simulate(model, t2 + 0.05, sensitivities=["q0[X2]", "e_x2_min", "g"], **TIGHT)
+    assert r.success and len(r.impacts) == 2 and r.sensitivities.valid
+    first, second = r.impacts[0].dt_dp, r.impacts[1].dt_dp
+    assert r.impacts[0].t == pytest.approx(t1, rel=1e-10) and r.impacts[1].t == pytest.approx(t2, rel=1e-10)
+    assert first["q0[X2]"] == pytest.approx(t1 / (2 * h0), rel=1e-8)
+    assert first["g"] == pytest.approx(-t1 / (2 * g), rel=1e-8)
+    assert first["e_x2_min"] == pytest.approx(0.0, abs=1e-10)
+    assert second["q0[X2]"] == pytest.approx((1 + 2 * e) * t1 / (2 * h0), rel=1e-8)
+    assert second["g"] == pytest.approx(-(1 + 2 * e) * t1 / (2 * g), rel=1e-8)
+    assert second["e_x2_min"] == pytest.approx(2 * t1, rel=1e-8)
+
+
+BOX = 3.0
+DIRECTIONS = ["q0[theta_2]", "qd0[X1]", "qd0[theta_0]", "e_x1_min", "l_1", "g"]
+
+
+def box_run(seed: int):
+    """A twisted 3-link chain (slender, rigid, slender) thrown in a box of half-width BOX with g = 0 and random
+    restitutions: (p, q0, qd0)."""
+    rng = np.random.default_rng(seed)
+    over = {"g": 0.0}
+    for axis in ("x1", "x2", "x3"):
+        over[f"wall_{axis}_min"], over[f"wall_{axis}_max"] = -BOX, BOX
+        over[f"e_{axis}_min"], over[f"e_{axis}_max"] = rng.uniform(0.5, 1.0, 2)
+    n = 3
+    q0 = np.zeros(n + 5)
+    q0[2:5] = rng.uniform(-0.5, 0.5, 3)
+    q0[5:8] = -0.3
+    qd0 = rng.normal(0, 2.0, n + 5)
+    qd0[:2] *= 0.2                                   # slow base turns: far from the base chart's lock
+    return over, q0, qd0
+
+
+@pytest.mark.parametrize("seed", [6, 7])
+def test_random_chains_in_a_box_match_central_differences(compiled, seed):
+    """Several frictionless single-contact impacts: every column of d x(t_end)/d(direction) agrees with a central
+    difference of the final state (step 1e-6) to 1e-6 of the column's size (at least 1e-5: the difference's own
+    noise, rtol / step times the state's size), where the perturbed runs meet the same impacts (contacts, in
+    order)."""
+    scene = chain(3, ("line", "rigid"), twists=True)
+    model = compiled(scene)
+    over, q0, qd0 = box_run(seed)
+    p = model.parameters(over)
+    t_end = 1.5
+    r = simulate(model, t_end, p=p, q0=q0, qd0=qd0, sensitivities=DIRECTIONS, **TIGHT)
+    assert r.success and len(r.impacts) >= 3, r.message
+    assert r.sensitivities.valid, r.sensitivity_message
+    assert all(len(i.contacts) == 1 for i in r.impacts)
+    sequence = [tuple(c.label for c in i.contacts) for i in r.impacts]
+    full = coordinate_names(model.n)
+
+    def final(step, direction):
+        p1, q1, qd1 = p.copy(), q0.copy(), qd0.copy()
+        if direction.startswith("q0["):
+            q1[full.index(direction[3:-1])] += step
+        elif direction.startswith("qd0["):
+            qd1[full.index(direction[4:-1])] += step
+        else:
+            p1[model.parameter_names.index(direction)] += step
+        run = simulate(model, t_end, p=p1, q0=q1, qd0=qd1, **TIGHT)
+        assert run.success and [tuple(c.label for c in i.contacts) for i in run.impacts] == sequence
+        return np.concatenate([model.layout.reduce(run.q_final), model.layout.reduce(run.qd_final)])
+
+    h = 1e-6
+    for j, direction in enumerate(DIRECTIONS):
+        fd = (final(h, direction) - final(-h, direction)) / (2 * h)
+        column = r.sensitivities.matrix[:, j]
+        assert np.abs(fd - column).max() <= 1e-6 * max(10.0, np.abs(fd).max()), direction
+
+
+def test_a_landing_ends_the_sensitivities_with_the_reason(compiled):
+    """A rod dropped with e = 0.05 bounces once, then lands (its next bounce below the rest height): the first impact
+    is differentiated, resting contact is not, so the verdict names the landing, its contact and time, and the
+    numbers from there on are NaN."""
+    model = compiled(rod_scene(9.81, 0.05, 0.3, 0.0), specialise=True)
+    r = simulate(model, 0.5, sensitivities=["q0[X2]", "e_x2_min"])
+    assert r.success
+    s = r.sensitivities
+    assert not s.valid and "resting" in s.status
+    landing = [e for e in r.contact_events if e.kind == "rest"][0]
+    assert s.t_event == pytest.approx(landing.t, abs=1e-12)
+    assert "O1/x2_min" in s.message and "NaN" in s.message
+    assert np.all(np.isnan(s.matrix))
+    assert r.impacts[0].t < landing.t and r.impacts[0].dt_dp["q0[X2]"] == pytest.approx(
+        1 / math.sqrt(2 * 0.3 * 9.81), rel=1e-5)
+    assert all(math.isnan(v) for v in r.impacts[-1].dt_dp.values())
+
+
+def test_a_frictional_impact_ends_the_sensitivities(compiled):
+    model = compiled(rod_scene(9.81, 0.8, 0.3, 0.0, friction=0.5), specialise=True)
+    r = simulate(model, 0.3, sensitivities=["q0[X2]"])
+    assert r.success and len(r.impacts) >= 1
+    assert r.sensitivity_status == "an impact by a frictional law"
+    assert np.all(np.isnan(r.sensitivities.matrix))
+
+
+def test_bad_direction_names_say_what_is_allowed(free_rod):
+    for bad in (["q0[theta_5]"], ["qd0[Y]"], ["mass"], [], ["g", "g"]):
+        with pytest.raises(ValueError, match="sensitivities"):
+            simulate(free_rod, 0.1, sensitivities=bad)
+    with pytest.raises(ValueError, match=r"allowed: q0\[theta_1\], q0\[X1\], q0\[X2\].*e_x2_min"):
+        simulate(free_rod, 0.1, sensitivities=["mass"])
+    s = simulate(free_rod, 0.1, sensitivities=["q0[4]"], **TIGHT).sensitivities   # index 4 of Eq. 13: X2
+    assert s["q[X2]", "q0[4]"] == pytest.approx(1.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("method, options", [("dop853", dict(rtol=1e-12, atol=1e-12)), ("rk4", dict(dt=2e-4))])
+def test_every_integrator_carries_them(compiled, method, options):
+    """DOP853's and RK4's own weights take the sensitivities over their steps as DOPRI5's do: a link length's column
+    against a central difference, on the box run of seed 6."""
+    model = compiled(chain(3, ("line", "rigid"), twists=True))
+    over, q0, qd0 = box_run(6)
+    p = model.parameters(over)
+    r = simulate(model, 1.5, method=method, p=p, q0=q0, qd0=qd0, sensitivities=["l_1"], **options)
+    assert r.success and len(r.impacts) == 3 and r.sensitivities.valid
+    index, h, ends = model.parameter_names.index("l_1"), 1e-6, []
+    for step in (h, -h):
+        p1 = p.copy()
+        p1[index] += step
+        run = simulate(model, 1.5, method=method, p=p1, q0=q0, qd0=qd0, **options)
+        ends.append(np.concatenate([model.layout.reduce(run.q_final), model.layout.reduce(run.qd_final)]))
+    fd = (ends[0] - ends[1]) / (2 * h)
+    assert np.abs(fd - r.sensitivities.matrix[:, 0]).max() <= 1e-6 * np.abs(fd).max()

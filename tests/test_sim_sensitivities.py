@@ -33,7 +33,7 @@ E, U, H0, T = 0.7, 2.0, 0.5, 0.6
 
 @pytest.fixture(scope="module")
 def free_rod(compiled):
-    return compiled(rod_scene(0.0, E, H0, -U), specialise=True)
+    return compiled(rod_scene(0.0, E, H0, -U), specialise=True, tangent=True)
 
 
 def test_rod_without_gravity_matches_the_closed_form(free_rod):
@@ -73,7 +73,7 @@ def test_bouncing_rod_impact_times_match_the_closed_form(compiled):
     """Dropped from rest at h0 under g: t1 = sqrt(2 h0 / g), t2 = t1 (1 + 2 e), so dt1/dh0 = t1 / (2 h0),
     dt1/dg = -t1 / (2 g), dt1/de = 0, dt2 = (1 + 2 e) dt1 along h0 and g, dt2/de = 2 t1."""
     e, h0, g = 0.8, 1.0, 9.81
-    model = compiled(rod_scene(g, e, h0, 0.0), specialise=True)
+    model = compiled(rod_scene(g, e, h0, 0.0), specialise=True, tangent=True)
     t1 = math.sqrt(2 * h0 / g)
     t2 = t1 * (1 + 2 * e)
     r = simulate(model, t2 + 0.05, sensitivities=["q0[X2]", "e_x2_min", "g"], **TIGHT)
@@ -116,7 +116,7 @@ def test_random_chains_in_a_box_match_central_differences(compiled, seed):
     noise, rtol / step times the state's size), where the perturbed runs meet the same impacts (contacts, in
     order)."""
     scene = chain(3, ("line", "rigid"), twists=True)
-    model = compiled(scene)
+    model = compiled(scene, tangent=True)
     over, q0, qd0 = box_run(seed)
     p = model.parameters(over)
     t_end = 1.5
@@ -150,7 +150,7 @@ def test_a_landing_ends_the_sensitivities_with_the_reason(compiled):
     """A rod dropped with e = 0.05 bounces once, then lands (its next bounce below the rest height): the first impact
     is differentiated, resting contact is not, so the verdict names the landing, its contact and time, and the
     numbers from there on are NaN."""
-    model = compiled(rod_scene(9.81, 0.05, 0.3, 0.0), specialise=True)
+    model = compiled(rod_scene(9.81, 0.05, 0.3, 0.0), specialise=True, tangent=True)
     r = simulate(model, 0.5, sensitivities=["q0[X2]", "e_x2_min"])
     assert r.success
     s = r.sensitivities
@@ -165,7 +165,7 @@ def test_a_landing_ends_the_sensitivities_with_the_reason(compiled):
 
 
 def test_a_frictional_impact_ends_the_sensitivities(compiled):
-    model = compiled(rod_scene(9.81, 0.8, 0.3, 0.0, friction=0.5), specialise=True)
+    model = compiled(rod_scene(9.81, 0.8, 0.3, 0.0, friction=0.5), specialise=True, tangent=True)
     r = simulate(model, 0.3, sensitivities=["q0[X2]"])
     assert r.success and len(r.impacts) >= 1
     assert r.sensitivity_status == "an impact by a frictional law"
@@ -186,7 +186,7 @@ def test_bad_direction_names_say_what_is_allowed(free_rod):
 def test_every_integrator_carries_them(compiled, method, options):
     """DOP853's and RK4's own weights take the sensitivities over their steps as DOPRI5's do: a link length's column
     against a central difference, on the box run of seed 6."""
-    model = compiled(chain(3, ("line", "rigid"), twists=True))
+    model = compiled(chain(3, ("line", "rigid"), twists=True), tangent=True)
     over, q0, qd0 = box_run(6)
     p = model.parameters(over)
     r = simulate(model, 1.5, method=method, p=p, q0=q0, qd0=qd0, sensitivities=["l_1"], **options)

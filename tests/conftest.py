@@ -189,3 +189,12 @@ def sanitized_build(folder: Path, sources, output: str) -> Path:
     subprocess.run(["gcc", *SANITIZE, "-I", str(folder), *map(str, sources), str(library), "-lm", "-o", str(exe)],
                    check=True)
     return exe
+
+
+def quick_model(scene, specialise: bool = True, **options):
+    """load_model(scene, ...) without a free base's second chart and without the tangent kernels (the code the
+    tests of other things do not need: half the derivation); the tests of the defaults call load_model."""
+    from runtime import load_model
+    options.setdefault("chart_b", False)
+    options.setdefault("tangent", False)
+    return load_model(scene, specialise=specialise, **options)

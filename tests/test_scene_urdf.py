@@ -13,7 +13,7 @@ import pytest
 from codegen.scene import SceneError, contact_points, frames, load_scene, scene_from_dict
 from codegen.urdf import matrix_rpy, rpy_matrix, scene_to_urdf, urdf_links
 from studies.reference import random_rotation
-from runtime import load_model
+from conftest import quick_model
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -149,7 +149,7 @@ def test_kinetic_energy_agrees_with_the_urdf():
     """T of the generated model at random states against the URDF's: sum of m |v_c|^2 / 2 + w . I w / 2, the
     velocities of the URDF's links by central differences of its kinematics along the same motion."""
     scene = arm_scene()
-    model = load_model(scene, specialise=False)
+    model = quick_model(scene, specialise=False)
     rng = np.random.default_rng(7)
     n = scene.n
     for _ in range(3):

@@ -9,8 +9,9 @@ from pathlib import Path
 import numpy as np
 
 from codegen.scene import LineLink, Scene, default_scene, load_scene, scene_from_dict
-from runtime import load_model, simulate
+from runtime import simulate
 from studies.reference import reference_of
+from conftest import quick_model
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -54,7 +55,7 @@ def test_a_scene_in_other_units_runs_with_its_warning_in_the_result_and_on_the_c
     expected = ("links[1].mu = 20000 kg/m (a mass of 20000 kg) (and 3 more): outside 1e-06 ... 10000 kg, unusual "
                 "for a link; masses are in kg and mu in kg/m, not g or t")
     assert scene.warnings == [expected]
-    result = simulate(load_model(scene), 0.3)
+    result = simulate(quick_model(scene), 0.3)
     assert result.success and result.warnings == [expected]
     done = run_cli("simulate", "--scene", str(path), "--t-end", "0.3")
     assert done.returncode == 0, done.stderr
@@ -74,7 +75,7 @@ def test_an_impact_of_limited_accuracy_names_the_mass_ratio():
         "walls": {"x1_min": 0.0, "x1_max": 6.0, "x2_min": 0.0, "x2_max": 6.0},
         "initial": {"q": [-math.pi / 2, 0.0, 0.0, 0.5, 3.0, 0.7, 0.0], "qd": [0.0, 0.0, 0.0, 20.0, 0.0, 0.0, 0.0]}})
     assert scene.warnings == []
-    result = simulate(load_model(scene), 0.5)
+    result = simulate(quick_model(scene), 0.5)
     assert result.success and len(result.impacts) >= 2
     assert len(result.warnings) == sum(i.roundoff > 1e-6 for i in result.impacts) >= 2
     for warning in result.warnings:
@@ -143,9 +144,9 @@ def test_steps_held_back_by_the_friction_regularisation_are_said_to_be_and_frict
     few 1e-7 s (its time constant 2e-7 s) over nearly all of the run, which the warning says, naming
     friction_velocity; at 1e-2 m/s the run takes a few dozen steps and no warning; sticking (the default) takes a few
     dozen steps at 1e-6 m/s too.  The command (--no-stick) prints the warning."""
-    stuck = simulate(load_model(rough_rod(1e-6)), 0.025, t_eval=[])
+    stuck = simulate(quick_model(rough_rod(1e-6)), 0.025, t_eval=[])
     assert stuck.success and stuck.n_steps < 1000 and stuck.n_sticks >= 1 and stuck.warnings == []
-    slow = simulate(load_model(rough_rod(1e-6)), 0.025, t_eval=[], stick=False)
+    slow = simulate(quick_model(rough_rod(1e-6)), 0.025, t_eval=[], stick=False)
     tau = 1e-6 / (0.5 * 9.81)
     friction = [w for w in slow.warnings if "friction_velocity" in w]
     assert slow.success and slow.n_steps > 10_000 and len(friction) == 1, slow.warnings
@@ -157,9 +158,9 @@ def test_steps_held_back_by_the_friction_regularisation_are_said_to_be_and_frict
     assert share >= 90
     mean_step = float(warning.split("at a mean step of ")[1].split(" s")[0])
     assert tau < mean_step < 10 * tau                   # an explicit method's steps on a stiff term of time tau
-    fast = simulate(load_model(rough_rod(1e-2)), 0.025, t_eval=[], stick=False)
+    fast = simulate(quick_model(rough_rod(1e-2)), 0.025, t_eval=[], stick=False)
     assert fast.success and fast.n_steps < 1000 and fast.warnings == []
-    rk4 = simulate(load_model(rough_rod(1e-6)), 0.025, t_eval=[], method="rk4", dt=5e-7, stick=False)
+    rk4 = simulate(quick_model(rough_rod(1e-6)), 0.025, t_eval=[], method="rk4", dt=5e-7, stick=False)
     assert not any("friction_velocity" in w for w in rk4.warnings)    # RK4's step is the caller's
     path = tmp_path / "rod.toml"
     path.write_text('name = "rough_rod"\nfriction = { x2_min = 0.5 }\nfriction_velocity = 1e-6\nrestitution = 0.0\n'
@@ -173,5 +174,5 @@ def test_steps_held_back_by_the_friction_regularisation_are_said_to_be_and_frict
 
 def test_the_shipped_rough_floor_run_stays_quiet():
     """The documented rough-floor run (4 s, about 5,600 steps) is not held back enough to be warned about."""
-    result = simulate(load_model("rough-floor"), 4.0, t_eval=[])
+    result = simulate(quick_model("rough-floor"), 4.0, t_eval=[])
     assert result.success and result.warnings == []

@@ -17,10 +17,10 @@ import numpy as np
 import pytest
 
 from codegen.scene import Joint, LineLink, Scene, SceneError, Wall, default_scene, load_scene, scene_from_dict
-from runtime import load_model, simulate
+from runtime import simulate
 from runtime.inputs import InputSchedule
 from studies import reference
-from conftest import chain, driven, driven_free_chain, random_parameters, reference_of
+from conftest import chain, driven, driven_free_chain, random_parameters, reference_of, quick_model
 
 def rel_err(a, b):
     return np.abs(np.asarray(a) - b).max() / max(np.abs(b).max(), 1e-300)
@@ -109,7 +109,7 @@ def test_torsional_spring_oscillates_at_the_reduced_inertia_frequency():
     omega = math.sqrt(24 * K / (m * l * l))
     period = 2 * math.pi / omega
     t = np.linspace(0, 3 * period, 61)
-    run = simulate(load_model(two_rods(stiffness=K, phi0=phi0)), t[-1], t_eval=t, method="dop853",
+    run = simulate(quick_model(two_rods(stiffness=K, phi0=phi0)), t[-1], t_eval=t, method="dop853",
                    rtol=1e-13, atol=1e-20)
     assert run.success
     phi = run.q[:, 3]
@@ -122,7 +122,7 @@ def test_damper_decays_at_the_predicted_rate():
     m = mu * l
     decay = 24 * C / (m * l * l)
     t = np.linspace(0, 2.0, 21)
-    run = simulate(load_model(two_rods(damping=C, rate0=rate0)), t[-1], t_eval=t, method="dop853",
+    run = simulate(quick_model(two_rods(damping=C, rate0=rate0)), t[-1], t_eval=t, method="dop853",
                    rtol=1e-13, atol=1e-22)
     rate = run.qd[:, 3]
     assert np.abs(rate - rate0 * np.exp(-decay * t)).max() < 1e-6 * rate0
@@ -152,7 +152,7 @@ DRIVEN_SCENE = "driven-fold"
 
 @pytest.mark.parametrize("how", ["constant", "hold", "linear", "function"])
 def test_energy_balance_closes_on_driven_runs_with_impacts(how):
-    model = load_model(DRIVEN_SCENE)
+    model = quick_model(DRIVEN_SCENE)
     u = {"constant": [0.4, -0.3],
          "hold": InputSchedule([0.2, 0.5, 0.9], [[0.5, 0.0], [-0.5, 0.3], [0.0, 0.0]]),
          "linear": InputSchedule([0.0, 0.6, 1.2], [[0.0, 0.0], [1.0, -1.0], [0.0, 0.5]], mode="linear"),
@@ -167,7 +167,7 @@ def test_energy_balance_closes_on_driven_runs_with_impacts(how):
 
 def test_hold_schedule_jumps_on_a_step_boundary():
     """A held schedule equals two runs chained at the jump (the second from the first's end state)."""
-    model = load_model(DRIVEN_SCENE)
+    model = quick_model(DRIVEN_SCENE)
     opts = dict(method="dop853", rtol=1e-12, atol=1e-12, max_impacts=1)
     whole = simulate(model, 0.12, u=InputSchedule([0.0, 0.06], [[1.0, -1.0], [-2.0, 0.5]]), **opts)
     first = simulate(model, 0.06, u=[1.0, -1.0], **opts)
@@ -177,7 +177,7 @@ def test_hold_schedule_jumps_on_a_step_boundary():
 
 
 def test_python_input_function_errors_reach_the_caller():
-    model = load_model(DRIVEN_SCENE)
+    model = quick_model(DRIVEN_SCENE)
 
     def broken(t, q, qd):
         if t > 0.05:
@@ -199,17 +199,17 @@ def test_python_input_function_errors_reach_the_caller():
 ])
 def test_bad_inputs_are_named(u, message):
     with pytest.raises(ValueError) as error:
-        simulate(load_model(DRIVEN_SCENE), 0.1, u=u)
+        simulate(quick_model(DRIVEN_SCENE), 0.1, u=u)
     assert message in str(error.value)
 
 
 def test_inputs_on_a_model_without_any_are_refused():
     with pytest.raises(ValueError, match="u: this model has no inputs"):
-        simulate(load_model("paper-case1"), 0.1, u=[1.0])
+        simulate(quick_model("paper-case1"), 0.1, u=[1.0])
 
 
 def test_parameters_by_name():
-    model = load_model(DRIVEN_SCENE)
+    model = quick_model(DRIVEN_SCENE)
     stiff = simulate(model, 0.3, p={"stiffness_2": 40.0, "damping_3": 0.0}, max_impacts=1)
     base = simulate(model, 0.3, max_impacts=1)
     assert not np.allclose(stiff.q_final, base.q_final)
@@ -261,7 +261,7 @@ def test_planar_specialisation_keeps_inputs_in_the_plane():
 
 def test_walls_stay_walls_under_inputs():
     """A strong input cannot push a point through a wall: impacts keep every gap >= -tolerance."""
-    model = load_model(DRIVEN_SCENE)
+    model = quick_model(DRIVEN_SCENE)
     run = simulate(model, 1.0, u=[8.0, -8.0], t_eval=np.linspace(0, 1, 401))
     assert run.success, run.message
     scene = model.scene
@@ -338,7 +338,7 @@ def test_bad_limits_are_named(joint, message):
 
 
 def test_limits_by_parameter_are_checked():
-    model = load_model(DRIVEN_SCENE)
+    model = quick_model(DRIVEN_SCENE)
     with pytest.raises(ValueError, match=r"p\[upper_2\]: must be > p\[lower_2\] = 0.5, got 0.2"):
         simulate(model, 0.1, p={"lower_2": 0.5, "upper_2": 0.2})
     with pytest.raises(ValueError, match="joint 2 is beyond its upper limit upper_2"):

@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 from codegen.scene import SceneError, load_scene, scene_from_dict
-from runtime import load_model, simulate
+from runtime import simulate
 from studies.reference import reference_of
+from conftest import quick_model
 
 G = 9.81
 
@@ -31,7 +32,7 @@ def rod(friction=0.5, v=(2.0, 0.0), inputs=(), friction_velocity=1e-4, restituti
 def test_a_sliding_rod_stops_as_coulomb_says(specialise):
     c_f, v0 = 0.5, 2.0
     scene = rod(c_f, (v0, 0.0))
-    model = load_model(scene, specialise=specialise)
+    model = quick_model(scene, specialise=specialise)
     t_stop = v0 / (c_f * G)
     t = np.linspace(0.0, 0.6, 61)
     result = simulate(model, 0.6, t_eval=t, rtol=1e-10, atol=1e-12)
@@ -50,7 +51,7 @@ def test_a_diagonal_slide_keeps_its_direction():
     velocity, so the rod decelerates along a straight line by c_f g and stops after |v0|^2 / (2 c_f g)."""
     c_f, v = 0.4, (1.2, 1.6)
     scene = rod(c_f, v)
-    model = load_model(scene, specialise=False)
+    model = quick_model(scene, specialise=False)
     result = simulate(model, 0.6, rtol=1e-10, atol=1e-12, t_eval=[0.1, 0.6])
     assert result.success, result.message
     speed0 = math.hypot(*v)
@@ -70,7 +71,7 @@ def test_a_pushed_rod_creeps_below_the_limit_and_slides_above_it(force):
     regularised rate v_s F / (c_f m g); above it, it accelerates at (F - c_f m g) / m from rest."""
     c_f, vs = 0.5, 1e-4
     scene = rod(c_f, (0.0, 0.0), inputs=("X1",), friction_velocity=vs)
-    model = load_model(scene)
+    model = quick_model(scene)
     result = simulate(model, 0.5, u=[force], rtol=1e-10, atol=1e-12, t_eval=[0.5], stick=False)
     assert result.success, result.message
     n = scene.n
@@ -115,7 +116,7 @@ def test_constrained_dynamics_with_friction_against_a_dense_solve():
             "friction": {"x2_min": 0.7, "x1_min": 0.3}, "friction_velocity": 1e-3,
             "initial": {"q": [0.1, 0.2, 0.3, 0.4, 0.5, 0.0, 0.0, 0.0]}}
     scene = scene_from_dict(data)
-    model = load_model(scene, specialise=False)
+    model = quick_model(scene, specialise=False)
     ref = reference_of(scene)
     rng = np.random.default_rng(3)
     contacts = model.contacts
@@ -163,7 +164,7 @@ def test_the_painleve_guard_follows_the_p_matrix_rule():
             "walls": {"x2_min": -5.0, "x1_min": -5.0, "x3_min": -5.0}, "friction": 3.0,
             "initial": {"q": [0.1, 0.2, 0.3, 0.4, 0.5, 0.0, 0.0, 0.0]}}
     scene = scene_from_dict(data)
-    model = load_model(scene, specialise=False)
+    model = quick_model(scene, specialise=False)
     ref = reference_of(scene)
     rng = np.random.default_rng(11)
     contacts = model.contacts
@@ -195,7 +196,7 @@ def test_energy_balance_closes_with_impacts_and_sliding():
             "initial": {"q": [-math.pi / 2, 0.0, -1.2, 0.5, 0.4, 0.0, 1.0, 0.0],
                         "qd": [0.0, 0.0, 1.0, 0.0, 0.0, 2.0, 0.0, 0.0]}}
     scene = scene_from_dict(data)
-    result = simulate(load_model(scene), 2.0, rtol=1e-10, atol=1e-12, t_eval=[])
+    result = simulate(quick_model(scene), 2.0, rtol=1e-10, atol=1e-12, t_eval=[])
     assert result.success, result.message
     assert result.impacts and result.loss_friction > 0.1                   # friction at the impacts took most
     assert any(impact.law == "gdi" and any(c.impulse_t != (0.0, 0.0) for c in impact.contacts)
@@ -214,7 +215,7 @@ def test_scene_fields_are_checked_by_name():
             scene_from_dict({**base, "friction": friction})
     with pytest.raises(SceneError, match=r"friction_velocity: must be in \[1e-09, 1\] m/s"):
         scene_from_dict({**base, "friction": 0.5, "friction_velocity": 0.0})
-    model = load_model(scene_from_dict({**base, "friction": 0.5}))
+    model = quick_model(scene_from_dict({**base, "friction": 0.5}))
     with pytest.raises(ValueError, match=r"p\[friction_x2_min\]: the Coulomb coefficient must be in \[0, 1000\]"):
         simulate(model, 0.1, p={"friction_x2_min": -1.0})
 
@@ -222,12 +223,12 @@ def test_scene_fields_are_checked_by_name():
 def test_frictionless_scenes_have_no_friction_rows():
     """Friction adds parameters and tangential rows only where a wall has it: the paper's scenes keep theirs."""
     scene = load_scene("paper-case1")
-    model = load_model(scene)
+    model = quick_model(scene)
     assert not [name for name in scene.parameter_names() if name.startswith("friction_")]
     assert sorted(model.contact_rows) == sorted({(point, wall.axis) for point, wall in model.contacts})
     rough = rod(0.5)
-    assert sorted(load_model(rough).contact_rows) == [(1, 0), (1, 1), (2, 0), (2, 1)]      # planar: X1 tangent only
-    assert sorted(load_model(rough, specialise=False).contact_rows) == [(p, a) for p in (1, 2) for a in range(3)]
+    assert sorted(quick_model(rough).contact_rows) == [(1, 0), (1, 1), (2, 0), (2, 1)]      # planar: X1 tangent only
+    assert sorted(quick_model(rough, specialise=False).contact_rows) == [(p, a) for p in (1, 2) for a in range(3)]
 
 
 @pytest.mark.parametrize("c_f, v, paradox", [(2.0, -1.0, True), (2.0, 1.0, False), (1.0, -1.0, False)])
@@ -243,7 +244,7 @@ def test_the_painleve_paradox_is_named(c_f, v, paradox):
             "walls": {"x2_min": 0.0}, "restitution": 0.0, "friction": c_f,
             "initial": {"q": [-math.pi / 2, 0.0, math.atan2(-math.cos(theta), math.sin(theta)), 1.0, 0.0, 0.0],
                         "qd": [0.0, 0.0, 0.0, v, 0.0, 0.0]}}
-    model = load_model(scene_from_dict(data))
+    model = quick_model(scene_from_dict(data))
     assert (1 + 3 * math.cos(theta) * (math.cos(theta) + c_f * math.copysign(1.0, v) * math.sin(theta)) < 0) == paradox
     result = simulate(model, 0.3, rtol=1e-10, atol=1e-12)
     assert result.success, result.message

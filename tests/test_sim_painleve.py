@@ -12,7 +12,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from codegen.scene import scene_from_dict
-from runtime import load_model, simulate
+from runtime import simulate
+from conftest import quick_model
 
 # Glocker's rod: mass m, half-length s, J = m s^2 / 3 about its centre, g = 10, c_f = 5/3, 31 deg, sliding at 30 m/s
 M, S, G_ROD, C_F = 1.0, 1.0, 10.0, 5.0 / 3.0
@@ -77,7 +78,7 @@ def rod_state(q, qd):
 
 @pytest.fixture(scope="module")
 def glocker():
-    return load_model(lean_scene("glocker_rod", 2 * S, M, G_ROD, C_F, THETA0, V0))
+    return quick_model(lean_scene("glocker_rod", 2 * S, M, G_ROD, C_F, THETA0, V0))
 
 
 def test_the_rod_leans_as_derived(glocker):
@@ -165,7 +166,7 @@ def test_a_start_inside_the_paradox_takes_the_tangential_impact_at_once(v, stick
     m, s, g, c_f = 1.0, 0.5, 9.81, 2.0
     J = m * (2 * s) ** 2 / 12
     assert compliance(theta, m, s, J, c_f) < 0
-    result = simulate(load_model(scene), 0.2, rtol=1e-10, atol=1e-12)
+    result = simulate(quick_model(scene), 0.2, rtol=1e-10, atol=1e-12)
     assert result.success, result.message
     assert result.n_tangential_impacts == 1
     impact = result.impacts[0]

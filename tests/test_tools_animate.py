@@ -6,7 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from runtime import load_model, simulate
+from runtime import simulate
+from conftest import quick_model
 
 ROOT = Path(__file__).resolve().parent.parent
 Image = pytest.importorskip("PIL.Image", reason="Pillow (a matplotlib dependency) is not installed")
@@ -15,7 +16,7 @@ Image = pytest.importorskip("PIL.Image", reason="Pillow (a matplotlib dependency
 @pytest.mark.parametrize("scene", ["paper-case1", "paper-case2"])     # planar (2D view) and spatial (3D view)
 def test_animation_has_a_frame_per_sample(tmp_path, scene):
     from runtime.animate import animate
-    model = load_model(scene)
+    model = quick_model(scene)
     result = simulate(model, 0.3, t_eval=np.linspace(0, 0.3, 13))
     frames = animate(result, model.scene, tmp_path / "run.gif", fps=10)
     with Image.open(tmp_path / "run.gif") as gif:
@@ -24,7 +25,7 @@ def test_animation_has_a_frame_per_sample(tmp_path, scene):
 
 def test_frames_are_thinned_to_the_limit(tmp_path):
     from runtime.animate import animate
-    model = load_model("paper-case1")
+    model = quick_model("paper-case1")
     result = simulate(model, 0.5, t_eval=np.linspace(0, 0.5, 101))
     assert animate(result, model.scene, tmp_path / "run.gif", max_frames=20) == 20
 

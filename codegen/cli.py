@@ -56,6 +56,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--one-chart", action="store_true",
                         help="leave a free base's second chart out (half the code; a run that reaches the gimbal "
                              "lock then stops there)")
+    parser.add_argument("--tangent", action="store_true",
+                        help="also generate the tangent kernels (exact derivatives: NAME_forward_dynamics_tangent "
+                             "and gac_linearize, the run's sensitivities gac_sens_attach); straight-line forward "
+                             "dynamics then, about twice the derivation time")
     parser.add_argument("--explain", action="store_true",
                         help="print what the model leaves out for this scene and why, then stop")
     parser.add_argument("--urdf", metavar="FILE",
@@ -94,8 +98,11 @@ def default_out(args: argparse.Namespace) -> str:
 def loops_note(scene, layout, options, args) -> str:
     """How the forward dynamics will be emitted: rolled over which links, or unrolled and why."""
     if not options.rolled:
-        return (f"straight-line code per link (--rolled for loops; the default from {ROLLED_MIN_LINKS} links on)"
-                if args.rolled is None else "straight-line code per link (--unrolled)")
+        if args.rolled is not None:
+            return "straight-line code per link (--unrolled)"
+        if options.tangent and scene.n >= ROLLED_MIN_LINKS:
+            return "straight-line code per link (--tangent: the tangent kernels need it)"
+        return f"straight-line code per link (--rolled for loops; the default from {ROLLED_MIN_LINKS} links on)"
     from .kinematics import ChainSymbols
     from .rolled import ROLL_MIN_RUN, find_run
     run = find_run(ChainSymbols(scene, options.bake_params, layout))
@@ -153,8 +160,12 @@ def main(argv=None) -> int:
     for warning in scene.warnings:                # values that suggest a slip of units: said, not refused
         print(f"warning: {warning}", file=sys.stderr)
 
-    options = build_options(scene, bake_params=args.bake_params, specialise=not args.general, rolled=args.rolled,
-                            chart_b=not args.one_chart)
+    try:
+        options = build_options(scene, bake_params=args.bake_params, specialise=not args.general, rolled=args.rolled,
+                                chart_b=not args.one_chart, tangent=args.tangent)
+    except ValueError as exc:
+        print(f"error: --{exc}", file=sys.stderr)
+        return 2
     try:
         layout = layout_for(scene, specialise=options.specialise)
         check_not_singular(scene, layout)
@@ -175,6 +186,8 @@ def main(argv=None) -> int:
         if chart_b_scene(scene, layout) is not None:
             print("  - a second base chart for the gimbal lock: " + ("left out (--one-chart)" if args.one_chart else
                                                                       "generated (NAME_b_*, NAME_model_b)"))
+        print("  - tangent kernels (exact derivatives): " + ("generated (--tangent)" if options.tangent else
+                                                              "left out (--tangent adds them)"))
         return 0
 
     out = args.out if args.out is not None else default_out(args)

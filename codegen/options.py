@@ -29,8 +29,8 @@ class BuildOptions:
     chart_b: bool = True                  # a free base's second chart (codegen.charts), for the loop near the gimbal
                                           # lock; False: none (a run that reaches the lock stops there with
                                           # GAC_ERR_GIMBAL_LOCK) and half the code of such a model
-    tangent: bool = True                  # generate forward_dynamics_tangent (codegen.tangent; gac_linearize) where
-                                          # forward_dynamics is straight-line code (never for rolled loops)
+    tangent: bool = False                 # generate the tangent kernels (codegen.tangent: gac_linearize and the
+                                          # run's sensitivities need them); straight-line forward dynamics only
     formulation: str = "gibbs_appell"     # the dynamics kernels: the paper's recursion, or "lagrange" (an explicit
                                           # Euler-Lagrange expansion, for comparison)
     split_lines: int = interface.SPLIT_LINES          # a kernel longer than this is cut into parts ...
@@ -48,16 +48,17 @@ class BuildOptions:
 
 
 def build_options(scene, *, bake_params: bool = False, specialise: bool = True, dense: bool | None = None,
-                  rolled: bool | None = None, chart_b: bool = True, tangent: bool | None = None,
+                  rolled: bool | None = None, chart_b: bool = True, tangent: bool = False,
                   formulation: str = "gibbs_appell",
                   split_lines: int | None = None, flags=None) -> BuildOptions:
     """The options of a model of ``scene`` (n links): ``dense`` None generates the dense kernels up to
     interface.DENSE_MAX_LINKS links (always for the Lagrangian formulation), ``rolled`` None loops from
     interface.ROLLED_MIN_LINKS links on where the scene has a run (the Gibbs-Appell formulation only; True
-    requires a run), ``chart_b`` False leaves a free base's second chart out, ``tangent`` None generates the forward
-    dynamics' tangent kernel (gac_linearize) wherever the forward dynamics is straight-line code, False never, True
-    refuses a rolled model (the rolled loops have no tangent), ``split_lines`` None keeps the emitter's part lengths (one value sets both), ``flags`` None
-    is DEFAULT_FLAGS."""
+    requires a run), ``chart_b`` False leaves a free base's second chart out, ``tangent`` True generates the tangent
+    kernels (the exact derivatives of gac_linearize and of a run's sensitivities; about twice the derivation time and
+    1.5-2x the C) with straight-line forward dynamics (``rolled`` None then means no loops; rolled=True is refused:
+    the loops have no tangent), ``split_lines`` None keeps the emitter's part lengths (one value sets both),
+    ``flags`` None is DEFAULT_FLAGS."""
     if formulation not in FORMULATIONS:
         raise ValueError(f"formulation: must be one of {', '.join(FORMULATIONS)}, got {formulation!r}")
     if formulation == "lagrange":
@@ -67,19 +68,18 @@ def build_options(scene, *, bake_params: bool = False, specialise: bool = True, 
     if split_lines is not None and (not isinstance(split_lines, int) or split_lines < 1):
         raise ValueError(f"split_lines: must be a whole number of lines >= 1, got {split_lines!r}")
     n = scene.n
-    loops = formulation == "gibbs_appell" and interface.wants_rolled(n, rolled)
-    if tangent is not None and not isinstance(tangent, bool):
-        raise TypeError(f"tangent: expected True, False or None, got {tangent!r}")
-    if tangent and loops:
-        raise ValueError(f"tangent: a rolled model (forward dynamics as loops over its links, n = {n} >= "
-                         f"{interface.ROLLED_MIN_LINKS} or rolled=True) has no tangent kernel; build with "
-                         "rolled=False to linearise it")
+    if not isinstance(tangent, bool):
+        raise TypeError(f"tangent: expected True or False, got {tangent!r}")
+    if tangent and rolled is True:
+        raise ValueError("tangent: the rolled forward dynamics (rolled=True: loops over the links) has no tangent "
+                         "kernel; leave rolled out (or False) to build the derivatives with straight-line code")
+    loops = formulation == "gibbs_appell" and not tangent and interface.wants_rolled(n, rolled)
     if tangent and formulation == "lagrange":
         raise ValueError("tangent: the Lagrangian formulation has no tangent kernel; use the gibbs_appell one")
     return BuildOptions(
         bake_params=bool(bake_params), specialise=bool(specialise), dense=interface.wants_dense(n, dense),
         rolled=loops, rolled_required=loops and rolled is True, chart_b=bool(chart_b),
-        tangent=tangent is not False and formulation == "gibbs_appell", formulation=formulation,
+        tangent=tangent, formulation=formulation,
         split_lines=interface.SPLIT_LINES if split_lines is None else split_lines,
         split_lines_hot=interface.SPLIT_LINES_HOT if split_lines is None else split_lines,
         flags=DEFAULT_FLAGS if flags is None else tuple(str(f) for f in flags))

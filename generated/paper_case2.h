@@ -100,10 +100,6 @@
  *   contact_bias             74 = 22 add + 46 mul + 0 div + 6 calls
  *   power                     0 = 0 add + 0 mul + 0 div + 0 calls
  *   forward_dynamics_energy    305 = 97 add + 196 mul + 6 div + 6 calls
- *   forward_dynamics_tangent    708 = 273 add + 417 mul + 12 div + 6 calls
- *   inertia_solve_tangent    502 = 193 add + 291 mul + 12 div + 6 calls
- *   contact_generalized_force_tangent    129 = 42 add + 81 mul + 0 div + 6 calls
- *   contact_gaps_tangent     83 = 29 add + 48 mul + 0 div + 6 calls
  *
  * USING IT
  *   paper_case2_options opt;  paper_case2_sim sim;  paper_case2_impact_record rec;  int code;
@@ -307,7 +303,7 @@ void paper_case2_power(const double *GAC_RESTRICT q, const double *GAC_RESTRICT 
  *   8 outputs.   305 ops (97 add, 196 mul, 6 div, 6 calls) */
 void paper_case2_forward_dynamics_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT y);
 
-/* Directional derivative of Theta_ddot (forward dynamics) along (dq, dqd, du, dp): the forward-mode tangent of its O(n) tape.
+/* Directional derivative of forward_dynamics (forward mode, exact: the tangent of its tape).
  *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
  *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
  *   u    in : inputs (NU, layout in the header; N m on an angle, N on a translation; NULL when NU = 0)
@@ -321,10 +317,10 @@ void paper_case2_forward_dynamics_energy(const double *GAC_RESTRICT q, const dou
  *   direction; gac_linearize calls it once per column of A and B.  A model whose forward dynamics is
  *   rolled code, or built with tangent=False, has none: this function then writes NaN and
  *   paper_case2_model.forward_dynamics_tangent is NULL.
- *   6 outputs.   708 ops (273 add, 417 mul, 12 div, 6 calls) */
+ *   Not generated for this model (rolled forward dynamics, or tangent=False): writes NaN. */
 void paper_case2_forward_dynamics_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT du, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dqdd);
 
-/* Directional derivative of I_f^-1 Q along (dq, dQ, dp): the tangent of its O(n) tape.
+/* Directional derivative of inertia_solve (forward mode, exact: the tangent of its tape).
  *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
  *   Q    in : generalised forces (NQ; N m on an angle, N on a translation)
  *   p    in : parameters (NPARAM, layout in the header)
@@ -335,10 +331,10 @@ void paper_case2_forward_dynamics_tangent(const double *GAC_RESTRICT q, const do
  *   dx = d(I_f^-1 Q) = -I_f^-1 (dI_f) I_f^-1 Q + I_f^-1 dQ along (dq, dQ, dp), O(n); the sensitivities
  *   of an impact (gac_sens.c).  Without a tangent kernel (as forward_dynamics_tangent): NaN, and
  *   paper_case2_model.inertia_solve_tangent is NULL.
- *   6 outputs.   502 ops (193 add, 291 mul, 12 div, 6 calls) */
+ *   Not generated for this model (rolled forward dynamics, or tangent=False): writes NaN. */
 void paper_case2_inertia_solve_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT Q, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dQ, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dx);
 
-/* Directional derivative of J^T f along (dq, df, dp): the tangent of its O(n) tape.
+/* Directional derivative of contact_generalized_force (forward mode, exact).
  *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
  *   f    in : force along each contact Jacobian row (NJROW; N, N m on a stop)
  *   p    in : parameters (NPARAM, layout in the header)
@@ -348,10 +344,10 @@ void paper_case2_inertia_solve_tangent(const double *GAC_RESTRICT q, const doubl
  *   dQ   out: d(J^T f) along (dq, df, dp) (NQ)
  *   dQ = (dJ)^T f + J^T df along (dq, df, dp), O(n); with f a unit row, dJ's row along dq.  Without a
  *   tangent kernel: NaN, and paper_case2_model.contact_generalized_force_tangent is NULL.
- *   6 outputs.   129 ops (42 add, 81 mul, 0 div, 6 calls) */
+ *   Not generated for this model (rolled forward dynamics, or tangent=False): writes NaN. */
 void paper_case2_contact_generalized_force_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT f, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT df, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dQ);
 
-/* Directional derivative of the contact gaps along (dq, dp): the tangent of their tape.
+/* Directional derivative of contact_gaps (forward mode, exact).
  *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
  *   p    in : parameters (NPARAM, layout in the header)
  *   dq   in : direction of q (NQ; rad, m)
@@ -359,7 +355,7 @@ void paper_case2_contact_generalized_force_tangent(const double *GAC_RESTRICT q,
  *   dgap out: d gap along (dq, dp) (NCONTACT; m, rad on a stop)
  *   dgap = (d gap/dq) dq + (d gap/dp) dp, O(n): an event time's sensitivity (gac_sens.c).  Without a
  *   tangent kernel: NaN, and paper_case2_model.contact_gaps_tangent is NULL.
- *   12 outputs.   83 ops (29 add, 48 mul, 0 div, 6 calls) */
+ *   Not generated for this model (rolled forward dynamics, or tangent=False): writes NaN. */
 void paper_case2_contact_gaps_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dgap);
 
 /* ODE right-hand side of the flight phase.

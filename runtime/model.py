@@ -276,7 +276,7 @@ class CompiledModel:
     def _tangent_available(self, what: str) -> None:
         if self.c.model.forward_dynamics_tangent == self.ffi.NULL:
             why = ("its forward dynamics is rolled code (loops over its links): load it with rolled=False"
-                   if self.options.rolled else "it was built with tangent=False: load it with tangent=None or True")
+                   if self.options.rolled else "load it with tangent=True")
             raise ValueError(f"{what}: this model has no tangent kernel (forward_dynamics_tangent); {why}")
 
     def forward_dynamics_tangent(self, q, qd, dq, dqd, p=None, u=None, du=None, dp=None) -> np.ndarray:
@@ -377,22 +377,24 @@ class CompiledModel:
 
 def load_model(scene: Scene | str | Path, bake_params: bool = False, flags=None, progress=None,
                specialise: bool = True, dense: bool | None = None, rolled: bool | None = None,
-               chart_b: bool = True, tangent: bool | None = None) -> CompiledModel:
+               chart_b: bool = True, tangent: bool = False) -> CompiledModel:
     """Generate (cached) and compile (cached) the model of a scene, a shipped scene name or a scene
     file.  ``specialise`` (default) leaves out what the scene does not need; False gives the general
     model.  ``dense``: generate the dense kernels (mass_matrix, bias, contact_jacobian; O(n^2) code, not
     needed by simulations); None (default) does up to codegen.interface.DENSE_MAX_LINKS links, and otherwise
     they are formed at run time from the O(n) kernels.  ``rolled``: emit the forward dynamics with loops over the
     links (codegen.rolled); None (default) does from codegen.interface.ROLLED_MIN_LINKS links on.  ``chart_b``
-    False leaves a free base's second chart out (a run that reaches the gimbal lock then stops there).  ``tangent``:
-    generate the forward dynamics' tangent kernel (``linearize``); None (default) does wherever the forward dynamics
-    is straight-line code, True refuses a rolled model, False never.  The choices
+    False leaves a free base's second chart out (a run that reaches the gimbal lock then stops there).  ``tangent``
+    True generates the tangent kernels that ``linearize``, ``forward_dynamics_tangent`` and ``simulate(...,
+    sensitivities=...)`` need (straight-line forward dynamics then; about twice the derivation).  The choices
     are resolved once, here (codegen.options.build_options), into the model's ``options``.  For a name or a file,
     the same model object is returned again while the file is unchanged (same path, modification time and size)
     and the options are the same."""
-    for option, value in (("dense", dense), ("rolled", rolled), ("tangent", tangent)):
+    for option, value in (("dense", dense), ("rolled", rolled)):
         if value is not None and not isinstance(value, bool):
             raise TypeError(f"{option}: expected True, False or None, got {value!r}")
+    if not isinstance(tangent, bool):
+        raise TypeError(f"tangent: expected True or False, got {tangent!r}")
     choices = dict(bake_params=bake_params, specialise=specialise, dense=dense, rolled=rolled, chart_b=chart_b,
                    tangent=tangent, flags=flags)
     if isinstance(scene, Scene):

@@ -468,8 +468,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     if sensitivities is not None:
         directions, seed_x, seed_p = sensitivity.directions(model, sensitivities)
         if c.model.inertia_solve_tangent == ffi.NULL:
-            raise ValueError("sensitivities: this model has no tangent kernels (its forward dynamics is rolled code, "
-                             "or it was built with tangent=False): load it with rolled=False and tangent=None")
+            raise ValueError("sensitivities: this model has no tangent kernels: load it with tangent=True "
+                             "(load_model(scene, tangent=True))")
         k = len(directions)
         sens = ffi.new("gac_sens *")
         sens_work = np.zeros(lib.gac_sens_ndouble(ffi.addressof(c.model), k))

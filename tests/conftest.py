@@ -161,8 +161,8 @@ def compiled():
     runtime.CompiledModel, built once per session.  Tests get the general model unless they ask for the specialised
     one, without a free base's second chart (half the code to build) unless they ask for it (the tests that pass
     through the gimbal lock: test_sim_charts, test_sim_gimbal_impact, test_tools_parity), and without the forward
-    dynamics' tangent kernel unless they ask for it (the derivative tests: test_build_tangents,
-    test_sim_sensitivities); the command-line and load_model tests build the defaults."""
+    dynamics' tangent kernels unless they ask for them (the derivative tests: test_build_tangents,
+    test_sim_sensitivities), as load_model does."""
     from runtime import load_model
 
     def get(scene: Scene, bake_params: bool = False, specialise: bool = False, dense=None, chart_b: bool = False,
@@ -170,7 +170,7 @@ def compiled():
         key = (scene, bake_params, specialise, dense, chart_b, tangent)
         if key not in _MODELS:
             _MODELS[key] = load_model(scene, bake_params=bake_params, specialise=specialise, dense=dense,
-                                      chart_b=chart_b, tangent=None if tangent else False)
+                                      chart_b=chart_b, tangent=tangent)
         return _MODELS[key]
     return get
 

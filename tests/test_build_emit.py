@@ -27,12 +27,13 @@ STRICT = ["-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 _GENERATED = {}
 
 
-def generated(scene, bake_params: bool = False, chart_b: bool = True):
-    """codegen.generate(scene), each (scene, bake_params, chart_b) derived once in this file (the tests only read
-    it)."""
-    key = (scene, bake_params, chart_b)
+def generated(scene, bake_params: bool = False, chart_b: bool = True, tangent: bool = False):
+    """codegen.generate(scene), each (scene, bake_params, chart_b, tangent) derived once in this file (the tests only
+    read it)."""
+    key = (scene, bake_params, chart_b, tangent)
     if key not in _GENERATED:
-        _GENERATED[key] = codegen.generate(scene, build_options(scene, bake_params=bake_params, chart_b=chart_b))
+        _GENERATED[key] = codegen.generate(scene, build_options(scene, bake_params=bake_params, chart_b=chart_b,
+                                                                tangent=tangent))
     return _GENERATED[key]
 
 
@@ -287,7 +288,7 @@ def test_interface_is_plain_data_and_matches_the_kernels():
                             env=dict(os.environ, PYTHONPATH=str(ROOT)))
     assert result.returncode == 0 and result.stdout.strip() == "[]", result.stdout + result.stderr
     from codegen import interface
-    model = generated(SCENES["nowalls"]())
+    model = generated(SCENES["nowalls"](), tangent=True)                 # every kernel, the tangents too
     assert [(f.name, tuple(f.inputs), f.output) for f in model.functions] == \
         [(f.name, tuple(a.name for a in f.args[:-1]), f.args[-1].name) for f in interface.KERNELS]
     for function in interface.ALL_FUNCTIONS:               # declared in the header and defined in the source

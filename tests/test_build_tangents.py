@@ -9,6 +9,8 @@ import math
 import numpy as np
 import pytest
 
+from runtime import simulate
+
 from codegen.options import build_options
 from codegen.scene import Joint, LineLink, Scene
 from conftest import chain, driven_free_chain, random_parameters, random_states
@@ -105,11 +107,22 @@ def test_spring_pair_against_its_closed_form(compiled):
     assert A[nq + 3, 3] == pytest.approx(-b, rel=1e-12) and A[nq + 3, nq + 3] == pytest.approx(-a, rel=1e-12)
 
 
-def test_models_without_a_tangent_refuse_by_option():
-    """A rolled model has no tangent kernel: asking for one names the option to change."""
-    with pytest.raises(ValueError, match="tangent: a rolled model .* rolled=False"):
-        build_options(chain(8), tangent=True)
-    assert build_options(chain(8)).rolled and build_options(chain(8), rolled=False, tangent=True).tangent
-    assert not build_options(chain(2), tangent=False).tangent
-    with pytest.raises(TypeError, match="tangent: expected True, False or None"):
+def test_models_without_a_tangent_refuse_by_option(compiled):
+    """Tangent kernels are built on request; a long chain asking for them gets straight-line forward dynamics
+    (the rolled loops have no tangent), rolled=True with them is refused naming the option, and a model built
+    without them says how to get them."""
+    assert not build_options(chain(2)).tangent and build_options(chain(2), tangent=True).tangent
+    assert build_options(chain(8)).rolled
+    long = build_options(chain(8), tangent=True)
+    assert long.tangent and not long.rolled
+    with pytest.raises(ValueError, match=r"tangent: the rolled forward dynamics \(rolled=True: loops"):
+        build_options(chain(8), rolled=True, tangent=True)
+    with pytest.raises(TypeError, match="tangent: expected True or False"):
         build_options(chain(2), tangent="yes")
+    with pytest.raises(TypeError, match="tangent: expected True or False"):
+        build_options(chain(2), tangent=None)
+    plain = compiled(chain(2))
+    with pytest.raises(ValueError, match="linearize: this model has no tangent kernel .* tangent=True"):
+        plain.linearize(plain.q0, plain.qd0)
+    with pytest.raises(ValueError, match="sensitivities: .* tangent=True"):
+        simulate(plain, 0.1, sensitivities=["g"])

@@ -109,3 +109,18 @@ def test_ops_is_a_study(tmp_path):
     """The operation-count study is python -m studies ops; the old form says so in one line, before any work."""
     result = run_cli("ops", "--links", "1-2", cwd=tmp_path, cache=tmp_path / "cache")
     assert_refused(result, "'ops' is a study: run python -m studies ops --links 1-2", tmp_path / "cache")
+
+
+def test_tangent_kernels_on_request(capsys):
+    """--tangent adds the tangent kernels (and straight-line forward dynamics for a long chain); with --rolled it is
+    refused naming both options."""
+    from codegen.cli import main
+    assert main(["--links", "10", "--explain"]) == 0
+    out = capsys.readouterr().out
+    assert "tangent kernels (exact derivatives): left out (--tangent adds them)" in out and "loops over links" in out
+    assert main(["--links", "10", "--explain", "--tangent"]) == 0
+    out = capsys.readouterr().out
+    assert "tangent kernels (exact derivatives): generated (--tangent)" in out
+    assert "straight-line code per link (--tangent: the tangent kernels need it)" in out
+    assert main(["--links", "10", "--rolled", "--tangent", "--no-compile"]) == 2
+    assert "error: --tangent: the rolled forward dynamics (rolled=True" in capsys.readouterr().err

@@ -69,11 +69,13 @@ static int gac_sens_inputs_fixed(const gac_sim *s)
     return s->controller == 0 || s->controller == gac_schedule_input || s->model->nu == 0;
 }
 
-/* S over one step [t, t + h] from the state x at s->t: the method's stages Y_i = x + h sum_l a_il K_l, K_i = f(Y_i)
- * again, and with them dY_i = S + h sum_l a_il dK_l, dK_i = [dY_i qd ; forward_dynamics_tangent(Y_i, dY_i, dp)]
- * per direction; S += h sum_i b_i dK_i.  (The derivative of the Runge-Kutta step itself: the variational equations
- * integrated by the same formula.) */
-void gac_sens_flight(gac_sim *s, const double *x, double h)
+/* S over one step [t, t + h] from the state x at s->t: the method's stages Y_i = x + h sum_l a_il K_l and with them
+ * dY_i = S + h sum_l a_il dK_l, dK_i = [dY_i qd ; forward_dynamics_tangent(Y_i, dY_i, dp)] per direction;
+ * S += h sum_i b_i dK_i.  (The derivative of the Runge-Kutta step itself: the variational equations integrated by
+ * the same formula.)  The stages K_i = f(Y_i) are the step's own (s->f, s->k[1..], as the integrator left them) when
+ * `taken` (the step of size h just accepted); otherwise (a part of it, up to an event) K_0 = s->f and the others
+ * are computed here. */
+void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
 {
     gac_sens *z = s->sens;
     const gac_model *md = s->model;
@@ -90,17 +92,20 @@ void gac_sens_flight(gac_sim *s, const double *x, double h)
     }
     {
         const int nq = md->nq, nx = md->nx, k = z->k;
-        double *K = z->work, *dK = K + (long)GAC_SENS_STAGES * nx, *Y = dK + (long)GAC_SENS_STAGES * k * nx, *dY = Y + nx;
+        double *work = z->work, *dK = work + (long)GAC_SENS_STAGES * nx, *Y = dK + (long)GAC_SENS_STAGES * k * nx;
+        double *dY = Y + nx;
+        const double *K[GAC_SENS_STAGES];
         stages = gac_tableau(s->opt.method, &a, &lda, &b, &c);
+        for (i = 0; i < stages; ++i) K[i] = i == 0 ? s->f : taken ? s->k[i] : work + (long)i * nx;
         for (i = 0; i < stages; ++i) {
             const double *u;
             for (n = 0; n < nx; ++n) {
                 double sum = 0.0;
-                for (l = 0; l < i; ++l) sum += a[i * lda + l] * K[l * nx + n];
+                for (l = 0; l < i; ++l) sum += a[i * lda + l] * K[l][n];
                 Y[n] = x[n] + h * sum;
             }
             u = gac_input(s, s->t + c[i] * h, Y);
-            md->rhs(s->t + c[i] * h, Y, u, s->p, K + (long)i * nx);
+            if (i > 0 && !taken) md->rhs(s->t + c[i] * h, Y, u, s->p, work + (long)i * nx);
             for (j = 0; j < k; ++j) {
                 double *dKi = dK + ((long)j * GAC_SENS_STAGES + i) * nx;
                 for (n = 0; n < nx; ++n) {

@@ -322,7 +322,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
                             : gac_resolve(s, t_event, c_event, record);
             if (code < 0) return code;
             if (s->sens != 0 && !released) {      /* the impact's jump, or a touch that has no derivative */
-                if (code == 1) gac_sens_impact(s, record);
+                if (code == 1) gac_sens_impact(s, record, c_event);
                 else gac_sens_stop(s, GAC_SENS_GRAZING, t_event, c_event);
             }
             for (i = 0; i < md->nx; ++i) s->x[i] = code == 1 ? s->x1[i] : s->xs[i];

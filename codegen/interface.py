@@ -183,8 +183,8 @@ def wants_dense(n: int, dense: bool | None) -> bool:
 
 
 SPLIT_LINES = 600           # a kernel longer than this is cut into parts (codegen.emit.render_function) ...
-SPLIT_LINES_HOT = 8000      # ... the right-hand side's kernels longer than this (parts cost 2-9 % per call)
-HOT_KERNELS = ("forward_dynamics",)
+SPLIT_LINES_HOT = 8000      # ... the hot kernels longer than this (parts cost 2-9 % per call)
+HOT_KERNELS = ("forward_dynamics", "forward_dynamics_tangent")   # (the tangent: at every stage per direction)
 
 ROLLED_MIN_LINKS = 8        # from this n on, forward_dynamics is emitted with loops over the links (codegen.rolled)
 

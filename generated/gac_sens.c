@@ -74,7 +74,8 @@ static int gac_sens_inputs_fixed(const gac_sim *s)
  * S += h sum_i b_i dK_i.  (The derivative of the Runge-Kutta step itself: the variational equations integrated by
  * the same formula.)  The stages K_i = f(Y_i) are the step's own (s->f, s->k[1..], as the integrator left them) when
  * `taken` (the step of size h just accepted); otherwise (a part of it, up to an event) K_0 = s->f and the others
- * are computed here. */
+ * are computed here.  The directions' tangents go GAC_TANGENT_BLOCK at a time through the model's
+ * forward_dynamics_tangent_block (their primal part computed once), the rest one by one. */
 void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
 {
     gac_sens *z = s->sens;
@@ -93,8 +94,11 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
     {
         const int nq = md->nq, nx = md->nx, k = z->k;
         double *work = z->work, *dK = work + (long)GAC_SENS_STAGES * nx, *Y = dK + (long)GAC_SENS_STAGES * k * nx;
-        double *dY = Y + nx;
+        double dQ[GAC_TANGENT_BLOCK * nq], dQD[GAC_TANGENT_BLOCK * nq], out[GAC_TANGENT_BLOCK * nq];
+        double dU[GAC_TANGENT_BLOCK * GAC_AT_LEAST_1(md->nu)];   /* the inputs' directions: 0 (held, or a schedule) */
         const double *K[GAC_SENS_STAGES];
+        int width;
+        for (n = 0; n < GAC_TANGENT_BLOCK * GAC_AT_LEAST_1(md->nu); ++n) dU[n] = 0.0;
         stages = gac_tableau(s->opt.method, &a, &lda, &b, &c);
         for (i = 0; i < stages; ++i) K[i] = i == 0 ? s->f : taken ? s->k[i] : work + (long)i * nx;
         for (i = 0; i < stages; ++i) {
@@ -106,16 +110,33 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
             }
             u = gac_input(s, s->t + c[i] * h, Y);
             if (i > 0 && !taken) md->rhs(s->t + c[i] * h, Y, u, s->p, work + (long)i * nx);
-            for (j = 0; j < k; ++j) {
-                double *dKi = dK + ((long)j * GAC_SENS_STAGES + i) * nx;
-                for (n = 0; n < nx; ++n) {
-                    double sum = 0.0;
-                    for (l = 0; l < i; ++l) sum += a[i * lda + l] * dK[((long)j * GAC_SENS_STAGES + l) * nx + n];
-                    dY[n] = z->S[(long)j * nx + n] + h * sum;
+            for (j = 0; j < k; j += width) {         /* GAC_TANGENT_BLOCK directions a call, then one by one */
+                double *dKi;
+                int m;
+                width = md->forward_dynamics_tangent_block != 0 && j + GAC_TANGENT_BLOCK <= k ? GAC_TANGENT_BLOCK : 1;
+                for (m = 0; m < width; ++m) {
+                    const double *dKj = dK + (long)(j + m) * GAC_SENS_STAGES * nx;
+                    dKi = dK + ((long)(j + m) * GAC_SENS_STAGES + i) * nx;
+                    for (n = 0; n < nx; ++n) {
+                        double sum = 0.0;
+                        for (l = 0; l < i; ++l) sum += a[i * lda + l] * dKj[(long)l * nx + n];
+                        sum = z->S[(long)(j + m) * nx + n] + h * sum;      /* dY_i of direction j + m */
+                        if (n < nq) dQ[m * nq + n] = sum;
+                        else dQD[m * nq + n - nq] = dKi[n - nq] = sum;
+                    }
                 }
-                for (n = 0; n < nq; ++n) dKi[n] = dY[nq + n];
-                md->forward_dynamics_tangent(Y, Y + nq, u, s->p, dY, dY + nq, 0, z->dp + (long)j * md->nparam,
-                                             dKi + nq);
+                if (width > 1) {
+                    md->forward_dynamics_tangent_block(Y, Y + nq, u, s->p, dQ, dQD, dU, z->dp + (long)j * md->nparam,
+                                                       out);
+                    for (m = 0; m < width; ++m) {
+                        dKi = dK + ((long)(j + m) * GAC_SENS_STAGES + i) * nx;
+                        for (n = 0; n < nq; ++n) dKi[nq + n] = out[m * nq + n];
+                    }
+                } else {
+                    dKi = dK + ((long)j * GAC_SENS_STAGES + i) * nx;
+                    md->forward_dynamics_tangent(Y, Y + nq, u, s->p, dQ, dQD, dU, z->dp + (long)j * md->nparam,
+                                                 dKi + nq);
+                }
             }
         }
         for (j = 0; j < k; ++j) {

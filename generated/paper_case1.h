@@ -120,6 +120,7 @@
  *   power                     0 = 0 add + 0 mul + 0 div + 0 calls
  *   forward_dynamics_energy    438 = 153 add + 271 mul + 6 div + 8 calls
  *   forward_dynamics_tangent    939 = 378 add + 541 mul + 12 div + 8 calls
+ *   forward_dynamics_tangent_block   2814 = 1179 add + 1597 mul + 30 div + 8 calls
  *   inertia_solve_tangent    734 = 299 add + 415 mul + 12 div + 8 calls
  *   contact_generalized_force_tangent    161 = 61 add + 92 mul + 0 div + 8 calls
  *   contact_gaps_tangent    144 = 60 add + 76 mul + 0 div + 8 calls
@@ -353,6 +354,23 @@ void paper_case1_forward_dynamics_energy(const double *GAC_RESTRICT q, const dou
  *   paper_case1_model.forward_dynamics_tangent is NULL.
  *   6 outputs.   939 ops (378 add, 541 mul, 12 div, 8 calls) */
 void paper_case1_forward_dynamics_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT du, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dqdd);
+
+/* forward_dynamics_tangent along 4 directions at once (the primal part computed once).
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   u    in : inputs (NU, layout in the header; N m on an angle, N on a translation; NULL when NU = 0)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   dq   in : GAC_TANGENT_BLOCK directions of q, one after the other (GAC_TANGENT_BLOCK x NQ)
+ *   dqd  in : the same directions of qd (GAC_TANGENT_BLOCK x NQ)
+ *   du   in : the same directions of u (GAC_TANGENT_BLOCK x NU; NULL when NU = 0)
+ *   dp   in : the same directions of p (GAC_TANGENT_BLOCK x NPARAM; ignored with baked parameters)
+ *   dqdd out: d qdd along each direction (GAC_TANGENT_BLOCK x NQ)
+ *   The same numbers as GAC_TANGENT_BLOCK calls of forward_dynamics_tangent, the part of its tape that
+ *   reads no direction computed once: each further direction costs its tangent part alone (the
+ *   sensitivities' flight, gac_sens.c).  Without a tangent kernel: NaN, and
+ *   paper_case1_model.forward_dynamics_tangent_block is NULL.
+ *   24 outputs.   2814 ops (1179 add, 1597 mul, 30 div, 8 calls) */
+void paper_case1_forward_dynamics_tangent_block(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT du, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dqdd);
 
 /* Directional derivative of I_f^-1 Q along (dq, dQ, dp): the tangent of its O(n) tape.
  *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)

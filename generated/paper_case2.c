@@ -1182,6 +1182,277 @@ void paper_case2_forward_dynamics_tangent(const double *GAC_RESTRICT q, const do
     dqdd[5] = d_Xdd_2;
 }
 
+/* ---- kernel forward_dynamics_tangent_block ---- */
+/* forward_dynamics_tangent along 4 directions at once (the primal part computed once).  2190 ops (888 add, 1266 mul, 30 div, 6 calls) */
+void paper_case2_forward_dynamics_tangent_block(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT du, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dqdd)
+{
+    (void)q;
+    (void)qd;
+    (void)u;
+    (void)p;
+    (void)dq;
+    (void)dqd;
+    (void)du;
+    (void)dp;
+    const double c_m1 = cos(q[0]);
+    const double s_m1 = sin(q[0]);
+    const double c_0 = cos(q[1]);
+    const double s_0 = sin(q[1]);
+    const double c_1 = cos(q[2]);
+    const double s_1 = sin(q[2]);
+    const double x0 = p[1]*p[2];
+    const double B0_1 = x0;
+    const double x1 = p[1]*p[1];
+    const double x2 = 0.5*x1;
+    const double h_1_x = p[2]*x2;
+    const double x3 = 0.3333333333333333*(p[1]*p[1]*p[1]);
+    const double B2_1 = p[2]*x3;
+    const double K_1_xx = p[1]*p[3];
+    const double K_1_yy = B2_1 + p[1]*p[4];
+    const double K_1_zz = B2_1 + p[1]*p[5];
+    const double wp_0_x = qd[0]*s_0;
+    const double wp_0_y = c_0*qd[0];
+    const double wdv_0_x = qd[1]*wp_0_y;
+    const double wdv_0_y = -qd[1]*wp_0_x;
+    const double av_0_x = p[0]*s_0;
+    const double av_0_y = c_0*p[0];
+    const double wp_1_x = c_1*wp_0_y + qd[1]*s_1;
+    const double wp_1_y = c_1*qd[1] - s_1*wp_0_y;
+    const double w_1_z = qd[2] + wp_0_x;
+    const double wdv_1_x = c_1*wdv_0_y + qd[2]*wp_1_y;
+    const double wdv_1_y = -qd[2]*wp_1_x - s_1*wdv_0_y;
+    const double av_1_x = av_0_y*c_1;
+    const double av_1_y = -av_0_y*s_1;
+    const double hw_1_y = -h_1_x*w_1_z;
+    const double hw_1_z = h_1_x*wp_1_y;
+    const double S_1_x = B0_1*av_1_x + hw_1_y*w_1_z - hw_1_z*wp_1_y;
+    const double S_1_y = B0_1*av_1_y + h_1_x*wdv_0_x + hw_1_z*wp_1_x;
+    const double S_1_z = B0_1*av_0_x - h_1_x*wdv_1_y - hw_1_y*wp_1_x;
+    const double Kw_1_x = K_1_xx*wp_1_x;
+    const double Kw_1_y = K_1_yy*wp_1_y;
+    const double Kw_1_z = K_1_zz*w_1_z;
+    const double T_1_x = K_1_xx*wdv_1_x + Kw_1_z*wp_1_y - Kw_1_y*w_1_z;
+    const double T_1_y = K_1_yy*wdv_1_y + Kw_1_x*w_1_z - Kw_1_z*wp_1_x - av_0_x*h_1_x;
+    const double T_1_z = K_1_zz*wdv_0_x + Kw_1_y*wp_1_x + av_1_y*h_1_x - Kw_1_x*wp_1_y;
+    const double Dinv_1 = 1.0/(K_1_zz);
+    const double W_1_4 = Dinv_1*h_1_x;
+    const double IaC_1_11 = B0_1 - W_1_4*h_1_x;
+    const double paF_1_y = S_1_y - T_1_z*W_1_4;
+    const double ss_1 = s_1*s_1;
+    const double sc_1 = c_1*s_1;
+    const double x4 = K_1_xx - K_1_yy;
+    const double x5 = ss_1*x4;
+    const double IzA_1_00 = K_1_xx - x5;
+    const double IzA_1_01 = sc_1*x4;
+    const double IzA_1_11 = K_1_yy + x5;
+    const double IzB_1_02 = h_1_x*s_1;
+    const double IzB_1_12 = -c_1*h_1_x;
+    const double x6 = B0_1 - IaC_1_11;
+    const double x7 = ss_1*x6;
+    const double IzC_1_00 = B0_1 - x7;
+    const double IzC_1_01 = sc_1*x6;
+    const double IzC_1_11 = IaC_1_11 + x7;
+    const double pF_1_y = S_1_x*c_1 - paF_1_y*s_1;
+    const double pF_1_z = S_1_x*s_1 + c_1*paF_1_y;
+    const double pN_1_y = T_1_x*c_1 - T_1_y*s_1;
+    const double pN_1_z = T_1_x*s_1 + T_1_y*c_1;
+    const double Dinv_0 = 1.0/(IzA_1_11);
+    const double W_0_1 = Dinv_0*IzA_1_01;
+    const double W_0_3 = Dinv_0*IzB_1_12;
+    const double IaA_0_11 = IzA_1_00 - IzA_1_01*W_0_1;
+    const double IaB_0_10 = IzB_1_02 - IzB_1_12*W_0_1;
+    const double IaC_0_00 = B0_1 - IzB_1_12*W_0_3;
+    const double paN_0_y = pN_1_y - W_0_1*pN_1_z;
+    const double paF_0_x = S_1_z - W_0_3*pN_1_z;
+    const double ss_0 = s_0*s_0;
+    const double x8 = c_0*s_0;
+    const double sc_0 = x8;
+    const double IzA_0_11 = IaA_0_11 - IaA_0_11*ss_0;
+    const double IzB_0_00 = -IaB_0_10*x8;
+    const double x9 = c_0*c_0;
+    const double IzB_0_10 = IaB_0_10*x9;
+    const double x10 = IaC_0_00 - IzC_1_00;
+    const double x11 = ss_0*x10;
+    const double IzC_0_00 = IaC_0_00 - x11;
+    const double IzC_0_01 = sc_0*x10;
+    const double IzC_0_02 = -IzC_1_01*s_0;
+    const double IzC_0_11 = IzC_1_00 + x11;
+    const double IzC_0_12 = IzC_1_01*c_0;
+    const double pF_0_x = c_0*paF_0_x - pF_1_y*s_0;
+    const double pF_0_z = c_0*pF_1_y + paF_0_x*s_0;
+    const double pN_0_z = c_0*paN_0_y;
+    const double Dinv_m1 = 1.0/(IzA_0_11);
+    const double W_m1_3 = Dinv_m1*IzB_0_10;
+    const double W_m1_5 = -Dinv_m1*IzB_0_00;
+    const double ud_m1 = -Dinv_m1*pN_0_z;
+    const double IaC_m1_00 = IzC_0_00 - IzB_0_10*W_m1_3;
+    const double IaC_m1_02 = IzC_0_01 + IzB_0_00*W_m1_3;
+    const double IaC_m1_22 = IzC_0_11 + IzB_0_00*W_m1_5;
+    const double paF_m1_x = pF_0_x - W_m1_3*pN_0_z;
+    const double paF_m1_z = pF_0_z - W_m1_5*pN_0_z;
+    const double Dinv_0_2 = 1.0/(IaC_m1_00);
+    const double L_1_0 = -Dinv_0_2*IzC_0_02;
+    const double D_1 = IzC_1_11 + IzC_0_02*L_1_0;
+    const double Dinv_1_2 = 1.0/(D_1);
+    const double L_2_0 = Dinv_0_2*IaC_m1_02;
+    const double u_2_1 = -IzC_0_12 - IaC_m1_02*L_1_0;
+    const double L_2_1 = Dinv_1_2*u_2_1;
+    const double D_2 = IaC_m1_22 - IaC_m1_02*L_2_0 - L_2_1*u_2_1;
+    const double Dinv_2 = 1.0/(D_2);
+    const double z_1 = pF_1_z + L_1_0*paF_m1_x;
+    const double z_2 = -paF_m1_z + L_2_0*paF_m1_x - L_2_1*z_1;
+    const double sol_2 = Dinv_2*z_2;
+    const double sol_1 = Dinv_1_2*z_1 - L_2_1*sol_2;
+    const double sol_0 = -Dinv_0_2*paF_m1_x - L_1_0*sol_1 - L_2_0*sol_2;
+    const double Xdd_0 = c_m1*sol_0 - s_m1*sol_1;
+    const double Xdd_2 = -c_m1*sol_1 - s_m1*sol_0;
+    const double acc_m1_x = Xdd_0*c_m1 - Xdd_2*s_m1;
+    const double acc_m1_y = -Xdd_0*s_m1 - Xdd_2*c_m1;
+    const double qdd_m1 = ud_m1 - W_m1_3*acc_m1_x - W_m1_5*sol_2;
+    const double alpha_0_y = c_0*qdd_m1;
+    const double acc_0_x = acc_m1_x*c_0 + s_0*sol_2;
+    const double acc_0_y = c_0*sol_2 - acc_m1_x*s_0;
+    const double acc_1_y = -acc_0_y*s_1 - acc_m1_y*c_1;
+    for (int j = 0; j < 4; ++j) {
+        const double *dp_j = dp != 0 ? dp + j * 18 : 0;
+        const double *dq_j = dq != 0 ? dq + j * 6 : 0;
+        const double *dqd_j = dqd != 0 ? dqd + j * 6 : 0;
+        const double *du_j = du != 0 ? du + j * 0 : 0;
+        (void)dp_j;
+        (void)dq_j;
+        (void)dqd_j;
+        (void)du_j;
+        const double d_c_m1 = -dq_j[0]*s_m1;
+        const double d_s_m1 = c_m1*dq_j[0];
+        const double d_c_0 = -dq_j[1]*s_0;
+        const double d_s_0 = c_0*dq_j[1];
+        const double d_c_1 = -dq_j[2]*s_1;
+        const double d_s_1 = c_1*dq_j[2];
+        const double x12 = dp_j[1]*p[2];
+        const double d_B0_1 = x12 + dp_j[2]*p[1];
+        const double d_h_1_x = dp_j[1]*x0 + dp_j[2]*x2;
+        const double d_B2_1 = dp_j[2]*x3 + x1*x12;
+        const double d_K_1_xx = dp_j[1]*p[3] + dp_j[3]*p[1];
+        const double d_K_1_yy = d_B2_1 + dp_j[1]*p[4] + dp_j[4]*p[1];
+        const double d_K_1_zz = d_B2_1 + dp_j[1]*p[5] + dp_j[5]*p[1];
+        const double d_wp_0_x = d_s_0*qd[0] + dqd_j[0]*s_0;
+        const double d_wp_0_y = c_0*dqd_j[0] + d_c_0*qd[0];
+        const double d_wdv_0_x = d_wp_0_y*qd[1] + dqd_j[1]*wp_0_y;
+        const double d_wdv_0_y = -d_wp_0_x*qd[1] - dqd_j[1]*wp_0_x;
+        const double d_av_0_x = d_s_0*p[0] + dp_j[0]*s_0;
+        const double d_av_0_y = c_0*dp_j[0] + d_c_0*p[0];
+        const double d_wp_1_x = c_1*d_wp_0_y + d_c_1*wp_0_y + d_s_1*qd[1] + dqd_j[1]*s_1;
+        const double d_wp_1_y = c_1*dqd_j[1] + d_c_1*qd[1] - d_s_1*wp_0_y - d_wp_0_y*s_1;
+        const double d_w_1_z = d_wp_0_x + dqd_j[2];
+        const double d_wdv_1_x = c_1*d_wdv_0_y + d_c_1*wdv_0_y + d_wp_1_y*qd[2] + dqd_j[2]*wp_1_y;
+        const double d_wdv_1_y = -d_s_1*wdv_0_y - d_wdv_0_y*s_1 - d_wp_1_x*qd[2] - dqd_j[2]*wp_1_x;
+        const double d_av_1_x = av_0_y*d_c_1 + c_1*d_av_0_y;
+        const double d_av_1_y = -av_0_y*d_s_1 - d_av_0_y*s_1;
+        const double d_hw_1_y = -d_h_1_x*w_1_z - d_w_1_z*h_1_x;
+        const double d_hw_1_z = d_h_1_x*wp_1_y + d_wp_1_y*h_1_x;
+        const double d_S_1_x = B0_1*d_av_1_x + av_1_x*d_B0_1 + d_hw_1_y*w_1_z + d_w_1_z*hw_1_y - d_hw_1_z*wp_1_y - d_wp_1_y*hw_1_z;
+        const double d_S_1_y = B0_1*d_av_1_y + av_1_y*d_B0_1 + d_h_1_x*wdv_0_x + d_hw_1_z*wp_1_x + d_wdv_0_x*h_1_x + d_wp_1_x*hw_1_z;
+        const double d_S_1_z = B0_1*d_av_0_x + av_0_x*d_B0_1 - d_h_1_x*wdv_1_y - d_hw_1_y*wp_1_x - d_wdv_1_y*h_1_x - d_wp_1_x*hw_1_y;
+        const double d_Kw_1_x = K_1_xx*d_wp_1_x + d_K_1_xx*wp_1_x;
+        const double d_Kw_1_y = K_1_yy*d_wp_1_y + d_K_1_yy*wp_1_y;
+        const double d_Kw_1_z = K_1_zz*d_w_1_z + d_K_1_zz*w_1_z;
+        const double d_T_1_x = K_1_xx*d_wdv_1_x + Kw_1_z*d_wp_1_y + d_K_1_xx*wdv_1_x + d_Kw_1_z*wp_1_y - Kw_1_y*d_w_1_z - d_Kw_1_y*w_1_z;
+        const double d_T_1_y = K_1_yy*d_wdv_1_y + Kw_1_x*d_w_1_z + d_K_1_yy*wdv_1_y + d_Kw_1_x*w_1_z - Kw_1_z*d_wp_1_x - av_0_x*d_h_1_x - d_Kw_1_z*wp_1_x - d_av_0_x*h_1_x;
+        const double d_T_1_z = K_1_zz*d_wdv_0_x + Kw_1_y*d_wp_1_x + av_1_y*d_h_1_x + d_K_1_zz*wdv_0_x + d_Kw_1_y*wp_1_x + d_av_1_y*h_1_x - Kw_1_x*d_wp_1_y - d_Kw_1_x*wp_1_y;
+        const double d_Dinv_1 = -d_K_1_zz/((K_1_zz*K_1_zz));
+        const double d_W_1_4 = Dinv_1*d_h_1_x + d_Dinv_1*h_1_x;
+        const double d_ud_1 = -Dinv_1*d_T_1_z - T_1_z*d_Dinv_1;
+        const double x13 = -d_B0_1;
+        const double d_IaC_1_11 = -x13 - W_1_4*d_h_1_x - d_W_1_4*h_1_x;
+        const double d_paF_1_y = d_S_1_y - T_1_z*d_W_1_4 - W_1_4*d_T_1_z;
+        const double d_ss_1 = 2.0*d_s_1*s_1;
+        const double d_sc_1 = c_1*d_s_1 + d_c_1*s_1;
+        const double x14 = d_K_1_xx - d_K_1_yy;
+        const double x15 = d_ss_1*x4 + ss_1*x14;
+        const double d_IzA_1_00 = d_K_1_xx - x15;
+        const double d_IzA_1_01 = d_sc_1*x4 + sc_1*x14;
+        const double d_IzA_1_11 = d_K_1_yy + x15;
+        const double d_IzB_1_02 = d_h_1_x*s_1 + d_s_1*h_1_x;
+        const double d_IzB_1_12 = -c_1*d_h_1_x - d_c_1*h_1_x;
+        const double x16 = d_B0_1 - d_IaC_1_11;
+        const double x17 = d_ss_1*x6 + ss_1*x16;
+        const double d_IzC_1_00 = -x13 - x17;
+        const double d_IzC_1_01 = d_sc_1*x6 + sc_1*x16;
+        const double d_IzC_1_11 = d_IaC_1_11 + x17;
+        const double d_pF_1_y = S_1_x*d_c_1 + c_1*d_S_1_x - d_paF_1_y*s_1 - d_s_1*paF_1_y;
+        const double d_pF_1_z = S_1_x*d_s_1 + c_1*d_paF_1_y + d_S_1_x*s_1 + d_c_1*paF_1_y;
+        const double d_pN_1_y = T_1_x*d_c_1 + c_1*d_T_1_x - T_1_y*d_s_1 - d_T_1_y*s_1;
+        const double d_pN_1_z = T_1_x*d_s_1 + T_1_y*d_c_1 + c_1*d_T_1_y + d_T_1_x*s_1;
+        const double d_Dinv_0 = -d_IzA_1_11/((IzA_1_11*IzA_1_11));
+        const double d_W_0_1 = Dinv_0*d_IzA_1_01 + IzA_1_01*d_Dinv_0;
+        const double d_W_0_3 = Dinv_0*d_IzB_1_12 + IzB_1_12*d_Dinv_0;
+        const double d_ud_0 = -Dinv_0*d_pN_1_z - d_Dinv_0*pN_1_z;
+        const double d_IaA_0_11 = d_IzA_1_00 - IzA_1_01*d_W_0_1 - W_0_1*d_IzA_1_01;
+        const double d_IaB_0_10 = d_IzB_1_02 - IzB_1_12*d_W_0_1 - W_0_1*d_IzB_1_12;
+        const double d_IaC_0_00 = -x13 - IzB_1_12*d_W_0_3 - W_0_3*d_IzB_1_12;
+        const double d_paN_0_y = d_pN_1_y - W_0_1*d_pN_1_z - d_W_0_1*pN_1_z;
+        const double d_paF_0_x = d_S_1_z - W_0_3*d_pN_1_z - d_W_0_3*pN_1_z;
+        const double d_ss_0 = 2.0*d_s_0*s_0;
+        const double x18 = c_0*d_s_0;
+        const double x19 = d_c_0*s_0;
+        const double d_sc_0 = x18 + x19;
+        const double d_IzA_0_11 = d_IaA_0_11 - IaA_0_11*d_ss_0 - d_IaA_0_11*ss_0;
+        const double d_IzB_0_00 = -IaB_0_10*x18 - IaB_0_10*x19 - d_IaB_0_10*x8;
+        const double d_IzB_0_10 = d_IaB_0_10*x9 + 2.0*IaB_0_10*c_0*d_c_0;
+        const double x20 = d_IaC_0_00 - d_IzC_1_00;
+        const double x21 = d_ss_0*x10 + ss_0*x20;
+        const double d_IzC_0_00 = d_IaC_0_00 - x21;
+        const double d_IzC_0_01 = d_sc_0*x10 + sc_0*x20;
+        const double d_IzC_0_02 = -IzC_1_01*d_s_0 - d_IzC_1_01*s_0;
+        const double d_IzC_0_11 = d_IzC_1_00 + x21;
+        const double d_IzC_0_12 = IzC_1_01*d_c_0 + c_0*d_IzC_1_01;
+        const double d_pF_0_x = c_0*d_paF_0_x + d_c_0*paF_0_x - d_pF_1_y*s_0 - d_s_0*pF_1_y;
+        const double d_pF_0_z = c_0*d_pF_1_y + d_c_0*pF_1_y + d_paF_0_x*s_0 + d_s_0*paF_0_x;
+        const double d_pN_0_z = c_0*d_paN_0_y + d_c_0*paN_0_y;
+        const double d_Dinv_m1 = -d_IzA_0_11/((IzA_0_11*IzA_0_11));
+        const double d_W_m1_3 = Dinv_m1*d_IzB_0_10 + IzB_0_10*d_Dinv_m1;
+        const double d_W_m1_5 = -Dinv_m1*d_IzB_0_00 - IzB_0_00*d_Dinv_m1;
+        const double d_ud_m1 = -Dinv_m1*d_pN_0_z - d_Dinv_m1*pN_0_z;
+        const double d_IaC_m1_00 = d_IzC_0_00 - IzB_0_10*d_W_m1_3 - W_m1_3*d_IzB_0_10;
+        const double d_IaC_m1_02 = d_IzC_0_01 + IzB_0_00*d_W_m1_3 + W_m1_3*d_IzB_0_00;
+        const double d_IaC_m1_22 = d_IzC_0_11 + IzB_0_00*d_W_m1_5 + W_m1_5*d_IzB_0_00;
+        const double d_paF_m1_x = d_pF_0_x - W_m1_3*d_pN_0_z - d_W_m1_3*pN_0_z;
+        const double d_paF_m1_z = d_pF_0_z - W_m1_5*d_pN_0_z - d_W_m1_5*pN_0_z;
+        const double d_Dinv_0_2 = -d_IaC_m1_00/((IaC_m1_00*IaC_m1_00));
+        const double d_L_1_0 = -Dinv_0_2*d_IzC_0_02 - IzC_0_02*d_Dinv_0_2;
+        const double d_D_1 = d_IzC_1_11 + IzC_0_02*d_L_1_0 + L_1_0*d_IzC_0_02;
+        const double d_Dinv_1_2 = -d_D_1/((D_1*D_1));
+        const double d_L_2_0 = Dinv_0_2*d_IaC_m1_02 + IaC_m1_02*d_Dinv_0_2;
+        const double d_u_2_1 = -d_IzC_0_12 - IaC_m1_02*d_L_1_0 - L_1_0*d_IaC_m1_02;
+        const double d_L_2_1 = Dinv_1_2*d_u_2_1 + d_Dinv_1_2*u_2_1;
+        const double d_D_2 = d_IaC_m1_22 - IaC_m1_02*d_L_2_0 - L_2_0*d_IaC_m1_02 - L_2_1*d_u_2_1 - d_L_2_1*u_2_1;
+        const double d_Dinv_2 = -d_D_2/((D_2*D_2));
+        const double d_z_1 = d_pF_1_z + L_1_0*d_paF_m1_x + d_L_1_0*paF_m1_x;
+        const double d_z_2 = -d_paF_m1_z + L_2_0*d_paF_m1_x + d_L_2_0*paF_m1_x - L_2_1*d_z_1 - d_L_2_1*z_1;
+        const double d_sol_2 = Dinv_2*d_z_2 + d_Dinv_2*z_2;
+        const double d_sol_1 = Dinv_1_2*d_z_1 + d_Dinv_1_2*z_1 - L_2_1*d_sol_2 - d_L_2_1*sol_2;
+        const double d_sol_0 = -Dinv_0_2*d_paF_m1_x - L_1_0*d_sol_1 - L_2_0*d_sol_2 - d_Dinv_0_2*paF_m1_x - d_L_1_0*sol_1 - d_L_2_0*sol_2;
+        const double d_Xdd_0 = c_m1*d_sol_0 + d_c_m1*sol_0 - d_s_m1*sol_1 - d_sol_1*s_m1;
+        const double d_Xdd_2 = -c_m1*d_sol_1 - d_c_m1*sol_1 - d_s_m1*sol_0 - d_sol_0*s_m1;
+        const double d_acc_m1_x = Xdd_0*d_c_m1 + c_m1*d_Xdd_0 - Xdd_2*d_s_m1 - d_Xdd_2*s_m1;
+        const double d_acc_m1_y = -Xdd_0*d_s_m1 - Xdd_2*d_c_m1 - c_m1*d_Xdd_2 - d_Xdd_0*s_m1;
+        const double d_qdd_m1 = d_ud_m1 - W_m1_3*d_acc_m1_x - W_m1_5*d_sol_2 - acc_m1_x*d_W_m1_3 - d_W_m1_5*sol_2;
+        const double d_alpha_0_x = d_qdd_m1*s_0 + d_s_0*qdd_m1;
+        const double d_alpha_0_y = c_0*d_qdd_m1 + d_c_0*qdd_m1;
+        const double d_acc_0_x = acc_m1_x*d_c_0 + c_0*d_acc_m1_x + d_s_0*sol_2 + d_sol_2*s_0;
+        const double d_acc_0_y = c_0*d_sol_2 + d_c_0*sol_2 - acc_m1_x*d_s_0 - d_acc_m1_x*s_0;
+        const double d_qdd_0 = d_ud_0 - W_0_1*d_alpha_0_y - W_0_3*d_acc_0_x - acc_0_x*d_W_0_3 - alpha_0_y*d_W_0_1;
+        const double d_acc_1_y = -acc_0_y*d_s_1 - acc_m1_y*d_c_1 - c_1*d_acc_m1_y - d_acc_0_y*s_1;
+        const double d_qdd_1 = d_ud_1 - d_alpha_0_x - W_1_4*d_acc_1_y - acc_1_y*d_W_1_4;
+        dqdd[j * 6 + 0] = d_qdd_m1;
+        dqdd[j * 6 + 1] = d_qdd_0;
+        dqdd[j * 6 + 2] = d_qdd_1;
+        dqdd[j * 6 + 3] = d_Xdd_0;
+        dqdd[j * 6 + 4] = d_sol_2;
+        dqdd[j * 6 + 5] = d_Xdd_2;
+    }
+}
+
 /* ---- kernel inertia_solve_tangent ---- */
 /* Directional derivative of I_f^-1 Q along (dq, dQ, dp): the tangent of its O(n) tape.  502 ops (193 add, 291 mul, 12 div, 6 calls) */
 void paper_case2_inertia_solve_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT Q, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dQ, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dx)
@@ -2344,6 +2615,7 @@ static const gac_model paper_case2_model_b = {
     .base = { .T_m1 = { 1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0 }, .T_0 = { 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0 },
               .T_1 = { 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0 }, .index = { 0, 1, 2 } },
     .chart_b = 0,
+    .forward_dynamics_tangent_block = 0,
     .inertia_solve_tangent = 0, .contact_generalized_force_tangent = 0, .contact_gaps_tangent = 0
 };
 
@@ -2368,6 +2640,7 @@ const gac_model paper_case2_model = {
     .base = { .T_m1 = { 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, -1.0, 0.0 }, .T_0 = { 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0 },
               .T_1 = { 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0 }, .index = { 0, 1, 2 } },
     .chart_b = &paper_case2_model_b,
+    .forward_dynamics_tangent_block = paper_case2_forward_dynamics_tangent_block,
     .inertia_solve_tangent = paper_case2_inertia_solve_tangent,
     .contact_generalized_force_tangent = paper_case2_contact_generalized_force_tangent,
     .contact_gaps_tangent = paper_case2_contact_gaps_tangent

@@ -101,6 +101,7 @@
  *   power                     0 = 0 add + 0 mul + 0 div + 0 calls
  *   forward_dynamics_energy    305 = 97 add + 196 mul + 6 div + 6 calls
  *   forward_dynamics_tangent    708 = 273 add + 417 mul + 12 div + 6 calls
+ *   forward_dynamics_tangent_block   2190 = 888 add + 1266 mul + 30 div + 6 calls
  *   inertia_solve_tangent    502 = 193 add + 291 mul + 12 div + 6 calls
  *   contact_generalized_force_tangent    129 = 42 add + 81 mul + 0 div + 6 calls
  *   contact_gaps_tangent     83 = 29 add + 48 mul + 0 div + 6 calls
@@ -323,6 +324,23 @@ void paper_case2_forward_dynamics_energy(const double *GAC_RESTRICT q, const dou
  *   paper_case2_model.forward_dynamics_tangent is NULL.
  *   6 outputs.   708 ops (273 add, 417 mul, 12 div, 6 calls) */
 void paper_case2_forward_dynamics_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT du, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dqdd);
+
+/* forward_dynamics_tangent along 4 directions at once (the primal part computed once).
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   u    in : inputs (NU, layout in the header; N m on an angle, N on a translation; NULL when NU = 0)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   dq   in : GAC_TANGENT_BLOCK directions of q, one after the other (GAC_TANGENT_BLOCK x NQ)
+ *   dqd  in : the same directions of qd (GAC_TANGENT_BLOCK x NQ)
+ *   du   in : the same directions of u (GAC_TANGENT_BLOCK x NU; NULL when NU = 0)
+ *   dp   in : the same directions of p (GAC_TANGENT_BLOCK x NPARAM; ignored with baked parameters)
+ *   dqdd out: d qdd along each direction (GAC_TANGENT_BLOCK x NQ)
+ *   The same numbers as GAC_TANGENT_BLOCK calls of forward_dynamics_tangent, the part of its tape that
+ *   reads no direction computed once: each further direction costs its tangent part alone (the
+ *   sensitivities' flight, gac_sens.c).  Without a tangent kernel: NaN, and
+ *   paper_case2_model.forward_dynamics_tangent_block is NULL.
+ *   24 outputs.   2190 ops (888 add, 1266 mul, 30 div, 6 calls) */
+void paper_case2_forward_dynamics_tangent_block(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT du, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dqdd);
 
 /* Directional derivative of I_f^-1 Q along (dq, dQ, dp): the tangent of its O(n) tape.
  *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)

@@ -159,6 +159,7 @@ typedef void (*gac_kernel_rhs)(double t, const double *x, const double *u, const
 /* q, a vector v (its size and meaning per kernel), p -> out: the linear operators of the model */
 typedef void (*gac_kernel_qv)(const double *q, const double *v, const double *p, double *out);
 /* q, qd, u, p and a direction (dq, dqd, du, dp) -> the directional derivative of a qqdu kernel's output */
+#define GAC_TANGENT_BLOCK 4    /* directions of a model's forward_dynamics_tangent_block */
 typedef void (*gac_kernel_tangent)(const double *q, const double *qd, const double *u, const double *p,
                                    const double *dq, const double *dqd, const double *du, const double *dp,
                                    double *out);
@@ -302,6 +303,10 @@ struct gac_model {
                                           near this chart's gimbal lock (gac_options.chart_switch) */
     /* the tangents of three more kernels, for the sensitivities of impacts (gac_sens_attach); NULL: none (a rolled
        forward dynamics, tangent=False, chart B) */
+    gac_kernel_tangent forward_dynamics_tangent_block; /* forward_dynamics_tangent along GAC_TANGENT_BLOCK directions
+                                          at once (each seed and the output GAC_TANGENT_BLOCK arrays of its size, one
+                                          after the other), the primal part computed once; NULL: none (the
+                                          sensitivities then call forward_dynamics_tangent per direction) */
     gac_kernel_qv_tangent inertia_solve_tangent;   /* q, Q, p, dq, dQ, dp -> d(I_f^-1 Q) (nq) */
     gac_kernel_qv_tangent contact_generalized_force_tangent; /* q, f, p, dq, df (njrow), dp -> d(J^T f) (nq) */
     gac_kernel_q_tangent contact_gaps_tangent;     /* q, p, dq, dp -> d gap (ncontact) */

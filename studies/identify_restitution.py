@@ -84,7 +84,7 @@ def fit(model, measured: np.ndarray, exact: bool) -> dict:
 def identify(impacts: int = 8, noise: float = 1e-4, seed: int = 1):
     """Measure, fit both ways: (model, measured impact times, true times, {"exact": fit, "differences": fit})."""
     from runtime import load_model
-    model = load_model(rod_scene(), specialise=True, tangent=None)
+    model = load_model(rod_scene(), specialise=True, tangent=True)
     truth = ImpactTimes(model, impacts).times([TRUE[n] for n in NAMES])
     measured = truth + np.random.default_rng(seed).normal(0.0, noise, impacts)
     return model, measured, truth, {"exact": fit(model, measured, True), "differences": fit(model, measured, False)}

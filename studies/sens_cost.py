@@ -74,7 +74,7 @@ def main(argv=None) -> int:
         return 2
     from codegen.scene import coordinate_names
     from runtime import load_model, simulate
-    model = load_model(scene(), tangent=None)
+    model = load_model(scene(), tangent=True)
     own = [coordinate_names(model.n)[i] for i in model.layout.free]
     directions = [f"q0[{c}]" for c in own] + [f"qd0[{c}]" for c in own]
     if ks[0] < 0 or ks[-1] > len(directions) or args.repeats < 1 or args.passes < 1:

@@ -158,8 +158,8 @@ typedef void (*gac_kernel_qqdu)(const double *q, const double *qd, const double 
 typedef void (*gac_kernel_rhs)(double t, const double *x, const double *u, const double *p, double *xdot);
 /* q, a vector v (its size and meaning per kernel), p -> out: the linear operators of the model */
 typedef void (*gac_kernel_qv)(const double *q, const double *v, const double *p, double *out);
-/* q, qd, u, p and a direction (dq, dqd, du, dp) -> the directional derivative of a qqdu kernel's output */
 #define GAC_TANGENT_BLOCK 4    /* directions of a model's forward_dynamics_tangent_block */
+/* q, qd, u, p and a direction (dq, dqd, du, dp) -> the directional derivative of a qqdu kernel's output */
 typedef void (*gac_kernel_tangent)(const double *q, const double *qd, const double *u, const double *p,
                                    const double *dq, const double *dqd, const double *du, const double *dp,
                                    double *out);
@@ -301,12 +301,12 @@ struct gac_model {
                                           every other entry the same (sizes, contacts, parameters); only theta_-1,
                                           theta_0, theta_1 and their rates differ.  The loop integrates on it
                                           near this chart's gimbal lock (gac_options.chart_switch) */
-    /* the tangents of three more kernels, for the sensitivities of impacts (gac_sens_attach); NULL: none (a rolled
-       forward dynamics, tangent=False, chart B) */
     gac_kernel_tangent forward_dynamics_tangent_block; /* forward_dynamics_tangent along GAC_TANGENT_BLOCK directions
                                           at once (each seed and the output GAC_TANGENT_BLOCK arrays of its size, one
                                           after the other), the primal part computed once; NULL: none (the
                                           sensitivities then call forward_dynamics_tangent per direction) */
+    /* the tangents of three more kernels, for the sensitivities of impacts (gac_sens_attach); NULL: none (a rolled
+       forward dynamics, tangent=False, chart B) */
     gac_kernel_qv_tangent inertia_solve_tangent;   /* q, Q, p, dq, dQ, dp -> d(I_f^-1 Q) (nq) */
     gac_kernel_qv_tangent contact_generalized_force_tangent; /* q, f, p, dq, df (njrow), dp -> d(J^T f) (nq) */
     gac_kernel_q_tangent contact_gaps_tangent;     /* q, p, dq, dp -> d gap (ncontact) */
@@ -901,8 +901,9 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * initial state dx0 (nx) and of the parameters dp (nparam).  In flight S solves the variational equations
  *     S' = (df/dx) S + (df/dp) dp,      column j: [dqd_j ; forward_dynamics_tangent(q, qd, u, p, dq_j, dqd_j, 0, dp_j)]
  * integrated by the run's own Runge-Kutta formula (RK4, DOPRI5's or DOP853's weights) over the very steps the state
- takes, the stages taken from the step itself; S is not in the step's error norm (the state's error control alone
- * chooses the steps).  At an impact of the frictionless law at time t*, located by contact c's gap:
+ * takes, the stages taken from the step itself (the directions GAC_TANGENT_BLOCK at a time through
+ * forward_dynamics_tangent_block where the model has it); S is not in the step's error norm (the state's error
+ * control alone chooses the steps).  At an impact of the frictionless law at time t*, located by contact c's gap:
  *     dt*_j = -(dg_j) / (w_c . qd-),  dg_j = contact_gaps_tangent(q, p, dq_j, dp_j)[c],  w_c = J^T (sign e_row_c)
  *     S+_j = D Delta (S-_j + f- dt*_j, dp_j) - f+ dt*_j
  * (the saltation matrix of Hiskens & Pai 2000, with the parameters' direct part), Delta the impact map of the

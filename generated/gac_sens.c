@@ -1,8 +1,9 @@
 /*
  * gac_sens.c -- forward sensitivities of a hybrid run (gac.h, "forward sensitivities of a run"): the variational
- * equations in flight, taken by the run's Runge-Kutta formula over the state's own steps (gac_sens_flight), the jump
- * of the sensitivities at an impact of one contact by the frictionless law, the saltation matrix of Hiskens & Pai
- * (2000) (gac_sens_impact), and the verdict: the first event not differentiated ends them (gac_sens_stop).
+ * equations in flight, taken by the run's Runge-Kutta formula over the state's own steps and stages
+ * (gac_sens_flight), the jump of the sensitivities at an impact by the frictionless law -- of one contact or several,
+ * walls or joint stops, the set of pushing contacts held fixed -- the saltation matrix of Hiskens & Pai (2000)
+ * (gac_sens_impact), and the verdict: the first event not differentiated ends them (gac_sens_stop).
  */
 #include "gac_internal.h"
 

@@ -105,6 +105,8 @@ def render_function(program: Program, split_lines: int | None = interface.SPLIT_
     register allocation and scheduling grow faster than a function's length, so parts compile faster (at a
     cost of 2-9 % per call, measured: hence interface.SPLIT_LINES_HOT for the right-hand side; docs/performance.md)."""
     kernel = program.kernel
+    if kernel.block:
+        return _render_block(program)
     lines = [f"const double {symbol.name} = {c_expression(expr)};" for symbol, expr in program.assignments]
     for i, expr in enumerate(program.outputs):
         lines.append(f"{kernel.output}[{i}] = {c_expression(expr)};")
@@ -114,6 +116,43 @@ def render_function(program: Program, split_lines: int | None = interface.SPLIT_
     if split_lines is not None and len(lines) > split_lines:
         function.parts, function.scratch = split(program, lines, split_lines)
     return function
+
+
+def _render_block(program: Program) -> RenderedFunction:
+    """A tangent kernel of kernel.block directions (codegen.kernels.forward_dynamics_tangent_block_kernel): the
+    assignments that read no seed (the primal part) once, then a loop over the directions j with the others, each
+    seed array a read at a + j * stride (its j-th direction, as a_j) and the output written at j * stride.  Not cut
+    into parts (a loop does not cross them); its operation count is the primal part's plus block times the rest's."""
+    kernel = program.kernel
+    seeds = {a for a in kernel.inputs if a in kernel.strides}
+    seeded, primal, tangent = set(), [], []
+    for symbol, expr in program.assignments:
+        reads = expr.free_symbols
+        if reads & seeded or any(s.name.partition("[")[0] in seeds for s in reads):
+            seeded.add(symbol)
+            tangent.append((symbol, expr))
+        else:
+            primal.append((symbol, expr))
+    local = {}                                       # a[i] -> a_j[i]
+    for expr in [e for _, e in tangent] + list(program.outputs):
+        for s in expr.free_symbols:
+            array, bracket, rest = s.name.partition("[")
+            if bracket and array in seeds:
+                local[s] = sp.Symbol(f"{array}_j[{rest}", real=True)
+    out, size = kernel.output, kernel.strides[kernel.output]
+    lines = [f"const double {symbol.name} = {c_expression(expr)};" for symbol, expr in primal]
+    lines.append(f"for (int j = 0; j < {kernel.block}; ++j) {{")
+    lines += [f"    const double *{a}_j = {a} != 0 ? {a} + j * {kernel.strides[a]} : 0;" for a in sorted(seeds)]
+    lines += [f"    (void){a}_j;" for a in sorted(seeds)]
+    lines += [f"    const double {symbol.name} = {c_expression(expr.xreplace(local))};" for symbol, expr in tangent]
+    lines += [f"    {out}[j * {size} + {i}] = {c_expression(expr.xreplace(local))};"
+              for i, expr in enumerate(program.outputs)]
+    lines.append("}")
+    ops = count_ops([e for _, e in primal])
+    once = count_ops([e for _, e in tangent] + list(program.outputs))
+    for _ in range(kernel.block):
+        ops = ops + once
+    return RenderedFunction(kernel.name, kernel.summary, kernel.inputs, kernel.output, kernel.output_size, lines, ops)
 
 
 def split(program: Program, lines: list[str], size: int) -> tuple[list[list[str]], int]:

@@ -141,6 +141,19 @@ KERNELS = (
              "direction; gac_linearize calls it once per column of A and B.  A model whose forward dynamics is "
              "rolled code, or built with tangent=False, has none: this function then writes NaN and "
              "NAME_model.forward_dynamics_tangent is NULL.", kernel=True, tangent=True),
+    Function("forward_dynamics_tangent_block", "void",
+             (_q(), _qd(), _u(), _p(),
+              _seed("dq", "GAC_TANGENT_BLOCK directions of q, one after the other (GAC_TANGENT_BLOCK x NQ)"),
+              _seed("dqd", "the same directions of qd (GAC_TANGENT_BLOCK x NQ)"),
+              _seed("du", "the same directions of u (GAC_TANGENT_BLOCK x NU; NULL when NU = 0)"),
+              _seed("dp", "the same directions of p (GAC_TANGENT_BLOCK x NPARAM; ignored with baked parameters)"),
+              _out("dqdd", "d qdd along each direction (GAC_TANGENT_BLOCK x NQ)")),
+             "forward_dynamics_tangent along GAC_TANGENT_BLOCK directions at once (its primal part computed once).",
+             "The same numbers as GAC_TANGENT_BLOCK calls of forward_dynamics_tangent, the part of its tape that "
+             "reads no direction computed once: each further direction costs its tangent part alone (the "
+             "sensitivities' flight, gac_sens.c).  Without a tangent kernel: NaN, and "
+             "NAME_model.forward_dynamics_tangent_block is NULL.", kernel=True, tangent=True,
+             out_size="NQ * GAC_TANGENT_BLOCK"),
     Function("inertia_solve_tangent", "void",
              (_q(), Arg("Q", "const double *", "generalised forces (NQ; N m on an angle, N on a translation)", True),
               _p(), _seed("dq", "direction of q (NQ; rad, m)"), _seed("dQ", "direction of Q (NQ)"),
@@ -182,9 +195,10 @@ def wants_dense(n: int, dense: bool | None) -> bool:
     return n <= DENSE_MAX_LINKS if dense is None else bool(dense)
 
 
+TANGENT_BLOCK = 4           # directions of forward_dynamics_tangent_block (gac.h's GAC_TANGENT_BLOCK)
 SPLIT_LINES = 600           # a kernel longer than this is cut into parts (codegen.emit.render_function) ...
-SPLIT_LINES_HOT = 8000      # ... the right-hand side's kernels longer than this (parts cost 2-9 % per call)
-HOT_KERNELS = ("forward_dynamics",)
+SPLIT_LINES_HOT = 8000      # ... the hot kernels longer than this (parts cost 2-9 % per call)
+HOT_KERNELS = ("forward_dynamics", "forward_dynamics_tangent")   # (the tangent: at every stage per direction)
 
 ROLLED_MIN_LINKS = 8        # from this n on, forward_dynamics is emitted with loops over the links (codegen.rolled)
 

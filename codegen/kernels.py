@@ -28,6 +28,9 @@ CSE'd by :mod:`codegen.flatten`.  The kernels and their C signatures:
     inertia_solve_tangent(q, Q, p, dq, dQ, dp, dx), contact_generalized_force_tangent(q, f, p, dq, df, dp, dQ),
     contact_gaps_tangent(q, p, dq, dp, dgap)       the same tangents of three more kernels (the sensitivities
                                          of an impact and of its event time, gac_sens.c)
+    forward_dynamics_tangent_block(q, qd, u, p, dq, dqd, du, dp, dqdd)  forward_dynamics_tangent along
+                                         interface.TANGENT_BLOCK directions at once, its primal part computed once
+                                         (the sensitivities' flight, gac_sens.c)
 
 Every kernel but three costs O(n) for n links.  mass_matrix, bias and contact_jacobian form dense matrices
 (O(n^2) code); the hybrid loop does not use them (it applies I_f^-1, I_f and J^T through the three operators
@@ -59,6 +62,10 @@ class Kernel:
     output_size: int
     tape: Tape
     values: list[sp.Expr] = field(default_factory=list)   # output[i] = values[i]
+    block: int = 0                                # > 0: a tangent kernel of `block` directions at once (its seeds
+                                                  # and output hold `block` directions, one after the other):
+                                                  # the primal part once, the tangent part in a loop over them
+    strides: dict = field(default_factory=dict)   # block: each seed array's and the output's length per direction
 
 
 def _new(chain: ChainSymbols, name: str, summary: str, inputs, output: str, size: int) -> Kernel:
@@ -340,6 +347,19 @@ def forward_dynamics_tangent_kernel(chain: ChainSymbols) -> Kernel:
                   tape, values)
 
 
+def forward_dynamics_tangent_block_kernel(chain: ChainSymbols) -> Kernel:
+    """forward_dynamics_tangent along interface.TANGENT_BLOCK directions at once: the same tangent program, emitted
+    with its primal part (no seed in it) once and its tangent part in a loop over the directions
+    (codegen.emit.render_function), so that each direction costs the tangent part alone."""
+    single = forward_dynamics_tangent_kernel(chain)
+    nq = len(chain.layout.free)
+    strides = {"dq": nq, "dqd": nq, "du": len(chain.u), "dp": len(chain.p), single.output: single.output_size}
+    return Kernel("forward_dynamics_tangent_block", f"forward_dynamics_tangent along {interface.TANGENT_BLOCK} "
+                  "directions at once (the primal part computed once).", single.inputs, single.output,
+                  interface.TANGENT_BLOCK * single.output_size, single.tape, single.values,
+                  block=interface.TANGENT_BLOCK, strides=strides)
+
+
 def _tangent_of(primal: Kernel, name: str, summary: str) -> Kernel:
     tape, values, inputs, _ = tangent.tangent(primal.tape, primal.values, primal.inputs)
     return Kernel(name, summary, inputs, "d" + primal.output, primal.output_size, tape, values)
@@ -367,6 +387,7 @@ KERNEL_BUILDERS = (mass_matrix_kernel, bias_kernel, forward_dynamics_kernel, ine
                    generalized_momentum_kernel, contact_points_kernel, contact_velocities_kernel,
                    contact_jacobian_kernel, contact_generalized_force_kernel, contact_gaps_kernel, energy_kernel,
                    contact_bias_kernel, power_kernel, forward_dynamics_energy_kernel, forward_dynamics_tangent_kernel,
+                   forward_dynamics_tangent_block_kernel,
                    inertia_solve_tangent_kernel, contact_generalized_force_tangent_kernel, contact_gaps_tangent_kernel)
 
 

@@ -34,7 +34,7 @@ class BuildOptions:
     formulation: str = "gibbs_appell"     # the dynamics kernels: the paper's recursion, or "lagrange" (an explicit
                                           # Euler-Lagrange expansion, for comparison)
     split_lines: int = interface.SPLIT_LINES          # a kernel longer than this is cut into parts ...
-    split_lines_hot: int = interface.SPLIT_LINES_HOT  # ... the right-hand side's forward_dynamics longer than this
+    split_lines_hot: int = interface.SPLIT_LINES_HOT  # ... the hot kernels (interface.HOT_KERNELS) longer than this
     flags: tuple[str, ...] = DEFAULT_FLAGS            # the C compiler's flags for the compiled module
 
     def generation_text(self) -> str:

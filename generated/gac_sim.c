@@ -299,7 +299,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             gac_add_work(s, t_event);
             gac_emit(s, t_event, t_eval, n_eval, i_eval, x_eval);
             gac_dense(s, t_event, s->xs);
-            if (s->sens != 0) gac_sens_flight(s, s->x, t_event - s->t);   /* S at the event, before it */
+            if (s->sens != 0) gac_sens_flight(s, s->x, t_event - s->t, 0);   /* S at the event, before it */
             if (released && s->is_stuck[c_event]) {   /* |lambda_T| reached c_f lambda: the point slips there */
                 code = gac_slip(s, t_event, s->xs, c_event);
                 if (code < 0) return code;
@@ -322,7 +322,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
                             : gac_resolve(s, t_event, c_event, record);
             if (code < 0) return code;
             if (s->sens != 0 && !released) {      /* the impact's jump, or a touch that has no derivative */
-                if (code == 1) gac_sens_impact(s, record);
+                if (code == 1) gac_sens_impact(s, record, c_event);
                 else gac_sens_stop(s, GAC_SENS_GRAZING, t_event, c_event);
             }
             for (i = 0; i < md->nx; ++i) s->x[i] = code == 1 ? s->x1[i] : s->xs[i];
@@ -366,7 +366,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         if (s->fail) return s->fail;
         sticking = s->opt.stick && s->nresting > 0 && gac_has_friction(md);
         if (sticking) gac_tangential_speeds(s, s->x, vt_start);   /* (a sign change within the step) */
-        if (s->sens != 0) gac_sens_flight(s, s->x, t1 - s->t);   /* the sensitivities over the same step */
+        if (s->sens != 0) gac_sens_flight(s, s->x, h, 1);   /* the sensitivities over the same step, its stages */
         gac_copy(s->x, s->x1, md->nx);
         {
             const double *f_end = s->opt.method == GAC_METHOD_RK4 ? s->k[4]

@@ -350,6 +350,23 @@ void paper_case1_forward_dynamics_energy(const double *GAC_RESTRICT q, const dou
  *   Not generated for this model (rolled forward dynamics, or tangent=False): writes NaN. */
 void paper_case1_forward_dynamics_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT du, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dqdd);
 
+/* forward_dynamics_tangent along GAC_TANGENT_BLOCK directions at once (its primal part computed once).
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   u    in : inputs (NU, layout in the header; N m on an angle, N on a translation; NULL when NU = 0)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   dq   in : GAC_TANGENT_BLOCK directions of q, one after the other (GAC_TANGENT_BLOCK x NQ)
+ *   dqd  in : the same directions of qd (GAC_TANGENT_BLOCK x NQ)
+ *   du   in : the same directions of u (GAC_TANGENT_BLOCK x NU; NULL when NU = 0)
+ *   dp   in : the same directions of p (GAC_TANGENT_BLOCK x NPARAM; ignored with baked parameters)
+ *   dqdd out: d qdd along each direction (GAC_TANGENT_BLOCK x NQ)
+ *   The same numbers as GAC_TANGENT_BLOCK calls of forward_dynamics_tangent, the part of its tape that
+ *   reads no direction computed once: each further direction costs its tangent part alone (the
+ *   sensitivities' flight, gac_sens.c).  Without a tangent kernel: NaN, and
+ *   paper_case1_model.forward_dynamics_tangent_block is NULL.
+ *   Not generated for this model (rolled forward dynamics, or tangent=False): writes NaN. */
+void paper_case1_forward_dynamics_tangent_block(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT du, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dqdd);
+
 /* Directional derivative of inertia_solve (forward mode, exact: the tangent of its tape).
  *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
  *   Q    in : generalised forces (NQ; N m on an angle, N on a translation)

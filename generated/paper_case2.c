@@ -1644,6 +1644,22 @@ void paper_case2_forward_dynamics_tangent(const double *GAC_RESTRICT q, const do
     for (i = 0; i < PAPER_CASE2_NQ; ++i) dqdd[i] = NAN;
 }
 
+/* forward_dynamics_tangent along GAC_TANGENT_BLOCK directions at once (its primal part computed once).  Not generated for this model (its forward dynamics is rolled code, or it was built with
+ * tangent=False): every output is NaN, and paper_case2_model.forward_dynamics_tangent_block is NULL. */
+void paper_case2_forward_dynamics_tangent_block(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT du, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dqdd)
+{
+    int i;
+    (void)q;
+    (void)qd;
+    (void)u;
+    (void)p;
+    (void)dq;
+    (void)dqd;
+    (void)du;
+    (void)dp;
+    for (i = 0; i < PAPER_CASE2_NQ * GAC_TANGENT_BLOCK; ++i) dqdd[i] = NAN;
+}
+
 /* Directional derivative of inertia_solve (forward mode, exact: the tangent of its tape).  Not generated for this model (its forward dynamics is rolled code, or it was built with
  * tangent=False): every output is NaN, and paper_case2_model.inertia_solve_tangent is NULL. */
 void paper_case2_inertia_solve_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT Q, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dQ, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dx)
@@ -1809,6 +1825,7 @@ static const gac_model paper_case2_model_b = {
     .base = { .T_m1 = { 1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0 }, .T_0 = { 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0 },
               .T_1 = { 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0 }, .index = { 0, 1, 2 } },
     .chart_b = 0,
+    .forward_dynamics_tangent_block = 0,
     .inertia_solve_tangent = 0, .contact_generalized_force_tangent = 0, .contact_gaps_tangent = 0
 };
 
@@ -1833,6 +1850,7 @@ const gac_model paper_case2_model = {
     .base = { .T_m1 = { 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, -1.0, 0.0 }, .T_0 = { 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0 },
               .T_1 = { 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0 }, .index = { 0, 1, 2 } },
     .chart_b = &paper_case2_model_b,
+    .forward_dynamics_tangent_block = 0,
     .inertia_solve_tangent = 0,
     .contact_generalized_force_tangent = 0,
     .contact_gaps_tangent = 0   /* no tangents: no sensitivities */

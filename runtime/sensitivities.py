@@ -23,12 +23,13 @@ STATUS_WORDS = {
     1: "resting contact (a landing, a release, or contacts at rest at the start)",
     2: "an impact by a frictional law",
     3: "an impact at a joint stop",
-    4: "an impact of several contacts at once (or of several rounds)",
+    4: "an impact of several rounds (or with dependent contact rows)",
     5: "a grazing contact (normal velocity ~ 0 at the wall)",
     6: "a tangential impact (Painleve)",
     7: "a switch to the second base chart",
     8: "inputs from a controller (they may depend on the state)",
     9: "the sensitivities overflowed",
+    10: "a mode boundary inside an impact of several contacts (a contact's impulse ~0 at the law's bound)",
 }
 
 _STATE = re.compile(r"^(q0|qd0)\[([^\]]+)\]$")

@@ -44,6 +44,26 @@ def test_tangent_kernel_against_finite_differences(compiled):
         assert not np.any(model.forward_dynamics_tangent(q, qd, 0 * dq, 0 * dqd, p, u))
 
 
+def test_the_block_tangent_is_the_tangent_along_each_of_its_directions(compiled):
+    """NAME_forward_dynamics_tangent_block (the primal part once, the tangent part in a loop over
+    GAC_TANGENT_BLOCK directions) gives, direction by direction, the numbers of NAME_forward_dynamics_tangent, inputs
+    and parameters moving too; its block size is gac.h's."""
+    from codegen import interface
+    scene = driven_free_chain()
+    model = compiled(scene, tangent=True)
+    block = interface.TANGENT_BLOCK
+    assert model.lib.GAC_TANGENT_BLOCK == block
+    rng = np.random.default_rng(73)
+    q, qd, p, u = _case(model, scene, 0, rng)
+    dq, dqd = rng.normal(size=(block, model.nq)), rng.normal(size=(block, model.nq))
+    du, dp = rng.normal(size=(block, model.nu)), rng.normal(size=(block, len(p))) * p * 0.2
+    got = model._call("forward_dynamics_tangent_block", block * model.nq, q, qd, u, p, dq.ravel(), dqd.ravel(),
+                      du.ravel(), dp.ravel()).reshape(block, model.nq)
+    for j in range(block):
+        single = model.forward_dynamics_tangent(q, qd, dq[j], dqd[j], p, u, du[j], dp[j])
+        assert np.allclose(got[j], single, rtol=1e-13, atol=1e-13 * np.abs(single).max())
+
+
 def test_linearize_against_finite_differences(compiled):
     scene = driven_free_chain()
     model = compiled(scene, tangent=True)

@@ -158,6 +158,7 @@ typedef void (*gac_kernel_qqdu)(const double *q, const double *qd, const double 
 typedef void (*gac_kernel_rhs)(double t, const double *x, const double *u, const double *p, double *xdot);
 /* q, a vector v (its size and meaning per kernel), p -> out: the linear operators of the model */
 typedef void (*gac_kernel_qv)(const double *q, const double *v, const double *p, double *out);
+#define GAC_TANGENT_BLOCK 4    /* directions of a model's forward_dynamics_tangent_block */
 /* q, qd, u, p and a direction (dq, dqd, du, dp) -> the directional derivative of a qqdu kernel's output */
 typedef void (*gac_kernel_tangent)(const double *q, const double *qd, const double *u, const double *p,
                                    const double *dq, const double *dqd, const double *du, const double *dp,
@@ -300,6 +301,10 @@ struct gac_model {
                                           every other entry the same (sizes, contacts, parameters); only theta_-1,
                                           theta_0, theta_1 and their rates differ.  The loop integrates on it
                                           near this chart's gimbal lock (gac_options.chart_switch) */
+    gac_kernel_tangent forward_dynamics_tangent_block; /* forward_dynamics_tangent along GAC_TANGENT_BLOCK directions
+                                          at once (each seed and the output GAC_TANGENT_BLOCK arrays of its size, one
+                                          after the other), the primal part computed once; NULL: none (the
+                                          sensitivities then call forward_dynamics_tangent per direction) */
     /* the tangents of three more kernels, for the sensitivities of impacts (gac_sens_attach); NULL: none (a rolled
        forward dynamics, tangent=False, chart B) */
     gac_kernel_qv_tangent inertia_solve_tangent;   /* q, Q, p, dq, dQ, dp -> d(I_f^-1 Q) (nq) */
@@ -896,12 +901,14 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * initial state dx0 (nx) and of the parameters dp (nparam).  In flight S solves the variational equations
  *     S' = (df/dx) S + (df/dp) dp,      column j: [dqd_j ; forward_dynamics_tangent(q, qd, u, p, dq_j, dqd_j, 0, dp_j)]
  * integrated by the run's own Runge-Kutta formula (RK4, DOPRI5's or DOP853's weights) over the very steps the state
- * takes, the stages' states recomputed from the step's start; S is not in the step's error norm (the state's error
- * control alone chooses the steps).  At an impact of one contact c of the frictionless law at time t*:
- *     dt*_j = -(dg_j) / (w . qd-),  dg_j = contact_gaps_tangent(q, p, dq_j, dp_j)[c],  w = J^T (sign e_row)
+ * takes, the stages taken from the step itself (the directions GAC_TANGENT_BLOCK at a time through
+ * forward_dynamics_tangent_block where the model has it); S is not in the step's error norm (the state's error
+ * control alone chooses the steps).  At an impact of the frictionless law at time t*, located by contact c's gap:
+ *     dt*_j = -(dg_j) / (w_c . qd-),  dg_j = contact_gaps_tangent(q, p, dq_j, dp_j)[c],  w_c = J^T (sign e_row_c)
  *     S+_j = D Delta (S-_j + f- dt*_j, dp_j) - f+ dt*_j
- * (the saltation matrix of Hiskens & Pai 2000, with the parameters' direct part), Delta the impact map
- * qd+ = qd - (1 + e) y (w . qd) / (w . y), y = I_f^-1 w, differentiated by inertia_solve_tangent and
+ * (the saltation matrix of Hiskens & Pai 2000, with the parameters' direct part), Delta the impact map of the
+ * contacts that took an impulse (walls and joint stops alike), their set held fixed: A F = -(1 + E) W qd,
+ * qd+ = qd + Y F, W their signed rows, Y = I_f^-1 W^T, A = W Y; differentiated by inertia_solve_tangent and
  * contact_generalized_force_tangent (e = p[e_index] is a parameter like any other).  Events this does not
  * differentiate end the sensitivities (status below): S and dt_impact are then NaN from that event on, the run itself
  * continues.  The status codes: */
@@ -909,9 +916,9 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
 #define GAC_SENS_RESTING       1   /* a contact came to rest (a landing, the start, Zeno's shrinking bounces) or was
                                       released: resting contact is not differentiated */
 #define GAC_SENS_FRICTION      2   /* an impact by a frictional law (record.law not FRICTIONLESS) */
-#define GAC_SENS_STOP          3   /* an impact at a joint stop */
-#define GAC_SENS_SIMULTANEOUS  4   /* an impact of several contacts (within the simultaneity window), or of more than
-                                      one round or a plastic round */
+#define GAC_SENS_STOP          3   /* (not raised since joint stops are differentiated; the code stays reserved) */
+#define GAC_SENS_SIMULTANEOUS  4   /* an impact of more than one round or a plastic round, or whose active contacts'
+                                      rows are dependent */
 #define GAC_SENS_GRAZING       5   /* a contact met its wall with normal velocity ~ 0 (|w . qd-| below 1e-9 of the
                                       chain's speed scale), or touched it without an impact: t* not differentiable */
 #define GAC_SENS_TANGENTIAL    6   /* a tangential impact (record.law GAC_IMPACT_LAW_GDI_TANGENTIAL) */
@@ -919,6 +926,9 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
 #define GAC_SENS_CONTROLLER    8   /* a controller gives the inputs (they may depend on the state; du = 0 is assumed
                                       only for held inputs and schedules) */
 #define GAC_SENS_NONFINITE     9   /* the sensitivities overflowed (not finite) */
+#define GAC_SENS_BOUNDARY     10   /* a mode boundary inside an impact of several contacts: a contact took an impulse
+                                      ~0 and leaves at the law's bound (w . qd+ + e w . qd- ~ 0), so a perturbation
+                                      may add it to the active set or drop it */
 
 /* The sensitivities of one run: pointers into the caller's dwork (gac_sens_ndouble(m, k) doubles), laid out as
  * S (k nx) | dp (k nparam) | dt_impact (k) | scratch.  Direction-major: S[j*nx + i] = d x_i / d direction j

@@ -293,6 +293,9 @@ static int gac_slide_cross(int nd, const double *W, int ncon, const int *start, 
     return 1;
 }
 
+static void gac_round_refine(int nd, const double *W, int ncon, const int *start, const int *dim, const double *cf,
+                             const int *rows, const double *q, double *L, double *residual);
+
 /* The round's problem solved exactly by its modes (at most GAC_ENUM_MAX contacts): every combination of separate,
  * stick and slide, the guess L's own modes first.  One tangential axis: a slide is one of two signs, one linear
  * solve.  Two: the slide directions are the roots of xi_T x d = 0, found by Newton's method on their angles
@@ -402,6 +405,8 @@ static int gac_round_enumerate(int nd, const double *W, int ncon, const int *sta
                 for (k = 0; k < ncon; ++k) push = trial[start[k]] > push ? trial[start[k]] : push;
                 if (!(push > 1e-9 * size)) continue;
             }
+            if (res > accept && res <= 1e3 * accept)   /* near: its modes' equations to round-off */
+                gac_round_refine(nd, W, ncon, start, dim, cf, rows, q, trial, &res);
             if (res <= accept) {
                 for (i = 0; i < nr; ++i) L[i] = trial[i];
                 *residual = res;
@@ -410,6 +415,137 @@ static int gac_round_enumerate(int nd, const double *W, int ncon, const int *sta
         }
     }
     return 0;
+}
+
+/* The modes of a round's solution L (velocities xi = W L + q): at each contact the condition L or xi meets worse,
+ * relative to their scales, decides.  mode[k] 0 separates (L_N / lscale <= xi_N / vscale), 1 sticks (its cone's
+ * slack (c_f L_N - |L_T|) / lscale above |xi_T| / vscale), 2 slides; dir[2k..2k+1] the slide's direction of xi_T
+ * (that of -L_T where xi_T is below round-off of the velocities: at the stick's edge). */
+static void gac_round_mode_of(int nd, const double *W, int ncon, const int *start, const int *dim, const double *cf,
+                              const int *rows, const double *q, const double *L, double vscale, double lscale,
+                              int *mode, double *dir)
+{
+    const int nr = start[ncon - 1] + dim[ncon - 1];
+    int k, i, j;
+    for (k = 0; k < ncon; ++k) {
+        const int s = start[k], d = dim[k];
+        double xi[3], lt = 0.0, xt = 0.0;
+        for (i = 0; i < d; ++i) {
+            double v = q[s + i];
+            for (j = 0; j < nr; ++j) v += W[rows[s + i] * nd + rows[j]] * L[j];
+            xi[i] = v;
+        }
+        dir[2 * k] = dir[2 * k + 1] = 0.0;
+        if (!(L[s] / lscale > xi[0] / vscale)) {
+            mode[k] = 0;
+            continue;
+        }
+        if (d == 1 || !(cf[k] > 0.0)) {
+            mode[k] = 1;
+            continue;
+        }
+        for (i = 1; i < d; ++i) {
+            lt += L[s + i] * L[s + i];
+            xt += xi[i] * xi[i];
+        }
+        lt = sqrt(lt);
+        xt = sqrt(xt);
+        if ((cf[k] * L[s] - lt) / lscale > xt / vscale) {
+            mode[k] = 1;
+            continue;
+        }
+        mode[k] = 2;
+        for (i = 1; i < d; ++i) {
+            dir[2 * k + i - 1] = xt > 1e-12 * vscale ? xi[i] / xt : lt > 0.0 ? -L[s + i] / lt : (i == 1 ? 1.0 : 0.0);
+        }
+    }
+}
+
+/* The round's solution L refined to round-off for the modes it has (gac_round_mode_of): Newton's method on the
+ * modes' equations, all rows at once,
+ *     separate: L = 0;   stick: xi = 0;   slide: xi_N = 0, L_T + c_f L_N u = 0,
+ * u the sliding direction: fixed for one tangential axis (and at the stick's edge), else u = xi_T / |xi_T| with
+ * its derivative (I - u u^T) W_T / |xi_T| in the Jacobian (the equations on L scaled by W's largest diagonal to
+ * velocities).  Steps are taken while the round's residual (gac_round_residual) falls; L and *residual are
+ * replaced only if it ends below where it started. */
+static void gac_round_refine(int nd, const double *W, int ncon, const int *start, const int *dim, const double *cf,
+                             const int *rows, const double *q, double *L, double *residual)
+{
+    const int nr = start[ncon - 1] + dim[ncon - 1];
+    double vscale = 0.0, lscale = 0.0, wscale = 0.0, best = *residual, dir[2 * GAC_AT_LEAST_1(ncon)];
+    double cur[GAC_AT_LEAST_1(nr)], J[GAC_AT_LEAST_1(nr * nr)], F[GAC_AT_LEAST_1(nr)], xi[GAC_AT_LEAST_1(nr)];
+    int mode[GAC_AT_LEAST_1(ncon)], k, i, j, it;
+    for (i = 0; i < nr; ++i) {
+        vscale = fabs(q[i]) > vscale ? fabs(q[i]) : vscale;
+        lscale = fabs(L[i]) > lscale ? fabs(L[i]) : lscale;
+        wscale = fabs(W[rows[i] * nd + rows[i]]) > wscale ? fabs(W[rows[i] * nd + rows[i]]) : wscale;
+        cur[i] = L[i];
+    }
+    if (!(vscale > 0.0) || !(lscale > 0.0) || !(wscale > 0.0) || !(best > 0.0)) return;
+    gac_round_mode_of(nd, W, ncon, start, dim, cf, rows, q, L, vscale, lscale, mode, dir);
+    for (it = 0; it < 6; ++it) {
+        double res;
+        for (i = 0; i < nr; ++i) {               /* xi = W L + q, in long double: the residual's own round-off */
+            long double v = q[i];
+            for (j = 0; j < nr; ++j) v += (long double)W[rows[i] * nd + rows[j]] * cur[j];
+            xi[i] = (double)v;
+        }
+        for (i = 0; i < nr * nr; ++i) J[i] = 0.0;
+        for (k = 0; k < ncon; ++k) {
+            const int s = start[k], d = dim[k];
+            if (mode[k] == 0) {                  /* L = 0 */
+                for (i = 0; i < d; ++i) {
+                    F[s + i] = wscale * cur[s + i];
+                    J[(s + i) * nr + s + i] = wscale;
+                }
+                continue;
+            }
+            for (j = 0; j < nr; ++j) J[s * nr + j] = W[rows[s] * nd + rows[j]];
+            F[s] = xi[s];                        /* xi_N = 0 */
+            if (mode[k] == 1) {                  /* xi_T = 0 */
+                for (i = 1; i < d; ++i) {
+                    for (j = 0; j < nr; ++j) J[(s + i) * nr + j] = W[rows[s + i] * nd + rows[j]];
+                    F[s + i] = xi[s + i];
+                }
+                continue;
+            }
+            {                                    /* L_T + c_f L_N u = 0 */
+                double u[2] = {dir[2 * k], dir[2 * k + 1]}, xt = 0.0;
+                int moving = 0;
+                if (d == 3) {
+                    xt = sqrt(xi[s + 1] * xi[s + 1] + xi[s + 2] * xi[s + 2]);
+                    moving = xt > 1e-12 * vscale;
+                    if (moving) u[0] = xi[s + 1] / xt, u[1] = xi[s + 2] / xt;
+                }
+                for (i = 1; i < d; ++i) {
+                    F[s + i] = wscale * (cur[s + i] + cf[k] * cur[s] * u[i - 1]);
+                    J[(s + i) * nr + s + i] += wscale;
+                    J[(s + i) * nr + s] += wscale * cf[k] * u[i - 1];
+                    if (moving) {                /* c_f L_N (I - u u^T) W_T / |xi_T| */
+                        int l;
+                        for (l = 1; l < d; ++l) {
+                            const double P = ((i == l) - u[i - 1] * u[l - 1]) * wscale * cf[k] * cur[s] / xt;
+                            for (j = 0; j < nr; ++j) J[(s + i) * nr + j] += P * W[rows[s + l] * nd + rows[j]];
+                        }
+                    }
+                }
+            }
+        }
+        for (i = 0; i < nr; ++i) F[i] = -F[i];
+        if (gac_lu_solve(nr, J, F, 1e-16) != 0 || !gac_finite(F, nr)) break;
+        for (i = 0; i < nr; ++i) cur[i] += F[i];
+        for (k = 0; k < ncon; ++k) {             /* the separating contacts exactly at 0 */
+            if (mode[k] == 0) {
+                for (i = 0; i < dim[k]; ++i) cur[start[k] + i] = 0.0;
+            }
+        }
+        res = gac_round_residual(nd, W, ncon, start, dim, cf, rows, q, cur);
+        if (!(res < best)) break;
+        best = res;
+        for (i = 0; i < nr; ++i) L[i] = cur[i];
+        if (res <= 4.0 * GAC_EPS) break;
+    }
+    *residual = best;
 }
 
 /* The frictional contact problem of one round: rows rows[0..nr-1] of the full system (W, nd x nd), grouped by
@@ -446,6 +582,7 @@ static void gac_round_friction(int nd, const double *W, int ncon, const int *sta
         if (ncon == 1 || change <= 4.0 * GAC_EPS * size) break;
     }
     *residual = gac_round_residual(nd, W, ncon, start, dim, cf, rows, q, L);
+    if (*residual > 4.0 * GAC_EPS) gac_round_refine(nd, W, ncon, start, dim, cf, rows, q, L, residual);
     if (*residual > 1e-12) {
         double exact[3 * GAC_ENUM_MAX], res;
         for (i = 0; i < nr && i < 3 * GAC_ENUM_MAX; ++i) exact[i] = L[i];
@@ -455,6 +592,7 @@ static void gac_round_friction(int nd, const double *W, int ncon, const int *sta
             *residual = res;
         }
     }
+    if (*residual > 4.0 * GAC_EPS) gac_round_refine(nd, W, ncon, start, dim, cf, rows, q, L, residual);
 }
 
 /* The contact-space system of the contacts list[0..n-1] at (q, qd): each contact's directions (its normal, then,
@@ -679,3 +817,4 @@ int gac_impact_tangential(const gac_model *m, const double *q, const double *qd,
     }
     return GAC_OK;
 }
+

@@ -193,10 +193,12 @@ class SimulationResult:
 
     def to_json(self) -> dict:
         return {
-            "impacts": [{"t": i.t, "contacts": [{"point": c.point, "wall": c.wall, "impulse": c.impulse, "kind": c.kind}
+            "impacts": [{"t": i.t, "contacts": [{"point": c.point, "wall": c.wall, "impulse": c.impulse,
+                                                 "impulse_t": list(c.impulse_t), "kind": c.kind}
                                                 for c in i.contacts],
                          "energy_before": i.energy_before, "energy_after": i.energy_after,
-                         "complementarity": i.complementarity} for i in self.impacts],
+                         "complementarity": i.complementarity, "law": i.law, "residual": i.residual,
+                         "roundoff": i.roundoff} for i in self.impacts],
             "t_final": self.t_final, "q_final": self.q_final.tolist(), "qd_final": self.qd_final.tolist(),
             "energy_initial": self.energy_initial, "energy_final": self.energy_final,
             "loss_impacts": self.loss_impacts, "energy_residual": self.energy_residual,
@@ -204,7 +206,8 @@ class SimulationResult:
             "work_input": self.work_input, "loss_damping": self.loss_damping,
             "loss_friction": self.loss_friction,
             "n_rhs": self.n_rhs, "n_steps": self.n_steps, "n_rejected": self.n_rejected,
-            "n_chart_switches": self.n_chart_switches,
+            "n_chart_switches": self.n_chart_switches, "n_sticks": self.n_sticks, "n_slips": self.n_slips,
+            "n_tangential_impacts": self.n_tangential_impacts,
             "status": self.status, "message": self.message, "method": self.method, "options": self.options,
             "contact_events": [{"t": e.t, "point": e.point, "wall": e.wall, "kind": e.kind}
                                for e in self.contact_events],

@@ -157,16 +157,35 @@ def derived():
 
 @pytest.fixture(scope="session")
 def compiled():
-    """compiled(scene, bake_params=False, specialise=False, dense=None, chart_b=False) -> runtime.CompiledModel,
-    built once per session.  Tests get the general model unless they ask for the specialised one, and without a free
-    base's second chart (half the code to build) unless they ask for it: the tests that pass through the gimbal lock
-    (test_sim_charts, test_sim_gimbal_impact, test_tools_parity) build their models with it."""
+    """compiled(scene, bake_params=False, specialise=False, dense=None, chart_b=False, tangent=False) ->
+    runtime.CompiledModel, built once per session.  Tests get the general model unless they ask for the specialised
+    one, without a free base's second chart (half the code to build) unless they ask for it (the tests that pass
+    through the gimbal lock: test_sim_charts, test_sim_gimbal_impact, test_tools_parity), and without the forward
+    dynamics' tangent kernel unless they ask for it (the derivative tests: test_build_tangents,
+    test_sim_sensitivities); the command-line and load_model tests build the defaults."""
     from runtime import load_model
 
-    def get(scene: Scene, bake_params: bool = False, specialise: bool = False, dense=None, chart_b: bool = False):
-        key = (scene, bake_params, specialise, dense, chart_b)
+    def get(scene: Scene, bake_params: bool = False, specialise: bool = False, dense=None, chart_b: bool = False,
+            tangent: bool = False):
+        key = (scene, bake_params, specialise, dense, chart_b, tangent)
         if key not in _MODELS:
             _MODELS[key] = load_model(scene, bake_params=bake_params, specialise=specialise, dense=dense,
-                                      chart_b=chart_b)
+                                      chart_b=chart_b, tangent=None if tangent else False)
         return _MODELS[key]
     return get
+
+
+SANITIZE = ("-std=c99", "-g", "-O1", "-Wall", "-Wextra", "-pedantic", "-Werror", "-fsanitize=address,undefined",
+            "-fno-sanitize-recover=all", "-fno-omit-frame-pointer")
+
+
+def sanitized_build(folder: Path, sources, output: str) -> Path:
+    """An executable of the C sources in ``folder`` (a model, a program) linked with the C library built strictly
+    with ASan + UBSan, the library compiled once for the whole suite (the build's cache of library objects)."""
+    import subprocess
+    from runtime.compile import library_object
+    library = library_object(SANITIZE)
+    exe = folder / output
+    subprocess.run(["gcc", *SANITIZE, "-I", str(folder), *map(str, sources), str(library), "-lm", "-o", str(exe)],
+                   check=True)
+    return exe

@@ -7,12 +7,11 @@ import pytest
 
 from codegen.pipeline import generate, write_model, write_standalone
 from runtime.compile import copy_library, library_sources
+from conftest import sanitized_build
 from runtime.header import return_codes
 from codegen.scene import load_scene
 from runtime import simulate
 
-STRICT = ["-std=c99", "-O1", "-g", "-Wall", "-Wextra", "-pedantic", "-Werror"]
-SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
 
 # One case per run of the driver (a crash fails only that case).  Each prints "code=<n>" and, where it
 # checks more, "same=<0|1>" (a result compared with another run) or "msg=<error message>".
@@ -194,13 +193,9 @@ def built(tmp_path_factory, compiled):
     write_model(model, out)
     copy_library(out)
     write_standalone(model, scene, out, [path.name for path in library_sources()])
-    library = sorted(str(path) for path in out.glob("gac_*.c"))
     (out / "driver.c").write_text(DRIVER)
-    subprocess.run(["gcc", *STRICT, *SANITIZE, "-I", str(out),
-                    str(out / "paper_case1.c"), *library, str(out / "driver.c"), "-lm", "-o", str(out / "driver")],
-                   check=True)
-    subprocess.run(["gcc", *STRICT, *SANITIZE, "-I", str(out), str(out / "paper_case1.c"), *library,
-                    str(out / "paper_case1_example.c"), "-lm", "-o", str(out / "example")], check=True)
+    sanitized_build(out, [out / "paper_case1.c", out / "driver.c"], "driver")
+    sanitized_build(out, [out / "paper_case1.c", out / "paper_case1_example.c"], "example")
     return out, compiled(scene, specialise=True)
 
 

@@ -12,6 +12,7 @@ import pytest
 from codegen.scene import load_scene
 from runtime import simulate
 from runtime.compile import library_files
+from conftest import sanitized_build
 
 ROOT = Path(__file__).resolve().parent.parent
 STRICT = "-std=c99 -O2 -Wall -Wextra -pedantic -Werror"
@@ -117,10 +118,7 @@ def test_header_compiles_as_cxx_and_links_from_cxx(case1_dir, tmp_path):
 
 
 def test_example_is_clean_under_sanitizers(case1_dir, tmp_path):
-    exe = tmp_path / "example_asan"
-    subprocess.run(["gcc", "-std=c99", "-g", "-O1", "-fsanitize=address,undefined", "-fno-sanitize-recover=all",
-                    "-fno-omit-frame-pointer", str(case1_dir / "paper_case1.c"), *library(case1_dir),
-                    str(case1_dir / "paper_case1_example.c"), "-I", str(case1_dir), "-lm", "-o", str(exe)], check=True)
+    exe = sanitized_build(case1_dir, [case1_dir / "paper_case1.c", case1_dir / "paper_case1_example.c"], "asan")
     for method in ("dopri5", "dop853", "rk4"):
         result = subprocess.run([str(exe), "1.5", method, "1e-3" if method == "rk4" else "1e-8"], capture_output=True,
                                 text=True, env=dict(os.environ, ASAN_OPTIONS="detect_leaks=1"))

@@ -27,7 +27,7 @@ def _case(model, scene, trial, rng):
 
 def test_tangent_kernel_against_finite_differences(compiled):
     scene = driven_free_chain()
-    model = compiled(scene)
+    model = compiled(scene, tangent=True)
     rng = np.random.default_rng(71)
     for trial in range(4):
         q, qd, p, u = _case(model, scene, trial, rng)
@@ -44,7 +44,7 @@ def test_tangent_kernel_against_finite_differences(compiled):
 
 def test_linearize_against_finite_differences(compiled):
     scene = driven_free_chain()
-    model = compiled(scene)
+    model = compiled(scene, tangent=True)
     nq, nx = model.nq, 2 * model.nq
     rng = np.random.default_rng(72)
     names = ["l_1", "mu_2", "stiffness_2", "damping_3", "rest_angle_2"]
@@ -69,7 +69,7 @@ def test_linearize_against_finite_differences(compiled):
 
 
 def test_linearize_refuses_parameters_it_does_not_read(compiled):
-    model = compiled(driven_free_chain())
+    model = compiled(driven_free_chain(), tangent=True)
     q, qd = model.q0, model.qd0
     with pytest.raises(ValueError, match="parameters: no parameter 'mass_9'"):
         model.linearize(q, qd, parameters=["mass_9"])
@@ -89,7 +89,7 @@ def test_spring_pair_against_its_closed_form(compiled):
     theta_ddot = -(2 / I_c)(K theta + C theta_dot): A has the eigenvalues of [[0, 1], [-2K/I_c, -2C/I_c]] and
     zeros (the free rigid motions)."""
     K, C, length, mu, J = 7.0, 0.3, 0.8, 1.5, 2e-3
-    model = compiled(spring_pair(K, C, length, mu, J))
+    model = compiled(spring_pair(K, C, length, mu, J), tangent=True)
     I_c = mu * length ** 3 / 12 + length * J
     A, B = model.linearize(np.zeros(model.nq), np.zeros(model.nq))
     assert B.shape == (2 * model.nq, 0)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from codegen.scene import LineLink, Scene, Wall
-from conftest import chain
+from conftest import chain, sanitized_build
 from runtime import simulate
 
 G = 9.81
@@ -397,7 +397,7 @@ q = [-1.5707963267948966, 0.0, -0.3, 0.5, -0.5, 0.0, 0.7, 0.0]
 
 @pytest.fixture(scope="module")
 def zeno_c(tmp_path_factory):
-    """The standalone example of a Zeno scene, built strictly with ASan + UBSan (and plainly, for valgrind)."""
+    """The standalone example of a Zeno scene, built strictly with ASan + UBSan."""
     import subprocess
     import sys
     from pathlib import Path
@@ -406,13 +406,7 @@ def zeno_c(tmp_path_factory):
     (out / "zeno.toml").write_text(ZENO_TOML)
     subprocess.run([sys.executable, "-m", "codegen", "--scene", str(out / "zeno.toml"), "--out", str(out),
                     "--standalone", "--no-compile"], check=True, cwd=root, capture_output=True)
-    sources = [str(out / "zeno_c.c"), *sorted(str(p) for p in out.glob("gac_*.c")), str(out / "zeno_c_example.c"),
-               "-I", str(out), "-lm"]
-    subprocess.run(["gcc", "-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror", "-g", "-O1",
-                    "-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer",
-                    *sources, "-o", str(out / "asan")], check=True)
-    subprocess.run(["gcc", "-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror", "-O2", "-g", *sources,
-                    "-o", str(out / "plain")], check=True)
+    sanitized_build(out, [out / "zeno_c.c", out / "zeno_c_example.c"], "asan")
     return out
 
 
@@ -434,6 +428,10 @@ def test_standalone_example_is_clean_under_valgrind(zeno_c):
     import subprocess
     if shutil.which("valgrind") is None:
         pytest.skip("valgrind is not installed")
+    sources = [str(zeno_c / "zeno_c.c"), *sorted(str(p) for p in zeno_c.glob("gac_*.c")),
+               str(zeno_c / "zeno_c_example.c"), "-I", str(zeno_c), "-lm"]
+    subprocess.run(["gcc", "-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror", "-O2", "-g", *sources,
+                    "-o", str(zeno_c / "plain")], check=True)
     checked = subprocess.run(["valgrind", "--error-exitcode=9", "-q", str(zeno_c / "plain"), "4.0"],
                              capture_output=True, text=True)
     assert checked.returncode == 0, checked.stderr

@@ -158,6 +158,7 @@ class Run:
     qd: np.ndarray
     counts: tuple | None = None      # (steps, rejected, rhs)
     resting: int | None = None
+    transitions: tuple | None = None  # (points that came to stick, began to slip, tangential impacts)
 
 
 def python_run(model, row: Row) -> Run:
@@ -168,7 +169,8 @@ def python_run(model, row: Row) -> Run:
                [(e.kind, e.t, e.wall if e.wall.startswith("theta_") else f"O{e.point}/{e.wall}")
                 for e in result.contact_events],
                result.t_final, layout.reduce(result.q_final), layout.reduce(result.qd_final),
-               (result.n_steps, result.n_rejected, result.n_rhs), len(result.resting_final))
+               (result.n_steps, result.n_rejected, result.n_rhs), len(result.resting_final),
+               (result.n_sticks, result.n_slips, result.n_tangential_impacts))
 
 
 def example_arguments(row: Row) -> list[str]:
@@ -195,6 +197,8 @@ def parse_exact(text: str) -> Run:
             run.qd = np.array(rest, dtype=float)
         elif word == "counts":
             run.counts = tuple(int(v) for v in rest[:3])
+        elif word == "transitions":
+            run.transitions = tuple(int(v) for v in rest)
     return run
 
 
@@ -228,7 +232,8 @@ def fmu_run(path: Path, row: Row, interval: float) -> Run:
     start["solver.method"] = METHOD_CODES[row.options["method"]]
     try:
         result = simulate_fmu(str(path), stop_time=row.t_end, output_interval=interval, start_values=start,
-                              output=[*q_names, *qd_names, "impacts", "resting_contacts"], debug_logging=True,
+                              output=[*q_names, *qd_names, "impacts", "resting_contacts", "sticks", "slips",
+                                      "tangential_impacts"], debug_logging=True,
                               logger=logger)
     finally:
         _restore_printing_logger()
@@ -241,7 +246,8 @@ def fmu_run(path: Path, row: Row, interval: float) -> Run:
     last = result[-1]
     assert last["impacts"] == len(impacts)
     return Run(impacts, [], float(last["time"]), np.array([last[n] for n in q_names]),
-               np.array([last[n] for n in qd_names]), None, int(last["resting_contacts"]))
+               np.array([last[n] for n in qd_names]), None, int(last["resting_contacts"]),
+               tuple(int(last[n]) for n in ("sticks", "slips", "tangential_impacts")))
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -333,6 +339,7 @@ def test_standalone_program_runs_as_the_python_runtime(row, front_ends):
     assert [(k, n) for k, _, n in c.events] == [(k, n) for k, _, n in python.events], "resting contacts differ"
     close([t for _, t, _ in c.events], [t for _, t, _ in python.events], RELATIVE, "resting-contact times")
     assert c.counts == python.counts, "the step counters differ"
+    assert c.transitions == python.transitions, "the stick, slip and tangential-impact counts differ"
 
 
 @pytest.mark.parametrize("row", row_params())
@@ -343,7 +350,7 @@ def test_fmu_in_one_communication_step_runs_as_the_python_runtime(row, front_end
     python = front_ends.python(row)
     fmu = fmu_run(front_ends.fmu(row), row, row.t_end)
     same_run(python, fmu, RELATIVE, impulses=False)
-    assert fmu.resting == python.resting
+    assert fmu.resting == python.resting and fmu.transitions == python.transitions
 
 
 @pytest.mark.parametrize("row", row_params())

@@ -25,8 +25,11 @@ def test_simulate_writes_json_and_plots(tmp_path):
     assert first["contacts"][0]["impulse"] > 0
     assert abs(first["t"] - (2 * 0.4 / 9.81) ** 0.5) < 1e-9
     for key in ("t_final", "q_final", "qd_final", "energy_initial", "energy_final", "loss_impacts",
-                "energy_residual", "energy_scale", "energy_drift", "n_rhs"):
+                "energy_residual", "energy_scale", "energy_drift", "n_rhs", "n_sticks", "n_slips",
+                "n_tangential_impacts"):
         assert key in data
+    assert first["law"] in ("frictionless", "gdi") and first["contacts"][0]["impulse_t"] == [0.0, 0.0]
+    assert 0 < first["roundoff"] < 1e-6 and first["residual"] >= 0.0
     assert data["t_final"] == 0.5 and len(data["q_final"]) == 6
     pngs = sorted(p.name for p in (tmp_path / "plots").glob("*.png"))
     assert "paper_case2_impacts.png" in pngs and "paper_case2_angles.png" in pngs and len(pngs) == 8   # X1..X3

@@ -6,6 +6,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parent.parent
 RATIO = re.compile(r"^(\d+\.\d+) \((\d+\.\d+)-(\d+\.\d+)\)$")
 
@@ -36,6 +38,7 @@ def check_ratio(cell: str):
     assert 0 < low <= median <= high
 
 
+@pytest.mark.slow          # builds and times two models in a study's process
 def test_driven_study_times_passive_and_driven_side_by_side():
     text = study("driven", "--links", "2", "--repeats", "1", "--runs", "2")
     assert text.startswith("Machine: ")
@@ -43,6 +46,7 @@ def test_driven_study_times_passive_and_driven_side_by_side():
     check_ratio(row["driven / passive"])
 
 
+@pytest.mark.slow          # builds and times two models in a study's process
 def test_specialise_study_times_general_and_specialised_side_by_side():
     text = study("specialise", "--repeat", "1", "--scenes", "paper-case2")
     assert text.startswith("Machine: ")

@@ -66,9 +66,14 @@
     X(STICK, "solver.stick", 1, "parameter", "fixed", "", 1, \
       "points resting on rough walls: 1 stick as a constraint, 0 regularised friction alone") \
     X(IMPACTS, "impacts", 1, "output", "discrete", "", 0, "impacts since the start") \
-    X(RESTING, "resting_contacts", 1, "output", "discrete", "", 0, "contacts resting on their wall now")
+    X(RESTING, "resting_contacts", 1, "output", "discrete", "", 0, "contacts resting on their wall now") \
+    X(STICKS, "sticks", 1, "output", "discrete", "", 0, \
+      "points resting on rough walls that came to stick (sliding -> stuck) since the start") \
+    X(SLIPS, "slips", 1, "output", "discrete", "", 0, "stuck points that began to slip since the start") \
+    X(TANGENTIAL_IMPACTS, "tangential_impacts", 1, "output", "discrete", "", 0, \
+      "tangential impacts (sliding resting contacts in the Painleve paradox) since the start, within impacts")
 
-/* The rows' ids: GAC_FMI2_Q .. GAC_FMI2_LOSS_FRICTION (Real rows), GAC_FMI2_METHOD .. GAC_FMI2_RESTING (Integer rows,
+/* The rows' ids: GAC_FMI2_Q .. GAC_FMI2_LOSS_FRICTION (Real rows), GAC_FMI2_METHOD .. GAC_FMI2_TANGENTIAL_IMPACTS (Integer rows,
  * which are their value references). */
 #define GAC_FMI2_ROW_ID(id, name, count, causality, variability, unit, start, what) GAC_FMI2_##id,
 enum { GAC_FMI2_REALS(GAC_FMI2_ROW_ID) GAC_FMI2_NREAL_ROWS };

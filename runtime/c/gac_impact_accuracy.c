@@ -253,8 +253,13 @@ static double gac_velocity_accuracy(const gac_model *m, const double *q, const d
  * in place.  Lambda: the law's impulses F (along the inward normals) and Ft (along the tangential axes); g = J^T
  * Lambda.  Momentum balance: r = I_f (qd+ - qd-) - g; were qd+ moved to the velocities that balance exactly,
  * qd+ - I_f^-1 r, T would change by qd+ . r to first order (I_f symmetric: no solve enters the measure), so qd+ is
- * refined by qd+ -= I_f^-1 r while |qd+ . r| falls by half and stands above what evaluating r can resolve,
- *   E0 = 4 (nq + 1) eps sum_i |qd+_i| (|(I_f qd+)_i| + |(I_f qd-)_i| + |g_i|)
+ * refined while |qd+ . r| falls by half and stands above what evaluating r can resolve, by the step that zeroes r
+ * and leaves the normal velocities of the pushing contacts S (F > 0) as the law left them (a free step
+ * qd+ -= I_f^-1 r moves them along I_f's soft directions, by far more than the law's round-off where I_f is
+ * ill-conditioned):  qd+ += -I_f^-1 r + Y_S dLambda_S, F_S += dLambda_S, A_SS dLambda_S = N_S I_f^-1 r (Y_S, A_SS
+ * from refined responses; the free step where A_SS is singular; the law's residual and the energy identity below
+ * are measured with the corrected impulses),
+ *   E0 = 4 (nq + 1) eps sum_i |qd+_i| (|(I_f (qd+ - qd-))_i| + |g_i|) + eps/2 sum_i |qd+_i| |(I_f qd+)_i|
  * (about 8 (nq + 1) eps T when the velocities' components do not cancel; large where they do, along a soft
  * direction of I_f or near the base chart's singular pose).  The accuracy is (|qd+ . r| + E0 + the contact law's
  * residual work, gac_law_residual, for a law solved in one round (after several rounds the law's conditions are
@@ -268,36 +273,49 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     double p_plus[GAC_AT_LEAST_1(nq)], r[GAC_AT_LEAST_1(nq)], dq[GAC_AT_LEAST_1(nq)], kept[GAC_AT_LEAST_1(nq)];
     double previous = INFINITY, balance = 0.0, floor = 0.0, law_work = 0.0, identity;
     double bound_now[GAC_AT_LEAST_1(nq)], bound_kept[GAC_AT_LEAST_1(nq)];
-    int a, i, it;
-    for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
-    for (a = 0; a < n; ++a) {                            /* Lambda in the Jacobian's rows */
-        const gac_contact *k = &m->contacts[list[a]];
-        int j;
-        f[k->row] += k->normal_sign * F[a];
-        for (j = 0; j < 2 && k->kind == GAC_CONTACT_WALL; ++j) {
-            if (k->trow[j] >= 0) f[k->trow[j]] += Ft[2*a + j];
+    double Fs[GAC_AT_LEAST_1(nq)], F_kept[GAC_AT_LEAST_1(nq)], dl[GAC_AT_LEAST_1(nq)];
+    double v_unused[GAC_AT_LEAST_1(nq)], e_unused[GAC_AT_LEAST_1(nq)];
+    const double *Y = GAC_WORK_Y(m, work);
+    int set[GAC_AT_LEAST_1(nq)], pos[GAC_AT_LEAST_1(nq)], ns = 0, a, i, it;
+    for (a = 0; a < n; ++a) {                            /* the pushing contacts S, whose velocities stay */
+        Fs[a] = F[a];
+        if (F[a] > 0.0) {
+            pos[ns] = a;
+            set[ns++] = list[a];
         }
     }
-    m->contact_generalized_force(q, f, p, g);
+    if (ns > 0 && (gac_impact_system_refined(m, q, qd, p, ns, set, work, v_unused, e_unused) != GAC_OK
+                   || gac_ldlt(ns, GAC_WORK_A(m, work), 1e-13) != 0)) ns = 0;   /* dependent: free steps */
     for (it = 0; ; ++it) {
-        long double work = 0.0L, size = 0.0L, stored = 0.0L;
+        long double work_r = 0.0L, size = 0.0L, stored = 0.0L;
+        for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
+        for (a = 0; a < n; ++a) {                        /* Lambda in the Jacobian's rows */
+            const gac_contact *k = &m->contacts[list[a]];
+            int j;
+            f[k->row] += k->normal_sign * Fs[a];
+            for (j = 0; j < 2 && k->kind == GAC_CONTACT_WALL; ++j) {
+                if (k->trow[j] >= 0) f[k->trow[j]] += Ft[2*a + j];
+            }
+        }
+        m->contact_generalized_force(q, f, p, g);
         for (i = 0; i < nq; ++i) change[i] = qd_plus[i] - qd[i];
         m->generalized_momentum(q, change, p, p_change);      /* I_f (qd+ - qd-): no cancelling of qd-'s parts */
         m->generalized_momentum(q, qd_plus, p, p_plus);
         for (i = 0; i < nq; ++i) {
             const long double ri = (long double)p_change[i] - g[i];
             r[i] = (double)ri;
-            work += qd_plus[i] * ri;
+            work_r += qd_plus[i] * ri;
             size += fabsl((long double)qd_plus[i]) * (fabs(p_change[i]) + fabs(g[i]));
             stored += fabsl((long double)qd_plus[i]) * fabs(p_plus[i]);
             bound_now[i] = fabs(r[i]) + 4.0 * (nq + 1) * GAC_EPS * (fabs(p_change[i]) + fabs(g[i]))
                            + 0.5 * GAC_EPS * fabs(p_plus[i]);
         }
-        balance = fabs((double)work);
+        balance = fabs((double)work_r);
         floor = 4.0 * (nq + 1) * GAC_EPS * (double)size + 0.5 * GAC_EPS * (double)stored;
         if (!(balance < previous)) {                     /* the last step did not improve: undo it */
             if (it > 0) {
                 gac_copy(qd_plus, kept, nq);
+                gac_copy(Fs, F_kept, n);
                 balance = previous;
             }
             break;
@@ -308,11 +326,24 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         m->inertia_solve(q, r, p, dq);
         if (!gac_finite(dq, nq)) break;
         gac_copy(kept, qd_plus, nq);
-        for (i = 0; i < nq; ++i) qd_plus[i] -= dq[i];
+        gac_copy(F_kept, Fs, n);
+        for (a = 0; a < ns; ++a) {                       /* N_S dq: what the free step would do to S's velocities */
+            double s = 0.0;
+            for (i = 0; i < nq; ++i) s += Y[(long)a * nq + i] * r[i];
+            dl[a] = s;
+        }
+        if (ns > 0) gac_ldlt_solve(ns, GAC_WORK_A(m, work), dl);   /* A_SS dLambda_S = N_S I_f^-1 r */
+        if (ns > 0 && !gac_finite(dl, ns)) break;
+        for (i = 0; i < nq; ++i) {
+            double s = -dq[i];
+            for (a = 0; a < ns; ++a) s += Y[(long)a * nq + i] * dl[a];
+            qd_plus[i] += s;
+        }
+        for (a = 0; a < ns; ++a) Fs[pos[a]] += dl[a];
     }
     if (rounds == 1 && !plastic && law != GAC_IMPACT_LAW_GDI_COMMON_E)
-        law_work = gac_law_residual(m, q, p, n, list, e, F, Ft, law, qd, qd_plus);
-    identity = gac_energy_identity(m, q, p, n, list, F, Ft, qd, qd_plus);
+        law_work = gac_law_residual(m, q, p, n, list, e, Fs, Ft, law, qd, qd_plus);
+    identity = gac_energy_identity(m, q, p, n, list, Fs, Ft, qd, qd_plus);
     if (v_acc) *v_acc = gac_velocity_accuracy(m, q, p, n, list, qd, qd_plus, bound_kept, work);
     return (balance + floor + law_work + identity) / (T > 0.0 ? T : 1e-300);
 }

@@ -105,25 +105,41 @@ static double gac_approach_tolerance(const gac_impact_event *ev)
 }
 
 /* The accuracy of the whole change qd- -> s->x1's velocities once the resting set[0..nset-1] is held (gac_hold):
- * the hold's impulses lambda, recovered from N_S I_f^-1 N_S^T lambda = N_S (qd_held - qd+) (refined responses),
+ * the hold's impulses lambda, recovered from N_R I_f^-1 N_R^T lambda = N_R (qd_held - qd+) (refined responses),
  * join the law's, and the momentum balance of the total is measured as in gac_law_accuracy (the contact law's
- * conditions are not: holding replaces them on the set).  The held velocities are refined in place. */
+ * conditions are not: holding replaces them on the set).  R: the set and every other contact of the impact that
+ * the hold leaves at rest (|v| <= 1e-9 of the fastest approach before), since gac_hold may push those too and
+ * gac_settle may then drop a held contact from the set (the set alone where R's rows are dependent); an impulse
+ * left out would count as a momentum residual, and its refinement would move the velocities.  The held velocities
+ * are refined in place. */
 static double gac_held_accuracy(gac_sim *s, gac_impact_event *ev, int nset, const int *set)
 {
     const gac_model *md = s->model;
     const int nq = md->nq;
     double change[nq], lambda[nq], e_unused[nq], F[nq], b, v = 0.0;
     double *A = GAC_WORK_A(md, s->work);
-    int a, k;
+    int rest[nq], nrest = 0, a, k, pass;
     for (k = 0; k < nq; ++k) change[k] = s->x1[nq + k] - ev->qd_plus[k];
     for (k = 0; k < ev->n; ++k) F[k] = ev->F[k];
-    if (gac_impact_system_refined(md, ev->x, change, s->p, nset, set, s->work, lambda, e_unused) == GAC_OK
-        && gac_ldlt(nset, A, 1e-12) == 0) {
-        gac_ldlt_solve(nset, A, lambda);                 /* lambda = A_SS^-1 N_S (qd_held - qd+) */
-        for (a = 0; a < nset; ++a) {
-            for (k = 0; k < ev->n; ++k) {
-                if (ev->list[k] == set[a]) F[k] += lambda[a];
+    for (a = 0; a < nset; ++a) rest[nrest++] = set[a];
+    for (k = 0; k < ev->n && nrest < nq; ++k) {
+        const int c = ev->list[k];
+        int in_set = 0;
+        for (a = 0; a < nset; ++a) in_set |= set[a] == c;
+        if (!in_set && fabs(ev->vn[c]) <= 1e-9 * ev->scale) rest[nrest++] = c;
+    }
+    for (pass = 0; pass < 2; ++pass) {                   /* R, else the set alone */
+        const int nr = pass == 0 ? nrest : nset;
+        if (pass == 1 && nrest == nset) break;
+        if (gac_impact_system_refined(md, ev->x, change, s->p, nr, rest, s->work, lambda, e_unused) == GAC_OK
+            && gac_ldlt(nr, A, 1e-12) == 0) {
+            gac_ldlt_solve(nr, A, lambda);               /* lambda = A_RR^-1 N_R (qd_held - qd+) */
+            for (a = 0; a < nr; ++a) {
+                for (k = 0; k < ev->n; ++k) {
+                    if (ev->list[k] == rest[a]) F[k] += lambda[a];
+                }
             }
+            break;
         }
     }
     b = gac_impact_accuracy(md, ev->x, s->p, ev->n, ev->list, ev->e, F, ev->Ft, ev->law, 0, 0, ev->x + nq,

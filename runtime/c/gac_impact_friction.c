@@ -20,8 +20,8 @@
  *
  * Each round of the rounds (gac_impact_rounds) is this frictional contact problem on the contacts that approach
  * or rest, solved by projected Gauss-Seidel over the contacts, each contact's own problem solved exactly
- * (separate, stick, or slide: a sign for one tangential axis, the direction found by bisection on the circle for
- * two); where the sweeps stall (coupled contacts with friction are not a monotone problem), the contacts' modes
+ * (separate, stick, or slide: a sign for one tangential axis, for two every direction in which it can slide, the
+ * real roots of a quartic; with W positive definite one of them always solves it); where the sweeps stall (coupled contacts with friction are not a monotone problem), the contacts' modes
  * are enumerated exactly (up to GAC_ENUM_MAX contacts).  Its residual is reported, and a round left above
  * GAC_FRICTION_RESIDUAL_MAX is GAC_ERR_IMPACT_FRICTION.
  */
@@ -30,7 +30,6 @@
 #include <math.h>
 
 #define GAC_PGS_SWEEPS 20000      /* Gauss-Seidel sweeps allowed for one round */
-#define GAC_SLIP_SAMPLES 72       /* directions sampled on the circle before bisection (two tangential axes) */
 #define GAC_ENUM_MAX 6            /* contacts of a round whose modes are enumerated where Gauss-Seidel stalls */
 #define GAC_SLIDE_STARTS 144      /* starts on a grid of the slide angles for Newton's method, per combination */
 
@@ -99,9 +98,95 @@ static int gac_slide(int d, const double *W, const double *r, double cf, double 
     return L[0] > 0.0;
 }
 
+/* p(t) = c[0] + c[1] t + ... + c[n] t^n. */
+static double gac_poly(int n, const double *c, double t)
+{
+    double v = c[n];
+    int i;
+    for (i = n - 1; i >= 0; --i) v = v * t + c[i];
+    return v;
+}
+
+/* The real roots of p (degree n <= 4, c[n] != 0), ascending, in root[]; returns how many.  Between consecutive
+ * roots of p' (found the same way, degree by degree) p is monotone: each such interval, and the two outer ones up
+ * to Cauchy's bound 1 + max |c_i / c_n|, holds at most one root, found by bisection where p changes sign; a root of
+ * p' where p vanishes (a double root) counts too. */
+static int gac_poly_roots(int n, const double *c, double *root)
+{
+    double d[4], crit[4], ends[6], bound = 0.0;
+    int ncrit = 0, nends = 0, count = 0, i, k;
+    for (i = 0; i < n; ++i) bound = fabs(c[i] / c[n]) > bound ? fabs(c[i] / c[n]) : bound;
+    bound += 1.0;
+    if (n == 1) {
+        root[0] = -c[0] / c[1];
+        return 1;
+    }
+    for (i = 1; i <= n; ++i) d[i - 1] = i * c[i];
+    ncrit = gac_poly_roots(n - 1, d, crit);
+    ends[nends++] = -bound;
+    for (k = 0; k < ncrit; ++k) {
+        if (crit[k] > -bound && crit[k] < bound) ends[nends++] = crit[k];
+    }
+    ends[nends++] = bound;
+    for (k = 0; k + 1 < nends; ++k) {
+        double lo = ends[k], hi = ends[k + 1], p_lo = gac_poly(n, c, lo), p_hi = gac_poly(n, c, hi);
+        int it;
+        if (p_lo == 0.0) {
+            if (count == 0 || root[count - 1] != lo) root[count++] = lo;
+            continue;
+        }
+        if (p_hi == 0.0 || (p_lo > 0.0) == (p_hi > 0.0)) continue;
+        for (it = 0; it < 200 && hi - lo > 2.0 * GAC_EPS * (fabs(lo) + fabs(hi)); ++it) {
+            const double mid = 0.5 * (lo + hi), p_mid = gac_poly(n, c, mid);
+            if (p_mid == 0.0) {
+                lo = hi = mid;
+                break;
+            }
+            if ((p_mid > 0.0) == (p_lo > 0.0)) {
+                lo = mid;
+                p_lo = p_mid;
+            } else {
+                hi = mid;
+            }
+        }
+        root[count++] = 0.5 * (lo + hi);
+    }
+    return count;
+}
+
+/* The sliding directions d = (cos phi, sin phi) of one contact with two tangential axes, where xi_T is parallel to
+ * d: with L = L_N (1, -c_f d) and xi_N = 0 (L_N = -r_N / D, D = W_NN - c_f W_NT . d), xi_T x d = 0 times D is
+ *     g(phi) = D (r_T x d) - r_N ((W_TN - c_f W_TT d) x d) = alpha c + beta s + gamma c^2 + delta c s + eps s^2,
+ * which has no pole where D = 0 (where L_N grows without bound: solutions can lie next to it, in pairs when r_N
+ * is small), a trigonometric polynomial of degree 2.  With t = tan(phi / 2), g (1 + t^2)^2 is a quartic in t,
+ * whose real roots (gac_poly_roots) are all the directions, and phi = pi (t infinite) where its leading
+ * coefficient vanishes.  Returns how many, their angles in phi[0..3]. */
+static int gac_slide_directions(const double *W, const double *r, double cf, double *phi)
+{
+    const double alpha = -W[0] * r[2] + r[0] * W[6], beta = W[0] * r[1] - r[0] * W[3];
+    const double gamma = cf * (W[1] * r[2] - r[0] * W[7]);
+    const double delta = cf * (-W[1] * r[1] + W[2] * r[2] + r[0] * W[4] - r[0] * W[8]);
+    const double eps = cf * (-W[2] * r[1] + r[0] * W[5]);
+    double c[5], t[4], size = 0.0;
+    int n = 4, count, i;
+    c[0] = alpha + gamma;
+    c[1] = 2.0 * (beta + delta);
+    c[2] = 4.0 * eps - 2.0 * gamma;
+    c[3] = 2.0 * (beta - delta);
+    c[4] = gamma - alpha;
+    for (i = 0; i < 5; ++i) size = fabs(c[i]) > size ? fabs(c[i]) : size;
+    if (!(size > 0.0)) return 0;
+    while (n > 0 && fabs(c[n]) <= 1e-14 * size) --n;     /* phi = pi is (nearly) a root */
+    count = n > 0 ? gac_poly_roots(n, c, t) : 0;
+    for (i = 0; i < count; ++i) phi[i] = 2.0 * atan(t[i]);
+    if (n < 4) phi[count++] = 3.14159265358979323846;
+    return count;
+}
+
 /* One contact's frictional problem, exactly: xi = W L + r (d = 1 + its tangential axes, W d x d row-major), the
  * cone of coefficient cf.  Separate (L = 0) when r_N >= 0, else stick (xi = 0) when that impulse lies in the cone,
- * else slide (xi_N = 0, L_T = -cf L_N xi_T / |xi_T|).  Where sliding has several solutions (friction strong enough
+ * else slide (xi_N = 0, L_T = -cf L_N xi_T / |xi_T|: for two tangential axes, every direction of
+ * gac_slide_directions that pushes, L_N > 0, and slides along it).  Where sliding has several solutions (friction strong enough
  * for the Painleve paradox at an impact), the one nearest the direction of r_T is taken. */
 static void gac_local_contact(int d, const double *W, const double *r, double cf, double *L)
 {
@@ -134,44 +219,20 @@ static void gac_local_contact(int d, const double *W, const double *r, double cf
                 found = 1;
             }
         }
-    } else {                                                   /* the sliding direction on the circle */
-        double prev_phi = 0.0, prev_f = 0.0, rt = sqrt(r[1] * r[1] + r[2] * r[2]);
-        int prev_ok = 0, k;
-        for (k = 0; k <= GAC_SLIP_SAMPLES; ++k) {
-            const double phi = 2.0 * 3.14159265358979323846 * k / GAC_SLIP_SAMPLES;
+    } else {                                                   /* the sliding directions: all of them */
+        double phi[5], rt = sqrt(r[1] * r[1] + r[2] * r[2]);
+        const int nphi = gac_slide_directions(W, r, cf, phi);
+        int k;
+        for (k = 0; k < nphi; ++k) {
             double across, along;
-            const int ok = gac_slide(d, W, r, cf, cos(phi), sin(phi), Ls, &across, &along);
-            if (ok && prev_ok && (across == 0.0 || (across > 0.0) != (prev_f > 0.0))) {
-                double lo = prev_phi, hi = phi, f_lo = prev_f;
-                int it;
-                for (it = 0; it < 80; ++it) {                  /* bisection to the double's resolution */
-                    const double mid = 0.5 * (lo + hi);
-                    double a2, b2;
-                    if (!gac_slide(d, W, r, cf, cos(mid), sin(mid), Ls, &a2, &b2)) break;
-                    if ((a2 > 0.0) == (f_lo > 0.0)) {
-                        lo = mid;
-                        f_lo = a2;
-                    } else {
-                        hi = mid;
-                    }
-                    if (hi - lo <= 4.0 * GAC_EPS * (1.0 + hi)) break;
-                }
-                {
-                    const double mid = 0.5 * (lo + hi);
-                    double a2, b2;
-                    if (gac_slide(d, W, r, cf, cos(mid), sin(mid), Ls, &a2, &b2) && b2 >= 0.0) {
-                        const double score = rt > 0.0 ? (cos(mid) * r[1] + sin(mid) * r[2]) / rt : 0.0;
-                        if (!found || score > best_score) {
-                            for (i = 0; i < d; ++i) best[i] = Ls[i];
-                            best_score = score;
-                            found = 1;
-                        }
-                    }
+            if (gac_slide(d, W, r, cf, cos(phi[k]), sin(phi[k]), Ls, &across, &along) && along >= 0.0) {
+                const double score = rt > 0.0 ? (cos(phi[k]) * r[1] + sin(phi[k]) * r[2]) / rt : 0.0;
+                if (!found || score > best_score) {
+                    for (i = 0; i < d; ++i) best[i] = Ls[i];
+                    best_score = score;
+                    found = 1;
                 }
             }
-            prev_phi = phi;
-            prev_f = across;
-            prev_ok = ok;
         }
     }
     if (found) {

@@ -263,7 +263,8 @@ static double gac_velocity_accuracy(const gac_model *m, const double *q, const d
  * (about 8 (nq + 1) eps T when the velocities' components do not cancel; large where they do, along a soft
  * direction of I_f or near the base chart's singular pose).  The accuracy is (|qd+ . r| + E0 + the contact law's
  * residual work, gac_law_residual, for a law solved in one round (after several rounds the law's conditions are
- * the rounds') + the energy identity's residual, gac_energy_identity) / T. */
+ * the rounds'; a round solved with a common e, its contacts' smallest, is measured with that e) + the energy
+ * identity's residual, gac_energy_identity) / T. */
 double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                            const double *e, const double *F, const double *Ft, int law, int rounds, int plastic,
                            const double *qd, double *qd_plus, double T, double *work, double *v_acc)
@@ -343,6 +344,21 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     }
     if (rounds == 1 && !plastic && law != GAC_IMPACT_LAW_GDI_COMMON_E)
         law_work = gac_law_residual(m, q, p, n, list, e, Fs, Ft, law, qd, qd_plus);
+    if (rounds == 1 && !plastic && law == GAC_IMPACT_LAW_GDI_COMMON_E) {   /* the round's law: the smallest e */
+        double e_common[GAC_AT_LEAST_1(nq)], before[3 * GAC_AT_LEAST_1(m->npoint)], vm[GAC_AT_LEAST_1(nq)];
+        double smallest = 1.0, scale = 0.0;
+        m->contact_velocities(q, qd, p, before);
+        for (a = 0; a < n; ++a) {
+            vm[a] = m->contacts[list[a]].normal_sign * gac_row_value(m, list[a], qd, before);
+            scale = fabs(vm[a]) > scale ? fabs(vm[a]) : scale;
+        }
+        for (a = 0; a < n; ++a) {                        /* the round's contacts: struck (own e) or at rest (0) */
+            const double ea = vm[a] < -1e-11 * scale ? e[a] : 0.0;
+            if (vm[a] <= 1e-11 * scale && ea < smallest) smallest = ea;
+        }
+        for (a = 0; a < n; ++a) e_common[a] = smallest;
+        law_work = gac_law_residual(m, q, p, n, list, e_common, Fs, Ft, GAC_IMPACT_LAW_GDI, qd, qd_plus);
+    }
     identity = gac_energy_identity(m, q, p, n, list, Fs, Ft, qd, qd_plus);
     if (v_acc) *v_acc = gac_velocity_accuracy(m, q, p, n, list, qd, qd_plus, bound_kept, work);
     return (balance + floor + law_work + identity) / (T > 0.0 ? T : 1e-300);

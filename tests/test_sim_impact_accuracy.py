@@ -71,7 +71,9 @@ def test_the_cause_of_an_inaccurate_impact_is_named(compiled):
     cause = accuracy_cause(model, p, q, qd, [0])
     assert "cond(I_f)" in cause and "base chart" not in cause
     cause = accuracy_cause(model, p, q, qd, [0], law="gdi", residual=3e-10)
-    assert "frictional law's solve" in cause
+    assert "frictional law's solve" in cause and "its contact-space inverse inertia" in cause
+    cause = accuracy_cause(model, p, q, qd, [0, 1], law="gdi", residual=3e-10)
+    assert "friction cones interact strongly; cond(W) = " in cause
 
 
 def _normal_and_tangential(model, q, qd, p, contacts):

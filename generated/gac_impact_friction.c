@@ -656,6 +656,70 @@ static void gac_round_friction(int nd, const double *W, int ncon, const int *sta
     if (*residual > 4.0 * GAC_EPS) gac_round_refine(nd, W, ncon, start, dim, cf, rows, q, L, residual);
 }
 
+/* The velocities of the system's rows (gac_friction_system: each contact's normal, then its tangential axes) at
+ * velocities w, read off the model's contact velocities. */
+static void gac_row_velocities(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                               const int *start, const int *dim, const int *axis_of, const double *w, double *out)
+{
+    double vel[3 * GAC_AT_LEAST_1(m->npoint)];
+    int a, i;
+    m->contact_velocities(q, w, p, vel);
+    for (a = 0; a < n; ++a) {
+        const gac_contact *k = &m->contacts[list[a]];
+        out[start[a]] = k->normal_sign * gac_row_value(m, list[a], w, vel);
+        for (i = 1; i < dim[a]; ++i) {
+            int axis = 0, j;
+            for (j = 0; ; ++axis) {               /* the axis_of-th axis other than the normal's */
+                if (axis == k->axis) continue;
+                if (j++ == axis_of[start[a] + i]) break;
+            }
+            out[start[a] + i] = vel[3 * (k->point - 1) + axis];
+        }
+    }
+}
+
+/* A law solved in one round, refined against the velocities its impulses give (iterative refinement of the whole
+ * nonlinear solve): the round's velocities xi = gamma+ + e gamma- read off qd_plus with the model's contact
+ * velocities differ from W L + q by d (the responses' and W's round-off, large where the impulses are large and W
+ * ill-conditioned); the round's modes are solved again for the constant q + d (gac_round_refine, from L) and the
+ * change of L applied to qd_plus and total, while the round's residual with q + d falls by half (3 times at
+ * most). */
+static void gac_refine_round(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                             const int *start, const int *dim, const int *axis_of, const double *const *resp,
+                             int nd, const double *W, int k, const int *st, const int *dm, const double *cfk,
+                             const int *rows, const double *ek, const double *gam0, double *L, double *total,
+                             double *qd_plus)
+{
+    const int nq = m->nq, nr = st[k - 1] + dm[k - 1];
+    double gp[GAC_AT_LEAST_1(nd)], qn[GAC_AT_LEAST_1(nr)], trial[GAC_AT_LEAST_1(nr)];
+    int it, b, i, j;
+    for (it = 0; it < 3; ++it) {
+        double before, after;
+        gac_row_velocities(m, q, p, n, list, start, dim, axis_of, qd_plus, gp);
+        for (b = 0; b < k; ++b) {
+            for (i = st[b]; i < st[b] + dm[b]; ++i) {  /* q + d = xi (model) - W L */
+                long double v = (long double)gp[rows[i]] + ek[b] * gam0[rows[i]];
+                for (j = 0; j < nr; ++j) v -= (long double)W[rows[i] * nd + rows[j]] * L[j];
+                qn[i] = (double)v;
+            }
+        }
+        before = gac_round_residual(nd, W, k, st, dm, cfk, rows, qn, L);
+        if (!(before > 4.0 * GAC_EPS)) return;
+        for (i = 0; i < nr; ++i) trial[i] = L[i];
+        after = before;
+        gac_round_refine(nd, W, k, st, dm, cfk, rows, qn, trial, &after);
+        if (!(after < 0.5 * before)) return;
+        for (i = 0; i < nr; ++i) {
+            const double change = trial[i] - L[i];
+            int c;
+            if (change == 0.0) continue;
+            for (c = 0; c < nq; ++c) qd_plus[c] += resp[rows[i]][c] * change;
+            total[rows[i]] += change;
+            L[i] = trial[i];
+        }
+    }
+}
+
 /* The contact-space system of the contacts list[0..n-1] at (q, qd): each contact's directions (its normal, then,
  * on a wall with friction under law, its tangential axes: start[a], dim[a], cf[a] its Coulomb coefficient, 0 where
  * it has no tangential part), their responses resp[r] = I_f^-1 d_r (in work's Y and Z), W = D I_f^-1 D^T (nd x nd,
@@ -724,13 +788,15 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
     double cf[GAC_AT_LEAST_1(nq)], gam[nd_max], total[nd_max], scale = 0.0, v_tol;
     int start[GAC_AT_LEAST_1(nq)], dim[GAC_AT_LEAST_1(nq)], axis_of[nd_max];
     const double *resp[nd_max];
+    double gam0[nd_max], ek0[GAC_AT_LEAST_1(nq)], cf0[GAC_AT_LEAST_1(nq)], L0[nd_max];
+    int st0[GAC_AT_LEAST_1(nq)], dm0[GAC_AT_LEAST_1(nq)], rows0[nd_max], k0 = 0;
     int a, b, i, j, nd = 0, round, code;
     *rounds = *plastic = 0;
     *residual = 0.0;
     *law_used = GAC_IMPACT_LAW_FRICTIONLESS;
     code = gac_friction_system(m, q, qd, p, n, list, law, work, cf, start, dim, axis_of, resp, gam, &nd);
     if (code != GAC_OK) return code;
-    for (a = 0; a < nd; ++a) total[a] = 0.0;
+    for (a = 0; a < nd; ++a) total[a] = 0.0, gam0[a] = gam[a];
     for (a = 0; a < n; ++a) {
         if (fabs(gam[start[a]]) > scale) scale = fabs(gam[start[a]]);
         if (dim[a] > 1 && *law_used == GAC_IMPACT_LAW_FRICTIONLESS)
@@ -783,6 +849,11 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
         }
         if (res > *residual) *residual = res;
         if (res > GAC_FRICTION_RESIDUAL_MAX) return GAC_ERR_IMPACT_FRICTION;
+        if (round == 0) {                        /* the first round, for gac_refine_round */
+            k0 = k;
+            for (b = 0; b < k; ++b) st0[b] = st[b], dm0[b] = dm[b], ek0[b] = ek[b], cf0[b] = cfk[b];
+            for (i = 0; i < nr; ++i) rows0[i] = rows[i], L0[i] = L[i];
+        }
         for (i = 0; i < nr; ++i) total[rows[i]] += L[i];
         for (a = 0; a < nd; ++a) {
             for (i = 0; i < nr; ++i) gam[a] += W[a*nd + rows[i]] * L[i];
@@ -798,6 +869,9 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
         for (a = 0; a < nd; ++a) value += resp[a][i] * total[a];
         qd_plus[i] = value;
     }
+    if (*rounds == 1 && !*plastic && law != GAC_IMPACT_LAW_NEWTON_COULOMB && k0 > 0)
+        gac_refine_round(m, q, p, n, list, start, dim, axis_of, resp, nd, W, k0, st0, dm0, cf0, rows0, ek0, gam0, L0,
+                         total, qd_plus);
     *tangential_parts = 0.0;                     /* sum |L_T| |I_f^-1 t|: the tangential changes before they cancel */
     for (a = 0; a < nd; ++a) {
         double column = 0.0;

@@ -152,12 +152,14 @@ static double gac_energy_identity(const gac_model *m, const double *q, const dou
 
 /* The impulses of a frictionless law solved in one round, refined against the velocities they give (iterative
  * refinement of the whole impact, not only of I_f's solves): the contacts that push (F > 0) must end with
- * gamma+ + e gamma- = 0 (e = 0 for a contact that rested: |gamma-| <= 1e-11 of the fastest), gamma+ read off qd_plus
+ * gamma+ + e gamma- = 0 (e = 0 for a contact that rested: |gamma-| <= 1e-11 of the fastest; after several rounds,
+ * with the velocities v- + A F the law's impulses give in contact space: where rows are nearly dependent the
+ * impulses can be large, and their responses' round-off moves the model's velocities far from them), gamma+ read off qd_plus
  * with the model's contact velocities.  Their miss d is removed by F_S += A_SS^-1 (-d), qd_plus += Y_S (that change),
  * A_SS = N_S I_f^-1 N_S^T from refined responses (gac_impact_system_refined), while max|d| falls by half; a step
  * that would pull (F < 0) or not improve is not taken.  Returns the contacts' largest miss left (m/s). */
 double gac_refine_impulses(const gac_model *m, const double *q, const double *p, int n, const int *list,
-                           const double *e, double *F, const double *qd, double *qd_plus, double *work)
+                           const double *e, int rounds, double *F, const double *qd, double *qd_plus, double *work)
 {
     const int nq = m->nq;
     double before[3 * GAC_AT_LEAST_1(m->npoint)], after[3 * GAC_AT_LEAST_1(m->npoint)], scale = 0.0, v_tol;
@@ -171,12 +173,27 @@ double gac_refine_impulses(const gac_model *m, const double *q, const double *p,
         scale = fabs(v) > scale ? fabs(v) : scale;
     }
     v_tol = 1e-11 * scale;
-    for (a = 0; a < n; ++a) {
-        const double v = m->contacts[list[a]].normal_sign * gac_row_value(m, list[a], qd, before);
-        if (!(F[a] > 0.0)) continue;
-        target[ns] = v < -v_tol ? -e[a] * v : 0.0;       /* gamma+ wanted */
-        pos[ns] = a;
-        set[ns++] = list[a];
+    if (rounds > 1) {                                    /* several rounds: the velocities the law's impulses give
+                                                            in contact space, v- + A F, are its own */
+        double v0[GAC_AT_LEAST_1(nq)];
+        if (gac_impact_system_refined(m, q, qd, p, n, list, work, v0, e_unused) != GAC_OK) return 0.0;
+        for (a = 0; a < n; ++a) {
+            int b;
+            double v = v0[a];
+            if (!(F[a] > 0.0)) continue;
+            for (b = 0; b < n; ++b) v += A[a * n + b] * F[b];
+            target[ns] = v;
+            pos[ns] = a;
+            set[ns++] = list[a];
+        }
+    } else {
+        for (a = 0; a < n; ++a) {
+            const double v = m->contacts[list[a]].normal_sign * gac_row_value(m, list[a], qd, before);
+            if (!(F[a] > 0.0)) continue;
+            target[ns] = v < -v_tol ? -e[a] * v : 0.0;   /* gamma+ wanted */
+            pos[ns] = a;
+            set[ns++] = list[a];
+        }
     }
     if (ns == 0) return 0.0;
     for (it = 0; it < 3; ++it) {

@@ -81,13 +81,14 @@ typedef struct {
 static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const double *e)
 {
     const int nq = s->model->nq;
-    const int refine = ev->rounds == 1 && !ev->plastic && ev->law == GAC_IMPACT_LAW_FRICTIONLESS;
+    const int refine = ev->rounds >= 1 && ev->law == GAC_IMPACT_LAW_FRICTIONLESS;
     double b, v = 0.0;
     int pass;
     for (pass = 0; pass < (refine ? 2 : 1); ++pass) {   /* the impulses against the velocities, then the velocities
                                                            against the impulses (the momentum balance), twice */
         if (refine)
-            gac_refine_impulses(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->x + nq, ev->qd_plus, s->work);
+            gac_refine_impulses(s->model, ev->x, s->p, ev->n, ev->list, e, ev->rounds, ev->F, ev->x + nq,
+                                ev->qd_plus, s->work);
         b = gac_impact_accuracy(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->Ft, ev->law, ev->rounds,
                                 ev->plastic, ev->x + nq, ev->qd_plus, ev->T_before, s->work, &v);
     }

@@ -178,7 +178,7 @@ static int gac_slide_directions(const double *W, const double *r, double cf, dou
     if (!(size > 0.0)) return 0;
     while (n > 0 && fabs(c[n]) <= 1e-14 * size) --n;     /* phi = pi is (nearly) a root */
     count = n > 0 ? gac_poly_roots(n, c, t) : 0;
-    for (i = 0; i < count; ++i) phi[i] = 2.0 * atan(t[i]);
+    for (i = 0; i < count; ++i) phi[i] = 2.0 * atan2(t[i], 1.0);     /* (the library calls no atan) */
     if (n < 4) phi[count++] = 3.14159265358979323846;
     return count;
 }

@@ -82,7 +82,7 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
 {
     const int nq = s->model->nq;
     const int refine = ev->rounds >= 1 && ev->law == GAC_IMPACT_LAW_FRICTIONLESS;
-    double b, v = 0.0;
+    double b = 0.0, v = 0.0;
     int pass;
     for (pass = 0; pass < (refine ? 2 : 1); ++pass) {   /* the impulses against the velocities, then the velocities
                                                            against the impulses (the momentum balance), twice */

@@ -150,63 +150,234 @@ static double gac_energy_identity(const gac_model *m, const double *q, const dou
     return fabs((double)(((long double)E1[0] - E0[0]) - 0.5L * work));
 }
 
+/* The impulses of a frictionless law solved in one round, refined against the velocities they give (iterative
+ * refinement of the whole impact, not only of I_f's solves): the contacts that push (F > 0) must end with
+ * gamma+ + e gamma- = 0 (e = 0 for a contact that rested: |gamma-| <= 1e-11 of the fastest; after several rounds,
+ * with the velocities v- + A F the law's impulses give in contact space: where rows are nearly dependent the
+ * impulses can be large, and their responses' round-off moves the model's velocities far from them), gamma+ read off qd_plus
+ * with the model's contact velocities.  Their miss d is removed by F_S += A_SS^-1 (-d), qd_plus += Y_S (that change),
+ * A_SS = N_S I_f^-1 N_S^T from refined responses (gac_impact_system_refined), while max|d| falls by half; a step
+ * that would pull (F < 0) or not improve is not taken.  Returns the contacts' largest miss left (m/s). */
+double gac_refine_impulses(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                           const double *e, int rounds, double *F, const double *qd, double *qd_plus, double *work)
+{
+    const int nq = m->nq;
+    double before[3 * GAC_AT_LEAST_1(m->npoint)], after[3 * GAC_AT_LEAST_1(m->npoint)], scale = 0.0, v_tol;
+    double target[GAC_AT_LEAST_1(nq)], d[GAC_AT_LEAST_1(nq)], v_unused[GAC_AT_LEAST_1(nq)], e_unused[GAC_AT_LEAST_1(nq)];
+    double previous = INFINITY, trial[GAC_AT_LEAST_1(nq)], kept_F[GAC_AT_LEAST_1(nq)], kept[GAC_AT_LEAST_1(nq)];
+    double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work);
+    int set[GAC_AT_LEAST_1(nq)], pos[GAC_AT_LEAST_1(nq)], ns = 0, a, i, it, built = 0;
+    m->contact_velocities(q, qd, p, before);
+    for (a = 0; a < n; ++a) {
+        const double v = m->contacts[list[a]].normal_sign * gac_row_value(m, list[a], qd, before);
+        scale = fabs(v) > scale ? fabs(v) : scale;
+    }
+    v_tol = 1e-11 * scale;
+    if (rounds > 1) {                                    /* several rounds: the velocities the law's impulses give
+                                                            in contact space, v- + A F, are its own */
+        double v0[GAC_AT_LEAST_1(nq)];
+        if (gac_impact_system_refined(m, q, qd, p, n, list, work, v0, e_unused) != GAC_OK) return 0.0;
+        for (a = 0; a < n; ++a) {
+            int b;
+            double v = v0[a];
+            if (!(F[a] > 0.0)) continue;
+            for (b = 0; b < n; ++b) v += A[a * n + b] * F[b];
+            target[ns] = v;
+            pos[ns] = a;
+            set[ns++] = list[a];
+        }
+    } else {
+        for (a = 0; a < n; ++a) {
+            const double v = m->contacts[list[a]].normal_sign * gac_row_value(m, list[a], qd, before);
+            if (!(F[a] > 0.0)) continue;
+            target[ns] = v < -v_tol ? -e[a] * v : 0.0;   /* gamma+ wanted */
+            pos[ns] = a;
+            set[ns++] = list[a];
+        }
+    }
+    if (ns == 0) return 0.0;
+    for (it = 0; it < 3; ++it) {
+        double miss = 0.0;
+        int j;
+        m->contact_velocities(q, qd_plus, p, after);
+        for (a = 0; a < ns; ++a) {
+            d[a] = m->contacts[set[a]].normal_sign * gac_row_value(m, set[a], qd_plus, after) - target[a];
+            miss = fabs(d[a]) > miss ? fabs(d[a]) : miss;
+        }
+        if (!(miss < previous)) {                        /* the last step did not improve: undo it */
+            for (a = 0; a < ns; ++a) F[pos[a]] = kept_F[a];
+            gac_copy(qd_plus, kept, nq);
+            return previous;
+        }
+        if (miss <= 4.0 * GAC_EPS * scale || miss > 0.5 * previous) return miss;
+        previous = miss;
+        if (!built) {                                    /* A_SS and Y_S, once */
+            if (gac_impact_system_refined(m, q, qd, p, ns, set, work, v_unused, e_unused) != GAC_OK
+                || gac_ldlt(ns, A, 1e-13) != 0) return miss;
+            built = 1;
+        }
+        for (a = 0; a < ns; ++a) trial[a] = -d[a];
+        gac_ldlt_solve(ns, A, trial);                    /* the impulses' change */
+        if (!gac_finite(trial, ns)) return miss;
+        for (a = 0; a < ns; ++a) {
+            if (F[pos[a]] + trial[a] < 0.0) return miss;  /* it would pull: keep the law's */
+        }
+        for (a = 0; a < ns; ++a) {
+            kept_F[a] = F[pos[a]];
+            F[pos[a]] += trial[a];
+        }
+        gac_copy(kept, qd_plus, nq);
+        for (i = 0; i < nq; ++i) {
+            double s = 0.0;
+            for (j = 0; j < ns; ++j) s += Y[(long)j * nq + i] * trial[j];
+            qd_plus[i] += s;
+        }
+    }
+    return previous;
+}
+
+/* How accurately the contacts' normal velocities after the impact are known (m/s), the largest over list[0..n-1]:
+ * the velocities that balance the impulses exactly differ from qd_plus by I_f^-1 rho, |rho_i| <= bound[i] (the
+ * momentum balance's residual and what evaluating it resolves), which moves contact a's velocity by
+ * Y_a . rho <= sum_i |Y_a,i| bound[i] (Y_a = I_f^-1 n_a, refined); reading the velocity off qd_plus adds
+ * 4 (nq + 1) eps sum_i |n_a,i| |qd+_i|.  Large where I_f is ill-conditioned along the contacts' directions even when
+ * the energy is accurate (the energy weighs a velocity error by I_f, a contact velocity by I_f^-1). */
+static double gac_velocity_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                                    const double *qd, const double *qd_plus, const double *bound, double *work)
+{
+    const int nq = m->nq;
+    double v_unused[GAC_AT_LEAST_1(nq)], e_unused[GAC_AT_LEAST_1(nq)], f[GAC_AT_LEAST_1(m->njrow)];
+    double g[GAC_AT_LEAST_1(nq)], worst = 0.0;
+    const double *Y = GAC_WORK_Y(m, work);
+    int a, i;
+    if (n < 1 || gac_impact_system_refined(m, q, qd, p, n, list, work, v_unused, e_unused) != GAC_OK) return 0.0;
+    for (a = 0; a < n; ++a) {
+        double v = 0.0, read = 0.0;
+        for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
+        f[m->contacts[list[a]].row] = 1.0;
+        m->contact_generalized_force(q, f, p, g);        /* n_a */
+        for (i = 0; i < nq; ++i) {
+            v += fabs(Y[(long)a * nq + i]) * bound[i];
+            read += fabs(g[i]) * fabs(qd_plus[i]);
+        }
+        v += 4.0 * (nq + 1) * GAC_EPS * read;
+        worst = v > worst ? v : worst;
+    }
+    return worst;
+}
+
 /* The impact's accuracy, measured after its law (relative to T, the kinetic energy before), with qd_plus refined
  * in place.  Lambda: the law's impulses F (along the inward normals) and Ft (along the tangential axes); g = J^T
  * Lambda.  Momentum balance: r = I_f (qd+ - qd-) - g; were qd+ moved to the velocities that balance exactly,
  * qd+ - I_f^-1 r, T would change by qd+ . r to first order (I_f symmetric: no solve enters the measure), so qd+ is
- * refined by qd+ -= I_f^-1 r while |qd+ . r| falls by half and stands above what evaluating r can resolve,
- *   E0 = 4 (nq + 1) eps sum_i |qd+_i| (|(I_f qd+)_i| + |(I_f qd-)_i| + |g_i|)
+ * refined while |qd+ . r| falls by half and stands above what evaluating r can resolve, by the step that zeroes r
+ * and leaves the normal velocities of the pushing contacts S (F > 0) as the law left them (a free step
+ * qd+ -= I_f^-1 r moves them along I_f's soft directions, by far more than the law's round-off where I_f is
+ * ill-conditioned):  qd+ += -I_f^-1 r + Y_S dLambda_S, F_S += dLambda_S, A_SS dLambda_S = N_S I_f^-1 r (Y_S, A_SS
+ * from refined responses; the free step where A_SS is singular; the law's residual and the energy identity below
+ * are measured with the corrected impulses),
+ *   E0 = 4 (nq + 1) eps sum_i |qd+_i| (|(I_f (qd+ - qd-))_i| + |g_i|) + eps/2 sum_i |qd+_i| |(I_f qd+)_i|
  * (about 8 (nq + 1) eps T when the velocities' components do not cancel; large where they do, along a soft
  * direction of I_f or near the base chart's singular pose).  The accuracy is (|qd+ . r| + E0 + the contact law's
  * residual work, gac_law_residual, for a law solved in one round (after several rounds the law's conditions are
- * the rounds') + the energy identity's residual, gac_energy_identity) / T. */
+ * the rounds'; a round solved with a common e, its contacts' smallest, is measured with that e) + the energy
+ * identity's residual, gac_energy_identity) / T. */
 double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                            const double *e, const double *F, const double *Ft, int law, int rounds, int plastic,
-                           const double *qd, double *qd_plus, double T)
+                           const double *qd, double *qd_plus, double T, double *work, double *v_acc)
 {
     const int nq = m->nq;
-    double f[GAC_AT_LEAST_1(m->njrow)], g[GAC_AT_LEAST_1(nq)], p_minus[GAC_AT_LEAST_1(nq)];
+    double f[GAC_AT_LEAST_1(m->njrow)], g[GAC_AT_LEAST_1(nq)], change[GAC_AT_LEAST_1(nq)], p_change[GAC_AT_LEAST_1(nq)];
     double p_plus[GAC_AT_LEAST_1(nq)], r[GAC_AT_LEAST_1(nq)], dq[GAC_AT_LEAST_1(nq)], kept[GAC_AT_LEAST_1(nq)];
     double previous = INFINITY, balance = 0.0, floor = 0.0, law_work = 0.0, identity;
-    int a, i, it;
-    for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
-    for (a = 0; a < n; ++a) {                            /* Lambda in the Jacobian's rows */
-        const gac_contact *k = &m->contacts[list[a]];
-        int j;
-        f[k->row] += k->normal_sign * F[a];
-        for (j = 0; j < 2 && k->kind == GAC_CONTACT_WALL; ++j) {
-            if (k->trow[j] >= 0) f[k->trow[j]] += Ft[2*a + j];
+    double bound_now[GAC_AT_LEAST_1(nq)], bound_kept[GAC_AT_LEAST_1(nq)];
+    double Fs[GAC_AT_LEAST_1(nq)], F_kept[GAC_AT_LEAST_1(nq)], dl[GAC_AT_LEAST_1(nq)];
+    double v_unused[GAC_AT_LEAST_1(nq)], e_unused[GAC_AT_LEAST_1(nq)];
+    const double *Y = GAC_WORK_Y(m, work);
+    int set[GAC_AT_LEAST_1(nq)], pos[GAC_AT_LEAST_1(nq)], ns = 0, a, i, it;
+    for (a = 0; a < n; ++a) {                            /* the pushing contacts S, whose velocities stay */
+        Fs[a] = F[a];
+        if (F[a] > 0.0) {
+            pos[ns] = a;
+            set[ns++] = list[a];
         }
     }
-    m->contact_generalized_force(q, f, p, g);
-    m->generalized_momentum(q, qd, p, p_minus);
+    if (ns > 0 && (gac_impact_system_refined(m, q, qd, p, ns, set, work, v_unused, e_unused) != GAC_OK
+                   || gac_ldlt(ns, GAC_WORK_A(m, work), 1e-13) != 0)) ns = 0;   /* dependent: free steps */
     for (it = 0; ; ++it) {
-        long double work = 0.0L, size = 0.0L;
+        long double work_r = 0.0L, size = 0.0L, stored = 0.0L;
+        for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
+        for (a = 0; a < n; ++a) {                        /* Lambda in the Jacobian's rows */
+            const gac_contact *k = &m->contacts[list[a]];
+            int j;
+            f[k->row] += k->normal_sign * Fs[a];
+            for (j = 0; j < 2 && k->kind == GAC_CONTACT_WALL; ++j) {
+                if (k->trow[j] >= 0) f[k->trow[j]] += Ft[2*a + j];
+            }
+        }
+        m->contact_generalized_force(q, f, p, g);
+        for (i = 0; i < nq; ++i) change[i] = qd_plus[i] - qd[i];
+        m->generalized_momentum(q, change, p, p_change);      /* I_f (qd+ - qd-): no cancelling of qd-'s parts */
         m->generalized_momentum(q, qd_plus, p, p_plus);
         for (i = 0; i < nq; ++i) {
-            const long double ri = ((long double)p_plus[i] - p_minus[i]) - g[i];
+            const long double ri = (long double)p_change[i] - g[i];
             r[i] = (double)ri;
-            work += qd_plus[i] * ri;
-            size += fabsl((long double)qd_plus[i]) * (fabs(p_plus[i]) + fabs(p_minus[i]) + fabs(g[i]));
+            work_r += qd_plus[i] * ri;
+            size += fabsl((long double)qd_plus[i]) * (fabs(p_change[i]) + fabs(g[i]));
+            stored += fabsl((long double)qd_plus[i]) * fabs(p_plus[i]);
+            bound_now[i] = fabs(r[i]) + 4.0 * (nq + 1) * GAC_EPS * (fabs(p_change[i]) + fabs(g[i]))
+                           + 0.5 * GAC_EPS * fabs(p_plus[i]);
         }
-        balance = fabs((double)work);
-        floor = 4.0 * (nq + 1) * GAC_EPS * (double)size;
+        balance = fabs((double)work_r);
+        floor = 4.0 * (nq + 1) * GAC_EPS * (double)size + 0.5 * GAC_EPS * (double)stored;
         if (!(balance < previous)) {                     /* the last step did not improve: undo it */
             if (it > 0) {
                 gac_copy(qd_plus, kept, nq);
+                gac_copy(Fs, F_kept, n);
                 balance = previous;
             }
             break;
         }
+        gac_copy(bound_kept, bound_now, nq);
         if (balance <= floor || balance > 0.5 * previous || it == GAC_REFINE_STEPS) break;
         previous = balance;
         m->inertia_solve(q, r, p, dq);
         if (!gac_finite(dq, nq)) break;
         gac_copy(kept, qd_plus, nq);
-        for (i = 0; i < nq; ++i) qd_plus[i] -= dq[i];
+        gac_copy(F_kept, Fs, n);
+        for (a = 0; a < ns; ++a) {                       /* N_S dq: what the free step would do to S's velocities */
+            double s = 0.0;
+            for (i = 0; i < nq; ++i) s += Y[(long)a * nq + i] * r[i];
+            dl[a] = s;
+        }
+        if (ns > 0) gac_ldlt_solve(ns, GAC_WORK_A(m, work), dl);   /* A_SS dLambda_S = N_S I_f^-1 r */
+        if (ns > 0 && !gac_finite(dl, ns)) break;
+        for (i = 0; i < nq; ++i) {
+            double s = -dq[i];
+            for (a = 0; a < ns; ++a) s += Y[(long)a * nq + i] * dl[a];
+            qd_plus[i] += s;
+        }
+        for (a = 0; a < ns; ++a) Fs[pos[a]] += dl[a];
     }
     if (rounds == 1 && !plastic && law != GAC_IMPACT_LAW_GDI_COMMON_E)
-        law_work = gac_law_residual(m, q, p, n, list, e, F, Ft, law, qd, qd_plus);
-    identity = gac_energy_identity(m, q, p, n, list, F, Ft, qd, qd_plus);
+        law_work = gac_law_residual(m, q, p, n, list, e, Fs, Ft, law, qd, qd_plus);
+    if (rounds == 1 && !plastic && law == GAC_IMPACT_LAW_GDI_COMMON_E) {   /* the round's law: the smallest e */
+        double e_common[GAC_AT_LEAST_1(nq)], before[3 * GAC_AT_LEAST_1(m->npoint)], vm[GAC_AT_LEAST_1(nq)];
+        double smallest = 1.0, scale = 0.0;
+        m->contact_velocities(q, qd, p, before);
+        for (a = 0; a < n; ++a) {
+            vm[a] = m->contacts[list[a]].normal_sign * gac_row_value(m, list[a], qd, before);
+            scale = fabs(vm[a]) > scale ? fabs(vm[a]) : scale;
+        }
+        for (a = 0; a < n; ++a) {                        /* the round's contacts: struck (own e) or at rest (0) */
+            const double ea = vm[a] < -1e-11 * scale ? e[a] : 0.0;
+            if (vm[a] <= 1e-11 * scale && ea < smallest) smallest = ea;
+        }
+        for (a = 0; a < n; ++a) e_common[a] = smallest;
+        law_work = gac_law_residual(m, q, p, n, list, e_common, Fs, Ft, GAC_IMPACT_LAW_GDI, qd, qd_plus);
+    }
+    identity = gac_energy_identity(m, q, p, n, list, Fs, Ft, qd, qd_plus);
+    if (v_acc) *v_acc = gac_velocity_accuracy(m, q, p, n, list, qd, qd_plus, bound_kept, work);
     return (balance + floor + law_work + identity) / (T > 0.0 ? T : 1e-300);
 }
+

@@ -20,8 +20,8 @@
  *
  * Each round of the rounds (gac_impact_rounds) is this frictional contact problem on the contacts that approach
  * or rest, solved by projected Gauss-Seidel over the contacts, each contact's own problem solved exactly
- * (separate, stick, or slide: a sign for one tangential axis, the direction found by bisection on the circle for
- * two); where the sweeps stall (coupled contacts with friction are not a monotone problem), the contacts' modes
+ * (separate, stick, or slide: a sign for one tangential axis, for two every direction in which it can slide, the
+ * real roots of a quartic; with W positive definite one of them always solves it); where the sweeps stall (coupled contacts with friction are not a monotone problem), the contacts' modes
  * are enumerated exactly (up to GAC_ENUM_MAX contacts).  Its residual is reported, and a round left above
  * GAC_FRICTION_RESIDUAL_MAX is GAC_ERR_IMPACT_FRICTION.
  */
@@ -30,7 +30,6 @@
 #include <math.h>
 
 #define GAC_PGS_SWEEPS 20000      /* Gauss-Seidel sweeps allowed for one round */
-#define GAC_SLIP_SAMPLES 72       /* directions sampled on the circle before bisection (two tangential axes) */
 #define GAC_ENUM_MAX 6            /* contacts of a round whose modes are enumerated where Gauss-Seidel stalls */
 #define GAC_SLIDE_STARTS 144      /* starts on a grid of the slide angles for Newton's method, per combination */
 
@@ -99,9 +98,95 @@ static int gac_slide(int d, const double *W, const double *r, double cf, double 
     return L[0] > 0.0;
 }
 
+/* p(t) = c[0] + c[1] t + ... + c[n] t^n. */
+static double gac_poly(int n, const double *c, double t)
+{
+    double v = c[n];
+    int i;
+    for (i = n - 1; i >= 0; --i) v = v * t + c[i];
+    return v;
+}
+
+/* The real roots of p (degree n <= 4, c[n] != 0), ascending, in root[]; returns how many.  Between consecutive
+ * roots of p' (found the same way, degree by degree) p is monotone: each such interval, and the two outer ones up
+ * to Cauchy's bound 1 + max |c_i / c_n|, holds at most one root, found by bisection where p changes sign; a root of
+ * p' where p vanishes (a double root) counts too. */
+static int gac_poly_roots(int n, const double *c, double *root)
+{
+    double d[4], crit[4], ends[6], bound = 0.0;
+    int ncrit = 0, nends = 0, count = 0, i, k;
+    for (i = 0; i < n; ++i) bound = fabs(c[i] / c[n]) > bound ? fabs(c[i] / c[n]) : bound;
+    bound += 1.0;
+    if (n == 1) {
+        root[0] = -c[0] / c[1];
+        return 1;
+    }
+    for (i = 1; i <= n; ++i) d[i - 1] = i * c[i];
+    ncrit = gac_poly_roots(n - 1, d, crit);
+    ends[nends++] = -bound;
+    for (k = 0; k < ncrit; ++k) {
+        if (crit[k] > -bound && crit[k] < bound) ends[nends++] = crit[k];
+    }
+    ends[nends++] = bound;
+    for (k = 0; k + 1 < nends; ++k) {
+        double lo = ends[k], hi = ends[k + 1], p_lo = gac_poly(n, c, lo), p_hi = gac_poly(n, c, hi);
+        int it;
+        if (p_lo == 0.0) {
+            if (count == 0 || root[count - 1] != lo) root[count++] = lo;
+            continue;
+        }
+        if (p_hi == 0.0 || (p_lo > 0.0) == (p_hi > 0.0)) continue;
+        for (it = 0; it < 200 && hi - lo > 2.0 * GAC_EPS * (fabs(lo) + fabs(hi)); ++it) {
+            const double mid = 0.5 * (lo + hi), p_mid = gac_poly(n, c, mid);
+            if (p_mid == 0.0) {
+                lo = hi = mid;
+                break;
+            }
+            if ((p_mid > 0.0) == (p_lo > 0.0)) {
+                lo = mid;
+                p_lo = p_mid;
+            } else {
+                hi = mid;
+            }
+        }
+        root[count++] = 0.5 * (lo + hi);
+    }
+    return count;
+}
+
+/* The sliding directions d = (cos phi, sin phi) of one contact with two tangential axes, where xi_T is parallel to
+ * d: with L = L_N (1, -c_f d) and xi_N = 0 (L_N = -r_N / D, D = W_NN - c_f W_NT . d), xi_T x d = 0 times D is
+ *     g(phi) = D (r_T x d) - r_N ((W_TN - c_f W_TT d) x d) = alpha c + beta s + gamma c^2 + delta c s + eps s^2,
+ * which has no pole where D = 0 (where L_N grows without bound: solutions can lie next to it, in pairs when r_N
+ * is small), a trigonometric polynomial of degree 2.  With t = tan(phi / 2), g (1 + t^2)^2 is a quartic in t,
+ * whose real roots (gac_poly_roots) are all the directions, and phi = pi (t infinite) where its leading
+ * coefficient vanishes.  Returns how many, their angles in phi[0..3]. */
+static int gac_slide_directions(const double *W, const double *r, double cf, double *phi)
+{
+    const double alpha = -W[0] * r[2] + r[0] * W[6], beta = W[0] * r[1] - r[0] * W[3];
+    const double gamma = cf * (W[1] * r[2] - r[0] * W[7]);
+    const double delta = cf * (-W[1] * r[1] + W[2] * r[2] + r[0] * W[4] - r[0] * W[8]);
+    const double eps = cf * (-W[2] * r[1] + r[0] * W[5]);
+    double c[5], t[4], size = 0.0;
+    int n = 4, count, i;
+    c[0] = alpha + gamma;
+    c[1] = 2.0 * (beta + delta);
+    c[2] = 4.0 * eps - 2.0 * gamma;
+    c[3] = 2.0 * (beta - delta);
+    c[4] = gamma - alpha;
+    for (i = 0; i < 5; ++i) size = fabs(c[i]) > size ? fabs(c[i]) : size;
+    if (!(size > 0.0)) return 0;
+    while (n > 0 && fabs(c[n]) <= 1e-14 * size) --n;     /* phi = pi is (nearly) a root */
+    count = n > 0 ? gac_poly_roots(n, c, t) : 0;
+    for (i = 0; i < count; ++i) phi[i] = 2.0 * atan2(t[i], 1.0);     /* (the library calls no atan) */
+    if (n < 4) phi[count++] = 3.14159265358979323846;
+    return count;
+}
+
 /* One contact's frictional problem, exactly: xi = W L + r (d = 1 + its tangential axes, W d x d row-major), the
  * cone of coefficient cf.  Separate (L = 0) when r_N >= 0, else stick (xi = 0) when that impulse lies in the cone,
- * else slide (xi_N = 0, L_T = -cf L_N xi_T / |xi_T|).  Where sliding has several solutions (friction strong enough
+ * else slide (xi_N = 0, L_T = -cf L_N xi_T / |xi_T|: for two tangential axes, every direction of
+ * gac_slide_directions that pushes, L_N > 0, and slides along it).  Where sliding has several solutions (friction strong enough
  * for the Painleve paradox at an impact), the one nearest the direction of r_T is taken. */
 static void gac_local_contact(int d, const double *W, const double *r, double cf, double *L)
 {
@@ -134,44 +219,20 @@ static void gac_local_contact(int d, const double *W, const double *r, double cf
                 found = 1;
             }
         }
-    } else {                                                   /* the sliding direction on the circle */
-        double prev_phi = 0.0, prev_f = 0.0, rt = sqrt(r[1] * r[1] + r[2] * r[2]);
-        int prev_ok = 0, k;
-        for (k = 0; k <= GAC_SLIP_SAMPLES; ++k) {
-            const double phi = 2.0 * 3.14159265358979323846 * k / GAC_SLIP_SAMPLES;
+    } else {                                                   /* the sliding directions: all of them */
+        double phi[5], rt = sqrt(r[1] * r[1] + r[2] * r[2]);
+        const int nphi = gac_slide_directions(W, r, cf, phi);
+        int k;
+        for (k = 0; k < nphi; ++k) {
             double across, along;
-            const int ok = gac_slide(d, W, r, cf, cos(phi), sin(phi), Ls, &across, &along);
-            if (ok && prev_ok && (across == 0.0 || (across > 0.0) != (prev_f > 0.0))) {
-                double lo = prev_phi, hi = phi, f_lo = prev_f;
-                int it;
-                for (it = 0; it < 80; ++it) {                  /* bisection to the double's resolution */
-                    const double mid = 0.5 * (lo + hi);
-                    double a2, b2;
-                    if (!gac_slide(d, W, r, cf, cos(mid), sin(mid), Ls, &a2, &b2)) break;
-                    if ((a2 > 0.0) == (f_lo > 0.0)) {
-                        lo = mid;
-                        f_lo = a2;
-                    } else {
-                        hi = mid;
-                    }
-                    if (hi - lo <= 4.0 * GAC_EPS * (1.0 + hi)) break;
-                }
-                {
-                    const double mid = 0.5 * (lo + hi);
-                    double a2, b2;
-                    if (gac_slide(d, W, r, cf, cos(mid), sin(mid), Ls, &a2, &b2) && b2 >= 0.0) {
-                        const double score = rt > 0.0 ? (cos(mid) * r[1] + sin(mid) * r[2]) / rt : 0.0;
-                        if (!found || score > best_score) {
-                            for (i = 0; i < d; ++i) best[i] = Ls[i];
-                            best_score = score;
-                            found = 1;
-                        }
-                    }
+            if (gac_slide(d, W, r, cf, cos(phi[k]), sin(phi[k]), Ls, &across, &along) && along >= 0.0) {
+                const double score = rt > 0.0 ? (cos(phi[k]) * r[1] + sin(phi[k]) * r[2]) / rt : 0.0;
+                if (!found || score > best_score) {
+                    for (i = 0; i < d; ++i) best[i] = Ls[i];
+                    best_score = score;
+                    found = 1;
                 }
             }
-            prev_phi = phi;
-            prev_f = across;
-            prev_ok = ok;
         }
     }
     if (found) {
@@ -293,6 +354,9 @@ static int gac_slide_cross(int nd, const double *W, int ncon, const int *start, 
     return 1;
 }
 
+static void gac_round_refine(int nd, const double *W, int ncon, const int *start, const int *dim, const double *cf,
+                             const int *rows, const double *q, double *L, double *residual);
+
 /* The round's problem solved exactly by its modes (at most GAC_ENUM_MAX contacts): every combination of separate,
  * stick and slide, the guess L's own modes first.  One tangential axis: a slide is one of two signs, one linear
  * solve.  Two: the slide directions are the roots of xi_T x d = 0, found by Newton's method on their angles
@@ -402,6 +466,8 @@ static int gac_round_enumerate(int nd, const double *W, int ncon, const int *sta
                 for (k = 0; k < ncon; ++k) push = trial[start[k]] > push ? trial[start[k]] : push;
                 if (!(push > 1e-9 * size)) continue;
             }
+            if (res > accept && res <= 1e3 * accept)   /* near: its modes' equations to round-off */
+                gac_round_refine(nd, W, ncon, start, dim, cf, rows, q, trial, &res);
             if (res <= accept) {
                 for (i = 0; i < nr; ++i) L[i] = trial[i];
                 *residual = res;
@@ -410,6 +476,137 @@ static int gac_round_enumerate(int nd, const double *W, int ncon, const int *sta
         }
     }
     return 0;
+}
+
+/* The modes of a round's solution L (velocities xi = W L + q): at each contact the condition L or xi meets worse,
+ * relative to their scales, decides.  mode[k] 0 separates (L_N / lscale <= xi_N / vscale), 1 sticks (its cone's
+ * slack (c_f L_N - |L_T|) / lscale above |xi_T| / vscale), 2 slides; dir[2k..2k+1] the slide's direction of xi_T
+ * (that of -L_T where xi_T is below round-off of the velocities: at the stick's edge). */
+static void gac_round_mode_of(int nd, const double *W, int ncon, const int *start, const int *dim, const double *cf,
+                              const int *rows, const double *q, const double *L, double vscale, double lscale,
+                              int *mode, double *dir)
+{
+    const int nr = start[ncon - 1] + dim[ncon - 1];
+    int k, i, j;
+    for (k = 0; k < ncon; ++k) {
+        const int s = start[k], d = dim[k];
+        double xi[3], lt = 0.0, xt = 0.0;
+        for (i = 0; i < d; ++i) {
+            double v = q[s + i];
+            for (j = 0; j < nr; ++j) v += W[rows[s + i] * nd + rows[j]] * L[j];
+            xi[i] = v;
+        }
+        dir[2 * k] = dir[2 * k + 1] = 0.0;
+        if (!(L[s] / lscale > xi[0] / vscale)) {
+            mode[k] = 0;
+            continue;
+        }
+        if (d == 1 || !(cf[k] > 0.0)) {
+            mode[k] = 1;
+            continue;
+        }
+        for (i = 1; i < d; ++i) {
+            lt += L[s + i] * L[s + i];
+            xt += xi[i] * xi[i];
+        }
+        lt = sqrt(lt);
+        xt = sqrt(xt);
+        if ((cf[k] * L[s] - lt) / lscale > xt / vscale) {
+            mode[k] = 1;
+            continue;
+        }
+        mode[k] = 2;
+        for (i = 1; i < d; ++i) {
+            dir[2 * k + i - 1] = xt > 1e-12 * vscale ? xi[i] / xt : lt > 0.0 ? -L[s + i] / lt : (i == 1 ? 1.0 : 0.0);
+        }
+    }
+}
+
+/* The round's solution L refined to round-off for the modes it has (gac_round_mode_of): Newton's method on the
+ * modes' equations, all rows at once,
+ *     separate: L = 0;   stick: xi = 0;   slide: xi_N = 0, L_T + c_f L_N u = 0,
+ * u the sliding direction: fixed for one tangential axis (and at the stick's edge), else u = xi_T / |xi_T| with
+ * its derivative (I - u u^T) W_T / |xi_T| in the Jacobian (the equations on L scaled by W's largest diagonal to
+ * velocities).  Steps are taken while the round's residual (gac_round_residual) falls; L and *residual are
+ * replaced only if it ends below where it started. */
+static void gac_round_refine(int nd, const double *W, int ncon, const int *start, const int *dim, const double *cf,
+                             const int *rows, const double *q, double *L, double *residual)
+{
+    const int nr = start[ncon - 1] + dim[ncon - 1];
+    double vscale = 0.0, lscale = 0.0, wscale = 0.0, best = *residual, dir[2 * GAC_AT_LEAST_1(ncon)];
+    double cur[GAC_AT_LEAST_1(nr)], J[GAC_AT_LEAST_1(nr * nr)], F[GAC_AT_LEAST_1(nr)], xi[GAC_AT_LEAST_1(nr)];
+    int mode[GAC_AT_LEAST_1(ncon)], k, i, j, it;
+    for (i = 0; i < nr; ++i) {
+        vscale = fabs(q[i]) > vscale ? fabs(q[i]) : vscale;
+        lscale = fabs(L[i]) > lscale ? fabs(L[i]) : lscale;
+        wscale = fabs(W[rows[i] * nd + rows[i]]) > wscale ? fabs(W[rows[i] * nd + rows[i]]) : wscale;
+        cur[i] = L[i];
+    }
+    if (!(vscale > 0.0) || !(lscale > 0.0) || !(wscale > 0.0) || !(best > 0.0)) return;
+    gac_round_mode_of(nd, W, ncon, start, dim, cf, rows, q, L, vscale, lscale, mode, dir);
+    for (it = 0; it < 6; ++it) {
+        double res;
+        for (i = 0; i < nr; ++i) {               /* xi = W L + q, in long double: the residual's own round-off */
+            long double v = q[i];
+            for (j = 0; j < nr; ++j) v += (long double)W[rows[i] * nd + rows[j]] * cur[j];
+            xi[i] = (double)v;
+        }
+        for (i = 0; i < nr * nr; ++i) J[i] = 0.0;
+        for (k = 0; k < ncon; ++k) {
+            const int s = start[k], d = dim[k];
+            if (mode[k] == 0) {                  /* L = 0 */
+                for (i = 0; i < d; ++i) {
+                    F[s + i] = wscale * cur[s + i];
+                    J[(s + i) * nr + s + i] = wscale;
+                }
+                continue;
+            }
+            for (j = 0; j < nr; ++j) J[s * nr + j] = W[rows[s] * nd + rows[j]];
+            F[s] = xi[s];                        /* xi_N = 0 */
+            if (mode[k] == 1) {                  /* xi_T = 0 */
+                for (i = 1; i < d; ++i) {
+                    for (j = 0; j < nr; ++j) J[(s + i) * nr + j] = W[rows[s + i] * nd + rows[j]];
+                    F[s + i] = xi[s + i];
+                }
+                continue;
+            }
+            {                                    /* L_T + c_f L_N u = 0 */
+                double u[2] = {dir[2 * k], dir[2 * k + 1]}, xt = 0.0;
+                int moving = 0;
+                if (d == 3) {
+                    xt = sqrt(xi[s + 1] * xi[s + 1] + xi[s + 2] * xi[s + 2]);
+                    moving = xt > 1e-12 * vscale;
+                    if (moving) u[0] = xi[s + 1] / xt, u[1] = xi[s + 2] / xt;
+                }
+                for (i = 1; i < d; ++i) {
+                    F[s + i] = wscale * (cur[s + i] + cf[k] * cur[s] * u[i - 1]);
+                    J[(s + i) * nr + s + i] += wscale;
+                    J[(s + i) * nr + s] += wscale * cf[k] * u[i - 1];
+                    if (moving) {                /* c_f L_N (I - u u^T) W_T / |xi_T| */
+                        int l;
+                        for (l = 1; l < d; ++l) {
+                            const double P = ((i == l) - u[i - 1] * u[l - 1]) * wscale * cf[k] * cur[s] / xt;
+                            for (j = 0; j < nr; ++j) J[(s + i) * nr + j] += P * W[rows[s + l] * nd + rows[j]];
+                        }
+                    }
+                }
+            }
+        }
+        for (i = 0; i < nr; ++i) F[i] = -F[i];
+        if (gac_lu_solve(nr, J, F, 1e-16) != 0 || !gac_finite(F, nr)) break;
+        for (i = 0; i < nr; ++i) cur[i] += F[i];
+        for (k = 0; k < ncon; ++k) {             /* the separating contacts exactly at 0 */
+            if (mode[k] == 0) {
+                for (i = 0; i < dim[k]; ++i) cur[start[k] + i] = 0.0;
+            }
+        }
+        res = gac_round_residual(nd, W, ncon, start, dim, cf, rows, q, cur);
+        if (!(res < best)) break;
+        best = res;
+        for (i = 0; i < nr; ++i) L[i] = cur[i];
+        if (res <= 4.0 * GAC_EPS) break;
+    }
+    *residual = best;
 }
 
 /* The frictional contact problem of one round: rows rows[0..nr-1] of the full system (W, nd x nd), grouped by
@@ -446,6 +643,7 @@ static void gac_round_friction(int nd, const double *W, int ncon, const int *sta
         if (ncon == 1 || change <= 4.0 * GAC_EPS * size) break;
     }
     *residual = gac_round_residual(nd, W, ncon, start, dim, cf, rows, q, L);
+    if (*residual > 4.0 * GAC_EPS) gac_round_refine(nd, W, ncon, start, dim, cf, rows, q, L, residual);
     if (*residual > 1e-12) {
         double exact[3 * GAC_ENUM_MAX], res;
         for (i = 0; i < nr && i < 3 * GAC_ENUM_MAX; ++i) exact[i] = L[i];
@@ -453,6 +651,71 @@ static void gac_round_friction(int nd, const double *W, int ncon, const int *sta
             && res < *residual) {
             for (i = 0; i < nr; ++i) L[i] = exact[i];
             *residual = res;
+        }
+    }
+    if (*residual > 4.0 * GAC_EPS) gac_round_refine(nd, W, ncon, start, dim, cf, rows, q, L, residual);
+}
+
+/* The velocities of the system's rows (gac_friction_system: each contact's normal, then its tangential axes) at
+ * velocities w, read off the model's contact velocities. */
+static void gac_row_velocities(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                               const int *start, const int *dim, const int *axis_of, const double *w, double *out)
+{
+    double vel[3 * GAC_AT_LEAST_1(m->npoint)];
+    int a, i;
+    m->contact_velocities(q, w, p, vel);
+    for (a = 0; a < n; ++a) {
+        const gac_contact *k = &m->contacts[list[a]];
+        out[start[a]] = k->normal_sign * gac_row_value(m, list[a], w, vel);
+        for (i = 1; i < dim[a]; ++i) {
+            int axis = 0, j;
+            for (j = 0; ; ++axis) {               /* the axis_of-th axis other than the normal's */
+                if (axis == k->axis) continue;
+                if (j++ == axis_of[start[a] + i]) break;
+            }
+            out[start[a] + i] = vel[3 * (k->point - 1) + axis];
+        }
+    }
+}
+
+/* A law solved in one round, refined against the velocities its impulses give (iterative refinement of the whole
+ * nonlinear solve): the round's velocities xi = gamma+ + e gamma- read off qd_plus with the model's contact
+ * velocities differ from W L + q by d (the responses' and W's round-off, large where the impulses are large and W
+ * ill-conditioned); the round's modes are solved again for the constant q + d (gac_round_refine, from L) and the
+ * change of L applied to qd_plus and total, while the round's residual with q + d falls by half (3 times at
+ * most). */
+static void gac_refine_round(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                             const int *start, const int *dim, const int *axis_of, const double *const *resp,
+                             int nd, const double *W, int k, const int *st, const int *dm, const double *cfk,
+                             const int *rows, const double *ek, const double *gam0, double *L, double *total,
+                             double *qd_plus)
+{
+    const int nq = m->nq, nr = st[k - 1] + dm[k - 1];
+    double gp[GAC_AT_LEAST_1(nd)], qn[GAC_AT_LEAST_1(nr)], trial[GAC_AT_LEAST_1(nr)];
+    int it, b, i, j;
+    for (it = 0; it < 3; ++it) {
+        double before, after;
+        gac_row_velocities(m, q, p, n, list, start, dim, axis_of, qd_plus, gp);
+        for (b = 0; b < k; ++b) {
+            for (i = st[b]; i < st[b] + dm[b]; ++i) {  /* q + d = xi (model) - W L */
+                long double v = (long double)gp[rows[i]] + ek[b] * gam0[rows[i]];
+                for (j = 0; j < nr; ++j) v -= (long double)W[rows[i] * nd + rows[j]] * L[j];
+                qn[i] = (double)v;
+            }
+        }
+        before = gac_round_residual(nd, W, k, st, dm, cfk, rows, qn, L);
+        if (!(before > 4.0 * GAC_EPS)) return;
+        for (i = 0; i < nr; ++i) trial[i] = L[i];
+        after = before;
+        gac_round_refine(nd, W, k, st, dm, cfk, rows, qn, trial, &after);
+        if (!(after < 0.5 * before)) return;
+        for (i = 0; i < nr; ++i) {
+            const double change = trial[i] - L[i];
+            int c;
+            if (change == 0.0) continue;
+            for (c = 0; c < nq; ++c) qd_plus[c] += resp[rows[i]][c] * change;
+            total[rows[i]] += change;
+            L[i] = trial[i];
         }
     }
 }
@@ -525,13 +788,15 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
     double cf[GAC_AT_LEAST_1(nq)], gam[nd_max], total[nd_max], scale = 0.0, v_tol;
     int start[GAC_AT_LEAST_1(nq)], dim[GAC_AT_LEAST_1(nq)], axis_of[nd_max];
     const double *resp[nd_max];
+    double gam0[nd_max], ek0[GAC_AT_LEAST_1(nq)], cf0[GAC_AT_LEAST_1(nq)], L0[nd_max];
+    int st0[GAC_AT_LEAST_1(nq)], dm0[GAC_AT_LEAST_1(nq)], rows0[nd_max], k0 = 0;
     int a, b, i, j, nd = 0, round, code;
     *rounds = *plastic = 0;
     *residual = 0.0;
     *law_used = GAC_IMPACT_LAW_FRICTIONLESS;
     code = gac_friction_system(m, q, qd, p, n, list, law, work, cf, start, dim, axis_of, resp, gam, &nd);
     if (code != GAC_OK) return code;
-    for (a = 0; a < nd; ++a) total[a] = 0.0;
+    for (a = 0; a < nd; ++a) total[a] = 0.0, gam0[a] = gam[a];
     for (a = 0; a < n; ++a) {
         if (fabs(gam[start[a]]) > scale) scale = fabs(gam[start[a]]);
         if (dim[a] > 1 && *law_used == GAC_IMPACT_LAW_FRICTIONLESS)
@@ -584,6 +849,11 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
         }
         if (res > *residual) *residual = res;
         if (res > GAC_FRICTION_RESIDUAL_MAX) return GAC_ERR_IMPACT_FRICTION;
+        if (round == 0) {                        /* the first round, for gac_refine_round */
+            k0 = k;
+            for (b = 0; b < k; ++b) st0[b] = st[b], dm0[b] = dm[b], ek0[b] = ek[b], cf0[b] = cfk[b];
+            for (i = 0; i < nr; ++i) rows0[i] = rows[i], L0[i] = L[i];
+        }
         for (i = 0; i < nr; ++i) total[rows[i]] += L[i];
         for (a = 0; a < nd; ++a) {
             for (i = 0; i < nr; ++i) gam[a] += W[a*nd + rows[i]] * L[i];
@@ -599,6 +869,9 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
         for (a = 0; a < nd; ++a) value += resp[a][i] * total[a];
         qd_plus[i] = value;
     }
+    if (*rounds == 1 && !*plastic && law != GAC_IMPACT_LAW_NEWTON_COULOMB && k0 > 0)
+        gac_refine_round(m, q, p, n, list, start, dim, axis_of, resp, nd, W, k0, st0, dm0, cf0, rows0, ek0, gam0, L0,
+                         total, qd_plus);
     *tangential_parts = 0.0;                     /* sum |L_T| |I_f^-1 t|: the tangential changes before they cancel */
     for (a = 0; a < nd; ++a) {
         double column = 0.0;
@@ -679,3 +952,4 @@ int gac_impact_tangential(const gac_model *m, const double *q, const double *qd,
     }
     return GAC_OK;
 }
+

@@ -134,9 +134,11 @@ void gac_refine_response(const gac_model *m, const double *q, const double *p, c
                          double *r, double *dy);
 int gac_impact_system_refined(const gac_model *m, const double *q, const double *qd, const double *p,
                               int ncontact_set, const int *contact_set, double *work, double *v, double *e);
+double gac_refine_impulses(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                           const double *e, int rounds, double *F, const double *qd, double *qd_plus, double *work);
 double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                            const double *e, const double *F, const double *Ft, int law, int rounds, int plastic,
-                           const double *qd, double *qd_plus, double T);
+                           const double *qd, double *qd_plus, double T, double *work, double *v_acc);
 
 /* gac_impact_friction.c */
 double gac_friction_coefficient(const gac_model *m, const double *p, int c);

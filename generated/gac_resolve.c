@@ -68,6 +68,7 @@ typedef struct {
     double scale;          /* the largest |normal velocity| before (m/s) */
     double height;         /* the rest height in force (m; 0: no landings by it) */
     double T_before, T_law, bound;
+    double v_acc;          /* how accurately the normal velocities after are known (m/s; gac_impact_accuracy) */
     double E_plus[2];      /* T and V at (x, qd_plus), kept with qd_plus (J) */
     int held;              /* 1 once gac_hold_resting changed the velocities after the law */
     int rounds, plastic;
@@ -80,35 +81,71 @@ typedef struct {
 static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const double *e)
 {
     const int nq = s->model->nq;
-    const double b = gac_impact_accuracy(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->Ft, ev->law,
-                                         ev->rounds, ev->plastic, ev->x + nq, ev->qd_plus, ev->T_before);
+    const int refine = ev->rounds >= 1 && ev->law == GAC_IMPACT_LAW_FRICTIONLESS;
+    double b = 0.0, v = 0.0;
+    int pass;
+    for (pass = 0; pass < (refine ? 2 : 1); ++pass) {   /* the impulses against the velocities, then the velocities
+                                                           against the impulses (the momentum balance), twice */
+        if (refine)
+            gac_refine_impulses(s->model, ev->x, s->p, ev->n, ev->list, e, ev->rounds, ev->F, ev->x + nq,
+                                ev->qd_plus, s->work);
+        b = gac_impact_accuracy(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->Ft, ev->law, ev->rounds,
+                                ev->plastic, ev->x + nq, ev->qd_plus, ev->T_before, s->work, &v);
+    }
+    if (v > ev->v_acc) ev->v_acc = v;
     return b > 1e-10 ? b : 1e-10;
 }
 
+/* The fastest approach to its wall a contact may keep after the impact (m/s): 10 times what the energy's accuracy
+ * b allows, b max|v-|, plus the normal velocities' own measured accuracy (gac_impact_accuracy: large along
+ * directions where I_f is ill-conditioned, where an accurate energy still leaves the contact velocities uncertain),
+ * and 1e-15 m/s. */
+static double gac_approach_tolerance(const gac_impact_event *ev)
+{
+    return 10.0 * (ev->bound * ev->scale + ev->v_acc) + 1e-15;
+}
+
 /* The accuracy of the whole change qd- -> s->x1's velocities once the resting set[0..nset-1] is held (gac_hold):
- * the hold's impulses lambda, recovered from N_S I_f^-1 N_S^T lambda = N_S (qd_held - qd+) (refined responses),
+ * the hold's impulses lambda, recovered from N_R I_f^-1 N_R^T lambda = N_R (qd_held - qd+) (refined responses),
  * join the law's, and the momentum balance of the total is measured as in gac_law_accuracy (the contact law's
- * conditions are not: holding replaces them on the set).  The held velocities are refined in place. */
+ * conditions are not: holding replaces them on the set).  R: the set and every other contact of the impact that
+ * the hold leaves at rest (|v| <= 1e-9 of the fastest approach before), since gac_hold may push those too and
+ * gac_settle may then drop a held contact from the set (the set alone where R's rows are dependent); an impulse
+ * left out would count as a momentum residual, and its refinement would move the velocities.  The held velocities
+ * are refined in place. */
 static double gac_held_accuracy(gac_sim *s, gac_impact_event *ev, int nset, const int *set)
 {
     const gac_model *md = s->model;
     const int nq = md->nq;
-    double change[nq], lambda[nq], e_unused[nq], F[nq], b;
+    double change[nq], lambda[nq], e_unused[nq], F[nq], b, v = 0.0;
     double *A = GAC_WORK_A(md, s->work);
-    int a, k;
+    int rest[nq], nrest = 0, a, k, pass;
     for (k = 0; k < nq; ++k) change[k] = s->x1[nq + k] - ev->qd_plus[k];
     for (k = 0; k < ev->n; ++k) F[k] = ev->F[k];
-    if (gac_impact_system_refined(md, ev->x, change, s->p, nset, set, s->work, lambda, e_unused) == GAC_OK
-        && gac_ldlt(nset, A, 1e-12) == 0) {
-        gac_ldlt_solve(nset, A, lambda);                 /* lambda = A_SS^-1 N_S (qd_held - qd+) */
-        for (a = 0; a < nset; ++a) {
-            for (k = 0; k < ev->n; ++k) {
-                if (ev->list[k] == set[a]) F[k] += lambda[a];
+    for (a = 0; a < nset; ++a) rest[nrest++] = set[a];
+    for (k = 0; k < ev->n && nrest < nq; ++k) {
+        const int c = ev->list[k];
+        int in_set = 0;
+        for (a = 0; a < nset; ++a) in_set |= set[a] == c;
+        if (!in_set && fabs(ev->vn[c]) <= 1e-9 * ev->scale) rest[nrest++] = c;
+    }
+    for (pass = 0; pass < 2; ++pass) {                   /* R, else the set alone */
+        const int nr = pass == 0 ? nrest : nset;
+        if (pass == 1 && nrest == nset) break;
+        if (gac_impact_system_refined(md, ev->x, change, s->p, nr, rest, s->work, lambda, e_unused) == GAC_OK
+            && gac_ldlt(nr, A, 1e-12) == 0) {
+            gac_ldlt_solve(nr, A, lambda);               /* lambda = A_RR^-1 N_R (qd_held - qd+) */
+            for (a = 0; a < nr; ++a) {
+                for (k = 0; k < ev->n; ++k) {
+                    if (ev->list[k] == rest[a]) F[k] += lambda[a];
+                }
             }
+            break;
         }
     }
     b = gac_impact_accuracy(md, ev->x, s->p, ev->n, ev->list, ev->e, F, ev->Ft, ev->law, 0, 0, ev->x + nq,
-                            s->x1 + nq, ev->T_before);
+                            s->x1 + nq, ev->T_before, s->work, &v);
+    if (v > ev->v_acc) ev->v_acc = v;
     return b > 1e-10 ? b : 1e-10;
 }
 
@@ -382,7 +419,7 @@ static int gac_hold_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *se
     if (code != GAC_OK && code != GAC_ERR_LCP) return code;
     gac_normal_velocities(md, s->x1, s->p, ev->vn);
     for (k = 0; k < ev->n; ++k) {
-        if (code == GAC_ERR_LCP || ev->vn[ev->list[k]] < -(10.0 * ev->bound * ev->scale + 1e-15)) {
+        if (code == GAC_ERR_LCP || ev->vn[ev->list[k]] < -gac_approach_tolerance(ev)) {
             for (i = 0; i < nq; ++i) s->x1[nq + i] = ev->qd_plus[i];
             *nset = 0;
             break;
@@ -423,7 +460,7 @@ static int gac_finish(gac_sim *s, gac_impact_event *ev, int nset, const int *set
         if (ev->gaps[c] <= s->opt.contact_tol && -ev->vn[c] > r->approach_after) r->approach_after = -ev->vn[c];
     }
     r->approach_before = ev->scale;
-    if (r->approach_after > 10.0 * ev->bound * ev->scale + 1e-15) return GAC_ERR_IMPACT_ACCURACY;
+    if (r->approach_after > gac_approach_tolerance(ev)) return GAC_ERR_IMPACT_ACCURACY;
     for (k = 0; k < r->ncontact; ++k) {                    /* impact history of each new contact */
         c = r->contact[k];
         if (s->is_resting[c]) continue;
@@ -461,7 +498,7 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     ev.held = 0;
     s->energy_x1_valid = 0;                              /* set again by gac_finish, for the state it leaves */
     ev.gaps = gaps, ev.vn = vn, ev.an = an, ev.e = e, ev.e_law = e_law, ev.qd_plus = qd_plus, ev.F = F, ev.Ft = Ft;
-    ev.friction = 0, ev.law = GAC_IMPACT_LAW_FRICTIONLESS, ev.residual = ev.parts = 0.0;
+    ev.friction = 0, ev.law = GAC_IMPACT_LAW_FRICTIONLESS, ev.residual = ev.parts = 0.0, ev.v_acc = 0.0;
     md->contact_gaps(ev.x, s->p, gaps);
     gac_normal_velocities(md, ev.x, s->p, vn);
     r->ncontact = 0;
@@ -498,3 +535,4 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     }
     return gac_finish(s, &ev, nset, set, r);
 }
+

@@ -615,8 +615,8 @@ def accuracy_cause(model: CompiledModel, p, q, qd, contacts: list, law: str = "f
     p = model.parameters() if p is None else np.asarray(p, dtype=float)
     planar = model.layout.planar_normal is not None
     if law != "frictionless" and residual > 1e-11:
-        return (f"the frictional law's solve left its conditions at {residual:.2g} (relative; contacts whose "
-                "friction cones interact strongly)")
+        return f"the frictional law's solve left its conditions at {residual:.2g} (relative; " + \
+            _friction_residual_cause(model, p, q, [c for c in contacts if c is not None]) + ")"
     if not planar:
         from codegen.charts import Chart
         chi = float(Chart.of(model.scene.base_twists).measure(model.layout.expand(q)[1]))
@@ -649,6 +649,22 @@ def accuracy_cause(model: CompiledModel, p, q, qd, contacts: list, law: str = "f
                     f"times 2T): they lie along a soft direction of I_f (cond(I_f) = {cond:.2g})")
     return (f"I_f is ill-conditioned there (cond(I_f) = {cond:.2g}); "
             + ill_conditioning(model.scene, p, planar=planar))
+
+
+def _friction_residual_cause(model: CompiledModel, p, q, contacts: list) -> str:
+    """Why a frictional impact's law was left above round-off: one contact's problem always has a solution, found
+    exactly, so its residual is the round-off of its velocities W Lambda + gamma where its contact-space inverse
+    inertia W (its normal and tangential rows) is ill-conditioned; several contacts' cones may also interact."""
+    rows = [model.contact_rows.index((point, axis)) for point, wall in (model.contacts[c] for c in contacts)
+            for axis in range(3) if hasattr(wall, "axis") and (point, axis) in model.contact_rows]
+    cond = math.inf
+    if rows:
+        N = model.contact_jacobian(q, p)[rows]
+        cond = float(np.linalg.cond(N @ np.linalg.solve(model.mass_matrix(q, p), N.T)))
+    if len(contacts) == 1:
+        return (f"the round-off of its contact's velocities: its contact-space inverse inertia W = J I_f^-1 J^T over "
+                f"its normal and tangential rows has cond(W) = {cond:.2g}")
+    return f"contacts whose friction cones interact strongly; cond(W) = {cond:.2g} over their rows"
 
 
 def ill_conditioning(scene: Scene, p, planar: bool) -> str:

@@ -181,13 +181,15 @@ EXTREME_PARAMETERS = (
     # The light end links of this chain get trapped between the heavy middle link and the walls and rattle:
     # about 4300 impacts in 2 s, the end links spinning at up to 1200 rad/s.  At rtol = 1e-10 DOPRI5 gains
     # 1.4e-6 of the energy (measured; a FAIL of requirement 3), so the case runs at 1e-12.  The rattling is
-    # chaotic: the sequence agrees with DOP853 up to 1.36 s (2145 impacts), then the two part.
+    # chaotic: the sequence agrees with DOP853 to 1e-6 s up to 1.379 s (measured: the impact times differ by
+    # 1.8e-7 s at 1.25 s, 2.8e-7 s at 1.3 s, 8e-7 s at 1.36 s, beyond 1e-6 s from 1.3794 s on, where the two part;
+    # the error grows with the round-off of each impact), so the comparison stops at 1.3 s (2099 impacts).
     Case(
         name="mass-ratio-heavy", scene="stress-mass-ratio-heavy",
         description="3-link chain, middle link 1e6 times its neighbours' mass; e = 1 in a box, 2 s (~4300 impacts)",
         simulate={"t_end": 2.0, "method": "dopri5", "rtol": 1e-12, "atol": 1e-14},
         checks=(energy_conserved(1e-7), impulse_momentum(1e-8),
-                converged(rtol=1e-12, atol=1e-14, time_tol=1e-6, until=1.36))),
+                converged(rtol=1e-12, atol=1e-14, time_tol=1e-6, until=1.3))),
 
     # Jxx = 1e-9 Jyy: I_f's condition number is 1e14.  The axial acceleration is a round-off difference
     # amplified by that condition, so the adaptive step shrinks: with the articulated-body forward dynamics

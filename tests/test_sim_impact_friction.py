@@ -370,3 +370,30 @@ def reference_state(model, rng):
     q[: model.scene.n + 2] = rng.uniform(-1.0, 1.0, model.scene.n + 2)
     qd = rng.normal(size=model.layout.nq_full) * 2
     return q, qd
+
+
+def test_a_single_contact_sliding_next_to_the_pole_of_its_normal_impulse_is_solved(compiled):
+    """A fuzz chain (structure 16 of seed 0: two links, a rough wall, c_f = 0.91) whose contacts strike it with
+    W nearly of rank 1 (eigenvalues 3e-4, 5e-4, 205) and a normal approach small beside the slip: the contact's
+    sliding solution lies within 1e-4 rad of the direction where the normal impulse L_N = -r_N / D has its pole
+    (D = 0), and sampling the sliding direction on the circle missed it (the frictional law's solve stopped the
+    run).  Every sliding direction is now a real root of a quartic: the run passes its 7 impacts, each solved to
+    round-off, and the last one (its slip grazing the pole) re-solved on its own slides on the cone's edge."""
+    from studies.fuzz import random_run, random_structure
+    rng = np.random.default_rng([0, 16])
+    scene = random_structure(rng, 16, 8)
+    model = compiled(scene, specialise=False)
+    for _ in range(2):
+        run = random_run(rng, scene, model)
+    result = simulate(model, 0.0275, p=run.p, q0=run.q0, qd0=run.qd0, **run.options)
+    assert result.success, result.message
+    assert len(result.impacts) >= 7 and all(i.law == "gdi" and i.residual < 1e-11 for i in result.impacts)
+    last = result.impacts[-1]
+    q, qd = model.layout.reduce(last.q), model.layout.reduce(last.qd_before)
+    contacts = [next(k for k, (point, wall) in enumerate(model.contacts)
+                     if point == c.point and wall.name == c.wall) for c in last.contacts]
+    solved = model.impact_friction(q, qd, contacts, run.p)
+    assert solved.law == "gdi" and solved.residual < 1e-11
+    c_f = run.p[scene.parameter_names().index(f"friction_{last.contacts[0].wall}")]
+    assert solved.impulse[0] > 0 and np.linalg.norm(solved.impulse_t[0]) == pytest.approx(c_f * solved.impulse[0],
+                                                                                          rel=1e-9)

@@ -136,7 +136,7 @@ def central_differences(model, t_end, p, q0, qd0, directions, matrix, step=1e-6,
         assert np.abs(fd - column).max() <= 1e-6 * max(10.0, np.abs(fd).max()), direction
 
 
-@pytest.mark.parametrize("seed", [6, 7])
+@pytest.mark.parametrize("seed", [6, pytest.param(7, marks=pytest.mark.slow)])    # seed 7: five impacts, -m slow
 def test_random_chains_in_a_box_match_central_differences(compiled, seed):
     """Several frictionless single-contact impacts: the final state's sensitivities against central differences."""
     scene = chain(3, ("line", "rigid"), twists=True)

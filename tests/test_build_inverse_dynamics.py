@@ -11,7 +11,7 @@ from conftest import driven_free_chain, random_parameters, random_states, refere
 
 def test_inverse_dynamics_against_the_reference_model(compiled):
     scene = driven_free_chain()
-    model = compiled(scene)
+    model = compiled(scene, tangent=True)              # the derivative tests' model: one build
     names = scene.parameter_names()
     rng = np.random.default_rng(28)
     for trial, (q, qd) in enumerate(random_states(3, 28, 4)):
@@ -35,7 +35,7 @@ def test_inverse_dynamics_against_the_reference_model(compiled):
 def test_inverse_dynamics_of_the_free_acceleration_is_zero(compiled):
     """At the forward dynamics' own acceleration no force is needed; at rest tau = -R holds the springs' forces."""
     scene = driven_free_chain()
-    model = compiled(scene)
+    model = compiled(scene, tangent=True)              # the derivative tests' model: one build
     for q, qd in random_states(3, 29, 3):
         free = model.forward_dynamics(q, qd)
         assert np.max(np.abs(model.inverse_dynamics(q, qd, free))) < 1e-12 * max(1.0, np.max(np.abs(free))) * 10

@@ -45,7 +45,7 @@ def test_compiled_kernels_equal_the_derived_ones_and_the_reference(compiled, der
 def test_compiled_driven_model_equals_the_derived_one(compiled, derived):
     """Inputs, joint springs and dampers: the generalised forces, power and spring energy in C."""
     scene = driven_free_chain()
-    model, expected = compiled(scene), derived(scene)
+    model, expected = compiled(scene, tangent=True), derived(scene)      # the derivative tests' model: one build
     rng = np.random.default_rng(91)
     for trial, (q, qd) in enumerate(random_states(3, 91, 3)):
         p = random_parameters(scene, seed=910 + trial)

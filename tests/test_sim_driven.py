@@ -133,7 +133,7 @@ def test_damper_decays_at_the_predicted_rate():
 def test_momentum_of_a_free_chain_is_kept_under_internal_torques(compiled):
     """g = 0, no walls: joint inputs (state feedback from Python), springs and dampers are internal."""
     scene = driven_free_chain()
-    model = compiled(scene)
+    model = compiled(scene, tangent=True)              # the derivative tests' model: one build
     ref = reference_of(scene)
 
     def pd(t, q, qd):

@@ -91,7 +91,7 @@ CASES = {
 # the line run in the default suite; the rigid runs (a minute each to build on two cores) with -m slow
 @pytest.mark.parametrize("case", [case if case.startswith("3d line") else pytest.param(case, marks=pytest.mark.slow)
                                   for case in CASES])
-def test_rolled_equals_unrolled_and_the_reference(case):
+def test_rolled_equals_unrolled_and_the_reference(case, tmp_path):
     scene = CASES[case](11)
     assert _run(scene) is not None
     loops = load_model(scene, specialise=False, dense=False, rolled=True, chart_b=False)
@@ -99,6 +99,11 @@ def test_rolled_equals_unrolled_and_the_reference(case):
     assert "in loops" in summary(loops) and "in loops" not in summary(straight)
     generated = [{f.name for f in model.generated.functions} for model in (loops, straight)]
     assert "forward_dynamics_energy" not in generated[0] and "forward_dynamics_energy" in generated[1]
+    from runtime.compile import LIBRARY_DIR                      # the loops' C is strict C99 too
+    (tmp_path / f"{loops.name}.h").write_text(loops.generated.header)
+    (tmp_path / f"{loops.name}.c").write_text(loops.generated.source)
+    subprocess.run(["gcc", *STRICT, "-O2", "-I", str(LIBRARY_DIR), "-c", str(tmp_path / f"{loops.name}.c"), "-o",
+                    str(tmp_path / "m.o")], check=True)
     names = scene.parameter_names()
     rng = np.random.default_rng(len(case))
     for trial in range(4):
@@ -160,6 +165,7 @@ def test_baked_parameters_that_differ_per_link_do_not_roll():
     assert pipeline._rolled_function(scene, options, layout_for(scene, options.specialise)) is None
 
 
+@pytest.mark.slow     # the default tier compiles the line run's loops strictly (test_rolled_equals_unrolled_...)
 def test_rolled_kernel_is_strict_c99_and_costs_what_the_unrolled_does(tmp_path):
     scene = run_chain(9, ("rigid",) * 9, seed=31)                # links 3..8 in loops
     loops = generate(scene, build_options(scene, specialise=False, rolled=True, chart_b=False))

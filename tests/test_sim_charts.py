@@ -258,6 +258,7 @@ def test_input_on_a_base_angle_stops_at_the_lock_and_says_why(scene):
 # ---------------------------------------------------------------------------
 # the other front ends: standalone program and FMU
 # ---------------------------------------------------------------------------
+@pytest.mark.slow     # the default tier's tools parity test runs the same program through the lock (gimbal-lock row)
 def test_standalone_program_passes_the_lock(tmp_path, model):
     subprocess.run([sys.executable, "-m", "codegen", "--scene", "gimbal-lock", "--out", str(tmp_path), "--standalone",
                     "--no-compile"], check=True, cwd=ROOT, capture_output=True)

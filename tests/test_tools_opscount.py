@@ -131,6 +131,7 @@ def check_report(out: Path, ns, lagrange_ns):
     return text, rows
 
 
+@pytest.mark.slow          # derives, compiles and times a model in the study's process
 def test_cli_one_link_gibbs_appell_only(tmp_path):
     result = run_ops("--links", "1", "--lagrange-max", "0", "--calls", "500", "--out", str(tmp_path))
     assert result.returncode == 0, result.stderr

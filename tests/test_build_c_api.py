@@ -5,7 +5,7 @@ import subprocess
 
 import pytest
 
-from codegen.pipeline import generate, write_model, write_standalone
+from codegen.pipeline import write_model, write_standalone
 from runtime.compile import copy_library, library_sources
 from conftest import sanitized_build
 from runtime.header import return_codes
@@ -189,14 +189,15 @@ def built(tmp_path_factory, compiled):
     library; and the compiled Python module of the same model."""
     out = tmp_path_factory.mktemp("c_api")
     scene = load_scene("paper-case1")
-    model = generate(scene)
+    compiled_model = compiled(scene, specialise=True)
+    model = compiled_model.generated                      # the suite's model of the scene, derived once
     write_model(model, out)
     copy_library(out)
     write_standalone(model, scene, out, [path.name for path in library_sources()])
     (out / "driver.c").write_text(DRIVER)
     sanitized_build(out, [out / "paper_case1.c", out / "driver.c"], "driver")
     sanitized_build(out, [out / "paper_case1.c", out / "paper_case1_example.c"], "example")
-    return out, compiled(scene, specialise=True)
+    return out, compiled_model
 
 
 def drive(built, *args) -> dict:

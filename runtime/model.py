@@ -273,17 +273,17 @@ class CompiledModel:
                                       self._ptr(self._inputs(u)), self._ptr(self._params(p)), self._ptr(tau))
         return tau
 
-    def _tangent_available(self, what: str) -> None:
-        if self.c.model.forward_dynamics_tangent == self.ffi.NULL:
-            why = ("its forward dynamics is rolled code (loops over its links): load it with rolled=False"
-                   if self.options.rolled else "load it with tangent=True")
-            raise ValueError(f"{what}: this model has no tangent kernel (forward_dynamics_tangent); {why}")
+    def require_tangents(self, what: str) -> None:
+        """Refuse ``what`` (a ValueError naming it) when the model was built without its tangent kernels."""
+        if not self.options.tangent:
+            raise ValueError(f"{what}: this model has no tangent kernel (forward_dynamics_tangent); load it with "
+                             "tangent=True (load_model(scene, tangent=True))")
 
     def forward_dynamics_tangent(self, q, qd, dq, dqd, p=None, u=None, du=None, dp=None) -> np.ndarray:
         """d qdd along the direction (dq, dqd, du, dp) at (q, qd, u, p): the directional derivative of
         forward_dynamics, exact (its generated forward-mode tangent, O(n)); du and dp default to 0.  dp along a
         parameter the model has built in (baked parameters, or a specialised model's zero) has no effect."""
-        self._tangent_available("forward_dynamics_tangent")
+        self.require_tangents("forward_dynamics_tangent")
         dq, dqd = self._vec(dq, self.nq, "dq"), self._vec(dqd, self.nq, "dqd")
         du = np.zeros(max(self.nu, 1)) if du is None else self._vec(du, self.nu, "du")
         dp = np.zeros(len(self.p)) if dp is None else self._vec(dp, len(self.p), "dp")
@@ -295,7 +295,7 @@ class CompiledModel:
         A = df/dx (2 nq x 2 nq) and B = df/du (2 nq x nu), exact (gac_linearize: the tangent kernel once per
         column).  ``parameters``: names of ``parameter_names`` -> (A, B, P) with P = df/dp of those parameters
         (2 nq x len(parameters), column k for parameters[k]); a parameter the model has built in is refused."""
-        self._tangent_available("linearize")
+        self.require_tangents("linearize")
         q, qd = self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd")
         p, u = self._params(p), self._inputs(u)
         nx = 2 * self.nq

@@ -433,6 +433,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     Samples, final state and impact states are returned in the full layout of Eq. 13 whatever the model.
     """
     model = scene if isinstance(scene, CompiledModel) else load_model(scene)
+    if sensitivities is not None:
+        model.require_tangents("sensitivities")
     ffi, lib, c = model.ffi, model.lib, model.c
     t_end = _real(t_end, "t_end")
     _check(np.isfinite(t_end) and t_end >= 0, "t_end", f"must be a finite time >= 0 s, got {t_end!r}")
@@ -467,9 +469,6 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     sens = sens_work = directions = None
     if sensitivities is not None:
         directions, seed_x, seed_p = sensitivity.directions(model, sensitivities)
-        if c.model.inertia_solve_tangent == ffi.NULL:
-            raise ValueError("sensitivities: this model has no tangent kernels: load it with tangent=True "
-                             "(load_model(scene, tangent=True))")
         k = len(directions)
         sens = ffi.new("gac_sens *")
         sens_work = np.zeros(lib.gac_sens_ndouble(ffi.addressof(c.model), k))

@@ -137,7 +137,7 @@ int gac_impact_system_refined(const gac_model *m, const double *q, const double 
 double gac_refine_impulses(const gac_model *m, const double *q, const double *p, int n, const int *list,
                            const double *e, int rounds, double *F, const double *qd, double *qd_plus, double *work);
 double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
-                           const double *e, const double *F, const double *Ft, int law, int rounds, int plastic,
+                           const double *e, double *F, double *Ft, int law, int rounds, int plastic,
                            const double *qd, double *qd_plus, double T, double *work, double *v_acc);
 
 /* gac_impact_friction.c */

@@ -910,12 +910,16 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * (the saltation matrix of Hiskens & Pai 2000, with the parameters' direct part), Delta the impact map of the
  * contacts that took an impulse (walls and joint stops alike), their set held fixed: A F = -(1 + E) W qd,
  * qd+ = qd + Y F, W their signed rows, Y = I_f^-1 W^T, A = W Y; differentiated by inertia_solve_tangent and
- * contact_generalized_force_tangent (e = p[e_index] is a parameter like any other).  Events this does not
+ * contact_generalized_force_tangent (e = p[e_index] is a parameter like any other; a landing is struck with e = 0).
+ * Resting contacts (frictionless walls): in flight the constrained dynamics' tangent (the forces' by
+ * contact_bias_tangent) and the derivative of the projection after each step; a landing's jump uses the field with
+ * the set after held and the hold's projection; a release (its force lambda_c reaching 0) dt*_j = -d lambda_c /
+ * lambda_c', S+ = S- + (f- - f+) dt*; contacts at rest at the start: their projection.  Events this does not
  * differentiate end the sensitivities (status below): S and dt_impact are then NaN from that event on, the run itself
  * continues.  The status codes: */
 #define GAC_SENS_VALID         0   /* every event so far differentiated */
-#define GAC_SENS_RESTING       1   /* a contact came to rest (a landing, the start, Zeno's shrinking bounces) or was
-                                      released: resting contact is not differentiated */
+#define GAC_SENS_RESTING       1   /* a contact rests on a wall with friction (or is stuck): friction at rest is not
+                                      differentiated (frictionless resting contact is) */
 #define GAC_SENS_FRICTION      2   /* an impact by a frictional law (record.law not FRICTIONLESS) */
 #define GAC_SENS_STOP          3   /* (not raised since joint stops are differentiated; the code stays reserved) */
 #define GAC_SENS_SIMULTANEOUS  4   /* an impact of more than one round or a plastic round, or whose active contacts'
@@ -927,9 +931,10 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
 #define GAC_SENS_CONTROLLER    8   /* a controller gives the inputs (they may depend on the state; du = 0 is assumed
                                       only for held inputs and schedules) */
 #define GAC_SENS_NONFINITE     9   /* the sensitivities overflowed (not finite) */
-#define GAC_SENS_BOUNDARY     10   /* a mode boundary inside an impact of several contacts: a contact took an impulse
+#define GAC_SENS_BOUNDARY     10   /* a mode boundary: inside an impact of several contacts, a contact took an impulse
                                       ~0 and leaves at the law's bound (w . qd+ + e w . qd- ~ 0), so a perturbation
-                                      may add it to the active set or drop it */
+                                      may add it to the active set or drop it; or resting contacts released together
+                                      (their forces ~0 at once) */
 
 /* The sensitivities of one run: pointers into the caller's dwork (gac_sens_ndouble(m, k) doubles), laid out as
  * S (k nx) | dp (k nparam) | dt_impact (k) | dgap_held (k max(ncontact, 1)) | scratch.  Direction-major: S[j*nx + i] = d x_i / d direction j

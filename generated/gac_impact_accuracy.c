@@ -14,6 +14,8 @@
 #include <math.h>
 
 #define GAC_REFINE_STEPS 4        /* refinement steps at most (each one O(n)); they stop once no longer improving */
+#define GAC_REFINE_IMPULSE_STEPS 8   /* of the impulses against the velocities they give (each O(n) per contact); on
+                                        nearly dependent rows with large impulses a step gains only a factor ~10 */
 
 /* y = I_f^-1 g refined in place: r = g - I_f y, y += I_f^-1 r, while |r| (largest component) falls by half and is
  * above round-off of g; a step that does not improve is undone.  r, dy: nq scratch. */
@@ -244,7 +246,7 @@ double gac_refine_impulses(const gac_model *m, const double *q, const double *p,
         }
     }
     if (ns == 0) return 0.0;
-    for (it = 0; it < 3; ++it) {
+    for (it = 0; it < GAC_REFINE_IMPULSE_STEPS; ++it) {
         double miss = 0.0;
         int j;
         m->contact_velocities(q, qd_plus, p, after);
@@ -324,8 +326,8 @@ static double gac_velocity_accuracy(const gac_model *m, const double *q, const d
  * rows of the pushing contacts (F > 0) and, under a frictional law, the tangential rows of those on rough walls
  * (their xi_T: 0 where stuck, the slide's direction where sliding):
  *   qd+ += -I_f^-1 r + Y_H dLambda_H, Lambda_H += dLambda_H, A_HH dLambda_H = N_H I_f^-1 r
- * (Y_H, A_HH from refined responses; the normal rows alone where A_HH is singular with the tangential ones, the free
- * step where it is singular with those; the law's residual and the energy identity below are measured with the
+ * (Y_H, A_HH from refined responses; the normal rows alone where A_HH is singular with the tangential ones, and of
+ * those a row dependent on the others takes no multiplier; the law's residual and the energy identity below are measured with the
  * corrected impulses),
  *   E0 = 4 (nq + 1) eps sum_i |qd+_i| (|(I_f (qd+ - qd-))_i| + |g_i|) + eps/2 sum_i |qd+_i| |(I_f qd+)_i|
  * (about 8 (nq + 1) eps T when the velocities' components do not cancel; large where they do, along a soft
@@ -423,9 +425,10 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         if (gac_ldlt(nh, GAC_WORK_A(m, work), 1e-13) != 0) nh = nnormal;
         else nnormal = -1;                               /* factored */
     }
-    if (nnormal >= 0 && nh > 0) {
+    if (nnormal >= 0 && nh > 0) {                        /* the normals; a normal dependent on the others (held
+                                                            with them) takes no multiplier */
         gac_held_system(m, q, p, nh, held, work);
-        if (gac_ldlt(nh, GAC_WORK_A(m, work), 1e-13) != 0) nh = 0;   /* dependent: free steps */
+        if (gac_ldlt_drop(nh, GAC_WORK_A(m, work), 1e-13) < 0) nh = 0;   /* none to hold: free steps */
     }
     for (it = 0; ; ++it) {
         long double work_r = 0.0L, size = 0.0L, stored = 0.0L;

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import SceneError
-from .urdf import urdf_links
+from .urdf import urdf_chain
 
 try:  # Python >= 3.11
     import tomllib
@@ -977,7 +977,8 @@ def urdf_scene(path: str | Path) -> Scene:
     folder, name = path.absolute().parent, re.sub(r"\W", "_", path.stem)[:48] or "urdf"
     if not re.match(r"[A-Za-z_]", name):
         name = f"urdf_{name}"[:48]
-    links, twists, joints = _links_from_data(_link_tables({"urdf": path.name}, folder))
+    tables, base = _chain_tables({"urdf": path.name}, folder)
+    links, twists, joints = _links_from_data(tables)
     n = len(links)
     angles = []
     for joint in (joints if n > 1 else ()):
@@ -985,6 +986,8 @@ def urdf_scene(path: str | Path) -> Scene:
         upper = math.inf if joint.upper is None else joint.upper
         angles.append(0.0 if lower <= 0.0 <= upper else
                       0.5 * (lower + upper) if math.isfinite(lower + upper) else (lower if lower > 0 else upper))
+    if base is not None:
+        return _urdf_fixed_scene(path, name, links, twists, joints, _base_from_data(base), angles)
     q = [0.0, 0.0, 0.0, *angles, 0.0, 0.0, 0.0]
     probe = Scene(name=name, links=links, twists=twists if n > 1 else (), joints=joints if n > 1 else (),
                   q0=tuple(q))
@@ -997,6 +1000,17 @@ def urdf_scene(path: str | Path) -> Scene:
                   for axis in (1, 2, 3) for side in ("min", "max"))
     return Scene(name=name, links=links, twists=probe.twists, joints=probe.joints, walls=walls, q0=tuple(q),
                  description=f"{path.name} at rest in a {2 * half:.3g} m box (the default box of a URDF file)")
+
+
+def _urdf_fixed_scene(path: Path, name: str, links, twists, joints, base: Base, angles) -> Scene:
+    """urdf_scene of a chain fixed to the world: at rest with its joints as there, in a box of six walls centred on
+    O_1 whose half-width is the length of the whole chain plus URDF_BOX_MARGIN (every point stays within it)."""
+    half = sum(link.length for link in links) + URDF_BOX_MARGIN
+    walls = tuple(Wall(f"x{axis}_{side}", round(base.point[axis - 1] + (-half if side == "min" else half), 12),
+                       URDF_RESTITUTION) for axis in (1, 2, 3) for side in ("min", "max"))
+    return Scene(name=name, links=links, twists=twists, joints=joints, walls=walls, q0=tuple(angles), base=base,
+                 description=f"{path.name} fixed to the world at rest in a {2 * half:.3g} m box (the default box of "
+                             "a URDF file)")
 
 
 def load_scene(source: str | Path) -> Scene:
@@ -1067,7 +1081,8 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
     """Build a Scene from the plain-data form used by the TOML/JSON files (see docs/scenes.md).  ``urdf``: a URDF
     file (relative to ``folder``, the scene file's) whose serial chain gives the links (codegen.urdf)."""
     _check_keys(data, TOP_KEYS, "scene")
-    links, twists, joints = _links_from_data(_link_tables(data, folder))
+    tables, base = _chain_tables(data, folder)
+    links, twists, joints = _links_from_data(tables)
     n = len(links)
     walls = _walls_from_data(data.get("walls", {}), data.get("restitution", 1.0), data.get("contacts", {}),
                              data.get("friction", 0.0))
@@ -1085,7 +1100,7 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
         joints=joints if n > 1 else (),
         inputs=data.get("inputs", ()),
         friction_velocity=data.get("friction_velocity", 1e-3),
-        base=_base_from_data(data.get("base", {})),
+        base=_base_from_data({} if base is None else base),
     )
 
 
@@ -1101,10 +1116,15 @@ def _base_from_data(table) -> Base:
 
 def _link_tables(data: dict, folder) -> list:
     """The [[links]] tables, given or read from the URDF file the scene names."""
+    return _chain_tables(data, folder)[0]
+
+
+def _chain_tables(data: dict, folder) -> tuple[list, dict | None]:
+    """The [[links]] tables and the [base] table (None: none), given or read from the URDF file the scene names."""
     if "urdf" not in data:
         if "urdf_tip_length" in data:
             raise SceneError("urdf_tip_length: given without a urdf file")
-        return data.get("links")
+        return data.get("links"), data.get("base")
     if "links" in data:
         raise SceneError("urdf: give either links or a urdf file, not both")
     if not isinstance(data["urdf"], str) or not data["urdf"]:
@@ -1118,9 +1138,13 @@ def _link_tables(data: dict, folder) -> list:
     except OSError as exc:
         raise SceneError(f"urdf: cannot read {path}: {exc.strerror or exc}") from None
     try:
-        return urdf_links(text, tip)
+        tables, base = urdf_chain(text, tip)
     except SceneError as exc:
         raise SceneError(f"urdf {path}: {exc}") from None
+    if base is not None and "base" in data:
+        raise SceneError(f"base: the URDF file {data['urdf']} fixes its root link to the world (a fixed base); "
+                         "give no [base] table")
+    return tables, base if base is not None else data.get("base")
 
 
 def _links_from_data(items) -> tuple[tuple[Link, ...], tuple, tuple]:

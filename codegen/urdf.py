@@ -12,7 +12,9 @@ the model are the URDF link frames turned by a constant rotation A_k (same origi
 so that the twist of joint k is T_k = A_(k-1)^T E_k A_k (E_k: the joint origin's rpy rotation), each link's
 centre of mass is A_k^T c and its inertia about it A_k^T R I R^T A_k (c, R, I: the URDF <inertial>).  A chain
 whose next joint is not normal to a joint's axis (an offset along the axis) has no such frame and is refused,
-as are trees, prismatic, planar or floating joints, mimic joints and joint friction (not in this model).
+as are trees, prismatic, planar or floating joints, mimic joints and joint friction (not in this model).  A root
+held to a link named ``world`` by a fixed joint is a fixed base (codegen.scene.Base): O_1 at the joint's origin, link
+1's frame E A_1 (E: the joint's rpy); by a floating joint, a free one.
 <limit lower upper> become the joint's stops, <dynamics damping> its damper; effort and velocity limits
 describe actuators and are not part of the dynamics.
 
@@ -108,8 +110,12 @@ def _inertial(link, where: str) -> tuple[float, np.ndarray, np.ndarray]:
     return float(mass), c, R @ I @ R.T
 
 
-def _chain(robot) -> tuple[list, list, object]:
-    """The links root..last and the revolute/continuous joints between them, and the fixed tip joint (or None)."""
+WORLD = "world"      # the link a URDF names for the world: a root fixed to it is a fixed base
+
+
+def _chain(robot) -> tuple[list, list, object, object]:
+    """The links root..last and the revolute/continuous joints between them, the fixed tip joint (or None), and the
+    fixed joint that holds the root to a link named ``world`` (or None: the root floats)."""
     links = {link.get("name"): link for link in robot.findall("link")}
     joints = robot.findall("joint")
     children: dict[str, list] = {}
@@ -126,6 +132,18 @@ def _chain(robot) -> tuple[list, list, object]:
     roots = [name for name in links if name not in parents]
     if len(roots) != 1:
         raise SceneError(f"urdf: expected one root link (a link that is no joint's child), found {roots}")
+    mount = None
+    if roots[0] == WORLD:
+        below = children.get(WORLD, [])
+        if len(below) != 1:
+            raise SceneError(f"urdf link {WORLD!r}: has {len(below)} child joints; it holds one root link")
+        mount = below[0]
+        if mount.get("type") not in ("fixed", "floating"):
+            raise SceneError(f"urdf joint {mount.get('name')!r}: holds the root to the world by a "
+                             f"{mount.get('type')!r} joint; read are 'fixed' (a fixed base) and 'floating' (a free "
+                             "base)")
+        roots = [mount.find("child").get("link")]
+        mount = mount if mount.get("type") == "fixed" else None
     chain, revolute, tip = [links[roots[0]]], [], None
     while True:
         below = children.get(chain[-1].get("name"), [])
@@ -139,9 +157,9 @@ def _chain(robot) -> tuple[list, list, object]:
             if children.get(tip.find("child").get("link")):
                 raise SceneError(f"urdf joint {tip.get('name')!r}: a fixed joint is allowed only as the chain's tip "
                                  "(with nothing below it)")
-            return chain, revolute, tip
+            return chain, revolute, tip, mount
         if not moving:
-            return chain, revolute, None
+            return chain, revolute, None, mount
         joint = moving[0]
         kind = joint.get("type")
         if kind not in ("revolute", "continuous"):
@@ -156,13 +174,20 @@ def _chain(robot) -> tuple[list, list, object]:
 def urdf_links(text: str, tip_length: float | None = None) -> list[dict]:
     """The [[links]] tables of a scene (rigid links with their twists, stops and dampers) for the serial chain of
     a URDF text.  ``tip_length`` (m): the last link's length when the URDF has no fixed tip link."""
+    return urdf_chain(text, tip_length)[0]
+
+
+def urdf_chain(text: str, tip_length: float | None = None) -> tuple[list[dict], dict | None]:
+    """The [[links]] tables (urdf_links) and the [base] table of a URDF chain: a root held to a ``world`` link by a
+    fixed joint is a fixed base (O_1 at the joint's origin, link 1's model frame turned by its rpy), else None
+    (a free base)."""
     try:
         robot = ET.fromstring(text)
     except ET.ParseError as exc:
         raise SceneError(f"urdf: not well-formed XML: {exc}") from None
     if robot.tag != "robot":
         raise SceneError(f"urdf: the root element is <{robot.tag}>, expected <robot>")
-    chain, joints, tip = _chain(robot)
+    chain, joints, tip, mount = _chain(robot)
     n = len(chain)
     # joint k (k = 2..n) in its child's frame: axis a_k; its origin in the parent's frame: xyz, rpy E_k
     axes = [None] + [_floats(j.find("axis"), "xyz", "1 0 0", f"urdf joint {j.get('name')!r} <axis>")
@@ -249,7 +274,12 @@ def urdf_links(text: str, tip_length: float | None = None) -> list[dict]:
                 if damping != 0.0:
                     table["damping"] = float(damping)
         tables.append(table)
-    return tables
+    if mount is None:
+        return tables, None
+    xyz, E = _origin(mount, f"urdf joint {mount.get('name')!r}")
+    rotation = _snap(E @ A[0][0])                                    # the model's frame of link 1 in the world
+    return tables, {"kind": "fixed", "point": [float(v) for v in xyz],
+                    "rotation": [[float(v) for v in row] for row in rotation]}
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -273,7 +303,8 @@ def link_inertial(link) -> tuple[float, np.ndarray, np.ndarray]:
 
 
 def scene_to_urdf(scene) -> tuple[str, list[str]]:
-    """A scene's (codegen.scene.Scene) chain as URDF (root link1 floating, revolute or continuous joints
+    """A scene's (codegen.scene.Scene) chain as URDF (root link1 floating, or held by a fixed joint to a link
+    ``world`` for a fixed base; revolute or continuous joints
     theta_2..theta_n about z, a fixed tip link at the end of link n), and notes on what URDF cannot hold (springs,
     the restitution of stops)."""
     notes = []
@@ -302,6 +333,14 @@ def scene_to_urdf(scene) -> tuple[str, list[str]]:
                      f'<parent link="link{k - 1}"/><child link="link{k}"/>'
                      f'<origin xyz="{_num(length)} 0.0 0.0" rpy="{_numbers(matrix_rpy(scene.twists[k - 2]))}"/>'
                      f'<axis xyz="0.0 0.0 1.0"/>{limit}{damping}</joint>')
+    if scene.base.kind == "fixed":                   # link 1's model frame is its URDF frame: held by the world
+        from .scene import frames
+        R1 = frames(scene, np.array(scene.q0, dtype=float))[2]
+        parts.append('  <link name="world"/>')
+        parts.append(f'  <joint name="mount" type="fixed"><parent link="world"/><child link="link1"/>'
+                     f'<origin xyz="{_numbers(scene.base.point)}" rpy="{_numbers(matrix_rpy(R1))}"/></joint>')
+    elif scene.base.kind == "pinned":
+        notes.append(f"base: a {scene.base.label} base has no URDF form read back here; link1 written floating")
     parts.append('  <link name="tip"/>')
     parts.append(f'  <joint name="tip" type="fixed"><parent link="link{scene.n}"/><child link="tip"/>'
                  f'<origin xyz="{_num(scene.links[-1].length)} 0.0 0.0" rpy="0.0 0.0 0.0"/></joint>')

@@ -245,3 +245,57 @@ def test_tip_length_for_a_chain_without_a_tip():
     assert scene.links[-1].length == 0.25
     with pytest.raises(SceneError, match="urdf_tip_length: given without a urdf file"):
         scene_from_dict({"name": "x", "links": [{"length": 1.0, "mu": 1.0}], "urdf_tip_length": 0.2})
+
+
+# ---------------------------------------------------------------------------------------------------
+# a root fixed to the world: a fixed base
+# ---------------------------------------------------------------------------------------------------
+MOUNT_XYZ, MOUNT_RPY = np.array([0.4, 1.1, -0.3]), np.array([0.3, -0.5, 1.2])
+
+
+def mounted_arm(kind="fixed"):
+    return ARM.replace('<link name="tool"/>', '<link name="tool"/><link name="world"/>'
+                       f'<joint name="mount" type="{kind}"><parent link="world"/><child link="base"/>'
+                       f'<origin xyz="{" ".join(map(str, MOUNT_XYZ))}" rpy="{" ".join(map(str, MOUNT_RPY))}"/></joint>')
+
+
+def test_root_fixed_to_the_world_is_a_fixed_base(tmp_path):
+    """The points of the mounted chain are the URDF's own (urdf_fk of the free arm, carried by the mount's pose) at
+    random joint angles, with no fitted rotation: the base's point and orientation are the URDF's."""
+    (tmp_path / "mounted.urdf").write_text(mounted_arm())
+    (tmp_path / "mounted.toml").write_text('name = "mounted"\nurdf = "mounted.urdf"\n[initial]\nq = [0.1, 0.2, 0.3]\n')
+    scene = load_scene(tmp_path / "mounted.toml")
+    assert scene.base.kind == "fixed" and scene.base.point == tuple(MOUNT_XYZ)
+    E = rpy_matrix(*MOUNT_RPY)
+    rng = np.random.default_rng(4)
+    for _ in range(5):
+        angles = rng.uniform(-0.5, 0.5, 3)
+        q = np.array(scene.q0)
+        q[3:6] = angles
+        links, tip = urdf_fk(ARM, angles)
+        expected = np.array([MOUNT_XYZ + E @ p for p, *_ in links] + [MOUNT_XYZ + E @ tip])
+        assert np.abs(contact_points(scene, q) - expected).max() < 1e-13
+    # alone, in a default box around its base; with a [base] table of its own, refused
+    alone = load_scene(tmp_path / "mounted.urdf")
+    assert alone.base == scene.base and all(w.position != 0.0 for w in alone.walls)
+    (tmp_path / "twice.toml").write_text('name = "twice"\nurdf = "mounted.urdf"\n[base]\nkind = "free"\n')
+    with pytest.raises(SceneError, match=r"base: the URDF file mounted.urdf fixes its root link to the world"):
+        load_scene(tmp_path / "twice.toml")
+
+
+def test_world_joints_other_than_fixed_or_floating_are_refused(tmp_path):
+    (tmp_path / "slider.urdf").write_text(mounted_arm("prismatic"))
+    with pytest.raises(SceneError, match=r"holds the root to the world by a 'prismatic' joint; read are 'fixed'"):
+        load_scene(tmp_path / "slider.urdf")
+    (tmp_path / "floating.urdf").write_text(mounted_arm("floating"))
+    assert load_scene(tmp_path / "floating.urdf").base.kind == "free"
+
+
+def test_fixed_base_round_trip(tmp_path):
+    """The shipped mounted-arm written as URDF (a world link holding link1) and read back: the same base pose."""
+    scene = load_scene("mounted-arm")
+    text, notes = scene_to_urdf(scene)
+    (tmp_path / "arm.urdf").write_text(text)
+    back = load_scene(tmp_path / "arm.urdf")
+    assert back.base.kind == "fixed" and back.base.point == scene.base.point
+    assert np.abs(frames(back, np.array(back.q0))[2] - frames(scene, np.array(scene.q0))[2]).max() < 1e-15

@@ -131,3 +131,23 @@ def test_state_given_to_a_mounted_model_keeps_its_base():
     q0[5] += 0.1
     with pytest.raises(ValueError, match=r"q0\[5\]: the scene's base holds it at 0.0"):
         simulate(model, 0.1, q0=q0)
+
+
+def test_rolled_forward_dynamics_of_a_mounted_chain():
+    """A 9-link chain on a revolute pin, its forward dynamics as loops over the run of identical links
+    (codegen.rolled), against the reference's restricted equations."""
+    from studies import reference
+    scene = chain(9, walls=False)
+    scene = dataclasses.replace(scene, base=Base("pinned", "revolute", (0.0, 0.0, 0.0), (0.3, 0.4, 0.5)), q0=(),
+                                qd0=(), name="rolled_pinned9")
+    model = quick_model(scene, rolled=True)
+    assert model.nq == 9
+    ref, layout = reference_of(scene), model.layout
+    free = list(layout.free)
+    rng = np.random.default_rng(9)
+    for _ in range(3):
+        q, qd = reference.random_state(9, rng)
+        q, qd = layout.expand(layout.reduce(q)), layout.expand(layout.reduce(qd), velocity=True)
+        expected = np.linalg.solve(ref.mass_matrix(q)[np.ix_(free, free)], ref.bias(q, qd)[free])
+        qdd = model.rhs(0.0, np.r_[layout.reduce(q), layout.reduce(qd)])[model.nq:]
+        assert np.abs(qdd - expected).max() < 1e-10 * np.abs(expected).max()

@@ -10,9 +10,10 @@ the model are the URDF link frames turned by a constant rotation A_k (same origi
     z_k  the axis of joint k (for the root link, the axis of joint 2 where it is normal to x_1)
 
 so that the twist of joint k is T_k = A_(k-1)^T E_k A_k (E_k: the joint origin's rpy rotation), each link's
-centre of mass is A_k^T c and its inertia about it A_k^T R I R^T A_k (c, R, I: the URDF <inertial>).  A chain
-whose next joint is not normal to a joint's axis (an offset along the axis) has no such frame and is refused,
-as are trees, prismatic, planar or floating joints, mimic joints and joint friction (not in this model).  A root
+centre of mass is A_k^T (c - s_k a_k) and its inertia about it A_k^T R I R^T A_k (c, R, I: the URDF <inertial>).
+A next joint offset along a joint's axis is taken up by sliding the joint's origin O_k along its axis by s_k (the
+common normal of Denavit-Hartenberg, from the tip down): the kinematics and the inertia stay the URDF's, and the
+contact point O_k is that point of the joint's axis.  Refused are trees, prismatic, planar or floating joints, mimic joints and joint friction (not in this model).  A root
 held to a link named ``world`` by a fixed joint is a fixed base (codegen.scene.Base): O_1 at the joint's origin, link
 1's frame E A_1 (E: the joint's rpy); by a floating joint, a free one.
 <limit lower upper> become the joint's stops, <dynamics damping> its damper; effort and velocity limits
@@ -206,6 +207,18 @@ def urdf_chain(text: str, tip_length: float | None = None) -> tuple[list[dict], 
     else:
         raise SceneError(f"urdf: the last link {chain[-1].get('name')!r} has no fixed tip link; give its length "
                          "(urdf_tip_length in the scene file) or add a fixed joint to a tip link at its end")
+    # a joint's origin O_k may sit anywhere on its axis: each is slid along it by s_k to where the link before it
+    # reaches it normal to that link's own axis (the common normal of Denavit-Hartenberg), from the tip (which stays)
+    # to joint 2 (the root's origin stays, its z is free): s_k = (next point - joint k's origin) . a_k
+    shift = [0.0] * (n + 1)
+    for k in range(n - 1, 0, -1):
+        if offsets[k] is not None:
+            ahead = offsets[k] + (shift[k + 1] * (origins[k][1] @ axes[k + 1]) if k + 1 < n else 0.0)
+            shift[k] = float(ahead @ axes[k])
+    for k in range(n):
+        if offsets[k] is not None:
+            ahead = offsets[k] + (shift[k + 1] * (origins[k][1] @ axes[k + 1]) if k + 1 < n else 0.0)
+            offsets[k] = ahead - (shift[k] * axes[k] if k > 0 else 0.0)
     # the model's frame of each link: A_k with x_k towards the next joint, z_k the joint's axis
     A = []
     for k in range(n):
@@ -246,7 +259,7 @@ def urdf_chain(text: str, tip_length: float | None = None) -> tuple[list[dict], 
     for k in range(n):
         Ak, length = A[k]
         mass, c, I = _inertial(chain[k], f"urdf link {chain[k].get('name')!r}")
-        com = Ak.T @ c
+        com = Ak.T @ (c - (shift[k] * axes[k] if k > 0 else 0.0))          # about O_k, slid along the axis
         inertia = Ak.T @ I @ Ak
         table = {"length": length, "mass": mass, "com": [float(v) for v in com],
                  "inertia": [[float(v) for v in row] for row in 0.5 * (inertia + inertia.T)]}
@@ -334,8 +347,10 @@ def scene_to_urdf(scene) -> tuple[str, list[str]]:
                      f'<origin xyz="{_num(length)} 0.0 0.0" rpy="{_numbers(matrix_rpy(scene.twists[k - 2]))}"/>'
                      f'<axis xyz="0.0 0.0 1.0"/>{limit}{damping}</joint>')
     if scene.base.kind == "fixed":                   # link 1's model frame is its URDF frame: held by the world
-        from .scene import frames
-        R1 = frames(scene, np.array(scene.q0, dtype=float))[2]
+        R1 = np.eye(3)
+        for T, angle in zip(scene.base_twists, scene.q0[:3]):      # ^{ref}R_1 = T_-1 Rz T_0 Rz T_1 Rz
+            c, s = math.cos(angle), math.sin(angle)
+            R1 = R1 @ np.array(T) @ np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
         parts.append('  <link name="world"/>')
         parts.append(f'  <joint name="mount" type="fixed"><parent link="world"/><child link="link1"/>'
                      f'<origin xyz="{_numbers(scene.base.point)}" rpy="{_numbers(matrix_rpy(R1))}"/></joint>')

@@ -775,7 +775,7 @@ def _reduce(layout, full, name: str, velocity: bool) -> np.ndarray:
         if abs(full[index] - target) > 1e-12 * max(1.0, abs(target)):
             if index in layout.held:
                 raise ValueError(f"{name}[{index}]: the scene's base holds it at {target!r} (not a coordinate of the "
-                                 f"model), got {full[index]!r}")
+                                 f"model), got {float(full[index])!r}")
             raise ValueError(f"{name}[{index}]: this specialised (planar) model holds it at {target!r}, got "
                              f"{full[index]!r}; load the general model (specialise=False) for other states")
     return np.ascontiguousarray(layout.reduce(full))

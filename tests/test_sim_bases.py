@@ -151,3 +151,15 @@ def test_rolled_forward_dynamics_of_a_mounted_chain():
         expected = np.linalg.solve(ref.mass_matrix(q)[np.ix_(free, free)], ref.bias(q, qd)[free])
         qdd = model.rhs(0.0, np.r_[layout.reduce(q), layout.reduce(qd)])[model.nq:]
         assert np.abs(qdd - expected).max() < 1e-10 * np.abs(expected).max()
+
+
+def test_motor_at_a_revolute_pivot_does_the_work_it_should():
+    """An input on theta_1 of a revolute pin (a motor at the pivot): with a constant torque tau the work of the
+    inputs is tau (theta_1(t) - theta_1(0)), and the energy balance closes."""
+    scene = dataclasses.replace(rod(name="pinned_rod_motor"), inputs=("theta_1",))
+    model = quick_model(scene)
+    tau = 2.5
+    result = simulate(model, 1.0, method="dop853", u=[tau], rtol=1e-12, atol=1e-12)
+    assert result.status == 0
+    assert abs(result.work_input - tau * (result.q_final[2] - result.q[0, 2])) < 1e-9 * result.energy_scale
+    assert abs(result.energy_final - result.energy_initial - result.work_input) < 1e-9 * result.energy_scale

@@ -730,6 +730,8 @@ class Scene:
         of Eq. 13 (the held entries at the base's values) or the model's coordinates alone (Eq. 13 order, the held
         ones left out), with the held entries set to the base's values exactly."""
         nq, names = self.nq, coordinate_names(self.n)
+        if isinstance(given, np.ndarray):
+            given = given.tolist()
         if not len(given):
             given = default_planar_state(self.n) if field == "initial.q" else (0.0,) * nq
         elif held and isinstance(given, (list, tuple)) and len(given) == nq - len(held):

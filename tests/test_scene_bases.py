@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from codegen.scene import Base, SceneError, axis_angles, frames, load_scene, rotation_angles, scene_from_dict
+from codegen.scene import Base, Scene, SceneError, axis_angles, frames, load_scene, rotation_angles, scene_from_dict
 from codegen.specialise import layout_for
 
 ARM = {
@@ -36,6 +36,9 @@ def test_revolute_base_fills_the_full_state():
     # the full layout is accepted too, when it agrees with the base
     again = scene_from_dict(arm(initial={"q": list(scene.q0)}))
     assert again.q0 == scene.q0
+    # from Python, numpy arrays too, either length
+    assert Scene(name="arm", links=scene.links, base=scene.base, q0=np.array([0.3, -0.4, 0.2])).q0 == scene.q0
+    assert Scene(name="arm", links=scene.links, base=scene.base, q0=np.array(scene.q0)).q0 == scene.q0
     # O_1 is held: no wall pairs it by default
     assert all(1 not in w.points for w in scene.walls)
     assert layout_for(scene, False).nq == 3

@@ -132,3 +132,4 @@ def test_shipped_mounted_arm_scene():
     assert scene.base.kind == "fixed" and scene.base.angles == (-math.pi / 2, 0.0, 0.0)
     points = frames(scene, np.array(scene.q0))[2]
     assert np.array_equal(points[:, 0], [0.0, 1.0, 0.0])           # the post stands up
+

@@ -180,6 +180,15 @@ KERNELS = (
              "dgap = (d gap/dq) dq + (d gap/dp) dp, O(n): an event time's sensitivity (gac_sens.c).  Without a "
              "tangent kernel: NaN, and NAME_model.contact_gaps_tangent is NULL.", kernel=True, tangent=True,
              out_size="NCONTACT"),
+    Function("contact_bias_tangent", "void",
+             (_q(), _qd(), _p(), _seed("dq", "direction of q (NQ; rad, m)"),
+              _seed("dqd", "direction of qd (NQ; rad/s, m/s)"),
+              _seed("dp", "direction of p (NPARAM; ignored with baked parameters)"),
+              _out("da", "d(Jdot qd) along (dq, dqd, dp) (NJROW; m/s^2)")),
+             "Directional derivative of contact_bias (forward mode, exact).",
+             "da = (d(Jdot qd)/dq) dq + (d(Jdot qd)/dqd) dqd + (d(Jdot qd)/dp) dp, O(n): the sensitivities of the "
+             "resting contacts' forces in flight (gac_sens.c).  Without a tangent kernel: NaN, and "
+             "NAME_model.contact_bias_tangent is NULL.", kernel=True, tangent=True, out_size="NJROW"),
 )
 
 DENSE_KERNELS = tuple(f.name for f in KERNELS if f.dense)

@@ -26,8 +26,10 @@ CSE'd by :mod:`codegen.flatten`.  The kernels and their C signatures:
                                          forward-mode tangent of forward_dynamics' tape (codegen.tangent), O(n);
                                          generated where forward_dynamics is straight-line code (gac_linearize)
     inertia_solve_tangent(q, Q, p, dq, dQ, dp, dx), contact_generalized_force_tangent(q, f, p, dq, df, dp, dQ),
-    contact_gaps_tangent(q, p, dq, dp, dgap)       the same tangents of three more kernels (the sensitivities
-                                         of an impact and of its event time, gac_sens.c)
+    contact_gaps_tangent(q, p, dq, dp, dgap),
+    contact_bias_tangent(q, qd, p, dq, dqd, dp, da)  the same tangents of four more kernels (the sensitivities
+                                         of an impact, of its event time and of the resting contacts' forces,
+                                         gac_sens.c)
     forward_dynamics_tangent_block(q, qd, u, p, dq, dqd, du, dp, dqdd)  forward_dynamics_tangent along
                                          interface.TANGENT_BLOCK directions at once, its primal part computed once
                                          (the sensitivities' flight, gac_sens.c)
@@ -377,6 +379,13 @@ def contact_generalized_force_tangent_kernel(chain: ChainSymbols) -> Kernel:
                        "Directional derivative of J^T f along (dq, df, dp): the tangent of its O(n) tape.")
 
 
+def contact_bias_tangent_kernel(chain: ChainSymbols) -> Kernel:
+    """d(J_dot qd) along (dq, dqd, dp): the tangent of contact_bias' tape (the sensitivities of the resting
+    contacts' forces in flight)."""
+    return _tangent_of(contact_bias_kernel(chain), "contact_bias_tangent",
+                       "Directional derivative of J_dot qd along (dq, dqd, dp): the tangent of its tape.")
+
+
 def contact_gaps_tangent_kernel(chain: ChainSymbols) -> Kernel:
     """d gap along (dq, dp): the tangent of contact_gaps' tape (an event time's sensitivity)."""
     return _tangent_of(contact_gaps_kernel(chain), "contact_gaps_tangent",
@@ -388,7 +397,8 @@ KERNEL_BUILDERS = (mass_matrix_kernel, bias_kernel, forward_dynamics_kernel, ine
                    contact_jacobian_kernel, contact_generalized_force_kernel, contact_gaps_kernel, energy_kernel,
                    contact_bias_kernel, power_kernel, forward_dynamics_energy_kernel, forward_dynamics_tangent_kernel,
                    forward_dynamics_tangent_block_kernel,
-                   inertia_solve_tangent_kernel, contact_generalized_force_tangent_kernel, contact_gaps_tangent_kernel)
+                   inertia_solve_tangent_kernel, contact_generalized_force_tangent_kernel, contact_gaps_tangent_kernel,
+                   contact_bias_tangent_kernel)
 
 
 def builders(dense: bool, fused: bool = True, tangent: bool = True):

@@ -3,7 +3,9 @@
  * improved by iterative refinement:
  *   the responses Y_a = I_f^-1 n_a the law works with are refined before it (r = n_a - I_f Y_a, Y_a += I_f^-1 r);
  *   after it, the velocities qd+ are refined against the momentum balance I_f (qd+ - qd-) = J^T Lambda with the
- *   law's impulses Lambda, and the energy the remaining residuals can move is the impact's accuracy.
+ *   law's impulses Lambda and, together, against what the law wants of the contacts' velocities (gamma+ = -e gamma-
+ *   on the normals, and on the tangents of the contacts that stick), and the energy the remaining residuals can move
+ *   is the impact's accuracy.
  * I_f v is the model's generalized_momentum and J^T Lambda its contact_generalized_force (O(n) each, neither is
  * formed); the corrections use inertia_solve.
  */
@@ -72,6 +74,52 @@ int gac_impact_system_refined(const gac_model *m, const double *q, const double 
         }
     }
     return GAC_OK;
+}
+
+/* A direction held by the refinement of an impact's velocities: a combination of Jacobian rows (a contact's inward
+ * normal; a tangential axis; or, for a contact sliding on a rough wall, its normal with the tangential rows in the
+ * ratio of the law's impulses, so that a correction keeps the impulse on the cone and its direction), the impulses
+ * a multiplier along it adds to, and what the law wants of its velocity. */
+typedef struct {
+    int nrow, row[3];
+    double coef[3];
+    int contact, tangent;  /* the impact's contact (index into list), and -1 (normal or slide) or the tangential axis */
+    int aimed;             /* the law sets its velocity: target */
+    double target, weight; /* m/s; N s (the impulse that a miss of the target costs work against) */
+} gac_held;
+
+/* The system of nh held directions, responses refined: Y_h = I_f^-1 w_h (gac_refine_response), A = W I_f^-1 W^T from
+ * them, in work's Y and A. */
+static void gac_held_system(const gac_model *m, const double *q, const double *p, int nh, const gac_held *held,
+                            double *work)
+{
+    const int nq = m->nq;
+    double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work), *g = GAC_WORK_G(m, work), *f = GAC_WORK_F(m, work);
+    double r[GAC_AT_LEAST_1(nq)], dy[GAC_AT_LEAST_1(nq)];
+    int h, c, i, k;
+    for (h = 0; h < nh; ++h) {
+        double *Yh = Y + (long)h * nq;
+        for (k = 0; k < m->njrow; ++k) f[k] = 0.0;
+        for (k = 0; k < held[h].nrow; ++k) f[held[h].row[k]] += held[h].coef[k];
+        m->contact_generalized_force(q, f, p, g);        /* w_h */
+        m->inertia_solve(q, g, p, Yh);
+        gac_refine_response(m, q, p, g, Yh, r, dy);
+        for (c = 0; c <= h; ++c) {
+            double s = 0.0;
+            for (i = 0; i < nq; ++i) s += g[i] * Y[(long)c * nq + i];
+            A[h*nh + c] = A[c*nh + h] = s;
+        }
+    }
+}
+
+/* The velocity along held direction h (its rows' velocities from the model's contact velocities vel, or qd for a
+ * stop), less the tangential part of a slide's (held at its value: the slide's target is its normal velocity). */
+static double gac_held_velocity(const gac_model *m, const int *list, const gac_held *h, const double *qd,
+                                const double *vel)
+{
+    const gac_contact *k = &m->contacts[list[h->contact]];
+    if (h->tangent < 0) return k->normal_sign * gac_row_value(m, list[h->contact], qd, vel);
+    return vel[3 * (k->point - 1) + h->tangent];
 }
 
 /* The contact law's residual after the impact, as energy (J): the work its violated conditions leave, for a law
@@ -267,15 +315,18 @@ static double gac_velocity_accuracy(const gac_model *m, const double *q, const d
 }
 
 /* The impact's accuracy, measured after its law (relative to T, the kinetic energy before), with qd_plus refined
- * in place.  Lambda: the law's impulses F (along the inward normals) and Ft (along the tangential axes); g = J^T
- * Lambda.  Momentum balance: r = I_f (qd+ - qd-) - g; were qd+ moved to the velocities that balance exactly,
+ * in place, and the impulses with it (F, Ft in place).  Lambda: the law's impulses F (along the inward normals) and Ft
+ * (along the tangential axes); g = J^T Lambda.  Momentum balance: r = I_f (qd+ - qd-) - g; were qd+ moved to the velocities that balance exactly,
  * qd+ - I_f^-1 r, T would change by qd+ . r to first order (I_f symmetric: no solve enters the measure), so qd+ is
  * refined while |qd+ . r| falls by half and stands above what evaluating r can resolve, by the step that zeroes r
- * and leaves the normal velocities of the pushing contacts S (F > 0) as the law left them (a free step
- * qd+ -= I_f^-1 r moves them along I_f's soft directions, by far more than the law's round-off where I_f is
- * ill-conditioned):  qd+ += -I_f^-1 r + Y_S dLambda_S, F_S += dLambda_S, A_SS dLambda_S = N_S I_f^-1 r (Y_S, A_SS
- * from refined responses; the free step where A_SS is singular; the law's residual and the energy identity below
- * are measured with the corrected impulses),
+ * and leaves the velocities the law set as it set them (a free step qd+ -= I_f^-1 r moves them along I_f's soft
+ * directions, by far more than the law's round-off where I_f is ill-conditioned): the held rows H are the normal
+ * rows of the pushing contacts (F > 0) and, under a frictional law, the tangential rows of those on rough walls
+ * (their xi_T: 0 where stuck, the slide's direction where sliding):
+ *   qd+ += -I_f^-1 r + Y_H dLambda_H, Lambda_H += dLambda_H, A_HH dLambda_H = N_H I_f^-1 r
+ * (Y_H, A_HH from refined responses; the normal rows alone where A_HH is singular with the tangential ones, the free
+ * step where it is singular with those; the law's residual and the energy identity below are measured with the
+ * corrected impulses),
  *   E0 = 4 (nq + 1) eps sum_i |qd+_i| (|(I_f (qd+ - qd-))_i| + |g_i|) + eps/2 sum_i |qd+_i| |(I_f qd+)_i|
  * (about 8 (nq + 1) eps T when the velocities' components do not cancel; large where they do, along a soft
  * direction of I_f or near the base chart's singular pose).  The accuracy is (|qd+ . r| + E0 + the contact law's
@@ -283,36 +334,109 @@ static double gac_velocity_accuracy(const gac_model *m, const double *q, const d
  * the rounds'; a round solved with a common e, its contacts' smallest, is measured with that e) + the energy
  * identity's residual, gac_energy_identity) / T. */
 double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
-                           const double *e, const double *F, const double *Ft, int law, int rounds, int plastic,
+                           const double *e, double *F, double *Ft, int law, int rounds, int plastic,
                            const double *qd, double *qd_plus, double T, double *work, double *v_acc)
 {
     const int nq = m->nq;
     double f[GAC_AT_LEAST_1(m->njrow)], g[GAC_AT_LEAST_1(nq)], change[GAC_AT_LEAST_1(nq)], p_change[GAC_AT_LEAST_1(nq)];
     double p_plus[GAC_AT_LEAST_1(nq)], r[GAC_AT_LEAST_1(nq)], dq[GAC_AT_LEAST_1(nq)], kept[GAC_AT_LEAST_1(nq)];
-    double previous = INFINITY, balance = 0.0, floor = 0.0, law_work = 0.0, identity;
+    double previous = INFINITY, previous_balance = INFINITY, previous_missed = INFINITY;
+    double balance = 0.0, floor = 0.0, law_work = 0.0, identity;
     double bound_now[GAC_AT_LEAST_1(nq)], bound_kept[GAC_AT_LEAST_1(nq)];
     double Fs[GAC_AT_LEAST_1(nq)], F_kept[GAC_AT_LEAST_1(nq)], dl[GAC_AT_LEAST_1(nq)];
-    double v_unused[GAC_AT_LEAST_1(nq)], e_unused[GAC_AT_LEAST_1(nq)];
+    double Fts[2 * GAC_AT_LEAST_1(nq)], Ft_kept[2 * GAC_AT_LEAST_1(nq)];
     const double *Y = GAC_WORK_Y(m, work);
-    int set[GAC_AT_LEAST_1(nq)], pos[GAC_AT_LEAST_1(nq)], ns = 0, a, i, it;
-    for (a = 0; a < n; ++a) {                            /* the pushing contacts S, whose velocities stay */
+    gac_held held[GAC_AT_LEAST_1(nq)];
+    double miss[GAC_AT_LEAST_1(nq)], before[3 * GAC_AT_LEAST_1(m->npoint)], after[3 * GAC_AT_LEAST_1(m->npoint)];
+    double scale = 0.0, v_tol, e_round = 1.0;
+    const int aims = rounds == 1 && !plastic && (law == GAC_IMPACT_LAW_FRICTIONLESS || law == GAC_IMPACT_LAW_GDI
+                                                 || law == GAC_IMPACT_LAW_GDI_COMMON_E);
+    int nh = 0, nnormal, a, i, it, pass;
+    for (a = 0; a < n; ++a) {
         Fs[a] = F[a];
-        if (F[a] > 0.0) {
-            pos[ns] = a;
-            set[ns++] = list[a];
+        Fts[2*a] = Ft[2*a];
+        Fts[2*a + 1] = Ft[2*a + 1];
+    }
+    m->contact_velocities(q, qd, p, before);
+    for (a = 0; a < n; ++a) {
+        const double v = m->contacts[list[a]].normal_sign * gac_row_value(m, list[a], qd, before);
+        scale = fabs(v) > scale ? fabs(v) : scale;
+    }
+    v_tol = 1e-11 * scale;                               /* struck (own e) or at rest (e = 0), as the law's residual */
+    if (law == GAC_IMPACT_LAW_GDI_COMMON_E) {            /* the round's e: the smallest of its contacts' */
+        for (a = 0; a < n; ++a) {
+            const double v = m->contacts[list[a]].normal_sign * gac_row_value(m, list[a], qd, before);
+            const double ea = v < -v_tol ? e[a] : 0.0;
+            if (v <= v_tol && ea < e_round) e_round = ea;
         }
     }
-    if (ns > 0 && (gac_impact_system_refined(m, q, qd, p, ns, set, work, v_unused, e_unused) != GAC_OK
-                   || gac_ldlt(ns, GAC_WORK_A(m, work), 1e-13) != 0)) ns = 0;   /* dependent: free steps */
+    /* the held directions: each pushing contact's normal (a slide's with its tangential impulse's ratio), then the
+     * tangential axes of those stuck on rough walls under a frictional law */
+    for (pass = 0; pass < 2; ++pass) {
+        for (a = 0; a < n && nh < nq; ++a) {
+            const gac_contact *k = &m->contacts[list[a]];
+            const double vm = k->normal_sign * gac_row_value(m, list[a], qd, before);
+            const double ea = vm < -v_tol ? (law == GAC_IMPACT_LAW_GDI_COMMON_E ? e_round : e[a]) : 0.0;
+            const double cf = law == GAC_IMPACT_LAW_FRICTIONLESS || k->kind != GAC_CONTACT_WALL
+                              ? 0.0 : gac_friction_coefficient(m, p, list[a]);
+            const int rough = cf > 0.0 && F[a] > 0.0;
+            const int slides = rough && hypot(Fts[2*a], Fts[2*a + 1]) >= (1.0 - 1e-6) * cf * F[a];
+            int j, axis = 0;
+            if (!(F[a] > 0.0)) continue;
+            if (pass == 0) {
+                gac_held *h = &held[nh++];
+                h->nrow = 1;
+                h->row[0] = k->row;
+                h->coef[0] = (double)k->normal_sign;
+                for (j = 0; j < 2 && slides; ++j) {
+                    if (k->trow[j] < 0) continue;
+                    h->row[h->nrow] = k->trow[j];
+                    h->coef[h->nrow++] = Fts[2*a + j] / F[a];
+                }
+                h->contact = a;
+                h->tangent = -1;
+                h->aimed = aims;
+                h->target = -ea * vm;
+                h->weight = F[a];
+                continue;
+            }
+            if (!rough || slides) continue;
+            for (j = 0; j < 2; ++j, ++axis) {
+                gac_held *h;
+                if (axis == k->axis) ++axis;
+                if (k->trow[j] < 0 || nh == nq) continue;
+                h = &held[nh++];
+                h->nrow = 1;
+                h->row[0] = k->trow[j];
+                h->coef[0] = 1.0;
+                h->contact = a;
+                h->tangent = axis;
+                h->aimed = aims;                         /* stuck: xi_T = 0 */
+                h->target = -ea * before[3 * (k->point - 1) + axis];
+                h->weight = cf * F[a];
+            }
+        }
+        if (pass == 0) nnormal = nh;
+    }
+    if (nh > nnormal) {                                  /* with the stuck tangents, if they are independent */
+        gac_held_system(m, q, p, nh, held, work);
+        if (gac_ldlt(nh, GAC_WORK_A(m, work), 1e-13) != 0) nh = nnormal;
+        else nnormal = -1;                               /* factored */
+    }
+    if (nnormal >= 0 && nh > 0) {
+        gac_held_system(m, q, p, nh, held, work);
+        if (gac_ldlt(nh, GAC_WORK_A(m, work), 1e-13) != 0) nh = 0;   /* dependent: free steps */
+    }
     for (it = 0; ; ++it) {
         long double work_r = 0.0L, size = 0.0L, stored = 0.0L;
+        double missed = 0.0;
         for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
         for (a = 0; a < n; ++a) {                        /* Lambda in the Jacobian's rows */
             const gac_contact *k = &m->contacts[list[a]];
             int j;
             f[k->row] += k->normal_sign * Fs[a];
             for (j = 0; j < 2 && k->kind == GAC_CONTACT_WALL; ++j) {
-                if (k->trow[j] >= 0) f[k->trow[j]] += Ft[2*a + j];
+                if (k->trow[j] >= 0) f[k->trow[j]] += Fts[2*a + j];
             }
         }
         m->contact_generalized_force(q, f, p, g);
@@ -330,37 +454,64 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         }
         balance = fabs((double)work_r);
         floor = 4.0 * (nq + 1) * GAC_EPS * (double)size + 0.5 * GAC_EPS * (double)stored;
-        if (!(balance < previous)) {                     /* the last step did not improve: undo it */
+        m->contact_velocities(q, qd_plus, p, after);
+        for (a = 0; a < nh; ++a) {                       /* the held directions' misses of the law's targets */
+            miss[a] = held[a].aimed ? gac_held_velocity(m, list, &held[a], qd_plus, after) - held[a].target : 0.0;
+            missed += held[a].weight * fabs(miss[a]);
+        }
+        if (!(balance + missed < previous)) {            /* the last step did not improve: undo it */
             if (it > 0) {
                 gac_copy(qd_plus, kept, nq);
                 gac_copy(Fs, F_kept, n);
-                balance = previous;
+                gac_copy(Fts, Ft_kept, 2 * n);
+                balance = previous_balance;
             }
             break;
         }
         gac_copy(bound_kept, bound_now, nq);
-        if (balance <= floor || balance > 0.5 * previous || it == GAC_REFINE_STEPS) break;
-        previous = balance;
+        if (it == GAC_REFINE_STEPS
+            || ((balance <= floor || balance > 0.5 * previous_balance)          /* neither part still halving */
+                && (missed == 0.0 || missed > 0.5 * previous_missed))) break;
+        previous = balance + missed;
+        previous_balance = balance;
+        previous_missed = missed;
         m->inertia_solve(q, r, p, dq);
         if (!gac_finite(dq, nq)) break;
         gac_copy(kept, qd_plus, nq);
         gac_copy(F_kept, Fs, n);
-        for (a = 0; a < ns; ++a) {                       /* N_S dq: what the free step would do to S's velocities */
+        gac_copy(Ft_kept, Fts, 2 * n);
+        for (a = 0; a < nh; ++a) {                       /* N_H dq: what the free step would do to H's velocities */
             double s = 0.0;
             for (i = 0; i < nq; ++i) s += Y[(long)a * nq + i] * r[i];
             dl[a] = s;
         }
-        if (ns > 0) gac_ldlt_solve(ns, GAC_WORK_A(m, work), dl);   /* A_SS dLambda_S = N_S I_f^-1 r */
-        if (ns > 0 && !gac_finite(dl, ns)) break;
+        for (a = 0; a < nh; ++a) dl[a] -= miss[a];
+        if (nh > 0) gac_ldlt_solve(nh, GAC_WORK_A(m, work), dl);   /* A_HH dLambda_H = N_H I_f^-1 r - miss_H */
+        if (nh > 0 && !gac_finite(dl, nh)) break;
+        for (a = 0; a < nh && !(held[a].tangent < 0 && Fs[held[a].contact] + dl[a] < 0.0); ++a) {}
+        if (a < nh) break;                               /* it would pull: keep the impulses as they are */
         for (i = 0; i < nq; ++i) {
             double s = -dq[i];
-            for (a = 0; a < ns; ++a) s += Y[(long)a * nq + i] * dl[a];
+            for (a = 0; a < nh; ++a) s += Y[(long)a * nq + i] * dl[a];
             qd_plus[i] += s;
         }
-        for (a = 0; a < ns; ++a) Fs[pos[a]] += dl[a];
+        for (a = 0; a < nh; ++a) {                       /* the impulses along the held directions */
+            const int c = held[a].contact;
+            int k;
+            if (held[a].tangent >= 0) {
+                Fts[2*c + (held[a].tangent > m->contacts[list[c]].axis ? held[a].tangent - 1 : held[a].tangent)]
+                    += dl[a];
+                continue;
+            }
+            Fs[c] += dl[a];
+            for (k = 1; k < held[a].nrow; ++k) {
+                const gac_contact *kc = &m->contacts[list[c]];
+                Fts[2*c + (held[a].row[k] == kc->trow[0] ? 0 : 1)] += held[a].coef[k] * dl[a];
+            }
+        }
     }
     if (rounds == 1 && !plastic && law != GAC_IMPACT_LAW_GDI_COMMON_E)
-        law_work = gac_law_residual(m, q, p, n, list, e, Fs, Ft, law, qd, qd_plus);
+        law_work = gac_law_residual(m, q, p, n, list, e, Fs, Fts, law, qd, qd_plus);
     if (rounds == 1 && !plastic && law == GAC_IMPACT_LAW_GDI_COMMON_E) {   /* the round's law: the smallest e */
         double e_common[GAC_AT_LEAST_1(nq)], before[3 * GAC_AT_LEAST_1(m->npoint)], vm[GAC_AT_LEAST_1(nq)];
         double smallest = 1.0, scale = 0.0;
@@ -374,9 +525,11 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
             if (vm[a] <= 1e-11 * scale && ea < smallest) smallest = ea;
         }
         for (a = 0; a < n; ++a) e_common[a] = smallest;
-        law_work = gac_law_residual(m, q, p, n, list, e_common, Fs, Ft, GAC_IMPACT_LAW_GDI, qd, qd_plus);
+        law_work = gac_law_residual(m, q, p, n, list, e_common, Fs, Fts, GAC_IMPACT_LAW_GDI, qd, qd_plus);
     }
-    identity = gac_energy_identity(m, q, p, n, list, Fs, Ft, qd, qd_plus);
+    identity = gac_energy_identity(m, q, p, n, list, Fs, Fts, qd, qd_plus);
+    gac_copy(F, Fs, n);                                  /* the impulses that balance the refined velocities */
+    gac_copy(Ft, Fts, 2 * n);
     if (v_acc) *v_acc = gac_velocity_accuracy(m, q, p, n, list, qd, qd_plus, bound_kept, work);
     return (balance + floor + law_work + identity) / (T > 0.0 ? T : 1e-300);
 }

@@ -322,6 +322,7 @@ int gac_rest_at_start(gac_sim *s)
     }
     if (n == 0) return GAC_OK;
     for (c = 0; c < n; ++c) s->gap_held[set[c]] = gaps[set[c]];         /* held where they start */
+    gac_copy(s->x1, s->x, md->nx);                 /* the state before (the sensitivities' attach reads it) */
     code = gac_project(s, s->x, n, set, 0);
     if (code == GAC_OK) code = gac_settle(s, s->t, s->x, &n, set);
     if (code != GAC_OK) return code;

@@ -1,9 +1,12 @@
 /*
  * gac_sens.c -- forward sensitivities of a hybrid run (gac.h, "forward sensitivities of a run"): the variational
- * equations in flight, taken by the run's Runge-Kutta formula over the state's own steps and stages
- * (gac_sens_flight), the jump of the sensitivities at an impact by the frictionless law -- of one contact or several,
- * walls or joint stops, the set of pushing contacts held fixed -- the saltation matrix of Hiskens & Pai (2000)
- * (gac_sens_impact), and the verdict: the first event not differentiated ends them (gac_sens_stop).
+ * equations in flight, free or with resting contacts held (the constrained dynamics' tangent), taken by the run's
+ * Runge-Kutta formula over the state's own steps and stages (gac_sens_flight), the derivative of the projection onto
+ * the resting contacts after each step (gac_sens_project), the jump of the sensitivities at an impact by the
+ * frictionless law -- of one contact or several, walls or joint stops, landings among them, the set of pushing
+ * contacts held fixed -- the saltation matrix of Hiskens & Pai (2000) (gac_sens_impact), the release of a resting
+ * contact (gac_sens_release), contacts at rest at the start (gac_sens_attach), and the verdict: the first event not
+ * differentiated ends them (gac_sens_stop).
  */
 #include "gac_internal.h"
 
@@ -14,8 +17,10 @@
 long gac_sens_ndouble(const gac_model *m, int k)
 {
     if (m == 0 || k < 1) return 0;
-    return GAC_SENS_NDOUBLE(m->nq, m->nparam, k);
+    return GAC_SENS_NDOUBLE(m->nq, m->nparam, m->ncontact, k);
 }
+
+static void gac_sens_start_rest(gac_sim *s);
 
 int gac_sens_attach(gac_sim *s, gac_sens *sens, int k, const double *seed_x, const double *seed_p, double *dwork)
 {
@@ -30,7 +35,8 @@ int gac_sens_attach(gac_sim *s, gac_sens *sens, int k, const double *seed_x, con
     md = s->model_a;
     if (k < 1) return GAC_ERR_BAD_OPTION;
     if (md->forward_dynamics_tangent == 0 || md->inertia_solve_tangent == 0
-        || md->contact_generalized_force_tangent == 0 || md->contact_gaps_tangent == 0)
+        || md->contact_generalized_force_tangent == 0 || md->contact_gaps_tangent == 0
+        || md->contact_bias_tangent == 0)
         return GAC_ERR_BAD_MODEL;
     if (!gac_finite(seed_x, k * md->nx) || (seed_p != 0 && !gac_finite(seed_p, k * md->nparam)))
         return GAC_ERR_BAD_OPTION;
@@ -38,16 +44,19 @@ int gac_sens_attach(gac_sim *s, gac_sens *sens, int k, const double *seed_x, con
     sens->S = dwork;                              /* dwork: S | dp | dt_impact | work */
     sens->dp = dwork + (long)k * md->nx;
     sens->dt_impact = sens->dp + (long)k * md->nparam;
-    sens->work = sens->dt_impact + k;
+    sens->dgap_held = sens->dt_impact + k;
+    sens->work = sens->dgap_held + (long)k * GAC_AT_LEAST_1(md->ncontact);
     gac_copy(sens->S, seed_x, k * md->nx);
     for (i = 0; i < k * md->nparam; ++i) sens->dp[i] = seed_p != 0 ? seed_p[i] : 0.0;
     for (i = 0; i < k; ++i) sens->dt_impact[i] = 0.0;
+    for (i = 0; i < k * GAC_AT_LEAST_1(md->ncontact); ++i) sens->dgap_held[i] = 0.0;
     sens->status = GAC_SENS_VALID;
     sens->t_status = s->t;
     sens->contact_status = -1;
     sens->n_impacts = 0;
     s->sens = sens;
     if (s->chart != 0) gac_sens_stop(s, GAC_SENS_CHART, s->t, -1);
+    else if (s->nresting > 0) gac_sens_start_rest(s);
     return GAC_OK;
 }
 
@@ -70,6 +79,319 @@ static int gac_sens_inputs_fixed(const gac_sim *s)
     return s->controller == 0 || s->controller == gac_schedule_input || s->model->nu == 0;
 }
 
+/* ---- contacts held at their walls: the constrained dynamics and the projections, and their tangents ---- */
+
+/* A set of contacts held at their walls (resting, or brought to rest by an impact) at a configuration q: their unit
+ * signed rows f_a (nr each), W_a = J^T f_a (their generalised normals), Y_a = I_f^-1 W_a and A = W Y, factored in LD
+ * (gac_ldlt).  The arrays are the caller's, sized for m <= nq. */
+typedef struct {
+    int m;
+    const int *set;
+    double *f, *W, *Y, *LD;
+} gac_sens_set;
+
+#define GAC_SENS_SET_ARRAYS(nq, nr) double H_f[(nq) * (nr)], H_W[(nq) * (nq)], H_Y[(nq) * (nq)], H_LD[(nq) * (nq)]
+#define GAC_SENS_SET_BIND(H) ((H).f = H_f, (H).W = H_W, (H).Y = H_Y, (H).LD = H_LD)
+
+/* Fill H for set[0..m-1] at q.  Returns 0, or 1 where the rows are dependent (no unique forces: the loop gives the
+ * dependent ones none, a choice with no derivative). */
+static int gac_sens_set_at(const gac_sim *s, const double *q, int m, const int *set, gac_sens_set *H)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow);
+    int a, b, i;
+    H->m = m;
+    H->set = set;
+    for (a = 0; a < m; ++a) {
+        const gac_contact *ct = md->contacts + set[a];
+        double *fa = H->f + (long)a * nr;
+        for (i = 0; i < nr; ++i) fa[i] = 0.0;
+        fa[ct->row] = ct->normal_sign;
+        md->contact_generalized_force(q, fa, s->p, H->W + (long)a * nq);
+        md->inertia_solve(q, H->W + (long)a * nq, s->p, H->Y + (long)a * nq);
+    }
+    for (a = 0; a < m; ++a) {
+        for (b = 0; b <= a; ++b) {
+            double sum = 0.0;
+            for (i = 0; i < nq; ++i) sum += H->W[(long)a * nq + i] * H->Y[(long)b * nq + i];
+            H->LD[a * m + b] = H->LD[b * m + a] = sum;
+        }
+    }
+    return m > 0 && gac_ldlt(m, H->LD, 1e-12) != 0;
+}
+
+static double gac_dot(int n, const double *a, const double *b)
+{
+    double sum = 0.0;
+    int i;
+    for (i = 0; i < n; ++i) sum += a[i] * b[i];
+    return sum;
+}
+
+/* The constrained flight at state x with H held (H at x's q): qdd_free = I_f^-1 R, the forces lambda of
+ * A lambda = -(W qdd_free + b), b_a = sign_a (Jdot qd)[row_a], and qdd = qdd_free + Y lambda
+ * (gac_constrained_dynamics on a frictionless set).  lambda_ref (if not NULL): the force scale, the largest
+ * |W_a qdd_free + b_a| / A_aa. */
+static void gac_sens_held_forces(const gac_sim *s, const double *x, const double *u, const gac_sens_set *H,
+                                 double *qdd_free, double *lambda, double *qdd, double *lambda_ref)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, m = H->m;
+    double bias[GAC_AT_LEAST_1(md->njrow)];
+    int a, i;
+    md->forward_dynamics(x, x + nq, u, s->p, qdd_free);
+    md->contact_bias(x, x + nq, s->p, bias);
+    if (lambda_ref != 0) *lambda_ref = 0.0;
+    for (a = 0; a < m; ++a) {
+        const gac_contact *ct = md->contacts + H->set[a];
+        lambda[a] = -(ct->normal_sign * bias[ct->row] + gac_dot(nq, H->W + (long)a * nq, qdd_free));
+        if (lambda_ref != 0) {
+            const double A_aa = gac_dot(nq, H->W + (long)a * nq, H->Y + (long)a * nq);
+            if (fabs(lambda[a]) / A_aa > *lambda_ref) *lambda_ref = fabs(lambda[a]) / A_aa;
+        }
+    }
+    if (m > 0) gac_ldlt_solve(m, H->LD, lambda);
+    for (i = 0; i < nq; ++i) {
+        double value = qdd_free[i];
+        for (a = 0; a < m; ++a) value += H->Y[(long)a * nq + i] * lambda[a];
+        qdd[i] = value;
+    }
+}
+
+/* dW_a = d(J^T f_a) and dY_a = d(I_f^-1 W_a) along (dq, dp), a = 0..m-1 (m x nq each). */
+static void gac_sens_set_tangent(const gac_sim *s, const double *q, const gac_sens_set *H, const double *dq,
+                                 const double *dp, double *dW, double *dY)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow);
+    double df[GAC_AT_LEAST_1(md->njrow)];
+    int a, i;
+    for (i = 0; i < nr; ++i) df[i] = 0.0;
+    for (a = 0; a < H->m; ++a) {
+        md->contact_generalized_force_tangent(q, H->f + (long)a * nr, s->p, dq, df, dp, dW + (long)a * nq);
+        if (dY != 0)
+            md->inertia_solve_tangent(q, H->W + (long)a * nq, s->p, dq, dW + (long)a * nq, dp, dY + (long)a * nq);
+    }
+}
+
+/* The constrained flight's tangent along (dq, dqd, dp), dqdd_free the free dynamics' there (the forces as
+ * gac_sens_held_forces left them):
+ *     A dlambda = -(sign d(Jdot qd)[dq, dqd, dp] + dW qdd_free + W dqdd_free) - dA lambda,   dA = dW Y + W dY,
+ *     d qdd = dqdd_free + dY lambda + Y dlambda,
+ * dW, dY along (dq, dp) (gac_sens_set_tangent), d(Jdot qd) by contact_bias_tangent.  dqdd may be dqdd_free;
+ * dlambda (m) may be NULL. */
+static void gac_sens_held_tangent(const gac_sim *s, const double *x, const gac_sens_set *H, const double *qdd_free,
+                                  const double *lambda, const double *dq, const double *dqd, const double *dp,
+                                  const double *dqdd_free, double *dlambda, double *dqdd)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, m = H->m;
+    double dW[m * nq], dY[m * nq], r[m], dbias[GAC_AT_LEAST_1(md->njrow)], out[nq];
+    int a, b, i;
+    if (m == 0) {
+        for (i = 0; i < nq; ++i) dqdd[i] = dqdd_free[i];
+        return;
+    }
+    gac_sens_set_tangent(s, x, H, dq, dp, dW, dY);
+    md->contact_bias_tangent(x, x + nq, s->p, dq, dqd, dp, dbias);
+    for (a = 0; a < m; ++a) {
+        const gac_contact *ct = md->contacts + H->set[a];
+        const double *wa = H->W + (long)a * nq, *dwa = dW + (long)a * nq;
+        double value = -(ct->normal_sign * dbias[ct->row] + gac_dot(nq, dwa, qdd_free) + gac_dot(nq, wa, dqdd_free));
+        for (b = 0; b < m; ++b)
+            value -= (gac_dot(nq, dwa, H->Y + (long)b * nq) + gac_dot(nq, wa, dY + (long)b * nq)) * lambda[b];
+        r[a] = value;
+    }
+    gac_ldlt_solve(m, H->LD, r);
+    for (i = 0; i < nq; ++i) {
+        double value = dqdd_free[i];
+        for (a = 0; a < m; ++a) value += dY[(long)a * nq + i] * lambda[a] + H->Y[(long)a * nq + i] * r[a];
+        out[i] = value;
+    }
+    gac_copy(dqdd, out, nq);
+    if (dlambda != 0) gac_copy(dlambda, r, m);
+}
+
+/* d(Y c) along (dq, dp) for fixed weights c (m): Y c = I_f^-1 J^T (sum_a c_a f_a), one tangent of each operator. */
+static void gac_sens_Yc_tangent(const gac_sim *s, const double *q, const gac_sens_set *H, const double *c,
+                                const double *dq, const double *dp, double *out)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow);
+    double fc[GAC_AT_LEAST_1(md->njrow)], df[GAC_AT_LEAST_1(md->njrow)], Wc[nq], dWc[nq];
+    int a, i;
+    for (i = 0; i < nr; ++i) fc[i] = df[i] = 0.0;
+    for (i = 0; i < nq; ++i) Wc[i] = 0.0;
+    for (a = 0; a < H->m; ++a) {
+        for (i = 0; i < nr; ++i) fc[i] += c[a] * H->f[(long)a * nr + i];
+        for (i = 0; i < nq; ++i) Wc[i] += c[a] * H->W[(long)a * nq + i];
+    }
+    md->contact_generalized_force_tangent(q, fc, s->p, dq, df, dp, dWc);
+    md->inertia_solve_tangent(q, Wc, s->p, dq, dWc, dp, out);
+}
+
+/* The derivative of the velocities' projection onto the held set's constraints W qd = 0 at q, in the mass metric
+ * (gac_project's, gac_hold's and the start's): qd_post = qd_pre + Y c, c = A^-1 W (qd_post - qd_pre), along
+ * (dq, dqd, dp):
+ *     d qd_post = dqd + d(Y c) + Y dc,   A dc = -(dW qd_post + W (dqd + d(Y c)))   (W qd_post = 0 kept). */
+static void gac_sens_hold_tangent(const gac_sim *s, const double *q, const gac_sens_set *H, const double *qd_pre,
+                                  const double *qd_post, const double *dq, const double *dqd, const double *dp,
+                                  double *out)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, m = H->m;
+    double c[GAC_AT_LEAST_1(m)], r[GAC_AT_LEAST_1(m)], dW[m * nq], change[nq], v[nq];
+    int a, i, moved = 0;
+    if (m == 0) {
+        gac_copy(out, dqd, nq);
+        return;
+    }
+    for (i = 0; i < nq; ++i) {
+        change[i] = qd_post[i] - qd_pre[i];
+        moved |= change[i] != 0.0;
+    }
+    for (a = 0; a < m; ++a) c[a] = gac_dot(nq, H->W + (long)a * nq, change);
+    gac_ldlt_solve(m, H->LD, c);
+    if (moved) gac_sens_Yc_tangent(s, q, H, c, dq, dp, v);
+    else for (i = 0; i < nq; ++i) v[i] = 0.0;
+    for (i = 0; i < nq; ++i) v[i] += dqd[i];                  /* dqd + d(Y c) */
+    gac_sens_set_tangent(s, q, H, dq, dp, dW, 0);
+    for (a = 0; a < m; ++a) r[a] = -(gac_dot(nq, dW + (long)a * nq, qd_post) + gac_dot(nq, H->W + (long)a * nq, v));
+    gac_ldlt_solve(m, H->LD, r);
+    for (i = 0; i < nq; ++i) {
+        double value = v[i];
+        for (a = 0; a < m; ++a) value += H->Y[(long)a * nq + i] * r[a];
+        out[i] = value;
+    }
+}
+
+/* 1 if contact c is on a wall with friction (c_f > 0) or stuck: resting contact there is not differentiated. */
+static int gac_sens_rough(const gac_sim *s, int c)
+{
+    return s->is_stuck[c] || gac_friction_coefficient(s->model, s->p, c) > 0.0;
+}
+
+/* The set H of the contacts at rest after a change of the velocities at state x: set[0..n-1] (the resting ones),
+ * then each candidate c (not among them) within contact_tol of its wall whose normal velocity is ~0 (below 1e-9 of
+ * the chain's speed scale times its lever) and whose row is independent of those before (they were held too, then
+ * dropped by gac_settle: their velocity is projected all the same).  Returns m, the set in out[0..m-1]. */
+static int gac_sens_at_rest(const gac_sim *s, const double *x, int n, const int *set, int ncand, const int *cand,
+                            int *out)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nc1 = GAC_AT_LEAST_1(md->ncontact);
+    double gaps[nc1], vn[nc1], speed = 0.0;
+    int a, k, m = 0;
+    for (a = 0; a < n; ++a) out[m++] = set[a];
+    md->contact_gaps(x, s->p, gaps);
+    gac_normal_velocities(md, x, s->p, vn);
+    for (a = 0; a < nq; ++a) {
+        if (fabs(x[nq + a]) > speed) speed = fabs(x[nq + a]);
+    }
+    for (k = 0; k < ncand && m < nq; ++k) {
+        const int c = cand[k];
+        int member = 0;
+        for (a = 0; a < m; ++a) member |= out[a] == c;
+        if (member || gaps[c] > s->opt.contact_tol || !(fabs(vn[c]) <= 1e-9 * speed * s->lever + 1e-300)) continue;
+        {
+            const int nr = GAC_AT_LEAST_1(md->njrow);
+            GAC_SENS_SET_ARRAYS(nq, nr);
+            gac_sens_set H;
+            GAC_SENS_SET_BIND(H);
+            out[m] = c;
+            if (gac_sens_set_at(s, x, m + 1, out, &H) == 0) ++m;
+        }
+    }
+    return m;
+}
+
+/* Contacts at rest at the start (gac_rest_at_start, before the sensitivities were attached): the gaps they are held
+ * at are their starting ones (dgap_held = d gap along the seed), and their velocities were projected onto W qd = 0
+ * from those gac_rest_at_start saved in s->x1 (s->pending: not yet reported; otherwise the state is taken as given,
+ * on its constraints). */
+static void gac_sens_start_rest(gac_sim *s)
+{
+    gac_sens *z = s->sens;
+    const gac_model *md = s->model;
+    const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), nc1 = GAC_AT_LEAST_1(md->ncontact);
+    const double *qd_pre = s->pending ? s->x1 + nq : s->x + nq;
+    double dgap[nc1], zero_p[GAC_AT_LEAST_1(md->nparam)], out[nq];
+    int all[GAC_AT_LEAST_1(md->ncontact)], set[nq], a, j, m;
+    GAC_SENS_SET_ARRAYS(nq, nr);
+    gac_sens_set H;
+    GAC_SENS_SET_BIND(H);
+    for (a = 0; a < s->nresting; ++a) {
+        if (gac_sens_rough(s, s->resting[a])) {
+            gac_sens_stop(s, GAC_SENS_RESTING, s->t, s->resting[a]);
+            return;
+        }
+    }
+    for (a = 0; a < md->ncontact; ++a) all[a] = a;
+    for (a = 0; a < GAC_AT_LEAST_1(md->nparam); ++a) zero_p[a] = 0.0;
+    m = gac_sens_at_rest(s, s->x, s->nresting, s->resting, s->pending ? md->ncontact : 0, all, set);
+    if (gac_sens_set_at(s, s->x, m, set, &H) != 0) {
+        gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, s->t, s->resting[0]);
+        return;
+    }
+    for (j = 0; j < z->k; ++j) {
+        double *S = z->S + (long)j * nx;
+        const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
+        md->contact_gaps_tangent(s->x, s->p, S, dp, dgap);
+        for (a = 0; a < md->ncontact; ++a) z->dgap_held[(long)j * nc1 + a] = dgap[a];
+        gac_sens_hold_tangent(s, s->x, &H, qd_pre, s->x + nq, S, S + nq, dp, out);
+        gac_copy(S + nq, out, nq);
+    }
+}
+
+/* After an accepted step in constrained flight: the derivative of gac_project's map x_pre -> x_post (both positions
+ * and velocities onto the resting set, in the mass metric) applied to S.  Positions: q_post = q_pre + Y c,
+ * c = A^-1 W (q_post - q_pre), the gaps held at gap_held:
+ *     dq_post = dq + d(Y c) + Y dc,   A dc = dgap_held - dgap_H(dq + d(Y c), dp);
+ * then the velocities at q_post from qd_pre (gac_sens_hold_tangent).  (A contact outside the set that the
+ * correction would push deeper, held where it is by gac_project's active set, is not followed.) */
+void gac_sens_project(gac_sim *s, const double *x_pre, const double *x_post)
+{
+    gac_sens *z = s->sens;
+    const gac_model *md = s->model;
+    const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), nc1 = GAC_AT_LEAST_1(md->ncontact);
+    const int m = s->nresting;
+    double c[GAC_AT_LEAST_1(m)], dc[GAC_AT_LEAST_1(m)], change[nq], dgap[nc1], dq[nq], out[nq];
+    double zero_p[GAC_AT_LEAST_1(md->nparam)];
+    int a, i, j, moved = 0;
+    GAC_SENS_SET_ARRAYS(nq, nr);
+    gac_sens_set H;
+    if (z == 0 || z->status != GAC_SENS_VALID || m == 0) return;
+    GAC_SENS_SET_BIND(H);
+    if (gac_sens_set_at(s, x_post, m, s->resting, &H) != 0) {
+        gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, s->t, s->resting[0]);
+        return;
+    }
+    for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+    for (i = 0; i < nq; ++i) {
+        change[i] = x_post[i] - x_pre[i];
+        moved |= change[i] != 0.0;
+    }
+    for (a = 0; a < m; ++a) c[a] = gac_dot(nq, H.W + (long)a * nq, change);
+    gac_ldlt_solve(m, H.LD, c);
+    for (j = 0; j < z->k; ++j) {
+        double *S = z->S + (long)j * nx;
+        const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
+        if (moved) gac_sens_Yc_tangent(s, x_post, &H, c, S, dp, dq);
+        else for (i = 0; i < nq; ++i) dq[i] = 0.0;
+        for (i = 0; i < nq; ++i) dq[i] += S[i];
+        md->contact_gaps_tangent(x_post, s->p, dq, dp, dgap);
+        for (a = 0; a < m; ++a) dc[a] = z->dgap_held[(long)j * nc1 + s->resting[a]] - dgap[s->resting[a]];
+        gac_ldlt_solve(m, H.LD, dc);
+        for (i = 0; i < nq; ++i) {
+            for (a = 0; a < m; ++a) dq[i] += H.Y[(long)a * nq + i] * dc[a];
+            S[i] = dq[i];
+        }
+        gac_sens_hold_tangent(s, x_post, &H, x_pre + nq, x_post + nq, S, S + nq, dp, out);
+        gac_copy(S + nq, out, nq);
+    }
+    if (!gac_finite(z->S, z->k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, s->t, -1);
+}
+
 /* S over one step [t, t + h] from the state x at s->t: the method's stages Y_i = x + h sum_l a_il K_l and with them
  * dY_i = S + h sum_l a_il dK_l, dK_i = [dY_i qd ; forward_dynamics_tangent(Y_i, dY_i, dp)] per direction;
  * S += h sum_i b_i dK_i.  (The derivative of the Runge-Kutta step itself: the variational equations integrated by
@@ -84,21 +406,27 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
     const double *a, *b, *c;
     int lda, stages, i, j, l, n;
     if (z == 0 || z->status != GAC_SENS_VALID || !(h > 0.0)) return;
-    if (s->nresting > 0) {
-        gac_sens_stop(s, GAC_SENS_RESTING, s->t, s->resting[0]);
-        return;
+    for (i = 0; i < s->nresting; ++i) {
+        if (gac_sens_rough(s, s->resting[i])) {
+            gac_sens_stop(s, GAC_SENS_RESTING, s->t, s->resting[i]);
+            return;
+        }
     }
     if (!gac_sens_inputs_fixed(s)) {
         gac_sens_stop(s, GAC_SENS_CONTROLLER, s->t, -1);
         return;
     }
     {
-        const int nq = md->nq, nx = md->nx, k = z->k;
+        const int nq = md->nq, nx = md->nx, k = z->k, nr = GAC_AT_LEAST_1(md->njrow), held = s->nresting > 0;
         double *work = z->work, *dK = work + (long)GAC_SENS_STAGES * nx, *Y = dK + (long)GAC_SENS_STAGES * k * nx;
         double dQ[GAC_TANGENT_BLOCK * nq], dQD[GAC_TANGENT_BLOCK * nq], out[GAC_TANGENT_BLOCK * nq];
         double dU[GAC_TANGENT_BLOCK * GAC_AT_LEAST_1(md->nu)];   /* the inputs' directions: 0 (held, or a schedule) */
+        double qdd_free[nq], qdd[nq], lambda[nq];                /* the constrained flight at a stage */
         const double *K[GAC_SENS_STAGES];
         int width;
+        GAC_SENS_SET_ARRAYS(nq, nr);
+        gac_sens_set H;
+        GAC_SENS_SET_BIND(H);
         for (n = 0; n < GAC_TANGENT_BLOCK * GAC_AT_LEAST_1(md->nu); ++n) dU[n] = 0.0;
         stages = gac_tableau(s->opt.method, &a, &lda, &b, &c);
         for (i = 0; i < stages; ++i) K[i] = i == 0 ? s->f : taken ? s->k[i] : work + (long)i * nx;
@@ -110,11 +438,24 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
                 Y[n] = x[n] + h * sum;
             }
             u = gac_input(s, s->t + c[i] * h, Y);
-            if (i > 0 && !taken) md->rhs(s->t + c[i] * h, Y, u, s->p, work + (long)i * nx);
+            if (held) {                              /* the resting contacts held: their forces at the stage */
+                if (gac_sens_set_at(s, Y, s->nresting, s->resting, &H) != 0) {
+                    gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, s->t, s->resting[0]);
+                    return;
+                }
+                gac_sens_held_forces(s, Y, u, &H, qdd_free, lambda, qdd, 0);
+                if (i > 0 && !taken) {
+                    gac_copy(work + (long)i * nx, Y + nq, nq);
+                    gac_copy(work + (long)i * nx + nq, qdd, nq);
+                }
+            } else if (i > 0 && !taken) {
+                md->rhs(s->t + c[i] * h, Y, u, s->p, work + (long)i * nx);
+            }
             for (j = 0; j < k; j += width) {         /* GAC_TANGENT_BLOCK directions a call, then one by one */
                 double *dKi;
                 int m;
-                width = md->forward_dynamics_tangent_block != 0 && j + GAC_TANGENT_BLOCK <= k ? GAC_TANGENT_BLOCK : 1;
+                width = !held && md->forward_dynamics_tangent_block != 0 && j + GAC_TANGENT_BLOCK <= k
+                        ? GAC_TANGENT_BLOCK : 1;
                 for (m = 0; m < width; ++m) {
                     const double *dKj = dK + (long)(j + m) * GAC_SENS_STAGES * nx;
                     dKi = dK + ((long)(j + m) * GAC_SENS_STAGES + i) * nx;
@@ -137,6 +478,9 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
                     dKi = dK + ((long)j * GAC_SENS_STAGES + i) * nx;
                     md->forward_dynamics_tangent(Y, Y + nq, u, s->p, dQ, dQD, dU, z->dp + (long)j * md->nparam,
                                                  dKi + nq);
+                    if (held)                        /* the constrained dynamics' tangent */
+                        gac_sens_held_tangent(s, Y, &H, qdd_free, lambda, dQ, dQD, z->dp + (long)j * md->nparam,
+                                              dKi + nq, 0, dKi + nq);
                 }
             }
         }
@@ -160,6 +504,7 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
 typedef struct {
     int m;                       /* active contacts */
     const int *active;           /* their model indices */
+    const int *landing;          /* 1: struck with e = 0 (a landing), its wall's e not read */
     const double *f, *W, *Y, *LD, *F, *v, *e;   /* f: m x nr unit signed rows; the rest as above */
 } gac_sens_law;
 
@@ -177,7 +522,7 @@ static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, con
     }
     for (a = 0; a < m; ++a) {
         const gac_contact *ct = md->contacts + L->active[a];
-        const double de = ct->e_index >= 0 ? dp[ct->e_index] : 0.0;
+        const double de = ct->e_index >= 0 && !L->landing[a] ? dp[ct->e_index] : 0.0;
         const double *wa = L->W + (long)a * nq, *dwa = dW + (long)a * nq;
         double dv = 0.0, rhs;
         for (i = 0; i < nq; ++i) dv += dwa[i] * qd[i] + wa[i] * dqd[i];
@@ -197,12 +542,42 @@ static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, con
     }
 }
 
+/* The field f = [qd, qdd] at state x with set[0..m-1] held (free flight for m = 0).  Returns 0, or 1 where the
+ * held rows are dependent.  lambda (m) and lambda_ref as gac_sens_held_forces, the set's arrays in H. */
+static int gac_sens_field(gac_sim *s, double t, const double *x, int m, const int *set, gac_sens_set *H,
+                          double *qdd_free, double *lambda, double *f, double *lambda_ref)
+{
+    const int nq = s->model->nq;
+    if (gac_sens_set_at(s, x, m, set, H) != 0) return 1;
+    gac_copy(f, x + nq, nq);
+    gac_sens_held_forces(s, x, gac_input(s, t, x), H, qdd_free, lambda, f + nq, lambda_ref);
+    return 0;
+}
+
+/* The resting set before the event of record r: the set now without the contacts that landed, with those released. */
+static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int *set)
+{
+    int a, b, n = 0;
+    for (a = 0; a < s->nresting; ++a) {
+        int landed = 0;
+        for (b = 0; b < r->nlanded; ++b) landed |= r->landed[b] == s->resting[a];
+        if (!landed) set[n++] = s->resting[a];
+    }
+    for (b = 0; b < r->nreleased; ++b) set[n++] = r->released[b];
+    return n;
+}
+
 /* The jump at the impact record r just resolved (state before it s->xs, after it s->x1), located by contact
  * c_event's gap: for each direction j, dt*_j = -dg_j / (w_c . qd-) and S+_j = D Delta (S-_j + f- dt*_j, dp_j)
  * - f+ dt*_j, Delta the map of the contacts that took an impulse (a wall's or a joint stop's alike: a stop's row is
- * a row of the identity).  A contact of the record that took no impulse stays out of Delta if it leaves the impact
- * separating; one with impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).
- * Impacts of another kind end the sensitivities. */
+ * a row of the identity), f- and f+ the fields with the resting sets before and after held.  A landing contact is
+ * struck with e = 0 (its wall's e not read); a resting contact that takes an impulse is at rest before (v ~ 0).
+ * When contacts rest after, the loop then held their velocities at 0 (gac_hold): D Delta is followed by the
+ * derivative of that projection (gac_sens_hold_tangent, on the resting set and the impact's other contacts left at
+ * rest), and a landing contact is held at the gap it had at the event (dgap_held from S-_j + f- dt*_j).  A contact
+ * of the record that took no impulse stays out of Delta if it leaves the impact separating or is held; one with
+ * impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).  Impacts of another
+ * kind end the sensitivities. */
 void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
 {
     gac_sens *z = s->sens;
@@ -217,18 +592,29 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
         gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, r->ncontact > 0 ? r->contact[0] : c_event);
         return;
     }
-    if (r->nlanded > 0 || r->nreleased > 0 || s->nresting > 0) {
-        gac_sens_stop(s, GAC_SENS_RESTING, r->t, r->contact[0]);
-        return;
+    {
+        int a;
+        for (a = 0; a < s->nresting; ++a) {
+            if (gac_sens_rough(s, s->resting[a])) {
+                gac_sens_stop(s, GAC_SENS_RESTING, r->t, s->resting[a]);
+                return;
+            }
+        }
     }
     {
         const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), n = r->ncontact;
+        const int nc1 = GAC_AT_LEAST_1(md->ncontact);
         const double *xm = s->xs, *xp = s->x1, *q = xm;
         double f[n * nr], W[n * nq], Y[n * nq], LD[n * n], F[n], v[n], e[n], fm[nx], fp[nx];
-        double dgap[GAC_AT_LEAST_1(md->ncontact)], dx[nx], dqd_plus[nq], zero_p[GAC_AT_LEAST_1(md->nparam)];
+        double dgap[nc1], dx[nx], dqd_plus[nq], zero_p[GAC_AT_LEAST_1(md->nparam)];
+        double qd_law[nq], qdd_free[nq], lambda[nq];
         double speed = 0.0, largest = 0.0, v_event = 0.0;
-        int active[n], m = 0, a, b, i, j;
+        int active[n], landing[n], before_set[nq + nc1], at_rest[nq], m = 0, nbefore, nheld = 0, a, b, i, j;
         gac_sens_law law;
+        GAC_SENS_SET_ARRAYS(nq, nr);
+        gac_sens_set H;
+        GAC_SENS_SET_BIND(H);
+        nbefore = gac_sens_set_before(s, r, before_set);
         for (i = 0; i < nq; ++i) {
             if (fabs(xm[nq + i]) > speed) speed = fabs(xm[nq + i]);
         }
@@ -251,6 +637,9 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
             const int c = r->contact[a];
             const gac_contact *ct = md->contacts + c;
             double *fa = f + (long)m * nr, *wa = W + (long)m * nq, before = 0.0, after = 0.0;
+            int was_resting = 0, held_after = 0;
+            for (b = 0; b < nbefore; ++b) was_resting |= before_set[b] == c;
+            for (b = 0; b < s->nresting; ++b) held_after |= s->resting[b] == c;
             for (i = 0; i < nr; ++i) fa[i] = 0.0;
             fa[ct->row] = ct->normal_sign;
             md->contact_generalized_force(q, fa, s->p, wa);
@@ -259,14 +648,19 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
                 after += wa[i] * xp[nq + i];
             }
             e[m] = ct->e_index >= 0 ? s->p[ct->e_index] : ct->e_value;
+            landing[m] = 0;
             if (r->impulse[a] > 1e-9 * largest) {
-                if (!(fabs(before) > 1e-9 * speed * s->lever)) {   /* pushed at rest: a graze inside the impact */
+                if (!was_resting && !(fabs(before) > 1e-9 * speed * s->lever)) {   /* pushed at rest: a graze */
                     gac_sens_stop(s, GAC_SENS_GRAZING, r->t, c);
                     return;
                 }
+                if (!was_resting && fabs(after) <= 1e-6 * fabs(before)) {   /* struck with e = 0: it landed */
+                    landing[m] = 1;
+                    e[m] = 0.0;
+                }
                 v[m] = before;
                 active[m++] = c;
-            } else {                                         /* no impulse: out of Delta if it leaves clear of */
+            } else if (!held_after && !was_resting) {       /* no impulse: out of Delta if it leaves clear of */
                 const double bound = after + (before < 0.0 ? e[m] * before : 0.0);   /* the law's bound */
                 if (!(bound > 1e-9 * speed * s->lever)) {
                     gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, c);
@@ -292,10 +686,25 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
             return;
         }
         gac_ldlt_solve(m, LD, F);
-        law.m = m, law.active = active, law.f = f, law.W = W, law.Y = Y, law.LD = LD, law.F = F, law.v = v;
-        law.e = e;
-        md->rhs(r->t, xm, gac_input(s, r->t, xm), s->p, fm);
-        md->rhs(r->t, xp, gac_input(s, r->t, xp), s->p, fp);
+        for (i = 0; i < nq; ++i) {                           /* the law's velocities, before any hold */
+            double value = xm[nq + i];
+            for (a = 0; a < m; ++a) value += Y[(long)a * nq + i] * F[a];
+            qd_law[i] = value;
+        }
+        law.m = m, law.active = active, law.landing = landing, law.f = f, law.W = W, law.Y = Y, law.LD = LD;
+        law.F = F, law.v = v, law.e = e;
+        if (gac_sens_field(s, r->t, xm, nbefore, before_set, &H, qdd_free, lambda, fm, 0) != 0
+            || gac_sens_field(s, r->t, xp, s->nresting, s->resting, &H, qdd_free, lambda, fp, 0) != 0) {
+            gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
+            return;
+        }
+        if (s->nresting > 0) {                               /* the hold after the law: the set at rest */
+            nheld = gac_sens_at_rest(s, xp, s->nresting, s->resting, n, r->contact, at_rest);
+            if (gac_sens_set_at(s, xp, nheld, at_rest, &H) != 0) {
+                gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
+                return;
+            }
+        }
         for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
         for (j = 0; j < z->k; ++j) {
             double *S = z->S + (long)j * nx;
@@ -305,6 +714,14 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
             tau = -dgap[c_event] / v_event;                  /* dt*_j: the gap stays 0 at the event */
             for (i = 0; i < nx; ++i) dx[i] = S[i] + fm[i] * tau; /* the perturbed state at the perturbed t* */
             gac_impact_differential(s, &law, q, xm + nq, dx, dx + nq, dp, dqd_plus);
+            if (nheld > 0) {
+                double held[nq];
+                gac_sens_hold_tangent(s, xp, &H, qd_law, xp + nq, dx, dqd_plus, dp, held);
+                gac_copy(dqd_plus, held, nq);
+                md->contact_gaps_tangent(q, s->p, dx, dp, dgap);
+                for (b = 0; b < r->nlanded; ++b)             /* held at the gap it had at the event */
+                    z->dgap_held[(long)j * nc1 + r->landed[b]] = dgap[r->landed[b]];
+            }
             for (i = 0; i < nq; ++i) {
                 S[i] = dx[i] - fp[i] * tau;                      /* back to the nominal t*: minus f+ dt*_j */
                 S[nq + i] = dqd_plus[i] - fp[nq + i] * tau;
@@ -314,4 +731,77 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
         z->n_impacts++;
         if (!gac_finite(z->S, z->k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, r->t, c_event);
     }
+}
+
+/* The release of resting contact c_event, whose force lambda_c fell to 0 at t* (state s->xs; gac_release made the
+ * set s->resting, record r): lambda_c is the event function, so dt*_j = -d lambda_c / lambda_c', d lambda_c along
+ * (S_j, dp_j) and lambda_c' along the flow (dq, dqd) = (qd, qdd), both by the constrained dynamics' tangent with the
+ * set before held.  The state is continuous, so S+_j = S-_j + (f- - f+) dt*_j (f- - f+ = Y_c lambda_c: ~0, as the
+ * field is continuous where lambda_c = 0).  Another contact released with it (its force ~0 too), a force that does
+ * not cross 0 (|lambda_c'| below 1e-9 of the force scale per s) or inputs that vary within the stretch (a linear
+ * schedule: lambda_c' would miss their rate) end the sensitivities. */
+void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
+{
+    gac_sens *z = s->sens;
+    const gac_model *md = s->model;
+    const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), nc1 = GAC_AT_LEAST_1(md->ncontact);
+    const double *x = s->xs;
+    double fm[nx], fp[nx], qdd_free[nq], lambda[nq], dqdd_free[nq], dlambda[nq], qdd_m[nq], lambda_ref, rate;
+    double zero_u[GAC_AT_LEAST_1(md->nu)], zero_p[GAC_AT_LEAST_1(md->nparam)];
+    int before_set[nq + nc1], nbefore, a, i, j, index = -1;
+    const double *u;
+    GAC_SENS_SET_ARRAYS(nq, nr);
+    gac_sens_set H;
+    if (z == 0 || z->status != GAC_SENS_VALID) return;
+    GAC_SENS_SET_BIND(H);
+    if (r->nreleased != 1) {
+        gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, c_event);
+        return;
+    }
+    if (s->controller != 0 && md->nu > 0) {
+        gac_sens_stop(s, GAC_SENS_CONTROLLER, r->t, c_event);
+        return;
+    }
+    for (i = 0; i < GAC_AT_LEAST_1(md->nu); ++i) zero_u[i] = 0.0;
+    for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+    u = gac_input(s, r->t, x);
+    nbefore = gac_sens_set_before(s, r, before_set);
+    for (a = 0; a < nbefore; ++a) {
+        if (before_set[a] == c_event) index = a;
+    }
+    if (index < 0 || gac_sens_field(s, r->t, x, s->nresting, s->resting, &H, qdd_free, lambda, fp, 0) != 0
+        || gac_sens_field(s, r->t, x, nbefore, before_set, &H, qdd_free, lambda, fm, &lambda_ref) != 0) {
+        gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
+        return;
+    }
+    gac_copy(qdd_m, fm + nq, nq);
+    md->forward_dynamics_tangent(x, x + nq, u, s->p, x + nq, qdd_m, zero_u, zero_p, dqdd_free);
+    gac_sens_held_tangent(s, x, &H, qdd_free, lambda, x + nq, qdd_m, zero_p, dqdd_free, dlambda, dqdd_free);
+    rate = dlambda[index];                                   /* lambda_c' along the flow */
+    if (!(fabs(rate) > 1e-9 * lambda_ref)) {
+        gac_sens_stop(s, GAC_SENS_GRAZING, r->t, c_event);
+        return;
+    }
+    for (j = 0; j < z->k; ++j) {
+        double *S = z->S + (long)j * nx;
+        const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
+        double tau;
+        md->forward_dynamics_tangent(x, x + nq, u, s->p, S, S + nq, zero_u, dp, dqdd_free);
+        gac_sens_held_tangent(s, x, &H, qdd_free, lambda, S, S + nq, dp, dqdd_free, dlambda, dqdd_free);
+        tau = -dlambda[index] / rate;
+        for (i = 0; i < nx; ++i) S[i] += (fm[i] - fp[i]) * tau;
+        z->dt_impact[j] = tau;
+    }
+    if (!gac_finite(z->S, z->k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, r->t, c_event);
+}
+
+/* Resting contacts released where the inputs change (gac_recheck_rest: their forces pull at once): the time is fixed
+ * (a schedule's breakpoint, or gac_sim_set_input), the state continuous, and the field's jump there moves no
+ * derivative: S goes on unchanged, dt = 0. */
+void gac_sens_fixed_release(gac_sim *s)
+{
+    gac_sens *z = s->sens;
+    int j;
+    if (z == 0 || z->status != GAC_SENS_VALID) return;
+    for (j = 0; j < z->k; ++j) z->dt_impact[j] = 0.0;
 }

@@ -98,9 +98,6 @@ int gac_report(gac_sim *s, gac_impact_record *record, int code)
 {
     const int nq = s->model->nq;
     double x[2 * nq], y[2 * nq];
-    if (s->sens != 0 && code == GAC_SIM_CONTACT)          /* resting contact: not differentiated */
-        gac_sens_stop(s, GAC_SENS_RESTING, record->t, record->nlanded > 0 ? record->landed[0]
-                                                      : record->nreleased > 0 ? record->released[0] : -1);
     if (s->sens != 0 && code == GAC_SIM_IMPACT && record->law == GAC_IMPACT_LAW_GDI_TANGENTIAL)
         gac_sens_stop(s, GAC_SENS_TANGENTIAL, record->t, record->ncontact > 0 ? record->contact[0] : -1);
     if (s->chart == 0) return code;

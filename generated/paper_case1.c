@@ -1348,6 +1348,20 @@ void paper_case1_contact_gaps_tangent(const double *GAC_RESTRICT q, const double
     for (i = 0; i < PAPER_CASE1_NCONTACT; ++i) dgap[i] = NAN;
 }
 
+/* Directional derivative of contact_bias (forward mode, exact).  Not generated for this model (its forward dynamics is rolled code, or it was built with
+ * tangent=False): every output is NaN, and paper_case1_model.contact_bias_tangent is NULL. */
+void paper_case1_contact_bias_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT dp, double *GAC_RESTRICT da)
+{
+    int i;
+    (void)q;
+    (void)qd;
+    (void)p;
+    (void)dq;
+    (void)dqd;
+    (void)dp;
+    for (i = 0; i < PAPER_CASE1_NJROW; ++i) da[i] = NAN;
+}
+
 void paper_case1_rhs(double t, const double *GAC_RESTRICT x, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p,
                  double *GAC_RESTRICT xdot)
 {
@@ -1488,7 +1502,8 @@ const gac_model paper_case1_model = {
     .forward_dynamics_tangent_block = 0,
     .inertia_solve_tangent = 0,
     .contact_generalized_force_tangent = 0,
-    .contact_gaps_tangent = 0   /* no tangents: no sensitivities */
+    .contact_gaps_tangent = 0,
+    .contact_bias_tangent = 0   /* no tangents: no sensitivities */
 };
 
 /* Point the arrays of a simulation and of a record at their own storage. */

@@ -375,6 +375,20 @@ void paper_case2_contact_generalized_force_tangent(const double *GAC_RESTRICT q,
  *   Not generated for this model (rolled forward dynamics, or tangent=False): writes NaN. */
 void paper_case2_contact_gaps_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dgap);
 
+/* Directional derivative of contact_bias (forward mode, exact).
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   dq   in : direction of q (NQ; rad, m)
+ *   dqd  in : direction of qd (NQ; rad/s, m/s)
+ *   dp   in : direction of p (NPARAM; ignored with baked parameters)
+ *   da   out: d(Jdot qd) along (dq, dqd, dp) (NJROW; m/s^2)
+ *   da = (d(Jdot qd)/dq) dq + (d(Jdot qd)/dqd) dqd + (d(Jdot qd)/dp) dp, O(n): the sensitivities of the
+ *   resting contacts' forces in flight (gac_sens.c).  Without a tangent kernel: NaN, and
+ *   paper_case2_model.contact_bias_tangent is NULL.
+ *   Not generated for this model (rolled forward dynamics, or tangent=False): writes NaN. */
+void paper_case2_contact_bias_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT dp, double *GAC_RESTRICT da);
+
 /* ODE right-hand side of the flight phase.
  *   t            time (s), unused
  *   x            state [q, qd] (NX)

@@ -20,7 +20,7 @@ from codegen.scene import coordinate_names
 # gac.h's GAC_SENS_* status codes, in words
 STATUS_WORDS = {
     0: "valid",
-    1: "resting contact (a landing, a release, or contacts at rest at the start)",
+    1: "resting contact on a rough wall (friction at rest is not differentiated)",
     2: "an impact by a frictional law",
     3: "an impact at a joint stop",
     4: "an impact of several rounds (or with dependent contact rows)",
@@ -29,7 +29,8 @@ STATUS_WORDS = {
     7: "a switch to the second base chart",
     8: "inputs from a controller (they may depend on the state)",
     9: "the sensitivities overflowed",
-    10: "a mode boundary inside an impact of several contacts (a contact's impulse ~0 at the law's bound)",
+    10: "a mode boundary (a contact's impulse ~0 at the law's bound inside an impact, or resting contacts "
+        "released together)",
 }
 
 _STATE = re.compile(r"^(q0|qd0)\[([^\]]+)\]$")

@@ -89,6 +89,8 @@ class ContactEvent:
     point: int
     wall: str
     kind: str             # 'rest' | 'release'
+    dt_dp: dict | None = None   # simulate(sensitivities=...): d t / d(direction) by direction name (a landing: its
+                                # impact's; NaN from the first event not differentiated on)
 
     @property
     def label(self) -> str:
@@ -501,7 +503,12 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
             if sens is not None and keep_impacts:
                 impacts[len(impacts) - 1].dt_dp = dict(zip(directions, ffi.unpack(sens.dt_impact, len(directions))))
         if code in (lib.GAC_SIM_IMPACT, lib.GAC_SIM_CONTACT):
-            contact_events += _read_contact_events(model, rec)
+            events = _read_contact_events(model, rec)
+            if sens is not None and (code == lib.GAC_SIM_IMPACT or rec.nreleased > 0):
+                dt_dp = dict(zip(directions, ffi.unpack(sens.dt_impact, len(directions))))
+                for event in events:
+                    event.dt_dp = dict(dt_dp)
+            contact_events += events
             segment_t, segment_steps = float(state.t), int(state.n_steps) + int(state.n_rejected)
             continue
         break

@@ -137,15 +137,24 @@ def test_simulate_links_out_of_range(capsys, links, message):
     assert message in capsys.readouterr().err
 
 
-def test_simulate_runs_a_urdf_file_in_a_default_box(tmp_path, capsys):
+def test_simulate_runs_a_urdf_file_in_a_default_box(tmp_path, capsys, monkeypatch):
+    """The README's two commands: a shipped scene's chain written as URDF, then run in a default box (the same file
+    name as there, so the suite builds that model once)."""
     import numpy as np
+    import codegen.cli
     import runtime.cli
     from codegen.scene import URDF_BOX_MARGIN, contact_points, load_scene
-    urdf = tmp_path / "my-arm.urdf"
-    urdf.write_text((ROOT / "codegen" / "scenes" / "urdf-arm.urdf").read_text())
+    monkeypatch.chdir(tmp_path)
+    assert codegen.cli.main(["--scene", "urdf-arm", "--urdf", "arm.urdf"]) == 0
+    urdf = tmp_path / "arm.urdf"
     scene = load_scene(urdf)
     shipped = load_scene("urdf-arm")
-    assert scene.links == shipped.links and scene.joints == shipped.joints and scene.name == "my_arm"
+    assert scene.name == "arm" and scene.joints == shipped.joints and len(scene.links) == len(shipped.links)
+    for mine, theirs in zip(scene.links, shipped.links):     # the URDF's decimal text: to round-off
+        assert mine.kind == theirs.kind
+        assert np.allclose(np.hstack([mine.length, mine.mass, mine.com, np.ravel(mine.inertia)]),
+                           np.hstack([theirs.length, theirs.mass, theirs.com, np.ravel(theirs.inertia)]),
+                           rtol=1e-14, atol=1e-15)
     # the box holds the chain in any orientation about its centre: every point within reach + margin of it
     points = contact_points(scene, np.array(scene.q0))
     centre = 0.5 * (points.min(axis=0) + points.max(axis=0))

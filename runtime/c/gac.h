@@ -305,11 +305,12 @@ struct gac_model {
                                           at once (each seed and the output GAC_TANGENT_BLOCK arrays of its size, one
                                           after the other), the primal part computed once; NULL: none (the
                                           sensitivities then call forward_dynamics_tangent per direction) */
-    /* the tangents of three more kernels, for the sensitivities of impacts (gac_sens_attach); NULL: none (a rolled
-       forward dynamics, tangent=False, chart B) */
+    /* the tangents of four more kernels, for the sensitivities of impacts and resting contacts (gac_sens_attach);
+       NULL: none (a rolled forward dynamics, tangent=False, chart B) */
     gac_kernel_qv_tangent inertia_solve_tangent;   /* q, Q, p, dq, dQ, dp -> d(I_f^-1 Q) (nq) */
     gac_kernel_qv_tangent contact_generalized_force_tangent; /* q, f, p, dq, df (njrow), dp -> d(J^T f) (nq) */
     gac_kernel_q_tangent contact_gaps_tangent;     /* q, p, dq, dp -> d gap (ncontact) */
+    gac_kernel_qv_tangent contact_bias_tangent;    /* q, qd, p, dq, dqd, dp -> d(Jdot qd) (njrow) */
 };
 
 /* GAC_OK if the descriptor is consistent (sizes > 0 where needed, nx = 2 nq, tables and kernels present,
@@ -909,12 +910,16 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * (the saltation matrix of Hiskens & Pai 2000, with the parameters' direct part), Delta the impact map of the
  * contacts that took an impulse (walls and joint stops alike), their set held fixed: A F = -(1 + E) W qd,
  * qd+ = qd + Y F, W their signed rows, Y = I_f^-1 W^T, A = W Y; differentiated by inertia_solve_tangent and
- * contact_generalized_force_tangent (e = p[e_index] is a parameter like any other).  Events this does not
+ * contact_generalized_force_tangent (e = p[e_index] is a parameter like any other; a landing is struck with e = 0).
+ * Resting contacts (frictionless walls): in flight the constrained dynamics' tangent (the forces' by
+ * contact_bias_tangent) and the derivative of the projection after each step; a landing's jump uses the field with
+ * the set after held and the hold's projection; a release (its force lambda_c reaching 0) dt*_j = -d lambda_c /
+ * lambda_c', S+ = S- + (f- - f+) dt*; contacts at rest at the start: their projection.  Events this does not
  * differentiate end the sensitivities (status below): S and dt_impact are then NaN from that event on, the run itself
  * continues.  The status codes: */
 #define GAC_SENS_VALID         0   /* every event so far differentiated */
-#define GAC_SENS_RESTING       1   /* a contact came to rest (a landing, the start, Zeno's shrinking bounces) or was
-                                      released: resting contact is not differentiated */
+#define GAC_SENS_RESTING       1   /* a contact rests on a wall with friction (or is stuck): friction at rest is not
+                                      differentiated (frictionless resting contact is) */
 #define GAC_SENS_FRICTION      2   /* an impact by a frictional law (record.law not FRICTIONLESS) */
 #define GAC_SENS_STOP          3   /* (not raised since joint stops are differentiated; the code stays reserved) */
 #define GAC_SENS_SIMULTANEOUS  4   /* an impact of more than one round or a plastic round, or whose active contacts'
@@ -926,27 +931,32 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
 #define GAC_SENS_CONTROLLER    8   /* a controller gives the inputs (they may depend on the state; du = 0 is assumed
                                       only for held inputs and schedules) */
 #define GAC_SENS_NONFINITE     9   /* the sensitivities overflowed (not finite) */
-#define GAC_SENS_BOUNDARY     10   /* a mode boundary inside an impact of several contacts: a contact took an impulse
+#define GAC_SENS_BOUNDARY     10   /* a mode boundary: inside an impact of several contacts, a contact took an impulse
                                       ~0 and leaves at the law's bound (w . qd+ + e w . qd- ~ 0), so a perturbation
-                                      may add it to the active set or drop it */
+                                      may add it to the active set or drop it; or resting contacts released together
+                                      (their forces ~0 at once) */
 
 /* The sensitivities of one run: pointers into the caller's dwork (gac_sens_ndouble(m, k) doubles), laid out as
- * S (k nx) | dp (k nparam) | dt_impact (k) | scratch.  Direction-major: S[j*nx + i] = d x_i / d direction j
+ * S (k nx) | dp (k nparam) | dt_impact (k) | dgap_held (k max(ncontact, 1)) | scratch.  Direction-major: S[j*nx + i] = d x_i / d direction j
  * (chart A's coordinates, x = [q, qd] at sim.t), dp[j*nparam + i] the parameter seed of direction j. */
 typedef struct gac_sens_s {
     int k;                       /* directions */
     double *S;                   /* k x nx: the sensitivities at sim.t (NaN once status is not GAC_SENS_VALID) */
     double *dp;                  /* k x nparam: the parameter seeds (constant) */
-    double *dt_impact;           /* k: d t* / d direction j of the last impact differentiated (s per unit) */
+    double *dt_impact;           /* k: d t* / d direction j of the last event differentiated: an impact (a landing
+                                    among them), or a release (s per unit) */
     int status;                  /* GAC_SENS_VALID or the first event not differentiated (GAC_SENS_*) */
     double t_status;             /* s: the time of that event */
     int contact_status;          /* its contact (0..ncontact-1), -1: none */
     long n_impacts;              /* impacts differentiated */
+    double *dgap_held;           /* k x max(ncontact, 1): d(the gap a resting contact is held at) / d direction j */
     double *work;                /* scratch: the stages */
 } gac_sens;
 
-/* Doubles of a gac_sens's dwork: S, dp, dt_impact, and 12 stage derivatives of the state and of each direction. */
-#define GAC_SENS_NDOUBLE(nq, nparam, k) (13L * (k) * 2 * (nq) + (long)(k) * (nparam) + (k) + 14L * 2 * (nq))
+/* Doubles of a gac_sens's dwork: S, dp, dt_impact, the held gaps' derivatives, and 12 stage derivatives of the state
+ * and of each direction. */
+#define GAC_SENS_NDOUBLE(nq, nparam, ncontact, k) \
+    (13L * (k) * 2 * (nq) + (long)(k) * (nparam) + (k) + (long)(k) * ((ncontact) > 0 ? (ncontact) : 1) + 14L * 2 * (nq))
 long gac_sens_ndouble(const gac_model *m, int k);
 
 /* Attach sensitivities along k directions to sim from its current time on: S = seed_x (k x nx, direction-major),

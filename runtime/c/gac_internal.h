@@ -70,6 +70,9 @@ int gac_tableau(int method, const double **a, int *lda, const double **b, const 
 void gac_sens_flight(gac_sim *s, const double *x, double h, int taken); /* S over [t, t + h] from x at s->t */
 void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event); /* the jump at an impact just resolved */
 void gac_sens_stop(gac_sim *s, int status, double t, int contact);    /* an event not differentiated */
+void gac_sens_project(gac_sim *s, const double *x_pre, const double *x_post); /* a step's projection onto the rest */
+void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event);  /* the release of a resting contact */
+void gac_sens_fixed_release(gac_sim *s);   /* resting contacts released where the inputs change: dt = 0, S goes on */
 
 /* gac_events.c: event location and the loop's tolerances */
 double gac_v_round(const gac_model *md, const double *vn);
@@ -137,7 +140,7 @@ int gac_impact_system_refined(const gac_model *m, const double *q, const double 
 double gac_refine_impulses(const gac_model *m, const double *q, const double *p, int n, const int *list,
                            const double *e, int rounds, double *F, const double *qd, double *qd_plus, double *work);
 double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
-                           const double *e, const double *F, const double *Ft, int law, int rounds, int plastic,
+                           const double *e, double *F, double *Ft, int law, int rounds, int plastic,
                            const double *qd, double *qd_plus, double T, double *work, double *v_acc);
 
 /* gac_impact_friction.c */

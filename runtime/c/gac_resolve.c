@@ -75,7 +75,7 @@ typedef struct {
 } gac_impact_event;
 
 /* The accuracy of the law just solved (ev->qd_plus, ev->F, ev->Ft with restitutions e), relative to T before, at
- * least 1e-10: measured after the solve, with qd_plus refined in place (gac_impact_accuracy: the momentum balance
+ * least 1e-10: measured after the solve, with qd_plus and the impulses refined in place (gac_impact_accuracy: the momentum balance
  * I_f (qd+ - qd-) = J^T Lambda and, for a law solved in one round, its contact conditions, as the energy their
  * residuals can move, plus what evaluating them can resolve). */
 static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const double *e)
@@ -117,7 +117,7 @@ static double gac_held_accuracy(gac_sim *s, gac_impact_event *ev, int nset, cons
 {
     const gac_model *md = s->model;
     const int nq = md->nq;
-    double change[nq], lambda[nq], e_unused[nq], F[nq], b, v = 0.0;
+    double change[nq], lambda[nq], e_unused[nq], F[nq], Ft[2 * nq], b, v = 0.0;
     double *A = GAC_WORK_A(md, s->work);
     int rest[nq], nrest = 0, a, k, pass;
     for (k = 0; k < nq; ++k) change[k] = s->x1[nq + k] - ev->qd_plus[k];
@@ -143,7 +143,8 @@ static double gac_held_accuracy(gac_sim *s, gac_impact_event *ev, int nset, cons
             break;
         }
     }
-    b = gac_impact_accuracy(md, ev->x, s->p, ev->n, ev->list, ev->e, F, ev->Ft, ev->law, 0, 0, ev->x + nq,
+    for (k = 0; k < 2 * ev->n; ++k) Ft[k] = ev->Ft[k];
+    b = gac_impact_accuracy(md, ev->x, s->p, ev->n, ev->list, ev->e, F, Ft, ev->law, 0, 0, ev->x + nq,
                             s->x1 + nq, ev->T_before, s->work, &v);
     if (v > ev->v_acc) ev->v_acc = v;
     return b > 1e-10 ? b : 1e-10;

@@ -188,6 +188,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
     }
     if (s->input_changed) {
         const int code = gac_recheck_rest(s, record);
+        if (code == 1 && s->sens != 0) gac_sens_fixed_release(s);     /* at the inputs' change: a fixed time */
         if (code != 0) return code < 0 ? code : gac_report(s, record, GAC_SIM_CONTACT);
     }
     if (s->t < t_end) {                           /* the budget and the progress callback, once per call ... */
@@ -321,6 +322,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             code = released ? gac_release(s, t_event, c_event, record)
                             : gac_resolve(s, t_event, c_event, record);
             if (code < 0) return code;
+            if (s->sens != 0 && released) gac_sens_release(s, record, c_event);   /* its event time's derivative */
             if (s->sens != 0 && !released) {      /* the impact's jump, or a touch that has no derivative */
                 if (code == 1) gac_sens_impact(s, record, c_event);
                 else gac_sens_stop(s, GAC_SENS_GRAZING, t_event, c_event);
@@ -378,6 +380,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         if (s->nresting > 0) {                     /* back onto the resting-contact constraints */
             int code = gac_project(s, s->x, s->nresting, s->resting, 1);
             if (code != GAC_OK) return code;
+            if (s->sens != 0) gac_sens_project(s, s->x1, s->x);   /* (s->x1: the step's end before it) */
             if (sticking) {                       /* sliding -> stuck: slow points that can stick */
                 code = gac_try_stick(s, vt_start, 1);
                 if (code < 0) return code;

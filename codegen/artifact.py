@@ -126,5 +126,12 @@ def _canonical_part(value):
 def _convert(value):
     if isinstance(value, (list, tuple)):
         return [_canonical(v) for v in value]
-    return {"type": type(value).__name__, **{k: _canonical(getattr(value, k)) for k in value.__dataclass_fields__}}
+    return {"type": type(value).__name__, **{k: _canonical(getattr(value, k)) for k in value.__dataclass_fields__
+                                             if not _unchanged_default(value, k)}}
+
+
+def _unchanged_default(value, field: str) -> bool:
+    """A field added later whose default keeps every earlier scene's meaning (a scene's free base) is left out of the
+    canonical form, so that those scenes keep their hashes (and their generated text and compiled modules)."""
+    return field == "base" and type(value).__name__ == "Scene" and value.base.kind == "free"
 

@@ -339,10 +339,13 @@ def _chart_context(scene: Scene, layout) -> dict:
     b = T_1 e_z (the three base joint axes' triple product): a, b, and where theta_0 is (an index into q, or
     its fixed value)."""
     T0, T1 = (np.array(T, dtype=float) for T in scene.base_twists[1:])
-    fixed = dict(layout.fixed)
+    if 1 not in layout.free:
+        # theta_0 held (a planar model, a revolute or fixed base): theta_-1 is held with it, and the rates of the
+        # base angles left map to omega through one unit column, never singular: the measure of a chart at its best
+        # (|cos 0| with a = e_y, b = e_x), whatever the held angle (a revolute base about X2 holds theta_0 = pi/2)
+        return {"a": ["0.0", "1.0", "0.0"], "b": ["1.0", "0.0", "0.0"], "index": -1, "value": "0.0"}
     return {"a": [_double_literal(float(x)) for x in T0[2, :]], "b": [_double_literal(float(x)) for x in T1[:, 2]],
-            "index": layout.free.index(1) if 1 in layout.free else -1,
-            "value": _double_literal(float(fixed.get(1, 0.0)))}
+            "index": layout.free.index(1), "value": "0.0"}
 
 
 def _base_context(scene: Scene, layout) -> dict:

@@ -37,7 +37,7 @@ class ChainSymbols:
     """Inputs (q, qd, p) of the generated functions, as sympy symbols named like the C arrays.
 
     ``q`` and ``qd`` are indexed in the full layout of Eq. 13 (n + 5 entries); coordinates the layout
-    holds fixed are numbers (exact multiples of pi/2 for angles, zero velocity), the free ones are the
+    holds fixed are numbers (exact multiples of pi/2 for angles where they are one, zero velocity), the free ones are the
     symbols q[j], qd[j] of the model's own (reduced) input arrays.
     """
 
@@ -52,7 +52,7 @@ class ChainSymbols:
             self.q[i] = sp.Symbol(f"q[{j}]", real=True)
             self.qd[i] = sp.Symbol(f"qd[{j}]", real=True)
         for i, value in self.layout.fixed:
-            self.q[i] = sp.Integer(round(value / (math.pi / 2))) * sp.pi / 2 if i < 2 else _number(value)
+            self.q[i] = _angle(value) if i < 3 else _number(value)
             self.qd[i] = sp.Integer(0)
         names = scene.parameter_names()
         values = scene.parameter_vector()
@@ -127,6 +127,15 @@ class ChainSymbols:
 
     def base_velocity(self) -> Vec:
         return tuple(self.qd[self.n + 2: self.n + 5])
+
+
+def _angle(value: float) -> sp.Expr:
+    """A held angle: an exact multiple of pi/2 where it is one (to 1e-12; its sine and cosine then vanish or are
+    +-1 symbolically), else the number."""
+    quarter = round(value / (math.pi / 2))
+    if abs(value - quarter * math.pi / 2) < 1e-12:
+        return sp.Integer(quarter) * sp.pi / 2
+    return _number(value)
 
 
 def _number(value: float) -> sp.Expr:

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import SceneError
-from .urdf import urdf_links
+from .urdf import urdf_chain
 
 try:  # Python >= 3.11
     import tomllib
@@ -344,6 +344,135 @@ def twist_about_x(angle: float) -> tuple[tuple[float, ...], ...]:
 
 
 # ---------------------------------------------------------------------------
+# the base: how link 1 is held
+# ---------------------------------------------------------------------------
+BASE_KINDS = ("free", "pinned", "fixed")
+BASE_JOINTS = ("spherical", "revolute")
+BASE_ANGLE_SNAP = 1e-12   # a base angle within this of a multiple of pi/2 is taken as exactly that multiple
+
+
+def _snap_quarter(angle: float) -> float:
+    quarter = round(angle / (math.pi / 2))
+    return quarter * math.pi / 2 if abs(angle - quarter * math.pi / 2) < BASE_ANGLE_SNAP else angle
+
+
+def axis_angles(axis) -> tuple[float, float]:
+    """(theta_-1, theta_0) that turn link 1's joint axis z_1 along the unit vector ``axis`` (box frame), with the
+    default base twists: ^{ref}R_1 = Ry(theta_-1) Rz(theta_0) Rx(theta_1) T_1, so z_1 = Ry(theta_-1) Rz(theta_0) e_x
+    = (cos theta_-1 cos theta_0, sin theta_0, -sin theta_-1 cos theta_0).  Along X2 (theta_0 = +-pi/2) theta_-1 is 0."""
+    d = np.asarray(axis, dtype=float)
+    theta0 = math.atan2(d[1], math.hypot(d[0], d[2]))
+    theta_m1 = math.atan2(-d[2], d[0]) if math.hypot(d[0], d[2]) > 1e-15 else 0.0
+    return _snap_quarter(theta_m1), _snap_quarter(theta0)
+
+
+def rotation_angles(R) -> tuple[float, float, float]:
+    """(theta_-1, theta_0, theta_1) of link 1's orientation ^{ref}R_1 (columns x_1, y_1, z_1 in the box frame), with
+    the default base twists: R T_1^T = Ry(theta_-1) Rz(theta_0) Rx(theta_1) (at theta_0 = +-pi/2, theta_-1 = 0)."""
+    M = np.asarray(R, dtype=float) @ np.array(T_1).T
+    theta_m1, theta0 = axis_angles(M[:, 0])
+    c, s = math.cos(theta_m1), math.sin(theta_m1)
+    Ry = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    N = rot_z(theta0).T @ Ry.T @ M                      # = Rx(theta_1)
+    return theta_m1, theta0, _snap_quarter(math.atan2(N[2, 1], N[1, 1]))
+
+
+@dataclass(frozen=True)
+class Base:
+    """How link 1 (the base) is held; docs/scenes.md, "The base".
+
+    kind      "free": floats (the default; all of theta_-1, theta_0, theta_1, X1, X2, X3 are coordinates);
+              "pinned": O_1 held at ``point``, link 1 turning about it through a ``joint``: "spherical" (the three
+              angles stay coordinates) or "revolute" about ``axis`` (theta_1 alone stays a coordinate);
+              "fixed": link 1 welded to the box at ``point`` with orientation ``angles`` (theta_-1, theta_0,
+              theta_1) or ``rotation`` (^{ref}R_1: columns x_1, y_1, z_1 in the box frame)
+    The coordinates a base holds are no coordinates of the model (codegen.specialise.Layout.fixed), with zero
+    velocity: the pivot does no work.
+    """
+
+    kind: str = "free"
+    joint: str | None = None
+    point: tuple | None = None
+    axis: tuple | None = None
+    angles: tuple | None = None
+    rotation: tuple | None = None
+
+    @property
+    def label(self) -> str:
+        return f"pinned ({self.joint})" if self.kind == "pinned" else self.kind
+
+    def checked(self) -> "Base":
+        """The base validated and normalised (axis of unit length, a fixed base's orientation as angles)."""
+        if not isinstance(self.kind, str) or self.kind not in BASE_KINDS:
+            raise SceneError(f"base.kind: must be one of {', '.join(repr(k) for k in BASE_KINDS)}, got {self.kind!r}")
+        given = {key for key in ("joint", "point", "axis", "angles", "rotation") if getattr(self, key) is not None}
+        allowed = {"free": set(), "pinned": {"joint", "point", "axis"}, "fixed": {"point", "angles", "rotation"}}
+        for key in sorted(given - allowed[self.kind]):
+            raise SceneError(f"base.{key}: not a field of a {self.kind} base (kind = {self.kind!r}); "
+                             + (f"a {self.kind} base has {', '.join(sorted(allowed[self.kind]))}"
+                                if allowed[self.kind] else "a free base has no other field"))
+        if self.kind == "free":
+            return Base()
+        if self.point is None:
+            raise SceneError(f"base.point: required for a {self.kind} base (where O_1 is held, m, box frame)")
+        point = _vector(list(self.point) if isinstance(self.point, (list, tuple)) else self.point, 3, "base.point")
+        if self.kind == "pinned":
+            joint = "spherical" if self.joint is None else self.joint
+            if not isinstance(joint, str) or joint not in BASE_JOINTS:
+                raise SceneError(f"base.joint: must be one of {', '.join(repr(j) for j in BASE_JOINTS)}, got {joint!r}")
+            if joint == "spherical":
+                if self.axis is not None:
+                    raise SceneError("base.axis: only for joint = 'revolute' (a spherical pin turns about any axis)")
+                return Base("pinned", "spherical", point)
+            if self.axis is None:
+                raise SceneError("base.axis: required for joint = 'revolute' (the direction of the joint axis, box "
+                                 "frame)")
+            axis = np.array(_vector(list(self.axis) if isinstance(self.axis, (list, tuple)) else self.axis, 3,
+                                    "base.axis"))
+            norm = float(np.linalg.norm(axis))
+            if not norm > 1e-12:
+                raise SceneError(f"base.axis: must be a non-zero direction, got {list(self.axis)!r}")
+            axis = axis / norm
+            axis[np.abs(axis) < SNAP] = 0.0
+            axis[np.abs(axis - 1.0) < SNAP] = 1.0
+            axis[np.abs(axis + 1.0) < SNAP] = -1.0
+            return Base("pinned", "revolute", point, tuple(float(v) for v in axis))
+        if (self.angles is None) == (self.rotation is None):
+            raise SceneError("base.angles: a fixed base needs its orientation: give angles = [theta_-1, theta_0, "
+                             "theta_1] (rad) or rotation = ^{ref}R_1 (3x3, columns x_1, y_1, z_1), one of them")
+        if self.angles is not None:
+            angles = _vector(list(self.angles) if isinstance(self.angles, (list, tuple)) else self.angles, 3,
+                             "base.angles")
+            angles = tuple(_snap_quarter(a) for a in angles)
+        else:
+            angles = rotation_angles(_clean_rotation(self.rotation, "base.rotation"))
+        return Base("fixed", None, point, None, angles)
+
+    def held(self, n: int) -> dict[int, float]:
+        """The coordinates (full-layout index of Eq. 13) the base holds, and their values."""
+        if self.kind == "free":
+            return {}
+        out = {n + 2 + a: float(x) for a, x in enumerate(self.point)}
+        if self.kind == "pinned" and self.joint == "revolute":
+            out.update(enumerate(axis_angles(self.axis)))
+        elif self.kind == "fixed":
+            out.update(enumerate(self.angles))
+        return dict(sorted(out.items()))
+
+    def held_points(self) -> tuple[int, ...]:
+        """The points O_i the base holds in place (they never touch a wall): O_1 of a pinned base, O_1 and O_2 of a
+        fixed one."""
+        return {"free": (), "pinned": (1,), "fixed": (1, 2)}[self.kind]
+
+    def source(self, index: int, n: int) -> str:
+        """The field of the base that gives held coordinate ``index``."""
+        return "base.point" if index >= n + 2 else ("base.axis" if self.kind == "pinned" else "base.angles")
+
+
+FREE_BASE = Base()
+
+
+# ---------------------------------------------------------------------------
 # parameter names: composed by parameter_name only, read back by split_parameter_name
 # ---------------------------------------------------------------------------
 WALL_KINDS = ("wall", "e", "friction")      # a wall's parameters, named by the wall: 'e_x2_min'
@@ -391,6 +520,8 @@ class Scene:
     joints     springs and dampers of the joints 2..n (Joint; n - 1 entries, or () for none)
     inputs     the actuated coordinates by name ("theta_2", "X2", ...): input u_i is the generalised force
                of inputs[i] (N m on an angle, N on a translation), added to the flight equations
+    base       how link 1 is held (Base): floating (the default), pinned at a point or fixed; q0 and qd0 always
+               hold the full layout, with the held coordinates at the base's values (zero rates)
     friction_velocity  v_s (m/s): a point resting on a wall with friction coefficient c_f slides against the Coulomb force
                -c_f lambda v_t / max(|v_t|, v_s) (lambda its normal force, v_t its tangential velocity): exact
                Coulomb sliding above v_s, a stiff viscous regime below it in place of sticking
@@ -408,6 +539,7 @@ class Scene:
     joints: tuple = ()          # Joint of joints 2..n (n - 1 entries); () means no springs or dampers
     inputs: tuple = ()          # names of the actuated coordinates (coordinate_names), one input u_i each
     friction_velocity: float = 1e-3   # m/s, see above
+    base: Base = FREE_BASE      # how link 1 is held (Base): free, pinned or fixed
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not _NAME_RE.match(self.name):
@@ -433,6 +565,7 @@ class Scene:
         if len(base) != 3:
             raise SceneError("base_twists: expected 3 matrices (T_-1, T_0, T_1)")
         object.__setattr__(self, "base_twists", base)
+        self._validate_base()
         object.__setattr__(self, "gravity", _number(self.gravity, "gravity"))
         if abs(self.gravity) > GRAVITY_MAX:
             raise SceneError(f"gravity: must be within [-1e6, 1e6] m/s^2, got {self.gravity!r}")
@@ -463,6 +596,19 @@ class Scene:
         return None
 
     # -- validation helpers --------------------------------------------------
+    def _validate_base(self) -> None:
+        if not isinstance(self.base, Base):
+            raise SceneError(f"base: expected a codegen.scene.Base, got {self.base!r}")
+        base = self.base.checked()
+        if base.kind == "fixed" and self.n < 2:
+            raise SceneError("base.kind: a fixed base welds link 1 to the box, so a chain of n = 1 link has nothing "
+                             "to move; give links 2..n (or kind = 'pinned')")
+        if base.kind != "free" and (base.kind == "fixed" or base.joint == "revolute") and \
+                self.base_twists != (T_MINUS1, T_0, T_1):
+            raise SceneError(f"base: a {base.label} base is placed through the default base twists "
+                             "(T_-1, T_0, T_1 of docs/model.md); base_twists must be the default")
+        object.__setattr__(self, "base", base)
+
     def _validate_walls(self) -> None:
         n = self.n
         seen = set()
@@ -477,11 +623,16 @@ class Scene:
             e = _number(w.restitution, f"restitution.{w.name}")
             if not 0.0 <= e <= 1.0:
                 raise SceneError(f"restitution.{w.name}: must be in [0, 1], got {e!r}")
-            points = tuple(w.points) if w.points else tuple(range(1, n + 2))
+            held = self.base.held_points()
+            points = tuple(w.points) if w.points else tuple(p for p in range(1, n + 2) if p not in held)
             for p in points:
                 if isinstance(p, bool) or not isinstance(p, int) or not 1 <= p <= n + 1:
                     raise SceneError(f"contacts.{w.name}: point indices must be integers in 1..{n + 1} "
                                      f"(O_1..O_{n + 1}), got {p!r}")
+                if p in held:
+                    raise SceneError(f"contacts.{w.name}: O_{p} is held in place by the {self.base.label} base and "
+                                     f"never touches a wall; allowed points: "
+                                     f"{', '.join(str(i) for i in range(1, n + 2) if i not in held)}")
             if len(set(points)) != len(points):
                 raise SceneError(f"contacts.{w.name}: repeated point index in {list(points)}")
             c_f = _number(w.friction, f"friction.{w.name}")
@@ -516,6 +667,11 @@ class Scene:
                 raise SceneError(f"inputs: unknown coordinate {name!r}; allowed: {', '.join(names)}")
         if len(set(inputs)) != len(inputs):
             raise SceneError(f"inputs: a coordinate is named twice in {list(inputs)}")
+        held = self.base.held(n)
+        for name in inputs:
+            if names.index(name) in held:
+                raise SceneError(f"inputs: {name} is held by the {self.base.label} base (not a coordinate of the "
+                                 f"model); allowed: {', '.join(x for i, x in enumerate(names) if i not in held)}")
         object.__setattr__(self, "inputs", tuple(inputs))
 
     @property
@@ -538,11 +694,10 @@ class Scene:
 
     def _validate_state(self) -> None:
         nq = self.nq
-        q0 = self.q0 if len(self.q0) else default_planar_state(self.n)
-        qd0 = self.qd0 if len(self.qd0) else (0.0,) * nq
-        q0 = _vector(list(q0), nq, "initial.q")
-        qd0 = _vector(list(qd0), nq, "initial.qd")
-        if abs(math.cos(q0[1])) < GIMBAL_MARGIN:
+        held = self.base.held(self.n)
+        q0 = self._held_state(self.q0, held, "initial.q")
+        qd0 = self._held_state(self.qd0, {i: 0.0 for i in held}, "initial.qd")
+        if 1 not in held and abs(math.cos(q0[1])) < GIMBAL_MARGIN:
             raise SceneError("initial.q[1] (theta_0): at the gimbal lock theta_0 = +-pi/2 of the base "
                              "orientation chart; allowed |theta_0| < pi/2")
         object.__setattr__(self, "q0", q0)
@@ -554,6 +709,13 @@ class Scene:
                                  f"{'lower' if stop.side < 0 else 'upper'} limit {stop.position!r} rad")
         points = contact_points(self, np.array(q0))
         for w in self.walls:
+            for p in self.base.held_points():
+                x = points[p - 1, w.axis]
+                if not (x >= w.position if w.side < 0 else x <= w.position):
+                    raise SceneError(f"base.point: the {self.base.label} base holds O_{p} at X{w.axis + 1} = "
+                                     f"{x:.6g}, outside the wall {w.name} = {w.position:g}; allowed X{w.axis + 1} "
+                                     f"{'>=' if w.side < 0 else '<='} {w.position:g}")
+        for w in self.walls:
             for p in w.points:
                 x = points[p - 1, w.axis]
                 inside = x >= w.position if w.side < 0 else x <= w.position
@@ -562,6 +724,35 @@ class Scene:
                         f"initial.q: contact point O_{p} has X{w.axis + 1} = {x:.6g}, outside the wall "
                         f"{w.name} = {w.position:g}; allowed X{w.axis + 1} "
                         f"{'>=' if w.side < 0 else '<='} {w.position:g}")
+
+    def _held_state(self, given, held: dict[int, float], field: str) -> tuple[float, ...]:
+        """The full-layout initial q (or qd) from what the scene gives: nothing (the default start), the full layout
+        of Eq. 13 (the held entries at the base's values) or the model's coordinates alone (Eq. 13 order, the held
+        ones left out), with the held entries set to the base's values exactly."""
+        nq, names = self.nq, coordinate_names(self.n)
+        if isinstance(given, np.ndarray):
+            given = given.tolist()
+        if not len(given):
+            given = default_planar_state(self.n) if field == "initial.q" else (0.0,) * nq
+        elif held and isinstance(given, (list, tuple)) and len(given) == nq - len(held):
+            values = iter(_vector(list(given), nq - len(held), field))
+            given = [held[i] if i in held else next(values) for i in range(nq)]
+        elif held and (not isinstance(given, (list, tuple)) or len(given) != nq):
+            raise SceneError(f"{field}: expected {nq} values (the layout of Eq. 13) or the {nq - len(held)} "
+                             f"coordinates the {self.base.label} base leaves ("
+                             f"{', '.join(x for i, x in enumerate(names) if i not in held)}), got {given!r}")
+        else:
+            values = _vector(list(given), nq, field)
+            for i, value in held.items():
+                if abs(values[i] - value) > 1e-9 * max(1.0, abs(value)):
+                    what = self.base.source(i, self.n) if field == "initial.q" else "a held coordinate has no rate"
+                    raise SceneError(f"{field}[{i}] ({names[i]}): the {self.base.label} base holds it at "
+                                     f"{value:.12g} ({what}), got {values[i]!r}")
+            given = values
+        out = list(_vector(list(given), nq, field))
+        for i, value in held.items():
+            out[i] = value
+        return tuple(out)
 
     # -- parameters ----------------------------------------------------------
     def parameter_names(self) -> list[str]:
@@ -746,7 +937,8 @@ def shipped_scene_names() -> list[str]:
 # loading from TOML / JSON
 # ---------------------------------------------------------------------------
 TOP_KEYS = ("name", "description", "gravity", "links", "urdf", "urdf_tip_length", "walls", "restitution", "friction",
-            "friction_velocity", "contacts", "initial", "inputs")
+            "friction_velocity", "contacts", "initial", "inputs", "base")
+BASE_KEYS = ("kind", "joint", "point", "axis", "angles", "rotation")
 JOINT_KEYS = ("stiffness", "rest_angle", "damping", "lower", "upper", "limit_restitution")
 LINE_KEYS = ("length", "mu", "J", "twist", "twist_matrix", "count") + JOINT_KEYS
 RIGID_KEYS = ("length", "mass", "com", "inertia", "twist", "twist_matrix", "count") + JOINT_KEYS
@@ -787,7 +979,8 @@ def urdf_scene(path: str | Path) -> Scene:
     folder, name = path.absolute().parent, re.sub(r"\W", "_", path.stem)[:48] or "urdf"
     if not re.match(r"[A-Za-z_]", name):
         name = f"urdf_{name}"[:48]
-    links, twists, joints = _links_from_data(_link_tables({"urdf": path.name}, folder))
+    tables, base = _chain_tables({"urdf": path.name}, folder)
+    links, twists, joints = _links_from_data(tables)
     n = len(links)
     angles = []
     for joint in (joints if n > 1 else ()):
@@ -795,6 +988,8 @@ def urdf_scene(path: str | Path) -> Scene:
         upper = math.inf if joint.upper is None else joint.upper
         angles.append(0.0 if lower <= 0.0 <= upper else
                       0.5 * (lower + upper) if math.isfinite(lower + upper) else (lower if lower > 0 else upper))
+    if base is not None:
+        return _urdf_fixed_scene(path, name, links, twists, joints, _base_from_data(base), angles)
     q = [0.0, 0.0, 0.0, *angles, 0.0, 0.0, 0.0]
     probe = Scene(name=name, links=links, twists=twists if n > 1 else (), joints=joints if n > 1 else (),
                   q0=tuple(q))
@@ -807,6 +1002,17 @@ def urdf_scene(path: str | Path) -> Scene:
                   for axis in (1, 2, 3) for side in ("min", "max"))
     return Scene(name=name, links=links, twists=probe.twists, joints=probe.joints, walls=walls, q0=tuple(q),
                  description=f"{path.name} at rest in a {2 * half:.3g} m box (the default box of a URDF file)")
+
+
+def _urdf_fixed_scene(path: Path, name: str, links, twists, joints, base: Base, angles) -> Scene:
+    """urdf_scene of a chain fixed to the world: at rest with its joints as there, in a box of six walls centred on
+    O_1 whose half-width is the length of the whole chain plus URDF_BOX_MARGIN (every point stays within it)."""
+    half = sum(link.length for link in links) + URDF_BOX_MARGIN
+    walls = tuple(Wall(f"x{axis}_{side}", round(base.point[axis - 1] + (-half if side == "min" else half), 12),
+                       URDF_RESTITUTION) for axis in (1, 2, 3) for side in ("min", "max"))
+    return Scene(name=name, links=links, twists=twists, joints=joints, walls=walls, q0=tuple(angles), base=base,
+                 description=f"{path.name} fixed to the world at rest in a {2 * half:.3g} m box (the default box of "
+                             "a URDF file)")
 
 
 def load_scene(source: str | Path) -> Scene:
@@ -877,7 +1083,8 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
     """Build a Scene from the plain-data form used by the TOML/JSON files (see docs/scenes.md).  ``urdf``: a URDF
     file (relative to ``folder``, the scene file's) whose serial chain gives the links (codegen.urdf)."""
     _check_keys(data, TOP_KEYS, "scene")
-    links, twists, joints = _links_from_data(_link_tables(data, folder))
+    tables, base = _chain_tables(data, folder)
+    links, twists, joints = _links_from_data(tables)
     n = len(links)
     walls = _walls_from_data(data.get("walls", {}), data.get("restitution", 1.0), data.get("contacts", {}),
                              data.get("friction", 0.0))
@@ -895,15 +1102,31 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
         joints=joints if n > 1 else (),
         inputs=data.get("inputs", ()),
         friction_velocity=data.get("friction_velocity", 1e-3),
+        base=_base_from_data({} if base is None else base),
     )
+
+
+def _base_from_data(table) -> Base:
+    """The [base] table (docs/scenes.md, "The base"); absent: a free base."""
+    _check_keys(table, BASE_KEYS, "base")
+    if "kind" not in table and table:
+        raise SceneError(f"base.kind: required with other base fields; one of {', '.join(repr(k) for k in BASE_KINDS)}")
+    rotation = table.get("rotation")
+    return Base(table.get("kind", "free"), table.get("joint"), table.get("point"), table.get("axis"),
+                table.get("angles"), rotation)
 
 
 def _link_tables(data: dict, folder) -> list:
     """The [[links]] tables, given or read from the URDF file the scene names."""
+    return _chain_tables(data, folder)[0]
+
+
+def _chain_tables(data: dict, folder) -> tuple[list, dict | None]:
+    """The [[links]] tables and the [base] table (None: none), given or read from the URDF file the scene names."""
     if "urdf" not in data:
         if "urdf_tip_length" in data:
             raise SceneError("urdf_tip_length: given without a urdf file")
-        return data.get("links")
+        return data.get("links"), data.get("base")
     if "links" in data:
         raise SceneError("urdf: give either links or a urdf file, not both")
     if not isinstance(data["urdf"], str) or not data["urdf"]:
@@ -917,9 +1140,13 @@ def _link_tables(data: dict, folder) -> list:
     except OSError as exc:
         raise SceneError(f"urdf: cannot read {path}: {exc.strerror or exc}") from None
     try:
-        return urdf_links(text, tip)
+        tables, base = urdf_chain(text, tip)
     except SceneError as exc:
         raise SceneError(f"urdf {path}: {exc}") from None
+    if base is not None and "base" in data:
+        raise SceneError(f"base: the URDF file {data['urdf']} fixes its root link to the world (a fixed base); "
+                         "give no [base] table")
+    return tables, base if base is not None else data.get("base")
 
 
 def _links_from_data(items) -> tuple[tuple[Link, ...], tuple, tuple]:

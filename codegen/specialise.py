@@ -36,6 +36,7 @@ class Layout:
     zero_params: tuple[str, ...]                # parameters built in as 0
     notes: tuple[str, ...]                      # what was left out and why (--explain)
     planar_normal: int | None = None            # 0 or 2 for a planar model, else None
+    held: tuple[int, ...] = ()                  # full-state indices the base holds (scene.base; among ``fixed``)
 
     @property
     def nq(self) -> int:
@@ -63,26 +64,39 @@ class Layout:
 
 
 def layout_for(scene: Scene, specialise: bool = True) -> Layout:
+    """The model's layout: the coordinates the base holds (scene.base: a pinned or fixed base) are never coordinates;
+    with ``specialise`` the rest of what the scene does not need is left out too (the module's docstring)."""
+    held = scene.base.held(scene.n)
+    names = coordinate_names(scene.n)
+    base_note = _base_note(scene, held, names)
     if not specialise:
-        return Layout(tuple(range(scene.nq)), (), tuple(scene.contacts()), tuple(scene.contact_rows()), (),
-                      ("general model: no specialisation asked for (all n + 5 coordinates, all walls, "
-                       "every parameter at run time)",))
-    notes = []
+        fixed = tuple(held.items())
+        free = tuple(i for i in range(scene.nq) if i not in held)
+        return Layout(free, fixed, tuple(scene.contacts()), tuple(scene.contact_rows()), (),
+                      base_note + ("general model: no specialisation asked for (every coordinate the base leaves, "
+                                   "all walls, every parameter at run time)",), None, tuple(held))
+    notes = list(base_note)
     normal, reason = planar_normal(scene)
     n = scene.n
     if normal is None:
-        free, fixed = tuple(range(scene.nq)), ()
-        notes.append(f"kept all {scene.nq} coordinates: not planar ({reason})")
+        fixed = tuple(held.items())
+        free = tuple(i for i in range(scene.nq) if i not in held)
+        notes.append(f"kept all {len(free)} coordinates{' the base leaves' if held else ''}: not planar ({reason})")
         walls = scene.walls
     else:
-        fixed_index = (0, 1, n + 2 + normal)
-        fixed = tuple((i, snap_angle(scene.q0[i]) if i < 2 else scene.q0[i]) for i in fixed_index)
-        free = tuple(i for i in range(scene.nq) if i not in fixed_index)
-        names = coordinate_names(n)
-        notes.append(f"planar: every real joint axis is parallel to X{normal + 1} and nothing starts out of the "
-                     f"plane, so {', '.join(names[i] for i in fixed_index)} are held at "
-                     f"{', '.join(f'{v:.12g}' for _, v in fixed)}: {len(free)} coordinates instead of {scene.nq} "
-                     "(results are mapped back to the full layout)")
+        planar_index = tuple(i for i in (0, 1, n + 2 + normal) if i not in held)
+        values = dict(held)
+        values.update((i, snap_angle(scene.q0[i]) if i < 2 else scene.q0[i]) for i in planar_index)
+        fixed = tuple(sorted(values.items()))
+        free = tuple(i for i in range(scene.nq) if i not in values)
+        if planar_index:
+            notes.append(f"planar: every real joint axis is parallel to X{normal + 1} and nothing starts out of the "
+                         f"plane, so {', '.join(names[i] for i in planar_index)} are held at "
+                         f"{', '.join(f'{values[i]:.12g}' for i in planar_index)}: {len(free)} coordinates instead of "
+                         f"{scene.nq - len(held)} (results are mapped back to the full layout)")
+        else:
+            notes.append(f"planar: every real joint axis is parallel to X{normal + 1}, and the base already holds "
+                         "every out-of-plane coordinate")
         across = [w for w in scene.walls if w.axis == normal]
         walls = tuple(w for w in scene.walls if w.axis != normal)
         if across:
@@ -108,7 +122,30 @@ def layout_for(scene: Scene, specialise: bool = True) -> Layout:
                      f"{', '.join(zero_params)}")
     else:
         notes.append("no parameter is zero: all stay in the runtime array p")
-    return Layout(free, fixed, contacts, rows, zero_params, tuple(notes), normal)
+    return Layout(free, fixed, contacts, rows, zero_params, tuple(notes), normal, tuple(held))
+
+
+def _base_note(scene: Scene, held: dict[int, float], names: list[str]) -> tuple[str, ...]:
+    """What the base leaves out, for --explain (nothing for a free base)."""
+    base = scene.base
+    if not held:
+        return ()
+    kept = scene.nq - len(held)
+    where = f"O_1 held at ({', '.join(f'{x:.12g}' for x in base.point)})"
+    if base.kind == "pinned" and base.joint == "spherical":
+        what = f"{where}, link 1 turning freely about it"
+    elif base.kind == "pinned":
+        q = np.zeros(scene.nq)
+        q[:2] = held[0], held[1]
+        zero = frames(scene, q)[2][:, 0]                     # x_1 at theta_1 = 0
+        what = (f"{where}, link 1 turning about the axis ({', '.join(f'{x:.6g}' for x in base.axis)}); theta_1 = 0 "
+                f"points it along ({', '.join(f'{0.0 if abs(x) < 1e-15 else x:.6g}' for x in zero)})")
+    else:
+        what = f"{where}, link 1 welded to the box"
+    return (f"base {base.label}: {what}, so {', '.join(names[i] for i in held)} are not coordinates (held at "
+            f"{', '.join(f'{v:.12g}' for v in held.values())}, zero rates: the base does no work): {kept} coordinates "
+            f"instead of {scene.nq}; the points {', '.join(f'O_{p}' for p in base.held_points())} it holds touch no "
+            "wall",)
 
 
 def snap_angle(value: float) -> float:
@@ -150,7 +187,7 @@ def planar_normal(scene: Scene) -> tuple[int | None, str]:
 
 def check_not_singular(scene: Scene, layout: Layout) -> None:
     """A clear error for models whose inertia matrix is singular by construction (zero inertia)."""
-    if layout.planar_normal is not None:
+    if layout.planar_normal is not None or not {0, 1, 2} <= set(layout.free):
         return                                              # rotation about the links is not a coordinate
     for i, link in enumerate(scene.links, start=1):
         if link.kind == "line" and link.J[0] == 0.0 and scene.n == 1:

@@ -10,9 +10,12 @@ the model are the URDF link frames turned by a constant rotation A_k (same origi
     z_k  the axis of joint k (for the root link, the axis of joint 2 where it is normal to x_1)
 
 so that the twist of joint k is T_k = A_(k-1)^T E_k A_k (E_k: the joint origin's rpy rotation), each link's
-centre of mass is A_k^T c and its inertia about it A_k^T R I R^T A_k (c, R, I: the URDF <inertial>).  A chain
-whose next joint is not normal to a joint's axis (an offset along the axis) has no such frame and is refused,
-as are trees, prismatic, planar or floating joints, mimic joints and joint friction (not in this model).
+centre of mass is A_k^T (c - s_k a_k) and its inertia about it A_k^T R I R^T A_k (c, R, I: the URDF <inertial>).
+A next joint offset along a joint's axis is taken up by sliding the joint's origin O_k along its axis by s_k (the
+common normal of Denavit-Hartenberg, from the tip down): the kinematics and the inertia stay the URDF's, and the
+contact point O_k is that point of the joint's axis.  Refused are trees, prismatic, planar or floating joints, mimic joints and joint friction (not in this model).  A root
+held to a link named ``world`` by a fixed joint is a fixed base (codegen.scene.Base): O_1 at the joint's origin, link
+1's frame E A_1 (E: the joint's rpy); by a floating joint, a free one.
 <limit lower upper> become the joint's stops, <dynamics damping> its damper; effort and velocity limits
 describe actuators and are not part of the dynamics.
 
@@ -108,8 +111,12 @@ def _inertial(link, where: str) -> tuple[float, np.ndarray, np.ndarray]:
     return float(mass), c, R @ I @ R.T
 
 
-def _chain(robot) -> tuple[list, list, object]:
-    """The links root..last and the revolute/continuous joints between them, and the fixed tip joint (or None)."""
+WORLD = "world"      # the link a URDF names for the world: a root fixed to it is a fixed base
+
+
+def _chain(robot) -> tuple[list, list, object, object]:
+    """The links root..last and the revolute/continuous joints between them, the fixed tip joint (or None), and the
+    fixed joint that holds the root to a link named ``world`` (or None: the root floats)."""
     links = {link.get("name"): link for link in robot.findall("link")}
     joints = robot.findall("joint")
     children: dict[str, list] = {}
@@ -126,6 +133,18 @@ def _chain(robot) -> tuple[list, list, object]:
     roots = [name for name in links if name not in parents]
     if len(roots) != 1:
         raise SceneError(f"urdf: expected one root link (a link that is no joint's child), found {roots}")
+    mount = None
+    if roots[0] == WORLD:
+        below = children.get(WORLD, [])
+        if len(below) != 1:
+            raise SceneError(f"urdf link {WORLD!r}: has {len(below)} child joints; it holds one root link")
+        mount = below[0]
+        if mount.get("type") not in ("fixed", "floating"):
+            raise SceneError(f"urdf joint {mount.get('name')!r}: holds the root to the world by a "
+                             f"{mount.get('type')!r} joint; read are 'fixed' (a fixed base) and 'floating' (a free "
+                             "base)")
+        roots = [mount.find("child").get("link")]
+        mount = mount if mount.get("type") == "fixed" else None
     chain, revolute, tip = [links[roots[0]]], [], None
     while True:
         below = children.get(chain[-1].get("name"), [])
@@ -139,9 +158,9 @@ def _chain(robot) -> tuple[list, list, object]:
             if children.get(tip.find("child").get("link")):
                 raise SceneError(f"urdf joint {tip.get('name')!r}: a fixed joint is allowed only as the chain's tip "
                                  "(with nothing below it)")
-            return chain, revolute, tip
+            return chain, revolute, tip, mount
         if not moving:
-            return chain, revolute, None
+            return chain, revolute, None, mount
         joint = moving[0]
         kind = joint.get("type")
         if kind not in ("revolute", "continuous"):
@@ -156,13 +175,20 @@ def _chain(robot) -> tuple[list, list, object]:
 def urdf_links(text: str, tip_length: float | None = None) -> list[dict]:
     """The [[links]] tables of a scene (rigid links with their twists, stops and dampers) for the serial chain of
     a URDF text.  ``tip_length`` (m): the last link's length when the URDF has no fixed tip link."""
+    return urdf_chain(text, tip_length)[0]
+
+
+def urdf_chain(text: str, tip_length: float | None = None) -> tuple[list[dict], dict | None]:
+    """The [[links]] tables (urdf_links) and the [base] table of a URDF chain: a root held to a ``world`` link by a
+    fixed joint is a fixed base (O_1 at the joint's origin, link 1's model frame turned by its rpy), else None
+    (a free base)."""
     try:
         robot = ET.fromstring(text)
     except ET.ParseError as exc:
         raise SceneError(f"urdf: not well-formed XML: {exc}") from None
     if robot.tag != "robot":
         raise SceneError(f"urdf: the root element is <{robot.tag}>, expected <robot>")
-    chain, joints, tip = _chain(robot)
+    chain, joints, tip, mount = _chain(robot)
     n = len(chain)
     # joint k (k = 2..n) in its child's frame: axis a_k; its origin in the parent's frame: xyz, rpy E_k
     axes = [None] + [_floats(j.find("axis"), "xyz", "1 0 0", f"urdf joint {j.get('name')!r} <axis>")
@@ -181,6 +207,18 @@ def urdf_links(text: str, tip_length: float | None = None) -> list[dict]:
     else:
         raise SceneError(f"urdf: the last link {chain[-1].get('name')!r} has no fixed tip link; give its length "
                          "(urdf_tip_length in the scene file) or add a fixed joint to a tip link at its end")
+    # a joint's origin O_k may sit anywhere on its axis: each is slid along it by s_k to where the link before it
+    # reaches it normal to that link's own axis (the common normal of Denavit-Hartenberg), from the tip (which stays)
+    # to joint 2 (the root's origin stays, its z is free): s_k = (next point - joint k's origin) . a_k
+    shift = [0.0] * (n + 1)
+    for k in range(n - 1, 0, -1):
+        if offsets[k] is not None:
+            ahead = offsets[k] + (shift[k + 1] * (origins[k][1] @ axes[k + 1]) if k + 1 < n else 0.0)
+            shift[k] = float(ahead @ axes[k])
+    for k in range(n):
+        if offsets[k] is not None:
+            ahead = offsets[k] + (shift[k + 1] * (origins[k][1] @ axes[k + 1]) if k + 1 < n else 0.0)
+            offsets[k] = ahead - (shift[k] * axes[k] if k > 0 else 0.0)
     # the model's frame of each link: A_k with x_k towards the next joint, z_k the joint's axis
     A = []
     for k in range(n):
@@ -221,7 +259,7 @@ def urdf_links(text: str, tip_length: float | None = None) -> list[dict]:
     for k in range(n):
         Ak, length = A[k]
         mass, c, I = _inertial(chain[k], f"urdf link {chain[k].get('name')!r}")
-        com = Ak.T @ c
+        com = Ak.T @ (c - (shift[k] * axes[k] if k > 0 else 0.0))          # about O_k, slid along the axis
         inertia = Ak.T @ I @ Ak
         table = {"length": length, "mass": mass, "com": [float(v) for v in com],
                  "inertia": [[float(v) for v in row] for row in 0.5 * (inertia + inertia.T)]}
@@ -249,7 +287,12 @@ def urdf_links(text: str, tip_length: float | None = None) -> list[dict]:
                 if damping != 0.0:
                     table["damping"] = float(damping)
         tables.append(table)
-    return tables
+    if mount is None:
+        return tables, None
+    xyz, E = _origin(mount, f"urdf joint {mount.get('name')!r}")
+    rotation = _snap(E @ A[0][0])                                    # the model's frame of link 1 in the world
+    return tables, {"kind": "fixed", "point": [float(v) for v in xyz],
+                    "rotation": [[float(v) for v in row] for row in rotation]}
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -273,7 +316,8 @@ def link_inertial(link) -> tuple[float, np.ndarray, np.ndarray]:
 
 
 def scene_to_urdf(scene) -> tuple[str, list[str]]:
-    """A scene's (codegen.scene.Scene) chain as URDF (root link1 floating, revolute or continuous joints
+    """A scene's (codegen.scene.Scene) chain as URDF (root link1 floating, or held by a fixed joint to a link
+    ``world`` for a fixed base; revolute or continuous joints
     theta_2..theta_n about z, a fixed tip link at the end of link n), and notes on what URDF cannot hold (springs,
     the restitution of stops)."""
     notes = []
@@ -302,6 +346,16 @@ def scene_to_urdf(scene) -> tuple[str, list[str]]:
                      f'<parent link="link{k - 1}"/><child link="link{k}"/>'
                      f'<origin xyz="{_num(length)} 0.0 0.0" rpy="{_numbers(matrix_rpy(scene.twists[k - 2]))}"/>'
                      f'<axis xyz="0.0 0.0 1.0"/>{limit}{damping}</joint>')
+    if scene.base.kind == "fixed":                   # link 1's model frame is its URDF frame: held by the world
+        R1 = np.eye(3)
+        for T, angle in zip(scene.base_twists, scene.q0[:3]):      # ^{ref}R_1 = T_-1 Rz T_0 Rz T_1 Rz
+            c, s = math.cos(angle), math.sin(angle)
+            R1 = R1 @ np.array(T) @ np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        parts.append('  <link name="world"/>')
+        parts.append(f'  <joint name="mount" type="fixed"><parent link="world"/><child link="link1"/>'
+                     f'<origin xyz="{_numbers(scene.base.point)}" rpy="{_numbers(matrix_rpy(R1))}"/></joint>')
+    elif scene.base.kind == "pinned":
+        notes.append(f"base: a {scene.base.label} base has no URDF form read back here; link1 written floating")
     parts.append('  <link name="tip"/>')
     parts.append(f'  <joint name="tip" type="fixed"><parent link="link{scene.n}"/><child link="tip"/>'
                  f'<origin xyz="{_num(scene.links[-1].length)} 0.0 0.0" rpy="0.0 0.0 0.0"/></joint>')

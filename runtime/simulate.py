@@ -623,7 +623,7 @@ def accuracy_cause(model: CompiledModel, p, q, qd, contacts: list, law: str = "f
     if law != "frictionless" and residual > 1e-11:
         return f"the frictional law's solve left its conditions at {residual:.2g} (relative; " + \
             _friction_residual_cause(model, p, q, [c for c in contacts if c is not None]) + ")"
-    if not planar:
+    if 1 in model.layout.free:                     # theta_0 a coordinate: the chart can near its lock
         from codegen.charts import Chart
         chi = float(Chart.of(model.scene.base_twists).measure(model.layout.expand(q)[1]))
         if chi < CHART_NEAR:
@@ -780,6 +780,9 @@ def _reduce(layout, full, name: str, velocity: bool) -> np.ndarray:
     for index, value in layout.fixed:
         target = 0.0 if velocity else value
         if abs(full[index] - target) > 1e-12 * max(1.0, abs(target)):
+            if index in layout.held:
+                raise ValueError(f"{name}[{index}]: the scene's base holds it at {target!r} (not a coordinate of the "
+                                 f"model), got {float(full[index])!r}")
             raise ValueError(f"{name}[{index}]: this specialised (planar) model holds it at {target!r}, got "
                              f"{full[index]!r}; load the general model (specialise=False) for other states")
     return np.ascontiguousarray(layout.reduce(full))

@@ -504,7 +504,7 @@ def with_parameters(scene, p):
             l, m, cx, cy, cz, ixx, iyy, izz, ixy, ixz, iyz = values
             links.append(RigidLink(l, m, (cx, cy, cz), ((ixx, ixy, ixz), (ixy, iyy, iyz), (ixz, iyz, izz))))
     return Scene(name=scene.name, links=tuple(links), twists=scene.twists, gravity=g, walls=scene.walls,
-                 q0=scene.q0, qd0=scene.qd0, base_twists=scene.base_twists)
+                 q0=scene.q0, qd0=scene.qd0, base_twists=scene.base_twists, base=scene.base)
 
 
 def integrate_reference(scene, t_eval, rtol=1e-12, atol=1e-12):

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from codegen.scene import SceneError, contact_points, frames, load_scene, scene_from_dict
-from codegen.urdf import matrix_rpy, rpy_matrix, scene_to_urdf, urdf_links
+from codegen.urdf import matrix_rpy, rpy_matrix, scene_to_urdf, urdf_chain, urdf_links
 from studies.reference import random_rotation
 from conftest import quick_model
 
@@ -224,8 +224,8 @@ NO_TIP = replace('<joint name="tool" type="fixed"><parent link="hand"/><child li
 
 @pytest.mark.parametrize("text, message", [
     (replace('type="continuous"', 'type="prismatic"'), "type 'prismatic'"),
-    (replace('<origin xyz="0.0 0.0 0.4" rpy="0 0 0.5"/>', '<origin xyz="0.0 0.1 0.4" rpy="0 0 0.5"/>'),
-     "not normal to this joint's axis"),
+    (replace('<origin xyz="0.0 0.0 0.4" rpy="0 0 0.5"/>', '<origin xyz="0.0 0.4 0.0" rpy="0 0 0.5"/>'),
+     "sits at the joint itself"),
     (replace('<dynamics damping="0.05"/>', '<dynamics damping="0.05" friction="0.2"/>'), "joint friction"),
     (replace('<limit lower="-0.5" upper="0.5"/>', ''), "needs <limit lower upper>"),
     (replace('<limit lower="-0.5" upper="0.5"/>', '<limit lower="0.5" upper="0.5"/>'), "must be < upper"),
@@ -245,3 +245,89 @@ def test_tip_length_for_a_chain_without_a_tip():
     assert scene.links[-1].length == 0.25
     with pytest.raises(SceneError, match="urdf_tip_length: given without a urdf file"):
         scene_from_dict({"name": "x", "links": [{"length": 1.0, "mu": 1.0}], "urdf_tip_length": 0.2})
+
+
+# ---------------------------------------------------------------------------------------------------
+# a root fixed to the world: a fixed base
+# ---------------------------------------------------------------------------------------------------
+MOUNT_XYZ, MOUNT_RPY = np.array([0.4, 1.1, -0.3]), np.array([0.3, -0.5, 1.2])
+
+
+def mounted_arm(kind="fixed", text=ARM):
+    return text.replace('<link name="tool"/>', '<link name="tool"/><link name="world"/>'
+                       f'<joint name="mount" type="{kind}"><parent link="world"/><child link="base"/>'
+                       f'<origin xyz="{" ".join(map(str, MOUNT_XYZ))}" rpy="{" ".join(map(str, MOUNT_RPY))}"/></joint>')
+
+
+def test_root_fixed_to_the_world_is_a_fixed_base(tmp_path):
+    """The points of the mounted chain are the URDF's own (urdf_fk of the free arm, carried by the mount's pose) at
+    random joint angles, with no fitted rotation: the base's point and orientation are the URDF's."""
+    (tmp_path / "mounted.urdf").write_text(mounted_arm())
+    (tmp_path / "mounted.toml").write_text('name = "mounted"\nurdf = "mounted.urdf"\n[initial]\nq = [0.1, 0.2, 0.3]\n')
+    scene = load_scene(tmp_path / "mounted.toml")
+    assert scene.base.kind == "fixed" and scene.base.point == tuple(MOUNT_XYZ)
+    E = rpy_matrix(*MOUNT_RPY)
+    rng = np.random.default_rng(4)
+    for _ in range(5):
+        angles = rng.uniform(-0.5, 0.5, 3)
+        q = np.array(scene.q0)
+        q[3:6] = angles
+        links, tip = urdf_fk(ARM, angles)
+        expected = np.array([MOUNT_XYZ + E @ p for p, *_ in links] + [MOUNT_XYZ + E @ tip])
+        assert np.abs(contact_points(scene, q) - expected).max() < 1e-13
+    # alone, in a default box around its base; with a [base] table of its own, refused
+    alone = load_scene(tmp_path / "mounted.urdf")
+    assert alone.base == scene.base and all(w.position != 0.0 for w in alone.walls)
+    (tmp_path / "twice.toml").write_text('name = "twice"\nurdf = "mounted.urdf"\n[base]\nkind = "free"\n')
+    with pytest.raises(SceneError, match=r"base: the URDF file mounted.urdf fixes its root link to the world"):
+        load_scene(tmp_path / "twice.toml")
+
+
+def test_world_joints_other_than_fixed_or_floating_are_refused(tmp_path):
+    (tmp_path / "slider.urdf").write_text(mounted_arm("prismatic"))
+    with pytest.raises(SceneError, match=r"holds the root to the world by a 'prismatic' joint; read are 'fixed'"):
+        load_scene(tmp_path / "slider.urdf")
+    (tmp_path / "floating.urdf").write_text(mounted_arm("floating"))
+    assert load_scene(tmp_path / "floating.urdf").base.kind == "free"
+
+
+def test_fixed_base_round_trip(tmp_path):
+    """The shipped mounted-arm written as URDF (a world link holding link1) and read back: the same base pose."""
+    scene = load_scene("mounted-arm")
+    text, notes = scene_to_urdf(scene)
+    (tmp_path / "arm.urdf").write_text(text)
+    back = load_scene(tmp_path / "arm.urdf")
+    assert back.base.kind == "fixed" and back.base.point == scene.base.point
+    assert np.abs(frames(back, np.array(back.q0))[2] - frames(scene, np.array(scene.q0))[2]).max() < 1e-15
+
+
+def test_offsets_along_the_joint_axes_slide_the_joint_points():
+    """Next joints offset along a joint's axis (shoulder: 0.1 m along its y axis to the elbow; elbow: 0.05 m along its
+    z axis to the wrist; the tool 0.02 m along the wrist's axis): on a world mount, at random angles, each model
+    point O_k lies on URDF joint k's axis, the tip is the URDF's, and the centres of mass, inertias and joint axes
+    are the URDF's, all in the world frame with no fitted rotation."""
+    free_text = ARM.replace('<origin xyz="0.0 0.0 0.4" rpy="0 0 0.5"/>', '<origin xyz="0.0 0.1 0.4" rpy="0 0 0.5"/>')
+    free_text = free_text.replace('<origin xyz="0.3 0.0 0.0" rpy="0.2 0 0"/>', '<origin xyz="0.3 0.0 0.05" rpy="0.2 0 0"/>')
+    free_text = free_text.replace('<origin xyz="0.1 0 0"/>', '<origin xyz="0.1 0.012 0.016"/>')
+    text = mounted_arm(text=free_text)
+    scene = scene_from_dict({"name": "offset", "links": urdf_chain(text)[0], "base": urdf_chain(text)[1],
+                             "initial": {"q": [0.0, 0.0, 0.0]}})
+    E = rpy_matrix(*MOUNT_RPY)
+    robot = ET.fromstring(free_text)
+    axes = [numbers(j.find("axis"), "xyz", "1 0 0") for j in robot.findall("joint") if j.get("type") != "fixed"]
+    rng = np.random.default_rng(12)
+    for _ in range(5):
+        angles = rng.uniform(-0.5, 0.5, 3)
+        q = np.array(scene.q0)
+        q[3:6] = angles
+        poses, tip = urdf_fk(free_text, angles)
+        points, Rs = contact_points(scene, q), frames(scene, q)
+        assert np.abs(points[-1] - (MOUNT_XYZ + E @ tip)).max() < 1e-13
+        for i, link in enumerate(scene.links):
+            origin, R, com, mass, inertia = poses[i]
+            if i >= 1:
+                axis = E @ R @ (axes[i - 1] / np.linalg.norm(axes[i - 1]))
+                assert np.abs(np.cross(points[i] - (MOUNT_XYZ + E @ origin), axis)).max() < 1e-13
+                assert np.abs(Rs[i + 2][:, 2] - axis).max() < 1e-13
+            assert np.abs(points[i] + Rs[i + 2] @ np.array(link.com) - (MOUNT_XYZ + E @ com)).max() < 1e-13
+            assert np.abs(Rs[i + 2] @ np.array(link.inertia) @ Rs[i + 2].T - E @ inertia @ E.T).max() < 1e-15

@@ -124,3 +124,12 @@ def test_tangent_kernels_on_request(capsys):
     assert "straight-line code per link (--tangent: the tangent kernels need it)" in out
     assert main(["--links", "10", "--rolled", "--tangent", "--no-compile"]) == 2
     assert "error: --tangent: the rolled forward dynamics (rolled=True" in capsys.readouterr().err
+
+
+def test_explain_says_what_a_mounted_base_holds(capsys):
+    from codegen.cli import main
+    assert main(["--scene", "mounted-arm", "--explain"]) == 0
+    out = capsys.readouterr().out
+    assert "the model keeps 2 of 8 coordinates" in out
+    assert ("base fixed: O_1 held at (1, 0, 0), link 1 welded to the box, so theta_-1, theta_0, theta_1, X1, X2, X3 "
+            "are not coordinates") in out

@@ -198,12 +198,41 @@ def test_a_landing_is_differentiated(compiled):
         1 / math.sqrt(2 * 0.3 * 9.81), rel=1e-5)
 
 
-def test_a_frictional_impact_ends_the_sensitivities(compiled):
-    model = compiled(rod_scene(9.81, 0.8, 0.3, 0.0, friction=0.5), specialise=True, tangent=True)
-    r = simulate(model, 0.3, sensitivities=["q0[X2]"])
-    assert r.success and len(r.impacts) >= 1
-    assert r.sensitivity_status == "an impact by a frictional law"
-    assert np.all(np.isnan(r.sensitivities.matrix))
+def rough_rod(friction: float):
+    """The rod tilted 0.7 rad from the vertical, thrown down and sideways and turning, onto a floor with e = 0.8 and
+    the given Coulomb coefficient: it strikes with O_1, then O_2, then O_1 again within 0.5 s."""
+    return scene_from_dict({"name": f"sens_rough_rod{int(10 * friction)}", "gravity": 9.81,
+                            "links": [{"length": 1.0, "mu": 1.0, "J": [0.0, 0.0, 0.0]}],
+                            "walls": {"x2_min": 0.0}, "restitution": 0.8, "friction": friction,
+                            "initial": {"q": [-math.pi / 2, 0.0, 0.7, 0.0, 0.3, 0.0],
+                                        "qd": [0.0, 0.0, 1.5, 0.8, -1.0, 0.0]}})
+
+
+def test_impacts_that_stick_on_a_rough_floor_match_central_differences(compiled):
+    """c_f = 2: at each of the three impacts the struck end sticks (|L_T| < c_f L_N), so the frictional law is
+    Newton's restitution along the normal and the tangent alike (xi = gamma+ + e gamma- = 0 on both rows): its
+    saltation is the frictionless one with the tangential rows active.  Dropping them gives the frictionless law's
+    derivative, which the differences refute."""
+    model = compiled(rough_rod(2.0), specialise=True, tangent=True)
+    names = ["q0[X2]", "qd0[X1]", "qd0[theta_1]", "e_x2_min", "g", "l_1"]
+    r = simulate(model, 0.5, sensitivities=names, **TIGHT)
+    assert r.success and len(r.impacts) == 3 and r.sensitivity_status == "valid"
+    for impact in r.impacts:
+        assert impact.law == "gdi"
+        contact = impact.contacts[0]
+        assert 0.0 < abs(contact.impulse_t[0]) < 2.0 * contact.impulse       # stuck, and friction at work
+    p, q0, qd0 = model.p.copy(), np.array(model.scene.q0), np.array(model.scene.qd0)
+    central_differences(model, 0.5, p, q0, qd0, names, r.sensitivities.matrix, **TIGHT)
+
+
+def test_a_sliding_impact_ends_the_sensitivities(compiled):
+    model = compiled(rough_rod(0.2), specialise=True, tangent=True)
+    r = simulate(model, 0.5, sensitivities=["q0[X2]"], **TIGHT)
+    assert r.success and r.impacts[0].law == "gdi"
+    contact = r.impacts[0].contacts[0]
+    assert abs(contact.impulse_t[0]) == pytest.approx(0.2 * contact.impulse, rel=1e-9)   # on the cone: sliding
+    assert r.sensitivity_status == "an impact by a frictional law in which a contact slides"
+    assert "t = 0.16" in r.sensitivity_message and np.all(np.isnan(r.sensitivities.matrix))
 
 
 def test_bad_direction_names_say_what_is_allowed(free_rod):

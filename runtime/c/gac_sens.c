@@ -583,7 +583,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
     gac_sens *z = s->sens;
     const gac_model *md = s->model;
     if (z == 0 || z->status != GAC_SENS_VALID) return;
-    if (r->law != GAC_IMPACT_LAW_FRICTIONLESS) {
+    if (r->law != GAC_IMPACT_LAW_FRICTIONLESS && r->law != GAC_IMPACT_LAW_GDI) {
         gac_sens_stop(s, r->law == GAC_IMPACT_LAW_GDI_TANGENTIAL ? GAC_SENS_TANGENTIAL : GAC_SENS_FRICTION, r->t,
                       r->ncontact > 0 ? r->contact[0] : -1);
         return;
@@ -602,14 +602,14 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
         }
     }
     {
-        const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), n = r->ncontact;
+        const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), n = r->ncontact, n3 = 3 * n;
         const int nc1 = GAC_AT_LEAST_1(md->ncontact);
         const double *xm = s->xs, *xp = s->x1, *q = xm;
-        double f[n * nr], W[n * nq], Y[n * nq], LD[n * n], F[n], v[n], e[n], fm[nx], fp[nx];
+        double f[n3 * nr], W[n3 * nq], Y[n3 * nq], LD[n3 * n3], F[n3], v[n3], e[n3], fm[nx], fp[nx];
         double dgap[nc1], dx[nx], dqd_plus[nq], zero_p[GAC_AT_LEAST_1(md->nparam)];
         double qd_law[nq], qdd_free[nq], lambda[nq];
         double speed = 0.0, largest = 0.0, v_event = 0.0;
-        int active[n], landing[n], before_set[nq + nc1], at_rest[nq], m = 0, nbefore, nheld = 0, a, b, i, j;
+        int active[n3], landing[n3], before_set[nq + nc1], at_rest[nq], m = 0, nbefore, nheld = 0, a, b, i, j;
         gac_sens_law law;
         GAC_SENS_SET_ARRAYS(nq, nr);
         gac_sens_set H;
@@ -660,6 +660,29 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
                 }
                 v[m] = before;
                 active[m++] = c;
+                if (r->law == GAC_IMPACT_LAW_GDI && ct->kind == GAC_CONTACT_WALL
+                    && gac_friction_coefficient(md, s->p, c) > 0.0) {   /* a rough contact: stuck, or not derived */
+                    const double cf = gac_friction_coefficient(md, s->p, c);
+                    const double tangential = hypot(r->impulse_t[2 * a], r->impulse_t[2 * a + 1]);
+                    int t;
+                    if (!(tangential < (1.0 - 1e-6) * cf * r->impulse[a])) {   /* sliding (or at the cone's edge) */
+                        gac_sens_stop(s, GAC_SENS_FRICTION, r->t, c);
+                        return;
+                    }
+                    for (t = 0; t < 2; ++t) {                /* stuck: xi_T = gamma+_T + e gamma-_T = 0, the same
+                                                                law as the normal's along its tangential rows */
+                        double *ft = f + (long)m * nr, *wt = W + (long)m * nq, vt = 0.0;
+                        if (ct->trow[t] < 0) continue;
+                        for (i = 0; i < nr; ++i) ft[i] = 0.0;
+                        ft[ct->trow[t]] = 1.0;
+                        md->contact_generalized_force(q, ft, s->p, wt);
+                        for (i = 0; i < nq; ++i) vt += wt[i] * xm[nq + i];
+                        e[m] = e[m - 1];
+                        landing[m] = landing[m - 1];
+                        v[m] = vt;
+                        active[m++] = c;
+                    }
+                }
             } else if (!held_after && !was_resting) {       /* no impulse: out of Delta if it leaves clear of */
                 const double bound = after + (before < 0.0 ? e[m] * before : 0.0);   /* the law's bound */
                 if (!(bound > 1e-9 * speed * s->lever)) {

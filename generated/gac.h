@@ -920,8 +920,9 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
 #define GAC_SENS_VALID         0   /* every event so far differentiated */
 #define GAC_SENS_RESTING       1   /* a contact rests on a wall with friction (or is stuck): friction at rest is not
                                       differentiated (frictionless resting contact is) */
-#define GAC_SENS_FRICTION      2   /* an impact by a frictional law in which a rough contact slides (or one solved
-                                      with a common e): stuck contacts are differentiated */
+#define GAC_SENS_FRICTION      2   /* an impact by a frictional law other than GAC_IMPACT_LAW_GDI solved with each
+                                      contact's own e (a round with a common e, Newton + Coulomb): the GDI law's
+                                      stuck and sliding contacts are differentiated */
 #define GAC_SENS_STOP          3   /* (not raised since joint stops are differentiated; the code stays reserved) */
 #define GAC_SENS_SIMULTANEOUS  4   /* an impact of more than one round or a plastic round, or whose active contacts'
                                       rows are dependent */

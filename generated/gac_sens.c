@@ -502,10 +502,18 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
  *     dv_a = dw_a . qd + w_a . dqd,  A dF = -de v - (1 + E) dv - dA F,  d qd+ = dqd + dY F + Y dF.
  * (One contact: dF = dL of y L, L = -(1 + e) v / (w . y).)  A is kept factored (gac_ldlt) in LD. */
 typedef struct {
-    int m;                       /* active contacts */
-    const int *active;           /* their model indices */
+    int m;                       /* active rows */
+    const int *active;           /* their contacts' model indices */
     const int *landing;          /* 1: struck with e = 0 (a landing), its wall's e not read */
     const double *f, *W, *Y, *LD, *F, *v, *e;   /* f: m x nr unit signed rows; the rest as above */
+    /* sliding contacts (the frictional law, its impulse on the cone): row a of such a contact's tangent has
+       normal[a] >= 0, the row of its normal; u[a] the slide's direction's component along it (L_T = -c_f L_N u),
+       xi_T[a] the tangential velocity xi_T (|xi_T| of the contact in xi_T_norm[a]); normal[a] = -1 elsewhere.
+       With any, the system is not symmetric and LD holds A itself (m x m) for gac_lu_solve. */
+    int nslide;
+    const int *normal;
+    const double *u, *xi_T_norm, *cf;
+    const int *cf_index;
 } gac_sens_law;
 
 static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, const double *q, const double *qd,
@@ -534,7 +542,37 @@ static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, con
         }
         dF[a] = rhs;
     }
-    gac_ldlt_solve(m, L->LD, dF);
+    if (L->nslide == 0) {
+        gac_ldlt_solve(m, L->LD, dF);
+    } else {                                             /* with slides: M dF = rhs, M not symmetric */
+        double M[m * m], c[m];
+        for (a = 0; a < m; ++a) c[a] = -dF[a];           /* d xi_a = (A dF)_a + c_a; A dF = -c on the other rows */
+        for (a = 0; a < m * m; ++a) M[a] = L->LD[a];     /* A (its slide rows replaced below) */
+        for (a = 0; a < m; ++a) {
+            const int nrm = L->normal[a];
+            double dcf;
+            int t;
+            if (nrm < 0) continue;
+            dcf = L->cf_index[a] >= 0 ? dp[L->cf_index[a]] : 0.0;
+            /* R_a = L_T,a + c_f L_N u_a(xi_T) = 0, differentiated:
+               dL_T,a + c_f u_a dL_N + c_f L_N sum_t Du_at (A dL + c)_t = -dc_f L_N u_a,
+               Du = (I - u u^T) / |xi_T| over the contact's tangential rows t (0 with one tangential row) */
+            for (b = 0; b < m; ++b) M[a * m + b] = (b == a ? 1.0 : 0.0) + (b == nrm ? L->cf[a] * L->u[a] : 0.0);
+            dF[a] = -dcf * L->F[nrm] * L->u[a];
+            for (t = 0; t < m; ++t) {
+                double Du;
+                if (L->normal[t] != nrm) continue;
+                Du = L->cf[a] * L->F[nrm] * ((t == a ? 1.0 : 0.0) - L->u[a] * L->u[t]) / L->xi_T_norm[a];
+                if (Du == 0.0) continue;
+                for (b = 0; b < m; ++b) M[a * m + b] += Du * L->LD[t * m + b];
+                dF[a] -= Du * c[t];
+            }
+        }
+        if (gac_lu_solve(m, M, dF, 1e-14) != 0) {
+            for (i = 0; i < nq; ++i) dqd_plus[i] = NAN;
+            return;
+        }
+    }
     for (i = 0; i < nq; ++i) {
         double value = dqd[i];
         for (a = 0; a < m; ++a) value += dY[(long)a * nq + i] * L->F[a] + L->Y[(long)a * nq + i] * dF[a];
@@ -606,6 +644,8 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
         const int nc1 = GAC_AT_LEAST_1(md->ncontact);
         const double *xm = s->xs, *xp = s->x1, *q = xm;
         double f[n3 * nr], W[n3 * nq], Y[n3 * nq], LD[n3 * n3], F[n3], v[n3], e[n3], fm[nx], fp[nx];
+        double u[n3], xi_t[n3], xi_norm[n3], cf_row[n3];
+        int normal[n3], cf_index[n3], nslide = 0;
         double dgap[nc1], dx[nx], dqd_plus[nq], zero_p[GAC_AT_LEAST_1(md->nparam)];
         double qd_law[nq], qdd_free[nq], lambda[nq];
         double speed = 0.0, largest = 0.0, v_event = 0.0;
@@ -660,27 +700,47 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
                 }
                 v[m] = before;
                 active[m++] = c;
+                normal[m - 1] = -1;
+                F[m - 1] = r->impulse[a];
                 if (r->law == GAC_IMPACT_LAW_GDI && ct->kind == GAC_CONTACT_WALL
-                    && gac_friction_coefficient(md, s->p, c) > 0.0) {   /* a rough contact: stuck, or not derived */
+                    && gac_friction_coefficient(md, s->p, c) > 0.0) {   /* a rough contact: stuck or sliding */
                     const double cf = gac_friction_coefficient(md, s->p, c);
                     const double tangential = hypot(r->impulse_t[2 * a], r->impulse_t[2 * a + 1]);
+                    const int row_n = m - 1, first = m;
+                    const int slides = !(tangential < (1.0 - 1e-6) * cf * r->impulse[a]);
+                    double xi2 = 0.0;
                     int t;
-                    if (!(tangential < (1.0 - 1e-6) * cf * r->impulse[a])) {   /* sliding (or at the cone's edge) */
-                        gac_sens_stop(s, GAC_SENS_FRICTION, r->t, c);
-                        return;
-                    }
-                    for (t = 0; t < 2; ++t) {                /* stuck: xi_T = gamma+_T + e gamma-_T = 0, the same
-                                                                law as the normal's along its tangential rows */
-                        double *ft = f + (long)m * nr, *wt = W + (long)m * nq, vt = 0.0;
+                    for (t = 0; t < 2; ++t) {                /* its tangential rows: stuck, xi_T = gamma+_T + e gamma-_T
+                                                                = 0, the normal's law along them; sliding, on the cone */
+                        double *ft = f + (long)m * nr, *wt = W + (long)m * nq, vt = 0.0, vt_after = 0.0;
                         if (ct->trow[t] < 0) continue;
                         for (i = 0; i < nr; ++i) ft[i] = 0.0;
                         ft[ct->trow[t]] = 1.0;
                         md->contact_generalized_force(q, ft, s->p, wt);
-                        for (i = 0; i < nq; ++i) vt += wt[i] * xm[nq + i];
-                        e[m] = e[m - 1];
-                        landing[m] = landing[m - 1];
+                        for (i = 0; i < nq; ++i) {
+                            vt += wt[i] * xm[nq + i];
+                            vt_after += wt[i] * xp[nq + i];
+                        }
+                        e[m] = e[row_n];
+                        landing[m] = landing[row_n];
                         v[m] = vt;
+                        F[m] = r->impulse_t[2 * a + t];
+                        normal[m] = slides ? row_n : -1;
+                        xi_t[m] = vt_after + e[row_n] * vt;
+                        xi2 += xi_t[m] * xi_t[m];
+                        cf_row[m] = cf;
+                        cf_index[m] = ct->friction_index;
+                        u[m] = slides ? -r->impulse_t[2 * a + t] / (cf * r->impulse[a]) : 0.0;
                         active[m++] = c;
+                    }
+                    if (slides) {
+                        if (!(sqrt(xi2) > 1e-9 * speed * s->lever)) {   /* on the cone with xi_T ~ 0: a mode
+                                                                           boundary between stick and slide */
+                            gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, c);
+                            return;
+                        }
+                        for (t = first; t < m; ++t) xi_norm[t] = sqrt(xi2);
+                        ++nslide;
                     }
                 }
             } else if (!held_after && !was_resting) {       /* no impulse: out of Delta if it leaves clear of */
@@ -702,13 +762,21 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
                 for (i = 0; i < nq; ++i) sum += W[(long)a * nq + i] * Y[(long)b * nq + i];
                 LD[a * m + b] = LD[b * m + a] = sum;
             }
-            F[a] = -(1.0 + e[a]) * v[a];
         }
-        if (gac_ldlt(m, LD, 1e-12) != 0) {                   /* dependent rows: no unique differential */
-            gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
-            return;
+        {
+            double factor[m * m];
+            gac_copy(factor, LD, m * m);
+            if (gac_ldlt(m, factor, 1e-12) != 0) {           /* dependent rows: no unique differential */
+                gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
+                return;
+            }
+            if (nslide == 0) {                               /* Newton's law on every row: A F = -(1 + E) v */
+                gac_copy(LD, factor, m * m);
+                for (a = 0; a < m; ++a) F[a] = -(1.0 + e[a]) * v[a];
+                gac_ldlt_solve(m, LD, F);
+            }                                                /* with slides: the law's impulses (the record's),
+                                                                and LD keeps A for the differential */
         }
-        gac_ldlt_solve(m, LD, F);
         for (i = 0; i < nq; ++i) {                           /* the law's velocities, before any hold */
             double value = xm[nq + i];
             for (a = 0; a < m; ++a) value += Y[(long)a * nq + i] * F[a];
@@ -716,6 +784,8 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
         }
         law.m = m, law.active = active, law.landing = landing, law.f = f, law.W = W, law.Y = Y, law.LD = LD;
         law.F = F, law.v = v, law.e = e;
+        law.nslide = nslide, law.normal = normal, law.u = u, law.xi_T_norm = xi_norm, law.cf = cf_row;
+        law.cf_index = cf_index;
         if (gac_sens_field(s, r->t, xm, nbefore, before_set, &H, qdd_free, lambda, fm, 0) != 0
             || gac_sens_field(s, r->t, xp, s->nresting, s->resting, &H, qdd_free, lambda, fp, 0) != 0) {
             gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);

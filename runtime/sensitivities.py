@@ -21,7 +21,7 @@ from codegen.scene import coordinate_names
 STATUS_WORDS = {
     0: "valid",
     1: "resting contact on a rough wall (friction at rest is not differentiated)",
-    2: "an impact by a frictional law in which a contact slides",
+    2: "an impact by a frictional law with a common e, or by Newton + Coulomb",
     3: "an impact at a joint stop",
     4: "an impact of several rounds (or with dependent contact rows)",
     5: "a grazing contact (normal velocity ~ 0 at the wall)",

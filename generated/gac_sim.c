@@ -125,6 +125,8 @@ static void gac_emit(gac_sim *s, double t_b, const double *t_eval, int n_eval, i
             for (i = 0; i < md->nx; ++i) out[i] = s->x[i];
         }
         gac_to_chart_a(s, out);
+        if (s->sens != 0 && s->sens->S_eval != 0)         /* S at the sample too, when asked */
+            gac_sens_sample(s, t_eval[*i_eval], s->sens->S_eval + (long)(*i_eval) * s->sens->k * md->nx);
         ++*i_eval;
     }
 }
@@ -411,6 +413,8 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
     while (n_eval > 0 && *i_eval < n_eval && t_eval[*i_eval] <= t_end) {   /* samples at t_end itself */
         for (i = 0; i < md->nx; ++i) x_eval[(long)(*i_eval) * md->nx + i] = s->x[i];
         gac_to_chart_a(s, x_eval + (long)(*i_eval) * md->nx);
+        if (s->sens != 0 && s->sens->S_eval != 0)
+            gac_copy(s->sens->S_eval + (long)(*i_eval) * s->sens->k * md->nx, s->sens->S, (long)s->sens->k * md->nx);
         ++*i_eval;
     }
     return s->fail ? s->fail : GAC_SIM_END;

@@ -92,6 +92,8 @@ class Sensitivities:
     n_impacts: int = 0                       # impacts differentiated
     code: int = 0                            # GAC_SENS_* of gac.h
     extra: dict = field(default_factory=dict)
+    at_samples: np.ndarray | None = None     # simulate(sensitivities_at_samples=True): len(t) x 2 nq x k, NaN from
+                                             # the first event not differentiated on
 
     @property
     def valid(self) -> bool:
@@ -118,12 +120,14 @@ def contact_label(model, contact: int) -> str:
     return wall.name if wall.name.startswith("theta_") else f"O{point}/{wall.name}"
 
 
-def read(model, sens, names: list[str], run_ok: bool, run_message: str) -> Sensitivities:
-    """The final Sensitivities from the C struct ``sens`` (gac_sens) after a run."""
+def read(model, sens, names: list[str], run_ok: bool, run_message: str, samples=None) -> Sensitivities:
+    """The final Sensitivities from the C struct ``sens`` (gac_sens) after a run; ``samples`` (n x k x nx, the C
+    loop's S at each sample) as at_samples (n x nx x k)."""
     nx, k = 2 * model.nq, len(names)
     matrix = np.array(model.ffi.unpack(sens.S, k * nx)).reshape(k, nx).T.copy()
     code = int(sens.status)
-    result = Sensitivities(state_names(model), list(names), matrix, n_impacts=int(sens.n_impacts), code=code)
+    result = Sensitivities(state_names(model), list(names), matrix, n_impacts=int(sens.n_impacts), code=code,
+                           at_samples=None if samples is None else np.transpose(samples, (0, 2, 1)).copy())
     if code != 0:
         where = contact_label(model, int(sens.contact_status))
         result.status = STATUS_WORDS.get(code, f"status {code}")

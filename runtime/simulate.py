@@ -393,7 +393,8 @@ class Impacts(Sequence):
 
 def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "dopri5", t_eval=None, *,
              p=None, q0=None, qd0=None, u=None, progress=None, charts: bool = True, check_start: bool = True,
-             keep_impacts: bool = True, sensitivities=None, **options) -> SimulationResult:
+             keep_impacts: bool = True, sensitivities=None, sensitivities_at_samples: bool = False,
+             **options) -> SimulationResult:
     """Simulate the scene's hybrid dynamics from its initial state over [0, t_end].
 
     method        'dopri5' (adaptive Dormand-Prince 5(4), rtol/atol), 'dop853' (adaptive 8(5,3)),
@@ -424,6 +425,9 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                   impact's dt_dp the impact time's derivatives, result.sensitivity_status / _message the verdict
                   (events the C loop does not differentiate make them NaN from there on: docs/simulation.md,
                   "Sensitivities")
+    sensitivities_at_samples  True: also d x(t_i)/d(direction) at every sample t_i (result.sensitivities.at_samples,
+                  len(t) x 2 nq x k), each formed by one more Runge-Kutta step of the directions from its step's start
+                  (costs about one step of the directions per sample)
     **options     the C loop's options (LOOP_OPTIONS: rtol, atol, dt, h_max, event_samples, event_tol, contact_tol,
                   max_steps, max_impacts, max_wall_time, rest_height, zeno_impacts, energy_tol), with the C library's
                   defaults
@@ -479,6 +483,12 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                                    model._ptr(sens_work))
         if code != lib.GAC_OK:
             raise ValueError(f"sensitivities: {model.error_message(code)}")
+    elif sensitivities_at_samples:
+        raise ValueError("sensitivities_at_samples: needs sensitivities=[...] (the directions)")
+    s_eval = None
+    if sens is not None and sensitivities_at_samples:     # S at each sample, written by the C loop with x_eval
+        s_eval = np.full((len(t_eval), len(directions), nx), np.nan)
+        sens.S_eval = model._ptr(s_eval)
     watch = _watch(model, sim, opt.max_wall_time, progress)   # noqa: F841  (the clock and progress handles)
 
     # the loop: one C call per impact or change of the resting contacts, up to t_end or the loop's end
@@ -487,6 +497,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     while i_eval[0] < len(t_eval) and t_eval[i_eval[0]] <= 0.0:      # samples at the start (as sim_init left it)
         row = x_eval[i_eval[0]]          # in chart A's coordinates, whichever base chart the loop starts on
         c.sim_state(sim, ffi.NULL, model._ptr(row[:nq]), model._ptr(row[nq:]))
+        if s_eval is not None:
+            s_eval[i_eval[0]] = np.array(ffi.unpack(sens.S, len(directions) * nx)).reshape(len(directions), nx)
         i_eval[0] += 1
     record = c.new("impact_record")
     rec = record.base         # the library's record (gac_impact_record); its arrays live in *record
@@ -551,7 +563,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                  "chart_switch": float(opt.chart_switch)},
         n_chart_switches=int(state.n_chart_switches), n_sticks=int(state.n_sticks), n_slips=int(state.n_slips),
         n_tangential_impacts=int(state.n_tangential_impacts),
-        sensitivities=None if sens is None else sensitivity.read(model, sens, directions, status == 0, message))
+        sensitivities=None if sens is None else sensitivity.read(model, sens, directions, status == 0, message,
+                                                                 None if s_eval is None else s_eval[:n]))
 
 
 def _option_value(opt, name: str):

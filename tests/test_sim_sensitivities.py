@@ -260,6 +260,54 @@ def test_a_sliding_impact_in_the_plane_matches_central_differences(compiled):
     central_differences(model, 0.5, p, q0, qd0, names, r.sensitivities.matrix, **TIGHT)
 
 
+def test_sensitivities_at_the_samples_follow_the_closed_form(free_rod):
+    """The rod without gravity at every 1 ms sample: h(t) = h0 + qd0 t before the bounce at t* = H0/U and
+    e (U t - H0) after, so dh/dh0 = 1 then -e, dh/dqd0 = t then -e t, dh/de = 0 then U t - H0 (each sample's S formed
+    by one more step of the directions from its step's start)."""
+    names = ["q0[X2]", "qd0[X2]", "e_x2_min"]
+    r = simulate(free_rod, T, sensitivities=names, sensitivities_at_samples=True, **TIGHT)
+    at = r.sensitivities.at_samples
+    assert at.shape == (len(r.t), 2 * free_rod.nq, 3)
+    row = r.sensitivities.rows.index("q[X2]")
+    before = r.t <= H0 / U + 1e-12                  # a sample at t* itself is the state just before the impact
+    expected = np.where(before[:, None], np.stack([np.ones_like(r.t), r.t, 0 * r.t], axis=1),
+                        np.stack([-E + 0 * r.t, -E * r.t, U * r.t - H0], axis=1))
+    assert np.abs(at[:, row, :] - expected).max() < 1e-8
+    assert np.array_equal(at[-1], r.sensitivities.matrix)                   # the last sample is t_end
+    with pytest.raises(ValueError, match="sensitivities_at_samples: needs sensitivities"):
+        simulate(free_rod, 0.1, sensitivities_at_samples=True)
+
+
+def test_sensitivities_at_the_samples_match_central_differences_of_the_samples(compiled):
+    """The rod thrown onto the rough floor (three stuck impacts, gravity, turning): S at every 10 ms sample against
+    central differences of the samples themselves, for a coordinate, a velocity and a parameter."""
+    model = compiled(rough_rod(2.0), specialise=True, tangent=True)
+    names, samples, step = ["q0[X2]", "qd0[theta_1]", "g"], np.linspace(0.0, 0.5, 51), 1e-6
+    r = simulate(model, 0.5, t_eval=samples, sensitivities=names, sensitivities_at_samples=True, **TIGHT)
+    sequence = [i.t for i in r.impacts]
+    full = coordinate_names(model.n)
+
+    def trajectory(h, direction):
+        q0, qd0, p = np.array(model.scene.q0), np.array(model.scene.qd0), model.p.copy()
+        if direction.startswith("q0["):
+            q0[full.index(direction[3:-1])] += h
+        elif direction.startswith("qd0["):
+            qd0[full.index(direction[4:-1])] += h
+        else:
+            p[model.parameter_names.index(direction)] += h
+        run = simulate(model, 0.5, t_eval=samples, p=p, q0=q0, qd0=qd0, **TIGHT)
+        assert len(run.impacts) == len(sequence)
+        free = list(model.layout.free)
+        return np.hstack([run.q[:, free], run.qd[:, free]])
+
+    impacts = np.array(sequence)
+    clear = np.array([np.min(np.abs(impacts - t)) > 2e-3 for t in samples])   # the jump moves with the impact time
+    for j, direction in enumerate(names):
+        fd = (trajectory(step, direction) - trajectory(-step, direction)) / (2 * step)
+        error = np.abs(fd[clear] - r.sensitivities.at_samples[clear, :, j])
+        assert error.max() <= 1e-6 * max(10.0, np.abs(fd[clear]).max()), direction
+
+
 def test_bad_direction_names_say_what_is_allowed(free_rod):
     for bad in (["q0[theta_5]"], ["qd0[Y]"], ["mass"], [], ["g", "g"]):
         with pytest.raises(ValueError, match="sensitivities"):

@@ -939,7 +939,7 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       (their forces ~0 at once) */
 
 /* The sensitivities of one run: pointers into the caller's dwork (gac_sens_ndouble(m, k) doubles), laid out as
- * S (k nx) | dp (k nparam) | dt_impact (k) | dgap_held (k max(ncontact, 1)) | scratch.  Direction-major: S[j*nx + i] = d x_i / d direction j
+ * S (k nx) | dp (k nparam) | dt_impact (k) | dgap_held (k max(ncontact, 1)) | scratch | S_keep (k nx).  Direction-major: S[j*nx + i] = d x_i / d direction j
  * (chart A's coordinates, x = [q, qd] at sim.t), dp[j*nparam + i] the parameter seed of direction j. */
 typedef struct gac_sens_s {
     int k;                       /* directions */
@@ -953,12 +953,17 @@ typedef struct gac_sens_s {
     long n_impacts;              /* impacts differentiated */
     double *dgap_held;           /* k x max(ncontact, 1): d(the gap a resting contact is held at) / d direction j */
     double *work;                /* scratch: the stages */
+    double *S_keep;              /* scratch: S kept while a sample's is formed (k x nx) */
+    double *S_eval;              /* NULL (default), or the caller's n_eval x k x nx: S at each sample the loop writes
+                                    to x_eval (the same index), formed by the run's Runge-Kutta formula from the
+                                    step's start to the sample (one step of the directions' stages per sample);
+                                    NaN from the first event not differentiated on.  Set after gac_sens_attach. */
 } gac_sens;
 
-/* Doubles of a gac_sens's dwork: S, dp, dt_impact, the held gaps' derivatives, and 12 stage derivatives of the state
- * and of each direction. */
+/* Doubles of a gac_sens's dwork: S, dp, dt_impact, the held gaps' derivatives, 12 stage derivatives of the state
+ * and of each direction, and S kept while a sample's is formed. */
 #define GAC_SENS_NDOUBLE(nq, nparam, ncontact, k) \
-    (13L * (k) * 2 * (nq) + (long)(k) * (nparam) + (k) + (long)(k) * ((ncontact) > 0 ? (ncontact) : 1) + 14L * 2 * (nq))
+    (14L * (k) * 2 * (nq) + (long)(k) * (nparam) + (k) + (long)(k) * ((ncontact) > 0 ? (ncontact) : 1) + 14L * 2 * (nq))
 long gac_sens_ndouble(const gac_model *m, int k);
 
 /* Attach sensitivities along k directions to sim from its current time on: S = seed_x (k x nx, direction-major),

@@ -41,11 +41,13 @@ int gac_sens_attach(gac_sim *s, gac_sens *sens, int k, const double *seed_x, con
     if (!gac_finite(seed_x, k * md->nx) || (seed_p != 0 && !gac_finite(seed_p, k * md->nparam)))
         return GAC_ERR_BAD_OPTION;
     sens->k = k;
-    sens->S = dwork;                              /* dwork: S | dp | dt_impact | work */
+    sens->S = dwork;                              /* dwork: S | dp | dt_impact | dgap_held | work | S_keep */
     sens->dp = dwork + (long)k * md->nx;
     sens->dt_impact = sens->dp + (long)k * md->nparam;
     sens->dgap_held = sens->dt_impact + k;
     sens->work = sens->dgap_held + (long)k * GAC_AT_LEAST_1(md->ncontact);
+    sens->S_keep = dwork + gac_sens_ndouble(md, k) - (long)k * md->nx;   /* the last k nx doubles */
+    sens->S_eval = 0;
     gac_copy(sens->S, seed_x, k * md->nx);
     for (i = 0; i < k * md->nparam; ++i) sens->dp[i] = seed_p != 0 ? seed_p[i] : 0.0;
     for (i = 0; i < k; ++i) sens->dt_impact[i] = 0.0;
@@ -493,6 +495,22 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
         }
         if (!gac_finite(z->S, k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, s->t + h, -1);
     }
+}
+
+/* S at sample time t of the step that starts at s->t (s->t <= t <= its end) into out (k x nx): one step of the run's
+ * formula from the step's start to t, as at an event, S itself kept; NaN once the sensitivities ended. */
+void gac_sens_sample(gac_sim *s, double t, double *out)
+{
+    gac_sens *z = s->sens;
+    const long size = (long)z->k * s->model_a->nx;
+    if (z->status == GAC_SENS_VALID && t > s->t) {
+        gac_copy(z->S_keep, z->S, size);
+        gac_sens_flight(s, s->x, t - s->t, 0);
+        gac_copy(out, z->S, size);
+        if (z->status == GAC_SENS_VALID) gac_copy(z->S, z->S_keep, size);
+        return;
+    }
+    gac_copy(out, z->S, size);                           /* (NaN where they ended) */
 }
 
 /* The impact map of the active contacts a = 1..m (those that took an impulse) by Newton's law, Eq. 47, with the

@@ -836,6 +836,13 @@ class Scene:
         that end there (link p - 1 and link p); 0 for segments."""
         return max((self.links[i - 1].radius for i in (p - 1, p) if 1 <= i <= self.n), default=0.0)
 
+    def link_pairs(self) -> list[tuple[int, int]]:
+        """The pairs of links (i < j, 1-based) that can touch each other as capsules: not adjacent (adjacent links
+        share a joint point, where their capsules always overlap) and with radii adding up to more than 0 (two
+        segments of no thickness meet only by crossing, which no gap of theirs can see coming)."""
+        return [(i, j) for i in range(1, self.n + 1) for j in range(i + 2, self.n + 1)
+                if self.links[i - 1].radius + self.links[j - 1].radius > 0.0]
+
     def radius_owner(self, p: int) -> int | None:
         """The link (1-based) whose radius point_radius(p) takes, or None when it is 0."""
         r = self.point_radius(p)

@@ -68,3 +68,12 @@ def test_gaps_against_an_independent_computation():
         expected = [w.normal_sign * (points[p - 1, w.axis] - w.position) - point_radius[p - 1]
                     for p, w in model.contacts]
         assert model.contact_gaps(model.layout.reduce(q)) == pytest.approx(expected, abs=1e-13)
+
+
+def test_the_shipped_capsule_chain_lands_at_its_radius():
+    model = load_model("capsule-chain")
+    result = simulate(model, 8.0, t_eval=[])
+    assert result.success, result.message
+    assert sorted(point for point, wall in result.resting_final) == [1, 2, 3, 4]
+    points = model.contact_points(model.layout.reduce(result.q_final))
+    assert points[:, 1] == pytest.approx([0.05] * 4, abs=1e-9)

@@ -136,6 +136,7 @@
 /* ---- limits ----------------------------------------------------------------------------------- */
 #define GAC_CHART_FLOOR  5.96e-5   /* sqrt(16 eps / 1e-6): gac_impact refuses a base chart measure below it */
 #define GAC_LCP_CAP      16        /* contacts one complementarity solve takes at most: min(nq, 16) */
+#define GAC_LINK_NGEOMETRY 6     /* doubles of a link contact's geometry: gap, s, t, n (gac_link_gap) */
 #define GAC_MAX_ROUNDS   256       /* rounds of the impact law before its plastic closing round */
 #define GAC_IMPACT_ROUNDOFF_MAX 1e-2  /* an impact whose round-off bound (record.roundoff) exceeds this stops the
                                          run (GAC_ERR_IMPACT_ACCURACY): its energy is not known */
@@ -474,8 +475,6 @@ int gac_constrained_dynamics(const gac_model *m, const double *q, const double *
 /* Contact c's point index (1-based, O_1 = 1), wall axis (0..2 for X1..X3) and inward normal sign (+1/-1);
  * a joint stop: its joint k, axis -1 and +1 (lower) or -1 (upper); c outside 0..ncontact-1: 0, -1, 0. */
 void gac_contact_info(const gac_model *m, int c, int *point, int *axis, int *normal_sign);
-
-#define GAC_LINK_NGEOMETRY 6   /* doubles of a link contact's geometry: gap, s, t, n (gac_link_gap) */
 
 /* Two links as capsules (gac_link.c): link i spans O_i -> O_i+1.  The closest points of two segments a0-a1 and
  * b0-b1: a0 + s (a1 - a0) and b0 + t (b1 - b0), s, t in [0, 1] (parallel segments: the middle of their overlap). */

@@ -131,7 +131,10 @@ def _convert(value):
 
 
 def _unchanged_default(value, field: str) -> bool:
-    """A field added later whose default keeps every earlier scene's meaning (a scene's free base) is left out of the
-    canonical form, so that those scenes keep their hashes (and their generated text and compiled modules)."""
+    """A field added later whose default keeps every earlier scene's meaning (a scene's free base, a link's radius 0)
+    is left out of the canonical form, so that those scenes keep their hashes (and their generated text and compiled
+    modules)."""
+    if field == "radius":                   # a link's capsule radius: 0 is the segment every earlier scene had
+        return type(value).__name__ in ("LineLink", "RigidLink") and value.radius == 0.0
     return field == "base" and type(value).__name__ == "Scene" and value.base.kind == "free"
 

@@ -11,7 +11,8 @@ CSE'd by :mod:`codegen.flatten`.  The kernels and their C signatures:
     contact_points(q, p, r)              O_1..O_{n+1}, (n+1) x 3
     contact_velocities(q, qd, p, v)      their velocities, (n+1) x 3                    (Eq. 42)
     contact_jacobian(q, p, J)            rows of Eq. 42 that the walls need, nrow x nq
-    contact_gaps(q, p, gap)              signed distance of each (point, wall) pair, >= 0 inside, then of each
+    contact_gaps(q, p, gap)              signed distance of each (point, wall) pair, >= 0 inside (less the
+                                         point's capsule radius, Scene.point_radius), then of each
                                          joint stop (rad: theta_k - lower, upper - theta_k)
     contact_bias(q, qd, p, a)            J_dot qd: contact row accelerations at Theta_ddot = 0
     energy(q, qd, p, E)                  E[0] kinetic, E[1] potential (gravity and joint springs)
@@ -212,8 +213,10 @@ def contact_bias_kernel(chain: ChainSymbols) -> Kernel:
 
 def contact_gaps_kernel(chain: ChainSymbols) -> Kernel:
     contacts = chain.layout.contacts
+    capsules = any(link.radius > 0.0 for link in chain.scene.links)
     k = _new(chain, "contact_gaps",
-             "Gap of each (point, wall) pair: distance of the point inside its wall (negative = beyond it).",
+             "Gap of each (point, wall) pair: distance of the point inside its wall"
+             + (" less its capsule radius" if capsules else "") + " (negative = beyond it).",
              ("q", "p"), "gap", len(contacts))
     points = _points(k.tape, chain)
     values = []
@@ -222,7 +225,9 @@ def contact_gaps_kernel(chain: ChainSymbols) -> Kernel:
             values.append(wall.normal_sign * (chain.theta(point) - chain.param(wall.parameter)))
             continue
         position = chain.param(parameter_name("wall", wall.name))
-        values.append(wall.normal_sign * (points[point - 1][wall.axis] - position))
+        gap = wall.normal_sign * (points[point - 1][wall.axis] - position)
+        radius = chain.scene.point_radius(point)        # a capsule's end sphere reaches the wall first
+        values.append(gap - sp.Float(radius) if radius > 0.0 else gap)
     k.values = values
     return k
 

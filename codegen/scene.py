@@ -131,6 +131,7 @@ class LineLink:
     length: float
     mu: float
     J: tuple[float, float, float] = PAPER_J
+    radius: float = 0.0      # m: the link is a capsule of this radius about O_i -> O_{i+1} (0: a segment)
 
     def validate(self, where: str) -> None:
         _in_range(self.length, f"{where}.length", LENGTH_RANGE, "m")
@@ -138,6 +139,7 @@ class LineLink:
         J = _vector(list(self.J), 3, f"{where}.J", INERTIA_MAX)
         for axis, value in zip("xyz", J):
             _nonnegative(value, f"{where}.J ({'J' + axis + axis})")
+        _check_radius(self.radius, where)
 
     kind = "line"
     param_names = ("l", "mu", "Jxx", "Jyy", "Jzz")
@@ -162,6 +164,7 @@ class RigidLink:
     mass: float
     com: tuple[float, float, float]
     inertia: tuple[tuple[float, float, float], ...]
+    radius: float = 0.0      # m: the link is a capsule of this radius about O_i -> O_{i+1} (0: a segment)
 
     kind = "rigid"
     param_names = ("l", "m", "cx", "cy", "cz", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
@@ -169,6 +172,7 @@ class RigidLink:
     def validate(self, where: str) -> None:
         _in_range(self.length, f"{where}.length", LENGTH_RANGE, "m")
         _in_range(self.mass, f"{where}.mass", MASS_RANGE, "kg")
+        _check_radius(self.radius, where)
         _vector(list(self.com), 3, f"{where}.com")
         inertia = np.array(_matrix3([list(r) for r in self.inertia], f"{where}.inertia", INERTIA_MAX))
         if not np.allclose(inertia, inertia.T, rtol=0, atol=1e-12 * max(1.0, np.abs(inertia).max())):
@@ -191,6 +195,14 @@ class RigidLink:
 
 
 Link = LineLink | RigidLink
+
+
+def _check_radius(radius, where: str) -> float:
+    """A link's capsule radius: 0 (a segment) or a length in LENGTH_RANGE."""
+    radius = _number(radius, f"{where}.radius", LENGTH_RANGE[1])
+    if radius != 0.0:
+        _in_range(radius, f"{where}.radius", LENGTH_RANGE, "m (or 0: a segment of no thickness)")
+    return radius
 
 
 # ---------------------------------------------------------------------------
@@ -640,6 +652,14 @@ class Scene:
                 raise SceneError(f"friction.{w.name}: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {c_f!r}")
             walls.append(Wall(w.name, float(w.position), e, tuple(sorted(points)), float(c_f)))
         walls.sort(key=lambda w: WALL_NAMES.index(w.name))
+        for w in walls:                 # a capsule's contact point on a rough wall is off its centre: not modelled
+            for p in w.points if w.friction > 0.0 else ():
+                i = self.radius_owner(p)
+                if i is not None:
+                    raise SceneError(f"links[{i}].radius: O_{p} touches the wall {w.name} with friction "
+                                     f"(friction.{w.name} = {w.friction:g}), and a capsule's point of contact on a "
+                                     "rough wall is off its end point's centre, which the model does not take; "
+                                     f"give links[{i}].radius = 0 or a frictionless {w.name}")
         for axis in range(3):
             lo = self._find(walls, f"x{axis + 1}_min")
             hi = self._find(walls, f"x{axis + 1}_max")
@@ -717,13 +737,15 @@ class Scene:
                                      f"{'>=' if w.side < 0 else '<='} {w.position:g}")
         for w in self.walls:
             for p in w.points:
-                x = points[p - 1, w.axis]
-                inside = x >= w.position if w.side < 0 else x <= w.position
+                x, r = points[p - 1, w.axis], self.point_radius(p)
+                inside = x - r >= w.position if w.side < 0 else x + r <= w.position
                 if not inside:
+                    reach = f" (its capsule's radius {r:g} m included)" if r > 0.0 else ""
+                    bound = w.position + r if w.side < 0 else w.position - r
                     raise SceneError(
                         f"initial.q: contact point O_{p} has X{w.axis + 1} = {x:.6g}, outside the wall "
-                        f"{w.name} = {w.position:g}; allowed X{w.axis + 1} "
-                        f"{'>=' if w.side < 0 else '<='} {w.position:g}")
+                        f"{w.name} = {w.position:g}{reach}; allowed X{w.axis + 1} "
+                        f"{'>=' if w.side < 0 else '<='} {bound:g}")
 
     def _held_state(self, given, held: dict[int, float], field: str) -> tuple[float, ...]:
         """The full-layout initial q (or qd) from what the scene gives: nothing (the default start), the full layout
@@ -808,6 +830,24 @@ class Scene:
     def warnings(self) -> list[str]:
         """Values the scene accepts but that suggest a slip of units (see unit_warnings), one sentence each."""
         return unit_warnings(self)
+
+    def point_radius(self, p: int) -> float:
+        """The radius (m) the joint point O_p touches a wall with: the larger of the capsule radii of the links
+        that end there (link p - 1 and link p); 0 for segments."""
+        return max((self.links[i - 1].radius for i in (p - 1, p) if 1 <= i <= self.n), default=0.0)
+
+    def link_pairs(self) -> list[tuple[int, int]]:
+        """The pairs of links (i < j, 1-based) that can touch each other as capsules: not adjacent (adjacent links
+        share a joint point, where their capsules always overlap) and with radii adding up to more than 0 (two
+        segments of no thickness meet only by crossing, which no gap of theirs can see coming)."""
+        return [(i, j) for i in range(1, self.n + 1) for j in range(i + 2, self.n + 1)
+                if self.links[i - 1].radius + self.links[j - 1].radius > 0.0]
+
+    def radius_owner(self, p: int) -> int | None:
+        """The link (1-based) whose radius point_radius(p) takes, or None when it is 0."""
+        r = self.point_radius(p)
+        return next((i for i in (p - 1, p) if 1 <= i <= self.n and self.links[i - 1].radius == r), None) \
+            if r > 0.0 else None
 
     def stops(self) -> list[tuple[int, JointStop]]:
         """The joint stops as (joint k, JointStop) pairs, joint order, lower before upper."""
@@ -940,8 +980,8 @@ TOP_KEYS = ("name", "description", "gravity", "links", "urdf", "urdf_tip_length"
             "friction_velocity", "contacts", "initial", "inputs", "base")
 BASE_KEYS = ("kind", "joint", "point", "axis", "angles", "rotation")
 JOINT_KEYS = ("stiffness", "rest_angle", "damping", "lower", "upper", "limit_restitution")
-LINE_KEYS = ("length", "mu", "J", "twist", "twist_matrix", "count") + JOINT_KEYS
-RIGID_KEYS = ("length", "mass", "com", "inertia", "twist", "twist_matrix", "count") + JOINT_KEYS
+LINE_KEYS = ("length", "mu", "J", "radius", "twist", "twist_matrix", "count") + JOINT_KEYS
+RIGID_KEYS = ("length", "mass", "com", "inertia", "radius", "twist", "twist_matrix", "count") + JOINT_KEYS
 INITIAL_KEYS = ("q", "qd")
 
 
@@ -1173,12 +1213,12 @@ def _links_from_data(items) -> tuple[tuple[Link, ...], tuple, tuple]:
                     if key not in item:
                         raise SceneError(f"{where}.{key}: required for a rigid link (mass, com, inertia)")
                 link = RigidLink(item["length"], item["mass"], tuple(item["com"]),
-                                 tuple(tuple(r) for r in item["inertia"]))
+                                 tuple(tuple(r) for r in item["inertia"]), item.get("radius", 0.0))
             else:
                 for key in ("length", "mu"):
                     if key not in item:
                         raise SceneError(f"{where}.{key}: required")
-                link = LineLink(item["length"], item["mu"], tuple(item.get("J", PAPER_J)))
+                link = LineLink(item["length"], item["mu"], tuple(item.get("J", PAPER_J)), item.get("radius", 0.0))
             link.validate(where)
             index = len(links) + 1
             if "twist" in item and "twist_matrix" in item:

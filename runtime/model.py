@@ -246,6 +246,45 @@ class CompiledModel:
         E = self._call("energy", 2, self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd"), self._params(p))
         return float(E[0]), float(E[1])
 
+    def _link_pair(self, i: int, j: int, radius) -> float:
+        """Check links i, j (1-based) and give the radius sum of their capsules (``radius`` if given)."""
+        n = self.scene.n
+        for name, k in (("i", i), ("j", j)):
+            if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= k <= n:
+                raise ValueError(f"{name}: a link index in 1..{n}, got {k!r}")
+        if i == j:
+            raise ValueError(f"j: a link other than i = {i}, got {j!r}")
+        if radius is None:
+            return self.scene.links[i - 1].radius + self.scene.links[j - 1].radius
+        if not (isinstance(radius, (int, float, np.floating)) and 0.0 <= float(radius) < np.inf):
+            raise ValueError(f"radius: a finite number >= 0 (m), got {radius!r}")
+        return float(radius)
+
+    def link_gap(self, q, i: int, j: int, p=None, radius=None) -> tuple[float, float, float, np.ndarray]:
+        """The contact of links i and j as capsules (gac_link_gap): (gap, s, t, n) with gap the distance of their
+        segments less the sum of their radii (``radius`` if given; m), s and t the closest points' fractions along
+        links i and j, n the unit normal from link j's closest point to link i's."""
+        radius = self._link_pair(i, j, radius)
+        out = np.zeros(6)
+        code = self.lib.gac_link_gap(self.ffi.addressof(self.c.model), self._ptr(self._vec(q, self.nq, "q")),
+                                     self._ptr(self._params(p)), int(i), int(j), radius, self._ptr(out))
+        if code != self.lib.GAC_OK:
+            raise ImpactError(f"link contact ({i}, {j}): {self.error_message(code)}")
+        return float(out[0]), float(out[1]), float(out[2]), out[3:].copy()
+
+    def link_impact(self, q, qd, i: int, j: int, e: float, p=None, radius=None) -> tuple[np.ndarray, float, float]:
+        """Newton's law with restitution e on the relative normal velocity of links i and j at their closest points
+        (gac_link_impact): (qd_plus, impulse >= 0 in N s, the normal velocity before)."""
+        radius = self._link_pair(i, j, radius)
+        q, qd = self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd")
+        qd_plus, out = np.zeros(self.nq), np.zeros(2)
+        code = self.lib.gac_link_impact(self.ffi.addressof(self.c.model), self._ptr(q), self._ptr(qd),
+                                        self._ptr(self._params(p)), int(i), int(j), radius, float(e),
+                                        self._ptr(qd_plus), self._ptr(out), self._ptr(out[1:]))
+        if code != self.lib.GAC_OK:
+            raise ImpactError(f"link impact ({i}, {j}): {self.error_message(code)}")
+        return qd_plus, float(out[0]), float(out[1])
+
     def impact(self, q, qd, contact_set, p=None, mode: str = "equality") -> tuple[np.ndarray, np.ndarray]:
         """Post-impact velocities and impulses for the contacts with indices ``contact_set``:
         mode 'equality' is Eq. 48 as printed, 'complementarity' forbids pulling impulses."""

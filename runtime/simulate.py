@@ -850,9 +850,12 @@ def _check_inside(model: CompiledModel, q: np.ndarray, p: np.ndarray, name: str)
                              f"{wall.parameter} by {-gaps[c]:.3g} rad")
         axis = f"X{wall.axis + 1}"
         position = p[model.scene.parameter_index("wall", wall.name)]
+        radius = model.scene.point_radius(point)          # a capsule's end sphere: the gap is less its radius
+        bound = position + radius if wall.side < 0 else position - radius
+        reach = f", its capsule's radius {radius:g} m included" if radius > 0.0 else ""
         raise ValueError(f"{name}: contact point O_{point} is outside the wall {wall.name}: {axis} = "
                          f"{points[point - 1, wall.axis]:.6g} m, allowed {axis} {'>=' if wall.side < 0 else '<='} "
-                         f"{position:g} (gap {gaps[c]:.3g} m)")
+                         f"{bound:g} (gap {gaps[c]:.3g} m{reach})")
 
 
 def _step_diagnosis(model: CompiledModel, sim, t_from: float, steps: int) -> str:

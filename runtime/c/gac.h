@@ -136,6 +136,7 @@
 /* ---- limits ----------------------------------------------------------------------------------- */
 #define GAC_CHART_FLOOR  5.96e-5   /* sqrt(16 eps / 1e-6): gac_impact refuses a base chart measure below it */
 #define GAC_LCP_CAP      16        /* contacts one complementarity solve takes at most: min(nq, 16) */
+#define GAC_LINK_NGEOMETRY 6     /* doubles of a link contact's geometry: gap, s, t, n (gac_link_gap) */
 #define GAC_MAX_ROUNDS   256       /* rounds of the impact law before its plastic closing round */
 #define GAC_IMPACT_ROUNDOFF_MAX 1e-2  /* an impact whose round-off bound (record.roundoff) exceeds this stops the
                                          run (GAC_ERR_IMPACT_ACCURACY): its energy is not known */
@@ -474,6 +475,31 @@ int gac_constrained_dynamics(const gac_model *m, const double *q, const double *
 /* Contact c's point index (1-based, O_1 = 1), wall axis (0..2 for X1..X3) and inward normal sign (+1/-1);
  * a joint stop: its joint k, axis -1 and +1 (lower) or -1 (upper); c outside 0..ncontact-1: 0, -1, 0. */
 void gac_contact_info(const gac_model *m, int c, int *point, int *axis, int *normal_sign);
+
+/* Two links as capsules (gac_link.c): link i spans O_i -> O_i+1.  The closest points of two segments a0-a1 and
+ * b0-b1: a0 + s (a1 - a0) and b0 + t (b1 - b0), s, t in [0, 1] (parallel segments: the middle of their overlap). */
+void gac_segment_closest(const double *a0, const double *a1, const double *b0, const double *b1, double *s,
+                         double *t);
+/* The contact of links i and j (1-based, i != j, both in 1..npoint - 1) whose capsule radii add up to `radius` (m):
+ * geometry (GAC_LINK_NGEOMETRY doubles) = gap (the segments' distance less radius, m; < 0: they overlap), s, t
+ * (the closest points' fractions along links i and j) and the unit normal n (3) from link j's closest point to link
+ * i's (when the axes cross, across both).  The gap's rate is n . (v_P - v_Q), P, Q the closest points moving with
+ * their links.  Returns GAC_OK or GAC_ERR_BAD_CONTACT. */
+int gac_link_gap(const gac_model *m, const double *q, const double *p, int i, int j, double radius,
+                 double *geometry);
+/* g (nq) = J^T n: the generalised force of a unit push along n on link i at P and -n on link j at Q, the row of
+ * that contact (nq calls of contact_velocities: O(n^2)).  geometry from gac_link_gap.  Returns the row's scale,
+ * the norm of the relative velocity v_P - v_Q's columns (a row far below it is round-off: no motion moves P, Q
+ * along n). */
+double gac_link_direction(const gac_model *m, const double *q, const double *p, int i, int j,
+                          const double *geometry, double *g);
+/* Newton's law (Eq. 47) on the relative normal velocity v = n . (v_P - v_Q) of links i and j, configuration
+ * unchanged: an approaching pair (v < 0) takes the impulse F = -(1 + e) v / (n I_f^-1 n^T) >= 0 (N s, pushing them
+ * apart), so that v+ = -e v; a separating one none.  qd_plus (nq), *impulse, and *v_normal (v before; may be NULL)
+ * out.  Returns GAC_OK or GAC_ERR_BAD_CONTACT, _BAD_OPTION (e outside [0, 1]), _SINGULAR_MASS, _SINGULAR_IMPACT (the
+ * chain cannot move along the row: the closest points are the two ends of the one link between i and j). */
+int gac_link_impact(const gac_model *m, const double *q, const double *qd, const double *p, int i, int j,
+                    double radius, double e, double *qd_plus, double *impulse, double *v_normal);
 
 /* The base chart's measure chi(q) (gac_chart), in [0, 1] for the default twists. */
 double gac_chart_measure(const gac_model *m, const double *q);

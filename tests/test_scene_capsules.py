@@ -1,0 +1,82 @@
+"""Capsule links (a radius about the segment O_i -> O_{i+1}): the scene field, the radius a joint point touches a
+wall with, and every bad value refused naming its field."""
+import copy
+import math
+
+import pytest
+
+from codegen.artifact import scene_hash
+from codegen.scene import LineLink, RigidLink, Scene, SceneError, Wall, scene_from_dict
+
+GOOD = {
+    "name": "capsules",
+    "gravity": 9.81,
+    "restitution": 0.5,
+    "links": [{"length": 1.0, "mu": 1.0, "radius": 0.02},
+              {"length": 1.0, "mu": 1.0, "radius": 0.05},
+              {"length": 0.5, "mass": 2.0, "com": [0.25, 0.0, 0.0],
+               "inertia": [[1e-3, 0, 0], [0, 2e-2, 0], [0, 0, 2e-2]]}],
+    "walls": {"x2_min": 0.0, "x1_min": -5.0, "x1_max": 5.0},
+    "initial": {"q": [-math.pi / 2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0]},
+}
+
+
+def mutated(link, key, value):
+    data = copy.deepcopy(GOOD)
+    data["links"][link][key] = value
+    return data
+
+
+def test_radius_is_read_and_a_joint_point_takes_the_larger():
+    scene = scene_from_dict(GOOD)
+    assert [link.radius for link in scene.links] == [0.02, 0.05, 0.0]
+    assert [scene.point_radius(p) for p in range(1, 5)] == [0.02, 0.05, 0.05, 0.0]
+    assert [scene.radius_owner(p) for p in range(1, 5)] == [1, 2, 2, None]
+
+
+def test_a_zero_radius_keeps_the_scene_hash():
+    """Radius 0 is the segment of every scene before capsules: its hash, so its generated text, is unchanged."""
+    links = (LineLink(1.0, 1.0), LineLink(0.5, 2.0))
+    zero = Scene(name="h", links=tuple(LineLink(l.length, l.mu, l.J, 0.0) for l in links))
+    assert scene_hash(Scene(name="h", links=links)) == scene_hash(zero)
+    assert scene_hash(Scene(name="h", links=(LineLink(1.0, 1.0, radius=0.1), links[1]))) != scene_hash(zero)
+
+
+@pytest.mark.parametrize("link, value, words", [
+    (0, -0.01, "links[1].radius: must be in [1e-09, 1e+09] m (or 0: a segment of no thickness), got -0.01"),
+    (1, "thick", "links[2].radius: expected a number, got 'thick'"),
+    (2, float("nan"), "links[3].radius: must be a finite number"),
+    (0, 1e-12, "links[1].radius: must be in [1e-09"),
+    (1, 2e9, "links[2].radius: must be within"),
+])
+def test_bad_radius_names_the_field(link, value, words):
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(mutated(link, "radius", value))
+    assert words in str(info.value)
+
+
+def test_radius_on_a_rough_wall_is_refused():
+    data = copy.deepcopy(GOOD)
+    data["friction"] = {"x2_min": 0.4}
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(data)
+    assert str(info.value).startswith("links[1].radius: O_1 touches the wall x2_min with friction (friction.x2_min = 0.4)")
+    data["contacts"] = {"x2_min": [4]}                 # only the segment's end touches the rough floor: allowed
+    assert scene_from_dict(data).wall("x2_min").points == (4,)
+
+
+def test_a_start_whose_capsule_crosses_a_wall_is_refused():
+    data = copy.deepcopy(GOOD)
+    data["initial"]["q"] = [-math.pi / 2, 0.0, -math.pi / 2, 0.0, 0.0, 0.0, 0.01, 0.0]    # the chain flat at X2 = 0.01
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(data)
+    assert "O_1 has X2 = 0.01, outside the wall x2_min = 0 (its capsule's radius 0.02 m included); allowed X2 >= 0.02" \
+        in str(info.value)
+    data["initial"]["q"][6] = 0.05                                                        # touching: allowed
+    scene_from_dict(data)
+
+
+def test_rigid_links_take_a_radius_too():
+    link = RigidLink(1.0, 1.0, (0.5, 0.0, 0.0), ((1e-3, 0, 0), (0, 0.1, 0), (0, 0, 0.1)), 0.03)
+    scene = Scene(name="r", links=(link,), walls=(Wall("x2_min", -1.0),))
+    assert scene.point_radius(1) == scene.point_radius(2) == 0.03

@@ -1,0 +1,79 @@
+"""Capsule links against the walls: a link of radius r touches a wall with the sphere at either end, so its wall
+contacts are its end points with the gap less r (docs/simulation.md, "Capsules").  Checked against closed forms
+(a rod falling onto a floor, a rod lying on it) and against an independent numpy computation of the gaps."""
+import math
+
+import numpy as np
+import pytest
+
+from codegen.scene import LineLink, Scene, Wall, WALL_NAMES
+from runtime import load_model, simulate
+from studies.reference import reference_of
+
+G, R = 9.81, 0.05
+
+
+@pytest.fixture(scope="module")
+def rod():
+    """One capsule rod of length 1 m, radius R, in a planar box with a floor at X2 = 0 (e = 0.5)."""
+    scene = Scene(name="capsule_rod", links=(LineLink(1.0, 1.0, (1e-4, 1e-4, 1e-4), R),),
+                  walls=(Wall("x1_min", -5.0, 0.5), Wall("x1_max", 5.0, 0.5), Wall("x2_min", 0.0, 0.5)),
+                  gravity=G, q0=(-math.pi / 2, 0.0, 0.0, 0.0, 1.0, 0.0))
+    return load_model(scene)
+
+
+def test_a_dropped_capsule_strikes_at_the_closed_form_time(rod):
+    """Upright, O_1 at height h: its end sphere reaches the floor at t = sqrt(2 (h - R) / g)."""
+    for h in (1.0, 0.3):
+        result = simulate(rod, 0.5, q0=[-math.pi / 2, 0.0, 0.0, 0.0, h, 0.0], rtol=1e-12, atol=1e-12)
+        assert result.impacts, result.message
+        assert result.t_first_impact == pytest.approx(math.sqrt(2.0 * (h - R) / G), rel=1e-10, abs=1e-12)
+        assert [contact.label for contact in result.impacts[0].contacts] == ["O1/x2_min"]
+
+
+def test_a_capsule_rod_comes_to_rest_on_the_floor_at_its_radius(rod):
+    """Dropped tilted, it bounces, lands and lies flat with both end spheres on the floor: the axis at X2 = R."""
+    result = simulate(rod, 3.0, q0=[-math.pi / 2, 0.0, -math.pi / 2 + 0.2, 0.0, 1.0, 0.0])
+    assert result.success, result.message
+    assert sorted(point for point, wall in result.resting_final) == [1, 2]
+    points = rod.contact_points(rod.layout.reduce(result.q_final))
+    assert points[:, 1] == pytest.approx([R, R], abs=1e-9)
+    assert result.energy_final == pytest.approx(1.0 * G * R, rel=1e-6)        # V = m g R at rest, T = 0
+
+
+def test_a_rod_lying_at_its_radius_stays_there(rod):
+    result = simulate(rod, 1.0, q0=[-math.pi / 2, 0.0, -math.pi / 2, 0.0, R, 0.0])
+    assert result.success and not result.impacts, result.message
+    points = rod.contact_points(rod.layout.reduce(result.q_final))
+    assert points[:, 1] == pytest.approx([R, R], abs=1e-12)
+
+
+def test_gaps_against_an_independent_computation():
+    """A spatial three-link chain of capsules (radii 0.02, 0.07, 0: the joint point takes the larger) in a box of six
+    walls: the generated gaps against wall - point - radius from the reference model's points."""
+    radii = (0.02, 0.07, 0.0)
+    links = tuple(LineLink(l, 1.0, (1e-3, 2e-3, 2e-3), r) for l, r in zip((0.8, 0.5, 0.6), radii))
+    walls = tuple(Wall(name, -3.0 - k if name.endswith("min") else 3.0 + k, 0.7)
+                  for k, name in enumerate(WALL_NAMES))
+    scene = Scene(name="capsule_gaps", links=links, walls=walls, twists=(((1.0, 0, 0), (0, 0, -1.0), (0, 1.0, 0)),) * 2,
+                  q0=(0.1, 0.2, 0.3, 0.4, 0.5, 0.0, 0.0, 0.0))
+    model = load_model(scene)
+    reference = reference_of(scene)
+    point_radius = [max(radii[i] for i in (p - 1, p) if 0 <= i < 3) for p in range(4)]
+    assert point_radius == [scene.point_radius(p) for p in range(1, 5)]
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        q = np.concatenate([rng.uniform(-1.2, 1.2, 5), rng.uniform(-1.0, 1.0, 3)])
+        points = reference.points(q)
+        expected = [w.normal_sign * (points[p - 1, w.axis] - w.position) - point_radius[p - 1]
+                    for p, w in model.contacts]
+        assert model.contact_gaps(model.layout.reduce(q)) == pytest.approx(expected, abs=1e-13)
+
+
+def test_the_shipped_capsule_chain_lands_at_its_radius():
+    model = load_model("capsule-chain")
+    result = simulate(model, 8.0, t_eval=[])
+    assert result.success, result.message
+    assert sorted(point for point, wall in result.resting_final) == [1, 2, 3, 4]
+    points = model.contact_points(model.layout.reduce(result.q_final))
+    assert points[:, 1] == pytest.approx([0.05] * 4, abs=1e-9)

@@ -89,13 +89,18 @@ def _double_literal(value: float) -> str:
 
 
 class LongDoubleCPrinter(ChainCPrinter):
-    """ChainCPrinter for long double: literals with an L suffix, the math functions' long-double forms (sinl, cosl,
+    """ChainCPrinter for long double: the inputs' elements widened where they are read ((long double)q[0], so that
+    no product or sum of two inputs is rounded to double), literals with an L suffix, the math functions' long-double forms (sinl, cosl,
     fabsl: C99CodePrinter's real type float80) and sqrtl, powl.  A number that is a double (a Float: the scene's
     values and twists) is printed with 21 significant digits of that double, which reads back as the same double in
     long double (64-bit significand); a rational with 21 digits of its exact value."""
 
     def __init__(self):
         super().__init__({"type_aliases": {real: float80}})
+
+    def _print_Symbol(self, expr):
+        name = super()._print_Symbol(expr)
+        return f"(long double){name}" if "[" in name else name    # an input (q[0], p[3]): widened before use
 
     def _print_Float(self, expr):
         return _long_double_literal(f"{float(expr):.21g}")

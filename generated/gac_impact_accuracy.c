@@ -368,7 +368,8 @@ static double gac_velocity_accuracy(const gac_model *m, const double *q, const d
  * direction of I_f or near the base chart's singular pose).  With the model's long-double kernels r is evaluated
  * in long double as the difference of two evaluations, r = I_f qd+ - I_f qd- - g (qd+ - qd- is not exact in
  * double), and the evaluation part of E0 is 4 (nq + 1) eps_L sum_i |qd+_i| (|(I_f qd+)_i| + |(I_f qd-)_i| + |g_i|),
- * eps_L = LDBL_EPSILON; the second part, storing qd+ in doubles, stays eps/2 ... with eps the double's.  The accuracy is (|qd+ . r| + E0 + the contact law's
+ * eps_L = LDBL_EPSILON; the second part, storing qd+ in doubles, stays eps/2 ... with eps the double's (the energy
+ * identity likewise with energy_ld, gac_energy_identity_ld).  The accuracy is (|qd+ . r| + E0 + the contact law's
  * residual work, gac_law_residual, for a law solved in one round (after several rounds the law's conditions are
  * the rounds'; a round solved with a common e, its contacts' smallest, is measured with that e) + the energy
  * identity's residual, gac_energy_identity) / T. */

@@ -90,8 +90,8 @@ def _double_literal(value: float) -> str:
 
 class LongDoubleCPrinter(ChainCPrinter):
     """ChainCPrinter for long double: the inputs' elements widened where they are read ((long double)q[0], so that
-    no product or sum of two inputs is rounded to double), literals with an L suffix, the math functions' long-double forms (sinl, cosl,
-    fabsl: C99CodePrinter's real type float80) and sqrtl, powl.  A number that is a double (a Float: the scene's
+    no product or sum of two inputs is rounded to double), literals with an L suffix, the math functions'
+    long-double forms (sinl, cosl, fabsl: C99CodePrinter's real type float80) and sqrtl, powl.  A number that is a double (a Float: the scene's
     values and twists) is printed with 21 significant digits of that double, which reads back as the same double in
     long double (64-bit significand); a rational with 21 digits of its exact value."""
 

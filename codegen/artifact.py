@@ -58,6 +58,7 @@ class RenderedFunction:
     ops: OpCount
     parts: list = None               # a long function split: lines of each part (values crossing parts in s[])
     scratch: int = 0                 # doubles of s[] a split function needs
+    out_type: str = "double"         # the C type of the output's elements ("long double": interface.EXTENDED_KERNELS)
 
 
 @dataclass(frozen=True)

@@ -60,6 +60,10 @@ def build_parser() -> argparse.ArgumentParser:
                         help="also generate the tangent kernels (exact derivatives: NAME_forward_dynamics_tangent "
                              "and gac_linearize, the run's sensitivities gac_sens_attach); straight-line forward "
                              "dynamics then, about twice the derivation time")
+    parser.add_argument("--no-extended", action="store_true",
+                        help="leave out the long-double variants of generalized_momentum, contact_generalized_force "
+                             "and energy (NAME_*_ld): the impact's accuracy is then measured in double, coarser on "
+                             "ill-conditioned chains")
     parser.add_argument("--explain", action="store_true",
                         help="print what the model leaves out for this scene and why, then stop")
     parser.add_argument("--urdf", metavar="FILE",
@@ -162,7 +166,7 @@ def main(argv=None) -> int:
 
     try:
         options = build_options(scene, bake_params=args.bake_params, specialise=not args.general, rolled=args.rolled,
-                                chart_b=not args.one_chart, tangent=args.tangent)
+                                chart_b=not args.one_chart, tangent=args.tangent, extended=not args.no_extended)
     except ValueError as exc:
         print(f"error: --{exc}", file=sys.stderr)
         return 2
@@ -188,6 +192,9 @@ def main(argv=None) -> int:
                                                                       "generated (NAME_b_*, NAME_model_b)"))
         print("  - tangent kernels (exact derivatives): " + ("generated (--tangent)" if options.tangent else
                                                               "left out (--tangent adds them)"))
+        print("  - long-double kernels for the impact's accuracy: " + ("generated (--no-extended leaves them out)"
+                                                                       if options.extended else
+                                                                       "left out (--no-extended)"))
         return 0
 
     out = args.out if args.out is not None else default_out(args)

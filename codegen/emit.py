@@ -6,6 +6,7 @@ from importlib import resources
 import jinja2
 import numpy as np
 import sympy as sp
+from sympy.codegen.ast import float80, real
 from sympy.printing.c import C99CodePrinter
 
 from . import interface
@@ -87,11 +88,65 @@ def _double_literal(value: float) -> str:
     return text
 
 
+class LongDoubleCPrinter(ChainCPrinter):
+    """ChainCPrinter for long double: the inputs' elements widened where they are read ((long double)q[0], so that
+    no product or sum of two inputs is rounded to double), literals with an L suffix, the math functions'
+    long-double forms (sinl, cosl, fabsl: C99CodePrinter's real type float80) and sqrtl, powl.  A number that is a double (a Float: the scene's
+    values and twists) is printed with 21 significant digits of that double, which reads back as the same double in
+    long double (64-bit significand); a rational with 21 digits of its exact value."""
+
+    def __init__(self):
+        super().__init__({"type_aliases": {real: float80}})
+
+    def _print_Symbol(self, expr):
+        name = super()._print_Symbol(expr)
+        return f"(long double){name}" if "[" in name else name    # an input (q[0], p[3]): widened before use
+
+    def _print_Float(self, expr):
+        return _long_double_literal(f"{float(expr):.21g}")
+
+    def _print_Integer(self, expr):
+        return f"{int(expr)}.0L"
+
+    def _print_Rational(self, expr):
+        return _long_double_literal(str(sp.N(expr, 21)))
+
+    def _print_Pow(self, expr):
+        base, exponent = expr.args
+        if exponent.is_Integer:
+            k = abs(int(exponent))
+            factor = self.parenthesize(base, 50)
+            product = "*".join([factor] * k)
+            return product if exponent > 0 else f"1.0L/({product})"
+        if exponent == sp.Rational(1, 2):
+            return f"sqrtl({self._print(base)})"
+        if exponent == sp.Rational(-1, 2):
+            return f"1.0L/sqrtl({self._print(base)})"
+        return f"powl({self._print(base)}, {self._print(exponent)})"
+
+
+def _long_double_literal(text: str) -> str:
+    """A decimal number as a long-double literal: its trailing zeros after the point dropped (0.5L, not
+    0.500000000000000000000L), an L appended."""
+    mantissa, e, exponent = text.partition("e")
+    if "." not in mantissa:
+        mantissa += ".0"
+    else:
+        mantissa = mantissa.rstrip("0")
+        mantissa += "0" if mantissa.endswith(".") else ""
+    return mantissa + e + exponent + "L"
+
+
 PRINTER = ChainCPrinter()
+LONG_DOUBLE_PRINTER = LongDoubleCPrinter()
 
 
 def c_expression(expr: sp.Expr) -> str:
     return PRINTER.doprint(expr)
+
+
+def c_expression_ld(expr: sp.Expr) -> str:
+    return LONG_DOUBLE_PRINTER.doprint(expr)
 
 
 # A kernel longer than this is emitted as parts of at most this many lines.  Parts compile about 1.5 times
@@ -116,6 +171,21 @@ def render_function(program: Program, split_lines: int | None = interface.SPLIT_
     if split_lines is not None and len(lines) > split_lines:
         function.parts, function.scratch = split(program, lines, split_lines)
     return function
+
+
+def render_extended(program: Program) -> RenderedFunction:
+    """The long-double variant NAME_<kernel>_ld of a kernel (interface.EXTENDED_KERNELS) from the kernel's own
+    flattened program: inputs double, every intermediate and the output long double.  Never cut into parts (the
+    three kernels are O(n) and short)."""
+    kernel = program.kernel
+    name = interface.EXTENDED_OF[kernel.name]
+    summary = next(f.summary for f in interface.KERNELS if f.name == name)
+    lines = [f"const long double {symbol.name} = {c_expression_ld(expr)};" for symbol, expr in program.assignments]
+    for i, expr in enumerate(program.outputs):
+        lines.append(f"{kernel.output}[{i}] = {c_expression_ld(expr)};")
+    ops = count_ops([e for _, e in program.assignments] + list(program.outputs))
+    return RenderedFunction(name, summary, kernel.inputs, kernel.output, kernel.output_size, lines, ops,
+                            out_type="long double")
 
 
 def _render_block(program: Program) -> RenderedFunction:
@@ -255,6 +325,7 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], o
         chart=_chart_context(scene, layout), base=_base_context(scene, layout), layout_free=list(layout.free),
         fused=any(name in generated for name in interface.FUSED_KERNELS),
         tangent=any(name in generated for name in interface.TANGENT_KERNELS),
+        extended=any(name in generated for name in interface.EXTENDED_KERNELS),
         chart_b=None if chart_b is None else dict(
             functions=chart_b[1], fused=any(f.name in interface.FUSED_KERNELS for f in chart_b[1]), base=_base_context(chart_b[0], layout),
             rows=[[_double_literal(float(x)) for x in row] for row in chart_b[0].base_twists[0]],
@@ -320,14 +391,16 @@ def _c_string(text: str) -> str:
 
 
 def _check_kernels(functions: list[RenderedFunction]) -> bool:
-    """The generated kernels are those codegen.interface declares (all, or all but some of the dense, fused and
-    tangent ones): same names, order, inputs and output.  Returns whether the dense kernels are among them."""
+    """The generated kernels are those codegen.interface declares (all, or all but some of the dense, fused,
+    tangent and long-double ones): same names, order, inputs and output.  Returns whether the dense kernels are among them."""
     names = {f.name for f in functions}
     dense = "mass_matrix" in names
     fused = any(name in names for name in interface.FUSED_KERNELS)
     tangent = any(name in names for name in interface.TANGENT_KERNELS)
+    extended = any(name in names for name in interface.EXTENDED_KERNELS)
     declared = [(f.name, tuple(a.name for a in f.args[:-1]), f.args[-1].name) for f in interface.KERNELS
-                if (dense or not f.dense) and (fused or not f.fused) and (tangent or not f.tangent)]
+                if (dense or not f.dense) and (fused or not f.fused) and (tangent or not f.tangent)
+                and (extended or not f.extended)]
     generated = [(f.name, tuple(f.inputs), f.output) for f in functions]
     if declared != generated:
         raise AssertionError(f"kernels {generated} differ from codegen.interface.KERNELS {declared}")

@@ -46,6 +46,10 @@ class Function:
     tangent: bool = False           # a kernel's directional derivative (codegen.tangent): generated where
                                     # forward_dynamics is straight-line code (unless options.tangent is False);
                                     # otherwise NAME_<name> writes NaN and the descriptor's pointer is NULL
+    extended: bool = False          # a long-double variant of a kernel (NAME_<kernel>_ld), printed from the same
+                                    # flattened program as the kernel (codegen.emit.render_extended): generated
+                                    # unless options.extended is False; otherwise NAME_<name> writes NaN and the
+                                    # descriptor's pointer is NULL
     out_size: str = "NQ"            # the size macro of the output (without NAME_): what the NaN stub writes
 
     def c_type(self, arg: Arg, name: str, restrict: str = "") -> str:
@@ -85,6 +89,16 @@ def _seed(name, doc):
 
 def _out(name, doc):
     return Arg(name, "double *", doc, restrict=True)
+
+
+def _out_ld(name, doc):
+    return Arg(name, "long double *", doc, restrict=True)
+
+
+_LD_DOC = ("The same flattened program as NAME_{kernel}, every intermediate a long double (inputs double): what the "
+           "impact's accuracy measure evaluates its residuals with (gac_impact_accuracy), about 11 more bits than "
+           "the double kernel.  A model built with extended=False has none: this function then writes NaN and "
+           "NAME_model.{name} is NULL.")
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -189,11 +203,26 @@ KERNELS = (
              "da = (d(Jdot qd)/dq) dq + (d(Jdot qd)/dqd) dqd + (d(Jdot qd)/dp) dp, O(n): the sensitivities of the "
              "resting contacts' forces in flight (gac_sens.c).  Without a tangent kernel: NaN, and "
              "NAME_model.contact_bias_tangent is NULL.", kernel=True, tangent=True, out_size="NJROW"),
+    Function("generalized_momentum_ld", "void", (_q(), _qd(), _p(), _out_ld("h", "I_f qd (NQ; N m s, N s)")),
+             "generalized_momentum in long double: I_f qd.",
+             _LD_DOC.format(kernel="generalized_momentum", name="generalized_momentum_ld"), kernel=True,
+             extended=True),
+    Function("contact_generalized_force_ld", "void",
+             (_q(), Arg("f", "const double *", "force along each contact Jacobian row (NJROW; N, N m on a stop)",
+                        True), _p(), _out_ld("Q", "J^T f (NQ; N m on an angle, N on a translation)")),
+             "contact_generalized_force in long double: J^T f.",
+             _LD_DOC.format(kernel="contact_generalized_force", name="contact_generalized_force_ld"), kernel=True,
+             extended=True),
+    Function("energy_ld", "void", (_q(), _qd(), _p(), _out_ld("E", "E[0] kinetic, E[1] potential energy (J)")),
+             "energy in long double: kinetic and potential energy.",
+             _LD_DOC.format(kernel="energy", name="energy_ld"), kernel=True, extended=True, out_size="2"),
 )
 
 DENSE_KERNELS = tuple(f.name for f in KERNELS if f.dense)
 FUSED_KERNELS = tuple(f.name for f in KERNELS if f.fused)
 TANGENT_KERNELS = tuple(f.name for f in KERNELS if f.tangent)
+EXTENDED_KERNELS = tuple(f.name for f in KERNELS if f.extended)
+EXTENDED_OF = {name.removesuffix("_ld"): name for name in EXTENDED_KERNELS}   # kernel -> its long-double variant
 DENSE_MAX_LINKS = 12        # up to this n the dense kernels are generated unless told otherwise
 
 
@@ -433,7 +462,7 @@ def function_table() -> str:
     for f in ALL_FUNCTIONS:
         call = f"NAME_{f.name}({', '.join(a.name for a in f.args)})"
         kind = ("fused kernel" if f.fused else "dense kernel" if f.dense else "tangent kernel" if f.tangent
-                else "kernel") if f.kernel else "wrapper"
+                else "long-double kernel" if f.extended else "kernel") if f.kernel else "wrapper"
         summary = f.summary.replace("|", "/").replace("*", "\\*")
         lines.append(f"| `{call}` | {kind} | {summary} |")
     return "\n".join(lines) + "\n"

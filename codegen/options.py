@@ -31,6 +31,10 @@ class BuildOptions:
                                           # GAC_ERR_GIMBAL_LOCK) and half the code of such a model
     tangent: bool = False                 # generate the tangent kernels (codegen.tangent: gac_linearize and the
                                           # run's sensitivities need them); straight-line forward dynamics only
+    extended: bool = True                 # generate the long-double variants of generalized_momentum,
+                                          # contact_generalized_force and energy (interface.EXTENDED_KERNELS): the
+                                          # impact's accuracy measure evaluates its residuals with them; False: the
+                                          # double ones (a smaller build, a coarser measure on ill-conditioned chains)
     formulation: str = "gibbs_appell"     # the dynamics kernels: the paper's recursion, or "lagrange" (an explicit
                                           # Euler-Lagrange expansion, for comparison)
     split_lines: int = interface.SPLIT_LINES          # a kernel longer than this is cut into parts ...
@@ -40,7 +44,8 @@ class BuildOptions:
     def generation_text(self) -> str:
         """The choices that shape the C text (not the compiler's flags), for the generated text's cache key."""
         return (f"{self.bake_params}|{self.specialise}|{self.dense}|{self.rolled}|{self.rolled_required}|"
-                f"{self.chart_b}|{self.tangent}|{self.formulation}|{self.split_lines}|{self.split_lines_hot}")
+                f"{self.chart_b}|{self.tangent}|{self.extended}|{self.formulation}|{self.split_lines}|"
+                f"{self.split_lines_hot}")
 
     def split_size(self, kernel_name: str) -> int:
         """The part length of a kernel (split_lines_hot for the right-hand side's forward_dynamics)."""
@@ -49,7 +54,7 @@ class BuildOptions:
 
 def build_options(scene, *, bake_params: bool = False, specialise: bool = True, dense: bool | None = None,
                   rolled: bool | None = None, chart_b: bool = True, tangent: bool = False,
-                  formulation: str = "gibbs_appell",
+                  extended: bool = True, formulation: str = "gibbs_appell",
                   split_lines: int | None = None, flags=None) -> BuildOptions:
     """The options of a model of ``scene`` (n links): ``dense`` None generates the dense kernels up to
     interface.DENSE_MAX_LINKS links (always for the Lagrangian formulation), ``rolled`` None loops from
@@ -57,7 +62,8 @@ def build_options(scene, *, bake_params: bool = False, specialise: bool = True, 
     requires a run), ``chart_b`` False leaves a free base's second chart out, ``tangent`` True generates the tangent
     kernels (the exact derivatives of gac_linearize and of a run's sensitivities; about twice the derivation time and
     1.5-2x the C) with straight-line forward dynamics (``rolled`` None then means no loops; rolled=True is refused:
-    the loops have no tangent), ``split_lines`` None keeps the emitter's part lengths (one value sets both),
+    the loops have no tangent), ``extended`` False leaves out the long-double variants of three kernels
+    (interface.EXTENDED_KERNELS; the impact's accuracy is then measured in double), ``split_lines`` None keeps the emitter's part lengths (one value sets both),
     ``flags`` None is DEFAULT_FLAGS."""
     if formulation not in FORMULATIONS:
         raise ValueError(f"formulation: must be one of {', '.join(FORMULATIONS)}, got {formulation!r}")
@@ -70,6 +76,8 @@ def build_options(scene, *, bake_params: bool = False, specialise: bool = True, 
     n = scene.n
     if not isinstance(tangent, bool):
         raise TypeError(f"tangent: expected True or False, got {tangent!r}")
+    if not isinstance(extended, bool):
+        raise TypeError(f"extended: expected True or False, got {extended!r}")
     if tangent and rolled is True:
         raise ValueError("tangent: the rolled forward dynamics (rolled=True: loops over the links) has no tangent "
                          "kernel; leave rolled out (or False) to build the derivatives with straight-line code")
@@ -79,7 +87,7 @@ def build_options(scene, *, bake_params: bool = False, specialise: bool = True, 
     return BuildOptions(
         bake_params=bool(bake_params), specialise=bool(specialise), dense=interface.wants_dense(n, dense),
         rolled=loops, rolled_required=loops and rolled is True, chart_b=bool(chart_b),
-        tangent=tangent, formulation=formulation,
+        tangent=tangent, extended=extended, formulation=formulation,
         split_lines=interface.SPLIT_LINES if split_lines is None else split_lines,
         split_lines_hot=interface.SPLIT_LINES_HOT if split_lines is None else split_lines,
         flags=DEFAULT_FLAGS if flags is None else tuple(str(f) for f in flags))

@@ -7,11 +7,11 @@ from dataclasses import replace
 from pathlib import Path
 
 from .charts import chart_b_scene
-from .emit import GeneratedModel, assemble_model, render_function, render_standalone
+from .emit import GeneratedModel, assemble_model, render_extended, render_function, render_standalone
 from .options import BuildOptions, build_options
 from .flatten import flatten, live_assignments
 from .ops import raw_count_ops
-from . import kernels, lagrange
+from . import interface, kernels, lagrange
 from .scene import Scene, SceneError
 from .specialise import check_not_singular, layout_for
 
@@ -43,10 +43,12 @@ def generate(scene: Scene, options: BuildOptions | None = None, *, name: str | N
     if scene_b is None:
         return model
     # chart B: the same chain with T_-1 turned a right angle (codegen.charts), its loop kernels only (no dense
-    # ones), in the same NAME.c as NAME_b_* and the descriptor NAME_model_b
+    # ones), in the same NAME.c as NAME_b_* and the descriptor NAME_model_b (the impact's accuracy is measured on
+    # chart A: no long-double kernels)
     start = time.perf_counter()
     progress("chart B")
-    model_b = _generate(scene_b, f"{name}_b", replace(options, dense=False, tangent=False), progress, workers,
+    model_b = _generate(scene_b, f"{name}_b", replace(options, dense=False, tangent=False, extended=False), progress,
+                        workers,
                         model.layout)
     return assemble_model(scene, name, model.functions, options, model.layout, chart_b=(scene_b, model_b.functions),
                           timings=dict(model.timings, chart_b=time.perf_counter() - start))
@@ -84,6 +86,9 @@ def _generate(scene, name, options: BuildOptions, progress, workers, layout) -> 
     functions = [render_function(p, options.split_size(p.kernel.name)) for p in programs]
     if looped is not None:
         functions.insert(_kernel_position("forward_dynamics", options.dense), looped)
+    if options.extended:                         # the long-double variants, from the same programs (interface order)
+        extended = {p.kernel.name: p for p in programs if p.kernel.name in interface.EXTENDED_OF}
+        functions += [render_extended(extended[kernel]) for kernel in interface.EXTENDED_OF if kernel in extended]
     timings["render"] = time.perf_counter() - start
     return assemble_model(scene, name, functions, options, layout, timings=timings)
 
@@ -151,7 +156,8 @@ def _can_fork() -> bool:
 
 
 def _kernel_job(job):
-    """Derive, flatten and render one kernel (in a worker process): (rendered function, stage seconds)."""
+    """Derive, flatten and render one kernel (in a worker process): (rendered functions: the kernel, then its
+    long-double variant when options.extended asks for it; stage seconds)."""
     scene, options, layout, builder_name = job
     from .kinematics import ChainSymbols
     builder = next(b for b in kernels.KERNEL_BUILDERS if b.__name__ == builder_name)
@@ -159,13 +165,15 @@ def _kernel_job(job):
     if options.rolled and builder_name == "forward_dynamics_kernel":
         function = _rolled_function(scene, options, layout)
         if function is not None:
-            return function, (time.perf_counter() - start, 0.0, 0.0)
+            return [function], (time.perf_counter() - start, 0.0, 0.0)
     kernel = builder(ChainSymbols(scene, options.bake_params, layout))
     derived = time.perf_counter()
     program = flatten(kernel)
     flattened = time.perf_counter()
-    function = render_function(program, options.split_size(kernel.name))
-    return function, (derived - start, flattened - derived, time.perf_counter() - flattened)
+    functions = [render_function(program, options.split_size(kernel.name))]
+    if options.extended and kernel.name in interface.EXTENDED_OF:
+        functions.append(render_extended(program))
+    return functions, (derived - start, flattened - derived, time.perf_counter() - flattened)
 
 
 def _generate_in_parallel(scene, name, options: BuildOptions, layout, workers, progress):
@@ -181,12 +189,13 @@ def _generate_in_parallel(scene, name, options: BuildOptions, layout, workers, p
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
         jobs = {pool.submit(_kernel_job, (scene, options, layout, b.__name__)): b for b in builders}
         for done in as_completed(jobs):
-            function, stages = done.result()
-            functions[function.name] = function
+            rendered, stages = done.result()
+            functions.update((function.name, function) for function in rendered)
             seconds = [a + b for a, b in zip(seconds, stages)]
-            progress(f"  {function.name}: {len(function.lines)} lines ({sum(stages):.2f} s)")
+            progress(f"  {rendered[0].name}: {len(rendered[0].lines)} lines ({sum(stages):.2f} s)")
     wall = time.perf_counter() - start
     ordered = [functions[b.__name__.removesuffix("_kernel")] for b in builders]
+    ordered += [functions[name] for name in interface.EXTENDED_KERNELS if name in functions]
     timings = {"derive": seconds[0], "cse": seconds[1], "render": seconds[2], "parallel_wall": wall}
     return assemble_model(scene, name, ordered, options, layout, timings=timings)
 

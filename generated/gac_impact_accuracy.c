@@ -7,10 +7,13 @@
  *   on the normals, and on the tangents of the contacts that stick), and the energy the remaining residuals can move
  *   is the impact's accuracy.
  * I_f v is the model's generalized_momentum and J^T Lambda its contact_generalized_force (O(n) each, neither is
- * formed); the corrections use inertia_solve.
+ * formed); the corrections use inertia_solve.  The momentum balance and the energy identity are evaluated with the
+ * kernels' long-double variants where the model has them (generalized_momentum_ld, contact_generalized_force_ld,
+ * energy_ld), in double otherwise.
  */
 #include "gac_internal.h"
 
+#include <float.h>
 #include <math.h>
 
 #define GAC_REFINE_STEPS 4        /* refinement steps at most (each one O(n)); they stop once no longer improving */
@@ -200,6 +203,37 @@ static double gac_energy_identity(const gac_model *m, const double *q, const dou
     return fabs((double)(((long double)E1[0] - E0[0]) - 0.5L * work));
 }
 
+/* The energy identity's residual in long double (the model's long-double kernels): T(qd+) - T(qd-) by energy_ld,
+ * and Lambda . (gamma+ + gamma-) = (J^T Lambda) . (qd+ + qd-) with J^T Lambda by contact_generalized_force_ld (f:
+ * Lambda in the Jacobian's rows). */
+static double gac_energy_identity_ld(const gac_model *m, const double *q, const double *p, const double *f,
+                                     const double *qd, const double *qd_plus)
+{
+    long double E0[2], E1[2], g[GAC_AT_LEAST_1(m->nq)], work = 0.0L;
+    int i;
+    m->energy_ld(q, qd, p, E0);
+    m->energy_ld(q, qd_plus, p, E1);
+    m->contact_generalized_force_ld(q, f, p, g);
+    for (i = 0; i < m->nq; ++i) work += g[i] * ((long double)qd[i] + qd_plus[i]);
+    return fabs((double)((E1[0] - E0[0]) - 0.5L * work));
+}
+
+/* f = Lambda in the Jacobian's rows (njrow): each contact's normal impulse F[a] along its inward normal, its
+ * tangential impulses Ft[2a..2a+1] along its tangential rows. */
+static void gac_impulse_rows(const gac_model *m, int n, const int *list, const double *F, const double *Ft, double *f)
+{
+    int a, i;
+    for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
+    for (a = 0; a < n; ++a) {
+        const gac_contact *k = &m->contacts[list[a]];
+        int j;
+        f[k->row] += k->normal_sign * F[a];
+        for (j = 0; j < 2 && k->kind == GAC_CONTACT_WALL; ++j) {
+            if (k->trow[j] >= 0) f[k->trow[j]] += Ft[2*a + j];
+        }
+    }
+}
+
 /* The impulses of a frictionless law solved in one round, refined against the velocities they give (iterative
  * refinement of the whole impact, not only of I_f's solves): the contacts that push (F > 0) must end with
  * gamma+ + e gamma- = 0 (e = 0 for a contact that rested: |gamma-| <= 1e-11 of the fastest; after several rounds,
@@ -331,7 +365,11 @@ static double gac_velocity_accuracy(const gac_model *m, const double *q, const d
  * corrected impulses),
  *   E0 = 4 (nq + 1) eps sum_i |qd+_i| (|(I_f (qd+ - qd-))_i| + |g_i|) + eps/2 sum_i |qd+_i| |(I_f qd+)_i|
  * (about 8 (nq + 1) eps T when the velocities' components do not cancel; large where they do, along a soft
- * direction of I_f or near the base chart's singular pose).  The accuracy is (|qd+ . r| + E0 + the contact law's
+ * direction of I_f or near the base chart's singular pose).  With the model's long-double kernels r is evaluated
+ * in long double as the difference of two evaluations, r = I_f qd+ - I_f qd- - g (qd+ - qd- is not exact in
+ * double), and the evaluation part of E0 is 4 (nq + 1) eps_L sum_i |qd+_i| (|(I_f qd+)_i| + |(I_f qd-)_i| + |g_i|),
+ * eps_L = LDBL_EPSILON; the second part, storing qd+ in doubles, stays eps/2 ... with eps the double's (the energy
+ * identity likewise with energy_ld, gac_energy_identity_ld).  The accuracy is (|qd+ . r| + E0 + the contact law's
  * residual work, gac_law_residual, for a law solved in one round (after several rounds the law's conditions are
  * the rounds'; a round solved with a common e, its contacts' smallest, is measured with that e) + the energy
  * identity's residual, gac_energy_identity) / T. */
@@ -349,6 +387,8 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     double Fts[2 * GAC_AT_LEAST_1(nq)], Ft_kept[2 * GAC_AT_LEAST_1(nq)];
     const double *Y = GAC_WORK_Y(m, work);
     gac_held held[GAC_AT_LEAST_1(nq)];
+    const int extended = m->generalized_momentum_ld != 0 && m->contact_generalized_force_ld != 0;
+    long double h_minus[GAC_AT_LEAST_1(nq)], h_plus[GAC_AT_LEAST_1(nq)], g_ld[GAC_AT_LEAST_1(nq)];
     double miss[GAC_AT_LEAST_1(nq)], before[3 * GAC_AT_LEAST_1(m->npoint)], after[3 * GAC_AT_LEAST_1(m->npoint)];
     double scale = 0.0, v_tol, e_round = 1.0;
     const int aims = rounds == 1 && !plastic && (law == GAC_IMPACT_LAW_FRICTIONLESS || law == GAC_IMPACT_LAW_GDI
@@ -430,33 +470,43 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         gac_held_system(m, q, p, nh, held, work);
         if (gac_ldlt_drop(nh, GAC_WORK_A(m, work), 1e-13) < 0) nh = 0;   /* none to hold: free steps */
     }
+    if (extended) m->generalized_momentum_ld(q, qd, p, h_minus);    /* I_f qd-, once */
     for (it = 0; ; ++it) {
         long double work_r = 0.0L, size = 0.0L, stored = 0.0L;
         double missed = 0.0;
-        for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
-        for (a = 0; a < n; ++a) {                        /* Lambda in the Jacobian's rows */
-            const gac_contact *k = &m->contacts[list[a]];
-            int j;
-            f[k->row] += k->normal_sign * Fs[a];
-            for (j = 0; j < 2 && k->kind == GAC_CONTACT_WALL; ++j) {
-                if (k->trow[j] >= 0) f[k->trow[j]] += Fts[2*a + j];
+        gac_impulse_rows(m, n, list, Fs, Fts, f);        /* Lambda in the Jacobian's rows */
+        if (extended) {                                  /* r = I_f qd+ - I_f qd- - g, all in long double */
+            m->contact_generalized_force_ld(q, f, p, g_ld);
+            m->generalized_momentum_ld(q, qd_plus, p, h_plus);
+            for (i = 0; i < nq; ++i) {
+                const long double ri = (h_plus[i] - h_minus[i]) - g_ld[i];
+                const long double evaluated = fabsl(h_plus[i]) + fabsl(h_minus[i]) + fabsl(g_ld[i]);
+                r[i] = (double)ri;
+                work_r += qd_plus[i] * ri;
+                size += fabsl((long double)qd_plus[i]) * evaluated;
+                stored += fabsl((long double)qd_plus[i]) * fabsl(h_plus[i]);
+                bound_now[i] = (double)(fabsl(ri) + 4.0L * (nq + 1) * LDBL_EPSILON * evaluated
+                                        + 0.5L * GAC_EPS * fabsl(h_plus[i]));
             }
+            balance = fabs((double)work_r);
+            floor = (double)(4.0L * (nq + 1) * LDBL_EPSILON * size + 0.5L * GAC_EPS * stored);
+        } else {
+            m->contact_generalized_force(q, f, p, g);
+            for (i = 0; i < nq; ++i) change[i] = qd_plus[i] - qd[i];
+            m->generalized_momentum(q, change, p, p_change);  /* I_f (qd+ - qd-): no cancelling of qd-'s parts */
+            m->generalized_momentum(q, qd_plus, p, p_plus);
+            for (i = 0; i < nq; ++i) {
+                const long double ri = (long double)p_change[i] - g[i];
+                r[i] = (double)ri;
+                work_r += qd_plus[i] * ri;
+                size += fabsl((long double)qd_plus[i]) * (fabs(p_change[i]) + fabs(g[i]));
+                stored += fabsl((long double)qd_plus[i]) * fabs(p_plus[i]);
+                bound_now[i] = fabs(r[i]) + 4.0 * (nq + 1) * GAC_EPS * (fabs(p_change[i]) + fabs(g[i]))
+                               + 0.5 * GAC_EPS * fabs(p_plus[i]);
+            }
+            balance = fabs((double)work_r);
+            floor = 4.0 * (nq + 1) * GAC_EPS * (double)size + 0.5 * GAC_EPS * (double)stored;
         }
-        m->contact_generalized_force(q, f, p, g);
-        for (i = 0; i < nq; ++i) change[i] = qd_plus[i] - qd[i];
-        m->generalized_momentum(q, change, p, p_change);      /* I_f (qd+ - qd-): no cancelling of qd-'s parts */
-        m->generalized_momentum(q, qd_plus, p, p_plus);
-        for (i = 0; i < nq; ++i) {
-            const long double ri = (long double)p_change[i] - g[i];
-            r[i] = (double)ri;
-            work_r += qd_plus[i] * ri;
-            size += fabsl((long double)qd_plus[i]) * (fabs(p_change[i]) + fabs(g[i]));
-            stored += fabsl((long double)qd_plus[i]) * fabs(p_plus[i]);
-            bound_now[i] = fabs(r[i]) + 4.0 * (nq + 1) * GAC_EPS * (fabs(p_change[i]) + fabs(g[i]))
-                           + 0.5 * GAC_EPS * fabs(p_plus[i]);
-        }
-        balance = fabs((double)work_r);
-        floor = 4.0 * (nq + 1) * GAC_EPS * (double)size + 0.5 * GAC_EPS * (double)stored;
         m->contact_velocities(q, qd_plus, p, after);
         for (a = 0; a < nh; ++a) {                       /* the held directions' misses of the law's targets */
             miss[a] = held[a].aimed ? gac_held_velocity(m, list, &held[a], qd_plus, after) - held[a].target : 0.0;
@@ -530,7 +580,12 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         for (a = 0; a < n; ++a) e_common[a] = smallest;
         law_work = gac_law_residual(m, q, p, n, list, e_common, Fs, Fts, GAC_IMPACT_LAW_GDI, qd, qd_plus);
     }
-    identity = gac_energy_identity(m, q, p, n, list, Fs, Fts, qd, qd_plus);
+    if (extended && m->energy_ld != 0) {                 /* in long double */
+        gac_impulse_rows(m, n, list, Fs, Fts, f);
+        identity = gac_energy_identity_ld(m, q, p, f, qd, qd_plus);
+    } else {
+        identity = gac_energy_identity(m, q, p, n, list, Fs, Fts, qd, qd_plus);
+    }
     gac_copy(F, Fs, n);                                  /* the impulses that balance the refined velocities */
     gac_copy(Ft, Fts, 2 * n);
     if (v_acc) *v_acc = gac_velocity_accuracy(m, q, p, n, list, qd, qd_plus, bound_kept, work);

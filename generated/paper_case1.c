@@ -1275,6 +1275,187 @@ void paper_case1_forward_dynamics_energy(const double *GAC_RESTRICT q, const dou
     y[7] = p[0]*(href_1_y + B0_1*q[5]) + p[0]*(href_2_y + B0_2*O_2_y) + p[0]*(href_3_y + B0_3*O_3_y) + p[0]*(href_4_y + B0_4*O_4_y);
 }
 
+/* ---- kernel generalized_momentum_ld ---- */
+/* generalized_momentum in long double: I_f qd.  148 ops (46 add, 94 mul, 0 div, 8 calls) */
+void paper_case1_generalized_momentum_ld(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, long double *GAC_RESTRICT h)
+{
+    (void)q;
+    (void)qd;
+    (void)p;
+    const long double c_1 = cosl((long double)q[0]);
+    const long double s_1 = sinl((long double)q[0]);
+    const long double c_2 = cosl((long double)q[1]);
+    const long double s_2 = sinl((long double)q[1]);
+    const long double c_3 = cosl((long double)q[2]);
+    const long double s_3 = sinl((long double)q[2]);
+    const long double c_4 = cosl((long double)q[3]);
+    const long double s_4 = sinl((long double)q[3]);
+    const long double B0_1 = (long double)p[1]*(long double)p[2];
+    const long double h_1_x = 0.5L*(long double)p[2]*((long double)p[1]*(long double)p[1]);
+    const long double B2_1 = 0.333333333333333333333L*(long double)p[2]*((long double)p[1]*(long double)p[1]*(long double)p[1]);
+    const long double K_1_zz = B2_1 + (long double)p[1]*(long double)p[5];
+    const long double B0_2 = (long double)p[6]*(long double)p[7];
+    const long double h_2_x = 0.5L*(long double)p[7]*((long double)p[6]*(long double)p[6]);
+    const long double B2_2 = 0.333333333333333333333L*(long double)p[7]*((long double)p[6]*(long double)p[6]*(long double)p[6]);
+    const long double K_2_zz = B2_2 + (long double)p[10]*(long double)p[6];
+    const long double B0_3 = (long double)p[11]*(long double)p[12];
+    const long double h_3_x = 0.5L*(long double)p[12]*((long double)p[11]*(long double)p[11]);
+    const long double B2_3 = 0.333333333333333333333L*(long double)p[12]*((long double)p[11]*(long double)p[11]*(long double)p[11]);
+    const long double K_3_zz = B2_3 + (long double)p[11]*(long double)p[15];
+    const long double B0_4 = (long double)p[16]*(long double)p[17];
+    const long double h_4_x = 0.5L*(long double)p[17]*((long double)p[16]*(long double)p[16]);
+    const long double B2_4 = 0.333333333333333333333L*(long double)p[17]*((long double)p[16]*(long double)p[16]*(long double)p[16]);
+    const long double K_4_zz = B2_4 + (long double)p[16]*(long double)p[20];
+    const long double vl_1_x = c_1*(long double)qd[5] - (long double)qd[4]*s_1;
+    const long double vl_1_y = -c_1*(long double)qd[4] - (long double)qd[5]*s_1;
+    const long double x0 = vl_1_y + (long double)p[1]*(long double)qd[0];
+    const long double vl_2_x = c_2*vl_1_x + s_2*x0;
+    const long double vl_2_y = c_2*x0 - s_2*vl_1_x;
+    const long double wl_2_z = (long double)qd[0] + (long double)qd[1];
+    const long double x1 = vl_2_y + (long double)p[6]*wl_2_z;
+    const long double vl_3_x = c_3*vl_2_x + s_3*x1;
+    const long double vl_3_y = c_3*x1 - s_3*vl_2_x;
+    const long double wl_3_z = (long double)qd[2] + wl_2_z;
+    const long double x2 = vl_3_y + (long double)p[11]*wl_3_z;
+    const long double vl_4_x = c_4*vl_3_x + s_4*x2;
+    const long double vl_4_y = c_4*x2 - s_4*vl_3_x;
+    const long double wl_4_z = (long double)qd[3] + wl_3_z;
+    const long double Hm_4_z = K_4_zz*wl_4_z + h_4_x*vl_4_y;
+    const long double Lm_4_x = B0_4*vl_4_x;
+    const long double Lm_4_y = B0_4*vl_4_y + h_4_x*wl_4_z;
+    const long double pF_4_x = Lm_4_x*c_4 - Lm_4_y*s_4;
+    const long double pF_4_y = Lm_4_x*s_4 + Lm_4_y*c_4;
+    const long double pN_4_z = Hm_4_z + pF_4_y*(long double)p[11];
+    const long double Hm_3_z = pN_4_z + K_3_zz*wl_3_z + h_3_x*vl_3_y;
+    const long double Lm_3_x = pF_4_x + B0_3*vl_3_x;
+    const long double Lm_3_y = pF_4_y + B0_3*vl_3_y + h_3_x*wl_3_z;
+    const long double pF_3_x = Lm_3_x*c_3 - Lm_3_y*s_3;
+    const long double pF_3_y = Lm_3_x*s_3 + Lm_3_y*c_3;
+    const long double pN_3_z = Hm_3_z + pF_3_y*(long double)p[6];
+    const long double Hm_2_z = pN_3_z + K_2_zz*wl_2_z + h_2_x*vl_2_y;
+    const long double Lm_2_x = pF_3_x + B0_2*vl_2_x;
+    const long double Lm_2_y = pF_3_y + B0_2*vl_2_y + h_2_x*wl_2_z;
+    const long double pF_2_x = Lm_2_x*c_2 - Lm_2_y*s_2;
+    const long double pF_2_y = Lm_2_x*s_2 + Lm_2_y*c_2;
+    const long double pN_2_z = Hm_2_z + pF_2_y*(long double)p[1];
+    const long double Hm_1_z = pN_2_z + K_1_zz*(long double)qd[0] + h_1_x*vl_1_y;
+    const long double Lm_1_x = pF_2_x + B0_1*vl_1_x;
+    const long double Lm_1_y = pF_2_y + B0_1*vl_1_y + h_1_x*(long double)qd[0];
+    const long double pF_1_y = Lm_1_x*c_1 - Lm_1_y*s_1;
+    const long double pF_1_z = Lm_1_x*s_1 + Lm_1_y*c_1;
+    h[0] = Hm_1_z;
+    h[1] = Hm_2_z;
+    h[2] = Hm_3_z;
+    h[3] = Hm_4_z;
+    h[4] = -pF_1_z;
+    h[5] = pF_1_y;
+}
+
+/* ---- kernel contact_generalized_force_ld ---- */
+/* contact_generalized_force in long double: J^T f.  57 ops (21 add, 28 mul, 0 div, 8 calls) */
+void paper_case1_contact_generalized_force_ld(const double *GAC_RESTRICT q, const double *GAC_RESTRICT f, const double *GAC_RESTRICT p, long double *GAC_RESTRICT Q)
+{
+    (void)q;
+    (void)f;
+    (void)p;
+    const long double c_1 = cosl((long double)q[0]);
+    const long double s_1 = sinl((long double)q[0]);
+    const long double c_2 = cosl((long double)q[1]);
+    const long double s_2 = sinl((long double)q[1]);
+    const long double c_3 = cosl((long double)q[2]);
+    const long double s_3 = sinl((long double)q[2]);
+    const long double c_4 = cosl((long double)q[3]);
+    const long double s_4 = sinl((long double)q[3]);
+    const long double Rref_2_00 = -c_1*s_2 - c_2*s_1;
+    const long double Rref_2_01 = s_1*s_2 - c_1*c_2;
+    const long double Rref_3_00 = Rref_2_00*c_3 + Rref_2_01*s_3;
+    const long double Rref_3_01 = Rref_2_01*c_3 - Rref_2_00*s_3;
+    const long double Rref_4_00 = Rref_3_00*c_4 + Rref_3_01*s_4;
+    const long double Rref_4_01 = Rref_3_01*c_4 - Rref_3_00*s_4;
+    const long double Mf_4_z = Rref_4_00*(long double)f[9]*(long double)p[16] + Rref_4_01*(long double)f[8]*(long double)p[16];
+    const long double Ff_4_x = (long double)f[6] + (long double)f[8];
+    const long double Ff_4_y = (long double)f[7] + (long double)f[9];
+    const long double Mf_3_z = Mf_4_z + Ff_4_x*Rref_3_01*(long double)p[11] + Ff_4_y*Rref_3_00*(long double)p[11];
+    const long double Ff_3_x = Ff_4_x + (long double)f[4];
+    const long double Ff_3_y = Ff_4_y + (long double)f[5];
+    const long double Mf_2_z = Mf_3_z + Ff_3_x*Rref_2_01*(long double)p[6] + Ff_3_y*Rref_2_00*(long double)p[6];
+    const long double Ff_2_x = Ff_3_x + (long double)f[2];
+    const long double Ff_2_y = Ff_3_y + (long double)f[3];
+    const long double Mf_1_z = Mf_2_z - Ff_2_x*c_1*(long double)p[1] - Ff_2_y*(long double)p[1]*s_1;
+    const long double Ff_1_x = Ff_2_x + (long double)f[0];
+    const long double Ff_1_y = Ff_2_y + (long double)f[1];
+    Q[0] = Mf_1_z;
+    Q[1] = Mf_2_z;
+    Q[2] = Mf_3_z;
+    Q[3] = Mf_4_z;
+    Q[4] = Ff_1_x;
+    Q[5] = Ff_1_y;
+}
+
+/* ---- kernel energy_ld ---- */
+/* energy in long double: kinetic and potential energy.  176 ops (48 add, 120 mul, 0 div, 8 calls) */
+void paper_case1_energy_ld(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, long double *GAC_RESTRICT E)
+{
+    (void)q;
+    (void)qd;
+    (void)p;
+    const long double c_1 = cosl((long double)q[0]);
+    const long double s_1 = sinl((long double)q[0]);
+    const long double c_2 = cosl((long double)q[1]);
+    const long double s_2 = sinl((long double)q[1]);
+    const long double c_3 = cosl((long double)q[2]);
+    const long double s_3 = sinl((long double)q[2]);
+    const long double c_4 = cosl((long double)q[3]);
+    const long double s_4 = sinl((long double)q[3]);
+    const long double B0_1 = (long double)p[1]*(long double)p[2];
+    const long double h_1_x = 0.5L*(long double)p[2]*((long double)p[1]*(long double)p[1]);
+    const long double B2_1 = 0.333333333333333333333L*(long double)p[2]*((long double)p[1]*(long double)p[1]*(long double)p[1]);
+    const long double K_1_zz = B2_1 + (long double)p[1]*(long double)p[5];
+    const long double B0_2 = (long double)p[6]*(long double)p[7];
+    const long double h_2_x = 0.5L*(long double)p[7]*((long double)p[6]*(long double)p[6]);
+    const long double B2_2 = 0.333333333333333333333L*(long double)p[7]*((long double)p[6]*(long double)p[6]*(long double)p[6]);
+    const long double K_2_zz = B2_2 + (long double)p[10]*(long double)p[6];
+    const long double B0_3 = (long double)p[11]*(long double)p[12];
+    const long double h_3_x = 0.5L*(long double)p[12]*((long double)p[11]*(long double)p[11]);
+    const long double B2_3 = 0.333333333333333333333L*(long double)p[12]*((long double)p[11]*(long double)p[11]*(long double)p[11]);
+    const long double K_3_zz = B2_3 + (long double)p[11]*(long double)p[15];
+    const long double B0_4 = (long double)p[16]*(long double)p[17];
+    const long double h_4_x = 0.5L*(long double)p[17]*((long double)p[16]*(long double)p[16]);
+    const long double B2_4 = 0.333333333333333333333L*(long double)p[17]*((long double)p[16]*(long double)p[16]*(long double)p[16]);
+    const long double K_4_zz = B2_4 + (long double)p[16]*(long double)p[20];
+    const long double Rref_2_00 = -c_1*s_2 - c_2*s_1;
+    const long double Rref_2_01 = s_1*s_2 - c_1*c_2;
+    const long double Rref_3_00 = Rref_2_00*c_3 + Rref_2_01*s_3;
+    const long double Rref_3_01 = Rref_2_01*c_3 - Rref_2_00*s_3;
+    const long double Rref_4_00 = Rref_3_00*c_4 + Rref_3_01*s_4;
+    const long double Rref_4_01 = Rref_3_01*c_4 - Rref_3_00*s_4;
+    const long double x0 = c_1*(long double)p[1];
+    const long double O_2_y = (long double)q[5] + x0;
+    const long double x1 = Rref_2_01*(long double)p[6];
+    const long double O_3_y = O_2_y - x1;
+    const long double x2 = Rref_3_01*(long double)p[11];
+    const long double O_4_y = O_3_y - x2;
+    const long double wref_2_z = (long double)qd[0] + (long double)qd[1];
+    const long double wref_3_z = (long double)qd[2] + wref_2_z;
+    const long double wref_4_z = (long double)qd[3] + wref_3_z;
+    const long double vO_2_x = (long double)qd[4] - (long double)qd[0]*x0;
+    const long double vO_2_y = (long double)qd[5] - (long double)p[1]*(long double)qd[0]*s_1;
+    const long double vO_3_x = vO_2_x + wref_2_z*x1;
+    const long double vO_3_y = vO_2_y + Rref_2_00*(long double)p[6]*wref_2_z;
+    const long double vO_4_x = vO_3_x + wref_3_z*x2;
+    const long double vO_4_y = vO_3_y + Rref_3_00*(long double)p[11]*wref_3_z;
+    const long double href_1_x = -h_1_x*s_1;
+    const long double href_1_y = c_1*h_1_x;
+    const long double href_2_x = Rref_2_00*h_2_x;
+    const long double href_2_y = -Rref_2_01*h_2_x;
+    const long double href_3_x = Rref_3_00*h_3_x;
+    const long double href_3_y = -Rref_3_01*h_3_x;
+    const long double href_4_x = Rref_4_00*h_4_x;
+    const long double href_4_y = -Rref_4_01*h_4_x;
+    E[0] = 0.5L*B0_1*((long double)qd[4]*(long double)qd[4] + (long double)qd[5]*(long double)qd[5]) + 0.5L*B0_2*(vO_2_x*vO_2_x + vO_2_y*vO_2_y) + 0.5L*B0_3*(vO_3_x*vO_3_x + vO_3_y*vO_3_y) + 0.5L*B0_4*(vO_4_x*vO_4_x + vO_4_y*vO_4_y) + 0.5L*K_1_zz*((long double)qd[0]*(long double)qd[0]) + 0.5L*K_2_zz*(wref_2_z*wref_2_z) + 0.5L*K_3_zz*(wref_3_z*wref_3_z) + 0.5L*K_4_zz*(wref_4_z*wref_4_z) + href_1_x*(long double)qd[0]*(long double)qd[5] + href_2_x*vO_2_y*wref_2_z + href_3_x*vO_3_y*wref_3_z + href_4_x*vO_4_y*wref_4_z - href_1_y*(long double)qd[0]*(long double)qd[4] - href_2_y*vO_2_x*wref_2_z - href_3_y*vO_3_x*wref_3_z - href_4_y*vO_4_x*wref_4_z;
+    E[1] = (long double)p[0]*(href_1_y + B0_1*(long double)q[5]) + (long double)p[0]*(href_2_y + B0_2*O_2_y) + (long double)p[0]*(href_3_y + B0_3*O_3_y) + (long double)p[0]*(href_4_y + B0_4*O_4_y);
+}
+
 /* ---- end of kernels ---- */
 /* Directional derivative of forward_dynamics (forward mode, exact: the tangent of its tape).  Not generated for this model (its forward dynamics is rolled code, or it was built with
  * tangent=False): every output is NaN, and paper_case1_model.forward_dynamics_tangent is NULL. */
@@ -1503,7 +1684,10 @@ const gac_model paper_case1_model = {
     .inertia_solve_tangent = 0,
     .contact_generalized_force_tangent = 0,
     .contact_gaps_tangent = 0,
-    .contact_bias_tangent = 0   /* no tangents: no sensitivities */
+    .contact_bias_tangent = 0,   /* no tangents: no sensitivities */
+    .generalized_momentum_ld = paper_case1_generalized_momentum_ld,
+    .contact_generalized_force_ld = paper_case1_contact_generalized_force_ld,
+    .energy_ld = paper_case1_energy_ld
 };
 
 /* Point the arrays of a simulation and of a record at their own storage. */

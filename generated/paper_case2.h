@@ -100,6 +100,9 @@
  *   contact_bias             74 = 22 add + 46 mul + 0 div + 6 calls
  *   power                     0 = 0 add + 0 mul + 0 div + 0 calls
  *   forward_dynamics_energy    305 = 97 add + 196 mul + 6 div + 6 calls
+ *   generalized_momentum_ld     87 = 24 add + 57 mul + 0 div + 6 calls
+ *   contact_generalized_force_ld     42 = 11 add + 25 mul + 0 div + 6 calls
+ *   energy_ld               100 = 27 add + 67 mul + 0 div + 6 calls
  *
  * USING IT
  *   paper_case2_options opt;  paper_case2_sim sim;  paper_case2_impact_record rec;  int code;
@@ -388,6 +391,42 @@ void paper_case2_contact_gaps_tangent(const double *GAC_RESTRICT q, const double
  *   paper_case2_model.contact_bias_tangent is NULL.
  *   Not generated for this model (rolled forward dynamics, or tangent=False): writes NaN. */
 void paper_case2_contact_bias_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT dp, double *GAC_RESTRICT da);
+
+/* generalized_momentum in long double: I_f qd.
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   h    out: I_f qd (NQ; N m s, N s)
+ *   The same flattened program as paper_case2_generalized_momentum, every intermediate a long double
+ *   (inputs double): what the impact's accuracy measure evaluates its residuals with
+ *   (gac_impact_accuracy), about 11 more bits than the double kernel.  A model built with extended=False
+ *   has none: this function then writes NaN and paper_case2_model.generalized_momentum_ld is NULL.
+ *   6 outputs.   87 ops (24 add, 57 mul, 0 div, 6 calls) */
+void paper_case2_generalized_momentum_ld(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, long double *GAC_RESTRICT h);
+
+/* contact_generalized_force in long double: J^T f.
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   f    in : force along each contact Jacobian row (NJROW; N, N m on a stop)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   Q    out: J^T f (NQ; N m on an angle, N on a translation)
+ *   The same flattened program as paper_case2_contact_generalized_force, every intermediate a long
+ *   double (inputs double): what the impact's accuracy measure evaluates its residuals with
+ *   (gac_impact_accuracy), about 11 more bits than the double kernel.  A model built with extended=False
+ *   has none: this function then writes NaN and paper_case2_model.contact_generalized_force_ld is NULL.
+ *   6 outputs.   42 ops (11 add, 25 mul, 0 div, 6 calls) */
+void paper_case2_contact_generalized_force_ld(const double *GAC_RESTRICT q, const double *GAC_RESTRICT f, const double *GAC_RESTRICT p, long double *GAC_RESTRICT Q);
+
+/* energy in long double: kinetic and potential energy.
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   E    out: E[0] kinetic, E[1] potential energy (J)
+ *   The same flattened program as paper_case2_energy, every intermediate a long double (inputs double):
+ *   what the impact's accuracy measure evaluates its residuals with (gac_impact_accuracy), about 11 more
+ *   bits than the double kernel.  A model built with extended=False has none: this function then writes
+ *   NaN and paper_case2_model.energy_ld is NULL.
+ *   2 outputs.   100 ops (27 add, 67 mul, 0 div, 6 calls) */
+void paper_case2_energy_ld(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, long double *GAC_RESTRICT E);
 
 /* ODE right-hand side of the flight phase.
  *   t            time (s), unused

@@ -416,7 +416,7 @@ class CompiledModel:
 
 def load_model(scene: Scene | str | Path, bake_params: bool = False, flags=None, progress=None,
                specialise: bool = True, dense: bool | None = None, rolled: bool | None = None,
-               chart_b: bool = True, tangent: bool = False) -> CompiledModel:
+               chart_b: bool = True, tangent: bool = False, extended: bool = True) -> CompiledModel:
     """Generate (cached) and compile (cached) the model of a scene, a shipped scene name or a scene
     file.  ``specialise`` (default) leaves out what the scene does not need; False gives the general
     model.  ``dense``: generate the dense kernels (mass_matrix, bias, contact_jacobian; O(n^2) code, not
@@ -425,17 +425,20 @@ def load_model(scene: Scene | str | Path, bake_params: bool = False, flags=None,
     links (codegen.rolled); None (default) does from codegen.interface.ROLLED_MIN_LINKS links on.  ``chart_b``
     False leaves a free base's second chart out (a run that reaches the gimbal lock then stops there).  ``tangent``
     True generates the tangent kernels that ``linearize``, ``forward_dynamics_tangent`` and ``simulate(...,
-    sensitivities=...)`` need (straight-line forward dynamics then; about twice the derivation).  The choices
+    sensitivities=...)`` need (straight-line forward dynamics then; about twice the derivation).  ``extended``
+    False leaves out the long-double variants of generalized_momentum, contact_generalized_force and energy that
+    the impact's accuracy measure evaluates its residuals with (it then measures in double).  The choices
     are resolved once, here (codegen.options.build_options), into the model's ``options``.  For a name or a file,
     the same model object is returned again while the file is unchanged (same path, modification time and size)
     and the options are the same."""
     for option, value in (("dense", dense), ("rolled", rolled)):
         if value is not None and not isinstance(value, bool):
             raise TypeError(f"{option}: expected True, False or None, got {value!r}")
-    if not isinstance(tangent, bool):
-        raise TypeError(f"tangent: expected True or False, got {tangent!r}")
+    for option, value in (("tangent", tangent), ("extended", extended)):
+        if not isinstance(value, bool):
+            raise TypeError(f"{option}: expected True or False, got {value!r}")
     choices = dict(bake_params=bake_params, specialise=specialise, dense=dense, rolled=rolled, chart_b=chart_b,
-                   tangent=tangent, flags=flags)
+                   tangent=tangent, extended=extended, flags=flags)
     if isinstance(scene, Scene):
         return _build_model(scene, build_options(scene, **choices), progress)
     if not isinstance(scene, (str, os.PathLike)):
@@ -444,7 +447,7 @@ def load_model(scene: Scene | str | Path, bake_params: bool = False, flags=None,
     path = scene_file(scene)
     stat = path.stat()
     key = (path, stat.st_mtime_ns, stat.st_size, bool(bake_params), tuple(flags or ()), bool(specialise), dense,
-           rolled, bool(chart_b), tangent)
+           rolled, bool(chart_b), tangent, extended)
     model = _MODELS.get(key)
     if model is None:
         loaded = load_scene(path)

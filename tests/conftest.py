@@ -157,20 +157,21 @@ def derived():
 
 @pytest.fixture(scope="session")
 def compiled():
-    """compiled(scene, bake_params=False, specialise=False, dense=None, chart_b=False, tangent=False) ->
-    runtime.CompiledModel, built once per session.  Tests get the general model unless they ask for the specialised
-    one, without a free base's second chart (half the code to build) unless they ask for it (the tests that pass
-    through the gimbal lock: test_sim_charts, test_sim_gimbal_impact, test_tools_parity), and without the forward
-    dynamics' tangent kernels unless they ask for them (the derivative tests: test_build_tangents,
-    test_sim_sensitivities), as load_model does."""
+    """compiled(scene, bake_params=False, specialise=False, dense=None, chart_b=False, tangent=False,
+    extended=False) -> runtime.CompiledModel, built once per session.  Tests get the general model unless they ask
+    for the specialised one, without a free base's second chart (half the code to build) unless they ask for it (the
+    tests that pass through the gimbal lock: test_sim_charts, test_sim_gimbal_impact, test_tools_parity), without
+    the forward dynamics' tangent kernels unless they ask for them (the derivative tests: test_build_tangents,
+    test_sim_sensitivities), as load_model does, and without the long-double kernels of the impact's accuracy
+    unless they ask for them (load_model's default: the tests of that accuracy, test_sim_impact_accuracy)."""
     from runtime import load_model
 
     def get(scene: Scene, bake_params: bool = False, specialise: bool = False, dense=None, chart_b: bool = False,
-            tangent: bool = False):
-        key = (scene, bake_params, specialise, dense, chart_b, tangent)
+            tangent: bool = False, extended: bool = False):
+        key = (scene, bake_params, specialise, dense, chart_b, tangent, extended)
         if key not in _MODELS:
             _MODELS[key] = load_model(scene, bake_params=bake_params, specialise=specialise, dense=dense,
-                                      chart_b=chart_b, tangent=tangent)
+                                      chart_b=chart_b, tangent=tangent, extended=extended)
         return _MODELS[key]
     return get
 
@@ -192,9 +193,11 @@ def sanitized_build(folder: Path, sources, output: str) -> Path:
 
 
 def quick_model(scene, specialise: bool = True, **options):
-    """load_model(scene, ...) without a free base's second chart and without the tangent kernels (the code the
-    tests of other things do not need: half the derivation); the tests of the defaults call load_model."""
+    """load_model(scene, ...) without a free base's second chart, without the tangent kernels and without the
+    long-double kernels of the impact's accuracy (the code the tests of other things do not need: half the
+    derivation); the tests of the defaults call load_model."""
     from runtime import load_model
     options.setdefault("chart_b", False)
     options.setdefault("tangent", False)
+    options.setdefault("extended", False)
     return load_model(scene, specialise=specialise, **options)

@@ -140,8 +140,10 @@
 #define GAC_MAX_ROUNDS   256       /* rounds of the impact law before its plastic closing round */
 #define GAC_IMPACT_ROUNDOFF_MAX 1e-2  /* an impact whose round-off bound (record.roundoff) exceeds this stops the
                                          run (GAC_ERR_IMPACT_ACCURACY): its energy is not known */
-#define GAC_FRICTION_RESIDUAL_MAX 1e-9  /* the frictional impact law's conditions, relative: beyond it the impact
-                                         is refused (GAC_ERR_IMPACT_FRICTION) */
+#define GAC_FRICTION_RESIDUAL_MAX 1e-9  /* the frictional impact law's conditions, relative: beyond it, or beyond
+                                         16 eps cond(W) of a round's contact-space W (its LDL^T pivots' spread)
+                                         where that is larger, the impact is refused (GAC_ERR_IMPACT_FRICTION); the
+                                         residual left counts in the impact's accuracy (record.roundoff) */
 #define GAC_SLOW_SLIDING 4         /* a resting point sliding slower than this many friction_velocity is in (or
                                       near) the regularised friction's stiff, viscous regime: sim.n_slow_sliding */
 
@@ -171,6 +173,9 @@ typedef void (*gac_kernel_qv_tangent)(const double *q, const double *v, const do
 /* q, p and a direction (dq, dp) -> the directional derivative of a q kernel */
 typedef void (*gac_kernel_q_tangent)(const double *q, const double *p, const double *dq, const double *dp,
                                      double *out);
+/* q, a vector v (qd or f), p -> out in long double: a kernel's long-double variant (its own flattened program, every
+ * intermediate a long double, the inputs double) */
+typedef void (*gac_kernel_qv_ld)(const double *q, const double *v, const double *p, long double *out);
 
 /* A controller: writes the inputs u (nu) for time t (s) and state (q, qd).  On entry u holds the inputs
  * last given to gac_sim_set_input.  Called at every stage of the integrators and wherever the loop needs
@@ -312,6 +317,11 @@ struct gac_model {
     gac_kernel_qv_tangent contact_generalized_force_tangent; /* q, f, p, dq, df (njrow), dp -> d(J^T f) (nq) */
     gac_kernel_q_tangent contact_gaps_tangent;     /* q, p, dq, dp -> d gap (ncontact) */
     gac_kernel_qv_tangent contact_bias_tangent;    /* q, qd, p, dq, dqd, dp -> d(Jdot qd) (njrow) */
+    /* long-double variants of three kernels, for the impact's accuracy (gac_impact_accuracy evaluates its momentum
+       balance and energy identity with them); NULL: none (extended=False, chart B; then in double) */
+    gac_kernel_qv_ld generalized_momentum_ld;      /* q, qd, p -> I_f qd (nq) */
+    gac_kernel_qv_ld contact_generalized_force_ld; /* q, f (njrow), p -> J^T f (nq) */
+    gac_kernel_qv_ld energy_ld;                    /* q, qd, p -> E[0] kinetic, E[1] potential energy (J) */
 };
 
 /* GAC_OK if the descriptor is consistent (sizes > 0 where needed, nx = 2 nq, tables and kernels present,

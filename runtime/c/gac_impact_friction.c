@@ -805,7 +805,7 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
     v_tol = 1e-11 * scale;
     for (round = 0; ; ++round) {
         int rows[nd_max], st[GAC_AT_LEAST_1(nq)], dm[GAC_AT_LEAST_1(nq)];
-        double ek[GAC_AT_LEAST_1(nq)], cfk[GAC_AT_LEAST_1(nq)], qv[nd_max], L[nd_max], res = 0.0;
+        double ek[GAC_AT_LEAST_1(nq)], cfk[GAC_AT_LEAST_1(nq)], qv[nd_max], L[nd_max], res = 0.0, res_max = 0.0;
         int k = 0, nr = 0, approaching = 0, pass;
         const int last = round >= GAC_MAX_ROUNDS;
         for (a = 0; a < n; ++a) {
@@ -822,6 +822,21 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
             }
         }
         if (!approaching) break;
+        {                                        /* what the round's W lets its conditions be solved to: its
+                                                    pivots' spread (a lower bound of cond W) times 16 eps */
+            double Wr[nr * nr], dmax = 0.0, dmin = INFINITY;
+            for (i = 0; i < nr; ++i) {
+                for (j = 0; j < nr; ++j) Wr[i * nr + j] = W[rows[i] * nd + rows[j]];
+            }
+            if (gac_ldlt(nr, Wr, 1e-300) == 0) {
+                for (i = 0; i < nr; ++i) {
+                    dmax = Wr[i * nr + i] > dmax ? Wr[i * nr + i] : dmax;
+                    dmin = Wr[i * nr + i] < dmin ? Wr[i * nr + i] : dmin;
+                }
+                res_max = 16.0 * GAC_EPS * dmax / dmin;
+            }
+            if (!(res_max > GAC_FRICTION_RESIDUAL_MAX)) res_max = GAC_FRICTION_RESIDUAL_MAX;
+        }
         for (pass = 0; pass < 2; ++pass) {
             double dT = 0.0, size = 0.0;
             for (b = 0; b < k; ++b) {           /* q = (1 + e) gamma- (GDI); Newton + Coulomb: e on the normal only */
@@ -839,7 +854,7 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
                 dT += L[i] * (gam[rows[i]] + 0.5 * wl);
                 size += fabs(L[i]) * (fabs(gam[rows[i]]) + 0.5 * fabs(wl));
             }
-            if (dT <= 1e-12 * size && res <= GAC_FRICTION_RESIDUAL_MAX) break;      /* solved, no gain */
+            if (dT <= 1e-12 * size && res <= res_max) break;      /* solved, no gain */
             {                                    /* else a common restitution, the smallest of the round's */
                 double e_min = 1.0;
                 for (b = 0; b < k; ++b) e_min = ek[b] < e_min ? ek[b] : e_min;
@@ -848,7 +863,7 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
             }
         }
         if (res > *residual) *residual = res;
-        if (res > GAC_FRICTION_RESIDUAL_MAX) return GAC_ERR_IMPACT_FRICTION;
+        if (res > res_max) return GAC_ERR_IMPACT_FRICTION;
         if (round == 0) {                        /* the first round, for gac_refine_round */
             k0 = k;
             for (b = 0; b < k; ++b) st0[b] = st[b], dm0[b] = dm[b], ek0[b] = ek[b], cf0[b] = cfk[b];

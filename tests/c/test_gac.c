@@ -917,6 +917,64 @@ static const gac_model skew = {
     .contact_bias = box_jbias, .energy = skew_energy, .rhs = skew_rhs
 };
 
+/* skew_ld: skew with the long-double variants of its momentum, generalised force and energy, with which the library
+ * measures an impact's accuracy (gac_impact_accuracy: the momentum balance and the energy identity in long double). */
+static void skew_momentum_ld(const double *q, const double *qd, const double *p, long double *h)
+{
+    (void)q; (void)p;
+    h[0] = 2.0L * qd[0] + qd[1]; h[1] = qd[0] + 2.0L * qd[1];
+}
+static void skew_force_ld(const double *q, const double *f, const double *p, long double *Q)
+{
+    (void)q; (void)p;
+    Q[0] = f[0]; Q[1] = f[1];
+}
+static void skew_energy_ld(const double *q, const double *qd, const double *p, long double *E)
+{
+    const long double x = qd[0], y = qd[1];
+    (void)q; (void)p;
+    E[0] = x * x + x * y + y * y;
+    E[1] = 0.0L;
+}
+static gac_model skew_with_ld(void)
+{
+    gac_model m = skew;
+    m.generalized_momentum_ld = skew_momentum_ld;
+    m.contact_generalized_force_ld = skew_force_ld;
+    m.energy_ld = skew_energy_ld;
+    return m;
+}
+
+/* The first impact of the point thrown into skew's corner, with and without the long-double kernels: the same law,
+ * the same velocities, and an accuracy at least as fine with them. */
+static void test_extended_accuracy(void)
+{
+    const gac_model extended = skew_with_ld();
+    const gac_model *models[2] = {&skew, &extended};
+    const double q0[2] = {0.3, 0.7}, qd0[2] = {-1.0, -0.3};
+    double qd_after[2][2], roundoff[2];
+    int k;
+    for (k = 0; k < 2; ++k) {
+        gac_options opt;
+        gac_sim sim;
+        gac_impact_record rec;
+        int code;
+        gac_default_options(&opt);
+        gac_record_bind(&rec, models[k], rdwork, riwork);
+        code = gac_sim_init(&sim, models[k], dwork, iwork, 0.0, q0, qd0, 0, &opt);
+        if (code == GAC_OK) code = gac_sim_advance(&sim, 10.0, 0, 0, 0, 0, &rec);
+        CHECK(code == GAC_SIM_IMPACT, "%s: code %d", models[k]->name, code);
+        qd_after[k][0] = rec.qd_after[0];
+        qd_after[k][1] = rec.qd_after[1];
+        roundoff[k] = rec.roundoff;
+    }
+    CHECK(qd_after[0][0] == qd_after[1][0] && qd_after[0][1] == qd_after[1][1],
+          "the same velocities: (%.17g, %.17g), (%.17g, %.17g)", qd_after[0][0], qd_after[0][1], qd_after[1][0],
+          qd_after[1][1]);
+    CHECK(roundoff[1] <= roundoff[0] && roundoff[1] <= 1e-10, "accuracy with long double %g, double %g", roundoff[1],
+          roundoff[0]);
+}
+
 /* The spring's y(1) with the loop stepping at a fixed h (RK4: dt = h; DOPRI5 and DOP853: first step h, h_max = h and
  * tolerances so loose that every step is accepted); the error against cos(w). */
 static double spring_error(int method, double h)
@@ -1258,6 +1316,7 @@ int main(int argc, char **argv)
     test_events();
     test_resting_contact();
     test_impact_law();
+    test_extended_accuracy();
     test_loop_rules();
     test_charts();
     printf("%d checks, %d failed\n", checks, failures);

@@ -93,6 +93,8 @@ def test_a_sliding_rod_stops_and_stays_stuck(specialise):
     events = transitions(result)
     assert [(kind, label) for kind, _, label in events] == [("stick", "O1/x2_min"), ("stick", "O2/x2_min")]
     assert events[0][1] == events[1][1] and abs(events[0][1] - t_stop) <= 1e-4 / (c_f * G)
+    exported = result.to_json()["contact_events"]                 # what --json writes
+    assert [(e["kind"], e["t"]) for e in exported[2:]] == [(kind, t) for kind, t, _ in events]
 
 
 def test_a_rod_pushed_past_the_limit_slips_where_the_push_reaches_c_f_m_g():

@@ -329,7 +329,8 @@ int gac_rest_at_start(gac_sim *s)
     s->n_landings += n;
     gac_set_resting(s, n, set, 0);
     s->pending = n > 0;
-    code = gac_try_stick(s, 0, 0);                   /* at rest on a rough wall: stuck where it can be */
+    code = gac_try_stick(s, 0, 0, 0, 0);             /* at rest on a rough wall: stuck where it can be (listed by
+                                                        the first advance's report of the contacts at rest) */
     return code < 0 ? code : GAC_OK;
 }
 
@@ -338,48 +339,63 @@ int gac_rest_at_start(gac_sim *s)
 int gac_release(gac_sim *s, double t, int c_event, gac_impact_record *r)
 {
     const gac_model *md = s->model;
-    int set[md->nq], n = 0, a, i, code;
+    int set[md->nq], n = 0, a, code;
     for (a = 0; a < s->nresting; ++a) {
         if (s->resting[a] != c_event) set[n++] = s->resting[a];
     }
     code = gac_settle(s, t, s->xs, &n, set);
     if (code != GAC_OK) return code;
-    r->t = t;
-    r->ncontact = 0;
-    r->complementarity = 0;
-    r->energy_before = r->energy_after = gac_total_energy(md, s->xs, s->p);
-    for (i = 0; i < md->nq; ++i) {
-        r->q[i] = s->xs[i];
-        r->qd_before[i] = r->qd_after[i] = s->xs[md->nq + i];
-    }
-    r->approach_before = r->approach_after = 0.0;
+    gac_contact_record(s, t, s->xs, r);
     gac_set_resting(s, n, set, r);
     return GAC_OK;
 }
 
+/* The record of an event without impact at time t and state x (ncontact = 0, the state the same before and after);
+ * its lists of contacts (landed, released, stuck, slipped) are left as they are. */
+void gac_contact_record(const gac_sim *s, double t, const double *x, gac_impact_record *r)
+{
+    const gac_model *md = s->model;
+    int i;
+    r->t = t;
+    r->ncontact = 0;
+    r->complementarity = 0;
+    r->energy_before = r->energy_after = gac_total_energy(md, x, s->p);
+    for (i = 0; i < md->nq; ++i) {
+        r->q[i] = x[i];
+        r->qd_before[i] = r->qd_after[i] = x[md->nq + i];
+    }
+    r->approach_before = r->approach_after = 0.0;
+}
+
 /* After the inputs changed (or a point slipped): the stuck points the forces now push beyond their cones slip
- * (gac_slip), and the resting contacts they pull off their walls (their force lambda <= 0 at the current state) are
- * released.  Returns 1 (record filled: GAC_SIM_CONTACT), 0 or an error. */
+ * (gac_slip, appended to record->slipped), and the resting contacts they pull off their walls (their force
+ * lambda <= 0 at the current state) are released.  Returns 1 (record filled: GAC_SIM_CONTACT; a release, or a slip
+ * listed in record->slipped, this call's or the caller's), 0 or an error. */
 int gac_recheck_rest(gac_sim *s, gac_impact_record *record)
 {
     const gac_model *md = s->model;
     int a, code;
     s->input_changed = 0;
     for (;;) {
-        if (s->nresting == 0) return 0;
-        gac_events(s, s->t, s->x, s->ev);
-        if (s->fail == GAC_ERR_FRICTION) {            /* sliding in the Painleve paradox: the loop's tangential impact */
-            s->fail = 0;
+        a = s->nresting;
+        if (s->nresting > 0) gac_events(s, s->t, s->x, s->ev);
+        if (s->nresting > 0 && s->fail == GAC_ERR_FRICTION) {   /* sliding in the Painleve paradox: the loop's */
+            s->fail = 0;                                         /* tangential impact */
             s->f_valid = 0;
-            return 0;
+        } else if (s->nresting > 0) {
+            if (s->fail) return s->fail;
+            for (a = 0; a < s->nresting; ++a) {
+                if (s->ev[s->resting[a]] <= 0.0) break;
+            }
         }
-        if (s->fail) return s->fail;
-        for (a = 0; a < s->nresting; ++a) {
-            if (s->ev[s->resting[a]] <= 0.0) break;
+        if (a == s->nresting) {                       /* nothing released: a record only of the slips */
+            if (record->nslipped == 0) return 0;
+            gac_contact_record(s, s->t, s->x, record);
+            record->nlanded = record->nreleased = 0;
+            return 1;
         }
-        if (a == s->nresting) return 0;
         if (!s->is_stuck[s->resting[a]]) break;
-        code = gac_slip(s, s->t, s->x, s->resting[a]);
+        code = gac_slip(s, s->t, s->x, s->resting[a], record);
         if (code < 0) return code;
         if (code == 0) break;                         /* no normal force left: released */
         s->f_valid = s->vn_valid = 0;

@@ -184,13 +184,19 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         }
         record->approach_before = record->approach_after = 0.0;
         record->nlanded = s->nresting;
-        record->nreleased = 0;
-        for (i = 0; i < s->nresting; ++i) record->landed[i] = s->resting[i];
+        record->nreleased = record->nstuck = record->nslipped = 0;
+        for (i = 0; i < s->nresting; ++i) {
+            record->landed[i] = s->resting[i];
+            if (s->is_stuck[s->resting[i]]) record->stuck[record->nstuck++] = s->resting[i];   /* (gac_rest_at_start) */
+        }
         return gac_report(s, record, GAC_SIM_CONTACT);
     }
     if (s->input_changed) {
-        const int code = gac_recheck_rest(s, record);
-        if (code == 1 && s->sens != 0) gac_sens_fixed_release(s);     /* at the inputs' change: a fixed time */
+        int code;
+        record->nstuck = record->nslipped = 0;
+        code = gac_recheck_rest(s, record);
+        if (code == 1 && s->sens != 0 && record->nreleased > 0)
+            gac_sens_fixed_release(s);                               /* at the inputs' change: a fixed time */
         if (code != 0) return code < 0 ? code : gac_report(s, record, GAC_SIM_CONTACT);
     }
     if (s->t < t_end) {                           /* the budget and the progress callback, once per call ... */
@@ -199,7 +205,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
     }
     while (s->t < t_end) {
         double h, t1, t_event = 0.0, err = 0.0, vt_start[2 * GAC_AT_LEAST_1(md->ncontact)];
-        int c_event = -1, last, sticking;
+        int c_event = -1, last, sticking, stuck_report = 0;
         if (!s->f_valid) {
             gac_f(s, s->t, s->x, s->f);
             s->f_valid = 1;
@@ -297,29 +303,32 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         t1 = last ? t_end : s->t + h;
         gac_prepare_dense(s, h);
         if (gac_find_event(s, t1, &t_event, &c_event)) {
-            int code, released = s->is_resting[c_event];
+            int code, released = s->is_resting[c_event], was_stuck[GAC_AT_LEAST_1(md->ncontact)];
             if (s->fail) return s->fail;
             gac_add_work(s, t_event);
             gac_emit(s, t_event, t_eval, n_eval, i_eval, x_eval);
             gac_dense(s, t_event, s->xs);
             if (s->sens != 0) gac_sens_flight(s, s->x, t_event - s->t, 0);   /* S at the event, before it */
+            record->nstuck = record->nslipped = 0;
             if (released && s->is_stuck[c_event]) {   /* |lambda_T| reached c_f lambda: the point slips there */
-                code = gac_slip(s, t_event, s->xs, c_event);
+                code = gac_slip(s, t_event, s->xs, c_event, record);
                 if (code < 0) return code;
             } else {
                 code = 0;
             }
-            if (code == 1) {
-                gac_copy(s->x, s->xs, md->nx);
+            if (code == 1) {                          /* the slip, with the others beyond their cones or pulling */
+                gac_copy(s->x, s->xs, md->nx);        /* there, is reported (GAC_SIM_CONTACT) */
                 s->t = t_event;
                 s->f_valid = s->vn_valid = 0;
-                code = gac_recheck_rest(s, record);   /* others beyond their cones or pulling there */
+                code = gac_recheck_rest(s, record);
                 if (code < 0) return code;
                 if (s->fail) return s->fail;
                 if (gac_energy_check(s, 0) != GAC_OK) return GAC_ERR_DRIFT;
                 if (s->opt.method == GAC_METHOD_RK4) s->h = s->opt.dt;
-                if (code == 1) return gac_report(s, record, GAC_SIM_CONTACT);
-                continue;
+                return gac_report(s, record, GAC_SIM_CONTACT);
+            }
+            if (!released && s->opt.stick) {          /* the stuck points before the impact (its transitions) */
+                for (i = 0; i < md->ncontact; ++i) was_stuck[i] = s->is_stuck[i];
             }
             code = released ? gac_release(s, t_event, c_event, record)
                             : gac_resolve(s, t_event, c_event, record);
@@ -333,9 +342,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             s->t = t_event;
             s->f_valid = s->vn_valid = 0;
             if (code == 1 && !released && s->opt.stick) {   /* after an impact every resting point re-decided */
-                int stuck;
-                for (i = 0; i < md->ncontact; ++i) s->is_stuck[i] = 0;
-                stuck = gac_try_stick(s, 0, 1);
+                const int stuck = gac_restick(s, 1, was_stuck, record);
                 if (stuck < 0) return stuck;
                 if (stuck > 0) s->energy_x1_valid = 0;
             }
@@ -383,9 +390,19 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             int code = gac_project(s, s->x, s->nresting, s->resting, 1);
             if (code != GAC_OK) return code;
             if (s->sens != 0) gac_sens_project(s, s->x1, s->x);   /* (s->x1: the step's end before it) */
-            if (sticking) {                       /* sliding -> stuck: slow points that can stick */
-                code = gac_try_stick(s, vt_start, 1);
+            if (sticking) {                       /* sliding -> stuck: slow points that can stick (reported) */
+                double x_before[md->nx];
+                gac_copy(x_before, s->x, md->nx);
+                record->nstuck = record->nslipped = 0;
+                code = gac_try_stick(s, vt_start, 1, 0, record);
                 if (code < 0) return code;
+                if (code > 0) {
+                    gac_contact_record(s, s->t, x_before, record);
+                    record->nlanded = record->nreleased = 0;
+                    record->energy_after = gac_total_energy(md, s->x, s->p);
+                    for (i = 0; i < md->nq; ++i) record->qd_after[i] = s->x[md->nq + i];
+                    stuck_report = 1;
+                }
             }
             s->f_valid = s->vn_valid = 0;
             gac_events(s, s->t, s->x, s->ev);
@@ -404,11 +421,16 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             gac_to_chart_a(s, x);
             if (s->fail) return s->fail;
         }
+        if (stuck_report) {                       /* (in chart A's coordinates before a switch) */
+            const int code = gac_report(s, record, GAC_SIM_CONTACT);
+            if (code < 0) return code;
+        }
         if (gac_wants_switch(s)) {                /* near chart A's lock, or far enough from it again */
             const int code = gac_switch_chart(s);
             if (code != GAC_OK) return code;
             md = s->model;
         }
+        if (stuck_report) return GAC_SIM_CONTACT; /* points came to stick at this step's end */
     }
     while (n_eval > 0 && *i_eval < n_eval && t_eval[*i_eval] <= t_end) {   /* samples at t_end itself */
         for (i = 0; i < md->nx; ++i) x_eval[(long)(*i_eval) * md->nx + i] = s->x[i];

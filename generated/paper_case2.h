@@ -117,7 +117,7 @@
  *   .n_rhs, .n_impacts, .nresting and .resting[0..nresting-1] (the resting contacts), sim.base.opt; or
  *   paper_case2_sim_state.  The record: rec.base.t, .ncontact, .contact[k], .impulse[k] (N s), .q[i],
  *   .qd_before[i], .qd_after[i], .energy_before, .energy_after (J), .nlanded, .landed[k], .nreleased,
- *   .released[k], ... (gac_impact_record).
+ *   .released[k], .nstuck, .stuck[k], .nslipped, .slipped[k], ... (gac_impact_record).
  * Storage: the arrays of sim.base and rec.base point into the struct's own dwork / iwork; every
  *   paper_case2_sim_* call points them there again.  A struct copied by assignment or memcpy points at the
  *   original's storage until that next call: copy with paper_case2_sim_copy / paper_case2_impact_record_copy.

@@ -82,13 +82,16 @@ class Impact:
 
 @dataclass
 class ContactEvent:
-    """A change of the resting contact set: point O_point (1-based) on a wall became
-    resting ('rest') or was released ('release') at time t."""
+    """A change of the resting contacts at time t: point O_point (1-based) on a wall became resting ('rest') or was
+    released ('release'); or, resting on a wall with Coulomb friction, came to stick ('stick': sliding -> stuck, or
+    landed and stuck) or began to slip ('slip': stuck -> sliding, its cone's edge reached or an impact set it
+    sliding).  An impact's events carry its time; result.n_sticks and result.n_slips count the 'stick' and 'slip'
+    events."""
 
     t: float
     point: int
     wall: str
-    kind: str             # 'rest' | 'release'
+    kind: str             # 'rest' | 'release' | 'stick' | 'slip'
     dt_dp: dict | None = None   # simulate(sensitivities=...): d t / d(direction) by direction name (a landing: its
                                 # impact's; NaN from the first event not differentiated on)
 
@@ -126,8 +129,8 @@ class SimulationResult:
     loss_friction: float = 0.0    # J: energy sliding friction took at resting contacts (>= 0)
     u: np.ndarray | None = None        # (len(t), nu) the inputs at the sample times (None: no inputs)
     n_chart_switches: int = 0          # switches between the base charts near the gimbal lock (gac_sim.n_chart_switches)
-    n_sticks: int = 0                  # resting points on rough walls that came to stick (sliding -> stuck)
-    n_slips: int = 0                   # stuck points that began to slip (|lambda_T| reached c_f lambda_N)
+    n_sticks: int = 0                  # resting points on rough walls that came to stick: the 'stick' events
+    n_slips: int = 0                   # stuck points that began to slip: the 'slip' events
     n_tangential_impacts: int = 0      # tangential impacts (law 'gdi-tangential', also in impacts): sliding resting
                                        # contacts with no consistent forces (Painleve paradox, the dynamic jam)
     sensitivities: "sensitivity.Sensitivities | None" = None   # simulate(sensitivities=...): d x(t_final)/d(direction)
@@ -199,7 +202,8 @@ class SimulationResult:
         return "\n".join(lines)
 
     def contact_event_table(self, limit: int | None = None) -> str:
-        """The resting-contact events, one line each ('' when there are none); ``limit`` as impact_table's."""
+        """The resting-contact events (rest, release, stick, slip), one line each ('' when there are none);
+        ``limit`` as impact_table's."""
         if not self.contact_events:
             return ""
         lines = [f"resting contact: {'t (s)':>14}  point/wall"]
@@ -776,7 +780,8 @@ def _read_impact(model: CompiledModel, r) -> Impact:
 
 def _read_contact_events(model: CompiledModel, r) -> list[ContactEvent]:
     events = []
-    for kind, count, indices in (("rest", r.nlanded, r.landed), ("release", r.nreleased, r.released)):
+    for kind, count, indices in (("rest", r.nlanded, r.landed), ("release", r.nreleased, r.released),
+                                 ("stick", r.nstuck, r.stuck), ("slip", r.nslipped, r.slipped)):
         for k in range(count):
             point, wall = model.contacts[indices[k]]
             events.append(ContactEvent(float(r.t), point, wall.name, kind))

@@ -177,3 +177,36 @@ def test_separating_contact_in_the_window_is_not_made_to_approach(compiled):
         assert F.min() >= 0
         hits += (N @ qd_eq)[1] < 0                       # where Eq. 48 over both would make it approach
     assert hits >= 10
+
+
+def test_mixed_restitutions_gain_energy_only_without_complementarity(compiled):
+    """Walls with e = 0 and e = 1 struck together (2 to 4 contacts on random twisted 3-link chains): Eq. 48 as printed
+    (every contact v+ = -e v-, impulses free to pull) gains kinetic energy on some states, while the law with
+    complementarity never does: each round changes T by 1/2 sum (1 - e_a) F_a v-_a <= 0 (F_a > 0 only where
+    v-_a <= 0), whatever the e's, so the frictionless law needs no common-e fallback (the frictional law's comes from
+    its tangential part, (1 - e_a) Lambda_T . gamma_T-, of either sign).  The frictional entry point with law
+    'frictionless' agrees, and never reports a common e."""
+    scene = chain(3, twists=True)
+    model = compiled(scene)
+    rng = np.random.default_rng(47)
+    names = scene.parameter_names()
+    gains, worst = 0, 0.0
+    for trial in range(300):
+        p = random_parameters(scene, seed=4700 + trial)
+        for i, name in enumerate(names):
+            if name.startswith("e_"):
+                p[i] = rng.choice([0.0, 1.0])
+        q, qd = reference.random_state(3, rng)
+        points = rng.choice(np.arange(1, 5), size=int(rng.integers(2, 5)), replace=False)
+        contact_set = [int(rng.choice([c for c, (pt, w) in enumerate(model.contacts) if pt == point]))
+                       for point in points]
+        T0 = model.energy(q, qd, p)[0]
+        qd_eq, _ = model.impact(q, qd, contact_set, p, mode="equality")
+        gains += model.energy(q, qd_eq, p)[0] > T0 * (1 + 1e-6)
+        qd_plus, _ = model.impact(q, qd, contact_set, p, mode="complementarity")
+        worst = max(worst, (model.energy(q, qd_plus, p)[0] - T0) / T0)
+        frictional = model.impact_friction(q, qd, contact_set, p, law="frictionless")
+        assert frictional.law == "frictionless", trial
+        assert model.energy(q, frictional.qd_plus, p)[0] <= T0 * (1 + 1e-10), trial
+    assert gains >= 10                                  # the printed law's gain is common with mixed e
+    assert worst <= 1e-12                               # the complementarity law's: round-off at most

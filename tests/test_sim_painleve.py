@@ -184,7 +184,7 @@ def test_a_start_inside_the_paradox_takes_the_tangential_impact_at_once(v, stick
     assert impact.qd_after[2] == pytest.approx(w, rel=1e-9)
     if sticks:
         assert lam_n > 0 and abs(lam_t) < c_f * lam_n
-        assert result.n_sticks == 1 and [e.kind for e in result.contact_events] == ["rest"]
+        assert result.n_sticks == 1 and [(e.kind, e.t) for e in result.contact_events] == [("rest", 0.0), ("stick", 0.0)]
     else:
         assert lam_n < 0
         assert [(e.kind, e.t) for e in result.contact_events] == [("rest", 0.0), ("release", 0.0)]

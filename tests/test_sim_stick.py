@@ -13,8 +13,18 @@ import pytest
 
 from codegen.scene import load_scene, scene_from_dict
 from runtime import simulate
+from runtime.inputs import InputSchedule
 from tests.test_sim_friction import G, rod
 from conftest import quick_model
+
+
+def transitions(result):
+    """The run's stick and slip events as (kind, t, contact), after checking that result.n_sticks and result.n_slips
+    count exactly them."""
+    events = [(e.kind, e.t, e.label) for e in result.contact_events if e.kind in ("stick", "slip")]
+    assert result.n_sticks == sum(kind == "stick" for kind, _, _ in events)
+    assert result.n_slips == sum(kind == "slip" for kind, _, _ in events)
+    return events
 
 
 @pytest.mark.parametrize("force", [2.0, 4.8])
@@ -30,6 +40,7 @@ def test_a_pushed_rod_below_the_limit_stays_stuck(force):
     assert stuck.success, stuck.message
     assert np.abs(stuck.q[:, n + 2] - 1.0).max() < 1e-12 and np.abs(stuck.qd[:, n + 2]).max() < 1e-12
     assert stuck.n_sticks == 2 and stuck.n_slips == 0            # both ends stuck from the start, never slipping
+    assert transitions(stuck) == [("stick", 0.0, "O1/x2_min"), ("stick", 0.0, "O2/x2_min")]
     assert stuck.loss_friction == 0.0 and abs(stuck.energy_residual) < 1e-12
     creep = simulate(model, 0.5, u=[force], rtol=1e-10, atol=1e-12, t_eval=[0.5], stick=False)
     assert creep.success and creep.n_sticks == 0
@@ -51,6 +62,7 @@ def test_a_pushed_rod_above_the_limit_slides_at_the_coulomb_rate():
     assert np.abs(result.qd[:, n + 2] - a * t).max() < 1e-9
     assert np.abs(result.q[:, n + 2] - (1.0 + 0.5 * a * t * t)).max() < 1e-9
     assert result.n_slips == 2 and result.n_sticks == 2
+    assert sorted((kind, t) for kind, t, _ in transitions(result)) == [("slip", 0.0)] * 2 + [("stick", 0.0)] * 2
     assert result.loss_friction == pytest.approx(c_f * G * 0.5 * a * 0.25, rel=1e-9)      # c_f m g x distance
     assert abs(result.energy_residual) < 1e-12 * result.work_input
 
@@ -76,6 +88,31 @@ def test_a_sliding_rod_stops_and_stays_stuck(specialise):
     assert result.loss_friction == pytest.approx(0.5 * v0 * v0, rel=1e-9)
     assert abs(result.energy_residual) < 1e-9
     assert result.options["stick"] is True
+    # the stick events: both ends at one step's end, once the rod is slower than v_s (within v_s / (c_f g) of the
+    # stop) or has passed through zero speed
+    events = transitions(result)
+    assert [(kind, label) for kind, _, label in events] == [("stick", "O1/x2_min"), ("stick", "O2/x2_min")]
+    assert events[0][1] == events[1][1] and abs(events[0][1] - t_stop) <= 1e-4 / (c_f * G)
+    exported = result.to_json()["contact_events"]                 # what --json writes
+    assert [(e["kind"], e["t"]) for e in exported[2:]] == [(kind, t) for kind, t, _ in events]
+
+
+def test_a_rod_pushed_past_the_limit_slips_where_the_push_reaches_c_f_m_g():
+    """A stuck rod pushed along X1 by a force growing linearly, F = k t (a linear schedule): the ends share the push
+    and each slips where its share reaches c_f times its share of the weight, both at t = c_f m g / k, located as
+    events to the loop's event tolerance; the slips are recorded as 'slip' events, each counted once."""
+    c_f, k = 0.5, 10.0
+    model = quick_model(rod(c_f, (0.0, 0.0), inputs=("X1",), friction_velocity=1e-4))
+    push = InputSchedule([0.0, 1.0], [[0.0], [k]], mode="linear")
+    result = simulate(model, 0.8, u=push, rtol=1e-10, atol=1e-12, t_eval=[])
+    assert result.success, result.message
+    events = transitions(result)
+    assert [kind for kind, _, _ in events] == ["stick", "stick", "slip", "slip"]
+    assert sorted(label for kind, _, label in events if kind == "slip") == ["O1/x2_min", "O2/x2_min"]
+    t_slip = c_f * G / k
+    for _, t, _ in events[2:]:
+        assert abs(t - t_slip) < 1e-12
+    assert result.qd_final[model.scene.n + 2] > 0.0                    # sliding along the push since
 
 
 def rough_variants(friction):
@@ -104,6 +141,7 @@ def test_a_resting_chain_costs_little_more_than_on_a_smooth_floor(friction):
     assert stick.n_rhs < 10 * runs["smooth"].n_rhs
     assert stick.n_rhs < regularised.n_rhs / 4
     assert len(stick.resting_final) == 5 and stick.n_sticks >= 5
+    transitions(stick)
     assert np.abs(stick.qd_final).max() < 1e-9                     # at rest, stuck
     assert abs(stick.energy_residual) < 1e-6 and stick.loss_friction >= 0.0
     assert not any("friction_velocity" in w for w in stick.warnings)
@@ -121,6 +159,7 @@ def test_the_energy_balance_closes_in_3d_with_several_points_on_rough_walls():
     result = simulate(model, 3.0, rtol=1e-10, atol=1e-12, t_eval=[3.0])
     assert result.success, result.message
     assert result.impacts and result.n_sticks >= 3
+    transitions(result)
     assert result.loss_friction > 0.0
     assert abs(result.energy_drift) < 1e-8
     assert len(result.resting_final) == 3 and np.abs(result.qd_final).max() < 1e-9
@@ -163,3 +202,5 @@ def test_a_leaning_rod_slips_where_the_friction_it_needs_reaches_c_f_N():
     after = simulate(model, t_slip + 1e-7, t_eval=[], rtol=1e-11, atol=1e-13)
     assert before.success and before.n_sticks == 1 and before.n_slips == 0
     assert after.success and after.n_slips == 1
+    slip = [t for kind, t, label in transitions(after) if kind == "slip"]
+    assert len(slip) == 1 and abs(slip[0] - t_slip) < 1e-7

@@ -9,12 +9,13 @@ contacts and the same final state.
 What each row compares, and to what:
 
 * Python against the standalone program (``NAME_example T_END METHOD --rtol ... --exact``, every number printed
-  with %.17g): impact count, contacts of each impact and resting-contact changes identical; impact times, impulses
+  with %.17g): impact count, contacts of each impact and resting-contact changes (rest, release, stick, slip)
+  identical, and the stick and slip counts equal to those changes; impact times, impulses
   and the final t, q, qd to 1e-9 relative (RELATIVE); the step counters (steps, rejected, right-hand sides) equal.
 * Python against the FMU in one communication step over [0, t_end] (the same single NAME_sim_advance loop as
-  the other two): the impacts the FMU logs (category logEvents: time to 17 digits, contacts by name) and its
-  ``impacts`` and ``resting_contacts`` outputs identical in number and contacts, times and the final q, qd (its
-  outputs) to RELATIVE.
+  the other two): the impacts and the changes of the resting contacts (rest, release, stick, slip) the FMU logs
+  (category logEvents: time to 17 digits, contacts by name) and its ``impacts`` and ``resting_contacts`` outputs
+  identical in number and contacts, times and the final q, qd (its outputs) to RELATIVE.
 * Python against the FMU on a fine communication grid: each fmi2DoStep ends the integration at a communication
   point, so the adaptive steps differ and the runs agree only to the integration tolerance, amplified by the
   chain's sensitivity over the run: the impacts' contacts in the same order, times and final state within the
@@ -152,7 +153,7 @@ def scene_source(row: Row, folder: Path):
 @dataclass
 class Run:
     impacts: list          # (t, [contact names], [impulses])
-    events: list           # (kind, t, contact name): resting contacts made ('rest') or released
+    events: list           # (kind, t, contact name): resting contacts made ('rest'), released, stuck or slipping
     t: float
     q: np.ndarray          # the model's coordinates (NAME.h)
     qd: np.ndarray
@@ -187,7 +188,7 @@ def parse_exact(text: str) -> Run:
         word, *rest = line.split()
         if word == "impact":
             run.impacts.append((float(rest[0]), rest[1::2], [float(v) for v in rest[2::2]]))
-        elif word in ("rest", "release"):
+        elif word in ("rest", "release", "stick", "slip"):
             run.events.append((word, float(rest[0]), rest[1]))
         elif word == "end":
             run.t = float(rest[0])
@@ -238,14 +239,20 @@ def fmu_run(path: Path, row: Row, interval: float) -> Run:
     finally:
         _restore_printing_logger()
     assert all(status == fmi2OK for status, _, _ in messages), messages
-    impacts = []
+    impacts, events = [], []
     for _, category, message in messages:
-        if category == "logEvents" and message.startswith("impact at t = "):
-            head, contacts = message[len("impact at t = "):].split(", energy")[0].split(" s: ")
+        if category != "logEvents":
+            continue
+        kind, _, rest = message.partition(" at t = ")
+        if kind == "impact":
+            head, contacts = rest.split(", energy")[0].split(" s: ")
             impacts.append((float(head), contacts.split()[2:], []))
+        elif kind in ("rest", "release", "stick", "slip"):
+            head, contact = rest.split(" s: ")
+            events.append((kind, float(head), contact))
     last = result[-1]
     assert last["impacts"] == len(impacts)
-    return Run(impacts, [], float(last["time"]), np.array([last[n] for n in q_names]),
+    return Run(impacts, events, float(last["time"]), np.array([last[n] for n in q_names]),
                np.array([last[n] for n in qd_names]), None, int(last["resting_contacts"]),
                tuple(int(last[n]) for n in ("sticks", "slips", "tangential_impacts")))
 
@@ -340,6 +347,8 @@ def test_standalone_program_runs_as_the_python_runtime(row, front_ends):
     close([t for _, t, _ in c.events], [t for _, t, _ in python.events], RELATIVE, "resting-contact times")
     assert c.counts == python.counts, "the step counters differ"
     assert c.transitions == python.transitions, "the stick, slip and tangential-impact counts differ"
+    assert c.transitions[:2] == tuple(sum(k == kind for k, _, _ in c.events) for kind in ("stick", "slip")), \
+        "the stick and slip counts are not the program's stick and slip records"
 
 
 @pytest.mark.parametrize("row", row_params())
@@ -351,6 +360,8 @@ def test_fmu_in_one_communication_step_runs_as_the_python_runtime(row, front_end
     fmu = fmu_run(front_ends.fmu(row), row, row.t_end)
     same_run(python, fmu, RELATIVE, impulses=False)
     assert fmu.resting == python.resting and fmu.transitions == python.transitions
+    assert [(k, n) for k, _, n in fmu.events] == [(k, n) for k, _, n in python.events], "resting contacts differ"
+    close([t for _, t, _ in fmu.events], [t for _, t, _ in python.events], RELATIVE, "resting-contact times")
 
 
 @pytest.mark.parametrize("row", row_params())

@@ -102,10 +102,11 @@
                                           the constraints too far (tighten rtol) */
 #define GAC_SIM_END      1    /* reached t_end */
 #define GAC_SIM_IMPACT   2    /* ended at an impact, already applied; see the record (which may also list
-                                 contacts come to rest or released by the impact) */
+                                 contacts come to rest, released, stuck or set slipping by the impact) */
 #define GAC_SIM_CONTACT  3    /* ended where the resting set changed without an impact: a contact
-                                 released (its force reached 0), or the contacts gac_sim_init puts at rest;
-                                 record.t, landed[], released[] are filled, ncontact = 0 */
+                                 released (its force reached 0), the contacts gac_sim_init puts at rest, or a
+                                 resting point on a rough wall that came to stick or began to slip; record.t,
+                                 landed[], released[], stuck[], slipped[] are filled, ncontact = 0 */
 
 /* ---- integrators (gac_options.method) -------------------------------------------------------- */
 #define GAC_METHOD_RK4     0   /* classical fixed-step RK4 (opt.dt), cubic Hermite dense output */
@@ -406,9 +407,9 @@ int gac_linearize(const gac_model *m, const double *q, const double *qd, const d
      + GAC_IMPACT_NWORK(nq, npoint, njrow, friction) + (long)(nq) * (nq))
 #define GAC_SIM_NINT(nq, ncontact) ((long)(nq) + 3L * GAC_AT_LEAST_1(ncontact))
 /* Doubles and ints of one impact record (gac_record_bind): dwork = impulse | q | qd_before | qd_after
- * (nq each) | impulse_t (2 nq), iwork = contact | landed | released (nq each). */
+ * (nq each) | impulse_t (2 nq), iwork = contact | landed | released | stuck | slipped (nq each). */
 #define GAC_RECORD_NDOUBLE(nq) (6L * (nq))
-#define GAC_RECORD_NINT(nq) (3L * (nq))
+#define GAC_RECORD_NINT(nq) (5L * (nq))
 
 /* The macros above for model m. */
 long gac_impact_nwork(const gac_model *m);
@@ -604,8 +605,13 @@ int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const do
  * slower than v_s along its wall (or whose one tangential velocity changed sign within the step) whose stuck solve
  * gives |lambda_T| <= c_f lambda_N (and keeps the other stuck points inside their cones); its tangential velocity is
  * then projected to 0 in the mass metric, the kinetic energy that takes added to loss_friction.  The projection
- * after every step holds stuck points' tangential velocities at 0 too.  sim.n_sticks and sim.n_slips count the
- * transitions; no record is made (the loop goes on).  The stuck constraint does no work.
+ * after every step holds stuck points' tangential velocities at 0 too.  Every transition is recorded like a landing
+ * or a release: record.stuck[] (came to stick) and record.slipped[] (began to slip), with the impact that caused it
+ * (a point stuck before an impact and stuck after it made no transition; one stuck before and sliding after it
+ * slipped), or else as its own GAC_SIM_CONTACT event (a slip located on the dense output, a stick at a step's end:
+ * qd_before, energy_before the state before the stick's projection, qd_after, energy_after after it; the contacts
+ * gac_sim_init puts at rest and sticks, with their first report).  sim.n_sticks and sim.n_slips count them.  The
+ * stuck constraint does no work.
  *
  * Tangential impact (gac_jam.c).  Where resting points slide on rough walls and their system B is no P-matrix (the
  * Painleve paradox: one contact, its compliance with sliding B_aa <= 0), the loop takes an impact without collision:
@@ -743,6 +749,10 @@ typedef struct {
     double approach_after;       /* fastest approach of a contact within contact_tol after (m/s) */
     int nlanded, *landed;        /* contacts come to rest at this event */
     int nreleased, *released;    /* resting contacts released at this event */
+    int nstuck, *stuck;          /* resting contacts on rough walls that came to stick at this event (sliding -> stuck,
+                                    or landed and stuck; see "Sticking"): sim.n_sticks counts them */
+    int nslipped, *slipped;      /* stuck resting contacts that began to slip at this event (stuck -> sliding: their
+                                    cone's edge reached, or an impact that set them sliding): sim.n_slips counts them */
 } gac_impact_record;
 
 /* The state of one simulation.  Read t, x, the counters and the resting set; write nothing but
@@ -771,7 +781,8 @@ typedef struct {
                                     stiff (time constant about friction_velocity / (c_f g)) and may limit the step */
     double t_slow_sliding;       /* s: the time those steps covered */
     long n_sticks, n_slips;      /* resting points on rough walls that came to stick (sliding -> stuck, at a step
-                                    end, an impact or the start) and that began to slip (stuck -> sliding) */
+                                    end, an impact or the start) and that began to slip (stuck -> sliding): the
+                                    records' stuck[] and slipped[] entries */
     long n_tangential_impacts;   /* tangential impacts (record.law GAC_IMPACT_LAW_GDI_TANGENTIAL) since gac_sim_init:
                                     the Painleve paradox of sliding resting contacts resolved by an impact (also
                                     counted in n_impacts) */
@@ -924,7 +935,7 @@ typedef struct {
     long n_impacts;              /* impacts applied */
     double t_first_impact;       /* s; -1 when there was none */
     double loss_impacts;         /* J: sum of (energy_before - energy_after) over the impacts */
-    long n_contact_events;       /* GAC_SIM_CONTACT ends (contacts come to rest or released) */
+    long n_contact_events;       /* GAC_SIM_CONTACT ends (contacts come to rest, released, stuck or slipping) */
 } gac_run_summary;
 
 /* Run to t_end in one call: gac_sim_advance until GAC_SIM_END or an error (GAC_ERR_MAX_IMPACTS once

@@ -94,6 +94,7 @@ int gac_hold(gac_sim *s, double *x, int nset, const int *set, int n, const int *
 void gac_set_resting(gac_sim *s, int n, const int *set, gac_impact_record *r);
 int gac_rest_at_start(gac_sim *s);
 int gac_release(gac_sim *s, double t, int c_event, gac_impact_record *r);
+void gac_contact_record(const gac_sim *s, double t, const double *x, gac_impact_record *r);
 int gac_recheck_rest(gac_sim *s, gac_impact_record *record);
 
 /* gac_energy.c: the energy balance */
@@ -186,9 +187,10 @@ int gac_stuck_dynamics(const gac_model *m, const double *q, const double *qd, co
 int gac_project_stuck(gac_sim *s, double *x, int n, const int *set);
 int gac_rest_forces(gac_sim *s, double t, const double *x, double *qdd, double *lambda, double *lambda_t,
                     double *dissipation);
-int gac_slip(gac_sim *s, double t, const double *x, int c);
+int gac_slip(gac_sim *s, double t, const double *x, int c, gac_impact_record *r);
 void gac_tangential_speeds(const gac_sim *s, const double *x, double *vt);
-int gac_try_stick(gac_sim *s, const double *vt_start, int count_loss);
+int gac_try_stick(gac_sim *s, const double *vt_start, int count_loss, const int *was_stuck, gac_impact_record *r);
+int gac_restick(gac_sim *s, int count_loss, const int *was_stuck, gac_impact_record *r);
 
 /* gac_energy.c: work and sliding */
 void gac_add_work(gac_sim *s, double t_b);       /* the work of inputs, dampers and friction over [s->t, t_b] */

@@ -16,7 +16,7 @@
 #include <math.h>
 
 /* The tangential impact at s->x (time s->t) on the resting contacts, and the resting set after it: contacts left at
- * rest (normal velocity within round-off of 0) stay and stick where they can (gac_try_stick), the others are released.
+ * rest (normal velocity within round-off of 0) stay and stick where they can (gac_restick), the others are released.
  * The record says so (law GAC_IMPACT_LAW_GDI_TANGENTIAL, impulses, released contacts); the loop re-checks the resting
  * contacts at the next advance (those the new state pulls off their walls are released, as after a change of the
  * inputs).  Post-conditions: every impulse >= 0, no kinetic energy gained beyond the law's round-off (1e-10 of T).
@@ -29,13 +29,13 @@ int gac_jam(gac_sim *s, gac_impact_record *r)
     const int nq = md->nq, nc1 = GAC_AT_LEAST_1(md->ncontact), n = s->nresting;
     double *x = s->x, qd_plus[nq], F[nq], Ft[2 * nq], E[2], vn[nc1], vt[2 * nc1];
     double residual, parts, scale = 0.0, v_hold;
-    int list[nq], set[nq], nset = 0, a, c, i, code;
+    int list[nq], set[nq], was_stuck[nc1], nset = 0, a, c, i, code;
     s->fail = 0;
     for (a = 0; a < n; ++a) list[a] = s->resting[a];
     md->energy(x, x + nq, s->p, E);
     if (!gac_finite(E, 2)) return GAC_ERR_NONFINITE;
     r->t = s->t;
-    r->ncontact = r->nlanded = r->nreleased = 0;
+    r->ncontact = r->nlanded = r->nreleased = r->nstuck = r->nslipped = 0;
     r->rounds = 1;
     r->plastic = r->law_elastic = 0;
     r->complementarity = 1;                          /* no contact approached: not Eq. 47 */
@@ -85,13 +85,16 @@ int gac_jam(gac_sim *s, gac_impact_record *r)
             if (code != GAC_OK) return code;
         }
     }
-    for (c = 0; c < md->ncontact; ++c) s->is_stuck[c] = 0;
+    for (c = 0; c < md->ncontact; ++c) {            /* the stuck points before (the record's transitions) */
+        was_stuck[c] = s->is_stuck[c];
+        s->is_stuck[c] = 0;
+    }
     if (nset > 0) {                                  /* their normal velocities to 0: round-off, never a gain */
         code = gac_project(s, x, nset, set, 0);
         if (code != GAC_OK) return code;
     }
     gac_set_resting(s, nset, set, r);
-    code = gac_try_stick(s, 0, 0);                   /* stopped: stuck where the cone holds it */
+    code = gac_restick(s, 0, was_stuck, r);          /* stopped: stuck where the cone holds it */
     if (code < 0) return code;
     md->energy(x, x + nq, s->p, s->energy_x1);
     r->energy_after = s->energy_x1[0] + s->energy_x1[1];

@@ -255,9 +255,11 @@ void gac_record_bind(gac_impact_record *r, const gac_model *m, double *dwork, in
     r->qd_before = dwork + 2 * nq;
     r->qd_after = dwork + 3 * nq;
     r->impulse_t = dwork + 4 * nq;
-    r->contact = iwork;                        /* iwork: contact | landed | released */
+    r->contact = iwork;                        /* iwork: contact | landed | released | stuck | slipped */
     r->landed = iwork + nq;
     r->released = iwork + 2 * nq;
+    r->stuck = iwork + 3 * nq;
+    r->slipped = iwork + 4 * nq;
 }
 
 void gac_sim_state(const gac_sim *s, double *t, double *q, double *qd)

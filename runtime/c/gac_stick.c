@@ -261,9 +261,10 @@ int gac_rest_forces(gac_sim *s, double t, const double *x, double *qdd, double *
 }
 
 /* The stuck resting contact c at state x (time t) whose |lambda_T| reached c_f lambda_N: it slips, along
- * -lambda_T (s->slip, the friction's direction until it is faster than friction_velocity).  Returns 1 (it slips),
- * 0 (its normal force is not positive: it is to be released instead) or an error. */
-int gac_slip(gac_sim *s, double t, const double *x, int c)
+ * -lambda_T (s->slip, the friction's direction until it is faster than friction_velocity), counted in n_slips and
+ * listed in r->slipped (r NULL: not listed).  Returns 1 (it slips), 0 (its normal force is not positive: it is to be
+ * released instead) or an error. */
+int gac_slip(gac_sim *s, double t, const double *x, int c, gac_impact_record *r)
 {
     const gac_model *md = s->model;
     const int nq1 = GAC_AT_LEAST_1(md->nq);
@@ -279,6 +280,7 @@ int gac_slip(gac_sim *s, double t, const double *x, int c)
     s->slip[2 * c] = norm > 0.0 ? -lambda_t[2 * a] / norm : 0.0;
     s->slip[2 * c + 1] = norm > 0.0 ? -lambda_t[2 * a + 1] / norm : 0.0;
     s->n_slips++;
+    if (r != 0) r->slipped[r->nslipped++] = c;
     return 1;
 }
 
@@ -329,13 +331,15 @@ static int gac_stuck_feasible(gac_sim *s, const double *x, int c_try, double *d)
  * inside its cone.  The velocities are then projected onto the held rows (the stuck tangential velocities to 0, mass
  * metric); with count_loss the kinetic energy that takes is added to loss_friction.  A slow point that cannot stick
  * slides on with the direction its stuck solve would slip in (s->slip); a slip's direction is forgotten once its point
- * is faster than friction_velocity or moves against it.  Returns the number of points that stuck, or an error. */
-int gac_try_stick(gac_sim *s, const double *vt_start, int count_loss)
+ * is faster than friction_velocity or moves against it.  A point that sticks and was not stuck before (was_stuck, per
+ * contact; NULL: none was) came to stick: counted in n_sticks and listed in r->stuck (r NULL: not listed).  Returns
+ * the number of points that stuck, or an error. */
+int gac_try_stick(gac_sim *s, const double *vt_start, int count_loss, const int *was_stuck, gac_impact_record *r)
 {
     const gac_model *md = s->model;
     const double vs = md->friction_velocity;
     double vt[2 * GAC_AT_LEAST_1(md->ncontact)], E_before, d[2], x[md->nx];
-    int a, added = 0, code;
+    int list[GAC_AT_LEAST_1(md->nq)], a, added = 0, code;
     if (!s->opt.stick || s->nresting == 0 || !gac_has_friction(md)) return 0;
     gac_tangential_speeds(s, s->x, vt);
     for (a = 0; a < s->nresting; ++a) {
@@ -359,14 +363,39 @@ int gac_try_stick(gac_sim *s, const double *vt_start, int count_loss)
             continue;
         }
         s->slip[2 * c] = s->slip[2 * c + 1] = 0.0;
-        ++added;
+        list[added++] = c;
     }
     if (added == 0) return 0;
     E_before = gac_total_energy(md, s->x, s->p);
     code = gac_project_stuck(s, s->x, s->nresting, s->resting);
     if (code != GAC_OK) return code;
     if (count_loss) s->loss_friction += E_before - gac_total_energy(md, s->x, s->p);
-    s->n_sticks += added;
+    for (a = 0; a < added; ++a) {                      /* the transitions: stuck now, not before */
+        const int c = list[a];
+        if (was_stuck != 0 && was_stuck[c]) continue;
+        s->n_sticks++;
+        if (r != 0) r->stuck[r->nstuck++] = c;
+    }
     s->f_valid = s->vn_valid = 0;
     return added;
+}
+
+/* After an impact (or a tangential impact), every resting point re-decided: none stuck, then gac_try_stick (count_loss
+ * as there).  Against was_stuck (per contact, the stuck points before the impact) the record r lists the transitions:
+ * stuck now and not before (r->stuck), stuck before, still resting and now sliding (r->slipped); n_sticks and n_slips
+ * count them.  Returns the number of points stuck now, or an error. */
+int gac_restick(gac_sim *s, int count_loss, const int *was_stuck, gac_impact_record *r)
+{
+    const gac_model *md = s->model;
+    int a, c, stuck;
+    for (c = 0; c < md->ncontact; ++c) s->is_stuck[c] = 0;
+    stuck = gac_try_stick(s, 0, count_loss, was_stuck, r);
+    if (stuck < 0) return stuck;
+    for (a = 0; a < s->nresting; ++a) {
+        c = s->resting[a];
+        if (!was_stuck[c] || s->is_stuck[c]) continue;
+        s->n_slips++;
+        if (r != 0) r->slipped[r->nslipped++] = c;
+    }
+    return stuck;
 }

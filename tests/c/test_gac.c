@@ -288,7 +288,7 @@ static void test_sizes(void)
     CHECK(gac_impact_nwork(&box) == 2 * 4 + 2 + 3 * 1 + 2, "impact work %ld", gac_impact_nwork(&box));
     CHECK(gac_sim_ndouble(&box) == 28 * 4 + 3 + 9 * 4 + gac_impact_nwork(&box) + 4, "sim doubles %ld",
           gac_sim_ndouble(&box));
-    CHECK(gac_sim_nint(&box) == 2 + 3 * 4 && gac_record_ndouble(&box) == 12 && gac_record_nint(&box) == 6, "ints");
+    CHECK(gac_sim_nint(&box) == 2 + 3 * 4 && gac_record_ndouble(&box) == 12 && gac_record_nint(&box) == 10, "ints");
     CHECK(gac_sim_ndouble(&box) <= NDOUBLE && gac_sim_nint(&box) <= NINT, "test arrays large enough");
     CHECK(NEAR(gac_chart_measure(&box, box_q0), 1.0, 0.0), "chart measure 1");
 }
@@ -628,7 +628,8 @@ static void test_sled_run(int stick)
     gac_options opt;
     gac_sim sim;
     gac_impact_record rec;
-    int code, i_eval = 0;
+    int code, i_eval = 0, n_stuck = 0;
+    double t_stuck = -1.0;
     CHECK(gac_model_check(&sled) == GAC_OK && gac_impact_nwork(&sled) == 24 * 4 + 2 + 3 + 2, "sled model, work %ld",
           gac_impact_nwork(&sled));
     code = gac_constrained_dynamics(&sled, sled_q0, sled_qd0, 0, sled_p, 1, contact_set, qdd, lambda, swork);
@@ -642,8 +643,13 @@ static void test_sled_run(int stick)
     CHECK(code == GAC_OK, "init %d", code);
     gac_record_bind(&rec, &sled, rdwork, riwork);
     while ((code = gac_sim_advance(&sim, 1.0, t_eval, 2, &i_eval, x_eval, &rec)) == GAC_SIM_CONTACT) {
+        CHECK(rec.nslipped == 0 && (rec.nstuck == 0 || (rec.nstuck == 1 && rec.stuck[0] == 0)), "stuck %d, slipped %d",
+              rec.nstuck, rec.nslipped);
+        if (rec.nstuck > 0) t_stuck = rec.t;
+        n_stuck += rec.nstuck;
     }
     CHECK(code == GAC_SIM_END && sim.nresting == 1 && i_eval == 2, "end %d, resting %d", code, sim.nresting);
+    CHECK(n_stuck == sim.n_sticks, "stick events %d, n_sticks %ld", n_stuck, sim.n_sticks);
     CHECK(NEAR(x_eval[0], v0 * 0.3 - 0.5 * c_f * g * 0.09, 1e-8), "x(0.3) %.17g", x_eval[0]);
     CHECK(t_stop < 1.0 && NEAR(x_eval[4], v0 * v0 / (2.0 * c_f * g), 1e-8), "x(1) %.17g, expected %.17g", x_eval[4],
           v0 * v0 / (2.0 * c_f * g));
@@ -661,6 +667,7 @@ static void test_sled_run(int stick)
               "stuck once: sticks %ld, slips %ld, slow for %.3g s, v(1) %.3g", sim.n_sticks, sim.n_slips,
               sim.t_slow_sliding, x_eval[6]);
         CHECK(fabs(sim.energy_residual) < 1e-12, "energy residual %.3g", sim.energy_residual);
+        CHECK(fabs(t_stuck - t_stop) < 1e-3, "stuck at %.17g, stops at %.17g", t_stuck, t_stop);
     }
     CHECK(fabs(x_eval[5]) < 1e-12 && fabs(x_eval[7]) < 1e-12, "on the floor");
 }
@@ -707,6 +714,8 @@ static void test_tangential_impact(void)
     CHECK(NEAR(rec.energy_before - rec.energy_after, 1.0, 1e-14) && sim.n_tangential_impacts == 1
           && sim.n_impacts == 1 && sim.n_sticks == 1, "energy taken %.17g, counts %ld %ld %ld",
           rec.energy_before - rec.energy_after, sim.n_tangential_impacts, sim.n_impacts, sim.n_sticks);
+    CHECK(rec.nstuck == 1 && rec.stuck[0] == 0 && rec.nslipped == 0, "the impact's record: stuck %d, slipped %d",
+          rec.nstuck, rec.nslipped);
     while ((code = gac_sim_advance(&sim, 0.5, t_eval, 1, &i_eval, x_eval, &rec)) == GAC_SIM_CONTACT) {
     }
     CHECK(code == GAC_SIM_END && sim.nresting == 1 && sim.is_stuck[0] && i_eval == 1 && x_eval[0] == 0.0

@@ -725,27 +725,52 @@ GAC_FMI2_EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const f
     return fail((Instance *)c, "fmi2GetRealOutputDerivatives", "not supported (maxOutputDerivativeOrder=0)");
 }
 
-/* The logEvents line of the impact in record: its time, its contacts by name as the model's NAME_contact_name
- * gives them (O1/x2_min for point O_1 on the wall x2_min, theta_2_upper for a joint's stop) and the energy. */
+/* Contact c's name as the model's NAME_contact_name gives it (O1/x2_min for point O_1 on the wall x2_min,
+ * theta_2_upper for a joint's stop), written at text (size chars). */
+static void contact_name(const gac_model *m, int c, char *text, size_t size)
+{
+    const gac_contact *k = &m->contacts[c];
+    if (k->kind == GAC_CONTACT_STOP)
+        snprintf(text, size, "theta_%d_%s", k->point, k->normal_sign > 0 ? "lower" : "upper");
+    else
+        snprintf(text, size, "O%d/x%d_%s", k->point, k->axis + 1, k->normal_sign > 0 ? "min" : "max");
+}
+
+/* The logEvents line of the impact in record: its time, its contacts by name (contact_name) and the energy. */
 static void impact_message(const gac_model *m, const gac_impact_record *r, char *text, size_t size)
 {
     size_t used;
     int k;
     snprintf(text, size, "impact at t = %.17g s: %d contacts", r->t, r->ncontact);
     for (k = 0; k < r->ncontact; ++k) {
-        const gac_contact *c = &m->contacts[r->contact[k]];
         used = strlen(text);
         if (used + 100 >= size) {                 /* room kept for the energy below */
             snprintf(text + used, size - used, " ...");
             break;
         }
-        if (c->kind == GAC_CONTACT_STOP)
-            snprintf(text + used, size - used, " theta_%d_%s", c->point, c->normal_sign > 0 ? "lower" : "upper");
-        else
-            snprintf(text + used, size - used, " O%d/x%d_%s", c->point, c->axis + 1, c->normal_sign > 0 ? "min" : "max");
+        text[used] = ' ';
+        contact_name(m, r->contact[k], text + used + 1, size - used - 1);
     }
     used = strlen(text);
     snprintf(text + used, size - used, ", energy %.17g -> %.17g J", r->energy_before, r->energy_after);
+}
+
+/* The logEvents lines of the resting contacts the record changed, one per contact and in the record's order: "rest",
+ * "release", "stick" or "slip", "at t = T s: " and its name (contact_name). */
+static void log_contact_events(const Instance *in, const gac_impact_record *r)
+{
+    const char *kinds[4] = {"rest", "release", "stick", "slip"};
+    const int counts[4] = {r->nlanded, r->nreleased, r->nstuck, r->nslipped};
+    const int *lists[4] = {r->landed, r->released, r->stuck, r->slipped};
+    char line[200];
+    int j, k;
+    for (j = 0; j < 4; ++j) {
+        for (k = 0; k < counts[j]; ++k) {
+            const int used = snprintf(line, sizeof line, "%s at t = %.17g s: ", kinds[j], r->t);
+            contact_name(in->m, lists[j][k], line + used, sizeof line - (size_t)used);
+            say(in, fmi2OK, "logEvents", line);
+        }
+    }
 }
 
 /* Advance from currentCommunicationPoint (the instance's time) by communicationStepSize: flight, impacts
@@ -783,6 +808,7 @@ GAC_FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunica
         } else if (code != GAC_SIM_CONTACT) {
             break;
         }
+        if (in->logging) log_contact_events(in, &in->record);      /* after its impact's line */
     }
     if (code != GAC_SIM_END) {
         in->mode = MODE_ERROR;

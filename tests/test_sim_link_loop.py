@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from codegen.scene import LineLink, Scene, SceneError, coordinate_names, scene_from_dict
+from codegen.scene import LineLink, Scene, SceneError, Wall, coordinate_names, scene_from_dict
 from runtime import load_model, simulate
 from tests.test_sim_link_contact import closest_distance
 
@@ -131,3 +131,34 @@ def test_the_scene_file_sets_the_links_restitution():
         scene_from_dict({**base, "restitution": {"default": 0.7, "links": 1.5}})
     bare = {"links": [{"length": 1.0, "mu": 1.0}] * 3}
     assert scene_from_dict(bare).link_restitution is None          # no capsules: the scene is as before
+
+
+def test_the_law_with_rounds_takes_a_link_pair_with_a_wall():
+    """A link pair and O_1 on the floor struck at once (gac_impact_complementarity: the rounds' law): no impulse
+    pulls, neither contact approaches after, e = 1 keeps the energy, and the pair's row is its J^T n."""
+    names = coordinate_names(3)
+    q_full = np.zeros(8)
+    q_full[names.index("theta_2")] = q_full[names.index("theta_3")] = 1.9
+    links = tuple(LineLink(l, mu, (1e-3, 2e-3, 3e-3), 0.05) for l, mu in ((1.0, 1.0), (0.8, 1.5), (1.1, 0.7)))
+    scene = Scene(name="fold3_floor", links=links, gravity=0.0, walls=(Wall("x2_min", -0.05, 1.0, (1,)),),
+                  q0=tuple(q_full), link_restitution=1.0)
+    model = load_model(scene)
+    kinds = [type(w).__name__ for _, w in model.contacts]
+    assert kinds == ["Wall", "LinkPair"]
+    q = model.q0
+    rng = np.random.default_rng(3)
+    struck = 0
+    for _ in range(40):
+        qd = rng.uniform(-2.0, 2.0, model.nq)
+        v_wall = model.contact_velocities(q, qd)[0, 1]
+        v_pair = pair_rate(model, q, qd, 1, 3)
+        if v_wall >= 0.0 or v_pair >= 0.0:
+            continue                                     # both approaching
+        qd_plus, F = model.impact(q, qd, [0, 1], mode="complementarity")
+        assert (F >= 0.0).all() and F.max() > 0.0
+        after = (model.contact_velocities(q, qd_plus)[0, 1], pair_rate(model, q, qd_plus, 1, 3))
+        assert min(after) >= -1e-12 * max(abs(v_wall), abs(v_pair))
+        T0, T1 = model.energy(q, qd)[0], model.energy(q, qd_plus)[0]
+        assert T1 == pytest.approx(T0, rel=1e-11)
+        struck += 1
+    assert struck >= 3

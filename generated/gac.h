@@ -90,6 +90,10 @@
 #define GAC_ERR_LINK_CONTACT     -32   /* a contact of two links (GAC_CONTACT_LINK) met what the loop does not do
                                           with link pairs: an impact under a frictional law (opt.impact_law) on a
                                           rough wall at the same time (link pairs are frictionless) */
+#define GAC_ERR_LINK_REST        -33   /* two links would come to rest on each other: a link pair struck
+                                          opt.zeno_impacts times in a row at shrinking intervals (e < 1: the Zeno
+                                          rule that lands a wall's contact) or at one instant (within 1e-12 (1 +
+                                          |t|) s); resting contact between links is not modelled */
 
 /* ---- how gac_sim_advance ends: the run's budgets (< 0) and status (> 0) ------------------------ */
 #define GAC_ERR_WALL_TIME        -25   /* the run used opt.max_wall_time seconds of its clock (gac_sim_set_clock)

@@ -920,6 +920,12 @@ def _end_message(model: CompiledModel, sim, code: int, segment_t: float, segment
                                model.impact_law_name(int(record.law)), float(record.residual))
         message += (f" (this impact's energy is known only to {float(record.roundoff):.3g} relative, its measured "
                     f"accuracy: {cause})")
+    if code == lib.GAC_ERR_LINK_REST:
+        q = np.array(model.ffi.unpack(sim.x, model.nq))
+        gaps = model.contact_gaps(q, np.array(model.ffi.unpack(sim.p, len(model.parameters()))))
+        first = len(model.layout.contacts)
+        pair = model.contacts[first + int(np.argmin(gaps[first:]))][1]
+        message += f" (the pair closest at the stop: links {pair.i} and {pair.j}, {pair.name})"
     if code == lib.GAC_ERR_NONFINITE and sim.opt.method == lib.GAC_METHOD_RK4:
         message += f" (rk4 with dt = {dt:g} s is unstable on this motion: reduce dt, or use an adaptive method)"
     return message

@@ -3,6 +3,8 @@ folding until links 1 and 3 strike (energy kept at e = 1, the free chain's linea
 law v+ = -e v- on the pair's relative normal velocity, no penetration), and a tumbling spatial chain of capsules
 whose pairs never overlap at the samples (an independent segment distance on result.q)."""
 import math
+import tomllib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -162,3 +164,19 @@ def test_the_law_with_rounds_takes_a_link_pair_with_a_wall():
         assert T1 == pytest.approx(T0, rel=1e-11)
         struck += 1
     assert struck >= 3
+
+
+def test_links_that_would_rest_on_each_other_stop_the_run_naming_them():
+    """The shipped capsule-chain without its joint stops folds on the floor until links 1 and 3 press on each other:
+    struck again and again at one instant, the pair stops the run with a status that names it (resting contact
+    between links is not modelled) instead of chattering to max_impacts."""
+    data = tomllib.loads((Path(__file__).parents[1] / "codegen" / "scenes" / "capsule-chain.toml").read_text())
+    for key in ("lower", "upper", "limit_restitution"):
+        data["links"][1].pop(key)
+    data["name"] = "capsule_chain_unstopped"
+    model = load_model(scene_from_dict(data))
+    r = simulate(model, 8.0, t_eval=[])
+    assert r.status == -1
+    assert "two links would come to rest on each other" in r.message and "links 1 and 3, L1-L3" in r.message
+    assert len(r.impacts) < 1000
+    assert any(c.kind == "link" for i in r.impacts for c in i.contacts)

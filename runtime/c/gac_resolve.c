@@ -238,8 +238,15 @@ static int gac_who_lands(gac_sim *s, gac_impact_event *ev)
         c = ev->list[k];
         ev->e_law[k] = ev->e[k] = gac_restitution(md, s->p, c);
         ev->landing[k] = s->is_resting[c];
-        if (!s->is_resting[c] && ev->vn[c] <= 0.0 && ev->gaps[c] <= s->opt.contact_tol
-            && md->contacts[c].kind != GAC_CONTACT_LINK) {     /* a link pair never lands: struck with its own e */
+        if (md->contacts[c].kind == GAC_CONTACT_LINK) {     /* a link pair never lands: struck with its own e, */
+            /* unless it would by the Zeno rule, or is struck again and again at one instant (held by the others) */
+            const int stalled = s->dt_last[c] > -1.5 && ev->t - s->t_last[c] <= 1e-12 * (1.0 + fabs(ev->t));
+            ev->shrinking[c] = (ev->shrinking[c] && ev->e_law[k] < 1.0) || stalled;
+            if (s->opt.zeno_impacts > 0 && ev->shrinking[c] && s->n_shrink[c] + 1 >= s->opt.zeno_impacts)
+                return GAC_ERR_LINK_REST;
+            continue;
+        }
+        if (!s->is_resting[c] && ev->vn[c] <= 0.0 && ev->gaps[c] <= s->opt.contact_tol) {
             const double reach = 2.0 * (-ev->an[c]) * ev->height;   /* v^2 of a bounce that rises that high */
             const double bounce = ev->e_law[k] < 1.0 ? ev->e_law[k] * ev->vn[c] : ev->vn[c];   /* e = 1: at rest */
             const int rests = ev->an[c] < 0.0 && bounce * bounce <= reach;

@@ -490,7 +490,8 @@ int gac_constrained_dynamics(const gac_model *m, const double *q, const double *
                              double *work);
 
 /* Contact c's point index (1-based, O_1 = 1), wall axis (0..2 for X1..X3) and inward normal sign (+1/-1);
- * a joint stop: its joint k, axis -1 and +1 (lower) or -1 (upper); c outside 0..ncontact-1: 0, -1, 0. */
+ * a joint stop: its joint k, axis -1 and +1 (lower) or -1 (upper); a link pair: its first link i, axis -1 and +1;
+ * c outside 0..ncontact-1: 0, -1, 0. */
 void gac_contact_info(const gac_model *m, int c, int *point, int *axis, int *normal_sign);
 
 /* Two links as capsules (gac_link.c): link i spans O_i -> O_i+1.  The closest points of two segments a0-a1 and

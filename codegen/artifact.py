@@ -137,5 +137,7 @@ def _unchanged_default(value, field: str) -> bool:
     modules)."""
     if field == "radius":                   # a link's capsule radius: 0 is the segment every earlier scene had
         return type(value).__name__ in ("LineLink", "RigidLink") and value.radius == 0.0
+    if field == "link_restitution":         # the e of capsule links meeting: unset in every earlier scene
+        return type(value).__name__ == "Scene" and value.link_restitution is None
     return field == "base" and type(value).__name__ == "Scene" and value.base.kind == "free"
 

@@ -303,8 +303,9 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], o
     rules = parameter_rules(scene, layout.zero_params, bake_params)
     contact_table = [_contact_entry(c, point, wall, layout, scene, bake_params)
                      for c, (point, wall) in enumerate(layout.contacts)]
+    contact_table += [_link_entry(len(contact_table) + k, pair) for k, pair in enumerate(scene.link_contacts())]
     sizes = interface.size_definitions(name, n=scene.n, nq=layout.nq, nparam=len(params), nu=scene.nu,
-                                       npoint=scene.n + 1, ncontact=len(layout.contacts),
+                                       npoint=scene.n + 1, ncontact=len(contact_table),
                                        njrow=len(layout.contact_rows), friction=any(entry["has_friction"] for entry in contact_table))
     context = dict(
         NAME=name.upper(), name=name, version=__version__, scene=scene, scene_hash=scene_hash(scene),
@@ -317,8 +318,10 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], o
                         for rule in rules],
         relations=parameter_relations(rules),
         weight_scale=_weight_scale_expression(scene, bake_params),
-        contacts=[(c, point, wall) for c, (point, wall) in enumerate(layout.contacts)],
+        contacts=[(c, point, wall) for c, (point, wall) in enumerate(layout.contacts)]
+                 + [(len(layout.contacts) + k, pair.i, pair) for k, pair in enumerate(scene.link_contacts())],
         contact_table=contact_table,
+        link_radius=[_double_literal(float(pair.radius)) for pair in scene.link_contacts()],
         row_labels=[f"(theta_{point})" if axis == "theta" else f"(O_{point},X{axis + 1})"
                     for point, axis in layout.contact_rows],
         rows=list(layout.contact_rows), twists=scene.all_twists,
@@ -458,6 +461,16 @@ def _contact_entry(c: int, point: int, wall, layout, scene: Scene, bake_params: 
                 friction_index=(-1 if bake_params or friction == 0.0
                                 else scene.parameter_index("friction", wall.name)),
                 friction_value=_double_literal(friction), trow=trow)
+
+
+def _link_entry(c: int, pair) -> dict:
+    """One row of the model's gac_contact table for two capsule links (GAC_CONTACT_LINK): links i, j in point and
+    coordinate, a constant e; no Jacobian row (row 0 unused); the radius sum goes to the model's link_radius."""
+    return dict(c=c, point=pair.i, axis=-1, sign=1, row=0, e_index=-1,
+                e_value=_double_literal(float(pair.restitution)), kind="GAC_CONTACT_LINK", coordinate=pair.j,
+                label=pair.name, doc=f"links {pair.i} and {pair.j} as capsules (radii {pair.radius:g} m together, "
+                f"e = {pair.restitution}), frictionless, never resting", has_friction=0, friction_index=-1,
+                friction_value=_double_literal(0.0), trow=[-1, -1])
 
 
 def macro_name(name: str) -> str:

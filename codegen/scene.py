@@ -287,6 +287,26 @@ class JointStop:
         return parameter_name("lower" if self.side < 0 else "upper", self.joint)
 
 
+@dataclass(frozen=True)
+class LinkPair:
+    """Links i < j as capsules meeting each other: a contact of the loop (an event when their gap closes, an impact
+    by Newton's law on their closest points' relative normal velocity, frictionless, never resting), with gap = the
+    distance of their segments less radius = r_i + r_j (m)."""
+
+    i: int
+    j: int
+    radius: float         # m, r_i + r_j
+    restitution: float
+
+    @property
+    def name(self) -> str:
+        return f"L{self.i}-L{self.j}"
+
+    @property
+    def links(self) -> tuple[int, int]:
+        return (self.i, self.j)
+
+
 FREE_JOINT = Joint()
 
 
@@ -552,6 +572,7 @@ class Scene:
     inputs: tuple = ()          # names of the actuated coordinates (coordinate_names), one input u_i each
     friction_velocity: float = 1e-3   # m/s, see above
     base: Base = FREE_BASE      # how link 1 is held (Base): free, pinned or fixed
+    link_restitution: float | None = None   # e of two capsule links meeting (Scene.link_pairs); None: 1
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not _NAME_RE.match(self.name):
@@ -584,6 +605,11 @@ class Scene:
         object.__setattr__(self, "friction_velocity", _in_range(self.friction_velocity, "friction_velocity",
                                                                 FRICTION_VELOCITY_RANGE, "m/s"))
         self._validate_walls()
+        if self.link_restitution is not None:
+            e = _number(self.link_restitution, "restitution.links")
+            if not 0.0 <= e <= 1.0:
+                raise SceneError(f"restitution.links: must be in [0, 1], got {e!r}")
+            object.__setattr__(self, "link_restitution", e)
         self._validate_joints()
         self._validate_state()
 
@@ -842,6 +868,11 @@ class Scene:
         segments of no thickness meet only by crossing, which no gap of theirs can see coming)."""
         return [(i, j) for i in range(1, self.n + 1) for j in range(i + 2, self.n + 1)
                 if self.links[i - 1].radius + self.links[j - 1].radius > 0.0]
+
+    def link_contacts(self) -> list[LinkPair]:
+        """The link pairs as contacts of the loop (after the walls and stops), with their radius sums and e."""
+        e = 1.0 if self.link_restitution is None else float(self.link_restitution)
+        return [LinkPair(i, j, self.links[i - 1].radius + self.links[j - 1].radius, e) for i, j in self.link_pairs()]
 
     def radius_owner(self, p: int) -> int | None:
         """The link (1-based) whose radius point_radius(p) takes, or None when it is 0."""
@@ -1126,8 +1157,14 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
     tables, base = _chain_tables(data, folder)
     links, twists, joints = _links_from_data(tables)
     n = len(links)
-    walls = _walls_from_data(data.get("walls", {}), data.get("restitution", 1.0), data.get("contacts", {}),
+    restitution = data.get("restitution", 1.0)
+    walls = _walls_from_data(data.get("walls", {}), restitution, data.get("contacts", {}),
                              data.get("friction", 0.0))
+    link_e = None                       # two capsule links meeting: restitution.links, else the scene's default
+    if isinstance(restitution, dict) and "links" in restitution:
+        link_e = restitution["links"]
+    elif any(link.radius > 0.0 for link in links):
+        link_e = restitution.get("default", 1.0) if isinstance(restitution, dict) else restitution
     initial = data.get("initial", {})
     _check_keys(initial, INITIAL_KEYS, "initial")
     return Scene(
@@ -1142,6 +1179,7 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
         joints=joints if n > 1 else (),
         inputs=data.get("inputs", ()),
         friction_velocity=data.get("friction_velocity", 1e-3),
+        link_restitution=link_e,
         base=_base_from_data({} if base is None else base),
     )
 
@@ -1248,9 +1286,9 @@ def _links_from_data(items) -> tuple[tuple[Link, ...], tuple, tuple]:
 def _walls_from_data(walls, restitution, contacts, friction=0.0) -> tuple[Wall, ...]:
     _check_keys(walls, WALL_NAMES, "walls")
     if isinstance(restitution, dict):
-        _check_keys(restitution, WALL_NAMES + ("default",), "restitution")
+        _check_keys(restitution, WALL_NAMES + ("default", "links"), "restitution")
         for name in restitution:
-            if name != "default" and name not in walls:
+            if name not in ("default", "links") and name not in walls:
                 raise SceneError(f"restitution.{name}: there is no such wall in [walls]")
     if isinstance(friction, dict):
         _check_keys(friction, WALL_NAMES + ("default",), "friction")

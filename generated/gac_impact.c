@@ -41,11 +41,14 @@ double gac_row_value(const gac_model *m, int c, const double *w, const double *v
 }
 
 /* n_c = J^T (sign e_row): the generalised force of a unit force along contact c's inward normal (its signed
- * Jacobian row), into g (nq); f (njrow) is scratch. */
-static void gac_contact_direction(const gac_model *m, const double *q, const double *p, int c, double *f,
-                                  double *g)
+ * Jacobian row), into g (nq); f (njrow) is scratch.  A link pair: J^T n at its closest points (gac_link.c). */
+void gac_contact_direction(const gac_model *m, const double *q, const double *p, int c, double *f, double *g)
 {
     int r;
+    if (m->contacts[c].kind == GAC_CONTACT_LINK) {
+        gac_link_contact_direction(m, q, p, c, g);
+        return;
+    }
     for (r = 0; r < m->njrow; ++r) f[r] = 0.0;
     f[m->contacts[c].row] = (double)m->contacts[c].normal_sign;
     m->contact_generalized_force(q, f, p, g);
@@ -281,6 +284,6 @@ void gac_contact_info(const gac_model *m, int c, int *point, int *axis, int *nor
         return;
     }
     *point = m->contacts[c].point;
-    *axis = m->contacts[c].kind == GAC_CONTACT_STOP ? -1 : m->contacts[c].axis;
+    *axis = m->contacts[c].kind == GAC_CONTACT_WALL ? m->contacts[c].axis : -1;
     *normal_sign = m->contacts[c].normal_sign;
 }

@@ -111,6 +111,17 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r);
 /* gac_model.c */
 int gac_has_friction(const gac_model *m);
 
+/* gac_link.c: link pairs as contacts of the loop (kind GAC_CONTACT_LINK, the last entries of m->contacts) */
+int gac_kernel_contacts(const gac_model *m);            /* the contacts before them: those of contact_gaps */
+int gac_has_link(const gac_model *m, int n, const int *list);   /* 1 if list[0..n-1] holds a link pair */
+/* every contact's gap (ncontact): the kernel's, then each link pair's (gac_link_gap) */
+void gac_contact_gaps(const gac_model *m, const double *q, const double *p, double *gaps);
+void gac_link_contact_direction(const gac_model *m, const double *q, const double *p, int c, double *g);
+/* link contact c's gap rate n . (v_P - v_Q) from the joint points' velocities vel (npoint x 3) at q */
+double gac_link_contact_rate(const gac_model *m, const double *q, const double *p, int c, const double *vel);
+double gac_link_law_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                             const double *F, const double *qd, const double *qd_plus, double T);
+
 /* gac_linalg.c */
 int gac_lu_solve(int n, double *A, double *b, double tol);
 int gac_ldlt(int n, double *A, double tol);
@@ -120,6 +131,7 @@ int gac_ldlt_drop(int n, double *A, double tol);
 /* gac_impact.c */
 void gac_contact_row(const gac_model *m, int c, int *row, double *sign);
 double gac_row_value(const gac_model *m, int c, const double *w, const double *vel);
+void gac_contact_direction(const gac_model *m, const double *q, const double *p, int c, double *f, double *g);
 double gac_restitution(const gac_model *m, const double *p, int c);
 int gac_row_response(const gac_model *m, const double *q, const double *p, int row, double *f, double *g,
                      double *out);

@@ -103,7 +103,7 @@ int gac_jam(gac_sim *s, gac_impact_record *r)
     gac_normal_velocities(md, x, s->p, vn);
     {
         double gaps[nc1];
-        md->contact_gaps(x, s->p, gaps);
+        gac_contact_gaps(md, x, s->p, gaps);
         r->approach_after = 0.0;
         for (c = 0; c < md->ncontact; ++c) {
             if (gaps[c] <= s->opt.contact_tol && -vn[c] > r->approach_after) r->approach_after = -vn[c];

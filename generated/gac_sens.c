@@ -285,7 +285,7 @@ static int gac_sens_at_rest(const gac_sim *s, const double *x, int n, const int 
     double gaps[nc1], vn[nc1], speed = 0.0;
     int a, k, m = 0;
     for (a = 0; a < n; ++a) out[m++] = set[a];
-    md->contact_gaps(x, s->p, gaps);
+    gac_contact_gaps(md, x, s->p, gaps);
     gac_normal_velocities(md, x, s->p, vn);
     for (a = 0; a < nq; ++a) {
         if (fabs(x[nq + a]) > speed) speed = fabs(x[nq + a]);
@@ -633,12 +633,25 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
  * rest), and a landing contact is held at the gap it had at the event (dgap_held from S-_j + f- dt*_j).  A contact
  * of the record that took no impulse stays out of Delta if it leaves the impact separating or is held; one with
  * impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).  Impacts of another
- * kind end the sensitivities. */
+ * kind, and impacts of two links, end the sensitivities. */
 void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
 {
     gac_sens *z = s->sens;
     const gac_model *md = s->model;
     if (z == 0 || z->status != GAC_SENS_VALID) return;
+    {
+        int a;
+        for (a = 0; a < r->ncontact; ++a) {
+            if (md->contacts[r->contact[a]].kind == GAC_CONTACT_LINK) {
+                gac_sens_stop(s, GAC_SENS_LINK, r->t, r->contact[a]);
+                return;
+            }
+        }
+        if (c_event >= 0 && md->contacts[c_event].kind == GAC_CONTACT_LINK) {
+            gac_sens_stop(s, GAC_SENS_LINK, r->t, c_event);
+            return;
+        }
+    }
     if (r->law != GAC_IMPACT_LAW_FRICTIONLESS && r->law != GAC_IMPACT_LAW_GDI) {
         gac_sens_stop(s, r->law == GAC_IMPACT_LAW_GDI_TANGENTIAL ? GAC_SENS_TANGENTIAL : GAC_SENS_FRICTION, r->t,
                       r->ncontact > 0 ? r->contact[0] : -1);

@@ -154,7 +154,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
         for (i = 0; i < 3 * md->npoint; ++i) {
             if (fabs(r[i]) > size) size = fabs(r[i]);
         }
-        md->contact_gaps(x, pv, gaps);
+        gac_contact_gaps(md, x, pv, gaps);
         window = opt->method == GAC_METHOD_RK4 ? 0.0 : 100.0 * (opt->atol + opt->rtol * size);
         if (window < opt->contact_tol) window = opt->contact_tol;
         depth = opt->contact_tol + window + 1e-12 * size;

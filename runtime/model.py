@@ -103,7 +103,8 @@ class CompiledModel:
         self.input_names = list(scene.inputs)              # u[i] acts on coordinate input_names[i]
         self.nu = scene.nu
         self.q0, self.qd0 = self.layout.reduce(scene.q0), self.layout.reduce(scene.qd0)
-        self.contacts = list(self.layout.contacts)
+        # the kernel's contacts (point, Wall or JointStop), then each capsule link pair (i, LinkPair): gac.h's table
+        self.contacts = list(self.layout.contacts) + [(pair.i, pair) for pair in scene.link_contacts()]
         self.contact_rows = list(self.layout.contact_rows)
         self.c = CInterface(self.ffi, self.lib, self.name)   # every call into the compiled model goes through it
         self._work = np.zeros(self.size("IMPACT_NWORK"))
@@ -240,7 +241,12 @@ class CompiledModel:
                           self._vec(qd, self.nq, "qd"), self._params(p))
 
     def contact_gaps(self, q, p=None) -> np.ndarray:
-        return self._call("contact_gaps", len(self.contacts), self._vec(q, self.nq, "q"), self._params(p))
+        """Every contact's gap: the kernel's (walls, stops), then each link pair's (gac_link_gap)."""
+        gaps = self._call("contact_gaps", len(self.contacts), self._vec(q, self.nq, "q"), self._params(p))
+        for c in range(len(self.layout.contacts), len(self.contacts)):
+            pair = self.contacts[c][1]
+            gaps[c] = self.link_gap(q, pair.i, pair.j, p)[0]
+        return gaps
 
     def energy(self, q, qd, p=None) -> tuple[float, float]:
         E = self._call("energy", 2, self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd"), self._params(p))

@@ -31,6 +31,7 @@ STATUS_WORDS = {
     9: "the sensitivities overflowed",
     10: "a mode boundary (a contact's impulse ~0 at the law's bound inside an impact, or resting contacts "
         "released together)",
+    11: "an impact of two links (link-link contact is not differentiated)",
 }
 
 _STATE = re.compile(r"^(q0|qd0)\[([^\]]+)\]$")
@@ -117,7 +118,7 @@ def contact_label(model, contact: int) -> str:
     if contact < 0:
         return ""
     point, wall = model.contacts[contact]
-    return wall.name if wall.name.startswith("theta_") else f"O{point}/{wall.name}"
+    return wall.name if wall.name.startswith(("theta_", "L")) else f"O{point}/{wall.name}"
 
 
 def read(model, sens, names: list[str], run_ok: bool, run_message: str, samples=None) -> Sensitivities:

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from codegen.scene import JointStop, Scene, SceneError, parameter_name, split_parameter_name
+from codegen.scene import JointStop, LinkPair, Scene, SceneError, parameter_name, split_parameter_name
 from codegen.parameters import check_vector, parameter_rules
 from codegen.specialise import coordinate_names
 
@@ -46,13 +46,14 @@ class Contact:
     point: int
     wall: str
     impulse: float        # N s along the wall's inward normal (>= 0: it pushes); N m s for a stop
-    kind: str = "wall"    # 'wall' | 'stop'
+    kind: str = "wall"    # 'wall' | 'stop' | 'link' (two capsule links: wall 'L<i>-L<j>', point i, links (i, j))
     impulse_t: tuple = (0.0, 0.0)   # N s along the wall's two tangential axes, ascending (X1, X2 for a x3 wall):
                                     # friction at the impact (0 on a frictionless wall)
+    links: tuple = ()     # 'link': the two links (i, j), 1-based; the impulse pushes them apart along their normal
 
     @property
     def label(self) -> str:
-        return self.wall if self.kind == "stop" else f"O{self.point}/{self.wall}"
+        return self.wall if self.kind in ("stop", "link") else f"O{self.point}/{self.wall}"
 
 
 @dataclass
@@ -214,7 +215,8 @@ class SimulationResult:
     def to_json(self) -> dict:
         return {
             "impacts": [{"t": i.t, "contacts": [{"point": c.point, "wall": c.wall, "impulse": c.impulse,
-                                                 "impulse_t": list(c.impulse_t), "kind": c.kind}
+                                                 "impulse_t": list(c.impulse_t), "kind": c.kind,
+                                                 **({"links": list(c.links)} if c.kind == "link" else {})}
                                                 for c in i.contacts],
                          "energy_before": i.energy_before, "energy_after": i.energy_after,
                          "complementarity": i.complementarity, "law": i.law, "residual": i.residual,
@@ -768,8 +770,10 @@ def _read_impact(model: CompiledModel, r) -> Impact:
     contacts = []
     for k in range(r.ncontact):
         point, wall = model.contacts[r.contact[k]]
-        contacts.append(Contact(point, wall.name, float(r.impulse[k]), "stop" if isinstance(wall, JointStop) else "wall",
-                                (float(r.impulse_t[2 * k]), float(r.impulse_t[2 * k + 1]))))
+        kind = "stop" if isinstance(wall, JointStop) else "link" if isinstance(wall, LinkPair) else "wall"
+        contacts.append(Contact(point, wall.name, float(r.impulse[k]), kind,
+                                (float(r.impulse_t[2 * k]), float(r.impulse_t[2 * k + 1])),
+                                wall.links if kind == "link" else ()))
     unpack, layout = model.ffi.unpack, model.layout
     return Impact(float(r.t), contacts, float(r.energy_before), float(r.energy_after), bool(r.complementarity),
                   layout.expand(unpack(r.q, nq)), layout.expand(unpack(r.qd_before, nq), velocity=True),
@@ -850,6 +854,10 @@ def _check_inside(model: CompiledModel, q: np.ndarray, p: np.ndarray, name: str)
     points = model.contact_points(q, p)
     for c in np.flatnonzero(gaps < -1e-12 * max(1.0, float(np.abs(points).max()))):
         point, wall = model.contacts[c]
+        if isinstance(wall, LinkPair):
+            raise ValueError(f"{name}: links {wall.i} and {wall.j} overlap as capsules: their segments are "
+                             f"{gaps[c] + wall.radius:.6g} m apart, less than their radii {wall.radius:g} m together "
+                             f"(gap {gaps[c]:.3g} m)")
         if isinstance(wall, JointStop):
             raise ValueError(f"{name}: joint {point} is beyond its {'lower' if wall.side < 0 else 'upper'} limit "
                              f"{wall.parameter} by {-gaps[c]:.3g} rad")
@@ -917,6 +925,12 @@ def _end_message(model: CompiledModel, sim, code: int, segment_t: float, segment
                                model.impact_law_name(int(record.law)), float(record.residual))
         message += (f" (this impact's energy is known only to {float(record.roundoff):.3g} relative, its measured "
                     f"accuracy: {cause})")
+    if code == lib.GAC_ERR_LINK_REST:
+        q = np.array(model.ffi.unpack(sim.x, model.nq))
+        gaps = model.contact_gaps(q, np.array(model.ffi.unpack(sim.p, len(model.parameters()))))
+        first = len(model.layout.contacts)
+        pair = model.contacts[first + int(np.argmin(gaps[first:]))][1]
+        message += f" (the pair closest at the stop: links {pair.i} and {pair.j}, {pair.name})"
     if code == lib.GAC_ERR_NONFINITE and sim.opt.method == lib.GAC_METHOD_RK4:
         message += f" (rk4 with dt = {dt:g} s is unstable on this motion: reduce dt, or use an adaptive method)"
     return message

@@ -9,6 +9,7 @@ import pytest
 from codegen.scene import LineLink, Scene, Wall, WALL_NAMES
 from runtime import load_model, simulate
 from studies.reference import reference_of
+from tests.test_sim_link_contact import closest_distance
 
 G, R = 9.81, 0.05
 
@@ -66,7 +67,9 @@ def test_gaps_against_an_independent_computation():
         q = np.concatenate([rng.uniform(-1.2, 1.2, 5), rng.uniform(-1.0, 1.0, 3)])
         points = reference.points(q)
         expected = [w.normal_sign * (points[p - 1, w.axis] - w.position) - point_radius[p - 1]
-                    for p, w in model.contacts]
+                    for p, w in model.layout.contacts]
+        # then the link pair (1, 3) of capsules 0.02 + 0: its segments' distance less 0.02
+        expected.append(closest_distance(*(points[k] for k in (0, 1, 2, 3))) - 0.02)
         assert model.contact_gaps(model.layout.reduce(q)) == pytest.approx(expected, abs=1e-13)
 
 

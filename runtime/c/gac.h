@@ -87,6 +87,13 @@
 #define GAC_ERR_IMPACT_ENERGY    -31   /* an impact gained kinetic energy: the Newton + Coulomb law
                                           (opt.impact_law), whose slip reversal during the impact can (Kane's
                                           rod); the default law cannot */
+#define GAC_ERR_LINK_CONTACT     -32   /* a contact of two links (GAC_CONTACT_LINK) met what the loop does not do
+                                          with link pairs: an impact under a frictional law (opt.impact_law) on a
+                                          rough wall at the same time (link pairs are frictionless) */
+#define GAC_ERR_LINK_REST        -33   /* two links would come to rest on each other: a link pair struck
+                                          opt.zeno_impacts times in a row at shrinking intervals (e < 1: the Zeno
+                                          rule that lands a wall's contact) or at one instant (within 1e-12 (1 +
+                                          |t|) s); resting contact between links is not modelled */
 
 /* ---- how gac_sim_advance ends: the run's budgets (< 0) and status (> 0) ------------------------ */
 #define GAC_ERR_WALL_TIME        -25   /* the run used opt.max_wall_time seconds of its clock (gac_sim_set_clock)
@@ -197,12 +204,18 @@ typedef int (*gac_progress)(double t, long n_steps, long n_impacts, void *user);
 
 /* One contact: a point of the chain and a wall (kind GAC_CONTACT_WALL), or a joint and its stop (kind
  * GAC_CONTACT_STOP: a unilateral constraint on the coordinate q[coordinate], gap = normal_sign (q - limit) in
- * rad, its Jacobian row a row of the identity).  Both are handled alike: events, impacts, resting. */
+ * rad, its Jacobian row a row of the identity).  Both are handled alike: events, impacts, resting.
+ * Or two links as capsules (kind GAC_CONTACT_LINK: links point and coordinate, 1-based, gap = their segments'
+ * distance less its m->link_radius entry, gac_link_gap; its direction J^T n from the closest points, gac_link_direction; no Jacobian
+ * row).  Link contacts come last in the table, after every contact of the contact_gaps kernel; they take part in
+ * events and impacts (frictionless), never in the resting set. */
 #define GAC_CONTACT_WALL 0
 #define GAC_CONTACT_STOP 1
+#define GAC_CONTACT_LINK 2
 typedef struct {
     int point;            /* wall: the point O_point, 1-based (1..npoint); its coordinates are
-                             contact_points[3*(point-1) .. 3*(point-1)+2].  stop: the joint k (information) */
+                             contact_points[3*(point-1) .. 3*(point-1)+2].  stop: the joint k (information).
+                             link: the first link i (1..npoint-1) */
     int axis;             /* wall: its normal axis, 0..2 for X1..X3.  stop: -1 */
     int normal_sign;      /* wall: +1: the inward normal is +X_axis (a *_min wall), -1: -X_axis (a *_max wall).
                              stop: +1 for a lower limit, -1 for an upper one */
@@ -210,8 +223,9 @@ typedef struct {
     int e_index;          /* restitution e of the wall or stop (Newton's law, Eq. 47): p[e_index], or e_value
                              when e_index < 0 (a constant of the model) */
     double e_value;
-    int kind;             /* GAC_CONTACT_WALL (0) or GAC_CONTACT_STOP (1) */
-    int coordinate;       /* stop: the index into q of its joint's angle (0..nq-1); wall: unused */
+    int kind;             /* GAC_CONTACT_WALL (0), GAC_CONTACT_STOP (1) or GAC_CONTACT_LINK (2) */
+    int coordinate;       /* stop: the index into q of its joint's angle (0..nq-1); link: the second link j
+                             (> point + 1); wall: unused */
     int has_friction;     /* wall: 1 if the wall has Coulomb friction (0: frictionless; a zero-initialised entry) */
     int friction_index;         /* its friction coefficient c_f: p[friction_index], or friction_value when < 0 */
     double friction_value;
@@ -323,6 +337,9 @@ struct gac_model {
     gac_kernel_qv_ld generalized_momentum_ld;      /* q, qd, p -> I_f qd (nq) */
     gac_kernel_qv_ld contact_generalized_force_ld; /* q, f (njrow), p -> J^T f (nq) */
     gac_kernel_qv_ld energy_ld;                    /* q, qd, p -> E[0] kinetic, E[1] potential energy (J) */
+    const double *link_radius;         /* r_i + r_j (m, >= 0) of each link contact (GAC_CONTACT_LINK), in table order
+                                          (link_radius[0]: the first after the kernel's contacts); NULL when the
+                                          model has none */
 };
 
 /* GAC_OK if the descriptor is consistent (sizes > 0 where needed, nx = 2 nq, tables and kernels present,
@@ -484,7 +501,8 @@ int gac_constrained_dynamics(const gac_model *m, const double *q, const double *
                              double *work);
 
 /* Contact c's point index (1-based, O_1 = 1), wall axis (0..2 for X1..X3) and inward normal sign (+1/-1);
- * a joint stop: its joint k, axis -1 and +1 (lower) or -1 (upper); c outside 0..ncontact-1: 0, -1, 0. */
+ * a joint stop: its joint k, axis -1 and +1 (lower) or -1 (upper); a link pair: its first link i, axis -1 and +1;
+ * c outside 0..ncontact-1: 0, -1, 0. */
 void gac_contact_info(const gac_model *m, int c, int *point, int *axis, int *normal_sign);
 
 /* Two links as capsules (gac_link.c): link i spans O_i -> O_i+1.  The closest points of two segments a0-a1 and
@@ -984,6 +1002,7 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       ~0 and leaves at the law's bound (w . qd+ + e w . qd- ~ 0), so a perturbation
                                       may add it to the active set or drop it; or resting contacts released together
                                       (their forces ~0 at once) */
+#define GAC_SENS_LINK         11   /* an impact of two links (a GAC_CONTACT_LINK contact): not differentiated */
 
 /* The sensitivities of one run: pointers into the caller's dwork (gac_sens_ndouble(m, k) doubles), laid out as
  * S (k nx) | dp (k nparam) | dt_impact (k) | dgap_held (k max(ncontact, 1)) | scratch | S_keep (k nx).  Direction-major: S[j*nx + i] = d x_i / d direction j

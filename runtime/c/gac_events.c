@@ -126,7 +126,7 @@ static int gac_dip(gac_sim *s, int c, double t_a, double g_a, double v_a, double
         m = iter < 60 ? (a * fb - b * fa) / (fb - fa) : 0.5 * (a + b);
         if (!(m > a && m < b)) m = 0.5 * (a + b);
         gac_dense(s, m, s->xs);
-        md->contact_gaps(s->xs, s->p, s->es);
+        gac_contact_gaps(md, s->xs, s->p, s->es);
         gm = s->es[c];
         gac_normal_velocities(md, s->xs, s->p, s->es);
         vm = s->es[c];

@@ -59,13 +59,11 @@ int gac_impact_system_refined(const gac_model *m, const double *q, const double 
     const int nq = m->nq;
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work), *g = GAC_WORK_G(m, work), *f = GAC_WORK_F(m, work);
     double r[GAC_AT_LEAST_1(nq)], dy[GAC_AT_LEAST_1(nq)];
-    int a, c, i, k;
+    int a, c, i;
     const int code = gac_impact_system(m, q, qd, p, ncontact_set, contact_set, work, v, e);
     if (code != GAC_OK) return code;
     for (a = 0; a < ncontact_set; ++a) {
-        for (k = 0; k < m->njrow; ++k) f[k] = 0.0;
-        f[m->contacts[contact_set[a]].row] = (double)m->contacts[contact_set[a]].normal_sign;
-        m->contact_generalized_force(q, f, p, g);       /* n_a */
+        gac_contact_direction(m, q, p, contact_set[a], f, g);   /* n_a */
         gac_refine_response(m, q, p, g, Y + (long)a * nq, r, dy);
         for (c = 0; c < a; ++c) {
             double s = 0.0;

@@ -162,3 +162,96 @@ int gac_link_impact(const gac_model *m, const double *q, const double *qd, const
     if (v_normal != 0) *v_normal = v;
     return GAC_OK;
 }
+
+/* ---- link pairs as contacts of the loop (kind GAC_CONTACT_LINK, after the kernel's contacts) ---------------- */
+
+int gac_kernel_contacts(const gac_model *m)
+{
+    int n = m->ncontact;
+    while (n > 0 && m->contacts[n - 1].kind == GAC_CONTACT_LINK) --n;
+    return n;
+}
+
+int gac_has_link(const gac_model *m, int n, const int *list)
+{
+    int a;
+    for (a = 0; a < n; ++a) {
+        if (m->contacts[list[a]].kind == GAC_CONTACT_LINK) return 1;
+    }
+    return 0;
+}
+
+void gac_contact_gaps(const gac_model *m, const double *q, const double *p, double *gaps)
+{
+    const int nk = gac_kernel_contacts(m);
+    double geometry[GAC_LINK_NGEOMETRY];
+    int c;
+    if (m->ncontact == 0) return;
+    m->contact_gaps(q, p, gaps);                         /* walls and stops (the kernel's contacts) */
+    for (c = nk; c < m->ncontact; ++c) {                 /* then each link pair: its segments' distance less radius */
+        const gac_contact *k = &m->contacts[c];
+        gaps[c] = gac_link_gap(m, q, p, k->point, k->coordinate, m->link_radius[c - nk], geometry) == GAC_OK
+                  ? geometry[0] : NAN;
+    }
+}
+
+void gac_link_contact_direction(const gac_model *m, const double *q, const double *p, int c, double *g)
+{
+    const gac_contact *k = &m->contacts[c];
+    double geometry[GAC_LINK_NGEOMETRY];
+    int i;
+    if (gac_link_gap(m, q, p, k->point, k->coordinate, m->link_radius[c - gac_kernel_contacts(m)], geometry)
+        != GAC_OK) {
+        for (i = 0; i < m->nq; ++i) g[i] = NAN;
+        return;
+    }
+    (void)gac_link_direction(m, q, p, k->point, k->coordinate, geometry, g);
+}
+
+double gac_link_contact_rate(const gac_model *m, const double *q, const double *p, int c, const double *vel)
+{
+    const gac_contact *k = &m->contacts[c];
+    double geometry[GAC_LINK_NGEOMETRY], size;
+    if (gac_link_gap(m, q, p, k->point, k->coordinate, m->link_radius[c - gac_kernel_contacts(m)], geometry)
+        != GAC_OK) return NAN;
+    return gac_link_rate(vel, k->point, k->coordinate, geometry, &size);
+}
+
+/* The accuracy of an impact law whose contacts include a link pair (relative to T, the kinetic energy before):
+ * the momentum balance r = I_f (qd+ - qd-) - sum_a F_a n_a (n_a = J^T n of each contact, gac_contact_direction),
+ * |qd+ . r| the energy a velocity that balanced exactly would differ by, with what evaluating r resolves,
+ *   4 (nq + 1) eps sum_i |qd+_i| (|(I_f (qd+ - qd-))_i| + |g_i|) + eps/2 sum_i |qd+_i| |(I_f qd+)_i|,
+ * and the energy identity's residual |T+ - T- - 1/2 sum_a F_a (v-_a + v+_a)|.  Nothing is refined (the refinement
+ * of gac_impact_accuracy works in the Jacobian's rows, which a link pair has none of). */
+double gac_link_law_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                             const double *F, const double *qd, const double *qd_plus, double T)
+{
+    const int nq = m->nq;
+    double g[GAC_AT_LEAST_1(nq)], n_a[GAC_AT_LEAST_1(nq)], change[GAC_AT_LEAST_1(nq)], p_change[GAC_AT_LEAST_1(nq)];
+    double p_plus[GAC_AT_LEAST_1(nq)], f[GAC_AT_LEAST_1(m->njrow)], E0[2], E1[2];
+    long double balance = 0.0L, size = 0.0L, stored = 0.0L, work = 0.0L;
+    int a, i;
+    for (i = 0; i < nq; ++i) g[i] = 0.0;
+    for (a = 0; a < n; ++a) {
+        long double vm = 0.0L, vp = 0.0L;
+        gac_contact_direction(m, q, p, list[a], f, n_a);
+        for (i = 0; i < nq; ++i) {
+            g[i] += F[a] * n_a[i];
+            vm += (long double)n_a[i] * qd[i];
+            vp += (long double)n_a[i] * qd_plus[i];
+        }
+        work += (long double)F[a] * (vm + vp);
+    }
+    for (i = 0; i < nq; ++i) change[i] = qd_plus[i] - qd[i];
+    m->generalized_momentum(q, change, p, p_change);
+    m->generalized_momentum(q, qd_plus, p, p_plus);
+    for (i = 0; i < nq; ++i) {
+        balance += qd_plus[i] * ((long double)p_change[i] - g[i]);
+        size += fabsl((long double)qd_plus[i]) * (fabs(p_change[i]) + fabs(g[i]));
+        stored += fabsl((long double)qd_plus[i]) * fabs(p_plus[i]);
+    }
+    m->energy(q, qd, p, E0);
+    m->energy(q, qd_plus, p, E1);
+    return (fabs((double)balance) + 4.0 * (nq + 1) * GAC_EPS * (double)size + 0.5 * GAC_EPS * (double)stored
+            + fabs((double)(((long double)E1[0] - E0[0]) - 0.5L * work))) / (T > 0.0 ? T : 1e-300);
+}

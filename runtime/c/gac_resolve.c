@@ -84,6 +84,11 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
     const int refine = ev->rounds >= 1 && ev->law == GAC_IMPACT_LAW_FRICTIONLESS;
     double b = 0.0, v = 0.0;
     int pass;
+    if (gac_has_link(s->model, ev->n, ev->list)) {      /* a link pair has no Jacobian row: measured, not refined */
+        b = gac_link_law_accuracy(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->x + nq, ev->qd_plus,
+                                  ev->T_before);
+        return b > 1e-10 ? b : 1e-10;
+    }
     for (pass = 0; pass < (refine ? 2 : 1); ++pass) {   /* the impulses against the velocities, then the velocities
                                                            against the impulses (the momentum balance), twice */
         if (refine)
@@ -144,6 +149,10 @@ static double gac_held_accuracy(gac_sim *s, gac_impact_event *ev, int nset, cons
         }
     }
     for (k = 0; k < 2 * ev->n; ++k) Ft[k] = ev->Ft[k];
+    if (gac_has_link(md, ev->n, ev->list)) {
+        b = gac_link_law_accuracy(md, ev->x, s->p, ev->n, ev->list, F, ev->x + nq, s->x1 + nq, ev->T_before);
+        return b > 1e-10 ? b : 1e-10;
+    }
     b = gac_impact_accuracy(md, ev->x, s->p, ev->n, ev->list, ev->e, F, Ft, ev->law, 0, 0, ev->x + nq,
                             s->x1 + nq, ev->T_before, s->work, &v);
     if (v > ev->v_acc) ev->v_acc = v;
@@ -229,6 +238,14 @@ static int gac_who_lands(gac_sim *s, gac_impact_event *ev)
         c = ev->list[k];
         ev->e_law[k] = ev->e[k] = gac_restitution(md, s->p, c);
         ev->landing[k] = s->is_resting[c];
+        if (md->contacts[c].kind == GAC_CONTACT_LINK) {     /* a link pair never lands: struck with its own e, */
+            /* unless it would by the Zeno rule, or is struck again and again at one instant (held by the others) */
+            const int stalled = s->dt_last[c] > -1.5 && ev->t - s->t_last[c] <= 1e-12 * (1.0 + fabs(ev->t));
+            ev->shrinking[c] = (ev->shrinking[c] && ev->e_law[k] < 1.0) || stalled;
+            if (s->opt.zeno_impacts > 0 && ev->shrinking[c] && s->n_shrink[c] + 1 >= s->opt.zeno_impacts)
+                return GAC_ERR_LINK_REST;
+            continue;
+        }
         if (!s->is_resting[c] && ev->vn[c] <= 0.0 && ev->gaps[c] <= s->opt.contact_tol) {
             const double reach = 2.0 * (-ev->an[c]) * ev->height;   /* v^2 of a bounce that rises that high */
             const double bounce = ev->e_law[k] < 1.0 ? ev->e_law[k] * ev->vn[c] : ev->vn[c];   /* e = 1: at rest */
@@ -287,6 +304,7 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
         if (s->opt.impact_law != GAC_IMPACT_LAW_FRICTIONLESS && gac_friction_coefficient(md, s->p, ev->list[k]) > 0.0)
             ev->friction = 1;
     }
+    if (ev->friction && gac_has_link(md, ev->n, ev->list)) return GAC_ERR_LINK_CONTACT;   /* link pairs: frictionless */
     code = gac_law(s, ev, ev->e_law);
     r->residual = ev->residual;
     if (code != GAC_OK) return code;
@@ -383,6 +401,7 @@ static int gac_choose_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *
         const int left_at_rest = ev->height > 0.0 && !s->is_resting[c] && ev->gaps[c] <= s->opt.contact_tol
                                  && fabs(ev->vn[c]) <= v_hold;
         int held_lift = 0;
+        if (md->contacts[c].kind == GAC_CONTACT_LINK) continue;      /* a link pair never rests */
         if (s->is_resting[c] && ev->vn[c] > v_hold && ev->e_law[k] < 1.0 && ev->height > 0.0) {
             /* its acceleration towards the wall with the other resting contacts held */
             double a_free[nc1];
@@ -500,7 +519,7 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     s->energy_x1_valid = 0;                              /* set again by gac_finish, for the state it leaves */
     ev.gaps = gaps, ev.vn = vn, ev.an = an, ev.e = e, ev.e_law = e_law, ev.qd_plus = qd_plus, ev.F = F, ev.Ft = Ft;
     ev.friction = 0, ev.law = GAC_IMPACT_LAW_FRICTIONLESS, ev.residual = ev.parts = 0.0, ev.v_acc = 0.0;
-    md->contact_gaps(ev.x, s->p, gaps);
+    gac_contact_gaps(md, ev.x, s->p, gaps);
     gac_normal_velocities(md, ev.x, s->p, vn);
     r->ncontact = 0;
     r->nlanded = r->nreleased = 0;

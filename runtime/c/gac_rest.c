@@ -25,8 +25,9 @@ void gac_normal_velocities(const gac_model *md, const double *x, const double *p
     md->contact_velocities(x, x + md->nq, p, v);
     for (c = 0; c < md->ncontact; ++c) {
         const gac_contact *k = &md->contacts[c];
-        vn[c] = (double)k->normal_sign * (k->kind == GAC_CONTACT_STOP ? x[md->nq + k->coordinate]
-                                                                       : v[3 * (k->point - 1) + k->axis]);
+        vn[c] = k->kind == GAC_CONTACT_LINK ? gac_link_contact_rate(md, x, p, c, v)
+                : (double)k->normal_sign * (k->kind == GAC_CONTACT_STOP ? x[md->nq + k->coordinate]
+                                                                        : v[3 * (k->point - 1) + k->axis]);
     }
 }
 
@@ -47,6 +48,10 @@ int gac_normal_accelerations(gac_sim *s, double t, const double *x, int n, const
     for (c = 0; c < md->ncontact; ++c) {
         int row;
         double sign;
+        if (md->contacts[c].kind == GAC_CONTACT_LINK) {   /* a link pair never rests: its acceleration is unused */
+            an[c] = 0.0;
+            continue;
+        }
         gac_contact_row(md, c, &row, &sign);
         an[c] = sign * (bias[row] + gac_row_value(md, c, qdd, vel));
     }
@@ -90,7 +95,7 @@ int gac_project(gac_sim *s, double *x, int n, const int *set, int positions)
     const double E_before = positions && n > 0 ? gac_total_energy(md, x, s->p) : 0.0;
     if (n == 0) return GAC_OK;
     g[0] = g0[0] = 0.0;
-    md->contact_gaps(x, s->p, g0);
+    gac_contact_gaps(md, x, s->p, g0);
     for (c = 0; c < md->ncontact; ++c) in_set[c] = 0;
     for (a = 0; a < n; ++a) {
         held[a] = set[a];
@@ -100,7 +105,7 @@ int gac_project(gac_sim *s, double *x, int n, const int *set, int positions)
     for (it = 0; positions && it < 4 + md->ncontact; ++it) {
         double gmax = 0.0;
         int added = 0;
-        md->contact_gaps(x, s->p, g);
+        gac_contact_gaps(md, x, s->p, g);
         for (c = 0; c < md->ncontact && it > 0; ++c) {      /* pushed deeper: hold it */
             const double stay = g0[c] < 0.0 ? g0[c] : 0.0;
             if (!in_set[c] && g[c] < stay - floor && m < nq) {
@@ -305,7 +310,7 @@ int gac_rest_at_start(gac_sim *s)
     const int nc1 = GAC_AT_LEAST_1(md->ncontact);
     double gaps[nc1], vn[nc1], an[nc1], a = 0.0;
     int set[md->nq], n = 0, c, code;
-    md->contact_gaps(s->x, s->p, gaps);
+    gac_contact_gaps(md, s->x, s->p, gaps);
     gac_normal_velocities(md, s->x, s->p, vn);
     code = gac_normal_accelerations(s, s->t, s->x, 0, 0, an);
     if (code != GAC_OK) return code;
@@ -315,7 +320,7 @@ int gac_rest_at_start(gac_sim *s)
     for (c = 0; c < md->ncontact; ++c) {
         const int at_rest = gac_restitution(md, s->p, c) < 1.0 ? vn[c] * vn[c] <= 2.0 * a * s->rest_height
                                                                 : fabs(vn[c]) <= gac_v_round(md, vn);
-        if (fabs(gaps[c]) <= s->opt.contact_tol && at_rest) {
+        if (fabs(gaps[c]) <= s->opt.contact_tol && at_rest && md->contacts[c].kind != GAC_CONTACT_LINK) {
             code = gac_add_independent(s, s->x, &n, set, c);
             if (code != GAC_OK) return code;
         }

@@ -478,7 +478,9 @@ int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q,
  * impulse[k] (N s, >= 0) along contact contact_set[k]'s inward normal, impulse_t[2k], impulse_t[2k + 1] (N s) along
  * its wall's two tangential axes in ascending order (X1, X2 for a X3 wall; 0 where the model has no motion or the
  * wall no friction); *law_used the law applied (GAC_IMPACT_LAW_*), *residual the largest relative violation of the
- * law's conditions.  work: gac_impact_nwork(m) doubles.  Returns GAC_OK or GAC_ERR_BAD_CONTACT, _SINGULAR_MASS,
+ * law's conditions.  A model with no rough wall (its work array the smaller one) is solved by the frictionless law's
+ * rounds whatever the law asked (*law_used GAC_IMPACT_LAW_FRICTIONLESS).  work: gac_impact_nwork(m) doubles.
+ * Returns GAC_OK or GAC_ERR_BAD_CONTACT, _SINGULAR_MASS,
  * _GIMBAL_LOCK, _BAD_OPTION (law), _IMPACT_FRICTION (residual above GAC_FRICTION_RESIDUAL_MAX). */
 int gac_impact_friction(const gac_model *m, const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd,
                         const double *GAC_RESTRICT p, int ncontact_set, const int *GAC_RESTRICT contact_set, int law,

@@ -916,6 +916,14 @@ int gac_impact_friction(const gac_model *m, const double *GAC_RESTRICT q, const 
         if (contact_set[a] < 0 || contact_set[a] >= m->ncontact) return GAC_ERR_BAD_CONTACT;
         e[a] = gac_restitution(m, p, contact_set[a]);
     }
+    if (!gac_has_friction(m)) {                  /* no rough wall: every law is the frictionless one, and the work
+                                                    array is the smaller one of a model without friction */
+        for (a = 0; a < 2 * ncontact_set; ++a) impulse_t[a] = 0.0;
+        *law_used = GAC_IMPACT_LAW_FRICTIONLESS;
+        *residual = 0.0;
+        return gac_impact_rounds(m, q, qd, p, ncontact_set, contact_set, e, -1, qd_plus, impulse, work, &rounds,
+                                 &plastic);
+    }
     return gac_impact_rounds_friction(m, q, qd, p, ncontact_set, contact_set, e, -1, law, qd_plus, impulse,
                                       impulse_t, work, &rounds, &plastic, law_used, residual, &parts);
 }

@@ -210,3 +210,29 @@ def test_mixed_restitutions_gain_energy_only_without_complementarity(compiled):
         assert model.energy(q, frictional.qd_plus, p)[0] <= T0 * (1 + 1e-10), trial
     assert gains >= 10                                  # the printed law's gain is common with mixed e
     assert worst <= 1e-12                               # the complementarity law's: round-off at most
+
+
+def test_the_frictional_entry_on_a_model_without_friction_stays_in_its_work_array(compiled):
+    """gac_impact_friction on a model with no rough wall: its work array is the smaller one (no room for the
+    frictional law's W), so the law is the frictionless rounds whatever was asked; a sentinel past the array's end
+    stays untouched (a frictional solve there wrote beyond it and corrupted the heap)."""
+    scene = chain(3, twists=True)
+    model = compiled(scene)
+    rng = np.random.default_rng(5)
+    size = model.size("IMPACT_NWORK")
+    q, qd, p = rng.uniform(-1, 1, model.nq), rng.normal(size=model.nq) * 2, model.parameters()
+    contact_set = np.ascontiguousarray([0, 3, 6][: min(3, model.nq)], dtype=np.int32)
+    n = len(contact_set)
+    for law in ("gdi", "newton-coulomb", "frictionless"):
+        work = np.full(size + 4 * model.nq * model.nq, 12345.0)
+        qd_plus, impulse, impulse_t = np.zeros(model.nq), np.zeros(n), np.zeros(2 * n)
+        law_used, residual = model.ffi.new("int *"), model.ffi.new("double *")
+        code = model.lib.gac_impact_friction(
+            model.ffi.addressof(model.c.model), model._ptr(q), model._ptr(qd), model._ptr(p), n,
+            model.ffi.cast("int *", model.ffi.from_buffer(contact_set)), model.impact_law_code(law),
+            model._ptr(qd_plus), model._ptr(impulse), model._ptr(impulse_t), law_used, residual, model._ptr(work))
+        assert code == model.lib.GAC_OK, law
+        assert np.all(work[size:] == 12345.0), law                      # nothing written past the array
+        assert model.impact_law_name(law_used[0]) == "frictionless" and np.all(impulse_t == 0.0)
+        expected, _ = model.impact(q, qd, contact_set, p, mode="complementarity")
+        assert np.allclose(qd_plus, expected, rtol=1e-9, atol=1e-12), law

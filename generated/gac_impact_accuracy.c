@@ -563,19 +563,10 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     }
     if (rounds == 1 && !plastic && law != GAC_IMPACT_LAW_GDI_COMMON_E)
         law_work = gac_law_residual(m, q, p, n, list, e, Fs, Fts, law, qd, qd_plus);
-    if (rounds == 1 && !plastic && law == GAC_IMPACT_LAW_GDI_COMMON_E) {   /* the round's law: the smallest e */
-        double e_common[GAC_AT_LEAST_1(nq)], before[3 * GAC_AT_LEAST_1(m->npoint)], vm[GAC_AT_LEAST_1(nq)];
-        double smallest = 1.0, scale = 0.0;
-        m->contact_velocities(q, qd, p, before);
-        for (a = 0; a < n; ++a) {
-            vm[a] = m->contacts[list[a]].normal_sign * gac_row_value(m, list[a], qd, before);
-            scale = fabs(vm[a]) > scale ? fabs(vm[a]) : scale;
-        }
-        for (a = 0; a < n; ++a) {                        /* the round's contacts: struck (own e) or at rest (0) */
-            const double ea = vm[a] < -1e-11 * scale ? e[a] : 0.0;
-            if (vm[a] <= 1e-11 * scale && ea < smallest) smallest = ea;
-        }
-        for (a = 0; a < n; ++a) e_common[a] = smallest;
+    if (rounds == 1 && !plastic && law == GAC_IMPACT_LAW_GDI_COMMON_E) {   /* the round's law: its smallest e
+                                                                             (e_round, as the targets used it) */
+        double e_common[GAC_AT_LEAST_1(nq)];
+        for (a = 0; a < n; ++a) e_common[a] = e_round;
         law_work = gac_law_residual(m, q, p, n, list, e_common, Fs, Fts, GAC_IMPACT_LAW_GDI, qd, qd_plus);
     }
     if (extended && m->energy_ld != 0) {                 /* in long double */

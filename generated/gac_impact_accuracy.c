@@ -17,6 +17,9 @@
 #include <math.h>
 
 #define GAC_REFINE_STEPS 4        /* refinement steps at most (each one O(n)); they stop once no longer improving */
+#define GAC_REFINE_BALANCE_STEPS 32  /* of the impulses against the velocities, qd+ kept (each O(n)); on nearly
+                                        dependent rows of an ill-conditioned I_f a step can take off as little as
+                                        half, and they stop once not halving */
 #define GAC_REFINE_IMPULSE_STEPS 8   /* of the impulses against the velocities they give (each O(n) per contact); on
                                         nearly dependent rows with large impulses a step gains only a factor ~10 */
 
@@ -318,6 +321,84 @@ double gac_refine_impulses(const gac_model *m, const double *q, const double *p,
     return previous;
 }
 
+/* The momentum balance's residual r = I_f (qd+ - qd-) - J^T Lambda for the impulses F, Ft (h_minus: I_f qd- in
+ * long double, when the model has the long-double kernels; NULL: in double), with what it moves: balance = |qd+ . r|
+ * (T's change were qd+ moved to balance), moved = |qd- . r| (with it, the energy identity's miss for these
+ * impulses: T+ - T- - 1/2 Lambda . (gamma+ + gamma-) = 1/2 (qd+ + qd-) . r), the floors of what evaluating r
+ * resolves (and, for balance, storing qd+ in doubles), and each component's bound (|r_i| and its evaluation). */
+typedef struct {
+    double *r, *bound;                                   /* nq each, the caller's */
+    double balance, floor, moved, moved_floor;
+} gac_balance;
+
+static void gac_balance_residual(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                                 const double *F, const double *Ft, const double *qd, const double *qd_plus,
+                                 const long double *h_minus, gac_balance *b)
+{
+    const int nq = m->nq;
+    double f[GAC_AT_LEAST_1(m->njrow)], g[GAC_AT_LEAST_1(nq)], change[GAC_AT_LEAST_1(nq)];
+    double p_change[GAC_AT_LEAST_1(nq)], p_plus[GAC_AT_LEAST_1(nq)];
+    long double h_plus[GAC_AT_LEAST_1(nq)], g_ld[GAC_AT_LEAST_1(nq)];
+    long double work_r = 0.0L, work_m = 0.0L, size = 0.0L, size_m = 0.0L, stored = 0.0L;
+    int i;
+    gac_impulse_rows(m, n, list, F, Ft, f);              /* Lambda in the Jacobian's rows */
+    if (h_minus) {                                       /* r = I_f qd+ - I_f qd- - g, all in long double */
+        m->contact_generalized_force_ld(q, f, p, g_ld);
+        m->generalized_momentum_ld(q, qd_plus, p, h_plus);
+        for (i = 0; i < nq; ++i) {
+            const long double ri = (h_plus[i] - h_minus[i]) - g_ld[i];
+            const long double evaluated = fabsl(h_plus[i]) + fabsl(h_minus[i]) + fabsl(g_ld[i]);
+            b->r[i] = (double)ri;
+            work_r += qd_plus[i] * ri;
+            work_m += qd[i] * ri;
+            size += fabsl((long double)qd_plus[i]) * evaluated;
+            size_m += fabsl((long double)qd[i]) * evaluated;
+            stored += fabsl((long double)qd_plus[i]) * fabsl(h_plus[i]);
+            b->bound[i] = (double)(fabsl(ri) + 4.0L * (nq + 1) * LDBL_EPSILON * evaluated
+                                   + 0.5L * GAC_EPS * fabsl(h_plus[i]));
+        }
+        b->floor = (double)(4.0L * (nq + 1) * LDBL_EPSILON * size + 0.5L * GAC_EPS * stored);
+        b->moved_floor = (double)(4.0L * (nq + 1) * LDBL_EPSILON * size_m);
+    } else {
+        m->contact_generalized_force(q, f, p, g);
+        for (i = 0; i < nq; ++i) change[i] = qd_plus[i] - qd[i];
+        m->generalized_momentum(q, change, p, p_change);  /* I_f (qd+ - qd-): no cancelling of qd-'s parts */
+        m->generalized_momentum(q, qd_plus, p, p_plus);
+        for (i = 0; i < nq; ++i) {
+            const long double ri = (long double)p_change[i] - g[i];
+            b->r[i] = (double)ri;
+            work_r += qd_plus[i] * ri;
+            work_m += qd[i] * ri;
+            size += fabsl((long double)qd_plus[i]) * (fabs(p_change[i]) + fabs(g[i]));
+            size_m += fabsl((long double)qd[i]) * (fabs(p_change[i]) + fabs(g[i]));
+            stored += fabsl((long double)qd_plus[i]) * fabs(p_plus[i]);
+            b->bound[i] = fabs(b->r[i]) + 4.0 * (nq + 1) * GAC_EPS * (fabs(p_change[i]) + fabs(g[i]))
+                          + 0.5 * GAC_EPS * fabs(p_plus[i]);
+        }
+        b->floor = 4.0 * (nq + 1) * GAC_EPS * (double)size + 0.5 * GAC_EPS * (double)stored;
+        b->moved_floor = 4.0 * (nq + 1) * GAC_EPS * (double)size_m;
+    }
+    b->balance = fabs((double)work_r);
+    b->moved = fabs((double)work_m);
+}
+
+/* Lambda += dLambda along the held directions (a slide's direction adds to its tangential impulses in ratio). */
+static void gac_held_add(const gac_model *m, const int *list, int nh, const gac_held *held, const double *dl,
+                         double *F, double *Ft)
+{
+    int a, k;
+    for (a = 0; a < nh; ++a) {
+        const int c = held[a].contact;
+        const gac_contact *kc = &m->contacts[list[c]];
+        if (held[a].tangent >= 0) {
+            Ft[2*c + (held[a].tangent > kc->axis ? held[a].tangent - 1 : held[a].tangent)] += dl[a];
+            continue;
+        }
+        F[c] += dl[a];
+        for (k = 1; k < held[a].nrow; ++k) Ft[2*c + (held[a].row[k] == kc->trow[0] ? 0 : 1)] += held[a].coef[k] * dl[a];
+    }
+}
+
 /* How accurately the contacts' normal velocities after the impact are known (m/s), the largest over list[0..n-1]:
  * the velocities that balance the impulses exactly differ from qd_plus by I_f^-1 rho, |rho_i| <= bound[i] (the
  * momentum balance's residual and what evaluating it resolves), which moves contact a's velocity by
@@ -376,8 +457,9 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
                            const double *qd, double *qd_plus, double T, double *work, double *v_acc)
 {
     const int nq = m->nq;
-    double f[GAC_AT_LEAST_1(m->njrow)], g[GAC_AT_LEAST_1(nq)], change[GAC_AT_LEAST_1(nq)], p_change[GAC_AT_LEAST_1(nq)];
-    double p_plus[GAC_AT_LEAST_1(nq)], r[GAC_AT_LEAST_1(nq)], dq[GAC_AT_LEAST_1(nq)], kept[GAC_AT_LEAST_1(nq)];
+    double f[GAC_AT_LEAST_1(m->njrow)], res_r[GAC_AT_LEAST_1(nq)], res_bound[GAC_AT_LEAST_1(nq)];
+    double r[GAC_AT_LEAST_1(nq)], dq[GAC_AT_LEAST_1(nq)], kept[GAC_AT_LEAST_1(nq)], scratch[2 * GAC_AT_LEAST_1(nq)];
+    gac_balance res;
     double previous = INFINITY, previous_balance = INFINITY, previous_missed = INFINITY;
     double balance = 0.0, floor = 0.0, law_work = 0.0, identity;
     double bound_now[GAC_AT_LEAST_1(nq)], bound_kept[GAC_AT_LEAST_1(nq)];
@@ -386,12 +468,14 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     const double *Y = GAC_WORK_Y(m, work);
     gac_held held[GAC_AT_LEAST_1(nq)];
     const int extended = m->generalized_momentum_ld != 0 && m->contact_generalized_force_ld != 0;
-    long double h_minus[GAC_AT_LEAST_1(nq)], h_plus[GAC_AT_LEAST_1(nq)], g_ld[GAC_AT_LEAST_1(nq)];
+    long double h_minus[GAC_AT_LEAST_1(nq)];
     double miss[GAC_AT_LEAST_1(nq)], before[3 * GAC_AT_LEAST_1(m->npoint)], after[3 * GAC_AT_LEAST_1(m->npoint)];
     double scale = 0.0, v_tol, e_round = 1.0;
     const int aims = rounds == 1 && !plastic && (law == GAC_IMPACT_LAW_FRICTIONLESS || law == GAC_IMPACT_LAW_GDI
                                                  || law == GAC_IMPACT_LAW_GDI_COMMON_E);
     int nh = 0, nnormal, a, i, it, pass;
+    res.r = res_r;
+    res.bound = res_bound;
     for (a = 0; a < n; ++a) {
         Fs[a] = F[a];
         Fts[2*a] = Ft[2*a];
@@ -470,41 +554,12 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     }
     if (extended) m->generalized_momentum_ld(q, qd, p, h_minus);    /* I_f qd-, once */
     for (it = 0; ; ++it) {
-        long double work_r = 0.0L, size = 0.0L, stored = 0.0L;
         double missed = 0.0;
-        gac_impulse_rows(m, n, list, Fs, Fts, f);        /* Lambda in the Jacobian's rows */
-        if (extended) {                                  /* r = I_f qd+ - I_f qd- - g, all in long double */
-            m->contact_generalized_force_ld(q, f, p, g_ld);
-            m->generalized_momentum_ld(q, qd_plus, p, h_plus);
-            for (i = 0; i < nq; ++i) {
-                const long double ri = (h_plus[i] - h_minus[i]) - g_ld[i];
-                const long double evaluated = fabsl(h_plus[i]) + fabsl(h_minus[i]) + fabsl(g_ld[i]);
-                r[i] = (double)ri;
-                work_r += qd_plus[i] * ri;
-                size += fabsl((long double)qd_plus[i]) * evaluated;
-                stored += fabsl((long double)qd_plus[i]) * fabsl(h_plus[i]);
-                bound_now[i] = (double)(fabsl(ri) + 4.0L * (nq + 1) * LDBL_EPSILON * evaluated
-                                        + 0.5L * GAC_EPS * fabsl(h_plus[i]));
-            }
-            balance = fabs((double)work_r);
-            floor = (double)(4.0L * (nq + 1) * LDBL_EPSILON * size + 0.5L * GAC_EPS * stored);
-        } else {
-            m->contact_generalized_force(q, f, p, g);
-            for (i = 0; i < nq; ++i) change[i] = qd_plus[i] - qd[i];
-            m->generalized_momentum(q, change, p, p_change);  /* I_f (qd+ - qd-): no cancelling of qd-'s parts */
-            m->generalized_momentum(q, qd_plus, p, p_plus);
-            for (i = 0; i < nq; ++i) {
-                const long double ri = (long double)p_change[i] - g[i];
-                r[i] = (double)ri;
-                work_r += qd_plus[i] * ri;
-                size += fabsl((long double)qd_plus[i]) * (fabs(p_change[i]) + fabs(g[i]));
-                stored += fabsl((long double)qd_plus[i]) * fabs(p_plus[i]);
-                bound_now[i] = fabs(r[i]) + 4.0 * (nq + 1) * GAC_EPS * (fabs(p_change[i]) + fabs(g[i]))
-                               + 0.5 * GAC_EPS * fabs(p_plus[i]);
-            }
-            balance = fabs((double)work_r);
-            floor = 4.0 * (nq + 1) * GAC_EPS * (double)size + 0.5 * GAC_EPS * (double)stored;
-        }
+        gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, extended ? h_minus : 0, &res);
+        balance = res.balance;
+        floor = res.floor;
+        gac_copy(bound_now, res.bound, nq);
+        gac_copy(r, res.r, nq);
         m->contact_velocities(q, qd_plus, p, after);
         for (a = 0; a < nh; ++a) {                       /* the held directions' misses of the law's targets */
             miss[a] = held[a].aimed ? gac_held_velocity(m, list, &held[a], qd_plus, after) - held[a].target : 0.0;
@@ -528,12 +583,19 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         previous_missed = missed;
         m->inertia_solve(q, r, p, dq);
         if (!gac_finite(dq, nq)) break;
+        gac_refine_response(m, q, p, r, dq, scratch, scratch + nq);   /* dq = I_f^-1 r, refined */
         gac_copy(kept, qd_plus, nq);
         gac_copy(F_kept, Fs, n);
         gac_copy(Ft_kept, Fts, 2 * n);
-        for (a = 0; a < nh; ++a) {                       /* N_H dq: what the free step would do to H's velocities */
+        for (a = 0; a < nh; ++a) {                       /* W_H dq: what the free step does to H's velocities (the
+                                                            step taken, rather than Y_H . r, its image through the
+                                                            responses, which differ along I_f's soft directions) */
+            int k;
             double s = 0.0;
-            for (i = 0; i < nq; ++i) s += Y[(long)a * nq + i] * r[i];
+            for (k = 0; k < m->njrow; ++k) f[k] = 0.0;
+            for (k = 0; k < held[a].nrow; ++k) f[held[a].row[k]] += held[a].coef[k];
+            m->contact_generalized_force(q, f, p, scratch);   /* w_a */
+            for (i = 0; i < nq; ++i) s += scratch[i] * dq[i];
             dl[a] = s;
         }
         for (a = 0; a < nh; ++a) dl[a] -= miss[a];
@@ -546,20 +608,38 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
             for (a = 0; a < nh; ++a) s += Y[(long)a * nq + i] * dl[a];
             qd_plus[i] += s;
         }
-        for (a = 0; a < nh; ++a) {                       /* the impulses along the held directions */
-            const int c = held[a].contact;
-            int k;
-            if (held[a].tangent >= 0) {
-                Fts[2*c + (held[a].tangent > m->contacts[list[c]].axis ? held[a].tangent - 1 : held[a].tangent)]
-                    += dl[a];
-                continue;
-            }
-            Fs[c] += dl[a];
-            for (k = 1; k < held[a].nrow; ++k) {
-                const gac_contact *kc = &m->contacts[list[c]];
-                Fts[2*c + (held[a].row[k] == kc->trow[0] ? 0 : 1)] += held[a].coef[k] * dl[a];
-            }
+        gac_held_add(m, list, nh, held, dl, Fs, Fts);    /* the impulses along the held directions */
+    }
+    /* The impulses refined against the velocities, qd+ kept (after several rounds over nearly dependent rows the
+     * rounds' impulses can stand far from those that balance the velocities, r then lying along the held rows,
+     * where it moves no velocity, qd+ . r ~ 0, but the energy identity by qd- . r): Lambda_H += dLambda_H,
+     * A_HH dLambda_H = N_H I_f^-1 r, while |qd+ . r| + |qd- . r| falls by half above its floor; never a pull. */
+    gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, extended ? h_minus : 0, &res);
+    for (it = 0; nh > 0 && it < GAC_REFINE_BALANCE_STEPS; ++it) {
+        const double now = res.balance + res.moved;
+        if (now <= 2.0 * (res.floor + res.moved_floor)) break;
+        for (a = 0; a < nh; ++a) {                       /* N_H I_f^-1 r = Y_H . r */
+            double sum = 0.0;
+            for (i = 0; i < nq; ++i) sum += Y[(long)a * nq + i] * res.r[i];
+            dl[a] = sum;
         }
+        gac_ldlt_solve(nh, GAC_WORK_A(m, work), dl);
+        if (!gac_finite(dl, nh)) break;
+        for (a = 0; a < nh && !(held[a].tangent < 0 && Fs[held[a].contact] + dl[a] < 0.0); ++a) {}
+        if (a < nh) break;                               /* it would pull */
+        gac_copy(F_kept, Fs, n);
+        gac_copy(Ft_kept, Fts, 2 * n);
+        gac_held_add(m, list, nh, held, dl, Fs, Fts);
+        gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, extended ? h_minus : 0, &res);
+        if (!(res.balance + res.moved <= 0.5 * now)) {   /* not halving: undo the step */
+            gac_copy(Fs, F_kept, n);
+            gac_copy(Fts, Ft_kept, 2 * n);
+            gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, extended ? h_minus : 0, &res);
+            break;
+        }
+        balance = res.balance;
+        floor = res.floor;
+        gac_copy(bound_kept, res.bound, nq);
     }
     if (rounds == 1 && !plastic && law != GAC_IMPACT_LAW_GDI_COMMON_E)
         law_work = gac_law_residual(m, q, p, n, list, e, Fs, Fts, law, qd, qd_plus);

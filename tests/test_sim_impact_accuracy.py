@@ -148,7 +148,11 @@ def test_an_ill_conditioned_chains_impacts_are_accurate_to_1e_10(compiled):
     # 1/2 Lambda . (gamma+ + gamma-), which holds exactly for velocities that balance the impulses, is evaluated
     # here with the model's kernels, and an impact's accuracy may exceed 1e-10 by no more than twice its residual
     # (the chaotic trajectory's states, and so that residual, move with each impact's round-off)
-    model, case = _fuzz_case(compiled, 3, 2)
+    rng = np.random.default_rng([0, 3])
+    scene = fuzz.random_structure(rng, 3)
+    model = compiled(scene, chart_b=True, extended=True)       # the study's model (load_model's defaults)
+    for _ in range(3):
+        case = fuzz.random_run(rng, scene, model)
     result = simulate(model, 0.3, p=case.p, q0=case.q0, qd0=case.qd0, **case.options)
     assert result.status == 0, result.message
     assert len(result.impacts) > 20
@@ -205,3 +209,28 @@ def test_residuals_in_long_double_resolve_an_ill_conditioned_chains_impacts_to_1
         assert worst <= 1e-10, worst
     else:
         assert worst > 1e-10, worst
+
+
+def test_impulses_after_several_rounds_balance_the_velocities(compiled):
+    # the fuzz study's 5-link chain 0-3, run 2 (a link with an axial inertia 2e-14 of the largest, cond(I_f) ~ 1e13):
+    # impacts solved in two rounds at three or four contacts whose rows are nearly dependent (cond 2e8); the rounds'
+    # impulses summed stood far from those that balance the velocities (the record's energy identity missed by 1e-4
+    # of T although the velocities were right); the impulses are refined against the velocities, which they keep
+    rng = np.random.default_rng([0, 3])
+    scene = fuzz.random_structure(rng, 3)
+    model = compiled(scene, chart_b=True, extended=True)       # the study's model (load_model's defaults)
+    for _ in range(3):
+        case = fuzz.random_run(rng, scene, model)
+    result = simulate(model, case.t_end, p=case.p, q0=case.q0, qd0=case.qd0, **case.options)
+    assert result.status == 0, result.message
+    several = [impact for impact in result.impacts if impact.rounds > 1]
+    assert several
+    assert max(impact.roundoff for impact in result.impacts) <= 1e-10
+    layout = model.layout
+    for impact in several:                  # independently: I_f (qd+ - qd-) = J^T Lambda, dense, in numpy
+        q, qd_m, qd_p = (layout.reduce(x) for x in (impact.q, impact.qd_before, impact.qd_after))
+        M, J = model.mass_matrix(q, case.p), model.contact_jacobian(q, case.p)
+        g = J.T @ _impulses(model, impact)
+        r = M @ (qd_p - qd_m) - g
+        size = (np.abs(M) @ np.abs(qd_p - qd_m) + np.abs(g)).max()      # what evaluating r in double resolves
+        assert np.abs(r).max() <= 1e-9 * size, (impact.t, np.abs(r).max(), size)

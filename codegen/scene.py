@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import SceneError
-from .urdf import urdf_chain
+from .urdf import urdf_chain, urdf_mount_frame
 
 try:  # Python >= 3.11
     import tomllib
@@ -396,6 +396,20 @@ def axis_angles(axis) -> tuple[float, float]:
     theta0 = math.atan2(d[1], math.hypot(d[0], d[2]))
     theta_m1 = math.atan2(-d[2], d[0]) if math.hypot(d[0], d[2]) > 1e-15 else 0.0
     return _snap_quarter(theta_m1), _snap_quarter(theta0)
+
+
+def urdf_mount_offset(text: str, tip_length: float | None = None) -> float:
+    """theta_1 minus the URDF angle of the revolute or continuous joint that holds a URDF chain's root to ``world``
+    (rad, in (-pi, pi]; a constant): the model's theta_1 counts from the base chart's zero direction about the axis
+    (axis_angles), the URDF angle from the root's frame at the joint's origin (codegen.urdf.urdf_mount_frame).  0 for
+    any other base."""
+    frame = urdf_mount_frame(text, tip_length)
+    if frame is None:
+        return 0.0
+    theta_m1, theta0 = axis_angles(frame[:, 2])
+    chart = np.array(T_MINUS1) @ rot_z(theta_m1) @ np.array(T_0) @ rot_z(theta0) @ np.array(T_1)   # at theta_1 = 0
+    R = chart.T @ frame                                                                          # = Rz(offset)
+    return math.atan2(R[1, 0], R[0, 0])
 
 
 def rotation_angles(R) -> tuple[float, float, float]:
@@ -1060,7 +1074,9 @@ def urdf_scene(path: str | Path) -> Scene:
         angles.append(0.0 if lower <= 0.0 <= upper else
                       0.5 * (lower + upper) if math.isfinite(lower + upper) else (lower if lower > 0 else upper))
     if base is not None:
-        return _urdf_fixed_scene(path, name, links, twists, joints, _base_from_data(base), angles)
+        if base["kind"] == "pinned":                 # theta_1 too: the URDF angle 0 of the joint that holds the root
+            angles = [urdf_mount_offset(path.read_text()), *angles]
+        return _urdf_mounted_scene(path, name, links, twists, joints, _base_from_data(base), angles)
     q = [0.0, 0.0, 0.0, *angles, 0.0, 0.0, 0.0]
     probe = Scene(name=name, links=links, twists=twists if n > 1 else (), joints=joints if n > 1 else (),
                   q0=tuple(q))
@@ -1075,15 +1091,16 @@ def urdf_scene(path: str | Path) -> Scene:
                  description=f"{path.name} at rest in a {2 * half:.3g} m box (the default box of a URDF file)")
 
 
-def _urdf_fixed_scene(path: Path, name: str, links, twists, joints, base: Base, angles) -> Scene:
-    """urdf_scene of a chain fixed to the world: at rest with its joints as there, in a box of six walls centred on
-    O_1 whose half-width is the length of the whole chain plus URDF_BOX_MARGIN (every point stays within it)."""
+def _urdf_mounted_scene(path: Path, name: str, links, twists, joints, base: Base, angles) -> Scene:
+    """urdf_scene of a chain fixed or pinned to the world: at rest with its joints as there (angles: the
+    coordinates the base leaves), in a box of six walls centred on O_1 whose half-width is the length of the whole
+    chain plus URDF_BOX_MARGIN (every point stays within it)."""
     half = sum(link.length for link in links) + URDF_BOX_MARGIN
     walls = tuple(Wall(f"x{axis}_{side}", round(base.point[axis - 1] + (-half if side == "min" else half), 12),
                        URDF_RESTITUTION) for axis in (1, 2, 3) for side in ("min", "max"))
     return Scene(name=name, links=links, twists=twists, joints=joints, walls=walls, q0=tuple(angles), base=base,
-                 description=f"{path.name} fixed to the world at rest in a {2 * half:.3g} m box (the default box of "
-                             "a URDF file)")
+                 description=f"{path.name} {'fixed' if base.kind == 'fixed' else 'pinned'} to the world at rest in a "
+                             f"{2 * half:.3g} m box (the default box of a URDF file)")
 
 
 def load_scene(source: str | Path) -> Scene:
@@ -1222,8 +1239,8 @@ def _chain_tables(data: dict, folder) -> tuple[list, dict | None]:
     except SceneError as exc:
         raise SceneError(f"urdf {path}: {exc}") from None
     if base is not None and "base" in data:
-        raise SceneError(f"base: the URDF file {data['urdf']} fixes its root link to the world (a fixed base); "
-                         "give no [base] table")
+        raise SceneError(f"base: the URDF file {data['urdf']} holds its root link to the world (a "
+                         f"{'fixed' if base['kind'] == 'fixed' else 'pinned revolute'} base); give no [base] table")
     return tables, base if base is not None else data.get("base")
 
 

@@ -587,6 +587,8 @@ class Scene:
     friction_velocity: float = 1e-3   # m/s, see above
     base: Base = FREE_BASE      # how link 1 is held (Base): free, pinned or fixed
     link_restitution: float | None = None   # e of two capsule links meeting (Scene.link_pairs); None: 1
+    contact_pairs: tuple | None = None      # the link pairs (i, j) that may strike each other ([contacts] links);
+    #                                         None: every pair that can (Scene.link_pairs)
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not _NAME_RE.match(self.name):
@@ -624,6 +626,8 @@ class Scene:
             if not 0.0 <= e <= 1.0:
                 raise SceneError(f"restitution.links: must be in [0, 1], got {e!r}")
             object.__setattr__(self, "link_restitution", e)
+        if self.contact_pairs is not None:
+            object.__setattr__(self, "contact_pairs", self._checked_pairs(self.contact_pairs))
         self._validate_joints()
         self._validate_state()
 
@@ -876,12 +880,36 @@ class Scene:
         that end there (link p - 1 and link p); 0 for segments."""
         return max((self.links[i - 1].radius for i in (p - 1, p) if 1 <= i <= self.n), default=0.0)
 
-    def link_pairs(self) -> list[tuple[int, int]]:
+    def possible_link_pairs(self) -> list[tuple[int, int]]:
         """The pairs of links (i < j, 1-based) that can touch each other as capsules: not adjacent (adjacent links
         share a joint point, where their capsules always overlap) and with radii adding up to more than 0 (two
         segments of no thickness meet only by crossing, which no gap of theirs can see coming)."""
         return [(i, j) for i in range(1, self.n + 1) for j in range(i + 2, self.n + 1)
                 if self.links[i - 1].radius + self.links[j - 1].radius > 0.0]
+
+    def link_pairs(self) -> list[tuple[int, int]]:
+        """The link pairs that are contacts of the model: possible_link_pairs, or those of them ``contact_pairs``
+        names."""
+        pairs = self.possible_link_pairs()
+        return pairs if self.contact_pairs is None else [pair for pair in pairs if pair in self.contact_pairs]
+
+    def _checked_pairs(self, pairs) -> tuple:
+        """contact_pairs as sorted (i, j) tuples, i < j, each a possible pair; a SceneError naming contacts.links."""
+        possible = self.possible_link_pairs()
+        if not isinstance(pairs, (list, tuple)):
+            raise SceneError(f"contacts.links: expected a list of link pairs [i, j], got {pairs!r}")
+        out = set()
+        for pair in pairs:
+            if (not isinstance(pair, (list, tuple)) or len(pair) != 2
+                    or not all(isinstance(v, int) and not isinstance(v, bool) for v in pair)):
+                raise SceneError(f"contacts.links: expected pairs of link numbers [i, j], got {pair!r}")
+            i, j = sorted(pair)
+            if (i, j) not in possible:
+                raise SceneError(f"contacts.links: links {i} and {j} cannot strike each other (allowed: the pairs "
+                                 "of links 1..n, not adjacent, with radii adding up to more than 0: "
+                                 f"{', '.join(f'[{a}, {b}]' for a, b in possible) or 'none'}), got {list(pair)!r}")
+            out.add((i, j))
+        return tuple(sorted(out))
 
     def link_contacts(self) -> list[LinkPair]:
         """The link pairs as contacts of the loop (after the walls and stops), with their radius sums and e."""
@@ -1175,8 +1203,11 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
     links, twists, joints = _links_from_data(tables)
     n = len(links)
     restitution = data.get("restitution", 1.0)
-    walls = _walls_from_data(data.get("walls", {}), restitution, data.get("contacts", {}),
-                             data.get("friction", 0.0))
+    contacts = data.get("contacts", {})           # points per wall, and the link pairs (links) that may strike
+    pairs = contacts.get("links") if isinstance(contacts, dict) else None
+    if isinstance(contacts, dict):
+        contacts = {name: points for name, points in contacts.items() if name != "links"}
+    walls = _walls_from_data(data.get("walls", {}), restitution, contacts, data.get("friction", 0.0))
     link_e = None                       # two capsule links meeting: restitution.links, else the scene's default
     if isinstance(restitution, dict) and "links" in restitution:
         link_e = restitution["links"]
@@ -1197,6 +1228,7 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
         inputs=data.get("inputs", ()),
         friction_velocity=data.get("friction_velocity", 1e-3),
         link_restitution=link_e,
+        contact_pairs=pairs,
         base=_base_from_data({} if base is None else base),
     )
 
@@ -1312,7 +1344,7 @@ def _walls_from_data(walls, restitution, contacts, friction=0.0) -> tuple[Wall, 
         for name in friction:
             if name != "default" and name not in walls:
                 raise SceneError(f"friction.{name}: there is no such wall in [walls]")
-    _check_keys(contacts, WALL_NAMES, "contacts")
+    _check_keys(contacts, WALL_NAMES + ("links",), "contacts")
     for name in contacts:
         if name not in walls:
             raise SceneError(f"contacts.{name}: there is no such wall in [walls]")

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import SceneError
-from .urdf import urdf_chain
+from .urdf import urdf_chain, urdf_mount_frame
 
 try:  # Python >= 3.11
     import tomllib
@@ -398,6 +398,20 @@ def axis_angles(axis) -> tuple[float, float]:
     return _snap_quarter(theta_m1), _snap_quarter(theta0)
 
 
+def urdf_mount_offset(text: str, tip_length: float | None = None) -> float:
+    """theta_1 minus the URDF angle of the revolute or continuous joint that holds a URDF chain's root to ``world``
+    (rad, in (-pi, pi]; a constant): the model's theta_1 counts from the base chart's zero direction about the axis
+    (axis_angles), the URDF angle from the root's frame at the joint's origin (codegen.urdf.urdf_mount_frame).  0 for
+    any other base."""
+    frame = urdf_mount_frame(text, tip_length)
+    if frame is None:
+        return 0.0
+    theta_m1, theta0 = axis_angles(frame[:, 2])
+    chart = np.array(T_MINUS1) @ rot_z(theta_m1) @ np.array(T_0) @ rot_z(theta0) @ np.array(T_1)   # at theta_1 = 0
+    R = chart.T @ frame                                                                          # = Rz(offset)
+    return math.atan2(R[1, 0], R[0, 0])
+
+
 def rotation_angles(R) -> tuple[float, float, float]:
     """(theta_-1, theta_0, theta_1) of link 1's orientation ^{ref}R_1 (columns x_1, y_1, z_1 in the box frame), with
     the default base twists: R T_1^T = Ry(theta_-1) Rz(theta_0) Rx(theta_1) (at theta_0 = +-pi/2, theta_-1 = 0)."""
@@ -573,6 +587,8 @@ class Scene:
     friction_velocity: float = 1e-3   # m/s, see above
     base: Base = FREE_BASE      # how link 1 is held (Base): free, pinned or fixed
     link_restitution: float | None = None   # e of two capsule links meeting (Scene.link_pairs); None: 1
+    contact_pairs: tuple | None = None      # the link pairs (i, j) that may strike each other ([contacts] links);
+    #                                         None: every pair that can (Scene.link_pairs)
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not _NAME_RE.match(self.name):
@@ -610,6 +626,8 @@ class Scene:
             if not 0.0 <= e <= 1.0:
                 raise SceneError(f"restitution.links: must be in [0, 1], got {e!r}")
             object.__setattr__(self, "link_restitution", e)
+        if self.contact_pairs is not None:
+            object.__setattr__(self, "contact_pairs", self._checked_pairs(self.contact_pairs))
         self._validate_joints()
         self._validate_state()
 
@@ -862,12 +880,36 @@ class Scene:
         that end there (link p - 1 and link p); 0 for segments."""
         return max((self.links[i - 1].radius for i in (p - 1, p) if 1 <= i <= self.n), default=0.0)
 
-    def link_pairs(self) -> list[tuple[int, int]]:
+    def possible_link_pairs(self) -> list[tuple[int, int]]:
         """The pairs of links (i < j, 1-based) that can touch each other as capsules: not adjacent (adjacent links
         share a joint point, where their capsules always overlap) and with radii adding up to more than 0 (two
         segments of no thickness meet only by crossing, which no gap of theirs can see coming)."""
         return [(i, j) for i in range(1, self.n + 1) for j in range(i + 2, self.n + 1)
                 if self.links[i - 1].radius + self.links[j - 1].radius > 0.0]
+
+    def link_pairs(self) -> list[tuple[int, int]]:
+        """The link pairs that are contacts of the model: possible_link_pairs, or those of them ``contact_pairs``
+        names."""
+        pairs = self.possible_link_pairs()
+        return pairs if self.contact_pairs is None else [pair for pair in pairs if pair in self.contact_pairs]
+
+    def _checked_pairs(self, pairs) -> tuple:
+        """contact_pairs as sorted (i, j) tuples, i < j, each a possible pair; a SceneError naming contacts.links."""
+        possible = self.possible_link_pairs()
+        if not isinstance(pairs, (list, tuple)):
+            raise SceneError(f"contacts.links: expected a list of link pairs [i, j], got {pairs!r}")
+        out = set()
+        for pair in pairs:
+            if (not isinstance(pair, (list, tuple)) or len(pair) != 2
+                    or not all(isinstance(v, int) and not isinstance(v, bool) for v in pair)):
+                raise SceneError(f"contacts.links: expected pairs of link numbers [i, j], got {pair!r}")
+            i, j = sorted(pair)
+            if (i, j) not in possible:
+                raise SceneError(f"contacts.links: links {i} and {j} cannot strike each other (allowed: the pairs "
+                                 "of links 1..n, not adjacent, with radii adding up to more than 0: "
+                                 f"{', '.join(f'[{a}, {b}]' for a, b in possible) or 'none'}), got {list(pair)!r}")
+            out.add((i, j))
+        return tuple(sorted(out))
 
     def link_contacts(self) -> list[LinkPair]:
         """The link pairs as contacts of the loop (after the walls and stops), with their radius sums and e."""
@@ -1060,7 +1102,9 @@ def urdf_scene(path: str | Path) -> Scene:
         angles.append(0.0 if lower <= 0.0 <= upper else
                       0.5 * (lower + upper) if math.isfinite(lower + upper) else (lower if lower > 0 else upper))
     if base is not None:
-        return _urdf_fixed_scene(path, name, links, twists, joints, _base_from_data(base), angles)
+        if base["kind"] == "pinned":                 # theta_1 too: the URDF angle 0 of the joint that holds the root
+            angles = [urdf_mount_offset(path.read_text()), *angles]
+        return _urdf_mounted_scene(path, name, links, twists, joints, _base_from_data(base), angles)
     q = [0.0, 0.0, 0.0, *angles, 0.0, 0.0, 0.0]
     probe = Scene(name=name, links=links, twists=twists if n > 1 else (), joints=joints if n > 1 else (),
                   q0=tuple(q))
@@ -1075,15 +1119,16 @@ def urdf_scene(path: str | Path) -> Scene:
                  description=f"{path.name} at rest in a {2 * half:.3g} m box (the default box of a URDF file)")
 
 
-def _urdf_fixed_scene(path: Path, name: str, links, twists, joints, base: Base, angles) -> Scene:
-    """urdf_scene of a chain fixed to the world: at rest with its joints as there, in a box of six walls centred on
-    O_1 whose half-width is the length of the whole chain plus URDF_BOX_MARGIN (every point stays within it)."""
+def _urdf_mounted_scene(path: Path, name: str, links, twists, joints, base: Base, angles) -> Scene:
+    """urdf_scene of a chain fixed or pinned to the world: at rest with its joints as there (angles: the
+    coordinates the base leaves), in a box of six walls centred on O_1 whose half-width is the length of the whole
+    chain plus URDF_BOX_MARGIN (every point stays within it)."""
     half = sum(link.length for link in links) + URDF_BOX_MARGIN
     walls = tuple(Wall(f"x{axis}_{side}", round(base.point[axis - 1] + (-half if side == "min" else half), 12),
                        URDF_RESTITUTION) for axis in (1, 2, 3) for side in ("min", "max"))
     return Scene(name=name, links=links, twists=twists, joints=joints, walls=walls, q0=tuple(angles), base=base,
-                 description=f"{path.name} fixed to the world at rest in a {2 * half:.3g} m box (the default box of "
-                             "a URDF file)")
+                 description=f"{path.name} {'fixed' if base.kind == 'fixed' else 'pinned'} to the world at rest in a "
+                             f"{2 * half:.3g} m box (the default box of a URDF file)")
 
 
 def load_scene(source: str | Path) -> Scene:
@@ -1158,8 +1203,11 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
     links, twists, joints = _links_from_data(tables)
     n = len(links)
     restitution = data.get("restitution", 1.0)
-    walls = _walls_from_data(data.get("walls", {}), restitution, data.get("contacts", {}),
-                             data.get("friction", 0.0))
+    contacts = data.get("contacts", {})           # points per wall, and the link pairs (links) that may strike
+    pairs = contacts.get("links") if isinstance(contacts, dict) else None
+    if isinstance(contacts, dict):
+        contacts = {name: points for name, points in contacts.items() if name != "links"}
+    walls = _walls_from_data(data.get("walls", {}), restitution, contacts, data.get("friction", 0.0))
     link_e = None                       # two capsule links meeting: restitution.links, else the scene's default
     if isinstance(restitution, dict) and "links" in restitution:
         link_e = restitution["links"]
@@ -1180,6 +1228,7 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
         inputs=data.get("inputs", ()),
         friction_velocity=data.get("friction_velocity", 1e-3),
         link_restitution=link_e,
+        contact_pairs=pairs,
         base=_base_from_data({} if base is None else base),
     )
 
@@ -1222,8 +1271,8 @@ def _chain_tables(data: dict, folder) -> tuple[list, dict | None]:
     except SceneError as exc:
         raise SceneError(f"urdf {path}: {exc}") from None
     if base is not None and "base" in data:
-        raise SceneError(f"base: the URDF file {data['urdf']} fixes its root link to the world (a fixed base); "
-                         "give no [base] table")
+        raise SceneError(f"base: the URDF file {data['urdf']} holds its root link to the world (a "
+                         f"{'fixed' if base['kind'] == 'fixed' else 'pinned revolute'} base); give no [base] table")
     return tables, base if base is not None else data.get("base")
 
 
@@ -1295,7 +1344,7 @@ def _walls_from_data(walls, restitution, contacts, friction=0.0) -> tuple[Wall, 
         for name in friction:
             if name != "default" and name not in walls:
                 raise SceneError(f"friction.{name}: there is no such wall in [walls]")
-    _check_keys(contacts, WALL_NAMES, "contacts")
+    _check_keys(contacts, WALL_NAMES + ("links",), "contacts")
     for name in contacts:
         if name not in walls:
             raise SceneError(f"contacts.{name}: there is no such wall in [walls]")

@@ -15,7 +15,12 @@ A next joint offset along a joint's axis is taken up by sliding the joint's orig
 common normal of Denavit-Hartenberg, from the tip down): the kinematics and the inertia stay the URDF's, and the
 contact point O_k is that point of the joint's axis.  Refused are trees, prismatic, planar or floating joints, mimic joints and joint friction (not in this model).  A root
 held to a link named ``world`` by a fixed joint is a fixed base (codegen.scene.Base): O_1 at the joint's origin, link
-1's frame E A_1 (E: the joint's rpy); by a floating joint, a free one.
+1's frame E A_1 (E: the joint's rpy); by a floating joint, a free one; by a revolute or continuous joint, a pinned
+revolute base: its axis E a (a: the joint's <axis> in the root's frame) is the root's z_1, O_1 the point of that axis
+where the root reaches the next joint normal to it (slid along the axis as the other joints are), and theta_1 the
+joint's URDF angle plus a constant, codegen.scene.urdf_mount_offset (theta_1 counts from the base chart's zero direction about the
+axis, the URDF angle from the root's x at the joint's origin); such a joint may not have stops or a damper (the model's
+base has neither).
 <limit lower upper> become the joint's stops, <dynamics damping> its damper; effort and velocity limits
 describe actuators and are not part of the dynamics.
 
@@ -114,9 +119,12 @@ def _inertial(link, where: str) -> tuple[float, np.ndarray, np.ndarray]:
 WORLD = "world"      # the link a URDF names for the world: a root fixed to it is a fixed base
 
 
+MOUNTS = ("fixed", "floating", "revolute", "continuous")     # the joints that may hold the root to the world
+
+
 def _chain(robot) -> tuple[list, list, object, object]:
     """The links root..last and the revolute/continuous joints between them, the fixed tip joint (or None), and the
-    fixed joint that holds the root to a link named ``world`` (or None: the root floats)."""
+    fixed, revolute or continuous joint that holds the root to a link named ``world`` (or None: the root floats)."""
     links = {link.get("name"): link for link in robot.findall("link")}
     joints = robot.findall("joint")
     children: dict[str, list] = {}
@@ -139,12 +147,12 @@ def _chain(robot) -> tuple[list, list, object, object]:
         if len(below) != 1:
             raise SceneError(f"urdf link {WORLD!r}: has {len(below)} child joints; it holds one root link")
         mount = below[0]
-        if mount.get("type") not in ("fixed", "floating"):
+        if mount.get("type") not in MOUNTS:
             raise SceneError(f"urdf joint {mount.get('name')!r}: holds the root to the world by a "
-                             f"{mount.get('type')!r} joint; read are 'fixed' (a fixed base) and 'floating' (a free "
-                             "base)")
+                             f"{mount.get('type')!r} joint; read are 'fixed' (a fixed base), 'floating' (a free "
+                             "base) and 'revolute' or 'continuous' (a pinned revolute base)")
         roots = [mount.find("child").get("link")]
-        mount = mount if mount.get("type") == "fixed" else None
+        mount = mount if mount.get("type") != "floating" else None
     chain, revolute, tip = [links[roots[0]]], [], None
     while True:
         below = children.get(chain[-1].get("name"), [])
@@ -180,8 +188,21 @@ def urdf_links(text: str, tip_length: float | None = None) -> list[dict]:
 
 def urdf_chain(text: str, tip_length: float | None = None) -> tuple[list[dict], dict | None]:
     """The [[links]] tables (urdf_links) and the [base] table of a URDF chain: a root held to a ``world`` link by a
-    fixed joint is a fixed base (O_1 at the joint's origin, link 1's model frame turned by its rpy), else None
-    (a free base)."""
+    fixed joint is a fixed base (O_1 at the joint's origin, link 1's model frame turned by its rpy), by a revolute or
+    continuous joint a pinned revolute base (its axis in the world, O_1 on it), else None (a free base)."""
+    tables, base, _ = _read(text, tip_length)
+    return tables, base
+
+
+def urdf_mount_frame(text: str, tip_length: float | None = None) -> np.ndarray | None:
+    """Link 1's model frame in the world (columns x_1, y_1, z_1) at the URDF angle 0 of the revolute or continuous
+    joint holding the root to ``world``, E A_1 (E: the joint's rpy); None for any other base.  At URDF angle phi it is
+    E Rot(a, phi) A_1 = E A_1 Rz(phi), since A_1 turns z onto the joint's axis a (codegen.scene.urdf_mount_offset)."""
+    return _read(text, tip_length)[2]
+
+
+def _read(text: str, tip_length: float | None) -> tuple[list[dict], dict | None, np.ndarray | None]:
+    """urdf_chain's tables and base, and urdf_mount_frame."""
     try:
         robot = ET.fromstring(text)
     except ET.ParseError as exc:
@@ -198,6 +219,9 @@ def urdf_chain(text: str, tip_length: float | None = None) -> tuple[list[dict], 
         if np.linalg.norm(a) == 0.0:
             raise SceneError(f"urdf joint {joints[k - 2].get('name')!r} <axis>: the zero vector")
         axes[k - 1] = a / np.linalg.norm(a)
+    pinned = mount is not None and mount.get("type") in ("revolute", "continuous")
+    if pinned:                                        # the base's axis, in the root's frame, is the root's z_1
+        axes[0] = _mount_axis(mount)
     # the offset from each link's joint to the next joint (or the tip), in that link's URDF frame
     offsets = [xyz for xyz, _ in origins]
     if tip is not None:
@@ -209,22 +233,25 @@ def urdf_chain(text: str, tip_length: float | None = None) -> tuple[list[dict], 
                          "(urdf_tip_length in the scene file) or add a fixed joint to a tip link at its end")
     # a joint's origin O_k may sit anywhere on its axis: each is slid along it by s_k to where the link before it
     # reaches it normal to that link's own axis (the common normal of Denavit-Hartenberg), from the tip (which stays)
-    # to joint 2 (the root's origin stays, its z is free): s_k = (next point - joint k's origin) . a_k
+    # to joint 2, and to the root's origin on a revolute mount's axis (a free or fixed root's origin stays, its z is
+    # free): s_k = (next point - joint k's origin) . a_k
     shift = [0.0] * (n + 1)
-    for k in range(n - 1, 0, -1):
+    for k in range(n - 1, -1 if pinned else 0, -1):
         if offsets[k] is not None:
             ahead = offsets[k] + (shift[k + 1] * (origins[k][1] @ axes[k + 1]) if k + 1 < n else 0.0)
             shift[k] = float(ahead @ axes[k])
     for k in range(n):
         if offsets[k] is not None:
             ahead = offsets[k] + (shift[k + 1] * (origins[k][1] @ axes[k + 1]) if k + 1 < n else 0.0)
-            offsets[k] = ahead - (shift[k] * axes[k] if k > 0 else 0.0)
+            offsets[k] = ahead - (shift[k] * axes[k] if axes[k] is not None else 0.0)
     # the model's frame of each link: A_k with x_k towards the next joint, z_k the joint's axis
     A = []
     for k in range(n):
         where = f"urdf link {chain[k].get('name')!r}"
         if k == 0:
-            if n > 1:
+            if pinned:
+                z = axes[0]                                        # the mount's axis
+            elif n > 1:
                 z = origins[0][1] @ axes[1]                        # joint 2's axis in the root frame
             else:
                 z = np.array([0.0, 0.0, 1.0])
@@ -243,7 +270,7 @@ def urdf_chain(text: str, tip_length: float | None = None) -> tuple[list[dict], 
             x = d / length
             cosine = float(x @ z)
             if abs(cosine) > PERPENDICULAR_TOL:
-                if k == 0:                                         # the root's z is free: any normal to x
+                if k == 0 and not pinned:                          # the root's z is free: any normal to x
                     z = z - cosine * x
                     if np.linalg.norm(z) < 1e-6:
                         z = np.cross(x, [1.0, 0.0, 0.0]) if abs(x[0]) < 0.9 else np.cross(x, [0.0, 1.0, 0.0])
@@ -259,7 +286,7 @@ def urdf_chain(text: str, tip_length: float | None = None) -> tuple[list[dict], 
     for k in range(n):
         Ak, length = A[k]
         mass, c, I = _inertial(chain[k], f"urdf link {chain[k].get('name')!r}")
-        com = Ak.T @ (c - (shift[k] * axes[k] if k > 0 else 0.0))          # about O_k, slid along the axis
+        com = Ak.T @ (c - (shift[k] * axes[k] if axes[k] is not None else 0.0))    # about O_k, slid along the axis
         inertia = Ak.T @ I @ Ak
         table = {"length": length, "mass": mass, "com": [float(v) for v in com],
                  "inertia": [[float(v) for v in row] for row in 0.5 * (inertia + inertia.T)]}
@@ -288,11 +315,40 @@ def urdf_chain(text: str, tip_length: float | None = None) -> tuple[list[dict], 
                     table["damping"] = float(damping)
         tables.append(table)
     if mount is None:
-        return tables, None
+        return tables, None, None
     xyz, E = _origin(mount, f"urdf joint {mount.get('name')!r}")
     rotation = _snap(E @ A[0][0])                                    # the model's frame of link 1 in the world
-    return tables, {"kind": "fixed", "point": [float(v) for v in xyz],
-                    "rotation": [[float(v) for v in row] for row in rotation]}
+    if not pinned:
+        return tables, {"kind": "fixed", "point": [float(v) for v in xyz],
+                        "rotation": [[float(v) for v in row] for row in rotation]}, None
+    axis = _snap(E @ axes[0])
+    point = xyz + E @ (shift[0] * axes[0])                           # O_1: slid along the axis
+    return tables, {"kind": "pinned", "joint": "revolute", "point": [float(v) for v in point],
+                    "axis": [float(v) for v in axis]}, rotation
+
+
+def _mount_axis(mount) -> np.ndarray:
+    """The unit axis (root frame) of the revolute or continuous joint holding the root to the world, refused with
+    stops or a damper (the model's base has neither)."""
+    where = f"urdf joint {mount.get('name')!r}"
+    a = _floats(mount.find("axis"), "xyz", "1 0 0", f"{where} <axis>")
+    if np.linalg.norm(a) == 0.0:
+        raise SceneError(f"{where} <axis>: the zero vector")
+    limit = mount.find("limit")
+    if mount.get("type") == "revolute" and limit is not None:
+        lower = _floats(limit, "lower", "0", f"{where} <limit>", 1)[0]
+        upper = _floats(limit, "upper", "0", f"{where} <limit>", 1)[0]
+        if lower != upper:
+            raise SceneError(f"{where} <limit>: lower = {float(lower)!r}, upper = {float(upper)!r} rad are stops of the joint that "
+                             "holds the root to the world; the model's pinned base has no stops (use type continuous)")
+    dynamics = mount.find("dynamics")
+    if dynamics is not None:
+        for attribute in ("damping", "friction"):
+            if _floats(dynamics, attribute, "0", f"{where} <dynamics>", 1)[0] != 0.0:
+                raise SceneError(f"{where} <dynamics {attribute}>: the model's pinned base has no {attribute}; give "
+                                 "0 or leave it out")
+    return a / np.linalg.norm(a)
+
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -316,8 +372,8 @@ def link_inertial(link) -> tuple[float, np.ndarray, np.ndarray]:
 
 
 def scene_to_urdf(scene) -> tuple[str, list[str]]:
-    """A scene's (codegen.scene.Scene) chain as URDF (root link1 floating, or held by a fixed joint to a link
-    ``world`` for a fixed base; revolute or continuous joints
+    """A scene's (codegen.scene.Scene) chain as URDF (root link1 floating, or held to a link ``world`` by a fixed
+    joint for a fixed base, by a continuous joint about its z for a pinned revolute one; revolute or continuous joints
     theta_2..theta_n about z, a fixed tip link at the end of link n), and notes on what URDF cannot hold (springs,
     the restitution of stops)."""
     notes = []
@@ -354,6 +410,18 @@ def scene_to_urdf(scene) -> tuple[str, list[str]]:
         parts.append('  <link name="world"/>')
         parts.append(f'  <joint name="mount" type="fixed"><parent link="world"/><child link="link1"/>'
                      f'<origin xyz="{_numbers(scene.base.point)}" rpy="{_numbers(matrix_rpy(R1))}"/></joint>')
+    elif scene.base.kind == "pinned" and scene.base.joint == "revolute":
+        # held by a continuous joint about link 1's z whose origin is the base chart's frame at theta_1 = 0, so that
+        # the URDF angle is theta_1 (codegen.scene.urdf_mount_offset 0)
+        R1 = np.eye(3)
+        for T, angle in zip(scene.base_twists[:2], scene.q0[:2]):
+            c, s = math.cos(angle), math.sin(angle)
+            R1 = R1 @ np.array(T) @ np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        R1 = R1 @ np.array(scene.base_twists[2])
+        parts.append('  <link name="world"/>')
+        parts.append(f'  <joint name="mount" type="continuous"><parent link="world"/><child link="link1"/>'
+                     f'<origin xyz="{_numbers(scene.base.point)}" rpy="{_numbers(matrix_rpy(R1))}"/>'
+                     '<axis xyz="0.0 0.0 1.0"/></joint>')
     elif scene.base.kind == "pinned":
         notes.append(f"base: a {scene.base.label} base has no URDF form read back here; link1 written floating")
     parts.append('  <link name="tip"/>')

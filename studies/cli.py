@@ -22,6 +22,7 @@ STUDIES = {
     "simcost": ("studies.simcost", "time per simulated second against n, with the fitted exponent"),
     "peer": ("studies.peer", "forward dynamics against Pinocchio's ABA traced by CasADi, side by side in C"),
     "friction": ("studies.friction_cost", "friction at resting contacts: cost and the regularisation velocity"),
+    "links": ("studies.link_cost", "link-link contacts: a capsule scene with and without its link pairs"),
     "fmu": ("studies.fmu_cost", "a run through the FMI 2.0 FMU (driven by FMPy) against runtime.simulate"),
     "identify": ("studies.identify_restitution", "restitution and g fitted to noisy impact times, exact Jacobian"),
     "shoot": ("studies.shoot_target", "the throw whose tip hits a target after a bounce, Newton with exact Jacobians"),

@@ -1,6 +1,7 @@
 """Capsule links (a radius about the segment O_i -> O_{i+1}): the scene field, the radius a joint point touches a
 wall with, and every bad value refused naming its field."""
 import copy
+import re
 import math
 
 import pytest
@@ -80,3 +81,33 @@ def test_rigid_links_take_a_radius_too():
     link = RigidLink(1.0, 1.0, (0.5, 0.0, 0.0), ((1e-3, 0, 0), (0, 0.1, 0), (0, 0, 0.1)), 0.03)
     scene = Scene(name="r", links=(link,), walls=(Wall("x2_min", -1.0),))
     assert scene.point_radius(1) == scene.point_radius(2) == 0.03
+
+
+def test_contacts_links_chooses_the_link_pairs():
+    """[contacts] links names the link pairs that are contacts (in any order, each once); [] leaves them all out; a
+    scene without it keeps every possible pair and its hash; a pair that cannot strike, or not a pair, is refused
+    naming contacts.links."""
+    data = copy.deepcopy(GOOD)
+    data["links"].append({"length": 0.5, "mu": 1.0, "radius": 0.03})
+    data["initial"]["q"] = data["initial"]["q"][:5] + [0.0] + data["initial"]["q"][5:]
+    every = scene_from_dict(data)
+    assert every.link_pairs() == every.possible_link_pairs() == [(1, 3), (1, 4), (2, 4)]
+    assert every.contact_pairs is None
+    data["contacts"] = {"links": [[4, 1], [1, 4], [1, 3]]}
+    chosen = scene_from_dict(data)
+    assert chosen.link_pairs() == [(1, 3), (1, 4)] and chosen.contact_pairs == ((1, 3), (1, 4))
+    assert [pair.name for pair in chosen.link_contacts()] == ["L1-L3", "L1-L4"]
+    data["contacts"] = {"links": [], "x2_min": [1, 2]}
+    none = scene_from_dict(data)
+    assert none.link_pairs() == [] and none.walls == tuple(w if w.name != "x2_min" else
+                                                          Wall("x2_min", 0.0, 0.5, (1, 2)) for w in every.walls)
+    assert len({scene_hash(every), scene_hash(chosen), scene_hash(none)}) == 3
+    assert scene_hash(every) == scene_hash(Scene(**{f: getattr(every, f) for f in every.__dataclass_fields__
+                                                    if f != "contact_pairs"}))
+    for pairs, words in (([[1, 2]], "links 1 and 2 cannot strike each other (allowed: the pairs of links 1..n, not "
+                                    "adjacent, with radii adding up to more than 0: [1, 3], [1, 4], [2, 4]), got [1, 2]"),
+                         ([[1, 3, 4]], "expected pairs of link numbers [i, j], got [1, 3, 4]"),
+                         ("1-3", "expected a list of link pairs [i, j], got '1-3'")):
+        data["contacts"] = {"links": pairs}
+        with pytest.raises(SceneError, match=re.escape(f"contacts.links: {words}")):
+            scene_from_dict(data)

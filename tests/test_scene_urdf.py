@@ -279,7 +279,7 @@ def test_root_fixed_to_the_world_is_a_fixed_base(tmp_path):
     alone = load_scene(tmp_path / "mounted.urdf")
     assert alone.base == scene.base and all(w.position != 0.0 for w in alone.walls)
     (tmp_path / "twice.toml").write_text('name = "twice"\nurdf = "mounted.urdf"\n[base]\nkind = "free"\n')
-    with pytest.raises(SceneError, match=r"base: the URDF file mounted.urdf fixes its root link to the world"):
+    with pytest.raises(SceneError, match=r"base: the URDF file mounted.urdf holds its root link to the world \(a fixed base\)"):
         load_scene(tmp_path / "twice.toml")
 
 
@@ -331,3 +331,141 @@ def test_offsets_along_the_joint_axes_slide_the_joint_points():
                 assert np.abs(Rs[i + 2][:, 2] - axis).max() < 1e-13
             assert np.abs(points[i] + Rs[i + 2] @ np.array(link.com) - (MOUNT_XYZ + E @ com)).max() < 1e-13
             assert np.abs(Rs[i + 2] @ np.array(link.inertia) @ Rs[i + 2].T - E @ inertia @ E.T).max() < 1e-15
+
+
+# ---------------------------------------------------------------------------------------------------
+# a root held to the world by a revolute or continuous joint: a pinned revolute base
+# ---------------------------------------------------------------------------------------------------
+PENDULUM = """<robot name="pendulum">
+  <link name="world"/>
+  <link name="upper"><inertial><origin xyz="0.25 0.02 0.01" rpy="0 0 0"/><mass value="1.5"/>
+    <inertia ixx="0.002" iyy="0.03" izz="0.031" ixy="0.001" ixz="0" iyz="0.0002"/></inertial></link>
+  <link name="lower"><inertial><origin xyz="0.2 0 -0.01" rpy="0 0 0"/><mass value="0.8"/>
+    <inertia ixx="0.001" iyy="0.012" izz="0.0125" ixy="0" ixz="0.0003" iyz="0"/></inertial></link>
+  <link name="tip"/>
+  <joint name="pivot" type="MOUNT"><parent link="world"/><child link="upper"/>
+    <origin xyz="1.0 1.5 0.0" rpy="1.5707963267948966 0 0"/><axis xyz="0 1 0"/>LIMIT</joint>
+  <joint name="elbow" type="continuous"><parent link="upper"/><child link="lower"/>
+    <origin xyz="0.5 0 0"/><axis xyz="0 1 0"/></joint>
+  <joint name="tip" type="fixed"><parent link="lower"/><child link="tip"/><origin xyz="0.4 0 0"/></joint>
+</robot>
+"""
+# The same double pendulum written as a scene: the pivot's rpy turns the root's y (its joint axis) onto X3 and its x
+# onto X1; the model's link frames are (x, y, z) = (URDF x, -URDF z, URDF y), so each centre of mass (c_x, c_y, c_z)
+# becomes (c_x, -c_z, c_y) and the inertias are turned alike; theta_1 = 0 points link 1 along +X2 (the chart of an
+# axis along X3), where the URDF angle 0 points it along +X1: theta_1 = URDF angle - pi/2.
+PENDULUM_SCENE = {
+    "name": "pendulum_scene",
+    "base": {"kind": "pinned", "joint": "revolute", "point": [1.0, 1.5, 0.0], "axis": [0.0, 0.0, 1.0]},
+    "links": [{"length": 0.5, "mass": 1.5, "com": [0.25, -0.01, 0.02],
+               "inertia": [[0.002, 0.0, 0.001], [0.0, 0.031, -0.0002], [0.001, -0.0002, 0.03]]},
+              {"length": 0.4, "mass": 0.8, "com": [0.2, 0.01, 0.0],
+               "inertia": [[0.001, -0.0003, 0.0], [-0.0003, 0.0125, 0.0], [0.0, 0.0, 0.012]]}],
+    "initial": {"q": [0.3, -0.2]},
+}
+
+
+def pendulum(mount="continuous", limit=""):
+    return PENDULUM.replace("MOUNT", mount).replace("LIMIT", limit)
+
+
+@pytest.fixture(scope="module")
+def pendulums(tmp_path_factory):
+    """The URDF pendulum on a continuous world joint (read from a scene file) and the same chain written as a scene
+    with a pinned revolute base, their models built once."""
+    folder = tmp_path_factory.mktemp("pendulum")
+    (folder / "pendulum.urdf").write_text(pendulum())
+    (folder / "pendulum.toml").write_text('name = "pendulum_urdf"\nurdf = "pendulum.urdf"\n[initial]\nq = [0.3, -0.2]\n')
+    from_urdf = load_scene(folder / "pendulum.toml")
+    written = scene_from_dict(PENDULUM_SCENE)
+    return from_urdf, written, quick_model(from_urdf), quick_model(written)
+
+
+def test_root_on_a_revolute_world_joint_is_a_pinned_revolute_base(pendulums):
+    from_urdf, written, *_ = pendulums
+    assert from_urdf.base == written.base
+    assert from_urdf.base.kind == "pinned" and from_urdf.base.joint == "revolute"
+    for a, b in zip(from_urdf.links, written.links):
+        assert a.length == pytest.approx(b.length, abs=1e-15) and a.mass == b.mass
+        assert np.abs(np.array(a.com) - np.array(b.com)).max() < 1e-15
+        assert np.abs(np.array(a.inertia) - np.array(b.inertia)).max() < 1e-15
+    assert np.abs(np.array(from_urdf.twists) - np.array(written.twists)).max() < 1e-15
+    # revolute with the limits URDF requires but no stops (lower = upper) reads the same; a type revolute with stops,
+    # or a damper on the pivot, is refused by name
+    assert urdf_chain(pendulum("revolute", '<limit effort="1" velocity="1"/>'))[1] == urdf_chain(pendulum())[1]
+    with pytest.raises(SceneError, match=r"urdf joint 'pivot' <limit>: lower = -1.0, upper = 1.0 rad are stops of "
+                                         r"the joint that holds the root to the world"):
+        urdf_chain(pendulum("revolute", '<limit lower="-1" upper="1" effort="1" velocity="1"/>'))
+    with pytest.raises(SceneError, match=r"urdf joint 'pivot' <dynamics damping>: the model's pinned base has no "
+                                         r"damping"):
+        urdf_chain(pendulum("continuous", '<dynamics damping="0.1"/>'))
+
+
+def test_pinned_urdf_pendulum_has_the_written_scenes_dynamics(pendulums):
+    """Mass matrix and forward dynamics of the two models agree to 1e-12 at random states."""
+    *_, a, b = pendulums
+    assert a.nq == b.nq == 2
+    rng = np.random.default_rng(29)
+    for _ in range(20):
+        q, qd = rng.uniform(-math.pi, math.pi, 2), rng.uniform(-3.0, 3.0, 2)
+        assert np.abs(a.mass_matrix(q) - b.mass_matrix(q)).max() < 1e-12
+        assert np.abs(a.forward_dynamics(q, qd) - b.forward_dynamics(q, qd)).max() < 1e-12
+
+
+def test_pinned_urdf_pendulum_points_are_the_urdfs(pendulums):
+    """The model's points at theta_1 = URDF angle + urdf_mount_offset are the URDF's (urdf_fk of the chain below the
+    pivot, turned by the pivot's angle and carried by its origin), also on a pivot whose axis the root reaches off its
+    origin (O_1 slides along the axis to where link 1 reaches joint 2 normal to it)."""
+    from codegen.scene import urdf_mount_offset
+    from_urdf = pendulums[0]
+    assert urdf_mount_offset(pendulum()) == pytest.approx(-math.pi / 2, abs=1e-15)
+    shifted = pendulum().replace('<origin xyz="0.5 0 0"/>', '<origin xyz="0.5 0.07 0"/>')
+    offset_scene = scene_from_dict({"name": "shifted", "links": urdf_chain(shifted)[0], "base": urdf_chain(shifted)[1],
+                                    "initial": {"q": [0.0, 0.0]}})
+    assert offset_scene.base.point == pytest.approx((1.0, 1.5, 0.07), abs=1e-15)
+    E = rpy_matrix(math.pi / 2, 0.0, 0.0)
+    rng = np.random.default_rng(7)
+    for scene, text in ((from_urdf, pendulum()), (offset_scene, shifted)):
+        offset = urdf_mount_offset(text)
+        free_text = "\n".join(line for line in text.splitlines() if "world" not in line and "pivot" not in line
+                              and "1.5707963267948966" not in line)
+        for _ in range(5):
+            phi, elbow = rng.uniform(-math.pi, math.pi, 2)
+            q = np.array(scene.q0)
+            q[2], q[3] = phi + offset, elbow
+            links, tip = urdf_fk(free_text, [elbow])
+            turn = E @ rodrigues([0.0, 1.0, 0.0], phi)
+            expected = np.array([[1.0, 1.5, 0.0] + turn @ p for p, *_ in links[1:]] + [[1.0, 1.5, 0.0] + turn @ tip])
+            points = contact_points(scene, q)
+            assert np.abs(points[1:] - expected).max() < 1e-13
+            assert np.abs(points[0][:2] - [1.0, 1.5]).max() < 1e-15          # O_1 on the pivot's axis (along X3)
+
+
+def test_pinned_revolute_base_round_trip(tmp_path):
+    """The written pendulum scene as URDF (a continuous joint from a world link, about link1's z) and read back: the
+    same base, links and twists, and the URDF angle is theta_1 (offset 0)."""
+    from codegen.scene import urdf_mount_offset
+    scene = scene_from_dict(PENDULUM_SCENE)
+    text, notes = scene_to_urdf(scene)
+    assert '<joint name="mount" type="continuous">' in text and not any("base" in note for note in notes)
+    (tmp_path / "back.urdf").write_text(text)
+    (tmp_path / "back.toml").write_text('name = "back"\nurdf = "back.urdf"\n[initial]\nq = [0.3, -0.2]\n')
+    back = load_scene(tmp_path / "back.toml")
+    assert back.base == scene.base and urdf_mount_offset(text) == 0.0
+    for a, b in zip(back.links, scene.links):
+        assert a.length == pytest.approx(b.length, abs=1e-15) and a.mass == pytest.approx(b.mass, rel=1e-15)
+        assert np.abs(np.array(a.com) - np.array(b.com)).max() < 1e-15
+        assert np.abs(np.array(a.inertia) - np.array(b.inertia)).max() < 1e-15
+    assert np.abs(np.array(back.twists) - np.array(scene.twists)).max() < 1e-15
+    assert np.abs(contact_points(back, np.array(back.q0)) - contact_points(scene, np.array(scene.q0))).max() < 1e-15
+
+
+def test_pinned_urdf_alone_starts_at_its_zero_pose(tmp_path):
+    """A URDF file alone with a revolute world joint: the pinned base, at rest at the URDF's zero angles (theta_1 =
+    urdf_mount_offset), in the default box around O_1."""
+    from codegen.scene import urdf_mount_offset
+    (tmp_path / "pendulum.urdf").write_text(pendulum())
+    scene = load_scene(tmp_path / "pendulum.urdf")
+    assert scene.base == scene_from_dict(PENDULUM_SCENE).base
+    assert scene.q0[2:4] == (urdf_mount_offset(pendulum()), 0.0) and not any(scene.qd0)
+    assert contact_points(scene, np.array(scene.q0))[-1] == pytest.approx([1.9, 1.5, 0.0], abs=1e-15)

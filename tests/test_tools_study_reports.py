@@ -67,3 +67,13 @@ def test_charts_study_one_chart_row_runs_one_chart():
     one, switching = table(text, "method")
     assert one["run"] == "one chart" and switching["run"].startswith("charts")
     assert float(one["reaches t (s)"]) < 0.25 and float(switching["reaches t (s)"]) == 0.5
+
+
+@pytest.mark.slow          # builds and times two models in a study's process
+def test_links_study_times_a_scene_with_and_without_its_link_pairs():
+    text = study("links", "--scenes", "capsule-chain", "--links", "0", "--t-end", "1", "--repeats", "2", "--runs", "1")
+    assert text.startswith("Machine: ")
+    (row,) = table(text, "scene")
+    assert row["scene"] == "capsule-chain" and row["link pairs"] == "1" and row["same run"] == "yes"
+    check_ratio(row["with / without (time)"])
+    assert row["rhs ratio"] == "1.000"

@@ -612,8 +612,13 @@ def impact_warnings(impacts: list[Impact], model: CompiledModel | None = None, p
     layout = model.layout
     return [f"impact at t = {i.t:.9g} s: its energy is accurate only to {i.roundoff:.2g} (relative): "
             + accuracy_cause(model, p, layout.reduce(i.q), layout.reduce(i.qd_before),
-                             [_contact_index(model, c) for c in i.contacts], i.law, i.residual)
+                             impact_contact_indices(model, i), i.law, i.residual)
             for i in flagged]
+
+
+def impact_contact_indices(model: CompiledModel, impact: Impact) -> list[int | None]:
+    """The model's indices of an impact's contacts (None for one not found), as accuracy_cause takes them."""
+    return [_contact_index(model, c) for c in impact.contacts]
 
 
 def _contact_index(model: CompiledModel, contact: Contact) -> int | None:

@@ -201,6 +201,7 @@ class Outcome:
     message: str = ""
     roundoff: float = 0.0     # the largest relative accuracy an impact of the run states (record.roundoff), or 0
     inaccurate: bool = False  # the run stopped with an impact whose accuracy is useless (GAC_ERR_IMPACT_ACCURACY)
+    cause: str = ""           # for a run whose least accurate impact is above 1e-10: why (runtime accuracy_cause)
 
 
 def classify(message: str) -> str:
@@ -249,7 +250,7 @@ def run_structure(args) -> list[Outcome]:
     """Compile one structure and run its runs (one worker's job)."""
     seed, index, runs, budget, n_max = args
     from runtime.model import load_model
-    from runtime.simulate import simulate
+    from runtime.simulate import accuracy_cause, impact_contact_indices, simulate
     rng = np.random.default_rng([seed, index])
     scene = random_structure(rng, index, n_max)
     planar = not any(wall.name.startswith("x3") for wall in scene.walls)   # a planar structure has no X3 walls
@@ -281,8 +282,14 @@ def run_structure(args) -> list[Outcome]:
         failed = bool(violations) or any(pattern in result.message for pattern in FAILURE_PATTERNS)
         roundoff = max([i.roundoff for i in result.impacts], default=0.0)
         inaccurate = "could not be solved to round-off" in result.message   # GAC_ERR_IMPACT_ACCURACY
+        cause = ""
+        if roundoff > 1e-10:                           # the least accurate impact's cause, as the warnings name it
+            worst = max(result.impacts, key=lambda i: i.roundoff)
+            cause = accuracy_cause(model, run.p, model.layout.reduce(worst.q), model.layout.reduce(worst.qd_before),
+                                   impact_contact_indices(model, worst), worst.law, worst.residual)
         outcomes.append(Outcome(case, scene.n, planar, run.options["method"], result.status, text, failed,
-                                violations, len(result.impacts), seconds, result.message, roundoff, inaccurate))
+                                violations, len(result.impacts), seconds, result.message, roundoff, inaccurate,
+                                cause))
     return outcomes
 
 
@@ -323,8 +330,9 @@ def accuracy_summary(outcomes: list[Outcome]) -> str:
     worse_10 = sum(o.roundoff > 1e-10 or o.inaccurate for o in outcomes)
     worse_6 = sum(o.roundoff > 1e-6 or o.inaccurate for o in outcomes)
     stopped = sum(o.inaccurate for o in outcomes)
+    flagged = [f"- {o.case}: {o.roundoff:.2g}, {o.cause}" for o in outcomes if o.roundoff > 1e-10 and o.cause]
     return (f"impact accuracy: {worse_10} of {n} runs state an impact less accurate than 1e-10, {worse_6} than 1e-6; "
-            f"{stopped} stop with an impact of useless accuracy")
+            f"{stopped} stop with an impact of useless accuracy" + "".join("\n" + line for line in flagged))
 
 
 # ---------------------------------------------------------------------------

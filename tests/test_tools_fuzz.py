@@ -174,3 +174,14 @@ def test_a_structure_runs_through_the_study_path():
     outcomes = fuzz.run_structure((11, 4, 2, 30.0, 1))          # a one-link structure: quick to build
     assert len(outcomes) == 2 and not any(o.outcome.startswith("exception") for o in outcomes)
     assert all(isinstance(o.planar, bool) for o in outcomes)
+
+
+def test_the_accuracy_summary_names_each_flagged_runs_cause():
+    """A run whose least accurate impact is above 1e-10 is listed with its accuracy and cause; the others are not."""
+    def outcome(case, roundoff, cause=""):
+        return fuzz.Outcome(case, 3, False, "dopri5", 0, "ok", False, roundoff=roundoff, cause=cause)
+    text = fuzz.accuracy_summary([outcome("0-1/0", 0.0), outcome("0-2/1", 2.2e-10, "the base chart is near its "
+                                  "singular pose"), outcome("0-3/0", 9e-11)])
+    lines = text.splitlines()
+    assert lines[0].startswith("impact accuracy: 1 of 3 runs state an impact less accurate than 1e-10, 0 than 1e-6")
+    assert lines[1:] == ["- 0-2/1: 2.2e-10, the base chart is near its singular pose"]

@@ -1,8 +1,9 @@
 """Forward sensitivities through a switch of base chart (gac_sens_switch, gac_chart_convert_tangent): the derivative
 of the switch map x_B = phi(x_A) against its finite differences, both ways; the saltation term of the switch
 (f_B(phi(x)) - (d phi / dx) f_A(x)) dt* is 0; and the final state's sensitivities of runs of the gimbal-lock scene
-that cross chart A's lock (onto chart B and back, ending on chart B, with an impact on chart B, starting on chart B)
-against central differences, the samples' too.  Other events: tests/test_sim_sensitivities.py."""
+that cross chart A's lock (onto chart B and back, ending on chart B, with an impact on chart B, starting on chart B;
+DOP853, DOPRI5 and RK4) against central differences, the samples' too.  The C unit test (tests/c) checks the
+derivative of the conversion at random states too.  Other events: tests/test_sim_sensitivities.py."""
 from __future__ import annotations
 
 import numpy as np
@@ -141,6 +142,19 @@ def test_sensitivities_through_the_switch_match_central_differences(model, scene
         assert mu[0] > 0.35 and mu[(t > 0.2) & (t < first)].max() < 0.7 and len(r.impacts) == 2
     central_differences(model, t_end, p, q0, qd0, DIRECTIONS, r.sensitivities.matrix, step=1e-5, charts=charts,
                         **TIGHT)
+
+
+@pytest.mark.parametrize("options", [dict(method="rk4", dt=1e-3), dict(method="dopri5", rtol=1e-11, atol=1e-13)],
+                         ids=["rk4", "dopri5"])
+def test_every_integrator_carries_them_through_the_switch(model, scene, options):
+    """RK4 (whose switch is made at a step's start) and DOPRI5, onto chart B and back: against central differences
+    of the same method's runs."""
+    directions = ["q0[theta_0]", "qd0[theta_-1]", "g"]
+    p = model.parameters()
+    r = simulate(model, 0.69, p=p, sensitivities=directions, **options)
+    assert r.success and r.n_chart_switches == 2 and r.sensitivities.valid, r.message
+    central_differences(model, 0.69, p, np.array(scene.q0), np.array(scene.qd0), directions, r.sensitivities.matrix,
+                        step=1e-5, **options)
 
 
 def test_the_samples_sensitivities_are_in_chart_a_coordinates(model, scene):

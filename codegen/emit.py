@@ -330,7 +330,8 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], o
         tangent=any(name in generated for name in interface.TANGENT_KERNELS),
         extended=any(name in generated for name in interface.EXTENDED_KERNELS),
         chart_b=None if chart_b is None else dict(
-            functions=chart_b[1], fused=any(f.name in interface.FUSED_KERNELS for f in chart_b[1]), base=_base_context(chart_b[0], layout),
+            functions=chart_b[1], fused=any(f.name in interface.FUSED_KERNELS for f in chart_b[1]),
+            tangent=any(f.name in interface.TANGENT_KERNELS for f in chart_b[1]), base=_base_context(chart_b[0], layout),
             rows=[[_double_literal(float(x)) for x in row] for row in chart_b[0].base_twists[0]],
             q0=[_double_literal(float(x)) for x in layout.reduce(chart_b[0].q0)],
             qd0=[_double_literal(float(x)) for x in layout.reduce(chart_b[0].qd0)]),

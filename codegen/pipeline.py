@@ -43,12 +43,12 @@ def generate(scene: Scene, options: BuildOptions | None = None, *, name: str | N
     if scene_b is None:
         return model
     # chart B: the same chain with T_-1 turned a right angle (codegen.charts), its loop kernels only (no dense
-    # ones), in the same NAME.c as NAME_b_* and the descriptor NAME_model_b (the impact's accuracy is measured on
-    # chart A: no long-double kernels)
+    # ones) and their tangents where chart A has them (the sensitivities go on through a switch), in the same NAME.c
+    # as NAME_b_* and the descriptor NAME_model_b (the impact's accuracy is measured on chart A: no long-double
+    # kernels)
     start = time.perf_counter()
     progress("chart B")
-    model_b = _generate(scene_b, f"{name}_b", replace(options, dense=False, tangent=False, extended=False), progress,
-                        workers,
+    model_b = _generate(scene_b, f"{name}_b", replace(options, dense=False, extended=False), progress, workers,
                         model.layout)
     return assemble_model(scene, name, model.functions, options, model.layout, chart_b=(scene_b, model_b.functions),
                           timings=dict(model.timings, chart_b=time.perf_counter() - start))

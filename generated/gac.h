@@ -327,7 +327,7 @@ struct gac_model {
                                           after the other), the primal part computed once; NULL: none (the
                                           sensitivities then call forward_dynamics_tangent per direction) */
     /* the tangents of four more kernels, for the sensitivities of impacts and resting contacts (gac_sens_attach);
-       NULL: none (a rolled forward dynamics, tangent=False, chart B) */
+       NULL: none (a rolled forward dynamics, tangent=False) */
     gac_kernel_qv_tangent inertia_solve_tangent;   /* q, Q, p, dq, dQ, dp -> d(I_f^-1 Q) (nq) */
     gac_kernel_qv_tangent contact_generalized_force_tangent; /* q, f, p, dq, df (njrow), dp -> d(J^T f) (nq) */
     gac_kernel_q_tangent contact_gaps_tangent;     /* q, p, dq, dp -> d gap (ncontact) */
@@ -569,6 +569,15 @@ void gac_base_rates(const gac_base *c, const double *angles, const double *omega
  * at the same indices.  x and out may be the same array.  GAC_OK or GAC_ERR_BAD_MODEL. */
 int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const double *x, const double *near,
                       double *out);
+/* The derivative of that conversion, applied to k directions S (k x 2 nq, direction-major, in place: dx on `from`
+ * in, dy on `to` out), at x (on `from`) and y (its conversion).  The base angles and rates (a on `from`, b on `to`):
+ *     E_b(b) db = E_a(a) da                                   (the same angular displacement: R kept)
+ *     E_b db' = dE_a[da] a' + E_a da' - dE_b[db] b'           (E_b b' = E_a a' = omega, differentiated)
+ * dE v = v[1] du_0 + v[2] du_1 as the axes turn about those before them, du_0 = (u_-1 dtheta_-1) x u_0,
+ * du_1 = (u_-1 dtheta_-1 + u_0 dtheta_0) x u_1 (u_-1 fixed); every other component copied.  GAC_OK, GAC_ERR_BAD_MODEL (the angles' indices, as
+ * gac_chart_convert) or GAC_ERR_GIMBAL_LOCK (y at `to`'s lock: |det E_b| below GAC_CHART_LOCK). */
+int gac_chart_convert_tangent(const gac_base *from, const gac_base *to, int nq, const double *x, const double *y,
+                              int k, double *S);
 
 /* ---- the hybrid simulation -------------------------------------------------------------------- */
 /*
@@ -981,9 +990,11 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * Resting contacts (frictionless walls): in flight the constrained dynamics' tangent (the forces' by
  * contact_bias_tangent) and the derivative of the projection after each step; a landing's jump uses the field with
  * the set after held and the hold's projection; a release (its force lambda_c reaching 0) dt*_j = -d lambda_c /
- * lambda_c', S+ = S- + (f- - f+) dt*; contacts at rest at the start: their projection.  Events this does not
- * differentiate end the sensitivities (status below): S and dt_impact are then NaN from that event on, the run itself
- * continues.  The status codes: */
+ * lambda_c', S+ = S- + (f- - f+) dt*; contacts at rest at the start: their projection.  A switch of base chart
+ * (x_B = phi(x_A), either way): S_B = (d phi / dx_A) S_A (gac_chart_convert_tangent), with no saltation term, as
+ * the two charts' fields are phi-related; S is carried in the coordinates of the chart integrated now and reported
+ * in chart A's (gac_sens_state, the samples).  Events this does not differentiate end the sensitivities (status
+ * below): S and dt_impact are then NaN from that event on, the run itself continues.  The status codes: */
 #define GAC_SENS_VALID         0   /* every event so far differentiated */
 #define GAC_SENS_RESTING       1   /* a contact rests on a wall with friction (or is stuck): friction at rest is not
                                       differentiated (frictionless resting contact is) */
@@ -996,7 +1007,8 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
 #define GAC_SENS_GRAZING       5   /* a contact met its wall with normal velocity ~ 0 (|w . qd-| below 1e-9 of the
                                       chain's speed scale), or touched it without an impact: t* not differentiable */
 #define GAC_SENS_TANGENTIAL    6   /* a tangential impact (record.law GAC_IMPACT_LAW_GDI_TANGENTIAL) */
-#define GAC_SENS_CHART         7   /* the loop switched to (or ran on) the second base chart */
+#define GAC_SENS_CHART         7   /* the loop switched to (or started on) a base chart without tangent kernels
+                                      (a model built before chart B had them), or at that chart's own lock */
 #define GAC_SENS_CONTROLLER    8   /* a controller gives the inputs (they may depend on the state; du = 0 is assumed
                                       only for held inputs and schedules) */
 #define GAC_SENS_NONFINITE     9   /* the sensitivities overflowed (not finite) */
@@ -1008,10 +1020,12 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
 
 /* The sensitivities of one run: pointers into the caller's dwork (gac_sens_ndouble(m, k) doubles), laid out as
  * S (k nx) | dp (k nparam) | dt_impact (k) | dgap_held (k max(ncontact, 1)) | scratch | S_keep (k nx).  Direction-major: S[j*nx + i] = d x_i / d direction j
- * (chart A's coordinates, x = [q, qd] at sim.t), dp[j*nparam + i] the parameter seed of direction j. */
+ * (x = [q, qd] at sim.t in the coordinates of the chart integrated now, sim.chart: gac_sens_state gives chart A's),
+ * dp[j*nparam + i] the parameter seed of direction j. */
 typedef struct gac_sens_s {
     int k;                       /* directions */
-    double *S;                   /* k x nx: the sensitivities at sim.t (NaN once status is not GAC_SENS_VALID) */
+    double *S;                   /* k x nx: the sensitivities at sim.t, on the chart integrated now (NaN once
+                                    status is not GAC_SENS_VALID) */
     double *dp;                  /* k x nparam: the parameter seeds (constant) */
     double *dt_impact;           /* k: d t* / d direction j of the last event differentiated: an impact (a landing
                                     among them), or a release (s per unit) */
@@ -1024,8 +1038,10 @@ typedef struct gac_sens_s {
     double *S_keep;              /* scratch: S kept while a sample's is formed (k x nx) */
     double *S_eval;              /* NULL (default), or the caller's n_eval x k x nx: S at each sample the loop writes
                                     to x_eval (the same index), formed by the run's Runge-Kutta formula from the
-                                    step's start to the sample (one step of the directions' stages per sample);
-                                    NaN from the first event not differentiated on.  Set after gac_sens_attach. */
+                                    step's start to the sample (one step of the directions' stages per sample),
+                                    in chart A's coordinates like the samples; NaN from the first event not
+                                    differentiated on (and at a sample at chart A's lock).  Set after
+                                    gac_sens_attach. */
 } gac_sens;
 
 /* Doubles of a gac_sens's dwork: S, dp, dt_impact, the held gaps' derivatives, 12 stage derivatives of the state
@@ -1040,6 +1056,11 @@ long gac_sens_ndouble(const gac_model *m, int k);
  * GAC_ERR_BAD_OPTION (k < 1, a seed not finite) or GAC_ERR_BAD_MODEL (the model has no tangent kernels: rolled
  * forward dynamics, or built with tangent=False). */
 int gac_sens_attach(gac_sim *sim, gac_sens *sens, int k, const double *seed_x, const double *seed_p, double *dwork);
+
+/* S (k x nx) at sim.t in chart A's coordinates, whichever chart is integrated (as gac_sim_state gives the state):
+ * sens.S itself, or on chart B its conversion (gac_chart_convert_tangent; NaN at chart A's lock).  GAC_OK or
+ * GAC_ERR_NULL_ARGUMENT (sim, S NULL, or no sensitivities attached). */
+int gac_sens_state(const gac_sim *sim, double *S);
 
 #ifdef __cplusplus
 }

@@ -201,3 +201,68 @@ int gac_chart_convert(const gac_base *from, const gac_base *to, int nq, const do
     }
     return GAC_OK;
 }
+
+/* c = a x b. */
+static void cross3(const double *a, const double *b, double *c)
+{
+    c[0] = a[1] * b[2] - a[2] * b[1];
+    c[1] = a[2] * b[0] - a[0] * b[2];
+    c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* dE v, the derivative of E(angles) along dangles applied to v: each axis turns about the axes before it,
+ * du_-1 = 0, du_0 = (u_-1 da) x u_0, du_1 = (u_-1 da + u_0 db) x u_1 (da, db = dangles[0], [1]), so
+ *     dE v = v[1] (u_-1 da) x u_0 + v[2] (u_-1 da + u_0 db) x u_1. */
+static void axes_tangent(const double *E, const double *dangles, const double *v, double *out)
+{
+    const double u_m1[3] = {E[0], E[3], E[6]}, u_0[3] = {E[1], E[4], E[7]}, u_1[3] = {E[2], E[5], E[8]};
+    double turn[3], a[3], b[3];
+    int i;
+    for (i = 0; i < 3; ++i) turn[i] = u_m1[i] * dangles[0];
+    cross3(turn, u_0, a);
+    for (i = 0; i < 3; ++i) turn[i] += u_0[i] * dangles[1];
+    cross3(turn, u_1, b);
+    for (i = 0; i < 3; ++i) out[i] = v[1] * a[i] + v[2] * b[i];
+}
+
+int gac_chart_convert_tangent(const gac_base *from, const gac_base *to, int nq, const double *x, const double *y,
+                              int k, double *S)
+{
+    double th_a[3], thd_a[3], th_b[3], thd_b[3], E_a[9], E_b[9];
+    int i, j;
+    for (i = 0; i < 3; ++i) {
+        if (from->index[i] < 0 || from->index[i] >= nq || to->index[i] != from->index[i]) return GAC_ERR_BAD_MODEL;
+        th_a[i] = x[from->index[i]];
+        thd_a[i] = x[nq + from->index[i]];
+        th_b[i] = y[to->index[i]];
+        thd_b[i] = y[nq + to->index[i]];
+    }
+    gac_base_axes(from, th_a, E_a);
+    gac_base_axes(to, th_b, E_b);
+    {
+        const double c0[3] = {E_b[0], E_b[3], E_b[6]}, c1[3] = {E_b[1], E_b[4], E_b[7]}, c2[3] = {E_b[2], E_b[5], E_b[8]};
+        if (!(fabs(det3(c0, c1, c2)) > GAC_CHART_LOCK)) return GAC_ERR_GIMBAL_LOCK;
+    }
+    for (j = 0; j < k; ++j) {
+        double *dx = S + (long)j * 2 * nq, dth[3], dthd[3], w[3], dE_a[3], dE_b[3], dth_b[3], dthd_b[3];
+        for (i = 0; i < 3; ++i) {
+            dth[i] = dx[from->index[i]];
+            dthd[i] = dx[nq + from->index[i]];
+        }
+        /* the same angular displacement on both charts: E_b dth_b = E_a dth */
+        for (i = 0; i < 3; ++i) w[i] = E_a[3 * i] * dth[0] + E_a[3 * i + 1] * dth[1] + E_a[3 * i + 2] * dth[2];
+        solve3(E_b, w, dth_b);
+        /* the same omega, E_b thd_b = E_a thd_a, differentiated:
+         * E_b dthd_b = dE_a[dth] thd_a + E_a dthd - dE_b[dth_b] thd_b */
+        axes_tangent(E_a, dth, thd_a, dE_a);
+        axes_tangent(E_b, dth_b, thd_b, dE_b);
+        for (i = 0; i < 3; ++i)
+            w[i] = dE_a[i] + E_a[3 * i] * dthd[0] + E_a[3 * i + 1] * dthd[1] + E_a[3 * i + 2] * dthd[2] - dE_b[i];
+        solve3(E_b, w, dthd_b);
+        for (i = 0; i < 3; ++i) {
+            dx[to->index[i]] = dth_b[i];
+            dx[nq + to->index[i]] = dthd_b[i];
+        }
+    }
+    return GAC_OK;
+}

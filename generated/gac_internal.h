@@ -74,6 +74,10 @@ void gac_sens_stop(gac_sim *s, int status, double t, int contact);    /* an even
 void gac_sens_project(gac_sim *s, const double *x_pre, const double *x_post); /* a step's projection onto the rest */
 void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event);  /* the release of a resting contact */
 void gac_sens_fixed_release(gac_sim *s);   /* resting contacts released where the inputs change: dt = 0, S goes on */
+/* a switch of base chart: x on `from` became y on `to`, S carried through the conversion's derivative */
+void gac_sens_switch(gac_sim *s, const gac_model *from, const gac_model *to, const double *x, const double *y);
+/* S at x (the chart integrated now) into chart A's coordinates at xa (x converted), in place */
+void gac_sens_to_chart_a(const gac_sim *s, const double *x, const double *xa, double *S);
 
 /* gac_events.c: event location and the loop's tolerances */
 double gac_v_round(const gac_model *md, const double *vn);

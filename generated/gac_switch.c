@@ -58,8 +58,9 @@ int gac_step_near_lock(const gac_sim *s)
 int gac_switch_chart(gac_sim *s)
 {
     const gac_model *from = s->model, *to = s->chart == 0 ? s->model_a->chart_b : s->model_a;
+    double x_from[from->nx];
     int i, code;
-    gac_sens_stop(s, GAC_SENS_CHART, s->t, -1);       /* the sensitivities are carried on chart A only */
+    gac_copy(x_from, s->x, from->nx);
     if (s->chart == 0) {
         for (i = 0; i < 3; ++i) s->near_a[i] = s->x[from->base.index[i]];
     }
@@ -68,6 +69,7 @@ int gac_switch_chart(gac_sim *s)
     if (s->chart == 1) {
         for (i = 0; i < 3; ++i) s->near_a[i] = s->x[to->base.index[i]];
     }
+    gac_sens_switch(s, from, to, x_from, s->x);         /* S carried through the conversion */
     s->chart = 1 - s->chart;
     s->model = to;
     s->n_chart_switches++;

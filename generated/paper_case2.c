@@ -1962,7 +1962,7 @@ static const gac_model paper_case2_model_b = {
     .contact_generalized_force = paper_case2_b_contact_generalized_force, .contact_gaps = paper_case2_b_contact_gaps,
     .contact_bias = paper_case2_b_contact_bias, .energy = paper_case2_b_energy, .rhs = paper_case2_b_rhs,
     .forward_dynamics_energy = paper_case2_b_forward_dynamics_energy,
-    .forward_dynamics_tangent = 0,   /* linearisation is on chart A */
+    .forward_dynamics_tangent = 0,   /* no tangents: the sensitivities stop at a switch */
     .power = 0,
     .check_parameters = paper_case2_check_parameters, .parameter_info = paper_case2_parameter_info,
     .weight_scale = paper_case2_weight_scale,
@@ -1970,7 +1970,9 @@ static const gac_model paper_case2_model_b = {
               .T_1 = { 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0 }, .index = { 0, 1, 2 } },
     .chart_b = 0,
     .forward_dynamics_tangent_block = 0,
-    .inertia_solve_tangent = 0, .contact_generalized_force_tangent = 0, .contact_gaps_tangent = 0,
+    .inertia_solve_tangent = 0,
+    .contact_generalized_force_tangent = 0,
+    .contact_gaps_tangent = 0,
     .contact_bias_tangent = 0,
     .generalized_momentum_ld = 0, .contact_generalized_force_ld = 0, .energy_ld = 0   /* accuracy: on chart A */
 };

@@ -26,7 +26,7 @@ STATUS_WORDS = {
     4: "an impact of several rounds (or with dependent contact rows)",
     5: "a grazing contact (normal velocity ~ 0 at the wall)",
     6: "a tangential impact (Painleve)",
-    7: "a switch to the second base chart",
+    7: "a switch to a base chart without tangent kernels (or at its own lock)",
     8: "inputs from a controller (they may depend on the state)",
     9: "the sensitivities overflowed",
     10: "a mode boundary (a contact's impulse ~0 at the law's bound inside an impact, or resting contacts "
@@ -121,11 +121,14 @@ def contact_label(model, contact: int) -> str:
     return wall.name if wall.name.startswith(("theta_", "L")) else f"O{point}/{wall.name}"
 
 
-def read(model, sens, names: list[str], run_ok: bool, run_message: str, samples=None) -> Sensitivities:
-    """The final Sensitivities from the C struct ``sens`` (gac_sens) after a run; ``samples`` (n x k x nx, the C
-    loop's S at each sample) as at_samples (n x nx x k)."""
+def read(model, sim, sens, names: list[str], run_ok: bool, run_message: str, samples=None) -> Sensitivities:
+    """The final Sensitivities from the C struct ``sens`` (gac_sens) of the simulation ``sim`` after a run, in chart
+    A's coordinates (gac_sens_state, whichever base chart the run ended on); ``samples`` (n x k x nx, the C loop's S
+    at each sample) as at_samples (n x nx x k)."""
     nx, k = 2 * model.nq, len(names)
-    matrix = np.array(model.ffi.unpack(sens.S, k * nx)).reshape(k, nx).T.copy()
+    final = np.zeros((k, nx))
+    model.lib.gac_sens_state(model.ffi.addressof(sim, "base"), model._ptr(final))
+    matrix = final.T.copy()
     code = int(sens.status)
     result = Sensitivities(state_names(model), list(names), matrix, n_impacts=int(sens.n_impacts), code=code,
                            at_samples=None if samples is None else np.transpose(samples, (0, 2, 1)).copy())

@@ -503,8 +503,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     while i_eval[0] < len(t_eval) and t_eval[i_eval[0]] <= 0.0:      # samples at the start (as sim_init left it)
         row = x_eval[i_eval[0]]          # in chart A's coordinates, whichever base chart the loop starts on
         c.sim_state(sim, ffi.NULL, model._ptr(row[:nq]), model._ptr(row[nq:]))
-        if s_eval is not None:
-            s_eval[i_eval[0]] = np.array(ffi.unpack(sens.S, len(directions) * nx)).reshape(len(directions), nx)
+        if s_eval is not None:                                       # (chart A's too)
+            lib.gac_sens_state(ffi.addressof(sim, "base"), model._ptr(s_eval[i_eval[0]]))
         i_eval[0] += 1
     record = c.new("impact_record")
     rec = record.base         # the library's record (gac_impact_record); its arrays live in *record
@@ -569,7 +569,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                  "chart_switch": float(opt.chart_switch)},
         n_chart_switches=int(state.n_chart_switches), n_sticks=int(state.n_sticks), n_slips=int(state.n_slips),
         n_tangential_impacts=int(state.n_tangential_impacts),
-        sensitivities=None if sens is None else sensitivity.read(model, sens, directions, status == 0, message,
+        sensitivities=None if sens is None else sensitivity.read(model, sim, sens, directions, status == 0, message,
                                                                  None if s_eval is None else s_eval[:n]))
 
 

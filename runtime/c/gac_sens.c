@@ -5,8 +5,9 @@
  * the resting contacts after each step (gac_sens_project), the jump of the sensitivities at an impact by the
  * frictionless law -- of one contact or several, walls or joint stops, landings among them, the set of pushing
  * contacts held fixed -- the saltation matrix of Hiskens & Pai (2000) (gac_sens_impact), the release of a resting
- * contact (gac_sens_release), contacts at rest at the start (gac_sens_attach), and the verdict: the first event not
- * differentiated ends them (gac_sens_stop).
+ * contact (gac_sens_release), contacts at rest at the start (gac_sens_attach), a switch of base chart
+ * (gac_sens_switch; S is in the coordinates of the chart integrated now, gac_sens_state gives chart A's), and the
+ * verdict: the first event not differentiated ends them (gac_sens_stop).
  */
 #include "gac_internal.h"
 
@@ -22,6 +23,14 @@ long gac_sens_ndouble(const gac_model *m, int k)
 
 static void gac_sens_start_rest(gac_sim *s);
 
+/* 1 if the model has the tangent kernels the sensitivities call. */
+static int gac_sens_has_tangents(const gac_model *md)
+{
+    return md->forward_dynamics_tangent != 0 && md->inertia_solve_tangent != 0
+           && md->contact_generalized_force_tangent != 0 && md->contact_gaps_tangent != 0
+           && md->contact_bias_tangent != 0;
+}
+
 int gac_sens_attach(gac_sim *s, gac_sens *sens, int k, const double *seed_x, const double *seed_p, double *dwork)
 {
     const gac_model *md;
@@ -34,10 +43,7 @@ int gac_sens_attach(gac_sim *s, gac_sens *sens, int k, const double *seed_x, con
     if (seed_x == 0 || dwork == 0) return GAC_ERR_NULL_ARGUMENT;
     md = s->model_a;
     if (k < 1) return GAC_ERR_BAD_OPTION;
-    if (md->forward_dynamics_tangent == 0 || md->inertia_solve_tangent == 0
-        || md->contact_generalized_force_tangent == 0 || md->contact_gaps_tangent == 0
-        || md->contact_bias_tangent == 0)
-        return GAC_ERR_BAD_MODEL;
+    if (!gac_sens_has_tangents(md)) return GAC_ERR_BAD_MODEL;
     if (!gac_finite(seed_x, k * md->nx) || (seed_p != 0 && !gac_finite(seed_p, k * md->nparam)))
         return GAC_ERR_BAD_OPTION;
     sens->k = k;
@@ -57,8 +63,66 @@ int gac_sens_attach(gac_sim *s, gac_sens *sens, int k, const double *seed_x, con
     sens->contact_status = -1;
     sens->n_impacts = 0;
     s->sens = sens;
-    if (s->chart != 0) gac_sens_stop(s, GAC_SENS_CHART, s->t, -1);
-    else if (s->nresting > 0) gac_sens_start_rest(s);
+    if (s->chart != 0) {                          /* started on chart B: the seeds (chart A's) carried onto it at the
+                                                     state before the start's projection (gac_sens_switch) */
+        const int nq = md->nq;
+        const double *x_b = s->pending ? s->x1 : s->x;
+        double x_a[2 * nq];
+        if (!gac_sens_has_tangents(s->model)
+            || gac_chart_convert(&s->model->base, &md->base, nq, x_b, s->near_a, x_a) != GAC_OK
+            || gac_chart_convert_tangent(&md->base, &s->model->base, nq, x_a, x_b, k, sens->S) != GAC_OK)
+            gac_sens_stop(s, GAC_SENS_CHART, s->t, -1);
+    }
+    if (sens->status == GAC_SENS_VALID && s->nresting > 0) gac_sens_start_rest(s);
+    return GAC_OK;
+}
+
+/* The switch of base chart (gac_switch_chart): the state x on chart `from` became y on `to`, the same physical
+ * state (R and omega kept), so S_to = (d phi / dx) S_from, phi the conversion (gac_chart_convert_tangent).  The
+ * switch comes at a step's end where chi_A crossed its threshold, a time that may move with the directions, but
+ * its saltation term (f_to(y) - (d phi / dx) f_from(x)) dt* is 0 whatever dt*: the two charts' fields describe the
+ * same motion, so f_to(phi(x)) = (d phi / dx) f_from(x).  A chart without tangent kernels (or y at its own lock)
+ * ends the sensitivities. */
+void gac_sens_switch(gac_sim *s, const gac_model *from, const gac_model *to, const double *x, const double *y)
+{
+    gac_sens *z = s->sens;
+    if (z == 0 || z->status != GAC_SENS_VALID) return;
+    if (!gac_sens_has_tangents(to)
+        || gac_chart_convert_tangent(&from->base, &to->base, from->nq, x, y, z->k, z->S) != GAC_OK) {
+        gac_sens_stop(s, GAC_SENS_CHART, s->t, -1);
+        return;
+    }
+    if (!gac_finite(z->S, z->k * from->nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, s->t, -1);
+}
+
+/* S (k x nx) of the chart integrated now at the state x, into chart A's coordinates at xa (x converted), in place;
+ * NaN where chart A is at its lock (its angles' derivatives unbounded there). */
+void gac_sens_to_chart_a(const gac_sim *s, const double *x, const double *xa, double *S)
+{
+    const gac_sens *z = s->sens;
+    int i;
+    if (z == 0 || s->chart == 0 || z->status != GAC_SENS_VALID) return;
+    if (gac_chart_convert_tangent(&s->model->base, &s->model_a->base, s->model->nq, x, xa, z->k, S) != GAC_OK) {
+        for (i = 0; i < z->k * s->model->nx; ++i) S[i] = NAN;
+    }
+}
+
+int gac_sens_state(const gac_sim *s, double *S)
+{
+    const gac_sens *z;
+    if (s == 0 || S == 0 || s->sens == 0) return GAC_ERR_NULL_ARGUMENT;
+    z = s->sens;
+    gac_copy(S, z->S, z->k * s->model->nx);
+    if (s->chart == 1 && z->status == GAC_SENS_VALID) {
+        const int nq = s->model->nq;
+        double xa[2 * nq];
+        if (gac_chart_convert(&s->model->base, &s->model_a->base, nq, s->x, s->near_a, xa) != GAC_OK) {
+            int i;
+            for (i = 0; i < z->k * s->model->nx; ++i) S[i] = NAN;
+            return GAC_OK;
+        }
+        gac_sens_to_chart_a(s, s->x, xa, S);
+    }
     return GAC_OK;
 }
 

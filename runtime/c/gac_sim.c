@@ -117,16 +117,20 @@ static void gac_emit(gac_sim *s, double t_b, const double *t_eval, int n_eval, i
 {
     const gac_model *md = s->model;
     while (n_eval > 0 && *i_eval < n_eval && t_eval[*i_eval] <= t_b) {
-        double *out = x_eval + (long)(*i_eval) * md->nx;
+        double *out = x_eval + (long)(*i_eval) * md->nx, x[md->nx];
         if (t_eval[*i_eval] > s->t0_step) {
             gac_dense(s, t_eval[*i_eval], out);
         } else {
             int i;
             for (i = 0; i < md->nx; ++i) out[i] = s->x[i];
         }
+        gac_copy(x, out, md->nx);
         gac_to_chart_a(s, out);
-        if (s->sens != 0 && s->sens->S_eval != 0)         /* S at the sample too, when asked */
-            gac_sens_sample(s, t_eval[*i_eval], s->sens->S_eval + (long)(*i_eval) * s->sens->k * md->nx);
+        if (s->sens != 0 && s->sens->S_eval != 0) {       /* S at the sample too, when asked (chart A's) */
+            double *S = s->sens->S_eval + (long)(*i_eval) * s->sens->k * md->nx;
+            gac_sens_sample(s, t_eval[*i_eval], S);
+            gac_sens_to_chart_a(s, x, out, S);
+        }
         ++*i_eval;
     }
 }
@@ -433,10 +437,14 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         if (stuck_report) return GAC_SIM_CONTACT; /* points came to stick at this step's end */
     }
     while (n_eval > 0 && *i_eval < n_eval && t_eval[*i_eval] <= t_end) {   /* samples at t_end itself */
-        for (i = 0; i < md->nx; ++i) x_eval[(long)(*i_eval) * md->nx + i] = s->x[i];
-        gac_to_chart_a(s, x_eval + (long)(*i_eval) * md->nx);
-        if (s->sens != 0 && s->sens->S_eval != 0)
-            gac_copy(s->sens->S_eval + (long)(*i_eval) * s->sens->k * md->nx, s->sens->S, (long)s->sens->k * md->nx);
+        double *out = x_eval + (long)(*i_eval) * md->nx;
+        gac_copy(out, s->x, md->nx);
+        gac_to_chart_a(s, out);
+        if (s->sens != 0 && s->sens->S_eval != 0) {
+            double *S = s->sens->S_eval + (long)(*i_eval) * s->sens->k * md->nx;
+            gac_copy(S, s->sens->S, s->sens->k * md->nx);
+            gac_sens_to_chart_a(s, s->x, out, S);
+        }
         ++*i_eval;
     }
     return s->fail ? s->fail : GAC_SIM_END;

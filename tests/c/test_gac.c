@@ -1208,7 +1208,8 @@ static void test_loop_rules(void)
 }
 
 /* ---- the two base charts: the default base twists (chart A, first axis X2) and chart B = C T_-1 with C = Rz(-90 deg)
- * (first axis X1).  Angles round trip, the same orientation and angular velocity on both charts, the lock. ---- */
+ * (first axis X1).  Angles round trip, the same orientation and angular velocity on both charts, the conversion's
+ * derivative, the lock. ---- */
 static double lcg_state = 0.5;
 static double uniform(double lo, double hi)       /* a fixed pseudo-random sequence (no rand(): reproducible) */
 {
@@ -1224,11 +1225,31 @@ static double max_diff(const double *a, const double *b, int n)
     return d;
 }
 
+/* The largest difference between gac_chart_convert_tangent's derivative at x (on `from`, y its conversion) and
+ * central differences of gac_chart_convert (step 1e-6), along each of the 6 components of a 3-angle state. */
+static double convert_tangent_error(const gac_base *from, const gac_base *to, const double *x, const double *y)
+{
+    double D[36], plus[6], minus[6], xp[6], xm[6], worst = 0.0;
+    int c, i;
+    for (i = 0; i < 36; ++i) D[i] = i % 7 == 0 ? 1.0 : 0.0;      /* the unit directions, one a row */
+    if (gac_chart_convert_tangent(from, to, 3, x, y, 6, D) != GAC_OK) return HUGE_VAL;
+    for (c = 0; c < 6; ++c) {
+        for (i = 0; i < 6; ++i) xp[i] = xm[i] = x[i];
+        xp[c] += 1e-6;
+        xm[c] -= 1e-6;
+        gac_chart_convert(from, to, 3, xp, y, plus);
+        gac_chart_convert(from, to, 3, xm, y, minus);
+        for (i = 0; i < 6; ++i)
+            worst = fmax(worst, fabs((plus[i] - minus[i]) / 2e-6 - D[6 * c + i]) / (1.0 + fabs(D[6 * c + i])));
+    }
+    return worst;
+}
+
 static void test_charts(void)
 {
     const gac_base A = {{1, 0, 0, 0, 0, 1, 0, -1, 0}, {1, 0, 0, 0, 0, -1, 0, 1, 0}, {0, 0, 1, 1, 0, 0, 0, 1, 0}, {0, 1, 2}};
     const gac_base B = {{0, 0, 1, -1, 0, 0, 0, -1, 0}, {1, 0, 0, 0, 0, -1, 0, 1, 0}, {0, 0, 1, 1, 0, 0, 0, 1, 0}, {0, 1, 2}};
-    double worst_angles = 0.0, worst_R = 0.0, worst_omega = 0.0;
+    double worst_angles = 0.0, worst_R = 0.0, worst_omega = 0.0, worst_tangent = 0.0;
     int k, i;
     for (k = 0; k < 200; ++k) {
         /* a state of a 3-coordinate "chain" (the base angles only) with theta_0 away from both charts' locks */
@@ -1252,6 +1273,10 @@ static void test_charts(void)
         worst_R = fmax(worst_R, max_diff(RA, RB, 9));
         worst_omega = fmax(worst_omega, max_diff(wA, wB, 3) / (1.0 + fabs(wA[0]) + fabs(wA[1]) + fabs(wA[2])));
         worst_angles = fmax(worst_angles, max_diff(x, z, 6) + (broken && k < 3 ? 1.0 : 0.0));
+        if (k < 50 && gac_base_measure(&A, RA) > 0.05) {   /* the switch's derivative, both ways */
+            worst_tangent = fmax(worst_tangent, convert_tangent_error(&A, &B, x, y));
+            worst_tangent = fmax(worst_tangent, convert_tangent_error(&B, &A, y, z));
+        }
         /* |det E| of each chart is its measure of R */
         CHECK(NEAR(fabs(EA[0] * (EA[4] * EA[8] - EA[5] * EA[7]) - EA[1] * (EA[3] * EA[8] - EA[5] * EA[6])
                         + EA[2] * (EA[3] * EA[7] - EA[4] * EA[6])), gac_base_measure(&A, RA), 1e-12), "det E_A = chi_A");
@@ -1259,6 +1284,7 @@ static void test_charts(void)
     CHECK(worst_angles <= 1e-12, "angles and rates round trip A -> B -> A: %.3g", worst_angles);
     CHECK(worst_R <= 1e-12, "the same orientation on both charts: %.3g", worst_R);
     CHECK(worst_omega <= 1e-12, "the same angular velocity on both charts: %.3g", worst_omega);
+    CHECK(worst_tangent <= 1e-8, "the conversion's derivative against central differences: %.3g", worst_tangent);
     {
         /* chart A's lock: theta_0 = pi/2 puts z_1 along X2; only theta_-1 + theta_1 is defined there */
         const double x[3] = {0.7, 1.5707963267948966, -0.2}, near[3] = {0.3, 1.5, 0.1};

@@ -2,8 +2,9 @@
 reads the same file: the mass matrix (CRBA) and the forward dynamics (ABA) at random states.
 
 The arm is held to ``world`` by a fixed joint (a fixed base) and has six revolute joints whose next joints sit off
-their axes and partly along them (the importer slides those joint points along their axes), joint origins turned by
-rpy, and inertias about turned centres of mass with off-diagonal terms.  Coordinates map without fitting: a fixed
+their axes and partly along them (the importer slides those joint points along their axes; wrist_1 reaches wrist_2
+purely along its axis, as on a UR arm, and gets its length from wrist_2's slide), joint origins turned by rpy, and
+inertias about turned centres of mass with off-diagonal terms.  Coordinates map without fitting: a fixed
 base holds theta_-1, theta_0, theta_1 and X1..X3, so the model's coordinates are theta_2..theta_7, and theta_k is
 URDF joint k-1's angle (same zero, same sign; codegen.urdf), which is Pinocchio's q for a revolute joint; the
 velocities likewise.  Gravity: the model's acts along -X2 of the box, and the URDF's world frame is the box's (the
@@ -70,7 +71,7 @@ ARM6 = """<?xml version="1.0"?>
   </link>
   <joint name="wrist_2_joint" type="revolute">
     <parent link="wrist_1_link"/><child link="wrist_2_link"/>
-    <origin xyz="0.01 0.1157 0.02" rpy="0.0 0.0 -0.2"/><axis xyz="0 0 1"/>
+    <origin xyz="0.0 0.093 0.0" rpy="0 0 0"/><axis xyz="0 0 1"/>
     <limit lower="-3.1" upper="3.1" effort="28" velocity="3.2"/>
   </joint>
   <link name="wrist_2_link">

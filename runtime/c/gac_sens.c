@@ -155,8 +155,7 @@ static int gac_sens_inputs_fixed(const gac_sim *s)
  * (its generalised normal), Y_a = I_f^-1 W_a and A = W Y, factored in LD (gac_ldlt).  The arrays are the caller's,
  * sized for m <= 3 nq rows. */
 typedef struct {
-    int m;                       /* rows */
-    int n;                       /* contacts (the first n rows are their normal rows) */
+    int m;                       /* rows (the first ones the normal rows of set's contacts) */
     const int *set;
     int *brow;
     double *sgn, *f, *W, *Y, *LD;
@@ -185,7 +184,6 @@ static int gac_sens_set_at(const gac_sim *s, const double *q, int n, const int *
     const gac_model *md = s->model;
     const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow);
     int a, b, i, t, m = 0;
-    H->n = n;
     H->set = set;
     for (a = 0; a < n; ++a) {                     /* the normal rows */
         const gac_contact *ct = md->contacts + set[a];

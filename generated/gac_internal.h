@@ -69,7 +69,8 @@ int gac_tableau(int method, const double **a, int *lda, const double **b, const 
 /* gac_sens.c: the sensitivities carried along a run (sim->sens) */
 void gac_sens_flight(gac_sim *s, const double *x, double h, int taken); /* S over [t, t + h] from x at s->t */
 void gac_sens_sample(gac_sim *s, double t, double *out);  /* S at a sample time within the step */
-void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event); /* the jump at an impact just resolved */
+void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event,
+                     const int *was_stuck);     /* the jump at an impact just resolved (was_stuck: before it) */
 void gac_sens_stop(gac_sim *s, int status, double t, int contact);    /* an event not differentiated */
 void gac_sens_project(gac_sim *s, const double *x_pre, const double *x_post); /* a step's projection onto the rest */
 void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event);  /* the release of a resting contact */

@@ -1,6 +1,7 @@
 /*
  * gac_sens.c -- forward sensitivities of a hybrid run (gac.h, "forward sensitivities of a run"): the variational
- * equations in flight, free or with resting contacts held (the constrained dynamics' tangent), taken by the run's
+ * equations in flight, free or with resting contacts held (the constrained dynamics' tangent; a point stuck on a
+ * rough wall held along every axis, its tangential rows with its normal one), taken by the run's
  * Runge-Kutta formula over the state's own steps and stages (gac_sens_flight), the derivative of the projection onto
  * the resting contacts after each step (gac_sens_project), the jump of the sensitivities at an impact by the
  * frictionless law -- of one contact or several, walls or joint stops, landings among them, the set of pushing
@@ -147,32 +148,65 @@ static int gac_sens_inputs_fixed(const gac_sim *s)
 
 /* ---- contacts held at their walls: the constrained dynamics and the projections, and their tangents ---- */
 
-/* A set of contacts held at their walls (resting, or brought to rest by an impact) at a configuration q: their unit
- * signed rows f_a (nr each), W_a = J^T f_a (their generalised normals), Y_a = I_f^-1 W_a and A = W Y, factored in LD
- * (gac_ldlt).  The arrays are the caller's, sized for m <= nq. */
+/* A set of contacts held at their walls (resting, or brought to rest by an impact) at a configuration q, as rows:
+ * first each contact's normal row, then the two tangential rows of each one stuck on a rough wall (gac_held_rows'
+ * order; a stuck point is a bilateral constraint along all three axes).  Row a: its unit signed row f_a (nr) of J,
+ * brow[a] (its row of J and of contact_bias) and sgn[a] (the normal's sign, 1 along a tangential axis); W_a = J^T f_a
+ * (its generalised normal), Y_a = I_f^-1 W_a and A = W Y, factored in LD (gac_ldlt).  The arrays are the caller's,
+ * sized for m <= 3 nq rows. */
 typedef struct {
-    int m;
+    int m;                       /* rows (the first ones the normal rows of set's contacts) */
     const int *set;
-    double *f, *W, *Y, *LD;
+    int *brow;
+    double *sgn, *f, *W, *Y, *LD;
 } gac_sens_set;
 
-#define GAC_SENS_SET_ARRAYS(nq, nr) double H_f[(nq) * (nr)], H_W[(nq) * (nq)], H_Y[(nq) * (nq)], H_LD[(nq) * (nq)]
-#define GAC_SENS_SET_BIND(H) ((H).f = H_f, (H).W = H_W, (H).Y = H_Y, (H).LD = H_LD)
+#define GAC_SENS_SET_ARRAYS(nq, nr) \
+    double H_f[3 * (nq) * (nr)], H_W[3 * (nq) * (nq)], H_Y[3 * (nq) * (nq)], H_LD[9 * (nq) * (nq)], \
+        H_sgn[3 * (nq)]; \
+    int H_brow[3 * (nq)]
+#define GAC_SENS_SET_BIND(H) ((H).f = H_f, (H).W = H_W, (H).Y = H_Y, (H).LD = H_LD, (H).sgn = H_sgn, \
+                              (H).brow = H_brow)
 
-/* Fill H for set[0..m-1] at q.  Returns 0, or 1 where the rows are dependent (no unique forces: the loop gives the
- * dependent ones none, a choice with no derivative). */
-static int gac_sens_set_at(const gac_sim *s, const double *q, int m, const int *set, gac_sens_set *H)
+/* 1 if contact c rests on a wall with friction without being stuck (stuck: per contact, or NULL: none is): it slides
+ * there, and sliding friction at rest is not differentiated. */
+static int gac_sens_sliding(const gac_sim *s, const int *stuck, int c)
+{
+    return (stuck == 0 || !stuck[c]) && gac_friction_coefficient(s->model, s->p, c) > 0.0;
+}
+
+/* Fill H for set[0..n-1] at q, with the tangential rows of those stuck (stuck: per contact, or NULL: normal rows
+ * only).  Returns 0, or 1 where the rows are dependent (no unique forces: the loop gives the dependent ones none, a
+ * choice with no derivative) or more than nq. */
+static int gac_sens_set_at(const gac_sim *s, const double *q, int n, const int *set, const int *stuck,
+                           gac_sens_set *H)
 {
     const gac_model *md = s->model;
     const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow);
-    int a, b, i;
-    H->m = m;
+    int a, b, i, t, m = 0;
     H->set = set;
-    for (a = 0; a < m; ++a) {
+    for (a = 0; a < n; ++a) {                     /* the normal rows */
         const gac_contact *ct = md->contacts + set[a];
+        H->brow[m] = ct->row;
+        H->sgn[m++] = ct->normal_sign;
+    }
+    for (a = 0; a < n && stuck != 0; ++a) {       /* the stuck points' tangential rows, along +X_axis */
+        const gac_contact *ct = md->contacts + set[a];
+        if (!stuck[set[a]] || ct->kind != GAC_CONTACT_WALL || !(gac_friction_coefficient(md, s->p, set[a]) > 0.0))
+            continue;
+        for (t = 0; t < 2; ++t) {
+            if (ct->trow[t] < 0) continue;
+            if (m == 3 * nq) return 1;
+            H->brow[m] = ct->trow[t];
+            H->sgn[m++] = 1.0;
+        }
+    }
+    H->m = m;
+    if (m > nq) return 1;
+    for (a = 0; a < m; ++a) {
         double *fa = H->f + (long)a * nr;
         for (i = 0; i < nr; ++i) fa[i] = 0.0;
-        fa[ct->row] = ct->normal_sign;
+        fa[H->brow[a]] = H->sgn[a];
         md->contact_generalized_force(q, fa, s->p, H->W + (long)a * nq);
         md->inertia_solve(q, H->W + (long)a * nq, s->p, H->Y + (long)a * nq);
     }
@@ -209,8 +243,7 @@ static void gac_sens_held_forces(const gac_sim *s, const double *x, const double
     md->contact_bias(x, x + nq, s->p, bias);
     if (lambda_ref != 0) *lambda_ref = 0.0;
     for (a = 0; a < m; ++a) {
-        const gac_contact *ct = md->contacts + H->set[a];
-        lambda[a] = -(ct->normal_sign * bias[ct->row] + gac_dot(nq, H->W + (long)a * nq, qdd_free));
+        lambda[a] = -(H->sgn[a] * bias[H->brow[a]] + gac_dot(nq, H->W + (long)a * nq, qdd_free));
         if (lambda_ref != 0) {
             const double A_aa = gac_dot(nq, H->W + (long)a * nq, H->Y + (long)a * nq);
             if (fabs(lambda[a]) / A_aa > *lambda_ref) *lambda_ref = fabs(lambda[a]) / A_aa;
@@ -261,9 +294,8 @@ static void gac_sens_held_tangent(const gac_sim *s, const double *x, const gac_s
     gac_sens_set_tangent(s, x, H, dq, dp, dW, dY);
     md->contact_bias_tangent(x, x + nq, s->p, dq, dqd, dp, dbias);
     for (a = 0; a < m; ++a) {
-        const gac_contact *ct = md->contacts + H->set[a];
         const double *wa = H->W + (long)a * nq, *dwa = dW + (long)a * nq;
-        double value = -(ct->normal_sign * dbias[ct->row] + gac_dot(nq, dwa, qdd_free) + gac_dot(nq, wa, dqdd_free));
+        double value = -(H->sgn[a] * dbias[H->brow[a]] + gac_dot(nq, dwa, qdd_free) + gac_dot(nq, wa, dqdd_free));
         for (b = 0; b < m; ++b)
             value -= (gac_dot(nq, dwa, H->Y + (long)b * nq) + gac_dot(nq, wa, dY + (long)b * nq)) * lambda[b];
         r[a] = value;
@@ -331,12 +363,6 @@ static void gac_sens_hold_tangent(const gac_sim *s, const double *q, const gac_s
     }
 }
 
-/* 1 if contact c is on a wall with friction (c_f > 0) or stuck: resting contact there is not differentiated. */
-static int gac_sens_rough(const gac_sim *s, int c)
-{
-    return s->is_stuck[c] || gac_friction_coefficient(s->model, s->p, c) > 0.0;
-}
-
 /* The set H of the contacts at rest after a change of the velocities at state x: set[0..n-1] (the resting ones),
  * then each candidate c (not among them) within contact_tol of its wall whose normal velocity is ~0 (below 1e-9 of
  * the chain's speed scale times its lever) and whose row is independent of those before (they were held too, then
@@ -365,7 +391,7 @@ static int gac_sens_at_rest(const gac_sim *s, const double *x, int n, const int 
             gac_sens_set H;
             GAC_SENS_SET_BIND(H);
             out[m] = c;
-            if (gac_sens_set_at(s, x, m + 1, out, &H) == 0) ++m;
+            if (gac_sens_set_at(s, x, m + 1, out, 0, &H) == 0) ++m;
         }
     }
     return m;
@@ -386,8 +412,8 @@ static void gac_sens_start_rest(gac_sim *s)
     GAC_SENS_SET_ARRAYS(nq, nr);
     gac_sens_set H;
     GAC_SENS_SET_BIND(H);
-    for (a = 0; a < s->nresting; ++a) {
-        if (gac_sens_rough(s, s->resting[a])) {
+    for (a = 0; a < s->nresting; ++a) {       /* (a rough wall's contact at rest from the start: not followed) */
+        if (gac_sens_sliding(s, 0, s->resting[a])) {
             gac_sens_stop(s, GAC_SENS_RESTING, s->t, s->resting[a]);
             return;
         }
@@ -395,7 +421,7 @@ static void gac_sens_start_rest(gac_sim *s)
     for (a = 0; a < md->ncontact; ++a) all[a] = a;
     for (a = 0; a < GAC_AT_LEAST_1(md->nparam); ++a) zero_p[a] = 0.0;
     m = gac_sens_at_rest(s, s->x, s->nresting, s->resting, s->pending ? md->ncontact : 0, all, set);
-    if (gac_sens_set_at(s, s->x, m, set, &H) != 0) {
+    if (gac_sens_set_at(s, s->x, m, set, 0, &H) != 0) {
         gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, s->t, s->resting[0]);
         return;
     }
@@ -410,11 +436,13 @@ static void gac_sens_start_rest(gac_sim *s)
 }
 
 /* After an accepted step in constrained flight: the derivative of gac_project's map x_pre -> x_post (both positions
- * and velocities onto the resting set, in the mass metric) applied to S.  Positions: q_post = q_pre + Y c,
- * c = A^-1 W (q_post - q_pre), the gaps held at gap_held:
+ * and velocities onto the resting set, in the mass metric) applied to S.  Positions, onto the normal rows N alone
+ * (a stuck point's tangential position is not held, only its velocity): q_post = q_pre + Y c,
+ * c = A^-1 N (q_post - q_pre), the gaps held at gap_held:
  *     dq_post = dq + d(Y c) + Y dc,   A dc = dgap_held - dgap_H(dq + d(Y c), dp);
- * then the velocities at q_post from qd_pre (gac_sens_hold_tangent).  (A contact outside the set that the
- * correction would push deeper, held where it is by gac_project's active set, is not followed.) */
+ * then the velocities at q_post from qd_pre onto every held row, the stuck points' tangential ones too
+ * (gac_sens_hold_tangent).  (A contact outside the set that the correction would push deeper, held where it is by
+ * gac_project's active set, is not followed.) */
 void gac_sens_project(gac_sim *s, const double *x_pre, const double *x_post)
 {
     gac_sens *z = s->sens;
@@ -425,10 +453,10 @@ void gac_sens_project(gac_sim *s, const double *x_pre, const double *x_post)
     double zero_p[GAC_AT_LEAST_1(md->nparam)];
     int a, i, j, moved = 0;
     GAC_SENS_SET_ARRAYS(nq, nr);
-    gac_sens_set H;
+    gac_sens_set H;                                          /* the normal rows: the positions */
     if (z == 0 || z->status != GAC_SENS_VALID || m == 0) return;
     GAC_SENS_SET_BIND(H);
-    if (gac_sens_set_at(s, x_post, m, s->resting, &H) != 0) {
+    if (gac_sens_set_at(s, x_post, m, s->resting, 0, &H) != 0) {
         gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, s->t, s->resting[0]);
         return;
     }
@@ -452,6 +480,15 @@ void gac_sens_project(gac_sim *s, const double *x_pre, const double *x_post)
             for (a = 0; a < m; ++a) dq[i] += H.Y[(long)a * nq + i] * dc[a];
             S[i] = dq[i];
         }
+    }
+    if (gac_any_stuck(s->is_stuck, m, s->resting)   /* the velocities: with the stuck points' tangential rows */
+        && gac_sens_set_at(s, x_post, m, s->resting, s->is_stuck, &H) != 0) {
+        gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, s->t, s->resting[0]);
+        return;
+    }
+    for (j = 0; j < z->k; ++j) {
+        double *S = z->S + (long)j * nx;
+        const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
         gac_sens_hold_tangent(s, x_post, &H, x_pre + nq, x_post + nq, S, S + nq, dp, out);
         gac_copy(S + nq, out, nq);
     }
@@ -472,8 +509,8 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
     const double *a, *b, *c;
     int lda, stages, i, j, l, n;
     if (z == 0 || z->status != GAC_SENS_VALID || !(h > 0.0)) return;
-    for (i = 0; i < s->nresting; ++i) {
-        if (gac_sens_rough(s, s->resting[i])) {
+    for (i = 0; i < s->nresting; ++i) {          /* a point sliding on a rough wall: not followed */
+        if (gac_sens_sliding(s, s->is_stuck, s->resting[i])) {
             gac_sens_stop(s, GAC_SENS_RESTING, s->t, s->resting[i]);
             return;
         }
@@ -504,8 +541,9 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
                 Y[n] = x[n] + h * sum;
             }
             u = gac_input(s, s->t + c[i] * h, Y);
-            if (held) {                              /* the resting contacts held: their forces at the stage */
-                if (gac_sens_set_at(s, Y, s->nresting, s->resting, &H) != 0) {
+            if (held) {                              /* the resting contacts held (the stuck points along every
+                                                        axis): their forces at the stage */
+                if (gac_sens_set_at(s, Y, s->nresting, s->resting, s->is_stuck, &H) != 0) {
                     gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, s->t, s->resting[0]);
                     return;
                 }
@@ -662,13 +700,14 @@ static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, con
     }
 }
 
-/* The field f = [qd, qdd] at state x with set[0..m-1] held (free flight for m = 0).  Returns 0, or 1 where the
- * held rows are dependent.  lambda (m) and lambda_ref as gac_sens_held_forces, the set's arrays in H. */
-static int gac_sens_field(gac_sim *s, double t, const double *x, int m, const int *set, gac_sens_set *H,
-                          double *qdd_free, double *lambda, double *f, double *lambda_ref)
+/* The field f = [qd, qdd] at state x with set[0..m-1] held (free flight for m = 0), those stuck (stuck: per contact,
+ * or NULL: none) along every axis.  Returns 0, or 1 where the held rows are dependent.  lambda (H->m rows) and
+ * lambda_ref as gac_sens_held_forces, the set's arrays in H. */
+static int gac_sens_field(gac_sim *s, double t, const double *x, int m, const int *set, const int *stuck,
+                          gac_sens_set *H, double *qdd_free, double *lambda, double *f, double *lambda_ref)
 {
     const int nq = s->model->nq;
-    if (gac_sens_set_at(s, x, m, set, H) != 0) return 1;
+    if (gac_sens_set_at(s, x, m, set, stuck, H) != 0) return 1;
     gac_copy(f, x + nq, nq);
     gac_sens_held_forces(s, x, gac_input(s, t, x), H, qdd_free, lambda, f + nq, lambda_ref);
     return 0;
@@ -687,7 +726,7 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
     return n;
 }
 
-/* The jump at the impact record r just resolved (state before it s->xs, after it s->x1), located by contact
+/* The jump at the impact record r just resolved (state before it s->xs, after it s->x), located by contact
  * c_event's gap: for each direction j, dt*_j = -dg_j / (w_c . qd-) and S+_j = D Delta (S-_j + f- dt*_j, dp_j)
  * - f+ dt*_j, Delta the map of the contacts that took an impulse (a wall's or a joint stop's alike: a stop's row is
  * a row of the identity), f- and f+ the fields with the resting sets before and after held.  A landing contact is
@@ -696,9 +735,13 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
  * derivative of that projection (gac_sens_hold_tangent, on the resting set and the impact's other contacts left at
  * rest), and a landing contact is held at the gap it had at the event (dgap_held from S-_j + f- dt*_j).  A contact
  * of the record that took no impulse stays out of Delta if it leaves the impact separating or is held; one with
- * impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).  Impacts of another
- * kind, and impacts of two links, end the sensitivities. */
-void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
+ * impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).  On rough walls the
+ * stuck points are held along every axis: those before (was_stuck, per contact, or NULL: none) in f-, those after
+ * (s->is_stuck, as gac_restick re-decided them: called after it, the state after in s->x) in f+ and in the hold,
+ * which brings the law's velocities onto their tangential rows too (a landing that sticks).  A point sliding at
+ * rest before or after, a stuck point that slipped, or one that came to stick without taking the impact's impulse
+ * ends them (GAC_SENS_RESTING, GAC_SENS_STICK), as do impacts of another kind and impacts of two links. */
+void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const int *was_stuck)
 {
     gac_sens *z = s->sens;
     const gac_model *md = s->model;
@@ -725,11 +768,29 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
         gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, r->ncontact > 0 ? r->contact[0] : c_event);
         return;
     }
-    {
-        int a;
-        for (a = 0; a < s->nresting; ++a) {
-            if (gac_sens_rough(s, s->resting[a])) {
+    {                                                        /* on rough walls: stuck points before and after */
+        int before_set[md->nq + GAC_AT_LEAST_1(md->ncontact)], nbefore = gac_sens_set_before(s, r, before_set), a, b;
+        for (a = 0; a < nbefore; ++a) {                      /* sliding before: not followed */
+            if (gac_sens_sliding(s, was_stuck, before_set[a])) {
+                gac_sens_stop(s, GAC_SENS_RESTING, r->t, before_set[a]);
+                return;
+            }
+        }
+        for (a = 0; a < s->nresting; ++a) {                  /* sliding after (a landing that slides on) */
+            if (gac_sens_sliding(s, s->is_stuck, s->resting[a])) {
                 gac_sens_stop(s, GAC_SENS_RESTING, r->t, s->resting[a]);
+                return;
+            }
+        }
+        if (r->nslipped > 0) {                               /* a stuck point slipped at the impact */
+            gac_sens_stop(s, GAC_SENS_STICK, r->t, r->slipped[0]);
+            return;
+        }
+        for (a = 0; a < r->nstuck; ++a) {                    /* came to stick: only the impact's own contacts */
+            int struck = 0;
+            for (b = 0; b < r->ncontact; ++b) struck |= r->contact[b] == r->stuck[a];
+            if (!struck) {
+                gac_sens_stop(s, GAC_SENS_STICK, r->t, r->stuck[a]);
                 return;
             }
         }
@@ -737,7 +798,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
     {
         const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), n = r->ncontact, n3 = 3 * n;
         const int nc1 = GAC_AT_LEAST_1(md->ncontact);
-        const double *xm = s->xs, *xp = s->x1, *q = xm;
+        const double *xm = s->xs, *xp = s->x, *q = xm;
         double f[n3 * nr], W[n3 * nq], Y[n3 * nq], LD[n3 * n3], F[n3], v[n3], e[n3], fm[nx], fp[nx];
         double u[n3], xi_t[n3], xi_norm[n3], cf_row[n3];
         int normal[n3], cf_index[n3], nslide = 0;
@@ -881,14 +942,14 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event)
         law.F = F, law.v = v, law.e = e;
         law.nslide = nslide, law.normal = normal, law.u = u, law.xi_T_norm = xi_norm, law.cf = cf_row;
         law.cf_index = cf_index;
-        if (gac_sens_field(s, r->t, xm, nbefore, before_set, &H, qdd_free, lambda, fm, 0) != 0
-            || gac_sens_field(s, r->t, xp, s->nresting, s->resting, &H, qdd_free, lambda, fp, 0) != 0) {
+        if (gac_sens_field(s, r->t, xm, nbefore, before_set, was_stuck, &H, qdd_free, lambda, fm, 0) != 0
+            || gac_sens_field(s, r->t, xp, s->nresting, s->resting, s->is_stuck, &H, qdd_free, lambda, fp, 0) != 0) {
             gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
             return;
         }
         if (s->nresting > 0) {                               /* the hold after the law: the set at rest */
             nheld = gac_sens_at_rest(s, xp, s->nresting, s->resting, n, r->contact, at_rest);
-            if (gac_sens_set_at(s, xp, nheld, at_rest, &H) != 0) {
+            if (gac_sens_set_at(s, xp, nheld, at_rest, s->is_stuck, &H) != 0) {
                 gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
                 return;
             }
@@ -957,8 +1018,9 @@ void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
     for (a = 0; a < nbefore; ++a) {
         if (before_set[a] == c_event) index = a;
     }
-    if (index < 0 || gac_sens_field(s, r->t, x, s->nresting, s->resting, &H, qdd_free, lambda, fp, 0) != 0
-        || gac_sens_field(s, r->t, x, nbefore, before_set, &H, qdd_free, lambda, fm, &lambda_ref) != 0) {
+    if (index < 0                             /* (the stuck points are those before: a stuck one released ended them) */
+        || gac_sens_field(s, r->t, x, s->nresting, s->resting, s->is_stuck, &H, qdd_free, lambda, fp, 0) != 0
+        || gac_sens_field(s, r->t, x, nbefore, before_set, s->is_stuck, &H, qdd_free, lambda, fm, &lambda_ref) != 0) {
         gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
         return;
     }

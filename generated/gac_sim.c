@@ -315,6 +315,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             if (s->sens != 0) gac_sens_flight(s, s->x, t_event - s->t, 0);   /* S at the event, before it */
             record->nstuck = record->nslipped = 0;
             if (released && s->is_stuck[c_event]) {   /* |lambda_T| reached c_f lambda: the point slips there */
+                if (s->sens != 0) gac_sens_stop(s, GAC_SENS_STICK, t_event, c_event);   /* (or leaves: not followed) */
                 code = gac_slip(s, t_event, s->xs, c_event, record);
                 if (code < 0) return code;
             } else {
@@ -338,10 +339,6 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
                             : gac_resolve(s, t_event, c_event, record);
             if (code < 0) return code;
             if (s->sens != 0 && released) gac_sens_release(s, record, c_event);   /* its event time's derivative */
-            if (s->sens != 0 && !released) {      /* the impact's jump, or a touch that has no derivative */
-                if (code == 1) gac_sens_impact(s, record, c_event);
-                else gac_sens_stop(s, GAC_SENS_GRAZING, t_event, c_event);
-            }
             for (i = 0; i < md->nx; ++i) s->x[i] = code == 1 ? s->x1[i] : s->xs[i];
             s->t = t_event;
             s->f_valid = s->vn_valid = 0;
@@ -349,6 +346,11 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
                 const int stuck = gac_restick(s, 1, was_stuck, record);
                 if (stuck < 0) return stuck;
                 if (stuck > 0) s->energy_x1_valid = 0;
+            }
+            if (s->sens != 0 && !released) {      /* the impact's jump (its stuck points decided), or a touch that
+                                                     has no derivative */
+                if (code == 1) gac_sens_impact(s, record, c_event, s->opt.stick ? was_stuck : 0);
+                else gac_sens_stop(s, GAC_SENS_GRAZING, t_event, c_event);
             }
             gac_events(s, s->t, s->x, s->ev);
             if (s->fail == GAC_ERR_FRICTION && s->nresting > 0) {   /* landed sliding in the paradox: the tangential */

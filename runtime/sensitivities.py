@@ -20,7 +20,8 @@ from codegen.scene import coordinate_names
 # gac.h's GAC_SENS_* status codes, in words
 STATUS_WORDS = {
     0: "valid",
-    1: "resting contact on a rough wall (friction at rest is not differentiated)",
+    1: "resting contact sliding on a rough wall, or at rest there from the start (sliding friction at rest is not "
+       "differentiated)",
     2: "an impact by a frictional law with a common e, or by Newton + Coulomb",
     3: "an impact at a joint stop",
     4: "an impact of several rounds (or with dependent contact rows)",
@@ -32,6 +33,8 @@ STATUS_WORDS = {
     10: "a mode boundary (a contact's impulse ~0 at the law's bound inside an impact, or resting contacts "
         "released together)",
     11: "an impact of two links (link-link contact is not differentiated)",
+    12: "a stick-slip transition on a rough wall (a stuck point slipped or left the wall, or came to stick other "
+        "than by landing stuck)",
 }
 
 _STATE = re.compile(r"^(q0|qd0)\[([^\]]+)\]$")

@@ -996,8 +996,9 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * in chart A's (gac_sens_state, the samples).  Events this does not differentiate end the sensitivities (status
  * below): S and dt_impact are then NaN from that event on, the run itself continues.  The status codes: */
 #define GAC_SENS_VALID         0   /* every event so far differentiated */
-#define GAC_SENS_RESTING       1   /* a contact rests on a wall with friction (or is stuck): friction at rest is not
-                                      differentiated (frictionless resting contact is) */
+#define GAC_SENS_RESTING       1   /* a contact rests on a wall with friction sliding (sliding friction at rest is not
+                                      differentiated; frictionless resting contact and stuck points that landed stuck
+                                      are), or at rest there from the start */
 #define GAC_SENS_FRICTION      2   /* an impact by a frictional law other than GAC_IMPACT_LAW_GDI solved with each
                                       contact's own e (a round with a common e, Newton + Coulomb): the GDI law's
                                       stuck and sliding contacts are differentiated */
@@ -1017,6 +1018,9 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       may add it to the active set or drop it; or resting contacts released together
                                       (their forces ~0 at once) */
 #define GAC_SENS_LINK         11   /* an impact of two links (a GAC_CONTACT_LINK contact): not differentiated */
+#define GAC_SENS_STICK        12   /* a stick-slip transition on a rough wall: a stuck resting point slipped or left the
+                                      wall (its event: |lambda_T| = c_f lambda_N), or came to stick other than by
+                                      landing stuck */
 
 /* The sensitivities of one run: pointers into the caller's dwork (gac_sens_ndouble(m, k) doubles), laid out as
  * S (k nx) | dp (k nparam) | dt_impact (k) | dgap_held (k max(ncontact, 1)) | scratch | S_keep (k nx).  Direction-major: S[j*nx + i] = d x_i / d direction j

@@ -23,6 +23,7 @@ def test_models_side_by_side_need_different_names_and_a_count_each():
         time_rhs_side_by_side([model], [0])
 
 
+@pytest.mark.slow      # a 16-link chain's derivation (a study's harness)
 def test_each_model_is_timed_on_its_own_rhs():
     """A 16-link chain's rhs (about 14 times the operations of a 1-link chain's) is timed slower in the same program:
     the median of the batches' ratios is above 5 (the same rhs timed twice would give 1; one batch disturbed by

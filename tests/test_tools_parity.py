@@ -97,8 +97,9 @@ ROWS = [
     Row("chain12-rolled", "links:12", 0.6, dict(method="dopri5", rtol=1e-9, atol=1e-11), slow=True),
     Row("fuzz-0-0-1", "fuzz:0-0-1", 2.0, dict(method="dop853", rtol=4.519460342714693e-07,
                                                atol=1.4274655908381933e-07), grid_tol=1e-4, slow=True),
+    # at 1.3507 s O1 and O2 land on x1_min 40 us apart, and the grid's step ends change which lands first
     Row("fuzz-0-4-1", "fuzz:0-4-1", 2.0, dict(method="dopri5", rtol=3.049050117668382e-10,
-                                               atol=9.462290101851901e-13), grid_tol=1e-5, grid_until=1.39, slow=True),
+                                               atol=9.462290101851901e-13), grid_tol=1e-5, grid_until=1.35, slow=True),
     Row("fuzz-0-2-2", "fuzz:0-2-2", 2.0, dict(method="rk4", dt=0.000151287440173357), slow=True),
 ]
 

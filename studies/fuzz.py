@@ -12,7 +12,8 @@ the start, often cramped (margins 1e-3 ... 1 of the chain's extent, so that a si
 chain); restitution per wall 0, 1 or uniform in [0, 1]; Coulomb friction on the walls of 30 % of the structures
 (c_f uniform in [0, 1.5] per wall and run, drawn so that the other structures' runs are unchanged); capsule links
 on a quarter of the structures, all frictionless ones (each link a capsule with probability 0.7, at least one;
-radius r log-uniform in 5e-5 ... 5e-2 m, the link's length then log-uniform in 20 r ... 2000 r; every
+radius r log-uniform in 5e-5 ... 5e-2 m; every link's length, capsule or not, log-uniform in 20 R ... 2e4 R
+(at most 1e2 m) with R the chain's largest radius, so that a capsule is thin against every link; every
 non-adjacent pair of links with a capsule strikes the other, restitution 0, 1 or uniform in [0, 1]; the box
 margins add the largest radius and the start is redrawn until no pair overlaps); rates up to 20 rad/s; DOPRI5 and DOP853 at
 rtol 1e-11 ... 1e-6 (atol = rtol x the shortest link, at least 1e-16) and RK4 at dt 1e-5 ... 1e-3 s.  A
@@ -66,7 +67,7 @@ CAPSULE_SHARE = 0.25      # structures with capsule links (drawn among the frict
 CAPSULE_STREAM = 104729   # the child stream of the structure's seed that decides it and draws the radii
 CAPSULE_LINK = 0.7        # probability that a link of a capsule structure is a capsule
 RADIUS_RANGE = (5e-5, 5e-2)       # m, log-uniform
-LENGTH_PER_RADIUS = (20.0, 2e3)   # a capsule link's length / its radius, log-uniform
+LENGTH_PER_RADIUS = (20.0, 2e4)   # a capsule structure's link lengths / its largest radius, log-uniform
 START_TRIES = 200         # starts drawn before a capsule structure's run gives up finding one without overlap
 
 # Stops that are failures of the engine: its own post-impact checks and non-finite states.
@@ -92,10 +93,10 @@ def _rotation(rng) -> np.ndarray:
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
-def _random_link(rng, kind: str, planar: bool, radius: float = 0.0):
-    """A link of the given kind; a capsule (radius > 0) draws its length against its radius (LENGTH_PER_RADIUS),
-    with the same number of draws."""
-    lo, hi = (1e-3, 1e2) if radius == 0.0 else (radius * LENGTH_PER_RADIUS[0], radius * LENGTH_PER_RADIUS[1])
+def _random_link(rng, kind: str, planar: bool, radius: float = 0.0, reach: float = 0.0):
+    """A link of the given kind and capsule radius; in a chain whose largest radius is reach > 0 the length is drawn
+    against it (LENGTH_PER_RADIUS, with the same number of draws)."""
+    lo, hi = (1e-3, 1e2) if reach == 0.0 else (reach * LENGTH_PER_RADIUS[0], min(1e2, reach * LENGTH_PER_RADIUS[1]))
     length, mass = _log_uniform(rng, lo, hi), _log_uniform(rng, 1e-4, 1e4)
     if kind == "line":
         mu = mass / length
@@ -169,7 +170,8 @@ def random_run(rng, scene: Scene, model) -> Run:
     """New lengths, masses, inertias (same link kinds), a box around a random start, restitutions,
     rates and an integrator."""
     planar = scene.walls and not any(w.name.startswith("x3") for w in scene.walls)
-    links = tuple(_random_link(rng, link.kind, planar, link.radius) for link in scene.links)
+    reach = max(link.radius for link in scene.links)
+    links = tuple(_random_link(rng, link.kind, planar, link.radius, reach) for link in scene.links)
     names = scene.parameter_names()
     p = model.p.copy()
     values = [v for link in links for v in link.param_values()]
@@ -193,11 +195,10 @@ def random_run(rng, scene: Scene, model) -> Run:
         raise ValueError(f"{scene.name}: no start without overlapping capsules in {START_TRIES} draws")
     lo, hi = points.min(axis=0), points.max(axis=0)
     extent = float(max((hi - lo).max(), min(link.length for link in links)))
-    reach = max(radii)                           # the box clears every capsule at the start
     for name in names:
         if name.startswith("wall_"):
             axis, side = int(name[6]) - 1, name.endswith("max")
-            margin = extent * _log_uniform(rng, 1e-3, 1.0) + reach
+            margin = extent * _log_uniform(rng, 1e-3, 1.0) + reach     # the box clears every capsule at the start
             p[names.index(name)] = hi[axis] + margin if side else lo[axis] - margin
         elif name.startswith("e_"):
             p[names.index(name)] = float(rng.choice([0.0, 1.0, rng.uniform()]))

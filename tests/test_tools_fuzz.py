@@ -260,12 +260,14 @@ def test_each_capsule_check_can_fail(compiled):
     scene = fuzz.random_structure(rng, index, n_max)
     model = compiled(scene)
     run = fuzz.random_run(rng, scene, model)
+    names = scene.parameter_names()
+    reach = max(link.radius for link in scene.links)
+    assert all(run.p[names.index(f"l_{i}")] >= fuzz.LENGTH_PER_RADIUS[0] * reach for i in range(1, scene.n + 1))
     run.options = {"method": "dopri5", "rtol": 1e-10, "atol": 1e-12}
     q, qd = run.q0, run.qd0
     clean = FakeResult(np.array([q]), np.array([qd]), q, qd)
     assert fuzz.check_run(model, run, clean, 0.1, 20.0) == []
     # a wall half a radius inside link 2's capsule
-    names = scene.parameter_names()
     r = scene.links[1].radius
     points = model.contact_points(model.layout.reduce(q), run.p)
     sunk = fuzz.Run(run.p.copy(), q, qd, run.t_end, run.options, run.extent)

@@ -15,8 +15,8 @@ on a quarter of the structures, all frictionless ones (each link a capsule with 
 radius r log-uniform in 5e-5 ... 5e-2 m; every link's length, capsule or not, log-uniform in 20 R ... 2e4 R
 (at most 1e2 m) with R the chain's largest radius, so that a capsule is thin against every link; every
 non-adjacent pair of links with a capsule strikes the other, restitution 0, 1 or uniform in [0, 1]; the box
-margins add the largest radius and the start is redrawn until no pair overlaps); rates up to 20 rad/s; DOPRI5 and DOP853 at
-rtol 1e-11 ... 1e-6 (atol = rtol x the shortest link, at least 1e-16) and RK4 at dt 1e-5 ... 1e-3 s.  A
+margins add the largest radius and the start is redrawn until no pair overlaps); rates up to 20 rad/s; DOPRI5 and
+DOP853 at rtol 1e-11 ... 1e-6 (atol = rtol x the shortest link, at least 1e-16) and RK4 at dt 1e-5 ... 1e-3 s.  A
 *structure* (n, link kinds, twists, planar or not) is compiled once; its runs draw new lengths, masses,
 inertias, walls, restitutions, start and integrator through the parameter vector and the start override.
 
@@ -167,8 +167,8 @@ class Run:
 
 
 def random_run(rng, scene: Scene, model) -> Run:
-    """New lengths, masses, inertias (same link kinds), a box around a random start, restitutions,
-    rates and an integrator."""
+    """New lengths, masses, inertias (same link kinds and radii), a box around a random start (clear of the
+    capsules, no link pair overlapping), restitutions, rates and an integrator."""
     planar = scene.walls and not any(w.name.startswith("x3") for w in scene.walls)
     reach = max(link.radius for link in scene.links)
     links = tuple(_random_link(rng, link.kind, planar, link.radius, reach) for link in scene.links)

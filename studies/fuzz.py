@@ -113,9 +113,10 @@ def _random_link(rng, kind: str, planar: bool, radius: float = 0.0, reach: float
     return RigidLink(length, mass, com, tuple(map(tuple, inertia)), radius)
 
 
-def random_structure(rng, index: int, n_max: int = 8) -> Scene:
-    """A compiled model's worth of randomness: n, link kinds, twists, planar or spatial, gravity.  The
-    numbers (lengths, masses, walls, start) are redrawn per run."""
+def random_structure(rng, index: int, n_max: int = 8, capsules: bool = True) -> Scene:
+    """A compiled model's worth of randomness: n, link kinds, twists, planar or spatial, gravity, capsule radii.  The
+    numbers (lengths, masses, walls, start) are redrawn per run.  capsules=False: the structure as drawn before
+    capsules were part of the distribution (the same draws without the radii)."""
     n = int(rng.integers(1, n_max + 1))
     planar = rng.uniform() < 0.35
     kinds = [str(rng.choice(["line", "rigid"])) for _ in range(n)]
@@ -131,7 +132,7 @@ def random_structure(rng, index: int, n_max: int = 8) -> Scene:
     # structure's seed so that the other structures and their runs stay as they were
     side = _child_stream(rng, CAPSULE_STREAM)
     link_e = None
-    if not rough and side.uniform() < CAPSULE_SHARE / (1.0 - ROUGH_SHARE):
+    if capsules and not rough and side.uniform() < CAPSULE_SHARE / (1.0 - ROUGH_SHARE):
         capsule = side.uniform(size=n) < CAPSULE_LINK
         capsule[int(side.integers(n))] |= not capsule.any()
         radii = [_log_uniform(side, *RADIUS_RANGE) if c else 0.0 for c in capsule]

@@ -36,17 +36,12 @@ def test_structures_are_deterministic_valid_and_cover_the_distribution():
 
 def test_capsules_leave_the_other_structures_and_their_runs_as_they_were():
     """The capsule draw comes from a child stream of the structure's seed: a structure without capsules is the one
-    drawn with the capsule share at 0, and its rng is left at the same point for its runs."""
-    share = fuzz.CAPSULE_SHARE
+    drawn without them (capsules=False), and its rng is left at the same point for its runs."""
     for i in range(40):
         rng = np.random.default_rng([0, i])
         scene = fuzz.random_structure(rng, i)
-        fuzz.CAPSULE_SHARE = 0.0
-        try:
-            rng_old = np.random.default_rng([0, i])
-            old = fuzz.random_structure(rng_old, i)
-        finally:
-            fuzz.CAPSULE_SHARE = share
+        rng_old = np.random.default_rng([0, i])
+        old = fuzz.random_structure(rng_old, i, capsules=False)
         assert rng.uniform() == rng_old.uniform()
         if not fuzz.has_capsules(scene):
             assert scene == old

@@ -10,9 +10,13 @@ rigid bodies (a random box, centre of mass off the axis, principal axes turned);
 joint axes, start in the X1-X2 plane) and spatial ones with random twists; gravity 0 or 9.81; a box around
 the start, often cramped (margins 1e-3 ... 1 of the chain's extent, so that a side can be shorter than the
 chain); restitution per wall 0, 1 or uniform in [0, 1]; Coulomb friction on the walls of 30 % of the structures
-(c_f uniform in [0, 1.5] per wall and run, drawn so that the other structures' runs are unchanged); rates up to
-20 rad/s; DOPRI5 and DOP853 at
-rtol 1e-11 ... 1e-6 (atol = rtol x the shortest link, at least 1e-16) and RK4 at dt 1e-5 ... 1e-3 s.  A
+(c_f uniform in [0, 1.5] per wall and run, drawn so that the other structures' runs are unchanged); capsule links
+on a quarter of the structures, all frictionless ones (each link a capsule with probability 0.7, at least one;
+radius r log-uniform in 5e-5 ... 5e-2 m; every link's length, capsule or not, log-uniform in 20 R ... 2e4 R
+(at most 1e2 m) with R the chain's largest radius, so that a capsule is thin against every link; every
+non-adjacent pair of links with a capsule strikes the other, restitution 0, 1 or uniform in [0, 1]; the box
+margins add the largest radius and the start is redrawn until no pair overlaps); rates up to 20 rad/s; DOPRI5 and
+DOP853 at rtol 1e-11 ... 1e-6 (atol = rtol x the shortest link, at least 1e-16) and RK4 at dt 1e-5 ... 1e-3 s.  A
 *structure* (n, link kinds, twists, planar or not) is compiled once; its runs draw new lengths, masses,
 inertias, walls, restitutions, start and integrator through the parameter vector and the start override.
 
@@ -20,6 +24,10 @@ Every run is checked independently of the engine's own checks (``check_run``):
   * no NaN in the samples, the impact states and the final state;
   * penetration: the compiled gap kernel on every sample and impact state >= -PEN_TOL (relative to the
     chain's extent, plus the simultaneity window of the adaptive methods; RK4_PEN x the extent for RK4);
+  * capsules against walls, in numpy from the joint points (model.contact_points): a capsule link's wall gap,
+    the distance of its segment's nearest point (an end point) to the wall less its radius, >= -the same tolerance;
+  * capsules against capsules: for every link pair of the scene, the distance of the two segments (an
+    independent closest-points computation, not the model's link_gap) less r_i + r_j >= -the same tolerance;
   * no energy gain at an impact: T from the recorded velocities at the impact configuration, after <=
     before (1 + tol), tol = max(ENERGY_TOL, 10 x the impact's stated round-off bound);
   * e = 1 kept: where every contact that took an impulse is on a wall with e = 1, |T_after + energy taken
@@ -41,7 +49,7 @@ import re
 import sys
 import time
 import traceback
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -55,6 +63,12 @@ BUDGET_SLACK = 5.0        # s beyond the budget before a run counts as over it
 T_END_MAX = 2.0           # s
 ROUGH_SHARE = 0.3         # structures whose walls have Coulomb friction (c_f uniform in [0, 1.5] per run and wall)
 ROUGH_STREAM = 7919       # the random stream that decides it, apart from the structure's own
+CAPSULE_SHARE = 0.25      # structures with capsule links (drawn among the frictionless ones)
+CAPSULE_STREAM = 104729   # the child stream of the structure's seed that decides it and draws the radii
+CAPSULE_LINK = 0.7        # probability that a link of a capsule structure is a capsule
+RADIUS_RANGE = (5e-5, 5e-2)       # m, log-uniform
+LENGTH_PER_RADIUS = (20.0, 2e4)   # a capsule structure's link lengths / its largest radius, log-uniform
+START_TRIES = 200         # starts drawn before a capsule structure's run gives up finding one without overlap
 
 # Stops that are failures of the engine: its own post-impact checks and non-finite states.
 FAILURE_PATTERNS = (
@@ -79,13 +93,16 @@ def _rotation(rng) -> np.ndarray:
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
-def _random_link(rng, kind: str, planar: bool):
-    length, mass = _log_uniform(rng, 1e-3, 1e2), _log_uniform(rng, 1e-4, 1e4)
+def _random_link(rng, kind: str, planar: bool, radius: float = 0.0, reach: float = 0.0):
+    """A link of the given kind and capsule radius; in a chain whose largest radius is reach > 0 the length is drawn
+    against it (LENGTH_PER_RADIUS, with the same number of draws)."""
+    lo, hi = (1e-3, 1e2) if reach == 0.0 else (reach * LENGTH_PER_RADIUS[0], min(1e2, reach * LENGTH_PER_RADIUS[1]))
+    length, mass = _log_uniform(rng, lo, hi), _log_uniform(rng, 1e-4, 1e4)
     if kind == "line":
         mu = mass / length
         r = length * _log_uniform(rng, 1e-3, 1e-1)
         axial = mu * r * r / 2 * (_log_uniform(rng, 1e-8, 1.0) if rng.uniform() < 0.3 else 1.0)
-        return LineLink(length, mu, (axial, mu * r * r / 4, mu * r * r / 4))
+        return LineLink(length, mu, (axial, mu * r * r / 4, mu * r * r / 4), radius)
     a, b, c = length, length * rng.uniform(0.05, 1.0), length * rng.uniform(0.05, 1.0)
     moments = mass / 12 * np.array([b * b + c * c, a * a + c * c, a * a + b * b])
     R = np.eye(3) if planar else _rotation(rng)
@@ -93,12 +110,13 @@ def _random_link(rng, kind: str, planar: bool):
     inertia = (inertia + inertia.T) / 2
     com = (length * rng.uniform(0.1, 0.9), 0.0 if planar else length * rng.uniform(-0.2, 0.2),
            0.0 if planar else length * rng.uniform(-0.2, 0.2))
-    return RigidLink(length, mass, com, tuple(map(tuple, inertia)))
+    return RigidLink(length, mass, com, tuple(map(tuple, inertia)), radius)
 
 
-def random_structure(rng, index: int, n_max: int = 8) -> Scene:
-    """A compiled model's worth of randomness: n, link kinds, twists, planar or spatial, gravity.  The
-    numbers (lengths, masses, walls, start) are redrawn per run."""
+def random_structure(rng, index: int, n_max: int = 8, capsules: bool = True) -> Scene:
+    """A compiled model's worth of randomness: n, link kinds, twists, planar or spatial, gravity, capsule radii.  The
+    numbers (lengths, masses, walls, start) are redrawn per run.  capsules=False: the structure as drawn before
+    capsules were part of the distribution (the same draws without the radii)."""
     n = int(rng.integers(1, n_max + 1))
     planar = rng.uniform() < 0.35
     kinds = [str(rng.choice(["line", "rigid"])) for _ in range(n)]
@@ -110,10 +128,31 @@ def random_structure(rng, index: int, n_max: int = 8) -> Scene:
     # friction on the walls of some structures, drawn apart so that the frictionless structures and their runs
     # stay those of earlier releases of this study
     rough = np.random.default_rng([index, ROUGH_STREAM]).uniform() < ROUGH_SHARE
+    # capsules on some frictionless structures (a rough wall refuses them), drawn from a child stream of the
+    # structure's seed so that the other structures and their runs stay as they were
+    side = _child_stream(rng, CAPSULE_STREAM)
+    link_e = None
+    if capsules and not rough and side.uniform() < CAPSULE_SHARE / (1.0 - ROUGH_SHARE):
+        capsule = side.uniform(size=n) < CAPSULE_LINK
+        capsule[int(side.integers(n))] |= not capsule.any()
+        radii = [_log_uniform(side, *RADIUS_RANGE) if c else 0.0 for c in capsule]
+        links = tuple(replace(link, radius=r) for link, r in zip(links, radii))
+        link_e = float(side.choice([0.0, 1.0, side.uniform()]))
     walls = tuple(Wall(name, -1e3 if name.endswith("min") else 1e3, 1.0, friction=0.5 if rough else 0.0)
                   for name in WALL_NAMES if not (planar and name.startswith("x3")))
     q0 = [-math.pi / 2, 0.0] + [0.0] * n + [0.0, 0.0, 0.0]
-    return Scene(name=f"fuzz{index}", links=links, twists=twists, gravity=gravity, walls=walls, q0=tuple(q0))
+    return Scene(name=f"fuzz{index}", links=links, twists=twists, gravity=gravity, walls=walls, q0=tuple(q0),
+                 link_restitution=link_e)
+
+
+def _child_stream(rng, key: int):
+    """An independent stream from rng's seed (a SeedSequence child), leaving rng's own draws untouched."""
+    seq = rng.bit_generator.seed_seq
+    return np.random.default_rng(np.random.SeedSequence(seq.entropy, spawn_key=tuple(seq.spawn_key) + (key,)))
+
+
+def has_capsules(scene: Scene) -> bool:
+    return any(link.radius > 0.0 for link in scene.links)
 
 
 @dataclass
@@ -129,31 +168,38 @@ class Run:
 
 
 def random_run(rng, scene: Scene, model) -> Run:
-    """New lengths, masses, inertias (same link kinds), a box around a random start, restitutions,
-    rates and an integrator."""
+    """New lengths, masses, inertias (same link kinds and radii), a box around a random start (clear of the
+    capsules, no link pair overlapping), restitutions, rates and an integrator."""
     planar = scene.walls and not any(w.name.startswith("x3") for w in scene.walls)
-    links = tuple(_random_link(rng, link.kind, planar) for link in scene.links)
+    reach = max(link.radius for link in scene.links)
+    links = tuple(_random_link(rng, link.kind, planar, link.radius, reach) for link in scene.links)
     names = scene.parameter_names()
     p = model.p.copy()
     values = [v for link in links for v in link.param_values()]
     p[1:1 + len(values)] = values
     p[0] = scene.gravity
     n = scene.n
-    q = np.zeros(scene.nq)
-    q[2:2 + n] = rng.uniform(-math.pi, math.pi, n)
-    if planar:
-        q[0] = -math.pi / 2
+    radii = [link.radius for link in scene.links]
+    for _ in range(START_TRIES):                 # capsule structures: a start where no pair overlaps
+        q = np.zeros(scene.nq)
+        q[2:2 + n] = rng.uniform(-math.pi, math.pi, n)
+        if planar:
+            q[0] = -math.pi / 2
+        else:
+            q[0] = rng.uniform(-math.pi, math.pi)
+            q[1] = rng.uniform(-1.2, 1.2)
+        q_model = model.layout.reduce(q)
+        points = model.contact_points(q_model, p)
+        if min(pair_gaps(points, radii, scene.link_pairs()), default=1.0) > 0.0:
+            break
     else:
-        q[0] = rng.uniform(-math.pi, math.pi)
-        q[1] = rng.uniform(-1.2, 1.2)
-    q_model = model.layout.reduce(q)
-    points = model.contact_points(q_model, p)
+        raise ValueError(f"{scene.name}: no start without overlapping capsules in {START_TRIES} draws")
     lo, hi = points.min(axis=0), points.max(axis=0)
     extent = float(max((hi - lo).max(), min(link.length for link in links)))
     for name in names:
         if name.startswith("wall_"):
             axis, side = int(name[6]) - 1, name.endswith("max")
-            margin = extent * _log_uniform(rng, 1e-3, 1.0)
+            margin = extent * _log_uniform(rng, 1e-3, 1.0) + reach     # the box clears every capsule at the start
             p[names.index(name)] = hi[axis] + margin if side else lo[axis] - margin
         elif name.startswith("e_"):
             p[names.index(name)] = float(rng.choice([0.0, 1.0, rng.uniform()]))
@@ -202,10 +248,70 @@ class Outcome:
     roundoff: float = 0.0     # the largest relative accuracy an impact of the run states (record.roundoff), or 0
     inaccurate: bool = False  # the run stopped with an impact whose accuracy is useless (GAC_ERR_IMPACT_ACCURACY)
     cause: str = ""           # for a run whose least accurate impact is above 1e-10: why (runtime accuracy_cause)
+    capsules: bool = False    # the structure has capsule links (and link pairs)
 
 
 def classify(message: str) -> str:
     return re.sub(r"[-+]?\d[\d.]*(e[-+]?\d+)?", "#", message)[:120]
+
+
+def segment_distance(a0, a1, b0, b1) -> float:
+    """min |a(s) - b(t)| over 0 <= s, t <= 1 for the segments a(s) = a0 + s (a1 - a0), b(t) = b0 + t (b1 - b0): the
+    smallest of the candidates, the interior stationary point (when the segments are not parallel) and the minimum
+    along each edge of the unit square (one clamped quadratic)."""
+    d1, d2, r = a1 - a0, b1 - b0, a0 - b0
+    aa, bb, ab = float(d1 @ d1), float(d2 @ d2), float(d1 @ d2)
+    pairs = []
+    det = aa * bb - ab * ab
+    if det > 1e-12 * aa * bb:                   # the normal equations of |r + s d1 - t d2|^2
+        s = (ab * float(d2 @ r) - bb * float(d1 @ r)) / det
+        t = (aa * float(d2 @ r) - ab * float(d1 @ r)) / det
+        if 0.0 <= s <= 1.0 and 0.0 <= t <= 1.0:
+            pairs.append((s, t))
+    for s in (0.0, 1.0):
+        pairs.append((s, min(max(float((r + s * d1) @ d2) / bb, 0.0), 1.0) if bb > 0.0 else 0.0))
+    for t in (0.0, 1.0):
+        pairs.append((min(max(-float((r - t * d2) @ d1) / aa, 0.0), 1.0) if aa > 0.0 else 0.0, t))
+    return min(float(np.linalg.norm(r + s * d1 - t * d2)) for s, t in pairs)
+
+
+def pair_gaps(points: np.ndarray, radii, pairs) -> list[float]:
+    """Each link pair's gap from the joint points O_1..O_{n+1} (rows of points): the distance of the segments
+    O_i O_{i+1} and O_j O_{j+1} less r_i + r_j."""
+    return [segment_distance(points[i - 1], points[i], points[j - 1], points[j]) - radii[i - 1] - radii[j - 1]
+            for i, j in pairs]
+
+
+def capsule_wall_gaps(points: np.ndarray, radii, walls) -> list[float]:
+    """Each capsule link's gap to each wall from the joint points: the signed distance of its segment's nearest
+    point (the nearer end, the distance being linear along the segment) less its radius."""
+    gaps = []
+    for w in walls:
+        inward = points[:, w.axis] - w.position if w.side < 0 else w.position - points[:, w.axis]
+        gaps += [min(inward[p - 1] for p in (i, i + 1) if p in w.points) - r for i, r in enumerate(radii, start=1)
+                 if r > 0.0 and (i in w.points or i + 1 in w.points)]
+    return gaps
+
+
+def check_capsules(model, run: Run, states, pen_tol: float) -> list[str]:
+    """The capsules' checks (module docstring) on full-layout states: walls at the run's positions in p."""
+    scene = model.scene
+    radii = [link.radius for link in scene.links]
+    if not any(radii):
+        return []
+    names = scene.parameter_names()
+    walls = [replace(w, position=float(run.p[names.index(f"wall_{w.name}")])) for w in scene.walls]
+    pairs, violations = scene.link_pairs(), []
+    deepest_wall = deepest_pair = math.inf
+    for q in states:
+        points = model.contact_points(model.layout.reduce(q), run.p)
+        deepest_wall = min([deepest_wall] + capsule_wall_gaps(points, radii, walls))
+        deepest_pair = min([deepest_pair] + pair_gaps(points, radii, pairs))
+    if deepest_wall < -pen_tol:
+        violations.append(f"capsule penetrates a wall by {-deepest_wall:.3g} m > {pen_tol:.3g} m")
+    if deepest_pair < -pen_tol:
+        violations.append(f"capsules overlap by {-deepest_pair:.3g} m > {pen_tol:.3g} m")
+    return violations
 
 
 def check_run(model, run: Run, result, seconds: float, budget: float) -> list[str]:
@@ -223,6 +329,7 @@ def check_run(model, run: Run, result, seconds: float, budget: float) -> list[st
         deepest = min(float(model.contact_gaps(q, p).min()) for q in states)
         if deepest < -pen_tol:
             violations.append(f"penetration {-deepest:.3g} m > {pen_tol:.3g} m")
+    violations += check_capsules(model, run, list(result.q) + [i.q for i in result.impacts], pen_tol)
     for impact in result.impacts:
         q = layout.reduce(impact.q)
         T0 = model.energy(q, layout.reduce(impact.qd_before), p)[0]
@@ -254,15 +361,21 @@ def run_structure(args) -> list[Outcome]:
     rng = np.random.default_rng([seed, index])
     scene = random_structure(rng, index, n_max)
     planar = not any(wall.name.startswith("x3") for wall in scene.walls)   # a planar structure has no X3 walls
+    capsules = has_capsules(scene)
     outcomes = []
     try:
         model = load_model(scene, specialise=False)
     except Exception as exc:                           # noqa: BLE001 - reported as an outcome
         return [Outcome(f"{seed}-{index}/{k}", scene.n, False, "-", -1, f"exception: {classify(str(exc))}", True,
-                        message=str(exc)) for k in range(runs)]
+                        message=str(exc), capsules=capsules) for k in range(runs)]
     for k in range(runs):
-        run = random_run(rng, scene, model)
         case = f"{seed}-{index}/{k}"
+        try:
+            run = random_run(rng, scene, model)
+        except ValueError as exc:                      # no start without overlapping capsules: the draw's limit
+            outcomes.append(Outcome(case, scene.n, planar, "-", -1, f"no start: {classify(str(exc))}", False,
+                                    message=str(exc), capsules=capsules))
+            continue
         start = time.perf_counter()
         try:
             result = simulate(model, run.t_end, p=run.p, q0=run.q0, qd0=run.qd0, max_wall_time=budget,
@@ -270,11 +383,12 @@ def run_structure(args) -> list[Outcome]:
         except ValueError as exc:                      # a refused setting (an RK4 step past stability)
             seconds = time.perf_counter() - start
             outcomes.append(Outcome(case, scene.n, planar, run.options["method"], -1,
-                                    f"refused: {classify(str(exc))}", False, seconds=seconds, message=str(exc)))
+                                    f"refused: {classify(str(exc))}", False, seconds=seconds, message=str(exc),
+                                    capsules=capsules))
             continue
         except Exception:                              # noqa: BLE001 - a traceback is a failure
             outcomes.append(Outcome(case, scene.n, planar, run.options["method"], -1, "exception", True,
-                                    message=traceback.format_exc()[-400:]))
+                                    message=traceback.format_exc()[-400:], capsules=capsules))
             continue
         seconds = time.perf_counter() - start
         violations = check_run(model, run, result, seconds, budget)
@@ -289,7 +403,7 @@ def run_structure(args) -> list[Outcome]:
                                    impact_contact_indices(model, worst), worst.law, worst.residual)
         outcomes.append(Outcome(case, scene.n, planar, run.options["method"], result.status, text, failed,
                                 violations, len(result.impacts), seconds, result.message, roundoff, inaccurate,
-                                cause))
+                                cause, capsules))
     return outcomes
 
 
@@ -333,6 +447,17 @@ def accuracy_summary(outcomes: list[Outcome]) -> str:
     flagged = [f"- {o.case}: {o.roundoff:.2g}, {o.cause}" for o in outcomes if o.roundoff > 1e-10 and o.cause]
     return (f"impact accuracy: {worse_10} of {n} runs state an impact less accurate than 1e-10, {worse_6} than 1e-6; "
             f"{stopped} stop with an impact of useless accuracy" + "".join("\n" + line for line in flagged))
+
+
+def capsule_summary(outcomes: list[Outcome]) -> str:
+    """How many structures (and their runs) have capsule links, and how those runs ended."""
+    structures = {o.case.split("/")[0] for o in outcomes}
+    runs = [o for o in outcomes if o.capsules]
+    with_caps = {o.case.split("/")[0] for o in runs}
+    checks = sum(any(v.startswith("caps") for v in o.violations) for o in runs)
+    return (f"capsules: {len(with_caps)} of {len(structures)} structures ({len(runs)} runs) have capsule links; "
+            f"{sum(o.failed for o in runs)} of their runs failed, {checks} on a capsule check, "
+            f"{sum(o.outcome == 'ok' for o in runs)} ended ok")
 
 
 # ---------------------------------------------------------------------------
@@ -396,6 +521,7 @@ def main(argv=None) -> int:
     print(table(outcomes))
     print()
     print(accuracy_summary(outcomes))
+    print(capsule_summary(outcomes))
     failed = [o for o in outcomes if o.failed]
     for o in failed[:50]:
         print(f"FAILED {o.case} ({o.method}, n = {o.n}): {o.violations or o.message[:200]}")

@@ -26,6 +26,27 @@ def test_structures_are_deterministic_valid_and_cover_the_distribution():
     masses = [link.mass for s in scenes for link in s.links]
     assert min(lengths) < 3e-3 and max(lengths) > 30 and min(masses) < 1e-3 and max(masses) > 1e3
     assert {s.gravity for s in scenes} == {0.0, 9.81}
+    capsules = [s for s in scenes if fuzz.has_capsules(s)]
+    assert 0.15 < len(capsules) / len(scenes) < 0.35
+    assert not any(w.friction > 0.0 for s in capsules for w in s.walls)         # rough walls refuse capsules
+    radii = [link.radius for s in capsules for link in s.links if link.radius > 0.0]
+    assert fuzz.RADIUS_RANGE[0] <= min(radii) and max(radii) <= fuzz.RADIUS_RANGE[1]
+    assert any(s.link_pairs() for s in capsules)
+
+
+def test_capsules_leave_the_other_structures_and_their_runs_as_they_were():
+    """The capsule draw comes from a child stream of the structure's seed: a structure without capsules is the one
+    drawn without them (capsules=False), and its rng is left at the same point for its runs."""
+    for i in range(40):
+        rng = np.random.default_rng([0, i])
+        scene = fuzz.random_structure(rng, i)
+        rng_old = np.random.default_rng([0, i])
+        old = fuzz.random_structure(rng_old, i, capsules=False)
+        assert rng.uniform() == rng_old.uniform()
+        if not fuzz.has_capsules(scene):
+            assert scene == old
+        else:
+            assert [link.length for link in scene.links] == [link.length for link in old.links]
 
 
 def test_runs_start_strictly_inside_their_box_with_every_restitution_kind(compiled):
@@ -185,3 +206,87 @@ def test_the_accuracy_summary_names_each_flagged_runs_cause():
     lines = text.splitlines()
     assert lines[0].startswith("impact accuracy: 1 of 3 runs state an impact less accurate than 1e-10, 0 than 1e-6")
     assert lines[1:] == ["- 0-2/1: 2.2e-10, the base chart is near its singular pose"]
+
+
+CAPSULE_CASE = (11, 7, 3)      # seed, structure, n_max: three links, capsules on links 1 and 2, the pair (1, 3)
+
+
+def test_a_capsule_structure_runs_through_the_study_path():
+    """A structure with capsule links and a link pair, two runs, through run_structure: the outcomes say it has
+    capsules, and both runs end cleanly and pass the checks, the capsules' included."""
+    seed, index, n_max = CAPSULE_CASE
+    scene = fuzz.random_structure(np.random.default_rng([seed, index]), index, n_max)
+    assert fuzz.has_capsules(scene) and scene.link_pairs() == [(1, 3)]
+    outcomes = fuzz.run_structure((seed, index, 2, 30.0, n_max))
+    assert len(outcomes) == 2 and all(o.capsules for o in outcomes)
+    assert [(o.case, o.violations, o.message) for o in outcomes if o.failed] == []
+    assert fuzz.capsule_summary(outcomes).startswith("capsules: 1 of 1 structures (2 runs) have capsule links; "
+                                                     "0 of their runs failed")
+
+
+def test_segment_distance_against_a_dense_search():
+    """The independent closest-points computation against a 401 x 401 grid of (s, t): never above the grid's least
+    distance and within the grid's resolution below it, for skew, parallel, collinear and crossing segments and a
+    segment of zero length."""
+    rng = np.random.default_rng(2)
+    cases = [tuple(rng.normal(size=(4, 3))) for _ in range(40)]
+    a0, a1 = np.zeros(3), np.array([1.0, 0, 0])
+    cases += [(a0, a1, np.array([0.2, 0.3, 0]), np.array([0.9, 0.3, 0])),          # parallel
+              (a0, a1, np.array([1.5, 0, 0]), np.array([2.5, 0, 0])),              # collinear, apart
+              (a0, a1, np.array([0.5, -1, 0]), np.array([0.5, 1, 0])),             # crossing
+              (a0, a1, np.array([0.5, 0.5, 0.5]), np.array([0.5, 0.5, 0.5]))]      # a point
+    grid = np.linspace(0.0, 1.0, 401)
+    for b in cases:
+        p0, p1, q0, q1 = (np.asarray(x, dtype=float) for x in b)
+        A = p0 + grid[:, None] * (p1 - p0)
+        B = q0 + grid[:, None] * (q1 - q0)
+        brute = np.linalg.norm(A[:, None, :] - B[None, :, :], axis=2).min()
+        d = fuzz.segment_distance(p0, p1, q0, q1)
+        step = (np.linalg.norm(p1 - p0) + np.linalg.norm(q1 - q0)) / 400
+        assert brute - step <= d <= brute + 1e-12
+
+
+def test_each_capsule_check_can_fail(compiled):
+    """Doctored states of the capsule structure: a wall moved to half a radius inside a capsule's end (the joint
+    point itself still clear of it), and links 1 and 3 folded across each other: check_run reports each with its
+    capsule check; the untouched start passes."""
+    seed, index, n_max = CAPSULE_CASE
+    rng = np.random.default_rng([seed, index])
+    scene = fuzz.random_structure(rng, index, n_max)
+    model = compiled(scene)
+    run = fuzz.random_run(rng, scene, model)
+    names = scene.parameter_names()
+    reach = max(link.radius for link in scene.links)
+    assert all(run.p[names.index(f"l_{i}")] >= fuzz.LENGTH_PER_RADIUS[0] * reach for i in range(1, scene.n + 1))
+    run.options = {"method": "dopri5", "rtol": 1e-10, "atol": 1e-12}
+    q, qd = run.q0, run.qd0
+    clean = FakeResult(np.array([q]), np.array([qd]), q, qd)
+    assert fuzz.check_run(model, run, clean, 0.1, 20.0) == []
+    # a wall half a radius inside link 2's capsule
+    r = scene.links[1].radius
+    points = model.contact_points(model.layout.reduce(q), run.p)
+    sunk = fuzz.Run(run.p.copy(), q, qd, run.t_end, run.options, run.extent)
+    sunk.p[names.index("wall_x2_min")] = min(points[1, 1], points[2, 1]) - r / 2
+    violations = fuzz.check_run(model, sunk, clean, 0.1, 20.0)
+    assert any(v.startswith("capsule penetrates a wall by") for v in violations), violations
+    # links 1 and 3 folded across each other: the deepest of a grid of the two joint angles, lengths 1, 0.5, 1 m
+    folded = fuzz.Run(run.p.copy(), q, qd, run.t_end, run.options, run.extent)
+    for i, length in enumerate((1.0, 0.5, 1.0), start=1):
+        folded.p[names.index(f"l_{i}")] = length
+    for name in names:
+        if name.startswith("wall_"):
+            folded.p[names.index(name)] = 1e3 if name.endswith("max") else -1e3
+    radii = [link.radius for link in scene.links]
+    states = []
+    for a in np.linspace(-np.pi, np.pi, 25):
+        for b in np.linspace(-np.pi, np.pi, 25):
+            state = q.copy()
+            state[3:5] = a, b
+            gap = fuzz.pair_gaps(model.contact_points(model.layout.reduce(state), folded.p), radii, [(1, 3)])[0]
+            states.append((gap, state))
+    gap, state = min(states, key=lambda item: item[0])
+    assert gap < -1e-4 and model.link_gap(model.layout.reduce(state), 1, 3, folded.p)[0] == pytest.approx(gap)
+    fold = FakeResult(np.array([state]), np.array([qd]), state, qd)
+    violations = fuzz.check_run(model, folded, fold, 0.1, 20.0)
+    assert any(v.startswith("capsules overlap by") for v in violations), violations
+    assert not any(v.startswith("capsule penetrates") for v in violations)

@@ -382,6 +382,16 @@ static void gac_balance_residual(const gac_model *m, const double *q, const doub
     b->moved = fabs((double)work_m);
 }
 
+/* 1 if adding dLambda along the held directions would make a contact's normal impulse pull (F < 0). */
+static int gac_held_would_pull(int nh, const gac_held *held, const double *F, const double *dl)
+{
+    int a;
+    for (a = 0; a < nh; ++a) {
+        if (held[a].tangent < 0 && F[held[a].contact] + dl[a] < 0.0) return 1;
+    }
+    return 0;
+}
+
 /* Lambda += dLambda along the held directions (a slide's direction adds to its tangential impulses in ratio). */
 static void gac_held_add(const gac_model *m, const int *list, int nh, const gac_held *held, const double *dl,
                          double *F, double *Ft)
@@ -457,12 +467,12 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
                            const double *qd, double *qd_plus, double T, double *work, double *v_acc)
 {
     const int nq = m->nq;
-    double f[GAC_AT_LEAST_1(m->njrow)], res_r[GAC_AT_LEAST_1(nq)], res_bound[GAC_AT_LEAST_1(nq)];
-    double r[GAC_AT_LEAST_1(nq)], dq[GAC_AT_LEAST_1(nq)], kept[GAC_AT_LEAST_1(nq)], scratch[2 * GAC_AT_LEAST_1(nq)];
+    double f[GAC_AT_LEAST_1(m->njrow)], r[GAC_AT_LEAST_1(nq)], bound_now[GAC_AT_LEAST_1(nq)];
+    double dq[GAC_AT_LEAST_1(nq)], kept[GAC_AT_LEAST_1(nq)], scratch[2 * GAC_AT_LEAST_1(nq)];
     gac_balance res;
     double previous = INFINITY, previous_balance = INFINITY, previous_missed = INFINITY;
     double balance = 0.0, floor = 0.0, law_work = 0.0, identity;
-    double bound_now[GAC_AT_LEAST_1(nq)], bound_kept[GAC_AT_LEAST_1(nq)];
+    double bound_kept[GAC_AT_LEAST_1(nq)];
     double Fs[GAC_AT_LEAST_1(nq)], F_kept[GAC_AT_LEAST_1(nq)], dl[GAC_AT_LEAST_1(nq)];
     double Fts[2 * GAC_AT_LEAST_1(nq)], Ft_kept[2 * GAC_AT_LEAST_1(nq)];
     const double *Y = GAC_WORK_Y(m, work);
@@ -474,8 +484,8 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     const int aims = rounds == 1 && !plastic && (law == GAC_IMPACT_LAW_FRICTIONLESS || law == GAC_IMPACT_LAW_GDI
                                                  || law == GAC_IMPACT_LAW_GDI_COMMON_E);
     int nh = 0, nnormal, a, i, it, pass;
-    res.r = res_r;
-    res.bound = res_bound;
+    res.r = r;                                           /* the balance's residual and bounds, evaluated in place */
+    res.bound = bound_now;
     for (a = 0; a < n; ++a) {
         Fs[a] = F[a];
         Fts[2*a] = Ft[2*a];
@@ -558,8 +568,6 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, extended ? h_minus : 0, &res);
         balance = res.balance;
         floor = res.floor;
-        gac_copy(bound_now, res.bound, nq);
-        gac_copy(r, res.r, nq);
         m->contact_velocities(q, qd_plus, p, after);
         for (a = 0; a < nh; ++a) {                       /* the held directions' misses of the law's targets */
             miss[a] = held[a].aimed ? gac_held_velocity(m, list, &held[a], qd_plus, after) - held[a].target : 0.0;
@@ -601,8 +609,7 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         for (a = 0; a < nh; ++a) dl[a] -= miss[a];
         if (nh > 0) gac_ldlt_solve(nh, GAC_WORK_A(m, work), dl);   /* A_HH dLambda_H = N_H I_f^-1 r - miss_H */
         if (nh > 0 && !gac_finite(dl, nh)) break;
-        for (a = 0; a < nh && !(held[a].tangent < 0 && Fs[held[a].contact] + dl[a] < 0.0); ++a) {}
-        if (a < nh) break;                               /* it would pull: keep the impulses as they are */
+        if (gac_held_would_pull(nh, held, Fs, dl)) break;   /* keep the impulses as they are */
         for (i = 0; i < nq; ++i) {
             double s = -dq[i];
             for (a = 0; a < nh; ++a) s += Y[(long)a * nq + i] * dl[a];
@@ -614,7 +621,7 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
      * rounds' impulses can stand far from those that balance the velocities, r then lying along the held rows,
      * where it moves no velocity, qd+ . r ~ 0, but the energy identity by qd- . r): Lambda_H += dLambda_H,
      * A_HH dLambda_H = N_H I_f^-1 r, while |qd+ . r| + |qd- . r| falls by half above its floor; never a pull. */
-    gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, extended ? h_minus : 0, &res);
+    if (nh > 0) gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, extended ? h_minus : 0, &res);
     for (it = 0; nh > 0 && it < GAC_REFINE_BALANCE_STEPS; ++it) {
         const double now = res.balance + res.moved;
         if (now <= 2.0 * (res.floor + res.moved_floor)) break;
@@ -625,8 +632,7 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         }
         gac_ldlt_solve(nh, GAC_WORK_A(m, work), dl);
         if (!gac_finite(dl, nh)) break;
-        for (a = 0; a < nh && !(held[a].tangent < 0 && Fs[held[a].contact] + dl[a] < 0.0); ++a) {}
-        if (a < nh) break;                               /* it would pull */
+        if (gac_held_would_pull(nh, held, Fs, dl)) break;
         gac_copy(F_kept, Fs, n);
         gac_copy(Ft_kept, Fts, 2 * n);
         gac_held_add(m, list, nh, held, dl, Fs, Fts);

@@ -1,12 +1,14 @@
 /*
  * gac_sens.c -- forward sensitivities of a hybrid run (gac.h, "forward sensitivities of a run"): the variational
  * equations in flight, free or with resting contacts held (the constrained dynamics' tangent; a point stuck on a
- * rough wall held along every axis, its tangential rows with its normal one), taken by the run's
+ * rough wall held along every axis, its tangential rows with its normal one; a point sliding there with its Coulomb
+ * or viscous friction, gac_sens_slide_tangent), taken by the run's
  * Runge-Kutta formula over the state's own steps and stages (gac_sens_flight), the derivative of the projection onto
  * the resting contacts after each step (gac_sens_project), the jump of the sensitivities at an impact by the
  * frictionless law -- of one contact or several, walls or joint stops, landings among them, the set of pushing
  * contacts held fixed -- the saltation matrix of Hiskens & Pai (2000) (gac_sens_impact), the release of a resting
- * contact (gac_sens_release), contacts at rest at the start (gac_sens_attach), a switch of base chart
+ * contact (gac_sens_release), a stuck point's slip (gac_sens_slip) and a sliding point's coming to stick
+ * (gac_sens_stick), contacts at rest at the start (gac_sens_attach), a switch of base chart
  * (gac_sens_switch; S is in the coordinates of the chart integrated now, gac_sens_state gives chart A's), and the
  * verdict: the first event not differentiated ends them (gac_sens_stop).
  */
@@ -691,7 +693,9 @@ void gac_sens_project(gac_sim *s, const double *x_pre, const double *x_post)
  * the same formula.)  The stages K_i = f(Y_i) are the step's own (s->f, s->k[1..], as the integrator left them) when
  * `taken` (the step of size h just accepted); otherwise (a part of it, up to an event) K_0 = s->f and the others
  * are computed here.  The directions' tangents go GAC_TANGENT_BLOCK at a time through the model's
- * forward_dynamics_tangent_block (their primal part computed once), the rest one by one. */
+ * forward_dynamics_tangent_block (their primal part computed once), the rest one by one.  With resting contacts the
+ * stage's constrained dynamics and its tangent (gac_sens_held_forces, gac_sens_held_tangent), sliding friction
+ * among them. */
 void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
 {
     gac_sens *z = s->sens;
@@ -938,9 +942,11 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
  * impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).  On rough walls the
  * stuck points are held along every axis: those before (was_stuck, per contact, or NULL: none) in f-, those after
  * (s->is_stuck, as gac_restick re-decided them: called after it, the state after in s->x) in f+ and in the hold,
- * which brings the law's velocities onto their tangential rows too (a landing that sticks).  A point sliding at
- * rest before or after, a stuck point that slipped, or one that came to stick without taking the impact's impulse
- * ends them (GAC_SENS_RESTING, GAC_SENS_STICK), as do impacts of another kind and impacts of two links. */
+ * which brings the law's velocities onto their tangential rows too (a landing that sticks); the others on rough
+ * walls slide in f- and f+ with their friction (a landing that slides on).  A point sliding at rest slower than
+ * friction_velocity before or after (the slip directions of f- are the loop's after the impact), a stuck point that
+ * slipped, or one that came to stick without taking the impact's impulse ends them (GAC_SENS_RESTING,
+ * GAC_SENS_STICK), as do impacts of another kind and impacts of two links. */
 void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const int *was_stuck)
 {
     gac_sens *z = s->sens;
@@ -1410,9 +1416,9 @@ void gac_sens_stick(gac_sim *s, const double *x_before, const int *stuck_before,
     if (!gac_finite(z->S, z->k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, s->t, c);
 }
 
-/* Resting contacts released where the inputs change (gac_recheck_rest: their forces pull at once): the time is fixed
- * (a schedule's breakpoint, or gac_sim_set_input), the state continuous, and the field's jump there moves no
- * derivative: S goes on unchanged, dt = 0. */
+/* Resting contacts released, or stuck points slipped, where the inputs change (gac_recheck_rest: their forces pull at
+ * once, or leave the cone): the time is fixed (a schedule's breakpoint, or gac_sim_set_input), the state continuous,
+ * and the field's jump there moves no derivative: S goes on unchanged, dt = 0. */
 void gac_sens_fixed_release(gac_sim *s)
 {
     gac_sens *z = s->sens;

@@ -990,15 +990,21 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * Resting contacts (frictionless walls): in flight the constrained dynamics' tangent (the forces' by
  * contact_bias_tangent) and the derivative of the projection after each step; a landing's jump uses the field with
  * the set after held and the hold's projection; a release (its force lambda_c reaching 0) dt*_j = -d lambda_c /
- * lambda_c', S+ = S- + (f- - f+) dt*; contacts at rest at the start: their projection.  A switch of base chart
+ * lambda_c', S+ = S- + (f- - f+) dt*; contacts at rest at the start: their projection.  On rough walls: a stuck
+ * point's tangential rows held with its normal one; a sliding point's friction -c_f lambda phi in the flight's tangent
+ * (lambda through the unsymmetric B, phi = v_t / max(|v_t|, v_s) and c_f differentiated); a slip at its event
+ * lambda_N = |lambda_T| / c_f (one tangential axis) by that event's time, S+ = S- + (f- - f+) dt*; sticking at a
+ * step's end as the event |v_t| = v_s, S+ = D P (S- + f- dt*) - f+ dt*, P the velocities' projection onto the stuck
+ * rows.  A switch of base chart
  * (x_B = phi(x_A), either way): S_B = (d phi / dx_A) S_A (gac_chart_convert_tangent), with no saltation term, as
  * the two charts' fields are phi-related; S is carried in the coordinates of the chart integrated now and reported
  * in chart A's (gac_sens_state, the samples).  Events this does not differentiate end the sensitivities (status
  * below): S and dt_impact are then NaN from that event on, the run itself continues.  The status codes: */
 #define GAC_SENS_VALID         0   /* every event so far differentiated */
-#define GAC_SENS_RESTING       1   /* a contact rests on a wall with friction sliding (sliding friction at rest is not
-                                      differentiated; frictionless resting contact and stuck points that landed stuck
-                                      are), or at rest there from the start */
+#define GAC_SENS_RESTING       1   /* a point sliding at rest on a rough wall where its friction is not followed: with
+                                      a slip direction over two tangential axes (below friction_velocity that
+                                      direction, whose derivative is not carried, enters its force), or slower than
+                                      friction_velocity at an impact */
 #define GAC_SENS_FRICTION      2   /* an impact by a frictional law other than GAC_IMPACT_LAW_GDI solved with each
                                       contact's own e (a round with a common e, Newton + Coulomb): the GDI law's
                                       stuck and sliding contacts are differentiated */
@@ -1016,11 +1022,12 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
 #define GAC_SENS_BOUNDARY     10   /* a mode boundary: inside an impact of several contacts, a contact took an impulse
                                       ~0 and leaves at the law's bound (w . qd+ + e w . qd- ~ 0), so a perturbation
                                       may add it to the active set or drop it; or resting contacts released together
-                                      (their forces ~0 at once) */
+                                      (their forces ~0 at once), a slip with another slip or a release, or points
+                                      that stick at one step's end at different speeds */
 #define GAC_SENS_LINK         11   /* an impact of two links (a GAC_CONTACT_LINK contact): not differentiated */
-#define GAC_SENS_STICK        12   /* a stick-slip transition on a rough wall: a stuck resting point slipped or left the
-                                      wall (its event: |lambda_T| = c_f lambda_N), or came to stick other than by
-                                      landing stuck */
+#define GAC_SENS_STICK        12   /* a stick-slip transition on a rough wall not differentiated: a stuck point that
+                                      slipped over two tangential axes or left the wall (its force reaching 0 while
+                                      stuck), or one that came to stick at an impact without taking its impulse */
 
 /* The sensitivities of one run: pointers into the caller's dwork (gac_sens_ndouble(m, k) doubles), laid out as
  * S (k nx) | dp (k nparam) | dt_impact (k) | dgap_held (k max(ncontact, 1)) | scratch | S_keep (k nx).  Direction-major: S[j*nx + i] = d x_i / d direction j

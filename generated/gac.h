@@ -1030,7 +1030,8 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       stuck), or one that came to stick at an impact without taking its impulse */
 
 /* The sensitivities of one run: pointers into the caller's dwork (gac_sens_ndouble(m, k) doubles), laid out as
- * S (k nx) | dp (k nparam) | dt_impact (k) | dgap_held (k max(ncontact, 1)) | scratch | S_keep (k nx).  Direction-major: S[j*nx + i] = d x_i / d direction j
+ * S (k nx) | dp (k nparam) | dt_impact (k) | dgap_held (k max(ncontact, 1)) | dslip (2 k max(ncontact, 1)) |
+ * slip_known (2 max(ncontact, 1)) | scratch | S_keep (k nx).  Direction-major: S[j*nx + i] = d x_i / d direction j
  * (x = [q, qd] at sim.t in the coordinates of the chart integrated now, sim.chart: gac_sens_state gives chart A's),
  * dp[j*nparam + i] the parameter seed of direction j. */
 typedef struct gac_sens_s {
@@ -1045,6 +1046,10 @@ typedef struct gac_sens_s {
     int contact_status;          /* its contact (0..ncontact-1), -1: none */
     long n_impacts;              /* impacts differentiated */
     double *dgap_held;           /* k x max(ncontact, 1): d(the gap a resting contact is held at) / d direction j */
+    double *dslip;               /* k x 2 max(ncontact, 1): d(a sliding point's slip direction, sim.slip) / d direction
+                                    j, known where it was set by a slip over two tangential axes */
+    double *slip_known;          /* 2 max(ncontact, 1): the slip directions dslip is of (a point whose sim.slip
+                                    differs, over two axes, was given its direction elsewhere: not followed) */
     double *work;                /* scratch: the stages */
     double *S_keep;              /* scratch: S kept while a sample's is formed (k x nx) */
     double *S_eval;              /* NULL (default), or the caller's n_eval x k x nx: S at each sample the loop writes
@@ -1055,10 +1060,12 @@ typedef struct gac_sens_s {
                                     gac_sens_attach. */
 } gac_sens;
 
-/* Doubles of a gac_sens's dwork: S, dp, dt_impact, the held gaps' derivatives, 12 stage derivatives of the state
- * and of each direction, and S kept while a sample's is formed. */
+/* Doubles of a gac_sens's dwork: S, dp, dt_impact, the held gaps' derivatives, the slip directions' derivatives and
+ * the directions they are of, 12 stage derivatives of the state and of each direction, and S kept while a sample's
+ * is formed. */
 #define GAC_SENS_NDOUBLE(nq, nparam, ncontact, k) \
-    (14L * (k) * 2 * (nq) + (long)(k) * (nparam) + (k) + (long)(k) * ((ncontact) > 0 ? (ncontact) : 1) + 14L * 2 * (nq))
+    (14L * (k) * 2 * (nq) + (long)(k) * (nparam) + (k) + (3L * (k) + 2) * ((ncontact) > 0 ? (ncontact) : 1) \
+     + 14L * 2 * (nq))
 long gac_sens_ndouble(const gac_model *m, int k);
 
 /* Attach sensitivities along k directions to sim from its current time on: S = seed_x (k x nx, direction-major),

@@ -50,17 +50,22 @@ int gac_sens_attach(gac_sim *s, gac_sens *sens, int k, const double *seed_x, con
     if (!gac_finite(seed_x, k * md->nx) || (seed_p != 0 && !gac_finite(seed_p, k * md->nparam)))
         return GAC_ERR_BAD_OPTION;
     sens->k = k;
-    sens->S = dwork;                              /* dwork: S | dp | dt_impact | dgap_held | work | S_keep */
+    sens->S = dwork;                              /* dwork: S | dp | dt_impact | dgap_held | dslip | slip_known |
+                                                     work | S_keep */
     sens->dp = dwork + (long)k * md->nx;
     sens->dt_impact = sens->dp + (long)k * md->nparam;
     sens->dgap_held = sens->dt_impact + k;
-    sens->work = sens->dgap_held + (long)k * GAC_AT_LEAST_1(md->ncontact);
+    sens->dslip = sens->dgap_held + (long)k * GAC_AT_LEAST_1(md->ncontact);
+    sens->slip_known = sens->dslip + 2L * k * GAC_AT_LEAST_1(md->ncontact);
+    sens->work = sens->slip_known + 2L * GAC_AT_LEAST_1(md->ncontact);
     sens->S_keep = dwork + gac_sens_ndouble(md, k) - (long)k * md->nx;   /* the last k nx doubles */
     sens->S_eval = 0;
     gac_copy(sens->S, seed_x, k * md->nx);
     for (i = 0; i < k * md->nparam; ++i) sens->dp[i] = seed_p != 0 ? seed_p[i] : 0.0;
     for (i = 0; i < k; ++i) sens->dt_impact[i] = 0.0;
     for (i = 0; i < k * GAC_AT_LEAST_1(md->ncontact); ++i) sens->dgap_held[i] = 0.0;
+    for (i = 0; i < 2 * k * GAC_AT_LEAST_1(md->ncontact); ++i) sens->dslip[i] = 0.0;
+    for (i = 0; i < 2 * GAC_AT_LEAST_1(md->ncontact); ++i) sens->slip_known[i] = 0.0;
     sens->status = GAC_SENS_VALID;
     sens->t_status = s->t;
     sens->contact_status = -1;
@@ -192,13 +197,15 @@ static int gac_sens_sliding(const gac_sim *s, const int *stuck, int c)
 }
 
 /* 1 if resting contact c slides with a slip direction (s->slip, set where a stuck point slipped or a slow point
- * could not stick) over two tangential axes: below friction_velocity that direction enters its friction, and its
- * derivative (that of the forces where it was set) is not followed.  Along one axis it is +-1, a constant. */
-static int gac_sens_slip_2d(const gac_sim *s, int c)
+ * could not stick) over two tangential axes whose derivative is not known: below friction_velocity that direction
+ * enters its friction, and its derivative is carried (sens->dslip) only from a slip (gac_sens_slip), not from the
+ * direction a slow point that could not stick was given (gac_try_stick).  Along one axis it is +-1, a constant. */
+static int gac_sens_slip_unknown(const gac_sim *s, int c)
 {
     const gac_contact *ct = s->model->contacts + c;
+    const double *d = s->slip + 2 * c, *known = s->sens->slip_known + 2 * c;
     return gac_sens_sliding(s, s->is_stuck, c) && ct->trow[0] >= 0 && ct->trow[1] >= 0
-           && (s->slip[2 * c] != 0.0 || s->slip[2 * c + 1] != 0.0);
+           && (d[0] != 0.0 || d[1] != 0.0) && (d[0] != known[0] || d[1] != known[1]);
 }
 
 /* A contact of set[0..n-1] sliding at state x slower than friction_velocity (stuck: per contact, or NULL: none is),
@@ -393,11 +400,13 @@ static void gac_sens_set_tangent(const gac_sim *s, const double *q, const gac_se
 /* The sliding contacts' dYd_a = d(I_f^-1 D_a) along (dq, dqd, dp) into dY's rows (dW from gac_sens_set_tangent):
  *     dD_a = dW_a + dc_f G_a + c_f d(J^T g_a)[dq, dg_a, dp],   dg_a = -dphi_a on its tangential rows,
  *     dphi = (I - phi phi^T) dv_t / |v_t|                        (Coulomb, |v_t| > v_s),
- *     dphi = dv_t / v_s - (v_t . dv_t) / (|v_t| v_s) d             (viscous, below v_s; d the slip direction),
+ *     dphi = dv_t / v_s - (v_t . dv_t) / (|v_t| v_s) d + (1 - |v_t| / v_s) dd   (viscous, below v_s; d the slip
+ *                                                                            direction, dd its derivative dslip),
  * dv_t along each tangential row t = d(J^T e_t)[dq, dp] . qd + Wt_t . dqd.  (One tangential axis: phi = +-1, or
  * d where the point moves along d, so dphi = 0 but for the viscous part's dv_t / v_s.) */
 static void gac_sens_slide_tangent(const gac_sim *s, const double *x, const gac_sens_set *H, const double *dq,
-                                   const double *dqd, const double *dp, const double *dW, double *dY)
+                                   const double *dqd, const double *dp, const double *dslip, const double *dW,
+                                   double *dY)
 {
     const gac_model *md = s->model;
     const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow);
@@ -426,6 +435,9 @@ static void gac_sens_slide_tangent(const gac_sim *s, const double *x, const gac_
         } else {                                  /* (at rest along d: |v_t|' = d . dv_t) */
             along = speed > 0.0 ? (vt[0] * dvt[0] + vt[1] * dvt[1]) / speed : d[0] * dvt[0] + d[1] * dvt[1];
             for (t = 0; t < 2; ++t) dphi[t] = (dvt[t] - along * d[t]) / vs;
+            if (dslip != 0 && (d[0] != 0.0 || d[1] != 0.0)) {   /* the slip direction's own derivative */
+                for (t = 0; t < 2; ++t) dphi[t] += (1.0 - speed / vs) * dslip[2 * H->set[a] + t];
+            }
         }
         for (t = 0; t < 2; ++t) {
             if (ct->trow[t] < 0) continue;
@@ -450,11 +462,11 @@ static void gac_sens_slide_tangent(const gac_sim *s, const double *x, const gac_
  *     d qdd = dqdd_free + dYd lambda + Yd dlambda,
  * dW, dY along (dq, dp) (gac_sens_set_tangent), d(Jdot qd) by contact_bias_tangent; without sliding friction
  * Yd = Y and B = A (so the first is A dlambda = -(sign d(Jdot qd) + dW qdd_free + W dqdd_free) - dA lambda,
- * dA = dW Y + W dY); with it, the sliding contacts' dYd by gac_sens_slide_tangent.  dqdd may be dqdd_free;
- * dlambda (m) may be NULL. */
+ * dA = dW Y + W dY); with it, the sliding contacts' dYd by gac_sens_slide_tangent (dslip: the slip directions'
+ * derivatives, 2 per contact, or NULL: 0).  dqdd may be dqdd_free; dlambda (m) may be NULL. */
 static void gac_sens_held_tangent(const gac_sim *s, const double *x, const gac_sens_set *H, const double *qdd_free,
                                   const double *lambda, const double *dq, const double *dqd, const double *dp,
-                                  const double *dqdd_free, double *dlambda, double *dqdd)
+                                  const double *dslip, const double *dqdd_free, double *dlambda, double *dqdd)
 {
     const gac_model *md = s->model;
     const int nq = md->nq, m = H->m;
@@ -466,7 +478,7 @@ static void gac_sens_held_tangent(const gac_sim *s, const double *x, const gac_s
         return;
     }
     gac_sens_set_tangent(s, x, H, dq, dp, dW, dY);
-    if (H->nslide > 0) gac_sens_slide_tangent(s, x, H, dq, dqd, dp, dW, dY);
+    if (H->nslide > 0) gac_sens_slide_tangent(s, x, H, dq, dqd, dp, dslip, dW, dY);
     md->contact_bias_tangent(x, x + nq, s->p, dq, dqd, dp, dbias);
     for (i = 0; i < nq; ++i) {
         double value = qdd_free[i], dvalue = dqdd_free[i];
@@ -703,8 +715,8 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
     const double *a, *b, *c;
     int lda, stages, i, j, l, n;
     if (z == 0 || z->status != GAC_SENS_VALID || !(h > 0.0)) return;
-    for (i = 0; i < s->nresting; ++i) {          /* a slip direction over two tangential axes: not followed */
-        if (gac_sens_slip_2d(s, s->resting[i])) {
+    for (i = 0; i < s->nresting; ++i) {          /* a slip direction over two axes not followed */
+        if (gac_sens_slip_unknown(s, s->resting[i])) {
             gac_sens_stop(s, GAC_SENS_RESTING, s->t, s->resting[i]);
             return;
         }
@@ -715,10 +727,11 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
     }
     {
         const int nq = md->nq, nx = md->nx, k = z->k, nr = GAC_AT_LEAST_1(md->njrow), held = s->nresting > 0;
+        const int nc1 = GAC_AT_LEAST_1(md->ncontact);
         double *work = z->work, *dK = work + (long)GAC_SENS_STAGES * nx, *Y = dK + (long)GAC_SENS_STAGES * k * nx;
         double dQ[GAC_TANGENT_BLOCK * nq], dQD[GAC_TANGENT_BLOCK * nq], out[GAC_TANGENT_BLOCK * nq];
         double dU[GAC_TANGENT_BLOCK * GAC_AT_LEAST_1(md->nu)];   /* the inputs' directions: 0 (held, or a schedule) */
-        double qdd_free[nq], qdd[nq], lambda[nq];                /* the constrained flight at a stage */
+        double qdd_free[nq], qdd[nq], lambda[3 * nq];               /* the constrained flight at a stage */
         const double *K[GAC_SENS_STAGES];
         int width;
         GAC_SENS_SET_ARRAYS(nq, nr);
@@ -779,7 +792,7 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
                                                  dKi + nq);
                     if (held)                        /* the constrained dynamics' tangent */
                         gac_sens_held_tangent(s, Y, &H, qdd_free, lambda, dQ, dQD, z->dp + (long)j * md->nparam,
-                                              dKi + nq, 0, dKi + nq);
+                                              z->dslip + 2L * j * nc1, dKi + nq, 0, dKi + nq);
                 }
             }
         }
@@ -1003,7 +1016,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         double u[n3], xi_t[n3], xi_norm[n3], cf_row[n3];
         int normal[n3], cf_index[n3], nslide = 0;
         double dgap[nc1], dx[nx], dqd_plus[nq], zero_p[GAC_AT_LEAST_1(md->nparam)];
-        double qd_law[nq], qdd_free[nq], lambda[nq];
+        double qd_law[nq], qdd_free[nq], lambda[3 * nq];
         double speed = 0.0, largest = 0.0, v_event = 0.0;
         int active[n3], landing[n3], before_set[nq + nc1], at_rest[nq], m = 0, nbefore, nheld = 0, a, b, i, j;
         gac_sens_law law;
@@ -1195,7 +1208,7 @@ void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
     const gac_model *md = s->model;
     const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), nc1 = GAC_AT_LEAST_1(md->ncontact);
     const double *x = s->xs;
-    double fm[nx], fp[nx], qdd_free[nq], lambda[nq], dqdd_free[nq], dlambda[nq], qdd_m[nq], lambda_ref, rate;
+    double fm[nx], fp[nx], qdd_free[nq], lambda[3 * nq], dqdd_free[nq], dlambda[3 * nq], qdd_m[nq], lambda_ref, rate;
     double zero_u[GAC_AT_LEAST_1(md->nu)], zero_p[GAC_AT_LEAST_1(md->nparam)];
     int before_set[nq + nc1], nbefore, a, i, j, index = -1;
     const double *u;
@@ -1226,7 +1239,7 @@ void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
     }
     gac_copy(qdd_m, fm + nq, nq);
     md->forward_dynamics_tangent(x, x + nq, u, s->p, x + nq, qdd_m, zero_u, zero_p, dqdd_free);
-    gac_sens_held_tangent(s, x, &H, qdd_free, lambda, x + nq, qdd_m, zero_p, dqdd_free, dlambda, dqdd_free);
+    gac_sens_held_tangent(s, x, &H, qdd_free, lambda, x + nq, qdd_m, zero_p, 0, dqdd_free, dlambda, dqdd_free);
     rate = dlambda[index];                                   /* lambda_c' along the flow */
     if (!(fabs(rate) > 1e-9 * lambda_ref)) {
         gac_sens_stop(s, GAC_SENS_GRAZING, r->t, c_event);
@@ -1237,7 +1250,8 @@ void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
         const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
         double tau;
         md->forward_dynamics_tangent(x, x + nq, u, s->p, S, S + nq, zero_u, dp, dqdd_free);
-        gac_sens_held_tangent(s, x, &H, qdd_free, lambda, S, S + nq, dp, dqdd_free, dlambda, dqdd_free);
+        gac_sens_held_tangent(s, x, &H, qdd_free, lambda, S, S + nq, dp, z->dslip + 2L * j * nc1, dqdd_free, dlambda,
+                              dqdd_free);
         tau = -dlambda[index] / rate;
         for (i = 0; i < nx; ++i) S[i] += (fm[i] - fp[i]) * tau;
         z->dt_impact[j] = tau;
@@ -1246,25 +1260,27 @@ void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
 }
 
 /* The slip of the stuck resting contact c_event at t* (state s->xs; gac_slip and gac_recheck_rest made it slide,
- * record r), along one tangential axis: its event function e = lambda_N - |lambda_T| / c_f (the cone) gives
- * dt*_j = -de_j / e', de_j along (S_j, dp_j) (its c_f term + |lambda_T| dc_f / c_f^2) and e' along the flow,
- * both from the stuck field's tangent (gac_sens_held_tangent, c_event held along its tangential row).  The state is
- * continuous, so S+_j = S-_j + (f- - f+) dt*_j, f- stuck and f+ sliding with phi = d (its slip direction, -lambda_T /
- * |lambda_T|, with |v_t| = 0): the friction c_f lambda_N d equals the stuck force on the cone, so f- - f+ ~ 0.  Along
- * one axis d = +-1 is a constant, so the sliding that follows has no term in d's derivative; a slip over two axes
- * (d turns with the directions) ends the sensitivities (GAC_SENS_STICK), as do several points slipping or released
- * at once (GAC_SENS_BOUNDARY), an event e that does not cross 0 (|e'| below 1e-9 of the force scale per s:
- * GAC_SENS_GRAZING) or a controller's inputs. */
+ * record r): its event function e = lambda_N - |lambda_T| / c_f (the cone) gives dt*_j = -de_j / e',
+ *     de_j = dlambda_N - lambda_T . dlambda_T / (|lambda_T| c_f) + |lambda_T| dc_f / c_f^2
+ * along (S_j, dp_j) and e' along the flow, both from the stuck field's tangent (gac_sens_held_tangent, c_event held
+ * along its tangential rows).  The state is continuous, so S+_j = S-_j + (f- - f+) dt*_j, f- stuck and f+ sliding
+ * with phi = d, its slip direction d = -lambda_T / |lambda_T| with |v_t| = 0: the friction c_f lambda_N d equals the
+ * stuck force on the cone, so f- - f+ ~ 0.  Along one tangential axis d = +-1 is a constant; over two it turns with
+ * the directions, dd_j = -(I - d d^T)(dlambda_T_j + lambda_T' dt*_j) / |lambda_T| (the force at the perturbed
+ * event), kept in sens->dslip for the viscous band that follows (gac_sens_slide_tangent).  Several points slipping
+ * or released at once (GAC_SENS_BOUNDARY), an event e that does not cross 0 (|e'| below 1e-9 of the force scale per
+ * s: GAC_SENS_GRAZING) or a controller's inputs end the sensitivities. */
 void gac_sens_slip(gac_sim *s, const gac_impact_record *r, int c_event)
 {
     gac_sens *z = s->sens;
     const gac_model *md = s->model;
     const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), nc1 = GAC_AT_LEAST_1(md->ncontact);
     const gac_contact *ct = md->contacts + c_event;
-    const double *x = s->xs, cf = gac_friction_coefficient(md, s->p, c_event);
-    double fm[nx], fp[nx], qdd_free[nq], lambda[nq], dqdd_free[nq], dlambda[nq], qdd_m[nq], lambda_ref, rate, sign;
-    double zero_u[GAC_AT_LEAST_1(md->nu)], zero_p[GAC_AT_LEAST_1(md->nparam)];
-    int stuck_before[nc1], a, i, j, index = -1, row_t = -1;
+    const double *x = s->xs, *d = s->slip + 2 * c_event, cf = gac_friction_coefficient(md, s->p, c_event);
+    double fm[nx], fp[nx], qdd_free[nq], lambda[3 * nq], dqdd_free[nq], dlambda[3 * nq], qdd_m[nq], lambda_ref, rate;
+    double zero_u[GAC_AT_LEAST_1(md->nu)], zero_p[GAC_AT_LEAST_1(md->nparam)], lt[2] = {0.0, 0.0}, lt_rate[2] = {0.0, 0.0};
+    double norm;
+    int stuck_before[nc1], a, i, j, t, index = -1, row_t[2] = {-1, -1};
     const double *u;
     GAC_SENS_SET_ARRAYS(nq, nr);
     gac_sens_set H;
@@ -1272,10 +1288,6 @@ void gac_sens_slip(gac_sim *s, const gac_impact_record *r, int c_event)
     GAC_SENS_SET_BIND(H);
     if (r->nslipped != 1 || r->nreleased != 0 || r->slipped[0] != c_event) {
         gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, c_event);
-        return;
-    }
-    if ((ct->trow[0] >= 0) + (ct->trow[1] >= 0) != 1) {
-        gac_sens_stop(s, GAC_SENS_STICK, r->t, c_event);
         return;
     }
     if (s->controller != 0 && md->nu > 0) {
@@ -1295,33 +1307,57 @@ void gac_sens_slip(gac_sim *s, const gac_impact_record *r, int c_event)
     for (a = 0; a < H.n; ++a) {
         if (H.set[a] == c_event) index = a;
     }
-    for (a = H.n; a < H.m; ++a) {
-        if (H.brow[a] == ct->trow[0] || H.brow[a] == ct->trow[1]) row_t = a;
+    for (a = H.n; a < H.m; ++a) {                           /* its tangential rows, by axis */
+        for (t = 0; t < 2; ++t) {
+            if (ct->trow[t] >= 0 && H.brow[a] == ct->trow[t]) row_t[t] = a;
+        }
     }
-    if (index < 0 || row_t < 0) {
+    for (t = 0; t < 2; ++t) {
+        if (ct->trow[t] >= 0 && row_t[t] < 0) index = -1;  /* (a dependent row dropped: not followed) */
+        if (row_t[t] >= 0) lt[t] = lambda[row_t[t]];
+    }
+    norm = hypot(lt[0], lt[1]);
+    if (index < 0 || H.ndropped > 0 || !(norm > 0.0)) {
         gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
         return;
     }
-    sign = lambda[row_t] >= 0.0 ? 1.0 : -1.0;               /* |lambda_T| = sign lambda_T */
     gac_copy(qdd_m, fm + nq, nq);
     md->forward_dynamics_tangent(x, x + nq, u, s->p, x + nq, qdd_m, zero_u, zero_p, dqdd_free);
-    gac_sens_held_tangent(s, x, &H, qdd_free, lambda, x + nq, qdd_m, zero_p, dqdd_free, dlambda, dqdd_free);
-    rate = dlambda[index] - sign * dlambda[row_t] / cf;     /* e' along the flow */
+    gac_sens_held_tangent(s, x, &H, qdd_free, lambda, x + nq, qdd_m, zero_p, 0, dqdd_free, dlambda, dqdd_free);
+    rate = dlambda[index];                                  /* e' along the flow */
+    for (t = 0; t < 2; ++t) {
+        if (row_t[t] < 0) continue;
+        lt_rate[t] = dlambda[row_t[t]];
+        rate -= lt[t] * lt_rate[t] / (norm * cf);
+    }
     if (!(fabs(rate) > 1e-9 * lambda_ref)) {
         gac_sens_stop(s, GAC_SENS_GRAZING, r->t, c_event);
         return;
     }
     for (j = 0; j < z->k; ++j) {
-        double *S = z->S + (long)j * nx;
+        double *S = z->S + (long)j * nx, *dd = z->dslip + 2L * j * nc1 + 2 * c_event, dlt[2] = {0.0, 0.0}, de, tau;
         const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
         const double dcf = ct->friction_index >= 0 ? dp[ct->friction_index] : 0.0;
-        double tau;
         md->forward_dynamics_tangent(x, x + nq, u, s->p, S, S + nq, zero_u, dp, dqdd_free);
-        gac_sens_held_tangent(s, x, &H, qdd_free, lambda, S, S + nq, dp, dqdd_free, dlambda, dqdd_free);
-        tau = -(dlambda[index] - sign * dlambda[row_t] / cf + sign * lambda[row_t] * dcf / (cf * cf)) / rate;
+        gac_sens_held_tangent(s, x, &H, qdd_free, lambda, S, S + nq, dp, z->dslip + 2L * j * nc1, dqdd_free, dlambda,
+                              dqdd_free);
+        de = dlambda[index] + norm * dcf / (cf * cf);
+        for (t = 0; t < 2; ++t) {
+            if (row_t[t] < 0) continue;
+            dlt[t] = dlambda[row_t[t]];
+            de -= lt[t] * dlt[t] / (norm * cf);
+        }
+        tau = -de / rate;
         for (i = 0; i < nx; ++i) S[i] += (fm[i] - fp[i]) * tau;
         z->dt_impact[j] = tau;
+        {                                                   /* dd = -(I - d d^T)(dlambda_T + lambda_T' tau) / |lambda_T| */
+            const double w0 = dlt[0] + lt_rate[0] * tau, w1 = dlt[1] + lt_rate[1] * tau, dw = d[0] * w0 + d[1] * w1;
+            dd[0] = -(w0 - d[0] * dw) / norm;
+            dd[1] = -(w1 - d[1] * dw) / norm;
+        }
     }
+    z->slip_known[2 * c_event] = d[0];
+    z->slip_known[2 * c_event + 1] = d[1];
     if (!gac_finite(z->S, z->k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, r->t, c_event);
 }
 

@@ -45,14 +45,14 @@ def sequence(run):
             [(e.label, e.kind) for e in run.contact_events])
 
 
-def central_differences(model, t_end, directions, matrix, step=1e-6, p=None, qd0=None, **options):
+def central_differences(model, t_end, directions, matrix, step=1e-6, p=None, q0=None, qd0=None, **options):
     """Every column of d x(t_end)/d(direction) against a central difference of the final state, to 1e-6 of the
     column's size (at least 1e-5), the perturbed runs meeting the same impacts and contact events as the nominal
-    (p, qd0: the nominal run's, the model's by default)."""
+    (p, q0, qd0: the nominal run's, the model's by default; q0, qd0 in the full layout)."""
     p = model.p.copy() if p is None else np.array(p, dtype=float)
-    q0 = model.layout.expand(model.q0)
+    q0 = model.layout.expand(model.q0) if q0 is None else np.array(q0, dtype=float)
     qd0 = model.layout.expand(model.qd0, velocity=True) if qd0 is None else np.array(qd0, dtype=float)
-    nominal = sequence(simulate(model, t_end, p=p, qd0=qd0, **options))
+    nominal = sequence(simulate(model, t_end, p=p, q0=q0, qd0=qd0, **options))
     full = coordinate_names(model.n)
 
     def final(h, direction):

@@ -592,7 +592,8 @@ static int gac_sens_at_rest(const gac_sim *s, const double *x, int n, const int 
  * from those gac_rest_at_start saved in s->x1 (s->pending: not yet reported; otherwise the state is taken as given,
  * on its constraints); on rough walls the points that stuck there (gac_try_stick) then had their velocities
  * projected onto the held rows with their tangential ones, from qd_mid = qd_pre + Y c, A c = -W qd_pre (the first
- * projection, formed again here).  Those that slide are followed in flight. */
+ * projection, formed again here).  Those that slide are followed in flight, with the slip directions the stick test
+ * gave them (gac_sens_reslip). */
 static void gac_sens_start_rest(gac_sim *s)
 {
     gac_sens *z = s->sens;
@@ -636,6 +637,11 @@ static void gac_sens_start_rest(gac_sim *s)
             gac_sens_hold_tangent(s, s->x, &H2, qd_mid, s->x + nq, S, S + nq, dp, out);
             gac_copy(S + nq, out, nq);
         }
+    }
+    {                                             /* slip directions the start's stick test gave (none before) */
+        double none[2 * nc1];
+        for (i = 0; i < 2 * nc1; ++i) none[i] = 0.0;
+        gac_sens_reslip(s, none, stuck);
     }
 }
 
@@ -1450,6 +1456,92 @@ void gac_sens_stick(gac_sim *s, const double *x_before, const int *stuck_before,
         z->dt_impact[j] = tau;
     }
     if (!gac_finite(z->S, z->k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, s->t, c);
+}
+
+/* The slip directions gac_try_stick gave slow points that could not stick, at the state s->x (a step's end, or the
+ * start; slip_before: s->slip before that call, nstuck: the points it stuck).  A point c over two tangential axes
+ * whose direction d changed was judged stuck, its velocities projected onto the held rows with its tangential ones
+ * (P, mass metric), and given d = -lambda_T / |lambda_T| of that stuck solve (the others sliding with the slip
+ * directions they had then: those before c in s->resting order already renewed).  Its derivative, at this fixed time,
+ *     dd_j = -(I - d d^T) dlambda_T_j / |lambda_T|,   dlambda_T_j along (S_q, D P (S_j), dp_j) by the stuck field's
+ * tangent, goes into sens->dslip (slip_known: d).  A call that also stuck points (the state then changed after the
+ * directions were judged) leaves them unknown: the flight ends the sensitivities if one is used. */
+void gac_sens_reslip(gac_sim *s, const double *slip_before, int nstuck)
+{
+    gac_sens *z = s->sens;
+    const gac_model *md = s->model;
+    const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), nc1 = GAC_AT_LEAST_1(md->ncontact);
+    double slip_now[2 * nc1], xp[nx], c_v[3 * nq], qdd_free[nq], lambda[3 * nq], f[nx], dqdd_free[nq];
+    double dlambda[3 * nq], dx[nx], zero_u[GAC_AT_LEAST_1(md->nu)], zero_p[GAC_AT_LEAST_1(md->nparam)];
+    int stuck_c[nc1], a, b, i, j, t;
+    GAC_SENS_SET_ARRAYS(nq, nr);
+    gac_sens_set H;                                          /* the held rows with c stuck, at s->x: P */
+    GAC_SENS_SET_ARRAYS_OF(H2, nq, nr);
+    gac_sens_set H2;                                         /* the stuck field at P(s->x) */
+    if (z == 0 || z->status != GAC_SENS_VALID || nstuck > 0 || !gac_sens_inputs_fixed(s)) return;
+    GAC_SENS_SET_BIND(H);
+    GAC_SENS_SET_BIND_OF(H2, H2);
+    gac_copy(slip_now, slip_before, 2 * md->ncontact);
+    for (i = 0; i < GAC_AT_LEAST_1(md->nu); ++i) zero_u[i] = 0.0;
+    for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+    for (a = 0; a < s->nresting; ++a) {
+        const int c = s->resting[a];
+        const gac_contact *ct = md->contacts + c;
+        const double *d = s->slip + 2 * c;
+        int row_t[2] = {-1, -1}, ok = 1;
+        double lt[2] = {0.0, 0.0}, norm;
+        const double *u;
+        if (d[0] == slip_now[2 * c] && d[1] == slip_now[2 * c + 1]) continue;
+        if (ct->trow[0] < 0 || ct->trow[1] < 0 || (d[0] == 0.0 && d[1] == 0.0) || s->is_stuck[c]) {
+            slip_now[2 * c] = d[0];                          /* along one axis, forgotten: nothing to carry */
+            slip_now[2 * c + 1] = d[1];
+            continue;
+        }
+        for (b = 0; b < md->ncontact; ++b) stuck_c[b] = s->is_stuck[b] || b == c;
+        if (gac_sens_set_at(s, s->x, s->nresting, s->resting, stuck_c, &H) != 0) ok = 0;
+        if (ok) {                                            /* xp = P(s->x): W qd -> 0 on the held rows */
+            gac_copy(xp, s->x, nx);
+            for (b = 0; b < H.m; ++b) c_v[b] = -gac_dot(nq, H.W + (long)b * nq, s->x + nq);
+            gac_ldlt_solve(H.m, H.LD, c_v);
+            for (i = 0; i < nq; ++i) {
+                for (b = 0; b < H.m; ++b) xp[nq + i] += H.Y[(long)b * nq + i] * c_v[b];
+            }
+            ok = gac_sens_field_slip(s, s->t, xp, s->nresting, s->resting, stuck_c, slip_now, &H2, qdd_free,
+                                     lambda, f, 0) == 0 && H2.ndropped == 0;
+        }
+        for (b = H2.n; ok && b < H2.m; ++b) {                /* c's tangential rows, by axis */
+            for (t = 0; t < 2; ++t) {
+                if (H2.brow[b] == ct->trow[t]) row_t[t] = b;
+            }
+        }
+        if (ok && row_t[0] >= 0 && row_t[1] >= 0) {
+            lt[0] = lambda[row_t[0]];
+            lt[1] = lambda[row_t[1]];
+        }
+        norm = hypot(lt[0], lt[1]);
+        if (!ok || !(norm > 0.0) || hypot(d[0] + lt[0] / norm, d[1] + lt[1] / norm) > 1e-6) {
+            slip_now[2 * c] = d[0];                          /* not the direction found here: left unknown */
+            slip_now[2 * c + 1] = d[1];
+            continue;
+        }
+        u = gac_input(s, s->t, xp);
+        for (j = 0; j < z->k; ++j) {
+            double *S = z->S + (long)j * nx, *dd = z->dslip + 2L * j * nc1 + 2 * c, w[2], dw;
+            const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
+            gac_copy(dx, S, nq);
+            gac_sens_hold_tangent(s, s->x, &H, s->x + nq, xp + nq, S, S + nq, dp, dx + nq);
+            md->forward_dynamics_tangent(xp, xp + nq, u, s->p, dx, dx + nq, zero_u, dp, dqdd_free);
+            gac_sens_held_tangent(s, xp, &H2, qdd_free, lambda, dx, dx + nq, dp, z->dslip + 2L * j * nc1, dqdd_free,
+                                  dlambda, dqdd_free);
+            w[0] = dlambda[row_t[0]];
+            w[1] = dlambda[row_t[1]];
+            dw = d[0] * w[0] + d[1] * w[1];
+            dd[0] = -(w[0] - d[0] * dw) / norm;
+            dd[1] = -(w[1] - d[1] * dw) / norm;
+        }
+        z->slip_known[2 * c] = slip_now[2 * c] = d[0];
+        z->slip_known[2 * c + 1] = slip_now[2 * c + 1] = d[1];
+    }
 }
 
 /* Resting contacts released, or stuck points slipped, where the inputs change (gac_recheck_rest: their forces pull at

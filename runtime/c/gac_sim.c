@@ -408,6 +408,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
                 code = gac_try_stick(s, vt_start, 1, 0, record);
                 if (code < 0) return code;
                 if (code > 0 && s->sens != 0) gac_sens_stick(s, x_before, stuck_before, slip_before, record);
+                if (s->sens != 0) gac_sens_reslip(s, slip_before, code);   /* the slow points' slip directions */
                 if (code > 0) {
                     gac_contact_record(s, s->t, x_before, record);
                     record->nlanded = record->nreleased = 0;

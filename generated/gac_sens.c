@@ -198,8 +198,8 @@ static int gac_sens_sliding(const gac_sim *s, const int *stuck, int c)
 
 /* 1 if resting contact c slides with a slip direction (s->slip, set where a stuck point slipped or a slow point
  * could not stick) over two tangential axes whose derivative is not known: below friction_velocity that direction
- * enters its friction, and its derivative is carried (sens->dslip) only from a slip (gac_sens_slip), not from the
- * direction a slow point that could not stick was given (gac_try_stick).  Along one axis it is +-1, a constant. */
+ * enters its friction, and its derivative (sens->dslip) is known for the direction sens->slip_known it was found
+ * for (gac_sens_slip, gac_sens_reslip).  Along one axis it is +-1, a constant. */
 static int gac_sens_slip_unknown(const gac_sim *s, int c)
 {
     const gac_contact *ct = s->model->contacts + c;

@@ -20,8 +20,8 @@ from codegen.scene import coordinate_names
 # gac.h's GAC_SENS_* status codes, in words
 STATUS_WORDS = {
     0: "valid",
-    1: "a point sliding on a rough wall with a slip direction over two tangential axes, or slower than "
-       "friction_velocity at an impact (its friction there is not differentiated)",
+    1: "a point sliding on a rough wall with a slip direction over two tangential axes whose derivative is not known, "
+       "or slower than friction_velocity at an impact (its friction there is not differentiated)",
     2: "an impact by a frictional law with a common e, or by Newton + Coulomb",
     3: "an impact at a joint stop",
     4: "an impact of several rounds (or with dependent contact rows)",
@@ -33,8 +33,8 @@ STATUS_WORDS = {
     10: "a mode boundary (a contact's impulse ~0 at the law's bound inside an impact, resting contacts released "
         "together, a slip with another slip or a release, or points sticking together at different speeds)",
     11: "an impact of two links (link-link contact is not differentiated)",
-    12: "a stick-slip transition on a rough wall (a stuck point slipped over two tangential axes or left the wall, "
-        "or came to stick at an impact without taking its impulse)",
+    12: "a stick-slip transition on a rough wall (a stuck point left the wall or slipped at an impact, or came to "
+        "stick at an impact without taking its impulse)",
 }
 
 _STATE = re.compile(r"^(q0|qd0)\[([^\]]+)\]$")

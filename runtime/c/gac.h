@@ -992,8 +992,9 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * the set after held and the hold's projection; a release (its force lambda_c reaching 0) dt*_j = -d lambda_c /
  * lambda_c', S+ = S- + (f- - f+) dt*; contacts at rest at the start: their projection.  On rough walls: a stuck
  * point's tangential rows held with its normal one; a sliding point's friction -c_f lambda phi in the flight's tangent
- * (lambda through the unsymmetric B, phi = v_t / max(|v_t|, v_s) and c_f differentiated); a slip at its event
- * lambda_N = |lambda_T| / c_f (one tangential axis) by that event's time, S+ = S- + (f- - f+) dt*; sticking at a
+ * (lambda through the unsymmetric B, phi = v_t / max(|v_t|, v_s) and c_f differentiated, and the slip direction's
+ * derivative over two tangential axes, sens.dslip); a slip at its event lambda_N = |lambda_T| / c_f by that event's
+ * time, S+ = S- + (f- - f+) dt*; sticking at a
  * step's end as the event |v_t| = v_s, S+ = D P (S- + f- dt*) - f+ dt*, P the velocities' projection onto the stuck
  * rows.  A switch of base chart
  * (x_B = phi(x_A), either way): S_B = (d phi / dx_A) S_A (gac_chart_convert_tangent), with no saltation term, as
@@ -1002,9 +1003,9 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * below): S and dt_impact are then NaN from that event on, the run itself continues.  The status codes: */
 #define GAC_SENS_VALID         0   /* every event so far differentiated */
 #define GAC_SENS_RESTING       1   /* a point sliding at rest on a rough wall where its friction is not followed: with
-                                      a slip direction over two tangential axes (below friction_velocity that
-                                      direction, whose derivative is not carried, enters its force), or slower than
-                                      friction_velocity at an impact */
+                                      a slip direction over two tangential axes whose derivative is not known (given
+                                      by a stick test at a step's end where other points stuck, or not the direction
+                                      the stuck solve gives), or slower than friction_velocity at an impact */
 #define GAC_SENS_FRICTION      2   /* an impact by a frictional law other than GAC_IMPACT_LAW_GDI solved with each
                                       contact's own e (a round with a common e, Newton + Coulomb): the GDI law's
                                       stuck and sliding contacts are differentiated */
@@ -1026,8 +1027,9 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       that stick at one step's end at different speeds */
 #define GAC_SENS_LINK         11   /* an impact of two links (a GAC_CONTACT_LINK contact): not differentiated */
 #define GAC_SENS_STICK        12   /* a stick-slip transition on a rough wall not differentiated: a stuck point that
-                                      slipped over two tangential axes or left the wall (its force reaching 0 while
-                                      stuck), or one that came to stick at an impact without taking its impulse */
+                                      left the wall (its force reaching 0 while stuck), a stuck point that slipped
+                                      at an impact, or one that came to stick at an impact without taking its
+                                      impulse */
 
 /* The sensitivities of one run: pointers into the caller's dwork (gac_sens_ndouble(m, k) doubles), laid out as
  * S (k nx) | dp (k nparam) | dt_impact (k) | dgap_held (k max(ncontact, 1)) | dslip (2 k max(ncontact, 1)) |

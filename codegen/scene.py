@@ -1414,6 +1414,8 @@ def _obstacles_from_data(items) -> tuple[Obstacle, ...]:
             if key not in item:
                 raise SceneError(f"{where}.{key}: required")
         kind = item.get("kind", "sphere")
+        if kind not in OBSTACLE_KINDS:
+            raise SceneError(f"{where}.kind: one of {', '.join(repr(k) for k in OBSTACLE_KINDS)}, got {kind!r}")
         if kind == "sphere":
             if "a" in item or "b" in item:
                 raise SceneError(f"{where}.{'a' if 'a' in item else 'b'}: a sphere takes center; give kind = "

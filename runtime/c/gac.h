@@ -1041,7 +1041,8 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       ~0 and leaves at the law's bound (w . qd+ + e w . qd- ~ 0), so a perturbation
                                       may add it to the active set or drop it; or resting contacts released together
                                       (their forces ~0 at once) */
-#define GAC_SENS_LINK         11   /* an impact of two links (a GAC_CONTACT_LINK contact): not differentiated */
+#define GAC_SENS_LINK         11   /* an impact of two links or of a link on a fixed obstacle (GAC_CONTACT_LINK,
+                                         GAC_CONTACT_OBSTACLE): not differentiated */
 #define GAC_SENS_STICK        12   /* a stick-slip transition on a rough wall: a stuck resting point slipped or left the
                                       wall (its event: |lambda_T| = c_f lambda_N), or came to stick other than by
                                       landing stuck */

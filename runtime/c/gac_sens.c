@@ -740,7 +740,8 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
  * (s->is_stuck, as gac_restick re-decided them: called after it, the state after in s->x) in f+ and in the hold,
  * which brings the law's velocities onto their tangential rows too (a landing that sticks).  A point sliding at
  * rest before or after, a stuck point that slipped, or one that came to stick without taking the impact's impulse
- * ends them (GAC_SENS_RESTING, GAC_SENS_STICK), as do impacts of another kind and impacts of two links. */
+ * ends them (GAC_SENS_RESTING, GAC_SENS_STICK), as do impacts of another kind and impacts of two links or of a
+ * link on an obstacle (GAC_SENS_LINK). */
 void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const int *was_stuck)
 {
     gac_sens *z = s->sens;

@@ -244,6 +244,8 @@ static int gac_who_lands(gac_sim *s, gac_impact_event *ev)
             ev->shrinking[c] = (ev->shrinking[c] && ev->e_law[k] < 1.0) || stalled;
             if (s->opt.zeno_impacts > 0 && ev->shrinking[c] && s->n_shrink[c] + 1 >= s->opt.zeno_impacts)
                 return GAC_ERR_LINK_REST;
+            if (stalled && ev->e_law[k] == 0.0) return GAC_ERR_LINK_REST;   /* left at rest by a plastic strike and
+                                                                              pressed on at once: resting */
             continue;
         }
         if (!s->is_resting[c] && ev->vn[c] <= 0.0 && ev->gaps[c] <= s->opt.contact_tol) {

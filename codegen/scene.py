@@ -34,6 +34,7 @@ WALL_NAMES = ("x1_min", "x1_max", "x2_min", "x2_max", "x3_min", "x3_max")
 DEFAULT_GRAVITY = 9.81
 DEFAULT_GRAVITY_DIRECTION = (0.0, -1.0, 0.0)   # gravity along -X2 (the paper's convention)
 GRAVITY_DIRECTION_TOL = 1e-9                   # | |d| - 1 | allowed of a gravity direction
+URDF_GRAVITY_DIRECTION = (0.0, 0.0, -1.0)      # a URDF's gravity, along its world's -z (the box frame unturned)
 # Table 1 and 2 of the paper: moment of inertia per unit length, kg m.
 PAPER_J = (5.89e-5, 2.94e-5, 2.94e-5)
 GIMBAL_MARGIN = 1e-6  # |cos(theta_0)| below this is the gimbal lock of the base chart
@@ -1242,7 +1243,7 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
         links=links,
         twists=twists if n > 1 else (),
         gravity=data.get("gravity", DEFAULT_GRAVITY),
-        gravity_direction=data.get("gravity_direction", DEFAULT_GRAVITY_DIRECTION),
+        gravity_direction=_gravity_direction_from_data(data),
         walls=walls,
         q0=tuple(initial["q"]) if "q" in initial else (),
         qd0=tuple(initial["qd"]) if "qd" in initial else (),
@@ -1253,6 +1254,18 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
         contact_pairs=pairs,
         base=_base_from_data({} if base is None else base),
     )
+
+
+def _gravity_direction_from_data(data: dict):
+    """The gravity_direction key: a vector, or "urdf" (with a urdf file): gravity along the URDF world's -z, which
+    the import takes as the box frame unturned, so (0, 0, -1); absent: -X2."""
+    value = data.get("gravity_direction", DEFAULT_GRAVITY_DIRECTION)
+    if isinstance(value, str):
+        if value != "urdf" or "urdf" not in data:
+            raise SceneError(f"gravity_direction: expected a unit vector [d1, d2, d3], or \"urdf\" in a scene with a "
+                             f"urdf file (gravity along the URDF world's -z), got {value!r}")
+        return URDF_GRAVITY_DIRECTION
+    return value
 
 
 def _base_from_data(table) -> Base:

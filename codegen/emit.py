@@ -484,7 +484,7 @@ def gravity_text(scene: Scene) -> str:
     d = scene.gravity_direction
     if d == DEFAULT_GRAVITY_DIRECTION:
         return "-X2"
-    return f"d = ({', '.join(f'{x:.17g}' for x in d)}) of the box frame (gravity_direction)"
+    return f"d = ({', '.join(repr(x) for x in d)}) of the box frame (gravity_direction)"
 
 
 def param_doc(pname: str, scene: Scene | None = None) -> str:
@@ -492,7 +492,7 @@ def param_doc(pname: str, scene: Scene | None = None) -> str:
     scene's gravity is not along -X2."""
     kind, owner = split_parameter_name(pname)
     if kind == "g" and scene is not None and scene.gravity_direction != DEFAULT_GRAVITY_DIRECTION:
-        return f"gravity along {gravity_text(scene)} (m/s^2)"
+        return f"gravity's magnitude, along {gravity_text(scene)} (m/s^2)"
     if kind in JOINT_DOC:
         return f"joint {owner}: {JOINT_DOC[kind]}"
     if kind == "wall":

@@ -101,6 +101,19 @@ def test_gravity_direction_is_a_unit_vector_and_keeps_default_scenes_hashes():
     assert scene_hash(scene_from_dict(mutated(("gravity_direction",), tilt))) != scene_hash(default)
 
 
+
+def test_a_planar_chain_stays_a_planar_model_only_with_gravity_in_its_plane():
+    from codegen.specialise import planar_normal
+    planar = mutated(("links", 1, "twist"), 0.0)
+    planar["initial"]["q"][0] = -math.pi / 2                  # joint axes along X3: the X1-X2 plane
+    assert planar_normal(scene_from_dict(planar)) == (2, "")
+    planar["gravity_direction"] = [math.sin(0.4), -math.cos(0.4), 0.0]
+    assert planar_normal(scene_from_dict(planar)) == (2, "")
+    planar["gravity_direction"] = [0.0, -math.cos(0.4), math.sin(0.4)]
+    assert planar_normal(scene_from_dict(planar)) == (None, "gravity (gravity_direction) has a component along X3, "
+                                                            "out of the plane")
+
+
 def test_initial_contact_point_outside_the_box_is_rejected():
     data = mutated(("initial", "q"), [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -0.5, 0.0])   # O_1 below the floor
     with pytest.raises(SceneError, match=r"initial.q: contact point O_1 has X2 = -0.5.*x2_min"):

@@ -143,5 +143,7 @@ def _unchanged_default(value, field: str) -> bool:
         return type(value).__name__ == "Scene" and value.gravity_direction == (0.0, -1.0, 0.0)
     if field == "contact_pairs":            # which link pairs are contacts: every possible one in earlier scenes
         return type(value).__name__ == "Scene" and value.contact_pairs is None
+    if field in ("obstacles", "obstacle_restitution"):   # fixed obstacles (and their default e): none earlier
+        return type(value).__name__ == "Scene" and not value.obstacles
     return field == "base" and type(value).__name__ == "Scene" and value.base.kind == "free"
 

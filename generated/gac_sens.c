@@ -749,12 +749,12 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
     {
         int a;
         for (a = 0; a < r->ncontact; ++a) {
-            if (md->contacts[r->contact[a]].kind == GAC_CONTACT_LINK) {
+            if (gac_rowless(md, r->contact[a])) {
                 gac_sens_stop(s, GAC_SENS_LINK, r->t, r->contact[a]);
                 return;
             }
         }
-        if (c_event >= 0 && md->contacts[c_event].kind == GAC_CONTACT_LINK) {
+        if (c_event >= 0 && gac_rowless(md, c_event)) {
             gac_sens_stop(s, GAC_SENS_LINK, r->t, c_event);
             return;
         }

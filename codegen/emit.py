@@ -15,7 +15,8 @@ from .artifact import GeneratedModel, RenderedFunction, scene_hash, text_digest 
 from .ops import count_ops
 from .options import BuildOptions
 from .parameters import parameter_rules
-from .scene import WALL_NAMES, JointStop, ObstacleContact, Scene, parameter_name, split_parameter_name
+from .scene import DEFAULT_GRAVITY_DIRECTION, WALL_NAMES, JointStop, ObstacleContact, Scene, parameter_name, \
+    split_parameter_name
 from .specialise import coordinate_names
 from .version import __version__
 
@@ -312,8 +313,8 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], o
         NAME=name.upper(), name=name, version=__version__, scene=scene, scene_hash=scene_hash(scene),
         bake_params=bake_params, functions=functions, nq=layout.nq,
         coordinates=[names[i] for i in layout.free], fixed=[(names[i], _double_literal(v)) for i, v in layout.fixed],
-        notes=layout.notes,
-        params=[(i, pname, param_doc(pname) + (" [built in as 0]" if pname in zeros else ""), _double_literal(value),
+        notes=layout.notes, gravity_along=gravity_text(scene),
+        params=[(i, pname, param_doc(pname, scene) + (" [built in as 0]" if pname in zeros else ""), _double_literal(value),
                  f"[{rule.lo:g}, {rule.hi:g}]") for i, ((pname, value), rule) in enumerate(zip(params, rules))],
         parameter_info=[(rule.name, _double_literal(rule.lo), _double_literal(rule.hi), _c_string(rule.text))
                         for rule in rules],
@@ -492,8 +493,20 @@ def macro_name(name: str) -> str:
     return name.replace("-", "M").upper()
 
 
-def param_doc(pname: str) -> str:
+def gravity_text(scene: Scene) -> str:
+    """Where gravity acts, in words: '-X2' (the default), else the scene's gravity_direction d."""
+    d = scene.gravity_direction
+    if d == DEFAULT_GRAVITY_DIRECTION:
+        return "-X2"
+    return f"d = ({', '.join(repr(x) for x in d)}) of the box frame (gravity_direction)"
+
+
+def param_doc(pname: str, scene: Scene | None = None) -> str:
+    """The description of parameter ``pname`` (its unit last, in parentheses); ``scene``: says where g acts when the
+    scene's gravity is not along -X2."""
     kind, owner = split_parameter_name(pname)
+    if kind == "g" and scene is not None and scene.gravity_direction != DEFAULT_GRAVITY_DIRECTION:
+        return f"gravity's magnitude, along {gravity_text(scene)} (m/s^2)"
     if kind in JOINT_DOC:
         return f"joint {owner}: {JOINT_DOC[kind]}"
     if kind == "wall":

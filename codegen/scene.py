@@ -32,6 +32,9 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 WALL_NAMES = ("x1_min", "x1_max", "x2_min", "x2_max", "x3_min", "x3_max")
 DEFAULT_GRAVITY = 9.81
+DEFAULT_GRAVITY_DIRECTION = (0.0, -1.0, 0.0)   # gravity along -X2 (the paper's convention)
+GRAVITY_DIRECTION_TOL = 1e-9                   # | |d| - 1 | allowed of a gravity direction
+URDF_GRAVITY_DIRECTION = (0.0, 0.0, -1.0)      # a URDF's gravity, along its world's -z (the box frame unturned)
 # Table 1 and 2 of the paper: moment of inertia per unit length, kg m.
 PAPER_J = (5.89e-5, 2.94e-5, 2.94e-5)
 GIMBAL_MARGIN = 1e-6  # |cos(theta_0)| below this is the gimbal lock of the base chart
@@ -100,6 +103,21 @@ def _vector(value, size: int, fieldname: str, largest: float = COORDINATE_MAX) -
     if not isinstance(value, (list, tuple)) or len(value) != size:
         raise SceneError(f"{fieldname}: expected a list of {size} numbers, got {value!r}")
     return tuple(_number(v, f"{fieldname}[{i}]", largest) for i, v in enumerate(value))
+
+
+def _unit_direction(value, fieldname: str) -> tuple[float, float, float]:
+    """A unit 3-vector: three finite numbers whose length is 1 within GRAVITY_DIRECTION_TOL (not normalised here,
+    so that the scene file says exactly the direction the model uses; the error gives the normalised vector)."""
+    d = _vector(value.tolist() if isinstance(value, np.ndarray) else value, 3, fieldname, largest=1e3)
+    length = math.sqrt(sum(x * x for x in d))
+    if length == 0.0:
+        raise SceneError(f"{fieldname}: must be a unit vector (the direction gravity acts along, box frame), "
+                         f"got the zero vector {list(d)!r}")
+    if abs(length - 1.0) > GRAVITY_DIRECTION_TOL:
+        unit = [round(x / length, 15) for x in d]
+        raise SceneError(f"{fieldname}: must be a unit vector (length 1 within {GRAVITY_DIRECTION_TOL:g}; the "
+                         f"magnitude is 'gravity'), got {list(d)!r} of length {length!r}; normalised: {unit!r}")
+    return tuple(x + 0.0 for x in d)          # -0.0 as 0.0: the same direction hashes the same
 
 
 def _matrix3(value, fieldname: str, largest: float = COORDINATE_MAX) -> tuple[tuple[float, ...], ...]:
@@ -681,7 +699,9 @@ class Scene:
 
     links      real links 1..n (LineLink or RigidLink), n >= 1
     twists     T_k for k = 2..n (n - 1 rotation matrices); () means all identity
-    gravity    g (m/s^2) acting along -X2 (the paper: the origin accelerates at +g along X2)
+    gravity    g (m/s^2), the magnitude of gravity (the runtime parameter 'g')
+    gravity_direction  d, the unit vector gravity acts along, in the box frame (default (0, -1, 0): -X2, the paper's
+               convention; the reference frame accelerates at -g d).  A tilted d makes the box's floor an incline
     walls      the walls of the box that exist; an absent wall means no wall
     q0, qd0    initial state, layout [theta_-1, theta_0, theta_1..theta_n, X1, X2, X3]
     joints     springs and dampers of the joints 2..n (Joint; n - 1 entries, or () for none)
@@ -712,6 +732,7 @@ class Scene:
     #                                         None: every pair that can (Scene.link_pairs)
     obstacles: tuple = ()       # Obstacle: convex bodies fixed in the box that the links strike ([[obstacles]])
     obstacle_restitution: float = 1.0   # e of an obstacle that gives none (the scene's restitution default)
+    gravity_direction: tuple = DEFAULT_GRAVITY_DIRECTION   # d: gravity acts along it, unit vector, box frame
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not _NAME_RE.match(self.name):
@@ -741,6 +762,7 @@ class Scene:
         object.__setattr__(self, "gravity", _number(self.gravity, "gravity"))
         if abs(self.gravity) > GRAVITY_MAX:
             raise SceneError(f"gravity: must be within [-1e6, 1e6] m/s^2, got {self.gravity!r}")
+        object.__setattr__(self, "gravity_direction", _unit_direction(self.gravity_direction, "gravity_direction"))
         object.__setattr__(self, "friction_velocity", _in_range(self.friction_velocity, "friction_velocity",
                                                                 FRICTION_VELOCITY_RANGE, "m/s"))
         self._validate_walls()
@@ -1213,8 +1235,8 @@ def shipped_scene_names() -> list[str]:
 # ---------------------------------------------------------------------------
 # loading from TOML / JSON
 # ---------------------------------------------------------------------------
-TOP_KEYS = ("name", "description", "gravity", "links", "urdf", "urdf_tip_length", "walls", "restitution", "friction",
-            "friction_velocity", "contacts", "initial", "inputs", "base", "obstacles")
+TOP_KEYS = ("name", "description", "gravity", "gravity_direction", "links", "urdf", "urdf_tip_length", "walls",
+            "restitution", "friction", "friction_velocity", "contacts", "initial", "inputs", "base", "obstacles")
 BASE_KEYS = ("kind", "joint", "point", "axis", "angles", "rotation")
 JOINT_KEYS = ("stiffness", "rest_angle", "damping", "lower", "upper", "limit_restitution")
 LINE_KEYS = ("length", "mu", "J", "radius", "twist", "twist_matrix", "count") + JOINT_KEYS
@@ -1386,6 +1408,7 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
         links=links,
         twists=twists if n > 1 else (),
         gravity=data.get("gravity", DEFAULT_GRAVITY),
+        gravity_direction=_gravity_direction_from_data(data),
         walls=walls,
         q0=tuple(initial["q"]) if "q" in initial else (),
         qd0=tuple(initial["qd"]) if "qd" in initial else (),
@@ -1398,6 +1421,18 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
         obstacles=_obstacles_from_data(data.get("obstacles", [])),
         obstacle_restitution=default_e,
     )
+
+
+def _gravity_direction_from_data(data: dict):
+    """The gravity_direction key: a vector, or "urdf" (with a urdf file): gravity along the URDF world's -z, which
+    the import takes as the box frame unturned, so (0, 0, -1); absent: -X2."""
+    value = data.get("gravity_direction", DEFAULT_GRAVITY_DIRECTION)
+    if isinstance(value, str):
+        if value != "urdf" or "urdf" not in data:
+            raise SceneError(f"gravity_direction: expected a unit vector [d1, d2, d3], or \"urdf\" in a scene with a "
+                             f"urdf file (gravity along the URDF world's -z), got {value!r}")
+        return URDF_GRAVITY_DIRECTION
+    return value
 
 
 def _obstacles_from_data(items) -> tuple[Obstacle, ...]:

@@ -75,6 +75,11 @@ def draw_box(ax, scene: Scene, planar: bool) -> None:
         ax.set_aspect("equal")
         ax.set_xlabel("X1 (m)")
         ax.set_ylabel("X2 (m)")
+        d = scene.gravity_direction
+        if d != (0.0, -1.0, 0.0) and math.hypot(d[0], d[1]) > 0.0:    # a tilted gravity: its direction, drawn
+            ax.annotate("g", xy=(0.88, 0.6), xycoords="axes fraction", xytext=(-30 * d[0], -30 * d[1]),
+                        textcoords="offset points", ha="center", va="center", fontsize=8,
+                        arrowprops={"arrowstyle": "->", "color": "0.3"})
     else:
         ax.set_xlabel("X1 (m)")
         ax.set_ylabel("X3 (m)")

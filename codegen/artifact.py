@@ -139,7 +139,11 @@ def _unchanged_default(value, field: str) -> bool:
         return type(value).__name__ in ("LineLink", "RigidLink") and value.radius == 0.0
     if field == "link_restitution":         # the e of capsule links meeting: unset in every earlier scene
         return type(value).__name__ == "Scene" and value.link_restitution is None
+    if field == "gravity_direction":        # gravity along -X2, as in every earlier scene
+        return type(value).__name__ == "Scene" and value.gravity_direction == (0.0, -1.0, 0.0)
     if field == "contact_pairs":            # which link pairs are contacts: every possible one in earlier scenes
         return type(value).__name__ == "Scene" and value.contact_pairs is None
+    if field in ("obstacles", "obstacle_restitution"):   # fixed obstacles (and their default e): none earlier
+        return type(value).__name__ == "Scene" and not value.obstacles
     return field == "base" and type(value).__name__ == "Scene" and value.base.kind == "free"
 

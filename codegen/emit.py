@@ -15,7 +15,8 @@ from .artifact import GeneratedModel, RenderedFunction, scene_hash, text_digest 
 from .ops import count_ops
 from .options import BuildOptions
 from .parameters import parameter_rules
-from .scene import JointStop, Scene, parameter_name, split_parameter_name
+from .scene import DEFAULT_GRAVITY_DIRECTION, WALL_NAMES, JointStop, ObstacleContact, Scene, parameter_name, \
+    split_parameter_name
 from .specialise import coordinate_names
 from .version import __version__
 
@@ -303,7 +304,8 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], o
     rules = parameter_rules(scene, layout.zero_params, bake_params)
     contact_table = [_contact_entry(c, point, wall, layout, scene, bake_params)
                      for c, (point, wall) in enumerate(layout.contacts)]
-    contact_table += [_link_entry(len(contact_table) + k, pair) for k, pair in enumerate(scene.link_contacts())]
+    contact_table += [_link_entry(len(contact_table) + k, pair, scene, bake_params)
+                      for k, pair in enumerate(scene.rowless_contacts())]
     sizes = interface.size_definitions(name, n=scene.n, nq=layout.nq, nparam=len(params), nu=scene.nu,
                                        npoint=scene.n + 1, ncontact=len(contact_table),
                                        njrow=len(layout.contact_rows), friction=any(entry["has_friction"] for entry in contact_table))
@@ -311,17 +313,19 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], o
         NAME=name.upper(), name=name, version=__version__, scene=scene, scene_hash=scene_hash(scene),
         bake_params=bake_params, functions=functions, nq=layout.nq,
         coordinates=[names[i] for i in layout.free], fixed=[(names[i], _double_literal(v)) for i, v in layout.fixed],
-        notes=layout.notes,
-        params=[(i, pname, param_doc(pname) + (" [built in as 0]" if pname in zeros else ""), _double_literal(value),
+        notes=layout.notes, gravity_along=gravity_text(scene),
+        params=[(i, pname, param_doc(pname, scene) + (" [built in as 0]" if pname in zeros else ""), _double_literal(value),
                  f"[{rule.lo:g}, {rule.hi:g}]") for i, ((pname, value), rule) in enumerate(zip(params, rules))],
         parameter_info=[(rule.name, _double_literal(rule.lo), _double_literal(rule.hi), _c_string(rule.text))
                         for rule in rules],
         relations=parameter_relations(rules),
         weight_scale=_weight_scale_expression(scene, bake_params),
         contacts=[(c, point, wall) for c, (point, wall) in enumerate(layout.contacts)]
-                 + [(len(layout.contacts) + k, pair.i, pair) for k, pair in enumerate(scene.link_contacts())],
+                 + [(len(layout.contacts) + k, pair.i, pair) for k, pair in enumerate(scene.rowless_contacts())],
         contact_table=contact_table,
-        link_radius=[_double_literal(float(pair.radius)) for pair in scene.link_contacts()],
+        link_radius=[_double_literal(float(pair.radius)) for pair in scene.rowless_contacts()],
+        obstacles=[dict(name=o.name, kind=o.kind, radius=o.radius, restitution=o.restitution,
+                        segment=[_double_literal(float(x)) for end in o.segment for x in end]) for o in scene.obstacles],
         row_labels=[f"(theta_{point})" if axis == "theta" else f"(O_{point},X{axis + 1})"
                     for point, axis in layout.contact_rows],
         rows=list(layout.contact_rows), twists=scene.all_twists,
@@ -464,9 +468,19 @@ def _contact_entry(c: int, point: int, wall, layout, scene: Scene, bake_params: 
                 friction_value=_double_literal(friction), trow=trow)
 
 
-def _link_entry(c: int, pair) -> dict:
+def _link_entry(c: int, pair, scene: Scene, bake_params: bool) -> dict:
     """One row of the model's gac_contact table for two capsule links (GAC_CONTACT_LINK): links i, j in point and
-    coordinate, a constant e; no Jacobian row (row 0 unused); the radius sum goes to the model's link_radius."""
+    coordinate, a constant e; or for a link and a fixed obstacle (GAC_CONTACT_OBSTACLE): link i in point, the
+    obstacle's index in coordinate, its e the parameter e_<name>.  No Jacobian row (row 0 unused); the radius sum goes
+    to the model's link_radius."""
+    if isinstance(pair, ObstacleContact):
+        o = pair.obstacle
+        return dict(c=c, point=pair.i, axis=-1, sign=1, row=0,
+                    e_index=-1 if bake_params else scene.parameter_index("e", o.name),
+                    e_value=_double_literal(float(o.restitution)), kind="GAC_CONTACT_OBSTACLE", coordinate=pair.index,
+                    label=pair.name, doc=f"link {pair.i} on the fixed {o.kind} {o.name} (radii {pair.radius:g} m "
+                    f"together, e = {o.restitution}), frictionless, never resting", has_friction=0, friction_index=-1,
+                    friction_value=_double_literal(0.0), trow=[-1, -1])
     return dict(c=c, point=pair.i, axis=-1, sign=1, row=0, e_index=-1,
                 e_value=_double_literal(float(pair.restitution)), kind="GAC_CONTACT_LINK", coordinate=pair.j,
                 label=pair.name, doc=f"links {pair.i} and {pair.j} as capsules (radii {pair.radius:g} m together, "
@@ -479,14 +493,26 @@ def macro_name(name: str) -> str:
     return name.replace("-", "M").upper()
 
 
-def param_doc(pname: str) -> str:
+def gravity_text(scene: Scene) -> str:
+    """Where gravity acts, in words: '-X2' (the default), else the scene's gravity_direction d."""
+    d = scene.gravity_direction
+    if d == DEFAULT_GRAVITY_DIRECTION:
+        return "-X2"
+    return f"d = ({', '.join(repr(x) for x in d)}) of the box frame (gravity_direction)"
+
+
+def param_doc(pname: str, scene: Scene | None = None) -> str:
+    """The description of parameter ``pname`` (its unit last, in parentheses); ``scene``: says where g acts when the
+    scene's gravity is not along -X2."""
     kind, owner = split_parameter_name(pname)
+    if kind == "g" and scene is not None and scene.gravity_direction != DEFAULT_GRAVITY_DIRECTION:
+        return f"gravity's magnitude, along {gravity_text(scene)} (m/s^2)"
     if kind in JOINT_DOC:
         return f"joint {owner}: {JOINT_DOC[kind]}"
     if kind == "wall":
         return f"position of wall {owner} (m)"
     if kind == "e":
-        return f"restitution of wall {owner} (-)"
+        return f"restitution of {'wall' if owner in WALL_NAMES else 'obstacle'} {owner} (-)"
     if kind == "friction":
         return f"Coulomb friction coefficient of wall {owner} (-)"
     if kind == "g":

@@ -97,7 +97,7 @@ def fmi2_variables(model: GeneratedModel, scene: Scene, rows: dict, constants: d
         "Q": [(c, c, None) for c in coordinates],
         "QD": [(c, c, None) for c in coordinates],
         "U": [(c, c, None) for c in scene.inputs],
-        "P": [(rule.name, param_doc(rule.name), value)
+        "P": [(rule.name, param_doc(rule.name, scene), value)
               for rule, value in zip(rules, scene.parameter_vector().tolist())],
         "Q0": [(c, c, float(v)) for c, v in zip(coordinates, layout.reduce(scene.q0))],
         "QD0": [(c, c, float(v)) for c, v in zip(coordinates, layout.reduce(scene.qd0))],

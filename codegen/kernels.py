@@ -247,7 +247,7 @@ def energy_expressions(tape, chain: ChainSymbols):
         h_ref = tape.let_vec(matvec(R, B.h), f"href_{i}")
         w_loc = tape.let_vec(mat_t_vec(R, w), f"wloc_{i}")
         T += B.B0 * dot(v, v) / 2 + dot(v, cross(w, h_ref)) + dot(w_loc, matvec(B.K, w_loc)) / 2
-        V += chain.gravity * (B.B0 * points[i - 1][1] + h_ref[1])
+        V += chain.gravity * (B.B0 * chain.height(points[i - 1]) + chain.height(h_ref))    # -g d . m r_G
     return T, V + chain.spring_potential()
 
 

@@ -15,7 +15,7 @@ import sympy as sp
 
 from .scene import Scene, parameter_name
 from .specialise import Layout, layout_for
-from .tape import (E_X, E_Y, E_Z, ZERO, Tape, Vec, Mat, add, column, cross, index_name, matmul,
+from .tape import (E_X, E_Z, ZERO, Tape, Vec, Mat, add, column, cross, dot, index_name, matmul,
                    mat_t_vec, matvec, scale, to_exact)
 
 
@@ -64,6 +64,7 @@ class ChainSymbols:
                       for i, name in enumerate(names)]
         self.param_index = {name: i for i, name in enumerate(names)}
         self.twists = [to_exact(T) for T in scene.all_twists]
+        self.up = tuple(to_exact([[-x for x in scene.gravity_direction]])[0])  # -d: (0, 1, 0) exactly by default
         self.u = [sp.Symbol(f"u[{i}]", real=True) for i in range(scene.nu)]    # inputs, scene.inputs order
         self.input_coordinate = scene.input_coordinates()                      # full-layout index of each
 
@@ -115,6 +116,14 @@ class ChainSymbols:
     @property
     def gravity(self) -> sp.Expr:
         return self.param("g")
+
+    def frame_acceleration(self) -> Vec:
+        """The reference frame's acceleration that stands for gravity: -g d = g up (g X2 by default, Eq. 18)."""
+        return scale(self.gravity, self.up)
+
+    def height(self, r: Vec) -> sp.Expr:
+        """up . r, the height of a point r against gravity (X2 by default): V = g sum_i m_i height(r_Gi)."""
+        return dot(self.up, r)
 
     def theta(self, k: int) -> sp.Symbol:
         return self.q[k + 1]
@@ -215,10 +224,11 @@ def velocity_products(tape: Tape, chain: ChainSymbols, rotations: dict[int, Mat]
         omega_dot_{v,k}  = ^kR_{k-1} omega_dot_{v,k-1} + (^kR_{k-1} omega_{k-1}) x z theta_dot_k
         r_ddot_{Ov,k}    = ^kR_{k-1} (r_ddot_{Ov,k-1} + omega_dot_{v,k-1} x r_{k-1}
                                        + omega_{k-1} x (omega_{k-1} x r_{k-1}))
-    starting from the reference frame, which has omega = 0 and r_ddot_{Ov} = g X2 (gravity).
+    starting from the reference frame, which has omega = 0 and r_ddot_{Ov} = -g d (gravity along d; g X2 by
+    default).
     """
     omega, omega_dot_v, acc_v = {}, {}, {}
-    previous = ((ZERO, ZERO, ZERO), (ZERO, ZERO, ZERO), scale(chain.gravity, E_Y))
+    previous = ((ZERO, ZERO, ZERO), (ZERO, ZERO, ZERO), chain.frame_acceleration())
     r_prev = (ZERO, ZERO, ZERO)
     for k in range(-1, chain.n + 1):
         w, wd, a = velocity_step(tape, rotations[k], chain.theta_dot(k), previous, r_prev, index_name(k))

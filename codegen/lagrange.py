@@ -8,7 +8,9 @@ layout of Eq. 13 or the scene's specialised Layout), same parameter array, same 
    intermediate gets a symbol.  Per real link i, with v = velocity of O_i, w = angular velocity and
    R = ^{ref}R_i (all in the reference frame),
 
-       T_i = 1/2 B0 v.v + v.(w x R h) + 1/2 (R^T w)^T K (R^T w),     V_i = g (B0 O_i + R h) . X2.
+       T_i = 1/2 B0 v.v + v.(w x R h) + 1/2 (R^T w)^T K (R^T w),     V_i = -g (B0 O_i + R h) . d
+
+   (d the scene's gravity direction, -X2 by default).
 
    The expressions are nested, not multiplied out (no ``expand``): multiplying out would only make
    them larger.  Fixed coordinates are numbers and zero parameters are 0, exactly as in ChainSymbols.

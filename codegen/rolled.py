@@ -43,7 +43,7 @@ from .kernels import Kernel
 from .ops import count_ops
 from .kinematics import ChainSymbols, Motion
 from .scene import parameter_name, split_parameter_name
-from .tape import E_Y, ZERO, Tape, index_name, scale
+from .tape import ZERO, Tape, index_name
 
 ROLL_MIN_RUN = 4          # the fewest links a loop covers
 
@@ -395,7 +395,7 @@ def build_blocks(chain: ChainSymbols, run: tuple[int, int], forced: dict | None 
 
     # 1. velocities, links -1 .. k0 - 1
     tape, writes = Tape(), []
-    motion = ((ZERO, ZERO, ZERO), (ZERO, ZERO, ZERO), scale(chain.gravity, E_Y))
+    motion = ((ZERO, ZERO, ZERO), (ZERO, ZERO, ZERO), chain.frame_acceleration())
     for k in range(-1, k0):
         motion, cs_k = _velocity(tape, chain, k, motion)
         writes += cs.write(k, cs_k) + (mv.write(k, _flat(motion)) if k >= 1 else [])

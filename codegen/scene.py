@@ -32,6 +32,9 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 WALL_NAMES = ("x1_min", "x1_max", "x2_min", "x2_max", "x3_min", "x3_max")
 DEFAULT_GRAVITY = 9.81
+DEFAULT_GRAVITY_DIRECTION = (0.0, -1.0, 0.0)   # gravity along -X2 (the paper's convention)
+GRAVITY_DIRECTION_TOL = 1e-9                   # | |d| - 1 | allowed of a gravity direction
+URDF_GRAVITY_DIRECTION = (0.0, 0.0, -1.0)      # a URDF's gravity, along its world's -z (the box frame unturned)
 # Table 1 and 2 of the paper: moment of inertia per unit length, kg m.
 PAPER_J = (5.89e-5, 2.94e-5, 2.94e-5)
 GIMBAL_MARGIN = 1e-6  # |cos(theta_0)| below this is the gimbal lock of the base chart
@@ -100,6 +103,21 @@ def _vector(value, size: int, fieldname: str, largest: float = COORDINATE_MAX) -
     if not isinstance(value, (list, tuple)) or len(value) != size:
         raise SceneError(f"{fieldname}: expected a list of {size} numbers, got {value!r}")
     return tuple(_number(v, f"{fieldname}[{i}]", largest) for i, v in enumerate(value))
+
+
+def _unit_direction(value, fieldname: str) -> tuple[float, float, float]:
+    """A unit 3-vector: three finite numbers whose length is 1 within GRAVITY_DIRECTION_TOL (not normalised here,
+    so that the scene file says exactly the direction the model uses; the error gives the normalised vector)."""
+    d = _vector(value.tolist() if isinstance(value, np.ndarray) else value, 3, fieldname, largest=1e3)
+    length = math.sqrt(sum(x * x for x in d))
+    if length == 0.0:
+        raise SceneError(f"{fieldname}: must be a unit vector (the direction gravity acts along, box frame), "
+                         f"got the zero vector {list(d)!r}")
+    if abs(length - 1.0) > GRAVITY_DIRECTION_TOL:
+        unit = [round(x / length, 15) for x in d]
+        raise SceneError(f"{fieldname}: must be a unit vector (length 1 within {GRAVITY_DIRECTION_TOL:g}; the "
+                         f"magnitude is 'gravity'), got {list(d)!r} of length {length!r}; normalised: {unit!r}")
+    return tuple(x + 0.0 for x in d)          # -0.0 as 0.0: the same direction hashes the same
 
 
 def _matrix3(value, fieldname: str, largest: float = COORDINATE_MAX) -> tuple[tuple[float, ...], ...]:
@@ -305,6 +323,127 @@ class LinkPair:
     @property
     def links(self) -> tuple[int, int]:
         return (self.i, self.j)
+
+
+OBSTACLE_KINDS = ("sphere", "capsule")
+OBSTACLE_KEYS = ("name", "kind", "center", "a", "b", "radius", "restitution", "links")
+_OBSTACLE_NAME_RE = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,22}[A-Za-z_]$|^[A-Za-z]$")
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """A convex body fixed in the box that links strike: a capsule of ``radius`` (m) about the fixed segment a -> b
+    (box frame, m); a sphere is the capsule with a = b (kind 'sphere', centre a).  ``restitution``: its e (None:
+    the scene's default); ``links``: the links (1-based) that can touch it (None: every link that moves)."""
+
+    name: str
+    kind: str = "sphere"
+    a: tuple = (0.0, 0.0, 0.0)
+    b: tuple | None = None        # None: a (a sphere)
+    radius: float = 0.0
+    restitution: float | None = None
+    links: tuple | None = None
+
+    @staticmethod
+    def sphere(name: str, center, radius: float, restitution: float | None = None, links=None) -> "Obstacle":
+        return Obstacle(name, "sphere", tuple(center), None, radius, restitution, links)
+
+    @staticmethod
+    def bar(name: str, a, b, radius: float, restitution: float | None = None, links=None) -> "Obstacle":
+        return Obstacle(name, "capsule", tuple(a), tuple(b), radius, restitution, links)
+
+    @property
+    def segment(self) -> tuple[tuple, tuple]:
+        return self.a, self.a if self.b is None else self.b
+
+    def checked(self, where: str, default_e: float, n: int, moving: list[int]) -> "Obstacle":
+        """The obstacle with every field validated (SceneError naming ``where``.field), restitution and links
+        filled in: n links, of which ``moving`` can move (a fixed base welds link 1)."""
+        if not isinstance(self.name, str) or not _OBSTACLE_NAME_RE.match(self.name):
+            raise SceneError(f"{where}.name: 1..24 letters, digits or _, starting with a letter and not ending with a "
+                             f"digit (it names the parameter e_<name> and the contacts L<i>/<name>), got {self.name!r}")
+        if self.name in WALL_NAMES or self.name == "limit":
+            raise SceneError(f"{where}.name: {self.name!r} is taken (a wall's name, or e_limit of the joint stops); "
+                             "give another name")
+        where = f"{where} ({self.name})"
+        if self.kind not in OBSTACLE_KINDS:
+            raise SceneError(f"{where}.kind: one of {', '.join(repr(k) for k in OBSTACLE_KINDS)}, got {self.kind!r}")
+        a = _vector(list(self.a) if isinstance(self.a, (list, tuple)) else self.a, 3,
+                    f"{where}.{'center' if self.kind == 'sphere' else 'a'}")
+        if self.kind == "sphere":
+            if self.b is not None and tuple(self.b) != a:
+                raise SceneError(f"{where}.b: a sphere has a centre only; give kind = 'capsule' for a bar a -> b")
+            b = a
+        else:
+            if self.b is None:
+                raise SceneError(f"{where}.b: required for a capsule (a bar from a to b, m)")
+            b = _vector(list(self.b) if isinstance(self.b, (list, tuple)) else self.b, 3, f"{where}.b")
+        radius = _in_range(self.radius, f"{where}.radius", LENGTH_RANGE, "m (an obstacle's radius must be > 0)")
+        e = default_e if self.restitution is None else self.restitution
+        e = _number(e, f"{where}.restitution")
+        if not 0.0 <= e <= 1.0:
+            raise SceneError(f"{where}.restitution: must be in [0, 1], got {e!r}")
+        if self.links is None:
+            links = tuple(moving)
+        else:
+            if isinstance(self.links, (str, bytes)) or not isinstance(self.links, (list, tuple)) or not self.links:
+                raise SceneError(f"{where}.links: expected a non-empty list of link numbers 1..{n}, got {self.links!r}")
+            for i in self.links:
+                if isinstance(i, bool) or not isinstance(i, int) or not 1 <= i <= n:
+                    raise SceneError(f"{where}.links: link numbers must be integers in 1..{n}, got {i!r}")
+                if i not in moving:
+                    raise SceneError(f"{where}.links: link {i} is welded to the box by the fixed base and never "
+                                     f"strikes anything; allowed: {', '.join(str(k) for k in moving)}")
+            if len(set(self.links)) != len(self.links):
+                raise SceneError(f"{where}.links: a link is named twice in {list(self.links)}")
+            links = tuple(sorted(self.links))
+        return Obstacle(self.name, self.kind, a, None if self.kind == "sphere" else b, float(radius), float(e), links)
+
+
+@dataclass(frozen=True)
+class ObstacleContact:
+    """Link i and a fixed obstacle: a contact of the loop like a link pair whose second side never moves (an event
+    when their gap closes, an impact by Newton's law with the obstacle's e, frictionless, never resting), with gap
+    = the distance of the link's segment from the obstacle's less radius = r_i + r_obstacle (m)."""
+
+    i: int
+    obstacle: Obstacle
+    index: int            # the obstacle's place in Scene.obstacles (0-based): the model's obstacle table
+    radius: float         # m, r_i + r_obstacle
+
+    @property
+    def name(self) -> str:
+        return f"L{self.i}/{self.obstacle.name}"
+
+    @property
+    def links(self) -> tuple[int]:
+        return (self.i,)
+
+    @property
+    def restitution(self) -> float:
+        return float(self.obstacle.restitution)
+
+
+def segment_distance(a0, a1, b0, b1) -> float:
+    """The distance (m) of segments a0-a1 and b0-b1 (numpy; scene validation): the minimum over the clamped closest
+    points of the two lines and of each end point against the other segment."""
+    a0, a1, b0, b1 = (np.asarray(v, dtype=float) for v in (a0, a1, b0, b1))
+
+    def to_segment(x, p0, p1):
+        d = p1 - p0
+        dd = float(d @ d)
+        t = 0.0 if dd == 0.0 else min(1.0, max(0.0, float((x - p0) @ d) / dd))
+        return float(np.linalg.norm(x - (p0 + t * d)))
+
+    best = min(to_segment(a0, b0, b1), to_segment(a1, b0, b1), to_segment(b0, a0, a1), to_segment(b1, a0, a1))
+    u, v, w = a1 - a0, b1 - b0, a0 - b0
+    uu, uv, vv, uw, vw = u @ u, u @ v, v @ v, u @ w, v @ w
+    denom = uu * vv - uv * uv
+    if denom > 1e-14 * uu * vv:               # interior closest points of the two lines, when both lie inside
+        s, t = (uv * vw - vv * uw) / denom, (uu * vw - uv * uw) / denom
+        if 0.0 <= s <= 1.0 and 0.0 <= t <= 1.0:
+            best = min(best, float(np.linalg.norm(w + s * u - t * v)))
+    return best
 
 
 FREE_JOINT = Joint()
@@ -560,7 +699,9 @@ class Scene:
 
     links      real links 1..n (LineLink or RigidLink), n >= 1
     twists     T_k for k = 2..n (n - 1 rotation matrices); () means all identity
-    gravity    g (m/s^2) acting along -X2 (the paper: the origin accelerates at +g along X2)
+    gravity    g (m/s^2), the magnitude of gravity (the runtime parameter 'g')
+    gravity_direction  d, the unit vector gravity acts along, in the box frame (default (0, -1, 0): -X2, the paper's
+               convention; the reference frame accelerates at -g d).  A tilted d makes the box's floor an incline
     walls      the walls of the box that exist; an absent wall means no wall
     q0, qd0    initial state, layout [theta_-1, theta_0, theta_1..theta_n, X1, X2, X3]
     joints     springs and dampers of the joints 2..n (Joint; n - 1 entries, or () for none)
@@ -589,6 +730,9 @@ class Scene:
     link_restitution: float | None = None   # e of two capsule links meeting (Scene.link_pairs); None: 1
     contact_pairs: tuple | None = None      # the link pairs (i, j) that may strike each other ([contacts] links);
     #                                         None: every pair that can (Scene.link_pairs)
+    obstacles: tuple = ()       # Obstacle: convex bodies fixed in the box that the links strike ([[obstacles]])
+    obstacle_restitution: float = 1.0   # e of an obstacle that gives none (the scene's restitution default)
+    gravity_direction: tuple = DEFAULT_GRAVITY_DIRECTION   # d: gravity acts along it, unit vector, box frame
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not _NAME_RE.match(self.name):
@@ -618,6 +762,7 @@ class Scene:
         object.__setattr__(self, "gravity", _number(self.gravity, "gravity"))
         if abs(self.gravity) > GRAVITY_MAX:
             raise SceneError(f"gravity: must be within [-1e6, 1e6] m/s^2, got {self.gravity!r}")
+        object.__setattr__(self, "gravity_direction", _unit_direction(self.gravity_direction, "gravity_direction"))
         object.__setattr__(self, "friction_velocity", _in_range(self.friction_velocity, "friction_velocity",
                                                                 FRICTION_VELOCITY_RANGE, "m/s"))
         self._validate_walls()
@@ -629,6 +774,7 @@ class Scene:
         if self.contact_pairs is not None:
             object.__setattr__(self, "contact_pairs", self._checked_pairs(self.contact_pairs))
         self._validate_joints()
+        self._validate_obstacles()
         self._validate_state()
 
     # -- derived sizes -----------------------------------------------------
@@ -756,6 +902,26 @@ class Scene:
     def _find(walls, name):
         return next((w for w in walls if w.name == name), None)
 
+    def _validate_obstacles(self) -> None:
+        if isinstance(self.obstacles, (str, bytes, dict)) or not isinstance(self.obstacles, (list, tuple)):
+            raise SceneError(f"obstacles: expected a list of obstacles, got {self.obstacles!r}")
+        e = _number(self.obstacle_restitution, "restitution")
+        if not 0.0 <= e <= 1.0:
+            raise SceneError(f"restitution: must be in [0, 1], got {e!r}")
+        held = self.base.held_points()
+        moving = [i for i in range(1, self.n + 1) if not (i in held and i + 1 in held)]
+        out, names = [], set()
+        for k, item in enumerate(self.obstacles, start=1):
+            if not isinstance(item, Obstacle):
+                raise SceneError(f"obstacles[{k}]: expected a codegen.scene.Obstacle, got {item!r}")
+            item = item.checked(f"obstacles[{k}]", e, self.n, moving)
+            if item.name in names:
+                raise SceneError(f"obstacles[{k}].name: {item.name!r} is given twice; obstacle names are unique")
+            names.add(item.name)
+            out.append(item)
+        object.__setattr__(self, "obstacles", tuple(out))
+        object.__setattr__(self, "obstacle_restitution", e)
+
     def _validate_state(self) -> None:
         nq = self.nq
         held = self.base.held(self.n)
@@ -779,6 +945,13 @@ class Scene:
                     raise SceneError(f"base.point: the {self.base.label} base holds O_{p} at X{w.axis + 1} = "
                                      f"{x:.6g}, outside the wall {w.name} = {w.position:g}; allowed X{w.axis + 1} "
                                      f"{'>=' if w.side < 0 else '<='} {w.position:g}")
+        for c in self.obstacle_contacts():
+            a, b = c.obstacle.segment
+            gap = segment_distance(points[c.i - 1], points[c.i], a, b) - c.radius
+            if gap < 0.0:
+                raise SceneError(f"initial.q: link {c.i} overlaps the obstacle {c.obstacle.name} by {-gap:.6g} m (its "
+                                 f"segment is {gap + c.radius:.6g} m from the obstacle's, less than their radii "
+                                 f"{c.radius:g} m together); allowed: a start with every link clear of it")
         for w in self.walls:
             for p in w.points:
                 x, r = points[p - 1, w.axis], self.point_radius(p)
@@ -840,6 +1013,7 @@ class Scene:
                 names.append(parameter_name("upper", k))
             if joint.lower is not None or joint.upper is not None:
                 names.append(parameter_name("e_limit", k))
+        names += [parameter_name("e", o.name) for o in self.obstacles]
         return names
 
     def parameter_index(self, kind: str, owner: int | str | None = None) -> int:
@@ -868,6 +1042,7 @@ class Scene:
                 values.append(joint.upper)
             if joint.lower is not None or joint.upper is not None:
                 values.append(joint.limit_restitution)
+        values += [o.restitution for o in self.obstacles]
         return np.array(values, dtype=float)
 
     @property
@@ -915,6 +1090,17 @@ class Scene:
         """The link pairs as contacts of the loop (after the walls and stops), with their radius sums and e."""
         e = 1.0 if self.link_restitution is None else float(self.link_restitution)
         return [LinkPair(i, j, self.links[i - 1].radius + self.links[j - 1].radius, e) for i, j in self.link_pairs()]
+
+    def obstacle_contacts(self) -> list[ObstacleContact]:
+        """The (link, obstacle) pairs as contacts of the loop (after the link pairs), obstacle-major, then link
+        order."""
+        return [ObstacleContact(i, o, k, self.links[i - 1].radius + o.radius)
+                for k, o in enumerate(self.obstacles) for i in o.links]
+
+    def rowless_contacts(self) -> list:
+        """The contacts after the kernel's walls and stops, in the model's table order: each link pair (LinkPair),
+        then each link and obstacle (ObstacleContact)."""
+        return [*self.link_contacts(), *self.obstacle_contacts()]
 
     def radius_owner(self, p: int) -> int | None:
         """The link (1-based) whose radius point_radius(p) takes, or None when it is 0."""
@@ -1049,8 +1235,8 @@ def shipped_scene_names() -> list[str]:
 # ---------------------------------------------------------------------------
 # loading from TOML / JSON
 # ---------------------------------------------------------------------------
-TOP_KEYS = ("name", "description", "gravity", "links", "urdf", "urdf_tip_length", "walls", "restitution", "friction",
-            "friction_velocity", "contacts", "initial", "inputs", "base")
+TOP_KEYS = ("name", "description", "gravity", "gravity_direction", "links", "urdf", "urdf_tip_length", "walls",
+            "restitution", "friction", "friction_velocity", "contacts", "initial", "inputs", "base", "obstacles")
 BASE_KEYS = ("kind", "joint", "point", "axis", "angles", "rotation")
 JOINT_KEYS = ("stiffness", "rest_angle", "damping", "lower", "upper", "limit_restitution")
 LINE_KEYS = ("length", "mu", "J", "radius", "twist", "twist_matrix", "count") + JOINT_KEYS
@@ -1213,6 +1399,7 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
         link_e = restitution["links"]
     elif any(link.radius > 0.0 for link in links):
         link_e = restitution.get("default", 1.0) if isinstance(restitution, dict) else restitution
+    default_e = restitution.get("default", 1.0) if isinstance(restitution, dict) else restitution
     initial = data.get("initial", {})
     _check_keys(initial, INITIAL_KEYS, "initial")
     return Scene(
@@ -1221,6 +1408,7 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
         links=links,
         twists=twists if n > 1 else (),
         gravity=data.get("gravity", DEFAULT_GRAVITY),
+        gravity_direction=_gravity_direction_from_data(data),
         walls=walls,
         q0=tuple(initial["q"]) if "q" in initial else (),
         qd0=tuple(initial["qd"]) if "qd" in initial else (),
@@ -1230,7 +1418,55 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
         link_restitution=link_e,
         contact_pairs=pairs,
         base=_base_from_data({} if base is None else base),
+        obstacles=_obstacles_from_data(data.get("obstacles", [])),
+        obstacle_restitution=default_e,
     )
+
+
+def _gravity_direction_from_data(data: dict):
+    """The gravity_direction key: a vector, or "urdf" (with a urdf file): gravity along the URDF world's -z, which
+    the import takes as the box frame unturned, so (0, 0, -1); absent: -X2."""
+    value = data.get("gravity_direction", DEFAULT_GRAVITY_DIRECTION)
+    if isinstance(value, str):
+        if value != "urdf" or "urdf" not in data:
+            raise SceneError(f"gravity_direction: expected a unit vector [d1, d2, d3], or \"urdf\" in a scene with a "
+                             f"urdf file (gravity along the URDF world's -z), got {value!r}")
+        return URDF_GRAVITY_DIRECTION
+    return value
+
+
+def _obstacles_from_data(items) -> tuple[Obstacle, ...]:
+    """The [[obstacles]] tables (docs/scenes.md, "Obstacles"): each checked by Scene."""
+    if not isinstance(items, list):
+        raise SceneError(f"obstacles: expected a list of tables ([[obstacles]]), got {items!r}")
+    out = []
+    for k, item in enumerate(items, start=1):
+        where = f"obstacles[{k}]"
+        if not isinstance(item, dict):
+            raise SceneError(f"{where}: expected a table, got {item!r}")
+        _check_keys(item, OBSTACLE_KEYS, where)
+        for key in ("name", "radius"):
+            if key not in item:
+                raise SceneError(f"{where}.{key}: required")
+        kind = item.get("kind", "sphere")
+        if kind not in OBSTACLE_KINDS:
+            raise SceneError(f"{where}.kind: one of {', '.join(repr(k) for k in OBSTACLE_KINDS)}, got {kind!r}")
+        if kind == "sphere":
+            if "a" in item or "b" in item:
+                raise SceneError(f"{where}.{'a' if 'a' in item else 'b'}: a sphere takes center; give kind = "
+                                 "'capsule' for a bar from a to b")
+            if "center" not in item:
+                raise SceneError(f"{where}.center: required for a sphere (its centre [X1, X2, X3], m)")
+            a, b = item["center"], None
+        else:
+            if "center" in item:
+                raise SceneError(f"{where}.center: a capsule takes its end points a and b (m), not a center")
+            for key in ("a", "b"):
+                if key not in item:
+                    raise SceneError(f"{where}.{key}: required for a capsule (a bar from a to b, m)")
+            a, b = item["a"], item["b"]
+        out.append(Obstacle(item["name"], kind, a, b, item["radius"], item.get("restitution"), item.get("links")))
+    return tuple(out)
 
 
 def _base_from_data(table) -> Base:

@@ -7,8 +7,8 @@ wall of the scene, every parameter at run time.  With ``specialise=True``:
 
 * **planar scenes** -- every real joint axis parallel to the same box axis X1 or X3 (theta_0 = 0 and
   theta_-1 a multiple of pi/2 with the default base twists; T_2..T_n rotations about z), no link with a
-  centre of mass off the plane or a product of inertia coupling the plane to its normal, and no
-  out-of-plane velocity at the start (as in the paper's case 1): theta_-1, theta_0 and the out-of-plane
+  centre of mass off the plane or a product of inertia coupling the plane to its normal, gravity in the plane, and
+  no out-of-plane velocity at the start (as in the paper's case 1): theta_-1, theta_0 and the out-of-plane
   translation are held fixed, n + 2 coordinates instead of n + 5, and walls across the normal are
   dropped (no point ever reaches them);
 * **zero parameters** -- g, J components, centre-of-mass offsets or products of inertia that are
@@ -174,6 +174,8 @@ def planar_normal(scene: Scene) -> tuple[int | None, str]:
         return None, "the joint axes are not parallel to X1 or X3"
     if qd[0] != 0.0 or qd[1] != 0.0 or qd[n + 2 + normal] != 0.0:
         return None, f"theta_-1, theta_0 or X{normal + 1} has a non-zero initial velocity"
+    if scene.gravity_direction[normal] != 0.0:
+        return None, f"gravity (gravity_direction) has a component along X{normal + 1}, out of the plane"
     out_of_plane = {"theta_-1", "theta_0", f"X{normal + 1}"} & set(scene.inputs)
     if out_of_plane:
         return None, f"an input drives {', '.join(sorted(out_of_plane))} out of the plane"

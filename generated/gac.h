@@ -93,7 +93,9 @@
 #define GAC_ERR_LINK_REST        -33   /* two links would come to rest on each other: a link pair struck
                                           opt.zeno_impacts times in a row at shrinking intervals (e < 1: the Zeno
                                           rule that lands a wall's contact) or at one instant (within 1e-12 (1 +
-                                          |t|) s); resting contact between links is not modelled */
+                                          |t|) s); resting contact between links is not modelled.  Also a
+                                          link on a fixed obstacle (GAC_CONTACT_OBSTACLE), which never rests
+                                          either */
 
 /* ---- how gac_sim_advance ends: the run's budgets (< 0) and status (> 0) ------------------------ */
 #define GAC_ERR_WALL_TIME        -25   /* the run used opt.max_wall_time seconds of its clock (gac_sim_set_clock)
@@ -208,14 +210,19 @@ typedef int (*gac_progress)(double t, long n_steps, long n_impacts, void *user);
  * Or two links as capsules (kind GAC_CONTACT_LINK: links point and coordinate, 1-based, gap = their segments'
  * distance less its m->link_radius entry, gac_link_gap; its direction J^T n from the closest points, gac_link_direction; no Jacobian
  * row).  Link contacts come last in the table, after every contact of the contact_gaps kernel; they take part in
- * events and impacts (frictionless), never in the resting set. */
+ * events and impacts (frictionless), never in the resting set.
+ * Or a link and a fixed obstacle (kind GAC_CONTACT_OBSTACLE: link point, 1-based, and obstacle coordinate,
+ * 0-based into m->obstacles; gap = the distance of the link's segment from the obstacle's, less its
+ * m->link_radius entry (the link's radius plus the obstacle's), gac_obstacle_gap): handled as a link pair whose
+ * second side never moves.  Obstacle contacts come after the link pairs. */
 #define GAC_CONTACT_WALL 0
 #define GAC_CONTACT_STOP 1
 #define GAC_CONTACT_LINK 2
+#define GAC_CONTACT_OBSTACLE 3
 typedef struct {
     int point;            /* wall: the point O_point, 1-based (1..npoint); its coordinates are
                              contact_points[3*(point-1) .. 3*(point-1)+2].  stop: the joint k (information).
-                             link: the first link i (1..npoint-1) */
+                             link, obstacle: the (first) link i (1..npoint-1) */
     int axis;             /* wall: its normal axis, 0..2 for X1..X3.  stop: -1 */
     int normal_sign;      /* wall: +1: the inward normal is +X_axis (a *_min wall), -1: -X_axis (a *_max wall).
                              stop: +1 for a lower limit, -1 for an upper one */
@@ -223,9 +230,10 @@ typedef struct {
     int e_index;          /* restitution e of the wall or stop (Newton's law, Eq. 47): p[e_index], or e_value
                              when e_index < 0 (a constant of the model) */
     double e_value;
-    int kind;             /* GAC_CONTACT_WALL (0), GAC_CONTACT_STOP (1) or GAC_CONTACT_LINK (2) */
+    int kind;             /* GAC_CONTACT_WALL (0), GAC_CONTACT_STOP (1), GAC_CONTACT_LINK (2) or
+                             GAC_CONTACT_OBSTACLE (3) */
     int coordinate;       /* stop: the index into q of its joint's angle (0..nq-1); link: the second link j
-                             (> point + 1); wall: unused */
+                             (> point + 1); obstacle: the obstacle (0..nobstacle-1); wall: unused */
     int has_friction;     /* wall: 1 if the wall has Coulomb friction (0: frictionless; a zero-initialised entry) */
     int friction_index;         /* its friction coefficient c_f: p[friction_index], or friction_value when < 0 */
     double friction_value;
@@ -337,9 +345,14 @@ struct gac_model {
     gac_kernel_qv_ld generalized_momentum_ld;      /* q, qd, p -> I_f qd (nq) */
     gac_kernel_qv_ld contact_generalized_force_ld; /* q, f (njrow), p -> J^T f (nq) */
     gac_kernel_qv_ld energy_ld;                    /* q, qd, p -> E[0] kinetic, E[1] potential energy (J) */
-    const double *link_radius;         /* r_i + r_j (m, >= 0) of each link contact (GAC_CONTACT_LINK), in table order
+    const double *link_radius;         /* r_i + r_j (m, >= 0) of each link contact (GAC_CONTACT_LINK), then r_i + r_o
+                                          of each obstacle contact (GAC_CONTACT_OBSTACLE), in table order
                                           (link_radius[0]: the first after the kernel's contacts); NULL when the
                                           model has none */
+    int nobstacle;                     /* fixed obstacles (>= 0) */
+    const double *obstacles;           /* [6 nobstacle]: each obstacle's segment a, b (m, box frame; a sphere has
+                                          a = b); its radius is in the link_radius entries of its contacts */
+    const char *const *obstacle_names; /* [nobstacle]: each obstacle's name (contacts are named L<i>/<name>) */
 };
 
 /* GAC_OK if the descriptor is consistent (sizes > 0 where needed, nx = 2 nq, tables and kernels present,
@@ -531,6 +544,17 @@ double gac_link_direction(const gac_model *m, const double *q, const double *p, 
  * chain cannot move along the row: the closest points are the two ends of the one link between i and j). */
 int gac_link_impact(const gac_model *m, const double *q, const double *qd, const double *p, int i, int j,
                     double radius, double e, double *qd_plus, double *impulse, double *v_normal);
+
+/* Link i (1-based) and fixed obstacle o (0-based, m->obstacles) whose radii add up to `radius` (m): geometry
+ * (GAC_LINK_NGEOMETRY doubles) as gac_link_gap's, t along the obstacle's segment and n from the obstacle's closest
+ * point to the link's.  The gap's rate is n . v_P (the obstacle does not move).  Returns GAC_OK or
+ * GAC_ERR_BAD_CONTACT. */
+int gac_obstacle_gap(const gac_model *m, const double *q, const double *p, int i, int o, double radius,
+                     double *geometry);
+/* g (nq) = J^T n of contact c (0..ncontact-1, any kind): the generalised force of a unit push along its normal (a
+ * wall's or stop's signed Jacobian row; a link pair's or obstacle's at the closest points), so that the gap's rate
+ * is g . qd.  Returns GAC_OK or GAC_ERR_BAD_CONTACT (c out of range, or a link contact's geometry failed). */
+int gac_contact_normal(const gac_model *m, const double *q, const double *p, int c, double *g);
 
 /* The base chart's measure chi(q) (gac_chart), in [0, 1] for the default twists. */
 double gac_chart_measure(const gac_model *m, const double *q);
@@ -1025,7 +1049,8 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       may add it to the active set or drop it; or resting contacts released together
                                       (their forces ~0 at once), a slip with another slip or a release, or points
                                       that stick at one step's end at different speeds */
-#define GAC_SENS_LINK         11   /* an impact of two links (a GAC_CONTACT_LINK contact): not differentiated */
+#define GAC_SENS_LINK         11   /* an impact of two links or of a link on a fixed obstacle (GAC_CONTACT_LINK,
+                                         GAC_CONTACT_OBSTACLE): not differentiated */
 #define GAC_SENS_STICK        12   /* a stick-slip transition on a rough wall not differentiated: a stuck point that
                                       left the wall (its force reaching 0 while stuck), a stuck point that slipped
                                       at an impact, or one that came to stick at an impact without taking its

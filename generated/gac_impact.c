@@ -45,7 +45,7 @@ double gac_row_value(const gac_model *m, int c, const double *w, const double *v
 void gac_contact_direction(const gac_model *m, const double *q, const double *p, int c, double *f, double *g)
 {
     int r;
-    if (m->contacts[c].kind == GAC_CONTACT_LINK) {
+    if (gac_rowless(m, c)) {
         gac_link_contact_direction(m, q, p, c, g);
         return;
     }

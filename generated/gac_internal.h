@@ -120,13 +120,16 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r);
 /* gac_model.c */
 int gac_has_friction(const gac_model *m);
 
-/* gac_link.c: link pairs as contacts of the loop (kind GAC_CONTACT_LINK, the last entries of m->contacts) */
+/* gac_link.c: link pairs and obstacles as contacts of the loop (kinds GAC_CONTACT_LINK, GAC_CONTACT_OBSTACLE, the
+ * last entries of m->contacts: no Jacobian row, never resting, frictionless) */
+int gac_rowless(const gac_model *m, int c);             /* 1 if contact c is a link pair or an obstacle */
 int gac_kernel_contacts(const gac_model *m);            /* the contacts before them: those of contact_gaps */
-int gac_has_link(const gac_model *m, int n, const int *list);   /* 1 if list[0..n-1] holds a link pair */
-/* every contact's gap (ncontact): the kernel's, then each link pair's (gac_link_gap) */
+int gac_has_link(const gac_model *m, int n, const int *list);   /* 1 if list[0..n-1] holds one of them */
+/* every contact's gap (ncontact): the kernel's, then each link pair's and obstacle's (gac_link_gap,
+ * gac_obstacle_gap) */
 void gac_contact_gaps(const gac_model *m, const double *q, const double *p, double *gaps);
 void gac_link_contact_direction(const gac_model *m, const double *q, const double *p, int c, double *g);
-/* link contact c's gap rate n . (v_P - v_Q) from the joint points' velocities vel (npoint x 3) at q */
+/* link or obstacle contact c's gap rate n . (v_P - v_Q) from the joint points' velocities vel (npoint x 3) at q */
 double gac_link_contact_rate(const gac_model *m, const double *q, const double *p, int c, const double *vel);
 double gac_link_law_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                              const double *F, const double *qd, const double *qd_plus, double T);

@@ -965,7 +965,8 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
  * walls slide in f- and f+ with their friction (a landing that slides on).  A point sliding at rest slower than
  * friction_velocity before or after (the slip directions of f- are the loop's after the impact), a stuck point that
  * slipped, or one that came to stick without taking the impact's impulse ends them (GAC_SENS_RESTING,
- * GAC_SENS_STICK), as do impacts of another kind and impacts of two links. */
+ * GAC_SENS_STICK), as do impacts of another kind and impacts of two links or of a link on an obstacle
+ * (GAC_SENS_LINK). */
 void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const int *was_stuck)
 {
     gac_sens *z = s->sens;
@@ -974,12 +975,12 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
     {
         int a;
         for (a = 0; a < r->ncontact; ++a) {
-            if (md->contacts[r->contact[a]].kind == GAC_CONTACT_LINK) {
+            if (gac_rowless(md, r->contact[a])) {
                 gac_sens_stop(s, GAC_SENS_LINK, r->t, r->contact[a]);
                 return;
             }
         }
-        if (c_event >= 0 && md->contacts[c_event].kind == GAC_CONTACT_LINK) {
+        if (c_event >= 0 && gac_rowless(md, c_event)) {
             gac_sens_stop(s, GAC_SENS_LINK, r->t, c_event);
             return;
         }

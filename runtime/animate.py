@@ -10,6 +10,7 @@ needs ffmpeg on the PATH.  Frames are the run's samples, thinned to at most ``ma
 """
 from __future__ import annotations
 
+import math
 import shutil
 from pathlib import Path
 
@@ -38,8 +39,28 @@ def _planar(shapes: np.ndarray) -> bool:
     return bool(np.ptp(shapes[..., 2]) < 1e-9)
 
 
+def draw_obstacles(ax, scene: Scene, planar: bool) -> None:
+    """Each fixed obstacle, grey: in the plane its outline there (a disc for a sphere, a stadium for a bar: the
+    capsule's section by the chain's plane X3 = const when both ends lie in it), in space its axis as a thick line
+    with its ends."""
+    for o in scene.obstacles:
+        a, b = (np.array(x, dtype=float) for x in o.segment)
+        if planar:
+            turn = np.linspace(-np.pi / 2, np.pi / 2, 24)
+            d = b[:2] - a[:2]
+            angle = math.atan2(d[1], d[0]) if np.any(d) else 0.0
+            ends = [(b[:2], angle + turn), (a[:2], angle + np.pi + turn)]
+            outline = np.vstack([c + o.radius * np.column_stack([np.cos(t), np.sin(t)]) for c, t in ends])
+            ax.fill(outline[:, 0], outline[:, 1], color="0.6", ec="0.3", lw=1.0, zorder=1)
+        else:
+            ax.plot([a[0], b[0]], [a[2], b[2]], [a[1], b[1]], color="0.5", lw=6, solid_capstyle="round")
+            ax.plot([a[0], b[0]], [a[2], b[2]], [a[1], b[1]], "o", color="0.4", ms=5)
+
+
 def draw_box(ax, scene: Scene, planar: bool) -> None:
-    """The walls (in the plane: the rectangle if all four exist, else each wall as a line) and axis labels."""
+    """The walls (in the plane: the rectangle if all four exist, else each wall as a line), the fixed obstacles and
+    axis labels."""
+    draw_obstacles(ax, scene, planar)
     walls = {w.name: w.position for w in scene.walls}
     if planar:
         lo1, hi1 = walls.get("x1_min"), walls.get("x1_max")
@@ -54,6 +75,11 @@ def draw_box(ax, scene: Scene, planar: bool) -> None:
         ax.set_aspect("equal")
         ax.set_xlabel("X1 (m)")
         ax.set_ylabel("X2 (m)")
+        d = scene.gravity_direction
+        if d != (0.0, -1.0, 0.0) and math.hypot(d[0], d[1]) > 0.0:    # a tilted gravity: its direction, drawn
+            ax.annotate("g", xy=(0.88, 0.6), xycoords="axes fraction", xytext=(-30 * d[0], -30 * d[1]),
+                        textcoords="offset points", ha="center", va="center", fontsize=8,
+                        arrowprops={"arrowstyle": "->", "color": "0.3"})
     else:
         ax.set_xlabel("X1 (m)")
         ax.set_ylabel("X3 (m)")

@@ -18,7 +18,7 @@ from codegen import interface
 from codegen.cache import generate_cached
 from codegen.options import BuildOptions, build_options
 from codegen.artifact import GeneratedModel
-from codegen.scene import Scene, load_scene, scene_file
+from codegen.scene import ObstacleContact, Scene, load_scene, scene_file
 
 from .compile import compile_model
 
@@ -103,8 +103,9 @@ class CompiledModel:
         self.input_names = list(scene.inputs)              # u[i] acts on coordinate input_names[i]
         self.nu = scene.nu
         self.q0, self.qd0 = self.layout.reduce(scene.q0), self.layout.reduce(scene.qd0)
-        # the kernel's contacts (point, Wall or JointStop), then each capsule link pair (i, LinkPair): gac.h's table
-        self.contacts = list(self.layout.contacts) + [(pair.i, pair) for pair in scene.link_contacts()]
+        # the kernel's contacts (point, Wall or JointStop), then each capsule link pair (i, LinkPair), then each link
+        # and obstacle (i, ObstacleContact): gac.h's table
+        self.contacts = list(self.layout.contacts) + [(pair.i, pair) for pair in scene.rowless_contacts()]
         self.contact_rows = list(self.layout.contact_rows)
         self.c = CInterface(self.ffi, self.lib, self.name)   # every call into the compiled model goes through it
         self._work = np.zeros(self.size("IMPACT_NWORK"))
@@ -241,12 +242,44 @@ class CompiledModel:
                           self._vec(qd, self.nq, "qd"), self._params(p))
 
     def contact_gaps(self, q, p=None) -> np.ndarray:
-        """Every contact's gap: the kernel's (walls, stops), then each link pair's (gac_link_gap)."""
+        """Every contact's gap: the kernel's (walls, stops), then each link pair's (gac_link_gap) and each link and
+        obstacle's (gac_obstacle_gap)."""
         gaps = self._call("contact_gaps", len(self.contacts), self._vec(q, self.nq, "q"), self._params(p))
         for c in range(len(self.layout.contacts), len(self.contacts)):
             pair = self.contacts[c][1]
-            gaps[c] = self.link_gap(q, pair.i, pair.j, p)[0]
+            gaps[c] = (self.obstacle_gap(q, pair.i, pair.obstacle.name, p)[0] if isinstance(pair, ObstacleContact)
+                       else self.link_gap(q, pair.i, pair.j, p)[0])
         return gaps
+
+    def obstacle_gap(self, q, i: int, obstacle: str, p=None) -> tuple[float, float, float, np.ndarray]:
+        """The contact of link i and the fixed obstacle named ``obstacle`` (gac_obstacle_gap): (gap, s, t, n) with gap
+        the distance of the link's segment from the obstacle's less their radii (m), s and t the closest points'
+        fractions along the link and the obstacle's segment, n the unit normal from the obstacle to the link."""
+        names = [o.name for o in self.scene.obstacles]
+        if obstacle not in names:
+            raise ValueError(f"obstacle: one of this scene's obstacles ({', '.join(names) or 'none'}), got {obstacle!r}")
+        if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 1 <= i <= self.scene.n:
+            raise ValueError(f"i: a link index in 1..{self.scene.n}, got {i!r}")
+        o = names.index(obstacle)
+        radius = self.scene.links[i - 1].radius + self.scene.obstacles[o].radius
+        out = np.zeros(6)
+        code = self.lib.gac_obstacle_gap(self.ffi.addressof(self.c.model), self._ptr(self._vec(q, self.nq, "q")),
+                                         self._ptr(self._params(p)), int(i), o, radius, self._ptr(out))
+        if code != self.lib.GAC_OK:
+            raise ImpactError(f"obstacle contact (link {i}, {obstacle}): {self.error_message(code)}")
+        return float(out[0]), float(out[1]), float(out[2]), out[3:].copy()
+
+    def contact_normal(self, q, c: int, p=None) -> np.ndarray:
+        """J^T n of contact c (gac_contact_normal): the generalised force (nq) of a unit push along its normal, so
+        that the gap's rate is contact_normal . qd."""
+        if isinstance(c, bool) or not isinstance(c, (int, np.integer)) or not 0 <= c < len(self.contacts):
+            raise ValueError(f"c: a contact index in 0..{len(self.contacts) - 1}, got {c!r}")
+        g = np.zeros(self.nq)
+        code = self.lib.gac_contact_normal(self.ffi.addressof(self.c.model), self._ptr(self._vec(q, self.nq, "q")),
+                                           self._ptr(self._params(p)), int(c), self._ptr(g))
+        if code != self.lib.GAC_OK:
+            raise ImpactError(f"contact {c}: {self.error_message(code)}")
+        return g
 
     def energy(self, q, qd, p=None) -> tuple[float, float]:
         E = self._call("energy", 2, self._vec(q, self.nq, "q"), self._vec(qd, self.nq, "qd"), self._params(p))

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from codegen.scene import JointStop, LinkPair, Scene, SceneError, parameter_name, split_parameter_name
+from codegen.scene import JointStop, LinkPair, ObstacleContact, Scene, SceneError, parameter_name, split_parameter_name
 from codegen.parameters import check_vector, parameter_rules
 from codegen.specialise import coordinate_names
 
@@ -47,13 +47,15 @@ class Contact:
     wall: str
     impulse: float        # N s along the wall's inward normal (>= 0: it pushes); N m s for a stop
     kind: str = "wall"    # 'wall' | 'stop' | 'link' (two capsule links: wall 'L<i>-L<j>', point i, links (i, j))
+    #                       | 'obstacle' (link i on a fixed obstacle: wall 'L<i>/<name>', point i, links (i,))
     impulse_t: tuple = (0.0, 0.0)   # N s along the wall's two tangential axes, ascending (X1, X2 for a x3 wall):
                                     # friction at the impact (0 on a frictionless wall)
-    links: tuple = ()     # 'link': the two links (i, j), 1-based; the impulse pushes them apart along their normal
+    links: tuple = ()     # 'link': the two links (i, j), 1-based; the impulse pushes them apart along their normal;
+    #                       'obstacle': (i,), the impulse pushing link i off the obstacle
 
     @property
     def label(self) -> str:
-        return self.wall if self.kind in ("stop", "link") else f"O{self.point}/{self.wall}"
+        return self.wall if self.kind in ("stop", "link", "obstacle") else f"O{self.point}/{self.wall}"
 
 
 @dataclass
@@ -776,10 +778,11 @@ def _read_impact(model: CompiledModel, r) -> Impact:
     contacts = []
     for k in range(r.ncontact):
         point, wall = model.contacts[r.contact[k]]
-        kind = "stop" if isinstance(wall, JointStop) else "link" if isinstance(wall, LinkPair) else "wall"
+        kind = ("stop" if isinstance(wall, JointStop) else "link" if isinstance(wall, LinkPair)
+                else "obstacle" if isinstance(wall, ObstacleContact) else "wall")
         contacts.append(Contact(point, wall.name, float(r.impulse[k]), kind,
                                 (float(r.impulse_t[2 * k]), float(r.impulse_t[2 * k + 1])),
-                                wall.links if kind == "link" else ()))
+                                wall.links if kind in ("link", "obstacle") else ()))
     unpack, layout = model.ffi.unpack, model.layout
     return Impact(float(r.t), contacts, float(r.energy_before), float(r.energy_after), bool(r.complementarity),
                   layout.expand(unpack(r.q, nq)), layout.expand(unpack(r.qd_before, nq), velocity=True),
@@ -860,6 +863,10 @@ def _check_inside(model: CompiledModel, q: np.ndarray, p: np.ndarray, name: str)
     points = model.contact_points(q, p)
     for c in np.flatnonzero(gaps < -1e-12 * max(1.0, float(np.abs(points).max()))):
         point, wall = model.contacts[c]
+        if isinstance(wall, ObstacleContact):
+            raise ValueError(f"{name}: link {wall.i} overlaps the obstacle {wall.obstacle.name}: its segment is "
+                             f"{gaps[c] + wall.radius:.6g} m from the obstacle's, less than their radii {wall.radius:g} "
+                             f"m together (gap {gaps[c]:.3g} m)")
         if isinstance(wall, LinkPair):
             raise ValueError(f"{name}: links {wall.i} and {wall.j} overlap as capsules: their segments are "
                              f"{gaps[c] + wall.radius:.6g} m apart, less than their radii {wall.radius:g} m together "
@@ -936,7 +943,9 @@ def _end_message(model: CompiledModel, sim, code: int, segment_t: float, segment
         gaps = model.contact_gaps(q, np.array(model.ffi.unpack(sim.p, len(model.parameters()))))
         first = len(model.layout.contacts)
         pair = model.contacts[first + int(np.argmin(gaps[first:]))][1]
-        message += f" (the pair closest at the stop: links {pair.i} and {pair.j}, {pair.name})"
+        message += (f" (the contact closest at the stop: link {pair.i} on the obstacle {pair.obstacle.name}, "
+                    f"{pair.name})" if isinstance(pair, ObstacleContact)
+                    else f" (the pair closest at the stop: links {pair.i} and {pair.j}, {pair.name})")
     if code == lib.GAC_ERR_NONFINITE and sim.opt.method == lib.GAC_METHOD_RK4:
         message += f" (rk4 with dt = {dt:g} s is unstable on this motion: reduce dt, or use an adaptive method)"
     return message

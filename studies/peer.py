@@ -2,8 +2,8 @@
 
 For each n the general (n + 5 coordinate) model of the built-in n-link chain is generated, and the same chain
 is written as a URDF (three prismatic joints X1, X2, X3, then the revolute joints theta_-1, theta_0, theta_1 ..
-theta_n with the scene's twists as fixed rotations, massless imaginary links, gravity along -X2 by a fixed
-rotation of the reference frame), traced by Pinocchio + CasADi (studies/peer_trace.py, run in the interpreter
+theta_n with the scene's twists as fixed rotations, massless imaginary links, gravity along the scene's direction
+(-X2) by a fixed rotation of the reference frame), traced by Pinocchio + CasADi (studies/peer_trace.py, run in the interpreter
 that has the `peer` extra) and generated as C.  One C program then times both on the same random states,
 alternating batches, and checks that they agree (coordinates mapped exactly; relative difference below 1e-12).
 
@@ -64,7 +64,7 @@ def urdf(scene) -> str:
                 f'<axis xyz="{axis}"/>{free if kind != "fixed" else ""}</joint>')
 
     parts = ['<robot name="chain">', link("world", ""), link("ref"),
-             joint("gravity_along_minus_x2", "fixed", "world", "ref", "1 0 0", angles=(math.pi / 2, 0, 0))]
+             joint("gravity_along_d", "fixed", "world", "ref", "1 0 0", angles=_gravity_mount(scene.gravity_direction))]
     previous = "ref"
     for a, axis in enumerate(("1 0 0", "0 1 0", "0 0 1")):
         parts += [link(f"slide{a + 1}"), joint(f"X{a + 1}", "prismatic", previous, f"slide{a + 1}", axis)]
@@ -88,6 +88,18 @@ def urdf(scene) -> str:
         previous = name
     parts.append("</robot>")
     return "\n".join(parts)
+
+
+def _gravity_mount(d) -> tuple[float, float, float]:
+    """rpy of the fixed rotation from Pinocchio's world (gravity along -z) to the box frame: it turns the scene's
+    gravity direction d onto -z (rows a, b, -d, right-handed); Rx(pi/2) for the default d = -X2."""
+    from codegen.urdf import matrix_rpy
+    d = np.asarray(d, dtype=float)
+    if np.array_equal(d, [0.0, -1.0, 0.0]):
+        return (math.pi / 2, 0.0, 0.0)
+    a = np.cross(-d, [0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.cross(-d, [1.0, 0.0, 0.0])
+    a /= np.linalg.norm(a)
+    return matrix_rpy(np.array([a, np.cross(-d, a), -d]))
 
 
 def pin_order(n: int) -> list[int]:

@@ -29,7 +29,7 @@ direction ``x_k = R_k[:, 0]``.  Points: ``O_{-1} = O_0 = O_1 = X`` and
 Link ``i`` (1..n) carries, in its own frame and relative to its origin
 ``O_i``: length ``l``, mass ``m``, first moment ``h = m c`` and the inertia
 tensor ``K`` about ``O_i`` (not about the centre of mass).  Gravity of
-magnitude ``g`` acts along ``-X2``.
+magnitude ``g`` acts along the unit vector ``d`` (default ``-X2``).
 
 Equations of motion: ``M(q) qdd = R(q, qd)``.
 """
@@ -124,10 +124,11 @@ class ReferenceChain:
     ----------
     links : list of (l, m, h, K), one per real link 1..n
     twists : list of n + 2 constant rotations [T_{-1}, T_0, T_1, ..., T_n]
-    g : gravity magnitude, acting along -X2
+    g : gravity magnitude, acting along d
+    direction : d, the unit vector gravity acts along (default (0, -1, 0), i.e. -X2)
     """
 
-    def __init__(self, links, twists, g):
+    def __init__(self, links, twists, g, direction=(0.0, -1.0, 0.0)):
         self.n = len(links)
         assert self.n >= 1
         assert len(twists) == self.n + 2
@@ -138,6 +139,7 @@ class ReferenceChain:
         self.K = [np.asarray(link[3], dtype=float) for link in links]
         self.T = [np.asarray(T, dtype=float) for T in twists]
         self.g = float(g)
+        self.up = -np.asarray(direction, dtype=float)     # -d: gravity acts against it
 
     # --- index bookkeeping -------------------------------------------------
     # Joints are numbered k = -1..n; Python lists indexed by k + 1.
@@ -246,7 +248,7 @@ class ReferenceChain:
         Link i, with w its angular velocity, v the velocity of O_i and
         h_w = R_i h, K_w = R_i K R_i^T in reference components:
             T_i = 1/2 m v.v + v.(w x h_w) + 1/2 w.K_w w
-            V_i = g (m (O_i)_2 + (R_i h)_2)          (gravity along -X2)
+            V_i = g up.(m O_i + R_i h)            (up = -d; up = X2 by default)
         """
         frames = self.frames(q)
         O = self.origins(q)
@@ -258,7 +260,7 @@ class ReferenceChain:
             m, h_w, K_w = self.m[i - 1], R @ self.h[i - 1], R @ self.K[i - 1] @ R.T
             wi, vi = w[i + 1], v[i + 1]
             T += 0.5 * m * vi @ vi + vi @ np.cross(wi, h_w) + 0.5 * wi @ K_w @ wi
-            V += self.g * (m * O[i + 1][1] + h_w[1])
+            V += self.g * self.up @ (m * O[i + 1] + h_w)
         return T, V
 
     def linear_momentum(self, q, qd):
@@ -356,12 +358,12 @@ class ReferenceChain:
         """Generalised forces tau = M qdd - R(q, qd), by recursive Newton-Euler.
 
         Everything is in reference (world) components.  Gravity is modelled by
-        giving the base an upward acceleration g e2.
+        giving the base the acceleration -g d (g e2 by default).
 
         Forward pass (k = -1..n), z_k being fixed in frame k-1:
             w_k  = w_{k-1} + z_k thd_k
             wd_k = wd_{k-1} + z_k thdd_k + w_{k-1} x z_k thd_k
-            a(O_1) = Xdd + g e2,
+            a(O_1) = Xdd - g d,
             a(O_{i+1}) = a(O_i) + wd_i x r_i + w_i x (w_i x r_i),  r_i = l_i x_i
         Per link, the inertial force and moment about O_i are
             F_i = m a(O_i) + wd x h_w + w x (w x h_w)
@@ -389,7 +391,7 @@ class ReferenceChain:
             w_prev, wd_prev = w_k, wd_k
 
         # forward pass: accelerations of the origins O_1..O_n
-        a = [Xdd + self.g * np.array([0.0, 1.0, 0.0])]  # a[0] = a(O_1)
+        a = [Xdd + self.g * self.up]  # a[0] = a(O_1)
         for i in range(1, self.n):
             r = self.l[i - 1] * frames[i + 1][:, 0]
             wi, wdi = w[i + 1], wd[i + 1]
@@ -486,7 +488,7 @@ def reference_of(scene, p=None) -> ReferenceChain:
             links.append(line_link(link.length, link.mu, link.J))
         else:
             links.append(rigid_link(link.length, link.mass, link.com, link.inertia))
-    return ReferenceChain(links, [np.array(T) for T in scene.all_twists], scene.gravity)
+    return ReferenceChain(links, [np.array(T) for T in scene.all_twists], scene.gravity, scene.gravity_direction)
 
 
 def with_parameters(scene, p):
@@ -503,7 +505,8 @@ def with_parameters(scene, p):
         else:
             l, m, cx, cy, cz, ixx, iyy, izz, ixy, ixz, iyz = values
             links.append(RigidLink(l, m, (cx, cy, cz), ((ixx, ixy, ixz), (ixy, iyy, iyz), (ixz, iyz, izz))))
-    return Scene(name=scene.name, links=tuple(links), twists=scene.twists, gravity=g, walls=scene.walls,
+    return Scene(name=scene.name, links=tuple(links), twists=scene.twists, gravity=g,
+                 gravity_direction=scene.gravity_direction, walls=scene.walls,
                  q0=scene.q0, qd0=scene.qd0, base_twists=scene.base_twists, base=scene.base)
 
 

@@ -164,7 +164,7 @@ def _uniform_spin(run: CaseRun, t: float) -> np.ndarray:
     k = link.omega / w
     K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
     rotation = np.eye(3) + math.sin(w * t) * K + (1 - math.cos(w * t)) * K @ K
-    com = link.com + link.v_com * t - 0.5 * param(run, "g") * t * t * np.array([0.0, 1.0, 0.0])
+    com = link.com + link.v_com * t + 0.5 * param(run, "g") * t * t * np.array(scene.gravity_direction)
     return com + (contact_points(scene, q0) - link.com) @ rotation.T
 
 

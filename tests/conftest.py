@@ -111,6 +111,15 @@ def chain(n: int, kinds=("line",), twists: bool = False, walls: bool = True) -> 
     return random_scene(n, seed, random_twists=twists, kinds=kinds, name=name, walls=walls)
 
 
+def tilted(scene: Scene, seed: int, normal: int | None = None) -> Scene:
+    """The scene with gravity along a random unit vector (gravity_direction, a scene constant built into the model);
+    with ``normal`` (0 or 2) one in the plane normal to that box axis, so that a planar scene stays planar."""
+    d = np.random.default_rng(seed).normal(size=3)
+    if normal is not None:
+        d[normal] = 0.0
+    return dataclasses.replace(scene, name=f"{scene.name}_tilt", gravity_direction=tuple(d / np.linalg.norm(d)))
+
+
 INPUTS_3D = ("theta_-1", "theta_0", "theta_1", "theta_2", "theta_3", "X1", "X2", "X3")
 
 

@@ -28,7 +28,8 @@ STRICT = ["-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 
 def run_chain(n: int, kinds, seed: int, planar: bool = False, joints: bool = True, inputs: bool = True) -> Scene:
     """n links of kinds[i] (random parameters each), every twist T_2..T_n the same random rotation (about z when
-    planar), a spring and a damper on every joint, an input on every joint angle and on X1..X3, far walls."""
+    planar), a spring and a damper on every joint, an input on every joint angle and on X1..X3, far walls; gravity
+    along a random direction (gravity_direction) when not planar, else along -X2."""
     rng = np.random.default_rng(seed)
     links = tuple(random_link(rng, kinds[i]) for i in range(n))
     if planar:
@@ -46,8 +47,10 @@ def run_chain(n: int, kinds, seed: int, planar: bool = False, joints: bool = Tru
     q0 = [0.0] * (n + 5)
     if planar:
         q0[0] = -np.pi / 2
-    return Scene(name=f"run{n}_{seed}", links=links, twists=(T,) * (n - 1), gravity=rng.uniform(1, 12), walls=walls,
-                 q0=tuple(q0), joints=joint_list, inputs=names)
+    gravity = rng.uniform(1, 12)
+    d = (0.0, -1.0, 0.0) if planar else rng.normal(size=3)
+    return Scene(name=f"run{n}_{seed}", links=links, twists=(T,) * (n - 1), gravity=gravity, walls=walls,
+                 q0=tuple(q0), joints=joint_list, inputs=names, gravity_direction=tuple(d / np.linalg.norm(d)))
 
 
 def _run(scene: Scene, specialise: bool = False, bake: bool = False):

@@ -11,7 +11,7 @@ import sympy as sp
 from sympy.printing.pycode import pycode
 
 from studies import reference
-from conftest import chain, random_parameters, reference_of
+from conftest import chain, random_parameters, reference_of, tilted
 from codegen.flatten import flatten
 from codegen.kinematics import ChainSymbols
 from codegen.kernels import forward_dynamics_kernel
@@ -39,10 +39,12 @@ def solve_both(scene, specialise, q, qd, p):
     return out, layout
 
 
-@pytest.mark.parametrize("n", [1, 2, 3, pytest.param(5, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("n,tilt", [(1, False), (2, False), (3, False), (3, True),
+                                    pytest.param(5, False, marks=pytest.mark.slow)])
 @pytest.mark.parametrize("kinds", [("line",), ("line", "rigid")])
-def test_articulated_matches_dense_and_reference_on_random_3d_chains(n, kinds):
-    scene = chain(n, kinds, twists=True)
+def test_articulated_matches_dense_and_reference_on_random_3d_chains(n, kinds, tilt):
+    """``tilt``: gravity along a random direction (gravity_direction) instead of -X2."""
+    scene = tilted(chain(n, kinds, twists=True), seed=n) if tilt else chain(n, kinds, twists=True)
     rng = np.random.default_rng(n)
     for trial in range(3):
         p = random_parameters(scene, seed=700 * n + trial)

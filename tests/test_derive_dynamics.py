@@ -5,19 +5,27 @@ import numpy as np
 import pytest
 
 from studies import reference
-from conftest import chain, random_parameters, reference_of
+from conftest import chain, random_parameters, reference_of, tilted
 
-CASES = [(n, twists, kinds) for n in range(1, 6) for twists, kinds in
-         ((False, ("line",)), (True, ("line",)), (True, ("rigid", "line")))]
+# gravity along -X2, and tilted (gravity_direction a random unit vector) for the twisted chains of rigid links
+CASES = [(n, twists, kinds, tilt) for n in range(1, 6) for twists, kinds, tilt in
+         ((False, ("line",), False), (True, ("line",), False), (True, ("rigid", "line"), False),
+          (True, ("rigid", "line"), True))]
+
+
+def scene_of(n, kinds=("line",), twists=False, tilt=False):
+    """chain(n, kinds, twists), with gravity along a random direction if ``tilt``."""
+    scene = chain(n, kinds, twists)
+    return tilted(scene, seed=n) if tilt else scene
 
 
 def rel_err(a, b):
     return np.abs(a - b).max() / max(np.abs(b).max(), 1e-300)
 
 
-@pytest.mark.parametrize("n,random_twists,kinds", CASES)
-def test_inertia_matrix_and_rhs_match_reference(derived, n, random_twists, kinds):
-    scene = chain(n, kinds, random_twists)
+@pytest.mark.parametrize("n,random_twists,kinds,tilt", CASES)
+def test_inertia_matrix_and_rhs_match_reference(derived, n, random_twists, kinds, tilt):
+    scene = scene_of(n, kinds, random_twists, tilt)
     model = derived(scene)
     rng = np.random.default_rng(n)
     for trial in range(4):
@@ -70,9 +78,10 @@ def test_contact_kinematics(derived, n):
         assert abs(J[row] @ qd - v[point - 1, axis]) < 1e-12 * max(1, np.abs(v).max())
 
 
+@pytest.mark.parametrize("tilt", [False, True])
 @pytest.mark.parametrize("n", [1, 3])
-def test_gaps_and_energy(derived, n):
-    scene = chain(n, ("rigid", "line"), twists=True)
+def test_gaps_and_energy(derived, n, tilt):
+    scene = scene_of(n, ("rigid", "line"), twists=True, tilt=tilt)
     model = derived(scene)
     rng = np.random.default_rng(n)
     for trial in range(3):
@@ -94,8 +103,9 @@ def test_gaps_and_energy(derived, n):
         assert rel_err(qdd, model.forward_dynamics(q, qd, p)) < 1e-12
 
 
-def test_gravity_is_minus_gradient_of_potential(derived):
-    scene = chain(3, twists=True)
+@pytest.mark.parametrize("tilt", [False, True])
+def test_gravity_is_minus_gradient_of_potential(derived, tilt):
+    scene = scene_of(3, twists=True, tilt=tilt)
     model = derived(scene)
     q, _ = reference.random_state(3, np.random.default_rng(5))
     zero = np.zeros(scene.nq)

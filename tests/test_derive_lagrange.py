@@ -13,7 +13,7 @@ from codegen.kinematics import ChainSymbols
 from codegen.lagrange import Differentiator, energies
 from codegen.scene import LineLink, RigidLink, Scene
 from codegen.options import build_options
-from conftest import chain, random_parameters, random_planar_scene, random_scene, reference_of
+from conftest import chain, random_parameters, random_planar_scene, random_scene, reference_of, tilted
 from runtime.compile import LIBRARY_DIR
 
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror"]
@@ -36,19 +36,22 @@ def rel_err(a, b):
     return np.abs(a - b).max() / max(np.abs(b).max(), 1e-300)
 
 
-GENERAL = [pytest.param(1, False, ("line",), id="n1-line", marks=pytest.mark.slow),
-           pytest.param(2, True, ("rigid", "line"), id="n2-rigid-twists"),
-           pytest.param(3, True, ("line",), id="n3-line-twists", marks=pytest.mark.slow),
-           pytest.param(4, True, ("rigid", "line"), id="n4-rigid-twists", marks=pytest.mark.slow)]
+GENERAL = [pytest.param(1, False, ("line",), False, id="n1-line", marks=pytest.mark.slow),
+           pytest.param(2, True, ("rigid", "line"), False, id="n2-rigid-twists"),
+           pytest.param(2, True, ("rigid", "line"), True, id="n2-rigid-twists-tilted-gravity"),
+           pytest.param(3, True, ("line",), False, id="n3-line-twists", marks=pytest.mark.slow),
+           pytest.param(4, True, ("rigid", "line"), False, id="n4-rigid-twists", marks=pytest.mark.slow)]
 
 
-def general_scene(n, random_twists, kinds):
-    return chain(n, kinds, random_twists)
+def general_scene(n, random_twists, kinds, tilt=False):
+    """chain(n, kinds, random_twists), with gravity along a random direction if ``tilt``."""
+    scene = chain(n, kinds, random_twists)
+    return tilted(scene, seed=n) if tilt else scene
 
 
-@pytest.mark.parametrize("n,random_twists,kinds", GENERAL)
-def test_general_layout_matches_gibbs_appell_and_reference(derived, n, random_twists, kinds):
-    scene = general_scene(n, random_twists, kinds)
+@pytest.mark.parametrize("n,random_twists,kinds,tilt", GENERAL)
+def test_general_layout_matches_gibbs_appell_and_reference(derived, n, random_twists, kinds, tilt):
+    scene = general_scene(n, random_twists, kinds, tilt)
     lag, ga = derived(scene, formulation="lagrange"), derived(scene)
     assert lag.nq == ga.nq == n + 5
     rng = np.random.default_rng(n)
@@ -65,14 +68,17 @@ def test_general_layout_matches_gibbs_appell_and_reference(derived, n, random_tw
         assert rel_err(qdd, ref.forward_dynamics(q, qd)) < 1e-9
 
 
-SPECIALISED = [pytest.param(1, 2, marks=pytest.mark.slow), pytest.param(2, 0), pytest.param(3, 2),
-               pytest.param(4, 0, marks=pytest.mark.slow)]
+SPECIALISED = [pytest.param(1, 2, False, marks=pytest.mark.slow), pytest.param(2, 0, False),
+               pytest.param(3, 2, False), pytest.param(3, 2, True, id="3-2-tilted-gravity-in-plane"),
+               pytest.param(4, 0, False, marks=pytest.mark.slow)]
 
 
-@pytest.mark.parametrize("n,normal", SPECIALISED)
-def test_specialised_layout_matches_gibbs_appell_and_reference(derived, n, normal):
-    """Planar scenes (n + 2 coordinates, zero parameters built in), rigid and slender links alternating."""
+@pytest.mark.parametrize("n,normal,tilt", SPECIALISED)
+def test_specialised_layout_matches_gibbs_appell_and_reference(derived, n, normal, tilt):
+    """Planar scenes (n + 2 coordinates, zero parameters built in), rigid and slender links alternating; ``tilt``:
+    gravity along a random direction in the plane (the scene stays planar)."""
     scene = random_planar_scene(n, 90 + n, normal)
+    scene = tilted(scene, seed=n, normal=normal) if tilt else scene
     lag, ga = derived(scene, specialise=True, formulation="lagrange"), derived(scene, specialise=True)
     layout = lag.layout
     assert lag.nq == ga.nq == n + 2

@@ -26,6 +26,13 @@ from studies.reference import (
 N_VALUES = [1, 2, 3, 5]
 
 
+def tilt(chain, rng):
+    """The chain with gravity along a random unit vector d (ReferenceChain.up = -d) instead of -X2."""
+    d = rng.normal(size=3)
+    chain.up = -d / np.linalg.norm(d)
+    return chain
+
+
 def central_gradient(f, x, eps=1e-6):
     """Central finite-difference gradient of the scalar function f at x."""
     x = np.asarray(x, dtype=float)
@@ -90,18 +97,22 @@ def test_inverse_dynamics_is_affine_in_qdd_with_slope_M(n):
 # 2. Gravity
 # ---------------------------------------------------------------------------
 
+@pytest.mark.parametrize("tilted", [False, True])
 @pytest.mark.parametrize("n", N_VALUES)
-def test_gravity_is_minus_gradient_of_potential(n):
+def test_gravity_is_minus_gradient_of_potential(n, tilted):
     """R(q, 0) = -dV/dq."""
     rng = np.random.default_rng(200 + n)
     chain = random_chain(n, rng, random_twists=True)
+    if tilted:
+        chain = tilt(chain, rng)
     for _ in range(3):
         q, _ = random_state(n, rng)
         dV = central_gradient(lambda x: chain.energy(x, np.zeros(n + 5))[1], q)
         R = chain.bias(q, np.zeros(n + 5))
         np.testing.assert_allclose(R, -dV, rtol=1e-6, atol=1e-6 * np.abs(dV).max())
-        # the X2 component is the total weight, pointing down
-        assert R[n + 3] == pytest.approx(-chain.g * chain.m.sum(), rel=1e-12)
+        # the X components are the total weight, along d = -up (-X2 by default)
+        np.testing.assert_allclose(R[n + 2:], -chain.g * chain.m.sum() * chain.up, rtol=1e-12,
+                                   atol=1e-12 * chain.g * chain.m.sum())
 
 
 # ---------------------------------------------------------------------------
@@ -188,7 +199,7 @@ def lagrangian_equations(chain):
         m, h, K = chain.m[i - 1], sp.Matrix(chain.h[i - 1]), sym_constant(chain.K[i - 1])
         h_w = R * h
         T += m * v.dot(v) / 2 + v.dot(w.cross(h_w)) + (w_link.T * K * w_link)[0, 0] / 2
-        V += chain.g * (m * O[1] + h_w[1])
+        V += chain.g * (m * O + h_w).dot(sp.Matrix(chain.up))
         O = O + chain.l[i - 1] * R[:, 0]
 
     p = [T.diff(x) for x in qd]  # generalised momenta dT/dqd
@@ -211,11 +222,13 @@ def lagrangian_equations(chain):
             lambda qv, qdv: np.array(R_fun(qv, qdv), dtype=float).ravel())
 
 
-@pytest.mark.parametrize("n, random_twists", [(1, False), (2, True)])
-def test_against_symbolic_lagrangian(n, random_twists):
-    """Jacobian-assembled M and Newton-Euler R equal the Euler-Lagrange ones."""
+@pytest.mark.parametrize("n, random_twists, tilted", [(1, False, False), (2, True, False), (2, True, True)])
+def test_against_symbolic_lagrangian(n, random_twists, tilted):
+    """Jacobian-assembled M and Newton-Euler R equal the Euler-Lagrange ones (gravity along -X2, or tilted)."""
     rng = np.random.default_rng(400 + n)
     chain = random_chain(n, rng, random_twists)
+    if tilted:
+        chain = tilt(chain, rng)
     M_sym, R_sym = lagrangian_equations(chain)
     for _ in range(3):
         q, qd = random_state(n, rng)

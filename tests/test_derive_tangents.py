@@ -6,6 +6,7 @@ from __future__ import annotations
 import cmath
 
 import numpy as np
+import pytest
 import sympy as sp
 
 from codegen import tangent
@@ -13,7 +14,7 @@ from codegen.flatten import flatten
 from codegen.kernels import forward_dynamics_kernel, forward_dynamics_tangent_kernel
 from codegen.kinematics import ChainSymbols
 from codegen.specialise import layout_for
-from conftest import chain, driven_free_chain, random_parameters, random_states
+from conftest import chain, driven_free_chain, random_parameters, random_states, tilted
 from derived import python_function
 
 
@@ -24,9 +25,11 @@ def _programs(scene):
             python_function(flatten(tangent_kernel), tangent_kernel.inputs))
 
 
-def test_tangent_against_complex_step():
-    """Im f(x + i h v) / h = f'(x) v + O(h^2) with no cancellation: at h = 1e-30 it is the derivative to round-off."""
-    scene = driven_free_chain()
+@pytest.mark.parametrize("tilt", [False, True])
+def test_tangent_against_complex_step(tilt):
+    """Im f(x + i h v) / h = f'(x) v + O(h^2) with no cancellation: at h = 1e-30 it is the derivative to round-off.
+    Every parameter moves, g among them (d/dg along -X2, or along a random gravity_direction with ``tilt``)."""
+    scene = tilted(driven_free_chain(), seed=61) if tilt else driven_free_chain()
     complex_program, tangent_program = _programs(scene)
     rng = np.random.default_rng(61)
     nparam = len(scene.parameter_vector())

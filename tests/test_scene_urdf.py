@@ -283,6 +283,27 @@ def test_root_fixed_to_the_world_is_a_fixed_base(tmp_path):
         load_scene(tmp_path / "twice.toml")
 
 
+def test_gravity_along_the_urdf_worlds_minus_z(tmp_path, derived):
+    """gravity_direction = "urdf": gravity along the URDF world's -z (the import takes the world as the box frame,
+    unturned), so the mounted arm's potential energy is g sum m_i z_i, its centres of mass z_i from the URDF's own
+    kinematics; without a urdf file the word is refused."""
+    (tmp_path / "mounted.urdf").write_text(mounted_arm())
+    (tmp_path / "mounted.toml").write_text('name = "mounted"\nurdf = "mounted.urdf"\ngravity_direction = "urdf"\n'
+                                           '[initial]\nq = [0.1, 0.2, 0.3]\n')
+    scene = load_scene(tmp_path / "mounted.toml")
+    assert scene.gravity_direction == (0.0, 0.0, -1.0)
+    model = derived(scene)
+    E, g = rpy_matrix(*MOUNT_RPY), scene.gravity
+    rng = np.random.default_rng(5)
+    for _ in range(3):
+        angles = rng.uniform(-0.5, 0.5, 3)
+        links, _ = urdf_fk(ARM, angles)
+        V = sum(g * mass * (MOUNT_XYZ + E @ com)[2] for _, _, com, mass, _ in links)
+        assert model.energy(angles, np.zeros(3))[1] == pytest.approx(V, rel=1e-12, abs=1e-12)
+    with pytest.raises(SceneError, match=r'gravity_direction: expected a unit vector .*"urdf" in a scene with a urdf'):
+        scene_from_dict({"name": "x", "links": [{"length": 1.0, "mu": 1.0}], "gravity_direction": "urdf"})
+
+
 def test_world_joints_other_than_fixed_or_floating_are_refused(tmp_path):
     (tmp_path / "slider.urdf").write_text(mounted_arm("prismatic"))
     with pytest.raises(SceneError, match=r"holds the root to the world by a 'prismatic' joint; read are 'fixed'"):

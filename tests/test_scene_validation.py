@@ -68,6 +68,11 @@ def test_good_scene_loads():
     (("contacts", "x2_min"), [6], "contacts.x2_min"),
     (("contacts", "x3_min"), [1], "contacts.x3_min"),
     (("gravity",), "down", "gravity"),
+    (("gravity_direction",), [0.0, 0.0, 0.0], "gravity_direction"),
+    (("gravity_direction",), [0.0, -2.0, 0.0], "gravity_direction"),
+    (("gravity_direction",), [0.0, -1.0], "gravity_direction"),
+    (("gravity_direction",), [0.0, float("inf"), 0.0], "gravity_direction[1]"),
+    (("gravity_direction",), [0.0, "down", 0.0], "gravity_direction[1]"),
     (("initial", "q"), [0.0] * 5, "initial.q"),
     (("initial", "q"), [0.0, math.pi / 2, 0, 0, 0, 0, 0.5, 0.0], "initial.q[1]"),
     (("initial", "X"), [0.0], "initial"),
@@ -79,6 +84,34 @@ def test_bad_values_name_the_field(path, value, field):
     with pytest.raises(SceneError) as info:
         scene_from_dict(mutated(path, value))
     assert str(info.value).startswith(field), str(info.value)
+
+
+def test_gravity_direction_is_a_unit_vector_and_keeps_default_scenes_hashes():
+    """gravity_direction: a unit vector (length 1 within 1e-9; the error gives the normalised one); the default -X2
+    leaves a scene's hash (its generated text and compiled model) as it was, any other direction changes it."""
+    from codegen.artifact import scene_hash
+    with pytest.raises(SceneError, match=r"gravity_direction: must be a unit vector .*normalised: \[0\.6, -0\.8, 0\.0\]"):
+        scene_from_dict(mutated(("gravity_direction",), [3.0, -4.0, 0.0]))
+    tilt = [math.sin(0.4), -math.cos(0.4), 0.0]
+    assert scene_from_dict(mutated(("gravity_direction",), tilt)).gravity_direction == tuple(tilt)
+    assert scene_from_dict(mutated(("gravity_direction",), [0.0, -1.0 + 5e-10, 0.0])).gravity_direction[1] < -0.999
+    default = scene_from_dict(GOOD)
+    assert default.gravity_direction == (0.0, -1.0, 0.0)
+    assert scene_hash(scene_from_dict(mutated(("gravity_direction",), [0, -1, -0.0]))) == scene_hash(default)
+    assert scene_hash(scene_from_dict(mutated(("gravity_direction",), tilt))) != scene_hash(default)
+
+
+
+def test_a_planar_chain_stays_a_planar_model_only_with_gravity_in_its_plane():
+    from codegen.specialise import planar_normal
+    planar = mutated(("links", 1, "twist"), 0.0)
+    planar["initial"]["q"][0] = -math.pi / 2                  # joint axes along X3: the X1-X2 plane
+    assert planar_normal(scene_from_dict(planar)) == (2, "")
+    planar["gravity_direction"] = [math.sin(0.4), -math.cos(0.4), 0.0]
+    assert planar_normal(scene_from_dict(planar)) == (2, "")
+    planar["gravity_direction"] = [0.0, -math.cos(0.4), math.sin(0.4)]
+    assert planar_normal(scene_from_dict(planar)) == (None, "gravity (gravity_direction) has a component along X3, "
+                                                            "out of the plane")
 
 
 def test_initial_contact_point_outside_the_box_is_rejected():

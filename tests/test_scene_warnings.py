@@ -40,7 +40,7 @@ def test_lengths_masses_and_angles_that_suggest_other_units_are_named():
     edge = scene_from_dict({"name": "edge", "links": [{"length": 100.0, "mu": 100.0}, {"length": 1e-4, "mu": 0.01}],
                             "initial": {"q": [-math.pi / 2, 0.0, 2 * math.pi, -2 * math.pi, 0.0, 0.0, 0.0]}})
     assert edge.warnings == []                              # the ranges' ends are accepted quietly
-    for name in ("paper-case1", "paper-case2", "driven-fold", "rough-floor", "urdf-arm", "gimbal-lock"):
+    for name in ("paper-case1", "paper-case2", "driven-fold", "rough-floor", "urdf-arm", "gimbal-lock", "incline"):
         assert load_scene(name).warnings == [], name
 
 

@@ -3,7 +3,8 @@
  * the gap between the capsules, the direction J^T n of a push between them along the normal, and Newton's law for
  * one such pair.  Everything comes from the joint points' positions and velocities (contact_points,
  * contact_velocities): a point at fraction s along link i moves with (1 - s) v_O_i + s v_O_i+1, the link being
- * rigid.
+ * rigid.  A link and a fixed obstacle (a sphere or a bar, a capsule about a fixed segment) are the same contact with
+ * the second segment fixed in the box: its closest point does not move.
  */
 #include "gac_internal.h"
 
@@ -63,16 +64,13 @@ void gac_segment_closest(const double *a0, const double *a1, const double *b0, c
     *t_out = t;
 }
 
-int gac_link_gap(const gac_model *m, const double *q, const double *p, int i, int j, double radius,
-                 double *geometry)
+/* The contact geometry of segment a0-a1 (a link) and segment b0-b1 (another link or an obstacle), radii adding up to
+ * radius: gap, s, t, n (from b's closest point to a's; across both axes when they cross). */
+static void gac_segment_contact(const double *a0, const double *a1, const double *b0, const double *b1,
+                                double radius, double *geometry)
 {
-    const int npoint = m->npoint;
-    double r[3 * GAC_AT_LEAST_1(npoint)], d[3], dist, s, t;
-    const double *a0, *a1, *b0, *b1;
+    double d[3], dist, s, t;
     int k;
-    if (i < 1 || j < 1 || i + 1 > npoint || j + 1 > npoint || i == j || !(radius >= 0.0)) return GAC_ERR_BAD_CONTACT;
-    m->contact_points(q, p, r);
-    a0 = r + 3 * (i - 1), a1 = a0 + 3, b0 = r + 3 * (j - 1), b1 = b0 + 3;
     gac_segment_closest(a0, a1, b0, b1, &s, &t);
     for (k = 0; k < 3; ++k) d[k] = (1.0 - s) * a0[k] + s * a1[k] - (1.0 - t) * b0[k] - t * b1[k];
     dist = sqrt(gac_dot3(d, d));
@@ -96,19 +94,42 @@ int gac_link_gap(const gac_model *m, const double *q, const double *p, int i, in
     geometry[1] = s;
     geometry[2] = t;
     for (k = 0; k < 3; ++k) geometry[3 + k] = d[k];
+}
+
+int gac_link_gap(const gac_model *m, const double *q, const double *p, int i, int j, double radius,
+                 double *geometry)
+{
+    const int npoint = m->npoint;
+    double r[3 * GAC_AT_LEAST_1(npoint)];
+    if (i < 1 || j < 1 || i + 1 > npoint || j + 1 > npoint || i == j || !(radius >= 0.0)) return GAC_ERR_BAD_CONTACT;
+    m->contact_points(q, p, r);
+    gac_segment_contact(r + 3 * (i - 1), r + 3 * i, r + 3 * (j - 1), r + 3 * j, radius, geometry);
+    return GAC_OK;
+}
+
+int gac_obstacle_gap(const gac_model *m, const double *q, const double *p, int i, int o, double radius,
+                     double *geometry)
+{
+    const int npoint = m->npoint;
+    double r[3 * GAC_AT_LEAST_1(npoint)];
+    if (i < 1 || i + 1 > npoint || o < 0 || o >= m->nobstacle || m->obstacles == 0 || !(radius >= 0.0))
+        return GAC_ERR_BAD_CONTACT;
+    m->contact_points(q, p, r);
+    gac_segment_contact(r + 3 * (i - 1), r + 3 * i, m->obstacles + 6 * o, m->obstacles + 6 * o + 3, radius,
+                        geometry);
     return GAC_OK;
 }
 
 /* n . (v_P - v_Q): the rate of the gap of links i, j with closest points at fractions s, t and normal n, from the
- * joint points' velocities vel (npoint x 3); *size: |v_P - v_Q|. */
+ * joint points' velocities vel (npoint x 3); j = 0: a fixed obstacle (v_Q = 0); *size: |v_P - v_Q|. */
 static double gac_link_rate(const double *vel, int i, int j, const double *geometry, double *size)
 {
     const double s = geometry[1], t = geometry[2], *n = geometry + 3;
-    const double *va = vel + 3 * (i - 1), *vb = vel + 3 * (j - 1);
+    const double *va = vel + 3 * (i - 1), *vb = j > 0 ? vel + 3 * (j - 1) : 0;
     double rate = 0.0, dv, sq = 0.0;
     int k;
     for (k = 0; k < 3; ++k) {
-        dv = (1.0 - s) * va[k] + s * va[3 + k] - (1.0 - t) * vb[k] - t * vb[3 + k];
+        dv = (1.0 - s) * va[k] + s * va[3 + k] - (vb != 0 ? (1.0 - t) * vb[k] + t * vb[3 + k] : 0.0);
         rate += n[k] * dv;
         sq += dv * dv;
     }
@@ -163,12 +184,18 @@ int gac_link_impact(const gac_model *m, const double *q, const double *qd, const
     return GAC_OK;
 }
 
-/* ---- link pairs as contacts of the loop (kind GAC_CONTACT_LINK, after the kernel's contacts) ---------------- */
+/* ---- link pairs and obstacles as contacts of the loop (kinds GAC_CONTACT_LINK and GAC_CONTACT_OBSTACLE, after
+ * the kernel's contacts) ---------------------------------------------------------------------------------------- */
+
+int gac_rowless(const gac_model *m, int c)
+{
+    return m->contacts[c].kind == GAC_CONTACT_LINK || m->contacts[c].kind == GAC_CONTACT_OBSTACLE;
+}
 
 int gac_kernel_contacts(const gac_model *m)
 {
     int n = m->ncontact;
-    while (n > 0 && m->contacts[n - 1].kind == GAC_CONTACT_LINK) --n;
+    while (n > 0 && gac_rowless(m, n - 1)) --n;
     return n;
 }
 
@@ -176,45 +203,66 @@ int gac_has_link(const gac_model *m, int n, const int *list)
 {
     int a;
     for (a = 0; a < n; ++a) {
-        if (m->contacts[list[a]].kind == GAC_CONTACT_LINK) return 1;
+        if (gac_rowless(m, list[a])) return 1;
     }
     return 0;
+}
+
+/* Contact c's geometry (a link pair or an obstacle) and its second link (0 for an obstacle: it does not move). */
+static int gac_rowless_geometry(const gac_model *m, const double *q, const double *p, int c, double *geometry,
+                                int *second)
+{
+    const gac_contact *k = &m->contacts[c];
+    const double radius = m->link_radius[c - gac_kernel_contacts(m)];
+    if (k->kind == GAC_CONTACT_OBSTACLE) {
+        *second = 0;
+        return gac_obstacle_gap(m, q, p, k->point, k->coordinate, radius, geometry);
+    }
+    *second = k->coordinate;
+    return gac_link_gap(m, q, p, k->point, k->coordinate, radius, geometry);
 }
 
 void gac_contact_gaps(const gac_model *m, const double *q, const double *p, double *gaps)
 {
     const int nk = gac_kernel_contacts(m);
     double geometry[GAC_LINK_NGEOMETRY];
-    int c;
+    int c, second;
     if (m->ncontact == 0) return;
     m->contact_gaps(q, p, gaps);                         /* walls and stops (the kernel's contacts) */
-    for (c = nk; c < m->ncontact; ++c) {                 /* then each link pair: its segments' distance less radius */
-        const gac_contact *k = &m->contacts[c];
-        gaps[c] = gac_link_gap(m, q, p, k->point, k->coordinate, m->link_radius[c - nk], geometry) == GAC_OK
-                  ? geometry[0] : NAN;
-    }
+    for (c = nk; c < m->ncontact; ++c)                   /* then each link pair and obstacle: distance less radius */
+        gaps[c] = gac_rowless_geometry(m, q, p, c, geometry, &second) == GAC_OK ? geometry[0] : NAN;
 }
 
 void gac_link_contact_direction(const gac_model *m, const double *q, const double *p, int c, double *g)
 {
-    const gac_contact *k = &m->contacts[c];
     double geometry[GAC_LINK_NGEOMETRY];
-    int i;
-    if (gac_link_gap(m, q, p, k->point, k->coordinate, m->link_radius[c - gac_kernel_contacts(m)], geometry)
-        != GAC_OK) {
+    int i, second;
+    if (gac_rowless_geometry(m, q, p, c, geometry, &second) != GAC_OK) {
         for (i = 0; i < m->nq; ++i) g[i] = NAN;
         return;
     }
-    (void)gac_link_direction(m, q, p, k->point, k->coordinate, geometry, g);
+    (void)gac_link_direction(m, q, p, m->contacts[c].point, second, geometry, g);
 }
 
 double gac_link_contact_rate(const gac_model *m, const double *q, const double *p, int c, const double *vel)
 {
-    const gac_contact *k = &m->contacts[c];
     double geometry[GAC_LINK_NGEOMETRY], size;
-    if (gac_link_gap(m, q, p, k->point, k->coordinate, m->link_radius[c - gac_kernel_contacts(m)], geometry)
-        != GAC_OK) return NAN;
-    return gac_link_rate(vel, k->point, k->coordinate, geometry, &size);
+    int second;
+    if (gac_rowless_geometry(m, q, p, c, geometry, &second) != GAC_OK) return NAN;
+    return gac_link_rate(vel, m->contacts[c].point, second, geometry, &size);
+}
+
+int gac_contact_normal(const gac_model *m, const double *q, const double *p, int c, double *g)
+{
+    double f[GAC_AT_LEAST_1(m->njrow)];
+    int i;
+    if (m == 0 || q == 0 || p == 0 || g == 0) return GAC_ERR_NULL_ARGUMENT;
+    if (c < 0 || c >= m->ncontact) return GAC_ERR_BAD_CONTACT;
+    gac_contact_direction(m, q, p, c, f, g);
+    for (i = 0; i < m->nq; ++i) {
+        if (!isfinite(g[i])) return GAC_ERR_BAD_CONTACT;
+    }
+    return GAC_OK;
 }
 
 /* The accuracy of an impact law whose contacts include a link pair (relative to T, the kinetic energy before):

@@ -25,7 +25,7 @@ void gac_normal_velocities(const gac_model *md, const double *x, const double *p
     md->contact_velocities(x, x + md->nq, p, v);
     for (c = 0; c < md->ncontact; ++c) {
         const gac_contact *k = &md->contacts[c];
-        vn[c] = k->kind == GAC_CONTACT_LINK ? gac_link_contact_rate(md, x, p, c, v)
+        vn[c] = gac_rowless(md, c) ? gac_link_contact_rate(md, x, p, c, v)
                 : (double)k->normal_sign * (k->kind == GAC_CONTACT_STOP ? x[md->nq + k->coordinate]
                                                                         : v[3 * (k->point - 1) + k->axis]);
     }
@@ -48,7 +48,7 @@ int gac_normal_accelerations(gac_sim *s, double t, const double *x, int n, const
     for (c = 0; c < md->ncontact; ++c) {
         int row;
         double sign;
-        if (md->contacts[c].kind == GAC_CONTACT_LINK) {   /* a link pair never rests: its acceleration is unused */
+        if (gac_rowless(md, c)) {   /* a link pair never rests: its acceleration is unused */
             an[c] = 0.0;
             continue;
         }
@@ -320,7 +320,7 @@ int gac_rest_at_start(gac_sim *s)
     for (c = 0; c < md->ncontact; ++c) {
         const int at_rest = gac_restitution(md, s->p, c) < 1.0 ? vn[c] * vn[c] <= 2.0 * a * s->rest_height
                                                                 : fabs(vn[c]) <= gac_v_round(md, vn);
-        if (fabs(gaps[c]) <= s->opt.contact_tol && at_rest && md->contacts[c].kind != GAC_CONTACT_LINK) {
+        if (fabs(gaps[c]) <= s->opt.contact_tol && at_rest && !gac_rowless(md, c)) {
             code = gac_add_independent(s, s->x, &n, set, c);
             if (code != GAC_OK) return code;
         }

@@ -726,7 +726,8 @@ GAC_FMI2_EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const f
 }
 
 /* Contact c's name as the model's NAME_contact_name gives it (O1/x2_min for point O_1 on the wall x2_min,
- * theta_2_upper for a joint's stop, L1-L3 for links 1 and 3 as capsules), written at text (size chars). */
+ * theta_2_upper for a joint's stop, L1-L3 for links 1 and 3 as capsules, L2/ball for link 2 on the obstacle ball),
+ * written at text (size chars). */
 static void contact_name(const gac_model *m, int c, char *text, size_t size)
 {
     const gac_contact *k = &m->contacts[c];
@@ -734,6 +735,8 @@ static void contact_name(const gac_model *m, int c, char *text, size_t size)
         snprintf(text, size, "theta_%d_%s", k->point, k->normal_sign > 0 ? "lower" : "upper");
     else if (k->kind == GAC_CONTACT_LINK)
         snprintf(text, size, "L%d-L%d", k->point, k->coordinate);
+    else if (k->kind == GAC_CONTACT_OBSTACLE)
+        snprintf(text, size, "L%d/%s", k->point, m->obstacle_names[k->coordinate]);
     else
         snprintf(text, size, "O%d/x%d_%s", k->point, k->axis + 1, k->normal_sign > 0 ? "min" : "max");
 }

@@ -74,7 +74,11 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event,
 void gac_sens_stop(gac_sim *s, int status, double t, int contact);    /* an event not differentiated */
 void gac_sens_project(gac_sim *s, const double *x_pre, const double *x_post); /* a step's projection onto the rest */
 void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event);  /* the release of a resting contact */
-void gac_sens_fixed_release(gac_sim *s);   /* resting contacts released where the inputs change: dt = 0, S goes on */
+void gac_sens_slip(gac_sim *s, const gac_impact_record *r, int c_event);   /* a stuck point's slip at its event */
+void gac_sens_stick(gac_sim *s, const double *x_before, const int *stuck_before, const double *slip_before,
+                    const gac_impact_record *r);   /* points that stuck at a step's end */
+void gac_sens_reslip(gac_sim *s, const double *slip_before, int nstuck);   /* slip directions a stick test gave */
+void gac_sens_fixed_release(gac_sim *s);   /* released or slipped where the inputs change: dt = 0, S goes on */
 /* a switch of base chart: x on `from` became y on `to`, S carried through the conversion's derivative */
 void gac_sens_switch(gac_sim *s, const gac_model *from, const gac_model *to, const double *x, const double *y);
 /* S at x (the chart integrated now) into chart A's coordinates at xa (x converted), in place */

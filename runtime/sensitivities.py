@@ -20,8 +20,8 @@ from codegen.scene import coordinate_names
 # gac.h's GAC_SENS_* status codes, in words
 STATUS_WORDS = {
     0: "valid",
-    1: "resting contact sliding on a rough wall, or at rest there from the start (sliding friction at rest is not "
-       "differentiated)",
+    1: "a point sliding on a rough wall with a slip direction over two tangential axes whose derivative is not known, "
+       "or slower than friction_velocity at an impact (its friction there is not differentiated)",
     2: "an impact by a frictional law with a common e, or by Newton + Coulomb",
     3: "an impact at a joint stop",
     4: "an impact of several rounds (or with dependent contact rows)",
@@ -30,11 +30,11 @@ STATUS_WORDS = {
     7: "a switch to a base chart without tangent kernels (or at its own lock)",
     8: "inputs from a controller (they may depend on the state)",
     9: "the sensitivities overflowed",
-    10: "a mode boundary (a contact's impulse ~0 at the law's bound inside an impact, or resting contacts "
-        "released together)",
+    10: "a mode boundary (a contact's impulse ~0 at the law's bound inside an impact, resting contacts released "
+        "together, a slip with another slip or a release, or points sticking together at different speeds)",
     11: "an impact of two links or of a link on an obstacle (these contacts are not differentiated)",
-    12: "a stick-slip transition on a rough wall (a stuck point slipped or left the wall, or came to stick other "
-        "than by landing stuck)",
+    12: "a stick-slip transition on a rough wall (a stuck point left the wall or slipped at an impact, or came to "
+        "stick at an impact without taking its impulse)",
 }
 
 _STATE = re.compile(r"^(q0|qd0)\[([^\]]+)\]$")

@@ -524,7 +524,8 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
                 impacts[len(impacts) - 1].dt_dp = dict(zip(directions, ffi.unpack(sens.dt_impact, len(directions))))
         if code in (lib.GAC_SIM_IMPACT, lib.GAC_SIM_CONTACT):
             events = _read_contact_events(model, rec)
-            if sens is not None and (code == lib.GAC_SIM_IMPACT or rec.nreleased > 0):
+            if sens is not None and (code == lib.GAC_SIM_IMPACT or rec.nreleased > 0 or rec.nslipped > 0
+                                     or rec.nstuck > 0):
                 dt_dp = dict(zip(directions, ffi.unpack(sens.dt_impact, len(directions))))
                 for event in events:
                     event.dt_dp = dict(dt_dp)

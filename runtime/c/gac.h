@@ -1014,15 +1014,22 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * Resting contacts (frictionless walls): in flight the constrained dynamics' tangent (the forces' by
  * contact_bias_tangent) and the derivative of the projection after each step; a landing's jump uses the field with
  * the set after held and the hold's projection; a release (its force lambda_c reaching 0) dt*_j = -d lambda_c /
- * lambda_c', S+ = S- + (f- - f+) dt*; contacts at rest at the start: their projection.  A switch of base chart
+ * lambda_c', S+ = S- + (f- - f+) dt*; contacts at rest at the start: their projection.  On rough walls: a stuck
+ * point's tangential rows held with its normal one; a sliding point's friction -c_f lambda phi in the flight's tangent
+ * (lambda through the unsymmetric B, phi = v_t / max(|v_t|, v_s) and c_f differentiated, and the slip direction's
+ * derivative over two tangential axes, sens.dslip); a slip at its event lambda_N = |lambda_T| / c_f by that event's
+ * time, S+ = S- + (f- - f+) dt*; sticking at a
+ * step's end as the event |v_t| = v_s, S+ = D P (S- + f- dt*) - f+ dt*, P the velocities' projection onto the stuck
+ * rows.  A switch of base chart
  * (x_B = phi(x_A), either way): S_B = (d phi / dx_A) S_A (gac_chart_convert_tangent), with no saltation term, as
  * the two charts' fields are phi-related; S is carried in the coordinates of the chart integrated now and reported
  * in chart A's (gac_sens_state, the samples).  Events this does not differentiate end the sensitivities (status
  * below): S and dt_impact are then NaN from that event on, the run itself continues.  The status codes: */
 #define GAC_SENS_VALID         0   /* every event so far differentiated */
-#define GAC_SENS_RESTING       1   /* a contact rests on a wall with friction sliding (sliding friction at rest is not
-                                      differentiated; frictionless resting contact and stuck points that landed stuck
-                                      are), or at rest there from the start */
+#define GAC_SENS_RESTING       1   /* a point sliding at rest on a rough wall where its friction is not followed: with
+                                      a slip direction over two tangential axes whose derivative is not known (given
+                                      by a stick test at a step's end where other points stuck, or not the direction
+                                      the stuck solve gives), or slower than friction_velocity at an impact */
 #define GAC_SENS_FRICTION      2   /* an impact by a frictional law other than GAC_IMPACT_LAW_GDI solved with each
                                       contact's own e (a round with a common e, Newton + Coulomb): the GDI law's
                                       stuck and sliding contacts are differentiated */
@@ -1040,15 +1047,18 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
 #define GAC_SENS_BOUNDARY     10   /* a mode boundary: inside an impact of several contacts, a contact took an impulse
                                       ~0 and leaves at the law's bound (w . qd+ + e w . qd- ~ 0), so a perturbation
                                       may add it to the active set or drop it; or resting contacts released together
-                                      (their forces ~0 at once) */
+                                      (their forces ~0 at once), a slip with another slip or a release, or points
+                                      that stick at one step's end at different speeds */
 #define GAC_SENS_LINK         11   /* an impact of two links or of a link on a fixed obstacle (GAC_CONTACT_LINK,
                                          GAC_CONTACT_OBSTACLE): not differentiated */
-#define GAC_SENS_STICK        12   /* a stick-slip transition on a rough wall: a stuck resting point slipped or left the
-                                      wall (its event: |lambda_T| = c_f lambda_N), or came to stick other than by
-                                      landing stuck */
+#define GAC_SENS_STICK        12   /* a stick-slip transition on a rough wall not differentiated: a stuck point that
+                                      left the wall (its force reaching 0 while stuck), a stuck point that slipped
+                                      at an impact, or one that came to stick at an impact without taking its
+                                      impulse */
 
 /* The sensitivities of one run: pointers into the caller's dwork (gac_sens_ndouble(m, k) doubles), laid out as
- * S (k nx) | dp (k nparam) | dt_impact (k) | dgap_held (k max(ncontact, 1)) | scratch | S_keep (k nx).  Direction-major: S[j*nx + i] = d x_i / d direction j
+ * S (k nx) | dp (k nparam) | dt_impact (k) | dgap_held (k max(ncontact, 1)) | dslip (2 k max(ncontact, 1)) |
+ * slip_known (2 max(ncontact, 1)) | scratch | S_keep (k nx).  Direction-major: S[j*nx + i] = d x_i / d direction j
  * (x = [q, qd] at sim.t in the coordinates of the chart integrated now, sim.chart: gac_sens_state gives chart A's),
  * dp[j*nparam + i] the parameter seed of direction j. */
 typedef struct gac_sens_s {
@@ -1063,6 +1073,10 @@ typedef struct gac_sens_s {
     int contact_status;          /* its contact (0..ncontact-1), -1: none */
     long n_impacts;              /* impacts differentiated */
     double *dgap_held;           /* k x max(ncontact, 1): d(the gap a resting contact is held at) / d direction j */
+    double *dslip;               /* k x 2 max(ncontact, 1): d(a sliding point's slip direction, sim.slip) / d direction
+                                    j, known where it was set by a slip over two tangential axes */
+    double *slip_known;          /* 2 max(ncontact, 1): the slip directions dslip is of (a point whose sim.slip
+                                    differs, over two axes, was given its direction elsewhere: not followed) */
     double *work;                /* scratch: the stages */
     double *S_keep;              /* scratch: S kept while a sample's is formed (k x nx) */
     double *S_eval;              /* NULL (default), or the caller's n_eval x k x nx: S at each sample the loop writes
@@ -1073,10 +1087,12 @@ typedef struct gac_sens_s {
                                     gac_sens_attach. */
 } gac_sens;
 
-/* Doubles of a gac_sens's dwork: S, dp, dt_impact, the held gaps' derivatives, 12 stage derivatives of the state
- * and of each direction, and S kept while a sample's is formed. */
+/* Doubles of a gac_sens's dwork: S, dp, dt_impact, the held gaps' derivatives, the slip directions' derivatives and
+ * the directions they are of, 12 stage derivatives of the state and of each direction, and S kept while a sample's
+ * is formed. */
 #define GAC_SENS_NDOUBLE(nq, nparam, ncontact, k) \
-    (14L * (k) * 2 * (nq) + (long)(k) * (nparam) + (k) + (long)(k) * ((ncontact) > 0 ? (ncontact) : 1) + 14L * 2 * (nq))
+    (14L * (k) * 2 * (nq) + (long)(k) * (nparam) + (k) + (3L * (k) + 2) * ((ncontact) > 0 ? (ncontact) : 1) \
+     + 14L * 2 * (nq))
 long gac_sens_ndouble(const gac_model *m, int k);
 
 /* Attach sensitivities along k directions to sim from its current time on: S = seed_x (k x nx, direction-major),

@@ -1,12 +1,14 @@
 /*
  * gac_sens.c -- forward sensitivities of a hybrid run (gac.h, "forward sensitivities of a run"): the variational
  * equations in flight, free or with resting contacts held (the constrained dynamics' tangent; a point stuck on a
- * rough wall held along every axis, its tangential rows with its normal one), taken by the run's
+ * rough wall held along every axis, its tangential rows with its normal one; a point sliding there with its Coulomb
+ * or viscous friction, gac_sens_slide_tangent), taken by the run's
  * Runge-Kutta formula over the state's own steps and stages (gac_sens_flight), the derivative of the projection onto
  * the resting contacts after each step (gac_sens_project), the jump of the sensitivities at an impact by the
  * frictionless law -- of one contact or several, walls or joint stops, landings among them, the set of pushing
  * contacts held fixed -- the saltation matrix of Hiskens & Pai (2000) (gac_sens_impact), the release of a resting
- * contact (gac_sens_release), contacts at rest at the start (gac_sens_attach), a switch of base chart
+ * contact (gac_sens_release), a stuck point's slip (gac_sens_slip) and a sliding point's coming to stick
+ * (gac_sens_stick), contacts at rest at the start (gac_sens_attach), a switch of base chart
  * (gac_sens_switch; S is in the coordinates of the chart integrated now, gac_sens_state gives chart A's), and the
  * verdict: the first event not differentiated ends them (gac_sens_stop).
  */
@@ -48,17 +50,22 @@ int gac_sens_attach(gac_sim *s, gac_sens *sens, int k, const double *seed_x, con
     if (!gac_finite(seed_x, k * md->nx) || (seed_p != 0 && !gac_finite(seed_p, k * md->nparam)))
         return GAC_ERR_BAD_OPTION;
     sens->k = k;
-    sens->S = dwork;                              /* dwork: S | dp | dt_impact | dgap_held | work | S_keep */
+    sens->S = dwork;                              /* dwork: S | dp | dt_impact | dgap_held | dslip | slip_known |
+                                                     work | S_keep */
     sens->dp = dwork + (long)k * md->nx;
     sens->dt_impact = sens->dp + (long)k * md->nparam;
     sens->dgap_held = sens->dt_impact + k;
-    sens->work = sens->dgap_held + (long)k * GAC_AT_LEAST_1(md->ncontact);
+    sens->dslip = sens->dgap_held + (long)k * GAC_AT_LEAST_1(md->ncontact);
+    sens->slip_known = sens->dslip + 2L * k * GAC_AT_LEAST_1(md->ncontact);
+    sens->work = sens->slip_known + 2L * GAC_AT_LEAST_1(md->ncontact);
     sens->S_keep = dwork + gac_sens_ndouble(md, k) - (long)k * md->nx;   /* the last k nx doubles */
     sens->S_eval = 0;
     gac_copy(sens->S, seed_x, k * md->nx);
     for (i = 0; i < k * md->nparam; ++i) sens->dp[i] = seed_p != 0 ? seed_p[i] : 0.0;
     for (i = 0; i < k; ++i) sens->dt_impact[i] = 0.0;
     for (i = 0; i < k * GAC_AT_LEAST_1(md->ncontact); ++i) sens->dgap_held[i] = 0.0;
+    for (i = 0; i < 2 * k * GAC_AT_LEAST_1(md->ncontact); ++i) sens->dslip[i] = 0.0;
+    for (i = 0; i < 2 * GAC_AT_LEAST_1(md->ncontact); ++i) sens->slip_known[i] = 0.0;
     sens->status = GAC_SENS_VALID;
     sens->t_status = s->t;
     sens->contact_status = -1;
@@ -155,29 +162,72 @@ static int gac_sens_inputs_fixed(const gac_sim *s)
  * (its generalised normal), Y_a = I_f^-1 W_a and A = W Y, factored in LD (gac_ldlt).  The arrays are the caller's,
  * sized for m <= 3 nq rows. */
 typedef struct {
-    int m;                       /* rows (the first ones the normal rows of set's contacts) */
+    int m;                       /* rows (the first n the normal rows of set's contacts) */
+    int n;
+    int ndropped;                /* rows dependent on those before them (gac_ldlt_drop: their force 0) */
     const int *set;
     int *brow;
     double *sgn, *f, *W, *Y, *LD;
+    /* Sliding friction (gac_sens_set_slide; nslide = 0 without): contact a (a < n) sliding on a rough wall has
+       cf[a] > 0 and takes -cf lambda_a phi_a along the wall (phi_a = gac_slide_phi of its tangential velocity vt_a):
+       its force's generalised direction is D_a = W_a + cf_a G_a, G_a = J^T g_a, g_a = -phi_a on its tangential rows
+       (Wt: their J^T e_trow, 2 per contact, 0 for a missing axis).  Yd_r = I_f^-1 D_r (Y_r for the other rows) and
+       B = W Yd^T (m x m, not symmetric), so B lambda = -(W qdd_free + b) and qdd = qdd_free + Yd lambda. */
+    int nslide;
+    double *cf, *phi, *vt, *G, *Wt, *Yd, *B;
+    const double *slip;          /* the slip directions phi was formed with (2 per contact) */
 } gac_sens_set;
 
-#define GAC_SENS_SET_ARRAYS(nq, nr) \
-    double H_f[3 * (nq) * (nr)], H_W[3 * (nq) * (nq)], H_Y[3 * (nq) * (nq)], H_LD[9 * (nq) * (nq)], \
-        H_sgn[3 * (nq)]; \
-    int H_brow[3 * (nq)]
-#define GAC_SENS_SET_BIND(H) ((H).f = H_f, (H).W = H_W, (H).Y = H_Y, (H).LD = H_LD, (H).sgn = H_sgn, \
-                              (H).brow = H_brow)
+#define GAC_SENS_SET_ARRAYS_OF(P, nq, nr) \
+    double P##_f[3 * (nq) * (nr)], P##_W[3 * (nq) * (nq)], P##_Y[3 * (nq) * (nq)], P##_LD[9 * (nq) * (nq)], \
+        P##_sgn[3 * (nq)], P##_cf[(nq)], P##_phi[2 * (nq)], P##_vt[2 * (nq)], P##_G[(nq) * (nq)], \
+        P##_Wt[2 * (nq) * (nq)], P##_Yd[(nq) * (nq)], P##_B[(nq) * (nq)]; \
+    int P##_brow[3 * (nq)]
+#define GAC_SENS_SET_BIND_OF(S, P) ((S).f = P##_f, (S).W = P##_W, (S).Y = P##_Y, (S).LD = P##_LD, (S).sgn = P##_sgn, \
+                                    (S).brow = P##_brow, (S).cf = P##_cf, (S).phi = P##_phi, (S).vt = P##_vt, \
+                                    (S).G = P##_G, (S).Wt = P##_Wt, (S).Yd = P##_Yd, (S).B = P##_B, (S).nslide = 0)
+#define GAC_SENS_SET_ARRAYS(nq, nr) GAC_SENS_SET_ARRAYS_OF(H, nq, nr)   /* the arrays of a set named H */
+#define GAC_SENS_SET_BIND(S) GAC_SENS_SET_BIND_OF(S, H)
 
 /* 1 if contact c rests on a wall with friction without being stuck (stuck: per contact, or NULL: none is): it slides
- * there, and sliding friction at rest is not differentiated. */
+ * there. */
 static int gac_sens_sliding(const gac_sim *s, const int *stuck, int c)
 {
     return (stuck == 0 || !stuck[c]) && gac_friction_coefficient(s->model, s->p, c) > 0.0;
 }
 
+/* 1 if resting contact c slides with a slip direction (s->slip, set where a stuck point slipped or a slow point
+ * could not stick) over two tangential axes whose derivative is not known: below friction_velocity that direction
+ * enters its friction, and its derivative (sens->dslip) is known for the direction sens->slip_known it was found
+ * for (gac_sens_slip, gac_sens_reslip).  Along one axis it is +-1, a constant. */
+static int gac_sens_slip_unknown(const gac_sim *s, int c)
+{
+    const gac_contact *ct = s->model->contacts + c;
+    const double *d = s->slip + 2 * c, *known = s->sens->slip_known + 2 * c;
+    return gac_sens_sliding(s, s->is_stuck, c) && ct->trow[0] >= 0 && ct->trow[1] >= 0
+           && (d[0] != 0.0 || d[1] != 0.0) && (d[0] != known[0] || d[1] != known[1]);
+}
+
+/* A contact of set[0..n-1] sliding at state x slower than friction_velocity (stuck: per contact, or NULL: none is),
+ * or -1: at an impact the slip directions (s->slip) of the fields before and after are the loop's after it. */
+static int gac_sens_slow_slide(const gac_sim *s, const double *x, int n, const int *set, const int *stuck)
+{
+    const gac_model *md = s->model;
+    double vq[3 * GAC_AT_LEAST_1(md->npoint)], vt[2];
+    int a;
+    md->contact_velocities(x, x + md->nq, s->p, vq);
+    for (a = 0; a < n; ++a) {
+        if (md->contacts[set[a]].kind != GAC_CONTACT_WALL || !gac_sens_sliding(s, stuck, set[a])) continue;
+        gac_tangential_velocity(md, set[a], vq, vt);
+        if (!(hypot(vt[0], vt[1]) > md->friction_velocity)) return set[a];
+    }
+    return -1;
+}
+
 /* Fill H for set[0..n-1] at q, with the tangential rows of those stuck (stuck: per contact, or NULL: normal rows
- * only).  Returns 0, or 1 where the rows are dependent (no unique forces: the loop gives the dependent ones none, a
- * choice with no derivative) or more than nq. */
+ * only).  A row dependent on those before it (a rod lying flat stuck at both ends holds the same tangential row
+ * twice) drops out as in the loop (gac_ldlt_drop: its force 0, the motion the same; counted in H->ndropped).
+ * Returns 0, or 1 for more than 3 nq rows or none independent. */
 static int gac_sens_set_at(const gac_sim *s, const double *q, int n, const int *set, const int *stuck,
                            gac_sens_set *H)
 {
@@ -185,6 +235,8 @@ static int gac_sens_set_at(const gac_sim *s, const double *q, int n, const int *
     const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow);
     int a, b, i, t, m = 0;
     H->set = set;
+    H->n = n;
+    H->nslide = 0;
     for (a = 0; a < n; ++a) {                     /* the normal rows */
         const gac_contact *ct = md->contacts + set[a];
         H->brow[m] = ct->row;
@@ -201,8 +253,7 @@ static int gac_sens_set_at(const gac_sim *s, const double *q, int n, const int *
             H->sgn[m++] = 1.0;
         }
     }
-    H->m = m;
-    if (m > nq) return 1;
+    H->m = m;                                     /* (more than nq rows: some depend on the others) */
     for (a = 0; a < m; ++a) {
         double *fa = H->f + (long)a * nr;
         for (i = 0; i < nr; ++i) fa[i] = 0.0;
@@ -217,7 +268,8 @@ static int gac_sens_set_at(const gac_sim *s, const double *q, int n, const int *
             H->LD[a * m + b] = H->LD[b * m + a] = sum;
         }
     }
-    return m > 0 && gac_ldlt(m, H->LD, 1e-12) != 0;
+    H->ndropped = m > 0 ? gac_ldlt_drop(m, H->LD, 1e-12) : 0;
+    return H->ndropped < 0;
 }
 
 static double gac_dot(int n, const double *a, const double *b)
@@ -228,15 +280,87 @@ static double gac_dot(int n, const double *a, const double *b)
     return sum;
 }
 
+/* The sliding friction of H's contacts that slide on rough walls at state x (stuck: per contact, or NULL: none is;
+ * H filled by gac_sens_set_at at x's q): cf, vt, phi, Wt, G, Yd and B (gac_sens_set).  The loop's forces are
+ * gac_constrained_dynamics_friction's with the same phi (gac_slide_phi, with the slip directions slip, 2 per
+ * contact, below friction_velocity: s->slip, or the loop's before it changed them).  Returns 0, or 1 where a row of H
+ * dropped out (B would be singular). */
+static int gac_sens_set_slide(const gac_sim *s, const double *x, const int *stuck, const double *slip,
+                              gac_sens_set *H)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow), m = H->m;
+    double vq[3 * GAC_AT_LEAST_1(md->npoint)], unit[GAC_AT_LEAST_1(md->njrow)], D[nq];
+    int a, b, i, t;
+    H->nslide = 0;
+    H->slip = slip;
+    for (a = 0; a < H->n; ++a) {
+        const int c = H->set[a];
+        H->cf[a] = md->contacts[c].kind == GAC_CONTACT_WALL && gac_sens_sliding(s, stuck, c)
+                   ? gac_friction_coefficient(md, s->p, c) : 0.0;
+        H->nslide += H->cf[a] > 0.0;
+    }
+    if (H->nslide == 0) return 0;
+    if (H->ndropped > 0) return 1;            /* B with a dependent row: no unique forces to differentiate */
+    md->contact_velocities(x, x + nq, s->p, vq);
+    for (i = 0; i < nr; ++i) unit[i] = 0.0;
+    gac_copy(H->Yd, H->Y, (long)m * nq);
+    for (a = 0; a < H->n; ++a) {
+        const gac_contact *ct = md->contacts + H->set[a];
+        double *G = H->G + (long)a * nq;
+        if (!(H->cf[a] > 0.0)) continue;
+        gac_tangential_velocity(md, H->set[a], vq, H->vt + 2 * a);
+        gac_slide_phi(H->vt + 2 * a, md->friction_velocity, slip + 2 * H->set[a], H->phi + 2 * a);
+        for (i = 0; i < nq; ++i) G[i] = 0.0;
+        for (t = 0; t < 2; ++t) {                 /* G_a = J^T g_a = -sum_t phi_t Wt_t */
+            double *wt = H->Wt + (long)(2 * a + t) * nq;
+            for (i = 0; i < nq; ++i) wt[i] = 0.0;
+            if (ct->trow[t] < 0) continue;
+            unit[ct->trow[t]] = 1.0;
+            md->contact_generalized_force(x, unit, s->p, wt);
+            unit[ct->trow[t]] = 0.0;
+            for (i = 0; i < nq; ++i) G[i] -= H->phi[2 * a + t] * wt[i];
+        }
+        for (i = 0; i < nq; ++i) D[i] = H->W[(long)a * nq + i] + H->cf[a] * G[i];
+        md->inertia_solve(x, D, s->p, H->Yd + (long)a * nq);
+    }
+    for (a = 0; a < m; ++a) {
+        for (b = 0; b < m; ++b) H->B[a * m + b] = gac_dot(nq, H->W + (long)a * nq, H->Yd + (long)b * nq);
+    }
+    return 0;
+}
+
+/* Solve H's force system for r (m) in place: A r = r by LD, or with sliding friction B r = r by LU (a copy of B).
+ * Returns 0, or 1 where B is singular (r then NaN). */
+static int gac_sens_set_solve(const gac_sens_set *H, double *r)
+{
+    const int m = H->m;
+    int a;
+    if (m == 0) return 0;
+    if (H->nslide == 0) {
+        gac_ldlt_solve(m, H->LD, r);
+        return 0;
+    }
+    {
+        double B[m * m];
+        gac_copy(B, H->B, (long)m * m);
+        if (gac_lu_solve(m, B, r, 1e-14) == 0) return 0;
+    }
+    for (a = 0; a < m; ++a) r[a] = NAN;
+    return 1;
+}
+
 /* The constrained flight at state x with H held (H at x's q): qdd_free = I_f^-1 R, the forces lambda of
  * A lambda = -(W qdd_free + b), b_a = sign_a (Jdot qd)[row_a], and qdd = qdd_free + Y lambda
- * (gac_constrained_dynamics on a frictionless set).  lambda_ref (if not NULL): the force scale, the largest
- * |W_a qdd_free + b_a| / A_aa. */
+ * (gac_constrained_dynamics on a frictionless set); with sliding friction (gac_sens_set_slide) B lambda = the same
+ * and qdd = qdd_free + Yd lambda (gac_constrained_dynamics_friction).  lambda_ref (if not NULL): the force scale,
+ * the largest |W_a qdd_free + b_a| / A_aa. */
 static void gac_sens_held_forces(const gac_sim *s, const double *x, const double *u, const gac_sens_set *H,
                                  double *qdd_free, double *lambda, double *qdd, double *lambda_ref)
 {
     const gac_model *md = s->model;
     const int nq = md->nq, m = H->m;
+    const double *Yd = H->nslide > 0 ? H->Yd : H->Y;
     double bias[GAC_AT_LEAST_1(md->njrow)];
     int a, i;
     md->forward_dynamics(x, x + nq, u, s->p, qdd_free);
@@ -249,10 +373,10 @@ static void gac_sens_held_forces(const gac_sim *s, const double *x, const double
             if (fabs(lambda[a]) / A_aa > *lambda_ref) *lambda_ref = fabs(lambda[a]) / A_aa;
         }
     }
-    if (m > 0) gac_ldlt_solve(m, H->LD, lambda);
+    gac_sens_set_solve(H, lambda);
     for (i = 0; i < nq; ++i) {
         double value = qdd_free[i];
-        for (a = 0; a < m; ++a) value += H->Y[(long)a * nq + i] * lambda[a];
+        for (a = 0; a < m; ++a) value += Yd[(long)a * nq + i] * lambda[a];
         qdd[i] = value;
     }
 }
@@ -273,40 +397,106 @@ static void gac_sens_set_tangent(const gac_sim *s, const double *q, const gac_se
     }
 }
 
+/* The sliding contacts' dYd_a = d(I_f^-1 D_a) along (dq, dqd, dp) into dY's rows (dW from gac_sens_set_tangent):
+ *     dD_a = dW_a + dc_f G_a + c_f d(J^T g_a)[dq, dg_a, dp],   dg_a = -dphi_a on its tangential rows,
+ *     dphi = (I - phi phi^T) dv_t / |v_t|                        (Coulomb, |v_t| > v_s),
+ *     dphi = dv_t / v_s - (v_t . dv_t) / (|v_t| v_s) d + (1 - |v_t| / v_s) dd   (viscous, below v_s; d the slip
+ *                                                                            direction, dd its derivative dslip),
+ * dv_t along each tangential row t = d(J^T e_t)[dq, dp] . qd + Wt_t . dqd.  (One tangential axis: phi = +-1, or
+ * d where the point moves along d, so dphi = 0 but for the viscous part's dv_t / v_s.) */
+static void gac_sens_slide_tangent(const gac_sim *s, const double *x, const gac_sens_set *H, const double *dq,
+                                   const double *dqd, const double *dp, const double *dslip, const double *dW,
+                                   double *dY)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow);
+    const double vs = md->friction_velocity;
+    double g[GAC_AT_LEAST_1(md->njrow)], dg[GAC_AT_LEAST_1(md->njrow)], zero[GAC_AT_LEAST_1(md->njrow)];
+    double dJg[nq], dwt[nq], D[nq], dD[nq];
+    int a, i, t;
+    for (i = 0; i < nr; ++i) g[i] = dg[i] = zero[i] = 0.0;
+    for (a = 0; a < H->n; ++a) {
+        const gac_contact *ct = md->contacts + H->set[a];
+        const double cf = H->cf[a], *vt = H->vt + 2 * a, *phi = H->phi + 2 * a, *d = H->slip + 2 * H->set[a];
+        const double speed = sqrt(vt[0] * vt[0] + vt[1] * vt[1]);
+        const double dcf = ct->friction_index >= 0 ? dp[ct->friction_index] : 0.0;
+        double dvt[2] = {0.0, 0.0}, dphi[2], along = 0.0;
+        if (!(cf > 0.0)) continue;
+        for (t = 0; t < 2; ++t) {
+            if (ct->trow[t] < 0) continue;
+            g[ct->trow[t]] = 1.0;
+            md->contact_generalized_force_tangent(x, g, s->p, dq, zero, dp, dwt);
+            g[ct->trow[t]] = 0.0;
+            dvt[t] = gac_dot(nq, dwt, x + nq) + gac_dot(nq, H->Wt + (long)(2 * a + t) * nq, dqd);
+        }
+        if (speed > vs) {
+            const double pd = phi[0] * dvt[0] + phi[1] * dvt[1];
+            for (t = 0; t < 2; ++t) dphi[t] = (dvt[t] - phi[t] * pd) / speed;
+        } else {                                  /* (at rest along d: |v_t|' = d . dv_t) */
+            along = speed > 0.0 ? (vt[0] * dvt[0] + vt[1] * dvt[1]) / speed : d[0] * dvt[0] + d[1] * dvt[1];
+            for (t = 0; t < 2; ++t) dphi[t] = (dvt[t] - along * d[t]) / vs;
+            if (dslip != 0 && (d[0] != 0.0 || d[1] != 0.0)) {   /* the slip direction's own derivative */
+                for (t = 0; t < 2; ++t) dphi[t] += (1.0 - speed / vs) * dslip[2 * H->set[a] + t];
+            }
+        }
+        for (t = 0; t < 2; ++t) {
+            if (ct->trow[t] < 0) continue;
+            g[ct->trow[t]] = -phi[t];
+            dg[ct->trow[t]] = -dphi[t];
+        }
+        md->contact_generalized_force_tangent(x, g, s->p, dq, dg, dp, dJg);
+        for (t = 0; t < 2; ++t) {
+            if (ct->trow[t] >= 0) g[ct->trow[t]] = dg[ct->trow[t]] = 0.0;
+        }
+        for (i = 0; i < nq; ++i) {
+            D[i] = H->W[(long)a * nq + i] + cf * H->G[(long)a * nq + i];
+            dD[i] = dW[(long)a * nq + i] + dcf * H->G[(long)a * nq + i] + cf * dJg[i];
+        }
+        md->inertia_solve_tangent(x, D, s->p, dq, dD, dp, dY + (long)a * nq);
+    }
+}
+
 /* The constrained flight's tangent along (dq, dqd, dp), dqdd_free the free dynamics' there (the forces as
- * gac_sens_held_forces left them):
- *     A dlambda = -(sign d(Jdot qd)[dq, dqd, dp] + dW qdd_free + W dqdd_free) - dA lambda,   dA = dW Y + W dY,
- *     d qdd = dqdd_free + dY lambda + Y dlambda,
- * dW, dY along (dq, dp) (gac_sens_set_tangent), d(Jdot qd) by contact_bias_tangent.  dqdd may be dqdd_free;
- * dlambda (m) may be NULL. */
+ * gac_sens_held_forces left them; qdd = qdd_free + Yd lambda):
+ *     B dlambda = -(sign d(Jdot qd)[dq, dqd, dp] + dW qdd + W (dqdd_free + dYd lambda)),
+ *     d qdd = dqdd_free + dYd lambda + Yd dlambda,
+ * dW, dY along (dq, dp) (gac_sens_set_tangent), d(Jdot qd) by contact_bias_tangent; without sliding friction
+ * Yd = Y and B = A (so the first is A dlambda = -(sign d(Jdot qd) + dW qdd_free + W dqdd_free) - dA lambda,
+ * dA = dW Y + W dY); with it, the sliding contacts' dYd by gac_sens_slide_tangent (dslip: the slip directions'
+ * derivatives, 2 per contact, or NULL: 0).  dqdd may be dqdd_free; dlambda (m) may be NULL. */
 static void gac_sens_held_tangent(const gac_sim *s, const double *x, const gac_sens_set *H, const double *qdd_free,
                                   const double *lambda, const double *dq, const double *dqd, const double *dp,
-                                  const double *dqdd_free, double *dlambda, double *dqdd)
+                                  const double *dslip, const double *dqdd_free, double *dlambda, double *dqdd)
 {
     const gac_model *md = s->model;
     const int nq = md->nq, m = H->m;
-    double dW[m * nq], dY[m * nq], r[m], dbias[GAC_AT_LEAST_1(md->njrow)], out[nq];
-    int a, b, i;
+    const double *Yd = H->nslide > 0 ? H->Yd : H->Y;
+    double dW[m * nq], dY[m * nq], r[m], dbias[GAC_AT_LEAST_1(md->njrow)], qdd[nq], v[nq];
+    int a, i;
     if (m == 0) {
         for (i = 0; i < nq; ++i) dqdd[i] = dqdd_free[i];
         return;
     }
     gac_sens_set_tangent(s, x, H, dq, dp, dW, dY);
+    if (H->nslide > 0) gac_sens_slide_tangent(s, x, H, dq, dqd, dp, dslip, dW, dY);
     md->contact_bias_tangent(x, x + nq, s->p, dq, dqd, dp, dbias);
-    for (a = 0; a < m; ++a) {
-        const double *wa = H->W + (long)a * nq, *dwa = dW + (long)a * nq;
-        double value = -(H->sgn[a] * dbias[H->brow[a]] + gac_dot(nq, dwa, qdd_free) + gac_dot(nq, wa, dqdd_free));
-        for (b = 0; b < m; ++b)
-            value -= (gac_dot(nq, dwa, H->Y + (long)b * nq) + gac_dot(nq, wa, dY + (long)b * nq)) * lambda[b];
-        r[a] = value;
-    }
-    gac_ldlt_solve(m, H->LD, r);
     for (i = 0; i < nq; ++i) {
-        double value = dqdd_free[i];
-        for (a = 0; a < m; ++a) value += dY[(long)a * nq + i] * lambda[a] + H->Y[(long)a * nq + i] * r[a];
-        out[i] = value;
+        double value = qdd_free[i], dvalue = dqdd_free[i];
+        for (a = 0; a < m; ++a) {
+            value += Yd[(long)a * nq + i] * lambda[a];
+            dvalue += dY[(long)a * nq + i] * lambda[a];
+        }
+        qdd[i] = value;
+        v[i] = dvalue;
     }
-    gac_copy(dqdd, out, nq);
+    for (a = 0; a < m; ++a)
+        r[a] = -(H->sgn[a] * dbias[H->brow[a]] + gac_dot(nq, dW + (long)a * nq, qdd)
+                 + gac_dot(nq, H->W + (long)a * nq, v));
+    gac_sens_set_solve(H, r);
+    for (i = 0; i < nq; ++i) {
+        for (a = 0; a < m; ++a) v[i] += Yd[(long)a * nq + i] * r[a];
+    }
+    gac_copy(dqdd, v, nq);
     if (dlambda != 0) gac_copy(dlambda, r, m);
 }
 
@@ -391,7 +581,7 @@ static int gac_sens_at_rest(const gac_sim *s, const double *x, int n, const int 
             gac_sens_set H;
             GAC_SENS_SET_BIND(H);
             out[m] = c;
-            if (gac_sens_set_at(s, x, m + 1, out, 0, &H) == 0) ++m;
+            if (gac_sens_set_at(s, x, m + 1, out, 0, &H) == 0 && H.ndropped == 0) ++m;
         }
     }
     return m;
@@ -400,38 +590,58 @@ static int gac_sens_at_rest(const gac_sim *s, const double *x, int n, const int 
 /* Contacts at rest at the start (gac_rest_at_start, before the sensitivities were attached): the gaps they are held
  * at are their starting ones (dgap_held = d gap along the seed), and their velocities were projected onto W qd = 0
  * from those gac_rest_at_start saved in s->x1 (s->pending: not yet reported; otherwise the state is taken as given,
- * on its constraints). */
+ * on its constraints); on rough walls the points that stuck there (gac_try_stick) then had their velocities
+ * projected onto the held rows with their tangential ones, from qd_mid = qd_pre + Y c, A c = -W qd_pre (the first
+ * projection, formed again here).  Those that slide are followed in flight, with the slip directions the stick test
+ * gave them (gac_sens_reslip). */
 static void gac_sens_start_rest(gac_sim *s)
 {
     gac_sens *z = s->sens;
     const gac_model *md = s->model;
     const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), nc1 = GAC_AT_LEAST_1(md->ncontact);
     const double *qd_pre = s->pending ? s->x1 + nq : s->x + nq;
-    double dgap[nc1], zero_p[GAC_AT_LEAST_1(md->nparam)], out[nq];
-    int all[GAC_AT_LEAST_1(md->ncontact)], set[nq], a, j, m;
+    const int stuck = gac_any_stuck(s->is_stuck, s->nresting, s->resting);
+    double dgap[nc1], zero_p[GAC_AT_LEAST_1(md->nparam)], out[nq], qd_mid[nq], c[nq];
+    int all[GAC_AT_LEAST_1(md->ncontact)], set[nq], a, i, j, m;
     GAC_SENS_SET_ARRAYS(nq, nr);
     gac_sens_set H;
+    GAC_SENS_SET_ARRAYS_OF(H2, nq, nr);
+    gac_sens_set H2;                              /* the held rows with the stuck points' tangential ones */
     GAC_SENS_SET_BIND(H);
-    for (a = 0; a < s->nresting; ++a) {       /* (a rough wall's contact at rest from the start: not followed) */
-        if (gac_sens_sliding(s, 0, s->resting[a])) {
-            gac_sens_stop(s, GAC_SENS_RESTING, s->t, s->resting[a]);
-            return;
-        }
-    }
+    GAC_SENS_SET_BIND_OF(H2, H2);
     for (a = 0; a < md->ncontact; ++a) all[a] = a;
     for (a = 0; a < GAC_AT_LEAST_1(md->nparam); ++a) zero_p[a] = 0.0;
     m = gac_sens_at_rest(s, s->x, s->nresting, s->resting, s->pending ? md->ncontact : 0, all, set);
-    if (gac_sens_set_at(s, s->x, m, set, 0, &H) != 0) {
+    if (gac_sens_set_at(s, s->x, m, set, 0, &H) != 0
+        || (stuck && gac_sens_set_at(s, s->x, s->nresting, s->resting, s->is_stuck, &H2) != 0)) {
         gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, s->t, s->resting[0]);
         return;
+    }
+    gac_copy(qd_mid, s->x + nq, nq);
+    if (stuck) {                                  /* the velocities after the first projection */
+        for (a = 0; a < m; ++a) c[a] = -gac_dot(nq, H.W + (long)a * nq, qd_pre);
+        gac_ldlt_solve(m, H.LD, c);
+        for (i = 0; i < nq; ++i) {
+            qd_mid[i] = qd_pre[i];
+            for (a = 0; a < m; ++a) qd_mid[i] += H.Y[(long)a * nq + i] * c[a];
+        }
     }
     for (j = 0; j < z->k; ++j) {
         double *S = z->S + (long)j * nx;
         const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
         md->contact_gaps_tangent(s->x, s->p, S, dp, dgap);
         for (a = 0; a < md->ncontact; ++a) z->dgap_held[(long)j * nc1 + a] = dgap[a];
-        gac_sens_hold_tangent(s, s->x, &H, qd_pre, s->x + nq, S, S + nq, dp, out);
+        gac_sens_hold_tangent(s, s->x, &H, qd_pre, qd_mid, S, S + nq, dp, out);
         gac_copy(S + nq, out, nq);
+        if (stuck) {
+            gac_sens_hold_tangent(s, s->x, &H2, qd_mid, s->x + nq, S, S + nq, dp, out);
+            gac_copy(S + nq, out, nq);
+        }
+    }
+    {                                             /* slip directions the start's stick test gave (none before) */
+        double none[2 * nc1];
+        for (i = 0; i < 2 * nc1; ++i) none[i] = 0.0;
+        gac_sens_reslip(s, none, stuck);
     }
 }
 
@@ -501,7 +711,9 @@ void gac_sens_project(gac_sim *s, const double *x_pre, const double *x_post)
  * the same formula.)  The stages K_i = f(Y_i) are the step's own (s->f, s->k[1..], as the integrator left them) when
  * `taken` (the step of size h just accepted); otherwise (a part of it, up to an event) K_0 = s->f and the others
  * are computed here.  The directions' tangents go GAC_TANGENT_BLOCK at a time through the model's
- * forward_dynamics_tangent_block (their primal part computed once), the rest one by one. */
+ * forward_dynamics_tangent_block (their primal part computed once), the rest one by one.  With resting contacts the
+ * stage's constrained dynamics and its tangent (gac_sens_held_forces, gac_sens_held_tangent), sliding friction
+ * among them. */
 void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
 {
     gac_sens *z = s->sens;
@@ -509,8 +721,8 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
     const double *a, *b, *c;
     int lda, stages, i, j, l, n;
     if (z == 0 || z->status != GAC_SENS_VALID || !(h > 0.0)) return;
-    for (i = 0; i < s->nresting; ++i) {          /* a point sliding on a rough wall: not followed */
-        if (gac_sens_sliding(s, s->is_stuck, s->resting[i])) {
+    for (i = 0; i < s->nresting; ++i) {          /* a slip direction over two axes not followed */
+        if (gac_sens_slip_unknown(s, s->resting[i])) {
             gac_sens_stop(s, GAC_SENS_RESTING, s->t, s->resting[i]);
             return;
         }
@@ -521,10 +733,11 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
     }
     {
         const int nq = md->nq, nx = md->nx, k = z->k, nr = GAC_AT_LEAST_1(md->njrow), held = s->nresting > 0;
+        const int nc1 = GAC_AT_LEAST_1(md->ncontact);
         double *work = z->work, *dK = work + (long)GAC_SENS_STAGES * nx, *Y = dK + (long)GAC_SENS_STAGES * k * nx;
         double dQ[GAC_TANGENT_BLOCK * nq], dQD[GAC_TANGENT_BLOCK * nq], out[GAC_TANGENT_BLOCK * nq];
         double dU[GAC_TANGENT_BLOCK * GAC_AT_LEAST_1(md->nu)];   /* the inputs' directions: 0 (held, or a schedule) */
-        double qdd_free[nq], qdd[nq], lambda[nq];                /* the constrained flight at a stage */
+        double qdd_free[nq], qdd[nq], lambda[3 * nq];               /* the constrained flight at a stage */
         const double *K[GAC_SENS_STAGES];
         int width;
         GAC_SENS_SET_ARRAYS(nq, nr);
@@ -543,7 +756,8 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
             u = gac_input(s, s->t + c[i] * h, Y);
             if (held) {                              /* the resting contacts held (the stuck points along every
                                                         axis): their forces at the stage */
-                if (gac_sens_set_at(s, Y, s->nresting, s->resting, s->is_stuck, &H) != 0) {
+                if (gac_sens_set_at(s, Y, s->nresting, s->resting, s->is_stuck, &H) != 0
+                    || gac_sens_set_slide(s, Y, s->is_stuck, s->slip, &H) != 0) {   /* (the sliding points' friction) */
                     gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, s->t, s->resting[0]);
                     return;
                 }
@@ -584,7 +798,7 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
                                                  dKi + nq);
                     if (held)                        /* the constrained dynamics' tangent */
                         gac_sens_held_tangent(s, Y, &H, qdd_free, lambda, dQ, dQD, z->dp + (long)j * md->nparam,
-                                              dKi + nq, 0, dKi + nq);
+                                              z->dslip + 2L * j * nc1, dKi + nq, 0, dKi + nq);
                 }
             }
         }
@@ -701,16 +915,25 @@ static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, con
 }
 
 /* The field f = [qd, qdd] at state x with set[0..m-1] held (free flight for m = 0), those stuck (stuck: per contact,
- * or NULL: none) along every axis.  Returns 0, or 1 where the held rows are dependent.  lambda (H->m rows) and
- * lambda_ref as gac_sens_held_forces, the set's arrays in H. */
-static int gac_sens_field(gac_sim *s, double t, const double *x, int m, const int *set, const int *stuck,
-                          gac_sens_set *H, double *qdd_free, double *lambda, double *f, double *lambda_ref)
+ * or NULL: none) along every axis, the others on rough walls sliding with the slip directions slip (2 per contact).
+ * Returns 0, or 1 where the held rows admit no forces to differentiate.  lambda (H->m rows) and lambda_ref as
+ * gac_sens_held_forces, the set's arrays in H. */
+static int gac_sens_field_slip(gac_sim *s, double t, const double *x, int m, const int *set, const int *stuck,
+                               const double *slip, gac_sens_set *H, double *qdd_free, double *lambda, double *f,
+                               double *lambda_ref)
 {
     const int nq = s->model->nq;
-    if (gac_sens_set_at(s, x, m, set, stuck, H) != 0) return 1;
+    if (gac_sens_set_at(s, x, m, set, stuck, H) != 0 || gac_sens_set_slide(s, x, stuck, slip, H) != 0) return 1;
     gac_copy(f, x + nq, nq);
     gac_sens_held_forces(s, x, gac_input(s, t, x), H, qdd_free, lambda, f + nq, lambda_ref);
     return 0;
+}
+
+/* gac_sens_field_slip with the loop's slip directions (s->slip). */
+static int gac_sens_field(gac_sim *s, double t, const double *x, int m, const int *set, const int *stuck,
+                          gac_sens_set *H, double *qdd_free, double *lambda, double *f, double *lambda_ref)
+{
+    return gac_sens_field_slip(s, t, x, m, set, stuck, s->slip, H, qdd_free, lambda, f, lambda_ref);
 }
 
 /* The resting set before the event of record r: the set now without the contacts that landed, with those released. */
@@ -738,10 +961,12 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
  * impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).  On rough walls the
  * stuck points are held along every axis: those before (was_stuck, per contact, or NULL: none) in f-, those after
  * (s->is_stuck, as gac_restick re-decided them: called after it, the state after in s->x) in f+ and in the hold,
- * which brings the law's velocities onto their tangential rows too (a landing that sticks).  A point sliding at
- * rest before or after, a stuck point that slipped, or one that came to stick without taking the impact's impulse
- * ends them (GAC_SENS_RESTING, GAC_SENS_STICK), as do impacts of another kind and impacts of two links or of a
- * link on an obstacle (GAC_SENS_LINK). */
+ * which brings the law's velocities onto their tangential rows too (a landing that sticks); the others on rough
+ * walls slide in f- and f+ with their friction (a landing that slides on).  A point sliding at rest slower than
+ * friction_velocity before or after (the slip directions of f- are the loop's after the impact), a stuck point that
+ * slipped, or one that came to stick without taking the impact's impulse ends them (GAC_SENS_RESTING,
+ * GAC_SENS_STICK), as do impacts of another kind and impacts of two links or of a link on an obstacle
+ * (GAC_SENS_LINK). */
 void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const int *was_stuck)
 {
     gac_sens *z = s->sens;
@@ -771,17 +996,11 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
     }
     {                                                        /* on rough walls: stuck points before and after */
         int before_set[md->nq + GAC_AT_LEAST_1(md->ncontact)], nbefore = gac_sens_set_before(s, r, before_set), a, b;
-        for (a = 0; a < nbefore; ++a) {                      /* sliding before: not followed */
-            if (gac_sens_sliding(s, was_stuck, before_set[a])) {
-                gac_sens_stop(s, GAC_SENS_RESTING, r->t, before_set[a]);
-                return;
-            }
-        }
-        for (a = 0; a < s->nresting; ++a) {                  /* sliding after (a landing that slides on) */
-            if (gac_sens_sliding(s, s->is_stuck, s->resting[a])) {
-                gac_sens_stop(s, GAC_SENS_RESTING, r->t, s->resting[a]);
-                return;
-            }
+        int slow = gac_sens_slow_slide(s, s->xs, nbefore, before_set, was_stuck);   /* sliding slowly, before */
+        if (slow < 0) slow = gac_sens_slow_slide(s, s->x, s->nresting, s->resting, s->is_stuck);   /* or after */
+        if (slow >= 0) {
+            gac_sens_stop(s, GAC_SENS_RESTING, r->t, slow);
+            return;
         }
         if (r->nslipped > 0) {                               /* a stuck point slipped at the impact */
             gac_sens_stop(s, GAC_SENS_STICK, r->t, r->slipped[0]);
@@ -804,7 +1023,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         double u[n3], xi_t[n3], xi_norm[n3], cf_row[n3];
         int normal[n3], cf_index[n3], nslide = 0;
         double dgap[nc1], dx[nx], dqd_plus[nq], zero_p[GAC_AT_LEAST_1(md->nparam)];
-        double qd_law[nq], qdd_free[nq], lambda[nq];
+        double qd_law[nq], qdd_free[nq], lambda[3 * nq];
         double speed = 0.0, largest = 0.0, v_event = 0.0;
         int active[n3], landing[n3], before_set[nq + nc1], at_rest[nq], m = 0, nbefore, nheld = 0, a, b, i, j;
         gac_sens_law law;
@@ -996,7 +1215,7 @@ void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
     const gac_model *md = s->model;
     const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), nc1 = GAC_AT_LEAST_1(md->ncontact);
     const double *x = s->xs;
-    double fm[nx], fp[nx], qdd_free[nq], lambda[nq], dqdd_free[nq], dlambda[nq], qdd_m[nq], lambda_ref, rate;
+    double fm[nx], fp[nx], qdd_free[nq], lambda[3 * nq], dqdd_free[nq], dlambda[3 * nq], qdd_m[nq], lambda_ref, rate;
     double zero_u[GAC_AT_LEAST_1(md->nu)], zero_p[GAC_AT_LEAST_1(md->nparam)];
     int before_set[nq + nc1], nbefore, a, i, j, index = -1;
     const double *u;
@@ -1027,7 +1246,7 @@ void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
     }
     gac_copy(qdd_m, fm + nq, nq);
     md->forward_dynamics_tangent(x, x + nq, u, s->p, x + nq, qdd_m, zero_u, zero_p, dqdd_free);
-    gac_sens_held_tangent(s, x, &H, qdd_free, lambda, x + nq, qdd_m, zero_p, dqdd_free, dlambda, dqdd_free);
+    gac_sens_held_tangent(s, x, &H, qdd_free, lambda, x + nq, qdd_m, zero_p, 0, dqdd_free, dlambda, dqdd_free);
     rate = dlambda[index];                                   /* lambda_c' along the flow */
     if (!(fabs(rate) > 1e-9 * lambda_ref)) {
         gac_sens_stop(s, GAC_SENS_GRAZING, r->t, c_event);
@@ -1038,7 +1257,8 @@ void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
         const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
         double tau;
         md->forward_dynamics_tangent(x, x + nq, u, s->p, S, S + nq, zero_u, dp, dqdd_free);
-        gac_sens_held_tangent(s, x, &H, qdd_free, lambda, S, S + nq, dp, dqdd_free, dlambda, dqdd_free);
+        gac_sens_held_tangent(s, x, &H, qdd_free, lambda, S, S + nq, dp, z->dslip + 2L * j * nc1, dqdd_free, dlambda,
+                              dqdd_free);
         tau = -dlambda[index] / rate;
         for (i = 0; i < nx; ++i) S[i] += (fm[i] - fp[i]) * tau;
         z->dt_impact[j] = tau;
@@ -1046,9 +1266,288 @@ void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
     if (!gac_finite(z->S, z->k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, r->t, c_event);
 }
 
-/* Resting contacts released where the inputs change (gac_recheck_rest: their forces pull at once): the time is fixed
- * (a schedule's breakpoint, or gac_sim_set_input), the state continuous, and the field's jump there moves no
- * derivative: S goes on unchanged, dt = 0. */
+/* The slip of the stuck resting contact c_event at t* (state s->xs; gac_slip and gac_recheck_rest made it slide,
+ * record r): its event function e = lambda_N - |lambda_T| / c_f (the cone) gives dt*_j = -de_j / e',
+ *     de_j = dlambda_N - lambda_T . dlambda_T / (|lambda_T| c_f) + |lambda_T| dc_f / c_f^2
+ * along (S_j, dp_j) and e' along the flow, both from the stuck field's tangent (gac_sens_held_tangent, c_event held
+ * along its tangential rows).  The state is continuous, so S+_j = S-_j + (f- - f+) dt*_j, f- stuck and f+ sliding
+ * with phi = d, its slip direction d = -lambda_T / |lambda_T| with |v_t| = 0: the friction c_f lambda_N d equals the
+ * stuck force on the cone, so f- - f+ ~ 0.  Along one tangential axis d = +-1 is a constant; over two it turns with
+ * the directions, dd_j = -(I - d d^T)(dlambda_T_j + lambda_T' dt*_j) / |lambda_T| (the force at the perturbed
+ * event), kept in sens->dslip for the viscous band that follows (gac_sens_slide_tangent).  Several points slipping
+ * or released at once (GAC_SENS_BOUNDARY), an event e that does not cross 0 (|e'| below 1e-9 of the force scale per
+ * s: GAC_SENS_GRAZING) or a controller's inputs end the sensitivities. */
+void gac_sens_slip(gac_sim *s, const gac_impact_record *r, int c_event)
+{
+    gac_sens *z = s->sens;
+    const gac_model *md = s->model;
+    const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), nc1 = GAC_AT_LEAST_1(md->ncontact);
+    const gac_contact *ct = md->contacts + c_event;
+    const double *x = s->xs, *d = s->slip + 2 * c_event, cf = gac_friction_coefficient(md, s->p, c_event);
+    double fm[nx], fp[nx], qdd_free[nq], lambda[3 * nq], dqdd_free[nq], dlambda[3 * nq], qdd_m[nq], lambda_ref, rate;
+    double zero_u[GAC_AT_LEAST_1(md->nu)], zero_p[GAC_AT_LEAST_1(md->nparam)], lt[2] = {0.0, 0.0}, lt_rate[2] = {0.0, 0.0};
+    double norm;
+    int stuck_before[nc1], a, i, j, t, index = -1, row_t[2] = {-1, -1};
+    const double *u;
+    GAC_SENS_SET_ARRAYS(nq, nr);
+    gac_sens_set H;
+    if (z == 0 || z->status != GAC_SENS_VALID) return;
+    GAC_SENS_SET_BIND(H);
+    if (r->nslipped != 1 || r->nreleased != 0 || r->slipped[0] != c_event) {
+        gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, c_event);
+        return;
+    }
+    if (s->controller != 0 && md->nu > 0) {
+        gac_sens_stop(s, GAC_SENS_CONTROLLER, r->t, c_event);
+        return;
+    }
+    for (i = 0; i < GAC_AT_LEAST_1(md->nu); ++i) zero_u[i] = 0.0;
+    for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+    for (i = 0; i < md->ncontact; ++i) stuck_before[i] = s->is_stuck[i] || i == c_event;
+    u = gac_input(s, r->t, x);
+    if (gac_sens_field(s, r->t, x, s->nresting, s->resting, s->is_stuck, &H, qdd_free, lambda, fp, 0) != 0
+        || gac_sens_field(s, r->t, x, s->nresting, s->resting, stuck_before, &H, qdd_free, lambda, fm, &lambda_ref)
+               != 0) {
+        gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
+        return;
+    }
+    for (a = 0; a < H.n; ++a) {
+        if (H.set[a] == c_event) index = a;
+    }
+    for (a = H.n; a < H.m; ++a) {                           /* its tangential rows, by axis */
+        for (t = 0; t < 2; ++t) {
+            if (ct->trow[t] >= 0 && H.brow[a] == ct->trow[t]) row_t[t] = a;
+        }
+    }
+    for (t = 0; t < 2; ++t) {
+        if (ct->trow[t] >= 0 && row_t[t] < 0) index = -1;  /* (a dependent row dropped: not followed) */
+        if (row_t[t] >= 0) lt[t] = lambda[row_t[t]];
+    }
+    norm = hypot(lt[0], lt[1]);
+    if (index < 0 || H.ndropped > 0 || !(norm > 0.0)) {
+        gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
+        return;
+    }
+    gac_copy(qdd_m, fm + nq, nq);
+    md->forward_dynamics_tangent(x, x + nq, u, s->p, x + nq, qdd_m, zero_u, zero_p, dqdd_free);
+    gac_sens_held_tangent(s, x, &H, qdd_free, lambda, x + nq, qdd_m, zero_p, 0, dqdd_free, dlambda, dqdd_free);
+    rate = dlambda[index];                                  /* e' along the flow */
+    for (t = 0; t < 2; ++t) {
+        if (row_t[t] < 0) continue;
+        lt_rate[t] = dlambda[row_t[t]];
+        rate -= lt[t] * lt_rate[t] / (norm * cf);
+    }
+    if (!(fabs(rate) > 1e-9 * lambda_ref)) {
+        gac_sens_stop(s, GAC_SENS_GRAZING, r->t, c_event);
+        return;
+    }
+    for (j = 0; j < z->k; ++j) {
+        double *S = z->S + (long)j * nx, *dd = z->dslip + 2L * j * nc1 + 2 * c_event, dlt[2] = {0.0, 0.0}, de, tau;
+        const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
+        const double dcf = ct->friction_index >= 0 ? dp[ct->friction_index] : 0.0;
+        md->forward_dynamics_tangent(x, x + nq, u, s->p, S, S + nq, zero_u, dp, dqdd_free);
+        gac_sens_held_tangent(s, x, &H, qdd_free, lambda, S, S + nq, dp, z->dslip + 2L * j * nc1, dqdd_free, dlambda,
+                              dqdd_free);
+        de = dlambda[index] + norm * dcf / (cf * cf);
+        for (t = 0; t < 2; ++t) {
+            if (row_t[t] < 0) continue;
+            dlt[t] = dlambda[row_t[t]];
+            de -= lt[t] * dlt[t] / (norm * cf);
+        }
+        tau = -de / rate;
+        for (i = 0; i < nx; ++i) S[i] += (fm[i] - fp[i]) * tau;
+        z->dt_impact[j] = tau;
+        {                                                   /* dd = -(I - d d^T)(dlambda_T + lambda_T' tau) / |lambda_T| */
+            const double w0 = dlt[0] + lt_rate[0] * tau, w1 = dlt[1] + lt_rate[1] * tau, dw = d[0] * w0 + d[1] * w1;
+            dd[0] = -(w0 - d[0] * dw) / norm;
+            dd[1] = -(w1 - d[1] * dw) / norm;
+        }
+    }
+    z->slip_known[2 * c_event] = d[0];
+    z->slip_known[2 * c_event + 1] = d[1];
+    if (!gac_finite(z->S, z->k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, r->t, c_event);
+}
+
+/* Sliding -> stuck at a step's end (gac_try_stick, record r: the points r->stuck[], slower than friction_velocity
+ * there, or turned along their one tangential axis, stuck where the forces allow; the state x_before before, s->x
+ * after, stuck_before and slip_before the loop's stuck points and slip directions before).  The step ends where the
+ * slowing point has just crossed |v_t| = v_s (there the viscous force steps are short), so the transition is taken as
+ * the state event e = |v_t| - v_s of the first one, c: dt*_j = -de_j / e', de_j = v_t . dv_t_j / |v_t| along S_j and
+ * e' along the flow f- (sliding), and, the impact map being the velocities' projection onto the held rows with the
+ * new stuck points' tangential ones (gac_sens_hold_tangent),
+ *     S+_j = D P (S-_j + f- dt*_j) - f+ dt*_j,
+ * f+ the stuck field.  (Taking the step's end as a fixed time would miss v_s / (c_f g) in d X / d v0 of a block
+ * brought to rest.)  Points that stick together at different speeds (not one body's: a mode boundary) end the
+ * sensitivities, as does an e' ~ 0. */
+void gac_sens_stick(gac_sim *s, const double *x_before, const int *stuck_before, const double *slip_before,
+                    const gac_impact_record *r)
+{
+    gac_sens *z = s->sens;
+    const gac_model *md = s->model;
+    const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow);
+    double zero_p[GAC_AT_LEAST_1(md->nparam)], out[nq], fm[nx], fp[nx], qdd_free[nq], lambda[3 * nq], dx[nx];
+    double vq[3 * GAC_AT_LEAST_1(md->npoint)], vt[2], wt[2 * nq], unit[GAC_AT_LEAST_1(md->njrow)], dwt[nq];
+    double zero_r[GAC_AT_LEAST_1(md->njrow)], speed, rate = 0.0, amax = 0.0;
+    const gac_contact *ct;
+    int a, i, j, t, c;
+    GAC_SENS_SET_ARRAYS(nq, nr);
+    gac_sens_set H;
+    if (z == 0 || z->status != GAC_SENS_VALID) return;
+    GAC_SENS_SET_BIND(H);
+    if (r->nstuck < 1) return;
+    c = r->stuck[0];
+    ct = md->contacts + c;
+    md->contact_velocities(x_before, x_before + nq, s->p, vq);
+    gac_tangential_velocity(md, c, vq, vt);
+    speed = hypot(vt[0], vt[1]);
+    for (a = 1; a < r->nstuck; ++a) {                        /* one body's points, or a mode boundary */
+        double w[2];
+        gac_tangential_velocity(md, r->stuck[a], vq, w);
+        if (!(hypot(w[0] - vt[0], w[1] - vt[1]) <= 1e-6 * speed)) {
+            gac_sens_stop(s, GAC_SENS_BOUNDARY, s->t, r->stuck[a]);
+            return;
+        }
+    }
+    if (!gac_sens_inputs_fixed(s)) {
+        gac_sens_stop(s, GAC_SENS_CONTROLLER, s->t, c);
+        return;
+    }
+    if (gac_sens_field_slip(s, s->t, x_before, s->nresting, s->resting, stuck_before, slip_before, &H, qdd_free,
+                            lambda, fm, 0) != 0
+        || gac_sens_field(s, s->t, s->x, s->nresting, s->resting, s->is_stuck, &H, qdd_free, lambda, fp, 0) != 0) {
+        gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, s->t, c);
+        return;
+    }
+    for (i = 0; i < nr; ++i) unit[i] = zero_r[i] = 0.0;
+    for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+    for (t = 0; t < 2; ++t) {                                /* e' = v_t . (d v_t / dt) / |v_t| along f- */
+        for (i = 0; i < nq; ++i) wt[t * nq + i] = 0.0;
+        if (ct->trow[t] < 0) continue;
+        unit[ct->trow[t]] = 1.0;
+        md->contact_generalized_force(x_before, unit, s->p, wt + t * nq);
+        md->contact_generalized_force_tangent(x_before, unit, s->p, fm, zero_r, zero_p, dwt);
+        unit[ct->trow[t]] = 0.0;
+        rate += vt[t] * (gac_dot(nq, dwt, x_before + nq) + gac_dot(nq, wt + t * nq, fm + nq));
+    }
+    rate /= speed;
+    for (i = 0; i < nq; ++i) {
+        if (fabs(fm[nq + i]) > amax) amax = fabs(fm[nq + i]);
+    }
+    if (!(speed > 0.0) || !(fabs(rate) > 1e-9 * amax * s->lever)) {   /* not crossing v_s */
+        gac_sens_stop(s, GAC_SENS_GRAZING, s->t, c);
+        return;
+    }
+    for (j = 0; j < z->k; ++j) {
+        double *S = z->S + (long)j * nx, de = 0.0, tau;
+        const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
+        for (t = 0; t < 2; ++t) {
+            if (ct->trow[t] < 0) continue;
+            unit[ct->trow[t]] = 1.0;
+            md->contact_generalized_force_tangent(x_before, unit, s->p, S, zero_r, dp, dwt);
+            unit[ct->trow[t]] = 0.0;
+            de += vt[t] * (gac_dot(nq, dwt, x_before + nq) + gac_dot(nq, wt + t * nq, S + nq));
+        }
+        tau = -de / speed / rate;
+        for (i = 0; i < nx; ++i) dx[i] = S[i] + fm[i] * tau;  /* the perturbed state at the perturbed t* */
+        gac_sens_hold_tangent(s, s->x, &H, x_before + nq, s->x + nq, dx, dx + nq, dp, out);
+        for (i = 0; i < nq; ++i) {
+            S[i] = dx[i] - fp[i] * tau;
+            S[nq + i] = out[i] - fp[nq + i] * tau;
+        }
+        z->dt_impact[j] = tau;
+    }
+    if (!gac_finite(z->S, z->k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, s->t, c);
+}
+
+/* The slip directions gac_try_stick gave slow points that could not stick, at the state s->x (a step's end, or the
+ * start; slip_before: s->slip before that call, nstuck: the points it stuck).  A point c over two tangential axes
+ * whose direction d changed was judged stuck, its velocities projected onto the held rows with its tangential ones
+ * (P, mass metric), and given d = -lambda_T / |lambda_T| of that stuck solve (the others sliding with the slip
+ * directions they had then: those before c in s->resting order already renewed).  Its derivative, at this fixed time,
+ *     dd_j = -(I - d d^T) dlambda_T_j / |lambda_T|,   dlambda_T_j along (S_q, D P (S_j), dp_j) by the stuck field's
+ * tangent, goes into sens->dslip (slip_known: d).  A call that also stuck points (the state then changed after the
+ * directions were judged) leaves them unknown: the flight ends the sensitivities if one is used. */
+void gac_sens_reslip(gac_sim *s, const double *slip_before, int nstuck)
+{
+    gac_sens *z = s->sens;
+    const gac_model *md = s->model;
+    const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), nc1 = GAC_AT_LEAST_1(md->ncontact);
+    double slip_now[2 * nc1], xp[nx], c_v[3 * nq], qdd_free[nq], lambda[3 * nq], f[nx], dqdd_free[nq];
+    double dlambda[3 * nq], dx[nx], zero_u[GAC_AT_LEAST_1(md->nu)], zero_p[GAC_AT_LEAST_1(md->nparam)];
+    int stuck_c[nc1], a, b, i, j, t;
+    GAC_SENS_SET_ARRAYS(nq, nr);
+    gac_sens_set H;                                          /* the held rows with c stuck, at s->x: P */
+    GAC_SENS_SET_ARRAYS_OF(H2, nq, nr);
+    gac_sens_set H2;                                         /* the stuck field at P(s->x) */
+    if (z == 0 || z->status != GAC_SENS_VALID || nstuck > 0 || !gac_sens_inputs_fixed(s)) return;
+    GAC_SENS_SET_BIND(H);
+    GAC_SENS_SET_BIND_OF(H2, H2);
+    gac_copy(slip_now, slip_before, 2 * md->ncontact);
+    for (i = 0; i < GAC_AT_LEAST_1(md->nu); ++i) zero_u[i] = 0.0;
+    for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+    for (a = 0; a < s->nresting; ++a) {
+        const int c = s->resting[a];
+        const gac_contact *ct = md->contacts + c;
+        const double *d = s->slip + 2 * c;
+        int row_t[2] = {-1, -1}, ok = 1;
+        double lt[2] = {0.0, 0.0}, norm;
+        const double *u;
+        if (d[0] == slip_now[2 * c] && d[1] == slip_now[2 * c + 1]) continue;
+        if (ct->trow[0] < 0 || ct->trow[1] < 0 || (d[0] == 0.0 && d[1] == 0.0) || s->is_stuck[c]) {
+            slip_now[2 * c] = d[0];                          /* along one axis, forgotten: nothing to carry */
+            slip_now[2 * c + 1] = d[1];
+            continue;
+        }
+        for (b = 0; b < md->ncontact; ++b) stuck_c[b] = s->is_stuck[b] || b == c;
+        if (gac_sens_set_at(s, s->x, s->nresting, s->resting, stuck_c, &H) != 0) ok = 0;
+        if (ok) {                                            /* xp = P(s->x): W qd -> 0 on the held rows */
+            gac_copy(xp, s->x, nx);
+            for (b = 0; b < H.m; ++b) c_v[b] = -gac_dot(nq, H.W + (long)b * nq, s->x + nq);
+            gac_ldlt_solve(H.m, H.LD, c_v);
+            for (i = 0; i < nq; ++i) {
+                for (b = 0; b < H.m; ++b) xp[nq + i] += H.Y[(long)b * nq + i] * c_v[b];
+            }
+            ok = gac_sens_field_slip(s, s->t, xp, s->nresting, s->resting, stuck_c, slip_now, &H2, qdd_free,
+                                     lambda, f, 0) == 0 && H2.ndropped == 0;
+        }
+        for (b = H2.n; ok && b < H2.m; ++b) {                /* c's tangential rows, by axis */
+            for (t = 0; t < 2; ++t) {
+                if (H2.brow[b] == ct->trow[t]) row_t[t] = b;
+            }
+        }
+        if (ok && row_t[0] >= 0 && row_t[1] >= 0) {
+            lt[0] = lambda[row_t[0]];
+            lt[1] = lambda[row_t[1]];
+        }
+        norm = hypot(lt[0], lt[1]);
+        if (!ok || !(norm > 0.0) || hypot(d[0] + lt[0] / norm, d[1] + lt[1] / norm) > 1e-6) {
+            slip_now[2 * c] = d[0];                          /* not the direction found here: left unknown */
+            slip_now[2 * c + 1] = d[1];
+            continue;
+        }
+        u = gac_input(s, s->t, xp);
+        for (j = 0; j < z->k; ++j) {
+            double *S = z->S + (long)j * nx, *dd = z->dslip + 2L * j * nc1 + 2 * c, w[2], dw;
+            const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
+            gac_copy(dx, S, nq);
+            gac_sens_hold_tangent(s, s->x, &H, s->x + nq, xp + nq, S, S + nq, dp, dx + nq);
+            md->forward_dynamics_tangent(xp, xp + nq, u, s->p, dx, dx + nq, zero_u, dp, dqdd_free);
+            gac_sens_held_tangent(s, xp, &H2, qdd_free, lambda, dx, dx + nq, dp, z->dslip + 2L * j * nc1, dqdd_free,
+                                  dlambda, dqdd_free);
+            w[0] = dlambda[row_t[0]];
+            w[1] = dlambda[row_t[1]];
+            dw = d[0] * w[0] + d[1] * w[1];
+            dd[0] = -(w[0] - d[0] * dw) / norm;
+            dd[1] = -(w[1] - d[1] * dw) / norm;
+        }
+        z->slip_known[2 * c] = slip_now[2 * c] = d[0];
+        z->slip_known[2 * c + 1] = slip_now[2 * c + 1] = d[1];
+    }
+}
+
+/* Resting contacts released, or stuck points slipped, where the inputs change (gac_recheck_rest: their forces pull at
+ * once, or leave the cone): the time is fixed (a schedule's breakpoint, or gac_sim_set_input), the state continuous,
+ * and the field's jump there moves no derivative: S goes on unchanged, dt = 0. */
 void gac_sens_fixed_release(gac_sim *s)
 {
     gac_sens *z = s->sens;

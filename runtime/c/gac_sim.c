@@ -199,7 +199,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         int code;
         record->nstuck = record->nslipped = 0;
         code = gac_recheck_rest(s, record);
-        if (code == 1 && s->sens != 0 && record->nreleased > 0)
+        if (code == 1 && s->sens != 0 && (record->nreleased > 0 || record->nslipped > 0))
             gac_sens_fixed_release(s);                               /* at the inputs' change: a fixed time */
         if (code != 0) return code < 0 ? code : gac_report(s, record, GAC_SIM_CONTACT);
     }
@@ -315,9 +315,10 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             if (s->sens != 0) gac_sens_flight(s, s->x, t_event - s->t, 0);   /* S at the event, before it */
             record->nstuck = record->nslipped = 0;
             if (released && s->is_stuck[c_event]) {   /* |lambda_T| reached c_f lambda: the point slips there */
-                if (s->sens != 0) gac_sens_stop(s, GAC_SENS_STICK, t_event, c_event);   /* (or leaves: not followed) */
                 code = gac_slip(s, t_event, s->xs, c_event, record);
                 if (code < 0) return code;
+                if (code == 0 && s->sens != 0) gac_sens_stop(s, GAC_SENS_STICK, t_event, c_event);   /* (it leaves
+                                                                                           the wall: not followed) */
             } else {
                 code = 0;
             }
@@ -328,6 +329,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
                 code = gac_recheck_rest(s, record);
                 if (code < 0) return code;
                 if (s->fail) return s->fail;
+                if (s->sens != 0) gac_sens_slip(s, record, c_event);   /* its event time's derivative */
                 if (gac_energy_check(s, 0) != GAC_OK) return GAC_ERR_DRIFT;
                 if (s->opt.method == GAC_METHOD_RK4) s->h = s->opt.dt;
                 return gac_report(s, record, GAC_SIM_CONTACT);
@@ -397,11 +399,16 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             if (code != GAC_OK) return code;
             if (s->sens != 0) gac_sens_project(s, s->x1, s->x);   /* (s->x1: the step's end before it) */
             if (sticking) {                       /* sliding -> stuck: slow points that can stick (reported) */
-                double x_before[md->nx];
+                double x_before[md->nx], slip_before[2 * GAC_AT_LEAST_1(md->ncontact)];
+                int stuck_before[GAC_AT_LEAST_1(md->ncontact)];
                 gac_copy(x_before, s->x, md->nx);
+                gac_copy(slip_before, s->slip, 2 * md->ncontact);
+                for (i = 0; i < md->ncontact; ++i) stuck_before[i] = s->is_stuck[i];
                 record->nstuck = record->nslipped = 0;
                 code = gac_try_stick(s, vt_start, 1, 0, record);
                 if (code < 0) return code;
+                if (code > 0 && s->sens != 0) gac_sens_stick(s, x_before, stuck_before, slip_before, record);
+                if (s->sens != 0) gac_sens_reslip(s, slip_before, code);   /* the slow points' slip directions */
                 if (code > 0) {
                     gac_contact_record(s, s->t, x_before, record);
                     record->nlanded = record->nreleased = 0;

@@ -555,6 +555,16 @@ int gac_obstacle_gap(const gac_model *m, const double *q, const double *p, int i
  * wall's or stop's signed Jacobian row; a link pair's or obstacle's at the closest points), so that the gap's rate
  * is g . qd.  Returns GAC_OK or GAC_ERR_BAD_CONTACT (c out of range, or a link contact's geometry failed). */
 int gac_contact_normal(const gac_model *m, const double *q, const double *p, int c, double *g);
+/* The derivatives of a link pair's or an obstacle contact's gap and of its J^T n along a direction (dq (nq),
+ * dp (nparam)), for the sensitivities' impact: *dgap, g (nq) = J^T n (gac_contact_normal) and dg (nq) = d(J^T n).
+ * The closest points' motion (an interior fraction moves, an end point's stays) and the unit normal's rotation are
+ * differentiated in closed form; the points' Jacobians' own change (second derivatives of the kinematics) and the
+ * points' change with the parameters by fourth-order central differences of contact_velocities and contact_points
+ * (~1e-12 of their size; the model has no tangent of those kernels).  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT,
+ * GAC_ERR_BAD_CONTACT (c not a link pair or obstacle contact, or its geometry failed) or GAC_ERR_LINK_CONTACT where
+ * they have no derivative: the axes crossing (distance 0), or parallel with both closest points inside. */
+int gac_contact_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
+                               const double *dp, double *dgap, double *g, double *dg);
 
 /* The base chart's measure chi(q) (gac_chart), in [0, 1] for the default twists. */
 double gac_chart_measure(const gac_model *m, const double *q);

@@ -32,7 +32,8 @@ STATUS_WORDS = {
     9: "the sensitivities overflowed",
     10: "a mode boundary (a contact's impulse ~0 at the law's bound inside an impact, or resting contacts "
         "released together)",
-    11: "an impact of two links or of a link on an obstacle (these contacts are not differentiated)",
+    11: "an impact of two links or of a link on an obstacle among several contacts or with contacts at rest, or "
+        "where their closest points have no derivative (crossing or parallel axes)",
     12: "a stick-slip transition on a rough wall (a stuck point slipped or left the wall, or came to stick other "
         "than by landing stuck)",
 }

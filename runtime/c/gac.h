@@ -1020,7 +1020,9 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * (the saltation matrix of Hiskens & Pai 2000, with the parameters' direct part), Delta the impact map of the
  * contacts that took an impulse (walls and joint stops alike), their set held fixed: A F = -(1 + E) W qd,
  * qd+ = qd + Y F, W their signed rows, Y = I_f^-1 W^T, A = W Y; differentiated by inertia_solve_tangent and
- * contact_generalized_force_tangent (e = p[e_index] is a parameter like any other; a landing is struck with e = 0).
+ * contact_generalized_force_tangent (e = p[e_index] is a parameter like any other; a landing is struck with e = 0);
+ * a link pair or an obstacle struck alone: Newton's law on its row J^T n, differentiated by
+ * gac_contact_normal_tangent.
  * Resting contacts (frictionless walls): in flight the constrained dynamics' tangent (the forces' by
  * contact_bias_tangent) and the derivative of the projection after each step; a landing's jump uses the field with
  * the set after held and the hold's projection; a release (its force lambda_c reaching 0) dt*_j = -d lambda_c /
@@ -1052,7 +1054,9 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       may add it to the active set or drop it; or resting contacts released together
                                       (their forces ~0 at once) */
 #define GAC_SENS_LINK         11   /* an impact of two links or of a link on a fixed obstacle (GAC_CONTACT_LINK,
-                                         GAC_CONTACT_OBSTACLE): not differentiated */
+                                      GAC_CONTACT_OBSTACLE) among several contacts or with contacts at rest, or
+                                      where their closest points have no derivative (crossing or parallel axes);
+                                      one struck alone in flight is differentiated */
 #define GAC_SENS_STICK        12   /* a stick-slip transition on a rough wall: a stuck resting point slipped or left the
                                       wall (its event: |lambda_T| = c_f lambda_N), or came to stick other than by
                                       landing stuck */

@@ -5,10 +5,11 @@
  * Runge-Kutta formula over the state's own steps and stages (gac_sens_flight), the derivative of the projection onto
  * the resting contacts after each step (gac_sens_project), the jump of the sensitivities at an impact by the
  * frictionless law -- of one contact or several, walls or joint stops, landings among them, the set of pushing
- * contacts held fixed -- the saltation matrix of Hiskens & Pai (2000) (gac_sens_impact), the release of a resting
- * contact (gac_sens_release), contacts at rest at the start (gac_sens_attach), a switch of base chart
- * (gac_sens_switch; S is in the coordinates of the chart integrated now, gac_sens_state gives chart A's), and the
- * verdict: the first event not differentiated ends them (gac_sens_stop).
+ * contacts held fixed; a link pair or a link on an obstacle struck alone (gac_sens_link_impact) -- the saltation
+ * matrix of Hiskens & Pai (2000) (gac_sens_impact), the release of a resting contact (gac_sens_release), contacts
+ * at rest at the start (gac_sens_attach), a switch of base chart (gac_sens_switch; S is in the coordinates of the
+ * chart integrated now, gac_sens_state gives chart A's), and the verdict: the first event not differentiated ends
+ * them (gac_sens_stop).
  */
 #include "gac_internal.h"
 
@@ -820,7 +821,7 @@ static void gac_sens_link_impact(gac_sim *s, const gac_impact_record *r, int c)
  * which brings the law's velocities onto their tangential rows too (a landing that sticks).  A point sliding at
  * rest before or after, a stuck point that slipped, or one that came to stick without taking the impact's impulse
  * ends them (GAC_SENS_RESTING, GAC_SENS_STICK), as do impacts of another kind and impacts of two links or of a
- * link on an obstacle (GAC_SENS_LINK). */
+ * link on an obstacle among several contacts (GAC_SENS_LINK); one struck alone goes to gac_sens_link_impact. */
 void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const int *was_stuck)
 {
     gac_sens *z = s->sens;

@@ -555,6 +555,16 @@ int gac_obstacle_gap(const gac_model *m, const double *q, const double *p, int i
  * wall's or stop's signed Jacobian row; a link pair's or obstacle's at the closest points), so that the gap's rate
  * is g . qd.  Returns GAC_OK or GAC_ERR_BAD_CONTACT (c out of range, or a link contact's geometry failed). */
 int gac_contact_normal(const gac_model *m, const double *q, const double *p, int c, double *g);
+/* The derivatives of a link pair's or an obstacle contact's gap and of its J^T n along a direction (dq (nq),
+ * dp (nparam)), for the sensitivities' impact: *dgap, g (nq) = J^T n (gac_contact_normal) and dg (nq) = d(J^T n).
+ * The closest points' motion (an interior fraction moves, an end point's stays) and the unit normal's rotation are
+ * differentiated in closed form; the points' Jacobians' own change (second derivatives of the kinematics) and the
+ * points' change with the parameters by fourth-order central differences of contact_velocities and contact_points
+ * (~1e-12 of their size; the model has no tangent of those kernels).  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT,
+ * GAC_ERR_BAD_CONTACT (c not a link pair or obstacle contact, or its geometry failed) or GAC_ERR_LINK_CONTACT where
+ * they have no derivative: the axes crossing (distance 0), or parallel with both closest points inside. */
+int gac_contact_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
+                               const double *dp, double *dgap, double *g, double *dg);
 
 /* The base chart's measure chi(q) (gac_chart), in [0, 1] for the default twists. */
 double gac_chart_measure(const gac_model *m, const double *q);
@@ -1010,7 +1020,9 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * (the saltation matrix of Hiskens & Pai 2000, with the parameters' direct part), Delta the impact map of the
  * contacts that took an impulse (walls and joint stops alike), their set held fixed: A F = -(1 + E) W qd,
  * qd+ = qd + Y F, W their signed rows, Y = I_f^-1 W^T, A = W Y; differentiated by inertia_solve_tangent and
- * contact_generalized_force_tangent (e = p[e_index] is a parameter like any other; a landing is struck with e = 0).
+ * contact_generalized_force_tangent (e = p[e_index] is a parameter like any other; a landing is struck with e = 0);
+ * a link pair or an obstacle struck alone: Newton's law on its row J^T n, differentiated by
+ * gac_contact_normal_tangent.
  * Resting contacts (frictionless walls): in flight the constrained dynamics' tangent (the forces' by
  * contact_bias_tangent) and the derivative of the projection after each step; a landing's jump uses the field with
  * the set after held and the hold's projection; a release (its force lambda_c reaching 0) dt*_j = -d lambda_c /
@@ -1050,7 +1062,9 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       (their forces ~0 at once), a slip with another slip or a release, or points
                                       that stick at one step's end at different speeds */
 #define GAC_SENS_LINK         11   /* an impact of two links or of a link on a fixed obstacle (GAC_CONTACT_LINK,
-                                         GAC_CONTACT_OBSTACLE): not differentiated */
+                                      GAC_CONTACT_OBSTACLE) among several contacts or with contacts at rest, or
+                                      where their closest points have no derivative (crossing or parallel axes);
+                                      one struck alone in flight is differentiated */
 #define GAC_SENS_STICK        12   /* a stick-slip transition on a rough wall not differentiated: a stuck point that
                                       left the wall (its force reaching 0 while stuck), a stuck point that slipped
                                       at an impact, or one that came to stick at an impact without taking its

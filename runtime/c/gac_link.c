@@ -303,3 +303,138 @@ double gac_link_law_accuracy(const gac_model *m, const double *q, const double *
     return (fabs((double)balance) + 4.0 * (nq + 1) * GAC_EPS * (double)size + 0.5 * GAC_EPS * (double)stored
             + fabs((double)(((long double)E1[0] - E0[0]) - 0.5L * work))) / (T > 0.0 ? T : 1e-300);
 }
+
+/* ---- the derivative of a link pair's or an obstacle's contact geometry (for the sensitivities' impact) ------ */
+
+/* The Jacobians' own change, sum_k n . d(J_k)[dq, dp] at fixed s, t and n: the row at fixed geometry (J^T n,
+ * gac_link_direction) differentiated along (dq, dp) by a fourth-order central difference of
+ * 8 (g(h) - g(-h)) - (g(2h) - g(-2h)) over 12 h, h = 1e-3 of the direction's largest entry (the model has no
+ * tangent of contact_velocities; its truncation is ~h^4, its round-off ~eps / h: ~1e-12 of the row's size). */
+static void gac_link_row_change(const gac_model *m, const double *q, const double *p, int i, int j,
+                                const double *geometry, const double *dq, const double *dp, double *out)
+{
+    const int nq = m->nq, np = m->nparam;
+    double qh[GAC_AT_LEAST_1(nq)], ph[GAC_AT_LEAST_1(np)], g[GAC_AT_LEAST_1(nq)], size = 0.0, h;
+    static const double step[4] = {1.0, -1.0, 2.0, -2.0}, weight[4] = {8.0, -8.0, -1.0, 1.0};
+    int k, l;
+    for (k = 0; k < nq; ++k) size = fabs(dq[k]) > size ? fabs(dq[k]) : size;
+    for (k = 0; k < np; ++k) size = fabs(dp[k]) > size ? fabs(dp[k]) : size;
+    for (k = 0; k < nq; ++k) out[k] = 0.0;
+    if (!(size > 0.0)) return;
+    h = 1e-3 / size;
+    for (l = 0; l < 4; ++l) {
+        for (k = 0; k < nq; ++k) qh[k] = q[k] + step[l] * h * dq[k];
+        for (k = 0; k < np; ++k) ph[k] = p[k] + step[l] * h * dp[k];
+        (void)gac_link_direction(m, qh, ph, i, j, geometry, g);
+        for (k = 0; k < nq; ++k) out[k] += weight[l] * g[k];
+    }
+    for (k = 0; k < nq; ++k) out[k] /= 12.0 * h;
+}
+
+/* The joint points' motion along (dq, dp): contact_velocities(q, dq) (exact: the points' Jacobian applied to dq)
+ * and, where dp is not 0, the points' change with the parameters (a link's length) by the fourth-order central
+ * difference of contact_points, as gac_link_row_change. */
+static void gac_link_points_change(const gac_model *m, const double *q, const double *p, const double *dq,
+                                   const double *dp, double *dr)
+{
+    const int np = m->nparam, n3 = 3 * m->npoint;
+    double ph[GAC_AT_LEAST_1(np)], r[3 * GAC_AT_LEAST_1(m->npoint)], size = 0.0, h;
+    static const double step[4] = {1.0, -1.0, 2.0, -2.0}, weight[4] = {8.0, -8.0, -1.0, 1.0};
+    int k, l;
+    m->contact_velocities(q, dq, p, dr);
+    for (k = 0; k < np; ++k) size = fabs(dp[k]) > size ? fabs(dp[k]) : size;
+    if (!(size > 0.0)) return;
+    h = 1e-3 / size;
+    for (l = 0; l < 4; ++l) {
+        for (k = 0; k < np; ++k) ph[k] = p[k] + step[l] * h * dp[k];
+        m->contact_points(q, ph, r);
+        for (k = 0; k < n3; ++k) dr[k] += weight[l] * r[k] / (12.0 * h);
+    }
+}
+
+/* With P = a0 + s d1 and Q = b0 + t d2 the closest points (d1 = a1 - a0, d2 = b1 - b0), D = P - Q = dist n:
+ *   interior s:  d1 . D = 0,   interior t:  d2 . D = 0   (an end point: s or t fixed, ds or dt = 0),
+ * differentiated with dP0 = (1 - s) da0 + s da1 and dQ0 = (1 - t) db0 + t db1 the points' material motion:
+ *   a ds - b dt = -(dd1 . D + d1 . dD0),   b ds - e dt = -(dd2 . D + d2 . dD0),   dD0 = dP0 - dQ0,
+ * a = d1 . d1, b = d1 . d2, e = d2 . d2 (both rows where both are interior, the one of the interior fraction where
+ * one is); then dD = dD0 + ds d1 - dt d2, d gap = n . dD, dn = (I - n n^T) dD / dist, and the row g_k = n . J_k
+ * (J_k = (1 - s) V_a0,k + s V_a1,k - (1 - t) V_b0,k - t V_b1,k, V the points' Jacobian columns) changes by
+ *   dg_k = dn . J_k + n . (ds (V_a1,k - V_a0,k) - dt (V_b1,k - V_b0,k)) + n . dJ_k[dq, dp]
+ * (the last term: gac_link_row_change). */
+int gac_contact_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
+                               const double *dp, double *dgap, double *g, double *dg)
+{
+    const int nq = m != 0 ? m->nq : 0;
+    double geometry[GAC_LINK_NGEOMETRY], r[3 * GAC_AT_LEAST_1(m != 0 ? m->npoint : 1)];
+    double dr[3 * GAC_AT_LEAST_1(m != 0 ? m->npoint : 1)], zero[3] = {0.0, 0.0, 0.0}, change[GAC_AT_LEAST_1(nq)];
+    double d1[3], d2[3], D[3], dd1[3], dd2[3], dD[3], dn[3], a, b, e, dist, s, t, ds = 0.0, dt = 0.0, along;
+    const double *a0, *a1, *b0, *b1, *da0, *da1, *db0, *db1;
+    int i, j, k, code, s_inside, t_inside;
+    if (m == 0 || q == 0 || p == 0 || dq == 0 || dp == 0 || dgap == 0 || g == 0 || dg == 0)
+        return GAC_ERR_NULL_ARGUMENT;
+    if (c < 0 || c >= m->ncontact || !gac_rowless(m, c)) return GAC_ERR_BAD_CONTACT;
+    code = gac_rowless_geometry(m, q, p, c, geometry, &j);
+    if (code != GAC_OK) return code;
+    i = m->contacts[c].point;
+    m->contact_points(q, p, r);
+    gac_link_points_change(m, q, p, dq, dp, dr);
+    a0 = r + 3 * (i - 1), a1 = r + 3 * i, da0 = dr + 3 * (i - 1), da1 = dr + 3 * i;
+    if (j > 0) {
+        b0 = r + 3 * (j - 1), b1 = r + 3 * j, db0 = dr + 3 * (j - 1), db1 = dr + 3 * j;
+    } else {                                             /* a fixed obstacle: its segment does not move */
+        b0 = m->obstacles + 6 * m->contacts[c].coordinate, b1 = b0 + 3, db0 = db1 = zero;
+    }
+    s = geometry[1], t = geometry[2];
+    for (k = 0; k < 3; ++k) {
+        d1[k] = a1[k] - a0[k], d2[k] = b1[k] - b0[k], dd1[k] = da1[k] - da0[k], dd2[k] = db1[k] - db0[k];
+        D[k] = (1.0 - s) * a0[k] + s * a1[k] - (1.0 - t) * b0[k] - t * b1[k];
+        dD[k] = (1.0 - s) * da0[k] + s * da1[k] - (1.0 - t) * db0[k] - t * db1[k];   /* dD0 for now */
+    }
+    dist = sqrt(gac_dot3(D, D));
+    a = gac_dot3(d1, d1), b = gac_dot3(d1, d2), e = gac_dot3(d2, d2);
+    if (!(dist > 0.0) || !(a > 0.0)) return GAC_ERR_LINK_CONTACT;   /* crossing axes: n has no derivative */
+    s_inside = s > 0.0 && s < 1.0;
+    t_inside = e > 0.0 && t > 0.0 && t < 1.0;
+    {
+        const double r1 = -(gac_dot3(dd1, D) + gac_dot3(d1, dD)), r2 = -(gac_dot3(dd2, D) + gac_dot3(d2, dD));
+        if (s_inside && t_inside) {
+            const double det = b * b - a * e;
+            if (!(-det > 1e-8 * a * e)) return GAC_ERR_LINK_CONTACT;   /* parallel: a whole overlap is closest */
+            ds = (b * r2 - e * r1) / det;
+            dt = (a * r2 - b * r1) / det;
+        } else if (s_inside) {
+            ds = r1 / a;
+        } else if (t_inside) {
+            dt = -r2 / e;
+        }
+    }
+    for (k = 0; k < 3; ++k) dD[k] += ds * d1[k] - dt * d2[k];
+    along = gac_dot3(geometry + 3, dD);
+    *dgap = along;
+    for (k = 0; k < 3; ++k) dn[k] = (dD[k] - along * geometry[3 + k]) / dist;
+    (void)gac_link_direction(m, q, p, i, j, geometry, g);
+    /* dn . J_k + n . (dJ_k/ds ds + dJ_k/dt dt), from the points' Jacobian columns V_k (contact_velocities at e_k) */
+    {
+        double w[GAC_AT_LEAST_1(nq)], vel[3 * GAC_AT_LEAST_1(m->npoint)];
+        for (k = 0; k < nq; ++k) w[k] = 0.0;
+        for (k = 0; k < nq; ++k) {
+            const double *va, *vb;
+            double value = 0.0;
+            int x;
+            w[k] = 1.0;
+            m->contact_velocities(q, w, p, vel);
+            w[k] = 0.0;
+            va = vel + 3 * (i - 1), vb = j > 0 ? vel + 3 * (j - 1) : 0;
+            for (x = 0; x < 3; ++x) {
+                const double Jk = (1.0 - s) * va[x] + s * va[3 + x]
+                                  - (vb != 0 ? (1.0 - t) * vb[x] + t * vb[3 + x] : 0.0);
+                const double dJk = ds * (va[3 + x] - va[x]) - (vb != 0 ? dt * (vb[3 + x] - vb[x]) : 0.0);
+                value += dn[x] * Jk + geometry[3 + x] * dJk;
+            }
+            dg[k] = value;
+        }
+    }
+    gac_link_row_change(m, q, p, i, j, geometry, dq, dp, change);
+    for (k = 0; k < nq; ++k) dg[k] += change[k];
+    return GAC_OK;
+}

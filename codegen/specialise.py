@@ -22,7 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scene import RigidLink, Scene, SceneError, contact_points, coordinate_names, frames, split_parameter_name, stop_rows
+from .scene import (RigidLink, Scene, SceneError, contact_points, coordinate_names, frames, split_parameter_name,
+                    stop_rows)
 
 ANGLE_SNAP = 1e-12       # an angle within this of a multiple of pi/2 counts as exactly that multiple
 

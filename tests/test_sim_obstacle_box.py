@@ -158,3 +158,32 @@ def test_a_rod_landing_off_centre_on_an_edge_or_a_corner(model, name, x1, top, e
     assert abs(impact.qd_after[2]) > 0.1                      # struck off-centre, it turns
     lost = impact.energy_before - impact.energy_after
     assert lost == pytest.approx((1 - e * e) * v * v / (2 * (row @ y)), rel=1e-7, abs=1e-12)
+
+
+def test_film_strips_draw_the_boxes_and_the_plane(model, tmp_path):
+    """In the plane each box's outline is its corners' hull there (the slab a rectangle, the ridge a square on
+    its edge) and the plane its trace line; in space each box's 12 edges; a film strip of a drop is written."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from runtime.animate import draw_obstacles, film_strip
+    fig, ax = plt.subplots()
+    draw_obstacles(ax, model.scene, planar=True)
+    outlines = [patch.get_xy()[:-1] for patch in ax.patches]
+    assert len(outlines) == 4 and len(ax.lines) == 1                         # four boxes, the roof's trace
+    assert sorted(map(tuple, np.round(outlines[0], 12))) == [(-0.8, 0.0), (-0.8, 0.4), (0.8, 0.0), (0.8, 0.4)]
+    x, y = outlines[1].T
+    assert 0.5 * abs(x @ np.roll(y, 1) - y @ np.roll(x, 1)) == pytest.approx(0.16, rel=1e-12)   # (2 * 0.2)^2
+    assert y.max() == pytest.approx(0.3 + 0.2 * math.sqrt(2), abs=1e-12)
+    (p0, p1) = ax.lines[0]._xy1, ax.lines[0]._xy2                          # the trace: n . (x - point) = 0 there
+    for p in (p0, p1):
+        assert np.array(ROOF_N[:2]) @ (np.array(p) - (0.0, 6.0)) == pytest.approx(0.0, abs=1e-12)
+    plt.close(fig)
+    fig = plt.figure()
+    ax = fig.add_subplot(projection="3d")
+    draw_obstacles(ax, model.scene, planar=False)
+    assert len(ax.lines) == 4 * 12 + 1
+    plt.close(fig)
+    r = simulate(model, 0.4, q0=np.array([-math.pi / 2, 0.0, math.pi / 2, 3.3, 0.9, 0.0]), **TOL)
+    film_strip(r, model.scene, tmp_path / "strip.png", [0.0, 0.2, 0.4])
+    assert (tmp_path / "strip.png").stat().st_size > 1000

@@ -325,7 +325,9 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], o
         contact_table=contact_table,
         link_radius=[_double_literal(float(pair.radius)) for pair in scene.rowless_contacts()],
         obstacles=[dict(name=o.name, kind=o.kind, radius=o.radius, restitution=o.restitution,
-                        segment=[_double_literal(float(x)) for end in o.segment for x in end]) for o in scene.obstacles],
+                        segment=[_double_literal(float(x)) for end in o.segment for x in end],
+                        shape=[_double_literal(x) for x in o.shape]) for o in scene.obstacles],
+        obstacle_shapes=any(o.bounded_by_planes for o in scene.obstacles),
         row_labels=[f"(theta_{point})" if axis == "theta" else f"(O_{point},X{axis + 1})"
                     for point, axis in layout.contact_rows],
         rows=list(layout.contact_rows), twists=scene.all_twists,

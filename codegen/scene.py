@@ -325,24 +325,46 @@ class LinkPair:
         return (self.i, self.j)
 
 
-OBSTACLE_KINDS = ("sphere", "capsule")
-OBSTACLE_KEYS = ("name", "kind", "center", "a", "b", "radius", "restitution", "links")
+OBSTACLE_KINDS = ("sphere", "capsule", "box", "plane")
+OBSTACLE_KEYS = ("name", "kind", "center", "a", "b", "radius", "restitution", "links", "half_extents", "rotation",
+                 "point", "normal")
+OBSTACLE_FIELDS = {"sphere": ("center", "radius"), "capsule": ("a", "b", "radius"),
+                   "box": ("center", "half_extents", "rotation"), "plane": ("point", "normal")}
+OBSTACLE_SHAPE_CODES = {"sphere": 0, "capsule": 0, "box": 1, "plane": 2}   # gac.h GAC_OBSTACLE_*
+OBSTACLE_NSHAPE = 16                                                      # gac.h GAC_OBSTACLE_NSHAPE
+ROTATION_TOL = 1e-9          # a box's rotation: orthonormal with det +1 within it; a plane's normal: unit within it
 _OBSTACLE_NAME_RE = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,22}[A-Za-z_]$|^[A-Za-z]$")
 
 
 @dataclass(frozen=True)
 class Obstacle:
     """A convex body fixed in the box that links strike: a capsule of ``radius`` (m) about the fixed segment a -> b
-    (box frame, m); a sphere is the capsule with a = b (kind 'sphere', centre a).  ``restitution``: its e (None:
-    the scene's default); ``links``: the links (1-based) that can touch it (None: every link that moves)."""
+    (box frame, m); a sphere is the capsule with a = b (kind 'sphere', centre a).  Kind 'box': an oriented box of
+    centre a, ``half_extents`` (m) and ``rotation`` (3x3, its columns the box's axes; None: the identity); kind
+    'plane': the half-space n . (x - a) <= 0 below the plane through a of unit ``normal`` n (pointing into the free
+    side).  A box or a plane has no radius.  ``restitution``: its e (None: the scene's default); ``links``: the links
+    (1-based) that can touch it (None: every link that moves)."""
 
     name: str
     kind: str = "sphere"
     a: tuple = (0.0, 0.0, 0.0)
-    b: tuple | None = None        # None: a (a sphere)
+    b: tuple | None = None        # None: a (a sphere, a box, a plane)
     radius: float = 0.0
     restitution: float | None = None
     links: tuple | None = None
+    half_extents: tuple | None = None   # a box's
+    rotation: tuple | None = None       # a box's (3 rows of 3); None: the identity
+    normal: tuple | None = None         # a plane's
+
+    @staticmethod
+    def box(name: str, center, half_extents, rotation=None, restitution: float | None = None,
+            links=None) -> "Obstacle":
+        rows = None if rotation is None else tuple(tuple(r) for r in np.asarray(rotation, dtype=float).tolist())
+        return Obstacle(name, "box", tuple(center), None, 0.0, restitution, links, tuple(half_extents), rows)
+
+    @staticmethod
+    def plane(name: str, point, normal, restitution: float | None = None, links=None) -> "Obstacle":
+        return Obstacle(name, "plane", tuple(point), None, 0.0, restitution, links, normal=tuple(normal))
 
     @staticmethod
     def sphere(name: str, center, radius: float, restitution: float | None = None, links=None) -> "Obstacle":
@@ -356,6 +378,52 @@ class Obstacle:
     def segment(self) -> tuple[tuple, tuple]:
         return self.a, self.a if self.b is None else self.b
 
+    @property
+    def bounded_by_planes(self) -> bool:
+        """A box or a plane (signed distance, gac_obstacle.c), not a capsule about a segment (gac_link.c)."""
+        return self.kind in ("box", "plane")
+
+    @property
+    def shape(self) -> tuple[float, ...]:
+        """The model's shape row (gac.h obstacle_shapes, OBSTACLE_NSHAPE numbers): kind code, then a box's centre,
+        half extents and rotation (row-major) or a plane's point and normal."""
+        if self.kind == "box":
+            values = [*self.a, *self.half_extents, *(x for row in self.box_rotation for x in row)]
+        elif self.kind == "plane":
+            values = [*self.a, *self.normal]
+        else:
+            values = []
+        values = [float(OBSTACLE_SHAPE_CODES[self.kind]), *map(float, values)]
+        return tuple(values + [0.0] * (OBSTACLE_NSHAPE - len(values)))
+
+    @property
+    def box_rotation(self) -> tuple:
+        return ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)) if self.rotation is None else self.rotation
+
+    def distance(self, p0, p1) -> float:
+        """The least signed distance (m, negative inside) of segment p0-p1 from the obstacle's surface (numpy; scene
+        validation): a capsule's from its segment less its radius; a plane's at an end; a box's by golden section
+        over the convex function s -> sd(p0 + s (p1 - p0)) after a scan."""
+        p0, p1 = np.asarray(p0, dtype=float), np.asarray(p1, dtype=float)
+        if self.kind == "plane":
+            n = np.asarray(self.normal)
+            return float(min(n @ (p0 - self.a), n @ (p1 - self.a)))
+        if self.kind != "box":
+            a, b = self.segment
+            return segment_distance(p0, p1, a, b) - self.radius
+        f = lambda s: box_signed_distance(self, p0 + s * (p1 - p0))
+        grid = np.linspace(0.0, 1.0, 65)
+        k = int(np.argmin([f(s) for s in grid]))
+        lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, 64)]
+        ratio = (math.sqrt(5.0) - 1.0) / 2.0
+        for _ in range(80):
+            m1, m2 = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
+            if f(m1) <= f(m2):
+                hi = m2
+            else:
+                lo = m1
+        return float(min(f(0.0), f(1.0), f(0.5 * (lo + hi))))
+
     def checked(self, where: str, default_e: float, n: int, moving: list[int]) -> "Obstacle":
         """The obstacle with every field validated (SceneError naming ``where``.field), restitution and links
         filled in: n links, of which ``moving`` can move (a fixed base welds link 1)."""
@@ -368,6 +436,12 @@ class Obstacle:
         where = f"{where} ({self.name})"
         if self.kind not in OBSTACLE_KINDS:
             raise SceneError(f"{where}.kind: one of {', '.join(repr(k) for k in OBSTACLE_KINDS)}, got {self.kind!r}")
+        if self.kind in ("box", "plane"):
+            return self._checked_planes(where, default_e, n, moving)
+        for field in ("half_extents", "rotation", "normal"):
+            if getattr(self, field) is not None:
+                raise SceneError(f"{where}.{field}: a {self.kind} takes {', '.join(OBSTACLE_FIELDS[self.kind])}; "
+                                 f"{field} belongs to a {'plane' if field == 'normal' else 'box'}")
         a = _vector(list(self.a) if isinstance(self.a, (list, tuple)) else self.a, 3,
                     f"{where}.{'center' if self.kind == 'sphere' else 'a'}")
         if self.kind == "sphere":
@@ -379,6 +453,50 @@ class Obstacle:
                 raise SceneError(f"{where}.b: required for a capsule (a bar from a to b, m)")
             b = _vector(list(self.b) if isinstance(self.b, (list, tuple)) else self.b, 3, f"{where}.b")
         radius = _in_range(self.radius, f"{where}.radius", LENGTH_RANGE, "m (an obstacle's radius must be > 0)")
+        e, links = self._checked_contacts(where, default_e, n, moving)
+        return Obstacle(self.name, self.kind, a, None if self.kind == "sphere" else b, float(radius), e, links)
+
+    def _checked_planes(self, where: str, default_e: float, n: int, moving: list[int]) -> "Obstacle":
+        """A box or a plane with every field validated."""
+        if self.b is not None:
+            raise SceneError(f"{where}.b: a {self.kind} takes {', '.join(OBSTACLE_FIELDS[self.kind])}, not a bar's "
+                             "end points")
+        if self.radius not in (0, 0.0, None):
+            raise SceneError(f"{where}.radius: a {self.kind} has none (its faces are its surface), got "
+                             f"{self.radius!r}; a rounded obstacle is a sphere or a capsule")
+        a = _vector(list(self.a) if isinstance(self.a, (list, tuple)) else self.a, 3,
+                    f"{where}.{'center' if self.kind == 'box' else 'point'}")
+        half = rotation = normal = None
+        if self.kind == "box":
+            if self.normal is not None:
+                raise SceneError(f"{where}.normal: a box takes center, half_extents and rotation; normal belongs "
+                                 "to a plane")
+            if self.half_extents is None:
+                raise SceneError(f"{where}.half_extents: required for a box (3 half widths along its axes, m)")
+            if not isinstance(self.half_extents, (list, tuple)) or len(self.half_extents) != 3:
+                raise SceneError(f"{where}.half_extents: expected a list of 3 numbers (m), got {self.half_extents!r}")
+            half = tuple(float(_in_range(h, f"{where}.half_extents[{k}]", LENGTH_RANGE, "m"))
+                         for k, h in enumerate(self.half_extents))
+            rotation = None if self.rotation is None else _rotation(self.rotation, f"{where}.rotation")
+        else:
+            for field in ("half_extents", "rotation"):
+                if getattr(self, field) is not None:
+                    raise SceneError(f"{where}.{field}: a plane takes point and normal; {field} belongs to a box")
+            if self.normal is None:
+                raise SceneError(f"{where}.normal: required for a plane (its unit normal, into the free side)")
+            normal = _vector(list(self.normal) if isinstance(self.normal, (list, tuple)) else self.normal, 3,
+                             f"{where}.normal", largest=1e3)
+            length = math.sqrt(sum(x * x for x in normal))
+            if not abs(length - 1.0) <= ROTATION_TOL:
+                hint = ("" if length == 0.0 else
+                        "; normalised: [" + ", ".join(f"{x / length:.17g}" for x in normal) + "]")
+                raise SceneError(f"{where}.normal: must be a unit vector (length 1 within {ROTATION_TOL:g}), got "
+                                 f"{list(normal)!r} of length {length:.17g}{hint}")
+        e, links = self._checked_contacts(where, default_e, n, moving)
+        return Obstacle(self.name, self.kind, a, None, 0.0, e, links, half, rotation, normal)
+
+    def _checked_contacts(self, where: str, default_e: float, n: int, moving: list[int]) -> tuple[float, tuple]:
+        """The obstacle's e and the links that can touch it, validated."""
         e = default_e if self.restitution is None else self.restitution
         e = _number(e, f"{where}.restitution")
         if not 0.0 <= e <= 1.0:
@@ -397,7 +515,37 @@ class Obstacle:
             if len(set(self.links)) != len(self.links):
                 raise SceneError(f"{where}.links: a link is named twice in {list(self.links)}")
             links = tuple(sorted(self.links))
-        return Obstacle(self.name, self.kind, a, None if self.kind == "sphere" else b, float(radius), float(e), links)
+        return float(e), links
+
+
+def _rotation(value, fieldname: str) -> tuple:
+    """A box's rotation: 3 rows of 3 numbers, orthonormal with det +1 within ROTATION_TOL."""
+    rows = value.tolist() if isinstance(value, np.ndarray) else value
+    if not isinstance(rows, (list, tuple)) or len(rows) != 3:
+        raise SceneError(f"{fieldname}: expected 3 rows of 3 numbers (a rotation matrix, its columns the box's "
+                         f"axes), got {value!r}")
+    R = tuple(_vector(list(r) if isinstance(r, (list, tuple)) else r, 3, f"{fieldname}[{k}]", largest=1e3)
+              for k, r in enumerate(rows))
+    M = np.array(R)
+    off = float(np.abs(M.T @ M - np.eye(3)).max())
+    if not off <= ROTATION_TOL:
+        raise SceneError(f"{fieldname}: must be orthonormal (R^T R = I within {ROTATION_TOL:g}), got a departure "
+                         f"of {off:.3g}")
+    det = float(np.linalg.det(M))
+    if not abs(det - 1.0) <= ROTATION_TOL:
+        raise SceneError(f"{fieldname}: must be a proper rotation (det +1 within {ROTATION_TOL:g}), got det "
+                         f"{det:.6g} (a reflection: swap two columns)")
+    return R
+
+
+def box_signed_distance(box: "Obstacle", x) -> float:
+    """The signed distance (m, negative inside) of point x from a box obstacle's surface: in the box's frame,
+    |y - clamp(y)| outside, the nearest face's max_k (|y_k| - h_k) inside."""
+    R, h = np.array(box.box_rotation), np.array(box.half_extents)
+    y = R.T @ (np.asarray(x, dtype=float) - np.array(box.a))
+    d = y - np.clip(y, -h, h)
+    dist = float(np.linalg.norm(d))
+    return dist if dist > 0.0 else float(np.max(np.abs(y) - h))
 
 
 @dataclass(frozen=True)
@@ -946,6 +1094,14 @@ class Scene:
                                      f"{x:.6g}, outside the wall {w.name} = {w.position:g}; allowed X{w.axis + 1} "
                                      f"{'>=' if w.side < 0 else '<='} {w.position:g}")
         for c in self.obstacle_contacts():
+            if c.obstacle.bounded_by_planes:
+                gap = c.obstacle.distance(points[c.i - 1], points[c.i]) - c.radius
+                if gap < 0.0:
+                    raise SceneError(f"initial.q: link {c.i} overlaps the {c.obstacle.kind} {c.obstacle.name} by "
+                                     f"{-gap:.6g} m (its segment reaches {gap + c.radius:.6g} m from the surface, "
+                                     f"less than its radius {c.radius:g} m); allowed: a start with every link "
+                                     "clear of it")
+                continue
             a, b = c.obstacle.segment
             gap = segment_distance(points[c.i - 1], points[c.i], a, b) - c.radius
             if gap < 0.0:
@@ -1445,12 +1601,24 @@ def _obstacles_from_data(items) -> tuple[Obstacle, ...]:
         if not isinstance(item, dict):
             raise SceneError(f"{where}: expected a table, got {item!r}")
         _check_keys(item, OBSTACLE_KEYS, where)
-        for key in ("name", "radius"):
-            if key not in item:
-                raise SceneError(f"{where}.{key}: required")
+        if "name" not in item:
+            raise SceneError(f"{where}.name: required")
         kind = item.get("kind", "sphere")
         if kind not in OBSTACLE_KINDS:
             raise SceneError(f"{where}.kind: one of {', '.join(repr(k) for k in OBSTACLE_KINDS)}, got {kind!r}")
+        fields = OBSTACLE_FIELDS[kind]
+        shaped = kind in ("box", "plane")
+        for key in (("center", "a", "b", "radius") if shaped else ()) + ("half_extents", "rotation", "point", "normal"):
+            if key in item and key not in fields:
+                raise SceneError(f"{where}.{key}: a {kind} takes {', '.join(fields)}, not {key}")
+        for key in fields if shaped else ("radius",):
+            if key not in item and key != "rotation":
+                raise SceneError(f"{where}.{key}: required" + (f" for a {kind}" if shaped else ""))
+        if shaped:
+            out.append(Obstacle(item["name"], kind, item.get("center", item.get("point")), None, 0.0,
+                                item.get("restitution"), item.get("links"), item.get("half_extents"),
+                                item.get("rotation"), item.get("normal")))
+            continue
         if kind == "sphere":
             if "a" in item or "b" in item:
                 raise SceneError(f"{where}.{'a' if 'a' in item else 'b'}: a sphere takes center; give kind = "

@@ -7,8 +7,8 @@ wall of the scene, every parameter at run time.  With ``specialise=True``:
 
 * **planar scenes** -- every real joint axis parallel to the same box axis X1 or X3 (theta_0 = 0 and
   theta_-1 a multiple of pi/2 with the default base twists; T_2..T_n rotations about z), no link with a
-  centre of mass off the plane or a product of inertia coupling the plane to its normal, gravity in the plane, and
-  no out-of-plane velocity at the start (as in the paper's case 1): theta_-1, theta_0 and the out-of-plane
+  centre of mass off the plane or a product of inertia coupling the plane to its normal, gravity in the plane, every
+  fixed obstacle symmetric about the plane (its push stays in it), and no out-of-plane velocity at the start (as in the paper's case 1): theta_-1, theta_0 and the out-of-plane
   translation are held fixed, n + 2 coordinates instead of n + 5, and walls across the normal are
   dropped (no point ever reaches them);
 * **zero parameters** -- g, J components, centre-of-mass offsets or products of inertia that are
@@ -22,7 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scene import RigidLink, Scene, SceneError, coordinate_names, frames, split_parameter_name, stop_rows
+from .scene import (RigidLink, Scene, SceneError, contact_points, coordinate_names, frames, split_parameter_name,
+                    stop_rows)
 
 ANGLE_SNAP = 1e-12       # an angle within this of a multiple of pi/2 counts as exactly that multiple
 
@@ -184,7 +185,22 @@ def planar_normal(scene: Scene) -> tuple[int | None, str]:
             I = link.inertia
             if link.com[2] != 0.0 or I[0][2] != 0.0 or I[1][2] != 0.0:
                 return None, f"link {i} has its centre of mass or a product of inertia off the plane"
+    level = float(contact_points(scene, q_snapped)[0, normal])
+    for o in scene.obstacles:
+        if not obstacle_in_plane(o, normal, level):
+            return None, f"the obstacle {o.name} is not symmetric about the chain's plane X{normal + 1} = {level:g}"
     return normal, ""
+
+
+def obstacle_in_plane(o, normal: int, level: float) -> bool:
+    """Whether an obstacle's push on a chain in the plane X_normal = level stays in that plane: a capsule's ends in
+    it, a box's centre in it with an axis along its normal, a plane's normal in it."""
+    if o.kind == "plane":
+        return o.normal[normal] == 0.0
+    if o.kind == "box":
+        R = np.array(o.box_rotation)
+        return o.a[normal] == level and any(abs(abs(R[normal, k]) - 1.0) <= 1e-12 for k in range(3))
+    return all(end[normal] == level for end in o.segment)
 
 
 def check_not_singular(scene: Scene, layout: Layout) -> None:

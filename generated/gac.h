@@ -219,6 +219,13 @@ typedef int (*gac_progress)(double t, long n_steps, long n_impacts, void *user);
 #define GAC_CONTACT_STOP 1
 #define GAC_CONTACT_LINK 2
 #define GAC_CONTACT_OBSTACLE 3
+
+/* The kinds of a fixed obstacle (gac_model.obstacle_shapes): the capsule about a segment (a sphere or a bar), an
+ * oriented box, a half-space bounded by a plane; each shape GAC_OBSTACLE_NSHAPE doubles. */
+#define GAC_OBSTACLE_SEGMENT 0
+#define GAC_OBSTACLE_BOX 1
+#define GAC_OBSTACLE_PLANE 2
+#define GAC_OBSTACLE_NSHAPE 16
 typedef struct {
     int point;            /* wall: the point O_point, 1-based (1..npoint); its coordinates are
                              contact_points[3*(point-1) .. 3*(point-1)+2].  stop: the joint k (information).
@@ -353,6 +360,11 @@ struct gac_model {
     const double *obstacles;           /* [6 nobstacle]: each obstacle's segment a, b (m, box frame; a sphere has
                                           a = b); its radius is in the link_radius entries of its contacts */
     const char *const *obstacle_names; /* [nobstacle]: each obstacle's name (contacts are named L<i>/<name>) */
+    const double *obstacle_shapes;     /* [GAC_OBSTACLE_NSHAPE nobstacle] or NULL (every obstacle a segment's
+                                          capsule): each obstacle's kind (GAC_OBSTACLE_*), then a box's centre,
+                                          half extents (m) and rotation (row-major 3x3, columns its axes), or a
+                                          plane's point (m) and unit normal (into the free side); a box's or
+                                          plane's segment in `obstacles` is its centre or point twice, unused */
 };
 
 /* GAC_OK if the descriptor is consistent (sizes > 0 where needed, nx = 2 nq, tables and kernels present,
@@ -547,7 +559,9 @@ int gac_link_impact(const gac_model *m, const double *q, const double *qd, const
 
 /* Link i (1-based) and fixed obstacle o (0-based, m->obstacles) whose radii add up to `radius` (m): geometry
  * (GAC_LINK_NGEOMETRY doubles) as gac_link_gap's, t along the obstacle's segment and n from the obstacle's closest
- * point to the link's.  The gap's rate is n . v_P (the obstacle does not move).  Returns GAC_OK or
+ * point to the link's.  A box or a plane (m->obstacle_shapes, gac_obstacle.c): the least signed distance (negative
+ * inside) of the link's segment from it less `radius`, s* along the link, t = 0, n the signed distance's gradient
+ * at that point.  The gap's rate is n . v_P (the obstacle does not move).  Returns GAC_OK or
  * GAC_ERR_BAD_CONTACT. */
 int gac_obstacle_gap(const gac_model *m, const double *q, const double *p, int i, int o, double radius,
                      double *geometry);

@@ -120,6 +120,15 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r);
 /* gac_model.c */
 int gac_has_friction(const gac_model *m);
 
+/* gac_obstacle.c: boxes and planes as fixed obstacles.  The kind of obstacle o (GAC_OBSTACLE_*); for a box or a
+ * plane, the contact geometry (GAC_LINK_NGEOMETRY doubles, as gac_obstacle_gap's, t = 0) of segment a0-a1 of
+ * radius `radius` and obstacle o, returning 1 (0: a segment's capsule, nothing written); GAC_OK if obstacle o's
+ * shape is well formed (else GAC_ERR_BAD_MODEL). */
+int gac_obstacle_kind(const gac_model *m, int o);
+int gac_obstacle_shape_contact(const gac_model *m, int o, const double *a0, const double *a1, double radius,
+                               double *geometry);
+int gac_obstacle_shape_check(const gac_model *m, int o);
+
 /* gac_link.c: link pairs and obstacles as contacts of the loop (kinds GAC_CONTACT_LINK, GAC_CONTACT_OBSTACLE, the
  * last entries of m->contacts: no Jacobian row, never resting, frictionless) */
 int gac_rowless(const gac_model *m, int c);             /* 1 if contact c is a link pair or an obstacle */

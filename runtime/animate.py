@@ -39,11 +39,67 @@ def _planar(shapes: np.ndarray) -> bool:
     return bool(np.ptp(shapes[..., 2]) < 1e-9)
 
 
+def _hull(points: np.ndarray) -> np.ndarray:
+    """The convex hull of 2-D points, counter-clockwise (Andrew's monotone chain)."""
+    pts = sorted(map(tuple, np.round(points, 15)))
+
+    def half(seq):
+        out = []
+        for p in seq:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0.0:
+                out.pop()
+            out.append(p)
+        return out[:-1]
+
+    return np.array(half(pts) + half(pts[::-1]))
+
+
+def box_corners(o) -> np.ndarray:
+    """A box obstacle's 8 corners (box frame), corner k at the signs of k's bits."""
+    R, h = np.array(o.box_rotation), np.array(o.half_extents)
+    signs = np.array([[1 if k & (1 << j) else -1 for j in range(3)] for k in range(8)])
+    return np.array(o.a) + (signs * h) @ R.T
+
+
+def _draw_planes_obstacle(ax, scene: Scene, o, planar: bool) -> None:
+    """A box: in the plane its outline projected there, in space its 12 edges; a plane: in the plane its trace at
+    the chain's X3, in space a 2 m square of it about its point."""
+    if o.kind == "box":
+        corners = box_corners(o)
+        if planar:
+            outline = _hull(corners[:, :2])
+            ax.fill(outline[:, 0], outline[:, 1], color="0.6", ec="0.3", lw=1.0, zorder=1)
+        else:
+            for k in range(8):
+                for j in range(3):
+                    if not k & (1 << j):
+                        a, b = corners[k], corners[k | (1 << j)]
+                        ax.plot([a[0], b[0]], [a[2], b[2]], [a[1], b[1]], color="0.4", lw=1.5)
+        return
+    n, p = np.array(o.normal), np.array(o.a)
+    if planar:
+        level = float(contact_points(scene, np.array(scene.q0))[0, 2])
+        m = float(n[0] ** 2 + n[1] ** 2)
+        if m > 0.0:                                          # its trace: n1 x + n2 y = n . p - n3 X3
+            foot = (n @ p - n[2] * level) / m * n[:2]
+            ax.axline(tuple(foot), tuple(foot + (-n[1], n[0])), color="0.3", lw=2.5, zorder=1)
+    else:
+        u = np.cross(n, (1.0, 0.0, 0.0) if abs(n[0]) < 0.9 else (0.0, 1.0, 0.0))
+        u /= np.linalg.norm(u)
+        v = np.cross(n, u)
+        square = np.array([p + a * u + b * v for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1), (-1, -1))])
+        ax.plot(square[:, 0], square[:, 2], square[:, 1], color="0.4", lw=1.5)
+
+
 def draw_obstacles(ax, scene: Scene, planar: bool) -> None:
     """Each fixed obstacle, grey: in the plane its outline there (a disc for a sphere, a stadium for a bar: the
-    capsule's section by the chain's plane X3 = const when both ends lie in it), in space its axis as a thick line
-    with its ends."""
+    capsule's section by the chain's plane X3 = const when both ends lie in it; a box's outline projected on it; a
+    plane's trace), in space a capsule's axis as a thick line with its ends, a box's edges, a square of a plane."""
     for o in scene.obstacles:
+        if o.bounded_by_planes:
+            _draw_planes_obstacle(ax, scene, o, planar)
+            continue
         a, b = (np.array(x, dtype=float) for x in o.segment)
         if planar:
             turn = np.linspace(-np.pi / 2, np.pi / 2, 24)

@@ -60,3 +60,59 @@ def test_the_shipped_arm_obstacle_scene():
         scene_from_dict({"links": [{"length": 0.6, "mu": 2.0}, {"length": 0.6, "mu": 1.0}],
                          "base": {"kind": "fixed", "point": [1.0, 0.0, 0.0], "angles": [0.0, 0.0, 0.0]},
                          "obstacles": [{**BALL, "center": [2.0, 2.0, 0.0], "links": [1]}]})
+
+
+BOX = {"name": "block", "kind": "box", "center": [0.5, -1.0, 0.0], "half_extents": [0.3, 0.2, 0.4]}
+ROOF = {"name": "roof", "kind": "plane", "point": [0.0, 3.0, 0.0], "normal": [0.6, -0.8, 0.0]}
+TURN = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]     # a quarter turn about X3
+
+
+def test_a_box_and_a_plane_take_their_own_fields():
+    s = scene({**BOX, "rotation": TURN, "restitution": 0.4}, ROOF)
+    block, roof = s.obstacles
+    assert (block.kind, block.a, block.half_extents, block.rotation, block.radius) == (
+        "box", (0.5, -1.0, 0.0), (0.3, 0.2, 0.4), tuple(map(tuple, TURN)), 0.0)
+    assert block.shape[:7] == (1.0, 0.5, -1.0, 0.0, 0.3, 0.2, 0.4) and block.shape[7:16] == tuple(
+        float(x) for row in TURN for x in row)
+    assert (roof.kind, roof.a, roof.normal, roof.restitution) == ("plane", (0.0, 3.0, 0.0), (0.6, -0.8, 0.0), 0.7)
+    assert roof.shape[:7] == (2.0, 0.0, 3.0, 0.0, 0.6, -0.8, 0.0)
+    assert scene(BOX).obstacles[0].box_rotation == ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+    assert s.parameter_names()[-2:] == ["e_block", "e_roof"]
+    assert [c.radius for c in s.obstacle_contacts()] == [0.05] * 4      # the links' radii alone
+
+
+@pytest.mark.parametrize("obstacle, message", [
+    ({**BOX, "half_extents": [0.3, 0.0, 0.4]}, "obstacles[1] (block).half_extents[1]: must be in [1e-09, 1e+09] m"),
+    ({**BOX, "half_extents": [0.3, 0.2]}, "obstacles[1] (block).half_extents: expected a list of 3 numbers"),
+    ({**BOX, "rotation": [[1, 0, 0], [0, 1, 0], [0, 0, -1]]}, "obstacles[1] (block).rotation: must be a proper "
+                                                              "rotation (det +1 within 1e-09), got det -1"),
+    ({**BOX, "rotation": [[1, 0, 0], [0, 1, 1e-6], [0, 0, 1]]}, "obstacles[1] (block).rotation: must be orthonormal"),
+    ({**BOX, "rotation": [[1, 0, 0], [0, 1, 0]]}, "obstacles[1] (block).rotation: expected 3 rows of 3 numbers"),
+    ({**BOX, "radius": 0.1}, "obstacles[1].radius: a box takes center, half_extents, rotation, not radius"),
+    ({**BOX, "normal": [0, 1, 0]}, "obstacles[1].normal: a box takes center, half_extents, rotation, not normal"),
+    ({k: v for k, v in BOX.items() if k != "half_extents"}, "obstacles[1].half_extents: required for a box"),
+    ({**BOX, "center": [0.1, -0.1, 0.0]}, "initial.q: link 1 overlaps the box block by 0.15 m"),
+    ({**ROOF, "normal": [0.6, -0.8, 0.1]}, "obstacles[1] (roof).normal: must be a unit vector (length 1 within "
+                                           "1e-09), got [0.6, -0.8, 0.1] of length 1.00498756211208"),
+    ({**ROOF, "normal": [0.6, -0.8, 0.1]}, "; normalised: [0.59702231412599349, -0.79602975216799143, 0.0995"),
+    ({**ROOF, "normal": [0, 0, 0]}, "obstacles[1] (roof).normal: must be a unit vector"),
+    ({**ROOF, "center": [0, 1, 0]}, "obstacles[1].center: a plane takes point, normal, not center"),
+    ({k: v for k, v in ROOF.items() if k != "normal"}, "obstacles[1].normal: required for a plane"),
+    ({**ROOF, "point": [0.0, 0.5, 0.0]}, "initial.q: link 1 overlaps the plane roof by"),
+    ({**BALL, "normal": [0, 1, 0]}, "obstacles[1].normal: a sphere takes center, radius, not normal"),
+])
+def test_bad_boxes_and_planes_are_refused_by_field(obstacle, message):
+    with pytest.raises(SceneError, match=message.replace("[", r"\[").replace("(", r"\(").replace(")", r"\)")
+                       .replace("+", r"\+").replace(".", r"\.")):
+        scene(obstacle)
+
+
+def test_box_and_plane_obstacles_built_in_python_are_checked_alike():
+    from codegen.scene import Obstacle, Scene
+    links, q0 = scene(BALL).links, scene(BALL).q0
+    with pytest.raises(SceneError, match=r"obstacles\[1\] \(block\)\.radius: a box has none"):
+        Scene(name="s", links=links, q0=q0, obstacles=(Obstacle("block", "box", (0.5, -1, 0), None, 0.1,
+                                                                half_extents=(0.3, 0.2, 0.4)),))
+    s = Scene(name="s", links=links, q0=q0, obstacles=(Obstacle.box("block", (0.5, -1.0, 0.0), (0.3, 0.2, 0.4), TURN),
+                                                       Obstacle.plane("roof", (0, 3, 0), (0.6, -0.8, 0))))
+    assert [o.kind for o in s.obstacles] == ["box", "plane"]

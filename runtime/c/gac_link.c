@@ -115,6 +115,7 @@ int gac_obstacle_gap(const gac_model *m, const double *q, const double *p, int i
     if (i < 1 || i + 1 > npoint || o < 0 || o >= m->nobstacle || m->obstacles == 0 || !(radius >= 0.0))
         return GAC_ERR_BAD_CONTACT;
     m->contact_points(q, p, r);
+    if (gac_obstacle_shape_contact(m, o, r + 3 * (i - 1), r + 3 * i, radius, geometry)) return GAC_OK;  /* box, plane */
     gac_segment_contact(r + 3 * (i - 1), r + 3 * i, m->obstacles + 6 * o, m->obstacles + 6 * o + 3, radius,
                         geometry);
     return GAC_OK;

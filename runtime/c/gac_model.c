@@ -57,6 +57,7 @@ int gac_model_check(const gac_model *m)
             for (a = 0; a < 6; ++a) {
                 if (!isfinite(o[a])) return GAC_ERR_BAD_MODEL;
             }
+            if (gac_obstacle_shape_check(m, k->coordinate) != GAC_OK) return GAC_ERR_BAD_MODEL;
             continue;
         }
         if ((k->normal_sign != 1 && k->normal_sign != -1) || k->row < 0 || k->row >= m->njrow

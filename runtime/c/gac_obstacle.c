@@ -1,0 +1,195 @@
+/*
+ * gac_obstacle.c -- fixed obstacles bounded by planes: an oriented box and a half-space (a plane).  The gap of a
+ * link (segment a-b, radius r) and such an obstacle is
+ *     gap = min over s in [0, 1] of sd(a + s (b - a)) - r,
+ * sd the obstacle's signed distance (negative inside), and its normal n is the gradient of sd at the closest point
+ * a + s* (b - a): a face's normal inside the box or over a face, (p - closest) / |p - closest| outside it by an
+ * edge or a corner.  sd is convex, so the minimum is that of a 1-D convex function; it is found exactly from its
+ * piecewise structure (below), the gap then exact to round-off.  Spheres and capsules are in gac_link.c.
+ *
+ * A shape is GAC_OBSTACLE_NSHAPE doubles (m->obstacle_shapes): kind, then a box's centre c, half extents h and
+ * rotation R (row-major, its columns the box's axes in the box frame: x = c + R y, y in the box's own frame), or a
+ * plane's point and unit normal.
+ */
+#include "gac_internal.h"
+
+#include <math.h>
+
+/* two candidates whose sd differ by less than this (relative to the segment's and box's size) tie: a segment lying
+   flat on a face (or parallel to a plane) touches along a stretch, whose middle is taken as the closest point */
+#define GAC_OBST_TIE 1e-12
+#define GAC_OBST_NCANDIDATE 96
+
+int gac_obstacle_kind(const gac_model *m, int o)
+{
+    if (m->obstacle_shapes == 0) return GAC_OBSTACLE_SEGMENT;
+    return (int)m->obstacle_shapes[GAC_OBSTACLE_NSHAPE * o];
+}
+
+/* sd of the box at y (its own frame), and n_local, the gradient there (when n is not NULL) */
+static double gac_obst_box_sd(const double *h, const double *y, double *n)
+{
+    double d[3], sq = 0.0, dist, best = -INFINITY;
+    int k, face = 0;
+    for (k = 0; k < 3; ++k) {
+        d[k] = y[k] > h[k] ? y[k] - h[k] : (y[k] < -h[k] ? y[k] + h[k] : 0.0);
+        sq += d[k] * d[k];
+    }
+    dist = sqrt(sq);
+    if (dist > 0.0) {                                    /* outside: from the box's closest point */
+        if (n != 0) for (k = 0; k < 3; ++k) n[k] = d[k] / dist;
+        return dist;
+    }
+    for (k = 0; k < 3; ++k) {                            /* inside or on it: the nearest face */
+        if (fabs(y[k]) - h[k] > best) best = fabs(y[k]) - h[k], face = k;
+    }
+    if (n != 0) {
+        for (k = 0; k < 3; ++k) n[k] = 0.0;
+        n[face] = y[face] < 0.0 ? -1.0 : 1.0;
+    }
+    return best;
+}
+
+static void gac_obst_add(double *list, int *count, double s)
+{
+    if (s > 0.0 && s < 1.0 && *count < GAC_OBST_NCANDIDATE) list[(*count)++] = s;
+}
+
+static void gac_obst_sort(double *list, int count)
+{
+    int i, j;
+    for (i = 1; i < count; ++i) {
+        const double x = list[i];
+        for (j = i; j > 0 && list[j - 1] > x; --j) list[j] = list[j - 1];
+        list[j] = x;
+    }
+}
+
+/* Along y(s) = y0 + s e (the box's frame), sd is, between two consecutive breakpoints (where a coordinate crosses
+ * a face's plane +-h_k or 0, or two faces' distances |y_k| - h_k cross), either outside sqrt of a quadratic in s,
+ * least at its vertex or an end, or inside the maximum of linear functions, least at a breakpoint.  So the minimum
+ * is at a breakpoint, an end or one of those vertices; every candidate's sd is evaluated at its point. */
+static void gac_obst_box_contact(const double *shape, const double *a0, const double *a1, double radius,
+                                 double *geometry)
+{
+    const double *c = shape + 1, *h = shape + 4, *R = shape + 7;
+    double y0[3], e[3], list[GAC_OBST_NCANDIDATE], f[GAC_OBST_NCANDIDATE], y[3], nl[3], best = INFINITY;
+    double lo = 1.0, hi = 0.0, tie, size = 0.0, s;
+    int count = 0, k, j, a, b, base;
+    for (k = 0; k < 3; ++k) {                            /* y = R^T (x - c) */
+        y0[k] = e[k] = 0.0;
+        for (j = 0; j < 3; ++j) {
+            y0[k] += R[3 * j + k] * (a0[j] - c[j]);
+            e[k] += R[3 * j + k] * (a1[j] - a0[j]);
+        }
+        size += e[k] * e[k];
+    }
+    list[count++] = 0.0;
+    list[count++] = 1.0;
+    for (k = 0; k < 3; ++k) {
+        if (e[k] == 0.0) continue;
+        gac_obst_add(list, &count, (h[k] - y0[k]) / e[k]);
+        gac_obst_add(list, &count, (-h[k] - y0[k]) / e[k]);
+        gac_obst_add(list, &count, -y0[k] / e[k]);
+    }
+    for (k = 0; k < 3; ++k) {                            /* sa y_k - h_k = sb y_j - h_j */
+        for (j = k + 1; j < 3; ++j) {
+            for (a = -1; a <= 1; a += 2) {
+                for (b = -1; b <= 1; b += 2) {
+                    const double den = a * e[k] - b * e[j];
+                    if (den != 0.0) gac_obst_add(list, &count, (h[k] - h[j] - a * y0[k] + b * y0[j]) / den);
+                }
+            }
+        }
+    }
+    gac_obst_sort(list, count);
+    base = count;
+    for (a = 0; a + 1 < base; ++a) {                     /* each stretch outside: its quadratic's vertex */
+        const double mid = 0.5 * (list[a] + list[a + 1]);
+        double num = 0.0, den = 0.0;
+        for (k = 0; k < 3; ++k) {
+            const double yk = y0[k] + mid * e[k];
+            if (yk > h[k] || yk < -h[k]) {
+                num += (y0[k] - (yk > h[k] ? h[k] : -h[k])) * e[k];
+                den += e[k] * e[k];
+            }
+        }
+        if (den > 0.0) {
+            s = -num / den;
+            s = s < list[a] ? list[a] : (s > list[a + 1] ? list[a + 1] : s);
+            gac_obst_add(list, &count, s);
+        }
+    }
+    for (a = 0; a < count; ++a) {
+        for (k = 0; k < 3; ++k) y[k] = y0[k] + list[a] * e[k];
+        f[a] = gac_obst_box_sd(h, y, 0);
+        if (f[a] < best) best = f[a];
+    }
+    tie = GAC_OBST_TIE * (sqrt(size) + fabs(h[0]) + fabs(h[1]) + fabs(h[2]) + fabs(best));
+    for (a = 0; a < count; ++a) {                        /* the stretch of (near) minimisers: its middle */
+        if (f[a] <= best + tie) {
+            if (list[a] < lo) lo = list[a];
+            if (list[a] > hi) hi = list[a];
+        }
+    }
+    s = 0.5 * (lo + hi);
+    for (k = 0; k < 3; ++k) y[k] = y0[k] + s * e[k];
+    geometry[0] = gac_obst_box_sd(h, y, nl) - radius;
+    geometry[1] = s;
+    geometry[2] = 0.0;
+    for (k = 0; k < 3; ++k) geometry[3 + k] = R[3 * k] * nl[0] + R[3 * k + 1] * nl[1] + R[3 * k + 2] * nl[2];
+}
+
+/* sd = n . (x - point), linear along the segment: least at an end, or (parallel) the middle */
+static void gac_obst_plane_contact(const double *shape, const double *a0, const double *a1, double radius,
+                                   double *geometry)
+{
+    const double *point = shape + 1, *n = shape + 4;
+    double f0 = 0.0, f1 = 0.0, size = 0.0, s;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        f0 += n[k] * (a0[k] - point[k]);
+        f1 += n[k] * (a1[k] - point[k]);
+        size += (a1[k] - a0[k]) * (a1[k] - a0[k]);
+    }
+    if (fabs(f1 - f0) <= GAC_OBST_TIE * sqrt(size)) s = 0.5;
+    else s = f1 < f0 ? 1.0 : 0.0;
+    geometry[0] = (s == 0.5 ? 0.5 * (f0 + f1) : (s == 1.0 ? f1 : f0)) - radius;
+    geometry[1] = s;
+    geometry[2] = 0.0;
+    for (k = 0; k < 3; ++k) geometry[3 + k] = n[k];
+}
+
+int gac_obstacle_shape_contact(const gac_model *m, int o, const double *a0, const double *a1, double radius,
+                               double *geometry)
+{
+    const double *shape = m->obstacle_shapes + GAC_OBSTACLE_NSHAPE * o;
+    switch (gac_obstacle_kind(m, o)) {
+    case GAC_OBSTACLE_BOX: gac_obst_box_contact(shape, a0, a1, radius, geometry); return 1;
+    case GAC_OBSTACLE_PLANE: gac_obst_plane_contact(shape, a0, a1, radius, geometry); return 1;
+    default: return 0;
+    }
+}
+
+int gac_obstacle_shape_check(const gac_model *m, int o)
+{
+    const double *shape;
+    int k, kind;
+    if (m->obstacle_shapes == 0) return GAC_OK;
+    shape = m->obstacle_shapes + GAC_OBSTACLE_NSHAPE * o;
+    kind = gac_obstacle_kind(m, o);
+    if (kind != GAC_OBSTACLE_SEGMENT && kind != GAC_OBSTACLE_BOX && kind != GAC_OBSTACLE_PLANE)
+        return GAC_ERR_BAD_MODEL;
+    for (k = 0; k < GAC_OBSTACLE_NSHAPE; ++k) {
+        if (!isfinite(shape[k])) return GAC_ERR_BAD_MODEL;
+    }
+    if (kind == GAC_OBSTACLE_BOX) {
+        for (k = 4; k < 7; ++k) {
+            if (!(shape[k] > 0.0)) return GAC_ERR_BAD_MODEL;
+        }
+    } else if (kind == GAC_OBSTACLE_PLANE) {
+        const double len = sqrt(shape[4] * shape[4] + shape[5] * shape[5] + shape[6] * shape[6]);
+        if (!(fabs(len - 1.0) <= 1e-9)) return GAC_ERR_BAD_MODEL;
+    }
+    return GAC_OK;
+}

@@ -57,3 +57,15 @@ def test_a_chain_thrown_at_a_slanted_roof_bounces_without_crossing_it(model, qd0
             row = model.contact_normal(q, index[impact.contacts[0].wall])
             assert row @ qd_p == pytest.approx(-(row @ qd_m), rel=1e-9, abs=1e-12)
             assert impact.contacts[0].impulse > 0.0
+
+
+def test_sensitivities_stop_at_a_roof_strike(model):
+    """A plane's (or a box's) strike is not differentiated: the sensitivities end there with the link/obstacle
+    status, the time of the first roof strike, rather than go on with a derivative of a sphere's formula."""
+    tangent = load_model(model.scene, tangent=True)
+    qd0 = (0.0, 0.0, 3.0, -4.0, 5.0, 1.5, 7.5, 0.0)
+    r = simulate(tangent, 1.5, qd0=qd0, sensitivities=["qd0[X1]", "g"], **TOL)
+    first = next(i for i in r.impacts if any(c.kind == "obstacle" for c in i.contacts))
+    assert not r.sensitivities.valid
+    assert "box or plane obstacle" in r.sensitivities.status
+    assert r.sensitivities.t_event == pytest.approx(first.t, abs=1e-12)

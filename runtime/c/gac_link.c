@@ -374,6 +374,9 @@ int gac_contact_normal_tangent(const gac_model *m, const double *q, const double
     if (m == 0 || q == 0 || p == 0 || dq == 0 || dp == 0 || dgap == 0 || g == 0 || dg == 0)
         return GAC_ERR_NULL_ARGUMENT;
     if (c < 0 || c >= m->ncontact || !gac_rowless(m, c)) return GAC_ERR_BAD_CONTACT;
+    if (m->contacts[c].kind == GAC_CONTACT_OBSTACLE
+        && gac_obstacle_kind(m, m->contacts[c].coordinate) != GAC_OBSTACLE_SEGMENT)
+        return GAC_ERR_LINK_CONTACT;                     /* a box or a plane: not differentiated here */
     code = gac_rowless_geometry(m, q, p, c, geometry, &j);
     if (code != GAC_OK) return code;
     i = m->contacts[c].point;

@@ -373,6 +373,26 @@ FUNCTIONS = (
               Arg("q", "double *", "out: current coordinates (NQ), or NULL"),
               Arg("qd", "double *", "out: current velocities (NQ), or NULL")),
              "The current time and state, in chart A's coordinates whichever base chart is integrated (gac_sim_state)."),
+    Function("sens_attach", "int",
+             (Arg("sim", "{name}_sim *", "an initialised simulation"),
+              Arg("sens", "gac_sens *", "the sensitivities (caller-owned, alive for the run; NULL detaches them)"),
+              Arg("k", "int", "directions, >= 1"),
+              Arg("seed_x", "const double *", "the directions' seeds of the state, k x NX direction-major: "
+                  "seed_x[j*NX + i] = d x_i / d direction j at the current time"),
+              Arg("seed_p", "const double *", "their seeds of the parameters, k x NPARAM (NULL: 0): "
+                  "seed_p[j*NPARAM + {NAME}_P_G] = 1 for d/dg"),
+              Arg("dwork", "double *", "storage, {NAME}_SENS_NDOUBLE(k) doubles (caller-owned, alive for the run)")),
+             "Carry forward sensitivities of the run along k directions from its current time on (gac_sens_attach).",
+             "sens->status stays GAC_SENS_VALID while every event is differentiated; the first that is not ends "
+             "them (sens->status, t_status, contact_status).  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT, "
+             "GAC_ERR_BAD_OPTION (k < 1, a seed not finite) or GAC_ERR_BAD_MODEL (the model has no tangent kernels)."),
+    Function("sens_state", "int",
+             (Arg("sim", "const {name}_sim *", "a simulation with sensitivities attached"),
+              Arg("S", "double *", "out: k x NX, S[j*NX + i] = d x_i / d direction j at the current time, in chart "
+                  "A's coordinates (like sim_state)")),
+             "The sensitivities at the current time (gac_sens_state).",
+             "NaN once sens->status is not GAC_SENS_VALID.  Returns GAC_OK or GAC_ERR_NULL_ARGUMENT (sim or S NULL, "
+             "or no sensitivities attached)."),
     Function("sim_copy", "void",
              (Arg("dst", "{name}_sim *", "the copy"), Arg("src", "const {name}_sim *", "an initialised simulation")),
              "Copy a simulation, its arrays bound to the copy's own storage."),

@@ -1839,6 +1839,23 @@ void paper_case1_sim_state(const paper_case1_sim *sim, double *t, double *q, dou
     gac_sim_state(&base, t, q, qd);
 }
 
+int paper_case1_sens_attach(paper_case1_sim *sim, gac_sens *sens, int k, const double *seed_x, const double *seed_p,
+                      double *dwork)
+{
+    if (sim == 0) return GAC_ERR_NULL_ARGUMENT;
+    paper_case1_bind(&sim->base, sim->dwork, sim->iwork);
+    return gac_sens_attach(&sim->base, sens, k, seed_x, seed_p, dwork);
+}
+
+int paper_case1_sens_state(const paper_case1_sim *sim, double *S)
+{
+    gac_sim base;
+    if (sim == 0) return GAC_ERR_NULL_ARGUMENT;
+    base = sim->base;                   /* bound to sim's own arrays (read only here), wherever sim was copied */
+    gac_sim_bind(&base, &paper_case1_model, (double *)sim->dwork, (int *)sim->iwork);
+    return gac_sens_state(&base, S);
+}
+
 void paper_case1_sim_copy(paper_case1_sim *dst, const paper_case1_sim *src)
 {
     *dst = *src;

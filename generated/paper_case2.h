@@ -118,6 +118,12 @@
  *   paper_case2_sim_state.  The record: rec.base.t, .ncontact, .contact[k], .impulse[k] (N s), .q[i],
  *   .qd_before[i], .qd_after[i], .energy_before, .energy_after (J), .nlanded, .landed[k], .nreleased,
  *   .released[k], .nstuck, .stuck[k], .nslipped, .slipped[k], ... (gac_impact_record).
+ * Sensitivities d x(t) / d(direction) along k directions (models with tangent kernels), caller-owned:
+ *   static double sdw[PAPER_CASE2_SENS_NDOUBLE(2)], seed_x[2 * PAPER_CASE2_NX], seed_p[2 * PAPER_CASE2_NPARAM], S[2 * PAPER_CASE2_NX];
+ *   gac_sens sens;   seed_x[0 * NX + NQ + PAPER_CASE2_Q_...] = 1 (a start velocity), seed_p[1 * NPARAM + PAPER_CASE2_P_...] = 1
+ *   paper_case2_sens_attach(&sim, &sens, 2, seed_x, seed_p, sdw);   after sim_init, before sim_advance
+ *   ... run ...;  paper_case2_sens_state(&sim, S): S[j * NX + i] = d x_i / d direction j, valid while
+ *   sens.status == GAC_SENS_VALID (else the first event not differentiated, at sens.t_status: gac.h).
  * Storage: the arrays of sim.base and rec.base point into the struct's own dwork / iwork; every
  *   paper_case2_sim_* call points them there again.  A struct copied by assignment or memcpy points at the
  *   original's storage until that next call: copy with paper_case2_sim_copy / paper_case2_impact_record_copy.
@@ -142,6 +148,9 @@
 #define PAPER_CASE2_SIM_NINT         GAC_SIM_NINT(PAPER_CASE2_NQ, PAPER_CASE2_NCONTACT) /* ints of a simulation's storage (gac_sim_nint) */
 #define PAPER_CASE2_RECORD_NDOUBLE   GAC_RECORD_NDOUBLE(PAPER_CASE2_NQ) /* doubles of an impact record's storage (gac_record_ndouble) */
 #define PAPER_CASE2_RECORD_NINT      GAC_RECORD_NINT(PAPER_CASE2_NQ) /* ints of an impact record's storage (gac_record_nint) */
+
+/* Doubles of the storage of sensitivities along k directions (paper_case2_sens_attach's dwork; gac_sens_ndouble) */
+#define PAPER_CASE2_SENS_NDOUBLE(k) GAC_SENS_NDOUBLE(PAPER_CASE2_NQ, PAPER_CASE2_NPARAM, PAPER_CASE2_NCONTACT, (k))
 
 /* Coordinate indices into q and qd: x[PAPER_CASE2_Q_...] is a coordinate, x[PAPER_CASE2_NQ + PAPER_CASE2_Q_...] its rate. */
 #define PAPER_CASE2_Q_THETA_M1                   0
@@ -603,6 +612,26 @@ int paper_case2_sim_run(paper_case2_sim *sim, double t_end, paper_case2_impact_r
  *   qd           out: current velocities (NQ), or NULL
  */
 void paper_case2_sim_state(const paper_case2_sim *sim, double *t, double *q, double *qd);
+
+/* Carry forward sensitivities of the run along k directions from its current time on (gac_sens_attach).
+ * sens->status stays GAC_SENS_VALID while every event is differentiated; the first that is not ends them
+ * (sens->status, t_status, contact_status).  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT, GAC_ERR_BAD_OPTION (k
+ * < 1, a seed not finite) or GAC_ERR_BAD_MODEL (the model has no tangent kernels).
+ *   sim          an initialised simulation
+ *   sens         the sensitivities (caller-owned, alive for the run; NULL detaches them)
+ *   k            directions, >= 1
+ *   seed_x       the directions' seeds of the state, k x NX direction-major: seed_x[j*NX + i] = d x_i / d direction j at the current time
+ *   seed_p       their seeds of the parameters, k x NPARAM (NULL: 0): seed_p[j*NPARAM + PAPER_CASE2_P_G] = 1 for d/dg
+ *   dwork        storage, PAPER_CASE2_SENS_NDOUBLE(k) doubles (caller-owned, alive for the run)
+ */
+int paper_case2_sens_attach(paper_case2_sim *sim, gac_sens *sens, int k, const double *seed_x, const double *seed_p, double *dwork);
+
+/* The sensitivities at the current time (gac_sens_state).  NaN once sens->status is not GAC_SENS_VALID.
+ * Returns GAC_OK or GAC_ERR_NULL_ARGUMENT (sim or S NULL, or no sensitivities attached).
+ *   sim          a simulation with sensitivities attached
+ *   S            out: k x NX, S[j*NX + i] = d x_i / d direction j at the current time, in chart A's coordinates (like sim_state)
+ */
+int paper_case2_sens_state(const paper_case2_sim *sim, double *S);
 
 /* Copy a simulation, its arrays bound to the copy's own storage.
  *   dst          the copy

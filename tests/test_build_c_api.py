@@ -3,6 +3,7 @@ are refused with the documented codes (never a crash), and the example program p
 import re
 import subprocess
 
+import numpy as np
 import pytest
 
 from codegen.pipeline import write_model, write_standalone
@@ -128,6 +129,28 @@ int main(int argc, char **argv)
         memset(&rec, 0, sizeof rec);                  /* the original record gone: the copy keeps its data */
         equal = equal && copy.base.impulse[0] != 0.0;
         printf("same=%d\n", bound && equal && same_run(&sim, &other, 1.5));
+    } else if (strcmp(c, "sens") == 0) {            /* sensitivities through the per-model wrappers */
+        static double sdw[PAPER_CASE1_SENS_NDOUBLE(2)], seed_x[2 * PAPER_CASE1_NX], seed_p[2 * PAPER_CASE1_NPARAM];
+        double S[2 * PAPER_CASE1_NX];
+        gac_sens sens;
+        int i;
+        memset(seed_x, 0, sizeof seed_x);
+        memset(seed_p, 0, sizeof seed_p);
+        seed_x[PAPER_CASE1_NQ + PAPER_CASE1_Q_X1] = 1.0;                    /* d / d qd0[X1] */
+        seed_p[PAPER_CASE1_NPARAM + PAPER_CASE1_P_G] = 1.0;                 /* d / d g */
+        code = paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);
+        if (code != GAC_OK || paper_case1_sens_state(&sim, S) != GAC_ERR_NULL_ARGUMENT) return 3;   /* none yet */
+        if (paper_case1_sens_attach(&sim, &sens, 0, seed_x, seed_p, sdw) != GAC_ERR_BAD_OPTION) return 5;
+        code = paper_case1_sens_attach(&sim, &sens, 2, seed_x, seed_p, sdw);
+        if (code != GAC_OK) return 6;
+        while ((code = paper_case1_sim_advance(&sim, 0.6, NULL, 0, NULL, NULL, &rec)) == GAC_SIM_IMPACT
+               || code == GAC_SIM_CONTACT) {
+        }
+        if (code != GAC_SIM_END) return 3;
+        code = paper_case1_sens_state(&sim, S);
+        printf("status=%d\nimpacts=%ld\n", sens.status, sens.n_impacts);
+        printf("S=");
+        for (i = 0; i < 2 * PAPER_CASE1_NX; ++i) printf("%.17g%s", S[i], i + 1 < 2 * PAPER_CASE1_NX ? "," : "\n");
     } else if (strcmp(c, "state_null") == 0) {
         double t = -1.0, v[PAPER_CASE1_NQ];
         code = paper_case1_sim_init(&sim, 0.0, q, qd, p, &opt);
@@ -189,7 +212,7 @@ def built(tmp_path_factory, compiled):
     library; and the compiled Python module of the same model."""
     out = tmp_path_factory.mktemp("c_api")
     scene = load_scene("paper-case1")
-    compiled_model = compiled(scene, specialise=True)
+    compiled_model = compiled(scene, specialise=True, tangent=True)   # with the tangent kernels: sensitivities
     model = compiled_model.generated                      # the suite's model of the scene, derived once
     write_model(model, out)
     copy_library(out)
@@ -295,6 +318,20 @@ def test_header_sizes_are_the_library_formulas(built):
                             ("SIM_NINT", lib.gac_sim_nint), ("RECORD_NDOUBLE", lib.gac_record_ndouble),
                             ("RECORD_NINT", lib.gac_record_nint)):
         assert formula(descriptor) == getattr(lib, f"PAPER_CASE1_{suffix}") == model.size(suffix), suffix
+
+
+def test_sensitivities_through_the_per_model_wrappers_match_pythons(built):
+    """NAME_sens_attach / NAME_sens_state with caller-owned storage of NAME_SENS_NDOUBLE(k) doubles: a run of
+    paper-case1 through its impacts carries d x / d qd0[X1] and d x / d g as the Python front end's run does (the
+    same library; the standalone build's flags may change the last bits)."""
+    _, model = built
+    result = drive(built, "sens")
+    assert result["code"] == "0"
+    assert int(result["status"]) == 0 and int(result["impacts"]) > 0
+    S = np.array([float(v) for v in result["S"].split(",")]).reshape(2, -1).T
+    r = simulate(model, 0.6, sensitivities=["qd0[X1]", "g"])
+    assert r.sensitivities.valid and r.sensitivities.n_impacts == int(result["impacts"])
+    assert np.allclose(S, r.sensitivities.matrix, rtol=1e-9, atol=1e-9 * np.abs(r.sensitivities.matrix).max())
 
 
 def test_sim_state_and_default_options_ignore_null(built):

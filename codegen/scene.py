@@ -673,6 +673,7 @@ def parameter_name(kind: str, owner: int | str | None = None) -> str:
 def split_parameter_name(name: str) -> tuple[str, int | str | None]:
     """(kind, owner) of a parameter's name, the inverse of parameter_name: 'e_limit_3' -> ('e_limit', 3),
     'e_x2_min' -> ('e', 'x2_min'), 'Jxx_2' -> ('Jxx', 2), 'g' -> ('g', None)."""
+    name = name.partition(".")[2] or name           # a chain's prefix ('c2.l_1', codegen.chains) dropped
     if name[-1].isdigit():
         kind, owner = name.rsplit("_", 1)
         return kind, int(owner)
@@ -785,6 +786,11 @@ class Scene:
     @property
     def nq(self) -> int:
         return self.n + 5
+
+    @property
+    def npoint(self) -> int:
+        """The joint points O_1..O_(n+1)."""
+        return self.n + 1
 
     @property
     def all_twists(self) -> tuple:
@@ -1055,6 +1061,14 @@ class Scene:
         that end there (link p - 1 and link p); 0 for segments."""
         return max((self.links[i - 1].radius for i in (p - 1, p) if 1 <= i <= self.n), default=0.0)
 
+    def capsule_radius(self, i: int) -> float:
+        """The capsule radius (m) of link i (0 for a segment)."""
+        return self.links[i - 1].radius
+
+    def full_coordinate_names(self) -> list[str]:
+        """The names of the full layout (Eq. 13): theta_-1, theta_0, theta_1..theta_n, X1, X2, X3."""
+        return coordinate_names(self.n)
+
     def possible_link_pairs(self) -> list[tuple[int, int]]:
         """The pairs of links (i < j, 1-based) that can touch each other as capsules: not adjacent (adjacent links
         share a joint point, where their capsules always overlap) and with radii adding up to more than 0 (two
@@ -1242,6 +1256,7 @@ JOINT_KEYS = ("stiffness", "rest_angle", "damping", "lower", "upper", "limit_res
 LINE_KEYS = ("length", "mu", "J", "radius", "twist", "twist_matrix", "count") + JOINT_KEYS
 RIGID_KEYS = ("length", "mass", "com", "inertia", "radius", "twist", "twist_matrix", "count") + JOINT_KEYS
 INITIAL_KEYS = ("q", "qd")
+BOX_KEYS = ("gravity", "gravity_direction", "walls", "restitution", "friction", "friction_velocity", "obstacles")
 
 
 def scene_file(source: str | Path) -> Path:
@@ -1384,6 +1399,9 @@ def _toml_field_at(text: str, line: int) -> str:
 def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path | None = None) -> Scene:
     """Build a Scene from the plain-data form used by the TOML/JSON files (see docs/scenes.md).  ``urdf``: a URDF
     file (relative to ``folder``, the scene file's) whose serial chain gives the links (codegen.urdf)."""
+    if isinstance(data, dict) and "chains" in data:          # several chains in one box: codegen.chains
+        from .chains import chains_from_dict
+        return chains_from_dict(data, default_name, folder, BOX_KEYS)
     _check_keys(data, TOP_KEYS, "scene")
     tables, base = _chain_tables(data, folder)
     links, twists, joints = _links_from_data(tables)

@@ -66,6 +66,9 @@ class Layout:
 def layout_for(scene: Scene, specialise: bool = True) -> Layout:
     """The model's layout: the coordinates the base holds (scene.base: a pinned or fixed base) are never coordinates;
     with ``specialise`` the rest of what the scene does not need is left out too (the module's docstring)."""
+    if not isinstance(scene, Scene):                  # several chains (codegen.chains): each chain's, stacked
+        from .chains import chains_layout
+        return chains_layout(scene, specialise)
     held = scene.base.held(scene.n)
     names = coordinate_names(scene.n)
     base_note = _base_note(scene, held, names)

@@ -29,6 +29,16 @@ BOX_KINDS = ("g", "wall", "friction")      # parameters of the box, shared by ev
 MAX_CHAINS = 16
 
 
+def _box_value(chain: Scene, field: str):
+    """What a chain has of the box's ``field``: its walls without the points each chain chooses, its obstacles
+    without the links."""
+    if field == "walls":
+        return tuple((w.name, w.position, w.restitution, w.friction) for w in chain.walls)
+    if field == "obstacles":
+        return tuple((o.name, o.kind, o.segment, o.radius, o.restitution) for o in chain.obstacles)
+    return getattr(chain, field)
+
+
 def chain_prefix(k: int) -> str:
     """The prefix of chain k's (1-based) own names: 'c2.'."""
     return f"c{k}."
@@ -61,7 +71,7 @@ class Chains:
         first = chains[0]
         for k, chain in enumerate(chains[1:], start=2):
             for field in ("gravity", "gravity_direction", "walls", "obstacles", "friction_velocity"):
-                if getattr(chain, field) != getattr(first, field):
+                if _box_value(chain, field) != _box_value(first, field):
                     raise SceneError(f"chains[{k}].{field}: the chains share the box's {field} (chain 1's), "
                                      f"got a different one")
         for k, chain in enumerate(chains, start=1):

@@ -1198,8 +1198,12 @@ def frames(scene: Scene, q: np.ndarray) -> list[np.ndarray]:
 
 
 def contact_points(scene: Scene, q: np.ndarray) -> np.ndarray:
-    """Positions of O_1..O_{n+1} in the reference frame, shape (n + 1, 3)."""
+    """Positions of O_1..O_{n+1} in the reference frame, shape (n + 1, 3); of several chains (codegen.chains, q
+    their stacked full layouts), every chain's points in global order."""
     q = np.asarray(q, dtype=float)
+    if not isinstance(scene, Scene):
+        return np.concatenate([contact_points(chain, q[scene.state_offset(k):scene.state_offset(k) + chain.nq])
+                               for k, chain in enumerate(scene.chains, start=1)])
     Rs = frames(scene, q)
     points = [q[scene.n + 2: scene.n + 5].copy()]
     for i, link in enumerate(scene.links, start=1):

@@ -177,6 +177,9 @@ class Chains:
     def inputs(self) -> tuple:
         return ()
 
+    def input_coordinates(self) -> list[int]:
+        return []
+
     @property
     def nu(self) -> int:
         return 0

@@ -30,6 +30,7 @@ LAYERS = {
     "codegen.options": DESCRIPTION,           # every choice of a build, resolved once
     "codegen.specialise": DESCRIPTION,        # a model's layout
     "codegen.charts": DESCRIPTION,            # the second base chart's scene
+    "codegen.chains": DESCRIPTION,            # several chains in one box
     "codegen.interface": DESCRIPTION,         # the C interface, as plain data
     "codegen.outputs": DESCRIPTION,           # output paths checked before work
     # 2. derivation and emission (sympy, jinja2)
@@ -47,6 +48,7 @@ LAYERS = {
     "codegen.rolled": DERIVATION,
     "codegen.emit": DERIVATION,
     "codegen.pipeline": DERIVATION,
+    "codegen.combine": DERIVATION,            # several chains' kernels wrapped into one model
     "codegen.artifact": DERIVATION,           # the generated text as plain data
     "codegen.cache": DERIVATION,              # generate_cached and the cache directory
     "codegen.fmu": DERIVATION,                # an FMU's texts

@@ -340,6 +340,8 @@ def chains_from_dict(data: dict, default_name: str, folder, box_keys: tuple[str,
         try:
             scenes.append(scene_from_dict(merged, default_name=f"{default_name}_c{k}", folder=folder))
         except SceneError as exc:
+            if str(exc).startswith(tuple(box_keys)):        # the box's own field: named as it is
+                raise
             raise SceneError(f"chains[{k}].{exc}") from None
     restitution = data.get("restitution", 1.0)
     e = restitution.get("links", restitution.get("default", 1.0)) if isinstance(restitution, dict) else restitution

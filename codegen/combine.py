@@ -5,7 +5,7 @@ prefix NAME_cK_; the model's kernels, with the standard signatures (codegen.inte
 them on slices (docs/simulation.md, "Several chains"):
 
 * q, qd, Q (and qdd, x, h, Q out): chain k's block of the stacked coordinates;
-* p: chain k's parameter vector gathered from the combined one (codegen.chains.Chains.parameter_map);
+* p: chain k's parameter vector gathered from the combined one (codegen.scene.Chains.parameter_map);
 * contact_points, contact_velocities: chain k's points after the earlier chains' (global point numbers);
 * contact_gaps: chain k's walls and stops after the earlier chains'; contact_bias and the rows f of
   contact_generalized_force: chain k's Jacobian rows after the earlier chains';
@@ -22,7 +22,7 @@ import time
 from dataclasses import replace
 
 from .artifact import RenderedFunction
-from .chains import Chains
+from .scene import Chains
 from .options import BuildOptions
 from .scene import SceneError
 from .specialise import Layout, layout_for
@@ -51,10 +51,10 @@ def check_charts(scene: Chains, layout: Layout) -> int:
     return turning[0] if turning else 0
 
 
-def generate_chains(scene: Chains, options: BuildOptions, name: str, progress, workers):
-    """The combined model of several chains (codegen.pipeline.generate's answer for a Chains)."""
+def generate_chains(scene: Chains, options: BuildOptions, name: str, progress, workers, derive):
+    """The combined model of several chains (codegen.pipeline.generate's answer for a Chains); ``derive(scene, name,
+    options, progress, workers, layout)``: the one-chain pipeline, which gives each chain's rendered kernels."""
     from .emit import assemble_model
-    from .pipeline import _generate
     own = chain_options(options)
     layout = layout_for(scene, options.specialise)
     check_charts(scene, layout)
@@ -63,7 +63,7 @@ def generate_chains(scene: Chains, options: BuildOptions, name: str, progress, w
     for k, chain in enumerate(scene.chains, start=1):
         progress(f"chain {k}")
         chain_layout = layout_for(chain, options.specialise)
-        model = _generate(chain, f"{name}_c{k}", own, progress, workers, chain_layout)
+        model = derive(chain, f"{name}_c{k}", own, progress, workers, chain_layout)
         blocks.append(model.functions)
         sizes.append(chain_sizes(chain, chain_layout))
     wrappers = wrap_kernels(name, blocks, sizes)

@@ -433,7 +433,7 @@ def _chart_context(scene: Scene, layout) -> dict:
 
 def _turning_chain(scene, layout) -> tuple:
     """(the chain whose base chart the model watches, its offset in the full layout): the scene itself at 0; of
-    several chains (codegen.chains), the one whose theta_0 is a coordinate (at most one), else chain 1."""
+    several chains (codegen.scene.Chains), the one whose theta_0 is a coordinate (at most one), else chain 1."""
     if isinstance(scene, Scene):
         return scene, 0
     for k, chain in enumerate(scene.chains, start=1):

@@ -36,7 +36,7 @@ def _shapes(result, scene: Scene) -> np.ndarray:
 
 
 def _lines(shape: np.ndarray, scene) -> np.ndarray:
-    """The points as drawn: of several chains (codegen.chains), a NaN row between two chains breaks the line."""
+    """The points as drawn: of several chains (codegen.scene.Chains), a NaN row between two chains breaks the line."""
     if isinstance(scene, Scene):
         return shape
     return np.insert(shape, [scene.point_offset(k) for k in range(2, len(scene.chains) + 1)], np.nan, axis=0)

@@ -18,7 +18,7 @@ from codegen import interface
 from codegen.cache import generate_cached
 from codegen.options import BuildOptions, build_options
 from codegen.artifact import GeneratedModel
-from codegen.chains import Chains
+from codegen.scene import Chains
 from codegen.scene import ObstacleContact, Scene, load_scene, scene_file
 
 from .compile import compile_model
@@ -259,7 +259,7 @@ class CompiledModel:
         names = [o.name for o in self.scene.obstacles]
         if obstacle not in names:
             raise ValueError(f"obstacle: one of this scene's obstacles ({', '.join(names) or 'none'}), got {obstacle!r}")
-        last = self.scene.npoint - 1                    # links are numbered by their first point (codegen.chains)
+        last = self.scene.npoint - 1                    # links are numbered by their first point (codegen.scene.Chains)
         if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 1 <= i <= last:
             raise ValueError(f"i: a link index in 1..{last}, got {i!r}")
         o = names.index(obstacle)
@@ -289,7 +289,7 @@ class CompiledModel:
 
     def _link_pair(self, i: int, j: int, radius) -> float:
         """Check links i, j (1-based) and give the radius sum of their capsules (``radius`` if given)."""
-        n = self.scene.npoint - 1                       # links are numbered by their first point (codegen.chains)
+        n = self.scene.npoint - 1                       # links are numbered by their first point (codegen.scene.Chains)
         for name, k in (("i", i), ("j", j)):
             if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= k <= n:
                 raise ValueError(f"{name}: a link index in 1..{n}, got {k!r}")

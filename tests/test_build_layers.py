@@ -30,7 +30,6 @@ LAYERS = {
     "codegen.options": DESCRIPTION,           # every choice of a build, resolved once
     "codegen.specialise": DESCRIPTION,        # a model's layout
     "codegen.charts": DESCRIPTION,            # the second base chart's scene
-    "codegen.chains": DESCRIPTION,            # several chains in one box
     "codegen.interface": DESCRIPTION,         # the C interface, as plain data
     "codegen.outputs": DESCRIPTION,           # output paths checked before work
     # 2. derivation and emission (sympy, jinja2)

@@ -1,10 +1,10 @@
-"""A scene of several chains ([[chains]], codegen.chains): what it reads, the numbering of its points, links and
+"""A scene of several chains ([[chains]], codegen.scene.Chains): what it reads, the numbering of its points, links and
 parameters, and the errors that name the field (no model is built here)."""
 import math
 
 import pytest
 
-from codegen.chains import Chains
+from codegen.scene import Chains
 from codegen.options import build_options
 from codegen.scene import SceneError, load_scene, scene_from_dict
 from codegen.specialise import layout_for

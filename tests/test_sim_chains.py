@@ -1,4 +1,4 @@
-"""Two chains in one box (codegen.chains, codegen.combine): two equal one-link capsule chains thrown head-on along
+"""Two chains in one box (codegen.scene.Chains, codegen.combine): two equal one-link capsule chains thrown head-on along
 X1 strike end-on on their centres' line; the velocities after are Newton's law for two equal masses,
 v1' = ((1 - e) v1 + (1 + e) v2) / 2, v2' = ((1 + e) v1 + (1 - e) v2) / 2, the linear momentum is kept and the energy
 lost is (1 - e^2) m (v1 - v2)^2 / 4."""
@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from codegen.chains import Chains
+from codegen.scene import Chains
 from codegen.scene import LineLink, Scene, Wall
 from runtime import load_model, simulate
 

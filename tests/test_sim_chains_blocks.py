@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from codegen.chains import Chains
+from codegen.scene import Chains
 from codegen.scene import LineLink, Scene, Wall
 from runtime import load_model, simulate
 

@@ -7,7 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from codegen.chains import Chains
+from codegen.scene import Chains
 from codegen.scene import LineLink, Scene, load_scene
 from runtime import load_model, simulate
 

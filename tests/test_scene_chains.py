@@ -77,3 +77,13 @@ def test_what_does_not_compose_yet_is_refused_before_any_derivation():
     planar = scene_from_dict(box(chain(0.5), chain(2.0)))
     with pytest.raises(SceneError, match="^tangent: a scene of several chains"):
         generate(planar, build_options(planar, tangent=True))
+
+
+def test_obstacles_are_the_boxs_and_every_chains_links_strike_them():
+    from codegen.scene import ObstacleContact
+    scene = scene_from_dict(box(chain(0.5), chain(2.0), obstacles=[{"name": "ball", "center": [1.2, 1.5, 0.0],
+                                                                    "radius": 0.1, "restitution": 0.4}]))
+    assert scene.parameter_names().count("e_ball") == 1
+    hits = [c for c in scene.rowless_contacts() if isinstance(c, ObstacleContact)]
+    assert [c.name for c in hits] == ["L1/ball", "L3/ball"]          # chain 2's link 1 is global link 3
+    assert scene.rowless_contacts()[0].name == "L1-L3"                  # the pair across the chains first

@@ -15,7 +15,7 @@ from .interface import ROLLED_MIN_LINKS
 from .options import build_options
 from .outputs import output_dir_problem
 from .pipeline import write_model, write_standalone
-from .scene import MAX_LINKS, MAX_LINKS_REASON, SceneError, default_scene, is_c_identifier, load_scene, shipped_scene_names
+from .scene import MAX_LINKS, MAX_LINKS_REASON, Scene, SceneError, default_scene, is_c_identifier, load_scene, shipped_scene_names
 from .specialise import check_not_singular, layout_for
 
 
@@ -172,7 +172,14 @@ def main(argv=None) -> int:
         return 2
     try:
         layout = layout_for(scene, specialise=options.specialise)
-        check_not_singular(scene, layout)
+        if not isinstance(scene, Scene):            # several chains: what does not compose yet is refused here
+            from .combine import chain_options, check_charts
+            chain_options(options)
+            check_charts(scene, layout)
+            if args.urdf:
+                raise SceneError("--urdf: a scene of several chains has no URDF form (a URDF file holds one chain)")
+        else:
+            check_not_singular(scene, layout)
     except SceneError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -17,7 +17,6 @@ from .options import BuildOptions
 from .parameters import parameter_rules
 from .scene import DEFAULT_GRAVITY_DIRECTION, WALL_NAMES, JointStop, ObstacleContact, Scene, parameter_name, \
     split_parameter_name
-from .specialise import coordinate_names
 from .version import __version__
 
 
@@ -289,17 +288,18 @@ def _weight_scale_expression(scene: Scene, bake_params: bool) -> str:
 
 
 def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], options: BuildOptions,
-                   layout, chart_b=None, timings=None) -> GeneratedModel:
+                   layout, chart_b=None, timings=None, chains=None) -> GeneratedModel:
     """The model's header, source and cffi declarations from its rendered kernels (in interface order).
     ``chart_b``: (the scene on chart B, its rendered loop kernels) for a second base chart (codegen.charts), or None;
-    ``timings``: seconds per stage so far."""
+    ``timings``: seconds per stage so far; ``chains``: for several chains (codegen.combine), each chain's prefix, its
+    rendered kernels (emitted static, the model's kernels wrapping them) and its parameters' places in p."""
     bake_params = options.bake_params
     dense = _check_kernels(functions)
     generated = {f.name: f for f in functions}
     env = _environment()
     params = list(zip(scene.parameter_names(), scene.parameter_vector().tolist()))
     pnames = [pname for pname, _ in params]
-    names = coordinate_names(scene.n)
+    names = scene.full_coordinate_names()
     zeros = set(layout.zero_params)
     rules = parameter_rules(scene, layout.zero_params, bake_params)
     contact_table = [_contact_entry(c, point, wall, layout, scene, bake_params)
@@ -307,7 +307,7 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], o
     contact_table += [_link_entry(len(contact_table) + k, pair, scene, bake_params)
                       for k, pair in enumerate(scene.rowless_contacts())]
     sizes = interface.size_definitions(name, n=scene.n, nq=layout.nq, nparam=len(params), nu=scene.nu,
-                                       npoint=scene.n + 1, ncontact=len(contact_table),
+                                       npoint=scene.npoint, ncontact=len(contact_table),
                                        njrow=len(layout.contact_rows), friction=any(entry["has_friction"] for entry in contact_table))
     context = dict(
         NAME=name.upper(), name=name, version=__version__, scene=scene, scene_hash=scene_hash(scene),
@@ -354,6 +354,7 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], o
         kernels=[(f, generated.get(f.name)) for f in interface.KERNELS], dense=dense,
         formed=[f for f in interface.KERNELS if f.name not in generated], all_functions=interface.ALL_FUNCTIONS,
         api_functions=interface.FUNCTIONS, callbacks=interface.CALLBACKS,
+        chains=[dict(chain, nparam=len(chain["pmap"])) for chain in chains or ()],
     )
     header = env.get_template("model.h.j2").render(**context)
     source = env.get_template("model.c.j2").render(**context)
@@ -421,22 +422,35 @@ def _chart_context(scene: Scene, layout) -> dict:
     """What the C loop needs for the base chart's measure |det E| = |a . (e_z x Rz(theta_0) b)|, a = T_0^T e_z,
     b = T_1 e_z (the three base joint axes' triple product): a, b, and where theta_0 is (an index into q, or
     its fixed value)."""
+    scene, offset = _turning_chain(scene, layout)
     T0, T1 = (np.array(T, dtype=float) for T in scene.base_twists[1:])
-    if 1 not in layout.free:
+    if offset + 1 not in layout.free:
         # theta_0 held (a planar model, a revolute or fixed base): theta_-1 is held with it, and the rates of the
         # base angles left map to omega through one unit column, never singular: the measure of a chart at its best
         # (|cos 0| with a = e_y, b = e_x), whatever the held angle (a revolute base about X2 holds theta_0 = pi/2)
         return {"a": ["0.0", "1.0", "0.0"], "b": ["1.0", "0.0", "0.0"], "index": -1, "value": "0.0"}
     return {"a": [_double_literal(float(x)) for x in T0[2, :]], "b": [_double_literal(float(x)) for x in T1[:, 2]],
-            "index": layout.free.index(1), "value": "0.0"}
+            "index": layout.free.index(offset + 1), "value": "0.0"}
+
+
+def _turning_chain(scene, layout) -> tuple:
+    """(the chain whose base chart the model watches, its offset in the full layout): the scene itself at 0; of
+    several chains (codegen.scene.Chains), the one whose theta_0 is a coordinate (at most one), else chain 1."""
+    if isinstance(scene, Scene):
+        return scene, 0
+    for k, chain in enumerate(scene.chains, start=1):
+        if scene.state_offset(k) + 1 in layout.free:
+            return chain, scene.state_offset(k)
+    return scene.chains[0], 0
 
 
 def _base_context(scene: Scene, layout) -> dict:
     """The base chart's twists T_-1, T_0, T_1 (row-major, 9 numbers each) and the indices in q of theta_-1, theta_0,
     theta_1 (-1 for one the model holds fixed): gac_model.base, for the conversion between two charts."""
+    scene, offset = _turning_chain(scene, layout)
     T = [[_double_literal(float(x)) for row in M for x in row] for M in scene.base_twists]
     return {"T_m1": T[0], "T_0": T[1], "T_1": T[2],
-            "index": [layout.free.index(i) if i in layout.free else -1 for i in range(3)]}
+            "index": [layout.free.index(offset + i) if offset + i in layout.free else -1 for i in range(3)]}
 
 
 def _contact_entry(c: int, point: int, wall, layout, scene: Scene, bake_params: bool) -> dict:
@@ -444,6 +458,8 @@ def _contact_entry(c: int, point: int, wall, layout, scene: Scene, bake_params: 
     stop = isinstance(wall, JointStop)
     row = layout.contact_rows.index((point, "theta" if stop else wall.axis))
     restitution = ("e_limit", point) if stop else ("e", wall.name)          # the parameter of its e
+    e_index = -1 if bake_params else (scene.stop_parameter_index(*restitution) if stop and hasattr(
+        scene, "stop_parameter_index") else scene.parameter_index(*restitution))   # several chains: its chain's
     sign = int(wall.normal_sign)
     if stop:
         label = wall.name
@@ -460,8 +476,7 @@ def _contact_entry(c: int, point: int, wall, layout, scene: Scene, bake_params: 
     if friction > 0.0:
         doc += f", Coulomb friction coefficient c_f = {friction} (tangential rows {', '.join(str(r) for r in trow if r >= 0)})"
     return dict(c=c, point=point, axis=-1 if stop else wall.axis, sign=sign, row=row,
-                e_index=-1 if bake_params else scene.parameter_index(*restitution),
-                e_value=_double_literal(float(wall.restitution)),
+                e_index=e_index, e_value=_double_literal(float(wall.restitution)),
                 kind="GAC_CONTACT_STOP" if stop else "GAC_CONTACT_WALL",
                 coordinate=layout.free.index(point + 1) if stop else -1, label=label, doc=doc,
                 has_friction=int(friction > 0.0),
@@ -492,7 +507,7 @@ def _link_entry(c: int, pair, scene: Scene, bake_params: bool) -> dict:
 
 def macro_name(name: str) -> str:
     """A parameter or coordinate name as part of a C macro name: 'e_x2_min' -> 'E_X2_MIN', 'theta_-1' -> 'THETA_M1'."""
-    return name.replace("-", "M").upper()
+    return name.replace("-", "M").replace(".", "_").upper()
 
 
 def gravity_text(scene: Scene) -> str:

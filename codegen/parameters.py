@@ -119,10 +119,11 @@ def parameter_rules(scene: Scene, zero_params=(), bake_params: bool = False) -> 
             text = "built into this model as 0 (the scene's value, so its terms were left out; the general model " \
                    "takes other values)"
         partner = ""                                # the parameter this one must exceed
+        prefix = name.partition(".")[0] + "." if "." in name else ""          # a chain's (codegen.scene.Chains)
         if kind == "wall" and owner.endswith("_max"):
             partner = parameter_name("wall", owner[:-len("_max")] + "_min")     # wall_x1_max > wall_x1_min
         elif kind == "upper":
-            partner = parameter_name("lower", owner)                           # upper_k > lower_k
+            partner = prefix + parameter_name("lower", owner)                  # upper_k > lower_k
         if partner in names:
             rules.append(Rule(index, name, lo, hi, text, above=names.index(partner), above_name=partner))
         elif kind == "Ixx":

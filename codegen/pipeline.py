@@ -37,6 +37,9 @@ def generate(scene: Scene, options: BuildOptions | None = None, *, name: str | N
     """
     options = build_options(scene) if options is None else options
     name = name or scene.name
+    if not isinstance(scene, Scene):                       # several chains in one box (codegen.combine)
+        from .combine import generate_chains
+        return generate_chains(scene, options, name, progress, workers, _generate)
     model = _generate(scene, name, options, progress, workers, layout_for(scene, options.specialise))
     wanted = options.chart_b and options.formulation == "gibbs_appell"
     scene_b = chart_b_scene(scene, model.layout) if wanted else None

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scene import (RigidLink, Scene, SceneError, contact_points, coordinate_names, frames, split_parameter_name,
-                    stop_rows)
+from .scene import (JointStop, RigidLink, Scene, SceneError, contact_points, coordinate_names, frames,
+                    split_parameter_name, stop_rows)
 
 ANGLE_SNAP = 1e-12       # an angle within this of a multiple of pi/2 counts as exactly that multiple
 
@@ -67,6 +67,8 @@ class Layout:
 def layout_for(scene: Scene, specialise: bool = True) -> Layout:
     """The model's layout: the coordinates the base holds (scene.base: a pinned or fixed base) are never coordinates;
     with ``specialise`` the rest of what the scene does not need is left out too (the module's docstring)."""
+    if not isinstance(scene, Scene):                  # several chains (codegen.scene.Chains): each chain's, stacked
+        return chains_layout(scene, specialise)
     held = scene.base.held(scene.n)
     names = coordinate_names(scene.n)
     base_note = _base_note(scene, held, names)
@@ -212,3 +214,30 @@ def check_not_singular(scene: Scene, layout: Layout) -> None:
             raise SceneError(f"links[{i}].J: Jxx = 0 leaves the spatial single link's rotation about its own "
                              "axis with no inertia (the inertia matrix is singular); give Jxx > 0 or make the "
                              "scene planar")
+
+
+def chains_layout(scene, specialise: bool = True) -> Layout:
+    """The combined model's layout: each chain's (codegen.specialise.layout_for) shifted into the stacked full
+    layout; its contacts' points (walls) and joints (stops) in global numbers."""
+    free, fixed, contacts, rows, zeros, notes, held = [], [], [], [], [], [], []
+    normals = set()
+    for k, chain in enumerate(scene.chains, start=1):
+        layout = layout_for(chain, specialise)
+        off, poff = scene.state_offset(k), scene.point_offset(k)
+        free += [off + i for i in layout.free]
+        fixed += [(off + i, v) for i, v in layout.fixed]
+        held += [off + i for i in layout.held]
+        contacts += [(_shift_contact(point, wall, off, poff)) for point, wall in layout.contacts]
+        rows += [(off + point, axis) if axis == "theta" else (poff + point, axis) for point, axis in layout.contact_rows]
+        zeros += [scene.combined_name(k, name) for name in layout.zero_params]
+        notes += [f"chain {k}: {note}" for note in layout.notes]
+        normals.add(layout.planar_normal)
+    normal = normals.pop() if len(normals) == 1 else None
+    return Layout(tuple(free), tuple(fixed), tuple(contacts), tuple(rows), tuple(dict.fromkeys(zeros)), tuple(notes),
+                  normal, tuple(held))
+
+
+def _shift_contact(point, wall, off: int, poff: int):
+    """A chain's (point, Wall) contact in global point numbers; a stop's (joint k, JointStop) with k shifted by the
+    chain's full-layout offset (theta_k sits at full index k + 1)."""
+    return (off + point, wall) if isinstance(wall, JointStop) else (poff + point, wall)

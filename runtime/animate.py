@@ -35,6 +35,23 @@ def _shapes(result, scene: Scene) -> np.ndarray:
     return np.array([contact_points(scene, q) for q in result.q])
 
 
+def _lines(shape: np.ndarray, scene) -> np.ndarray:
+    """The points as drawn: of several chains (codegen.scene.Chains), a NaN row between two chains breaks the line."""
+    if isinstance(scene, Scene):
+        return shape
+    return np.insert(shape, [scene.point_offset(k) for k in range(2, len(scene.chains) + 1)], np.nan, axis=0)
+
+
+CHAIN_COLORS = ["tab:blue", "tab:orange", "tab:green", "tab:purple"]     # a film strip's chains, in order
+
+
+def _pieces(shape: np.ndarray, scene) -> list[np.ndarray]:
+    """The points of each chain (one piece for a one-chain scene)."""
+    if isinstance(scene, Scene):
+        return [shape]
+    return np.split(shape, [scene.point_offset(k) for k in range(2, len(scene.chains) + 1)])
+
+
 def _planar(shapes: np.ndarray) -> bool:
     return bool(np.ptp(shapes[..., 2]) < 1e-9)
 
@@ -174,14 +191,14 @@ def animate(result, scene: Scene, path, fps: int = 30, max_frames: int = MAX_FRA
     ax = fig.add_subplot(111) if planar else fig.add_subplot(111, projection="3d")
     draw_box(ax, scene, planar)
     _limits(ax, shapes, scene, planar)
-    chain = _draw(ax, shapes[0], planar, color="tab:blue", marker="o", ms=4, lw=2)
+    chain = _draw(ax, _lines(shapes[0], scene), planar, color="tab:blue", marker="o", ms=4, lw=2)
     stars = _draw(ax, shapes[0][:0], planar, color="r", marker="*", ms=12, ls="none")
     label = ax.set_title("")
     impact_t = np.array([i.t for i in result.impacts])
 
     def update(k):
         i = frames[k]
-        shape = shapes[i]
+        shape = _lines(shapes[i], scene)
         if planar:
             chain.set_data(shape[:, 0], shape[:, 1])
         else:
@@ -219,7 +236,8 @@ def film_strip(result, scene: Scene, path, times) -> None:
         ax = fig.add_subplot(1, len(times), k + 1, **({} if planar else {"projection": "3d"}))
         draw_box(ax, scene, planar)
         _limits(ax, shapes, scene, planar)
-        _draw(ax, shapes[i], planar, color="tab:blue", marker="o", ms=3, lw=2)
+        for piece, color in zip(_pieces(shapes[i], scene), CHAIN_COLORS * len(shapes[i])):
+            _draw(ax, piece, planar, color=color, marker="o", ms=3, lw=2)
         ax.set_title(f"{chr(ord('A') + k) if k < 26 else k}: t = {result.t[i]:.3f} s", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)

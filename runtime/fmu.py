@@ -56,6 +56,9 @@ def build_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", *, name:
     say = progress or (lambda message: None)
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
+    if not isinstance(scene, Scene):
+        raise SceneError(f"fmu: a scene of several chains ({scene.name}) is not built as an FMU yet; simulate it, or "
+                         "build its standalone C (python -m codegen --standalone)")
     if stop_time is None:
         stop_time = DEFAULT_T_END.get(scene.name, 1.0)
     for label, value in (("stop_time", stop_time), ("step_size", step_size)):

@@ -5,7 +5,8 @@ import sys
 
 from codegen.scene import MAX_LINKS, SceneError, default_scene, load_scene
 
-DEFAULT_T_END = {"paper_case1": 1.5, "paper_case2": 1.75, "chain4": 1.5, "arm_obstacle": 3.0}   # s; any other: 1.0
+DEFAULT_T_END = {"paper_case1": 1.5, "paper_case2": 1.75, "chain4": 1.5, "arm_obstacle": 3.0,
+                 "two_chains": 2.5}   # s; any other: 1.0
 
 
 def scene_and_horizon(args):

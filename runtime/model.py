@@ -18,6 +18,7 @@ from codegen import interface
 from codegen.cache import generate_cached
 from codegen.options import BuildOptions, build_options
 from codegen.artifact import GeneratedModel
+from codegen.scene import Chains
 from codegen.scene import ObstacleContact, Scene, load_scene, scene_file
 
 from .compile import compile_model
@@ -222,12 +223,12 @@ class CompiledModel:
                           self._vec(f, len(self.contact_rows), "f"), self._params(p))
 
     def contact_points(self, q, p=None) -> np.ndarray:
-        return self._call("contact_points", 3 * (self.n + 1), self._vec(q, self.nq, "q"),
-                          self._params(p)).reshape(self.n + 1, 3)
+        return self._call("contact_points", 3 * self.scene.npoint, self._vec(q, self.nq, "q"),
+                          self._params(p)).reshape(self.scene.npoint, 3)
 
     def contact_velocities(self, q, qd, p=None) -> np.ndarray:
-        return self._call("contact_velocities", 3 * (self.n + 1), self._vec(q, self.nq, "q"),
-                          self._vec(qd, self.nq, "qd"), self._params(p)).reshape(self.n + 1, 3)
+        return self._call("contact_velocities", 3 * self.scene.npoint, self._vec(q, self.nq, "q"),
+                          self._vec(qd, self.nq, "qd"), self._params(p)).reshape(self.scene.npoint, 3)
 
     def contact_jacobian(self, q, p=None) -> np.ndarray:
         rows = len(self.contact_rows)
@@ -248,7 +249,7 @@ class CompiledModel:
         for c in range(len(self.layout.contacts), len(self.contacts)):
             pair = self.contacts[c][1]
             gaps[c] = (self.obstacle_gap(q, pair.i, pair.obstacle.name, p)[0] if isinstance(pair, ObstacleContact)
-                       else self.link_gap(q, pair.i, pair.j, p)[0])
+                       else self.link_gap(q, pair.i, pair.j, p, radius=pair.radius)[0])
         return gaps
 
     def obstacle_gap(self, q, i: int, obstacle: str, p=None) -> tuple[float, float, float, np.ndarray]:
@@ -258,10 +259,11 @@ class CompiledModel:
         names = [o.name for o in self.scene.obstacles]
         if obstacle not in names:
             raise ValueError(f"obstacle: one of this scene's obstacles ({', '.join(names) or 'none'}), got {obstacle!r}")
-        if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 1 <= i <= self.scene.n:
-            raise ValueError(f"i: a link index in 1..{self.scene.n}, got {i!r}")
+        last = self.scene.npoint - 1                    # links are numbered by their first point (codegen.scene.Chains)
+        if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 1 <= i <= last:
+            raise ValueError(f"i: a link index in 1..{last}, got {i!r}")
         o = names.index(obstacle)
-        radius = self.scene.links[i - 1].radius + self.scene.obstacles[o].radius
+        radius = self.scene.capsule_radius(i) + self.scene.obstacles[o].radius
         out = np.zeros(6)
         code = self.lib.gac_obstacle_gap(self.ffi.addressof(self.c.model), self._ptr(self._vec(q, self.nq, "q")),
                                          self._ptr(self._params(p)), int(i), o, radius, self._ptr(out))
@@ -287,14 +289,14 @@ class CompiledModel:
 
     def _link_pair(self, i: int, j: int, radius) -> float:
         """Check links i, j (1-based) and give the radius sum of their capsules (``radius`` if given)."""
-        n = self.scene.n
+        n = self.scene.npoint - 1                       # links are numbered by their first point (codegen.scene.Chains)
         for name, k in (("i", i), ("j", j)):
             if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= k <= n:
                 raise ValueError(f"{name}: a link index in 1..{n}, got {k!r}")
         if i == j:
             raise ValueError(f"j: a link other than i = {i}, got {j!r}")
         if radius is None:
-            return self.scene.links[i - 1].radius + self.scene.links[j - 1].radius
+            return self.scene.capsule_radius(i) + self.scene.capsule_radius(j)
         if not (isinstance(radius, (int, float, np.floating)) and 0.0 <= float(radius) < np.inf):
             raise ValueError(f"radius: a finite number >= 0 (m), got {radius!r}")
         return float(radius)
@@ -478,7 +480,7 @@ def load_model(scene: Scene | str | Path, bake_params: bool = False, flags=None,
             raise TypeError(f"{option}: expected True or False, got {value!r}")
     choices = dict(bake_params=bake_params, specialise=specialise, dense=dense, rolled=rolled, chart_b=chart_b,
                    tangent=tangent, extended=extended, flags=flags)
-    if isinstance(scene, Scene):
+    if isinstance(scene, (Scene, Chains)):
         return _build_model(scene, build_options(scene, **choices), progress)
     if not isinstance(scene, (str, os.PathLike)):
         raise TypeError("scene: expected a Scene, a shipped scene name or a path to a .toml/.json scene "

@@ -706,10 +706,10 @@ def ill_conditioning(scene: Scene, p, planar: bool) -> str:
     turns its links about their joint axes only, so only those count), and that of the whole chain's moment of
     inertia (straight, about its end: M L^2 / 3) to its largest link's, which measures how I_f grows with the
     number of links (docs/simulation.md).  p: the parameters (scene.parameter_names()); planar: the model is."""
-    values = dict(zip(scene.parameter_names(), np.asarray(p, dtype=float).tolist()))
+    values = np.asarray(p, dtype=float).tolist()
 
     def value(kind, owner):
-        return values[parameter_name(kind, owner)]
+        return values[scene.parameter_index(kind, owner)]
     masses, lengths, moments = [], [], []          # (value, link); moments: (value, link, which one)
     for i, link in enumerate(scene.links, start=1):
         l = value("l", i)
@@ -889,7 +889,7 @@ def _step_diagnosis(model: CompiledModel, sim, t_from: float, steps: int) -> str
     estimate of the last step (the fastest mode), with its rate."""
     h_mean = (float(sim.t) - t_from) / max(steps, 1)
     nq = model.nq
-    names = [coordinate_names(model.scene.n)[i] for i in model.layout.free]
+    names = [model.scene.full_coordinate_names()[i] for i in model.layout.free]
     index = int(sim.err_index)
     x = np.array(model.ffi.unpack(sim.x, 2 * nq))
     what = f"{names[index]}" if index < nq else f"the rate of {names[index - nq]}"

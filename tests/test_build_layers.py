@@ -47,6 +47,7 @@ LAYERS = {
     "codegen.rolled": DERIVATION,
     "codegen.emit": DERIVATION,
     "codegen.pipeline": DERIVATION,
+    "codegen.combine": DERIVATION,            # several chains' kernels wrapped into one model
     "codegen.artifact": DERIVATION,           # the generated text as plain data
     "codegen.cache": DERIVATION,              # generate_cached and the cache directory
     "codegen.fmu": DERIVATION,                # an FMU's texts

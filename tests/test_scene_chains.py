@@ -5,7 +5,6 @@ import math
 import pytest
 
 from codegen.scene import Chains
-from codegen.options import build_options
 from codegen.scene import SceneError, load_scene, scene_from_dict
 from codegen.specialise import layout_for
 
@@ -74,9 +73,6 @@ def test_what_does_not_compose_yet_is_refused_before_any_derivation():
                                                                 "qd": [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]})))
     with pytest.raises(SceneError, match="chains 1 and 2 both turn their base in 3D"):
         generate(scene)
-    planar = scene_from_dict(box(chain(0.5), chain(2.0)))
-    with pytest.raises(SceneError, match="^tangent: a scene of several chains"):
-        generate(planar, build_options(planar, tangent=True))
 
 
 def test_obstacles_are_the_boxs_and_every_chains_links_strike_them():

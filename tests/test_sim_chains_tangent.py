@@ -1,16 +1,17 @@
-"""Tangent kernels of a scene of several chains (codegen.combine): the sensitivities of a run through a strike of two
+"""Tangent kernels and inputs of a scene of several chains (codegen.combine): the sensitivities of a run through a strike of two
 chains' links (head-on, and a spinning link's end on the side of the other) against central differences of whole
 runs, the pair's row derivative across the chains (gac_contact_normal_tangent on global points) against central
-differences, the linearisation block-diagonal with each chain's own model's blocks, and the block tangent kernel
-equal to its directions one at a time."""
+differences, the linearisation block-diagonal with each chain's own model's blocks, the block tangent kernel
+equal to its directions one at a time, and each chain's inputs acting on its own block (u stacked by chain)."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from codegen.scene import Chains, LineLink, Scene, Wall
+from codegen.scene import Chains, Joint, LineLink, Scene, Wall
 from runtime import load_model, simulate
 from tests.test_sim_chains import LENGTH, MU, RADIUS, head_on
 from tests.test_sim_chains_blocks import chains as tumbling
@@ -140,3 +141,31 @@ def test_the_block_tangent_kernel_is_its_directions_one_at_a_time(tumble):
     for j in range(block):
         one = model.forward_dynamics_tangent(q, qd, dq[j], dqd[j], dp=dp[j])
         assert np.allclose(out[j], one, rtol=1e-13, atol=1e-13)
+
+
+def test_each_chains_inputs_drive_its_own_block():
+    """Chain 1 driven on theta_2, chain 2 on theta_1 and theta_3 (with a spring and damper on its first joint): the
+    model's u is theirs stacked ('c1.theta_2', 'c2.theta_1', 'c2.theta_3'); qdd, the power and B are each chain's
+    own model's with its slice of u."""
+    a, b = tumbling().chains
+    scene = Chains(name="tumble_driven", chains=(replace(a, inputs=("theta_2",)), replace(
+        b, inputs=("theta_1", "theta_3"), joints=(Joint(stiffness=2.0, damping=0.3),) + b.joints[1:])),
+        link_restitution=0.9)
+    model = load_model(scene, tangent=True)
+    own = [load_model(chain, tangent=True) for chain in scene.chains]
+    assert model.input_names == ["c1.theta_2", "c2.theta_1", "c2.theta_3"] and model.nu == 3
+    rng = np.random.default_rng(2)
+    q, qd, u = rng.uniform(-2, 2, model.nq), rng.uniform(-3, 3, model.nq), rng.normal(size=3)
+    qs, qds, us = _split(scene, model, own, q), _split(scene, model, own, qd), [u[:1], u[1:]]
+    assert np.array_equal(model.forward_dynamics(q, qd, u=u),
+                          np.concatenate([m.forward_dynamics(x, y, u=z) for m, x, y, z in zip(own, qs, qds, us)]))
+    parts = np.array([m.power(x, y, u=z) for m, x, y, z in zip(own, qs, qds, us)])
+    assert np.allclose(model.power(q, qd, u=u), parts.sum(axis=0), rtol=1e-14, atol=1e-14)
+    _, B = model.linearize(q, qd, u=u)
+    nq, n1 = model.nq, own[0].nq
+    blocks = [m.linearize(x, y, u=z)[1] for m, x, y, z in zip(own, qs, qds, us)]
+    assert np.allclose(B[nq:nq + n1, :1], blocks[0][n1:], rtol=1e-12, atol=1e-12)
+    assert np.allclose(B[nq + n1:, 1:], blocks[1][own[1].nq:], rtol=1e-12, atol=1e-12)
+    assert np.all(B[nq:nq + n1, 1:] == 0.0) and np.all(B[nq + n1:, :1] == 0.0)
+    r = simulate(model, 0.5, u=u)
+    assert r.success and r.impacts, r.message

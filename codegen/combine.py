@@ -5,17 +5,21 @@ NAME_cK_ (declared before every kernel, so that a long source compiled as severa
 model's kernels, with the standard signatures (codegen.interface), are short wrappers that call
 them on slices (docs/simulation.md, "Several chains"):
 
-* q, qd, Q (and qdd, x, h, Q out): chain k's block of the stacked coordinates;
-* p: chain k's parameter vector gathered from the combined one (codegen.scene.Chains.parameter_map);
+* q, qd, Q and the directions dq, dqd, dQ (and qdd, x, h, Q, dqdd, dx, dQ out): chain k's block of the stacked
+  coordinates; u, du: chain k's inputs after the earlier chains';
+* p, dp: chain k's parameter vector (and direction) gathered from the combined one (Chains.parameter_map);
 * contact_points, contact_velocities: chain k's points after the earlier chains' (global point numbers);
-* contact_gaps: chain k's walls and stops after the earlier chains'; contact_bias and the rows f of
-  contact_generalized_force: chain k's Jacobian rows after the earlier chains';
-* energy, power: summed; forward_dynamics_energy: qdd by blocks, T and V summed.
+* contact_gaps (and its tangent): chain k's walls and stops after the earlier chains'; contact_bias (and its
+  tangent) and the rows f, df of contact_generalized_force (and its tangent): chain k's Jacobian rows after the
+  earlier chains';
+* energy, power: summed; forward_dynamics_energy: qdd by blocks, T and V summed;
+* forward_dynamics_tangent_block: each of its GAC_TANGENT_BLOCK directions cut (and dp gathered) into chain k's
+  own arrays, its output scattered back to chain k's block of each direction.
 
 The flight inertia is block-diagonal, so every kernel is exactly the chains' own.  What does not compose yet is
-refused here with a SceneError naming the option: tangent kernels (sensitivities, linearisation), the rolled forward
-dynamics, the second base chart (at most one chain may turn its theta_0: its chart's lock is watched, and a run
-that reaches it stops with the gimbal-lock status), and the Lagrangian formulation.
+refused here with a SceneError naming the option: the rolled forward dynamics, the second base chart (at most one
+chain may turn its theta_0: its chart's lock is watched, and a run that reaches it stops with the gimbal-lock
+status), and the Lagrangian formulation.
 """
 from __future__ import annotations
 

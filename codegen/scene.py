@@ -1819,7 +1819,8 @@ def _walls_from_data(walls, restitution, contacts, friction=0.0) -> tuple[Wall, 
 # * **coordinates**: the full layout is the chains' full layouts one after the other, each named with its chain's
 #   prefix ('c2.theta_1');
 # * **parameters**: the box's (g, the walls' positions, e and friction, the obstacles' e) once, in chain 1's order,
-#   then each chain's own (links, joints) with its prefix: 'c1.l_1', 'c2.mu_1', 'c2.e_limit_2'.
+#   then each chain's own (links, joints) with its prefix: 'c1.l_1', 'c2.mu_1', 'c2.e_limit_2';
+# * **inputs**: each chain's, one after the other, with its prefix ('c1.theta_2', 'c2.theta_1').
 #
 # Capsule links of different chains strike each other (every pair whose radii add up to more than 0), with the box's
 # ``restitution.links``.  Within a chain nothing changes (docs/scenes.md, "Several chains").

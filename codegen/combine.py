@@ -5,23 +5,28 @@ NAME_cK_ (declared before every kernel, so that a long source compiled as severa
 model's kernels, with the standard signatures (codegen.interface), are short wrappers that call
 them on slices (docs/simulation.md, "Several chains"):
 
-* q, qd, Q (and qdd, x, h, Q out): chain k's block of the stacked coordinates;
-* p: chain k's parameter vector gathered from the combined one (codegen.scene.Chains.parameter_map);
+* q, qd, Q and the directions dq, dqd, dQ (and qdd, x, h, Q, dqdd, dx, dQ out): chain k's block of the stacked
+  coordinates; u, du: chain k's inputs after the earlier chains';
+* p, dp: chain k's parameter vector (and direction) gathered from the combined one (Chains.parameter_map);
 * contact_points, contact_velocities: chain k's points after the earlier chains' (global point numbers);
-* contact_gaps: chain k's walls and stops after the earlier chains'; contact_bias and the rows f of
-  contact_generalized_force: chain k's Jacobian rows after the earlier chains';
-* energy, power: summed; forward_dynamics_energy: qdd by blocks, T and V summed.
+* contact_gaps (and its tangent): chain k's walls and stops after the earlier chains'; contact_bias (and its
+  tangent) and the rows f, df of contact_generalized_force (and its tangent): chain k's Jacobian rows after the
+  earlier chains';
+* energy, power: summed; forward_dynamics_energy: qdd by blocks, T and V summed;
+* forward_dynamics_tangent_block: each of its GAC_TANGENT_BLOCK directions cut (and dp gathered) into chain k's
+  own arrays, its output scattered back to chain k's block of each direction.
 
 The flight inertia is block-diagonal, so every kernel is exactly the chains' own.  What does not compose yet is
-refused here with a SceneError naming the option: tangent kernels (sensitivities, linearisation), the rolled forward
-dynamics, the second base chart (at most one chain may turn its theta_0: its chart's lock is watched, and a run
-that reaches it stops with the gimbal-lock status), and the Lagrangian formulation.
+refused here with a SceneError naming the option: the rolled forward dynamics, the second base chart (at most one
+chain may turn its theta_0: its chart's lock is watched, and a run that reaches it stops with the gimbal-lock
+status), and the Lagrangian formulation.
 """
 from __future__ import annotations
 
 import time
 from dataclasses import replace
 
+from . import interface
 from .artifact import RenderedFunction
 from .options import BuildOptions
 from .scene import Chains, SceneError
@@ -30,9 +35,6 @@ from .specialise import Layout, layout_for
 
 def chain_options(options: BuildOptions) -> BuildOptions:
     """A chain's own options inside a combined model, or a SceneError naming what does not compose."""
-    if options.tangent:
-        raise SceneError("tangent: a scene of several chains has no tangent kernels yet (no sensitivities, no "
-                         "linearisation); build it with tangent=False")
     if options.formulation != "gibbs_appell":
         raise SceneError(f"formulation: a scene of several chains is built with the gibbs_appell formulation only, "
                          f"got {options.formulation!r}")
@@ -74,12 +76,17 @@ def generate_chains(scene: Chains, options: BuildOptions, name: str, progress, w
 
 
 # how a kernel's arguments and output split over the chains: "q" the coordinates, "row" the Jacobian rows, "point"
-# the points (3 each), "gap" the kernel's contacts, "sum" summed, "fused" qdd by blocks then T, V summed
-_INPUT_SPLIT = {"q": "q", "qd": "q", "Q": "q", "f": "row", "u": None, "p": None}
+# the points (3 each), "gap" the kernel's contacts, "u" the inputs, "param" gathered by the chain's parameter map,
+# "sum" summed, "fused" qdd by blocks then T, V summed, "block" GAC_TANGENT_BLOCK directions each split by "q"
+_INPUT_SPLIT = {"q": "q", "qd": "q", "Q": "q", "f": "row", "u": "u", "p": "param",
+                "dq": "q", "dqd": "q", "dQ": "q", "df": "row", "du": "u", "dp": "param"}
 _OUTPUT_SPLIT = {"forward_dynamics": "q", "inertia_solve": "q", "generalized_momentum": "q",
                  "contact_points": "point", "contact_velocities": "point", "contact_generalized_force": "q",
                  "contact_gaps": "gap", "energy": "sum", "contact_bias": "row", "power": "sum",
-                 "forward_dynamics_energy": "fused", "generalized_momentum_ld": "q",
+                 "forward_dynamics_energy": "fused", "forward_dynamics_tangent": "q",
+                 "forward_dynamics_tangent_block": "block", "inertia_solve_tangent": "q",
+                 "contact_generalized_force_tangent": "q", "contact_gaps_tangent": "gap",
+                 "contact_bias_tangent": "row", "generalized_momentum_ld": "q",
                  "contact_generalized_force_ld": "q", "energy_ld": "sum"}
 
 
@@ -94,13 +101,42 @@ def wrap_kernels(name: str, blocks: list[list[RenderedFunction]], sizes: list[di
     for index, fname in enumerate(names):
         if fname not in _OUTPUT_SPLIT:
             raise SceneError(f"{fname}: a scene of several chains cannot combine this kernel yet")
-        out.append(_wrapper(name, fname, [functions[index] for functions in blocks], sizes))
+        parts = [functions[index] for functions in blocks]
+        if _OUTPUT_SPLIT[fname] == "block":
+            out.append(_block_wrapper(name, fname, parts, sizes))
+        else:
+            out.append(_wrapper(name, fname, parts, sizes))
     return out
 
 
 def chain_sizes(chain, layout: Layout) -> dict:
-    """A chain's blocks: its coordinates, Jacobian rows, point coordinates (3 per point) and kernel contacts."""
-    return {"q": layout.nq, "row": len(layout.contact_rows), "point": 3 * (chain.n + 1), "gap": len(layout.contacts)}
+    """A chain's blocks: its coordinates, Jacobian rows, point coordinates (3 per point), kernel contacts and
+    inputs."""
+    return {"q": layout.nq, "row": len(layout.contact_rows), "point": 3 * (chain.n + 1), "gap": len(layout.contacts),
+            "u": chain.nu}
+
+
+def _argument(arg: str, fname: str, offsets: dict, block: dict) -> str:
+    """What chain k's kernel gets for the model's argument ``arg``: its slice, its gathered parameters (pk, dpk), or
+    0 for inputs it has none of (the model's u may be NULL)."""
+    if arg not in _INPUT_SPLIT:
+        raise SceneError(f"{fname}: a scene of several chains cannot combine its argument {arg} yet")
+    split = _INPUT_SPLIT[arg]
+    if split == "param":
+        return "pk" if arg == "p" else "dpk"
+    if split == "u":
+        return "0" if block["u"] == 0 else f"{arg} != 0 ? {arg} + {offsets['u']} : 0"
+    return arg if offsets[split] == 0 else f"{arg} + {offsets[split]}"
+
+
+def _gather_parameters(name: str, k: int, inputs) -> list[str]:
+    """Chain k's parameter vector (and its direction dp, if the kernel reads one and it is given) from the model's."""
+    macro = f"{name.upper()}_C{k}_NPARAM"
+    lines = [f"    double pk[{macro}];", f"    {name}_c{k}_parameters(p, pk);"]
+    if "dp" in inputs:
+        lines += [f"    double dpk_[{macro}];", f"    const double *dpk = 0;",
+                  f"    if (dp != 0) {{ {name}_c{k}_parameters(dp, dpk_); dpk = dpk_; }}"]
+    return lines
 
 
 def _wrapper(name: str, fname: str, parts: list[RenderedFunction], sizes: list[dict]) -> RenderedFunction:
@@ -112,21 +148,12 @@ def _wrapper(name: str, fname: str, parts: list[RenderedFunction], sizes: list[d
     lines = [f"{out}[0] = 0.0;", f"{out}[1] = 0.0;"] if kind == "sum" else []
     if kind == "fused":
         lines.append("double T = 0.0, V = 0.0;   /* the chains' energies, summed */")
-    offsets = {"q": 0, "row": 0, "point": 0, "gap": 0}
+    offsets = {"q": 0, "row": 0, "point": 0, "gap": 0, "u": 0}
     for k, (f, block) in enumerate(zip(parts, sizes), start=1):
-        args = []
-        for arg in f.inputs:
-            if arg not in _INPUT_SPLIT:
-                raise SceneError(f"{fname}: a scene of several chains cannot combine its argument {arg} yet")
-            split = _INPUT_SPLIT[arg]
-            if arg == "p":
-                args.append("pk")
-            else:
-                args.append(arg if split is None or offsets[split] == 0 else f"{arg} + {offsets[split]}")
+        args = [_argument(arg, fname, offsets, block) for arg in f.inputs]
         call = f"{name}_c{k}_{fname}({', '.join(args)}, "
         lines.append("{")
-        lines.append(f"    double pk[{name.upper()}_C{k}_NPARAM];")
-        lines.append(f"    {name}_c{k}_parameters(p, pk);")
+        lines += _gather_parameters(name, k, f.inputs)
         if kind == "sum":
             lines += [f"    {f.out_type} yk[2];", f"    {call}yk);", f"    {out}[0] += yk[0];", f"    {out}[1] += yk[1];"]
         elif kind == "fused":
@@ -141,9 +168,58 @@ def _wrapper(name: str, fname: str, parts: list[RenderedFunction], sizes: list[d
             offsets[key] += block[key]
     if kind == "fused":
         lines += [f"{out}[{offsets['q']}] = T;", f"{out}[{offsets['q'] + 1}] = V;"]
+    size = {"sum": 2, "fused": offsets["q"] + 2}.get(kind, offsets.get(kind, 0))
+    return RenderedFunction(fname, first.summary + "  (Each chain's, on its block.)", first.inputs, out, size,
+                            lines, _ops(parts), out_type=first.out_type)
+
+
+def _block_wrapper(name: str, fname: str, parts: list[RenderedFunction], sizes: list[dict]) -> RenderedFunction:
+    """The wrapper of a tangent kernel of GAC_TANGENT_BLOCK directions (each seed and the output direction-major):
+    chain k's slice of every direction gathered into its own arrays, its kernel called once, its output scattered
+    back to its block of every direction."""
+    first = parts[0]
+    out = first.output
+    nq, nu = sum(s["q"] for s in sizes), sum(s["u"] for s in sizes)
+    nparam = f"{name.upper()}_NPARAM"
+    lines = []
+    offsets = {"q": 0, "u": 0}
+    for k, (f, block) in enumerate(zip(parts, sizes), start=1):
+        mine = f"{name.upper()}_C{k}_NPARAM"
+        nqk, nuk = block["q"], block["u"]
+        lines.append("{")
+        lines += [f"    double pk[{mine}];", f"    {name}_c{k}_parameters(p, pk);",
+                  f"    double dqk[GAC_TANGENT_BLOCK * {nqk}], dqdk[GAC_TANGENT_BLOCK * {nqk}], "
+                  f"yk[GAC_TANGENT_BLOCK * {nqk}];",
+                  f"    double dpk_[GAC_TANGENT_BLOCK * {mine}];",
+                  "    const double *dpk = dp != 0 ? dpk_ : 0;"]
+        if nuk:
+            lines += [f"    double duk_[GAC_TANGENT_BLOCK * {nuk}];", "    const double *duk = du != 0 ? duk_ : 0;"]
+        lines.append("    for (int j = 0; j < GAC_TANGENT_BLOCK; ++j) {")
+        lines.append(f"        for (int i = 0; i < {nqk}; ++i) {{ dqk[j * {nqk} + i] = dq[j * {nq} + {offsets['q']} + i]; "
+                     f"dqdk[j * {nqk} + i] = dqd[j * {nq} + {offsets['q']} + i]; }}")
+        lines.append(f"        if (dp != 0) {name}_c{k}_parameters(dp + j * {nparam}, dpk_ + j * {mine});")
+        if nuk:
+            lines.append(f"        if (du != 0) for (int i = 0; i < {nuk}; ++i) "
+                         f"duk_[j * {nuk} + i] = du[j * {nu} + {offsets['u']} + i];")
+        lines.append("    }")
+        args = {"q": f"q + {offsets['q']}", "qd": f"qd + {offsets['q']}", "p": "pk", "dq": "dqk", "dqd": "dqdk",
+                "dp": "dpk", "u": f"u != 0 ? u + {offsets['u']} : 0" if nuk else "0", "du": "duk" if nuk else "0"}
+        for arg in f.inputs:
+            if arg not in args:
+                raise SceneError(f"{fname}: a scene of several chains cannot combine its argument {arg} yet")
+        lines.append(f"    {name}_c{k}_{fname}({', '.join(args[arg] for arg in f.inputs)}, yk);")
+        lines.append(f"    for (int j = 0; j < GAC_TANGENT_BLOCK; ++j)")
+        lines.append(f"        for (int i = 0; i < {nqk}; ++i) {out}[j * {nq} + {offsets['q']} + i] = yk[j * {nqk} + i];")
+        lines.append("}")
+        offsets["q"] += nqk
+        offsets["u"] += nuk
+    return RenderedFunction(fname, first.summary + "  (Each chain's, on its block.)", first.inputs, out,
+                            interface.TANGENT_BLOCK * nq, lines, _ops(parts), out_type=first.out_type)
+
+
+def _ops(parts: list[RenderedFunction]):
+    """The chains' operation counts, summed."""
     ops = parts[0].ops
     for f in parts[1:]:
         ops = ops + f.ops
-    size = {"sum": 2, "fused": offsets["q"] + 2}.get(kind, offsets.get(kind, 0))
-    return RenderedFunction(fname, first.summary + "  (Each chain's, on its block.)", first.inputs, out, size,
-                            lines, ops, out_type=first.out_type)
+    return ops

@@ -521,6 +521,9 @@ def gravity_text(scene: Scene) -> str:
 def param_doc(pname: str, scene: Scene | None = None) -> str:
     """The description of parameter ``pname`` (its unit last, in parentheses); ``scene``: says where g acts when the
     scene's gravity is not along -X2."""
+    chain, dot, own = pname.partition(".")
+    if dot:                                         # a chain's own parameter in a scene of several chains ('c2.l_1')
+        return f"chain {chain[1:]}, {param_doc(own)}"
     kind, owner = split_parameter_name(pname)
     if kind == "g" and scene is not None and scene.gravity_direction != DEFAULT_GRAVITY_DIRECTION:
         return f"gravity's magnitude, along {gravity_text(scene)} (m/s^2)"

@@ -17,7 +17,7 @@ from xml.sax.saxutils import quoteattr
 from .artifact import GeneratedModel
 from .emit import _double_literal, _environment, param_doc
 from .parameters import parameter_rules
-from .scene import Scene, coordinate_names
+from .scene import Scene
 from .version import __version__
 
 FMI_VERSION = "2.0"
@@ -67,7 +67,7 @@ class Variable:
 
 
 def coordinate_unit(name: str, rate: bool = False, force: bool = False) -> str:
-    angle = name.startswith("theta")
+    angle = (name.partition(".")[2] or name).startswith("theta")      # a chain's prefix ('c2.theta_1') dropped
     if force:
         return "N.m" if angle else "N"
     return ("rad/s" if angle else "m/s") if rate else ("rad" if angle else "m")
@@ -90,7 +90,7 @@ def fmi2_variables(model: GeneratedModel, scene: Scene, rows: dict, constants: d
     a row of count 1 is one variable, a block (count nq, nu or nparam) one per coordinate, input or parameter, with
     its start from the scene.  ``constants``: the library's (gac.h), for the smallest rtol and the codes of the methods and impact laws."""
     layout = model.layout
-    names = coordinate_names(scene.n)
+    names = scene.full_coordinate_names()           # several chains: each with its prefix ('c2.theta_1')
     coordinates = [names[i] for i in layout.free]
     rules = parameter_rules(scene, layout.zero_params, model.bake_params)
     blocks = {                                      # a block's members: (name, what %s stands for, scene's start)
@@ -156,9 +156,12 @@ def fmu_texts(model: GeneratedModel, scene: Scene, sources: list[str], stop_time
     variables = fmi2_variables(model, scene, rows, constants)
     outputs = [index for index, v in enumerate(variables, start=1) if v.causality == "output"]
     used = sorted({v.unit for v in variables if v.unit})
+    chains = getattr(scene, "chains", None)
+    what = (f"{len(chains)} chains of {', '.join(str(c.n) for c in chains)} links" if chains
+            else f"{scene.n}-link chain")
     context = dict(name=model.name, guid=fmu_guid(model), version=__version__, fmi_version=FMI_VERSION,
-                   description=f"{scene.name}: {scene.n}-link chain confined in a box (flight, impacts, resting "
-                               "contact), recursive Gibbs-Appell", variables=variables, outputs=outputs,
+                   description=f"{scene.name}: {what} confined in a box (flight, impacts, resting contact), "
+                               "recursive Gibbs-Appell", variables=variables, outputs=outputs,
                    units=[(unit, UNITS[unit]) for unit in used], sources=sources,
                    stop_time=_double_literal(stop_time), step_size=_double_literal(step_size),
                    bake_params=model.bake_params, quote=quoteattr)

@@ -1819,7 +1819,8 @@ def _walls_from_data(walls, restitution, contacts, friction=0.0) -> tuple[Wall, 
 # * **coordinates**: the full layout is the chains' full layouts one after the other, each named with its chain's
 #   prefix ('c2.theta_1');
 # * **parameters**: the box's (g, the walls' positions, e and friction, the obstacles' e) once, in chain 1's order,
-#   then each chain's own (links, joints) with its prefix: 'c1.l_1', 'c2.mu_1', 'c2.e_limit_2'.
+#   then each chain's own (links, joints) with its prefix: 'c1.l_1', 'c2.mu_1', 'c2.e_limit_2';
+# * **inputs**: each chain's, one after the other, with its prefix ('c1.theta_2', 'c2.theta_1').
 #
 # Capsule links of different chains strike each other (every pair whose radii add up to more than 0), with the box's
 # ``restitution.links``.  Within a chain nothing changes (docs/scenes.md, "Several chains").
@@ -1872,10 +1873,6 @@ class Chains:
                 if _box_value(chain, field) != _box_value(first, field):
                     raise SceneError(f"chains[{k}].{field}: the chains share the box's {field} (chain 1's), "
                                      f"got a different one")
-        for k, chain in enumerate(chains, start=1):
-            if chain.inputs:
-                raise SceneError(f"chains[{k}].inputs: a scene of several chains takes no inputs (not supported "
-                                 "yet); drive a one-chain scene instead")
         e = float(self.link_restitution)
         if not 0.0 <= e <= 1.0:
             raise SceneError(f"restitution.links: must be in [0, 1], got {e!r}")
@@ -1972,18 +1969,22 @@ class Chains:
 
     @property
     def inputs(self) -> tuple:
-        return ()
+        """Each chain's inputs, one after the other, named with its prefix ('c2.theta_2'): u = [u_1, u_2, ...]."""
+        return tuple(chain_prefix(k) + name for k, chain in enumerate(self.chains, start=1) for name in chain.inputs)
 
     def input_coordinates(self) -> list[int]:
-        return []
+        """The combined full layout's index of each input's coordinate."""
+        return [self.state_offset(k) + i for k, chain in enumerate(self.chains, start=1)
+                for i in chain.input_coordinates()]
 
     @property
     def nu(self) -> int:
-        return 0
+        return sum(chain.nu for chain in self.chains)
 
     @property
     def driven(self) -> bool:
-        return False
+        """Whether anything but gravity acts in flight on some chain: inputs, springs or dampers."""
+        return any(chain.driven for chain in self.chains)
 
     @property
     def q0(self) -> tuple:
@@ -2115,4 +2116,4 @@ def chains_from_dict(data: dict, default_name: str, folder, box_keys: tuple[str,
     return Chains(name=name, chains=tuple(scenes), description=str(data.get("description", "")), link_restitution=e)
 
 
-CHAIN_KEYS = ("links", "initial", "base", "contacts")
+CHAIN_KEYS = ("links", "initial", "base", "contacts", "inputs")

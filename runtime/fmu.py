@@ -16,7 +16,7 @@ import zipfile
 from pathlib import Path
 
 from codegen.options import build_options
-from codegen.scene import Scene, SceneError, load_scene
+from codegen.scene import Chains, Scene, SceneError, load_scene
 
 from .compile import (LIBRARY_DIR, PARALLEL_LINES, BuildError, compile_objects, compiler_command, library_files,
                       translation_units)
@@ -44,7 +44,7 @@ def fmi2_sources() -> list[Path]:
     return sorted(path for path in FMI2_DIR.iterdir() if path.suffix in (".c", ".h"))
 
 
-def build_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", *, name: str | None = None,
+def build_fmu(scene: Scene | Chains | str | Path, out_dir: str | Path = "build", *, name: str | None = None,
               bake_params: bool = False, specialise: bool = True, rolled: bool | None = None,
               stop_time: float | None = None, step_size: float = DEFAULT_STEP, progress=None) -> Path:
     """Generate (or take from the cache) the scene's model, build it as an FMU in ``out_dir`` and return the
@@ -54,11 +54,8 @@ def build_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", *, name:
     from codegen.fmu import fmu_texts
 
     say = progress or (lambda message: None)
-    if not isinstance(scene, Scene):
+    if not isinstance(scene, (Scene, Chains)):
         scene = load_scene(scene)
-    if not isinstance(scene, Scene):
-        raise SceneError(f"fmu: a scene of several chains ({scene.name}) is not built as an FMU yet; simulate it, or "
-                         "build its standalone C (python -m codegen --standalone)")
     if stop_time is None:
         stop_time = DEFAULT_T_END.get(scene.name, 1.0)
     for label, value in (("stop_time", stop_time), ("step_size", step_size)):

@@ -15,7 +15,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from codegen.scene import coordinate_names
 
 # gac.h's GAC_SENS_* status codes, in words
 STATUS_WORDS = {
@@ -49,7 +48,7 @@ def directions(model, names) -> tuple[list[str], np.ndarray, np.ndarray]:
     names = list(names)
     if not names:
         raise ValueError("sensitivities: give at least one direction (q0[NAME], qd0[NAME] or a parameter name)")
-    full = coordinate_names(model.n)
+    full = model.scene.full_coordinate_names()
     free = list(model.layout.free)
     nq = model.nq
     seed_x = np.zeros((len(names), 2 * nq))
@@ -77,7 +76,7 @@ def directions(model, names) -> tuple[list[str], np.ndarray, np.ndarray]:
 
 def state_names(model) -> list[str]:
     """The rows of a sensitivity matrix: q[NAME] then qd[NAME] of the model's own coordinates."""
-    full = coordinate_names(model.n)
+    full = model.scene.full_coordinate_names()
     coords = [full[i] for i in model.layout.free]
     return [f"q[{c}]" for c in coords] + [f"qd[{c}]" for c in coords]
 

@@ -5,7 +5,6 @@ import math
 import pytest
 
 from codegen.scene import Chains
-from codegen.options import build_options
 from codegen.scene import SceneError, load_scene, scene_from_dict
 from codegen.specialise import layout_for
 
@@ -51,12 +50,19 @@ def test_the_layout_stacks_each_chains_own():
     assert [p for p, _ in layout.contacts] == [p for p, _ in own[0].contacts] + [2 + p for p, _ in own[1].contacts]
 
 
+def test_inputs_are_each_chains_with_its_prefix_one_after_the_other():
+    scene = scene_from_dict(box(chain(0.5, inputs=["theta_1"]), chain(2.0, inputs=["X1", "theta_1"])))
+    assert scene.inputs == ("c1.theta_1", "c2.X1", "c2.theta_1") and scene.nu == 3 and scene.driven
+    assert scene.input_coordinates() == [2, 6 + 3, 6 + 2]          # the combined full layout's places
+
+
 @pytest.mark.parametrize("data, message", [
     (box(chain(0.5), chain(2.0, links=[{"length": -1.0, "mu": 1.0}])), r"chains\[2\]\.links\[1\]"),
     (box(chain(0.5), dict(chain(2.0), colour="red")), r"chains\[2\]\.colour: unknown key"),
     (box(chain(0.5), {"initial": {"q": [0.0] * 6}}), r"chains\[2\]\.links: each chain needs"),
     (box(chain(0.5), chain(2.0), links=[{"length": 1.0, "mu": 1.0}]), r"^links: a scene with \[\[chains\]\]"),
     (box(chain(0.5)), r"chains: several chains means 2\.\."),
+    (box(chain(0.5), chain(2.0, inputs=["theta_3"])), r"chains\[2\]\.inputs"),
     (box(chain(0.5), chain(0.52)), r"chains\[2\]\.initial\.q: link 1 of chain 2 overlaps link 1 of chain 1"),
     (box(chain(0.5), dict(chain(2.0), initial={"q": [0.0] * 5})), r"chains\[2\]\.initial\.q"),
     (box(chain(0.5), chain(2.0), restitution={"default": 0.5, "links": 1.5}), r"^restitution\.links"),
@@ -74,9 +80,6 @@ def test_what_does_not_compose_yet_is_refused_before_any_derivation():
                                                                 "qd": [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]})))
     with pytest.raises(SceneError, match="chains 1 and 2 both turn their base in 3D"):
         generate(scene)
-    planar = scene_from_dict(box(chain(0.5), chain(2.0)))
-    with pytest.raises(SceneError, match="^tangent: a scene of several chains"):
-        generate(planar, build_options(planar, tangent=True))
 
 
 def test_obstacles_are_the_boxs_and_every_chains_links_strike_them():

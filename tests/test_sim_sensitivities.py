@@ -116,7 +116,7 @@ def central_differences(model, t_end, p, q0, qd0, directions, matrix, step=1e-6,
     state's size), where the perturbed runs meet the same impacts (contacts, in order) as the nominal one."""
     nominal = simulate(model, t_end, p=p, q0=q0, qd0=qd0, **options)
     sequence = [tuple(c.label for c in i.contacts) for i in nominal.impacts]
-    full = coordinate_names(model.n)
+    full = model.scene.full_coordinate_names()
 
     def final(h, direction):
         p1, q1, qd1 = p.copy(), q0.copy(), qd0.copy()

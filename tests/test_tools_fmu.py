@@ -140,6 +140,34 @@ def test_case1_agrees_with_simulate_and_closes_the_energy_balance(case1_fmu):
     assert loss[-1] == pytest.approx(sum(i.energy_before - i.energy_after for i in result.impacts), abs=1e-9)
 
 
+def test_two_chains_name_their_variables_by_chain_and_run_as_simulate(tmp_path):
+    """A scene of several chains: each chain's coordinates and own parameters with its prefix (q.c2.theta_1,
+    p.c2.l_1, the box's p.g once); one communication step over [0, 1] s gives simulate's impacts, final state and
+    energy, and the balance closes."""
+    path = build_fmu("two-chains", tmp_path)
+    assert validate_fmu(str(path)) == []
+    model = load_model("two-chains")
+    slave = Slave(path)
+    names = model.scene.full_coordinate_names()
+    assert coordinate_names(slave, "q") == [f"q.{names[i]}" for i in model.layout.free]
+    assert "q.c2.theta_1" in slave.vars and slave.vars["qd.c2.theta_1"].unit == "rad/s"
+    assert coordinate_names(slave, "p") == [f"p.{n}" for n in model.parameter_names]
+    assert slave.vars["p.c2.l_1"].description == "chain 2, link 1: length (m)" and slave.vars["p.c2.l_1"].unit == "m"
+    energy = ["energy.kinetic", "energy.potential", "energy.loss_impacts", "energy.loss_damping", "energy.work_input"]
+    q, qd = coordinate_names(slave, "q"), coordinate_names(slave, "qd")
+    slave.start({"solver.rtol": 1e-10, "solver.atol": 1e-12})
+    rows, _ = run_fmu(slave, 1.0, 1.0, q + qd + energy)
+    impacts = slave.fmu.getInteger(slave.refs(["impacts"]))[0]
+    slave.close()
+    result = simulate(model, 1.0, rtol=1e-10, atol=1e-12)
+    assert result.success and impacts == len(result.impacts) == 15, result.message
+    free, nq = list(model.layout.free), model.nq
+    assert np.abs(rows[-1, 1:1 + nq] - result.q_final[free]).max() < 1e-9
+    T, V, loss, damping, work = rows[:, 1 + 2 * nq:].T
+    assert T[-1] + V[-1] == pytest.approx(result.energy_final, rel=1e-9)
+    assert T[-1] + V[-1] + loss[-1] + damping[-1] - work[-1] == pytest.approx(T[0] + V[0], rel=1e-8)
+
+
 def test_driven_chain_inputs_held_over_each_step(driven_fmu):
     """A PD torque law closed around the FMU (inputs from its outputs at each communication point, held over
     the step) gives the same run as runtime.simulate with those inputs as a held schedule; the balance with the

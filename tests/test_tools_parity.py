@@ -29,7 +29,7 @@ Rows: the paper's two case studies, a driven chain folding against its joint sto
 floor (resting contact, Coulomb friction), an arm on a fixed base (mounted-arm: the model holds only the joints), a
 chain of capsules landing at its radius (capsule-chain) and one whose links 1 and 3 strike each other (capsule-fold:
 contacts of two links), an arm held by PD joint springs striking a fixed ball (arm-obstacle), two chains in one box
-striking each other (two-chains: Python and the standalone program only; no FMU of several chains), a chain tumbling
+striking each other (two-chains: variables named with the chain prefix, q.c2.theta_1), a chain tumbling
 down a rough incline (incline: gravity_direction tilted), the built-in 12-link chain (rolled forward dynamics)
 and three random admissible scenes of the fuzz study (studies/fuzz.py, fixed seeds) written as scene files, and
 the gimbal-lock scene, which passes the lock of its base chart on the second chart in all three (the C loop
@@ -97,8 +97,7 @@ ROWS = [
         slow=True),                                    # (capsule-fold's row has capsules at a wall in the default run)
     Row("capsule-fold", "capsule-fold", 1.0, dict(method="dopri5", rtol=1e-10, atol=1e-12)),
     Row("arm-obstacle", "arm-obstacle", 1.5, dict(method="dopri5", rtol=1e-10, atol=1e-12)),
-    Row("two-chains", "two-chains", 1.0, dict(method="dopri5", rtol=1e-10, atol=1e-12),
-        fmu="a scene of several chains is not built as an FMU yet"),
+    Row("two-chains", "two-chains", 1.0, dict(method="dopri5", rtol=1e-10, atol=1e-12)),
     # gravity along a tilted direction (gravity_direction): the chain tumbles down a rough incline
     Row("incline", "incline", 2.0, dict(method="dopri5", rtol=1e-10, atol=1e-12), slow=True),
     Row("chain12-rolled", "links:12", 0.6, dict(method="dopri5", rtol=1e-9, atol=1e-11), slow=True),

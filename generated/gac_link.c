@@ -308,9 +308,11 @@ double gac_link_law_accuracy(const gac_model *m, const double *q, const double *
 /* ---- the derivative of a link pair's or an obstacle's contact geometry (for the sensitivities' impact) ------ */
 
 /* The Jacobians' own change, sum_k n . d(J_k)[dq, dp] at fixed s, t and n: the row at fixed geometry (J^T n,
- * gac_link_direction) differentiated along (dq, dp) by a fourth-order central difference of
- * 8 (g(h) - g(-h)) - (g(2h) - g(-2h)) over 12 h, h = 1e-3 of the direction's largest entry (the model has no
- * tangent of contact_velocities; its truncation is ~h^4, its round-off ~eps / h: ~1e-12 of the row's size). */
+ * gac_link_direction) differentiated along (dq, dp).  Column k of the points' Jacobian is contact_velocities(q, e_k),
+ * so its change is contact_velocities_tangent(q, e_k, dq, dqd = 0, dp): exact, one tangent call per column.  A model
+ * without that kernel (a descriptor written by hand) gets the fourth-order central difference
+ * 8 (g(h) - g(-h)) - (g(2h) - g(-2h)) over 12 h, h = 1e-3 of the direction's largest entry (truncation ~h^4,
+ * round-off ~eps / h: ~1e-12 of the row's size). */
 static void gac_link_row_change(const gac_model *m, const double *q, const double *p, int i, int j,
                                 const double *geometry, const double *dq, const double *dp, double *out)
 {
@@ -318,6 +320,17 @@ static void gac_link_row_change(const gac_model *m, const double *q, const doubl
     double qh[GAC_AT_LEAST_1(nq)], ph[GAC_AT_LEAST_1(np)], g[GAC_AT_LEAST_1(nq)], size = 0.0, h;
     static const double step[4] = {1.0, -1.0, 2.0, -2.0}, weight[4] = {8.0, -8.0, -1.0, 1.0};
     int k, l;
+    if (m->contact_velocities_tangent != 0) {
+        double w[GAC_AT_LEAST_1(nq)], none[GAC_AT_LEAST_1(nq)], dvel[3 * GAC_AT_LEAST_1(m->npoint)], speed;
+        for (k = 0; k < nq; ++k) w[k] = none[k] = 0.0;
+        for (k = 0; k < nq; ++k) {                       /* n . dJ_k: the rate formula on the columns' change */
+            w[k] = 1.0;
+            m->contact_velocities_tangent(q, w, p, dq, none, dp, dvel);
+            out[k] = gac_link_rate(dvel, i, j, geometry, &speed);
+            w[k] = 0.0;
+        }
+        return;
+    }
     for (k = 0; k < nq; ++k) size = fabs(dq[k]) > size ? fabs(dq[k]) : size;
     for (k = 0; k < np; ++k) size = fabs(dp[k]) > size ? fabs(dp[k]) : size;
     for (k = 0; k < nq; ++k) out[k] = 0.0;
@@ -332,9 +345,9 @@ static void gac_link_row_change(const gac_model *m, const double *q, const doubl
     for (k = 0; k < nq; ++k) out[k] /= 12.0 * h;
 }
 
-/* The joint points' motion along (dq, dp): contact_velocities(q, dq) (exact: the points' Jacobian applied to dq)
- * and, where dp is not 0, the points' change with the parameters (a link's length) by the fourth-order central
- * difference of contact_points, as gac_link_row_change. */
+/* The joint points' motion along (dq, dp): contact_points_tangent (exact).  A model without it: contact_velocities(q,
+ * dq) (exact: the points' Jacobian applied to dq) and, where dp is not 0, the points' change with the parameters (a
+ * link's length) by the fourth-order central difference of contact_points, as gac_link_row_change. */
 static void gac_link_points_change(const gac_model *m, const double *q, const double *p, const double *dq,
                                    const double *dp, double *dr)
 {
@@ -342,6 +355,10 @@ static void gac_link_points_change(const gac_model *m, const double *q, const do
     double ph[GAC_AT_LEAST_1(np)], r[3 * GAC_AT_LEAST_1(m->npoint)], size = 0.0, h;
     static const double step[4] = {1.0, -1.0, 2.0, -2.0}, weight[4] = {8.0, -8.0, -1.0, 1.0};
     int k, l;
+    if (m->contact_points_tangent != 0) {
+        m->contact_points_tangent(q, p, dq, dp, dr);
+        return;
+    }
     m->contact_velocities(q, dq, p, dr);
     for (k = 0; k < np; ++k) size = fabs(dp[k]) > size ? fabs(dp[k]) : size;
     if (!(size > 0.0)) return;
@@ -361,7 +378,8 @@ static void gac_link_points_change(const gac_model *m, const double *q, const do
  * one is); then dD = dD0 + ds d1 - dt d2, d gap = n . dD, dn = (I - n n^T) dD / dist, and the row g_k = n . J_k
  * (J_k = (1 - s) V_a0,k + s V_a1,k - (1 - t) V_b0,k - t V_b1,k, V the points' Jacobian columns) changes by
  *   dg_k = dn . J_k + n . (ds (V_a1,k - V_a0,k) - dt (V_b1,k - V_b0,k)) + n . dJ_k[dq, dp]
- * (the last term: gac_link_row_change). */
+ * (the last term: gac_link_row_change; the points' motion: gac_link_points_change, both exact with the model's
+ * tangents of contact_points and contact_velocities). */
 int gac_contact_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
                                const double *dp, double *dgap, double *g, double *dg)
 {

@@ -347,6 +347,10 @@ struct gac_model {
     gac_kernel_qv_tangent contact_generalized_force_tangent; /* q, f, p, dq, df (njrow), dp -> d(J^T f) (nq) */
     gac_kernel_q_tangent contact_gaps_tangent;     /* q, p, dq, dp -> d gap (ncontact) */
     gac_kernel_qv_tangent contact_bias_tangent;    /* q, qd, p, dq, dqd, dp -> d(Jdot qd) (njrow) */
+    /* the tangents of the points and their velocities, for the derivative of a link pair's or an obstacle's row
+       (gac_contact_normal_tangent); NULL: none (it then differences contact_points and contact_velocities) */
+    gac_kernel_q_tangent contact_points_tangent;   /* q, p, dq, dp -> d O_1..O_npoint (npoint x 3) */
+    gac_kernel_qv_tangent contact_velocities_tangent; /* q, qd, p, dq, dqd, dp -> d(their velocities) (npoint x 3) */
     /* long-double variants of three kernels, for the impact's accuracy (gac_impact_accuracy evaluates its momentum
        balance and energy identity with them); NULL: none (extended=False, chart B; then in double) */
     gac_kernel_qv_ld generalized_momentum_ld;      /* q, qd, p -> I_f qd (nq) */

@@ -577,8 +577,9 @@ int gac_contact_normal(const gac_model *m, const double *q, const double *p, int
  * dp (nparam)), for the sensitivities' impact: *dgap, g (nq) = J^T n (gac_contact_normal) and dg (nq) = d(J^T n).
  * The closest points' motion (an interior fraction moves, an end point's stays) and the unit normal's rotation are
  * differentiated in closed form; the points' Jacobians' own change (second derivatives of the kinematics) and the
- * points' change with the parameters by fourth-order central differences of contact_velocities and contact_points
- * (~1e-12 of their size; the model has no tangent of those kernels).  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT,
+ * points' motion by the model's contact_velocities_tangent and contact_points_tangent (exact), or, in a descriptor
+ * without them, by fourth-order central differences of contact_velocities and contact_points (~1e-12 of their
+ * size).  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT,
  * GAC_ERR_BAD_CONTACT (c not a link pair or obstacle contact, or its geometry failed) or GAC_ERR_LINK_CONTACT where
  * they have no derivative: the axes crossing (distance 0), or parallel with both closest points inside; and for a
  * box or plane obstacle (not differentiated). */

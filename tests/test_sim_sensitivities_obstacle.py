@@ -31,24 +31,36 @@ def model():
     return load_model(scene, tangent=True)
 
 
-def normal_tangent(model, q, dq, dp):
-    """(d gap, J^T n, d(J^T n)) of the ball's contact along (dq, dp), by gac_contact_normal_tangent."""
+def normal_tangent(model, q, dq, dp, descriptor=None):
+    """(d gap, J^T n, d(J^T n)) of the ball's contact along (dq, dp), by gac_contact_normal_tangent (on the model's
+    descriptor, or on ``descriptor``)."""
     dgap, g, dg = model.ffi.new("double *"), np.zeros(model.nq), np.zeros(model.nq)
     q, dq, dp = (np.ascontiguousarray(x, dtype=float) for x in (q, dq, dp))
-    code = model.lib.gac_contact_normal_tangent(model.ffi.addressof(model.c.model), model._ptr(q), model._ptr(model.p),
-                                                0, model._ptr(dq), model._ptr(dp), dgap, model._ptr(g),
-                                                model._ptr(dg))
+    descriptor = model.ffi.addressof(model.c.model) if descriptor is None else descriptor
+    code = model.lib.gac_contact_normal_tangent(descriptor, model._ptr(q), model._ptr(model.p), 0, model._ptr(dq),
+                                                model._ptr(dp), dgap, model._ptr(g), model._ptr(dg))
     assert code == model.lib.GAC_OK
     return dgap[0], g, dg
+
+
+STEPS = ((1, 45.0), (2, -9.0), (3, 1.0))            # 6th-order central difference: sum c_k (f(+kh) - f(-kh)) / 60h
+
+
+def central(f, h=1e-4):
+    return sum(c * (f(k * h) - f(-k * h)) for k, c in STEPS) / (60.0 * h)
 
 
 @pytest.mark.parametrize("x1, inside", [(0.2, True), (0.65, False)])
 def test_the_rows_derivative_matches_central_differences_of_the_c_functions(model, x1, inside):
     """At random configurations near the ball, along random directions of q and of the rod's length: d gap and
-    d(J^T n) against central differences (step 1e-5, fourth order) of the gap and of gac_contact_normal, to 1e-8 of
-    the row's size; the closest point inside the rod (its motion and the normal's rotation) or at its end."""
+    d(J^T n) (exact: the points' and their velocities' tangent kernels) against sixth-order central differences
+    (step 1e-4) of the gap and of gac_contact_normal, to 1e-10 of the row's size (seen ~1e-11); the closest point
+    inside the rod (its motion and the normal's rotation) or at its end.  A descriptor without those two kernels
+    (its own central differences of contact_points and contact_velocities) agrees to 1e-10."""
     rng = np.random.default_rng(3)
     index = model.parameter_names.index("l_1")
+    without_point_tangents = model.ffi.new("gac_model *", model.c.model)
+    without_point_tangents.contact_points_tangent = without_point_tangents.contact_velocities_tangent = model.ffi.NULL
     for _ in range(4):
         q = np.array([math.pi / 2 + 0.15 + rng.uniform(-0.1, 0.1), x1 + rng.uniform(-0.05, 0.05), 0.7])
         s = model.obstacle_gap(q, 1, "ball")[1]
@@ -61,15 +73,14 @@ def test_the_rows_derivative_matches_central_differences_of_the_c_functions(mode
         def at(h):
             p = model.p.copy()
             p[index] += h * dp[index]
-            return model.contact_gaps(q + h * dq, p)[0], model.contact_normal(q + h * dq, 0, p)
+            return np.concatenate([[model.contact_gaps(q + h * dq, p)[0]], model.contact_normal(q + h * dq, 0, p)])
 
-        h = 1e-5
-        (g1, n1), (g_1, n_1), (g2, n2), (g_2, n_2) = at(h), at(-h), at(2 * h), at(-2 * h)
-        fd_gap = (8 * (g1 - g_1) - (g2 - g_2)) / (12 * h)
-        fd_row = (8 * (n1 - n_1) - (n2 - n_2)) / (12 * h)
-        assert dgap == pytest.approx(fd_gap, abs=1e-9)
-        assert np.abs(dg - fd_row).max() <= 1e-8 * max(1.0, np.abs(fd_row).max())
+        fd = central(at)
+        assert dgap == pytest.approx(fd[0], rel=1e-10)
+        assert np.abs(dg - fd[1:]).max() <= 1e-10 * max(1.0, np.abs(fd[1:]).max())
         assert np.abs(dg).max() > 1e-3                         # the row turns: there is something to check
+        _, _, dg_fd = normal_tangent(model, q, dq, dp, descriptor=without_point_tangents)
+        assert np.abs(dg_fd - dg).max() <= 1e-10 * np.abs(dg).max()
 
 
 @pytest.mark.parametrize("x1, inside", [(0.2, True), (0.55, False)])

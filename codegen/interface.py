@@ -203,6 +203,24 @@ KERNELS = (
              "da = (d(Jdot qd)/dq) dq + (d(Jdot qd)/dqd) dqd + (d(Jdot qd)/dp) dp, O(n): the sensitivities of the "
              "resting contacts' forces in flight (gac_sens.c).  Without a tangent kernel: NaN, and "
              "NAME_model.contact_bias_tangent is NULL.", kernel=True, tangent=True, out_size="NJROW"),
+    Function("contact_points_tangent", "void",
+             (_q(), _p(), _seed("dq", "direction of q (NQ; rad, m)"),
+              _seed("dp", "direction of p (NPARAM; ignored with baked parameters)"),
+              _out("dr", "d O_1..O_NPOINT along (dq, dp) (NPOINT x 3; m)")),
+             "Directional derivative of contact_points (forward mode, exact).",
+             "dr = (d r/dq) dq + (d r/dp) dp, O(n): the joint points' motion that moves a link pair's or an "
+             "obstacle's closest points (gac_contact_normal_tangent).  Without a tangent kernel: NaN, and "
+             "NAME_model.contact_points_tangent is NULL.", kernel=True, tangent=True, out_size="NPOINT * 3"),
+    Function("contact_velocities_tangent", "void",
+             (_q(), _qd(), _p(), _seed("dq", "direction of q (NQ; rad, m)"),
+              _seed("dqd", "direction of qd (NQ; rad/s, m/s)"),
+              _seed("dp", "direction of p (NPARAM; ignored with baked parameters)"),
+              _out("dv", "d(contact_velocities) along (dq, dqd, dp) (NPOINT x 3; m/s)")),
+             "Directional derivative of contact_velocities (forward mode, exact).",
+             "dv = (d v/dq) dq + (d v/dqd) dqd + (d v/dp) dp, O(n); with qd = e_k and dqd = 0, the change of the "
+             "points' Jacobian column k along (dq, dp): a link pair's or an obstacle's row's derivative "
+             "(gac_contact_normal_tangent).  Without a tangent kernel: NaN, and "
+             "NAME_model.contact_velocities_tangent is NULL.", kernel=True, tangent=True, out_size="NPOINT * 3"),
     Function("generalized_momentum_ld", "void", (_q(), _qd(), _p(), _out_ld("h", "I_f qd (NQ; N m s, N s)")),
              "generalized_momentum in long double: I_f qd.",
              _LD_DOC.format(kernel="generalized_momentum", name="generalized_momentum_ld"), kernel=True,

@@ -31,6 +31,9 @@ CSE'd by :mod:`codegen.flatten`.  The kernels and their C signatures:
     contact_bias_tangent(q, qd, p, dq, dqd, dp, da)  the same tangents of four more kernels (the sensitivities
                                          of an impact, of its event time and of the resting contacts' forces,
                                          gac_sens.c)
+    contact_points_tangent(q, p, dq, dp, dr),
+    contact_velocities_tangent(q, qd, p, dq, dqd, dp, dv)  and of the points and their velocities (a link pair's
+                                         or an obstacle's row and its derivative, gac_contact_normal_tangent)
     forward_dynamics_tangent_block(q, qd, u, p, dq, dqd, du, dp, dqdd)  forward_dynamics_tangent along
                                          interface.TANGENT_BLOCK directions at once, its primal part computed once
                                          (the sensitivities' flight, gac_sens.c)
@@ -391,6 +394,20 @@ def contact_bias_tangent_kernel(chain: ChainSymbols) -> Kernel:
                        "Directional derivative of J_dot qd along (dq, dqd, dp): the tangent of its tape.")
 
 
+def contact_points_tangent_kernel(chain: ChainSymbols) -> Kernel:
+    """d O_i along (dq, dp): the tangent of contact_points' tape (a link pair's or an obstacle's geometry)."""
+    return _tangent_of(contact_points_kernel(chain), "contact_points_tangent",
+                       "Directional derivative of the points O_1..O_{n+1} along (dq, dp): the tangent of their tape.")
+
+
+def contact_velocities_tangent_kernel(chain: ChainSymbols) -> Kernel:
+    """d v_O_i along (dq, dqd, dp): the tangent of contact_velocities' tape; at qd = e_k, dqd = 0 the change of the
+    points' Jacobian column k (the second derivatives of the kinematics a link pair's row needs)."""
+    return _tangent_of(contact_velocities_kernel(chain), "contact_velocities_tangent",
+                       "Directional derivative of the velocities of O_1..O_{n+1} along (dq, dqd, dp): the tangent of "
+                       "their tape.")
+
+
 def contact_gaps_tangent_kernel(chain: ChainSymbols) -> Kernel:
     """d gap along (dq, dp): the tangent of contact_gaps' tape (an event time's sensitivity)."""
     return _tangent_of(contact_gaps_kernel(chain), "contact_gaps_tangent",
@@ -403,7 +420,7 @@ KERNEL_BUILDERS = (mass_matrix_kernel, bias_kernel, forward_dynamics_kernel, ine
                    contact_bias_kernel, power_kernel, forward_dynamics_energy_kernel, forward_dynamics_tangent_kernel,
                    forward_dynamics_tangent_block_kernel,
                    inertia_solve_tangent_kernel, contact_generalized_force_tangent_kernel, contact_gaps_tangent_kernel,
-                   contact_bias_tangent_kernel)
+                   contact_bias_tangent_kernel, contact_points_tangent_kernel, contact_velocities_tangent_kernel)
 
 
 def builders(dense: bool, fused: bool = True, tangent: bool = True):

@@ -347,6 +347,10 @@ struct gac_model {
     gac_kernel_qv_tangent contact_generalized_force_tangent; /* q, f, p, dq, df (njrow), dp -> d(J^T f) (nq) */
     gac_kernel_q_tangent contact_gaps_tangent;     /* q, p, dq, dp -> d gap (ncontact) */
     gac_kernel_qv_tangent contact_bias_tangent;    /* q, qd, p, dq, dqd, dp -> d(Jdot qd) (njrow) */
+    /* the tangents of the points and their velocities, for the derivative of a link pair's or an obstacle's row
+       (gac_contact_normal_tangent); NULL: none (it then differences contact_points and contact_velocities) */
+    gac_kernel_q_tangent contact_points_tangent;   /* q, p, dq, dp -> d O_1..O_npoint (npoint x 3) */
+    gac_kernel_qv_tangent contact_velocities_tangent; /* q, qd, p, dq, dqd, dp -> d(their velocities) (npoint x 3) */
     /* long-double variants of three kernels, for the impact's accuracy (gac_impact_accuracy evaluates its momentum
        balance and energy identity with them); NULL: none (extended=False, chart B; then in double) */
     gac_kernel_qv_ld generalized_momentum_ld;      /* q, qd, p -> I_f qd (nq) */
@@ -573,11 +577,14 @@ int gac_contact_normal(const gac_model *m, const double *q, const double *p, int
  * dp (nparam)), for the sensitivities' impact: *dgap, g (nq) = J^T n (gac_contact_normal) and dg (nq) = d(J^T n).
  * The closest points' motion (an interior fraction moves, an end point's stays) and the unit normal's rotation are
  * differentiated in closed form; the points' Jacobians' own change (second derivatives of the kinematics) and the
- * points' change with the parameters by fourth-order central differences of contact_velocities and contact_points
- * (~1e-12 of their size; the model has no tangent of those kernels).  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT,
+ * points' motion by the model's contact_velocities_tangent and contact_points_tangent (exact), or, in a descriptor
+ * without them, by fourth-order central differences of contact_velocities and contact_points (~1e-12 of their
+ * size).  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT,
  * GAC_ERR_BAD_CONTACT (c not a link pair or obstacle contact, or its geometry failed) or GAC_ERR_LINK_CONTACT where
- * they have no derivative: the axes crossing (distance 0), or parallel with both closest points inside; and for a
- * box or plane obstacle (not differentiated). */
+ * they have no derivative: the axes crossing (distance 0), or parallel with both closest points inside.  A box's or
+ * plane's face has a constant normal and the link's closest point at one of its ends (a link parallel to the face,
+ * a whole stretch closest: GAC_ERR_LINK_CONTACT); a box's edge or corner nearest is a fixed segment or point, as a
+ * bar's or a sphere's. */
 int gac_contact_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
                                const double *dp, double *dgap, double *g, double *dg);
 
@@ -1078,8 +1085,8 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       that stick at one step's end at different speeds */
 #define GAC_SENS_LINK         11   /* an impact of two links or of a link on a fixed obstacle (GAC_CONTACT_LINK,
                                       GAC_CONTACT_OBSTACLE) among several contacts or with contacts at rest, or
-                                      where their closest points have no derivative (crossing or parallel axes),
-                                      or a box or plane obstacle;
+                                      where their closest points have no derivative (crossing or parallel axes,
+                                      a link parallel to a box's or plane's face);
                                       one struck alone in flight is differentiated */
 #define GAC_SENS_STICK        12   /* a stick-slip transition on a rough wall not differentiated: a stuck point that
                                       left the wall (its force reaching 0 while stuck), a stuck point that slipped

@@ -308,9 +308,11 @@ double gac_link_law_accuracy(const gac_model *m, const double *q, const double *
 /* ---- the derivative of a link pair's or an obstacle's contact geometry (for the sensitivities' impact) ------ */
 
 /* The Jacobians' own change, sum_k n . d(J_k)[dq, dp] at fixed s, t and n: the row at fixed geometry (J^T n,
- * gac_link_direction) differentiated along (dq, dp) by a fourth-order central difference of
- * 8 (g(h) - g(-h)) - (g(2h) - g(-2h)) over 12 h, h = 1e-3 of the direction's largest entry (the model has no
- * tangent of contact_velocities; its truncation is ~h^4, its round-off ~eps / h: ~1e-12 of the row's size). */
+ * gac_link_direction) differentiated along (dq, dp).  Column k of the points' Jacobian is contact_velocities(q, e_k),
+ * so its change is contact_velocities_tangent(q, e_k, dq, dqd = 0, dp): exact, one tangent call per column.  A model
+ * without that kernel (a descriptor written by hand) gets the fourth-order central difference
+ * 8 (g(h) - g(-h)) - (g(2h) - g(-2h)) over 12 h, h = 1e-3 of the direction's largest entry (truncation ~h^4,
+ * round-off ~eps / h: ~1e-12 of the row's size). */
 static void gac_link_row_change(const gac_model *m, const double *q, const double *p, int i, int j,
                                 const double *geometry, const double *dq, const double *dp, double *out)
 {
@@ -318,6 +320,17 @@ static void gac_link_row_change(const gac_model *m, const double *q, const doubl
     double qh[GAC_AT_LEAST_1(nq)], ph[GAC_AT_LEAST_1(np)], g[GAC_AT_LEAST_1(nq)], size = 0.0, h;
     static const double step[4] = {1.0, -1.0, 2.0, -2.0}, weight[4] = {8.0, -8.0, -1.0, 1.0};
     int k, l;
+    if (m->contact_velocities_tangent != 0) {
+        double w[GAC_AT_LEAST_1(nq)], none[GAC_AT_LEAST_1(nq)], dvel[3 * GAC_AT_LEAST_1(m->npoint)], speed;
+        for (k = 0; k < nq; ++k) w[k] = none[k] = 0.0;
+        for (k = 0; k < nq; ++k) {                       /* n . dJ_k: the rate formula on the columns' change */
+            w[k] = 1.0;
+            m->contact_velocities_tangent(q, w, p, dq, none, dp, dvel);
+            out[k] = gac_link_rate(dvel, i, j, geometry, &speed);
+            w[k] = 0.0;
+        }
+        return;
+    }
     for (k = 0; k < nq; ++k) size = fabs(dq[k]) > size ? fabs(dq[k]) : size;
     for (k = 0; k < np; ++k) size = fabs(dp[k]) > size ? fabs(dp[k]) : size;
     for (k = 0; k < nq; ++k) out[k] = 0.0;
@@ -332,9 +345,9 @@ static void gac_link_row_change(const gac_model *m, const double *q, const doubl
     for (k = 0; k < nq; ++k) out[k] /= 12.0 * h;
 }
 
-/* The joint points' motion along (dq, dp): contact_velocities(q, dq) (exact: the points' Jacobian applied to dq)
- * and, where dp is not 0, the points' change with the parameters (a link's length) by the fourth-order central
- * difference of contact_points, as gac_link_row_change. */
+/* The joint points' motion along (dq, dp): contact_points_tangent (exact).  A model without it: contact_velocities(q,
+ * dq) (exact: the points' Jacobian applied to dq) and, where dp is not 0, the points' change with the parameters (a
+ * link's length) by the fourth-order central difference of contact_points, as gac_link_row_change. */
 static void gac_link_points_change(const gac_model *m, const double *q, const double *p, const double *dq,
                                    const double *dp, double *dr)
 {
@@ -342,6 +355,10 @@ static void gac_link_points_change(const gac_model *m, const double *q, const do
     double ph[GAC_AT_LEAST_1(np)], r[3 * GAC_AT_LEAST_1(m->npoint)], size = 0.0, h;
     static const double step[4] = {1.0, -1.0, 2.0, -2.0}, weight[4] = {8.0, -8.0, -1.0, 1.0};
     int k, l;
+    if (m->contact_points_tangent != 0) {
+        m->contact_points_tangent(q, p, dq, dp, dr);
+        return;
+    }
     m->contact_velocities(q, dq, p, dr);
     for (k = 0; k < np; ++k) size = fabs(dp[k]) > size ? fabs(dp[k]) : size;
     if (!(size > 0.0)) return;
@@ -361,7 +378,11 @@ static void gac_link_points_change(const gac_model *m, const double *q, const do
  * one is); then dD = dD0 + ds d1 - dt d2, d gap = n . dD, dn = (I - n n^T) dD / dist, and the row g_k = n . J_k
  * (J_k = (1 - s) V_a0,k + s V_a1,k - (1 - t) V_b0,k - t V_b1,k, V the points' Jacobian columns) changes by
  *   dg_k = dn . J_k + n . (ds (V_a1,k - V_a0,k) - dt (V_b1,k - V_b0,k)) + n . dJ_k[dq, dp]
- * (the last term: gac_link_row_change). */
+ * (the last term: gac_link_row_change; the points' motion: gac_link_points_change, both exact with the model's
+ * tangents of contact_points and contact_velocities).  A box's edge or corner nearest to the link's closest point
+ * (gac_obstacle_feature) is a fixed segment or point as a bar's or a sphere's; a plane's or a box's face has a
+ * constant normal: the closest point is an end of the link (ds = 0; one inside, the link lies parallel to the face
+ * and a whole stretch is closest: no derivative), so d gap = n . dP0, dn = 0. */
 int gac_contact_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
                                const double *dp, double *dgap, double *g, double *dg)
 {
@@ -369,26 +390,35 @@ int gac_contact_normal_tangent(const gac_model *m, const double *q, const double
     double geometry[GAC_LINK_NGEOMETRY], r[3 * GAC_AT_LEAST_1(m != 0 ? m->npoint : 1)];
     double dr[3 * GAC_AT_LEAST_1(m != 0 ? m->npoint : 1)], zero[3] = {0.0, 0.0, 0.0}, change[GAC_AT_LEAST_1(nq)];
     double d1[3], d2[3], D[3], dd1[3], dd2[3], dD[3], dn[3], a, b, e, dist, s, t, ds = 0.0, dt = 0.0, along;
+    double end0[3], end1[3];
     const double *a0, *a1, *b0, *b1, *da0, *da1, *db0, *db1;
-    int i, j, k, code, s_inside, t_inside;
+    int i, j, k, code, s_inside, t_inside, face = 0;
     if (m == 0 || q == 0 || p == 0 || dq == 0 || dp == 0 || dgap == 0 || g == 0 || dg == 0)
         return GAC_ERR_NULL_ARGUMENT;
     if (c < 0 || c >= m->ncontact || !gac_rowless(m, c)) return GAC_ERR_BAD_CONTACT;
-    if (m->contacts[c].kind == GAC_CONTACT_OBSTACLE
-        && gac_obstacle_kind(m, m->contacts[c].coordinate) != GAC_OBSTACLE_SEGMENT)
-        return GAC_ERR_LINK_CONTACT;                     /* a box or a plane: not differentiated here */
     code = gac_rowless_geometry(m, q, p, c, geometry, &j);
     if (code != GAC_OK) return code;
     i = m->contacts[c].point;
     m->contact_points(q, p, r);
     gac_link_points_change(m, q, p, dq, dp, dr);
     a0 = r + 3 * (i - 1), a1 = r + 3 * i, da0 = dr + 3 * (i - 1), da1 = dr + 3 * i;
+    s = geometry[1], t = geometry[2];
     if (j > 0) {
         b0 = r + 3 * (j - 1), b1 = r + 3 * j, db0 = dr + 3 * (j - 1), db1 = dr + 3 * j;
     } else {                                             /* a fixed obstacle: its segment does not move */
-        b0 = m->obstacles + 6 * m->contacts[c].coordinate, b1 = b0 + 3, db0 = db1 = zero;
+        const int o = m->contacts[c].coordinate;
+        b0 = m->obstacles + 6 * o, b1 = b0 + 3, db0 = db1 = zero;
+        if (gac_obstacle_kind(m, o) != GAC_OBSTACLE_SEGMENT) {   /* a box or a plane: the part nearest */
+            double x[3], span = 0.0;
+            for (k = 0; k < 3; ++k) x[k] = (1.0 - s) * a0[k] + s * a1[k];
+            face = gac_obstacle_feature(m, o, x, end0, end1) == 0;
+            b0 = face ? x : end0, b1 = face ? x : end1, t = 0.0;
+            for (k = 0; k < 3; ++k) span += (b1[k] - b0[k]) * (b1[k] - b0[k]);
+            if (span > 0.0) {                            /* an edge: the foot of x on it */
+                for (k = 0; k < 3; ++k) t += (x[k] - b0[k]) * (b1[k] - b0[k]) / span;
+            }
+        }
     }
-    s = geometry[1], t = geometry[2];
     for (k = 0; k < 3; ++k) {
         d1[k] = a1[k] - a0[k], d2[k] = b1[k] - b0[k], dd1[k] = da1[k] - da0[k], dd2[k] = db1[k] - db0[k];
         D[k] = (1.0 - s) * a0[k] + s * a1[k] - (1.0 - t) * b0[k] - t * b1[k];
@@ -396,26 +426,32 @@ int gac_contact_normal_tangent(const gac_model *m, const double *q, const double
     }
     dist = sqrt(gac_dot3(D, D));
     a = gac_dot3(d1, d1), b = gac_dot3(d1, d2), e = gac_dot3(d2, d2);
-    if (!(dist > 0.0) || !(a > 0.0)) return GAC_ERR_LINK_CONTACT;   /* crossing axes: n has no derivative */
     s_inside = s > 0.0 && s < 1.0;
     t_inside = e > 0.0 && t > 0.0 && t < 1.0;
-    {
-        const double r1 = -(gac_dot3(dd1, D) + gac_dot3(d1, dD)), r2 = -(gac_dot3(dd2, D) + gac_dot3(d2, dD));
-        if (s_inside && t_inside) {
-            const double det = b * b - a * e;
-            if (!(-det > 1e-8 * a * e)) return GAC_ERR_LINK_CONTACT;   /* parallel: a whole overlap is closest */
-            ds = (b * r2 - e * r1) / det;
-            dt = (a * r2 - b * r1) / det;
-        } else if (s_inside) {
-            ds = r1 / a;
-        } else if (t_inside) {
-            dt = -r2 / e;
+    if (face) {                                          /* a constant normal: the link's end moves along it */
+        if (s_inside || !(a > 0.0)) return GAC_ERR_LINK_CONTACT;     /* parallel to the face: a stretch closest */
+        along = gac_dot3(geometry + 3, dD);
+        for (k = 0; k < 3; ++k) dn[k] = 0.0;
+    } else {
+        if (!(dist > 0.0) || !(a > 0.0)) return GAC_ERR_LINK_CONTACT;   /* crossing axes: n has no derivative */
+        {
+            const double r1 = -(gac_dot3(dd1, D) + gac_dot3(d1, dD)), r2 = -(gac_dot3(dd2, D) + gac_dot3(d2, dD));
+            if (s_inside && t_inside) {
+                const double det = b * b - a * e;
+                if (!(-det > 1e-8 * a * e)) return GAC_ERR_LINK_CONTACT;   /* parallel: a whole overlap is closest */
+                ds = (b * r2 - e * r1) / det;
+                dt = (a * r2 - b * r1) / det;
+            } else if (s_inside) {
+                ds = r1 / a;
+            } else if (t_inside) {
+                dt = -r2 / e;
+            }
         }
+        for (k = 0; k < 3; ++k) dD[k] += ds * d1[k] - dt * d2[k];
+        along = gac_dot3(geometry + 3, dD);
+        for (k = 0; k < 3; ++k) dn[k] = (dD[k] - along * geometry[3 + k]) / dist;
     }
-    for (k = 0; k < 3; ++k) dD[k] += ds * d1[k] - dt * d2[k];
-    along = gac_dot3(geometry + 3, dD);
     *dgap = along;
-    for (k = 0; k < 3; ++k) dn[k] = (dD[k] - along * geometry[3 + k]) / dist;
     (void)gac_link_direction(m, q, p, i, j, geometry, g);
     /* dn . J_k + n . (dJ_k/ds ds + dJ_k/dt dt), from the points' Jacobian columns V_k (contact_velocities at e_k) */
     {

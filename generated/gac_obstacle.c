@@ -75,7 +75,7 @@ static void gac_obst_box_contact(const double *shape, const double *a0, const do
     const double *c = shape + 1, *h = shape + 4, *R = shape + 7;
     double y0[3], e[3], list[GAC_OBST_NCANDIDATE], f[GAC_OBST_NCANDIDATE], y[3], nl[3], best = INFINITY;
     double lo = 1.0, hi = 0.0, tie, size = 0.0, s;
-    int count = 0, k, j, a, b, base;
+    int count = 0, k, j, a, b, base, at = 0, vertex[GAC_OBST_NCANDIDATE] = {0};
     for (k = 0; k < 3; ++k) {                            /* y = R^T (x - c) */
         y0[k] = e[k] = 0.0;
         for (j = 0; j < 3; ++j) {
@@ -116,6 +116,7 @@ static void gac_obst_box_contact(const double *shape, const double *a0, const do
         }
         if (den > 0.0) {
             s = -num / den;
+            if (s > list[a] && s < list[a + 1] && count < GAC_OBST_NCANDIDATE) vertex[count] = 1;
             s = s < list[a] ? list[a] : (s > list[a + 1] ? list[a + 1] : s);
             gac_obst_add(list, &count, s);
         }
@@ -123,7 +124,7 @@ static void gac_obst_box_contact(const double *shape, const double *a0, const do
     for (a = 0; a < count; ++a) {
         for (k = 0; k < 3; ++k) y[k] = y0[k] + list[a] * e[k];
         f[a] = gac_obst_box_sd(h, y, 0);
-        if (f[a] < best) best = f[a];
+        if (f[a] < best) best = f[a], at = a;
     }
     tie = GAC_OBST_TIE * (sqrt(size) + fabs(h[0]) + fabs(h[1]) + fabs(h[2]) + fabs(best));
     for (a = 0; a < count; ++a) {                        /* the stretch of (near) minimisers: its middle */
@@ -132,7 +133,9 @@ static void gac_obst_box_contact(const double *shape, const double *a0, const do
             if (list[a] > hi) hi = list[a];
         }
     }
-    s = 0.5 * (lo + hi);
+    /* the least a vertex inside its stretch: sd strictly convex there, the minimiser unique (a breakpoint next to
+       it ties within round-off only by (s - s*)^2, which the middle would turn into an error of sqrt(tie)) */
+    s = vertex[at] ? list[at] : 0.5 * (lo + hi);
     for (k = 0; k < 3; ++k) y[k] = y0[k] + s * e[k];
     geometry[0] = gac_obst_box_sd(h, y, nl) - radius;
     geometry[1] = s;
@@ -169,6 +172,30 @@ int gac_obstacle_shape_contact(const gac_model *m, int o, const double *a0, cons
     case GAC_OBSTACLE_PLANE: gac_obst_plane_contact(shape, a0, a1, radius, geometry); return 1;
     default: return 0;
     }
+}
+
+int gac_obstacle_feature(const gac_model *m, int o, const double *x, double *b0, double *b1)
+{
+    const double *shape = m->obstacle_shapes + GAC_OBSTACLE_NSHAPE * o, *c = shape + 1, *h = shape + 4, *R = shape + 7;
+    double y[3], lo[3], hi[3];
+    int k, j, outside = 0;
+    if (gac_obstacle_kind(m, o) != GAC_OBSTACLE_BOX) return 0;          /* a plane: its one face */
+    for (k = 0; k < 3; ++k) {                            /* y = R^T (x - c), then the box's closest point's stretch */
+        y[k] = 0.0;
+        for (j = 0; j < 3; ++j) y[k] += R[3 * j + k] * (x[j] - c[j]);
+        if (y[k] > h[k] || y[k] < -h[k]) {               /* beyond a face's plane: the closest point on it */
+            lo[k] = hi[k] = y[k] > h[k] ? h[k] : -h[k];
+            ++outside;
+        } else {                                         /* between the two: along the whole edge */
+            lo[k] = -h[k], hi[k] = h[k];
+        }
+    }
+    if (outside < 2) return 0;                           /* inside, or over a face */
+    for (k = 0; k < 3; ++k) {                            /* x = c + R y */
+        b0[k] = c[k] + R[3 * k] * lo[0] + R[3 * k + 1] * lo[1] + R[3 * k + 2] * lo[2];
+        b1[k] = c[k] + R[3 * k] * hi[0] + R[3 * k + 1] * hi[1] + R[3 * k + 2] * hi[2];
+    }
+    return outside - 1;
 }
 
 int gac_obstacle_shape_check(const gac_model *m, int o)

@@ -1844,6 +1844,32 @@ void paper_case2_contact_bias_tangent(const double *GAC_RESTRICT q, const double
     for (i = 0; i < PAPER_CASE2_NJROW; ++i) da[i] = NAN;
 }
 
+/* Directional derivative of contact_points (forward mode, exact).  Not generated for this model (its forward dynamics is rolled code, or it was built with
+ * tangent=False): every output is NaN, and paper_case2_model.contact_points_tangent is NULL. */
+void paper_case2_contact_points_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dr)
+{
+    int i;
+    (void)q;
+    (void)p;
+    (void)dq;
+    (void)dp;
+    for (i = 0; i < PAPER_CASE2_NPOINT * 3; ++i) dr[i] = NAN;
+}
+
+/* Directional derivative of contact_velocities (forward mode, exact).  Not generated for this model (its forward dynamics is rolled code, or it was built with
+ * tangent=False): every output is NaN, and paper_case2_model.contact_velocities_tangent is NULL. */
+void paper_case2_contact_velocities_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dv)
+{
+    int i;
+    (void)q;
+    (void)qd;
+    (void)p;
+    (void)dq;
+    (void)dqd;
+    (void)dp;
+    for (i = 0; i < PAPER_CASE2_NPOINT * 3; ++i) dv[i] = NAN;
+}
+
 void paper_case2_rhs(double t, const double *GAC_RESTRICT x, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p,
                  double *GAC_RESTRICT xdot)
 {
@@ -1974,6 +2000,8 @@ static const gac_model paper_case2_model_b = {
     .contact_generalized_force_tangent = 0,
     .contact_gaps_tangent = 0,
     .contact_bias_tangent = 0,
+    .contact_points_tangent = 0,
+    .contact_velocities_tangent = 0,
     .generalized_momentum_ld = 0, .contact_generalized_force_ld = 0, .energy_ld = 0   /* accuracy: on chart A */
 };
 
@@ -2003,6 +2031,8 @@ const gac_model paper_case2_model = {
     .contact_generalized_force_tangent = 0,
     .contact_gaps_tangent = 0,
     .contact_bias_tangent = 0,   /* no tangents: no sensitivities */
+    .contact_points_tangent = 0,
+    .contact_velocities_tangent = 0,
     .generalized_momentum_ld = paper_case2_generalized_momentum_ld,
     .contact_generalized_force_ld = paper_case2_contact_generalized_force_ld,
     .energy_ld = paper_case2_energy_ld

@@ -401,6 +401,33 @@ void paper_case2_contact_gaps_tangent(const double *GAC_RESTRICT q, const double
  *   Not generated for this model (rolled forward dynamics, or tangent=False): writes NaN. */
 void paper_case2_contact_bias_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT dp, double *GAC_RESTRICT da);
 
+/* Directional derivative of contact_points (forward mode, exact).
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   dq   in : direction of q (NQ; rad, m)
+ *   dp   in : direction of p (NPARAM; ignored with baked parameters)
+ *   dr   out: d O_1..O_NPOINT along (dq, dp) (NPOINT x 3; m)
+ *   dr = (d r/dq) dq + (d r/dp) dp, O(n): the joint points' motion that moves a link pair's or an
+ *   obstacle's closest points (gac_contact_normal_tangent).  Without a tangent kernel: NaN, and
+ *   paper_case2_model.contact_points_tangent is NULL.
+ *   Not generated for this model (rolled forward dynamics, or tangent=False): writes NaN. */
+void paper_case2_contact_points_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dr);
+
+/* Directional derivative of contact_velocities (forward mode, exact).
+ *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
+ *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)
+ *   p    in : parameters (NPARAM, layout in the header)
+ *   dq   in : direction of q (NQ; rad, m)
+ *   dqd  in : direction of qd (NQ; rad/s, m/s)
+ *   dp   in : direction of p (NPARAM; ignored with baked parameters)
+ *   dv   out: d(contact_velocities) along (dq, dqd, dp) (NPOINT x 3; m/s)
+ *   dv = (d v/dq) dq + (d v/dqd) dqd + (d v/dp) dp, O(n); with qd = e_k and dqd = 0, the change of the
+ *   points' Jacobian column k along (dq, dp): a link pair's or an obstacle's row's derivative
+ *   (gac_contact_normal_tangent).  Without a tangent kernel: NaN, and
+ *   paper_case2_model.contact_velocities_tangent is NULL.
+ *   Not generated for this model (rolled forward dynamics, or tangent=False): writes NaN. */
+void paper_case2_contact_velocities_tangent(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, const double *GAC_RESTRICT dq, const double *GAC_RESTRICT dqd, const double *GAC_RESTRICT dp, double *GAC_RESTRICT dv);
+
 /* generalized_momentum in long double: I_f qd.
  *   q    in : generalised coordinates Theta (NQ; rad for angles, m for X1..X3)
  *   qd   in : generalised velocities Theta_dot (NQ; rad/s, m/s)

@@ -370,6 +370,23 @@ class CompiledModel:
         return self._call("forward_dynamics_tangent", self.nq, self._vec(q, self.nq, "q"),
                           self._vec(qd, self.nq, "qd"), self._inputs(u), self._params(p), dq, dqd, du, dp)
 
+    def contact_points_tangent(self, q, dq, p=None, dp=None) -> np.ndarray:
+        """d O_1..O_npoint along (dq, dp) at (q, p) (npoint x 3, m per unit of the direction): the directional
+        derivative of contact_points, exact (its generated tangent, O(n)); dp defaults to 0."""
+        self.require_tangents("contact_points_tangent")
+        dp = np.zeros(len(self.p)) if dp is None else self._vec(dp, len(self.p), "dp")
+        return self._call("contact_points_tangent", 3 * self.scene.npoint, self._vec(q, self.nq, "q"),
+                          self._params(p), self._vec(dq, self.nq, "dq"), dp).reshape(self.scene.npoint, 3)
+
+    def contact_velocities_tangent(self, q, qd, dq, dqd, p=None, dp=None) -> np.ndarray:
+        """d(velocities of O_1..O_npoint) along (dq, dqd, dp) at (q, qd, p) (npoint x 3): the directional
+        derivative of contact_velocities, exact (its generated tangent, O(n)); dp defaults to 0."""
+        self.require_tangents("contact_velocities_tangent")
+        dp = np.zeros(len(self.p)) if dp is None else self._vec(dp, len(self.p), "dp")
+        return self._call("contact_velocities_tangent", 3 * self.scene.npoint, self._vec(q, self.nq, "q"),
+                          self._vec(qd, self.nq, "qd"), self._params(p), self._vec(dq, self.nq, "dq"),
+                          self._vec(dqd, self.nq, "dqd"), dp).reshape(self.scene.npoint, 3)
+
     def linearize(self, q, qd, p=None, u=None, parameters=None):
         """The flight dynamics x_dot = f(x, u, p), x = [q, qd], linearised at (q, qd, u, p): (A, B) with
         A = df/dx (2 nq x 2 nq) and B = df/du (2 nq x nu), exact (gac_linearize: the tangent kernel once per

@@ -64,6 +64,35 @@ def test_the_block_tangent_is_the_tangent_along_each_of_its_directions(compiled)
         assert np.allclose(got[j], single, rtol=1e-13, atol=1e-13 * np.abs(single).max())
 
 
+def test_point_tangents_against_finite_differences(compiled):
+    """NAME_contact_points_tangent and NAME_contact_velocities_tangent (the second derivatives of the kinematics a
+    link pair's or an obstacle's row needs) against 6th-order central differences of the compiled contact_points and
+    contact_velocities, every parameter moving; linear in the direction, 0 along none; at qd = e_k, dqd = 0, the
+    change of the points' Jacobian column k."""
+    scene = driven_free_chain()
+    model = compiled(scene, tangent=True)
+    rng = np.random.default_rng(74)
+    for trial in range(4):
+        q, qd, p, _ = _case(model, scene, trial, rng)
+        dq, dqd = rng.normal(size=model.nq), rng.normal(size=model.nq)
+        dp = rng.normal(size=len(p)) * p * 0.2
+        got = model.contact_points_tangent(q, dq, p, dp)
+        expected = central(lambda h: model.contact_points(q + h * dq, p + h * dp), 1e-3)
+        assert np.max(np.abs(got - expected)) < 1e-10 * np.max(np.abs(expected))
+        assert np.allclose(got, model.contact_velocities(q, dq, p) + model.contact_points_tangent(q, 0 * dq, p, dp),
+                           rtol=0, atol=1e-13 * np.max(np.abs(got)))     # dr/dq dq is the velocity at qd = dq
+        got = model.contact_velocities_tangent(q, qd, dq, dqd, p, dp)
+        expected = central(lambda h: model.contact_velocities(q + h * dq, qd + h * dqd, p + h * dp), 1e-3)
+        assert np.max(np.abs(got - expected)) < 1e-10 * np.max(np.abs(expected))
+        twice = model.contact_velocities_tangent(q, qd, 2 * dq, 2 * dqd, p, 2 * dp)
+        assert np.allclose(twice, 2 * got, rtol=1e-13, atol=0)
+        assert not np.any(model.contact_velocities_tangent(q, qd, 0 * dq, 0 * dqd, p))
+        e = np.eye(model.nq)[trial]
+        column = model.contact_velocities_tangent(q, e, dq, 0 * dqd, p, dp)
+        expected = central(lambda h: model.contact_velocities(q + h * dq, e, p + h * dp), 1e-3)
+        assert np.max(np.abs(column - expected)) < 1e-10 * max(np.max(np.abs(expected)), 1.0)
+
+
 def test_linearize_against_finite_differences(compiled):
     scene = driven_free_chain()
     model = compiled(scene, tangent=True)

@@ -59,13 +59,22 @@ def test_a_chain_thrown_at_a_slanted_roof_bounces_without_crossing_it(model, qd0
             assert impact.contacts[0].impulse > 0.0
 
 
-def test_sensitivities_stop_at_a_roof_strike(model):
-    """A plane's (or a box's) strike is not differentiated: the sensitivities end there with the link/obstacle
-    status, the time of the first roof strike, rather than go on with a derivative of a sphere's formula."""
+@pytest.mark.parametrize("qd0, t_end", [((0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 7.0, 0.0), 0.12),
+                                         ((0.0, 0.0, 1.0, -1.0, 2.0, 0.5, 7.0, 0.0), 0.15)])
+def test_sensitivities_through_a_roof_strike(model, qd0, t_end):
+    """The chain's tip strikes the roof alone (link 3 at its end: the plane's constant normal, ds = 0): the
+    sensitivities go through it and match central differences of whole runs; a joint between two links striking
+    it next is two contacts at once, which ends them (status 11) at that strike."""
+    from tests.test_sim_sensitivities import central_differences
     tangent = load_model(model.scene, tangent=True)
-    qd0 = (0.0, 0.0, 3.0, -4.0, 5.0, 1.5, 7.5, 0.0)
-    r = simulate(tangent, 1.5, qd0=qd0, sensitivities=["qd0[X1]", "g"], **TOL)
-    first = next(i for i in r.impacts if any(c.kind == "obstacle" for c in i.contacts))
-    assert not r.sensitivities.valid
-    assert "box or plane obstacle" in r.sensitivities.status
-    assert r.sensitivities.t_event == pytest.approx(first.t, abs=1e-12)
+    p = tangent.parameters({"e_roof": 0.8})
+    q0, qd0 = np.array(model.scene.q0, dtype=float), np.array(qd0)
+    directions = ["qd0[X1]", "g", "q0[theta_2]", "qd0[theta_3]", "l_2", "e_roof"]
+    r = simulate(tangent, t_end, p=p, qd0=qd0, sensitivities=directions, **TOL)
+    assert [[c.label for c in i.contacts] for i in r.impacts] == [["L3/roof"]]
+    assert r.sensitivities.valid and r.sensitivities.n_impacts == 1, r.sensitivity_message
+    central_differences(tangent, t_end, p, q0, qd0, directions, r.sensitivities.matrix, **TOL)
+    r = simulate(tangent, 0.3, p=p, qd0=qd0, sensitivities=directions, **TOL)
+    joint = next(i for i in r.impacts if len(i.contacts) == 2)
+    assert not r.sensitivities.valid and "among several contacts" in r.sensitivities.status
+    assert r.sensitivities.t_event == pytest.approx(joint.t, abs=1e-12)

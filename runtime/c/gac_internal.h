@@ -128,6 +128,10 @@ int gac_obstacle_kind(const gac_model *m, int o);
 int gac_obstacle_shape_contact(const gac_model *m, int o, const double *a0, const double *a1, double radius,
                                double *geometry);
 int gac_obstacle_shape_check(const gac_model *m, int o);
+/* The part of box or plane obstacle o nearest to the point x (a link's closest point): 0 a face (the plane's, or a
+ * box's with x over it or inside: a constant normal), 1 a box's edge, its ends in b0, b1, 2 a box's corner,
+ * b0 = b1 (the normal then turns with x, as against a segment's capsule) */
+int gac_obstacle_feature(const gac_model *m, int o, const double *x, double *b0, double *b1);
 
 /* gac_link.c: link pairs and obstacles as contacts of the loop (kinds GAC_CONTACT_LINK, GAC_CONTACT_OBSTACLE, the
  * last entries of m->contacts: no Jacobian row, never resting, frictionless) */

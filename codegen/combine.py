@@ -86,7 +86,8 @@ _OUTPUT_SPLIT = {"forward_dynamics": "q", "inertia_solve": "q", "generalized_mom
                  "forward_dynamics_energy": "fused", "forward_dynamics_tangent": "q",
                  "forward_dynamics_tangent_block": "block", "inertia_solve_tangent": "q",
                  "contact_generalized_force_tangent": "q", "contact_gaps_tangent": "gap",
-                 "contact_bias_tangent": "row", "generalized_momentum_ld": "q",
+                 "contact_bias_tangent": "row", "contact_points_tangent": "point",
+                 "contact_velocities_tangent": "point", "generalized_momentum_ld": "q",
                  "contact_generalized_force_ld": "q", "energy_ld": "sum"}
 
 

@@ -14,8 +14,16 @@ them on slices (docs/simulation.md, "Several chains"):
 
 The flight inertia is block-diagonal, so every kernel is exactly the chains' own.  What does not compose yet is
 refused here with a SceneError naming the option: tangent kernels (sensitivities, linearisation), the rolled forward
-dynamics, the second base chart (at most one chain may turn its theta_0: its chart's lock is watched, and a run
-that reaches it stops with the gimbal-lock status), and the Lagrangian formulation.
+dynamics and the Lagrangian formulation.
+
+Base charts: each chain whose theta_0 is a coordinate (a turning base) has its own chart B (codegen.charts), its
+kernels derived as a one-chain scene beside chart A's and emitted as NAME_cK_b_*.  The model gets one set of wrappers
+per combination of the turning chains' charts (chart_models): with one turning chain NAME_b_* and NAME_model_b as a
+one-chain model has, with several NAME_bM_* and NAME_model_bM, bit j of M set where turning chain j is on its chart
+B (the last, every one on B, is the model's chart_b).  The C loop switches each chain's chart on its own
+(runtime/c/gac_switch.c).  Beyond MAX_SWITCHED turning chains, or where one has no chart B (an input on a base
+angle, twists that do not turn each axis a right angle), the model has no second charts and a run that reaches a
+lock stops with the gimbal-lock status.
 """
 from __future__ import annotations
 
@@ -23,6 +31,7 @@ import time
 from dataclasses import replace
 
 from .artifact import RenderedFunction
+from .charts import chart_b_scene
 from .options import BuildOptions
 from .scene import Chains, SceneError
 from .specialise import Layout, layout_for
@@ -41,14 +50,12 @@ def chain_options(options: BuildOptions) -> BuildOptions:
     return replace(options, dense=False, rolled=False, rolled_required=False, chart_b=False)
 
 
-def check_charts(scene: Chains, layout: Layout) -> int:
-    """The chain whose theta_0 is a coordinate (its base chart can near its lock), or 0; SceneError if several."""
-    turning = [k for k, chain in enumerate(scene.chains, start=1) if scene.state_offset(k) + 1 in layout.free]
-    if len(turning) > 1:
-        raise SceneError(f"chains: chains {' and '.join(map(str, turning))} both turn their base in 3D (theta_0 a "
-                         "coordinate); a scene of several chains watches one base chart's gimbal lock, so at most one "
-                         "chain may (make the others planar, or mount them: [chains.base])")
-    return turning[0] if turning else 0
+MAX_SWITCHED = 4     # turning chains whose charts a model switches (2^4 chart models; gac.h GAC_CHART_BASES_MAX)
+
+
+def turning_chains(scene: Chains, layout: Layout) -> list[int]:
+    """The chains (1-based) whose theta_0 is a coordinate: their base charts can near their locks."""
+    return [k for k, chain in enumerate(scene.chains, start=1) if scene.state_offset(k) + 1 in layout.free]
 
 
 def generate_chains(scene: Chains, options: BuildOptions, name: str, progress, workers, derive):
@@ -57,20 +64,47 @@ def generate_chains(scene: Chains, options: BuildOptions, name: str, progress, w
     from .emit import assemble_model
     own = chain_options(options)
     layout = layout_for(scene, options.specialise)
-    check_charts(scene, layout)
     start = time.perf_counter()
-    blocks, sizes = [], []
+    blocks, sizes, layouts = [], [], []
     for k, chain in enumerate(scene.chains, start=1):
         progress(f"chain {k}")
-        chain_layout = layout_for(chain, options.specialise)
-        model = derive(chain, f"{name}_c{k}", own, progress, workers, chain_layout)
+        layouts.append(layout_for(chain, options.specialise))
+        model = derive(chain, f"{name}_c{k}", own, progress, workers, layouts[-1])
         blocks.append(model.functions)
-        sizes.append(chain_sizes(chain, chain_layout))
-    wrappers = wrap_kernels(name, blocks, sizes)
+        sizes.append(chain_sizes(chain, layouts[-1]))
+    prefixes = [f"{name}_c{k}" for k in range(1, len(blocks) + 1)]
+    wrappers = wrap_kernels(name, blocks, sizes, prefixes)
+    chains = [dict(prefix=prefix, functions=functions, pmap=scene.parameter_map(k), parameters=True)
+              for k, (prefix, functions) in enumerate(zip(prefixes, blocks), start=1)]
     timings = {"chains": time.perf_counter() - start}
-    return assemble_model(scene, name, wrappers, options, layout, timings=timings,
-                          chains=[dict(prefix=f"{name}_c{k}", functions=functions, pmap=scene.parameter_map(k))
-                                  for k, functions in enumerate(blocks, start=1)])
+    chart_models = None
+    turning = turning_chains(scene, layout)
+    scenes_b = [chart_b_scene(scene.chains[k - 1], layouts[k - 1]) for k in turning] \
+        if options.chart_b and 1 <= len(turning) <= MAX_SWITCHED else []
+    if scenes_b and all(s is not None for s in scenes_b):
+        start = time.perf_counter()
+        b_blocks = {}
+        for k, scene_b in zip(turning, scenes_b):
+            progress(f"chain {k}, chart B")
+            model = derive(scene_b, f"{name}_c{k}_b", replace(own, extended=False), progress, workers,
+                           layouts[k - 1])
+            b_blocks[k] = model.functions
+            chains.append(dict(prefix=f"{name}_c{k}_b", functions=model.functions, pmap=scene.parameter_map(k),
+                               parameters=False))
+        chart_models, b_scenes = [], dict(zip(turning, scenes_b))
+        for mask in range(1, 2 ** len(turning)):
+            on_b = {k for j, k in enumerate(turning) if mask >> j & 1}
+            suffix = "b" if len(turning) == 1 else f"b{mask}"
+            mixed = replace(scene, chains=tuple(b_scenes[k] if k in on_b else chain
+                                                for k, chain in enumerate(scene.chains, start=1)))
+            functions = wrap_kernels(name, [b_blocks[k] if k in on_b else functions
+                                            for k, functions in enumerate(blocks, start=1)], sizes,
+                                     [f"{name}_c{k}_b" if k in on_b else f"{name}_c{k}"
+                                      for k in range(1, len(blocks) + 1)])
+            chart_models.append((suffix, mixed, functions))
+        timings["chart_b"] = time.perf_counter() - start
+    return assemble_model(scene, name, wrappers, options, layout, timings=timings, chains=chains,
+                          chart_models=chart_models)
 
 
 # how a kernel's arguments and output split over the chains: "q" the coordinates, "row" the Jacobian rows, "point"
@@ -83,18 +117,21 @@ _OUTPUT_SPLIT = {"forward_dynamics": "q", "inertia_solve": "q", "generalized_mom
                  "contact_generalized_force_ld": "q", "energy_ld": "sum"}
 
 
-def wrap_kernels(name: str, blocks: list[list[RenderedFunction]], sizes: list[dict]) -> list[RenderedFunction]:
-    """The model's kernels as wrappers over the chains' (in the chains' common order, which is the interface's);
-    ``sizes``: each chain's block sizes (chain_sizes)."""
-    names = [f.name for f in blocks[0]]
-    for k, functions in enumerate(blocks[1:], start=2):
-        if [f.name for f in functions] != names:
-            raise AssertionError(f"chain {k}'s kernels {[f.name for f in functions]} differ from chain 1's {names}")
+def wrap_kernels(name: str, blocks: list[list[RenderedFunction]], sizes: list[dict],
+                 prefixes: list[str]) -> list[RenderedFunction]:
+    """The model's kernels as wrappers over the chains' (in the interface's order): those every chain has (a chain
+    on its chart B has no long-double kernels); ``sizes``: each chain's block sizes (chain_sizes); ``prefixes``:
+    each chain's kernels' prefix (NAME_cK, or NAME_cK_b on chart B)."""
+    by_name = [{f.name: f for f in functions} for functions in blocks]
+    names = [f.name for f in min(blocks, key=len)]
+    for k, functions in enumerate(by_name, start=1):
+        if not set(names) <= set(functions):
+            raise AssertionError(f"chain {k}'s kernels {sorted(functions)} lack some of {names}")
     out = []
-    for index, fname in enumerate(names):
+    for fname in names:
         if fname not in _OUTPUT_SPLIT:
             raise SceneError(f"{fname}: a scene of several chains cannot combine this kernel yet")
-        out.append(_wrapper(name, fname, [functions[index] for functions in blocks], sizes))
+        out.append(_wrapper(name, fname, [functions[fname] for functions in by_name], sizes, prefixes))
     return out
 
 
@@ -103,7 +140,8 @@ def chain_sizes(chain, layout: Layout) -> dict:
     return {"q": layout.nq, "row": len(layout.contact_rows), "point": 3 * (chain.n + 1), "gap": len(layout.contacts)}
 
 
-def _wrapper(name: str, fname: str, parts: list[RenderedFunction], sizes: list[dict]) -> RenderedFunction:
+def _wrapper(name: str, fname: str, parts: list[RenderedFunction], sizes: list[dict],
+             prefixes: list[str]) -> RenderedFunction:
     """One wrapper: chain k's kernel called on its slices (its parameters gathered into pk), its output placed at
     its block or summed."""
     first = parts[0]
@@ -123,7 +161,7 @@ def _wrapper(name: str, fname: str, parts: list[RenderedFunction], sizes: list[d
                 args.append("pk")
             else:
                 args.append(arg if split is None or offsets[split] == 0 else f"{arg} + {offsets[split]}")
-        call = f"{name}_c{k}_{fname}({', '.join(args)}, "
+        call = f"{prefixes[k - 1]}_{fname}({', '.join(args)}, "
         lines.append("{")
         lines.append(f"    double pk[{name.upper()}_C{k}_NPARAM];")
         lines.append(f"    {name}_c{k}_parameters(p, pk);")

@@ -82,26 +82,27 @@ def generate_chains(scene: Chains, options: BuildOptions, name: str, progress, w
     scenes_b = [chart_b_scene(scene.chains[k - 1], layouts[k - 1]) for k in turning] \
         if options.chart_b and 1 <= len(turning) <= MAX_SWITCHED else []
     if scenes_b and all(s is not None for s in scenes_b):
+        # each turning chain's chart B, derived as its own one-chain scene (no long-double kernels, as
+        # codegen.pipeline's chart B), then the wrappers of every combination of the chains' charts
         start = time.perf_counter()
+        on_b = dict(zip(turning, scenes_b))
         b_blocks = {}
-        for k, scene_b in zip(turning, scenes_b):
+        for k, scene_b in on_b.items():
             progress(f"chain {k}, chart B")
-            model = derive(scene_b, f"{name}_c{k}_b", replace(own, extended=False), progress, workers,
-                           layouts[k - 1])
-            b_blocks[k] = model.functions
-            chains.append(dict(prefix=f"{name}_c{k}_b", functions=model.functions, pmap=scene.parameter_map(k),
+            b_blocks[k] = derive(scene_b, f"{name}_c{k}_b", replace(own, extended=False), progress, workers,
+                                 layouts[k - 1]).functions
+            chains.append(dict(prefix=f"{name}_c{k}_b", functions=b_blocks[k], pmap=scene.parameter_map(k),
                                parameters=False))
-        chart_models, b_scenes = [], dict(zip(turning, scenes_b))
+        chart_models = []
         for mask in range(1, 2 ** len(turning)):
-            on_b = {k for j, k in enumerate(turning) if mask >> j & 1}
-            suffix = "b" if len(turning) == 1 else f"b{mask}"
-            mixed = replace(scene, chains=tuple(b_scenes[k] if k in on_b else chain
+            flipped = {k for j, k in enumerate(turning) if mask >> j & 1}      # bit j: the j-th turning chain on B
+            mixed = replace(scene, chains=tuple(on_b[k] if k in flipped else chain
                                                 for k, chain in enumerate(scene.chains, start=1)))
-            functions = wrap_kernels(name, [b_blocks[k] if k in on_b else functions
-                                            for k, functions in enumerate(blocks, start=1)], sizes,
-                                     [f"{name}_c{k}_b" if k in on_b else f"{name}_c{k}"
+            functions = wrap_kernels(name, [b_blocks[k] if k in flipped else blocks[k - 1]
+                                            for k in range(1, len(blocks) + 1)], sizes,
+                                     [f"{name}_c{k}_b" if k in flipped else f"{name}_c{k}"
                                       for k in range(1, len(blocks) + 1)])
-            chart_models.append((suffix, mixed, functions))
+            chart_models.append(("b" if len(turning) == 1 else f"b{mask}", mixed, functions))
         timings["chart_b"] = time.perf_counter() - start
     return assemble_model(scene, name, wrappers, options, layout, timings=timings, chains=chains,
                           chart_models=chart_models)

@@ -9,6 +9,9 @@
 
 #include <math.h>
 
+/* near_a holds three angles per base a model may switch */
+typedef char gac_near_a_fits[sizeof(((gac_sim *)0)->near_a) == 3 * GAC_CHART_BASES_MAX * sizeof(double) ? 1 : -1];
+
 /* 1 if the run may switch charts: opt.chart_switch > 0 and the model has a second chart. */
 int gac_can_switch(const gac_sim *s)
 {

@@ -84,6 +84,16 @@ def test_each_chain_switches_its_chart_on_its_own_and_the_run_reaches_t_end(run)
             assert chi[i, k] < 2 * SWITCH + 0.05 if mask >> k & 1 else chi[i, k] > SWITCH - 0.05, (t, mask)
 
 
+@pytest.mark.parametrize("method, options", [("dop853", dict(rtol=1e-10, atol=1e-12)), ("rk4", dict(dt=1e-4))])
+def test_the_other_methods_switch_the_same_way(run, method, options):
+    """The same switches with DOP853 and with RK4's fixed steps (which switch at a step's start where the step would
+    pass a lock)."""
+    _, model, result = run
+    other = simulate(model, 1.0, method=method, **options)
+    assert other.status == 0 and other.n_chart_switches == result.n_chart_switches, other.message
+    assert len(other.impacts) == len(result.impacts) and abs(other.energy_drift) < 1e-6
+
+
 def test_the_energy_balance_closes_and_no_link_passes_through_another(run):
     scene, model, result = run
     assert abs(result.energy_drift) < 1e-9, result.energy_summary()

@@ -748,6 +748,10 @@ int gac_chart_convert_tangent(const gac_base *from, const gac_base *to, int nq, 
  * is rejected and retried shorter (RK4: the switch is made at its start).  Resting contacts, held gaps, the
  * work integrals and the counters carry over.  Samples, impact records and gac_sim_state are in chart A's
  * coordinates, whichever chart was integrated; sim.chart and sim.n_chart_switches say which and how often.
+ * A model of several chains turning their bases (gac_model.nbase, chart_models) does this for each base on its
+ * own, with its own chi_A: sim.chart is then a mask (bit j: base j on its chart B), a switch converts the bases
+ * that cross their thresholds at that step end and continues on the model of the new mask, and the floor holds
+ * for every base's measure on the chart it is on.
  *
  * Stops before trouble: GAC_ERR_GIMBAL_LOCK (the base chart's measure below sqrt(16 eps / rtol) and no second
  * chart to continue on: chart_switch 0, or a model without chart_b), GAC_ERR_UNSTABLE (RK4 past its stability,

@@ -173,9 +173,8 @@ def main(argv=None) -> int:
     try:
         layout = layout_for(scene, specialise=options.specialise)
         if not isinstance(scene, Scene):            # several chains: what does not compose yet is refused here
-            from .combine import chain_options, check_charts
+            from .combine import chain_options
             chain_options(options)
-            check_charts(scene, layout)
             if args.urdf:
                 raise SceneError("--urdf: a scene of several chains has no URDF form (a URDF file holds one chain)")
         else:

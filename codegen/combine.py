@@ -17,9 +17,16 @@ them on slices (docs/simulation.md, "Several chains"):
   own arrays, its output scattered back to chain k's block of each direction.
 
 The flight inertia is block-diagonal, so every kernel is exactly the chains' own.  What does not compose yet is
-refused here with a SceneError naming the option: the rolled forward dynamics, the second base chart (at most one
-chain may turn its theta_0: its chart's lock is watched, and a run that reaches it stops with the gimbal-lock
-status), and the Lagrangian formulation.
+refused here with a SceneError naming the option: the rolled forward dynamics and the Lagrangian formulation.
+
+Base charts: each chain whose theta_0 is a coordinate (a turning base) has its own chart B (codegen.charts), its
+kernels derived as a one-chain scene beside chart A's and emitted as NAME_cK_b_*.  The model gets one set of wrappers
+per combination of the turning chains' charts (chart_models): with one turning chain NAME_b_* and NAME_model_b as a
+one-chain model has, with several NAME_bM_* and NAME_model_bM, bit j of M set where turning chain j is on its chart
+B (the last, every one on B, is the model's chart_b).  The C loop switches each chain's chart on its own
+(runtime/c/gac_switch.c).  Beyond MAX_SWITCHED turning chains, or where one has no chart B (an input on a base
+angle, twists that do not turn each axis a right angle), the model has no second charts and a run that reaches a
+lock stops with the gimbal-lock status.
 """
 from __future__ import annotations
 
@@ -28,6 +35,7 @@ from dataclasses import replace
 
 from . import interface
 from .artifact import RenderedFunction
+from .charts import chart_b_scene
 from .options import BuildOptions
 from .scene import Chains, SceneError
 from .specialise import Layout, layout_for
@@ -43,14 +51,12 @@ def chain_options(options: BuildOptions) -> BuildOptions:
     return replace(options, dense=False, rolled=False, rolled_required=False, chart_b=False)
 
 
-def check_charts(scene: Chains, layout: Layout) -> int:
-    """The chain whose theta_0 is a coordinate (its base chart can near its lock), or 0; SceneError if several."""
-    turning = [k for k, chain in enumerate(scene.chains, start=1) if scene.state_offset(k) + 1 in layout.free]
-    if len(turning) > 1:
-        raise SceneError(f"chains: chains {' and '.join(map(str, turning))} both turn their base in 3D (theta_0 a "
-                         "coordinate); a scene of several chains watches one base chart's gimbal lock, so at most one "
-                         "chain may (make the others planar, or mount them: [chains.base])")
-    return turning[0] if turning else 0
+MAX_SWITCHED = 4     # turning chains whose charts a model switches (2^4 chart models; gac.h GAC_CHART_BASES_MAX)
+
+
+def turning_chains(scene: Chains, layout: Layout) -> list[int]:
+    """The chains (1-based) whose theta_0 is a coordinate: their base charts can near their locks."""
+    return [k for k, chain in enumerate(scene.chains, start=1) if scene.state_offset(k) + 1 in layout.free]
 
 
 def generate_chains(scene: Chains, options: BuildOptions, name: str, progress, workers, derive):
@@ -59,20 +65,48 @@ def generate_chains(scene: Chains, options: BuildOptions, name: str, progress, w
     from .emit import assemble_model
     own = chain_options(options)
     layout = layout_for(scene, options.specialise)
-    check_charts(scene, layout)
     start = time.perf_counter()
-    blocks, sizes = [], []
+    blocks, sizes, layouts = [], [], []
     for k, chain in enumerate(scene.chains, start=1):
         progress(f"chain {k}")
-        chain_layout = layout_for(chain, options.specialise)
-        model = derive(chain, f"{name}_c{k}", own, progress, workers, chain_layout)
+        layouts.append(layout_for(chain, options.specialise))
+        model = derive(chain, f"{name}_c{k}", own, progress, workers, layouts[-1])
         blocks.append(model.functions)
-        sizes.append(chain_sizes(chain, chain_layout))
-    wrappers = wrap_kernels(name, blocks, sizes)
+        sizes.append(chain_sizes(chain, layouts[-1]))
+    prefixes = [f"{name}_c{k}" for k in range(1, len(blocks) + 1)]
+    wrappers = wrap_kernels(name, blocks, sizes, prefixes)
+    chains = [dict(prefix=prefix, functions=functions, pmap=scene.parameter_map(k), parameters=True)
+              for k, (prefix, functions) in enumerate(zip(prefixes, blocks), start=1)]
     timings = {"chains": time.perf_counter() - start}
-    return assemble_model(scene, name, wrappers, options, layout, timings=timings,
-                          chains=[dict(prefix=f"{name}_c{k}", functions=functions, pmap=scene.parameter_map(k))
-                                  for k, functions in enumerate(blocks, start=1)])
+    chart_models = None
+    turning = turning_chains(scene, layout)
+    scenes_b = [chart_b_scene(scene.chains[k - 1], layouts[k - 1]) for k in turning] \
+        if options.chart_b and 1 <= len(turning) <= MAX_SWITCHED else []
+    if scenes_b and all(s is not None for s in scenes_b):
+        # each turning chain's chart B, derived as its own one-chain scene (no long-double kernels, as
+        # codegen.pipeline's chart B), then the wrappers of every combination of the chains' charts
+        start = time.perf_counter()
+        on_b = dict(zip(turning, scenes_b))
+        b_blocks = {}
+        for k, scene_b in on_b.items():
+            progress(f"chain {k}, chart B")
+            b_blocks[k] = derive(scene_b, f"{name}_c{k}_b", replace(own, extended=False), progress, workers,
+                                 layouts[k - 1]).functions
+            chains.append(dict(prefix=f"{name}_c{k}_b", functions=b_blocks[k], pmap=scene.parameter_map(k),
+                               parameters=False))
+        chart_models = []
+        for mask in range(1, 2 ** len(turning)):
+            flipped = {k for j, k in enumerate(turning) if mask >> j & 1}      # bit j: the j-th turning chain on B
+            mixed = replace(scene, chains=tuple(on_b[k] if k in flipped else chain
+                                                for k, chain in enumerate(scene.chains, start=1)))
+            functions = wrap_kernels(name, [b_blocks[k] if k in flipped else blocks[k - 1]
+                                            for k in range(1, len(blocks) + 1)], sizes,
+                                     [f"{name}_c{k}_b" if k in flipped else f"{name}_c{k}"
+                                      for k in range(1, len(blocks) + 1)])
+            chart_models.append(("b" if len(turning) == 1 else f"b{mask}", mixed, functions))
+        timings["chart_b"] = time.perf_counter() - start
+    return assemble_model(scene, name, wrappers, options, layout, timings=timings, chains=chains,
+                          chart_models=chart_models)
 
 
 # how a kernel's arguments and output split over the chains: "q" the coordinates, "row" the Jacobian rows, "point"
@@ -91,22 +125,25 @@ _OUTPUT_SPLIT = {"forward_dynamics": "q", "inertia_solve": "q", "generalized_mom
                  "contact_generalized_force_ld": "q", "energy_ld": "sum"}
 
 
-def wrap_kernels(name: str, blocks: list[list[RenderedFunction]], sizes: list[dict]) -> list[RenderedFunction]:
-    """The model's kernels as wrappers over the chains' (in the chains' common order, which is the interface's);
-    ``sizes``: each chain's block sizes (chain_sizes)."""
-    names = [f.name for f in blocks[0]]
-    for k, functions in enumerate(blocks[1:], start=2):
-        if [f.name for f in functions] != names:
-            raise AssertionError(f"chain {k}'s kernels {[f.name for f in functions]} differ from chain 1's {names}")
+def wrap_kernels(name: str, blocks: list[list[RenderedFunction]], sizes: list[dict],
+                 prefixes: list[str]) -> list[RenderedFunction]:
+    """The model's kernels as wrappers over the chains' (in the interface's order): those every chain has (a chain
+    on its chart B has no long-double kernels); ``sizes``: each chain's block sizes (chain_sizes); ``prefixes``:
+    each chain's kernels' prefix (NAME_cK, or NAME_cK_b on chart B)."""
+    by_name = [{f.name: f for f in functions} for functions in blocks]
+    names = [f.name for f in min(blocks, key=len)]
+    for k, functions in enumerate(by_name, start=1):
+        if not set(names) <= set(functions):
+            raise AssertionError(f"chain {k}'s kernels {sorted(functions)} lack some of {names}")
     out = []
-    for index, fname in enumerate(names):
+    for fname in names:
         if fname not in _OUTPUT_SPLIT:
             raise SceneError(f"{fname}: a scene of several chains cannot combine this kernel yet")
-        parts = [functions[index] for functions in blocks]
+        parts = [functions[fname] for functions in by_name]
         if _OUTPUT_SPLIT[fname] == "block":
-            out.append(_block_wrapper(name, fname, parts, sizes))
+            out.append(_block_wrapper(name, fname, parts, sizes, prefixes))
         else:
-            out.append(_wrapper(name, fname, parts, sizes))
+            out.append(_wrapper(name, fname, parts, sizes, prefixes))
     return out
 
 
@@ -140,7 +177,8 @@ def _gather_parameters(name: str, k: int, inputs) -> list[str]:
     return lines
 
 
-def _wrapper(name: str, fname: str, parts: list[RenderedFunction], sizes: list[dict]) -> RenderedFunction:
+def _wrapper(name: str, fname: str, parts: list[RenderedFunction], sizes: list[dict],
+             prefixes: list[str]) -> RenderedFunction:
     """One wrapper: chain k's kernel called on its slices (its parameters gathered into pk), its output placed at
     its block or summed."""
     first = parts[0]
@@ -152,7 +190,7 @@ def _wrapper(name: str, fname: str, parts: list[RenderedFunction], sizes: list[d
     offsets = {"q": 0, "row": 0, "point": 0, "gap": 0, "u": 0}
     for k, (f, block) in enumerate(zip(parts, sizes), start=1):
         args = [_argument(arg, fname, offsets, block) for arg in f.inputs]
-        call = f"{name}_c{k}_{fname}({', '.join(args)}, "
+        call = f"{prefixes[k - 1]}_{fname}({', '.join(args)}, "
         lines.append("{")
         lines += _gather_parameters(name, k, f.inputs)
         if kind == "sum":
@@ -174,7 +212,8 @@ def _wrapper(name: str, fname: str, parts: list[RenderedFunction], sizes: list[d
                             lines, _ops(parts), out_type=first.out_type)
 
 
-def _block_wrapper(name: str, fname: str, parts: list[RenderedFunction], sizes: list[dict]) -> RenderedFunction:
+def _block_wrapper(name: str, fname: str, parts: list[RenderedFunction], sizes: list[dict],
+                   prefixes: list[str]) -> RenderedFunction:
     """The wrapper of a tangent kernel of GAC_TANGENT_BLOCK directions (each seed and the output direction-major):
     chain k's slice of every direction gathered into its own arrays, its kernel called once, its output scattered
     back to its block of every direction."""
@@ -208,7 +247,7 @@ def _block_wrapper(name: str, fname: str, parts: list[RenderedFunction], sizes: 
         for arg in f.inputs:
             if arg not in args:
                 raise SceneError(f"{fname}: a scene of several chains cannot combine its argument {arg} yet")
-        lines.append(f"    {name}_c{k}_{fname}({', '.join(args[arg] for arg in f.inputs)}, yk);")
+        lines.append(f"    {prefixes[k - 1]}_{fname}({', '.join(args[arg] for arg in f.inputs)}, yk);")
         lines.append(f"    for (int j = 0; j < GAC_TANGENT_BLOCK; ++j)")
         lines.append(f"        for (int i = 0; i < {nqk}; ++i) {out}[j * {nq} + {offsets['q']} + i] = yk[j * {nqk} + i];")
         lines.append("}")

@@ -288,11 +288,16 @@ def _weight_scale_expression(scene: Scene, bake_params: bool) -> str:
 
 
 def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], options: BuildOptions,
-                   layout, chart_b=None, timings=None, chains=None) -> GeneratedModel:
+                   layout, chart_b=None, timings=None, chains=None, chart_models=None) -> GeneratedModel:
     """The model's header, source and cffi declarations from its rendered kernels (in interface order).
     ``chart_b``: (the scene on chart B, its rendered loop kernels) for a second base chart (codegen.charts), or None;
     ``timings``: seconds per stage so far; ``chains``: for several chains (codegen.combine), each chain's prefix, its
-    rendered kernels (emitted static, the model's kernels wrapping them) and its parameters' places in p."""
+    rendered kernels (emitted static, the model's kernels wrapping them), its parameters' places in p and whether
+    the model gathers them (chart B's kernels share chart A's); ``chart_models``: for several chains, (suffix, the
+    scene on those charts, its loop kernels) of each combination of the turning chains' charts but chart A's, the
+    last every one on chart B (chart_b then unused)."""
+    if chart_b is not None:
+        chart_models = [("b", *chart_b)]
     bake_params = options.bake_params
     dense = _check_kernels(functions)
     generated = {f.name: f for f in functions}
@@ -332,15 +337,12 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], o
                     for point, axis in layout.contact_rows],
         rows=list(layout.contact_rows), twists=scene.all_twists,
         chart=_chart_context(scene, layout), base=_base_context(scene, layout), layout_free=list(layout.free),
+        bases=_bases_context(scene, layout),
         fused=any(name in generated for name in interface.FUSED_KERNELS),
         tangent=any(name in generated for name in interface.TANGENT_KERNELS),
         extended=any(name in generated for name in interface.EXTENDED_KERNELS),
-        chart_b=None if chart_b is None else dict(
-            functions=chart_b[1], fused=any(f.name in interface.FUSED_KERNELS for f in chart_b[1]),
-            tangent=any(f.name in interface.TANGENT_KERNELS for f in chart_b[1]), base=_base_context(chart_b[0], layout),
-            rows=[[_double_literal(float(x)) for x in row] for row in chart_b[0].base_twists[0]],
-            q0=[_double_literal(float(x)) for x in layout.reduce(chart_b[0].q0)],
-            qd0=[_double_literal(float(x)) for x in layout.reduce(chart_b[0].qd0)]),
+        chart_models=[_chart_model_context(suffix, scene_m, kernels, layout)
+                      for suffix, scene_m, kernels in chart_models or ()],
         q0=[_double_literal(float(x)) for x in layout.reduce(scene.q0)],
         qd0=[_double_literal(float(x)) for x in layout.reduce(scene.qd0)],
         literal=_double_literal,
@@ -356,6 +358,7 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], o
         api_functions=interface.FUNCTIONS, callbacks=interface.CALLBACKS,
         chains=[dict(chain, nparam=len(chain["pmap"])) for chain in chains or ()],
     )
+    context["chart_b"] = context["chart_models"][-1] if context["chart_models"] else None
     header = env.get_template("model.h.j2").render(**context)
     source = env.get_template("model.c.j2").render(**context)
     cdef = env.get_template("cdef.h.j2").render(**context)
@@ -418,11 +421,26 @@ def _check_kernels(functions: list[RenderedFunction]) -> bool:
     return dense
 
 
+def _chart_model_context(suffix: str, scene, functions: list[RenderedFunction], layout) -> dict:
+    """One model on other base charts (NAME_model_<suffix>): its loop kernels, its bases and its start."""
+    return dict(suffix=suffix, functions=functions, fused=any(f.name in interface.FUSED_KERNELS for f in functions),
+                tangent=any(f.name in interface.TANGENT_KERNELS for f in functions), base=_base_context(scene, layout),
+                bases=_bases_context(scene, layout),
+                rows=[[_double_literal(float(x)) for x in row] for row in scene.base_twists[0]]
+                if isinstance(scene, Scene) else None,
+                q0=[_double_literal(float(x)) for x in layout.reduce(scene.q0)],
+                qd0=[_double_literal(float(x)) for x in layout.reduce(scene.qd0)])
+
+
 def _chart_context(scene: Scene, layout) -> dict:
     """What the C loop needs for the base chart's measure |det E| = |a . (e_z x Rz(theta_0) b)|, a = T_0^T e_z,
     b = T_1 e_z (the three base joint axes' triple product): a, b, and where theta_0 is (an index into q, or
     its fixed value)."""
-    scene, offset = _turning_chain(scene, layout)
+    return _chart_of(*_turning_chain(scene, layout), layout)
+
+
+def _chart_of(scene: Scene, offset: int, layout) -> dict:
+    """_chart_context of the chain ``scene`` whose state starts at ``offset`` in the full layout."""
     T0, T1 = (np.array(T, dtype=float) for T in scene.base_twists[1:])
     if offset + 1 not in layout.free:
         # theta_0 held (a planar model, a revolute or fixed base): theta_-1 is held with it, and the rates of the
@@ -431,6 +449,19 @@ def _chart_context(scene: Scene, layout) -> dict:
         return {"a": ["0.0", "1.0", "0.0"], "b": ["1.0", "0.0", "0.0"], "index": -1, "value": "0.0"}
     return {"a": [_double_literal(float(x)) for x in T0[2, :]], "b": [_double_literal(float(x)) for x in T1[:, 2]],
             "index": layout.free.index(offset + 1), "value": "0.0"}
+
+
+def _bases_context(scene, layout) -> list[dict]:
+    """Of several chains two or more of which turn their base (theta_0 a coordinate): each one's base and measure
+    (gac_model.bases, charts), in chain order; else none (the one base is gac_model.base)."""
+    if isinstance(scene, Scene):
+        return []
+    turning = [(chain, scene.state_offset(k)) for k, chain in enumerate(scene.chains, start=1)
+               if scene.state_offset(k) + 1 in layout.free]
+    if len(turning) < 2:
+        return []
+    return [dict(base=_base_of(chain, offset, layout), chart=_chart_of(chain, offset, layout))
+            for chain, offset in turning]
 
 
 def _turning_chain(scene, layout) -> tuple:
@@ -447,7 +478,11 @@ def _turning_chain(scene, layout) -> tuple:
 def _base_context(scene: Scene, layout) -> dict:
     """The base chart's twists T_-1, T_0, T_1 (row-major, 9 numbers each) and the indices in q of theta_-1, theta_0,
     theta_1 (-1 for one the model holds fixed): gac_model.base, for the conversion between two charts."""
-    scene, offset = _turning_chain(scene, layout)
+    return _base_of(*_turning_chain(scene, layout), layout)
+
+
+def _base_of(scene: Scene, offset: int, layout) -> dict:
+    """_base_context of the chain ``scene`` whose state starts at ``offset`` in the full layout."""
     T = [[_double_literal(float(x)) for row in M for x in row] for M in scene.base_twists]
     return {"T_m1": T[0], "T_0": T[1], "T_1": T[2],
             "index": [layout.free.index(offset + i) if offset + i in layout.free else -1 for i in range(3)]}

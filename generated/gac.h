@@ -369,6 +369,17 @@ struct gac_model {
                                           half extents (m) and rotation (row-major 3x3, columns its axes), or a
                                           plane's point (m) and unit normal (into the free side); a box's or
                                           plane's segment in `obstacles` is its centre or point twice, unused */
+    /* several chains, several of which turn their base in 3D (docs/simulation.md, "Several chains"): each turning
+       chain has its own base chart, switched on its own */
+    int nbase;                         /* turning bases (>= 2); 0: the one base `base` (measure `chart`), as a
+                                          one-chain model has */
+    const gac_base *bases;             /* [nbase]: each turning chain's base on this model's chart (`base` is the
+                                          first) */
+    const gac_chart *charts;           /* [nbase]: their measures (`chart` is the first); gac_chart_measure is the
+                                          smallest */
+    const gac_model *const *chart_models; /* [2^nbase], on chart A's model (nbase <= GAC_CHART_BASES_MAX): the
+                                          model with base j on its chart B where bit j of the index is set (index 0
+                                          the model itself, the last its chart_b); NULL: none */
 };
 
 /* GAC_OK if the descriptor is consistent (sizes > 0 where needed, nx = 2 nq, tables and kernels present,
@@ -588,7 +599,8 @@ int gac_contact_normal(const gac_model *m, const double *q, const double *p, int
 int gac_contact_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
                                const double *dp, double *dgap, double *g, double *dg);
 
-/* The base chart's measure chi(q) (gac_chart), in [0, 1] for the default twists. */
+/* The base chart's measure chi(q) (gac_chart), in [0, 1] for the default twists; of several turning bases
+ * (gac_model.nbase), the smallest of theirs. */
 double gac_chart_measure(const gac_model *m, const double *q);
 
 /* Message for a return code (a static string). */
@@ -603,6 +615,7 @@ const char *gac_error_message(int code);
 #define GAC_CHART_SWITCH_MIN 0.1
 #define GAC_CHART_SWITCH_MAX 0.35
 #define GAC_CHART_LOCK 1e-12    /* a measure below this is the chart's own lock: theta_-1 is kept from `near` */
+#define GAC_CHART_BASES_MAX 4   /* a model switches the charts of at most this many bases (2^4 chart models) */
 
 /* R = T_-1 Rz(angles[0]) T_0 Rz(angles[1]) T_1 Rz(angles[2]) (3 x 3, row-major). */
 void gac_base_rotation(const gac_base *c, const double *angles, double *R);
@@ -742,6 +755,10 @@ int gac_chart_convert_tangent(const gac_base *from, const gac_base *to, int nq, 
  * is rejected and retried shorter (RK4: the switch is made at its start).  Resting contacts, held gaps, the
  * work integrals and the counters carry over.  Samples, impact records and gac_sim_state are in chart A's
  * coordinates, whichever chart was integrated; sim.chart and sim.n_chart_switches say which and how often.
+ * A model of several chains turning their bases (gac_model.nbase, chart_models) does this for each base on its
+ * own, with its own chi_A: sim.chart is then a mask (bit j: base j on its chart B), a switch converts the bases
+ * that cross their thresholds at that step end and continues on the model of the new mask, and the floor holds
+ * for every base's measure on the chart it is on.
  *
  * Stops before trouble: GAC_ERR_GIMBAL_LOCK (the base chart's measure below sqrt(16 eps / rtol) and no second
  * chart to continue on: chart_switch 0, or a model without chart_b), GAC_ERR_UNSTABLE (RK4 past its stability,
@@ -881,14 +898,17 @@ typedef struct {
     double energy_scale;         /* J: what energy_residual is measured on: the largest of M g L (weight_scale) and
                                     T + |V| at a step end so far, plus |work_input| + loss_damping + loss_friction + loss_impacts */
     int chart;                   /* the base chart integrated now: 0 = A (the model given to gac_sim_init), 1 = B
-                                    (its chart_b).  x is in this chart's coordinates; gac_sim_state, the samples
-                                    and the impact records are always in chart A's */
-    long n_chart_switches;       /* switches between the charts since gac_sim_init (the start on B included) */
+                                    (its chart_b); of several turning bases, bit j set where base j is on its
+                                    chart B (the model chart_models[chart]).  x is in this chart's coordinates;
+                                    gac_sim_state, the samples and the impact records are always in chart A's */
+    long n_chart_switches;       /* switches of a base between its charts since gac_sim_init (the start on B
+                                    included; two bases switched at once count two) */
     /* private: the model, integrator state and scratch (pointers into dwork / iwork) */
-    const gac_model *model;      /* the model integrated now: model_a, or model_a->chart_b */
+    const gac_model *model;      /* the model integrated now: model_a, model_a->chart_b, or chart_models[chart] */
     const gac_model *model_a;    /* the model given to gac_sim_init (chart A) */
-    double near_a[3];            /* chart A's base angles at the last step end (on B), sample or chart switch: the
-                                    branch and 2 pi shift of the next conversion to chart A continue from them */
+    double near_a[12];           /* [3 GAC_CHART_BASES_MAX]: each base's chart A angles at the last step end (on B),
+                                    sample or chart switch: the branch and 2 pi shift of the next conversion to
+                                    chart A continue from them */
     gac_controller controller;   /* NULL: the held inputs u */
     const gac_schedule *schedule; /* NULL: none (gac_sim_set_schedule) */
     void *controller_data;

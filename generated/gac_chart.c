@@ -10,6 +10,38 @@
 #define GAC_PI 3.14159265358979323846
 #define GAC_RECOMPOSE_TOL 1e-11   /* max |R(angles) - R| accepted from the closed-form angles */
 
+/* ---- a model's bases: one (gac_model.base), or several turning chains' (gac_model.nbase, bases, charts) ---- */
+int gac_nbase(const gac_model *m)
+{
+    return m->nbase > 0 ? m->nbase : 1;
+}
+
+const gac_base *gac_model_base(const gac_model *m, int j)
+{
+    return m->nbase > 0 ? &m->bases[j] : &m->base;
+}
+
+const gac_chart *gac_model_chart(const gac_model *m, int j)
+{
+    return m->nbase > 0 ? &m->charts[j] : &m->chart;
+}
+
+const gac_model *gac_chart_model(const gac_model *a, int chart)
+{
+    if (chart == 0) return a;
+    if (a->chart_models != 0) return chart > 0 && chart < 1 << a->nbase ? a->chart_models[chart] : 0;
+    return chart == 1 ? a->chart_b : 0;
+}
+
+/* One chart's measure |a . (e_z x Rz(theta_0) b)| at q (gac_chart_measure's, for one base). */
+double gac_chart_measure_of(const gac_chart *c, const double *q)
+{
+    const double *a = c->a, *b = c->b;
+    const double theta0 = c->theta0_index >= 0 ? q[c->theta0_index] : c->theta0_value;
+    const double cs = cos(theta0), sn = sin(theta0);
+    return fabs(-a[0] * (sn * b[0] + cs * b[1]) + a[1] * (cs * b[0] - sn * b[1]));
+}
+
 /* C = A B (3 x 3); C may not alias A or B. */
 static void mul3(const double *A, const double *B, double *C)
 {

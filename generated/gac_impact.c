@@ -23,13 +23,16 @@ double gac_restitution(const gac_model *m, const double *p, int c)
 /* The base chart's measure |det E| at configuration q: the triple product of the three base joint axes,
  * |a . (e_z x Rz(theta_0) b)| with a = T_0^T e_z, b = T_1 e_z (only their x, y enter; |cos theta_0| for the
  * default twists).  The chart is singular (gimbal lock) where it is 0; I_f's smallest eigenvalue falls like
- * its square. */
+ * its square.  Of several turning bases (gac_model.nbase), the smallest of their measures. */
 double gac_chart_measure(const gac_model *m, const double *q)
 {
-    const double *a = m->chart.a, *b = m->chart.b;
-    const double theta0 = m->chart.theta0_index >= 0 ? q[m->chart.theta0_index] : m->chart.theta0_value;
-    const double c = cos(theta0), s = sin(theta0);
-    return fabs(-a[0] * (s * b[0] + c * b[1]) + a[1] * (c * b[0] - s * b[1]));
+    double chi = gac_chart_measure_of(gac_model_chart(m, 0), q);
+    int j;
+    for (j = 1; j < gac_nbase(m); ++j) {
+        const double chi_j = gac_chart_measure_of(gac_model_chart(m, j), q);
+        if (chi_j < chi) chi = chi_j;
+    }
+    return chi;
 }
 
 /* Contact c's Jacobian row applied to velocities w, unsigned: the rate of its point along its wall's axis,

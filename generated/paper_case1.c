@@ -1715,7 +1715,7 @@ const gac_model paper_case1_model = {
     .contact_velocities_tangent = 0,
     .generalized_momentum_ld = paper_case1_generalized_momentum_ld,
     .contact_generalized_force_ld = paper_case1_contact_generalized_force_ld,
-    .energy_ld = paper_case1_energy_ld
+    .energy_ld = paper_case1_energy_ld,
 };
 
 /* Point the arrays of a simulation and of a record at their own storage. */

@@ -2002,7 +2002,7 @@ static const gac_model paper_case2_model_b = {
     .contact_bias_tangent = 0,
     .contact_points_tangent = 0,
     .contact_velocities_tangent = 0,
-    .generalized_momentum_ld = 0, .contact_generalized_force_ld = 0, .energy_ld = 0   /* accuracy: on chart A */
+    .generalized_momentum_ld = 0, .contact_generalized_force_ld = 0, .energy_ld = 0,   /* accuracy: on chart A */
 };
 
 const gac_model paper_case2_model = {
@@ -2035,7 +2035,7 @@ const gac_model paper_case2_model = {
     .contact_velocities_tangent = 0,
     .generalized_momentum_ld = paper_case2_generalized_momentum_ld,
     .contact_generalized_force_ld = paper_case2_contact_generalized_force_ld,
-    .energy_ld = paper_case2_energy_ld
+    .energy_ld = paper_case2_energy_ld,
 };
 
 /* Point the arrays of a simulation and of a record at their own storage. */

@@ -650,12 +650,10 @@ def accuracy_cause(model: CompiledModel, p, q, qd, contacts: list, law: str = "f
     if law != "frictionless" and residual > 1e-11:
         return f"the frictional law's solve left its conditions at {residual:.2g} (relative; " + \
             _friction_residual_cause(model, p, q, [c for c in contacts if c is not None]) + ")"
-    if 1 in model.layout.free:                     # theta_0 a coordinate: the chart can near its lock
-        from codegen.charts import Chart
-        chi = float(Chart.of(model.scene.base_twists).measure(model.layout.expand(q)[1]))
-        if chi < CHART_NEAR:
-            return (f"the base chart is near its singular pose: its measure chi = |det E| = {chi:.2g} (I_f's "
-                    "smallest eigenvalue falls like chi^2)")
+    chi = chart_measure(model, q)
+    if chi < CHART_NEAR:
+        return (f"the base chart is near its singular pose: its measure chi = |det E| = {chi:.2g} (I_f's "
+                "smallest eigenvalue falls like chi^2)")
     M = model.mass_matrix(q, p)
     eigenvalues = np.linalg.eigvalsh(M)
     cond = float(eigenvalues[-1] / eigenvalues[0]) if eigenvalues[0] > 0.0 else math.inf
@@ -682,6 +680,17 @@ def accuracy_cause(model: CompiledModel, p, q, qd, contacts: list, law: str = "f
                     f"times 2T): they lie along a soft direction of I_f (cond(I_f) = {cond:.2g})")
     return (f"I_f is ill-conditioned there (cond(I_f) = {cond:.2g}); "
             + ill_conditioning(model.scene, p, planar=planar))
+
+
+def chart_measure(model: CompiledModel, q) -> float:
+    """The base chart's measure chi = |det E| at q (chart A's coordinates): of several chains, the smallest of the
+    chains whose theta_0 is a coordinate; 1 where no base can near its lock (planar or mounted)."""
+    from codegen.charts import Chart
+    scene, full = model.scene, model.layout.expand(q)
+    chains = [(scene, 0)] if not hasattr(scene, "chains") else \
+        [(chain, scene.state_offset(k)) for k, chain in enumerate(scene.chains, start=1)]
+    return min([float(Chart.of(chain.base_twists).measure(full[offset + 1])) for chain, offset in chains
+                if offset + 1 in model.layout.free], default=1.0)
 
 
 def _friction_residual_cause(model: CompiledModel, p, q, contacts: list) -> str:

@@ -75,11 +75,10 @@ def test_errors_name_the_field(data, message):
 
 def test_what_does_not_compose_yet_is_refused_before_any_derivation():
     from codegen import generate
-    turning = dict(chain(0.5), initial={"q": [0.0, 0.3, 0.3, 0.5, 0.5, 0.0], "qd": [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]})
-    scene = scene_from_dict(box(turning, dict(turning, initial={"q": [0.0, 0.3, 0.3, 2.0, 0.5, 0.0],
-                                                                "qd": [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]})))
-    with pytest.raises(SceneError, match="chains 1 and 2 both turn their base in 3D"):
-        generate(scene)
+    from codegen.options import build_options
+    planar = scene_from_dict(box(chain(0.5), chain(2.0)))
+    with pytest.raises(SceneError, match="^formulation: a scene of several chains"):
+        generate(planar, build_options(planar, formulation="lagrange"))
 
 
 def test_obstacles_are_the_boxs_and_every_chains_links_strike_them():

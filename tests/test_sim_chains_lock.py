@@ -1,6 +1,7 @@
-"""Several chains and the base chart (codegen.combine): one chain may turn its base in 3D; the model watches that
-chain's chart and, having no second chart, a run that reaches its gimbal lock stops there with the loop's gimbal-lock
-status, as the chain's own one-chart model does there."""
+"""Several chains and the base chart (codegen.combine): one chain turns its base in 3D, the other is planar.  The
+model has that chain's chart B (NAME_model_b, one base as a one-chain model has), so a run passes the chain's gimbal
+lock as the chain does alone; without it (charts=False) a run that reaches the lock stops there with the loop's
+gimbal-lock status, as the chain's own one-chart model does."""
 import math
 from dataclasses import replace
 
@@ -23,11 +24,25 @@ def scenes():
     return turning, Chains(name="lock", chains=(replace(turning, name="lock_c1"), planar))
 
 
-def test_a_run_that_reaches_the_turning_chains_lock_stops_with_the_gimbal_status(scenes):
+def test_a_run_passes_the_turning_chains_lock_on_its_chart_b_as_the_chain_alone(scenes):
     turning, chains = scenes
     model = load_model(chains)
-    assert model.c.model.chart.theta0_index == 1 and model.c.model.chart_b == model.ffi.NULL
+    m, ffi = model.c.model, model.ffi
+    assert m.chart.theta0_index == 1 and m.nbase == 0 and ffi.string(m.chart_b.name) == b"lock_b"
     run = simulate(model, 0.6, max_steps=20000, **ACCURATE)
+    assert run.status == 0 and run.n_chart_switches >= 1, run.message
+    own_model = load_model(turning)
+    own = simulate(own_model, 0.6, max_steps=20000, **ACCURATE)
+    assert own.status == 0 and len(own.t) == len(run.t)
+    points = np.array([model.contact_points(model.layout.reduce(q))[:turning.npoint] for q in run.q])
+    alone = np.array([own_model.contact_points(own_model.layout.reduce(q)) for q in own.q])
+    assert np.abs(points - alone).max() < 1e-7                       # the chain moves as alone (chart-free)
+
+
+def test_without_charts_a_run_that_reaches_the_lock_stops_with_the_gimbal_status(scenes):
+    turning, chains = scenes
+    model = load_model(chains)
+    run = simulate(model, 0.6, max_steps=20000, charts=False, **ACCURATE)
     assert run.status == -1 and "gimbal lock" in run.message, run.message
     own = simulate(load_model(turning, chart_b=False), 0.6, max_steps=20000, **ACCURATE)
     assert own.status == -1 and run.t_final == pytest.approx(own.t_final, abs=2e-3)   # (each at its own step's end)

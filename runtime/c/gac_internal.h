@@ -79,8 +79,10 @@ void gac_sens_stick(gac_sim *s, const double *x_before, const int *stuck_before,
                     const gac_impact_record *r);   /* points that stuck at a step's end */
 void gac_sens_reslip(gac_sim *s, const double *slip_before, int nstuck);   /* slip directions a stick test gave */
 void gac_sens_fixed_release(gac_sim *s);   /* released or slipped where the inputs change: dt = 0, S goes on */
-/* a switch of base chart: x on `from` became y on `to`, S carried through the conversion's derivative */
-void gac_sens_switch(gac_sim *s, const gac_model *from, const gac_model *to, const double *x, const double *y);
+/* a switch of the bases of flip (bit j for base j): x on `from` became y on `to`, S carried through the
+   conversion's derivative */
+void gac_sens_switch(gac_sim *s, const gac_model *from, const gac_model *to, int flip, const double *x,
+                     const double *y);
 /* S at x (the chart integrated now) into chart A's coordinates at xa (x converted), in place */
 void gac_sens_to_chart_a(const gac_sim *s, const double *x, const double *xa, double *S);
 
@@ -202,11 +204,22 @@ int gac_impact_tangential(const gac_model *m, const double *q, const double *qd,
 double gac_clock_now(const gac_sim *s);          /* the run's clock (s): the embedder's, or C's processor time */
 void gac_schedule_begin(gac_sim *s);             /* the schedule's interval that holds s->t begins: its inputs */
 
-/* gac_switch.c: the two base charts in the loop */
+/* gac_chart.c: a model's bases, one or several (gac_model.nbase) */
+int gac_nbase(const gac_model *m);                          /* its bases (1 unless nbase says more) */
+const gac_base *gac_model_base(const gac_model *m, int j);   /* base j */
+const gac_chart *gac_model_chart(const gac_model *m, int j); /* base j's measure */
+const gac_model *gac_chart_model(const gac_model *a, int chart); /* the model of sim.chart `chart` (NULL: none) */
+double gac_chart_measure_of(const gac_chart *c, const double *q); /* one base's measure at q */
+
+/* gac_switch.c: the base charts in the loop (masks: bit j for base j) */
 int gac_can_switch(const gac_sim *s);            /* 1 if the run may switch charts (option on, second chart) */
-int gac_wants_switch(const gac_sim *s);          /* 1 if the run should leave the chart it is on, at s->x */
-int gac_step_near_lock(const gac_sim *s);        /* 1 if the step s->x -> s->x1 ends below the floor or passes the lock */
-int gac_switch_chart(gac_sim *s);                /* continue on the other chart from s->x */
+int gac_wants_switch(const gac_sim *s);          /* the bases that should leave the chart they are on, at s->x */
+int gac_step_near_lock(const gac_sim *s);        /* the bases whose step s->x -> s->x1 ends below the floor or
+                                                    passes the lock */
+int gac_switch_chart(gac_sim *s, int flip);      /* continue with the bases of flip on their other chart from s->x */
+int gac_state_chart_a(const gac_sim *s, const double *x, double *out);   /* x in chart A's coordinates */
+int gac_tangent_between(const gac_model *from, const gac_model *to, int mask, const double *x, const double *y, int k,
+                        double *S);              /* S at x on `from` carried to y on `to`, the bases of mask */
 void gac_to_chart_a(gac_sim *s, double *x);      /* a state of the chart integrated now, in chart A's coordinates
                                                     (a conversion that fails is kept in s->fail) */
 int gac_report(gac_sim *s, gac_impact_record *record, int code);   /* the record in chart A's coordinates */

@@ -6,6 +6,23 @@
 #include <float.h>
 #include <math.h>
 
+/* b, the model m on other base charts: same sizes and tables, every base's three angles at the same places. */
+static int chart_model_check(const gac_model *m, const gac_model *b)
+{
+    int j, c;
+    if (b == 0 || b->nq != m->nq || b->nx != m->nx || b->nparam != m->nparam || b->nu != m->nu
+        || b->npoint != m->npoint || b->ncontact != m->ncontact || b->njrow != m->njrow || b->contacts != m->contacts
+        || b->chart_b != 0 || b->chart_models != 0 || b->nbase != m->nbase || gac_model_check(b) != GAC_OK)
+        return GAC_ERR_BAD_MODEL;
+    for (j = 0; j < gac_nbase(m); ++j) {
+        for (c = 0; c < 3; ++c) {
+            const int index = gac_model_base(m, j)->index[c];
+            if (index < 0 || index >= m->nq || gac_model_base(b, j)->index[c] != index) return GAC_ERR_BAD_MODEL;
+        }
+    }
+    return GAC_OK;
+}
+
 int gac_model_check(const gac_model *m)
 {
     int c;
@@ -21,17 +38,22 @@ int gac_model_check(const gac_model *m)
         || m->contact_gaps == 0 || m->contact_bias == 0 || m->energy == 0 || m->rhs == 0)
         return GAC_ERR_BAD_MODEL;
     if (m->chart.theta0_index >= m->nq) return GAC_ERR_BAD_MODEL;
-    if (m->chart_b != 0) {               /* the same chain on a second chart: same sizes and tables, three angles */
-        const gac_model *b = m->chart_b;
-        if (b->nq != m->nq || b->nx != m->nx || b->nparam != m->nparam || b->nu != m->nu || b->npoint != m->npoint
-            || b->ncontact != m->ncontact || b->njrow != m->njrow || b->contacts != m->contacts || b->chart_b != 0
-            || gac_model_check(b) != GAC_OK)
-            return GAC_ERR_BAD_MODEL;
-        for (c = 0; c < 3; ++c) {
-            if (m->base.index[c] < 0 || m->base.index[c] >= m->nq || b->base.index[c] != m->base.index[c])
-                return GAC_ERR_BAD_MODEL;
+    if (m->nbase != 0) {                 /* several turning bases: each one's measure and angles in q */
+        if (m->nbase < 2 || m->bases == 0 || m->charts == 0) return GAC_ERR_BAD_MODEL;
+        for (c = 0; c < m->nbase; ++c) {
+            if (m->charts[c].theta0_index >= m->nq) return GAC_ERR_BAD_MODEL;
         }
     }
+    if (m->chart_models != 0) {          /* a model per combination of the bases' charts */
+        const int last = (1 << (m->nbase > 0 ? m->nbase : 1)) - 1;
+        if (m->nbase < 2 || m->nbase > GAC_CHART_BASES_MAX || m->chart_models[0] != m || m->chart_b == 0
+            || m->chart_models[last] != m->chart_b)
+            return GAC_ERR_BAD_MODEL;
+        for (c = 1; c < last; ++c) {
+            if (chart_model_check(m, m->chart_models[c]) != GAC_OK) return GAC_ERR_BAD_MODEL;
+        }
+    }
+    if (m->chart_b != 0 && chart_model_check(m, m->chart_b) != GAC_OK) return GAC_ERR_BAD_MODEL;
     for (c = 0; m->parameter_info != 0 && c < m->nparam; ++c) {
         const gac_parameter_info *info = &m->parameter_info[c];
         if (info->name == 0 || info->range == 0 || !(info->lo <= info->hi)) return GAC_ERR_BAD_MODEL;

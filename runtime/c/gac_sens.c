@@ -76,9 +76,8 @@ int gac_sens_attach(gac_sim *s, gac_sens *sens, int k, const double *seed_x, con
         const int nq = md->nq;
         const double *x_b = s->pending ? s->x1 : s->x;
         double x_a[2 * nq];
-        if (!gac_sens_has_tangents(s->model)
-            || gac_chart_convert(&s->model->base, &md->base, nq, x_b, s->near_a, x_a) != GAC_OK
-            || gac_chart_convert_tangent(&md->base, &s->model->base, nq, x_a, x_b, k, sens->S) != GAC_OK)
+        if (!gac_sens_has_tangents(s->model) || gac_state_chart_a(s, x_b, x_a) != GAC_OK
+            || gac_tangent_between(md, s->model, s->chart, x_a, x_b, k, sens->S) != GAC_OK)
             gac_sens_stop(s, GAC_SENS_CHART, s->t, -1);
     }
     if (sens->status == GAC_SENS_VALID && s->nresting > 0) gac_sens_start_rest(s);
@@ -91,12 +90,12 @@ int gac_sens_attach(gac_sim *s, gac_sens *sens, int k, const double *seed_x, con
  * its saltation term (f_to(y) - (d phi / dx) f_from(x)) dt* is 0 whatever dt*: the two charts' fields describe the
  * same motion, so f_to(phi(x)) = (d phi / dx) f_from(x).  A chart without tangent kernels (or y at its own lock)
  * ends the sensitivities. */
-void gac_sens_switch(gac_sim *s, const gac_model *from, const gac_model *to, const double *x, const double *y)
+void gac_sens_switch(gac_sim *s, const gac_model *from, const gac_model *to, int flip, const double *x,
+                     const double *y)
 {
     gac_sens *z = s->sens;
     if (z == 0 || z->status != GAC_SENS_VALID) return;
-    if (!gac_sens_has_tangents(to)
-        || gac_chart_convert_tangent(&from->base, &to->base, from->nq, x, y, z->k, z->S) != GAC_OK) {
+    if (!gac_sens_has_tangents(to) || gac_tangent_between(from, to, flip, x, y, z->k, z->S) != GAC_OK) {
         gac_sens_stop(s, GAC_SENS_CHART, s->t, -1);
         return;
     }
@@ -110,7 +109,7 @@ void gac_sens_to_chart_a(const gac_sim *s, const double *x, const double *xa, do
     const gac_sens *z = s->sens;
     int i;
     if (z == 0 || s->chart == 0 || z->status != GAC_SENS_VALID) return;
-    if (gac_chart_convert_tangent(&s->model->base, &s->model_a->base, s->model->nq, x, xa, z->k, S) != GAC_OK) {
+    if (gac_tangent_between(s->model, s->model_a, s->chart, x, xa, z->k, S) != GAC_OK) {
         for (i = 0; i < z->k * s->model->nx; ++i) S[i] = NAN;
     }
 }
@@ -121,10 +120,10 @@ int gac_sens_state(const gac_sim *s, double *S)
     if (s == 0 || S == 0 || s->sens == 0) return GAC_ERR_NULL_ARGUMENT;
     z = s->sens;
     gac_copy(S, z->S, z->k * s->model->nx);
-    if (s->chart == 1 && z->status == GAC_SENS_VALID) {
+    if (s->chart != 0 && z->status == GAC_SENS_VALID) {
         const int nq = s->model->nq;
         double xa[2 * nq];
-        if (gac_chart_convert(&s->model->base, &s->model_a->base, nq, s->x, s->near_a, xa) != GAC_OK) {
+        if (gac_state_chart_a(s, s->x, xa) != GAC_OK) {
             int i;
             for (i = 0; i < z->k * s->model->nx; ++i) S[i] = NAN;
             return GAC_OK;

@@ -95,7 +95,7 @@ void gac_sim_bind(gac_sim *s, const gac_model *md, double *dwork, int *iwork)
     double *d = dwork;
     int j;
     s->model_a = md;
-    s->model = s->chart == 1 && md->chart_b != 0 ? md->chart_b : md;   /* the chart integrated now */
+    s->model = gac_chart_model(md, s->chart) != 0 ? gac_chart_model(md, s->chart) : md;   /* the chart integrated now */
     s->x = d;             d += nx;             /* dwork: x | p | u | u_eval | f | k[0..15] | x1 | xs | cont[0..7] */
     s->p = d;             d += md->nparam;
     s->u = d;             d += md->nu;
@@ -186,7 +186,10 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     s->t_slow_sliding = 0.0;
     for (i = 0; i < md->nx; ++i) s->x[i] = x[i];
     s->n_chart_switches = 0;
-    for (i = 0; i < 3; ++i) s->near_a[i] = md->base.index[i] >= 0 ? x[md->base.index[i]] : 0.0;
+    for (i = 0; i < 3 * GAC_CHART_BASES_MAX; ++i) {
+        const gac_base *base = i / 3 < gac_nbase(md) ? gac_model_base(md, i / 3) : 0;
+        s->near_a[i] = base != 0 && base->index[i % 3] >= 0 ? x[base->index[i % 3]] : 0.0;
+    }
     s->t = t0;
     s->h = opt->dt;                               /* RK4 step, or the first adaptive step (0: automatic) */
     s->f_valid = 0;
@@ -218,7 +221,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
         s->slip[2 * i] = s->slip[2 * i + 1] = 0.0;
     }
     if (gac_wants_switch(s)) {                    /* chart A already poor at the start: start on B */
-        int code = gac_switch_chart(s);
+        int code = gac_switch_chart(s, gac_wants_switch(s));
         if (code != GAC_OK) return code;
     }
     if (s->rest_height > 0.0) {
@@ -270,8 +273,7 @@ void gac_sim_state(const gac_sim *s, double *t, double *q, double *qd)
     {
         const int nq = s->model->nq;
         double x[2 * nq];
-        gac_copy(x, s->x, 2 * nq);
-        if (s->chart == 1) gac_chart_convert(&s->model->base, &s->model_a->base, nq, x, s->near_a, x);
+        if (s->chart == 0 || gac_state_chart_a(s, s->x, x) != GAC_OK) gac_copy(x, s->x, 2 * nq);
         for (i = 0; i < nq; ++i) {
             if (q != 0) q[i] = x[i];
             if (qd != 0) qd[i] = x[nq + i];

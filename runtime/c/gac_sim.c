@@ -30,7 +30,7 @@ const double *gac_input(gac_sim *s, double t, const double *x)
     const gac_model *md = s->model;
     if (s->controller == 0 || md->nu == 0) return s->u;
     gac_copy(s->u_eval, s->u, md->nu);
-    if (s->chart == 1) {                      /* the controller sees chart A's coordinates, as every caller does */
+    if (s->chart != 0) {                      /* the controller sees chart A's coordinates, as every caller does */
         double xa[md->nx];
         gac_copy(xa, x, md->nx);
         gac_to_chart_a(s, xa);
@@ -289,7 +289,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
                 steps++;
                 continue;
             } else {                                       /* RK4: continue on the other chart from the step's start */
-                const int code = gac_switch_chart(s);
+                const int code = gac_switch_chart(s, gac_step_near_lock(s));
                 if (code != GAC_OK) return code;
                 md = s->model;
                 steps++;
@@ -428,7 +428,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             s->energy_x1_valid = 0;
             if (code != GAC_OK) return code;
         }
-        if (s->chart == 1) {                      /* chart A's angles followed step by step (near_a) */
+        if (s->chart != 0) {                      /* chart A's angles followed step by step (near_a) */
             double x[md->nx];
             gac_copy(x, s->x, md->nx);
             gac_to_chart_a(s, x);
@@ -439,7 +439,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             if (code < 0) return code;
         }
         if (gac_wants_switch(s)) {                /* near chart A's lock, or far enough from it again */
-            const int code = gac_switch_chart(s);
+            const int code = gac_switch_chart(s, gac_wants_switch(s));
             if (code != GAC_OK) return code;
             md = s->model;
         }

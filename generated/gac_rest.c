@@ -311,7 +311,8 @@ void gac_set_resting(gac_sim *s, int n, const int *set, gac_impact_record *r)
 
 /* gac_sim_init: contacts that start at their wall (|gap| <= contact_tol) with a normal velocity whose bounce
  * would rise less than rest_height (under the largest free-flight normal acceleration of any contact, so
- * that a contact pressed only through the others, like the top of a ladder, counts) come to rest:
+ * that a contact pressed only through the others, like the top of a ladder, counts; of a link pair or an obstacle
+ * only where it touches) come to rest:
  * positions and velocities projected, then only those with a pushing force kept.  On a wall with e = 1 a
  * contact must start at rest to round-off (gac_v_round), as it must arrive at rest to land there: the bounce
  * rule alone would let the projection take kinetic energy from an elastic chain (a chain spinning fast has a
@@ -326,8 +327,8 @@ int gac_rest_at_start(gac_sim *s)
     gac_normal_velocities(md, s->x, s->p, vn);
     code = gac_normal_accelerations(s, s->t, s->x, 0, 0, an);
     if (code != GAC_OK) return code;
-    for (c = 0; c < md->ncontact; ++c) {
-        if (fabs(an[c]) > a) a = fabs(an[c]);
+    for (c = 0; c < md->ncontact; ++c) {      /* (a link pair or an obstacle only where it touches) */
+        if (fabs(an[c]) > a && (!gac_rowless(md, c) || fabs(gaps[c]) <= s->opt.contact_tol)) a = fabs(an[c]);
     }
     for (c = 0; c < md->ncontact; ++c) {
         const int at_rest = gac_restitution(md, s->p, c) < 1.0 ? vn[c] * vn[c] <= 2.0 * a * s->rest_height

@@ -90,12 +90,14 @@
 #define GAC_ERR_LINK_CONTACT     -32   /* a contact of two links (GAC_CONTACT_LINK) met what the loop does not do
                                           with link pairs: an impact under a frictional law (opt.impact_law) on a
                                           rough wall at the same time (link pairs are frictionless) */
-#define GAC_ERR_LINK_REST        -33   /* two links would come to rest on each other: a link pair struck
-                                          opt.zeno_impacts times in a row at shrinking intervals (e < 1: the Zeno
-                                          rule that lands a wall's contact) or at one instant (within 1e-12 (1 +
-                                          |t|) s); resting contact between links is not modelled.  Also a
-                                          link on a fixed obstacle (GAC_CONTACT_OBSTACLE), which never rests
-                                          either */
+#define GAC_ERR_LINK_REST        -33   /* two links would come to rest on each other (or a link on a fixed
+                                          obstacle, GAC_CONTACT_OBSTACLE) where that contact cannot be held: its
+                                          normal has no derivative (crossing axes), or the model has rough walls
+                                          under a frictional impact law (resting friction on such contacts is not
+                                          modelled); struck opt.zeno_impacts times in a row at shrinking intervals
+                                          (e < 1: the Zeno rule that lands a wall's contact) or at one instant
+                                          (within 1e-12 (1 + |t|) s).  Also a held one whose normal loses its
+                                          derivative */
 
 /* ---- how gac_sim_advance ends: the run's budgets (< 0) and status (> 0) ------------------------ */
 #define GAC_ERR_WALL_TIME        -25   /* the run used opt.max_wall_time seconds of its clock (gac_sim_set_clock)
@@ -210,7 +212,8 @@ typedef int (*gac_progress)(double t, long n_steps, long n_impacts, void *user);
  * Or two links as capsules (kind GAC_CONTACT_LINK: links point and coordinate, 1-based, gap = their segments'
  * distance less its m->link_radius entry, gac_link_gap; its direction J^T n from the closest points, gac_link_direction; no Jacobian
  * row).  Link contacts come last in the table, after every contact of the contact_gaps kernel; they take part in
- * events and impacts (frictionless), never in the resting set.
+ * events and impacts (frictionless) and in the resting set, held by their direction g and its bias dg(qd) . qd
+ * (frictionless; not where g has no derivative, nor under a frictional impact law on rough walls).
  * Or a link and a fixed obstacle (kind GAC_CONTACT_OBSTACLE: link point, 1-based, and obstacle coordinate,
  * 0-based into m->obstacles; gap = the distance of the link's segment from the obstacle's, less its
  * m->link_radius entry (the link's radius plus the obstacle's), gac_obstacle_gap): handled as a link pair whose
@@ -1104,7 +1107,8 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       (their forces ~0 at once), a slip with another slip or a release, or points
                                       that stick at one step's end at different speeds */
 #define GAC_SENS_LINK         11   /* an impact of two links or of a link on a fixed obstacle (GAC_CONTACT_LINK,
-                                      GAC_CONTACT_OBSTACLE) among several contacts or with contacts at rest, or
+                                      GAC_CONTACT_OBSTACLE) among several contacts or with contacts at rest, such a
+                                      contact held at rest (its constrained flight is not differentiated), or
                                       where their closest points have no derivative (crossing or parallel axes,
                                       a link parallel to a box's or plane's face);
                                       one struck alone in flight is differentiated */

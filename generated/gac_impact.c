@@ -43,6 +43,27 @@ double gac_row_value(const gac_model *m, int c, const double *w, const double *v
     return k->kind == GAC_CONTACT_STOP ? w[k->coordinate] : vel[3 * (k->point - 1) + k->axis];
 }
 
+/* Contact c's normal rate of the generalised velocity w, along its inward normal: its signed Jacobian row applied to
+ * w (vel = contact_velocities(q, w)), or for a link pair or an obstacle g . w = n . (v_P - v_Q) at its closest
+ * points (gac_link_contact_rate). */
+double gac_normal_value(const gac_model *m, const double *q, const double *p, int c, const double *w,
+                        const double *vel)
+{
+    if (gac_rowless(m, c)) return gac_link_contact_rate(m, q, p, c, vel);
+    return (double)m->contacts[c].normal_sign * gac_row_value(m, c, w, vel);
+}
+
+/* The part of contact c's normal acceleration that does not depend on qdd, along its inward normal: its signed
+ * contact_bias row (bias = contact_bias(q, qd)), or for a link pair or an obstacle dg(qd) . qd (gac_rowless_bias).
+ * GAC_OK, or GAC_ERR_LINK_CONTACT where that normal has no derivative (crossing axes). */
+int gac_normal_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, const double *bias,
+                    double *b)
+{
+    if (gac_rowless(m, c)) return gac_rowless_bias(m, q, qd, p, c, b);
+    *b = (double)m->contacts[c].normal_sign * bias[m->contacts[c].row];
+    return GAC_OK;
+}
+
 /* n_c = J^T (sign e_row): the generalised force of a unit force along contact c's inward normal (its signed
  * Jacobian row), into g (nq); f (njrow) is scratch.  A link pair: J^T n at its closest points (gac_link.c). */
 void gac_contact_direction(const gac_model *m, const double *q, const double *p, int c, double *f, double *g)

@@ -383,8 +383,8 @@ static void gac_link_points_change(const gac_model *m, const double *q, const do
  * (gac_obstacle_feature) is a fixed segment or point as a bar's or a sphere's; a plane's or a box's face has a
  * constant normal: the closest point is an end of the link (ds = 0; one inside, the link lies parallel to the face
  * and a whole stretch is closest: no derivative), so d gap = n . dP0, dn = 0. */
-int gac_contact_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
-                               const double *dp, double *dgap, double *g, double *dg)
+static int gac_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
+                              const double *dp, int held, double *dgap, double *g, double *dg)
 {
     const int nq = m != 0 ? m->nq : 0;
     double geometry[GAC_LINK_NGEOMETRY], r[3 * GAC_AT_LEAST_1(m != 0 ? m->npoint : 1)];
@@ -429,7 +429,7 @@ int gac_contact_normal_tangent(const gac_model *m, const double *q, const double
     s_inside = s > 0.0 && s < 1.0;
     t_inside = e > 0.0 && t > 0.0 && t < 1.0;
     if (face) {                                          /* a constant normal: the link's end moves along it */
-        if (s_inside || !(a > 0.0)) return GAC_ERR_LINK_CONTACT;     /* parallel to the face: a stretch closest */
+        if (!(a > 0.0) || (s_inside && !held)) return GAC_ERR_LINK_CONTACT;   /* parallel: a stretch closest */
         along = gac_dot3(geometry + 3, dD);
         for (k = 0; k < 3; ++k) dn[k] = 0.0;
     } else {
@@ -438,9 +438,12 @@ int gac_contact_normal_tangent(const gac_model *m, const double *q, const double
             const double r1 = -(gac_dot3(dd1, D) + gac_dot3(d1, dD)), r2 = -(gac_dot3(dd2, D) + gac_dot3(d2, dD));
             if (s_inside && t_inside) {
                 const double det = b * b - a * e;
-                if (!(-det > 1e-8 * a * e)) return GAC_ERR_LINK_CONTACT;   /* parallel: a whole overlap is closest */
-                ds = (b * r2 - e * r1) / det;
-                dt = (a * r2 - b * r1) / det;
+                if (!(-det > 1e-8 * a * e)) {            /* parallel: a whole overlap is closest */
+                    if (!held) return GAC_ERR_LINK_CONTACT;
+                } else {
+                    ds = (b * r2 - e * r1) / det;
+                    dt = (a * r2 - b * r1) / det;
+                }
             } else if (s_inside) {
                 ds = r1 / a;
             } else if (t_inside) {
@@ -476,5 +479,28 @@ int gac_contact_normal_tangent(const gac_model *m, const double *q, const double
     }
     gac_link_row_change(m, q, p, i, j, geometry, dq, dp, change);
     for (k = 0; k < nq; ++k) dg[k] += change[k];
+    return GAC_OK;
+}
+
+int gac_contact_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
+                               const double *dp, double *dgap, double *g, double *dg)
+{
+    return gac_normal_tangent(m, q, p, c, dq, dp, 0, dgap, g, dg);
+}
+
+/* A held contact's bias b = dg(dq = qd) . qd: d/dt (g . qd) = g . qdd + b.  Where a whole stretch is closest (a link
+ * lying parallel to a face or to another link) the contact's points are taken as fixed on the links (ds = dt = 0):
+ * the stretch stays closest while the held rows keep it parallel. */
+int gac_rowless_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, double *b)
+{
+    const int nq = m->nq;
+    double zero_p[GAC_AT_LEAST_1(m->nparam)], g[GAC_AT_LEAST_1(nq)], dg[GAC_AT_LEAST_1(nq)], dgap, sum = 0.0;
+    int i, code;
+    for (i = 0; i < GAC_AT_LEAST_1(m->nparam); ++i) zero_p[i] = 0.0;
+    code = gac_normal_tangent(m, q, p, c, qd, zero_p, 1, &dgap, g, dg);
+    if (code != GAC_OK) return code;
+    for (i = 0; i < nq; ++i) sum += dg[i] * qd[i];
+    if (!isfinite(sum)) return GAC_ERR_LINK_CONTACT;
+    *b = sum;
     return GAC_OK;
 }

@@ -238,8 +238,9 @@ static int gac_who_lands(gac_sim *s, gac_impact_event *ev)
         c = ev->list[k];
         ev->e_law[k] = ev->e[k] = gac_restitution(md, s->p, c);
         ev->landing[k] = s->is_resting[c];
-        if (gac_rowless(md, c)) {     /* a link pair never lands: struck with its own e, */
-            /* unless it would by the Zeno rule, or is struck again and again at one instant (held by the others) */
+        if (gac_rowless(md, c) && !gac_holdable(s, ev->x, c)) {   /* a link pair or an obstacle that cannot be
+            held (gac_holdable) never lands: struck with its own e, unless it would by the Zeno rule, or is struck
+            again and again at one instant (held by the others) */
             const int stalled = s->dt_last[c] > -1.5 && ev->t - s->t_last[c] <= 1e-12 * (1.0 + fabs(ev->t));
             ev->shrinking[c] = (ev->shrinking[c] && ev->e_law[k] < 1.0) || stalled;
             if (s->opt.zeno_impacts > 0 && ev->shrinking[c] && s->n_shrink[c] + 1 >= s->opt.zeno_impacts)
@@ -403,7 +404,7 @@ static int gac_choose_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *
         const int left_at_rest = ev->height > 0.0 && !s->is_resting[c] && ev->gaps[c] <= s->opt.contact_tol
                                  && fabs(ev->vn[c]) <= v_hold;
         int held_lift = 0;
-        if (gac_rowless(md, c)) continue;      /* a link pair never rests */
+        if (!gac_holdable(s, s->x1, c)) continue;      /* a link pair or obstacle without a held normal */
         if (s->is_resting[c] && ev->vn[c] > v_hold && ev->e_law[k] < 1.0 && ev->height > 0.0) {
             /* its acceleration towards the wall with the other resting contacts held */
             double a_free[nc1];

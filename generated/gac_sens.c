@@ -608,6 +608,12 @@ static void gac_sens_start_rest(gac_sim *s)
     gac_sens_set H2;                              /* the held rows with the stuck points' tangential ones */
     GAC_SENS_SET_BIND(H);
     GAC_SENS_SET_BIND_OF(H2, H2);
+    for (a = 0; a < s->nresting; ++a) {           /* a link or an obstacle at rest: not differentiated */
+        if (gac_rowless(md, s->resting[a])) {
+            gac_sens_stop(s, GAC_SENS_LINK, s->t, s->resting[a]);
+            return;
+        }
+    }
     for (a = 0; a < md->ncontact; ++a) all[a] = a;
     for (a = 0; a < GAC_AT_LEAST_1(md->nparam); ++a) zero_p[a] = 0.0;
     m = gac_sens_at_rest(s, s->x, s->nresting, s->resting, s->pending ? md->ncontact : 0, all, set);

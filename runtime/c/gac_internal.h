@@ -97,6 +97,7 @@ double gac_simultaneity_window(const gac_sim *s, const double *x);
 /* gac_rest.c: resting contact */
 double gac_total_energy(const gac_model *md, const double *x, const double *p);
 void gac_normal_velocities(const gac_model *md, const double *x, const double *p, double *vn);
+int gac_holdable(const gac_sim *s, const double *x, int c);   /* 1 if contact c can be held at its wall */
 int gac_normal_accelerations(gac_sim *s, double t, const double *x, int n, const int *set, double *an);
 int gac_add_independent(gac_sim *s, const double *x, int *n, int *set, int c);
 int gac_project(gac_sim *s, double *x, int n, const int *set, int positions);
@@ -136,7 +137,7 @@ int gac_obstacle_shape_check(const gac_model *m, int o);
 int gac_obstacle_feature(const gac_model *m, int o, const double *x, double *b0, double *b1);
 
 /* gac_link.c: link pairs and obstacles as contacts of the loop (kinds GAC_CONTACT_LINK, GAC_CONTACT_OBSTACLE, the
- * last entries of m->contacts: no Jacobian row, never resting, frictionless) */
+ * last entries of m->contacts: no Jacobian row, frictionless; at rest they are held by g = J^T n and their bias) */
 int gac_rowless(const gac_model *m, int c);             /* 1 if contact c is a link pair or an obstacle */
 int gac_kernel_contacts(const gac_model *m);            /* the contacts before them: those of contact_gaps */
 int gac_has_link(const gac_model *m, int n, const int *list);   /* 1 if list[0..n-1] holds one of them */
@@ -146,6 +147,9 @@ void gac_contact_gaps(const gac_model *m, const double *q, const double *p, doub
 void gac_link_contact_direction(const gac_model *m, const double *q, const double *p, int c, double *g);
 /* link or obstacle contact c's gap rate n . (v_P - v_Q) from the joint points' velocities vel (npoint x 3) at q */
 double gac_link_contact_rate(const gac_model *m, const double *q, const double *p, int c, const double *vel);
+/* a held link or obstacle contact c's bias dg(qd) . qd (its normal acceleration less g . qdd) into *b: GAC_OK, or
+ * GAC_ERR_LINK_CONTACT where its normal has no derivative */
+int gac_rowless_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, double *b);
 double gac_link_law_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                              const double *F, const double *qd, const double *qd_plus, double T);
 
@@ -159,6 +163,10 @@ int gac_ldlt_drop(int n, double *A, double tol);
 void gac_contact_row(const gac_model *m, int c, int *row, double *sign);
 double gac_row_value(const gac_model *m, int c, const double *w, const double *vel);
 void gac_contact_direction(const gac_model *m, const double *q, const double *p, int c, double *f, double *g);
+double gac_normal_value(const gac_model *m, const double *q, const double *p, int c, const double *w,
+                        const double *vel);
+int gac_normal_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, const double *bias,
+                    double *b);
 double gac_restitution(const gac_model *m, const double *p, int c);
 int gac_row_response(const gac_model *m, const double *q, const double *p, int row, double *f, double *g,
                      double *out);

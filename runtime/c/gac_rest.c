@@ -31,8 +31,20 @@ void gac_normal_velocities(const gac_model *md, const double *x, const double *p
     }
 }
 
+/* 1 if contact c can be held at its wall at state x: a wall's or a stop's always; a link pair's or an obstacle's
+ * where its normal has a derivative along qd (gac_rowless_bias: not crossing axes) and no frictional impact law acts
+ * (resting on a link or an obstacle is frictionless, and a frictional impact with it is not modelled). */
+int gac_holdable(const gac_sim *s, const double *x, int c)
+{
+    const gac_model *md = s->model;
+    double b;
+    if (!gac_rowless(md, c)) return 1;
+    if (s->opt.impact_law != GAC_IMPACT_LAW_FRICTIONLESS && gac_has_friction(md)) return 0;
+    return gac_rowless_bias(md, x, x + md->nq, s->p, c, &b) == GAC_OK;
+}
+
 /* Normal accelerations (along the inward normals) of all contacts at time t and state x, with the contacts
- * set[0..n-1] held (n = 0: free flight). */
+ * set[0..n-1] held (n = 0: free flight); 0 for a link pair or an obstacle whose normal has no derivative. */
 int gac_normal_accelerations(gac_sim *s, double t, const double *x, int n, const int *set, double *an)
 {
     const gac_model *md = s->model;
@@ -46,14 +58,9 @@ int gac_normal_accelerations(gac_sim *s, double t, const double *x, int n, const
     md->contact_bias(x, x + nq, s->p, bias);
     md->contact_velocities(x, qdd, s->p, vel);           /* J qdd, read row by row */
     for (c = 0; c < md->ncontact; ++c) {
-        int row;
-        double sign;
-        if (gac_rowless(md, c)) {   /* a link pair never rests: its acceleration is unused */
-            an[c] = 0.0;
-            continue;
-        }
-        gac_contact_row(md, c, &row, &sign);
-        an[c] = sign * (bias[row] + gac_row_value(md, c, qdd, vel));
+        double b;
+        an[c] = gac_normal_bias(md, x, x + nq, s->p, c, bias, &b) == GAC_OK
+                ? b + gac_normal_value(md, x, s->p, c, qdd, vel) : 0.0;
     }
     return GAC_OK;
 }
@@ -167,10 +174,9 @@ int gac_settle(gac_sim *s, double t, const double *x, int *n, int *set)
     md->contact_bias(x, x + nq, s->p, bias);
     md->contact_velocities(x, qdd, s->p, vel);           /* J qdd_free, read row by row */
     for (a = 0; a < m; ++a) {
-        int row;
-        double sign;
-        gac_contact_row(md, set[a], &row, &sign);
-        c[a] = sign * (bias[row] + gac_row_value(md, set[a], qdd, vel));
+        double held_bias;
+        if (gac_normal_bias(md, x, x + nq, s->p, set[a], bias, &held_bias) != GAC_OK) return GAC_ERR_LINK_REST;
+        c[a] = held_bias + gac_normal_value(md, x, s->p, set[a], qdd, vel);
         if (fabs(c[a]) > scale) scale = fabs(c[a]);
     }
     full = (1UL << m) - 1UL;
@@ -295,11 +301,18 @@ void gac_set_resting(gac_sim *s, int n, const int *set, gac_impact_record *r)
     }
     for (a = 0; a < n; ++a) s->resting[a] = set[a];
     s->nresting = n;
+    for (a = 0; a < n; ++a) {                         /* a link or an obstacle held: its rest is not differentiated */
+        if (gac_rowless(md, set[a])) {
+            gac_sens_stop(s, GAC_SENS_LINK, r ? r->t : s->t, set[a]);
+            break;
+        }
+    }
 }
 
 /* gac_sim_init: contacts that start at their wall (|gap| <= contact_tol) with a normal velocity whose bounce
  * would rise less than rest_height (under the largest free-flight normal acceleration of any contact, so
- * that a contact pressed only through the others, like the top of a ladder, counts) come to rest:
+ * that a contact pressed only through the others, like the top of a ladder, counts; of a link pair or an obstacle
+ * only where it touches) come to rest:
  * positions and velocities projected, then only those with a pushing force kept.  On a wall with e = 1 a
  * contact must start at rest to round-off (gac_v_round), as it must arrive at rest to land there: the bounce
  * rule alone would let the projection take kinetic energy from an elastic chain (a chain spinning fast has a
@@ -314,13 +327,13 @@ int gac_rest_at_start(gac_sim *s)
     gac_normal_velocities(md, s->x, s->p, vn);
     code = gac_normal_accelerations(s, s->t, s->x, 0, 0, an);
     if (code != GAC_OK) return code;
-    for (c = 0; c < md->ncontact; ++c) {
-        if (fabs(an[c]) > a) a = fabs(an[c]);
+    for (c = 0; c < md->ncontact; ++c) {      /* (a link pair or an obstacle only where it touches) */
+        if (fabs(an[c]) > a && (!gac_rowless(md, c) || fabs(gaps[c]) <= s->opt.contact_tol)) a = fabs(an[c]);
     }
     for (c = 0; c < md->ncontact; ++c) {
         const int at_rest = gac_restitution(md, s->p, c) < 1.0 ? vn[c] * vn[c] <= 2.0 * a * s->rest_height
                                                                 : fabs(vn[c]) <= gac_v_round(md, vn);
-        if (fabs(gaps[c]) <= s->opt.contact_tol && at_rest && !gac_rowless(md, c)) {
+        if (fabs(gaps[c]) <= s->opt.contact_tol && at_rest && gac_holdable(s, s->x, c)) {
             code = gac_add_independent(s, s->x, &n, set, c);
             if (code != GAC_OK) return code;
         }
@@ -499,10 +512,9 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
     m->contact_bias(q, qd, p, bias);
     m->contact_velocities(q, qdd, p, vel);       /* J qdd_free, read row by row */
     for (a = 0; a < nresting; ++a) {              /* lambda = -(N qdd_free + Ndot qd) */
-        int row;
-        double sign;
-        gac_contact_row(m, resting[a], &row, &sign);
-        lambda[a] = -sign * (bias[row] + gac_row_value(m, resting[a], qdd, vel));
+        double held_bias;
+        if (gac_normal_bias(m, q, qd, p, resting[a], bias, &held_bias) != GAC_OK) return GAC_ERR_LINK_REST;
+        lambda[a] = -(held_bias + gac_normal_value(m, q, p, resting[a], qdd, vel));
         cf[a] = gac_friction(m, p, resting[a]);
         if (cf[a] > 0.0) friction = 1;
     }
@@ -529,12 +541,8 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
             m->contact_generalized_force(q, f, p, g);
             m->inertia_solve(q, g, p, Z + (long)a * nq);
             m->contact_velocities(q, Z + (long)a * nq, p, vel);
-            for (b = 0; b < nresting; ++b) {
-                int row;
-                double sign;
-                gac_contact_row(m, resting[b], &row, &sign);
-                B[b*nresting + a] += cf[a] * sign * gac_row_value(m, resting[b], Z + (long)a * nq, vel);
-            }
+            for (b = 0; b < nresting; ++b)
+                B[b*nresting + a] += cf[a] * gac_normal_value(m, q, p, resting[b], Z + (long)a * nq, vel);
         }
         if (gac_ldlt_drop(nresting, A, 1e-12) < 0) return GAC_ERR_SINGULAR_CONTACT;
         for (b = 0; b < nresting; ++b) {

@@ -93,22 +93,22 @@ static int gac_held_rows(const gac_model *m, const double *q, const double *qd, 
     return nr;
 }
 
-/* Row r's value of a generalised velocity w (vel = contact_velocities(q, w)). */
-static double gac_held_value(const gac_model *m, const int *set, int owner, int comp, double sgn, const double *w,
-                             const double *vel)
+/* Row r's value of a generalised velocity w (vel = contact_velocities(q, w)): a normal row's by gac_normal_value
+ * (a link's or an obstacle's contact from its closest points), a tangential row's the point velocity component. */
+static double gac_held_value(const gac_model *m, const double *q, const double *p, const int *set, int owner, int comp,
+                             const double *w, const double *vel)
 {
-    return comp < 0 ? sgn * gac_row_value(m, set[owner], w, vel) : vel[comp];
+    return comp < 0 ? gac_normal_value(m, q, p, set[owner], w, vel) : vel[comp];
 }
 
 /* G (nr x nr) = R I_f^-1 R^T of the held rows, symmetric (vel: scratch). */
 static void gac_held_gram(const gac_model *m, const double *q, const double *p, const int *set, int nr,
-                          const int *owner, const int *comp, const double *sgn, const double **resp, double *G,
-                          double *vel)
+                          const int *owner, const int *comp, const double **resp, double *G, double *vel)
 {
     int r, c;
     for (c = 0; c < nr; ++c) {
         m->contact_velocities(q, resp[c], p, vel);
-        for (r = 0; r < nr; ++r) G[r*nr + c] = gac_held_value(m, set, owner[r], comp[r], sgn[r], resp[c], vel);
+        for (r = 0; r < nr; ++r) G[r*nr + c] = gac_held_value(m, q, p, set, owner[r], comp[r], resp[c], vel);
     }
     for (r = 0; r < nr; ++r) {
         for (c = 0; c < r; ++c) G[r*nr + c] = G[c*nr + r] = 0.5 * (G[r*nr + c] + G[c*nr + r]);
@@ -160,10 +160,14 @@ int gac_stuck_dynamics(const gac_model *m, const double *q, const double *qd, co
         m->contact_generalized_force(q, f, p, g);
         m->inertia_solve(q, g, p, Z + (long)a * nq);
     }
-    gac_held_gram(m, q, p, set, nr, owner, comp, sgn, resp, G, vel);
+    gac_held_gram(m, q, p, set, nr, owner, comp, resp, G, vel);
     m->contact_velocities(q, qdd, p, vel);        /* R qdd_free, row by row */
-    for (r = 0; r < nr; ++r)
-        b[r] = -(sgn[r] * bias[brow[r]] + gac_held_value(m, set, owner[r], comp[r], sgn[r], qdd, vel));
+    for (r = 0; r < nr; ++r) {
+        double held_bias = 0.0;
+        if (comp[r] >= 0) held_bias = sgn[r] * bias[brow[r]];
+        else if (gac_normal_bias(m, q, qd, p, set[owner[r]], bias, &held_bias) != GAC_OK) return GAC_ERR_LINK_REST;
+        b[r] = -(held_bias + gac_held_value(m, q, p, set, owner[r], comp[r], qdd, vel));
+    }
     for (i = 0; i < nr * nr; ++i) L[i] = G[i];
     dropped = gac_ldlt_drop(nr, L, GAC_HELD_DEPENDENT);
     if (dropped < 0) return GAC_ERR_SINGULAR_CONTACT;
@@ -171,7 +175,7 @@ int gac_stuck_dynamics(const gac_model *m, const double *q, const double *qd, co
         if (!sliding[a]) continue;
         m->contact_velocities(q, Z + (long)a * nq, p, vel);
         for (r = 0; r < nr; ++r)
-            G[r*nr + a] += cf[a] * gac_held_value(m, set, owner[r], comp[r], sgn[r], Z + (long)a * nq, vel);
+            G[r*nr + a] += cf[a] * gac_held_value(m, q, p, set, owner[r], comp[r], Z + (long)a * nq, vel);
     }
     for (r = 0; r < nr; ++r) lam[r] = b[r];
     if (dropped == 0 && !any_sliding) {
@@ -239,9 +243,9 @@ int gac_project_stuck(gac_sim *s, double *x, int n, const int *set)
     int nr, r, i;
     nr = gac_held_rows(md, x, x + nq, s->p, n, set, s->is_stuck, s->work, owner, comp, brow, sgn, tj, resp);
     if (nr < 0) return nr;
-    gac_held_gram(md, x, s->p, set, nr, owner, comp, sgn, resp, G, vel);
+    gac_held_gram(md, x, s->p, set, nr, owner, comp, resp, G, vel);
     md->contact_velocities(x, x + nq, s->p, vel);
-    for (r = 0; r < nr; ++r) corr[r] = -gac_held_value(md, set, owner[r], comp[r], sgn[r], x + nq, vel);
+    for (r = 0; r < nr; ++r) corr[r] = -gac_held_value(md, x, s->p, set, owner[r], comp[r], x + nq, vel);
     if (gac_ldlt_drop(nr, G, GAC_HELD_DEPENDENT) < 0) return GAC_ERR_SINGULAR_CONTACT;
     gac_ldlt_solve(nr, G, corr);
     for (i = 0; i < nq; ++i) {

@@ -87,14 +87,15 @@
 #define GAC_ERR_IMPACT_ENERGY    -31   /* an impact gained kinetic energy: the Newton + Coulomb law
                                           (opt.impact_law), whose slip reversal during the impact can (Kane's
                                           rod); the default law cannot */
-#define GAC_ERR_LINK_CONTACT     -32   /* a contact of two links (GAC_CONTACT_LINK) met what the loop does not do
-                                          with link pairs: an impact under a frictional law (opt.impact_law) on a
-                                          rough wall at the same time (link pairs are frictionless) */
+#define GAC_ERR_LINK_CONTACT     -32   /* a contact of two links (GAC_CONTACT_LINK) or of a link on an obstacle
+                                          met what the loop does not do with it: a geometry without a derivative
+                                          where one is needed (crossing axes, a link lying parallel to a face or to
+                                          the other link while not held) */
 #define GAC_ERR_LINK_REST        -33   /* two links would come to rest on each other (or a link on a fixed
                                           obstacle, GAC_CONTACT_OBSTACLE) where that contact cannot be held: its
-                                          normal has no derivative (crossing axes), or the model has rough walls
-                                          under a frictional impact law (resting friction on such contacts is not
-                                          modelled); struck opt.zeno_impacts times in a row at shrinking intervals
+                                          normal has no derivative (crossing axes), or the model has friction
+                                          under a frictional impact law (resting friction on such contacts, and a
+                                          resting set mixing them with rough ones, is not modelled); struck opt.zeno_impacts times in a row at shrinking intervals
                                           (e < 1: the Zeno rule that lands a wall's contact) or at one instant
                                           (within 1e-12 (1 + |t|) s).  Also a held one whose normal loses its
                                           derivative */

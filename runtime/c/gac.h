@@ -1108,7 +1108,8 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       (their forces ~0 at once), a slip with another slip or a release, or points
                                       that stick at one step's end at different speeds */
 #define GAC_SENS_LINK         11   /* an impact of two links or of a link on a fixed obstacle (GAC_CONTACT_LINK,
-                                      GAC_CONTACT_OBSTACLE) among several contacts or with contacts at rest, such a
+                                      GAC_CONTACT_OBSTACLE) among several contacts or with contacts at rest, or
+                                      by a frictional law (a rough one: its tangential impulse), such a
                                       contact held at rest (its constrained flight is not differentiated), or
                                       where their closest points have no derivative (crossing or parallel axes,
                                       a link parallel to a box's or plane's face);

@@ -4,7 +4,8 @@ of the law for one contact (its 3 x 3 contact-space inverse inertia W built here
 point velocities along the documented frame n, t1 = the rod's axis off n, t2 = n x t1; stick where -W^-1 q lies in
 the cone, else slide, the direction found by a sweep of the tangent plane), in the stick and the slip regime; the
 kinetic energy never grows on random states, coefficients and restitutions; c_f = 0 gives the frictionless law
-exactly; a run keeps the momentum balance along all three directions; and sensitivities stop at such an impact."""
+exactly; a run keeps the momentum balance along all three directions; a rod landing on the rough ball rests on it
+frictionless; and sensitivities stop at such an impact."""
 from __future__ import annotations
 
 import math
@@ -22,9 +23,9 @@ TIGHT = dict(rtol=1e-12, atol=1e-14)
 @pytest.fixture(scope="module")
 def model(compiled):
     """A free rod of 1.2 m (capsule radius 0.02 m, a rigid body in 3D) and a rough ball of radius 0.3 m at the
-    origin (friction_ball a runtime parameter), no gravity."""
+    origin (friction_ball a runtime parameter), under gravity."""
     ball = Obstacle.sphere("ball", BALL, 0.3, friction=0.5)
-    scene = Scene(name="rough_ball", links=(LineLink(1.2, 1.5, (2e-3, 3e-3, 4e-3), 0.02),), gravity=0.0,
+    scene = Scene(name="rough_ball", links=(LineLink(1.2, 1.5, (2e-3, 3e-3, 4e-3), 0.02),), gravity=9.81,
                   q0=(-math.pi / 2, 0.0, math.pi / 2 + 0.3, -0.4, 0.8, 0.1), obstacles=(ball,))
     return compiled(scene, tangent=True)
 
@@ -211,3 +212,19 @@ def test_sensitivities_stop_at_a_rough_strike(model):
     smooth = simulate(tangent, 0.6, p=tangent.parameters({"e_ball": 0.6, "friction_ball": 0.0}), q0=q0, qd0=qd0,
                       sensitivities=["qd0[X1]"], **TIGHT)
     assert smooth.sensitivities.valid, smooth.sensitivity_message
+
+
+def test_a_rod_landing_on_the_rough_ball_rests_on_it_frictionless(model):
+    """The rod dropped flat, its centre over the ball (e_ball = 0): the frictional law's plastic strike, then the
+    contact held (resting frictionless: balanced, it stays) without sinking into the ball; dropped off centre, it
+    lands, slides off (nothing holds it tangentially at rest) and falls past."""
+    q0 = np.array([-math.pi / 2, 0.0, -math.pi / 2, -0.6, 0.5, 0.0])        # O_1 (-0.6, 0.5, 0), O_2 (0.6, 0.5, 0)
+    p = model.parameters({"e_ball": 0.0})
+    r = simulate(model, 1.0, p=p, q0=q0, qd0=np.zeros(6), rtol=1e-10, atol=1e-12)
+    assert r.success and [i.law for i in r.impacts] == ["gdi"] and r.resting_final == [(1, "L1/ball")]
+    assert min(model.contact_gaps(model.layout.reduce(q))[0] for q in r.q) >= -1e-12
+    q0[3] += 0.05
+    r = simulate(model, 1.0, p=p, q0=q0, qd0=np.zeros(6), rtol=1e-10, atol=1e-12)
+    centre = model.contact_points(model.layout.reduce(r.q[-1])).mean(axis=0)
+    assert r.success and r.resting_final == [] and centre[0] > 0.3 and centre[1] < 0.0     # slid off, falling
+    assert min(model.contact_gaps(model.layout.reduce(q))[0] for q in r.q) >= -1e-9

@@ -93,10 +93,9 @@
                                           the other link while not held) */
 #define GAC_ERR_LINK_REST        -33   /* two links would come to rest on each other (or a link on a fixed
                                           obstacle, GAC_CONTACT_OBSTACLE) where that contact cannot be held: its
-                                          normal has no derivative (crossing axes), or the model has friction
-                                          under a frictional impact law (resting friction on such contacts, and a
-                                          resting set mixing them with rough ones, is not modelled); struck opt.zeno_impacts times in a row at shrinking intervals
-                                          (e < 1: the Zeno rule that lands a wall's contact) or at one instant
+                                          normal has no derivative (crossing axes); struck opt.zeno_impacts
+                                          times in a row at shrinking intervals (e < 1: the Zeno rule that lands
+                                          a wall's contact) or at one instant
                                           (within 1e-12 (1 + |t|) s).  Also a held one whose normal loses its
                                           derivative */
 

@@ -138,7 +138,7 @@ int gac_obstacle_feature(const gac_model *m, int o, const double *x, double *b0,
 
 /* gac_link.c: link pairs and obstacles as contacts of the loop (kinds GAC_CONTACT_LINK, GAC_CONTACT_OBSTACLE, the
  * last entries of m->contacts: no Jacobian row; Coulomb friction at impacts only, along their contact frame; at rest
- * they are held frictionless by g = J^T n and their bias) */
+ * they are held frictionless by g = J^T n and their bias, whatever their friction coefficient) */
 int gac_rowless(const gac_model *m, int c);             /* 1 if contact c is a link pair or an obstacle */
 int gac_kernel_contacts(const gac_model *m);            /* the contacts before them: those of contact_gaps */
 int gac_has_link(const gac_model *m, int n, const int *list);   /* 1 if list[0..n-1] holds one of them */

@@ -32,16 +32,13 @@ void gac_normal_velocities(const gac_model *md, const double *x, const double *p
 }
 
 /* 1 if contact c can be held at its wall at state x: a wall's or a stop's always; a link pair's or an obstacle's
- * where its normal has a derivative along qd (gac_rowless_bias: not crossing axes) and no frictional impact law acts
- * in a model with friction (resting on a link or an obstacle is frictionless, and a resting set mixing such a
- * contact with rough ones is not modelled: under a frictional law it is struck with its own e every time, and one
- * that would come to rest ends the run with GAC_ERR_LINK_REST, gac_who_lands). */
+ * where its normal has a derivative along qd (gac_rowless_bias: not crossing axes).  Held, a link pair or an obstacle
+ * is frictionless whatever its Coulomb coefficient (which acts at its impacts only, gac_contact_friction). */
 int gac_holdable(const gac_sim *s, const double *x, int c)
 {
     const gac_model *md = s->model;
     double b;
     if (!gac_rowless(md, c)) return 1;
-    if (s->opt.impact_law != GAC_IMPACT_LAW_FRICTIONLESS && gac_has_friction(md)) return 0;
     return gac_rowless_bias(md, x, x + md->nq, s->p, c, &b) == GAC_OK;
 }
 

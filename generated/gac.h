@@ -87,15 +87,15 @@
 #define GAC_ERR_IMPACT_ENERGY    -31   /* an impact gained kinetic energy: the Newton + Coulomb law
                                           (opt.impact_law), whose slip reversal during the impact can (Kane's
                                           rod); the default law cannot */
-#define GAC_ERR_LINK_CONTACT     -32   /* a contact of two links (GAC_CONTACT_LINK) met what the loop does not do
-                                          with link pairs: an impact under a frictional law (opt.impact_law) on a
-                                          rough wall at the same time (link pairs are frictionless) */
+#define GAC_ERR_LINK_CONTACT     -32   /* a contact of two links (GAC_CONTACT_LINK) or of a link on an obstacle
+                                          met what the loop does not do with it: a geometry without a derivative
+                                          where one is needed (crossing axes, a link lying parallel to a face or to
+                                          the other link while not held) */
 #define GAC_ERR_LINK_REST        -33   /* two links would come to rest on each other (or a link on a fixed
                                           obstacle, GAC_CONTACT_OBSTACLE) where that contact cannot be held: its
-                                          normal has no derivative (crossing axes), or the model has rough walls
-                                          under a frictional impact law (resting friction on such contacts is not
-                                          modelled); struck opt.zeno_impacts times in a row at shrinking intervals
-                                          (e < 1: the Zeno rule that lands a wall's contact) or at one instant
+                                          normal has no derivative (crossing axes); struck opt.zeno_impacts
+                                          times in a row at shrinking intervals (e < 1: the Zeno rule that lands
+                                          a wall's contact) or at one instant
                                           (within 1e-12 (1 + |t|) s).  Also a held one whose normal loses its
                                           derivative */
 
@@ -1107,7 +1107,8 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       (their forces ~0 at once), a slip with another slip or a release, or points
                                       that stick at one step's end at different speeds */
 #define GAC_SENS_LINK         11   /* an impact of two links or of a link on a fixed obstacle (GAC_CONTACT_LINK,
-                                      GAC_CONTACT_OBSTACLE) among several contacts or with contacts at rest, such a
+                                      GAC_CONTACT_OBSTACLE) among several contacts or with contacts at rest, or
+                                      by a frictional law (a rough one: its tangential impulse), such a
                                       contact held at rest (its constrained flight is not differentiated), or
                                       where their closest points have no derivative (crossing or parallel axes,
                                       a link parallel to a box's or plane's face);

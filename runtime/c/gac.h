@@ -244,7 +244,8 @@ typedef struct {
                              GAC_CONTACT_OBSTACLE (3) */
     int coordinate;       /* stop: the index into q of its joint's angle (0..nq-1); link: the second link j
                              (> point + 1); obstacle: the obstacle (0..nobstacle-1); wall: unused */
-    int has_friction;     /* wall: 1 if the wall has Coulomb friction (0: frictionless; a zero-initialised entry) */
+    int has_friction;     /* wall, link, obstacle: 1 if it has Coulomb friction (0: frictionless; a zero-initialised
+                             entry); a link pair's and an obstacle's acts at impacts only */
     int friction_index;         /* its friction coefficient c_f: p[friction_index], or friction_value when < 0 */
     double friction_value;
     int trow[2];          /* the Jacobian rows of the point along the wall's two tangential axes (ascending), -1 for
@@ -507,7 +508,7 @@ int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q,
                                double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse,
                                double *GAC_RESTRICT work);
 
-/* The impact law at walls with Coulomb friction: gac_impact_complementarity's rounds, each round's problem on the
+/* The impact law with Coulomb friction (at rough walls, link pairs and obstacles): gac_impact_complementarity's rounds, each round's problem on the
  * contacts that approach or rest being, for law GAC_IMPACT_LAW_GDI,
  *     xi = gamma+ + e gamma-,   0 <= Lambda_N _|_ xi_N >= 0,   Lambda_T = -c_f Lambda_N xi_T / |xi_T| (xi_T != 0),
  *     |Lambda_T| <= c_f Lambda_N (xi_T = 0),
@@ -520,7 +521,8 @@ int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q,
  * Each round is solved by projected Gauss-Seidel with every contact's own problem solved exactly.
  * impulse[k] (N s, >= 0) along contact contact_set[k]'s inward normal, impulse_t[2k], impulse_t[2k + 1] (N s) along
  * its wall's two tangential axes in ascending order (X1, X2 for a X3 wall; 0 where the model has no motion or the
- * wall no friction); *law_used the law applied (GAC_IMPACT_LAW_*), *residual the largest relative violation of the
+ * wall no friction), or a link pair's or obstacle's t1, t2 (its contact frame at the closest points: n, t1 = link
+ * i's axis with its part along n removed, t2 = n x t1; its rows J^T n, J^T t1, J^T t2); *law_used the law applied (GAC_IMPACT_LAW_*), *residual the largest relative violation of the
  * law's conditions.  A model with no rough wall (its work array the smaller one) is solved by the frictionless law's
  * rounds whatever the law asked (*law_used GAC_IMPACT_LAW_FRICTIONLESS).  work: gac_impact_nwork(m) doubles.
  * Returns GAC_OK or GAC_ERR_BAD_CONTACT, _SINGULAR_MASS,
@@ -827,8 +829,9 @@ typedef struct {
     int ncontact;                /* simultaneous contacts */
     int *contact;                /* their indices 0..ncontact-1 of the model (see gac_contact_info) */
     double *impulse;             /* impulse along the inward normal (N s), >= 0 */
-    double *impulse_t;           /* 2 per contact: impulse along its wall's two tangential axes, ascending (N s;
-                                    0 without friction) */
+    double *impulse_t;           /* 2 per contact: impulse along its wall's two tangential axes, ascending, or
+                                    a link pair's or obstacle's t1, t2 (gac_impact_friction) (N s; 0 without
+                                    friction) */
     int law;                     /* the impact law applied (GAC_IMPACT_LAW_*: FRICTIONLESS when no contact with
                                     friction took part) */
     double residual;             /* the frictional law's largest relative violation of its conditions (0 without

@@ -1,5 +1,6 @@
 /*
- * gac_impact_friction.c -- impacts at walls with Coulomb friction.
+ * gac_impact_friction.c -- impacts with Coulomb friction, at rough walls and at rough link pairs and obstacles
+ * (the latter along their contact frame at the closest points, gac_rowless_frame: rows J^T n, J^T t1, J^T t2).
  *
  * The law (the "global dissipation index" form of Moreau's and Glocker's impact laws): at each contact the
  * normal and tangential velocities gamma = (gamma_N, gamma_T) share one restitution e, and Coulomb's cone holds

@@ -228,3 +228,26 @@ def test_a_rod_landing_on_the_rough_ball_rests_on_it_frictionless(model):
     centre = model.contact_points(model.layout.reduce(r.q[-1])).mean(axis=0)
     assert r.success and r.resting_final == [] and centre[0] > 0.3 and centre[1] < 0.0     # slid off, falling
     assert min(model.contact_gaps(model.layout.reduce(q))[0] for q in r.q) >= -1e-9
+
+
+def test_the_friction_keys_are_checked_and_named():
+    """An obstacle's friction is the parameter friction_<name> after the obstacles' e (none where it is 0, so a
+    frictionless scene keeps its layout); friction.links is a constant of the link pairs; values outside [0, 1e3]
+    or not numbers are refused naming the key."""
+    from codegen.errors import SceneError
+    from codegen.scene import scene_from_dict
+    data = {"name": "keys", "gravity": 0.0, "links": [{"length": 1.0, "mu": 1.0, "radius": 0.02}] * 3,
+            "obstacles": [{"name": "ball", "center": [0, 3, 0], "radius": 0.3, "friction": 0.4},
+                          {"name": "bar", "kind": "capsule", "a": [0, -3, -1], "b": [0, -3, 1], "radius": 0.1}],
+            "friction": {"links": 0.2}}
+    scene = scene_from_dict(data)
+    assert scene.parameter_names()[-3:] == ["e_ball", "e_bar", "friction_ball"]
+    assert scene.parameter_vector()[-1] == 0.4 and scene.link_friction == 0.2
+    assert [c.friction for c in scene.rowless_contacts()] == [0.2, 0.4, 0.4, 0.4, 0.0, 0.0, 0.0]
+    for bad, message in ((-1.0, r"obstacles\[1\] \(ball\)\.friction: the Coulomb coefficient must be in \[0, 1000\]"),
+                         ("x", r"obstacles\[1\] \(ball\)\.friction: expected a number")):
+        with pytest.raises(SceneError, match=message):
+            scene_from_dict({**data, "obstacles": [{**data["obstacles"][0], "friction": bad}]})
+    with pytest.raises(SceneError, match=r"friction\.links: the Coulomb coefficient must be in \[0, 1000\], got 2000"):
+        scene_from_dict({**data, "friction": {"links": 2e3}})
+    assert scene_from_dict({**data, "friction": 0.5}).link_friction == 0.0      # a single number: the walls' only

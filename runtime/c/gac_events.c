@@ -214,9 +214,10 @@ static int gac_lost_contact(gac_sim *s, double t, const double *g)
  *     D <= g_a + g_b + 2 delta,   delta = max(contact_tol, graze depth),
  * holds no penetration deeper than delta: nothing to find there.  Any other interval is split in half (the gap and
  * w at its middle from the interpolant), the halves taken left to right, down to event_tol: the first sample with
- * gap <= 0 after one > 0 brackets a crossing (located like any other); one reached from gap <= 0 (the contact left
- * its body at an impact and has come back) is a return if approaching there (gac_locate_return), or, deeper than the
- * lost-contact depth without approaching (a point inside the body on its way through), a crossing that was missed.
+ * gap <= 0 after one > 0 brackets a crossing (located like any other); one below -delta reached from gap <= 0 (the
+ * contact left its body at an impact or a release and has come back) is a return if approaching there
+ * (gac_locate_return), or, deeper than the lost-contact depth without approaching (a point inside the body on its
+ * way through), a crossing that was missed.
  * Bodies far apart cost nothing: the caller checks the interval first with the lever bound on the speed.
  * Returns 1 with the crossing in *t_cross, 2 with the sample inside the body in *t_cross, or 0. */
 static int gac_tunnel(gac_sim *s, int c, double t_a, double g_a, double t_b, double g_b, double *t_cross)
@@ -244,11 +245,12 @@ static int gac_tunnel(gac_sim *s, int c, double t_a, double g_a, double t_b, dou
         tm = 0.5 * (tl + tr);
         gm = gac_value_at(s, 0, c, tm);                  /* (leaves the state at tm in s->xs) */
         ++evals;
-        if (gm <= 0.0) {
-            if (gl > 0.0) {
-                *t_cross = gac_locate(s, 0, c, tl, gl, tm, gm);
-                return 1;
-            }
+        if (gm <= 0.0 && gl > 0.0) {
+            *t_cross = gac_locate(s, 0, c, tl, gl, tm, gm);
+            return 1;
+        }
+        if (gm < -delta) {                               /* from gap <= 0: back beyond the wall by more than delta
+                                                            (a shallower return is the samples' to find) */
             gac_normal_velocities(md, s->xs, s->p, s->es);
             if (s->es[c] < -gac_v_round(md, s->es)) {
                 *t_cross = gac_locate_return(s, c, tl, tm, gm);

@@ -145,6 +145,11 @@ int gac_has_link(const gac_model *m, int n, const int *list);   /* 1 if list[0..
 /* every contact's gap (ncontact): the kernel's, then each link pair's and obstacle's (gac_link_gap,
  * gac_obstacle_gap) */
 void gac_contact_gaps(const gac_model *m, const double *q, const double *p, double *gaps);
+/* 1 if contact c is a link pair or an obstacle of finite extent (a sphere, a bar, a box: not a plane) */
+int gac_finite_contact(const gac_model *m, int c);
+/* finite contact c's largest point speed relative to the other side at state x (m/s): max over link i's joint
+   points of |v|, plus link j's for a link pair */
+double gac_finite_speed(const gac_model *m, const double *x, const double *p, int c);
 void gac_link_contact_direction(const gac_model *m, const double *q, const double *p, int c, double *g);
 /* link or obstacle contact c's gap rate n . (v_P - v_Q) from the joint points' velocities vel (npoint x 3) at q */
 double gac_link_contact_rate(const gac_model *m, const double *q, const double *p, int c, const double *vel);

@@ -209,6 +209,36 @@ int gac_has_link(const gac_model *m, int n, const int *list)
     return 0;
 }
 
+/* 1 if contact c is a link pair or an obstacle of finite extent (a sphere, a bar or a box; a plane is a half-space,
+ * which no motion passes through with its gap positive on both sides). */
+int gac_finite_contact(const gac_model *m, int c)
+{
+    const gac_contact *k = &m->contacts[c];
+    if (k->kind == GAC_CONTACT_LINK) return 1;
+    return k->kind == GAC_CONTACT_OBSTACLE && gac_obstacle_kind(m, k->coordinate) != GAC_OBSTACLE_PLANE;
+}
+
+/* The largest speed (m/s) of finite contact c's link points relative to the other side at state x: a point at
+ * fraction s of link i moves with (1 - s) v_O_i + s v_O_i+1, no faster than the faster of the link's two joint
+ * points, so the bound is max(|v_O_i|, |v_O_i+1|), plus the same for link j of a link pair (0 for an obstacle). */
+double gac_finite_speed(const gac_model *m, const double *x, const double *p, int c)
+{
+    const gac_contact *k = &m->contacts[c];
+    double vel[3 * GAC_AT_LEAST_1(m->npoint)], w = 0.0;
+    int side, end;
+    m->contact_velocities(x, x + m->nq, p, vel);
+    for (side = 0; side < (k->kind == GAC_CONTACT_LINK ? 2 : 1); ++side) {
+        const int link = side == 0 ? k->point : k->coordinate;
+        double fastest = 0.0;
+        for (end = 0; end < 2; ++end) {
+            const double *v = vel + 3 * (link - 1 + end), speed = sqrt(gac_dot3(v, v));
+            if (speed > fastest) fastest = speed;
+        }
+        w += fastest;
+    }
+    return w;
+}
+
 /* Contact c's geometry (a link pair or an obstacle) and its second link (0 for an obstacle: it does not move). */
 static int gac_rowless_geometry(const gac_model *m, const double *q, const double *p, int c, double *geometry,
                                 int *second)

@@ -108,11 +108,18 @@ def library_cdef(functions=PYTHON_FUNCTIONS) -> str:
 
 
 def _statements(cdef: str) -> list[str]:
-    """cdef cut after each top-level ';' (a struct's fields stay inside its statement)."""
+    """cdef cut after each top-level ';' (a struct's fields stay inside its statement) and after each line of the
+    preprocessor (a #define is a statement of its own, not the start of the declaration that follows it)."""
     statements, depth, start = [], 0, 0
     for i, ch in enumerate(cdef):
         depth += (ch == "{") - (ch == "}")
-        if ch == ";" and depth == 0:
+        line_start = i == 0 or cdef[i - 1] == "\n"
+        if depth == 0 and line_start and ch == "#" and cdef[start:i].strip() == "":
+            end = cdef.find("\n", i)
+            end = len(cdef) if end < 0 else end + 1
+            statements.append(cdef[start:end])
+            start = end
+        elif ch == ";" and depth == 0 and i >= start:
             end = cdef.find("\n", i)
             end = len(cdef) if end < 0 else end + 1
             statements.append(cdef[start:end])

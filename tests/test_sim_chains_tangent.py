@@ -143,6 +143,7 @@ def test_the_block_tangent_kernel_is_its_directions_one_at_a_time(tumble):
         assert np.allclose(out[j], one, rtol=1e-13, atol=1e-13)
 
 
+@pytest.mark.slow            # three models of their own (two 3D chains driven, with tangents): about 14 s cold
 def test_each_chains_inputs_drive_its_own_block():
     """Chain 1 driven on theta_2, chain 2 on theta_1 and theta_3 (with a spring and damper on its first joint): the
     model's u is theirs stacked ('c1.theta_2', 'c2.theta_1', 'c2.theta_3'); qdd, the power and B are each chain's

@@ -91,7 +91,7 @@ def test_gaps_and_directions_against_an_independent_computation(model):
     rng = np.random.default_rng(3)
     centres = [np.array(o.a) for o in OBSTACLES[:4]]
     checked_rows = 0
-    for trial in range(40):
+    for trial in range(20):
         q = np.concatenate([rng.uniform(-math.pi, math.pi, 3), centres[trial % 4] + rng.uniform(-0.9, 0.9, 3)])
         q[1] = rng.uniform(-1.2, 1.2)                         # theta_0 away from the base chart's lock
         gaps = model.contact_gaps(q)
@@ -109,7 +109,7 @@ def test_gaps_and_directions_against_an_independent_computation(model):
                            for d in np.eye(model.nq)])
             assert g == pytest.approx(fd, abs=2e-6 * max(1.0, np.abs(g).max())), (trial, o.name)
             checked_rows += 1
-    assert checked_rows >= 60
+    assert checked_rows >= 30
 
 
 def drop(model, x1: float, top: float, e: float, name: str):

@@ -8,6 +8,9 @@
 
 #include <math.h>
 
+#define GAC_TUNNEL_DEPTH 96      /* halvings of a sample interval at most (down to event_tol well before) */
+#define GAC_TUNNEL_EVALS 512     /* gap evaluations per contact and sample interval at most */
+
 /* The normal speed below which an approach is round-off, given every contact's normal velocity vn:
  * GAC_V_FLOOR + 1e-10 max|vn| (the law's round-off floor on the chain's own speeds). */
 double gac_v_round(const gac_model *md, const double *vn)
@@ -200,6 +203,70 @@ static int gac_lost_contact(gac_sim *s, double t, const double *g)
     return 0;
 }
 
+/* A pass-through of finite contact c (a link pair, a sphere, a bar, a box: gac_finite_contact) inside the interval
+ * [t_a, t_b] of the step, at whose ends its gap is g_a, g_b: a link can cross a finite body and leave it on the far
+ * side, the gap positive at both ends and no sign change to see.  The gap is 1-Lipschitz in the points' travel (the
+ * distance to a convex body, and between two segments, changes by no more than the points move), so if every point
+ * of the link moves at most D relative to the other side over [a, b], the gap inside stays above
+ * max(g_a - D_a(t), g_b - D_b(t)) >= (g_a + g_b - D) / 2.  D is bounded by 2 max(w_a, w_b) (b - a), w the contact's
+ * largest point speed at the interval's ends (gac_finite_speed; the factor 2 covers a speed that grows inside the
+ * interval, which is short and nearly linear once it is split).  So an interval with
+ *     D <= g_a + g_b + 2 delta,   delta = max(contact_tol, graze depth),
+ * holds no penetration deeper than delta: nothing to find there.  Any other interval is split in half (the gap and
+ * w at its middle from the interpolant), the halves taken left to right, down to event_tol: the first sample with
+ * gap <= 0 after one > 0 brackets a crossing (located like any other); one below -delta reached from gap <= 0 (the
+ * contact left its body at an impact or a release and has come back) is a return if approaching there
+ * (gac_locate_return), or, deeper than the lost-contact depth without approaching (a point inside the body on its
+ * way through), a crossing that was missed.
+ * Bodies far apart cost nothing: the caller checks the interval first with the lever bound on the speed.
+ * Returns 1 with the crossing in *t_cross, 2 with the sample inside the body in *t_cross, or 0. */
+static int gac_tunnel(gac_sim *s, int c, double t_a, double g_a, double t_b, double g_b, double *t_cross)
+{
+    const gac_model *md = s->model;
+    double right[GAC_TUNNEL_DEPTH][3], tl = t_a, gl = g_a, wl, delta, lost;
+    int top = 0, evals = 0;
+    gac_dense(s, t_a, s->xs);
+    wl = gac_finite_speed(md, s->xs, s->p, c);
+    delta = gac_graze_depth(s, s->xs);
+    if (s->opt.contact_tol > delta) delta = s->opt.contact_tol;
+    lost = s->opt.contact_tol + gac_simultaneity_window(s, s->xs);
+    gac_dense(s, t_b, s->xs);
+    right[0][0] = t_b, right[0][1] = g_b, right[0][2] = gac_finite_speed(md, s->xs, s->p, c);
+    for (;;) {
+        const double tr = right[top][0], gr = right[top][1], wr = right[top][2];
+        const double travel = 2.0 * (wl > wr ? wl : wr) * (tr - tl);
+        double tm, gm;
+        if (travel <= gl + gr + 2.0 * delta || tr - tl <= s->opt.event_tol + 4.0 * GAC_EPS * fabs(tr)
+            || top + 1 == GAC_TUNNEL_DEPTH || evals == GAC_TUNNEL_EVALS) {   /* no pass-through: on to the next */
+            tl = tr, gl = gr, wl = wr;
+            if (top-- == 0) return 0;
+            continue;
+        }
+        tm = 0.5 * (tl + tr);
+        gm = gac_value_at(s, 0, c, tm);                  /* (leaves the state at tm in s->xs) */
+        ++evals;
+        if (gm <= 0.0 && gl > 0.0) {
+            *t_cross = gac_locate(s, 0, c, tl, gl, tm, gm);
+            return 1;
+        }
+        if (gm < -delta) {                               /* from gap <= 0: back beyond the wall by more than delta
+                                                            (a shallower return is the samples' to find) */
+            gac_normal_velocities(md, s->xs, s->p, s->es);
+            if (s->es[c] < -gac_v_round(md, s->es)) {
+                *t_cross = gac_locate_return(s, c, tl, tm, gm);
+                return 1;
+            }
+            if (gm < -lost) {
+                *t_cross = tm;
+                return 2;
+            }
+            gac_dense(s, tm, s->xs);
+        }
+        ++top;
+        right[top][0] = tm, right[top][1] = gm, right[top][2] = gac_finite_speed(md, s->xs, s->p, c);
+    }
+}
+
 /* Search the accepted step for the first event at event_samples points of the interpolant (the step ends
  * included), so that a dip through a wall and back inside one step is still seen.  Events: a wall
  * crossing (gap from > 0 to <= 0 between samples, or below 0 at a gap minimum between two samples where
@@ -217,15 +284,17 @@ int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
     const gac_model *md = s->model;
     const int nc1 = GAC_AT_LEAST_1(md->ncontact);
     int j, k, c, found = 0, have_prev = 1, ncand, cand[nc1];
-    const int m = s->opt.event_samples;
-    double t_prev = s->t, vprev[nc1], speed[nc1];
+    const int m = s->opt.event_samples, nk = gac_kernel_contacts(md);
+    double t_prev = s->t, vprev[nc1], speed[nc1], qsum_prev = 0.0;
+    for (k = 0; k < md->nq; ++k) qsum_prev += fabs(s->x[md->nq + k]);
     gac_copy(s->eprev, s->ev, md->ncontact);
     ncand = gac_dip_candidates(s, t1, cand, speed, vprev);
     for (j = 1; j <= m && !found; ++j) {
         double tj = j == m ? t1 : s->t + (t1 - s->t) * (double)j / (double)m;
-        double gj[nc1], vj[nc1];
-        int have_v = 0, deep = 0;
+        double gj[nc1], vj[nc1], qsum = 0.0, t_lost = 0.0;
+        int have_v = 0, deep = 0, lost = 0;
         gac_dense(s, tj, s->xs);
+        for (k = 0; k < md->nq; ++k) qsum += fabs(s->xs[md->nq + k]);
         gac_events(s, tj, s->xs, gj);
         for (c = 0; c < md->ncontact; ++c) {           /* crossings and returns at the samples */
             double tc;
@@ -271,6 +340,31 @@ int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
             }
             found = 1;
         }
+        for (c = nk; c < md->ncontact; ++c) {                /* passes through finite bodies between the samples */
+            const double lever = s->lever * (md->contacts[c].kind == GAC_CONTACT_LINK ? 2.0 : 1.0);
+            double tc;
+            int code;
+            if (s->is_resting[c] || (s->eprev[c] > 0.0 && gj[c] <= 0.0) || !gac_finite_contact(md, c)) continue;
+            if (2.0 * lever * (qsum > qsum_prev ? qsum : qsum_prev) * (tj - t_prev)    /* far apart: no point */
+                <= s->eprev[c] + gj[c] + 2.0 * s->opt.contact_tol) continue;           /* moves fast enough */
+            code = gac_tunnel(s, c, t_prev, s->eprev[c], tj, gj[c], &tc);
+            if (code == 2 && (!lost || tc < t_lost)) {
+                t_lost = tc;
+                lost = 1;
+            }
+            if (code != 1) continue;
+            if (!found || tc < *t_event) {
+                *t_event = tc;
+                *c_event = c;
+            }
+            found = 1;
+        }
+        if (lost && (!found || t_lost < *t_event)) {      /* inside a body on its way through: a missed crossing */
+            if (s->fail == 0) s->fail = GAC_ERR_LOST_CONTACT;
+            *t_event = t_lost;
+            *c_event = 0;
+            return 1;
+        }
         if (!found && deep && gac_lost_contact(s, tj, gj)) {     /* beyond its wall with no crossing to locate */
             if (s->fail == 0) s->fail = GAC_ERR_LOST_CONTACT;
             *t_event = tj;
@@ -281,6 +375,7 @@ int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
         if (have_v) gac_copy(vprev, vj, md->ncontact);
         have_prev = have_v;
         t_prev = tj;
+        qsum_prev = qsum;
     }
     return found;
 }

@@ -145,6 +145,10 @@ def _unchanged_default(value, field: str) -> bool:
         return type(value).__name__ == "Scene" and value.contact_pairs is None
     if field in ("obstacles", "obstacle_restitution"):   # fixed obstacles (and their default e): none earlier
         return type(value).__name__ == "Scene" and not value.obstacles
+    if field == "link_friction":            # capsule links meeting without friction, as in every earlier scene
+        return type(value).__name__ in ("Scene", "Chains") and value.link_friction == 0.0
+    if field == "friction" and type(value).__name__ == "Obstacle":   # a frictionless obstacle, as every earlier one
+        return value.friction == 0.0
     if field in ("half_extents", "rotation", "normal"):  # a box's and a plane's: unset on spheres and bars
         return type(value).__name__ == "Obstacle" and getattr(value, field) is None
     return field == "base" and type(value).__name__ == "Scene" and value.base.kind == "free"

@@ -522,22 +522,27 @@ def _contact_entry(c: int, point: int, wall, layout, scene: Scene, bake_params: 
 
 def _link_entry(c: int, pair, scene: Scene, bake_params: bool) -> dict:
     """One row of the model's gac_contact table for two capsule links (GAC_CONTACT_LINK): links i, j in point and
-    coordinate, a constant e; or for a link and a fixed obstacle (GAC_CONTACT_OBSTACLE): link i in point, the
-    obstacle's index in coordinate, its e the parameter e_<name>.  No Jacobian row (row 0 unused); the radius sum goes
-    to the model's link_radius."""
+    coordinate, a constant e and Coulomb coefficient (friction.links); or for a link and a fixed obstacle
+    (GAC_CONTACT_OBSTACLE): link i in point, the obstacle's index in coordinate, its e the parameter e_<name> and its
+    friction coefficient, where > 0, the parameter friction_<name>.  No Jacobian row (row 0 unused; their frictional
+    impacts act along their contact frame, gac_rowless_frame); the radius sum goes to the model's link_radius."""
+    friction = float(pair.friction)
+    rough = (f"Coulomb friction coefficient c_f = {friction:g} at impacts (along its contact frame)"
+             if friction > 0.0 else "frictionless, never resting")
     if isinstance(pair, ObstacleContact):
         o = pair.obstacle
         return dict(c=c, point=pair.i, axis=-1, sign=1, row=0,
                     e_index=-1 if bake_params else scene.parameter_index("e", o.name),
                     e_value=_double_literal(float(o.restitution)), kind="GAC_CONTACT_OBSTACLE", coordinate=pair.index,
                     label=pair.name, doc=f"link {pair.i} on the fixed {o.kind} {o.name} (radii {pair.radius:g} m "
-                    f"together, e = {o.restitution}), frictionless, never resting", has_friction=0, friction_index=-1,
-                    friction_value=_double_literal(0.0), trow=[-1, -1])
+                    f"together, e = {o.restitution}), {rough}", has_friction=int(friction > 0.0),
+                    friction_index=(-1 if bake_params or friction == 0.0 else scene.parameter_index("friction", o.name)),
+                    friction_value=_double_literal(friction), trow=[-1, -1])
     return dict(c=c, point=pair.i, axis=-1, sign=1, row=0, e_index=-1,
                 e_value=_double_literal(float(pair.restitution)), kind="GAC_CONTACT_LINK", coordinate=pair.j,
                 label=pair.name, doc=f"links {pair.i} and {pair.j} as capsules (radii {pair.radius:g} m together, "
-                f"e = {pair.restitution}), frictionless, never resting", has_friction=0, friction_index=-1,
-                friction_value=_double_literal(0.0), trow=[-1, -1])
+                f"e = {pair.restitution}), {rough}", has_friction=int(friction > 0.0), friction_index=-1,
+                friction_value=_double_literal(friction), trow=[-1, -1])
 
 
 def macro_name(name: str) -> str:
@@ -569,7 +574,7 @@ def param_doc(pname: str, scene: Scene | None = None) -> str:
     if kind == "e":
         return f"restitution of {'wall' if owner in WALL_NAMES else 'obstacle'} {owner} (-)"
     if kind == "friction":
-        return f"Coulomb friction coefficient of wall {owner} (-)"
+        return f"Coulomb friction coefficient of {'wall' if owner in WALL_NAMES else 'obstacle'} {owner} (-)"
     if kind == "g":
         return PARAM_DOC["g"]
     return f"link {owner}: {PARAM_DOC[kind]}"

@@ -315,6 +315,7 @@ class LinkPair:
     j: int
     radius: float         # m, r_i + r_j
     restitution: float
+    friction: float = 0.0  # Coulomb coefficient of their impacts (friction.links; 0: frictionless)
 
     @property
     def name(self) -> str:
@@ -327,7 +328,7 @@ class LinkPair:
 
 OBSTACLE_KINDS = ("sphere", "capsule", "box", "plane")
 OBSTACLE_KEYS = ("name", "kind", "center", "a", "b", "radius", "restitution", "links", "half_extents", "rotation",
-                 "point", "normal")
+                 "point", "normal", "friction")
 OBSTACLE_FIELDS = {"sphere": ("center", "radius"), "capsule": ("a", "b", "radius"),
                    "box": ("center", "half_extents", "rotation"), "plane": ("point", "normal")}
 OBSTACLE_SHAPE_CODES = {"sphere": 0, "capsule": 0, "box": 1, "plane": 2}   # gac.h GAC_OBSTACLE_*
@@ -343,7 +344,8 @@ class Obstacle:
     centre a, ``half_extents`` (m) and ``rotation`` (3x3, its columns the box's axes; None: the identity); kind
     'plane': the half-space n . (x - a) <= 0 below the plane through a of unit ``normal`` n (pointing into the free
     side).  A box or a plane has no radius.  ``restitution``: its e (None: the scene's default); ``links``: the links
-    (1-based) that can touch it (None: every link that moves)."""
+    (1-based) that can touch it (None: every link that moves); ``friction``: the Coulomb coefficient c_f of its
+    impacts (the runtime parameter friction_<name> when > 0; 0: frictionless)."""
 
     name: str
     kind: str = "sphere"
@@ -355,24 +357,30 @@ class Obstacle:
     half_extents: tuple | None = None   # a box's
     rotation: tuple | None = None       # a box's (3 rows of 3); None: the identity
     normal: tuple | None = None         # a plane's
+    friction: float = 0.0               # Coulomb coefficient of its impacts (0: frictionless)
 
     @staticmethod
     def box(name: str, center, half_extents, rotation=None, restitution: float | None = None,
-            links=None) -> "Obstacle":
+            links=None, friction: float = 0.0) -> "Obstacle":
         rows = None if rotation is None else tuple(tuple(r) for r in np.asarray(rotation, dtype=float).tolist())
-        return Obstacle(name, "box", tuple(center), None, 0.0, restitution, links, tuple(half_extents), rows)
+        return Obstacle(name, "box", tuple(center), None, 0.0, restitution, links, tuple(half_extents), rows,
+                        friction=friction)
 
     @staticmethod
-    def plane(name: str, point, normal, restitution: float | None = None, links=None) -> "Obstacle":
-        return Obstacle(name, "plane", tuple(point), None, 0.0, restitution, links, normal=tuple(normal))
+    def plane(name: str, point, normal, restitution: float | None = None, links=None,
+              friction: float = 0.0) -> "Obstacle":
+        return Obstacle(name, "plane", tuple(point), None, 0.0, restitution, links, normal=tuple(normal),
+                        friction=friction)
 
     @staticmethod
-    def sphere(name: str, center, radius: float, restitution: float | None = None, links=None) -> "Obstacle":
-        return Obstacle(name, "sphere", tuple(center), None, radius, restitution, links)
+    def sphere(name: str, center, radius: float, restitution: float | None = None, links=None,
+               friction: float = 0.0) -> "Obstacle":
+        return Obstacle(name, "sphere", tuple(center), None, radius, restitution, links, friction=friction)
 
     @staticmethod
-    def bar(name: str, a, b, radius: float, restitution: float | None = None, links=None) -> "Obstacle":
-        return Obstacle(name, "capsule", tuple(a), tuple(b), radius, restitution, links)
+    def bar(name: str, a, b, radius: float, restitution: float | None = None, links=None,
+            friction: float = 0.0) -> "Obstacle":
+        return Obstacle(name, "capsule", tuple(a), tuple(b), radius, restitution, links, friction=friction)
 
     @property
     def segment(self) -> tuple[tuple, tuple]:
@@ -453,8 +461,9 @@ class Obstacle:
                 raise SceneError(f"{where}.b: required for a capsule (a bar from a to b, m)")
             b = _vector(list(self.b) if isinstance(self.b, (list, tuple)) else self.b, 3, f"{where}.b")
         radius = _in_range(self.radius, f"{where}.radius", LENGTH_RANGE, "m (an obstacle's radius must be > 0)")
-        e, links = self._checked_contacts(where, default_e, n, moving)
-        return Obstacle(self.name, self.kind, a, None if self.kind == "sphere" else b, float(radius), e, links)
+        e, links, friction = self._checked_contacts(where, default_e, n, moving)
+        return Obstacle(self.name, self.kind, a, None if self.kind == "sphere" else b, float(radius), e, links,
+                        friction=friction)
 
     def _checked_planes(self, where: str, default_e: float, n: int, moving: list[int]) -> "Obstacle":
         """A box or a plane with every field validated."""
@@ -492,15 +501,19 @@ class Obstacle:
                         "; normalised: [" + ", ".join(f"{x / length:.17g}" for x in normal) + "]")
                 raise SceneError(f"{where}.normal: must be a unit vector (length 1 within {ROTATION_TOL:g}), got "
                                  f"{list(normal)!r} of length {length:.17g}{hint}")
-        e, links = self._checked_contacts(where, default_e, n, moving)
-        return Obstacle(self.name, self.kind, a, None, 0.0, e, links, half, rotation, normal)
+        e, links, friction = self._checked_contacts(where, default_e, n, moving)
+        return Obstacle(self.name, self.kind, a, None, 0.0, e, links, half, rotation, normal, friction)
 
-    def _checked_contacts(self, where: str, default_e: float, n: int, moving: list[int]) -> tuple[float, tuple]:
-        """The obstacle's e and the links that can touch it, validated."""
+    def _checked_contacts(self, where: str, default_e: float, n: int,
+                          moving: list[int]) -> tuple[float, tuple, float]:
+        """The obstacle's e, the links that can touch it and its friction coefficient, validated."""
         e = default_e if self.restitution is None else self.restitution
         e = _number(e, f"{where}.restitution")
         if not 0.0 <= e <= 1.0:
             raise SceneError(f"{where}.restitution: must be in [0, 1], got {e!r}")
+        c_f = _number(self.friction, f"{where}.friction")
+        if not 0.0 <= c_f <= FRICTION_MAX:
+            raise SceneError(f"{where}.friction: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {c_f!r}")
         if self.links is None:
             links = tuple(moving)
         else:
@@ -515,7 +528,7 @@ class Obstacle:
             if len(set(self.links)) != len(self.links):
                 raise SceneError(f"{where}.links: a link is named twice in {list(self.links)}")
             links = tuple(sorted(self.links))
-        return float(e), links
+        return float(e), links, float(c_f)
 
 
 def _rotation(value, fieldname: str) -> tuple:
@@ -570,6 +583,10 @@ class ObstacleContact:
     @property
     def restitution(self) -> float:
         return float(self.obstacle.restitution)
+
+    @property
+    def friction(self) -> float:
+        return float(self.obstacle.friction)
 
 
 def segment_distance(a0, a1, b0, b1) -> float:
@@ -877,6 +894,7 @@ class Scene:
     friction_velocity: float = 1e-3   # m/s, see above
     base: Base = FREE_BASE      # how link 1 is held (Base): free, pinned or fixed
     link_restitution: float | None = None   # e of two capsule links meeting (Scene.link_pairs); None: 1
+    link_friction: float = 0.0  # Coulomb coefficient of two capsule links meeting (friction.links; 0: frictionless)
     contact_pairs: tuple | None = None      # the link pairs (i, j) that may strike each other ([contacts] links);
     #                                         None: every pair that can (Scene.link_pairs)
     obstacles: tuple = ()       # Obstacle: convex bodies fixed in the box that the links strike ([[obstacles]])
@@ -920,6 +938,10 @@ class Scene:
             if not 0.0 <= e <= 1.0:
                 raise SceneError(f"restitution.links: must be in [0, 1], got {e!r}")
             object.__setattr__(self, "link_restitution", e)
+        c_f = _number(self.link_friction, "friction.links")
+        if not 0.0 <= c_f <= FRICTION_MAX:
+            raise SceneError(f"friction.links: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {c_f!r}")
+        object.__setattr__(self, "link_friction", float(c_f))
         if self.contact_pairs is not None:
             object.__setattr__(self, "contact_pairs", self._checked_pairs(self.contact_pairs))
         self._validate_joints()
@@ -1176,6 +1198,7 @@ class Scene:
             if joint.lower is not None or joint.upper is not None:
                 names.append(parameter_name("e_limit", k))
         names += [parameter_name("e", o.name) for o in self.obstacles]
+        names += [parameter_name("friction", o.name) for o in self.obstacles if o.friction > 0.0]
         return names
 
     def parameter_index(self, kind: str, owner: int | str | None = None) -> int:
@@ -1205,6 +1228,7 @@ class Scene:
             if joint.lower is not None or joint.upper is not None:
                 values.append(joint.limit_restitution)
         values += [o.restitution for o in self.obstacles]
+        values += [o.friction for o in self.obstacles if o.friction > 0.0]
         return np.array(values, dtype=float)
 
     @property
@@ -1259,7 +1283,8 @@ class Scene:
     def link_contacts(self) -> list[LinkPair]:
         """The link pairs as contacts of the loop (after the walls and stops), with their radius sums and e."""
         e = 1.0 if self.link_restitution is None else float(self.link_restitution)
-        return [LinkPair(i, j, self.links[i - 1].radius + self.links[j - 1].radius, e) for i, j in self.link_pairs()]
+        return [LinkPair(i, j, self.links[i - 1].radius + self.links[j - 1].radius, e, self.link_friction)
+                for i, j in self.link_pairs()]
 
     def obstacle_contacts(self) -> list[ObstacleContact]:
         """The (link, obstacle) pairs as contacts of the loop (after the link pairs), obstacle-major, then link
@@ -1571,7 +1596,8 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
     pairs = contacts.get("links") if isinstance(contacts, dict) else None
     if isinstance(contacts, dict):
         contacts = {name: points for name, points in contacts.items() if name != "links"}
-    walls = _walls_from_data(data.get("walls", {}), restitution, contacts, data.get("friction", 0.0))
+    friction = data.get("friction", 0.0)
+    walls = _walls_from_data(data.get("walls", {}), restitution, contacts, friction)
     link_e = None                       # two capsule links meeting: restitution.links, else the scene's default
     if isinstance(restitution, dict) and "links" in restitution:
         link_e = restitution["links"]
@@ -1594,6 +1620,7 @@ def scene_from_dict(data: dict, default_name: str = "scene", folder: str | Path 
         inputs=data.get("inputs", ()),
         friction_velocity=data.get("friction_velocity", 1e-3),
         link_restitution=link_e,
+        link_friction=friction.get("links", 0.0) if isinstance(friction, dict) else 0.0,
         contact_pairs=pairs,
         base=_base_from_data({} if base is None else base),
         obstacles=_obstacles_from_data(data.get("obstacles", [])),
@@ -1639,7 +1666,7 @@ def _obstacles_from_data(items) -> tuple[Obstacle, ...]:
         if shaped:
             out.append(Obstacle(item["name"], kind, item.get("center", item.get("point")), None, 0.0,
                                 item.get("restitution"), item.get("links"), item.get("half_extents"),
-                                item.get("rotation"), item.get("normal")))
+                                item.get("rotation"), item.get("normal"), item.get("friction", 0.0)))
             continue
         if kind == "sphere":
             if "a" in item or "b" in item:
@@ -1655,7 +1682,8 @@ def _obstacles_from_data(items) -> tuple[Obstacle, ...]:
                 if key not in item:
                     raise SceneError(f"{where}.{key}: required for a capsule (a bar from a to b, m)")
             a, b = item["a"], item["b"]
-        out.append(Obstacle(item["name"], kind, a, b, item["radius"], item.get("restitution"), item.get("links")))
+        out.append(Obstacle(item["name"], kind, a, b, item["radius"], item.get("restitution"), item.get("links"),
+                            friction=item.get("friction", 0.0)))
     return tuple(out)
 
 
@@ -1766,9 +1794,9 @@ def _walls_from_data(walls, restitution, contacts, friction=0.0) -> tuple[Wall, 
             if name not in ("default", "links") and name not in walls:
                 raise SceneError(f"restitution.{name}: there is no such wall in [walls]")
     if isinstance(friction, dict):
-        _check_keys(friction, WALL_NAMES + ("default",), "friction")
+        _check_keys(friction, WALL_NAMES + ("default", "links"), "friction")
         for name in friction:
-            if name != "default" and name not in walls:
+            if name not in ("default", "links") and name not in walls:
                 raise SceneError(f"friction.{name}: there is no such wall in [walls]")
     _check_keys(contacts, WALL_NAMES + ("links",), "contacts")
     for name in contacts:
@@ -1834,7 +1862,7 @@ def _box_value(chain: Scene, field: str):
     if field == "walls":
         return tuple((w.name, w.position, w.restitution, w.friction) for w in chain.walls)
     if field == "obstacles":
-        return tuple((o.name, o.kind, o.segment, o.radius, o.restitution) for o in chain.obstacles)
+        return tuple((o.name, o.kind, o.segment, o.radius, o.restitution, o.friction) for o in chain.obstacles)
     return getattr(chain, field)
 
 
@@ -1858,6 +1886,7 @@ class Chains:
     chains: tuple[Scene, ...]
     description: str = ""
     link_restitution: float = 1.0         # e of two capsule links of different chains meeting
+    link_friction: float = 0.0            # their Coulomb coefficient (friction.links)
 
     def __post_init__(self):
         chains = tuple(self.chains)
@@ -1877,6 +1906,10 @@ class Chains:
         if not 0.0 <= e <= 1.0:
             raise SceneError(f"restitution.links: must be in [0, 1], got {e!r}")
         object.__setattr__(self, "link_restitution", e)
+        c_f = _number(self.link_friction, "friction.links")
+        if not 0.0 <= c_f <= FRICTION_MAX:
+            raise SceneError(f"friction.links: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {c_f!r}")
+        object.__setattr__(self, "link_friction", float(c_f))
         self._check_apart()
 
     def _check_apart(self) -> None:
@@ -2068,7 +2101,7 @@ class Chains:
                         r = link_i.radius + link_j.radius
                         if r > 0.0:
                             pairs.append(LinkPair(self.point_offset(k) + i, self.point_offset(l) + j, r,
-                                                  self.link_restitution))
+                                                  self.link_restitution, self.link_friction))
         return pairs
 
     def rowless_contacts(self) -> list:
@@ -2077,7 +2110,8 @@ class Chains:
         pairs, obstacles = [], []
         for k, chain in enumerate(self.chains, start=1):
             shift = self.point_offset(k)
-            pairs += [LinkPair(c.i + shift, c.j + shift, c.radius, c.restitution) for c in chain.link_contacts()]
+            pairs += [LinkPair(c.i + shift, c.j + shift, c.radius, c.restitution, c.friction)
+                      for c in chain.link_contacts()]
             obstacles += [ObstacleContact(c.i + shift, c.obstacle, c.index, c.radius)
                           for c in chain.obstacle_contacts()]
         return pairs + self.cross_link_pairs() + obstacles
@@ -2113,7 +2147,10 @@ def chains_from_dict(data: dict, default_name: str, folder, box_keys: tuple[str,
             raise SceneError(f"chains[{k}].{exc}") from None
     restitution = data.get("restitution", 1.0)
     e = restitution.get("links", restitution.get("default", 1.0)) if isinstance(restitution, dict) else restitution
-    return Chains(name=name, chains=tuple(scenes), description=str(data.get("description", "")), link_restitution=e)
+    friction = data.get("friction", 0.0)
+    c_f = friction.get("links", 0.0) if isinstance(friction, dict) else 0.0
+    return Chains(name=name, chains=tuple(scenes), description=str(data.get("description", "")), link_restitution=e,
+                  link_friction=c_f)
 
 
 CHAIN_KEYS = ("links", "initial", "base", "contacts", "inputs")

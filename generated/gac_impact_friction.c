@@ -1,5 +1,6 @@
 /*
- * gac_impact_friction.c -- impacts at walls with Coulomb friction.
+ * gac_impact_friction.c -- impacts with Coulomb friction, at rough walls and at rough link pairs and obstacles
+ * (the latter along their contact frame at the closest points, gac_rowless_frame: rows J^T n, J^T t1, J^T t2).
  *
  * The law (the "global dissipation index" form of Moreau's and Glocker's impact laws): at each contact the
  * normal and tangential velocities gamma = (gamma_N, gamma_T) share one restitution e, and Coulomb's cone holds
@@ -33,11 +34,21 @@
 #define GAC_ENUM_MAX 6            /* contacts of a round whose modes are enumerated where Gauss-Seidel stalls */
 #define GAC_SLIDE_STARTS 144      /* starts on a grid of the slide angles for Newton's method, per combination */
 
-/* Coulomb coefficient of contact c at an impact: its wall's c_f (0 for a frictionless wall or a stop). */
+/* Coulomb coefficient of contact c's wall, at rest and at impacts: its c_f (0 for a frictionless wall, a stop, a
+ * link pair or an obstacle: those rest frictionless). */
 double gac_friction_coefficient(const gac_model *m, const double *p, int c)
 {
     const gac_contact *k = &m->contacts[c];
     if (k->kind != GAC_CONTACT_WALL || !k->has_friction) return 0.0;
+    return k->friction_index >= 0 ? p[k->friction_index] : k->friction_value;
+}
+
+/* Coulomb coefficient of contact c at an impact: a wall's c_f, or a link pair's or an obstacle's (which act at
+ * impacts only); 0 for a frictionless contact or a stop. */
+double gac_contact_friction(const gac_model *m, const double *p, int c)
+{
+    const gac_contact *k = &m->contacts[c];
+    if (!k->has_friction || (k->kind != GAC_CONTACT_WALL && !gac_rowless(m, c))) return 0.0;
     return k->friction_index >= 0 ? p[k->friction_index] : k->friction_value;
 }
 
@@ -657,15 +668,26 @@ static void gac_round_friction(int nd, const double *W, int ncon, const int *sta
 }
 
 /* The velocities of the system's rows (gac_friction_system: each contact's normal, then its tangential axes) at
- * velocities w, read off the model's contact velocities. */
+ * velocities w, read off the model's contact velocities; a link pair's or an obstacle's along its frame (its
+ * normal, t1, t2: axis_of 0, 1). */
 static void gac_row_velocities(const gac_model *m, const double *q, const double *p, int n, const int *list,
                                const int *start, const int *dim, const int *axis_of, const double *w, double *out)
 {
-    double vel[3 * GAC_AT_LEAST_1(m->npoint)];
+    double vel[3 * GAC_AT_LEAST_1(m->npoint)], size;
     int a, i;
     m->contact_velocities(q, w, p, vel);
     for (a = 0; a < n; ++a) {
         const gac_contact *k = &m->contacts[list[a]];
+        if (gac_rowless(m, list[a])) {
+            gac_contact_frame frame;
+            if (gac_rowless_frame(m, q, p, list[a], &frame) != GAC_OK) {
+                for (i = 0; i < dim[a]; ++i) out[start[a] + i] = NAN;
+                continue;
+            }
+            for (i = 0; i < dim[a]; ++i)
+                out[start[a] + i] = gac_frame_rate(&frame, vel, i == 0 ? 0 : 1 + axis_of[start[a] + i], &size);
+            continue;
+        }
         out[start[a]] = k->normal_sign * gac_row_value(m, list[a], w, vel);
         for (i = 1; i < dim[a]; ++i) {
             int axis = 0, j;
@@ -721,10 +743,15 @@ static void gac_refine_round(const gac_model *m, const double *q, const double *
 }
 
 /* The contact-space system of the contacts list[0..n-1] at (q, qd): each contact's directions (its normal, then,
- * on a wall with friction under law, its tangential axes: start[a], dim[a], cf[a] its Coulomb coefficient, 0 where
- * it has no tangential part), their responses resp[r] = I_f^-1 d_r (in work's Y and Z), W = D I_f^-1 D^T (nd x nd,
- * in work's W, symmetric) and the velocities gam = D qd; axis_of[r] the tangential axis (0, 1) of row r, -1 for a
- * normal.  *nd_out the rows.  GAC_OK or the error of gac_impact_system / gac_row_response. */
+ * with friction under law, its tangential directions: start[a], dim[a], cf[a] its Coulomb coefficient, 0 where it
+ * has no tangential part), their responses resp[r] = I_f^-1 d_r (in work's Y and Z), W = D I_f^-1 D^T (nd x nd,
+ * in work's W, symmetric) and the velocities gam = D qd; axis_of[r] the tangential direction (0, 1) of row r, -1
+ * for a normal.  A wall's tangential directions are the Jacobian rows trow[] of its point along the box axes other
+ * than its normal; a link pair's or an obstacle's (no rows) are J^T t1, J^T t2 of its contact frame
+ * (gac_rowless_frame), its velocities the closest points' relative velocity along n, t1, t2 (gac_frame_rate); a
+ * direction that no motion of the chain takes (|J^T t| below 1e-10 of its columns' size: a planar model's t2) is
+ * left out, as a wall's axis without a row.  *nd_out the rows.  GAC_OK or the error of gac_impact_system /
+ * gac_row_response / gac_rowless_frame. */
 static int gac_friction_system(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                                const int *list, int law, double *work, double *cf, int *start, int *dim,
                                int *axis_of, const double **resp, double *gam, int *nd_out)
@@ -734,14 +761,20 @@ static int gac_friction_system(const gac_model *m, const double *q, const double
     double *Y = GAC_WORK_Y(m, work), *g = GAC_WORK_G(m, work), *vel = GAC_WORK_VEL(m, work);
     double *f = GAC_WORK_F(m, work), *Z = GAC_WORK_Z(m, work), *W = GAC_WORK_W(m, work);
     double r_scratch[GAC_AT_LEAST_1(nq)], dy_scratch[GAC_AT_LEAST_1(nq)];
+    gac_contact_frame frames[GAC_AT_LEAST_1(n)];
     int owner[nd_max], comp[nd_max];
-    int a, b, j, nd = 0, nt = 0, code;
+    int a, b, i, j, nd = 0, nt = 0, code;
     code = gac_impact_system_refined(m, q, qd, p, n, list, work, v_unused, e_wall);   /* Y_a = I_f^-1 n_a, refined */
     if (code != GAC_OK) return code;
     for (a = 0; a < n; ++a) {                 /* the directions: each contact's normal, then its tangential axes */
         const gac_contact *k = &m->contacts[list[a]];
+        const int rowless = gac_rowless(m, list[a]);
         int axis = 0;
-        cf[a] = law == GAC_IMPACT_LAW_FRICTIONLESS ? 0.0 : gac_friction_coefficient(m, p, list[a]);
+        if (rowless) {
+            code = gac_rowless_frame(m, q, p, list[a], &frames[a]);
+            if (code != GAC_OK) return code;
+        }
+        cf[a] = law == GAC_IMPACT_LAW_FRICTIONLESS ? 0.0 : gac_contact_friction(m, p, list[a]);
         start[a] = nd;
         owner[nd] = a, comp[nd] = -1, axis_of[nd] = -1, resp[nd++] = Y + (long)a * nq;
         if (!(cf[a] > 0.0)) {
@@ -749,12 +782,27 @@ static int gac_friction_system(const gac_model *m, const double *q, const double
             continue;
         }
         for (j = 0; j < 2; ++j, ++axis) {
+            double *Zt = Z + (long)nt * nq;
+            if (rowless) {                    /* J^T t_j of the frame, and its response */
+                double norm = 0.0;
+                const double scale = gac_frame_direction(m, q, p, &frames[a], j + 1, g);
+                for (i = 0; i < nq; ++i) norm += g[i] * g[i];
+                if (!(sqrt(norm) > 1e-10 * scale)) continue;
+                m->inertia_solve(q, g, p, Zt);
+                for (i = 0; i < nq; ++i) {
+                    if (!isfinite(Zt[i])) return GAC_ERR_SINGULAR_MASS;
+                }
+                gac_refine_response(m, q, p, g, Zt, r_scratch, dy_scratch);
+                owner[nd] = a, comp[nd] = -2, axis_of[nd] = j, resp[nd++] = Zt;
+                ++nt;
+                continue;
+            }
             if (axis == k->axis) ++axis;
             if (k->trow[j] < 0) continue;
-            code = gac_row_response(m, q, p, k->trow[j], f, g, Z + (long)nt * nq);   /* a unit force along +X_axis */
+            code = gac_row_response(m, q, p, k->trow[j], f, g, Zt);   /* a unit force along +X_axis */
             if (code != GAC_OK) return code;
-            gac_refine_response(m, q, p, g, Z + (long)nt * nq, r_scratch, dy_scratch);
-            owner[nd] = a, comp[nd] = 3 * (k->point - 1) + axis, axis_of[nd] = j, resp[nd++] = Z + (long)nt * nq;
+            gac_refine_response(m, q, p, g, Zt, r_scratch, dy_scratch);
+            owner[nd] = a, comp[nd] = 3 * (k->point - 1) + axis, axis_of[nd] = j, resp[nd++] = Zt;
             ++nt;
         }
         dim[a] = nd - start[a];
@@ -764,9 +812,12 @@ static int gac_friction_system(const gac_model *m, const double *q, const double
         const double *w = b < nd ? resp[b] : qd;
         m->contact_velocities(q, w, p, vel);
         for (a = 0; a < nd; ++a) {
-            const double value = comp[a] < 0
-                ? m->contacts[list[owner[a]]].normal_sign * gac_row_value(m, list[owner[a]], w, vel)
-                : vel[comp[a]];
+            const int c = list[owner[a]];
+            double value, size;
+            if (gac_rowless(m, c))            /* along the frame: its normal (comp -1), t1 or t2 (comp -2) */
+                value = gac_frame_rate(&frames[owner[a]], vel, comp[a] == -1 ? 0 : 1 + axis_of[a], &size);
+            else
+                value = comp[a] < 0 ? m->contacts[c].normal_sign * gac_row_value(m, c, w, vel) : vel[comp[a]];
             if (b < nd) W[a*nd + b] = value;
             else gam[a] = value;
         }

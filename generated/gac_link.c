@@ -297,29 +297,51 @@ int gac_contact_normal(const gac_model *m, const double *q, const double *p, int
 }
 
 /* The accuracy of an impact law whose contacts include a link pair (relative to T, the kinetic energy before):
- * the momentum balance r = I_f (qd+ - qd-) - sum_a F_a n_a (n_a = J^T n of each contact, gac_contact_direction),
- * |qd+ . r| the energy a velocity that balanced exactly would differ by, with what evaluating r resolves,
+ * the momentum balance r = I_f (qd+ - qd-) - sum_a (F_a n_a + Ft_a . t_a) (n_a = J^T n of each contact,
+ * gac_contact_direction; t_a its tangential directions where it took a tangential impulse Ft (2 per contact): a
+ * wall's J^T e_trow, a link pair's or an obstacle's J^T t1, J^T t2 of its frame), |qd+ . r| the energy a velocity
+ * that balanced exactly would differ by, with what evaluating r resolves,
  *   4 (nq + 1) eps sum_i |qd+_i| (|(I_f (qd+ - qd-))_i| + |g_i|) + eps/2 sum_i |qd+_i| |(I_f qd+)_i|,
- * and the energy identity's residual |T+ - T- - 1/2 sum_a F_a (v-_a + v+_a)|.  Nothing is refined (the refinement
- * of gac_impact_accuracy works in the Jacobian's rows, which a link pair has none of). */
+ * and the energy identity's residual |T+ - T- - 1/2 sum_a Lambda_a . (gamma-_a + gamma+_a)| over every direction.
+ * Nothing is refined (the refinement of gac_impact_accuracy works in the Jacobian's rows, which a link pair has none
+ * of).  Ft may be NULL (no tangential impulses). */
 double gac_link_law_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
-                             const double *F, const double *qd, const double *qd_plus, double T)
+                             const double *F, const double *Ft, const double *qd, const double *qd_plus, double T)
 {
     const int nq = m->nq;
     double g[GAC_AT_LEAST_1(nq)], n_a[GAC_AT_LEAST_1(nq)], change[GAC_AT_LEAST_1(nq)], p_change[GAC_AT_LEAST_1(nq)];
     double p_plus[GAC_AT_LEAST_1(nq)], f[GAC_AT_LEAST_1(m->njrow)], E0[2], E1[2];
     long double balance = 0.0L, size = 0.0L, stored = 0.0L, work = 0.0L;
-    int a, i;
+    int a, i, j;
     for (i = 0; i < nq; ++i) g[i] = 0.0;
     for (a = 0; a < n; ++a) {
-        long double vm = 0.0L, vp = 0.0L;
-        gac_contact_direction(m, q, p, list[a], f, n_a);
-        for (i = 0; i < nq; ++i) {
-            g[i] += F[a] * n_a[i];
-            vm += (long double)n_a[i] * qd[i];
-            vp += (long double)n_a[i] * qd_plus[i];
+        const gac_contact *k = &m->contacts[list[a]];
+        gac_contact_frame frame;
+        int have_frame = 0;
+        for (j = -1; j < 2; ++j) {                       /* the normal, then the two tangential directions */
+            const double L = j < 0 ? F[a] : (Ft != 0 ? Ft[2 * a + j] : 0.0);
+            long double vm = 0.0L, vp = 0.0L;
+            if (j >= 0 && L == 0.0) continue;
+            if (j < 0) {
+                gac_contact_direction(m, q, p, list[a], f, n_a);
+            } else if (gac_rowless(m, list[a])) {
+                if (!have_frame && gac_rowless_frame(m, q, p, list[a], &frame) != GAC_OK) return INFINITY;
+                have_frame = 1;
+                (void)gac_frame_direction(m, q, p, &frame, j + 1, n_a);
+            } else {
+                int r;
+                if (k->trow[j] < 0) return INFINITY;     /* an impulse along a direction the wall has no row of */
+                for (r = 0; r < m->njrow; ++r) f[r] = 0.0;
+                f[k->trow[j]] = 1.0;
+                m->contact_generalized_force(q, f, p, n_a);
+            }
+            for (i = 0; i < nq; ++i) {
+                g[i] += L * n_a[i];
+                vm += (long double)n_a[i] * qd[i];
+                vp += (long double)n_a[i] * qd_plus[i];
+            }
+            work += (long double)L * (vm + vp);
         }
-        work += (long double)F[a] * (vm + vp);
     }
     for (i = 0; i < nq; ++i) change[i] = qd_plus[i] - qd[i];
     m->generalized_momentum(q, change, p, p_change);
@@ -533,4 +555,71 @@ int gac_rowless_bias(const gac_model *m, const double *q, const double *qd, cons
     if (!isfinite(sum)) return GAC_ERR_LINK_CONTACT;
     *b = sum;
     return GAC_OK;
+}
+
+/* ---- a link pair's or an obstacle's contact frame (the frictional impact law's rows) -------------------------- */
+
+/* Contact c's frame at q: the closest points' fractions s, t on its links i, j (j = 0: a fixed obstacle), the unit
+ * normal n (from the obstacle's or link j's closest point to link i's) and two unit tangents.  t1 is link i's axis
+ * d1 = O_(i+1) - O_i with its part along n removed, t1 = (d1 - (d1 . n) n) / |...|; where link i lies within 1e-6
+ * of n (its end on a face, standing on it), the box axis X_k with the smallest |n_k| (the first of equals) in its
+ * place; t2 = n x t1.  The frame is a right-handed orthonormal basis (n, t1, t2). */
+int gac_rowless_frame(const gac_model *m, const double *q, const double *p, int c, gac_contact_frame *f)
+{
+    double geometry[GAC_LINK_NGEOMETRY], r[3 * GAC_AT_LEAST_1(m->npoint)], d[3], len = 0.0, along, *n, *t1, *t2;
+    int k, code;
+    code = gac_rowless_geometry(m, q, p, c, geometry, &f->j);
+    if (code != GAC_OK) return code;
+    f->i = m->contacts[c].point;
+    f->s = geometry[1];
+    f->t = geometry[2];
+    n = f->axis[0], t1 = f->axis[1], t2 = f->axis[2];
+    for (k = 0; k < 3; ++k) n[k] = geometry[3 + k];
+    m->contact_points(q, p, r);
+    for (k = 0; k < 3; ++k) d[k] = r[3 * f->i + k] - r[3 * (f->i - 1) + k];
+    along = gac_dot3(d, n);
+    for (k = 0; k < 3; ++k) t1[k] = d[k] - along * n[k], len += t1[k] * t1[k];
+    len = sqrt(len);
+    if (!(len > 1e-6 * sqrt(gac_dot3(d, d)))) {          /* the link along the normal: a box axis in its place */
+        int best = 0;
+        for (k = 1; k < 3; ++k) best = fabs(n[k]) < fabs(n[best]) ? k : best;
+        for (k = 0; k < 3; ++k) t1[k] = (k == best ? 1.0 : 0.0) - n[best] * n[k];
+        len = sqrt(gac_dot3(t1, t1));
+    }
+    for (k = 0; k < 3; ++k) t1[k] /= len;
+    t2[0] = n[1] * t1[2] - n[2] * t1[1];
+    t2[1] = n[2] * t1[0] - n[0] * t1[2];
+    t2[2] = n[0] * t1[1] - n[1] * t1[0];
+    return GAC_OK;
+}
+
+/* The rate of the closest points' relative velocity along the frame's axis k (0 the normal, 1 t1, 2 t2), from the
+ * joint points' velocities vel (npoint x 3): axis . (v_P - v_Q), as gac_link_rate (k = 0 is gac_link_contact_rate);
+ * *size the relative speed |v_P - v_Q|. */
+double gac_frame_rate(const gac_contact_frame *f, const double *vel, int k, double *size)
+{
+    double geometry[GAC_LINK_NGEOMETRY];
+    geometry[0] = 0.0, geometry[1] = f->s, geometry[2] = f->t;
+    geometry[3] = f->axis[k][0], geometry[4] = f->axis[k][1], geometry[5] = f->axis[k][2];
+    return gac_link_rate(vel, f->i, f->j, geometry, size);
+}
+
+/* g = J^T a (nq) for the frame's axis k: the generalised force of a unit push along it at the closest points (the
+ * rate of the relative velocity along it at qd = e_k, column by column, as gac_link_direction).  Returns the size
+ * of those columns, sqrt(sum_k |v_P - v_Q|^2 at e_k), for telling a direction no motion takes (g ~ 0). */
+double gac_frame_direction(const gac_model *m, const double *q, const double *p, const gac_contact_frame *f, int k,
+                           double *g)
+{
+    const int nq = m->nq;
+    double w[GAC_AT_LEAST_1(nq)], vel[3 * GAC_AT_LEAST_1(m->npoint)], size, scale = 0.0;
+    int i;
+    for (i = 0; i < nq; ++i) w[i] = 0.0;
+    for (i = 0; i < nq; ++i) {
+        w[i] = 1.0;
+        m->contact_velocities(q, w, p, vel);
+        g[i] = gac_frame_rate(f, vel, k, &size);
+        scale += size * size;
+        w[i] = 0.0;
+    }
+    return sqrt(scale);
 }

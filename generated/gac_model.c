@@ -63,7 +63,8 @@ int gac_model_check(const gac_model *m)
         if (k->kind == GAC_CONTACT_LINK) {                /* two links, after every kernel contact, no row */
             if (k->point < 1 || k->coordinate < k->point + 2 || k->coordinate > m->npoint - 1 || m->link_radius == 0
                 || !(m->link_radius[c - gac_kernel_contacts(m)] >= 0.0)
-                || k->normal_sign != 1 || k->e_index >= m->nparam || k->has_friction
+                || k->normal_sign != 1 || k->e_index >= m->nparam || k->friction_index >= m->nparam
+                || (k->has_friction && !(k->friction_index >= 0 || k->friction_value >= 0.0))
                 || (c + 1 < m->ncontact && !gac_rowless(m, c + 1)))
                 return GAC_ERR_BAD_MODEL;
             continue;
@@ -73,7 +74,8 @@ int gac_model_check(const gac_model *m)
             int a;
             if (k->point < 1 || k->point > m->npoint - 1 || k->coordinate < 0 || k->coordinate >= m->nobstacle
                 || m->obstacles == 0 || m->link_radius == 0 || !(m->link_radius[c - gac_kernel_contacts(m)] >= 0.0)
-                || k->normal_sign != 1 || k->e_index >= m->nparam || k->has_friction
+                || k->normal_sign != 1 || k->e_index >= m->nparam || k->friction_index >= m->nparam
+                || (k->has_friction && !(k->friction_index >= 0 || k->friction_value >= 0.0))
                 || (c + 1 < m->ncontact && m->contacts[c + 1].kind != GAC_CONTACT_OBSTACLE))
                 return GAC_ERR_BAD_MODEL;
             for (a = 0; a < 6; ++a) {
@@ -250,8 +252,8 @@ const char *gac_error_message(int code)
     case GAC_ERR_LOST_CONTACT: return "a point lies beyond its wall at an impact: a wall crossing was missed, the motion is too fast or I_f too ill-conditioned (extreme mass, length or inertia ratios) for the tolerance";
     case GAC_ERR_BAD_INPUT: return "an input is NaN or infinite: the inputs given to sim_set_input, and those a controller writes, must be finite";
     case GAC_ERR_IMPACT_FRICTION: return "the frictional impact law's solve (projected Gauss-Seidel over the contacts, each contact solved exactly) did not bring the law's conditions below GAC_FRICTION_RESIDUAL_MAX (1e-9, relative, or 16 eps cond(W) of the round's contact-space W where larger; record.residual says how far it got): contacts whose friction cones interact strongly; a smaller friction coefficient, or impact_law = frictionless, avoids it";
-    case GAC_ERR_LINK_REST: return "two links would come to rest on each other (or a link on a fixed obstacle) where that contact cannot be held: its normal has no derivative there (crossing axes), or rough walls act under a frictional impact law (resting friction on link and obstacle contacts is not modelled: use the frictionless law, or no friction); it took zeno_impacts impacts in a row at shrinking intervals (where a wall's contact would land) or at one instant (stops on the joints between them keep links apart; a set point clear of an obstacle keeps a driven arm off it)";
-    case GAC_ERR_LINK_CONTACT: return "an impact of two links (a link pair's contact) or of a link on an obstacle with a rough wall's contact under a frictional impact law: link pairs and obstacles are frictionless and the frictional law does not take them; use impact_law = frictionless for such a scene";
+    case GAC_ERR_LINK_REST: return "two links would come to rest on each other (or a link on a fixed obstacle) where that contact cannot be held: its normal has no derivative there (crossing axes); it took zeno_impacts impacts in a row at shrinking intervals (where a wall's contact would land) or at one instant (stops on the joints between them keep links apart; a set point clear of an obstacle keeps a driven arm off it)";
+    case GAC_ERR_LINK_CONTACT: return "a contact of two links (a link pair) or of a link on an obstacle has no derivative of its geometry where the loop needs one: crossing axes, or a link lying parallel to a face or to the other link while not held";
     case GAC_ERR_IMPACT_ENERGY: return "the impact gained kinetic energy: Newton's restitution with Coulomb friction on the velocity after the impact (impact_law = newton-coulomb) can, when the slip reverses during the impact (Kane's rod); the default law (gdi) never does";
     case GAC_ERR_FRICTION: return "the resting contacts with Coulomb friction have no unique, bounded normal forces at this state: their system B (the normal rows of I_f^-1 applied to the normal and friction directions) is no P-matrix (a principal minor <= 0), the Painleve paradox of sliding friction, and the tangential impact the hybrid loop takes there (the frictional impact law with the normal velocities 0 before, its non-trivial solution) has none either, or leaves a state as inconsistent; lower the friction coefficient";
     case GAC_ERR_BAD_MODEL: return "the model descriptor is inconsistent: nq >= 1, nx = 2 nq, npoint >= 1, ncontact, njrow, nparam, nu >= 0, every table and kernel present, each contact's kind, point, axis (a stop: its coordinate; a link pair: its two links, not adjacent, after every wall and stop), normal sign, Jacobian row and restitution index in range, each parameter_info row named with lo <= hi";

@@ -61,7 +61,7 @@ typedef struct {
     double *qd_plus, *F;   /* the law's velocities and impulses */
     double *Ft;            /* the law's tangential impulses (2 per contact taking part) */
     int friction;          /* 1 if the frictional law applies: opt.impact_law not frictionless and some contact
-                              taking part is on a wall with c_f > 0 */
+                              taking part has c_f > 0 (a rough wall, link pair or obstacle) */
     int law;               /* the law applied (GAC_IMPACT_LAW_*) */
     double residual;       /* the frictional law's residual */
     double parts;          /* the frictional law's sum |L_T| |I_f^-1 t| (reported by it, unused here) */
@@ -85,7 +85,7 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
     double b = 0.0, v = 0.0;
     int pass;
     if (gac_has_link(s->model, ev->n, ev->list)) {      /* a link pair has no Jacobian row: measured, not refined */
-        b = gac_link_law_accuracy(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->x + nq, ev->qd_plus,
+        b = gac_link_law_accuracy(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->Ft, ev->x + nq, ev->qd_plus,
                                   ev->T_before);
         return b > 1e-10 ? b : 1e-10;
     }
@@ -150,7 +150,7 @@ static double gac_held_accuracy(gac_sim *s, gac_impact_event *ev, int nset, cons
     }
     for (k = 0; k < 2 * ev->n; ++k) Ft[k] = ev->Ft[k];
     if (gac_has_link(md, ev->n, ev->list)) {
-        b = gac_link_law_accuracy(md, ev->x, s->p, ev->n, ev->list, F, ev->x + nq, s->x1 + nq, ev->T_before);
+        b = gac_link_law_accuracy(md, ev->x, s->p, ev->n, ev->list, F, Ft, ev->x + nq, s->x1 + nq, ev->T_before);
         return b > 1e-10 ? b : 1e-10;
     }
     b = gac_impact_accuracy(md, ev->x, s->p, ev->n, ev->list, ev->e, F, Ft, ev->law, 0, 0, ev->x + nq,
@@ -304,10 +304,9 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
     int k, pass, changed = 0, all_elastic = 1, code;
     ev->friction = 0;
     for (k = 0; k < ev->n; ++k) {
-        if (s->opt.impact_law != GAC_IMPACT_LAW_FRICTIONLESS && gac_friction_coefficient(md, s->p, ev->list[k]) > 0.0)
+        if (s->opt.impact_law != GAC_IMPACT_LAW_FRICTIONLESS && gac_contact_friction(md, s->p, ev->list[k]) > 0.0)
             ev->friction = 1;
     }
-    if (ev->friction && gac_has_link(md, ev->n, ev->list)) return GAC_ERR_LINK_CONTACT;   /* link pairs: frictionless */
     code = gac_law(s, ev, ev->e_law);
     r->residual = ev->residual;
     if (code != GAC_OK) return code;

@@ -962,7 +962,7 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
  *     dF = (-de v - (1 + e) dv - da F) / a,   d qd+ = dqd + dy F + y dF,
  * dn the row's derivative along dq with the closest points' motion and the normal's rotation
  * (gac_contact_normal_tangent).  Resting contacts before or after, a graze, a law of other than one round of
- * Newton's, or a geometry without a derivative there (crossing or parallel axes) end them (GAC_SENS_LINK, or
+ * Newton's (a rough contact's frictional law among them), or a geometry without a derivative there (crossing or parallel axes) end them (GAC_SENS_LINK, or
  * GAC_SENS_GRAZING for the graze). */
 static void gac_sens_link_impact(gac_sim *s, const gac_impact_record *r, int c)
 {

@@ -42,7 +42,8 @@ class FrictionalImpact:
 
     qd_plus: np.ndarray       # velocities after the impact (nq)
     impulse: np.ndarray       # N s along each contact's inward normal (>= 0)
-    impulse_t: np.ndarray     # (ncontact_set, 2) N s along each wall's two tangential axes, ascending
+    impulse_t: np.ndarray     # (ncontact_set, 2) N s along each wall's two tangential axes, ascending (a link
+    #                           pair's or an obstacle's: along its contact frame's t1, t2)
     law: str                  # the law applied ('gdi', 'gdi-common-e', 'newton-coulomb', 'frictionless')
     residual: float           # the law's largest relative violation of its conditions
 

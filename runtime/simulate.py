@@ -48,8 +48,9 @@ class Contact:
     impulse: float        # N s along the wall's inward normal (>= 0: it pushes); N m s for a stop
     kind: str = "wall"    # 'wall' | 'stop' | 'link' (two capsule links: wall 'L<i>-L<j>', point i, links (i, j))
     #                       | 'obstacle' (link i on a fixed obstacle: wall 'L<i>/<name>', point i, links (i,))
-    impulse_t: tuple = (0.0, 0.0)   # N s along the wall's two tangential axes, ascending (X1, X2 for a x3 wall):
-                                    # friction at the impact (0 on a frictionless wall)
+    impulse_t: tuple = (0.0, 0.0)   # N s along the wall's two tangential axes, ascending (X1, X2 for a x3 wall),
+                                    # or a link pair's or obstacle's t1, t2 (docs/simulation.md, "Friction at the
+                                    # impacts of link pairs and obstacles"): friction at the impact (0 without)
     links: tuple = ()     # 'link': the two links (i, j), 1-based; the impulse pushes them apart along their normal;
     #                       'obstacle': (i,), the impulse pushing link i off the obstacle
 

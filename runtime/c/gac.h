@@ -87,15 +87,15 @@
 #define GAC_ERR_IMPACT_ENERGY    -31   /* an impact gained kinetic energy: the Newton + Coulomb law
                                           (opt.impact_law), whose slip reversal during the impact can (Kane's
                                           rod); the default law cannot */
-#define GAC_ERR_LINK_CONTACT     -32   /* a contact of two links (GAC_CONTACT_LINK) met what the loop does not do
-                                          with link pairs: an impact under a frictional law (opt.impact_law) on a
-                                          rough wall at the same time (link pairs are frictionless) */
+#define GAC_ERR_LINK_CONTACT     -32   /* a contact of two links (GAC_CONTACT_LINK) or of a link on an obstacle
+                                          met what the loop does not do with it: a geometry without a derivative
+                                          where one is needed (crossing axes, a link lying parallel to a face or to
+                                          the other link while not held) */
 #define GAC_ERR_LINK_REST        -33   /* two links would come to rest on each other (or a link on a fixed
                                           obstacle, GAC_CONTACT_OBSTACLE) where that contact cannot be held: its
-                                          normal has no derivative (crossing axes), or the model has rough walls
-                                          under a frictional impact law (resting friction on such contacts is not
-                                          modelled); struck opt.zeno_impacts times in a row at shrinking intervals
-                                          (e < 1: the Zeno rule that lands a wall's contact) or at one instant
+                                          normal has no derivative (crossing axes); struck opt.zeno_impacts
+                                          times in a row at shrinking intervals (e < 1: the Zeno rule that lands
+                                          a wall's contact) or at one instant
                                           (within 1e-12 (1 + |t|) s).  Also a held one whose normal loses its
                                           derivative */
 
@@ -244,7 +244,8 @@ typedef struct {
                              GAC_CONTACT_OBSTACLE (3) */
     int coordinate;       /* stop: the index into q of its joint's angle (0..nq-1); link: the second link j
                              (> point + 1); obstacle: the obstacle (0..nobstacle-1); wall: unused */
-    int has_friction;     /* wall: 1 if the wall has Coulomb friction (0: frictionless; a zero-initialised entry) */
+    int has_friction;     /* wall, link, obstacle: 1 if it has Coulomb friction (0: frictionless; a zero-initialised
+                             entry); a link pair's and an obstacle's acts at impacts only */
     int friction_index;         /* its friction coefficient c_f: p[friction_index], or friction_value when < 0 */
     double friction_value;
     int trow[2];          /* the Jacobian rows of the point along the wall's two tangential axes (ascending), -1 for
@@ -507,7 +508,7 @@ int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q,
                                double *GAC_RESTRICT qd_plus, double *GAC_RESTRICT impulse,
                                double *GAC_RESTRICT work);
 
-/* The impact law at walls with Coulomb friction: gac_impact_complementarity's rounds, each round's problem on the
+/* The impact law with Coulomb friction (at rough walls, link pairs and obstacles): gac_impact_complementarity's rounds, each round's problem on the
  * contacts that approach or rest being, for law GAC_IMPACT_LAW_GDI,
  *     xi = gamma+ + e gamma-,   0 <= Lambda_N _|_ xi_N >= 0,   Lambda_T = -c_f Lambda_N xi_T / |xi_T| (xi_T != 0),
  *     |Lambda_T| <= c_f Lambda_N (xi_T = 0),
@@ -520,7 +521,8 @@ int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q,
  * Each round is solved by projected Gauss-Seidel with every contact's own problem solved exactly.
  * impulse[k] (N s, >= 0) along contact contact_set[k]'s inward normal, impulse_t[2k], impulse_t[2k + 1] (N s) along
  * its wall's two tangential axes in ascending order (X1, X2 for a X3 wall; 0 where the model has no motion or the
- * wall no friction); *law_used the law applied (GAC_IMPACT_LAW_*), *residual the largest relative violation of the
+ * wall no friction), or a link pair's or obstacle's t1, t2 (its contact frame at the closest points: n, t1 = link
+ * i's axis with its part along n removed, t2 = n x t1; its rows J^T n, J^T t1, J^T t2); *law_used the law applied (GAC_IMPACT_LAW_*), *residual the largest relative violation of the
  * law's conditions.  A model with no rough wall (its work array the smaller one) is solved by the frictionless law's
  * rounds whatever the law asked (*law_used GAC_IMPACT_LAW_FRICTIONLESS).  work: gac_impact_nwork(m) doubles.
  * Returns GAC_OK or GAC_ERR_BAD_CONTACT, _SINGULAR_MASS,
@@ -827,8 +829,9 @@ typedef struct {
     int ncontact;                /* simultaneous contacts */
     int *contact;                /* their indices 0..ncontact-1 of the model (see gac_contact_info) */
     double *impulse;             /* impulse along the inward normal (N s), >= 0 */
-    double *impulse_t;           /* 2 per contact: impulse along its wall's two tangential axes, ascending (N s;
-                                    0 without friction) */
+    double *impulse_t;           /* 2 per contact: impulse along its wall's two tangential axes, ascending, or
+                                    a link pair's or obstacle's t1, t2 (gac_impact_friction) (N s; 0 without
+                                    friction) */
     int law;                     /* the impact law applied (GAC_IMPACT_LAW_*: FRICTIONLESS when no contact with
                                     friction took part) */
     double residual;             /* the frictional law's largest relative violation of its conditions (0 without
@@ -1107,7 +1110,8 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       (their forces ~0 at once), a slip with another slip or a release, or points
                                       that stick at one step's end at different speeds */
 #define GAC_SENS_LINK         11   /* an impact of two links or of a link on a fixed obstacle (GAC_CONTACT_LINK,
-                                      GAC_CONTACT_OBSTACLE) among several contacts or with contacts at rest, such a
+                                      GAC_CONTACT_OBSTACLE) among several contacts or with contacts at rest, or
+                                      by a frictional law (a rough one: its tangential impulse), such a
                                       contact held at rest (its constrained flight is not differentiated), or
                                       where their closest points have no derivative (crossing or parallel axes,
                                       a link parallel to a box's or plane's face);

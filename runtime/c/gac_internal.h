@@ -137,7 +137,8 @@ int gac_obstacle_shape_check(const gac_model *m, int o);
 int gac_obstacle_feature(const gac_model *m, int o, const double *x, double *b0, double *b1);
 
 /* gac_link.c: link pairs and obstacles as contacts of the loop (kinds GAC_CONTACT_LINK, GAC_CONTACT_OBSTACLE, the
- * last entries of m->contacts: no Jacobian row, frictionless; at rest they are held by g = J^T n and their bias) */
+ * last entries of m->contacts: no Jacobian row; Coulomb friction at impacts only, along their contact frame; at rest
+ * they are held frictionless by g = J^T n and their bias, whatever their friction coefficient) */
 int gac_rowless(const gac_model *m, int c);             /* 1 if contact c is a link pair or an obstacle */
 int gac_kernel_contacts(const gac_model *m);            /* the contacts before them: those of contact_gaps */
 int gac_has_link(const gac_model *m, int n, const int *list);   /* 1 if list[0..n-1] holds one of them */
@@ -156,7 +157,21 @@ double gac_link_contact_rate(const gac_model *m, const double *q, const double *
  * GAC_ERR_LINK_CONTACT where its normal has no derivative */
 int gac_rowless_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, double *b);
 double gac_link_law_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
-                             const double *F, const double *qd, const double *qd_plus, double T);
+                             const double *F, const double *Ft, const double *qd, const double *qd_plus, double T);
+/* A link pair's or an obstacle's contact frame at q (gac_rowless_frame): its links i and j (0: a fixed obstacle),
+ * the closest points' fractions s, t along them, and the rows n, t1, t2 of axis (a right-handed orthonormal basis,
+ * n the inward normal, t1 link i's axis off n).  The frictional impact law's rows of such a contact are J^T n,
+ * J^T t1, J^T t2 (gac_frame_direction), its velocities the closest points' relative velocity along them
+ * (gac_frame_rate). */
+typedef struct {
+    int i, j;
+    double s, t;
+    double axis[3][3];
+} gac_contact_frame;
+int gac_rowless_frame(const gac_model *m, const double *q, const double *p, int c, gac_contact_frame *f);
+double gac_frame_rate(const gac_contact_frame *f, const double *vel, int k, double *size);
+double gac_frame_direction(const gac_model *m, const double *q, const double *p, const gac_contact_frame *f, int k,
+                           double *g);
 
 /* gac_linalg.c */
 int gac_lu_solve(int n, double *A, double *b, double tol);
@@ -199,6 +214,7 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
 
 /* gac_impact_friction.c */
 double gac_friction_coefficient(const gac_model *m, const double *p, int c);
+double gac_contact_friction(const gac_model *m, const double *p, int c);
 int gac_impact_rounds_friction(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                                const int *list, const double *e, int first, int law, double *qd_plus, double *F,
                                double *Ft, double *work, int *rounds, int *plastic, int *law_used, double *residual,

@@ -32,14 +32,13 @@ void gac_normal_velocities(const gac_model *md, const double *x, const double *p
 }
 
 /* 1 if contact c can be held at its wall at state x: a wall's or a stop's always; a link pair's or an obstacle's
- * where its normal has a derivative along qd (gac_rowless_bias: not crossing axes) and no frictional impact law acts
- * (resting on a link or an obstacle is frictionless, and a frictional impact with it is not modelled). */
+ * where its normal has a derivative along qd (gac_rowless_bias: not crossing axes).  Held, a link pair or an obstacle
+ * is frictionless whatever its Coulomb coefficient (which acts at its impacts only, gac_contact_friction). */
 int gac_holdable(const gac_sim *s, const double *x, int c)
 {
     const gac_model *md = s->model;
     double b;
     if (!gac_rowless(md, c)) return 1;
-    if (s->opt.impact_law != GAC_IMPACT_LAW_FRICTIONLESS && gac_has_friction(md)) return 0;
     return gac_rowless_bias(md, x, x + md->nq, s->p, c, &b) == GAC_OK;
 }
 
@@ -426,11 +425,12 @@ int gac_recheck_rest(gac_sim *s, gac_impact_record *record)
     return s->fail ? s->fail : 1;
 }
 
-/* Coulomb coefficient of contact c's wall (0 for a frictionless wall or a stop). */
+/* Coulomb coefficient of contact c's wall at rest (0 for a frictionless wall, a stop, a link pair or an obstacle:
+ * their friction acts at impacts only). */
 static double gac_friction(const gac_model *m, const double *p, int c)
 {
     const gac_contact *k = &m->contacts[c];
-    if (!k->has_friction) return 0.0;
+    if (!k->has_friction || k->kind != GAC_CONTACT_WALL) return 0.0;
     return k->friction_index >= 0 ? p[k->friction_index] : k->friction_value;
 }
 

@@ -105,6 +105,7 @@ def test_the_energy_balance_closes_and_no_link_passes_through_another(run):
     assert worst > -1e-9
 
 
+@pytest.mark.slow            # each chain's own model with its chart B besides the combined one
 def test_before_the_first_strike_each_chain_moves_as_alone(run):
     """The same motion, compared through each chain's points and their velocities (chart-free; chart A's rates are
     unbounded at its lock, so the velocities where a chain's chi_A < 1e-3 are left out)."""

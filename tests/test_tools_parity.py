@@ -33,7 +33,11 @@ striking each other (two-chains: variables named with the chain prefix, q.c2.the
 down a rough incline (incline: gravity_direction tilted), the built-in 12-link chain (rolled forward dynamics)
 and three random admissible scenes of the fuzz study (studies/fuzz.py, fixed seeds) written as scene files, and
 the gimbal-lock scene, which passes the lock of its base chart on the second chart in all three (the C loop
-switches).  The capsule-chain, incline, 12-link and fuzz rows run with -m slow.
+switches).  The capsule-chain, incline, 12-link and fuzz rows run with -m slow, and so do the FMU columns of the
+rows whose FMU path another default test takes (paper-case1-rk4, paper-case2, driven-stops, gimbal-lock,
+mounted-arm, capsule-fold, two-chains: the default run keeps the FMU of paper-case1, friction-rest and arm-obstacle;
+the gimbal-lock FMU passes its lock in tests/test_sim_charts.py, the two-chains FMU runs as simulate in
+tests/test_tools_fmu.py).
 """
 from __future__ import annotations
 
@@ -75,29 +79,30 @@ class Row:
     grid_until: float | None = None  # the fine grid: only the impacts before this time (s), no final state
     fmu: str = ""
     slow: bool = False
+    fmu_slow: bool = False           # its FMU columns with -m slow (the FMU's path is another default row's)
 
 
 ROWS = [
     Row("paper-case1", "paper-case1", 1.5, dict(method="dopri5", rtol=1e-10, atol=1e-12)),
-    Row("paper-case1-rk4", "paper-case1", 1.5, dict(method="rk4", dt=2e-4), grid_tol=1e-5),
-    Row("paper-case2", "paper-case2", 1.0, dict(method="dop853", rtol=1e-10, atol=1e-12)),
+    Row("paper-case1-rk4", "paper-case1", 1.5, dict(method="rk4", dt=2e-4), grid_tol=1e-5, fmu_slow=True),
+    Row("paper-case2", "paper-case2", 1.0, dict(method="dop853", rtol=1e-10, atol=1e-12), fmu_slow=True),
     Row("paper-case2-events", "paper-case2", 1.0,
         dict(method="dopri5", rtol=1e-9, atol=1e-11, event_samples=9, event_tol=1e-12, contact_tol=1e-7,
              rest_height=1e-4, zeno_impacts=8, h_max=0.01),
         fmu="the FMU has no event_samples, event_tol, contact_tol, rest_height or zeno_impacts parameter"),
-    Row("driven-stops", "driven-fold", 1.5, dict(method="dopri5", rtol=1e-10, atol=1e-12)),
+    Row("driven-stops", "driven-fold", 1.5, dict(method="dopri5", rtol=1e-10, atol=1e-12), fmu_slow=True),
     Row("friction-rest", "rough-floor", 2.0, dict(method="dopri5", rtol=1e-9, atol=1e-11), grid_until=0.93),
     # the grid's step ends move the chart switches too, and 18 impacts of a spinning chain amplify the difference
-    Row("gimbal-lock", "gimbal-lock", 3.0, dict(method="dopri5", rtol=1e-10, atol=1e-12), grid_tol=1e-4),
+    Row("gimbal-lock", "gimbal-lock", 3.0, dict(method="dopri5", rtol=1e-10, atol=1e-12), grid_tol=1e-4, fmu_slow=True),
     # O3 strikes the floor at 1.354 s while O4 rests there: O4 leaves that impact at zero normal velocity, and whether
     # it stays resting is decided at round-off, so steps ending at the grid's points may release it
-    Row("mounted-arm", "mounted-arm", 2.0, dict(method="dopri5", rtol=1e-10, atol=1e-12), grid_until=1.36),
+    Row("mounted-arm", "mounted-arm", 2.0, dict(method="dopri5", rtol=1e-10, atol=1e-12), grid_until=1.36, fmu_slow=True),
     # from 1.70 s the chain lies in the floor's corner with the right wall: its landings group differently
     Row("capsule-chain", "capsule-chain", 2.0, dict(method="dopri5", rtol=1e-10, atol=1e-12), grid_until=1.70,
         slow=True),                                    # (capsule-fold's row has capsules at a wall in the default run)
-    Row("capsule-fold", "capsule-fold", 1.0, dict(method="dopri5", rtol=1e-10, atol=1e-12)),
+    Row("capsule-fold", "capsule-fold", 1.0, dict(method="dopri5", rtol=1e-10, atol=1e-12), fmu_slow=True),
     Row("arm-obstacle", "arm-obstacle", 1.5, dict(method="dopri5", rtol=1e-10, atol=1e-12)),
-    Row("two-chains", "two-chains", 1.0, dict(method="dopri5", rtol=1e-10, atol=1e-12)),
+    Row("two-chains", "two-chains", 1.0, dict(method="dopri5", rtol=1e-10, atol=1e-12), fmu_slow=True),
     # gravity along a tilted direction (gravity_direction): the chain tumbles down a rough incline
     Row("incline", "incline", 2.0, dict(method="dopri5", rtol=1e-10, atol=1e-12), slow=True),
     Row("chain12-rolled", "links:12", 0.6, dict(method="dopri5", rtol=1e-9, atol=1e-11), slow=True),
@@ -110,8 +115,10 @@ ROWS = [
 ]
 
 
-def row_params():
-    return [pytest.param(row, id=row.id, marks=[pytest.mark.slow] if row.slow else []) for row in ROWS]
+def row_params(fmu: bool = False):
+    """The rows as parameters, slow ones marked (``fmu``: for the FMU columns, which rows with fmu_slow join)."""
+    return [pytest.param(row, id=row.id, marks=[pytest.mark.slow] if row.slow or (fmu and row.fmu_slow) else [])
+            for row in ROWS]
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -370,7 +377,7 @@ def test_standalone_program_runs_as_the_python_runtime(row, front_ends):
         "the stick and slip counts are not the program's stick and slip records"
 
 
-@pytest.mark.parametrize("row", row_params())
+@pytest.mark.parametrize("row", row_params(fmu=True))
 def test_fmu_in_one_communication_step_runs_as_the_python_runtime(row, front_ends):
     if row.fmu:
         pytest.skip(f"not expressible in the FMU: {row.fmu}")
@@ -383,7 +390,7 @@ def test_fmu_in_one_communication_step_runs_as_the_python_runtime(row, front_end
     close([t for _, t, _ in fmu.events], [t for _, t, _ in python.events], RELATIVE, "resting-contact times")
 
 
-@pytest.mark.parametrize("row", row_params())
+@pytest.mark.parametrize("row", row_params(fmu=True))
 def test_fmu_on_a_fine_grid_agrees_to_the_integration_tolerance(row, front_ends):
     if row.fmu:
         pytest.skip(f"not expressible in the FMU: {row.fmu}")

@@ -344,8 +344,11 @@ def test_the_obstacle_check_can_fail_and_its_box_distance_is_right(compiled):
     for _ in range(30):
         box = Obstacle.box("b", rng.normal(size=3), rng.uniform(0.1, 1.0, 3), fuzz._rotation(rng))
         p0, p1 = rng.normal(size=3) * 1.5, rng.normal(size=3) * 1.5
-        dense = min(fuzz.box_signed_distance(p0 + s * (p1 - p0), box.a, box.half_extents, box.box_rotation)
-                    for s in np.linspace(0.0, 1.0, 20001))
+        samples = p0 + np.linspace(0.0, 1.0, 20001)[:, None] * (p1 - p0)
+        excess = np.abs((samples - box.a) @ np.array(box.box_rotation)) - box.half_extents
+        dense = (np.linalg.norm(np.maximum(excess, 0.0), axis=1) + np.minimum(excess.max(axis=1), 0.0)).min()
+        assert fuzz.box_signed_distance(samples[7], box.a, box.half_extents, box.box_rotation) == \
+            pytest.approx(np.linalg.norm(np.maximum(excess[7], 0.0)) + min(excess[7].max(), 0.0), abs=1e-14)
         d = fuzz.segment_box_distance(p0, p1, box)
         assert dense - np.linalg.norm(p1 - p0) / 20000 <= d <= dense + 1e-12     # within the grid's resolution
         assert d == pytest.approx(box.distance(p0, p1), abs=1e-9)

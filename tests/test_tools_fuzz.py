@@ -338,7 +338,8 @@ def test_obstacles_leave_the_structures_and_their_runs_as_they_were(compiled):
 
 def test_the_obstacle_check_can_fail_and_its_box_distance_is_right(compiled):
     """The independent box distance against a dense search along the segment (inside the box too) and the scene's own;
-    a link moved into a sphere, a bar and a box in turn: check_run reports it on its obstacle check; clear, it passes."""
+    a link moved into a sphere, a bar and a box in turn: check_run reports it on its obstacle check; clear, it
+    passes."""
     from codegen.scene import Obstacle
     rng = np.random.default_rng(4)
     for _ in range(30):
@@ -361,7 +362,7 @@ def test_the_obstacle_check_can_fail_and_its_box_distance_is_right(compiled):
     q, qd = run.q0, run.qd0
     points = model.contact_points(model.layout.reduce(q), run.p)
     mid, size = (points[0] + points[1]) / 2, run.extent * 1e-2
-    centre = mid + 3 * run.extent                   # clear of the start; the doctored state moves the link's middle there
+    centre = mid + 3 * run.extent                  # clear of the start; the doctored state puts the link's middle here
     sunk = q.copy()
     sunk[-3:] += centre - mid                      # the free base's position: the whole chain translated
     bar = np.array([run.extent * 0.1, 0.0, 0.0])

@@ -15,7 +15,11 @@ on a quarter of the structures, all frictionless ones (each link a capsule with 
 radius r log-uniform in 5e-5 ... 5e-2 m; every link's length, capsule or not, log-uniform in 20 R ... 2e4 R
 (at most 1e2 m) with R the chain's largest radius, so that a capsule is thin against every link; every
 non-adjacent pair of links with a capsule strikes the other, restitution 0, 1 or uniform in [0, 1]; the box
-margins add the largest radius and the start is redrawn until no pair overlaps); rates up to 20 rad/s; DOPRI5 and
+margins add the largest radius and the start is redrawn until no pair overlaps); fixed obstacles in the study's runs
+of a fifth of the structures (has_obstacle_runs, from the stream [seed, structure, OBSTACLE_STREAM]; per run, from
+[seed, structure, OBSTACLE_STREAM, run], after the run is drawn: one or two spheres, bars or boxes of 1e-2 ... 0.3 of
+the chain's extent, centred inside the run's box and clear of its start, restitution 0, 1 or uniform; the structure
+is compiled with them for that run, an obstacle's place being a constant of the model); rates up to 20 rad/s; DOPRI5 and
 DOP853 at rtol 1e-11 ... 1e-6 (atol = rtol x the shortest link, at least 1e-16) and RK4 at dt 1e-5 ... 1e-3 s.  A
 *structure* (n, link kinds, twists, planar or not) is compiled once; its runs draw new lengths, masses,
 inertias, walls, restitutions, start and integrator through the parameter vector and the start override.
@@ -28,6 +32,9 @@ Every run is checked independently of the engine's own checks (``check_run``):
     the distance of its segment's nearest point (an end point) to the wall less its radius, >= -the same tolerance;
   * capsules against capsules: for every link pair of the scene, the distance of the two segments (an
     independent closest-points computation, not the model's link_gap) less r_i + r_j >= -the same tolerance;
+  * obstacles: every link's gap to every obstacle, the distance of its segment from a sphere's centre or a bar's
+    segment less both radii, or for a box the least of an own point-box signed distance along the segment (dense
+    samples, then a ternary search) less the link's radius, >= -the same tolerance;
   * no energy gain at an impact: T from the recorded velocities at the impact configuration, after <=
     before (1 + tol), tol = max(ENERGY_TOL, 10 x the impact's stated round-off bound);
   * e = 1 kept: where every contact that took an impulse is on a wall with e = 1, |T_after + energy taken
@@ -53,7 +60,7 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from codegen.scene import LineLink, RigidLink, Scene, Wall, WALL_NAMES
+from codegen.scene import LineLink, Obstacle, RigidLink, Scene, SceneError, Wall, WALL_NAMES
 
 PEN_TOL = 1e-9            # m per m of the chain's extent (at least 1e-9 m), see check_run
 RK4_PEN = 1e-5            # RK4 has no tolerance: its crossings are located on a cubic Hermite interpolant
@@ -69,6 +76,10 @@ CAPSULE_LINK = 0.7        # probability that a link of a capsule structure is a 
 RADIUS_RANGE = (5e-5, 5e-2)       # m, log-uniform
 LENGTH_PER_RADIUS = (20.0, 2e4)   # a capsule structure's link lengths / its largest radius, log-uniform
 START_TRIES = 200         # starts drawn before a capsule structure's run gives up finding one without overlap
+OBSTACLE_SHARE = 0.2      # structures whose runs have fixed obstacles in the box (the study's runs; see run_structure)
+OBSTACLE_STREAM = 7       # the random stream [seed, structure, OBSTACLE_STREAM(, run)] that decides it and draws them
+OBSTACLE_TRIES = 50       # placements drawn per obstacle before it is left out
+OBSTACLE_CLEAR = 1e-2     # an obstacle's least gap to every link at the start, per m of the chain's extent
 
 # Stops that are failures of the engine: its own post-impact checks and non-finite states.
 FAILURE_PATTERNS = (
@@ -229,6 +240,64 @@ def random_run(rng, scene: Scene, model) -> Run:
     return Run(p, q, qd, t_end, options, extent)
 
 
+def has_obstacle_runs(seed: int, index: int) -> bool:
+    """Whether the study puts fixed obstacles into structure ``index``'s runs: a stream apart from the structure's,
+    so that its chain, parameters and runs are those drawn without obstacles."""
+    return bool(np.random.default_rng([seed, index, OBSTACLE_STREAM]).uniform() < OBSTACLE_SHARE)
+
+
+def random_obstacles(rng, scene: Scene, model, run: Run) -> tuple[Obstacle, ...]:
+    """One or two fixed obstacles for a run (spheres, bars or boxes, sizes 1e-2 ... 0.3 of the chain's extent), each
+    centred inside the run's box (in the plane of motion of a planar chain) and at least OBSTACLE_CLEAR x the extent
+    from every link at the start; a draw that finds no such place in OBSTACLE_TRIES is left out."""
+    names = scene.parameter_names()
+    walls = {w.name: float(run.p[names.index(f"wall_{w.name}")]) for w in scene.walls}
+    points = model.contact_points(model.layout.reduce(run.q0), run.p)
+    radii = [link.radius for link in scene.links]
+    lo = [walls.get(f"x{k + 1}_min", float(points[:, k].mean())) for k in range(3)]
+    hi = [walls.get(f"x{k + 1}_max", float(points[:, k].mean())) for k in range(3)]
+    obstacles = []
+    for j in range(int(rng.integers(1, 3))):
+        kind = str(rng.choice(["sphere", "bar", "box"]))
+        for _ in range(OBSTACLE_TRIES):
+            centre = rng.uniform(lo, hi)
+            size = run.extent * _log_uniform(rng, 1e-2, 0.3)
+            name = f"{kind}_{'ab'[j]}"
+            if kind == "sphere":
+                o = Obstacle.sphere(name, tuple(centre), size)
+            elif kind == "bar":
+                axis = rng.normal(size=3)
+                axis *= run.extent * rng.uniform(0.1, 0.5) / np.linalg.norm(axis)
+                o = Obstacle.bar(name, tuple(centre - axis), tuple(centre + axis), size / 3)
+            else:
+                o = Obstacle.box(name, tuple(centre), tuple(size * rng.uniform(0.2, 1.0, 3)), _rotation(rng))
+            if min(obstacle_gaps(points, radii, [o])) <= OBSTACLE_CLEAR * run.extent:
+                continue
+            try:                                     # the structure's own start (scene.q0) must be clear of it too
+                replace(scene, obstacles=(*obstacles, o))
+            except SceneError:
+                continue
+            obstacles.append(o)
+            break
+    return tuple(obstacles)
+
+
+def obstacle_run(rng, scene: Scene, model, run: Run, obstacles, load) -> tuple[Scene, object, Run]:
+    """The structure with the run's obstacles, its model (``load``: scene -> compiled model; an obstacle's position
+    is a constant of the model) and the run with the obstacles' restitutions (0, 1 or uniform) after its parameters."""
+    before = scene.parameter_names()
+    scene = replace(scene, obstacles=tuple(obstacles))
+    model = load(scene)
+    names = model.parameter_names
+    if names[:len(run.p)] != before:
+        raise AssertionError("obstacles changed the order of the structure's parameters")
+    p = model.p.copy()
+    p[:len(run.p)] = run.p
+    for o in obstacles:
+        p[names.index(f"e_{o.name}")] = float(rng.choice([0.0, 1.0, rng.uniform()]))
+    return scene, model, replace(run, p=p)
+
+
 # ---------------------------------------------------------------------------
 # the checks
 # ---------------------------------------------------------------------------
@@ -249,6 +318,7 @@ class Outcome:
     inaccurate: bool = False  # the run stopped with an impact whose accuracy is useless (GAC_ERR_IMPACT_ACCURACY)
     cause: str = ""           # for a run whose least accurate impact is above 1e-10: why (runtime accuracy_cause)
     capsules: bool = False    # the structure has capsule links (and link pairs)
+    obstacles: int = 0        # fixed obstacles in the run's box
 
 
 def classify(message: str) -> str:
@@ -280,6 +350,55 @@ def pair_gaps(points: np.ndarray, radii, pairs) -> list[float]:
     O_i O_{i+1} and O_j O_{j+1} less r_i + r_j."""
     return [segment_distance(points[i - 1], points[i], points[j - 1], points[j]) - radii[i - 1] - radii[j - 1]
             for i, j in pairs]
+
+
+def box_signed_distance(x, centre, half_extents, rotation) -> float:
+    """The signed distance (m, negative inside) of point x from an oriented box: in the box's axes y = R^T (x - c),
+    the length of y's excess over the half extents outside, the largest |y_k| - h_k (<= 0) inside."""
+    excess = np.abs(np.asarray(rotation).T @ (np.asarray(x) - np.asarray(centre))) - np.asarray(half_extents)
+    return float(np.linalg.norm(np.maximum(excess, 0.0)) + min(float(excess.max()), 0.0))
+
+
+def segment_box_distance(p0, p1, obstacle) -> float:
+    """The least signed distance of segment p0-p1 from a box obstacle: 257 samples along it, then a ternary search
+    about the least sample (the signed distance of a convex body is convex along a line)."""
+    f = lambda s: box_signed_distance(p0 + s * (p1 - p0), obstacle.a, obstacle.half_extents, obstacle.box_rotation)
+    grid = np.linspace(0.0, 1.0, 257)
+    values = [f(s) for s in grid]
+    k = int(np.argmin(values))
+    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, 256)]
+    for _ in range(60):
+        m1, m2 = lo + (hi - lo) / 3, hi - (hi - lo) / 3
+        lo, hi = (lo, m2) if f(m1) <= f(m2) else (m1, hi)
+    return min(values[k], f(0.5 * (lo + hi)))
+
+
+def obstacle_gaps(points: np.ndarray, radii, obstacles) -> list[float]:
+    """Each link's gap to each fixed obstacle it can touch, from the joint points: a sphere's or bar's the distance of
+    the two segments less both radii, a box's the least signed distance of the link's segment less its radius."""
+    gaps = []
+    for o in obstacles:
+        for i in (o.links or range(1, len(radii) + 1)):
+            p0, p1 = points[i - 1], points[i]
+            if o.kind == "box":
+                gaps.append(segment_box_distance(p0, p1, o) - radii[i - 1])
+            else:
+                a, b = (np.asarray(x, dtype=float) for x in o.segment)
+                gaps.append(segment_distance(p0, p1, a, b) - radii[i - 1] - o.radius)
+    return gaps
+
+
+def check_obstacles(model, run: Run, states, pen_tol: float) -> list[str]:
+    """No link inside a fixed obstacle beyond pen_tol on full-layout states (obstacle_gaps)."""
+    obstacles = model.scene.obstacles
+    if not obstacles:
+        return []
+    radii = [link.radius for link in model.scene.links]
+    deepest = min((min(obstacle_gaps(model.contact_points(model.layout.reduce(q), run.p), radii, obstacles))
+                   for q in states), default=math.inf)
+    if deepest < -pen_tol:
+        return [f"obstacle penetrated by a link by {-deepest:.3g} m > {pen_tol:.3g} m"]
+    return []
 
 
 def capsule_wall_gaps(points: np.ndarray, radii, walls) -> list[float]:
@@ -330,6 +449,7 @@ def check_run(model, run: Run, result, seconds: float, budget: float) -> list[st
         if deepest < -pen_tol:
             violations.append(f"penetration {-deepest:.3g} m > {pen_tol:.3g} m")
     violations += check_capsules(model, run, list(result.q) + [i.q for i in result.impacts], pen_tol)
+    violations += check_obstacles(model, run, list(result.q) + [i.q for i in result.impacts], pen_tol)
     for impact in result.impacts:
         q = layout.reduce(impact.q)
         T0 = model.energy(q, layout.reduce(impact.qd_before), p)[0]
@@ -354,8 +474,12 @@ def check_run(model, run: Run, result, seconds: float, budget: float) -> list[st
 
 
 def run_structure(args) -> list[Outcome]:
-    """Compile one structure and run its runs (one worker's job)."""
-    seed, index, runs, budget, n_max = args
+    """Compile one structure and run its runs (one worker's job).  args: (seed, index, runs, budget, n_max[,
+    obstacles]); obstacles True (the study's runs): a structure that has_obstacle_runs puts each run's
+    random_obstacles into the box, compiling the structure with them for that run (False: the runs as drawn)."""
+    seed, index, runs, budget, n_max = args[:5]
+    obstacle_runs = bool(args[5]) if len(args) > 5 else False
+    obstacle_runs = obstacle_runs and has_obstacle_runs(seed, index)
     from runtime.model import load_model
     from runtime.simulate import accuracy_cause, impact_contact_indices, simulate
     rng = np.random.default_rng([seed, index])
@@ -376,22 +500,36 @@ def run_structure(args) -> list[Outcome]:
             outcomes.append(Outcome(case, scene.n, planar, "-", -1, f"no start: {classify(str(exc))}", False,
                                     message=str(exc), capsules=capsules))
             continue
+        run_model, obstacles = model, ()
+        if obstacle_runs:
+            obstacle_rng = np.random.default_rng([seed, index, OBSTACLE_STREAM, k])
+            obstacles = random_obstacles(obstacle_rng, scene, model, run)
+        if obstacles:
+            try:
+                _, run_model, run = obstacle_run(obstacle_rng, scene, model, run, obstacles,
+                                                 lambda s: load_model(s, specialise=False))
+            except Exception as exc:                   # noqa: BLE001 - reported as an outcome
+                outcomes.append(Outcome(case, scene.n, planar, run.options["method"], -1,
+                                        f"exception: {classify(str(exc))}", True, message=str(exc),
+                                        capsules=capsules, obstacles=len(obstacles)))
+                continue
         start = time.perf_counter()
         try:
-            result = simulate(model, run.t_end, p=run.p, q0=run.q0, qd0=run.qd0, max_wall_time=budget,
+            result = simulate(run_model, run.t_end, p=run.p, q0=run.q0, qd0=run.qd0, max_wall_time=budget,
                               t_eval=np.linspace(0.0, run.t_end, 201), **run.options)
         except ValueError as exc:                      # a refused setting (an RK4 step past stability)
             seconds = time.perf_counter() - start
             outcomes.append(Outcome(case, scene.n, planar, run.options["method"], -1,
                                     f"refused: {classify(str(exc))}", False, seconds=seconds, message=str(exc),
-                                    capsules=capsules))
+                                    capsules=capsules, obstacles=len(obstacles)))
             continue
         except Exception:                              # noqa: BLE001 - a traceback is a failure
             outcomes.append(Outcome(case, scene.n, planar, run.options["method"], -1, "exception", True,
-                                    message=traceback.format_exc()[-400:], capsules=capsules))
+                                    message=traceback.format_exc()[-400:], capsules=capsules,
+                                    obstacles=len(obstacles)))
             continue
         seconds = time.perf_counter() - start
-        violations = check_run(model, run, result, seconds, budget)
+        violations = check_run(run_model, run, result, seconds, budget)
         text = "ok" if result.status == 0 else classify(result.message)
         failed = bool(violations) or any(pattern in result.message for pattern in FAILURE_PATTERNS)
         roundoff = max([i.roundoff for i in result.impacts], default=0.0)
@@ -399,19 +537,21 @@ def run_structure(args) -> list[Outcome]:
         cause = ""
         if roundoff > 1e-10:                           # the least accurate impact's cause, as the warnings name it
             worst = max(result.impacts, key=lambda i: i.roundoff)
-            cause = accuracy_cause(model, run.p, model.layout.reduce(worst.q), model.layout.reduce(worst.qd_before),
-                                   impact_contact_indices(model, worst), worst.law, worst.residual)
+            reduce = run_model.layout.reduce
+            cause = accuracy_cause(run_model, run.p, reduce(worst.q), reduce(worst.qd_before),
+                                   impact_contact_indices(run_model, worst), worst.law, worst.residual)
         outcomes.append(Outcome(case, scene.n, planar, run.options["method"], result.status, text, failed,
                                 violations, len(result.impacts), seconds, result.message, roundoff, inaccurate,
-                                cause, capsules))
+                                cause, capsules, len(obstacles)))
     return outcomes
 
 
 def fuzz(runs: int = 1000, per_structure: int = 10, seed: int = 0, jobs: int | None = None,
-         budget: float = BUDGET, n_max: int = 8, progress=None) -> list[Outcome]:
-    """Run ``runs`` random runs (``per_structure`` per compiled structure) on ``jobs`` processes."""
+         budget: float = BUDGET, n_max: int = 8, progress=None, obstacles: bool = True) -> list[Outcome]:
+    """Run ``runs`` random runs (``per_structure`` per compiled structure) on ``jobs`` processes; ``obstacles``: fixed
+    obstacles in the runs of a share of the structures (run_structure)."""
     structures = max(1, math.ceil(runs / per_structure))
-    tasks = [(seed, index, min(per_structure, runs - index * per_structure), budget, n_max)
+    tasks = [(seed, index, min(per_structure, runs - index * per_structure), budget, n_max, obstacles)
              for index in range(structures)]
     outcomes: list[Outcome] = []
     start = time.perf_counter()
@@ -460,6 +600,17 @@ def capsule_summary(outcomes: list[Outcome]) -> str:
             f"{sum(o.outcome == 'ok' for o in runs)} ended ok")
 
 
+def obstacle_summary(outcomes: list[Outcome]) -> str:
+    """How many structures (and their runs) have fixed obstacles, and how those runs ended."""
+    structures = {o.case.split("/")[0] for o in outcomes}
+    runs = [o for o in outcomes if o.obstacles]
+    with_obstacles = {o.case.split("/")[0] for o in runs}
+    checks = sum(any(v.startswith("obstacle") for v in o.violations) for o in runs)
+    return (f"obstacles: {len(with_obstacles)} of {len(structures)} structures ({len(runs)} runs, "
+            f"{sum(o.obstacles for o in runs)} obstacles) have fixed obstacles; {sum(o.failed for o in runs)} of their "
+            f"runs failed, {checks} on an obstacle check, {sum(o.outcome == 'ok' for o in runs)} ended ok")
+
+
 # ---------------------------------------------------------------------------
 # the command
 # ---------------------------------------------------------------------------
@@ -488,10 +639,16 @@ def _rerun(case: str, budget: float, n_max: int) -> int:
     model = load_model(scene, specialise=False)
     for _ in range(k + 1):
         run = random_run(rng, scene, model)
+    if has_obstacle_runs(seed, index):               # the run's obstacles, as run_structure draws them
+        obstacle_rng = np.random.default_rng([seed, index, OBSTACLE_STREAM, k])
+        obstacles = random_obstacles(obstacle_rng, scene, model, run)
+        if obstacles:
+            scene, model, run = obstacle_run(obstacle_rng, scene, model, run, obstacles,
+                                             lambda s: load_model(s, specialise=False))
     print(f"scene: {scene}")
     print(f"simulate(model, {run.t_end!r}, p={run.p.tolist()!r}, q0={run.q0.tolist()!r}, "
           f"qd0={run.qd0.tolist()!r}, **{run.options!r})")
-    outcome = next(o for o in run_structure((seed, index, k + 1, budget, n_max)) if o.case == case)
+    outcome = next(o for o in run_structure((seed, index, k + 1, budget, n_max, True)) if o.case == case)
     print(json.dumps(asdict(outcome), indent=1, default=str))
     return 1 if outcome.failed else 0
 
@@ -522,6 +679,7 @@ def main(argv=None) -> int:
     print()
     print(accuracy_summary(outcomes))
     print(capsule_summary(outcomes))
+    print(obstacle_summary(outcomes))
     failed = [o for o in outcomes if o.failed]
     for o in failed[:50]:
         print(f"FAILED {o.case} ({o.method}, n = {o.n}): {o.violations or o.message[:200]}")

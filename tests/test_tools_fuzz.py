@@ -290,3 +290,91 @@ def test_each_capsule_check_can_fail(compiled):
     violations = fuzz.check_run(model, folded, fold, 0.1, 20.0)
     assert any(v.startswith("capsules overlap by") for v in violations), violations
     assert not any(v.startswith("capsule penetrates") for v in violations)
+
+
+OBSTACLE_CASE = (11, 13, 1)    # seed, structure, n_max: one capsule link; the study puts obstacles into its runs
+
+
+def test_an_obstacle_structure_runs_through_the_study_path():
+    """A structure the study gives fixed obstacles, two runs through run_structure as the study calls it: each run has
+    one or two obstacles, ends cleanly and passes the checks, the obstacles' included; called without the keyword
+    (as the tests that reproduce a structure do), the same runs have none."""
+    seed, index, n_max = OBSTACLE_CASE
+    assert fuzz.has_obstacle_runs(seed, index)
+    outcomes = fuzz.run_structure((seed, index, 2, 30.0, n_max, True))
+    assert [o.obstacles for o in outcomes] == [1, 2]
+    assert [(o.case, o.violations, o.message) for o in outcomes if o.failed] == []
+    assert fuzz.obstacle_summary(outcomes).startswith("obstacles: 1 of 1 structures (2 runs, 3 obstacles) have fixed "
+                                                      "obstacles; 0 of their runs failed, 0 on an obstacle check")
+    assert [o.obstacles for o in fuzz.run_structure((seed, index, 2, 30.0, n_max))] == [0, 0]
+
+
+def test_obstacles_leave_the_structures_and_their_runs_as_they_were(compiled):
+    """The obstacles come from their own stream after the run is drawn (random_structure and random_run know nothing of
+    them): the run's parameters are the first of the obstacle model's, the structure's links are kept, and each
+    obstacle is centred in the run's box, clear of the start."""
+    seed, index, n_max = OBSTACLE_CASE
+    rng = np.random.default_rng([seed, index])
+    scene = fuzz.random_structure(rng, index, n_max)
+    model = compiled(scene)
+    run = fuzz.random_run(rng, scene, model)
+    obstacle_rng = np.random.default_rng([seed, index, fuzz.OBSTACLE_STREAM, 0])
+    obstacles = fuzz.random_obstacles(obstacle_rng, scene, model, run)
+    assert 1 <= len(obstacles) <= 2
+    with_obstacles, obstacle_model, obstacle_run = fuzz.obstacle_run(obstacle_rng, scene, model, run, obstacles,
+                                                                     compiled)
+    assert with_obstacles.links == scene.links and with_obstacles.obstacles[0].name == obstacles[0].name
+    assert np.array_equal(obstacle_run.p[:len(run.p)], run.p) and len(obstacle_run.p) == len(run.p) + len(obstacles)
+    names = scene.parameter_names()
+    points = model.contact_points(model.layout.reduce(run.q0), run.p)
+    radii = [link.radius for link in scene.links]
+    assert min(fuzz.obstacle_gaps(points, radii, obstacles)) > fuzz.OBSTACLE_CLEAR * run.extent
+    for o in obstacles:
+        centre = (np.array(o.segment[0]) + np.array(o.segment[1])) / 2
+        for k, axis in enumerate("123"):
+            if f"wall_x{axis}_min" in names:
+                assert run.p[names.index(f"wall_x{axis}_min")] < centre[k] < run.p[names.index(f"wall_x{axis}_max")]
+
+
+def test_the_obstacle_check_can_fail_and_its_box_distance_is_right(compiled):
+    """The independent box distance against a dense search along the segment (inside the box too) and the scene's own;
+    a link moved into a sphere, a bar and a box in turn: check_run reports it on its obstacle check; clear, it
+    passes."""
+    from codegen.scene import Obstacle
+    rng = np.random.default_rng(4)
+    for _ in range(30):
+        box = Obstacle.box("b", rng.normal(size=3), rng.uniform(0.1, 1.0, 3), fuzz._rotation(rng))
+        p0, p1 = rng.normal(size=3) * 1.5, rng.normal(size=3) * 1.5
+        samples = p0 + np.linspace(0.0, 1.0, 20001)[:, None] * (p1 - p0)
+        excess = np.abs((samples - box.a) @ np.array(box.box_rotation)) - box.half_extents
+        dense = (np.linalg.norm(np.maximum(excess, 0.0), axis=1) + np.minimum(excess.max(axis=1), 0.0)).min()
+        assert fuzz.box_signed_distance(samples[7], box.a, box.half_extents, box.box_rotation) == \
+            pytest.approx(np.linalg.norm(np.maximum(excess[7], 0.0)) + min(excess[7].max(), 0.0), abs=1e-14)
+        d = fuzz.segment_box_distance(p0, p1, box)
+        assert dense - np.linalg.norm(p1 - p0) / 20000 <= d <= dense + 1e-12     # within the grid's resolution
+        assert d == pytest.approx(box.distance(p0, p1), abs=1e-9)
+    seed, index, n_max = OBSTACLE_CASE
+    rng = np.random.default_rng([seed, index])
+    scene = fuzz.random_structure(rng, index, n_max)
+    model = compiled(scene)
+    run = fuzz.random_run(rng, scene, model)
+    run.options = {"method": "dopri5", "rtol": 1e-10, "atol": 1e-12}
+    q, qd = run.q0, run.qd0
+    points = model.contact_points(model.layout.reduce(q), run.p)
+    mid, size = (points[0] + points[1]) / 2, run.extent * 1e-2
+    centre = mid + 3 * run.extent                  # clear of the start; the doctored state puts the link's middle here
+    sunk = q.copy()
+    sunk[-3:] += centre - mid                      # the free base's position: the whole chain translated
+    bar = np.array([run.extent * 0.1, 0.0, 0.0])
+    for obstacle in (Obstacle.sphere("ball", tuple(centre), size),
+                     Obstacle.bar("bar", tuple(centre - bar), tuple(centre + bar), size),
+                     Obstacle.box("block", tuple(centre), (size,) * 3, fuzz._rotation(rng))):
+        _, obstacle_model, obstacle_run = fuzz.obstacle_run(np.random.default_rng(0), scene, model, run, (obstacle,),
+                                                            compiled)
+        moved = obstacle_model.contact_points(obstacle_model.layout.reduce(sunk), obstacle_run.p)
+        assert np.allclose((moved[0] + moved[1]) / 2, centre)
+        clean = FakeResult(np.array([q]), np.array([qd]), q, qd)
+        assert fuzz.check_run(obstacle_model, obstacle_run, clean, 0.1, 20.0) == []
+        doctored = FakeResult(np.array([q, sunk]), np.array([qd, qd]), q, qd)
+        violations = fuzz.check_run(obstacle_model, obstacle_run, doctored, 0.1, 20.0)
+        assert any(v.startswith("obstacle penetrated by a link by") for v in violations), (obstacle.kind, violations)

@@ -43,12 +43,13 @@ int gac_holdable(const gac_sim *s, const double *x, int c)
 }
 
 /* Normal accelerations (along the inward normals) of all contacts at time t and state x, with the contacts
- * set[0..n-1] held (n = 0: free flight); 0 for a link pair or an obstacle whose normal has no derivative. */
+ * set[0..n-1] held (n = 0: free flight); 0 for a link pair or an obstacle whose normal has no derivative, and for
+ * one farther than contact_tol from touching (its bias, about 2 nq kernel calls, is read only where it touches). */
 int gac_normal_accelerations(gac_sim *s, double t, const double *x, int n, const int *set, double *an)
 {
     const gac_model *md = s->model;
     const int nq = md->nq;
-    double qdd[nq], lambda[nq], bias[GAC_AT_LEAST_1(md->njrow)];
+    double qdd[nq], lambda[nq], bias[GAC_AT_LEAST_1(md->njrow)], gaps[GAC_AT_LEAST_1(md->ncontact)];
     double *vel = GAC_WORK_VEL(md, s->work);
     const double *u = gac_input(s, t, x);
     int c, code = gac_constrained_dynamics_friction(md, x, x + nq, u, s->p, n, set, set == s->resting ? s->is_stuck : 0,
@@ -56,8 +57,13 @@ int gac_normal_accelerations(gac_sim *s, double t, const double *x, int n, const
     if (code != GAC_OK) return code;
     md->contact_bias(x, x + nq, s->p, bias);
     md->contact_velocities(x, qdd, s->p, vel);           /* J qdd, read row by row */
+    gac_contact_gaps(md, x, s->p, gaps);
     for (c = 0; c < md->ncontact; ++c) {
         double b;
+        if (gac_rowless(md, c) && !(gaps[c] <= s->opt.contact_tol)) {
+            an[c] = 0.0;
+            continue;
+        }
         an[c] = gac_normal_bias(md, x, x + nq, s->p, c, bias, &b) == GAC_OK
                 ? b + gac_normal_value(md, x, s->p, c, qdd, vel) : 0.0;
     }

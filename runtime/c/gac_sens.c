@@ -952,7 +952,7 @@ static void gac_sens_boundary_column(const gac_sim *s, const gac_sens_law *base,
     for (mask = 0; mask < (1 << nb); ++mask) {
         double margin = INFINITY;
         int m = 0;
-        for (a = 0; a < mt; ++a) {                           /* the set: the active rows, then the boundary rows in it */
+        for (a = 0; a < mt; ++a) {                           /* the set: the active rows, then its boundary rows */
             if (a >= m0 && !(mask & (1 << (a - m0)))) continue;
             row[m++] = a;
         }
@@ -963,7 +963,8 @@ static void gac_sens_boundary_column(const gac_sim *s, const gac_sens_law *base,
             gac_copy(Y2 + (long)a * nq, base->Y + (long)r * nq, nq);
             F2[a] = base->F[r], v2[a] = base->v[r], e2[a] = base->e[r];
             active2[a] = base->active[r], landing2[a] = base->landing[r], normal2[a] = -1;
-            for (b = 0; b <= a; ++b) LD2[a * m + b] = LD2[b * m + a] = gac_dot(nq, W2 + (long)a * nq, Y2 + (long)b * nq);
+            for (b = 0; b <= a; ++b)
+                LD2[a * m + b] = LD2[b * m + a] = gac_dot(nq, W2 + (long)a * nq, Y2 + (long)b * nq);
         }
         if (gac_ldlt(m, LD2, 1e-12) != 0) continue;          /* dependent rows: not this set */
         L.m = m, L.active = active2, L.landing = landing2, L.f = f2, L.W = W2, L.Y = Y2, L.LD = LD2;

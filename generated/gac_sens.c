@@ -70,6 +70,10 @@ int gac_sens_attach(gac_sim *s, gac_sens *sens, int k, const double *seed_x, con
     sens->t_status = s->t;
     sens->contact_status = -1;
     sens->n_impacts = 0;
+    sens->one_sided = 0;
+    sens->n_boundaries = 0;
+    sens->t_boundary = NAN;
+    sens->contact_boundary = -1;
     s->sens = sens;
     if (s->chart != 0) {                          /* started on chart B: the seeds (chart A's) carried onto it at the
                                                      state before the start's projection (gac_sens_switch) */
@@ -856,7 +860,8 @@ typedef struct {
 } gac_sens_law;
 
 static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, const double *q, const double *qd,
-                                    const double *dq, const double *dqd, const double *dp, double *dqd_plus)
+                                    const double *dq, const double *dqd, const double *dp, double *dqd_plus,
+                                    double *dF_out)
 {
     const gac_model *md = s->model;
     const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow), m = L->m;
@@ -909,6 +914,7 @@ static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, con
         }
         if (gac_lu_solve(m, M, dF, 1e-14) != 0) {
             for (i = 0; i < nq; ++i) dqd_plus[i] = NAN;
+            for (a = 0; a < m && dF_out != 0; ++a) dF_out[a] = NAN;
             return;
         }
     }
@@ -916,6 +922,73 @@ static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, con
         double value = dqd[i];
         for (a = 0; a < m; ++a) value += dY[(long)a * nq + i] * L->F[a] + L->Y[(long)a * nq + i] * dF[a];
         dqd_plus[i] = value;
+    }
+    if (dF_out != 0) gac_copy(dF_out, dF, m);
+}
+
+/* The boundary contacts of an impact (gac_sens_impact): contacts that took an impulse ~0 and leave at the law's bound
+ * xi_b = w_b . qd+ + e_b w_b . qd- ~ 0 (approaching before), appended to the law's m active rows as rows m..m+nb-1
+ * of its arrays (F = 0 there).  A perturbation along a direction may add b to the pushing set or leave it out; the
+ * law's complementarity (xi >= 0, F >= 0, xi F = 0) differentiated at such a b says which:
+ *     with b pushing:  dxi_b = 0 and dF_b >= 0;        without:  dF_b = 0 and dxi_b >= 0,
+ * dxi_b = dw_b . (qd+ + e_b qd-) + w_b . (dqd+ + e_b dqd-) + de_b v_b.  Without b the others' dF solve the active
+ * rows' system; with b, dF_b = -dxi_b(without) / s_b, s_b = A_bb - A_bS A_SS^-1 A_Sb > 0 (A positive definite), so
+ * for a direction with dxi_b(without) != 0 exactly one of the two is consistent, and the opposite direction takes
+ * the other: the derivative is one-sided.  Of the 2^nb sets the one whose conditions hold is taken -- the largest
+ * least margin (dF_b in velocity units, A_bb dF_b), robust to round-off where a direction keeps dxi_b = 0 and both
+ * sets give the same derivative.  dqd_plus: the law's velocities' derivative (before any hold) in that set. */
+#define GAC_SENS_MAX_BOUNDARY 3
+static void gac_sens_boundary_column(const gac_sim *s, const gac_sens_law *base, int nb, const double *qd_law,
+                                     const double *q, const double *qdm, const double *dx, const double *dp,
+                                     double *dqd_plus)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow), m0 = base->m, mt = m0 + nb;
+    double f2[mt * nr], W2[mt * nq], Y2[mt * nq], LD2[mt * mt], F2[mt], v2[mt], e2[mt], dF[mt], out[nq], dw[nq];
+    double df[nr], best = -INFINITY;
+    int active2[mt], landing2[mt], normal2[mt], row[mt], mask, a, b, i;
+    gac_sens_law L = *base;
+    for (i = 0; i < nr; ++i) df[i] = 0.0;
+    for (mask = 0; mask < (1 << nb); ++mask) {
+        double margin = INFINITY;
+        int m = 0;
+        for (a = 0; a < mt; ++a) {                           /* the set: the active rows, then its boundary rows */
+            if (a >= m0 && !(mask & (1 << (a - m0)))) continue;
+            row[m++] = a;
+        }
+        for (a = 0; a < m; ++a) {
+            const int r = row[a];
+            gac_copy(f2 + (long)a * nr, base->f + (long)r * nr, nr);
+            gac_copy(W2 + (long)a * nq, base->W + (long)r * nq, nq);
+            gac_copy(Y2 + (long)a * nq, base->Y + (long)r * nq, nq);
+            F2[a] = base->F[r], v2[a] = base->v[r], e2[a] = base->e[r];
+            active2[a] = base->active[r], landing2[a] = base->landing[r], normal2[a] = -1;
+            for (b = 0; b <= a; ++b)
+                LD2[a * m + b] = LD2[b * m + a] = gac_dot(nq, W2 + (long)a * nq, Y2 + (long)b * nq);
+        }
+        if (gac_ldlt(m, LD2, 1e-12) != 0) continue;          /* dependent rows: not this set */
+        L.m = m, L.active = active2, L.landing = landing2, L.f = f2, L.W = W2, L.Y = Y2, L.LD = LD2;
+        L.F = F2, L.v = v2, L.e = e2, L.normal = normal2;
+        gac_impact_differential(s, &L, q, qdm, dx, dx + nq, dp, out, dF);
+        for (a = m0; a < mt; ++a) {                          /* the boundary rows' conditions */
+            const double *wb = base->W + (long)a * nq, eb = base->e[a];
+            const gac_contact *ct = md->contacts + base->active[a];
+            double cond;
+            if (mask & (1 << (a - m0))) {                    /* pushing: dF_b >= 0 (as a velocity, A_bb dF_b) */
+                for (b = 0; row[b] != a; ++b) continue;
+                cond = dF[b] * gac_dot(nq, wb, base->Y + (long)a * nq);
+            } else {                                         /* out: dxi_b >= 0 */
+                md->contact_generalized_force_tangent(q, base->f + (long)a * nr, s->p, dx, df, dp, dw);
+                cond = (ct->e_index >= 0 ? dp[ct->e_index] : 0.0) * base->v[a];
+                for (i = 0; i < nq; ++i)
+                    cond += dw[i] * (qd_law[i] + eb * qdm[i]) + wb[i] * (out[i] + eb * dx[nq + i]);
+            }
+            if (cond < margin) margin = cond;
+        }
+        if (mask == 0 || margin > best) {                   /* (mask 0, the nominal set, always factors) */
+            best = margin;
+            gac_copy(dqd_plus, out, nq);
+        }
     }
 }
 
@@ -1113,7 +1186,9 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         double dgap[nc1], dx[nx], dqd_plus[nq], zero_p[GAC_AT_LEAST_1(md->nparam)];
         double qd_law[nq], qdd_free[nq], lambda[3 * nq];
         double speed = 0.0, largest = 0.0, v_event = 0.0;
+        double fb[n * nr], Wb[n * nq], vb[n], eb[n];         /* the boundary contacts' rows (one_sided) */
         int active[n3], landing[n3], before_set[nq + nc1], at_rest[nq], m = 0, nbefore, nheld = 0, a, b, i, j;
+        int boundary[n], nb = 0;
         gac_sens_law law;
         GAC_SENS_SET_ARRAYS(nq, nr);
         gac_sens_set H;
@@ -1209,14 +1284,23 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 }
             } else if (!held_after && !was_resting) {       /* no impulse: out of Delta if it leaves clear of */
                 const double bound = after + (before < 0.0 ? e[m] * before : 0.0);   /* the law's bound */
-                if (!(bound > 1e-9 * speed * s->lever)) {
-                    gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, c);
-                    return;
+                if (!(bound > 1e-9 * speed * s->lever)) {    /* at it: a mode boundary */
+                    const int frictionless = r->law == GAC_IMPACT_LAW_FRICTIONLESS || ct->kind != GAC_CONTACT_WALL
+                                             || !(gac_friction_coefficient(md, s->p, c) > 0.0);
+                    if (!z->one_sided || !frictionless || !(before < 0.0) || nb == GAC_SENS_MAX_BOUNDARY) {
+                        gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, c);
+                        return;
+                    }
+                    gac_copy(fb + (long)nb * nr, fa, nr);    /* each column takes its side (below) */
+                    gac_copy(Wb + (long)nb * nq, wa, nq);
+                    vb[nb] = before;
+                    eb[nb] = e[m];
+                    boundary[nb++] = c;
                 }
             }
         }
-        if (m == 0) {
-            gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, c_event);
+        if (m == 0 || (nb > 0 && nslide > 0)) {             /* (boundaries beside slides: not followed) */
+            gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, nb > 0 ? boundary[0] : c_event);
             return;
         }
         for (a = 0; a < m; ++a) {
@@ -1250,6 +1334,13 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         law.F = F, law.v = v, law.e = e;
         law.nslide = nslide, law.normal = normal, law.u = u, law.xi_T_norm = xi_norm, law.cf = cf_row;
         law.cf_index = cf_index;
+        for (b = 0; b < nb; ++b) {                           /* the boundary rows after the active ones, F = 0 */
+            gac_copy(f + (long)(m + b) * nr, fb + (long)b * nr, nr);
+            gac_copy(W + (long)(m + b) * nq, Wb + (long)b * nq, nq);
+            md->inertia_solve(q, W + (long)(m + b) * nq, s->p, Y + (long)(m + b) * nq);
+            F[m + b] = 0.0, v[m + b] = vb[b], e[m + b] = eb[b];
+            active[m + b] = boundary[b], landing[m + b] = 0, normal[m + b] = -1;
+        }
         if (gac_sens_field(s, r->t, xm, nbefore, before_set, was_stuck, &H, qdd_free, lambda, fm, 0) != 0
             || gac_sens_field(s, r->t, xp, s->nresting, s->resting, s->is_stuck, &H, qdd_free, lambda, fp, 0) != 0) {
             gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
@@ -1270,7 +1361,10 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             md->contact_gaps_tangent(q, s->p, S, dp, dgap);
             tau = -dgap[c_event] / v_event;                  /* dt*_j: the gap stays 0 at the event */
             for (i = 0; i < nx; ++i) dx[i] = S[i] + fm[i] * tau; /* the perturbed state at the perturbed t* */
-            gac_impact_differential(s, &law, q, xm + nq, dx, dx + nq, dp, dqd_plus);
+            if (nb == 0)
+                gac_impact_differential(s, &law, q, xm + nq, dx, dx + nq, dp, dqd_plus, 0);
+            else                                             /* this column's side of the boundary */
+                gac_sens_boundary_column(s, &law, nb, qd_law, q, xm + nq, dx, dp, dqd_plus);
             if (nheld > 0) {
                 double held[nq];
                 gac_sens_hold_tangent(s, xp, &H, qd_law, xp + nq, dx, dqd_plus, dp, held);
@@ -1286,6 +1380,10 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             z->dt_impact[j] = tau;
         }
         z->n_impacts++;
+        if (nb > 0 && z->n_boundaries++ == 0) {
+            z->t_boundary = r->t;
+            z->contact_boundary = boundary[0];
+        }
         if (!gac_finite(z->S, z->k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, r->t, c_event);
     }
 }

@@ -7,6 +7,10 @@ A direction is named
     q0[NAME] / qd0[NAME]   an initial coordinate or velocity, NAME a coordinate of the full layout of Eq. 13
                            ("theta_1", "X2") or its index there ("q0[8]"); only the model's own (free) coordinates
     PARAMETER              a runtime parameter by its name in model.parameter_names ("e_x2_min", "g", "l_1")
+
+One-sided derivatives (simulate(..., one_sided=True)): the C loop carries each direction twice, seeded with +e_j
+and -e_j, and at a mode boundary inside an impact each column takes the side its own direction leads to
+(gac_sens.one_sided); the right derivative is the first copy, the left one minus the second.
 """
 from __future__ import annotations
 
@@ -99,11 +103,19 @@ class Sensitivities:
     code: int = 0                            # GAC_SENS_* of gac.h
     extra: dict = field(default_factory=dict)
     at_samples: np.ndarray | None = None     # simulate(sensitivities_at_samples=True): len(t) x 2 nq x k, NaN from
-                                             # the first event not differentiated on
+                                             # the first event not differentiated on (one-sided: the right ones)
+    right: np.ndarray | None = None          # one-sided (status 'one-sided'): D+ (2 nq x k), the derivative along +e_j
+    left: np.ndarray | None = None           # and D- = -(the derivative along -e_j); None where there was no boundary
+    at_samples_left: np.ndarray | None = None   # one-sided, with at_samples: the left ones at the samples
 
     @property
     def valid(self) -> bool:
         return self.status == "valid"
+
+    @property
+    def one_sided(self) -> bool:
+        """True where a mode boundary was crossed: ``right`` and ``left`` hold the one-sided derivatives."""
+        return self.status == "one-sided"
 
     def __getitem__(self, key) -> float:
         """sens["q[X2]", "e_x2_min"]: one entry by row and direction name."""
@@ -126,17 +138,49 @@ def contact_label(model, contact: int) -> str:
     return wall.name if wall.name.startswith(("theta_", "L")) else f"O{point}/{wall.name}"
 
 
+def seeds(seed_x: np.ndarray, seed_p: np.ndarray, one_sided: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The C loop's seeds: the directions' own, then (one-sided) their negatives."""
+    if not one_sided:
+        return np.ascontiguousarray(seed_x), np.ascontiguousarray(seed_p)
+    return np.ascontiguousarray(np.vstack([seed_x, -seed_x])), np.ascontiguousarray(np.vstack([seed_p, -seed_p]))
+
+
+AGREE = 1e-9       # one-sided: a column whose right and left derivatives agree to this (relative) is two-sided
+
+
 def read(model, sim, sens, names: list[str], run_ok: bool, run_message: str, samples=None) -> Sensitivities:
     """The final Sensitivities from the C struct ``sens`` (gac_sens) of the simulation ``sim`` after a run, in chart
     A's coordinates (gac_sens_state, whichever base chart the run ended on); ``samples`` (n x k x nx, the C loop's S
-    at each sample) as at_samples (n x nx x k)."""
+    at each sample) as at_samples (n x nx x k).  With sens.one_sided the loop carried 2k columns (+e_j, then -e_j):
+    where it crossed a mode boundary the result is one-sided (right, left; matrix only where they agree), else the
+    first k as without."""
     nx, k = 2 * model.nq, len(names)
-    final = np.zeros((k, nx))
+    one_sided = bool(sens.one_sided)
+    total = 2 * k if one_sided else k
+    final = np.zeros((total, nx))
     model.lib.gac_sens_state(model.ffi.addressof(sim, "base"), model._ptr(final))
-    matrix = final.T.copy()
+    matrix = final[:k].T.copy()
     code = int(sens.status)
     result = Sensitivities(state_names(model), list(names), matrix, n_impacts=int(sens.n_impacts), code=code,
-                           at_samples=None if samples is None else np.transpose(samples, (0, 2, 1)).copy())
+                           at_samples=None if samples is None else np.transpose(samples[:, :k], (0, 2, 1)).copy())
+    if code == 0 and one_sided and int(sens.n_boundaries) > 0:
+        right, left = matrix, -final[k:].T
+        scale = np.maximum(np.abs(right).max(axis=0), np.abs(left).max(axis=0))
+        agree = np.abs(right - left).max(axis=0) <= AGREE * np.maximum(scale, 1e-300)
+        result.right, result.left = right.copy(), left.copy()
+        result.matrix = np.where(agree, 0.5 * (right + left), np.nan)
+        if samples is not None:
+            result.at_samples_left = -np.transpose(samples[:, k:], (0, 2, 1))
+        where = contact_label(model, int(sens.contact_boundary))
+        result.status = "one-sided"
+        result.t_event = float(sens.t_boundary)
+        result.extra["n_boundaries"] = int(sens.n_boundaries)
+        result.message = (f"one-sided from t = {result.t_event:.9g} s on: a mode boundary inside an impact (a "
+                          f"contact's impulse ~0 at the law's bound)" + (f" at {where}" if where else "")
+                          + f"; right and left derivatives in .right and .left, .matrix only the "
+                          f"{int(agree.sum())} of {k} column(s) where they agree (NaN elsewhere)"
+                          + ("" if run_ok else f"; the run did not reach t_end ({run_message})"))
+        return result
     if code != 0:
         where = contact_label(model, int(sens.contact_status))
         result.status = STATUS_WORDS.get(code, f"status {code}")

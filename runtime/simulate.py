@@ -403,7 +403,7 @@ class Impacts(Sequence):
 def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "dopri5", t_eval=None, *,
              p=None, q0=None, qd0=None, u=None, progress=None, charts: bool = True, check_start: bool = True,
              keep_impacts: bool = True, sensitivities=None, sensitivities_at_samples: bool = False,
-             **options) -> SimulationResult:
+             one_sided: bool = False, **options) -> SimulationResult:
     """Simulate the scene's hybrid dynamics from its initial state over [0, t_end].
 
     method        'dopri5' (adaptive Dormand-Prince 5(4), rtol/atol), 'dop853' (adaptive 8(5,3)),
@@ -437,6 +437,10 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     sensitivities_at_samples  True: also d x(t_i)/d(direction) at every sample t_i (result.sensitivities.at_samples,
                   len(t) x 2 nq x k), each formed by one more Runge-Kutta step of the directions from its step's start
                   (costs about one step of the directions per sample)
+    one_sided     True: at a mode boundary inside an impact (a contact's impulse ~0 at the law's bound) give the
+                  right and left derivatives (result.sensitivities.right / .left, status 'one-sided') instead of
+                  ending the sensitivities there; the C loop carries each direction twice (+ and -), so it costs
+                  about twice the directions' work; without a boundary the result is as without it
     **options     the C loop's options (LOOP_OPTIONS: rtol, atol, dt, h_max, event_samples, event_tol, contact_tol,
                   max_steps, max_impacts, max_wall_time, rest_height, zeno_impacts, energy_tol), with the C library's
                   defaults
@@ -484,19 +488,21 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     sens = sens_work = directions = None
     if sensitivities is not None:
         directions, seed_x, seed_p = sensitivity.directions(model, sensitivities)
-        k = len(directions)
+        seed_x, seed_p = sensitivity.seeds(seed_x, seed_p, bool(one_sided))
+        k = len(seed_x)                   # one-sided: each direction twice, +e_j then -e_j
         sens = ffi.new("gac_sens *")
         sens_work = np.zeros(lib.gac_sens_ndouble(ffi.addressof(c.model), k))
-        seed_x, seed_p = np.ascontiguousarray(seed_x), np.ascontiguousarray(seed_p)
         code = lib.gac_sens_attach(ffi.addressof(sim, "base"), sens, k, model._ptr(seed_x), model._ptr(seed_p) if seed_p.size else ffi.NULL,
                                    model._ptr(sens_work))
         if code != lib.GAC_OK:
             raise ValueError(f"sensitivities: {model.error_message(code)}")
-    elif sensitivities_at_samples:
-        raise ValueError("sensitivities_at_samples: needs sensitivities=[...] (the directions)")
+        sens.one_sided = 1 if one_sided else 0
+    elif sensitivities_at_samples or one_sided:
+        raise ValueError(f"{'one_sided' if one_sided else 'sensitivities_at_samples'}: needs sensitivities=[...] "
+                         "(the directions)")
     s_eval = None
     if sens is not None and sensitivities_at_samples:     # S at each sample, written by the C loop with x_eval
-        s_eval = np.full((len(t_eval), len(directions), nx), np.nan)
+        s_eval = np.full((len(t_eval), int(sens.k), nx), np.nan)
         sens.S_eval = model._ptr(s_eval)
     watch = _watch(model, sim, opt.max_wall_time, progress)   # noqa: F841  (the clock and progress handles)
 

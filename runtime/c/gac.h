@@ -1070,7 +1070,11 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * qd+ = qd + Y F, W their signed rows, Y = I_f^-1 W^T, A = W Y; differentiated by inertia_solve_tangent and
  * contact_generalized_force_tangent (e = p[e_index] is a parameter like any other; a landing is struck with e = 0);
  * a link pair or an obstacle struck alone: Newton's law on its row J^T n, differentiated by
- * gac_contact_normal_tangent.
+ * gac_contact_normal_tangent.  A contact of the impact with impulse ~0 that leaves at the law's bound
+ * (xi_b = w_b . qd+ + e_b w_b . qd- ~ 0) is a mode boundary: with sens.one_sided each column j takes the set its own
+ * direction leads to, the law's complementarity differentiated: with b pushing, dF_b >= 0; without, dxi_b >= 0
+ * (exactly one holds for a generic direction: dF_b = -dxi_b(without) / s_b, s_b > 0 the Schur complement of A);
+ * the column is then the derivative from that side (its direction's), sens.n_boundaries counts such impacts.
  * Resting contacts (frictionless walls): in flight the constrained dynamics' tangent (the forces' by
  * contact_bias_tangent) and the derivative of the projection after each step; a landing's jump uses the field with
  * the set after held and the hold's projection; a release (its force lambda_c reaching 0) dt*_j = -d lambda_c /
@@ -1106,7 +1110,9 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
 #define GAC_SENS_NONFINITE     9   /* the sensitivities overflowed (not finite) */
 #define GAC_SENS_BOUNDARY     10   /* a mode boundary: inside an impact of several contacts, a contact took an impulse
                                       ~0 and leaves at the law's bound (w . qd+ + e w . qd- ~ 0), so a perturbation
-                                      may add it to the active set or drop it; or resting contacts released together
+                                      may add it to the active set or drop it (with sens.one_sided = 1 each column
+                                      takes its own side instead, where the law is frictionless on those contacts
+                                      and none slides: n_boundaries counts them); or resting contacts released together
                                       (their forces ~0 at once), a slip with another slip or a release, or points
                                       that stick at one step's end at different speeds */
 #define GAC_SENS_LINK         11   /* an impact of two links or of a link on a fixed obstacle (GAC_CONTACT_LINK,
@@ -1150,6 +1156,15 @@ typedef struct gac_sens_s {
                                     in chart A's coordinates like the samples; NaN from the first event not
                                     differentiated on (and at a sample at chart A's lock).  Set after
                                     gac_sens_attach. */
+    int one_sided;               /* 0 (default): a mode boundary inside an impact ends the sensitivities
+                                    (GAC_SENS_BOUNDARY); 1: each column there takes the mode its own direction leads
+                                    to (below), so a column is the derivative along its direction from that side
+                                    only: seed +e_j and -e_j to have the right and the left derivative.  Set after
+                                    gac_sens_attach. */
+    long n_boundaries;           /* mode boundaries inside impacts crossed so (one_sided = 1): 0, or the columns
+                                    are one-sided derivatives from the first on */
+    double t_boundary;           /* s: the time of the first one */
+    int contact_boundary;        /* its contact (0..ncontact-1, the one at the law's bound), -1: none */
 } gac_sens;
 
 /* Doubles of a gac_sens's dwork: S, dp, dt_impact, the held gaps' derivatives, the slip directions' derivatives and

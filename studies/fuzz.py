@@ -27,7 +27,9 @@ inertias, walls, restitutions, start and integrator through the parameter vector
 Every run is checked independently of the engine's own checks (``check_run``):
   * no NaN in the samples, the impact states and the final state;
   * penetration: the compiled gap kernel on every sample and impact state >= -PEN_TOL (relative to the
-    chain's extent, plus the simultaneity window of the adaptive methods; RK4_PEN x the extent for RK4);
+    chain's extent, plus the loop's simultaneity window: 100 (atol + rtol x extent) for the adaptive methods, at
+    least the loop's contact_tol (1e-6 m), within which a contact counts as touching and may rest; plus RK4_PEN x
+    the extent for RK4);
   * capsules against walls, in numpy from the joint points (model.contact_points): a capsule link's wall gap,
     the distance of its segment's nearest point (an end point) to the wall less its radius, >= -the same tolerance;
   * capsules against capsules: for every link pair of the scene, the distance of the two segments (an
@@ -64,6 +66,7 @@ from codegen.scene import (Chains, LineLink, Obstacle, RigidLink, Scene, SceneEr
                            contact_points as scene_contact_points)
 
 PEN_TOL = 1e-9            # m per m of the chain's extent (at least 1e-9 m), see check_run
+CONTACT_TOL = 1e-6        # m: the loop's contact_tol (its default, which the study's runs keep), see check_run
 RK4_PEN = 1e-5            # RK4 has no tolerance: its crossings are located on a cubic Hermite interpolant
 ENERGY_TOL = 1e-7         # relative energy change allowed at an impact (round-off of ill-conditioned laws)
 BUDGET = 20.0             # s of wall time per run
@@ -460,6 +463,7 @@ class Outcome:
     capsules: bool = False    # the structure has capsule links (and link pairs)
     obstacles: int = 0        # fixed obstacles in the run's box
     chains: int = 1           # chains in the box (random_chains: 2 or 3)
+    strikes_across: int = 0   # impacts with a contact between links of two chains (labelled L{i}-L{j}, global links)
 
 
 def classify(message: str) -> str:
@@ -515,17 +519,20 @@ def point_radii(scene) -> list[float]:
 
 
 def all_link_pairs(scene) -> list[tuple[int, int]]:
-    """Every link pair that must stay apart, numbered as pair_gaps reads them (link i: the segment of rows i - 1, i):
-    each chain's own pairs (Scene.link_pairs: not adjacent, a capsule among them) and every pair of links of two
-    different chains with radii adding up to more than 0."""
+    """Every link pair that must stay apart, numbered as pair_gaps reads them (link i: the segment of rows i - 1, i,
+    the global link number of a model of several chains): each chain's own pairs (Scene.link_pairs: not adjacent, a
+    capsule among them), then pairs_across."""
+    rows = chain_rows(scene)
+    return [(rows[k].start + i, rows[k].start + j) for k, chain in enumerate(chains_of(scene))
+            for i, j in chain.link_pairs()] + pairs_across(scene)
+
+
+def pairs_across(scene) -> list[tuple[int, int]]:
+    """Every pair of links of two different chains with radii adding up to more than 0 (all_link_pairs' numbers)."""
     rows, radii = chain_rows(scene), point_radii(scene)
-    pairs = [(rows[k].start + i, rows[k].start + j) for k, chain in enumerate(chains_of(scene))
-             for i, j in chain.link_pairs()]
     links = [[rows[k].start + i for i in range(1, chain.n + 1)] for k, chain in enumerate(chains_of(scene))]
-    for k in range(len(links)):
-        for l in range(k + 1, len(links)):
-            pairs += [(i, j) for i in links[k] for j in links[l] if radii[i - 1] + radii[j - 1] > 0.0]
-    return pairs
+    return [(i, j) for k in range(len(links)) for l in range(k + 1, len(links))
+            for i in links[k] for j in links[l] if radii[i - 1] + radii[j - 1] > 0.0]
 
 
 def box_signed_distance(x, centre, half_extents, rotation) -> float:
@@ -600,8 +607,7 @@ def check_capsules(model, run: Run, states, pen_tol: float) -> list[str]:
         return []
     names = scene.parameter_names()
     rows = chain_rows(scene)
-    pairs = all_link_pairs(scene)
-    across = {pair for pair in pairs if not any(pair[0] in r and pair[1] in r for r in rows)}
+    pairs, across = all_link_pairs(scene), set(pairs_across(scene))
     chains = [(chain, [link.radius for link in chain.links],
                [replace(w, position=float(run.p[names.index(f"wall_{w.name}")])) for w in chain.walls])
               for chain in chains_of(scene)]
@@ -633,7 +639,10 @@ def check_run(model, run: Run, result, seconds: float, budget: float) -> list[st
     if not all(np.all(np.isfinite(a)) for a in arrays):
         return ["non-finite state"]
     method = run.options["method"]
-    window = 0.0 if method == "rk4" else 100 * (run.options["atol"] + run.options["rtol"] * run.extent)
+    # the loop's simultaneity window (gac_simultaneity_window): 100 graze depths (atol + rtol x extent; 0 for RK4), at
+    # least contact_tol, the gap within which a contact counts as touching (and may rest, a link pair too)
+    graze = 0.0 if method == "rk4" else run.options["atol"] + run.options["rtol"] * run.extent
+    window = max(100 * graze, run.options.get("contact_tol", CONTACT_TOL))
     pen_tol = PEN_TOL * max(1.0, run.extent) + window + (RK4_PEN * run.extent if method == "rk4" else 0.0)
     states = [layout.reduce(q) for q in result.q] + [layout.reduce(i.q) for i in result.impacts]
     if states and model.contacts:
@@ -728,6 +737,8 @@ def run_structure(args) -> list[Outcome]:
         text = "ok" if result.status == 0 else classify(result.message)
         failed = bool(violations) or any(pattern in result.message for pattern in FAILURE_PATTERNS)
         roundoff = max([i.roundoff for i in result.impacts], default=0.0)
+        across = {f"L{i}-L{j}" for i, j in pairs_across(scene)}
+        strikes = sum(any(c.wall in across for c in i.contacts) for i in result.impacts)
         inaccurate = "could not be solved to round-off" in result.message   # GAC_ERR_IMPACT_ACCURACY
         cause = ""
         if roundoff > 1e-10:                           # the least accurate impact's cause, as the warnings name it
@@ -737,7 +748,7 @@ def run_structure(args) -> list[Outcome]:
                                    impact_contact_indices(run_model, worst), worst.law, worst.residual)
         outcomes.append(Outcome(case, scene.n, planar, run.options["method"], result.status, text, failed,
                                 violations, len(result.impacts), seconds, result.message, roundoff, inaccurate,
-                                cause, capsules, len(obstacles), count))
+                                cause, capsules, len(obstacles), count, strikes))
     return outcomes
 
 
@@ -807,7 +818,9 @@ def chains_summary(outcomes: list[Outcome]) -> str:
     listed = ", ".join(f"{case} ({count} chains)" for case, count in several)
     return (f"several chains: {len(several)} of {len(structures)} structures ({len(runs)} runs) are several chains in "
             f"one box{': ' + listed if listed else ''}; {sum(o.failed for o in runs)} of their runs failed, {checks} on "
-            f"a wall or link-pair check, {sum(o.outcome == 'ok' for o in runs)} ended ok")
+            f"a wall or link-pair check, {sum(o.outcome == 'ok' for o in runs)} ended ok; "
+            f"{sum(o.strikes_across > 0 for o in runs)} runs had links of two chains strike "
+            f"({sum(o.strikes_across for o in runs)} such impacts)")
 
 
 def obstacle_summary(outcomes: list[Outcome]) -> str:

@@ -27,9 +27,7 @@ inertias, walls, restitutions, start and integrator through the parameter vector
 Every run is checked independently of the engine's own checks (``check_run``):
   * no NaN in the samples, the impact states and the final state;
   * penetration: the compiled gap kernel on every sample and impact state >= -PEN_TOL (relative to the
-    chain's extent, plus the loop's simultaneity window: 100 (atol + rtol x extent) for the adaptive methods, at
-    least the loop's contact_tol (1e-6 m), within which a contact counts as touching and may rest; plus RK4_PEN x
-    the extent for RK4);
+    chain's extent, plus the simultaneity window of the adaptive methods; RK4_PEN x the extent for RK4);
   * capsules against walls, in numpy from the joint points (model.contact_points): a capsule link's wall gap,
     the distance of its segment's nearest point (an end point) to the wall less its radius, >= -the same tolerance;
   * capsules against capsules: for every link pair of the scene, the distance of the two segments (an
@@ -66,7 +64,6 @@ from codegen.scene import (Chains, LineLink, Obstacle, RigidLink, Scene, SceneEr
                            contact_points as scene_contact_points)
 
 PEN_TOL = 1e-9            # m per m of the chain's extent (at least 1e-9 m), see check_run
-CONTACT_TOL = 1e-6        # m: the loop's contact_tol (its default, which the study's runs keep), see check_run
 RK4_PEN = 1e-5            # RK4 has no tolerance: its crossings are located on a cubic Hermite interpolant
 ENERGY_TOL = 1e-7         # relative energy change allowed at an impact (round-off of ill-conditioned laws)
 BUDGET = 20.0             # s of wall time per run
@@ -639,10 +636,7 @@ def check_run(model, run: Run, result, seconds: float, budget: float) -> list[st
     if not all(np.all(np.isfinite(a)) for a in arrays):
         return ["non-finite state"]
     method = run.options["method"]
-    # the loop's simultaneity window (gac_simultaneity_window): 100 graze depths (atol + rtol x extent; 0 for RK4), at
-    # least contact_tol, the gap within which a contact counts as touching (and may rest, a link pair too)
-    graze = 0.0 if method == "rk4" else run.options["atol"] + run.options["rtol"] * run.extent
-    window = max(100 * graze, run.options.get("contact_tol", CONTACT_TOL))
+    window = 0.0 if method == "rk4" else 100 * (run.options["atol"] + run.options["rtol"] * run.extent)
     pen_tol = PEN_TOL * max(1.0, run.extent) + window + (RK4_PEN * run.extent if method == "rk4" else 0.0)
     states = [layout.reduce(q) for q in result.q] + [layout.reduce(i.q) for i in result.impacts]
     if states and model.contacts:

@@ -19,10 +19,18 @@ margins add the largest radius and the start is redrawn until no pair overlaps);
 of a fifth of the structures (has_obstacle_runs, from the stream [seed, structure, OBSTACLE_STREAM]; per run, from
 [seed, structure, OBSTACLE_STREAM, run], after the run is drawn: one or two spheres, bars or boxes of 1e-2 ... 0.3 of
 the chain's extent, centred inside the run's box and clear of its start, restitution 0, 1 or uniform; the structure
-is compiled with them for that run, an obstacle's place being a constant of the model); rates up to 20 rad/s; DOPRI5 and
-DOP853 at rtol 1e-11 ... 1e-6 (atol = rtol x the shortest link, at least 1e-16) and RK4 at dt 1e-5 ... 1e-3 s.  A
-*structure* (n, link kinds, twists, planar or not) is compiled once; its runs draw new lengths, masses,
-inertias, walls, restitutions, start and integrator through the parameter vector and the start override.
+is compiled with them for that run, an obstacle's place being a constant of the model); several chains in one box
+for a tenth of the study's structures (has_chain_runs, from the stream [seed, structure, CHAINS_STREAM], the
+structure and its runs from [seed, structure, CHAINS_STREAM, 1], so every other structure and its runs are as they
+were; run_structure draws them only when the study asks, as it does obstacles): two chains, three in a quarter of
+them, of 1 ... 4 links each (random_chains: kinds, twists and capsules as above, at least one capsule per chain, one
+link restitution for every pair; no obstacles), each run placing every chain's base uniformly in a cube as wide as
+the chains together and redrawing until no link pair of a chain or across two chains overlaps, each base driven
+towards the others (random_chains_run); rates up to 20 rad/s; DOPRI5 and DOP853 at rtol 1e-11 ... 1e-6 (atol = rtol
+x the shortest link, at least 1e-16) and RK4 at dt 1e-5 ... 1e-3 s.  A *structure* (n, link kinds, twists, planar
+or not) is compiled once; its runs draw new lengths, masses, inertias, walls, restitutions, start and integrator
+through the parameter vector and the start override (a structure of several chains: each chain's own parameters,
+c2.l_1 ..., in the model's vector; the chains' coordinates stacked, chain k's after the earlier chains').
 
 Every run is checked independently of the engine's own checks (``check_run``):
   * no NaN in the samples, the impact states and the final state;
@@ -30,8 +38,12 @@ Every run is checked independently of the engine's own checks (``check_run``):
     chain's extent, plus the simultaneity window of the adaptive methods; RK4_PEN x the extent for RK4);
   * capsules against walls, in numpy from the joint points (model.contact_points): a capsule link's wall gap,
     the distance of its segment's nearest point (an end point) to the wall less its radius, >= -the same tolerance;
+    with several chains every chain's links (its rows of the joint points, counted here from the chains' sizes)
+    against the walls its own points touch, line links included;
   * capsules against capsules: for every link pair of the scene, the distance of the two segments (an
     independent closest-points computation, not the model's link_gap) less r_i + r_j >= -the same tolerance;
+    with several chains every chain's own pairs and every pair of links of two chains with a capsule among them
+    (all_link_pairs, reported apart as "capsules of two chains overlap");
   * obstacles: every link's gap to every obstacle, the distance of its segment from a sphere's centre or a bar's
     segment less both radii, or for a box the least of an own point-box signed distance along the segment (dense
     samples, then a ternary search) less the link's radius, >= -the same tolerance;

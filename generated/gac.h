@@ -99,9 +99,10 @@
                                           (within 1e-12 (1 + |t|) s).  Also a held one whose normal loses its
                                           derivative */
 #define GAC_ERR_LINK_LINE        -34   /* a link held on another link (or on a bar) turned parallel to it: its
-                                          other end came closer than the held point by more than contact_tol / 10
-                                          (a line contact, which the pair's one-point contact cannot hold); the run
-                                          stops at the start of the step, before the other end passes through */
+                                          other end came closer than the held point by more than round-off (1e-12
+                                          of the two lengths): a line contact, which the pair's one-point contact
+                                          cannot hold; the run stops at the start of that step, before the other
+                                          end passes through */
 
 /* ---- how gac_sim_advance ends: the run's budgets (< 0) and status (> 0) ------------------------ */
 #define GAC_ERR_WALL_TIME        -25   /* the run used opt.max_wall_time seconds of its clock (gac_sim_set_clock)

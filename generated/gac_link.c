@@ -111,7 +111,7 @@ static int gac_segment_pick(const double *a0, const double *a1, const double *b0
         const double lo = gac_clamp01(u0 < u1 ? u0 : u1), hi = gac_clamp01(u0 < u1 ? u1 : u0);
         const double dist = sqrt(best), tie = GAC_PARALLEL_TIE * (sqrt(a) + sqrt(e));
         double x[3], f[3], tt[3];
-        int j, flat = hi > lo;
+        int j, flat = (hi - lo) * sqrt(a) > 1e3 * tie;      /* an overlap of some length, not a crossing's foot */
         for (j = 0; flat && j < 3; ++j) {                /* the overlap's ends and middle within the tie */
             const double w = j == 0 ? lo : (j == 1 ? hi : 0.5 * (lo + hi));
             for (k = 0; k < 3; ++k) x[k] = a0[k] + w * d1[k];

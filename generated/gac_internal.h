@@ -140,6 +140,10 @@ int gac_obstacle_feature(const gac_model *m, int o, const double *x, double *b0,
  * last entries of m->contacts: no Jacobian row; Coulomb friction at impacts only, along their contact frame; at rest
  * they are held frictionless by g = J^T n and their bias, whatever their friction coefficient) */
 int gac_rowless(const gac_model *m, int c);             /* 1 if contact c is a link pair or an obstacle */
+/* The first held link pair or link on a bar of set[0..n-1] whose other end came closer than its held point by more
+ * than tol over the step x0 -> x1 (a line contact its one point cannot hold), else -1 (gac_link.c). */
+int gac_line_contact(const gac_model *m, const double *x0, const double *x1, const double *p, int n, const int *set,
+                     double tol);
 int gac_kernel_contacts(const gac_model *m);            /* the contacts before them: those of contact_gaps */
 int gac_has_link(const gac_model *m, int n, const int *list);   /* 1 if list[0..n-1] holds one of them */
 /* every contact's gap (ncontact): the kernel's, then each link pair's and obstacle's (gac_link_gap,

@@ -379,6 +379,9 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             }
             continue;                                         /* grazing: carry on from the touch */
         }
+        if (s->nresting > 0 && gac_has_link(md, s->nresting, s->resting)   /* a held pair's other end down too */
+            && gac_line_contact(md, s->x, s->x1, s->p, s->nresting, s->resting, 0.0) >= 0)
+            return GAC_ERR_LINK_LINE;
         gac_add_work(s, t1);
         if (s->fail) return s->fail;
         gac_emit(s, t1, t_eval, n_eval, i_eval, x_eval);

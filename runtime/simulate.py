@@ -962,6 +962,10 @@ def _end_message(model: CompiledModel, sim, code: int, segment_t: float, segment
         message += (f" (the contact closest at the stop: link {pair.i} on the obstacle {pair.obstacle.name}, "
                     f"{pair.name})" if isinstance(pair, ObstacleContact)
                     else f" (the pair closest at the stop: links {pair.i} and {pair.j}, {pair.name})")
+    if code == lib.GAC_ERR_LINK_LINE:
+        held = [model.contacts[c][1].name for c in range(len(model.contacts))
+                if int(sim.is_resting[c]) and isinstance(model.contacts[c][1], (LinkPair, ObstacleContact))]
+        message += f" (held at the stop: {', '.join(held)})"
     if code == lib.GAC_ERR_NONFINITE and sim.opt.method == lib.GAC_METHOD_RK4:
         message += f" (rk4 with dt = {dt:g} s is unstable on this motion: reduce dt, or use an adaptive method)"
     return message

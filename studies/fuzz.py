@@ -19,10 +19,18 @@ margins add the largest radius and the start is redrawn until no pair overlaps);
 of a fifth of the structures (has_obstacle_runs, from the stream [seed, structure, OBSTACLE_STREAM]; per run, from
 [seed, structure, OBSTACLE_STREAM, run], after the run is drawn: one or two spheres, bars or boxes of 1e-2 ... 0.3 of
 the chain's extent, centred inside the run's box and clear of its start, restitution 0, 1 or uniform; the structure
-is compiled with them for that run, an obstacle's place being a constant of the model); rates up to 20 rad/s; DOPRI5 and
-DOP853 at rtol 1e-11 ... 1e-6 (atol = rtol x the shortest link, at least 1e-16) and RK4 at dt 1e-5 ... 1e-3 s.  A
-*structure* (n, link kinds, twists, planar or not) is compiled once; its runs draw new lengths, masses,
-inertias, walls, restitutions, start and integrator through the parameter vector and the start override.
+is compiled with them for that run, an obstacle's place being a constant of the model); several chains in one box
+for a tenth of the study's structures (has_chain_runs, from the stream [seed, structure, CHAINS_STREAM], the
+structure and its runs from [seed, structure, CHAINS_STREAM, 1], so every other structure and its runs are as they
+were; run_structure draws them only when the study asks, as it does obstacles): two chains, three in a quarter of
+them, of 1 ... 4 links each (random_chains: kinds, twists and capsules as above, at least one capsule per chain, one
+link restitution for every pair; no obstacles), each run placing every chain's base uniformly in a cube as wide as
+the chains together and redrawing until no link pair of a chain or across two chains overlaps, each base driven
+towards the others (random_chains_run); rates up to 20 rad/s; DOPRI5 and DOP853 at rtol 1e-11 ... 1e-6 (atol = rtol
+x the shortest link, at least 1e-16) and RK4 at dt 1e-5 ... 1e-3 s.  A *structure* (n, link kinds, twists, planar
+or not) is compiled once; its runs draw new lengths, masses, inertias, walls, restitutions, start and integrator
+through the parameter vector and the start override (a structure of several chains: each chain's own parameters,
+c2.l_1 ..., in the model's vector; the chains' coordinates stacked, chain k's after the earlier chains').
 
 Every run is checked independently of the engine's own checks (``check_run``):
   * no NaN in the samples, the impact states and the final state;
@@ -30,8 +38,12 @@ Every run is checked independently of the engine's own checks (``check_run``):
     chain's extent, plus the simultaneity window of the adaptive methods; RK4_PEN x the extent for RK4);
   * capsules against walls, in numpy from the joint points (model.contact_points): a capsule link's wall gap,
     the distance of its segment's nearest point (an end point) to the wall less its radius, >= -the same tolerance;
+    with several chains every chain's links (its rows of the joint points, counted here from the chains' sizes)
+    against the walls its own points touch, line links included;
   * capsules against capsules: for every link pair of the scene, the distance of the two segments (an
     independent closest-points computation, not the model's link_gap) less r_i + r_j >= -the same tolerance;
+    with several chains every chain's own pairs and every pair of links of two chains with a capsule among them
+    (all_link_pairs, reported apart as "capsules of two chains overlap");
   * obstacles: every link's gap to every obstacle, the distance of its segment from a sphere's centre or a bar's
     segment less both radii, or for a box the least of an own point-box signed distance along the segment (dense
     samples, then a ternary search) less the link's radius, >= -the same tolerance;
@@ -60,7 +72,8 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from codegen.scene import LineLink, Obstacle, RigidLink, Scene, SceneError, Wall, WALL_NAMES
+from codegen.scene import (Chains, LineLink, Obstacle, RigidLink, Scene, SceneError, Wall, WALL_NAMES,
+                           contact_points as scene_contact_points)
 
 PEN_TOL = 1e-9            # m per m of the chain's extent (at least 1e-9 m), see check_run
 RK4_PEN = 1e-5            # RK4 has no tolerance: its crossings are located on a cubic Hermite interpolant
@@ -80,6 +93,8 @@ OBSTACLE_SHARE = 0.2      # structures whose runs have fixed obstacles in the bo
 OBSTACLE_STREAM = 7       # the random stream [seed, structure, OBSTACLE_STREAM(, run)] that decides it and draws them
 OBSTACLE_TRIES = 50       # placements drawn per obstacle before it is left out
 OBSTACLE_CLEAR = 1e-2     # an obstacle's least gap to every link at the start, per m of the chain's extent
+CHAINS_SHARE = 0.1        # structures drawn as several chains in one box (the study's; see draw_structure)
+CHAINS_STREAM = 23        # the random stream [seed, structure, CHAINS_STREAM(, 1)] that decides it and draws them
 
 # Stops that are failures of the engine: its own post-impact checks and non-finite states.
 FAILURE_PATTERNS = (
@@ -207,6 +222,20 @@ def random_run(rng, scene: Scene, model) -> Run:
         raise ValueError(f"{scene.name}: no start without overlapping capsules in {START_TRIES} draws")
     lo, hi = points.min(axis=0), points.max(axis=0)
     extent = float(max((hi - lo).max(), min(link.length for link in links)))
+    _draw_box(rng, names, p, lo, hi, extent, reach)
+    omega = _log_uniform(rng, 0.1, 20.0)
+    qd = np.zeros(scene.nq)
+    qd[:2 + n] = rng.uniform(-omega, omega, 2 + n)
+    qd[2 + n:] = rng.uniform(-1.0, 1.0, 3) * omega * extent
+    if planar:
+        qd[0] = qd[1] = qd[-1] = 0.0
+    t_end, options = _draw_end_and_integrator(rng, model, q_model, qd, p, extent, min(link.length for link in links))
+    return Run(p, q, qd, t_end, options, extent)
+
+
+def _draw_box(rng, names, p: np.ndarray, lo, hi, extent: float, reach: float) -> None:
+    """The walls around the start's points (lo, hi: their least and largest coordinates; margins 1e-3 ... 1 of the
+    extent plus the largest radius), the walls' restitutions and friction coefficients, written into p."""
     for name in names:
         if name.startswith("wall_"):
             axis, side = int(name[6]) - 1, name.endswith("max")
@@ -216,12 +245,10 @@ def random_run(rng, scene: Scene, model) -> Run:
             p[names.index(name)] = float(rng.choice([0.0, 1.0, rng.uniform()]))
         elif name.startswith("friction_"):
             p[names.index(name)] = float(rng.uniform(0.0, 1.5))
-    omega = _log_uniform(rng, 0.1, 20.0)
-    qd = np.zeros(scene.nq)
-    qd[:2 + n] = rng.uniform(-omega, omega, 2 + n)
-    qd[2 + n:] = rng.uniform(-1.0, 1.0, 3) * omega * extent
-    if planar:
-        qd[0] = qd[1] = qd[-1] = 0.0
+
+
+def _draw_end_and_integrator(rng, model, q_model, qd: np.ndarray, p, extent: float, shortest: float):
+    """t_end (5 extents at the start's fastest point speed, 0.05 ... T_END_MAX s) and the integrator's options."""
     speed = max(float(np.abs(model.contact_velocities(q_model, model.layout.reduce(qd), p)).max()), 1e-6)
     t_end = float(min(T_END_MAX, max(0.05, 5.0 * extent / speed)))
     kind = rng.uniform()
@@ -235,9 +262,134 @@ def random_run(rng, scene: Scene, model) -> Run:
         options = {"method": "rk4", "dt": _log_uniform(rng, 1e-5, 1e-3)}
     else:
         rtol = _log_uniform(rng, 1e-11, 1e-6)
-        options = {"method": method, "rtol": rtol,
-                   "atol": max(rtol * min(link.length for link in links), 1e-16)}
+        options = {"method": method, "rtol": rtol, "atol": max(rtol * shortest, 1e-16)}
+    return t_end, options
+
+
+# ---------------------------------------------------------------------------
+# several chains in one box
+# ---------------------------------------------------------------------------
+def has_chain_runs(seed: int, index: int) -> bool:
+    """Whether the study draws structure ``index`` as several chains (random_chains) instead of random_structure's one
+    chain: a stream apart from the structure's, so that every one-chain structure and its runs are as they were."""
+    return bool(np.random.default_rng([seed, index, CHAINS_STREAM]).uniform() < CHAINS_SHARE)
+
+
+def chains_stream(seed: int, index: int):
+    """The stream a multi-chain structure and its runs are drawn from."""
+    return np.random.default_rng([seed, index, CHAINS_STREAM, 1])
+
+
+def random_chains(rng, index: int, n_max: int = 8) -> Chains:
+    """Two chains (three in a quarter of the draws) of 1 ... min(4, n_max) links each, in one frictionless box: link
+    kinds, twists and capsule radii as random_structure's capsule structures (each link a capsule with probability
+    CAPSULE_LINK, at least one per chain; the lengths drawn against the scene's largest radius), planar or spatial
+    for all of them, one restitution for every pair of capsule links (within a chain and across chains).  Each
+    chain's own start (scene.q0) is its chain straightened from the origin, moved along X1 clear of the chains before
+    it; the runs draw their own starts (random_chains_run)."""
+    count = 3 if rng.uniform() < 0.25 else 2
+    planar = rng.uniform() < 0.35
+    gravity = float(rng.choice([0.0, 9.81]))
+    link_e = float(rng.choice([0.0, 1.0, rng.uniform()]))
+    walls = tuple(Wall(name, -1e3 if name.endswith("min") else 1e3, 1.0)
+                  for name in WALL_NAMES if not (planar and name.startswith("x3")))
+    sizes = [int(rng.integers(1, min(4, n_max) + 1)) for _ in range(count)]
+    capsules = []
+    for n in sizes:
+        capsule = rng.uniform(size=n) < CAPSULE_LINK
+        capsule[int(rng.integers(n))] |= not capsule.any()
+        capsules.append([_log_uniform(rng, *RADIUS_RANGE) if c else 0.0 for c in capsule])
+    reach = max(r for radii in capsules for r in radii)
+    chains, cursor = [], -0.9e3
+    for k, (n, radii) in enumerate(zip(sizes, capsules), start=1):
+        links = tuple(_random_link(rng, str(rng.choice(["line", "rigid"])), planar, r, reach) for r in radii)
+        twists = ()
+        if not planar and n > 1:
+            twists = tuple(tuple(map(tuple, np.eye(3) if rng.uniform() < 0.3 else _rotation(rng)))
+                           for _ in range(n - 1))
+        q0 = [-math.pi / 2, 0.0] + [0.0] * n + [0.0, 0.0, 0.0]
+        chain = Scene(name=f"fuzz{index}_c{k}", links=links, twists=twists, gravity=gravity, walls=walls,
+                      q0=tuple(q0), link_restitution=link_e)
+        points = scene_contact_points(chain, np.array(q0))
+        q0[n + 2] = cursor - points[:, 0].min() + reach         # the chain's least X1 just after the cursor
+        cursor += points[:, 0].max() - points[:, 0].min() + 3 * reach
+        chains.append(replace(chain, q0=tuple(q0)))
+    return Chains(name=f"fuzz{index}", chains=tuple(chains), link_restitution=link_e)
+
+
+def random_chains_run(rng, scene: Chains, model) -> Run:
+    """A run of several chains: each chain's links redrawn as random_run's (same kinds and radii), their parameters
+    written to the chain's own names in p (c2.l_1 ...); a start where each chain's angles are random and its base is
+    placed uniformly in a cube as wide as the chains' extents together (no link pair of a chain or across chains
+    overlapping: redrawn up to START_TRIES times), a box around it, restitutions, rates (each chain's base driven
+    towards the others' centre by a random share of its speed, so that they meet) and an integrator."""
+    planar = not any(w.name.startswith("x3") for w in scene.walls)
+    reach = max(link.radius for link in scene.links)
+    names = scene.parameter_names()
+    p = model.p.copy()
+    p[names.index("g")] = scene.gravity
+    shortest = math.inf
+    for k, chain in enumerate(scene.chains, start=1):
+        links = tuple(_random_link(rng, link.kind, planar, link.radius, reach) for link in chain.links)
+        values = [v for link in links for v in link.param_values()]
+        own = chain.parameter_names()[1:1 + len(values)]          # the chain's link parameters, after g
+        for name, value in zip(own, values):
+            p[names.index(scene.combined_name(k, name))] = value
+        shortest = min([shortest] + [link.length for link in links])
+    pairs, radii = all_link_pairs(scene), point_radii(scene)
+    bases = [scene.state_offset(k) + chain.n + 2 for k, chain in enumerate(scene.chains, start=1)]
+    for _ in range(START_TRIES):
+        q = np.zeros(scene.nq)
+        for k, chain in enumerate(scene.chains, start=1):
+            s = scene.state_offset(k)
+            q[s + 2:s + 2 + chain.n] = rng.uniform(-math.pi, math.pi, chain.n)
+            if planar:
+                q[s] = -math.pi / 2
+            else:
+                q[s] = rng.uniform(-math.pi, math.pi)
+                q[s + 1] = rng.uniform(-1.2, 1.2)
+        points = model.contact_points(model.layout.reduce(q), p)     # every base at the origin
+        span = sum(float(np.ptp(points[rows], axis=0).max()) for rows in chain_rows(scene))
+        for b in bases:
+            q[b:b + 3] = rng.uniform(-span / 2, span / 2, 3)
+            if planar:
+                q[b + 2] = 0.0
+        q_model = model.layout.reduce(q)
+        points = model.contact_points(q_model, p)
+        if min(pair_gaps(points, radii, pairs), default=1.0) > 0.0:
+            break
+    else:
+        raise ValueError(f"{scene.name}: no start without overlapping capsules in {START_TRIES} draws")
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    extent = float(max((hi - lo).max(), shortest))
+    _draw_box(rng, names, p, lo, hi, extent, reach)
+    omega = _log_uniform(rng, 0.1, 20.0)
+    qd = np.zeros(scene.nq)
+    centre = points.mean(axis=0)
+    for k, (chain, rows) in enumerate(zip(scene.chains, chain_rows(scene)), start=1):
+        s, n = scene.state_offset(k), chain.n
+        qd[s:s + 2 + n] = rng.uniform(-omega, omega, 2 + n)
+        towards = centre - points[rows].mean(axis=0)
+        towards /= max(float(np.linalg.norm(towards)), 1e-300)
+        qd[s + 2 + n:s + 5 + n] = (rng.uniform(-1.0, 1.0, 3) + rng.uniform(0.0, 2.0) * towards) * omega * extent
+        if planar:
+            qd[s] = qd[s + 1] = qd[s + 4 + n] = 0.0
+    t_end, options = _draw_end_and_integrator(rng, model, q_model, qd, p, extent, shortest)
     return Run(p, q, qd, t_end, options, extent)
+
+
+def draw_structure(seed: int, index: int, n_max: int, chains: bool):
+    """The study's structure ``index`` and the stream its runs are drawn from: several chains where ``chains`` and
+    has_chain_runs say so, else random_structure's chain."""
+    if chains and has_chain_runs(seed, index):
+        rng = chains_stream(seed, index)
+        return random_chains(rng, index, n_max), rng
+    rng = np.random.default_rng([seed, index])
+    return random_structure(rng, index, n_max), rng
+
+
+def draw_run(rng, scene, model) -> Run:
+    return random_chains_run(rng, scene, model) if isinstance(scene, Chains) else random_run(rng, scene, model)
 
 
 def has_obstacle_runs(seed: int, index: int) -> bool:
@@ -319,6 +471,8 @@ class Outcome:
     cause: str = ""           # for a run whose least accurate impact is above 1e-10: why (runtime accuracy_cause)
     capsules: bool = False    # the structure has capsule links (and link pairs)
     obstacles: int = 0        # fixed obstacles in the run's box
+    chains: int = 1           # chains in the box (random_chains: 2 or 3)
+    strikes_across: int = 0   # impacts with a contact between links of two chains (labelled L{i}-L{j}, global links)
 
 
 def classify(message: str) -> str:
@@ -350,6 +504,44 @@ def pair_gaps(points: np.ndarray, radii, pairs) -> list[float]:
     O_i O_{i+1} and O_j O_{j+1} less r_i + r_j."""
     return [segment_distance(points[i - 1], points[i], points[j - 1], points[j]) - radii[i - 1] - radii[j - 1]
             for i, j in pairs]
+
+
+def chains_of(scene) -> tuple:
+    """The one-chain scenes of a scene: a Chains' chains, or the scene itself."""
+    return tuple(scene.chains) if isinstance(scene, Chains) else (scene,)
+
+
+def chain_rows(scene) -> list[range]:
+    """The rows of each chain's joint points O_1..O_{n+1} in the model's contact_points (a chain's n + 1 points after
+    the earlier chains'), counted here from the chains' sizes."""
+    rows, start = [], 0
+    for chain in chains_of(scene):
+        rows.append(range(start, start + chain.n + 1))
+        start += chain.n + 1
+    return rows
+
+
+def point_radii(scene) -> list[float]:
+    """The capsule radius of the link that starts at each joint point (0 at each chain's last point), in the rows of
+    contact_points: pair_gaps' radii, link i being the segment of rows i - 1 and i."""
+    return [r for chain in chains_of(scene) for r in [link.radius for link in chain.links] + [0.0]]
+
+
+def all_link_pairs(scene) -> list[tuple[int, int]]:
+    """Every link pair that must stay apart, numbered as pair_gaps reads them (link i: the segment of rows i - 1, i,
+    the global link number of a model of several chains): each chain's own pairs (Scene.link_pairs: not adjacent, a
+    capsule among them), then pairs_across."""
+    rows = chain_rows(scene)
+    return [(rows[k].start + i, rows[k].start + j) for k, chain in enumerate(chains_of(scene))
+            for i, j in chain.link_pairs()] + pairs_across(scene)
+
+
+def pairs_across(scene) -> list[tuple[int, int]]:
+    """Every pair of links of two different chains with radii adding up to more than 0 (all_link_pairs' numbers)."""
+    rows, radii = chain_rows(scene), point_radii(scene)
+    links = [[rows[k].start + i for i in range(1, chain.n + 1)] for k, chain in enumerate(chains_of(scene))]
+    return [(i, j) for k in range(len(links)) for l in range(k + 1, len(links))
+            for i in links[k] for j in links[l] if radii[i - 1] + radii[j - 1] > 0.0]
 
 
 def box_signed_distance(x, centre, half_extents, rotation) -> float:
@@ -401,35 +593,50 @@ def check_obstacles(model, run: Run, states, pen_tol: float) -> list[str]:
     return []
 
 
-def capsule_wall_gaps(points: np.ndarray, radii, walls) -> list[float]:
+def capsule_wall_gaps(points: np.ndarray, radii, walls, every_link: bool = False) -> list[float]:
     """Each capsule link's gap to each wall from the joint points: the signed distance of its segment's nearest
-    point (the nearer end, the distance being linear along the segment) less its radius."""
+    point (the nearer end, the distance being linear along the segment) less its radius; every_link: the links of
+    no thickness too (their nearer joint point's distance)."""
     gaps = []
     for w in walls:
         inward = points[:, w.axis] - w.position if w.side < 0 else w.position - points[:, w.axis]
         gaps += [min(inward[p - 1] for p in (i, i + 1) if p in w.points) - r for i, r in enumerate(radii, start=1)
-                 if r > 0.0 and (i in w.points or i + 1 in w.points)]
+                 if (r > 0.0 or every_link) and (i in w.points or i + 1 in w.points)]
     return gaps
 
 
 def check_capsules(model, run: Run, states, pen_tol: float) -> list[str]:
-    """The capsules' checks (module docstring) on full-layout states: walls at the run's positions in p."""
+    """The capsules' checks (module docstring) on full-layout states: walls at the run's positions in p.  Several
+    chains: every chain's links against the walls its own points touch (each link, a capsule or not: a line link's
+    gap is its nearer joint point's), every chain's own pairs and every pair across chains (all_link_pairs)."""
     scene = model.scene
-    radii = [link.radius for link in scene.links]
+    several = isinstance(scene, Chains)
+    radii = point_radii(scene)
     if not any(radii):
         return []
     names = scene.parameter_names()
-    walls = [replace(w, position=float(run.p[names.index(f"wall_{w.name}")])) for w in scene.walls]
-    pairs, violations = scene.link_pairs(), []
-    deepest_wall = deepest_pair = math.inf
+    rows = chain_rows(scene)
+    pairs, across = all_link_pairs(scene), set(pairs_across(scene))
+    chains = [(chain, [link.radius for link in chain.links],
+               [replace(w, position=float(run.p[names.index(f"wall_{w.name}")])) for w in chain.walls])
+              for chain in chains_of(scene)]
+    violations = []
+    deepest_wall = deepest_pair = deepest_across = math.inf
     for q in states:
         points = model.contact_points(model.layout.reduce(q), run.p)
-        deepest_wall = min([deepest_wall] + capsule_wall_gaps(points, radii, walls))
-        deepest_pair = min([deepest_pair] + pair_gaps(points, radii, pairs))
+        for (chain, chain_radii, walls), r in zip(chains, rows):
+            gaps = capsule_wall_gaps(points[r.start:r.stop], chain_radii, walls, every_link=several)
+            deepest_wall = min([deepest_wall] + gaps)
+        gaps = pair_gaps(points, radii, pairs)
+        deepest_pair = min([deepest_pair] + [g for g, pair in zip(gaps, pairs) if pair not in across])
+        deepest_across = min([deepest_across] + [g for g, pair in zip(gaps, pairs) if pair in across])
     if deepest_wall < -pen_tol:
-        violations.append(f"capsule penetrates a wall by {-deepest_wall:.3g} m > {pen_tol:.3g} m")
+        what = "a link" if several else "capsule"
+        violations.append(f"{what} penetrates a wall by {-deepest_wall:.3g} m > {pen_tol:.3g} m")
     if deepest_pair < -pen_tol:
         violations.append(f"capsules overlap by {-deepest_pair:.3g} m > {pen_tol:.3g} m")
+    if deepest_across < -pen_tol:
+        violations.append(f"capsules of two chains overlap by {-deepest_across:.3g} m > {pen_tol:.3g} m")
     return violations
 
 
@@ -475,15 +682,18 @@ def check_run(model, run: Run, result, seconds: float, budget: float) -> list[st
 
 def run_structure(args) -> list[Outcome]:
     """Compile one structure and run its runs (one worker's job).  args: (seed, index, runs, budget, n_max[,
-    obstacles]); obstacles True (the study's runs): a structure that has_obstacle_runs puts each run's
-    random_obstacles into the box, compiling the structure with them for that run (False: the runs as drawn)."""
+    obstacles[, chains]]); obstacles True (the study's runs): a structure that has_obstacle_runs puts each run's
+    random_obstacles into the box, compiling the structure with them for that run (False: the runs as drawn);
+    chains True (the study's runs): a structure that has_chain_runs is drawn as several chains (random_chains, no
+    obstacles; False: random_structure's chain)."""
     seed, index, runs, budget, n_max = args[:5]
     obstacle_runs = bool(args[5]) if len(args) > 5 else False
-    obstacle_runs = obstacle_runs and has_obstacle_runs(seed, index)
+    chain_runs = bool(args[6]) if len(args) > 6 else False
     from runtime.model import load_model
     from runtime.simulate import accuracy_cause, impact_contact_indices, simulate
-    rng = np.random.default_rng([seed, index])
-    scene = random_structure(rng, index, n_max)
+    scene, rng = draw_structure(seed, index, n_max, chain_runs)
+    count = len(chains_of(scene))
+    obstacle_runs = obstacle_runs and count == 1 and has_obstacle_runs(seed, index)
     planar = not any(wall.name.startswith("x3") for wall in scene.walls)   # a planar structure has no X3 walls
     capsules = has_capsules(scene)
     outcomes = []
@@ -491,14 +701,14 @@ def run_structure(args) -> list[Outcome]:
         model = load_model(scene, specialise=False)
     except Exception as exc:                           # noqa: BLE001 - reported as an outcome
         return [Outcome(f"{seed}-{index}/{k}", scene.n, False, "-", -1, f"exception: {classify(str(exc))}", True,
-                        message=str(exc), capsules=capsules) for k in range(runs)]
+                        message=str(exc), capsules=capsules, chains=count) for k in range(runs)]
     for k in range(runs):
         case = f"{seed}-{index}/{k}"
         try:
-            run = random_run(rng, scene, model)
+            run = draw_run(rng, scene, model)
         except ValueError as exc:                      # no start without overlapping capsules: the draw's limit
             outcomes.append(Outcome(case, scene.n, planar, "-", -1, f"no start: {classify(str(exc))}", False,
-                                    message=str(exc), capsules=capsules))
+                                    message=str(exc), capsules=capsules, chains=count))
             continue
         run_model, obstacles = model, ()
         if obstacle_runs:
@@ -511,7 +721,7 @@ def run_structure(args) -> list[Outcome]:
             except Exception as exc:                   # noqa: BLE001 - reported as an outcome
                 outcomes.append(Outcome(case, scene.n, planar, run.options["method"], -1,
                                         f"exception: {classify(str(exc))}", True, message=str(exc),
-                                        capsules=capsules, obstacles=len(obstacles)))
+                                        capsules=capsules, obstacles=len(obstacles), chains=count))
                 continue
         start = time.perf_counter()
         try:
@@ -521,18 +731,20 @@ def run_structure(args) -> list[Outcome]:
             seconds = time.perf_counter() - start
             outcomes.append(Outcome(case, scene.n, planar, run.options["method"], -1,
                                     f"refused: {classify(str(exc))}", False, seconds=seconds, message=str(exc),
-                                    capsules=capsules, obstacles=len(obstacles)))
+                                    capsules=capsules, obstacles=len(obstacles), chains=count))
             continue
         except Exception:                              # noqa: BLE001 - a traceback is a failure
             outcomes.append(Outcome(case, scene.n, planar, run.options["method"], -1, "exception", True,
                                     message=traceback.format_exc()[-400:], capsules=capsules,
-                                    obstacles=len(obstacles)))
+                                    obstacles=len(obstacles), chains=count))
             continue
         seconds = time.perf_counter() - start
         violations = check_run(run_model, run, result, seconds, budget)
         text = "ok" if result.status == 0 else classify(result.message)
         failed = bool(violations) or any(pattern in result.message for pattern in FAILURE_PATTERNS)
         roundoff = max([i.roundoff for i in result.impacts], default=0.0)
+        across = {f"L{i}-L{j}" for i, j in pairs_across(scene)}
+        strikes = sum(any(c.wall in across for c in i.contacts) for i in result.impacts)
         inaccurate = "could not be solved to round-off" in result.message   # GAC_ERR_IMPACT_ACCURACY
         cause = ""
         if roundoff > 1e-10:                           # the least accurate impact's cause, as the warnings name it
@@ -542,16 +754,18 @@ def run_structure(args) -> list[Outcome]:
                                    impact_contact_indices(run_model, worst), worst.law, worst.residual)
         outcomes.append(Outcome(case, scene.n, planar, run.options["method"], result.status, text, failed,
                                 violations, len(result.impacts), seconds, result.message, roundoff, inaccurate,
-                                cause, capsules, len(obstacles)))
+                                cause, capsules, len(obstacles), count, strikes))
     return outcomes
 
 
 def fuzz(runs: int = 1000, per_structure: int = 10, seed: int = 0, jobs: int | None = None,
-         budget: float = BUDGET, n_max: int = 8, progress=None, obstacles: bool = True) -> list[Outcome]:
+         budget: float = BUDGET, n_max: int = 8, progress=None, obstacles: bool = True,
+         chains: bool = True) -> list[Outcome]:
     """Run ``runs`` random runs (``per_structure`` per compiled structure) on ``jobs`` processes; ``obstacles``: fixed
-    obstacles in the runs of a share of the structures (run_structure)."""
+    obstacles in the runs of a share of the structures; ``chains``: a share of the structures drawn as several
+    chains (run_structure)."""
     structures = max(1, math.ceil(runs / per_structure))
-    tasks = [(seed, index, min(per_structure, runs - index * per_structure), budget, n_max, obstacles)
+    tasks = [(seed, index, min(per_structure, runs - index * per_structure), budget, n_max, obstacles, chains)
              for index in range(structures)]
     outcomes: list[Outcome] = []
     start = time.perf_counter()
@@ -600,6 +814,21 @@ def capsule_summary(outcomes: list[Outcome]) -> str:
             f"{sum(o.outcome == 'ok' for o in runs)} ended ok")
 
 
+def chains_summary(outcomes: list[Outcome]) -> str:
+    """Which structures are several chains in one box, how many runs they had and how those ended."""
+    structures = {o.case.split("/")[0] for o in outcomes}
+    runs = [o for o in outcomes if o.chains > 1]
+    several = sorted({o.case.split("/")[0]: o.chains for o in runs}.items(),
+                     key=lambda kv: [int(x) for x in kv[0].split("-")])
+    checks = sum(any(v.startswith(("capsule", "a link")) for v in o.violations) for o in runs)
+    listed = ", ".join(f"{case} ({count} chains)" for case, count in several)
+    return (f"several chains: {len(several)} of {len(structures)} structures ({len(runs)} runs) are several chains in "
+            f"one box{': ' + listed if listed else ''}; {sum(o.failed for o in runs)} of their runs failed, {checks} on "
+            f"a wall or link-pair check, {sum(o.outcome == 'ok' for o in runs)} ended ok; "
+            f"{sum(o.strikes_across > 0 for o in runs)} runs had links of two chains strike "
+            f"({sum(o.strikes_across for o in runs)} such impacts)")
+
+
 def obstacle_summary(outcomes: list[Outcome]) -> str:
     """How many structures (and their runs) have fixed obstacles, and how those runs ended."""
     structures = {o.case.split("/")[0] for o in outcomes}
@@ -634,12 +863,11 @@ def _rerun(case: str, budget: float, n_max: int) -> int:
         return 2
     seed, index, k = map(int, match.groups())
     from runtime.model import load_model
-    rng = np.random.default_rng([seed, index])
-    scene = random_structure(rng, index, n_max)
+    scene, rng = draw_structure(seed, index, n_max, True)
     model = load_model(scene, specialise=False)
     for _ in range(k + 1):
-        run = random_run(rng, scene, model)
-    if has_obstacle_runs(seed, index):               # the run's obstacles, as run_structure draws them
+        run = draw_run(rng, scene, model)
+    if not isinstance(scene, Chains) and has_obstacle_runs(seed, index):   # the run's obstacles, as run_structure's
         obstacle_rng = np.random.default_rng([seed, index, OBSTACLE_STREAM, k])
         obstacles = random_obstacles(obstacle_rng, scene, model, run)
         if obstacles:
@@ -648,7 +876,7 @@ def _rerun(case: str, budget: float, n_max: int) -> int:
     print(f"scene: {scene}")
     print(f"simulate(model, {run.t_end!r}, p={run.p.tolist()!r}, q0={run.q0.tolist()!r}, "
           f"qd0={run.qd0.tolist()!r}, **{run.options!r})")
-    outcome = next(o for o in run_structure((seed, index, k + 1, budget, n_max, True)) if o.case == case)
+    outcome = next(o for o in run_structure((seed, index, k + 1, budget, n_max, True, True)) if o.case == case)
     print(json.dumps(asdict(outcome), indent=1, default=str))
     return 1 if outcome.failed else 0
 
@@ -680,9 +908,11 @@ def main(argv=None) -> int:
     print(accuracy_summary(outcomes))
     print(capsule_summary(outcomes))
     print(obstacle_summary(outcomes))
+    print(chains_summary(outcomes))
     failed = [o for o in outcomes if o.failed]
     for o in failed[:50]:
-        print(f"FAILED {o.case} ({o.method}, n = {o.n}): {o.violations or o.message[:200]}")
+        several = f", {o.chains} chains" if o.chains > 1 else ""
+        print(f"FAILED {o.case} ({o.method}, n = {o.n}{several}): {o.violations or o.message[:200]}")
     if args.json:
         with open(args.json, "w") as handle:
             json.dump([asdict(o) for o in outcomes], handle, indent=1, default=str)

@@ -378,3 +378,74 @@ def test_the_obstacle_check_can_fail_and_its_box_distance_is_right(compiled):
         doctored = FakeResult(np.array([q, sunk]), np.array([qd, qd]), q, qd)
         violations = fuzz.check_run(obstacle_model, obstacle_run, doctored, 0.1, 20.0)
         assert any(v.startswith("obstacle penetrated by a link by") for v in violations), (obstacle.kind, violations)
+
+
+CHAINS_CASE = (11, 21, 2)      # seed, structure, n_max: three planar chains of 1, 1 and 2 links in one box
+
+
+def test_multi_chain_structures_come_from_their_own_stream():
+    """A tenth of the structures are drawn as several chains (has_chain_runs, a stream apart): two or three chains of
+    1 ... 4 links, each with a capsule, every radius in range; the study's other structures are random_structure's,
+    and without the study's flag every structure is.  The study's pairs across chains are the model's table's."""
+    several = [i for i in range(300) if fuzz.has_chain_runs(0, i)]
+    assert 0.05 < len(several) / 300 < 0.15
+    scenes = [fuzz.random_chains(fuzz.chains_stream(0, i), i) for i in several]
+    assert {len(s.chains) for s in scenes} == {2, 3}
+    assert {c.n for s in scenes for c in s.chains} == {1, 2, 3, 4}
+    assert all(any(link.radius > 0.0 for link in c.links) for s in scenes for c in s.chains)
+    radii = [link.radius for s in scenes for link in s.links if link.radius > 0.0]
+    assert fuzz.RADIUS_RANGE[0] <= min(radii) and max(radii) <= fuzz.RADIUS_RANGE[1]
+    for s in scenes:
+        assert fuzz.pairs_across(s) == [(c.i, c.j) for c in s.cross_link_pairs()]
+    for i in range(40):
+        scene, _ = fuzz.draw_structure(0, i, 8, True)
+        one, _ = fuzz.draw_structure(0, i, 8, False)
+        assert one == fuzz.random_structure(np.random.default_rng([0, i]), i)
+        assert (scene != one) == fuzz.has_chain_runs(0, i)
+
+
+def test_a_multi_chain_structure_runs_through_the_study_path():
+    """Three chains in one box, two runs through run_structure as the study calls it: the outcomes say three chains,
+    links of two chains strike in each run, and both runs end cleanly and pass the checks, every pair across the
+    chains included."""
+    seed, index, n_max = CHAINS_CASE
+    assert fuzz.has_chain_runs(seed, index)
+    outcomes = fuzz.run_structure((seed, index, 2, 30.0, n_max, True, True))
+    assert [o.chains for o in outcomes] == [3, 3] and all(o.strikes_across > 0 for o in outcomes)
+    assert [(o.case, o.violations, o.message) for o in outcomes if o.failed] == []
+    assert fuzz.chains_summary(outcomes).startswith("several chains: 1 of 1 structures (2 runs) are several chains in "
+                                                    "one box: 11-21 (3 chains); 0 of their runs failed")
+
+
+def test_the_checks_across_chains_can_fail(compiled):
+    """Doctored states of the three-chain structure: chain 2 moved so that its first link's middle lies on chain 1's,
+    and a wall moved half a radius into chain 3's capsule: check_run reports the overlap across chains (not as
+    a pair of one chain) and the wall on its link check; the untouched start passes."""
+    seed, index, n_max = CHAINS_CASE
+    rng = fuzz.chains_stream(seed, index)
+    scene = fuzz.random_chains(rng, index, n_max)
+    model = compiled(scene)
+    run = fuzz.random_chains_run(rng, scene, model)
+    run.options = {"method": "dopri5", "rtol": 1e-10, "atol": 1e-12}
+    q, qd = run.q0, run.qd0
+    points = model.contact_points(model.layout.reduce(q), run.p)
+    radii, pairs = fuzz.point_radii(scene), fuzz.all_link_pairs(scene)
+    assert min(fuzz.pair_gaps(points, radii, pairs)) > 0.0
+    clean = FakeResult(np.array([q]), np.array([qd]), q, qd)
+    assert fuzz.check_run(model, run, clean, 0.1, 20.0) == []
+    rows = fuzz.chain_rows(scene)
+    one, two = rows[0].start, rows[1].start
+    crossed = q.copy()
+    base = scene.state_offset(2) + scene.chains[1].n + 2                 # chain 2's X1, X2, X3 in the full layout
+    crossed[base:base + 3] += (points[one] + points[one + 1] - points[two] - points[two + 1]) / 2
+    moved = model.contact_points(model.layout.reduce(crossed), run.p)
+    assert np.allclose(moved[two] + moved[two + 1], points[one] + points[one + 1])
+    violations = fuzz.check_run(model, run, FakeResult(np.array([crossed]), np.array([qd]), crossed, qd), 0.1, 20.0)
+    assert any(v.startswith("capsules of two chains overlap by") for v in violations), violations
+    assert not any(v.startswith("capsules overlap by") for v in violations)
+    link = next(i for i in rows[2][:-1] if radii[i] > 0.0)            # chain 3's capsule: the segment of rows i, i + 1
+    r = radii[link]
+    sunk = fuzz.Run(run.p.copy(), q, qd, run.t_end, run.options, run.extent)
+    sunk.p[scene.parameter_names().index("wall_x2_min")] = min(points[link, 1], points[link + 1, 1]) - r / 2
+    violations = fuzz.check_run(model, sunk, clean, 0.1, 20.0)
+    assert any(v.startswith("a link penetrates a wall by") for v in violations), violations

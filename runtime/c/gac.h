@@ -98,6 +98,11 @@
                                           a wall's contact) or at one instant
                                           (within 1e-12 (1 + |t|) s).  Also a held one whose normal loses its
                                           derivative */
+#define GAC_ERR_LINK_LINE        -34   /* a link held on another link (or on a bar) turned parallel to it: its
+                                          other end came closer than the held point by more than round-off (1e-12
+                                          of the two lengths): a line contact, which the pair's one-point contact
+                                          cannot hold; the run stops at the start of that step, before the other
+                                          end passes through */
 
 /* ---- how gac_sim_advance ends: the run's budgets (< 0) and status (> 0) ------------------------ */
 #define GAC_ERR_WALL_TIME        -25   /* the run used opt.max_wall_time seconds of its clock (gac_sim_set_clock)
@@ -553,7 +558,8 @@ int gac_constrained_dynamics(const gac_model *m, const double *q, const double *
 void gac_contact_info(const gac_model *m, int c, int *point, int *axis, int *normal_sign);
 
 /* Two links as capsules (gac_link.c): link i spans O_i -> O_i+1.  The closest points of two segments a0-a1 and
- * b0-b1: a0 + s (a1 - a0) and b0 + t (b1 - b0), s, t in [0, 1] (parallel segments: the middle of their overlap). */
+ * b0-b1: a0 + s (a1 - a0) and b0 + t (b1 - b0), s, t in [0, 1]: the least distance to round-off (the middle of their
+ * overlap where the distance is flat along it to 1e-12 of the lengths). */
 void gac_segment_closest(const double *a0, const double *a1, const double *b0, const double *b1, double *s,
                          double *t);
 /* The contact of links i and j (1-based, i != j, both in 1..npoint - 1) whose capsule radii add up to `radius` (m):

@@ -20,11 +20,45 @@ static double gac_clamp01(double x)
     return x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x);
 }
 
-void gac_segment_closest(const double *a0, const double *a1, const double *b0, const double *b1, double *s_out,
-                         double *t_out)
+/* The fraction along segment p0 + u d (|d|^2 = dd > 0) of its point nearest to x, and that distance's square. */
+static double gac_foot(const double *p0, const double *d, double dd, const double *x, double *sq)
 {
-    double d1[3], d2[3], r[3], a, e, f, s = 0.0, t = 0.0;
+    double w[3], u;
     int k;
+    for (k = 0; k < 3; ++k) w[k] = x[k] - p0[k];
+    u = gac_clamp01(gac_dot3(w, d) / dd);
+    for (k = 0; k < 3; ++k) w[k] -= u * d[k];
+    *sq = gac_dot3(w, w);
+    return u;
+}
+
+/* |a(s) - b(t)|^2 for a(s) = a0 + s d1, b(t) = b0 + t d2. */
+static double gac_pair_sq(const double *a0, const double *d1, const double *b0, const double *d2, double s, double t)
+{
+    double w[3];
+    int k;
+    for (k = 0; k < 3; ++k) w[k] = a0[k] + s * d1[k] - b0[k] - t * d2[k];
+    return gac_dot3(w, w);
+}
+
+/* The least distance of two segments is reached at the lines' stationary point where it lies inside both, or on
+ * an edge of the unit square of (s, t): an end of one segment and its foot on the other.  Every candidate is a pair
+ * of actual points, so the distance returned is never below the least, and the least is among them to round-off:
+ * the stationary point s = n . (d2 x r) / |n|^2, t = n . (d1 x r) / |n|^2 (n = d1 x d2, r = a0 - b0; the Lagrange
+ * identity's form of the normal equations, whose cross products keep the accuracy the dot-product form
+ * (b f - c e) / (a e - b^2) loses to cancellation as the segments turn parallel) and the four ends' feet.  Where a
+ * stretch of the overlap of b's shadow on a is closest (parallel segments: the distance is flat along it to within
+ * GAC_PARALLEL_TIE of the lengths), the middle of that overlap is taken instead, its distance within the tie of
+ * the least: a lying link's contact held at one point, not at whichever end round-off favours.  A tilt beyond the
+ * tie makes the distance linear along the overlap, least at its nearer end, which is then the closest point. */
+#define GAC_PARALLEL_TIE 1e-12
+
+/* gac_segment_closest's pick, returning 1 where it took the middle of a flat overlap, else 0. */
+static int gac_segment_pick(const double *a0, const double *a1, const double *b0, const double *b1, double *s_out,
+                            double *t_out)
+{
+    double d1[3], d2[3], r[3], n[3], m[3], a, e, nn, sq, best, s = 0.0, t = 0.0, u, v;
+    int k, end;
     for (k = 0; k < 3; ++k) {
         d1[k] = a1[k] - a0[k];
         d2[k] = b1[k] - b0[k];
@@ -32,36 +66,83 @@ void gac_segment_closest(const double *a0, const double *a1, const double *b0, c
     }
     a = gac_dot3(d1, d1);
     e = gac_dot3(d2, d2);
-    f = gac_dot3(d2, r);
     if (a == 0.0 && e == 0.0) {                          /* two points */
-        s = t = 0.0;
-    } else if (a == 0.0) {                               /* segment a is a point: its projection onto b */
-        t = gac_clamp01(f / e);
-    } else {
-        const double c = gac_dot3(d1, r);
-        if (e == 0.0) {                                  /* segment b is a point */
-            s = gac_clamp01(-c / a);
+        *s_out = *t_out = 0.0;
+        return 0;
+    }
+    if (a == 0.0) {                                      /* segment a is a point: its foot on b */
+        *s_out = 0.0;
+        *t_out = gac_foot(b0, d2, e, a0, &sq);
+        return 0;
+    }
+    if (e == 0.0) {                                      /* segment b is a point */
+        *s_out = gac_foot(a0, d1, a, b0, &sq);
+        *t_out = 0.0;
+        return 0;
+    }
+    best = INFINITY;
+    for (end = 0; end < 4; ++end) {                      /* a0, a1 on b; b0, b1 on a */
+        if (end < 2) {
+            u = (double)end;
+            v = gac_foot(b0, d2, e, end == 0 ? a0 : a1, &sq);
         } else {
-            const double b = gac_dot3(d1, d2), denom = a * e - b * b;
-            if (denom > 1e-14 * a * e) {                 /* not parallel: the lines' closest point, clamped */
-                s = gac_clamp01((b * f - c * e) / denom);
-            } else {                                     /* parallel: the middle of the overlap of b's shadow on a */
-                const double u0 = -c / a, u1 = (b - c) / a;
-                const double lo = gac_clamp01(u0 < u1 ? u0 : u1), hi = gac_clamp01(u0 < u1 ? u1 : u0);
-                s = 0.5 * (lo + hi);
-            }
-            t = (b * s + f) / e;                         /* b's closest point to a(s), then a's to b(t) if clamped */
-            if (t < 0.0) {
-                t = 0.0;
-                s = gac_clamp01(-c / a);
-            } else if (t > 1.0) {
-                t = 1.0;
-                s = gac_clamp01((b - c) / a);
-            }
+            v = (double)(end - 2);
+            u = gac_foot(a0, d1, a, end == 2 ? b0 : b1, &sq);
+        }
+        if (sq < best) best = sq, s = u, t = v;
+    }
+    n[0] = d1[1] * d2[2] - d1[2] * d2[1];                /* the stationary point inside both, if any */
+    n[1] = d1[2] * d2[0] - d1[0] * d2[2];
+    n[2] = d1[0] * d2[1] - d1[1] * d2[0];
+    nn = gac_dot3(n, n);
+    if (nn > 0.0) {
+        m[0] = d2[1] * r[2] - d2[2] * r[1], m[1] = d2[2] * r[0] - d2[0] * r[2], m[2] = d2[0] * r[1] - d2[1] * r[0];
+        u = gac_dot3(n, m) / nn;
+        m[0] = d1[1] * r[2] - d1[2] * r[1], m[1] = d1[2] * r[0] - d1[0] * r[2], m[2] = d1[0] * r[1] - d1[1] * r[0];
+        v = gac_dot3(n, m) / nn;
+        if (u > 0.0 && u < 1.0 && v > 0.0 && v < 1.0) {
+            sq = gac_pair_sq(a0, d1, b0, d2, u, v);
+            if (sq < best) best = sq, s = u, t = v;
         }
     }
-    *s_out = s;
-    *t_out = t;
+    {                                                    /* a stretch closest: the middle of the overlap */
+        const double c = gac_dot3(d1, r), b = gac_dot3(d1, d2);
+        const double u0 = -c / a, u1 = (b - c) / a;
+        const double lo = gac_clamp01(u0 < u1 ? u0 : u1), hi = gac_clamp01(u0 < u1 ? u1 : u0);
+        const double dist = sqrt(best), tie = GAC_PARALLEL_TIE * (sqrt(a) + sqrt(e));
+        double x[3], f[3], tt[3];
+        int j, flat = (hi - lo) * sqrt(a) > 1e3 * tie;      /* an overlap of some length, not a crossing's foot */
+        for (j = 0; flat && j < 3; ++j) {                /* the overlap's ends and middle within the tie */
+            const double w = j == 0 ? lo : (j == 1 ? hi : 0.5 * (lo + hi));
+            for (k = 0; k < 3; ++k) x[k] = a0[k] + w * d1[k];
+            tt[j] = gac_foot(b0, d2, e, x, &sq);
+            f[j] = sqrt(sq);
+            flat = f[j] <= dist + tie;
+        }
+        *s_out = flat ? 0.5 * (lo + hi) : s;
+        *t_out = flat ? tt[2] : t;
+        return flat;
+    }
+}
+
+void gac_segment_closest(const double *a0, const double *a1, const double *b0, const double *b1, double *s_out,
+                         double *t_out)
+{
+    (void)gac_segment_pick(a0, a1, b0, b1, s_out, t_out);
+}
+
+/* The distance from x to segment p0 p1. */
+static double gac_point_segment(const double *p0, const double *p1, const double *x)
+{
+    double d[3], sq;
+    int k;
+    for (k = 0; k < 3; ++k) d[k] = p1[k] - p0[k];
+    if (!(gac_dot3(d, d) > 0.0)) {
+        for (k = 0; k < 3; ++k) d[k] = x[k] - p0[k];
+        return sqrt(gac_dot3(d, d));
+    }
+    (void)gac_foot(p0, d, gac_dot3(d, d), x, &sq);
+    return sqrt(sq);
 }
 
 /* The contact geometry of segment a0-a1 (a link) and segment b0-b1 (another link or an obstacle), radii adding up to
@@ -251,6 +332,70 @@ static int gac_rowless_geometry(const gac_model *m, const double *q, const doubl
     }
     *second = k->coordinate;
     return gac_link_gap(m, q, p, k->point, k->coordinate, radius, geometry);
+}
+
+/* A held link pair, or a link held on a bar, touches at one point: an end of one segment on the other, the lines'
+ * stationary point, or the middle of a flat overlap (gac_segment_pick).  Where the segments turn parallel the
+ * other end comes down too: a line contact, which one point cannot hold (the single row keeps the held end on, the
+ * other end passes through; like a block rocking onto its other corner, it needs a second contact).  Over a step
+ * from x0 to x1, with the point held at x0: the held end's distance at x1 against the opposite end's (of the same
+ * segment), or a held middle's against the least; returns the first contact of set[0..n-1] whose other end (or
+ * least) came closer than the held point by more than tol (plus the parallel tie of the lengths), else -1. */
+int gac_line_contact(const gac_model *m, const double *x0, const double *x1, const double *p, int n, const int *set,
+                     double tol)
+{
+    const int npoint = m->npoint;
+    double r0[3 * GAC_AT_LEAST_1(npoint)], r1[3 * GAC_AT_LEAST_1(npoint)];
+    int a, k, loaded = 0;
+    for (a = 0; a < n; ++a) {
+        const gac_contact *c = &m->contacts[set[a]];
+        const double *A0, *A1, *B0, *B1, *seg[4];
+        double s0, t0, s1, t1, x[3], d[3], reach, held, other;
+        int flat, end;
+        if (!gac_rowless(m, set[a])) continue;
+        if (c->kind == GAC_CONTACT_OBSTACLE && gac_obstacle_kind(m, c->coordinate) != GAC_OBSTACLE_SEGMENT) continue;
+        if (!loaded) {
+            m->contact_points(x0, p, r0);
+            m->contact_points(x1, p, r1);
+            loaded = 1;
+        }
+        for (end = 0; end < 2; ++end) {                  /* the two segments at x0 (end 0) and x1 (end 1) */
+            const double *r = end == 0 ? r0 : r1;
+            seg[2 * end] = r + 3 * (c->point - 1);
+            seg[2 * end + 1] = r + 3 * c->point;
+        }
+        if (c->kind == GAC_CONTACT_OBSTACLE) {
+            B0 = m->obstacles + 6 * c->coordinate, B1 = B0 + 3;
+        } else {
+            B0 = r0 + 3 * (c->coordinate - 1), B1 = r0 + 3 * c->coordinate;
+        }
+        flat = gac_segment_pick(seg[0], seg[1], B0, B1, &s0, &t0);
+        if (c->kind == GAC_CONTACT_LINK) B0 = r1 + 3 * (c->coordinate - 1), B1 = r1 + 3 * c->coordinate;
+        A0 = seg[2], A1 = seg[3];
+        for (k = 0; k < 3; ++k) d[k] = A1[k] - A0[k];
+        reach = sqrt(gac_dot3(d, d));
+        for (k = 0; k < 3; ++k) d[k] = B1[k] - B0[k];
+        reach = tol + GAC_PARALLEL_TIE * (reach + sqrt(gac_dot3(d, d)));
+        if (flat) {                                      /* the held middle against the least */
+            (void)gac_segment_pick(A0, A1, B0, B1, &s1, &t1);
+            for (k = 0; k < 3; ++k) x[k] = A0[k] + s0 * (A1[k] - A0[k]);
+            held = gac_point_segment(B0, B1, x);
+            for (k = 0; k < 3; ++k) x[k] = A0[k] + s1 * (A1[k] - A0[k]) - B0[k] - t1 * (B1[k] - B0[k]);
+            if (sqrt(gac_dot3(x, x)) < held - reach) return set[a];
+            continue;
+        }
+        if (s0 == 0.0 || s0 == 1.0) {                    /* an end of the link on the other segment */
+            held = gac_point_segment(B0, B1, s0 == 0.0 ? A0 : A1);
+            other = gac_point_segment(B0, B1, s0 == 0.0 ? A1 : A0);
+            if (other < held - reach) return set[a];
+        }
+        if (t0 == 0.0 || t0 == 1.0) {                    /* an end of the other segment on the link */
+            held = gac_point_segment(A0, A1, t0 == 0.0 ? B0 : B1);
+            other = gac_point_segment(A0, A1, t0 == 0.0 ? B1 : B0);
+            if (other < held - reach) return set[a];
+        }
+    }
+    return -1;
 }
 
 void gac_contact_gaps(const gac_model *m, const double *q, const double *p, double *gaps)

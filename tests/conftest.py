@@ -189,6 +189,20 @@ SANITIZE = ("-std=c99", "-g", "-O1", "-Wall", "-Wextra", "-pedantic", "-Werror",
             "-fno-sanitize-recover=all", "-fno-omit-frame-pointer")
 
 
+def cache_with_library(folder: Path) -> Path:
+    """A new model cache at ``folder`` holding only the C library's object (and its sidecar), copied from the suite's
+    cache: a test about generating or compiling a model into an empty cache need not recompile the library, which
+    every model links (test_build_cache.py's own tests of the library's entry start from nothing)."""
+    import shutil
+    from codegen.options import DEFAULT_FLAGS
+    from runtime.compile import library_object
+    library = library_object(DEFAULT_FLAGS)
+    folder.mkdir(parents=True)
+    for path in (library, library.with_name(f"sha256_{library.stem}.txt")):
+        shutil.copy(path, folder / path.name)
+    return folder
+
+
 def sanitized_build(folder: Path, sources, output: str) -> Path:
     """An executable of the C sources in ``folder`` (a model, a program) linked with the C library built strictly
     with ASan + UBSan, the library compiled once for the whole suite (the build's cache of library objects)."""

@@ -17,6 +17,7 @@ import runtime.model
 from codegen.artifact import text_digest
 from codegen.cache import CacheError, generation_key
 from codegen.scene import default_scene
+from conftest import cache_with_library
 from runtime import load_model
 from runtime.compile import build_key, module_files, verify_module
 
@@ -44,7 +45,7 @@ def assert_valid(folder: Path) -> None:
 @pytest.fixture(scope="module")
 def pristine(tmp_path_factory):
     """A cache holding SCENE's generated text and compiled module, built in a separate process."""
-    folder = tmp_path_factory.mktemp("pristine")
+    folder = cache_with_library(tmp_path_factory.mktemp("pristine") / "cache")
     env = dict(os.environ, GIBBS_APPELL_CACHE=str(folder), PYTHONPATH=str(ROOT))
     code = "from runtime import load_model; from codegen.scene import default_scene; load_model(default_scene(1))"
     subprocess.run([sys.executable, "-c", code], env=env, check=True, cwd=ROOT)
@@ -265,7 +266,7 @@ def test_shipped_scene_by_name_is_loaded_once(builds):
 
 
 def test_reused_model_is_a_real_model(tmp_path, monkeypatch):
-    monkeypatch.setenv("GIBBS_APPELL_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setenv("GIBBS_APPELL_CACHE", str(cache_with_library(tmp_path / "cache")))
     path = tmp_path / "memo.toml"
     path.write_text(SCENE_FILE.format(g="9.81"))
     model = load_model(path)
@@ -277,7 +278,7 @@ def test_reused_model_is_a_real_model(tmp_path, monkeypatch):
 
 # -- one cache for the generator command line and load_model ---------------------------
 def test_codegen_cli_fills_the_cache_load_model_reads(tmp_path, monkeypatch):
-    folder = tmp_path / "cache"
+    folder = cache_with_library(tmp_path / "cache")
     env = dict(os.environ, GIBBS_APPELL_CACHE=str(folder), PYTHONPATH=str(ROOT))
     result = subprocess.run([sys.executable, "-m", "codegen", "--links", "1", "--out", str(tmp_path / "out")],
                             env=env, capture_output=True, text=True, cwd=tmp_path)

@@ -18,7 +18,7 @@ from codegen.ops import count_ops
 from codegen.scene import MAX_LINKS, Scene, LineLink, load_scene
 from codegen.options import build_options
 from runtime.compile import copy_library, library_files
-from conftest import chain
+from conftest import cache_with_library, chain
 
 ROOT = Path(__file__).resolve().parent.parent
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror"]
@@ -268,14 +268,7 @@ BUILD = ("import sys; sys.path.insert(0, {root!r}); from runtime import load_mod
 def test_concurrent_builds_of_the_same_model_both_succeed(tmp_path):
     """Two processes build one model into an empty model cache at once: one module, both runs right.  (The C
     library's object, which every model links, is copied in from the suite's cache: this test is about the model.)"""
-    import shutil
-    from codegen.options import DEFAULT_FLAGS
-    from runtime.compile import library_object
-    library = library_object(DEFAULT_FLAGS)
-    (tmp_path / "cache").mkdir()
-    for path in (library, library.with_name(f"sha256_{library.stem}.txt")):
-        shutil.copy(path, tmp_path / "cache" / path.name)
-    env = dict(os.environ, GIBBS_APPELL_CACHE=str(tmp_path / "cache"))
+    env = dict(os.environ, GIBBS_APPELL_CACHE=str(cache_with_library(tmp_path / "cache")))
     code = BUILD.format(root=str(ROOT))
     procs = [subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.PIPE,
                               stderr=subprocess.PIPE, text=True) for _ in range(2)]

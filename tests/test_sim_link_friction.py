@@ -134,7 +134,8 @@ def test_a_strike_with_a_rough_floor_contact_is_solved_by_the_same_law(chain):
 
 def test_without_friction_the_pair_law_is_the_frictionless_one(chain):
     """friction.links = 0 (the same chain otherwise): the frictional law's result on the pair alone is the
-    frictionless law's to 1e-14, without tangential impulse."""
+    frictionless law's to round-off (1e-13: the two solve the contact's system by separate paths), without
+    tangential impulse."""
     smooth = dataclasses.replace(chain.scene, name="smooth_pair", link_friction=0.0)
     assert smooth.link_contacts()[0].friction == 0.0
     c = pair_index(chain)
@@ -149,7 +150,7 @@ def test_without_friction_the_pair_law_is_the_frictionless_one(chain):
             continue
         expected, F = chain.impact(q, qd, [c], mode="complementarity")
         result = chain.impact_friction(q, qd, [c], law="frictionless")
-        assert np.allclose(result.qd_plus, expected, rtol=0, atol=1e-14 * np.abs(qd).max())
-        assert result.impulse[0] == pytest.approx(F[0], rel=1e-14) and not result.impulse_t.any()
+        assert np.allclose(result.qd_plus, expected, rtol=0, atol=1e-13 * np.abs(qd).max())
+        assert result.impulse[0] == pytest.approx(F[0], rel=1e-13) and not result.impulse_t.any()
         compared += 1
     assert compared > 10

@@ -528,7 +528,7 @@ def _link_entry(c: int, pair, scene: Scene, bake_params: bool) -> dict:
     impacts act along their contact frame, gac_rowless_frame); the radius sum goes to the model's link_radius."""
     friction = float(pair.friction)
     rough = (f"Coulomb friction coefficient c_f = {friction:g} at impacts (along its contact frame)"
-             if friction > 0.0 else "frictionless, never resting")
+             if friction > 0.0 else "frictionless")
     if isinstance(pair, ObstacleContact):
         o = pair.obstacle
         return dict(c=c, point=pair.i, axis=-1, sign=1, row=0,

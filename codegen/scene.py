@@ -308,7 +308,8 @@ class JointStop:
 @dataclass(frozen=True)
 class LinkPair:
     """Links i < j as capsules meeting each other: a contact of the loop (an event when their gap closes, an impact
-    by Newton's law on their closest points' relative normal velocity, frictionless, never resting), with gap = the
+    by Newton's law on their closest points' relative normal velocity (with friction.links' Coulomb coefficient),
+    and resting contact once landed), with gap = the
     distance of their segments less radius = r_i + r_j (m)."""
 
     i: int
@@ -564,7 +565,8 @@ def box_signed_distance(box: "Obstacle", x) -> float:
 @dataclass(frozen=True)
 class ObstacleContact:
     """Link i and a fixed obstacle: a contact of the loop like a link pair whose second side never moves (an event
-    when their gap closes, an impact by Newton's law with the obstacle's e, frictionless, never resting), with gap
+    when their gap closes, an impact by Newton's law with the obstacle's e and friction, and resting contact once
+    landed), with gap
     = the distance of the link's segment from the obstacle's less radius = r_i + r_obstacle (m)."""
 
     i: int

@@ -65,6 +65,58 @@ static void gac_obst_sort(double *list, int count)
     }
 }
 
+/* A segment y(s) = y0 + s e (the box's frame) reaching into the box across one of its edges.  sd's nearest face
+ * (the inside rule) is not the direction that separates them there: the separating axes of a segment and a box are
+ * the 3 face normals and the 3 directions u_k = e x E_k across the segment and an edge (E_k the box's axis k), and
+ * along each the two overlap by the segment's projection's distance into the box's, [-sum_j h_j |u_j|, +same]
+ * (negative when they overlap).  The axis of least overlap is the depth's direction; when it is an edge's (by more
+ * than tie over every face) the gap is that separation (-depth), continuous with the distance outside, n = +-u_k
+ * unit (from the box to the link; the limit of the outside normal across that edge), and s the link's point
+ * nearest to the edge's line.  Returns 1 with gap, s, 0 and n (the box's frame) in geometry, or 0 (a face's depth:
+ * sd's own gap and normal). */
+static int gac_obst_box_edge_cut(const double *h, const double *y0, const double *e, double tie, double *geometry)
+{
+    double face = -INFINITY, edge = -INFINITY, n[3] = {0.0, 0.0, 0.0}, size = 0.0;
+    int k, j, axis = -1;
+    for (k = 0; k < 3; ++k) {
+        const double lo = e[k] < 0.0 ? y0[k] + e[k] : y0[k], hi = e[k] < 0.0 ? y0[k] : y0[k] + e[k];
+        const double sep = lo - h[k] > -h[k] - hi ? lo - h[k] : -h[k] - hi;
+        if (sep > face) face = sep;
+        size += e[k] * e[k];
+    }
+    for (k = 0; k < 3; ++k) {                            /* u_k = e x E_k */
+        const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+        double u[3], len, r = 0.0, p0 = 0.0, p1 = 0.0, sep, sign;
+        u[k] = 0.0, u[k1] = e[k2], u[k2] = -e[k1];
+        len = sqrt(u[k1] * u[k1] + u[k2] * u[k2]);
+        if (!(len > 1e-9 * sqrt(size))) continue;        /* the link along the edge: a face's axis */
+        for (j = 0; j < 3; ++j) {
+            u[j] /= len;
+            r += h[j] * fabs(u[j]);
+            p0 += u[j] * y0[j];
+            p1 += u[j] * (y0[j] + e[j]);
+        }
+        sign = (p0 < p1 ? p0 : p1) - r > -r - (p0 > p1 ? p0 : p1) ? 1.0 : -1.0;
+        sep = sign > 0.0 ? (p0 < p1 ? p0 : p1) - r : -r - (p0 > p1 ? p0 : p1);
+        if (sep > edge) {
+            edge = sep, axis = k;
+            for (j = 0; j < 3; ++j) n[j] = sign * u[j];
+        }
+    }
+    if (axis < 0 || !(edge > face + tie)) return 0;
+    {                                                    /* the edge: y_j = h_j sign(n_j) off axis; s nearest it */
+        const int k1 = (axis + 1) % 3, k2 = (axis + 2) % 3;
+        const double w1 = y0[k1] - (n[k1] < 0.0 ? -h[k1] : h[k1]), w2 = y0[k2] - (n[k2] < 0.0 ? -h[k2] : h[k2]);
+        const double den = e[k1] * e[k1] + e[k2] * e[k2];
+        double s = -(w1 * e[k1] + w2 * e[k2]) / den;
+        geometry[1] = s < 0.0 ? 0.0 : (s > 1.0 ? 1.0 : s);
+    }
+    geometry[0] = edge;
+    geometry[2] = 0.0;
+    for (k = 0; k < 3; ++k) geometry[3 + k] = n[k];
+    return 1;
+}
+
 /* Along y(s) = y0 + s e (the box's frame), sd is, between two consecutive breakpoints (where a coordinate crosses
  * a face's plane +-h_k or 0, or two faces' distances |y_k| - h_k cross), either outside sqrt of a quadratic in s,
  * least at its vertex or an end, or inside the maximum of linear functions, least at a breakpoint.  So the minimum
@@ -136,6 +188,12 @@ static void gac_obst_box_contact(const double *shape, const double *a0, const do
     /* the least a vertex inside its stretch: sd strictly convex there, the minimiser unique (a breakpoint next to
        it ties within round-off only by (s - s*)^2, which the middle would turn into an error of sqrt(tie)) */
     s = vertex[at] ? list[at] : 0.5 * (lo + hi);
+    if (best <= 0.0 && gac_obst_box_edge_cut(h, y0, e, tie, geometry)) {     /* the link across an edge */
+        geometry[0] -= radius;
+        for (k = 0; k < 3; ++k) nl[k] = geometry[3 + k];
+        for (k = 0; k < 3; ++k) geometry[3 + k] = R[3 * k] * nl[0] + R[3 * k + 1] * nl[1] + R[3 * k + 2] * nl[2];
+        return;
+    }
     for (k = 0; k < 3; ++k) y[k] = y0[k] + s * e[k];
     geometry[0] = gac_obst_box_sd(h, y, nl) - radius;
     geometry[1] = s;

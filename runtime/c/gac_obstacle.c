@@ -65,18 +65,19 @@ static void gac_obst_sort(double *list, int count)
     }
 }
 
-/* A segment y(s) = y0 + s e (the box's frame) reaching into the box across one of its edges.  sd's nearest face
- * (the inside rule) is not the direction that separates them there: the separating axes of a segment and a box are
- * the 3 face normals and the 3 directions u_k = e x E_k across the segment and an edge (E_k the box's axis k), and
- * along each the two overlap by the segment's projection's distance into the box's, [-sum_j h_j |u_j|, +same]
- * (negative when they overlap).  The axis of least overlap is the depth's direction; when it is an edge's (by more
- * than tie over every face) the gap is that separation (-depth), continuous with the distance outside, n = +-u_k
- * unit (from the box to the link; the limit of the outside normal across that edge), and s the link's point
- * nearest to the edge's line.  Returns 1 with gap, s, 0 and n (the box's frame) in geometry, or 0 (a face's depth:
- * sd's own gap and normal). */
-static int gac_obst_box_edge_cut(const double *h, const double *y0, const double *e, double tie, double *geometry)
+/* A segment y(s) = y0 + s e (the box's frame) touching or reaching into the box (sd <= 0 somewhere along it) across
+ * one of its edges: sd's nearest face (the inside rule) is then not the direction that separates them, and an impact
+ * along it leaves the link approaching across the edge.  The separating axes of a segment and a box are the 3 face
+ * normals E_k and the 3 directions u_k = e x E_k across the segment and an edge, and along each the two overlap by
+ * the distance of the segment's projection into the box's, [-sum_j h_j |u_j|, +same] (the separation, negative
+ * when they overlap).  The axis of least overlap is the direction of the depth; when it is an edge's (by more than
+ * tie over every face) the contact is the link across that edge: n = +-u_k unit (from the box to the link; the limit
+ * of the outside normal, from the edge's nearest point, as the gap closes) in *n, and in *s the link's point nearest
+ * to the edge's line.  Otherwise (a face's depth) *s and *n are left as sd gives them. */
+static void gac_obst_box_edge_cut(const double *h, const double *y0, const double *e, double tie, double *s,
+                                  double *n)
 {
-    double face = -INFINITY, edge = -INFINITY, n[3] = {0.0, 0.0, 0.0}, size = 0.0;
+    double face = -INFINITY, edge = -INFINITY, best[3] = {0.0, 0.0, 0.0}, size = 0.0;
     int k, j, axis = -1;
     for (k = 0; k < 3; ++k) {
         const double lo = e[k] < 0.0 ? y0[k] + e[k] : y0[k], hi = e[k] < 0.0 ? y0[k] : y0[k] + e[k];
@@ -86,7 +87,7 @@ static int gac_obst_box_edge_cut(const double *h, const double *y0, const double
     }
     for (k = 0; k < 3; ++k) {                            /* u_k = e x E_k */
         const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-        double u[3], len, r = 0.0, p0 = 0.0, p1 = 0.0, sep, sign;
+        double u[3], len, r = 0.0, p0 = 0.0, p1 = 0.0, lo, hi;
         u[k] = 0.0, u[k1] = e[k2], u[k2] = -e[k1];
         len = sqrt(u[k1] * u[k1] + u[k2] * u[k2]);
         if (!(len > 1e-9 * sqrt(size))) continue;        /* the link along the edge: a face's axis */
@@ -96,25 +97,21 @@ static int gac_obst_box_edge_cut(const double *h, const double *y0, const double
             p0 += u[j] * y0[j];
             p1 += u[j] * (y0[j] + e[j]);
         }
-        sign = (p0 < p1 ? p0 : p1) - r > -r - (p0 > p1 ? p0 : p1) ? 1.0 : -1.0;
-        sep = sign > 0.0 ? (p0 < p1 ? p0 : p1) - r : -r - (p0 > p1 ? p0 : p1);
-        if (sep > edge) {
-            edge = sep, axis = k;
-            for (j = 0; j < 3; ++j) n[j] = sign * u[j];
+        lo = p0 < p1 ? p0 : p1, hi = p0 < p1 ? p1 : p0;
+        if (lo - r > edge || -r - hi > edge) {
+            const double sign = lo - r >= -r - hi ? 1.0 : -1.0;
+            edge = sign > 0.0 ? lo - r : -r - hi, axis = k;
+            for (j = 0; j < 3; ++j) best[j] = sign * u[j];
         }
     }
-    if (axis < 0 || !(edge > face + tie)) return 0;
-    {                                                    /* the edge: y_j = h_j sign(n_j) off axis; s nearest it */
+    if (axis < 0 || !(edge > face + tie)) return;
+    {                                                    /* the edge: y_j = h_j sign(n_j) off its axis */
         const int k1 = (axis + 1) % 3, k2 = (axis + 2) % 3;
-        const double w1 = y0[k1] - (n[k1] < 0.0 ? -h[k1] : h[k1]), w2 = y0[k2] - (n[k2] < 0.0 ? -h[k2] : h[k2]);
-        const double den = e[k1] * e[k1] + e[k2] * e[k2];
-        double s = -(w1 * e[k1] + w2 * e[k2]) / den;
-        geometry[1] = s < 0.0 ? 0.0 : (s > 1.0 ? 1.0 : s);
+        const double w1 = y0[k1] - (best[k1] < 0.0 ? -h[k1] : h[k1]), w2 = y0[k2] - (best[k2] < 0.0 ? -h[k2] : h[k2]);
+        const double at = -(w1 * e[k1] + w2 * e[k2]) / (e[k1] * e[k1] + e[k2] * e[k2]);
+        *s = at < 0.0 ? 0.0 : (at > 1.0 ? 1.0 : at);
     }
-    geometry[0] = edge;
-    geometry[2] = 0.0;
-    for (k = 0; k < 3; ++k) geometry[3 + k] = n[k];
-    return 1;
+    for (k = 0; k < 3; ++k) n[k] = best[k];
 }
 
 /* Along y(s) = y0 + s e (the box's frame), sd is, between two consecutive breakpoints (where a coordinate crosses
@@ -188,14 +185,9 @@ static void gac_obst_box_contact(const double *shape, const double *a0, const do
     /* the least a vertex inside its stretch: sd strictly convex there, the minimiser unique (a breakpoint next to
        it ties within round-off only by (s - s*)^2, which the middle would turn into an error of sqrt(tie)) */
     s = vertex[at] ? list[at] : 0.5 * (lo + hi);
-    if (best <= 0.0 && gac_obst_box_edge_cut(h, y0, e, tie, geometry)) {     /* the link across an edge */
-        geometry[0] -= radius;
-        for (k = 0; k < 3; ++k) nl[k] = geometry[3 + k];
-        for (k = 0; k < 3; ++k) geometry[3 + k] = R[3 * k] * nl[0] + R[3 * k + 1] * nl[1] + R[3 * k + 2] * nl[2];
-        return;
-    }
     for (k = 0; k < 3; ++k) y[k] = y0[k] + s * e[k];
     geometry[0] = gac_obst_box_sd(h, y, nl) - radius;
+    if (best <= 0.0) gac_obst_box_edge_cut(h, y0, e, tie, &s, nl);     /* on or inside: across an edge? */
     geometry[1] = s;
     geometry[2] = 0.0;
     for (k = 0; k < 3; ++k) geometry[3 + k] = R[3 * k] * nl[0] + R[3 * k + 1] * nl[1] + R[3 * k + 2] * nl[2];

@@ -65,6 +65,55 @@ static void gac_obst_sort(double *list, int count)
     }
 }
 
+/* A segment y(s) = y0 + s e (the box's frame) touching or reaching into the box (sd <= 0 somewhere along it) across
+ * one of its edges: sd's nearest face (the inside rule) is then not the direction that separates them, and an impact
+ * along it leaves the link approaching across the edge.  The separating axes of a segment and a box are the 3 face
+ * normals E_k and the 3 directions u_k = e x E_k across the segment and an edge, and along each the two overlap by
+ * the distance of the segment's projection into the box's, [-sum_j h_j |u_j|, +same] (the separation, negative
+ * when they overlap).  The axis of least overlap is the direction of the depth; when it is an edge's (by more than
+ * tie over every face) the contact is the link across that edge: n = +-u_k unit (from the box to the link; the limit
+ * of the outside normal, from the edge's nearest point, as the gap closes) in *n, and in *s the link's point nearest
+ * to the edge's line.  Otherwise (a face's depth) *s and *n are left as sd gives them. */
+static void gac_obst_box_edge_cut(const double *h, const double *y0, const double *e, double tie, double *s,
+                                  double *n)
+{
+    double face = -INFINITY, edge = -INFINITY, best[3] = {0.0, 0.0, 0.0}, size = 0.0;
+    int k, j, axis = -1;
+    for (k = 0; k < 3; ++k) {
+        const double lo = e[k] < 0.0 ? y0[k] + e[k] : y0[k], hi = e[k] < 0.0 ? y0[k] : y0[k] + e[k];
+        const double sep = lo - h[k] > -h[k] - hi ? lo - h[k] : -h[k] - hi;
+        if (sep > face) face = sep;
+        size += e[k] * e[k];
+    }
+    for (k = 0; k < 3; ++k) {                            /* u_k = e x E_k */
+        const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+        double u[3], len, r = 0.0, p0 = 0.0, p1 = 0.0, lo, hi;
+        u[k] = 0.0, u[k1] = e[k2], u[k2] = -e[k1];
+        len = sqrt(u[k1] * u[k1] + u[k2] * u[k2]);
+        if (!(len > 1e-9 * sqrt(size))) continue;        /* the link along the edge: a face's axis */
+        for (j = 0; j < 3; ++j) {
+            u[j] /= len;
+            r += h[j] * fabs(u[j]);
+            p0 += u[j] * y0[j];
+            p1 += u[j] * (y0[j] + e[j]);
+        }
+        lo = p0 < p1 ? p0 : p1, hi = p0 < p1 ? p1 : p0;
+        if (lo - r > edge || -r - hi > edge) {
+            const double sign = lo - r >= -r - hi ? 1.0 : -1.0;
+            edge = sign > 0.0 ? lo - r : -r - hi, axis = k;
+            for (j = 0; j < 3; ++j) best[j] = sign * u[j];
+        }
+    }
+    if (axis < 0 || !(edge > face + tie)) return;
+    {                                                    /* the edge: y_j = h_j sign(n_j) off its axis */
+        const int k1 = (axis + 1) % 3, k2 = (axis + 2) % 3;
+        const double w1 = y0[k1] - (best[k1] < 0.0 ? -h[k1] : h[k1]), w2 = y0[k2] - (best[k2] < 0.0 ? -h[k2] : h[k2]);
+        const double at = -(w1 * e[k1] + w2 * e[k2]) / (e[k1] * e[k1] + e[k2] * e[k2]);
+        *s = at < 0.0 ? 0.0 : (at > 1.0 ? 1.0 : at);
+    }
+    for (k = 0; k < 3; ++k) n[k] = best[k];
+}
+
 /* Along y(s) = y0 + s e (the box's frame), sd is, between two consecutive breakpoints (where a coordinate crosses
  * a face's plane +-h_k or 0, or two faces' distances |y_k| - h_k cross), either outside sqrt of a quadratic in s,
  * least at its vertex or an end, or inside the maximum of linear functions, least at a breakpoint.  So the minimum
@@ -138,6 +187,7 @@ static void gac_obst_box_contact(const double *shape, const double *a0, const do
     s = vertex[at] ? list[at] : 0.5 * (lo + hi);
     for (k = 0; k < 3; ++k) y[k] = y0[k] + s * e[k];
     geometry[0] = gac_obst_box_sd(h, y, nl) - radius;
+    if (best <= 0.0) gac_obst_box_edge_cut(h, y0, e, tie, &s, nl);     /* on or inside: across an edge? */
     geometry[1] = s;
     geometry[2] = 0.0;
     for (k = 0; k < 3; ++k) geometry[3 + k] = R[3 * k] * nl[0] + R[3 * k + 1] * nl[1] + R[3 * k + 2] * nl[2];

@@ -19,7 +19,8 @@ from runtime import load_model, simulate
 
 # (scene, dense): the generated dense kernels, or the matrices the library forms from the operators
 CASES = [(chain(1), True), (chain(3, ("rigid", "line"), twists=True), True), (chain(4, twists=True), True),
-         (chain(3, ("rigid", "line"), twists=True), False), (chain(4, twists=True), False)]
+         (chain(3, ("rigid", "line"), twists=True), False),
+         pytest.param(chain(4, twists=True), False, marks=pytest.mark.slow)]     # a model of its own for little more
 
 
 def _rows(model, ref, q_full):

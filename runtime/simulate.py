@@ -662,7 +662,8 @@ def accuracy_cause(model: CompiledModel, p, q, qd, contacts: list, law: str = "f
         return (f"the base chart is near its singular pose: its measure chi = |det E| = {chi:.2g} (I_f's "
                 "smallest eigenvalue falls like chi^2)")
     M = model.mass_matrix(q, p)
-    eigenvalues = np.linalg.eigvalsh(M)
+    chain, block = impact_chain(model, contacts)       # of several chains, one chain's own block of I_f
+    eigenvalues = np.linalg.eigvalsh(M[np.ix_(block, block)])
     cond = float(eigenvalues[-1] / eigenvalues[0]) if eigenvalues[0] > 0.0 else math.inf
     rows = []
     for c in contacts:
@@ -678,15 +679,43 @@ def accuracy_cause(model: CompiledModel, p, q, qd, contacts: list, law: str = "f
         if cond_A > DEPENDENT_CONTACTS:
             return (f"its {len(rows)} contacts' rows are nearly dependent: cond(J I_f^-1 J^T) = {cond_A:.2g} over "
                     "them")
-    momentum = M @ qd
-    energy2 = float(qd @ momentum)
+    own = "" if chain is None else f" (chain {chain}'s block)"
+    momentum = M[np.ix_(block, block)] @ qd[block]
+    energy2 = float(qd[block] @ momentum)
     if energy2 > 0.0:
-        cancel = float(np.abs(qd) @ np.abs(momentum)) / energy2
+        cancel = float(np.abs(qd[block]) @ np.abs(momentum)) / energy2
         if cancel > CANCELLING:
             return (f"the velocities' components cancel in the energy (sum |qd_i| |(I_f qd)_i| is {cancel:.2g} "
-                    f"times 2T): they lie along a soft direction of I_f (cond(I_f) = {cond:.2g})")
-    return (f"I_f is ill-conditioned there (cond(I_f) = {cond:.2g}); "
-            + ill_conditioning(model.scene, p, planar=planar))
+                    f"times 2T): they lie along a soft direction of I_f{own} (cond(I_f) = {cond:.2g})")
+    if chain is None:
+        return (f"I_f is ill-conditioned there (cond(I_f) = {cond:.2g}); "
+                + ill_conditioning(model.scene, p, planar=planar))
+    scene = model.scene
+    return (f"I_f is ill-conditioned there (chain {chain}'s block of it: cond = {cond:.2g}); in chain {chain}, "
+            + ill_conditioning(scene.chains[chain - 1], p[scene.parameter_map(chain)], planar=planar))
+
+
+def impact_chain(model: CompiledModel, contacts: list) -> tuple[int | None, np.ndarray]:
+    """Of a scene of several chains, where all an impact's contacts touch one chain k: (k, the model's coordinates of
+    chain k), since I_f is block-diagonal over the chains and such an impact moves chain k alone; else (None, every
+    coordinate)."""
+    scene, every = model.scene, np.arange(model.nq)
+    if not hasattr(scene, "chains"):
+        return None, every
+    points = set()
+    for c in contacts:
+        if c is not None:
+            point, contact = model.contacts[c]
+            points.add(point)
+            if hasattr(contact, "j"):                   # a link pair: its other link too
+                points.add(contact.j)
+    touched = {k for k, chain in enumerate(scene.chains, start=1) for point in points
+               if scene.point_offset(k) < point <= scene.point_offset(k) + chain.n + 1}
+    if len(touched) != 1:
+        return None, every
+    (k,) = touched
+    lo = scene.state_offset(k)
+    return k, np.array([m for m, full in enumerate(model.layout.free) if lo <= full < lo + scene.chains[k - 1].nq])
 
 
 def chart_measure(model: CompiledModel, q) -> float:

@@ -64,3 +64,24 @@ def test_momentum_is_kept_and_the_energy_lost_is_the_closed_form(run):
     assert result.energy_initial - result.energy_final == pytest.approx(lost, abs=1e-12 * T0)
     if e == 1.0:
         assert result.energy_final == pytest.approx(T0, rel=1e-12)
+
+
+def test_an_impact_of_one_chain_is_blamed_on_that_chains_ratios(run):
+    """I_f is block-diagonal over the chains: an impact at chain 1's wall moves chain 1 alone, so the cause of its
+    limited accuracy names chain 1's own block and ratios and not the mass ratio
+    between the chains (chain 2 made 1e6 times heavier), which the whole I_f's condition would show; the strike
+    between the chains couples both and is named by the whole chain set's ratios."""
+    from runtime.simulate import accuracy_cause
+    e, model, result = run
+    names = model.parameter_names
+    p = model.parameters()
+    p[names.index("c2.mu_1")] *= 1e6
+    q, qd = model.q0, model.qd0
+    wall = next(c for c, (point, contact) in enumerate(model.contacts) if point == 1 and
+                getattr(contact, "name", "") == "x1_min")
+    own = accuracy_cause(model, p, q, qd, [wall])
+    assert "(chain 1's block of it: cond = " in own and "; in chain 1, its most extreme ratio is " in own, own
+    assert "masses" not in own, own
+    pair = next(c for c, (point, contact) in enumerate(model.contacts) if hasattr(contact, "j"))
+    both = accuracy_cause(model, p, q, qd, [pair])
+    assert "its most extreme ratio is that of the links' masses: " in both and "block" not in both, both

@@ -1,5 +1,5 @@
 """Long chains: the derivation in worker processes gives the same text as a serial one, the source cut into
-translation units holds every kernel once, and a long 3D chain without dense kernels (9 links told so, by default; 30,
+translation units holds every kernel once, and a long 3D chain without dense kernels (8 links told so, by default; 30,
 past the links where they are left out anyway, with -m slow) agrees with the independent reference model and keeps its
 energy in flight."""
 from __future__ import annotations
@@ -58,9 +58,9 @@ def test_translation_units_hold_every_kernel_once():
     assert translation_units(model.source, 1) == [model.source]
 
 
-@pytest.fixture(scope="module", params=[9, pytest.param(30, marks=pytest.mark.slow)])
+@pytest.fixture(scope="module", params=[8, pytest.param(30, marks=pytest.mark.slow)])
 def long_chain(request):
-    """A long 3D chain without dense kernels: 9 links told so (dense=False; the same code as past
+    """A long 3D chain without dense kernels: 8 links told so (dense=False; the same code as past
     interface.DENSE_MAX_LINKS, where they are left out by default), 30 links with -m slow."""
     scene = chain(request.param, twists=True, walls=False)     # straight out: no box
     return scene, load_model(scene, specialise=False, chart_b=False, dense=False)   # (never near the gimbal lock)

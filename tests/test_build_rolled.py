@@ -97,8 +97,8 @@ CASES = {
 def test_rolled_equals_unrolled_and_the_reference(case, tmp_path):
     scene = CASES[case](11)
     assert _run(scene) is not None
-    loops = load_model(scene, specialise=False, dense=False, rolled=True, chart_b=False)
-    straight = load_model(scene, specialise=False, dense=False, rolled=False, chart_b=False, tangent=False)
+    loops = load_model(scene, specialise=False, dense=False, rolled=True, chart_b=False, extended=False)
+    straight = load_model(scene, specialise=False, dense=False, rolled=False, chart_b=False, extended=False)
     assert "in loops" in summary(loops) and "in loops" not in summary(straight)
     generated = [{f.name for f in model.generated.functions} for model in (loops, straight)]
     assert "forward_dynamics_energy" not in generated[0] and "forward_dynamics_energy" in generated[1]

@@ -185,19 +185,22 @@ static double gac_held_value(const gac_model *m, const double *q, const double *
 }
 
 /* The bias of held row r (its rate's part without qdd): a normal row's by gac_normal_bias, a wall's tangential row's
- * contact_bias row (bias), a frame's tangent's from gac_rowless_frame_bias.  GAC_OK or GAC_ERR_LINK_REST (a normal or
- * a frame without derivative). */
+ * contact_bias row (bias), a frame's tangent's from gac_rowless_frame_bias (its three rows' biases kept in
+ * frame[3 owner..], have[owner] set, for the contact's other tangent).  GAC_OK or GAC_ERR_LINK_REST (a normal or a
+ * frame without derivative). */
 static int gac_held_bias(const gac_model *m, const double *q, const double *qd, const double *p, const int *set,
-                         int owner, int comp, int brow, double sgn, int tj, const double *bias, double *b)
+                         int owner, int comp, int brow, double sgn, int tj, const double *bias, double *frame,
+                         int *have, double *b)
 {
-    double frame[3];
     if (comp >= 0) {
         *b = sgn * bias[brow];
         return GAC_OK;
     }
     if (comp == -1) return gac_normal_bias(m, q, qd, p, set[owner], bias, b) == GAC_OK ? GAC_OK : GAC_ERR_LINK_REST;
-    if (gac_rowless_frame_bias(m, q, qd, p, set[owner], frame) != GAC_OK) return GAC_ERR_LINK_REST;
-    *b = frame[1 + tj];
+    if (!have[owner] && gac_rowless_frame_bias(m, q, qd, p, set[owner], frame + 3 * owner) != GAC_OK)
+        return GAC_ERR_LINK_REST;
+    have[owner] = 1;
+    *b = frame[3 * owner + 1 + tj];
     return GAC_OK;
 }
 
@@ -234,8 +237,8 @@ int gac_stuck_dynamics(const gac_model *m, const double *q, const double *qd, co
     double *G = GAC_WORK_W(m, work), *L = GAC_WORK_L(m, work), *Z = GAC_WORK_Z(m, work);
     double *vel = GAC_WORK_VEL(m, work), *g = GAC_WORK_G(m, work), *f = GAC_WORK_F(m, work);
     double bias[GAC_AT_LEAST_1(m->njrow)], vq[3 * GAC_AT_LEAST_1(m->npoint)], b[cap], lam[cap], sgn[cap];
-    double cf[n1], slide[n1];
-    int owner[cap], comp[cap], brow[cap], tj[cap], idx[cap], sliding[n1];
+    double cf[n1], slide[n1], frame_bias[3 * n1];
+    int owner[cap], comp[cap], brow[cap], tj[cap], idx[cap], sliding[n1], have_bias[n1];
     const double *resp[cap];
     gac_tangents tg[n1];
     int nr, r, c, a, i, j, dropped, nk = 0, any_sliding = 0;
@@ -251,6 +254,7 @@ int gac_stuck_dynamics(const gac_model *m, const double *q, const double *qd, co
         cf[a] = gac_rest_friction(m, p, set[a]);
         sliding[a] = cf[a] > 0.0 && !stuck[set[a]];
         slide[a] = 0.0;
+        have_bias[a] = 0;
         if (!sliding[a]) continue;
         any_sliding = 1;
         for (j = 0; j < 2; ++j) vt[j] = gac_tangent_value(&tg[a], j, vq);
@@ -263,7 +267,8 @@ int gac_stuck_dynamics(const gac_model *m, const double *q, const double *qd, co
     m->contact_velocities(q, qdd, p, vel);        /* R qdd_free, row by row */
     for (r = 0; r < nr; ++r) {
         double held_bias = 0.0;
-        const int code = gac_held_bias(m, q, qd, p, set, owner[r], comp[r], brow[r], sgn[r], tj[r], bias, &held_bias);
+        const int code = gac_held_bias(m, q, qd, p, set, owner[r], comp[r], brow[r], sgn[r], tj[r], bias, frame_bias,
+                                       have_bias, &held_bias);
         if (code != GAC_OK) return code;
         b[r] = -(held_bias + gac_held_value(m, q, p, set, tg, owner[r], comp[r], tj[r], qdd, vel));
     }
@@ -388,14 +393,18 @@ int gac_slip(gac_sim *s, double t, const double *x, int c, gac_impact_record *r)
     return 1;
 }
 
-/* The tangential velocities vt (2 per contact) of every contact's point at state x. */
+/* The tangential velocities vt (2 per contact) of every contact's point at state x (of a link pair or an obstacle,
+ * whose frame costs its closest points, only where it rests: 0 elsewhere). */
 void gac_tangential_speeds(const gac_sim *s, const double *x, double *vt)
 {
     const gac_model *md = s->model;
     double vq[3 * GAC_AT_LEAST_1(md->npoint)];
     int c;
     md->contact_velocities(x, x + md->nq, s->p, vq);
-    for (c = 0; c < md->ncontact; ++c) gac_tangential_velocity(md, x, s->p, c, vq, vt + 2 * c);
+    for (c = 0; c < md->ncontact; ++c) {
+        if (gac_rowless(md, c) && !s->is_resting[c]) vt[2 * c] = vt[2 * c + 1] = 0.0;
+        else gac_tangential_velocity(md, x, s->p, c, vq, vt + 2 * c);
+    }
 }
 
 /* 1 if every stuck resting contact at x lies strictly inside its cone, |lambda_T| < c_f lambda_N (its slip
@@ -468,9 +477,10 @@ int gac_try_stick(gac_sim *s, const double *vt_start, int count_loss, const int 
     for (a = 0; a < s->nresting; ++a) {
         const int c = s->resting[a];
         const double *w = vt + 2 * c, speed = sqrt(w[0] * w[0] + w[1] * w[1]);
-        const int one_axis = gac_tangent_axes(md, s->x, s->p, c) == 1;
-        const int turned = vt_start != 0 && one_axis && w[0] * vt_start[2*c] + w[1] * vt_start[2*c + 1] < 0.0;
+        int turned;
         if (s->is_stuck[c] || !(gac_rest_friction(md, s->p, c) > 0.0)) continue;
+        turned = vt_start != 0 && gac_tangent_axes(md, s->x, s->p, c) == 1
+                 && w[0] * vt_start[2*c] + w[1] * vt_start[2*c + 1] < 0.0;
         if ((!(speed < vs) && !turned) || w[0] * s->slip[2*c] + w[1] * s->slip[2*c + 1] < 0.0)
             s->slip[2 * c] = s->slip[2 * c + 1] = 0.0;     /* past the passage through zero speed, or turned back */
         if (!(speed < vs) && !turned) continue;

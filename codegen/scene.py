@@ -316,7 +316,7 @@ class LinkPair:
     j: int
     radius: float         # m, r_i + r_j
     restitution: float
-    friction: float = 0.0  # Coulomb coefficient of their impacts (friction.links; 0: frictionless)
+    friction: float = 0.0  # Coulomb coefficient at their impacts and at rest (friction.links; 0: frictionless)
 
     @property
     def name(self) -> str:
@@ -346,7 +346,7 @@ class Obstacle:
     'plane': the half-space n . (x - a) <= 0 below the plane through a of unit ``normal`` n (pointing into the free
     side).  A box or a plane has no radius.  ``restitution``: its e (None: the scene's default); ``links``: the links
     (1-based) that can touch it (None: every link that moves); ``friction``: the Coulomb coefficient c_f of its
-    impacts (the runtime parameter friction_<name> when > 0; 0: frictionless)."""
+    impacts and of its resting contacts (the runtime parameter friction_<name> when > 0; 0: frictionless)."""
 
     name: str
     kind: str = "sphere"
@@ -358,7 +358,7 @@ class Obstacle:
     half_extents: tuple | None = None   # a box's
     rotation: tuple | None = None       # a box's (3 rows of 3); None: the identity
     normal: tuple | None = None         # a plane's
-    friction: float = 0.0               # Coulomb coefficient of its impacts (0: frictionless)
+    friction: float = 0.0               # Coulomb coefficient at its impacts and at rest (0: frictionless)
 
     @staticmethod
     def box(name: str, center, half_extents, rotation=None, restitution: float | None = None,
@@ -565,8 +565,8 @@ def box_signed_distance(box: "Obstacle", x) -> float:
 @dataclass(frozen=True)
 class ObstacleContact:
     """Link i and a fixed obstacle: a contact of the loop like a link pair whose second side never moves (an event
-    when their gap closes, an impact by Newton's law with the obstacle's e and friction, and resting contact once
-    landed), with gap
+    when their gap closes, an impact with the obstacle's e and friction, at rest held by its normal and, rough, stuck
+    or sliding along its contact frame), with gap
     = the distance of the link's segment from the obstacle's less radius = r_i + r_obstacle (m)."""
 
     i: int

@@ -137,8 +137,8 @@ int gac_obstacle_shape_check(const gac_model *m, int o);
 int gac_obstacle_feature(const gac_model *m, int o, const double *x, double *b0, double *b1);
 
 /* gac_link.c: link pairs and obstacles as contacts of the loop (kinds GAC_CONTACT_LINK, GAC_CONTACT_OBSTACLE, the
- * last entries of m->contacts: no Jacobian row; Coulomb friction at impacts only, along their contact frame; at rest
- * they are held frictionless by g = J^T n and their bias, whatever their friction coefficient) */
+ * last entries of m->contacts: no Jacobian row; Coulomb friction along their contact frame, at impacts and at rest,
+ * where they are held by g = J^T n and its bias, and, stuck, by J^T t1, J^T t2 and theirs) */
 int gac_rowless(const gac_model *m, int c);             /* 1 if contact c is a link pair or an obstacle */
 /* The first held link pair or link on a bar of set[0..n-1] whose other end came closer than its held point by more
  * than tol over the step x0 -> x1 (a line contact its one point cannot hold), else -1 (gac_link.c). */
@@ -160,6 +160,9 @@ double gac_link_contact_rate(const gac_model *m, const double *q, const double *
 /* a held link or obstacle contact c's bias dg(qd) . qd (its normal acceleration less g . qdd) into *b: GAC_OK, or
  * GAC_ERR_LINK_CONTACT where its normal has no derivative */
 int gac_rowless_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, double *b);
+/* the biases b (3) of a held link or obstacle contact c's frame rows J^T n, J^T t1, J^T t2 (b[0] gac_rowless_bias's):
+ * GAC_OK, or GAC_ERR_LINK_CONTACT where its frame has no derivative */
+int gac_rowless_frame_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, double *b);
 double gac_link_law_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                              const double *F, const double *Ft, const double *qd, const double *qd_plus, double T);
 /* A link pair's or an obstacle's contact frame at q (gac_rowless_frame): its links i and j (0: a fixed obstacle),
@@ -260,9 +263,23 @@ int gac_report(gac_sim *s, gac_impact_record *record, int code);   /* the record
 /* gac_jam.c: the tangential impact where sliding resting contacts have no consistent forces (Painleve) */
 int gac_jam(gac_sim *s, gac_impact_record *r);   /* at s->x: GAC_SIM_IMPACT (record reported) or an error */
 
-/* gac_stick.c: stuck and sliding points at resting contacts on rough walls */
+/* gac_stick.c: stuck and sliding points at rough resting contacts.  A resting contact's two tangential directions
+ * (gac_tangents): a wall's, its point's velocity along the box axes other than its normal (the Jacobian rows trow,
+ * velocity components comp; has[j] 0 for an axis without a row); a link pair's or an obstacle's, the closest points'
+ * relative velocity along its frame's t1, t2 (gac_rowless_frame; rows J^T t1, J^T t2, their biases from
+ * gac_rowless_frame_bias). */
+typedef struct {
+    int c, rowless, has[2], comp[2];
+    gac_contact_frame frame;
+} gac_tangents;
+double gac_rest_friction(const gac_model *m, const double *p, int c);   /* c's Coulomb coefficient at rest */
+int gac_tangents_at(const gac_model *m, const double *q, const double *p, int c, gac_tangents *tg);
+double gac_tangent_value(const gac_tangents *tg, int j, const double *vel);
+void gac_tangent_force(const gac_model *m, const double *q, const double *p, const gac_tangents *tg,
+                       const double *phi, double *f, double *g);
 double gac_slide_phi(const double *vt, double vs, const double *d, double *phi);
-void gac_tangential_velocity(const gac_model *m, int c, const double *vq, double *vt);
+void gac_tangential_velocity(const gac_model *m, const double *q, const double *p, int c, const double *vq,
+                             double *vt);
 int gac_any_stuck(const int *stuck, int n, const int *set);
 int gac_stuck_dynamics(const gac_model *m, const double *q, const double *qd, const double *u, const double *p,
                        int n, const int *set, const int *stuck, const double *slip, double *qdd, double *lambda,

@@ -53,7 +53,7 @@ int gac_jam(gac_sim *s, gac_impact_record *r)
     for (a = 0; a < n; ++a) {
         c = list[a];
         if (-vn[c] > r->approach_before) r->approach_before = -vn[c];
-        if (!s->is_stuck[c] && gac_friction_coefficient(md, s->p, c) > 0.0) {   /* sliding on a rough wall */
+        if (!s->is_stuck[c] && gac_rest_friction(md, s->p, c) > 0.0) {       /* sliding, rough */
             const double speed = sqrt(vt[2*c] * vt[2*c] + vt[2*c + 1] * vt[2*c + 1]);
             if (speed > scale) scale = speed;
         }

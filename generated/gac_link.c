@@ -504,42 +504,50 @@ double gac_link_law_accuracy(const gac_model *m, const double *q, const double *
 
 /* ---- the derivative of a link pair's or an obstacle's contact geometry (for the sensitivities' impact) ------ */
 
-/* The Jacobians' own change, sum_k n . d(J_k)[dq, dp] at fixed s, t and n: the row at fixed geometry (J^T n,
- * gac_link_direction) differentiated along (dq, dp).  Column k of the points' Jacobian is contact_velocities(q, e_k),
- * so its change is contact_velocities_tangent(q, e_k, dq, dqd = 0, dp): exact, one tangent call per column.  A model
- * without that kernel (a descriptor written by hand) gets the fourth-order central difference
- * 8 (g(h) - g(-h)) - (g(2h) - g(-2h)) over 12 h, h = 1e-3 of the direction's largest entry (truncation ~h^4,
- * round-off ~eps / h: ~1e-12 of the row's size). */
+/* The Jacobians' own change, sum_k a . d(J_k)[dq, dp] at fixed s, t and direction a, for each of the naxis
+ * directions axes[0..naxis-1] (a the normal n, or a frame's t1, t2): the row at fixed geometry (J^T a,
+ * gac_link_direction) differentiated along (dq, dp), into out (naxis x nq).  Column k of the points' Jacobian is
+ * contact_velocities(q, e_k), so its change is contact_velocities_tangent(q, e_k, dq, dqd = 0, dp): exact, one
+ * tangent call per column.  A model without that kernel (a descriptor written by hand) gets the fourth-order central
+ * difference 8 (g(h) - g(-h)) - (g(2h) - g(-2h)) over 12 h, h = 1e-3 of the direction's largest entry (truncation
+ * ~h^4, round-off ~eps / h: ~1e-12 of the row's size). */
 static void gac_link_row_change(const gac_model *m, const double *q, const double *p, int i, int j,
-                                const double *geometry, const double *dq, const double *dp, double *out)
+                                const double *geometry, int naxis, const double (*axes)[3], const double *dq,
+                                const double *dp, double *out)
 {
     const int nq = m->nq, np = m->nparam;
     double qh[GAC_AT_LEAST_1(nq)], ph[GAC_AT_LEAST_1(np)], g[GAC_AT_LEAST_1(nq)], size = 0.0, h;
+    double along[3][GAC_LINK_NGEOMETRY];                 /* the geometry with each direction in n's place */
     static const double step[4] = {1.0, -1.0, 2.0, -2.0}, weight[4] = {8.0, -8.0, -1.0, 1.0};
-    int k, l;
+    int k, l, a;
+    for (a = 0; a < naxis; ++a) {
+        for (k = 0; k < 3; ++k) along[a][k] = geometry[k], along[a][3 + k] = axes[a][k];
+    }
     if (m->contact_velocities_tangent != 0) {
         double w[GAC_AT_LEAST_1(nq)], none[GAC_AT_LEAST_1(nq)], dvel[3 * GAC_AT_LEAST_1(m->npoint)], speed;
         for (k = 0; k < nq; ++k) w[k] = none[k] = 0.0;
-        for (k = 0; k < nq; ++k) {                       /* n . dJ_k: the rate formula on the columns' change */
+        for (k = 0; k < nq; ++k) {                       /* a . dJ_k: the rate formula on the columns' change */
             w[k] = 1.0;
             m->contact_velocities_tangent(q, w, p, dq, none, dp, dvel);
-            out[k] = gac_link_rate(dvel, i, j, geometry, &speed);
+            for (a = 0; a < naxis; ++a) out[(long)a * nq + k] = gac_link_rate(dvel, i, j, along[a], &speed);
             w[k] = 0.0;
         }
         return;
     }
     for (k = 0; k < nq; ++k) size = fabs(dq[k]) > size ? fabs(dq[k]) : size;
     for (k = 0; k < np; ++k) size = fabs(dp[k]) > size ? fabs(dp[k]) : size;
-    for (k = 0; k < nq; ++k) out[k] = 0.0;
+    for (k = 0; k < naxis * nq; ++k) out[k] = 0.0;
     if (!(size > 0.0)) return;
     h = 1e-3 / size;
     for (l = 0; l < 4; ++l) {
         for (k = 0; k < nq; ++k) qh[k] = q[k] + step[l] * h * dq[k];
         for (k = 0; k < np; ++k) ph[k] = p[k] + step[l] * h * dp[k];
-        (void)gac_link_direction(m, qh, ph, i, j, geometry, g);
-        for (k = 0; k < nq; ++k) out[k] += weight[l] * g[k];
+        for (a = 0; a < naxis; ++a) {
+            (void)gac_link_direction(m, qh, ph, i, j, along[a], g);
+            for (k = 0; k < nq; ++k) out[(long)a * nq + k] += weight[l] * g[k];
+        }
     }
-    for (k = 0; k < nq; ++k) out[k] /= 12.0 * h;
+    for (k = 0; k < naxis * nq; ++k) out[k] /= 12.0 * h;
 }
 
 /* The joint points' motion along (dq, dp): contact_points_tangent (exact).  A model without it: contact_velocities(q,
@@ -581,11 +589,14 @@ static void gac_link_points_change(const gac_model *m, const double *q, const do
  * constant normal: the closest point is an end of the link (ds = 0; one inside, the link lies parallel to the face
  * and a whole stretch is closest: no derivative), so d gap = n . dP0, dn = 0. */
 static int gac_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
-                              const double *dp, int held, double *dgap, double *g, double *dg)
+                              const double *dp, int held, double *dgap, double *g, double *dg, double *gt,
+                              double *dgt)
 {
     const int nq = m != 0 ? m->nq : 0;
+    double axes[3][3], daxes[3][3];
+    int naxis;
     double geometry[GAC_LINK_NGEOMETRY], r[3 * GAC_AT_LEAST_1(m != 0 ? m->npoint : 1)];
-    double dr[3 * GAC_AT_LEAST_1(m != 0 ? m->npoint : 1)], zero[3] = {0.0, 0.0, 0.0}, change[GAC_AT_LEAST_1(nq)];
+    double dr[3 * GAC_AT_LEAST_1(m != 0 ? m->npoint : 1)], zero[3] = {0.0, 0.0, 0.0}, change[3 * GAC_AT_LEAST_1(nq)];
     double d1[3], d2[3], D[3], dd1[3], dd2[3], dD[3], dn[3], a, b, e, dist, s, t, ds = 0.0, dt = 0.0, along;
     double end0[3], end1[3];
     const double *a0, *a1, *b0, *b1, *da0, *da1, *db0, *db1;
@@ -652,37 +663,85 @@ static int gac_normal_tangent(const gac_model *m, const double *q, const double 
         for (k = 0; k < 3; ++k) dn[k] = (dD[k] - along * geometry[3 + k]) / dist;
     }
     *dgap = along;
+    naxis = 1;
+    for (k = 0; k < 3; ++k) axes[0][k] = geometry[3 + k], daxes[0][k] = dn[k];
+    if (dgt != 0) {                                      /* the frame's t1, t2 and their turning */
+        gac_contact_frame frame;
+        double u[3], du[3], len = 0.0, dd1n, d1n = gac_dot3(d1, geometry + 3), t1du;
+        code = gac_rowless_frame(m, q, p, c, &frame);
+        if (code != GAC_OK) return code;
+        dd1n = gac_dot3(dd1, geometry + 3) + gac_dot3(d1, dn);
+        for (k = 0; k < 3; ++k) {                        /* u = d1 - (d1 . n) n, as gac_rowless_frame */
+            u[k] = d1[k] - d1n * geometry[3 + k];
+            du[k] = dd1[k] - dd1n * geometry[3 + k] - d1n * dn[k];
+            len += u[k] * u[k];
+        }
+        len = sqrt(len);
+        if (!(len > 1e-6 * sqrt(a))) {                   /* a box axis X_b in link i's place: u = X_b - n_b n */
+            int best = 0;
+            for (k = 1; k < 3; ++k) best = fabs(geometry[3 + k]) < fabs(geometry[3 + best]) ? k : best;
+            len = 0.0;
+            for (k = 0; k < 3; ++k) {
+                u[k] = (k == best ? 1.0 : 0.0) - geometry[3 + best] * geometry[3 + k];
+                du[k] = -dn[best] * geometry[3 + k] - geometry[3 + best] * dn[k];
+                len += u[k] * u[k];
+            }
+            len = sqrt(len);
+        }
+        t1du = gac_dot3(frame.axis[1], du);
+        for (k = 0; k < 3; ++k) {                        /* dt1 = (I - t1 t1^T) du / |u|,  dt2 = dn x t1 + n x dt1 */
+            axes[1][k] = frame.axis[1][k], axes[2][k] = frame.axis[2][k];
+            daxes[1][k] = (du[k] - t1du * frame.axis[1][k]) / len;
+        }
+        for (k = 0; k < 3; ++k) {
+            const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+            daxes[2][k] = dn[k1] * axes[1][k2] - dn[k2] * axes[1][k1]
+                          + geometry[3 + k1] * daxes[1][k2] - geometry[3 + k2] * daxes[1][k1];
+        }
+        naxis = 3;
+    }
     (void)gac_link_direction(m, q, p, i, j, geometry, g);
-    /* dn . J_k + n . (dJ_k/ds ds + dJ_k/dt dt), from the points' Jacobian columns V_k (contact_velocities at e_k) */
+    for (k = 1; k < naxis; ++k) {
+        double along_axis[GAC_LINK_NGEOMETRY];
+        int x;
+        for (x = 0; x < 3; ++x) along_axis[x] = geometry[x], along_axis[3 + x] = axes[k][x];
+        (void)gac_link_direction(m, q, p, i, j, along_axis, gt + (long)(k - 1) * nq);
+    }
+    /* da . J_k + a . (dJ_k/ds ds + dJ_k/dt dt) for each direction a (n, and t1, t2), from the points' Jacobian
+     * columns V_k (contact_velocities at e_k) */
     {
         double w[GAC_AT_LEAST_1(nq)], vel[3 * GAC_AT_LEAST_1(m->npoint)];
         for (k = 0; k < nq; ++k) w[k] = 0.0;
         for (k = 0; k < nq; ++k) {
             const double *va, *vb;
-            double value = 0.0;
-            int x;
+            int x, l;
             w[k] = 1.0;
             m->contact_velocities(q, w, p, vel);
             w[k] = 0.0;
             va = vel + 3 * (i - 1), vb = j > 0 ? vel + 3 * (j - 1) : 0;
-            for (x = 0; x < 3; ++x) {
-                const double Jk = (1.0 - s) * va[x] + s * va[3 + x]
-                                  - (vb != 0 ? (1.0 - t) * vb[x] + t * vb[3 + x] : 0.0);
-                const double dJk = ds * (va[3 + x] - va[x]) - (vb != 0 ? dt * (vb[3 + x] - vb[x]) : 0.0);
-                value += dn[x] * Jk + geometry[3 + x] * dJk;
+            for (l = 0; l < naxis; ++l) {
+                double value = 0.0;
+                for (x = 0; x < 3; ++x) {
+                    const double Jk = (1.0 - s) * va[x] + s * va[3 + x]
+                                      - (vb != 0 ? (1.0 - t) * vb[x] + t * vb[3 + x] : 0.0);
+                    const double dJk = ds * (va[3 + x] - va[x]) - (vb != 0 ? dt * (vb[3 + x] - vb[x]) : 0.0);
+                    value += daxes[l][x] * Jk + axes[l][x] * dJk;
+                }
+                if (l == 0) dg[k] = value;
+                else dgt[(long)(l - 1) * nq + k] = value;
             }
-            dg[k] = value;
         }
     }
-    gac_link_row_change(m, q, p, i, j, geometry, dq, dp, change);
+    gac_link_row_change(m, q, p, i, j, geometry, naxis, (const double (*)[3])axes, dq, dp, change);
     for (k = 0; k < nq; ++k) dg[k] += change[k];
+    for (k = nq; k < naxis * nq; ++k) dgt[k - nq] += change[k];
     return GAC_OK;
 }
 
 int gac_contact_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
                                const double *dp, double *dgap, double *g, double *dg)
 {
-    return gac_normal_tangent(m, q, p, c, dq, dp, 0, dgap, g, dg);
+    return gac_normal_tangent(m, q, p, c, dq, dp, 0, dgap, g, dg, 0, 0);
 }
 
 /* A held contact's bias b = dg(dq = qd) . qd: d/dt (g . qd) = g . qdd + b.  Where a whole stretch is closest (a link
@@ -694,11 +753,51 @@ int gac_rowless_bias(const gac_model *m, const double *q, const double *qd, cons
     double zero_p[GAC_AT_LEAST_1(m->nparam)], g[GAC_AT_LEAST_1(nq)], dg[GAC_AT_LEAST_1(nq)], dgap, sum = 0.0;
     int i, code;
     for (i = 0; i < GAC_AT_LEAST_1(m->nparam); ++i) zero_p[i] = 0.0;
-    code = gac_normal_tangent(m, q, p, c, qd, zero_p, 1, &dgap, g, dg);
+    code = gac_normal_tangent(m, q, p, c, qd, zero_p, 1, &dgap, g, dg, 0, 0);
     if (code != GAC_OK) return code;
     for (i = 0; i < nq; ++i) sum += dg[i] * qd[i];
     if (!isfinite(sum)) return GAC_ERR_LINK_CONTACT;
     *b = sum;
+    return GAC_OK;
+}
+
+/* The biases of a held contact's three frame rows (n, t1, t2 of gac_rowless_frame), b[k] = dg_k(dq = qd) . qd with
+ * g_k = J^T a_k: d/dt (g_k . qd) = g_k . qdd + b[k], the points taken as fixed on the links where a whole stretch is
+ * closest (as gac_rowless_bias, whose b b[0] is).  GAC_OK, or GAC_ERR_LINK_CONTACT where the frame has no
+ * derivative. */
+int gac_rowless_frame_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, double *b)
+{
+    const int nq = m->nq;
+    double zero_p[GAC_AT_LEAST_1(m->nparam)], g[GAC_AT_LEAST_1(nq)], dg[GAC_AT_LEAST_1(nq)], dgap;
+    double gt[2 * GAC_AT_LEAST_1(nq)], dgt[2 * GAC_AT_LEAST_1(nq)], sum[3] = {0.0, 0.0, 0.0};
+    int i, code;
+    for (i = 0; i < GAC_AT_LEAST_1(m->nparam); ++i) zero_p[i] = 0.0;
+    code = gac_normal_tangent(m, q, p, c, qd, zero_p, 1, &dgap, g, dg, gt, dgt);
+    if (code != GAC_OK) return code;
+    for (i = 0; i < nq; ++i) {
+        sum[0] += dg[i] * qd[i];
+        sum[1] += dgt[i] * qd[i];
+        sum[2] += dgt[nq + i] * qd[i];
+    }
+    if (!gac_finite(sum, 3)) return GAC_ERR_LINK_CONTACT;
+    for (i = 0; i < 3; ++i) b[i] = sum[i];
+    return GAC_OK;
+}
+
+int gac_contact_frame_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
+                              const double *dp, double *axes, double *g, double *dg)
+{
+    gac_contact_frame frame;
+    double dgap;
+    int code, k;
+    if (m == 0 || q == 0 || p == 0 || dq == 0 || dp == 0 || axes == 0 || g == 0 || dg == 0)
+        return GAC_ERR_NULL_ARGUMENT;
+    if (c < 0 || c >= m->ncontact || !gac_rowless(m, c)) return GAC_ERR_BAD_CONTACT;
+    code = gac_normal_tangent(m, q, p, c, dq, dp, 0, &dgap, g, dg, g + m->nq, dg + m->nq);
+    if (code != GAC_OK) return code;
+    code = gac_rowless_frame(m, q, p, c, &frame);
+    if (code != GAC_OK) return code;
+    for (k = 0; k < 9; ++k) axes[k] = frame.axis[k / 3][k % 3];
     return GAC_OK;
 }
 

@@ -221,7 +221,7 @@ static int gac_sens_slow_slide(const gac_sim *s, const double *x, int n, const i
     md->contact_velocities(x, x + md->nq, s->p, vq);
     for (a = 0; a < n; ++a) {
         if (md->contacts[set[a]].kind != GAC_CONTACT_WALL || !gac_sens_sliding(s, stuck, set[a])) continue;
-        gac_tangential_velocity(md, set[a], vq, vt);
+        gac_tangential_velocity(md, x, s->p, set[a], vq, vt);
         if (!(hypot(vt[0], vt[1]) > md->friction_velocity)) return set[a];
     }
     return -1;
@@ -312,7 +312,7 @@ static int gac_sens_set_slide(const gac_sim *s, const double *x, const int *stuc
         const gac_contact *ct = md->contacts + H->set[a];
         double *G = H->G + (long)a * nq;
         if (!(H->cf[a] > 0.0)) continue;
-        gac_tangential_velocity(md, H->set[a], vq, H->vt + 2 * a);
+        gac_tangential_velocity(md, x, s->p, H->set[a], vq, H->vt + 2 * a);
         gac_slide_phi(H->vt + 2 * a, md->friction_velocity, slip + 2 * H->set[a], H->phi + 2 * a);
         for (i = 0; i < nq; ++i) G[i] = 0.0;
         for (t = 0; t < 2; ++t) {                 /* G_a = J^T g_a = -sum_t phi_t Wt_t */
@@ -1584,11 +1584,11 @@ void gac_sens_stick(gac_sim *s, const double *x_before, const int *stuck_before,
     c = r->stuck[0];
     ct = md->contacts + c;
     md->contact_velocities(x_before, x_before + nq, s->p, vq);
-    gac_tangential_velocity(md, c, vq, vt);
+    gac_tangential_velocity(md, x_before, s->p, c, vq, vt);
     speed = hypot(vt[0], vt[1]);
     for (a = 1; a < r->nstuck; ++a) {                        /* one body's points, or a mode boundary */
         double w[2];
-        gac_tangential_velocity(md, r->stuck[a], vq, w);
+        gac_tangential_velocity(md, x_before, s->p, r->stuck[a], vq, w);
         if (!(hypot(w[0] - vt[0], w[1] - vt[1]) <= 1e-6 * speed)) {
             gac_sens_stop(s, GAC_SENS_BOUNDARY, s->t, r->stuck[a]);
             return;

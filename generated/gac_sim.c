@@ -106,7 +106,7 @@ void gac_events(gac_sim *s, double t, const double *x, double *ev)
             ev[c] = lambda[a];
             if (s->is_stuck[c])
                 ev[c] -= sqrt(lambda_t[2*a] * lambda_t[2*a] + lambda_t[2*a + 1] * lambda_t[2*a + 1])
-                         / gac_friction_coefficient(md, s->p, c);
+                         / gac_rest_friction(md, s->p, c);
         }
     }
 }

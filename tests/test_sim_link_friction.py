@@ -154,3 +154,42 @@ def test_without_friction_the_pair_law_is_the_frictionless_one(chain):
         assert result.impulse[0] == pytest.approx(F[0], rel=1e-13) and not result.impulse_t.any()
         compared += 1
     assert compared > 10
+
+
+def test_the_pair_frame_rows_biases_match_central_differences_along_a_trajectory(chain):
+    """The biases a resting rough pair's held rows take (gac_contact_frame_tangent, the rows J^T n, J^T t1, J^T t2
+    and their derivatives; this model has no tangent kernels, so the Jacobians' own change is differenced inside):
+    along q(t) = q0 + v t + a t^2 / 2, d/dt (g_k . qd) = g_k . qdd + dg_k[qd] . qd against the fourth-order central
+    difference (step 1e-4) to 1e-8, on random states where both closest points lie inside their links (both
+    fractions moving), the rows the documented frame's."""
+    c = pair_index(chain)
+    rng = np.random.default_rng(29)
+    checked = 0
+    dp = np.zeros(max(len(chain.p), 1))
+
+    def rows(q, dq):
+        axes, g, dg = np.zeros(9), np.zeros(3 * chain.nq), np.zeros(3 * chain.nq)
+        code = chain.lib.gac_contact_frame_tangent(chain.ffi.addressof(chain.c.model), chain._ptr(q),
+                                                   chain._ptr(chain.p), c, chain._ptr(dq), chain._ptr(dp),
+                                                   chain._ptr(axes), chain._ptr(g), chain._ptr(dg))
+        assert code == chain.lib.GAC_OK, chain.error_message(code)
+        return g.reshape(3, chain.nq), dg.reshape(3, chain.nq)
+
+    while checked < 5:
+        q0 = np.concatenate([rng.uniform(-math.pi, math.pi, 5), rng.uniform(-1, 1, 3)])
+        q0[1] = rng.uniform(-1.2, 1.2)
+        _, s, t, _ = chain.link_gap(q0, 1, 3)
+        if not (0.05 < s < 0.95 and 0.05 < t < 0.95):
+            continue
+        v, acc = rng.standard_normal(chain.nq), rng.standard_normal(chain.nq)
+        g, dg = rows(q0, v)
+        assert np.allclose(g, pair_rows(chain, q0), rtol=0, atol=1e-14 * np.abs(g).max())
+        exact = g @ acc + dg @ v
+
+        def rates(h):
+            return rows(q0 + v * h + 0.5 * acc * h * h, np.zeros(chain.nq))[0] @ (v + acc * h)
+
+        h = 1e-4
+        diff = (8.0 * (rates(h) - rates(-h)) - (rates(2 * h) - rates(-2 * h))) / (12.0 * h)
+        assert np.abs(diff - exact).max() < 1e-8 * max(1.0, np.abs(exact).max()), (diff, exact)
+        checked += 1

@@ -4,8 +4,8 @@ of the law for one contact (its 3 x 3 contact-space inverse inertia W built here
 point velocities along the documented frame n, t1 = the rod's axis off n, t2 = n x t1; stick where -W^-1 q lies in
 the cone, else slide, the direction found by a sweep of the tangent plane), in the stick and the slip regime; the
 kinetic energy never grows on random states, coefficients and restitutions; c_f = 0 gives the frictionless law
-exactly; a run keeps the momentum balance along all three directions; a rod landing on the rough ball rests on it
-frictionless; and sensitivities stop at such an impact."""
+exactly; a run keeps the momentum balance along all three directions; a rod landing on the rough ball off centre is
+held there by its friction (on a smooth ball it slides off); and sensitivities stop at such an impact."""
 from __future__ import annotations
 
 import math
@@ -214,10 +214,11 @@ def test_sensitivities_stop_at_a_rough_strike(model):
     assert smooth.sensitivities.valid, smooth.sensitivity_message
 
 
-def test_a_rod_landing_on_the_rough_ball_rests_on_it_frictionless(model):
+def test_a_rod_landing_on_the_rough_ball_rests_on_it_held_by_its_friction(model):
     """The rod dropped flat, its centre over the ball (e_ball = 0): the frictional law's plastic strike, then the
-    contact held (resting frictionless: balanced, it stays) without sinking into the ball; dropped off centre, it
-    lands, slides off (nothing holds it tangentially at rest) and falls past."""
+    contact held without sinking into the ball; dropped off centre, it lands and sticks (c_f = 0.5): the stuck point
+    holds it, and it rocks on the ball, rolling without slipping, its centre staying within millimetres of where it
+    landed, the energy kept; on a smooth ball (friction_ball = 0) nothing holds it tangentially and it slides off."""
     q0 = np.array([-math.pi / 2, 0.0, -math.pi / 2, -0.6, 0.5, 0.0])        # O_1 (-0.6, 0.5, 0), O_2 (0.6, 0.5, 0)
     p = model.parameters({"e_ball": 0.0})
     r = simulate(model, 1.0, p=p, q0=q0, qd0=np.zeros(6), rtol=1e-10, atol=1e-12)
@@ -225,6 +226,12 @@ def test_a_rod_landing_on_the_rough_ball_rests_on_it_frictionless(model):
     assert min(model.contact_gaps(model.layout.reduce(q))[0] for q in r.q) >= -1e-12
     q0[3] += 0.05
     r = simulate(model, 1.0, p=p, q0=q0, qd0=np.zeros(6), rtol=1e-10, atol=1e-12)
+    centres = np.array([model.contact_points(model.layout.reduce(q)).mean(axis=0) for q in r.q])
+    assert r.success and r.resting_final == [(1, "L1/ball")] and r.n_sticks == 1 and r.n_slips == 0
+    assert np.abs(centres[:, 0] - 0.05).max() < 5e-3 and abs(r.energy_drift) < 1e-9
+    assert min(model.contact_gaps(model.layout.reduce(q))[0] for q in r.q) >= -1e-9
+    smooth = model.parameters({"e_ball": 0.0, "friction_ball": 0.0})
+    r = simulate(model, 1.0, p=smooth, q0=q0, qd0=np.zeros(6), rtol=1e-10, atol=1e-12)
     centre = model.contact_points(model.layout.reduce(r.q[-1])).mean(axis=0)
     assert r.success and r.resting_final == [] and centre[0] > 0.3 and centre[1] < 0.0     # slid off, falling
     assert min(model.contact_gaps(model.layout.reduce(q))[0] for q in r.q) >= -1e-9

@@ -217,8 +217,9 @@ typedef int (*gac_progress)(double t, long n_steps, long n_impacts, void *user);
  * Or two links as capsules (kind GAC_CONTACT_LINK: links point and coordinate, 1-based, gap = their segments'
  * distance less its m->link_radius entry, gac_link_gap; its direction J^T n from the closest points, gac_link_direction; no Jacobian
  * row).  Link contacts come last in the table, after every contact of the contact_gaps kernel; they take part in
- * events and impacts (frictionless) and in the resting set, held by their direction g and its bias dg(qd) . qd
- * (frictionless; not where g has no derivative, nor under a frictional impact law on rough walls).
+ * events and impacts (with Coulomb friction along their contact frame where rough) and in the resting set, held by
+ * their direction g and its bias dg(qd) . qd (not where g has no derivative), rough ones stuck or sliding along the
+ * frame's tangents as a rough wall's point (see "Sticking").
  * Or a link and a fixed obstacle (kind GAC_CONTACT_OBSTACLE: link point, 1-based, and obstacle coordinate,
  * 0-based into m->obstacles; gap = the distance of the link's segment from the obstacle's, less its
  * m->link_radius entry (the link's radius plus the obstacle's), gac_obstacle_gap): handled as a link pair whose
@@ -250,7 +251,7 @@ typedef struct {
     int coordinate;       /* stop: the index into q of its joint's angle (0..nq-1); link: the second link j
                              (> point + 1); obstacle: the obstacle (0..nobstacle-1); wall: unused */
     int has_friction;     /* wall, link, obstacle: 1 if it has Coulomb friction (0: frictionless; a zero-initialised
-                             entry); a link pair's and an obstacle's acts at impacts only */
+                             entry), at impacts and at rest; a link pair's and an obstacle's along its contact frame */
     int friction_index;         /* its friction coefficient c_f: p[friction_index], or friction_value when < 0 */
     double friction_value;
     int trow[2];          /* the Jacobian rows of the point along the wall's two tangential axes (ascending), -1 for
@@ -609,6 +610,15 @@ int gac_contact_normal(const gac_model *m, const double *q, const double *p, int
  * bar's or a sphere's. */
 int gac_contact_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
                                const double *dp, double *dgap, double *g, double *dg);
+/* A link pair's or an obstacle contact's frame rows and their derivatives along (dq (nq), dp (nparam)): axes (9)
+ * the frame n, t1, t2 row by row (t1 link i's axis off n, t2 = n x t1: the frictional impact law's and the resting
+ * friction's frame), g (3 nq) the rows J^T n, J^T t1, J^T t2 (the closest points' relative velocity along each is
+ * g_k . qd) and dg (3 nq) their derivatives, as gac_contact_normal_tangent's for the normal (its dg is dg's first
+ * row) with the tangents' turning d t1 = (I - t1 t1^T) du / |u| (u = d1 - (d1 . n) n, d1 link i's axis),
+ * d t2 = dn x t1 + n x d t1.  Along dq = qd (dp = 0), dg_k . qd is the bias of a resting contact's row k:
+ * d/dt (g_k . qd) = g_k . qdd + dg_k . qd.  Returns as gac_contact_normal_tangent. */
+int gac_contact_frame_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
+                              const double *dp, double *axes, double *g, double *dg);
 
 /* The base chart's measure chi(q) (gac_chart), in [0, 1] for the default twists; of several turning bases
  * (gac_model.nbase), the smallest of theirs. */
@@ -701,8 +711,11 @@ int gac_chart_convert_tangent(const gac_base *from, const gac_base *to, int nq, 
  * Every landing and release is reported in the record (landed[], released[]).
  *
  * Sticking (opt.stick = 1, the default).  A point resting on a wall with Coulomb friction c_f > 0 is STUCK or
- * SLIDING.  Stuck: its tangential Jacobian rows (gac_contact.trow) are held with the normal rows as bilateral
- * constraints, J_t qdd + Jdot_t qd = 0, their forces lambda_T solved with the normal forces in one system (rows
+ * SLIDING, and so is a rough link pair or link on an obstacle at rest, along its contact frame: its tangential rows
+ * are g_k = J_P^T t_k - J_Q^T t_k (k = 1, 2: the closest points' relative velocity along the frame's t1, t2, as at its
+ * impacts), their biases dg_k(qd) . qd the exact derivative of the frame rows (gac_contact_frame_tangent), where a
+ * wall's are its Jacobian rows trow and their contact_bias rows.  Stuck: its tangential rows (a wall's
+ * gac_contact.trow) are held with the normal rows as bilateral constraints, J_t qdd + Jdot_t qd = 0, their forces lambda_T solved with the normal forces in one system (rows
  * dependent on the others share the force by the least-norm solution, e.g. a rod lying flat).  Sliding: the force
  * -c_f lambda phi, phi = v_t / max(|v_t|, v_s) (v_s = friction_velocity), with, just after a slip began and while
  * the point is slower than v_s, (1 - |v_t| / v_s) d added to phi along the slip's direction d (the friction

@@ -125,7 +125,7 @@ void gac_add_work(gac_sim *s, double t_b)
     s->loss_friction += h * w_friction;
 }
 
-/* 1 if at x a resting contact on a wall with friction (not stuck) slides slower than GAC_SLOW_SLIDING friction_velocity
+/* 1 if at x a rough resting contact (not stuck) slides slower than GAC_SLOW_SLIDING friction_velocity
  * (its velocity along the wall, as in gac_constrained_dynamics_friction): the regularised friction force is then
  * (nearly) viscous, -c_f lambda v_t / friction_velocity, a stiff term that bounds an explicit method's step. */
 int gac_slow_sliding(const gac_sim *s, const double *x)
@@ -133,20 +133,15 @@ int gac_slow_sliding(const gac_sim *s, const double *x)
     const gac_model *md = s->model;
     const double slow = GAC_SLOW_SLIDING * md->friction_velocity;
     double vq[3 * GAC_AT_LEAST_1(md->npoint)];
-    int a, j;
+    int a;
     if (s->nresting == 0 || !gac_has_friction(md)) return 0;
     md->contact_velocities(x, x + md->nq, s->p, vq);
     for (a = 0; a < s->nresting; ++a) {
-        const gac_contact *k = &md->contacts[s->resting[a]];
-        const double cf = k->friction_index >= 0 ? s->p[k->friction_index] : k->friction_value;
-        double speed2 = 0.0;
-        int axis = 0;
-        if (k->kind != GAC_CONTACT_WALL || !k->has_friction || !(cf > 0.0) || s->is_stuck[s->resting[a]]) continue;
-        for (j = 0; j < 2; ++j, ++axis) {             /* the two tangential axes, ascending */
-            if (axis == k->axis) ++axis;
-            if (k->trow[j] >= 0) speed2 += vq[3 * (k->point - 1) + axis] * vq[3 * (k->point - 1) + axis];
-        }
-        if (speed2 < slow * slow) return 1;
+        const int c = s->resting[a];
+        double vt[2];
+        if (!(gac_rest_friction(md, s->p, c) > 0.0) || s->is_stuck[c]) continue;
+        gac_tangential_velocity(md, x, s->p, c, vq, vt);   /* a wall's two axes ascending, or a frame's tangents */
+        if (vt[0] * vt[0] + vt[1] * vt[1] < slow * slow) return 1;
     }
     return 0;
 }

@@ -35,7 +35,8 @@
 #define GAC_SLIDE_STARTS 144      /* starts on a grid of the slide angles for Newton's method, per combination */
 
 /* Coulomb coefficient of contact c's wall, at rest and at impacts: its c_f (0 for a frictionless wall, a stop, a
- * link pair or an obstacle: those rest frictionless). */
+ * link pair or an obstacle: those have no Jacobian rows; their coefficient is gac_contact_friction's, at rest
+ * gac_rest_friction's). */
 double gac_friction_coefficient(const gac_model *m, const double *p, int c)
 {
     const gac_contact *k = &m->contacts[c];
@@ -43,8 +44,8 @@ double gac_friction_coefficient(const gac_model *m, const double *p, int c)
     return k->friction_index >= 0 ? p[k->friction_index] : k->friction_value;
 }
 
-/* Coulomb coefficient of contact c at an impact: a wall's c_f, or a link pair's or an obstacle's (which act at
- * impacts only); 0 for a frictionless contact or a stop. */
+/* Coulomb coefficient of contact c at an impact (and at rest): a wall's c_f, or a link pair's or an obstacle's
+ * (along its contact frame); 0 for a frictionless contact or a stop. */
 double gac_contact_friction(const gac_model *m, const double *p, int c)
 {
     const gac_contact *k = &m->contacts[c];

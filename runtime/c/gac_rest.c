@@ -32,8 +32,9 @@ void gac_normal_velocities(const gac_model *md, const double *x, const double *p
 }
 
 /* 1 if contact c can be held at its wall at state x: a wall's or a stop's always; a link pair's or an obstacle's
- * where its normal has a derivative along qd (gac_rowless_bias: not crossing axes).  Held, a link pair or an obstacle
- * is frictionless whatever its Coulomb coefficient (which acts at its impacts only, gac_contact_friction). */
+ * where its normal has a derivative along qd (gac_rowless_bias: not crossing axes).  Held, a rough link pair or
+ * obstacle sticks or slides by Coulomb's law along its frame's tangents as a rough wall's point does (gac_stick.c);
+ * where the tangents have no derivative either, its stuck rows fail with GAC_ERR_LINK_REST. */
 int gac_holdable(const gac_sim *s, const double *x, int c)
 {
     const gac_model *md = s->model;
@@ -431,15 +432,6 @@ int gac_recheck_rest(gac_sim *s, gac_impact_record *record)
     return s->fail ? s->fail : 1;
 }
 
-/* Coulomb coefficient of contact c's wall at rest (0 for a frictionless wall, a stop, a link pair or an obstacle:
- * their friction acts at impacts only). */
-static double gac_friction(const gac_model *m, const double *p, int c)
-{
-    const gac_contact *k = &m->contacts[c];
-    if (!k->has_friction || k->kind != GAC_CONTACT_WALL) return 0.0;
-    return k->friction_index >= 0 ? p[k->friction_index] : k->friction_value;
-}
-
 /* 1 if the n x n row-major B (n <= GAC_PMATRIX_MAX) is a P-matrix with margin: every principal minor above
  * tol times the product of its diagonal's magnitudes (the minors by Gaussian elimination of each subset). */
 #define GAC_PMATRIX_MAX 10
@@ -521,7 +513,7 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
         double held_bias;
         if (gac_normal_bias(m, q, qd, p, resting[a], bias, &held_bias) != GAC_OK) return GAC_ERR_LINK_REST;
         lambda[a] = -(held_bias + gac_normal_value(m, q, p, resting[a], qdd, vel));
-        cf[a] = gac_friction(m, p, resting[a]);
+        cf[a] = gac_rest_friction(m, p, resting[a]);
         if (cf[a] > 0.0) friction = 1;
     }
     if (!friction) {
@@ -533,18 +525,17 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
         m->contact_velocities(q, qd, p, vq);
         for (a = 0; a < nresting * nresting; ++a) B[a] = A[a];
         for (a = 0; a < nresting; ++a) {
-            const gac_contact *k = &m->contacts[resting[a]];
+            gac_tangents tg;
             double vt[2], phi[2];
-            int j, r;
+            int j;
             slide[a] = 0.0;
             if (!(cf[a] > 0.0)) continue;
-            gac_tangential_velocity(m, resting[a], vq, vt);                  /* the two tangential axes, ascending */
+            code = gac_tangents_at(m, q, p, resting[a], &tg);       /* a wall's two axes ascending, or a frame's */
+            if (code != GAC_OK) return code;
+            for (j = 0; j < 2; ++j) vt[j] = gac_tangent_value(&tg, j, vq);
             slide[a] = gac_slide_phi(vt, m->friction_velocity, slip ? slip + 2 * resting[a] : 0, phi);  /* >= 0 */
-            for (r = 0; r < m->njrow; ++r) f[r] = 0.0;
-            for (j = 0; j < 2; ++j) {
-                if (k->trow[j] >= 0) f[k->trow[j]] = -phi[j];                 /* -phi: against the sliding */
-            }
-            m->contact_generalized_force(q, f, p, g);
+            for (j = 0; j < 2; ++j) phi[j] = -phi[j];                         /* -phi: against the sliding */
+            gac_tangent_force(m, q, p, &tg, phi, f, g);
             m->inertia_solve(q, g, p, Z + (long)a * nq);
             m->contact_velocities(q, Z + (long)a * nq, p, vel);
             for (b = 0; b < nresting; ++b)

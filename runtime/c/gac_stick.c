@@ -30,18 +30,81 @@ double gac_slide_phi(const double *vt, double vs, const double *d, double *phi)
     return phi[0] * vt[0] + phi[1] * vt[1];
 }
 
-/* The velocity of contact c's point along its wall's two tangential axes (ascending; 0 for an axis the model does
- * not move along, and for a stop), from the points' velocities vq (3 npoint). */
-void gac_tangential_velocity(const gac_model *m, int c, const double *vq, double *vt)
+/* Contact c's Coulomb coefficient at rest: a rough wall's, a rough link pair's or obstacle's (0 for a frictionless
+ * contact and a stop). */
+double gac_rest_friction(const gac_model *m, const double *p, int c)
+{
+    return gac_rowless(m, c) ? gac_contact_friction(m, p, c) : gac_friction_coefficient(m, p, c);
+}
+
+/* Contact c's tangential directions at q (gac_tangents): a wall's axes ascending, other than its normal's, with their
+ * velocity components (a stop has none); a link pair's or an obstacle's frame.  GAC_OK or gac_rowless_frame's
+ * error. */
+int gac_tangents_at(const gac_model *m, const double *q, const double *p, int c, gac_tangents *tg)
 {
     const gac_contact *k = &m->contacts[c];
     int j, axis = 0;
-    vt[0] = vt[1] = 0.0;
-    if (k->kind != GAC_CONTACT_WALL) return;
+    tg->c = c;
+    tg->rowless = gac_rowless(m, c);
+    for (j = 0; j < 2; ++j) tg->has[j] = 0, tg->comp[j] = -1;
+    if (tg->rowless) {
+        const int code = gac_rowless_frame(m, q, p, c, &tg->frame);
+        if (code != GAC_OK) return code;
+        tg->has[0] = tg->has[1] = 1;
+        return GAC_OK;
+    }
+    if (k->kind != GAC_CONTACT_WALL) return GAC_OK;
     for (j = 0; j < 2; ++j, ++axis) {
         if (axis == k->axis) ++axis;
-        if (k->trow[j] >= 0) vt[j] = vq[3 * (k->point - 1) + axis];
+        tg->has[j] = k->trow[j] >= 0;
+        tg->comp[j] = 3 * (k->point - 1) + axis;
     }
+    return GAC_OK;
+}
+
+/* The rate along tangential direction j of the velocities whose joint points move with vel (contact_velocities):
+ * a wall's point velocity component, a frame's t_j . (v_P - v_Q) at the closest points (0 where it has none). */
+double gac_tangent_value(const gac_tangents *tg, int j, const double *vel)
+{
+    double size;
+    if (!tg->has[j]) return 0.0;
+    return tg->rowless ? gac_frame_rate(&tg->frame, vel, 1 + j, &size) : vel[tg->comp[j]];
+}
+
+/* g (nq) = the generalised force of the tangential force phi (2: along the two directions): a wall's J^T f with
+ * f[trow_j] = phi_j (f, njrow: scratch), a frame's phi_1 J^T t1 + phi_2 J^T t2. */
+void gac_tangent_force(const gac_model *m, const double *q, const double *p, const gac_tangents *tg,
+                       const double *phi, double *f, double *g)
+{
+    const gac_contact *k = &m->contacts[tg->c];
+    int i, j;
+    if (tg->rowless) {
+        double row[GAC_AT_LEAST_1(m->nq)];
+        for (i = 0; i < m->nq; ++i) g[i] = 0.0;
+        for (j = 0; j < 2; ++j) {
+            (void)gac_frame_direction(m, q, p, &tg->frame, 1 + j, row);
+            for (i = 0; i < m->nq; ++i) g[i] += phi[j] * row[i];
+        }
+        return;
+    }
+    for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
+    for (j = 0; j < 2; ++j) {
+        if (tg->has[j]) f[k->trow[j]] = phi[j];
+    }
+    m->contact_generalized_force(q, f, p, g);
+}
+
+/* The velocity of contact c's point along its two tangential directions (a wall's axes ascending, a link pair's or an
+ * obstacle's t1, t2; 0 for an axis the model does not move along, and for a stop) at q, from the points'
+ * velocities vq (3 npoint). */
+void gac_tangential_velocity(const gac_model *m, const double *q, const double *p, int c, const double *vq,
+                             double *vt)
+{
+    gac_tangents tg;
+    vt[0] = vt[1] = 0.0;
+    if (m->contacts[c].kind == GAC_CONTACT_STOP || gac_tangents_at(m, q, p, c, &tg) != GAC_OK) return;
+    vt[0] = gac_tangent_value(&tg, 0, vq);
+    vt[1] = gac_tangent_value(&tg, 1, vq);
 }
 
 /* 1 if one of the contacts set[0..n-1] is stuck (stuck: per contact, or NULL: none). */
@@ -56,59 +119,101 @@ int gac_any_stuck(const int *stuck, int n, const int *set)
 }
 
 /* The rows held at the contacts set[0..n-1]: first each one's normal row (its response I_f^-1 n_a, left in Y by
- * gac_impact_system), then the tangential rows of each stuck one (responses I_f^-1 J^T e_trow into T).  Row r:
- * owner[r] (its contact's position in set), comp[r] (-1 for a normal row, else the point velocity component
- * 3 (point - 1) + axis it holds), brow[r] (its row of contact_bias), sgn[r] (the normal's sign, 1 along an axis),
- * tj[r] (the tangential axis 0 or 1, -1 for a normal row), resp[r].  Returns the number of rows or an error (< 0). */
+ * gac_impact_system), then the tangential rows of each stuck one (responses I_f^-1 J^T e_trow, or a link pair's or an
+ * obstacle's I_f^-1 J^T t_j, into T; a frame's tangent that no motion of the chain takes, |J^T t_j| below 1e-10 of
+ * its columns' size, left out as a wall's axis without a row).  tg[a]: contact set[a]'s tangential directions.
+ * Row r: owner[r] (its contact's position in set), comp[r] (-1 for a normal row, else the tangential row's
+ * direction holder: a wall's point velocity component 3 (point - 1) + axis, -2 a frame's), brow[r] (a wall's row
+ * of contact_bias), sgn[r] (the normal's sign, 1 along an axis), tj[r] (the tangential direction 0 or 1, -1 for a
+ * normal row), resp[r].  Returns the number of rows or an error (< 0). */
 static int gac_held_rows(const gac_model *m, const double *q, const double *qd, const double *p, int n,
-                         const int *set, const int *stuck, double *work, int *owner, int *comp, int *brow,
-                         double *sgn, int *tj, const double **resp)
+                         const int *set, const int *stuck, double *work, gac_tangents *tg, int *owner, int *comp,
+                         int *brow, double *sgn, int *tj, const double **resp)
 {
     const int nq = m->nq;
     double v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)];
     double *Y = GAC_WORK_Y(m, work), *T = GAC_WORK_T(m, work), *g = GAC_WORK_G(m, work), *f = GAC_WORK_F(m, work);
-    int a, j, nr = 0, nt = 0;
+    int a, i, j, nr = 0, nt = 0;
     const int code = gac_impact_system(m, q, qd, p, n, set, work, v, e);
     if (code != GAC_OK) return code;
     for (a = 0; a < n; ++a) {
         int row;
         double sign;
+        const int frame = gac_tangents_at(m, q, p, set[a], &tg[a]);
+        if (frame != GAC_OK) return frame;
         gac_contact_row(m, set[a], &row, &sign);
         owner[nr] = a, comp[nr] = -1, brow[nr] = row, sgn[nr] = sign, tj[nr] = -1;
         resp[nr++] = Y + (long)a * nq;
     }
     for (a = 0; a < n; ++a) {
         const gac_contact *k = &m->contacts[set[a]];
-        int axis = 0;
-        if (stuck == 0 || !stuck[set[a]] || !(gac_friction_coefficient(m, p, set[a]) > 0.0)) continue;
-        for (j = 0; j < 2; ++j, ++axis) {
-            if (axis == k->axis) ++axis;
-            if (k->trow[j] < 0) continue;
-            const int response = gac_row_response(m, q, p, k->trow[j], f, g, T + (long)nt * nq);   /* along +X_axis */
-            if (response != GAC_OK) return response;
-            owner[nr] = a, comp[nr] = 3 * (k->point - 1) + axis, brow[nr] = k->trow[j], sgn[nr] = 1.0, tj[nr] = j;
-            resp[nr++] = T + (long)nt++ * nq;
+        if (stuck == 0 || !stuck[set[a]] || !(gac_rest_friction(m, p, set[a]) > 0.0)) continue;
+        for (j = 0; j < 2; ++j) {
+            double *out = T + (long)nt * nq;
+            if (!tg[a].has[j]) continue;
+            if (tg[a].rowless) {                       /* J^T t_j, a motion's direction or none */
+                double norm = 0.0;
+                const double scale = gac_frame_direction(m, q, p, &tg[a].frame, 1 + j, g);
+                for (i = 0; i < nq; ++i) norm += g[i] * g[i];
+                if (!(sqrt(norm) > 1e-10 * scale)) {
+                    tg[a].has[j] = 0;
+                    continue;
+                }
+                m->inertia_solve(q, g, p, out);
+                if (!gac_finite(out, nq)) return GAC_ERR_SINGULAR_MASS;
+                owner[nr] = a, comp[nr] = -2, brow[nr] = -1, sgn[nr] = 1.0, tj[nr] = j;
+            } else {
+                const int response = gac_row_response(m, q, p, k->trow[j], f, g, out);   /* along +X_axis */
+                if (response != GAC_OK) return response;
+                owner[nr] = a, comp[nr] = tg[a].comp[j], brow[nr] = k->trow[j], sgn[nr] = 1.0, tj[nr] = j;
+            }
+            resp[nr++] = out;
+            nt++;
         }
     }
     return nr;
 }
 
 /* Row r's value of a generalised velocity w (vel = contact_velocities(q, w)): a normal row's by gac_normal_value
- * (a link's or an obstacle's contact from its closest points), a tangential row's the point velocity component. */
-static double gac_held_value(const gac_model *m, const double *q, const double *p, const int *set, int owner, int comp,
-                             const double *w, const double *vel)
+ * (a link's or an obstacle's contact from its closest points), a tangential row's the point velocity component, or
+ * a frame's t_j . (v_P - v_Q). */
+static double gac_held_value(const gac_model *m, const double *q, const double *p, const int *set,
+                             const gac_tangents *tg, int owner, int comp, int tj, const double *w, const double *vel)
 {
-    return comp < 0 ? gac_normal_value(m, q, p, set[owner], w, vel) : vel[comp];
+    if (comp == -1) return gac_normal_value(m, q, p, set[owner], w, vel);
+    return comp >= 0 ? vel[comp] : gac_tangent_value(&tg[owner], tj, vel);
+}
+
+/* The bias of held row r (its rate's part without qdd): a normal row's by gac_normal_bias, a wall's tangential row's
+ * contact_bias row (bias), a frame's tangent's from gac_rowless_frame_bias (its three rows' biases kept in
+ * frame[3 owner..], have[owner] set, for the contact's other tangent).  GAC_OK or GAC_ERR_LINK_REST (a normal or a
+ * frame without derivative). */
+static int gac_held_bias(const gac_model *m, const double *q, const double *qd, const double *p, const int *set,
+                         int owner, int comp, int brow, double sgn, int tj, const double *bias, double *frame,
+                         int *have, double *b)
+{
+    if (comp >= 0) {
+        *b = sgn * bias[brow];
+        return GAC_OK;
+    }
+    if (comp == -1) return gac_normal_bias(m, q, qd, p, set[owner], bias, b) == GAC_OK ? GAC_OK : GAC_ERR_LINK_REST;
+    if (!have[owner] && gac_rowless_frame_bias(m, q, qd, p, set[owner], frame + 3 * owner) != GAC_OK)
+        return GAC_ERR_LINK_REST;
+    have[owner] = 1;
+    *b = frame[3 * owner + 1 + tj];
+    return GAC_OK;
 }
 
 /* G (nr x nr) = R I_f^-1 R^T of the held rows, symmetric (vel: scratch). */
-static void gac_held_gram(const gac_model *m, const double *q, const double *p, const int *set, int nr,
-                          const int *owner, const int *comp, const double **resp, double *G, double *vel)
+static void gac_held_gram(const gac_model *m, const double *q, const double *p, const int *set,
+                          const gac_tangents *tg, int nr, const int *owner, const int *comp, const int *tj,
+                          const double **resp, double *G, double *vel)
 {
     int r, c;
     for (c = 0; c < nr; ++c) {
         m->contact_velocities(q, resp[c], p, vel);
-        for (r = 0; r < nr; ++r) G[r*nr + c] = gac_held_value(m, q, p, set, owner[r], comp[r], resp[c], vel);
+        for (r = 0; r < nr; ++r)
+            G[r*nr + c] = gac_held_value(m, q, p, set, tg, owner[r], comp[r], tj[r], resp[c], vel);
     }
     for (r = 0; r < nr; ++r) {
         for (c = 0; c < r; ++c) G[r*nr + c] = G[c*nr + r] = 0.5 * (G[r*nr + c] + G[c*nr + r]);
@@ -132,41 +237,40 @@ int gac_stuck_dynamics(const gac_model *m, const double *q, const double *qd, co
     double *G = GAC_WORK_W(m, work), *L = GAC_WORK_L(m, work), *Z = GAC_WORK_Z(m, work);
     double *vel = GAC_WORK_VEL(m, work), *g = GAC_WORK_G(m, work), *f = GAC_WORK_F(m, work);
     double bias[GAC_AT_LEAST_1(m->njrow)], vq[3 * GAC_AT_LEAST_1(m->npoint)], b[cap], lam[cap], sgn[cap];
-    double cf[n1], slide[n1];
-    int owner[cap], comp[cap], brow[cap], tj[cap], idx[cap], sliding[n1];
+    double cf[n1], slide[n1], frame_bias[3 * n1];
+    int owner[cap], comp[cap], brow[cap], tj[cap], idx[cap], sliding[n1], have_bias[n1];
     const double *resp[cap];
+    gac_tangents tg[n1];
     int nr, r, c, a, i, j, dropped, nk = 0, any_sliding = 0;
     if (dissipation) *dissipation = 0.0;
     m->forward_dynamics(q, qd, u, p, qdd);
     if (n == 0) return GAC_OK;
-    nr = gac_held_rows(m, q, qd, p, n, set, stuck, work, owner, comp, brow, sgn, tj, resp);
+    nr = gac_held_rows(m, q, qd, p, n, set, stuck, work, tg, owner, comp, brow, sgn, tj, resp);
     if (nr < 0) return nr;
     m->contact_bias(q, qd, p, bias);
     m->contact_velocities(q, qd, p, vq);
     for (a = 0; a < n; ++a) {                     /* sliding points: Z_a = I_f^-1 J_t^T (-phi_a) */
-        const gac_contact *k = &m->contacts[set[a]];
         double vt[2], phi[2];
-        cf[a] = gac_friction_coefficient(m, p, set[a]);
+        cf[a] = gac_rest_friction(m, p, set[a]);
         sliding[a] = cf[a] > 0.0 && !stuck[set[a]];
         slide[a] = 0.0;
+        have_bias[a] = 0;
         if (!sliding[a]) continue;
         any_sliding = 1;
-        gac_tangential_velocity(m, set[a], vq, vt);
+        for (j = 0; j < 2; ++j) vt[j] = gac_tangent_value(&tg[a], j, vq);
         slide[a] = gac_slide_phi(vt, m->friction_velocity, slip ? slip + 2 * set[a] : 0, phi);
-        for (i = 0; i < m->njrow; ++i) f[i] = 0.0;
-        for (j = 0; j < 2; ++j) {
-            if (k->trow[j] >= 0) f[k->trow[j]] = -phi[j];
-        }
-        m->contact_generalized_force(q, f, p, g);
+        for (j = 0; j < 2; ++j) phi[j] = -phi[j];
+        gac_tangent_force(m, q, p, &tg[a], phi, f, g);
         m->inertia_solve(q, g, p, Z + (long)a * nq);
     }
-    gac_held_gram(m, q, p, set, nr, owner, comp, resp, G, vel);
+    gac_held_gram(m, q, p, set, tg, nr, owner, comp, tj, resp, G, vel);
     m->contact_velocities(q, qdd, p, vel);        /* R qdd_free, row by row */
     for (r = 0; r < nr; ++r) {
         double held_bias = 0.0;
-        if (comp[r] >= 0) held_bias = sgn[r] * bias[brow[r]];
-        else if (gac_normal_bias(m, q, qd, p, set[owner[r]], bias, &held_bias) != GAC_OK) return GAC_ERR_LINK_REST;
-        b[r] = -(held_bias + gac_held_value(m, q, p, set, owner[r], comp[r], qdd, vel));
+        const int code = gac_held_bias(m, q, qd, p, set, owner[r], comp[r], brow[r], sgn[r], tj[r], bias, frame_bias,
+                                       have_bias, &held_bias);
+        if (code != GAC_OK) return code;
+        b[r] = -(held_bias + gac_held_value(m, q, p, set, tg, owner[r], comp[r], tj[r], qdd, vel));
     }
     for (i = 0; i < nr * nr; ++i) L[i] = G[i];
     dropped = gac_ldlt_drop(nr, L, GAC_HELD_DEPENDENT);
@@ -175,7 +279,7 @@ int gac_stuck_dynamics(const gac_model *m, const double *q, const double *qd, co
         if (!sliding[a]) continue;
         m->contact_velocities(q, Z + (long)a * nq, p, vel);
         for (r = 0; r < nr; ++r)
-            G[r*nr + a] += cf[a] * gac_held_value(m, q, p, set, owner[r], comp[r], Z + (long)a * nq, vel);
+            G[r*nr + a] += cf[a] * gac_held_value(m, q, p, set, tg, owner[r], comp[r], tj[r], Z + (long)a * nq, vel);
     }
     for (r = 0; r < nr; ++r) lam[r] = b[r];
     if (dropped == 0 && !any_sliding) {
@@ -240,12 +344,13 @@ int gac_project_stuck(gac_sim *s, double *x, int n, const int *set)
     double sgn[cap], corr[cap];
     int owner[cap], comp[cap], brow[cap], tj[cap];
     const double *resp[cap];
+    gac_tangents tg[GAC_AT_LEAST_1(n)];
     int nr, r, i;
-    nr = gac_held_rows(md, x, x + nq, s->p, n, set, s->is_stuck, s->work, owner, comp, brow, sgn, tj, resp);
+    nr = gac_held_rows(md, x, x + nq, s->p, n, set, s->is_stuck, s->work, tg, owner, comp, brow, sgn, tj, resp);
     if (nr < 0) return nr;
-    gac_held_gram(md, x, s->p, set, nr, owner, comp, resp, G, vel);
+    gac_held_gram(md, x, s->p, set, tg, nr, owner, comp, tj, resp, G, vel);
     md->contact_velocities(x, x + nq, s->p, vel);
-    for (r = 0; r < nr; ++r) corr[r] = -gac_held_value(md, x, s->p, set, owner[r], comp[r], x + nq, vel);
+    for (r = 0; r < nr; ++r) corr[r] = -gac_held_value(md, x, s->p, set, tg, owner[r], comp[r], tj[r], x + nq, vel);
     if (gac_ldlt_drop(nr, G, GAC_HELD_DEPENDENT) < 0) return GAC_ERR_SINGULAR_CONTACT;
     gac_ldlt_solve(nr, G, corr);
     for (i = 0; i < nq; ++i) {
@@ -288,14 +393,18 @@ int gac_slip(gac_sim *s, double t, const double *x, int c, gac_impact_record *r)
     return 1;
 }
 
-/* The tangential velocities vt (2 per contact) of every contact's point at state x. */
+/* The tangential velocities vt (2 per contact) of every contact's point at state x (of a link pair or an obstacle,
+ * whose frame costs its closest points, only where it rests: 0 elsewhere). */
 void gac_tangential_speeds(const gac_sim *s, const double *x, double *vt)
 {
     const gac_model *md = s->model;
     double vq[3 * GAC_AT_LEAST_1(md->npoint)];
     int c;
     md->contact_velocities(x, x + md->nq, s->p, vq);
-    for (c = 0; c < md->ncontact; ++c) gac_tangential_velocity(md, c, vq, vt + 2 * c);
+    for (c = 0; c < md->ncontact; ++c) {
+        if (gac_rowless(md, c) && !s->is_resting[c]) vt[2 * c] = vt[2 * c + 1] = 0.0;
+        else gac_tangential_velocity(md, x, s->p, c, vq, vt + 2 * c);
+    }
 }
 
 /* 1 if every stuck resting contact at x lies strictly inside its cone, |lambda_T| < c_f lambda_N (its slip
@@ -321,12 +430,31 @@ static int gac_stuck_feasible(gac_sim *s, const double *x, int c_try, double *d)
     }
     for (a = 0; a < s->nresting; ++a) {
         const int c = s->resting[a];
-        const double cf = gac_friction_coefficient(md, s->p, c);
+        const double cf = gac_rest_friction(md, s->p, c);
         if (!s->is_stuck[c]) continue;
         if (!(lambda[a] - sqrt(lambda_t[2*a] * lambda_t[2*a] + lambda_t[2*a + 1] * lambda_t[2*a + 1]) / cf > 0.0))
             ok = 0;
     }
     return ok;
+}
+
+/* The number of tangential directions contact c's point moves along at q: a wall's axes with a row, a frame's
+ * tangents with |J^T t_j| above 1e-10 of its columns' size (a planar chain's t2 is none), 0 for a stop. */
+static int gac_tangent_axes(const gac_model *m, const double *q, const double *p, int c)
+{
+    const gac_contact *k = &m->contacts[c];
+    double g[GAC_AT_LEAST_1(m->nq)];
+    gac_contact_frame frame;
+    int j, i, count = 0;
+    if (!gac_rowless(m, c)) return k->kind == GAC_CONTACT_WALL ? (k->trow[0] >= 0) + (k->trow[1] >= 0) : 0;
+    if (gac_rowless_frame(m, q, p, c, &frame) != GAC_OK) return 0;
+    for (j = 0; j < 2; ++j) {
+        double norm = 0.0;
+        const double scale = gac_frame_direction(m, q, p, &frame, 1 + j, g);
+        for (i = 0; i < m->nq; ++i) norm += g[i] * g[i];
+        count += sqrt(norm) > 1e-10 * scale;
+    }
+    return count;
 }
 
 /* Sliding -> stuck at s->x (a step's end, after an impact, at the start): each resting point on a rough wall that is
@@ -348,11 +476,11 @@ int gac_try_stick(gac_sim *s, const double *vt_start, int count_loss, const int 
     gac_tangential_speeds(s, s->x, vt);
     for (a = 0; a < s->nresting; ++a) {
         const int c = s->resting[a];
-        const gac_contact *k = &md->contacts[c];
         const double *w = vt + 2 * c, speed = sqrt(w[0] * w[0] + w[1] * w[1]);
-        const int one_axis = (k->trow[0] >= 0) + (k->trow[1] >= 0) == 1;
-        const int turned = vt_start != 0 && one_axis && w[0] * vt_start[2*c] + w[1] * vt_start[2*c + 1] < 0.0;
-        if (s->is_stuck[c] || !(gac_friction_coefficient(md, s->p, c) > 0.0)) continue;
+        int turned;
+        if (s->is_stuck[c] || !(gac_rest_friction(md, s->p, c) > 0.0)) continue;
+        turned = vt_start != 0 && gac_tangent_axes(md, s->x, s->p, c) == 1
+                 && w[0] * vt_start[2*c] + w[1] * vt_start[2*c + 1] < 0.0;
         if ((!(speed < vs) && !turned) || w[0] * s->slip[2*c] + w[1] * s->slip[2*c + 1] < 0.0)
             s->slip[2 * c] = s->slip[2 * c + 1] = 0.0;     /* past the passage through zero speed, or turned back */
         if (!(speed < vs) && !turned) continue;

@@ -1020,14 +1020,6 @@ class Scene:
                 raise SceneError(f"friction.{w.name}: the Coulomb coefficient must be in [0, {FRICTION_MAX:g}], got {c_f!r}")
             walls.append(Wall(w.name, float(w.position), e, tuple(sorted(points)), float(c_f)))
         walls.sort(key=lambda w: WALL_NAMES.index(w.name))
-        for w in walls:                 # a capsule's contact point on a rough wall is off its centre: not modelled
-            for p in w.points if w.friction > 0.0 else ():
-                i = self.radius_owner(p)
-                if i is not None:
-                    raise SceneError(f"links[{i}].radius: O_{p} touches the wall {w.name} with friction "
-                                     f"(friction.{w.name} = {w.friction:g}), and a capsule's point of contact on a "
-                                     "rough wall is off its end point's centre, which the model does not take; "
-                                     f"give links[{i}].radius = 0 or a frictionless {w.name}")
         for axis in range(3):
             lo = self._find(walls, f"x{axis + 1}_min")
             hi = self._find(walls, f"x{axis + 1}_max")

@@ -154,7 +154,7 @@ def random_structure(rng, index: int, n_max: int = 8, capsules: bool = True) -> 
     # friction on the walls of some structures, drawn apart so that the frictionless structures and their runs
     # stay those of earlier releases of this study
     rough = np.random.default_rng([index, ROUGH_STREAM]).uniform() < ROUGH_SHARE
-    # capsules on some frictionless structures (a rough wall refuses them), drawn from a child stream of the
+    # capsules on some frictionless structures (as drawn since capsules joined the study), drawn from a child stream of the
     # structure's seed so that the other structures and their runs stay as they were
     side = _child_stream(rng, CAPSULE_STREAM)
     link_e = None

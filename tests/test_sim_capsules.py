@@ -14,11 +14,14 @@ from tests.test_sim_link_contact import closest_distance
 G, R = 9.81, 0.05
 
 
+C_F = 0.3
+
+
 @pytest.fixture(scope="module")
 def rod():
-    """One capsule rod of length 1 m, radius R, in a planar box with a floor at X2 = 0 (e = 0.5)."""
+    """One capsule rod of length 1 m, radius R, in a planar box with a rough floor at X2 = 0 (e = 0.5, c_f = C_F)."""
     scene = Scene(name="capsule_rod", links=(LineLink(1.0, 1.0, (1e-4, 1e-4, 1e-4), R),),
-                  walls=(Wall("x1_min", -5.0, 0.5), Wall("x1_max", 5.0, 0.5), Wall("x2_min", 0.0, 0.5)),
+                  walls=(Wall("x1_min", -5.0, 0.5), Wall("x1_max", 5.0, 0.5), Wall("x2_min", 0.0, 0.5, friction=C_F)),
                   gravity=G, q0=(-math.pi / 2, 0.0, 0.0, 0.0, 1.0, 0.0))
     return load_model(scene)
 
@@ -47,6 +50,29 @@ def test_a_rod_lying_at_its_radius_stays_there(rod):
     assert result.success and not result.impacts, result.message
     points = rod.contact_points(rod.layout.reduce(result.q_final))
     assert points[:, 1] == pytest.approx([R, R], abs=1e-12)
+
+
+@pytest.mark.parametrize("c_f", [C_F, 0.0])
+def test_a_capsule_rod_sliding_flat_on_a_rough_floor_stops_at_the_closed_form_time_and_place(rod, c_f):
+    """Lying flat at X2 = R, pushed along X1 at v0: both end spheres slide, friction c_f m g against the sliding (it
+    acts at the end points' centres, as at a bare segment's: docs/simulation.md, "Capsules"), so
+    x(t) = v0 t - c_f g t^2 / 2 until it sticks; the work of friction is the kinetic energy; without friction
+    (c_f = 0 through p) it slides on at v0."""
+    v0, t_end = 2.0, 1.0
+    p = rod.parameters({"friction_x2_min": c_f})
+    result = simulate(rod, t_end, p=p, q0=[-math.pi / 2, 0.0, -math.pi / 2, 0.0, R, 0.0],
+                      qd0=[0.0, 0.0, 0.0, v0, 0.0, 0.0], t_eval=np.linspace(0.0, t_end, 41), rtol=1e-12, atol=1e-12)
+    assert result.success and not result.impacts, result.message
+    x = result.q[:, 3]
+    if c_f == 0.0:
+        assert x == pytest.approx(v0 * result.t, abs=1e-9)
+        return
+    # it sticks where its speed falls to friction_velocity v_f (the slide's end, then held): t* = (v0 - v_f) / (c_f g)
+    stop = (v0 - rod.scene.friction_velocity) / (c_f * G)
+    expected = v0 * np.minimum(result.t, stop) - 0.5 * c_f * G * np.minimum(result.t, stop) ** 2
+    assert x == pytest.approx(expected, abs=1e-9)
+    assert result.q[:, 4] == pytest.approx(R, abs=1e-12) and result.q[:, 2] == pytest.approx(-math.pi / 2, abs=1e-12)
+    assert result.loss_friction == pytest.approx(0.5 * v0 ** 2, rel=1e-6)          # m = 1 kg
 
 
 def test_gaps_against_an_independent_computation():

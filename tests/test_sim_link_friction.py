@@ -15,7 +15,7 @@ import pytest
 from codegen.scene import LineLink, Scene, Wall
 from studies.reference import reference_of
 
-RADII = (0.0, 0.0, 0.06)          # O_1 a bare point (a capsule may not touch a rough wall)
+RADII = (0.0, 0.0, 0.06)          # O_1, on the rough floor, a bare point
 TWISTS = (((1.0, 0, 0), (0, 0.0, -1.0), (0, 1.0, 0.0)), ((1.0, 0, 0), (0, 0.6, -0.8), (0, 0.8, 0.6)))
 
 

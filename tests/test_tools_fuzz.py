@@ -28,7 +28,7 @@ def test_structures_are_deterministic_valid_and_cover_the_distribution():
     assert {s.gravity for s in scenes} == {0.0, 9.81}
     capsules = [s for s in scenes if fuzz.has_capsules(s)]
     assert 0.15 < len(capsules) / len(scenes) < 0.35
-    assert not any(w.friction > 0.0 for s in capsules for w in s.walls)         # rough walls refuse capsules
+    assert not any(w.friction > 0.0 for s in capsules for w in s.walls)         # capsules drawn among frictionless structures
     radii = [link.radius for s in capsules for link in s.links if link.radius > 0.0]
     assert fuzz.RADIUS_RANGE[0] <= min(radii) and max(radii) <= fuzz.RADIUS_RANGE[1]
     assert any(s.link_pairs() for s in capsules)

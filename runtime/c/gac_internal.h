@@ -156,6 +156,8 @@ double gac_link_contact_rate(const gac_model *m, const double *q, const double *
 /* a held link or obstacle contact c's bias dg(qd) . qd (its normal acceleration less g . qdd) into *b: GAC_OK, or
  * GAC_ERR_LINK_CONTACT where its normal has no derivative */
 int gac_rowless_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, double *b);
+void gac_link_refine(const gac_model *m, const double *q, const double *p, int n, const int *list, double *F,
+                     const double *qd, double *qd_plus, double *work);
 double gac_link_law_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                              const double *F, const double *Ft, const double *qd, const double *qd_plus, double T);
 /* A link pair's or an obstacle's contact frame at q (gac_rowless_frame): its links i and j (0: a fixed obstacle),

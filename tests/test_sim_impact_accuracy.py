@@ -227,13 +227,30 @@ def test_impulses_after_several_rounds_balance_the_velocities(compiled):
     assert several
     assert max(impact.roundoff for impact in result.impacts) <= 1e-10
     layout = model.layout
-    for impact in several:                  # independently: I_f (qd+ - qd-) = J^T Lambda, dense, in numpy
+    # a hold of resting contacts after the law also moves the velocities, by impulses the record does not list:
+    # the impacts with no resting contact then are checked
+    free = [impact for impact in several if not _resting_at(result, impact.t)]
+    assert free
+    for impact in free:                     # independently: I_f (qd+ - qd-) = J^T Lambda, dense, in numpy
         q, qd_m, qd_p = (layout.reduce(x) for x in (impact.q, impact.qd_before, impact.qd_after))
         M, J = model.mass_matrix(q, case.p), model.contact_jacobian(q, case.p)
         g = J.T @ _impulses(model, impact)
         r = M @ (qd_p - qd_m) - g
         size = (np.abs(M) @ np.abs(qd_p - qd_m) + np.abs(g)).max()      # what evaluating r in double resolves
         assert np.abs(r).max() <= 1e-9 * size, (impact.t, np.abs(r).max(), size)
+
+
+def _resting_at(result, t: float) -> set:
+    """The (point, wall) contacts resting just after time t, from the run's resting-contact events."""
+    resting = set()
+    for event in result.contact_events:
+        if event.t > t:
+            break
+        if event.kind == "rest":
+            resting.add((event.point, event.wall))
+        elif event.kind == "release":
+            resting.discard((event.point, event.wall))
+    return resting
 
 
 def test_an_approach_left_by_the_rounds_round_off_is_closed(compiled):

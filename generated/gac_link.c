@@ -10,6 +10,8 @@
 
 #include <math.h>
 
+#define GAC_LINK_REFINE_STEPS 4   /* refinement steps of a link pair law's velocities at most (each O(n) per contact) */
+
 static double gac_dot3(const double *a, const double *b)
 {
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
@@ -441,6 +443,88 @@ int gac_contact_normal(const gac_model *m, const double *q, const double *p, int
     return GAC_OK;
 }
 
+/* The velocities of a frictionless impact law whose contacts include a link pair refined against the momentum
+ * balance r = I_f (qd+ - qd-) - sum_a F_a n_a (n_a = J^T n of each contact, gac_contact_direction), holding the
+ * contacts' normal velocities as the law set them (a free step qd+ -= I_f^-1 r moves them along I_f's soft
+ * directions): over the pushing contacts H (F > 0),
+ *   qd+ += -I_f^-1 r + Y_H dF_H,  F_H += dF_H,  A_HH dF_H = N_H I_f^-1 r
+ * (Y_H = I_f^-1 n_H and A_HH = N_H Y_H refined, gac_impact_system_refined; a row dependent on the others takes no
+ * multiplier), while |qd+ . r| (r in long double with the model's long-double kernels) falls by half; a step that
+ * would pull (F < 0) or not improve is not taken.  Only the law's own residual moves: gac_link_law_accuracy then
+ * measures what is left. */
+void gac_link_refine(const gac_model *m, const double *q, const double *p, int n, const int *list, double *F,
+                     const double *qd, double *qd_plus, double *work)
+{
+    const int nq = m->nq;
+    double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work);
+    double f[GAC_AT_LEAST_1(m->njrow)], n_a[GAC_AT_LEAST_1(nq)], r[GAC_AT_LEAST_1(nq)], dq[GAC_AT_LEAST_1(nq)];
+    double scratch[2 * GAC_AT_LEAST_1(nq)], kept[GAC_AT_LEAST_1(nq)], kept_F[GAC_AT_LEAST_1(nq)];
+    double dF[GAC_AT_LEAST_1(nq)], v_unused[GAC_AT_LEAST_1(nq)], e_unused[GAC_AT_LEAST_1(nq)];
+    double previous = INFINITY;
+    int set[GAC_AT_LEAST_1(nq)], pos[GAC_AT_LEAST_1(nq)], nh = 0, a, i, it;
+    for (a = 0; a < n; ++a) {
+        if (!(F[a] > 0.0)) continue;
+        pos[nh] = a;
+        set[nh++] = list[a];
+    }
+    if (nh == 0 || gac_impact_system_refined(m, q, qd, p, nh, set, work, v_unused, e_unused) != GAC_OK
+        || gac_ldlt_drop(nh, A, 1e-13) < 0) return;
+    for (it = 0; it <= GAC_LINK_REFINE_STEPS; ++it) {
+        double balance;
+        long double sum = 0.0L;
+        for (i = 0; i < nq; ++i) r[i] = 0.0;
+        for (a = 0; a < n; ++a) {                        /* g = sum_a F_a n_a, subtracted below */
+            gac_contact_direction(m, q, p, list[a], f, n_a);
+            for (i = 0; i < nq; ++i) r[i] += F[a] * n_a[i];
+        }
+        if (m->generalized_momentum_ld) {                /* r = I_f qd+ - I_f qd- - g in long double */
+            long double hp[GAC_AT_LEAST_1(nq)], hm[GAC_AT_LEAST_1(nq)];
+            m->generalized_momentum_ld(q, qd_plus, p, hp);
+            m->generalized_momentum_ld(q, qd, p, hm);
+            for (i = 0; i < nq; ++i) r[i] = (double)((hp[i] - hm[i]) - r[i]);
+        } else {
+            for (i = 0; i < nq; ++i) dq[i] = qd_plus[i] - qd[i];
+            m->generalized_momentum(q, dq, p, scratch);
+            for (i = 0; i < nq; ++i) r[i] = scratch[i] - r[i];
+        }
+        for (i = 0; i < nq; ++i) sum += (long double)qd_plus[i] * r[i];
+        balance = fabs((double)sum);
+        if (!(balance < previous)) {                     /* the last step did not improve: undo it */
+            if (it > 0) {
+                gac_copy(qd_plus, kept, nq);
+                for (a = 0; a < nh; ++a) F[pos[a]] = kept_F[a];
+            }
+            return;
+        }
+        if (it == GAC_LINK_REFINE_STEPS || balance > 0.5 * previous) return;
+        previous = balance;
+        m->inertia_solve(q, r, p, dq);
+        if (!gac_finite(dq, nq)) return;
+        gac_refine_response(m, q, p, r, dq, scratch, scratch + nq);   /* dq = I_f^-1 r, refined */
+        for (a = 0; a < nh; ++a) {                       /* N_H dq */
+            double s = 0.0;
+            gac_contact_direction(m, q, p, set[a], f, n_a);
+            for (i = 0; i < nq; ++i) s += n_a[i] * dq[i];
+            dF[a] = s;
+        }
+        gac_ldlt_solve(nh, A, dF);
+        if (!gac_finite(dF, nh)) return;
+        for (a = 0; a < nh; ++a) {
+            if (F[pos[a]] + dF[a] < 0.0) return;         /* it would pull: keep the law's */
+        }
+        gac_copy(kept, qd_plus, nq);
+        for (a = 0; a < nh; ++a) {
+            kept_F[a] = F[pos[a]];
+            F[pos[a]] += dF[a];
+        }
+        for (i = 0; i < nq; ++i) {
+            double step = -dq[i];
+            for (a = 0; a < nh; ++a) step += Y[(long)a * nq + i] * dF[a];
+            qd_plus[i] += step;
+        }
+    }
+}
+
 /* The accuracy of an impact law whose contacts include a link pair (relative to T, the kinetic energy before):
  * the momentum balance r = I_f (qd+ - qd-) - sum_a (F_a n_a + Ft_a . t_a) (n_a = J^T n of each contact,
  * gac_contact_direction; t_a its tangential directions where it took a tangential impulse Ft (2 per contact): a
@@ -448,8 +532,9 @@ int gac_contact_normal(const gac_model *m, const double *q, const double *p, int
  * that balanced exactly would differ by, with what evaluating r resolves,
  *   4 (nq + 1) eps sum_i |qd+_i| (|(I_f (qd+ - qd-))_i| + |g_i|) + eps/2 sum_i |qd+_i| |(I_f qd+)_i|,
  * and the energy identity's residual |T+ - T- - 1/2 sum_a Lambda_a . (gamma-_a + gamma+_a)| over every direction.
- * Nothing is refined (the refinement of gac_impact_accuracy works in the Jacobian's rows, which a link pair has none
- * of).  Ft may be NULL (no tangential impulses). */
+ * Nothing is refined here (the refinement of gac_impact_accuracy works in the Jacobian's rows, which a link pair has
+ * none of; gac_link_refine refines a frictionless law's velocities before).  Ft may be NULL (no tangential
+ * impulses). */
 double gac_link_law_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                              const double *F, const double *Ft, const double *qd, const double *qd_plus, double T)
 {

@@ -84,7 +84,10 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
     const int refine = ev->rounds >= 1 && ev->law == GAC_IMPACT_LAW_FRICTIONLESS;
     double b = 0.0, v = 0.0;
     int pass;
-    if (gac_has_link(s->model, ev->n, ev->list)) {      /* a link pair has no Jacobian row: measured, not refined */
+    if (gac_has_link(s->model, ev->n, ev->list)) {      /* a link pair has no Jacobian row: the velocities refined
+                                                           against the momentum balance alone, then measured */
+        if (refine)
+            gac_link_refine(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->x + nq, ev->qd_plus, s->work);
         b = gac_link_law_accuracy(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->Ft, ev->x + nq, ev->qd_plus,
                                   ev->T_before);
         return b > 1e-10 ? b : 1e-10;

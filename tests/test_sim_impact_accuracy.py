@@ -227,13 +227,30 @@ def test_impulses_after_several_rounds_balance_the_velocities(compiled):
     assert several
     assert max(impact.roundoff for impact in result.impacts) <= 1e-10
     layout = model.layout
-    for impact in several:                  # independently: I_f (qd+ - qd-) = J^T Lambda, dense, in numpy
+    # a hold of resting contacts after the law also moves the velocities, by impulses the record does not list:
+    # the impacts with no resting contact then are checked
+    free = [impact for impact in several if not _resting_at(result, impact.t)]
+    assert free
+    for impact in free:                     # independently: I_f (qd+ - qd-) = J^T Lambda, dense, in numpy
         q, qd_m, qd_p = (layout.reduce(x) for x in (impact.q, impact.qd_before, impact.qd_after))
         M, J = model.mass_matrix(q, case.p), model.contact_jacobian(q, case.p)
         g = J.T @ _impulses(model, impact)
         r = M @ (qd_p - qd_m) - g
         size = (np.abs(M) @ np.abs(qd_p - qd_m) + np.abs(g)).max()      # what evaluating r in double resolves
         assert np.abs(r).max() <= 1e-9 * size, (impact.t, np.abs(r).max(), size)
+
+
+def _resting_at(result, t: float) -> set:
+    """The (point, wall) contacts resting just after time t, from the run's resting-contact events."""
+    resting = set()
+    for event in result.contact_events:
+        if event.t > t:
+            break
+        if event.kind == "rest":
+            resting.add((event.point, event.wall))
+        elif event.kind == "release":
+            resting.discard((event.point, event.wall))
+    return resting
 
 
 def test_an_approach_left_by_the_rounds_round_off_is_closed(compiled):
@@ -251,4 +268,23 @@ def test_an_approach_left_by_the_rounds_round_off_is_closed(compiled):
     assert result.status == 0, result.message
     assert any(impact.rounds > 1 for impact in result.impacts)
     for impact in result.impacts:
+        assert impact.energy_after <= impact.energy_before * (1.0 + impact.roundoff) + 1e-300
+
+
+def test_responses_refined_in_long_double_solve_an_ill_conditioned_chains_impacts(compiled):
+    # the fuzz study's 5-link chain 0-98, run 7 (cond(I_f) about 5e9, a link of axial inertia 4e-5 kg m^2 beside one
+    # of 7e3): the responses I_f^-1 n_a refined with residuals in double stalled at cond(I_f) eps of themselves, and an
+    # impact solved in two rounds then gained 1e-6 of its energy (GAC_ERR_IMPACT_ACCURACY at 0.40 s); refined with
+    # residuals in long double they reach their own rounding.  Its impacts with an obstacle, whose velocities were
+    # measured without refinement (8.8e-10 of the energy), are now refined against the momentum balance too
+    rng = np.random.default_rng([0, 98])
+    scene = fuzz.random_structure(rng, 98)
+    model = compiled(scene, chart_b=True, extended=True)       # the study's model (load_model's defaults)
+    for _ in range(8):
+        case = fuzz.random_run(rng, scene, model)
+    result = simulate(model, case.t_end, p=case.p, q0=case.q0, qd0=case.qd0, **case.options)
+    assert result.status == 0, result.message
+    assert result.impacts
+    for impact in result.impacts:
+        assert impact.roundoff <= 1e-10, (impact.t, impact.roundoff)
         assert impact.energy_after <= impact.energy_before * (1.0 + impact.roundoff) + 1e-300

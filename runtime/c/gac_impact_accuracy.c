@@ -24,7 +24,10 @@
                                         nearly dependent rows with large impulses a step gains only a factor ~10 */
 
 /* y = I_f^-1 g refined in place: r = g - I_f y, y += I_f^-1 r, while |r| (largest component) falls by half and is
- * above round-off of g; a step that does not improve is undone.  r, dy: nq scratch. */
+ * above round-off of g; a step that does not improve is undone.  With the model's generalized_momentum_ld, r is
+ * evaluated in long double (mixed-precision refinement: each step then shrinks y's error by about cond(I_f) eps,
+ * down to y's own rounding in double, where a residual in double stalls at cond(I_f) eps of y).  r, dy: nq
+ * scratch. */
 void gac_refine_response(const gac_model *m, const double *q, const double *p, const double *g, double *y,
                          double *r, double *dy)
 {
@@ -34,11 +37,15 @@ void gac_refine_response(const gac_model *m, const double *q, const double *p, c
     for (i = 0; i < nq; ++i) size = fabs(g[i]) > size ? fabs(g[i]) : size;
     for (it = 0; it <= GAC_REFINE_STEPS; ++it) {
         double norm = 0.0;
-        m->generalized_momentum(q, y, p, r);
-        for (i = 0; i < nq; ++i) {
-            r[i] = g[i] - r[i];
-            norm = fabs(r[i]) > norm ? fabs(r[i]) : norm;
+        if (m->generalized_momentum_ld) {
+            long double h[GAC_AT_LEAST_1(nq)];
+            m->generalized_momentum_ld(q, y, p, h);
+            for (i = 0; i < nq; ++i) r[i] = (double)((long double)g[i] - h[i]);
+        } else {
+            m->generalized_momentum(q, y, p, r);
+            for (i = 0; i < nq; ++i) r[i] = g[i] - r[i];
         }
+        for (i = 0; i < nq; ++i) norm = fabs(r[i]) > norm ? fabs(r[i]) : norm;
         if (!(norm < previous)) {                        /* worse (or not finite): back to the previous y */
             if (it > 0) {
                 for (i = 0; i < nq; ++i) y[i] += dy[i];

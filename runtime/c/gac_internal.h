@@ -163,6 +163,8 @@ int gac_rowless_bias(const gac_model *m, const double *q, const double *qd, cons
 /* the biases b (3) of a held link or obstacle contact c's frame rows J^T n, J^T t1, J^T t2 (b[0] gac_rowless_bias's):
  * GAC_OK, or GAC_ERR_LINK_CONTACT where its frame has no derivative */
 int gac_rowless_frame_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, double *b);
+void gac_link_refine(const gac_model *m, const double *q, const double *p, int n, const int *list, double *F,
+                     const double *qd, double *qd_plus, double *work);
 double gac_link_law_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                              const double *F, const double *Ft, const double *qd, const double *qd_plus, double T);
 /* A link pair's or an obstacle's contact frame at q (gac_rowless_frame): its links i and j (0: a fixed obstacle),

@@ -838,6 +838,45 @@ void gac_sens_sample(gac_sim *s, double t, double *out)
     gac_copy(out, z->S, size);                           /* (NaN where they ended) */
 }
 
+/* Contact c's row at q as an impact's law takes it: a wall's or a stop's unit signed row f (nr) of J and
+ * w = J^T f; a link pair's or an obstacle's w = J^T n (gac_link_contact_direction, the gap's gradient), f left 0. */
+static void gac_sens_row(const gac_sim *s, int c, const double *q, double *f, double *w)
+{
+    const gac_model *md = s->model;
+    const gac_contact *ct = md->contacts + c;
+    int i;
+    for (i = 0; i < GAC_AT_LEAST_1(md->njrow); ++i) f[i] = 0.0;
+    if (gac_rowless(md, c)) {
+        gac_link_contact_direction(md, q, s->p, c, w);
+        return;
+    }
+    f[ct->row] = ct->normal_sign;
+    md->contact_generalized_force(q, f, s->p, w);
+}
+
+/* The derivative dw of contact c's row (gac_sens_row, f its row of J) along (dq, dp): d(J^T f) by
+ * contact_generalized_force_tangent, or for a link pair or an obstacle d(J^T n) with the closest points' motion and
+ * the normal's rotation (gac_contact_normal_tangent; its gap's derivative in *dgap where dgap is not NULL).  Returns
+ * 0, or 1 where the latter has none (crossing axes, a link parallel to a face or to another link). */
+static int gac_sens_row_tangent(const gac_sim *s, int c, const double *f, const double *q, const double *dq,
+                                const double *dp, double *dw, double *dgap)
+{
+    const gac_model *md = s->model;
+    if (gac_rowless(md, c)) {
+        double g[md->nq], gap_change;
+        const int code = gac_contact_normal_tangent(md, q, s->p, c, dq, dp, &gap_change, g, dw);
+        if (dgap != 0) *dgap = gap_change;
+        return code != GAC_OK;
+    }
+    {
+        double df[GAC_AT_LEAST_1(md->njrow)];
+        int i;
+        for (i = 0; i < GAC_AT_LEAST_1(md->njrow); ++i) df[i] = 0.0;
+        md->contact_generalized_force_tangent(q, f, s->p, dq, df, dp, dw);
+    }
+    return 0;
+}
+
 /* The impact map of the active contacts a = 1..m (those that took an impulse) by Newton's law, Eq. 47, with the
  * set fixed: W (m x nq) their signed normal rows w_a = J^T (sign e_row_a), Y_a = I_f^-1 w_a, A = W Y (m x m),
  * v = W qd, A F = -(1 + E) v, qd+ = qd + Y F.  Its differential along (dq, dqd, dp) with de_a = dp[e_index_a]:
@@ -865,11 +904,14 @@ static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, con
 {
     const gac_model *md = s->model;
     const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow), m = L->m;
-    double dW[m * nq], dY[m * nq], dF[m], df[nr];
+    double dW[m * nq], dY[m * nq], dF[m];
     int a, b, i;
-    for (i = 0; i < nr; ++i) df[i] = 0.0;
     for (a = 0; a < m; ++a) {
-        md->contact_generalized_force_tangent(q, L->f + (long)a * nr, s->p, dq, df, dp, dW + (long)a * nq);
+        if (gac_sens_row_tangent(s, L->active[a], L->f + (long)a * nr, q, dq, dp, dW + (long)a * nq, 0) != 0) {
+            for (i = 0; i < nq; ++i) dqd_plus[i] = NAN;  /* (a rowless row without a derivative: checked before) */
+            for (b = 0; b < m && dF_out != 0; ++b) dF_out[b] = NAN;
+            return;
+        }
         md->inertia_solve_tangent(q, L->W + (long)a * nq, s->p, dq, dW + (long)a * nq, dp, dY + (long)a * nq);
     }
     for (a = 0; a < m; ++a) {
@@ -945,10 +987,9 @@ static void gac_sens_boundary_column(const gac_sim *s, const gac_sens_law *base,
     const gac_model *md = s->model;
     const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow), m0 = base->m, mt = m0 + nb;
     double f2[mt * nr], W2[mt * nq], Y2[mt * nq], LD2[mt * mt], F2[mt], v2[mt], e2[mt], dF[mt], out[nq], dw[nq];
-    double df[nr], best = -INFINITY;
+    double best = -INFINITY;
     int active2[mt], landing2[mt], normal2[mt], row[mt], mask, a, b, i;
     gac_sens_law L = *base;
-    for (i = 0; i < nr; ++i) df[i] = 0.0;
     for (mask = 0; mask < (1 << nb); ++mask) {
         double margin = INFINITY;
         int m = 0;
@@ -978,7 +1019,8 @@ static void gac_sens_boundary_column(const gac_sim *s, const gac_sens_law *base,
                 for (b = 0; row[b] != a; ++b) continue;
                 cond = dF[b] * gac_dot(nq, wb, base->Y + (long)a * nq);
             } else {                                         /* out: dxi_b >= 0 */
-                md->contact_generalized_force_tangent(q, base->f + (long)a * nr, s->p, dx, df, dp, dw);
+                if (gac_sens_row_tangent(s, base->active[a], base->f + (long)a * nr, q, dx, dp, dw, 0) != 0)
+                    for (i = 0; i < nq; ++i) dw[i] = NAN;
                 cond = (ct->e_index >= 0 ? dp[ct->e_index] : 0.0) * base->v[a];
                 for (i = 0; i < nq; ++i)
                     cond += dw[i] * (qd_law[i] + eb * qdm[i]) + wb[i] * (out[i] + eb * dx[nq + i]);
@@ -1135,15 +1177,24 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             gac_sens_link_impact(s, r, c_event);             /* a link pair or an obstacle struck alone */
             return;
         }
-        for (a = 0; a < r->ncontact; ++a) {
-            if (gac_rowless(md, r->contact[a])) {
-                gac_sens_stop(s, GAC_SENS_LINK, r->t, r->contact[a]);
-                return;
+        if (gac_has_link(md, r->ncontact, r->contact) || (c_event >= 0 && gac_rowless(md, c_event))) {
+            /* a link pair or an obstacle among several contacts: Newton's law on its row J^T n like a wall's; one
+               rough under the frictional law, or one resting before or after, ends them */
+            int before_set[md->nq + GAC_AT_LEAST_1(md->ncontact)], nbefore = gac_sens_set_before(s, r, before_set);
+            for (a = 0; a < r->ncontact; ++a) {
+                if (gac_rowless(md, r->contact[a]) && r->law != GAC_IMPACT_LAW_FRICTIONLESS
+                    && gac_friction_coefficient(md, s->p, r->contact[a]) > 0.0) {
+                    gac_sens_stop(s, GAC_SENS_LINK, r->t, r->contact[a]);
+                    return;
+                }
             }
-        }
-        if (c_event >= 0 && gac_rowless(md, c_event)) {
-            gac_sens_stop(s, GAC_SENS_LINK, r->t, c_event);
-            return;
+            for (a = 0; a < nbefore + s->nresting; ++a) {
+                const int c = a < nbefore ? before_set[a] : s->resting[a - nbefore];
+                if (gac_rowless(md, c)) {
+                    gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
+                    return;
+                }
+            }
         }
     }
     if (r->law != GAC_IMPACT_LAW_FRICTIONLESS && r->law != GAC_IMPACT_LAW_GDI) {
@@ -1202,10 +1253,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         }
         {                                                    /* the event's contact: t* from its gap */
             double fe[nr], we[nq];
-            const gac_contact *ct = md->contacts + c_event;
-            for (i = 0; i < nr; ++i) fe[i] = 0.0;
-            fe[ct->row] = ct->normal_sign;
-            md->contact_generalized_force(q, fe, s->p, we);
+            gac_sens_row(s, c_event, q, fe, we);
             for (i = 0; i < nq; ++i) v_event += we[i] * xm[nq + i];
             if (!(fabs(v_event) > 1e-9 * speed * s->lever)) {   /* grazing: t* has no derivative */
                 gac_sens_stop(s, GAC_SENS_GRAZING, r->t, c_event);
@@ -1219,9 +1267,16 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             int was_resting = 0, held_after = 0;
             for (b = 0; b < nbefore; ++b) was_resting |= before_set[b] == c;
             for (b = 0; b < s->nresting; ++b) held_after |= s->resting[b] == c;
-            for (i = 0; i < nr; ++i) fa[i] = 0.0;
-            fa[ct->row] = ct->normal_sign;
-            md->contact_generalized_force(q, fa, s->p, wa);
+            gac_sens_row(s, c, q, fa, wa);
+            if (gac_rowless(md, c)) {                        /* its row's derivative exists here (or none) */
+                double zero_q[nq], zero_p[GAC_AT_LEAST_1(md->nparam)], dw[nq];
+                for (i = 0; i < nq; ++i) zero_q[i] = 0.0;
+                for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+                if (gac_sens_row_tangent(s, c, fa, q, zero_q, zero_p, dw, 0) != 0) {
+                    gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
+                    return;
+                }
+            }
             for (i = 0; i < nq; ++i) {
                 before += wa[i] * xm[nq + i];
                 after += wa[i] * xp[nq + i];
@@ -1348,6 +1403,12 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         }
         if (s->nresting > 0) {                               /* the hold after the law: the set at rest */
             nheld = gac_sens_at_rest(s, xp, s->nresting, s->resting, n, r->contact, at_rest);
+            for (a = 0; a < nheld; ++a) {                    /* a link pair or an obstacle left at rest */
+                if (gac_rowless(md, at_rest[a])) {
+                    gac_sens_stop(s, GAC_SENS_LINK, r->t, at_rest[a]);
+                    return;
+                }
+            }
             if (gac_sens_set_at(s, xp, nheld, at_rest, s->is_stuck, &H) != 0) {
                 gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
                 return;
@@ -1359,6 +1420,10 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
             double tau;
             md->contact_gaps_tangent(q, s->p, S, dp, dgap);
+            if (gac_rowless(md, c_event)) {                  /* its gap's gradient is its row J^T n */
+                double dw[nq];
+                (void)gac_sens_row_tangent(s, c_event, f, q, S, dp, dw, dgap + c_event);
+            }
             tau = -dgap[c_event] / v_event;                  /* dt*_j: the gap stays 0 at the event */
             for (i = 0; i < nx; ++i) dx[i] = S[i] + fm[i] * tau; /* the perturbed state at the perturbed t* */
             if (nb == 0)

@@ -5,8 +5,8 @@
  * or viscous friction, gac_sens_slide_tangent), taken by the run's
  * Runge-Kutta formula over the state's own steps and stages (gac_sens_flight), the derivative of the projection onto
  * the resting contacts after each step (gac_sens_project), the jump of the sensitivities at an impact by the
- * frictionless law -- of one contact or several, walls or joint stops, landings among them, the set of pushing
- * contacts held fixed; a link pair or a link on an obstacle struck alone (gac_sens_link_impact) -- the saltation
+ * frictionless law -- of one contact or several, walls, joint stops, link pairs and links on obstacles, landings
+ * among them, the set of pushing contacts held fixed -- the saltation
  * matrix of Hiskens & Pai (2000) (gac_sens_impact), the release of a resting contact (gac_sens_release), a stuck
  * point's slip (gac_sens_slip) and a sliding point's coming to stick (gac_sens_stick), contacts at rest at the start
  * (gac_sens_attach), a switch of base chart (gac_sens_switch; S is in the coordinates of the chart integrated now,
@@ -878,9 +878,11 @@ static int gac_sens_row_tangent(const gac_sim *s, int c, const double *f, const 
 }
 
 /* The impact map of the active contacts a = 1..m (those that took an impulse) by Newton's law, Eq. 47, with the
- * set fixed: W (m x nq) their signed normal rows w_a = J^T (sign e_row_a), Y_a = I_f^-1 w_a, A = W Y (m x m),
- * v = W qd, A F = -(1 + E) v, qd+ = qd + Y F.  Its differential along (dq, dqd, dp) with de_a = dp[e_index_a]:
- *     dw_a = d(J^T f_a)[dq, dp],  dY_a = d(I_f^-1 w_a)[dq, dw_a, dp],  dA_ab = dw_a . Y_b + w_a . dY_b,
+ * set fixed: W (m x nq) their signed normal rows w_a = J^T (sign e_row_a) (a link pair's or an obstacle's J^T n:
+ * gac_sens_row), Y_a = I_f^-1 w_a, A = W Y (m x m), v = W qd, A F = -(1 + E) v, qd+ = qd + Y F.  Its differential
+ * along (dq, dqd, dp) with de_a = dp[e_index_a]:
+ *     dw_a = d(J^T f_a)[dq, dp] (or d(J^T n): gac_sens_row_tangent),  dY_a = d(I_f^-1 w_a)[dq, dw_a, dp],
+ *     dA_ab = dw_a . Y_b + w_a . dY_b,
  *     dv_a = dw_a . qd + w_a . dqd,  A dF = -de v - (1 + E) dv - dA F,  d qd+ = dqd + dY F + Y dF.
  * (One contact: dF = dL of y L, L = -(1 + e) v / (w . y).)  A is kept factored (gac_ldlt) in LD. */
 typedef struct {
@@ -1069,85 +1071,6 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
     return n;
 }
 
-/* The jump at the impact of a link pair or of a link on an obstacle struck alone (record r, contact c, in free
- * flight before and after): Newton's law on its row n = J^T n_c (gac_contact_normal), F = -(1 + e) v / (n . y),
- * y = I_f^-1 n, v = n . qd-, qd+ = qd- + y F, with the same saltation matrix as the walls' (gac_sens_impact):
- * dt*_j = -dgap_j / v (the gap's gradient is n), S+_j = D Delta (S-_j + f- dt*_j, dp_j) - f+ dt*_j, and
- *     dv = dn . qd + n . dqd,   dy = d(I_f^-1 n)[dq, dn, dp],   da = dn . y + n . dy,
- *     dF = (-de v - (1 + e) dv - da F) / a,   d qd+ = dqd + dy F + y dF,
- * dn the row's derivative along dq with the closest points' motion and the normal's rotation
- * (gac_contact_normal_tangent).  Resting contacts before or after, a graze, a law of other than one round of
- * Newton's (a rough contact's frictional law among them), or a geometry without a derivative there (crossing or parallel axes) end them (GAC_SENS_LINK, or
- * GAC_SENS_GRAZING for the graze). */
-static void gac_sens_link_impact(gac_sim *s, const gac_impact_record *r, int c)
-{
-    gac_sens *z = s->sens;
-    const gac_model *md = s->model;
-    const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), nc1 = GAC_AT_LEAST_1(md->ncontact);
-    const double *xm = s->xs, *xp = s->x, *q = xm;
-    const gac_contact *ct = md->contacts + c;
-    const double e = gac_restitution(md, s->p, c);
-    double n[nq], y[nq], g[nq], dn[nq], dy[nq], dx[nx], fm[nx], fp[nx], qdd_free[nq], lambda[nq];
-    double zero_p[GAC_AT_LEAST_1(md->nparam)];
-    double a = 0.0, v = 0.0, F, speed = 0.0, dgap;
-    int before_set[nq + nc1], i, j;
-    GAC_SENS_SET_ARRAYS(nq, nr);
-    gac_sens_set H;
-    GAC_SENS_SET_BIND(H);
-    if (r->law != GAC_IMPACT_LAW_FRICTIONLESS || r->rounds != 1 || r->plastic || s->nresting > 0
-        || gac_sens_set_before(s, r, before_set) > 0 || !(r->impulse[0] > 0.0)) {
-        gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
-        return;
-    }
-    gac_link_contact_direction(md, q, s->p, c, n);
-    md->inertia_solve(q, n, s->p, y);
-    for (i = 0; i < nq; ++i) {
-        a += n[i] * y[i];
-        v += n[i] * xm[nq + i];
-        if (fabs(xm[nq + i]) > speed) speed = fabs(xm[nq + i]);
-    }
-    if (!(fabs(v) > 1e-9 * speed * s->lever)) {              /* grazing: t* has no derivative */
-        gac_sens_stop(s, GAC_SENS_GRAZING, r->t, c);
-        return;
-    }
-    F = -(1.0 + e) * v / a;                                  /* Newton (Eq. 47) on the pair's normal velocity */
-    if (gac_sens_field(s, r->t, xm, 0, 0, 0, &H, qdd_free, lambda, fm, 0) != 0
-        || gac_sens_field(s, r->t, xp, 0, 0, 0, &H, qdd_free, lambda, fp, 0) != 0) {
-        gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
-        return;
-    }
-    for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
-    for (j = 0; j < z->k; ++j) {
-        double *S = z->S + (long)j * nx;
-        const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
-        const double de = ct->e_index >= 0 ? dp[ct->e_index] : 0.0;
-        double tau, dv = 0.0, da = 0.0, dF;
-        if (gac_contact_normal_tangent(md, q, s->p, c, S, dp, &dgap, g, dn) != GAC_OK) {
-            gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
-            return;
-        }
-        tau = -dgap / v;                                     /* dt*_j: the gap stays 0 at the event */
-        for (i = 0; i < nx; ++i) dx[i] = S[i] + fm[i] * tau; /* the perturbed state at the perturbed t* */
-        if (gac_contact_normal_tangent(md, q, s->p, c, dx, dp, &dgap, g, dn) != GAC_OK) {
-            gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
-            return;
-        }
-        md->inertia_solve_tangent(q, n, s->p, dx, dn, dp, dy);
-        for (i = 0; i < nq; ++i) {
-            dv += dn[i] * xm[nq + i] + n[i] * dx[nq + i];
-            da += dn[i] * y[i] + n[i] * dy[i];
-        }
-        dF = (-de * v - (1.0 + e) * dv - da * F) / a;
-        for (i = 0; i < nq; ++i) {
-            S[i] = dx[i] - fp[i] * tau;                      /* back to the nominal t*: minus f+ dt*_j */
-            S[nq + i] = dx[nq + i] + dy[i] * F + y[i] * dF - fp[nq + i] * tau;
-        }
-        z->dt_impact[j] = tau;
-    }
-    z->n_impacts++;
-    if (!gac_finite(z->S, z->k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, r->t, c);
-}
-
 /* The jump at the impact record r just resolved (state before it s->xs, after it s->x), located by contact
  * c_event's gap: for each direction j, dt*_j = -dg_j / (w_c . qd-) and S+_j = D Delta (S-_j + f- dt*_j, dp_j)
  * - f+ dt*_j, Delta the map of the contacts that took an impulse (a wall's or a joint stop's alike: a stop's row is
@@ -1164,8 +1087,11 @@ static void gac_sens_link_impact(gac_sim *s, const gac_impact_record *r, int c)
  * walls slide in f- and f+ with their friction (a landing that slides on).  A point sliding at rest slower than
  * friction_velocity before or after (the slip directions of f- are the loop's after the impact), a stuck point that
  * slipped, or one that came to stick without taking the impact's impulse ends them (GAC_SENS_RESTING,
- * GAC_SENS_STICK), as do impacts of another kind and impacts of two links or of a link on an obstacle among several
- * contacts (GAC_SENS_LINK); one struck alone goes to gac_sens_link_impact. */
+ * GAC_SENS_STICK), as do impacts of another kind.  A link pair or a link on an obstacle (no Jacobian row) takes part
+ * with its row J^T n (gac_sens_row; t* from its gap where it locates the impact, the gap's gradient being that row),
+ * its restitution e_<name> (an obstacle's) or the model's constant (a pair's); one resting before or after the
+ * impact, left at rest by it, rough under the frictional law, or whose closest points have no derivative ends them
+ * (GAC_SENS_LINK). */
 void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const int *was_stuck)
 {
     gac_sens *z = s->sens;
@@ -1173,17 +1099,13 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
     if (z == 0 || z->status != GAC_SENS_VALID) return;
     {
         int a;
-        if (r->ncontact == 1 && r->contact[0] == c_event && gac_rowless(md, c_event)) {
-            gac_sens_link_impact(s, r, c_event);             /* a link pair or an obstacle struck alone */
-            return;
-        }
         if (gac_has_link(md, r->ncontact, r->contact) || (c_event >= 0 && gac_rowless(md, c_event))) {
             /* a link pair or an obstacle among several contacts: Newton's law on its row J^T n like a wall's; one
                rough under the frictional law, or one resting before or after, ends them */
             int before_set[md->nq + GAC_AT_LEAST_1(md->ncontact)], nbefore = gac_sens_set_before(s, r, before_set);
             for (a = 0; a < r->ncontact; ++a) {
                 if (gac_rowless(md, r->contact[a]) && r->law != GAC_IMPACT_LAW_FRICTIONLESS
-                    && gac_friction_coefficient(md, s->p, r->contact[a]) > 0.0) {
+                    && gac_contact_friction(md, s->p, r->contact[a]) > 0.0) {
                     gac_sens_stop(s, GAC_SENS_LINK, r->t, r->contact[a]);
                     return;
                 }

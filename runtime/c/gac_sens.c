@@ -5,8 +5,8 @@
  * or viscous friction, gac_sens_slide_tangent), taken by the run's
  * Runge-Kutta formula over the state's own steps and stages (gac_sens_flight), the derivative of the projection onto
  * the resting contacts after each step (gac_sens_project), the jump of the sensitivities at an impact by the
- * frictionless law -- of one contact or several, walls or joint stops, landings among them, the set of pushing
- * contacts held fixed; a link pair or a link on an obstacle struck alone (gac_sens_link_impact) -- the saltation
+ * frictionless law -- of one contact or several, walls, joint stops, link pairs and links on obstacles, landings
+ * among them, the set of pushing contacts held fixed -- the saltation
  * matrix of Hiskens & Pai (2000) (gac_sens_impact), the release of a resting contact (gac_sens_release), a stuck
  * point's slip (gac_sens_slip) and a sliding point's coming to stick (gac_sens_stick), contacts at rest at the start
  * (gac_sens_attach), a switch of base chart (gac_sens_switch; S is in the coordinates of the chart integrated now,
@@ -838,10 +838,51 @@ void gac_sens_sample(gac_sim *s, double t, double *out)
     gac_copy(out, z->S, size);                           /* (NaN where they ended) */
 }
 
+/* Contact c's row at q as an impact's law takes it: a wall's or a stop's unit signed row f (nr) of J and
+ * w = J^T f; a link pair's or an obstacle's w = J^T n (gac_link_contact_direction, the gap's gradient), f left 0. */
+static void gac_sens_row(const gac_sim *s, int c, const double *q, double *f, double *w)
+{
+    const gac_model *md = s->model;
+    const gac_contact *ct = md->contacts + c;
+    int i;
+    for (i = 0; i < GAC_AT_LEAST_1(md->njrow); ++i) f[i] = 0.0;
+    if (gac_rowless(md, c)) {
+        gac_link_contact_direction(md, q, s->p, c, w);
+        return;
+    }
+    f[ct->row] = ct->normal_sign;
+    md->contact_generalized_force(q, f, s->p, w);
+}
+
+/* The derivative dw of contact c's row (gac_sens_row, f its row of J) along (dq, dp): d(J^T f) by
+ * contact_generalized_force_tangent, or for a link pair or an obstacle d(J^T n) with the closest points' motion and
+ * the normal's rotation (gac_contact_normal_tangent; its gap's derivative in *dgap where dgap is not NULL).  Returns
+ * 0, or 1 where the latter has none (crossing axes, a link parallel to a face or to another link). */
+static int gac_sens_row_tangent(const gac_sim *s, int c, const double *f, const double *q, const double *dq,
+                                const double *dp, double *dw, double *dgap)
+{
+    const gac_model *md = s->model;
+    if (gac_rowless(md, c)) {
+        double g[md->nq], gap_change;
+        const int code = gac_contact_normal_tangent(md, q, s->p, c, dq, dp, &gap_change, g, dw);
+        if (dgap != 0) *dgap = gap_change;
+        return code != GAC_OK;
+    }
+    {
+        double df[GAC_AT_LEAST_1(md->njrow)];
+        int i;
+        for (i = 0; i < GAC_AT_LEAST_1(md->njrow); ++i) df[i] = 0.0;
+        md->contact_generalized_force_tangent(q, f, s->p, dq, df, dp, dw);
+    }
+    return 0;
+}
+
 /* The impact map of the active contacts a = 1..m (those that took an impulse) by Newton's law, Eq. 47, with the
- * set fixed: W (m x nq) their signed normal rows w_a = J^T (sign e_row_a), Y_a = I_f^-1 w_a, A = W Y (m x m),
- * v = W qd, A F = -(1 + E) v, qd+ = qd + Y F.  Its differential along (dq, dqd, dp) with de_a = dp[e_index_a]:
- *     dw_a = d(J^T f_a)[dq, dp],  dY_a = d(I_f^-1 w_a)[dq, dw_a, dp],  dA_ab = dw_a . Y_b + w_a . dY_b,
+ * set fixed: W (m x nq) their signed normal rows w_a = J^T (sign e_row_a) (a link pair's or an obstacle's J^T n:
+ * gac_sens_row), Y_a = I_f^-1 w_a, A = W Y (m x m), v = W qd, A F = -(1 + E) v, qd+ = qd + Y F.  Its differential
+ * along (dq, dqd, dp) with de_a = dp[e_index_a]:
+ *     dw_a = d(J^T f_a)[dq, dp] (or d(J^T n): gac_sens_row_tangent),  dY_a = d(I_f^-1 w_a)[dq, dw_a, dp],
+ *     dA_ab = dw_a . Y_b + w_a . dY_b,
  *     dv_a = dw_a . qd + w_a . dqd,  A dF = -de v - (1 + E) dv - dA F,  d qd+ = dqd + dY F + Y dF.
  * (One contact: dF = dL of y L, L = -(1 + e) v / (w . y).)  A is kept factored (gac_ldlt) in LD. */
 typedef struct {
@@ -865,11 +906,14 @@ static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, con
 {
     const gac_model *md = s->model;
     const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow), m = L->m;
-    double dW[m * nq], dY[m * nq], dF[m], df[nr];
+    double dW[m * nq], dY[m * nq], dF[m];
     int a, b, i;
-    for (i = 0; i < nr; ++i) df[i] = 0.0;
     for (a = 0; a < m; ++a) {
-        md->contact_generalized_force_tangent(q, L->f + (long)a * nr, s->p, dq, df, dp, dW + (long)a * nq);
+        if (gac_sens_row_tangent(s, L->active[a], L->f + (long)a * nr, q, dq, dp, dW + (long)a * nq, 0) != 0) {
+            for (i = 0; i < nq; ++i) dqd_plus[i] = NAN;  /* (a rowless row without a derivative: checked before) */
+            for (b = 0; b < m && dF_out != 0; ++b) dF_out[b] = NAN;
+            return;
+        }
         md->inertia_solve_tangent(q, L->W + (long)a * nq, s->p, dq, dW + (long)a * nq, dp, dY + (long)a * nq);
     }
     for (a = 0; a < m; ++a) {
@@ -945,10 +989,9 @@ static void gac_sens_boundary_column(const gac_sim *s, const gac_sens_law *base,
     const gac_model *md = s->model;
     const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow), m0 = base->m, mt = m0 + nb;
     double f2[mt * nr], W2[mt * nq], Y2[mt * nq], LD2[mt * mt], F2[mt], v2[mt], e2[mt], dF[mt], out[nq], dw[nq];
-    double df[nr], best = -INFINITY;
+    double best = -INFINITY;
     int active2[mt], landing2[mt], normal2[mt], row[mt], mask, a, b, i;
     gac_sens_law L = *base;
-    for (i = 0; i < nr; ++i) df[i] = 0.0;
     for (mask = 0; mask < (1 << nb); ++mask) {
         double margin = INFINITY;
         int m = 0;
@@ -978,7 +1021,8 @@ static void gac_sens_boundary_column(const gac_sim *s, const gac_sens_law *base,
                 for (b = 0; row[b] != a; ++b) continue;
                 cond = dF[b] * gac_dot(nq, wb, base->Y + (long)a * nq);
             } else {                                         /* out: dxi_b >= 0 */
-                md->contact_generalized_force_tangent(q, base->f + (long)a * nr, s->p, dx, df, dp, dw);
+                if (gac_sens_row_tangent(s, base->active[a], base->f + (long)a * nr, q, dx, dp, dw, 0) != 0)
+                    for (i = 0; i < nq; ++i) dw[i] = NAN;
                 cond = (ct->e_index >= 0 ? dp[ct->e_index] : 0.0) * base->v[a];
                 for (i = 0; i < nq; ++i)
                     cond += dw[i] * (qd_law[i] + eb * qdm[i]) + wb[i] * (out[i] + eb * dx[nq + i]);
@@ -1027,85 +1071,6 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
     return n;
 }
 
-/* The jump at the impact of a link pair or of a link on an obstacle struck alone (record r, contact c, in free
- * flight before and after): Newton's law on its row n = J^T n_c (gac_contact_normal), F = -(1 + e) v / (n . y),
- * y = I_f^-1 n, v = n . qd-, qd+ = qd- + y F, with the same saltation matrix as the walls' (gac_sens_impact):
- * dt*_j = -dgap_j / v (the gap's gradient is n), S+_j = D Delta (S-_j + f- dt*_j, dp_j) - f+ dt*_j, and
- *     dv = dn . qd + n . dqd,   dy = d(I_f^-1 n)[dq, dn, dp],   da = dn . y + n . dy,
- *     dF = (-de v - (1 + e) dv - da F) / a,   d qd+ = dqd + dy F + y dF,
- * dn the row's derivative along dq with the closest points' motion and the normal's rotation
- * (gac_contact_normal_tangent).  Resting contacts before or after, a graze, a law of other than one round of
- * Newton's (a rough contact's frictional law among them), or a geometry without a derivative there (crossing or parallel axes) end them (GAC_SENS_LINK, or
- * GAC_SENS_GRAZING for the graze). */
-static void gac_sens_link_impact(gac_sim *s, const gac_impact_record *r, int c)
-{
-    gac_sens *z = s->sens;
-    const gac_model *md = s->model;
-    const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), nc1 = GAC_AT_LEAST_1(md->ncontact);
-    const double *xm = s->xs, *xp = s->x, *q = xm;
-    const gac_contact *ct = md->contacts + c;
-    const double e = gac_restitution(md, s->p, c);
-    double n[nq], y[nq], g[nq], dn[nq], dy[nq], dx[nx], fm[nx], fp[nx], qdd_free[nq], lambda[nq];
-    double zero_p[GAC_AT_LEAST_1(md->nparam)];
-    double a = 0.0, v = 0.0, F, speed = 0.0, dgap;
-    int before_set[nq + nc1], i, j;
-    GAC_SENS_SET_ARRAYS(nq, nr);
-    gac_sens_set H;
-    GAC_SENS_SET_BIND(H);
-    if (r->law != GAC_IMPACT_LAW_FRICTIONLESS || r->rounds != 1 || r->plastic || s->nresting > 0
-        || gac_sens_set_before(s, r, before_set) > 0 || !(r->impulse[0] > 0.0)) {
-        gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
-        return;
-    }
-    gac_link_contact_direction(md, q, s->p, c, n);
-    md->inertia_solve(q, n, s->p, y);
-    for (i = 0; i < nq; ++i) {
-        a += n[i] * y[i];
-        v += n[i] * xm[nq + i];
-        if (fabs(xm[nq + i]) > speed) speed = fabs(xm[nq + i]);
-    }
-    if (!(fabs(v) > 1e-9 * speed * s->lever)) {              /* grazing: t* has no derivative */
-        gac_sens_stop(s, GAC_SENS_GRAZING, r->t, c);
-        return;
-    }
-    F = -(1.0 + e) * v / a;                                  /* Newton (Eq. 47) on the pair's normal velocity */
-    if (gac_sens_field(s, r->t, xm, 0, 0, 0, &H, qdd_free, lambda, fm, 0) != 0
-        || gac_sens_field(s, r->t, xp, 0, 0, 0, &H, qdd_free, lambda, fp, 0) != 0) {
-        gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
-        return;
-    }
-    for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
-    for (j = 0; j < z->k; ++j) {
-        double *S = z->S + (long)j * nx;
-        const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
-        const double de = ct->e_index >= 0 ? dp[ct->e_index] : 0.0;
-        double tau, dv = 0.0, da = 0.0, dF;
-        if (gac_contact_normal_tangent(md, q, s->p, c, S, dp, &dgap, g, dn) != GAC_OK) {
-            gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
-            return;
-        }
-        tau = -dgap / v;                                     /* dt*_j: the gap stays 0 at the event */
-        for (i = 0; i < nx; ++i) dx[i] = S[i] + fm[i] * tau; /* the perturbed state at the perturbed t* */
-        if (gac_contact_normal_tangent(md, q, s->p, c, dx, dp, &dgap, g, dn) != GAC_OK) {
-            gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
-            return;
-        }
-        md->inertia_solve_tangent(q, n, s->p, dx, dn, dp, dy);
-        for (i = 0; i < nq; ++i) {
-            dv += dn[i] * xm[nq + i] + n[i] * dx[nq + i];
-            da += dn[i] * y[i] + n[i] * dy[i];
-        }
-        dF = (-de * v - (1.0 + e) * dv - da * F) / a;
-        for (i = 0; i < nq; ++i) {
-            S[i] = dx[i] - fp[i] * tau;                      /* back to the nominal t*: minus f+ dt*_j */
-            S[nq + i] = dx[nq + i] + dy[i] * F + y[i] * dF - fp[nq + i] * tau;
-        }
-        z->dt_impact[j] = tau;
-    }
-    z->n_impacts++;
-    if (!gac_finite(z->S, z->k * nx)) gac_sens_stop(s, GAC_SENS_NONFINITE, r->t, c);
-}
-
 /* The jump at the impact record r just resolved (state before it s->xs, after it s->x), located by contact
  * c_event's gap: for each direction j, dt*_j = -dg_j / (w_c . qd-) and S+_j = D Delta (S-_j + f- dt*_j, dp_j)
  * - f+ dt*_j, Delta the map of the contacts that took an impulse (a wall's or a joint stop's alike: a stop's row is
@@ -1122,8 +1087,11 @@ static void gac_sens_link_impact(gac_sim *s, const gac_impact_record *r, int c)
  * walls slide in f- and f+ with their friction (a landing that slides on).  A point sliding at rest slower than
  * friction_velocity before or after (the slip directions of f- are the loop's after the impact), a stuck point that
  * slipped, or one that came to stick without taking the impact's impulse ends them (GAC_SENS_RESTING,
- * GAC_SENS_STICK), as do impacts of another kind and impacts of two links or of a link on an obstacle among several
- * contacts (GAC_SENS_LINK); one struck alone goes to gac_sens_link_impact. */
+ * GAC_SENS_STICK), as do impacts of another kind.  A link pair or a link on an obstacle (no Jacobian row) takes part
+ * with its row J^T n (gac_sens_row; t* from its gap where it locates the impact, the gap's gradient being that row),
+ * its restitution e_<name> (an obstacle's) or the model's constant (a pair's); one resting before or after the
+ * impact, left at rest by it, rough under the frictional law, or whose closest points have no derivative ends them
+ * (GAC_SENS_LINK). */
 void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const int *was_stuck)
 {
     gac_sens *z = s->sens;
@@ -1131,19 +1099,24 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
     if (z == 0 || z->status != GAC_SENS_VALID) return;
     {
         int a;
-        if (r->ncontact == 1 && r->contact[0] == c_event && gac_rowless(md, c_event)) {
-            gac_sens_link_impact(s, r, c_event);             /* a link pair or an obstacle struck alone */
-            return;
-        }
-        for (a = 0; a < r->ncontact; ++a) {
-            if (gac_rowless(md, r->contact[a])) {
-                gac_sens_stop(s, GAC_SENS_LINK, r->t, r->contact[a]);
-                return;
+        if (gac_has_link(md, r->ncontact, r->contact) || (c_event >= 0 && gac_rowless(md, c_event))) {
+            /* a link pair or an obstacle among several contacts: Newton's law on its row J^T n like a wall's; one
+               rough under the frictional law, or one resting before or after, ends them */
+            int before_set[md->nq + GAC_AT_LEAST_1(md->ncontact)], nbefore = gac_sens_set_before(s, r, before_set);
+            for (a = 0; a < r->ncontact; ++a) {
+                if (gac_rowless(md, r->contact[a]) && r->law != GAC_IMPACT_LAW_FRICTIONLESS
+                    && gac_contact_friction(md, s->p, r->contact[a]) > 0.0) {
+                    gac_sens_stop(s, GAC_SENS_LINK, r->t, r->contact[a]);
+                    return;
+                }
             }
-        }
-        if (c_event >= 0 && gac_rowless(md, c_event)) {
-            gac_sens_stop(s, GAC_SENS_LINK, r->t, c_event);
-            return;
+            for (a = 0; a < nbefore + s->nresting; ++a) {
+                const int c = a < nbefore ? before_set[a] : s->resting[a - nbefore];
+                if (gac_rowless(md, c)) {
+                    gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
+                    return;
+                }
+            }
         }
     }
     if (r->law != GAC_IMPACT_LAW_FRICTIONLESS && r->law != GAC_IMPACT_LAW_GDI) {
@@ -1202,10 +1175,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         }
         {                                                    /* the event's contact: t* from its gap */
             double fe[nr], we[nq];
-            const gac_contact *ct = md->contacts + c_event;
-            for (i = 0; i < nr; ++i) fe[i] = 0.0;
-            fe[ct->row] = ct->normal_sign;
-            md->contact_generalized_force(q, fe, s->p, we);
+            gac_sens_row(s, c_event, q, fe, we);
             for (i = 0; i < nq; ++i) v_event += we[i] * xm[nq + i];
             if (!(fabs(v_event) > 1e-9 * speed * s->lever)) {   /* grazing: t* has no derivative */
                 gac_sens_stop(s, GAC_SENS_GRAZING, r->t, c_event);
@@ -1219,9 +1189,16 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             int was_resting = 0, held_after = 0;
             for (b = 0; b < nbefore; ++b) was_resting |= before_set[b] == c;
             for (b = 0; b < s->nresting; ++b) held_after |= s->resting[b] == c;
-            for (i = 0; i < nr; ++i) fa[i] = 0.0;
-            fa[ct->row] = ct->normal_sign;
-            md->contact_generalized_force(q, fa, s->p, wa);
+            gac_sens_row(s, c, q, fa, wa);
+            if (gac_rowless(md, c)) {                        /* its row's derivative exists here (or none) */
+                double zero_q[nq], zero_p[GAC_AT_LEAST_1(md->nparam)], dw[nq];
+                for (i = 0; i < nq; ++i) zero_q[i] = 0.0;
+                for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+                if (gac_sens_row_tangent(s, c, fa, q, zero_q, zero_p, dw, 0) != 0) {
+                    gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
+                    return;
+                }
+            }
             for (i = 0; i < nq; ++i) {
                 before += wa[i] * xm[nq + i];
                 after += wa[i] * xp[nq + i];
@@ -1348,6 +1325,12 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         }
         if (s->nresting > 0) {                               /* the hold after the law: the set at rest */
             nheld = gac_sens_at_rest(s, xp, s->nresting, s->resting, n, r->contact, at_rest);
+            for (a = 0; a < nheld; ++a) {                    /* a link pair or an obstacle left at rest */
+                if (gac_rowless(md, at_rest[a])) {
+                    gac_sens_stop(s, GAC_SENS_LINK, r->t, at_rest[a]);
+                    return;
+                }
+            }
             if (gac_sens_set_at(s, xp, nheld, at_rest, s->is_stuck, &H) != 0) {
                 gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
                 return;
@@ -1359,6 +1342,10 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
             double tau;
             md->contact_gaps_tangent(q, s->p, S, dp, dgap);
+            if (gac_rowless(md, c_event)) {                  /* its gap's gradient is its row J^T n */
+                double dw[nq];
+                (void)gac_sens_row_tangent(s, c_event, f, q, S, dp, dw, dgap + c_event);
+            }
             tau = -dgap[c_event] / v_event;                  /* dt*_j: the gap stays 0 at the event */
             for (i = 0; i < nx; ++i) dx[i] = S[i] + fm[i] * tau; /* the perturbed state at the perturbed t* */
             if (nb == 0)

@@ -3,7 +3,8 @@ gac_sim_set_controller_jacobian): a planar 2-link chain falling onto a floor, tw
 joint 2's spring and damper (Joint(K, rest, C)) against the chain without them driven on theta_2 by the controller
 u = -K (theta_2 - rest) - C theta_2' -- give the same trajectories and the same sensitivities, bouncing, landing and
 resting, and on a rough floor through stick, slip and release; a nonlinear controller (of theta_2, theta_1, X1' and t)
-against central finite differences of whole runs; and the verdict and the errors without a usable Jacobian."""
+against central finite differences of whole runs, on the rough floor too; a controller of a base angle through
+switches of base chart; and the verdict and the errors without a usable Jacobian."""
 from __future__ import annotations
 
 import dataclasses
@@ -213,6 +214,36 @@ def test_a_nonlinear_controller_through_stick_and_slip_matches_central_differenc
         column = nominal.sensitivities.matrix[:, j]
         assert np.abs(fd[:nx] - column).max() <= 1e-6 * max(10.0, np.abs(fd[:nx]).max()), direction
         assert slip.dt_dp[direction] == pytest.approx(fd[nx], rel=1e-4, abs=1e-6), direction
+
+
+def test_a_controller_of_the_base_angles_through_chart_switches(compiled):
+    """The gimbal-lock scene (a free 2-link chain crossing chart A's lock, onto chart B and back) driven on theta_2 by
+    a controller of chart A's base angles and rates: on chart B the directions are carried to chart A's coordinates
+    before the controller's Jacobian takes them.  Against central differences (step 1e-5, as the charts' own test)."""
+    from test_sim_sensitivities import central_differences
+    from codegen.scene import load_scene
+    scene = load_scene("gimbal-lock")
+    model = compiled(dataclasses.replace(scene, name="ctrl_gimbal", inputs=("theta_2",)), specialise=True,
+                     chart_b=True, tangent=True)
+    full = model.scene.full_coordinate_names()
+    i0, i2 = full.index("theta_0"), full.index("theta_2")
+
+    def function(t, q, qd):          # (of theta_0 alone among the base angles: theta_-1's and theta_1's rates are
+        return [0.8 * math.sin(q[i0]) * qd[i0] + 1.5 * math.cos(q[i0]) - 2.0 * (q[i2] - 0.5)]   # unbounded at the lock)
+
+    def jacobian(t, q, qd):
+        du_dq, du_dqd = np.zeros((1, len(q))), np.zeros((1, len(q)))
+        du_dq[0, i0] = 0.8 * math.cos(q[i0]) * qd[i0] - 1.5 * math.sin(q[i0])
+        du_dq[0, i2], du_dqd[0, i0] = -2.0, 0.8 * math.sin(q[i0])
+        return du_dq, du_dqd
+
+    directions = ["q0[theta_0]", "qd0[theta_-1]", "qd0[theta_1]", "g"]
+    options = dict(method="dop853", rtol=1e-12, atol=1e-14)
+    p = model.parameters({"e_x2_min": 0.9})
+    r = simulate(model, 0.69, p=p, u=Controller(function, jacobian), sensitivities=directions, **options)
+    assert r.success and r.n_chart_switches >= 1 and r.sensitivities.valid, (r.message, r.sensitivity_message)
+    central_differences(model, 0.69, p, np.array(scene.q0), np.array(scene.qd0), directions, r.sensitivities.matrix,
+                        step=1e-5, u=function, **options)
 
 
 def test_a_controller_without_its_jacobian_ends_them(models):

@@ -357,6 +357,13 @@ FUNCTIONS = (
               Arg("user", "void *", "passed to the controller as it is")),
              "Let a controller give the inputs at every stage (gac_sim_set_controller).",
              "Returns GAC_OK or GAC_ERR_NULL_ARGUMENT."),
+    Function("sim_set_controller_jacobian", "int",
+             (Arg("sim", "{name}_sim *", "an initialised simulation with a controller (sim_set_controller)"),
+              Arg("jacobian", "gac_controller_jacobian", "jacobian(t, q, qd, du_dq, du_dqd, user) writes du/dq and "
+                  "du/dqd (NU x NQ each, row-major) with the controller's user pointer; NULL: none")),
+             "Give the controller its Jacobian, so that the sensitivities follow its state feedback "
+             "(gac_sim_set_controller_jacobian; without it a controller ends them, GAC_SENS_CONTROLLER).",
+             "Returns GAC_OK, GAC_ERR_NULL_ARGUMENT or GAC_ERR_BAD_OPTION (no controller set, or a schedule's)."),
     Function("sim_set_clock", "int",
              (Arg("sim", "{name}_sim *", "an initialised simulation"),
               Arg("clock", "gac_clock", "clock(user): seconds from a fixed origin, never decreasing; NULL: C's clock() "
@@ -423,12 +430,18 @@ FUNCTIONS = (
 ALL_FUNCTIONS = KERNELS + FUNCTIONS
 
 # The functions a model's cffi module declares extern "Python" (NAME_python_<name>): the front end defines them, the
-# loop calls them through the pointers given to sim_set_controller, sim_set_clock and sim_set_progress.
+# loop calls them through the pointers given to sim_set_controller, sim_set_controller_jacobian, sim_set_clock and
+# sim_set_progress.
 CALLBACKS = (
     Function("python_controller", "void",
              (Arg("t", "double", "time (s)"), Arg("q", "const double *", "NQ"), Arg("qd", "const double *", "NQ"),
               Arg("u", "double *", "out: the inputs (NU)"), Arg("user", "void *", "the run's handle")),
              "The inputs of a run driven by a Python function u(t, q, qd) (a gac_controller)."),
+    Function("python_controller_jacobian", "void",
+             (Arg("t", "double", "time (s)"), Arg("q", "const double *", "NQ"), Arg("qd", "const double *", "NQ"),
+              Arg("du_dq", "double *", "out: d u / d q (NU x NQ)"),
+              Arg("du_dqd", "double *", "out: d u / d qd (NU x NQ)"), Arg("user", "void *", "the run's handle")),
+             "The Jacobian of a Python controller (runtime.inputs.Controller; a gac_controller_jacobian)."),
     Function("python_clock", "double", (Arg("user", "void *", "unused"),),
              "Seconds of the Python process's monotonic clock (a gac_clock)."),
     Function("python_progress", "int",

@@ -200,6 +200,13 @@ typedef void (*gac_kernel_qv_ld)(const double *q, const double *v, const double 
  * user points to, not of how often it is called.  user: the caller's pointer, passed through. */
 typedef void (*gac_controller)(double t, const double *q, const double *qd, double *u, void *user);
 
+/* A controller's Jacobian (gac_sim_set_controller_jacobian), for the sensitivities through its state feedback: writes
+ * du_dq[i*nq + k] = d u_i / d q_k and du_dqd[i*nq + k] = d u_i / d qd_k (each nu x nq, row-major; u in its units, N m
+ * or N, per rad or m, and per rad/s or m/s) at time t (s) and state (q, qd), in the coordinates the controller sees
+ * (the model's, chart A's).  user: the controller's pointer. */
+typedef void (*gac_controller_jacobian)(double t, const double *q, const double *qd, double *du_dq, double *du_dqd,
+                                        void *user);
+
 /* A clock for the wall-time budget: seconds from any fixed origin, never decreasing.  user: passed through.
  * The default (NULL) is C's clock(): the processor time of the process, which on a target without a clock
  * counts nothing; give a monotonic wall clock where the host has one. */
@@ -935,6 +942,7 @@ typedef struct {
                                     sample or chart switch: the branch and 2 pi shift of the next conversion to
                                     chart A continue from them */
     gac_controller controller;   /* NULL: the held inputs u */
+    gac_controller_jacobian controller_jacobian; /* NULL: none (gac_sim_set_controller_jacobian) */
     const gac_schedule *schedule; /* NULL: none (gac_sim_set_schedule) */
     void *controller_data;
     gac_clock clock;             /* NULL: clock() */
@@ -1012,6 +1020,16 @@ int gac_sim_set_input(gac_sim *sim, const double *u);
  * GAC_ERR_NULL_ARGUMENT (sim NULL). */
 int gac_sim_set_controller(gac_sim *sim, gac_controller controller, void *user);
 
+/* Give the controller set by gac_sim_set_controller its Jacobian jacobian(t, q, qd, du_dq, du_dqd, user) (the same
+ * user pointer; NULL: none), so that the sensitivities (gac_sens_attach) follow its feedback: wherever they take the
+ * flight's tangent, the inputs' direction is du_j = du_dq dq_j + du_dqd dqd_j (in chart A's coordinates, dq_j and
+ * dqd_j carried there on chart B); at a release or a slip, whose event rates take u's derivative along the flow, its
+ * explicit time derivative is the central difference of the controller at the fixed state (0 exactly for a controller
+ * of the state alone).  Without it a controller ends the sensitivities (GAC_SENS_CONTROLLER).  A later
+ * gac_sim_set_controller or gac_sim_set_schedule drops it.  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT (sim NULL) or
+ * GAC_ERR_BAD_OPTION (a Jacobian without a controller, or with a schedule's; nothing changed). */
+int gac_sim_set_controller_jacobian(gac_sim *sim, gac_controller_jacobian jacobian);
+
 /* The clock the wall-time budget (opt.max_wall_time) is measured with (NULL: C's clock(), the process's processor
  * time); the budget starts again from now.  Returns GAC_OK or GAC_ERR_NULL_ARGUMENT (sim NULL). */
 int gac_sim_set_clock(gac_sim *sim, gac_clock clock, void *user);
@@ -1077,11 +1095,14 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
 
 /* Forward sensitivities S(t) = d x(t) / d(direction) of a hybrid run along k directions, each a seed of the
  * initial state dx0 (nx) and of the parameters dp (nparam).  In flight S solves the variational equations
- *     S' = (df/dx) S + (df/dp) dp,      column j: [dqd_j ; forward_dynamics_tangent(q, qd, u, p, dq_j, dqd_j, 0, dp_j)]
+ *     S' = (df/dx) S + (df/dp) dp,      column j: [dqd_j ; forward_dynamics_tangent(q, qd, u, p, dq_j, dqd_j, du_j, dp_j)]
  * integrated by the run's own Runge-Kutta formula (RK4, DOPRI5's or DOP853's weights) over the very steps the state
  * takes, the stages taken from the step itself (the directions GAC_TANGENT_BLOCK at a time through
  * forward_dynamics_tangent_block where the model has it); S is not in the step's error norm (the state's error
- * control alone chooses the steps).  At an impact of the frictionless law at time t*, located by contact c's gap:
+ * control alone chooses the steps).  du_j = 0 for held inputs and schedules (functions of t alone), and for a
+ * controller with its Jacobian (gac_sim_set_controller_jacobian) du_j = du_dq dq_j + du_dqd dqd_j, at the stages, in
+ * the resting contacts' constrained flight and at the events alike (the fields f- and f+ below hold the
+ * controller's u).  At an impact of the frictionless law at time t*, located by contact c's gap:
  *     dt*_j = -(dg_j) / (w_c . qd-),  dg_j = contact_gaps_tangent(q, p, dq_j, dp_j)[c],  w_c = J^T (sign e_row_c)
  *     S+_j = D Delta (S-_j + f- dt*_j, dp_j) - f+ dt*_j
  * (the saltation matrix of Hiskens & Pai 2000, with the parameters' direct part), Delta the impact map of the
@@ -1125,7 +1146,9 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
 #define GAC_SENS_CHART         7   /* the loop switched to (or started on) a base chart without tangent kernels
                                       (a model built before chart B had them), or at that chart's own lock */
 #define GAC_SENS_CONTROLLER    8   /* a controller gives the inputs (they may depend on the state; du = 0 is assumed
-                                      only for held inputs and schedules) */
+                                      only for held inputs and schedules) and has no Jacobian
+                                      (gac_sim_set_controller_jacobian), or a linear schedule's inputs vary over a
+                                      release or a slip */
 #define GAC_SENS_NONFINITE     9   /* the sensitivities overflowed (not finite) */
 #define GAC_SENS_BOUNDARY     10   /* a mode boundary: inside an impact of several contacts, a contact took an impulse
                                       ~0 and leaves at the law's bound (w . qd+ + e w . qd- ~ 0), so a perturbation

@@ -10,7 +10,8 @@
  * matrix of Hiskens & Pai (2000) (gac_sens_impact), the release of a resting contact (gac_sens_release), a stuck
  * point's slip (gac_sens_slip) and a sliding point's coming to stick (gac_sens_stick), contacts at rest at the start
  * (gac_sens_attach), a switch of base chart (gac_sens_switch; S is in the coordinates of the chart integrated now,
- * gac_sens_state gives chart A's), and the verdict: the first event not differentiated ends them (gac_sens_stop).
+ * gac_sens_state gives chart A's), a controller's state feedback by its Jacobian (gac_sens_du), and the verdict: the
+ * first event not differentiated ends them (gac_sens_stop).
  */
 #include "gac_internal.h"
 
@@ -154,6 +155,79 @@ void gac_sens_stop(gac_sim *s, int status, double t, int contact)
 static int gac_sens_inputs_fixed(const gac_sim *s)
 {
     return s->controller == 0 || s->controller == gac_schedule_input || s->model->nu == 0;
+}
+
+/* 1 if the inputs' derivative is known: 0 (gac_sens_inputs_fixed) or a controller's by its Jacobian. */
+static int gac_sens_inputs_known(const gac_sim *s)
+{
+    return gac_sens_inputs_fixed(s) || s->controller_jacobian != 0;
+}
+
+/* The inputs' Jacobian at time t and state x (of the chart integrated now), for gac_sens_du: J (2 nu nq doubles) =
+ * du/dq | du/dqd from the controller's Jacobian, in chart A's coordinates (the controller's), with xa = x there.
+ * Returns 0 if the inputs' derivative is 0 (J not written), 1 if J holds it (NaN where x has no chart A
+ * coordinates: the sensitivities then end as not finite). */
+static int gac_sens_jacobian_at(gac_sim *s, double t, const double *x, double *J, double *xa)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nu = md->nu;
+    int i;
+    if (gac_sens_inputs_fixed(s) || s->controller_jacobian == 0) return 0;
+    if (s->chart == 0) {
+        gac_copy(xa, x, md->nx);
+    } else if (gac_state_chart_a(s, x, xa) != GAC_OK) {
+        for (i = 0; i < 2 * nu * nq; ++i) J[i] = NAN;
+        return 1;
+    }
+    s->controller_jacobian(t, xa, xa + nq, J, J + (long)nu * nq, s->controller_data);
+    return 1;
+}
+
+/* The inputs' direction du (nu) along a direction (dq, dqd) of the chart integrated now at x: 0 (J NULL), or
+ *     du = du_dq dq_A + du_dqd dqd_A,
+ * J and xa from gac_sens_jacobian_at, (dq_A, dqd_A) the direction in chart A's coordinates at xa. */
+static void gac_sens_du(const gac_sim *s, const double *J, const double *x, const double *xa, const double *dq,
+                        const double *dqd, double *du)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nu = md->nu;
+    double d[2 * nq];
+    int i, l;
+    if (J == 0) {
+        for (i = 0; i < nu; ++i) du[i] = 0.0;
+        return;
+    }
+    gac_copy(d, dq, nq);
+    gac_copy(d + nq, dqd, nq);
+    if (s->chart != 0 && gac_tangent_between(md, s->model_a, s->chart, x, xa, 1, d) != GAC_OK) {
+        for (i = 0; i < nu; ++i) du[i] = NAN;
+        return;
+    }
+    for (i = 0; i < nu; ++i) {
+        double sum = 0.0;
+        for (l = 0; l < nq; ++l) sum += J[(long)i * nq + l] * d[l] + J[(long)(nu + i) * nq + l] * d[nq + l];
+        du[i] = sum;
+    }
+}
+
+/* The inputs' rate along the flow f = [qd, qdd] at (t, x), for an event's rate (a release, a slip): 0 for held
+ * inputs (J NULL), else du = du_dq qd + du_dqd qdd + du/dt, the explicit du/dt the controller's central difference in t
+ * at the fixed state x (exactly 0 for a controller of the state alone). */
+static void gac_sens_input_rate(gac_sim *s, const double *J, double t, const double *x, const double *xa,
+                                const double *f, double *du)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nu = md->nu;
+    const double h = 1e-5 * (fabs(t) > 1.0 ? fabs(t) : 1.0), tp = t + h, tm = t - h;
+    double up[GAC_AT_LEAST_1(nu)], um[GAC_AT_LEAST_1(nu)];
+    int i;
+    gac_sens_du(s, J, x, xa, f, f + nq, du);
+    if (J == 0) return;
+    gac_copy(up, s->u, nu);
+    gac_copy(um, s->u, nu);
+    s->controller(tp, xa, xa + nq, up, s->controller_data);
+    s->controller(tm, xa, xa + nq, um, s->controller_data);
+    for (i = 0; i < nu; ++i) du[i] += (up[i] - um[i]) / (tp - tm);
 }
 
 /* ---- contacts held at their walls: the constrained dynamics and the projections, and their tangents ---- */
@@ -736,19 +810,21 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
             return;
         }
     }
-    if (!gac_sens_inputs_fixed(s)) {
+    if (!gac_sens_inputs_known(s)) {
         gac_sens_stop(s, GAC_SENS_CONTROLLER, s->t, -1);
         return;
     }
     {
         const int nq = md->nq, nx = md->nx, k = z->k, nr = GAC_AT_LEAST_1(md->njrow), held = s->nresting > 0;
-        const int nc1 = GAC_AT_LEAST_1(md->ncontact);
+        const int nc1 = GAC_AT_LEAST_1(md->ncontact), nu1 = GAC_AT_LEAST_1(md->nu);
+        double J[2 * nu1 * nq], Ya[nx];                            /* the controller's Jacobian at a stage */
         double *work = z->work, *dK = work + (long)GAC_SENS_STAGES * nx, *Y = dK + (long)GAC_SENS_STAGES * k * nx;
         double dQ[GAC_TANGENT_BLOCK * nq], dQD[GAC_TANGENT_BLOCK * nq], out[GAC_TANGENT_BLOCK * nq];
-        double dU[GAC_TANGENT_BLOCK * GAC_AT_LEAST_1(md->nu)];   /* the inputs' directions: 0 (held, or a schedule) */
+        double dU[GAC_TANGENT_BLOCK * GAC_AT_LEAST_1(md->nu)];   /* the inputs' directions: 0 (held, or a schedule),
+                                                                     or the controller's du_dq dQ + du_dqd dQD */
         double qdd_free[nq], qdd[nq], lambda[3 * nq];               /* the constrained flight at a stage */
         const double *K[GAC_SENS_STAGES];
-        int width;
+        int width, jac;
         GAC_SENS_SET_ARRAYS(nq, nr);
         gac_sens_set H;
         GAC_SENS_SET_BIND(H);
@@ -763,6 +839,7 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
                 Y[n] = x[n] + h * sum;
             }
             u = gac_input(s, s->t + c[i] * h, Y);
+            jac = gac_sens_jacobian_at(s, s->t + c[i] * h, Y, J, Ya);
             if (held) {                              /* the resting contacts held (the stuck points along every
                                                         axis): their forces at the stage */
                 if (gac_sens_set_at(s, Y, s->nresting, s->resting, s->is_stuck, &H) != 0
@@ -793,6 +870,7 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
                         if (n < nq) dQ[m * nq + n] = sum;
                         else dQD[m * nq + n - nq] = dKi[n - nq] = sum;
                     }
+                    if (jac) gac_sens_du(s, J, Y, Ya, dQ + m * nq, dQD + m * nq, dU + m * md->nu);
                 }
                 if (width > 1) {
                     md->forward_dynamics_tangent_block(Y, Y + nq, u, s->p, dQ, dQD, dU, z->dp + (long)j * md->nparam,
@@ -1379,9 +1457,10 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
  * set s->resting, record r): lambda_c is the event function, so dt*_j = -d lambda_c / lambda_c', d lambda_c along
  * (S_j, dp_j) and lambda_c' along the flow (dq, dqd) = (qd, qdd), both by the constrained dynamics' tangent with the
  * set before held.  The state is continuous, so S+_j = S-_j + (f- - f+) dt*_j (f- - f+ = Y_c lambda_c: ~0, as the
- * field is continuous where lambda_c = 0).  Another contact released with it (its force ~0 too), a force that does
- * not cross 0 (|lambda_c'| below 1e-9 of the force scale per s) or inputs that vary within the stretch (a linear
- * schedule: lambda_c' would miss their rate) end the sensitivities. */
+ * field is continuous where lambda_c = 0).  A controller's inputs enter both by their Jacobian: du_j along (S_j), and
+ * u' along the flow (gac_sens_input_rate) in lambda_c'.  Another contact released with it (its force ~0 too), a force
+ * that does not cross 0 (|lambda_c'| below 1e-9 of the force scale per s) or inputs that vary within the stretch
+ * without a known rate (a linear schedule, a controller without its Jacobian) end the sensitivities. */
 void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
 {
     gac_sens *z = s->sens;
@@ -1389,9 +1468,9 @@ void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
     const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), nc1 = GAC_AT_LEAST_1(md->ncontact);
     const double *x = s->xs;
     double fm[nx], fp[nx], qdd_free[nq], lambda[3 * nq], dqdd_free[nq], dlambda[3 * nq], qdd_m[nq], lambda_ref, rate;
-    double zero_u[GAC_AT_LEAST_1(md->nu)], zero_p[GAC_AT_LEAST_1(md->nparam)];
+    double zero_p[GAC_AT_LEAST_1(md->nparam)], du[GAC_AT_LEAST_1(md->nu)], J[2 * GAC_AT_LEAST_1(md->nu) * nq], xa[nx];
     int before_set[nq + nc1], nbefore, a, i, j, index = -1;
-    const double *u;
+    const double *u, *Ju;
     GAC_SENS_SET_ARRAYS(nq, nr);
     gac_sens_set H;
     if (z == 0 || z->status != GAC_SENS_VALID) return;
@@ -1400,13 +1479,13 @@ void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
         gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, c_event);
         return;
     }
-    if (s->controller != 0 && md->nu > 0) {
-        gac_sens_stop(s, GAC_SENS_CONTROLLER, r->t, c_event);
+    if (s->controller != 0 && md->nu > 0 && (gac_sens_inputs_fixed(s) || s->controller_jacobian == 0)) {
+        gac_sens_stop(s, GAC_SENS_CONTROLLER, r->t, c_event);   /* (a linear schedule: its rate is not followed) */
         return;
     }
-    for (i = 0; i < GAC_AT_LEAST_1(md->nu); ++i) zero_u[i] = 0.0;
     for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
     u = gac_input(s, r->t, x);
+    Ju = gac_sens_jacobian_at(s, r->t, x, J, xa) ? J : 0;
     nbefore = gac_sens_set_before(s, r, before_set);
     for (a = 0; a < nbefore; ++a) {
         if (before_set[a] == c_event) index = a;
@@ -1418,7 +1497,8 @@ void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
         return;
     }
     gac_copy(qdd_m, fm + nq, nq);
-    md->forward_dynamics_tangent(x, x + nq, u, s->p, x + nq, qdd_m, zero_u, zero_p, dqdd_free);
+    gac_sens_input_rate(s, Ju, r->t, x, xa, fm, du);          /* u' along the flow */
+    md->forward_dynamics_tangent(x, x + nq, u, s->p, x + nq, qdd_m, du, zero_p, dqdd_free);
     gac_sens_held_tangent(s, x, &H, qdd_free, lambda, x + nq, qdd_m, zero_p, 0, dqdd_free, dlambda, dqdd_free);
     rate = dlambda[index];                                   /* lambda_c' along the flow */
     if (!(fabs(rate) > 1e-9 * lambda_ref)) {
@@ -1429,7 +1509,8 @@ void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
         double *S = z->S + (long)j * nx;
         const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
         double tau;
-        md->forward_dynamics_tangent(x, x + nq, u, s->p, S, S + nq, zero_u, dp, dqdd_free);
+        gac_sens_du(s, Ju, x, xa, S, S + nq, du);
+        md->forward_dynamics_tangent(x, x + nq, u, s->p, S, S + nq, du, dp, dqdd_free);
         gac_sens_held_tangent(s, x, &H, qdd_free, lambda, S, S + nq, dp, z->dslip + 2L * j * nc1, dqdd_free, dlambda,
                               dqdd_free);
         tau = -dlambda[index] / rate;
@@ -1449,7 +1530,8 @@ void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event)
  * the directions, dd_j = -(I - d d^T)(dlambda_T_j + lambda_T' dt*_j) / |lambda_T| (the force at the perturbed
  * event), kept in sens->dslip for the viscous band that follows (gac_sens_slide_tangent).  Several points slipping
  * or released at once (GAC_SENS_BOUNDARY), an event e that does not cross 0 (|e'| below 1e-9 of the force scale per
- * s: GAC_SENS_GRAZING) or a controller's inputs end the sensitivities. */
+ * s: GAC_SENS_GRAZING) or inputs without a known rate (a linear schedule, a controller without its Jacobian) end the
+ * sensitivities; a controller with its Jacobian enters as at a release (gac_sens_release). */
 void gac_sens_slip(gac_sim *s, const gac_impact_record *r, int c_event)
 {
     gac_sens *z = s->sens;
@@ -1458,10 +1540,10 @@ void gac_sens_slip(gac_sim *s, const gac_impact_record *r, int c_event)
     const gac_contact *ct = md->contacts + c_event;
     const double *x = s->xs, *d = s->slip + 2 * c_event, cf = gac_friction_coefficient(md, s->p, c_event);
     double fm[nx], fp[nx], qdd_free[nq], lambda[3 * nq], dqdd_free[nq], dlambda[3 * nq], qdd_m[nq], lambda_ref, rate;
-    double zero_u[GAC_AT_LEAST_1(md->nu)], zero_p[GAC_AT_LEAST_1(md->nparam)], lt[2] = {0.0, 0.0}, lt_rate[2] = {0.0, 0.0};
-    double norm;
+    double zero_p[GAC_AT_LEAST_1(md->nparam)], lt[2] = {0.0, 0.0}, lt_rate[2] = {0.0, 0.0};
+    double norm, du[GAC_AT_LEAST_1(md->nu)], J[2 * GAC_AT_LEAST_1(md->nu) * nq], xa[nx];
     int stuck_before[nc1], a, i, j, t, index = -1, row_t[2] = {-1, -1};
-    const double *u;
+    const double *u, *Ju;
     GAC_SENS_SET_ARRAYS(nq, nr);
     gac_sens_set H;
     if (z == 0 || z->status != GAC_SENS_VALID) return;
@@ -1470,14 +1552,14 @@ void gac_sens_slip(gac_sim *s, const gac_impact_record *r, int c_event)
         gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, c_event);
         return;
     }
-    if (s->controller != 0 && md->nu > 0) {
-        gac_sens_stop(s, GAC_SENS_CONTROLLER, r->t, c_event);
+    if (s->controller != 0 && md->nu > 0 && (gac_sens_inputs_fixed(s) || s->controller_jacobian == 0)) {
+        gac_sens_stop(s, GAC_SENS_CONTROLLER, r->t, c_event);   /* (a linear schedule: its rate is not followed) */
         return;
     }
-    for (i = 0; i < GAC_AT_LEAST_1(md->nu); ++i) zero_u[i] = 0.0;
     for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
     for (i = 0; i < md->ncontact; ++i) stuck_before[i] = s->is_stuck[i] || i == c_event;
     u = gac_input(s, r->t, x);
+    Ju = gac_sens_jacobian_at(s, r->t, x, J, xa) ? J : 0;
     if (gac_sens_field(s, r->t, x, s->nresting, s->resting, s->is_stuck, &H, qdd_free, lambda, fp, 0) != 0
         || gac_sens_field(s, r->t, x, s->nresting, s->resting, stuck_before, &H, qdd_free, lambda, fm, &lambda_ref)
                != 0) {
@@ -1502,7 +1584,8 @@ void gac_sens_slip(gac_sim *s, const gac_impact_record *r, int c_event)
         return;
     }
     gac_copy(qdd_m, fm + nq, nq);
-    md->forward_dynamics_tangent(x, x + nq, u, s->p, x + nq, qdd_m, zero_u, zero_p, dqdd_free);
+    gac_sens_input_rate(s, Ju, r->t, x, xa, fm, du);          /* u' along the flow */
+    md->forward_dynamics_tangent(x, x + nq, u, s->p, x + nq, qdd_m, du, zero_p, dqdd_free);
     gac_sens_held_tangent(s, x, &H, qdd_free, lambda, x + nq, qdd_m, zero_p, 0, dqdd_free, dlambda, dqdd_free);
     rate = dlambda[index];                                  /* e' along the flow */
     for (t = 0; t < 2; ++t) {
@@ -1518,7 +1601,8 @@ void gac_sens_slip(gac_sim *s, const gac_impact_record *r, int c_event)
         double *S = z->S + (long)j * nx, *dd = z->dslip + 2L * j * nc1 + 2 * c_event, dlt[2] = {0.0, 0.0}, de, tau;
         const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
         const double dcf = ct->friction_index >= 0 ? dp[ct->friction_index] : 0.0;
-        md->forward_dynamics_tangent(x, x + nq, u, s->p, S, S + nq, zero_u, dp, dqdd_free);
+        gac_sens_du(s, Ju, x, xa, S, S + nq, du);
+        md->forward_dynamics_tangent(x, x + nq, u, s->p, S, S + nq, du, dp, dqdd_free);
         gac_sens_held_tangent(s, x, &H, qdd_free, lambda, S, S + nq, dp, z->dslip + 2L * j * nc1, dqdd_free, dlambda,
                               dqdd_free);
         de = dlambda[index] + norm * dcf / (cf * cf);
@@ -1581,7 +1665,7 @@ void gac_sens_stick(gac_sim *s, const double *x_before, const int *stuck_before,
             return;
         }
     }
-    if (!gac_sens_inputs_fixed(s)) {
+    if (!gac_sens_inputs_known(s)) {                         /* (the map and e' need no du: the fields hold u) */
         gac_sens_stop(s, GAC_SENS_CONTROLLER, s->t, c);
         return;
     }
@@ -1646,17 +1730,17 @@ void gac_sens_reslip(gac_sim *s, const double *slip_before, int nstuck)
     const gac_model *md = s->model;
     const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), nc1 = GAC_AT_LEAST_1(md->ncontact);
     double slip_now[2 * nc1], xp[nx], c_v[3 * nq], qdd_free[nq], lambda[3 * nq], f[nx], dqdd_free[nq];
-    double dlambda[3 * nq], dx[nx], zero_u[GAC_AT_LEAST_1(md->nu)], zero_p[GAC_AT_LEAST_1(md->nparam)];
+    double dlambda[3 * nq], dx[nx], du[GAC_AT_LEAST_1(md->nu)], zero_p[GAC_AT_LEAST_1(md->nparam)];
+    double J[2 * GAC_AT_LEAST_1(md->nu) * nq], xa[nx];
     int stuck_c[nc1], a, b, i, j, t;
     GAC_SENS_SET_ARRAYS(nq, nr);
     gac_sens_set H;                                          /* the held rows with c stuck, at s->x: P */
     GAC_SENS_SET_ARRAYS_OF(H2, nq, nr);
     gac_sens_set H2;                                         /* the stuck field at P(s->x) */
-    if (z == 0 || z->status != GAC_SENS_VALID || nstuck > 0 || !gac_sens_inputs_fixed(s)) return;
+    if (z == 0 || z->status != GAC_SENS_VALID || nstuck > 0 || !gac_sens_inputs_known(s)) return;
     GAC_SENS_SET_BIND(H);
     GAC_SENS_SET_BIND_OF(H2, H2);
     gac_copy(slip_now, slip_before, 2 * md->ncontact);
-    for (i = 0; i < GAC_AT_LEAST_1(md->nu); ++i) zero_u[i] = 0.0;
     for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
     for (a = 0; a < s->nresting; ++a) {
         const int c = s->resting[a];
@@ -1664,7 +1748,7 @@ void gac_sens_reslip(gac_sim *s, const double *slip_before, int nstuck)
         const double *d = s->slip + 2 * c;
         int row_t[2] = {-1, -1}, ok = 1;
         double lt[2] = {0.0, 0.0}, norm;
-        const double *u;
+        const double *u, *Ju;
         if (d[0] == slip_now[2 * c] && d[1] == slip_now[2 * c + 1]) continue;
         if (ct->trow[0] < 0 || ct->trow[1] < 0 || (d[0] == 0.0 && d[1] == 0.0) || s->is_stuck[c]) {
             slip_now[2 * c] = d[0];                          /* along one axis, forgotten: nothing to carry */
@@ -1699,12 +1783,14 @@ void gac_sens_reslip(gac_sim *s, const double *slip_before, int nstuck)
             continue;
         }
         u = gac_input(s, s->t, xp);
+        Ju = gac_sens_jacobian_at(s, s->t, xp, J, xa) ? J : 0;
         for (j = 0; j < z->k; ++j) {
             double *S = z->S + (long)j * nx, *dd = z->dslip + 2L * j * nc1 + 2 * c, w[2], dw;
             const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
             gac_copy(dx, S, nq);
             gac_sens_hold_tangent(s, s->x, &H, s->x + nq, xp + nq, S, S + nq, dp, dx + nq);
-            md->forward_dynamics_tangent(xp, xp + nq, u, s->p, dx, dx + nq, zero_u, dp, dqdd_free);
+            gac_sens_du(s, Ju, xp, xa, dx, dx + nq, du);
+            md->forward_dynamics_tangent(xp, xp + nq, u, s->p, dx, dx + nq, du, dp, dqdd_free);
             gac_sens_held_tangent(s, xp, &H2, qdd_free, lambda, dx, dx + nq, dp, z->dslip + 2L * j * nc1, dqdd_free,
                                   dlambda, dqdd_free);
             w[0] = dlambda[row_t[0]];

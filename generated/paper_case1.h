@@ -143,6 +143,9 @@
  *   paper_case1_sens_attach(&sim, &sens, 2, seed_x, seed_p, sdw);   after sim_init, before sim_advance
  *   ... run ...;  paper_case1_sens_state(&sim, S): S[j * NX + i] = d x_i / d direction j, valid while
  *   sens.status == GAC_SENS_VALID (else the first event not differentiated, at sens.t_status: gac.h).
+ *   A controller (sim_set_controller) ends them (GAC_SENS_CONTROLLER) unless given its Jacobian after it:
+ *   paper_case1_sim_set_controller_jacobian(&sim, jac), jac(t, q, qd, du_dq, du_dqd, user) writing d u / d q and
+ *   d u / d qd (NU x NQ each, row-major, du_dq[i * NQ + k] = d u_i / d q_k) with the controller's user pointer.
  * Storage: the arrays of sim.base and rec.base point into the struct's own dwork / iwork; every
  *   paper_case1_sim_* call points them there again.  A struct copied by assignment or memcpy points at the
  *   original's storage until that next call: copy with paper_case1_sim_copy / paper_case1_impact_record_copy.
@@ -628,6 +631,14 @@ int paper_case1_sim_set_input(paper_case1_sim *sim, const double *u);
  *   user         passed to the controller as it is
  */
 int paper_case1_sim_set_controller(paper_case1_sim *sim, gac_controller controller, void *user);
+
+/* Give the controller its Jacobian, so that the sensitivities follow its state feedback
+ * (gac_sim_set_controller_jacobian; without it a controller ends them, GAC_SENS_CONTROLLER).  Returns
+ * GAC_OK, GAC_ERR_NULL_ARGUMENT or GAC_ERR_BAD_OPTION (no controller set, or a schedule's).
+ *   sim          an initialised simulation with a controller (sim_set_controller)
+ *   jacobian     jacobian(t, q, qd, du_dq, du_dqd, user) writes du/dq and du/dqd (NU x NQ each, row-major) with the controller's user pointer; NULL: none
+ */
+int paper_case1_sim_set_controller_jacobian(paper_case1_sim *sim, gac_controller_jacobian jacobian);
 
 /* Measure the wall-time budget (options.max_wall_time) with this clock from now on (gac_sim_set_clock).
  * Returns GAC_OK or GAC_ERR_NULL_ARGUMENT.

@@ -2165,6 +2165,13 @@ int paper_case2_sim_set_controller(paper_case2_sim *sim, gac_controller controll
     return gac_sim_set_controller(&sim->base, controller, user);
 }
 
+int paper_case2_sim_set_controller_jacobian(paper_case2_sim *sim, gac_controller_jacobian jacobian)
+{
+    if (sim == 0) return GAC_ERR_NULL_ARGUMENT;
+    paper_case2_bind(&sim->base, sim->dwork, sim->iwork);
+    return gac_sim_set_controller_jacobian(&sim->base, jacobian);
+}
+
 int paper_case2_sim_set_clock(paper_case2_sim *sim, gac_clock clock, void *user)
 {
     if (sim == 0) return GAC_ERR_NULL_ARGUMENT;

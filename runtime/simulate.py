@@ -26,7 +26,7 @@ from codegen.parameters import check_vector, parameter_rules
 from codegen.specialise import coordinate_names
 
 from .header import library_constants
-from .inputs import InputSchedule, attach, input_source  # noqa: F401  (InputSchedule: re-export)
+from .inputs import Controller, InputSchedule, attach, input_source, pd  # noqa: F401  (Controller, InputSchedule, pd: re-export)
 from .model import CHOSEN_LAWS, CompiledModel, load_model
 from . import sensitivities as sensitivity
 
@@ -414,7 +414,9 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     u             the inputs of a driven model (runtime.inputs): None (0), constant values (one per input, in
                   the order of model.input_names), an InputSchedule (values at times, held or linear; evaluated
                   in C, each of its times a step boundary), or a function u(t, q, qd) of the full-layout state,
-                  called back from C at every stage (slower: a Python call per stage)
+                  called back from C at every stage (slower: a Python call per stage); Controller(f, jacobian=J)
+                  (J(t, q, qd) -> (du/dq, du/dqd), nu x nq_full each) for sensitivities through the feedback, and
+                  pd(model, kp, kd, target) a PD controller with its Jacobian
     progress      progress(t, n_steps, n_impacts), called by the C loop every GAC_LOOK_STEPS steps and at every
                   event; returning False stops the run (status -1, "stopped by the progress callback"), as does an
                   exception in it
@@ -540,7 +542,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
             segment_t, segment_steps = float(state.t), int(state.n_steps) + int(state.n_rejected)
             continue
         break
-    if code == lib.GAC_ERR_BAD_INPUT and source.error is not None:
+    if source.error is not None:          # the input function (a bad value: GAC_ERR_BAD_INPUT) or its Jacobian
         raise source.error
     status, message = (0, "reached t_end") if code == lib.GAC_SIM_END else \
         (-1, _end_message(model, state, code, segment_t, segment_steps, len(impacts), rec))

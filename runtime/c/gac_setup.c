@@ -168,6 +168,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     for (i = 0; i < md->nparam; ++i) s->p[i] = pv[i];
     for (i = 0; i < md->nu; ++i) s->u[i] = s->u_eval[i] = 0.0;
     s->controller = 0;
+    s->controller_jacobian = 0;
     s->controller_data = 0;
     s->schedule = 0;
     s->sens = 0;
@@ -315,9 +316,18 @@ int gac_sim_set_controller(gac_sim *s, gac_controller controller, void *user)
     if (s == 0) return GAC_ERR_NULL_ARGUMENT;
     s->schedule = 0;
     s->controller = controller;
+    s->controller_jacobian = 0;
     s->controller_data = user;
     s->f_valid = 0;
     s->input_changed = 1;
+    return GAC_OK;
+}
+
+int gac_sim_set_controller_jacobian(gac_sim *s, gac_controller_jacobian jacobian)
+{
+    if (s == 0) return GAC_ERR_NULL_ARGUMENT;
+    if (jacobian != 0 && (s->controller == 0 || s->schedule != 0)) return GAC_ERR_BAD_OPTION;
+    s->controller_jacobian = jacobian;
     return GAC_OK;
 }
 
@@ -333,6 +343,7 @@ void gac_schedule_begin(gac_sim *s)
         s->controller_data = 0;
         gac_schedule_input(s->t, s->x, s->x + s->model->nq, s->u, (void *)s->schedule);
     }
+    s->controller_jacobian = 0;
     s->f_valid = 0;                    /* the flight derivative and the resting contacts' forces change */
     s->input_changed = 1;
 }

@@ -384,6 +384,15 @@ static void ball_pd(double t, const double *q, const double *qd, double *u, void
     u[0] = m * ball_p[0] - m * pd->k * (q[0] - pd->y_ref) - m * pd->c * qd[0];
 }
 
+/* ball_pd's Jacobian (1 x 1 each) */
+static void ball_pd_jacobian(double t, const double *q, const double *qd, double *du_dq, double *du_dqd, void *user)
+{
+    const pd_gains *pd = (const pd_gains *)user;
+    (void)t, (void)q, (void)qd;
+    du_dq[0] = -ball_p[1] * pd->k;
+    du_dqd[0] = -ball_p[1] * pd->c;
+}
+
 static void nan_controller(double t, const double *q, const double *qd, double *u, void *user)
 {
     (void)t; (void)q; (void)qd; (void)user;
@@ -1170,6 +1179,23 @@ static void test_loop_rules(void)
     gac_default_options(&opt);
     opt.rtol = 1e-6;
     opt.atol = 1e-8;
+    CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt) == GAC_OK, "init");
+    {                                     /* a controller's Jacobian: set after it, dropped with it */
+        pd_gains pd = {4.0, 0.8, 1.5};
+        CHECK(gac_sim_set_controller_jacobian(0, ball_pd_jacobian) == GAC_ERR_NULL_ARGUMENT, "jacobian: NULL sim");
+        CHECK(gac_sim_set_controller_jacobian(&sim, ball_pd_jacobian) == GAC_ERR_BAD_OPTION
+              && sim.controller_jacobian == 0, "jacobian without a controller refused");
+        CHECK(gac_sim_set_controller(&sim, ball_pd, &pd) == GAC_OK
+              && gac_sim_set_controller_jacobian(&sim, ball_pd_jacobian) == GAC_OK
+              && sim.controller_jacobian == ball_pd_jacobian, "jacobian set after its controller");
+        CHECK(gac_sim_set_controller(&sim, ball_pd, &pd) == GAC_OK && sim.controller_jacobian == 0,
+              "a new controller drops the jacobian");
+        CHECK(gac_sim_set_controller_jacobian(&sim, ball_pd_jacobian) == GAC_OK
+              && gac_sim_set_schedule(&sim, &linear) == GAC_OK && sim.controller_jacobian == 0
+              && gac_sim_set_controller_jacobian(&sim, ball_pd_jacobian) == GAC_ERR_BAD_OPTION,
+              "a schedule drops the jacobian and refuses one");
+        CHECK(gac_sim_set_controller(&sim, 0, 0) == GAC_OK, "back to the held inputs");
+    }
     CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, ball_q0, ball_qd0, 0, &opt) == GAC_OK, "init");
     CHECK(gac_sim_set_schedule(&sim, &wrong) == GAC_ERR_BAD_OPTION && sim.schedule == 0, "a schedule of 2 inputs refused");
     CHECK(gac_sim_set_schedule(&sim, &held) == GAC_OK, "held schedule set");

@@ -864,6 +864,10 @@ def _check_parameters(model: CompiledModel, p: np.ndarray) -> None:
             raise ValueError(f"p[{name}]: this model has every parameter built in as a constant (bake_params=True), "
                              f"so {float(p[k])!r} instead of {float(model.p[k])!r} would be ignored; load the "
                              "model with bake_params=False to change parameters at run time")
+        if name in model.layout.held_params and p[k] != model.p[k]:
+            raise ValueError(f"p[{name}]: this planar model holds {name} = {float(model.p[k])!r} (the obstacle stays "
+                             f"symmetric about the chain's plane), so {float(p[k])!r} is refused; to move it out of "
+                             "the plane, load the general model (load_model(scene, specialise=False))")
         if name in model.layout.zero_params and p[k] != 0.0:
             raise ValueError(f"p[{name}]: this model has {name} = 0 built in (the scene's value is 0, so its "
                              f"terms were left out), so {float(p[k])!r} would be ignored; to vary it, load the "

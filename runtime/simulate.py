@@ -883,9 +883,12 @@ def _check_inside(model: CompiledModel, q: np.ndarray, p: np.ndarray, name: str)
     points = model.contact_points(q, p)
     for c in np.flatnonzero(gaps < -1e-12 * max(1.0, float(np.abs(points).max()))):
         point, wall = model.contacts[c]
-        if isinstance(wall, ObstacleContact):
-            raise ValueError(f"{name}: link {wall.i} overlaps the obstacle {wall.obstacle.name}: its segment is "
-                             f"{gaps[c] + wall.radius:.6g} m from the obstacle's, less than their radii {wall.radius:g} "
+        if isinstance(wall, ObstacleContact):           # the obstacle's geometry (its radius too) is p's
+            o = wall.obstacle
+            radius = model.scene.capsule_radius(wall.i) + (
+                float(p[model.parameter_names.index(f"radius_{o.name}")]) if not o.bounded_by_planes else 0.0)
+            raise ValueError(f"{name}: link {wall.i} overlaps the obstacle {o.name}: its segment is "
+                             f"{gaps[c] + radius:.6g} m from the obstacle's, less than their radii {radius:g} "
                              f"m together (gap {gaps[c]:.3g} m)")
         if isinstance(wall, LinkPair):
             raise ValueError(f"{name}: links {wall.i} and {wall.j} overlap as capsules: their segments are "

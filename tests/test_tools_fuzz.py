@@ -324,7 +324,12 @@ def test_obstacles_leave_the_structures_and_their_runs_as_they_were(compiled):
     with_obstacles, obstacle_model, obstacle_run = fuzz.obstacle_run(obstacle_rng, scene, model, run, obstacles,
                                                                      compiled)
     assert with_obstacles.links == scene.links and with_obstacles.obstacles[0].name == obstacles[0].name
-    assert np.array_equal(obstacle_run.p[:len(run.p)], run.p) and len(obstacle_run.p) == len(run.p) + len(obstacles)
+    geometry = sum(len(o.geometry_names) for o in obstacles)                  # each one's e, then the geometry
+    assert np.array_equal(obstacle_run.p[:len(run.p)], run.p) and len(obstacle_run.p) == len(run.p) + len(obstacles) \
+        + geometry
+    assert obstacle_run.p[len(run.p) + len(obstacles):].tolist() == [x for o in obstacles for x in o.geometry_values]
+    assert with_obstacles.obstacles == tuple(o.with_geometry(o.geometry_values) for o in with_obstacles.obstacles)
+    assert [o.segment[0] for o in obstacle_model.scene.obstacles] == [(fuzz.OBSTACLE_PARKED,) * 3] * len(obstacles)
     names = scene.parameter_names()
     points = model.contact_points(model.layout.reduce(run.q0), run.p)
     radii = [link.radius for link in scene.links]

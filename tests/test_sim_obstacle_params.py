@@ -197,3 +197,20 @@ def test_a_planar_model_holds_the_geometry_that_keeps_an_obstacle_in_its_plane()
     far = simulate(planar, 3.0, p=planar.parameters({"center_y_ball": 5.0, "radius_ball": 0.05}), **TOL)
     on_ball = lambda r: [c.wall for i in r.impacts for c in i.contacts if c.wall.endswith("/ball")]
     assert near.status == far.status == 0 and on_ball(near) and not on_ball(far)
+
+
+def test_a_model_with_baked_parameters_keeps_its_obstacles_as_constants():
+    """bake_params: the obstacles' places in p are -1 (the shapes' constants), their ranges the scene's values alone;
+    the general model's places are their first parameters' indices."""
+    from codegen.cache import generate_cached
+    from codegen.options import build_options
+    scene = chain(False)
+    names = scene.parameter_names()
+    firsts = ", ".join(str(names.index(o.geometry_names[0])) for o in scene.obstacles)
+    general = generate_cached(scene, build_options(scene, specialise=False, chart_b=False, extended=False))
+    baked = generate_cached(scene, build_options(scene, bake_params=True, specialise=False, chart_b=False,
+                                                 extended=False))
+    assert f"_obstacle_params[4] = {{ {firsts} }};" in general.source
+    assert "_obstacle_params[4] = { -1, -1, -1, -1 };" in baked.source
+    assert '{ "radius_ball", 0.25, 0.25, "built into this model as a constant (0.25; generated with bake_params)" }' \
+        in baked.source

@@ -15,8 +15,8 @@ from .artifact import GeneratedModel, RenderedFunction, scene_hash, text_digest 
 from .ops import count_ops
 from .options import BuildOptions
 from .parameters import parameter_rules
-from .scene import DEFAULT_GRAVITY_DIRECTION, WALL_NAMES, JointStop, ObstacleContact, Scene, parameter_name, \
-    split_parameter_name
+from .scene import DEFAULT_GRAVITY_DIRECTION, OBSTACLE_GEOMETRY_KINDS, WALL_NAMES, JointStop, ObstacleContact, Scene, \
+    parameter_name, split_parameter_name
 from .version import __version__
 
 
@@ -306,7 +306,7 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], o
     pnames = [pname for pname, _ in params]
     names = scene.full_coordinate_names()
     zeros = set(layout.zero_params)
-    rules = parameter_rules(scene, layout.zero_params, bake_params)
+    rules = parameter_rules(scene, layout.zero_params, bake_params, layout.held_params)
     contact_table = [_contact_entry(c, point, wall, layout, scene, bake_params)
                      for c, (point, wall) in enumerate(layout.contacts)]
     contact_table += [_link_entry(len(contact_table) + k, pair, scene, bake_params)
@@ -328,11 +328,12 @@ def assemble_model(scene: Scene, name: str, functions: list[RenderedFunction], o
         contacts=[(c, point, wall) for c, (point, wall) in enumerate(layout.contacts)]
                  + [(len(layout.contacts) + k, pair.i, pair) for k, pair in enumerate(scene.rowless_contacts())],
         contact_table=contact_table,
-        link_radius=[_double_literal(float(pair.radius)) for pair in scene.rowless_contacts()],
+        link_radius=[_double_literal(float(scene.capsule_radius(pair.i) if isinstance(pair, ObstacleContact)
+                                           else pair.radius)) for pair in scene.rowless_contacts()],
         obstacles=[dict(name=o.name, kind=o.kind, radius=o.radius, restitution=o.restitution,
-                        segment=[_double_literal(float(x)) for end in o.segment for x in end],
-                        shape=[_double_literal(x) for x in o.shape]) for o in scene.obstacles],
-        obstacle_shapes=any(o.bounded_by_planes for o in scene.obstacles),
+                        shape=[_double_literal(x) for x in o.shape],
+                        param=-1 if bake_params else pnames.index(o.geometry_names[0]))
+                   for o in scene.obstacles],
         row_labels=[f"(theta_{point})" if axis == "theta" else f"(O_{point},X{axis + 1})"
                     for point, axis in layout.contact_rows],
         rows=list(layout.contact_rows), twists=scene.all_twists,
@@ -394,6 +395,14 @@ def parameter_relations(rules) -> list[tuple[str, int, str]]:
             i = rule.inertia_of
             relations.append((f"gac_inertia_admissible(p + {rule.index})", rule.index,
                               f"{parameter_name('Ixx', i)} .. {parameter_name('Iyz', i)}: a physical inertia"))
+        if rule.rotation_of:
+            o = rule.rotation_of
+            relations.append((f"gac_rotation_admissible(p + {rule.index})", rule.index,
+                              f"{parameter_name('rotation_11', o)} .. {parameter_name('rotation_33', o)}: a rotation"))
+        if rule.unit_of:
+            o = rule.unit_of
+            relations.append((f"gac_unit_admissible(p + {rule.index})", rule.index,
+                              f"{parameter_name('normal_x', o)} .. {parameter_name('normal_z', o)}: a unit vector"))
     return relations
 
 
@@ -525,7 +534,8 @@ def _link_entry(c: int, pair, scene: Scene, bake_params: bool) -> dict:
     coordinate, a constant e and Coulomb coefficient (friction.links); or for a link and a fixed obstacle
     (GAC_CONTACT_OBSTACLE): link i in point, the obstacle's index in coordinate, its e the parameter e_<name> and its
     friction coefficient, where > 0, the parameter friction_<name>.  No Jacobian row (row 0 unused; their frictional
-    impacts act along their contact frame, gac_rowless_frame); the radius sum goes to the model's link_radius."""
+    impacts act along their contact frame, gac_rowless_frame); the radius sum of a link pair, or the link's radius
+    of an obstacle contact (the obstacle's own is its geometry), goes to the model's link_radius."""
     friction = float(pair.friction)
     rough = (f"Coulomb friction coefficient c_f = {friction:g} at impacts (along its contact frame)"
              if friction > 0.0 else "frictionless")
@@ -577,7 +587,21 @@ def param_doc(pname: str, scene: Scene | None = None) -> str:
         return f"Coulomb friction coefficient of {'wall' if owner in WALL_NAMES else 'obstacle'} {owner} (-)"
     if kind == "g":
         return PARAM_DOC["g"]
+    if kind in OBSTACLE_GEOMETRY_KINDS:
+        return f"obstacle {owner}: {_obstacle_doc(kind)}"
     return f"link {owner}: {PARAM_DOC[kind]}"
+
+
+def _obstacle_doc(kind: str) -> str:
+    """The description of an obstacle's geometry parameter (codegen.scene.OBSTACLE_PARAMETERS)."""
+    what, _, axis = kind.rpartition("_")
+    if what == "rotation":
+        return f"rotation entry R[{axis[0]}][{axis[1]}] (row, column; its columns the box's axes) (-)"
+    words = {"center": "centre", "a": "end a", "b": "end b", "point": "point on the plane", "half": "half extent",
+             "normal": "unit normal (into the free side)"}
+    if kind == "radius":
+        return "radius (m)"
+    return f"{words[what]}, {axis} (m)" if what != "normal" else f"{words[what]}, {axis} (-)"
 
 
 STANDALONE_TEMPLATES = {"{name}_example.c": "example_main.c.j2", "Makefile": "Makefile.j2",

@@ -92,7 +92,7 @@ def fmi2_variables(model: GeneratedModel, scene: Scene, rows: dict, constants: d
     layout = model.layout
     names = scene.full_coordinate_names()           # several chains: each with its prefix ('c2.theta_1')
     coordinates = [names[i] for i in layout.free]
-    rules = parameter_rules(scene, layout.zero_params, model.bake_params)
+    rules = parameter_rules(scene, layout.zero_params, model.bake_params, layout.held_params)
     blocks = {                                      # a block's members: (name, what %s stands for, scene's start)
         "Q": [(c, c, None) for c in coordinates],
         "QD": [(c, c, None) for c in coordinates],

@@ -24,8 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scene import (COORDINATE_MAX, FRICTION_MAX, GRAVITY_MAX, INERTIA_MAX, LENGTH_RANGE, MASS_RANGE, STIFFNESS_MAX,
-                    RigidLink, Scene, SceneError, parameter_name, split_parameter_name)
+from .scene import (COORDINATE_MAX, FRICTION_MAX, GRAVITY_MAX, INERTIA_MAX, LENGTH_RANGE, MASS_RANGE,
+                    OBSTACLE_PARAMETERS, ROTATION_TOL, STIFFNESS_MAX, RigidLink, Scene, SceneError, parameter_name,
+                    split_parameter_name)
 
 
 @dataclass(frozen=True)
@@ -43,6 +44,8 @@ _RESTITUTION = Range(0.0, 1.0, "restitution must be in [0, 1]")
 _INERTIA_PER_LENGTH = Range(0.0, INERTIA_MAX, f"must be >= 0 and <= {INERTIA_MAX:g} kg m")
 _MOMENT = Range(0.0, INERTIA_MAX, f"must be >= 0 and <= {INERTIA_MAX:g} kg m^2")
 _PRODUCT = Range(-INERTIA_MAX, INERTIA_MAX, f"must be within [-{INERTIA_MAX:g}, {INERTIA_MAX:g}] kg m^2")
+_SIZE = Range(*LENGTH_RANGE, f"must be in [{LENGTH_RANGE[0]:g}, {LENGTH_RANGE[1]:g}] m (> 0)")
+_DIRECTION = Range(-2.0, 2.0, "must be within [-2, 2]")      # an entry of a rotation or a unit normal
 
 # kind of parameter (parameter_kind) -> its range
 RANGES = {
@@ -61,7 +64,14 @@ RANGES = {
     "damping": Range(0.0, STIFFNESS_MAX, f"must be >= 0 and <= {STIFFNESS_MAX:g} N m s/rad"),
     "lower": _ANGLE, "upper": _ANGLE,
     "e_limit": _RESTITUTION,
+    # an obstacle's geometry (codegen.scene.OBSTACLE_PARAMETERS)
+    **{kind: _POSITION for kind in ("center_x", "center_y", "center_z", "a_x", "a_y", "a_z", "b_x", "b_y", "b_z",
+                                    "point_x", "point_y", "point_z")},
+    **{kind: _SIZE for kind in ("radius", "half_x", "half_y", "half_z")},
+    **{kind: _DIRECTION for kind in OBSTACLE_PARAMETERS["box"][6:] + OBSTACLE_PARAMETERS["plane"][3:]},
 }
+ROTATION_WORDS = f"a proper rotation (orthonormal within {ROTATION_TOL:g}, det +1 within {ROTATION_TOL:g})"
+UNIT_WORDS = f"a unit vector (length 1 within {ROTATION_TOL:g})"
 
 SMALLEST_NORMAL = sys.float_info.min          # a nonzero value below this in magnitude is refused
 INERTIA_NAMES = RigidLink.param_names[5:]     # Ixx, Iyy, Izz, Ixy, Ixz, Iyz: consecutive in p
@@ -78,7 +88,8 @@ def parameter_kind(name: str) -> str:
 class Rule:
     """What p[index] may be: its range (lo = hi for a value built into the model), and the relation it is named by
     when that fails: above >= 0, p[index] > p[above]; inertia_of = i > 0, p[index .. index + 5] = Ixx_i .. Iyz_i
-    a physical inertia."""
+    a physical inertia; rotation_of = an obstacle's name, p[index .. index + 8] its rotation (row-major) a proper
+    rotation; unit_of = an obstacle's name, p[index .. index + 2] its normal a unit vector."""
 
     index: int
     name: str
@@ -88,6 +99,8 @@ class Rule:
     above: int = -1
     above_name: str = ""
     inertia_of: int = 0
+    rotation_of: str = ""
+    unit_of: str = ""
 
     @property
     def text(self) -> str:
@@ -98,13 +111,20 @@ class Rule:
         if self.inertia_of:
             i = self.inertia_of
             words += f"; {parameter_name('Ixx', i)} .. {parameter_name('Iyz', i)} together {INERTIA_WORDS}"
+        if self.rotation_of:
+            o = self.rotation_of
+            words += f"; {parameter_name('rotation_11', o)} .. {parameter_name('rotation_33', o)} together {ROTATION_WORDS}"
+        if self.unit_of:
+            o = self.unit_of
+            words += f"; {parameter_name('normal_x', o)} .. {parameter_name('normal_z', o)} together {UNIT_WORDS}"
         return words
 
 
-def parameter_rules(scene: Scene, zero_params=(), bake_params: bool = False) -> list[Rule]:
+def parameter_rules(scene: Scene, zero_params=(), bake_params: bool = False, held_params=()) -> list[Rule]:
     """The rule of every entry of the scene's parameter vector, in its order.  ``zero_params``: the parameters a
     generated model has built in as 0 (its layout's); ``bake_params``: the model has every parameter built in as the
-    scene's value.  A built-in value may not change: its range is that value alone."""
+    scene's value; ``held_params``: the obstacle geometry a planar model holds at the scene's values (its layout's).
+    A built-in value may not change: its range is that value alone."""
     names = scene.parameter_names()
     values = scene.parameter_vector().tolist()
     rules = []
@@ -118,6 +138,10 @@ def parameter_rules(scene: Scene, zero_params=(), bake_params: bool = False) -> 
             lo = hi = 0.0
             text = "built into this model as 0 (the scene's value, so its terms were left out; the general model " \
                    "takes other values)"
+        elif name in held_params:
+            lo = hi = value
+            text = (f"held at the scene's value {value!r} by this planar model (the obstacle stays symmetric about "
+                    "the chain's plane; the general model takes other values)")
         partner = ""                                # the parameter this one must exceed
         prefix = name.partition(".")[0] + "." if "." in name else ""          # a chain's (codegen.scene.Chains)
         if kind == "wall" and owner.endswith("_max"):
@@ -128,6 +152,10 @@ def parameter_rules(scene: Scene, zero_params=(), bake_params: bool = False) -> 
             rules.append(Rule(index, name, lo, hi, text, above=names.index(partner), above_name=partner))
         elif kind == "Ixx":
             rules.append(Rule(index, name, lo, hi, text, inertia_of=owner))
+        elif kind == "rotation_11":
+            rules.append(Rule(index, name, lo, hi, text, rotation_of=owner))
+        elif kind == "normal_x":
+            rules.append(Rule(index, name, lo, hi, text, unit_of=owner))
         else:
             rules.append(Rule(index, name, lo, hi, text))
     return rules
@@ -155,10 +183,38 @@ def check_vector(rules: list[Rule], p, changed=None) -> None:
         if rule.above >= 0 and not value[rule.index] > value[rule.above]:
             raise SceneError(f"p[{rule.name}]: must be > p[{rule.above_name}] = {value[rule.above]!r}, "
                              f"got {value[rule.index]!r}")
+        if rule.rotation_of:
+            check_rotation(value[rule.index:rule.index + 9], rule.name.rpartition("rotation_11_")[0], rule.rotation_of)
+        if rule.unit_of:
+            check_unit(value[rule.index:rule.index + 3], rule.name.rpartition("normal_x_")[0], rule.unit_of)
         if not rule.inertia_of:
             continue
         if changed is None or changed & {parameter_name(key, rule.inertia_of) for key in INERTIA_NAMES}:
             check_inertia(value[rule.index:rule.index + 6], rule.inertia_of)
+
+
+def check_rotation(entries, prefix: str, obstacle: str) -> None:
+    """A box's rotation (row-major) a proper rotation, the scene loader's test (codegen.scene._rotation), or
+    SceneError naming its parameters (``prefix``: a chain's, none for one chain)."""
+    R = np.array(entries, dtype=float).reshape(3, 3)
+    names = f"p[{prefix}{parameter_name('rotation_11', obstacle)} .. {prefix}{parameter_name('rotation_33', obstacle)}]"
+    off = float(np.abs(R.T @ R - np.eye(3)).max())
+    if not off <= ROTATION_TOL:
+        raise SceneError(f"{names}: the rotation of box {obstacle} must be {ROTATION_WORDS}; R^T R departs from I by "
+                         f"{off:.3g}")
+    det = float(np.linalg.det(R))
+    if not abs(det - 1.0) <= ROTATION_TOL:
+        raise SceneError(f"{names}: the rotation of box {obstacle} must be {ROTATION_WORDS}; got det {det:.6g} "
+                         "(a reflection: swap two columns)")
+
+
+def check_unit(entries, prefix: str, obstacle: str) -> None:
+    """A plane's normal a unit vector (codegen.scene's test), or SceneError naming its parameters."""
+    length = float(np.sqrt(sum(x * x for x in entries)))
+    if not abs(length - 1.0) <= ROTATION_TOL:
+        raise SceneError(f"p[{prefix}{parameter_name('normal_x', obstacle)} .. {prefix}"
+                         f"{parameter_name('normal_z', obstacle)}]: the normal of plane {obstacle} must be "
+                         f"{UNIT_WORDS}, got length {length:.17g}")
 
 
 def check_inertia(entries, link: int) -> None:

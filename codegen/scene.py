@@ -17,7 +17,7 @@ import json
 import math
 import re
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -332,8 +332,19 @@ OBSTACLE_KEYS = ("name", "kind", "center", "a", "b", "radius", "restitution", "l
                  "point", "normal", "friction")
 OBSTACLE_FIELDS = {"sphere": ("center", "radius"), "capsule": ("a", "b", "radius"),
                    "box": ("center", "half_extents", "rotation"), "plane": ("point", "normal")}
-OBSTACLE_SHAPE_CODES = {"sphere": 0, "capsule": 0, "box": 1, "plane": 2}   # gac.h GAC_OBSTACLE_*
+OBSTACLE_SHAPE_CODES = {"sphere": 3, "capsule": 0, "box": 1, "plane": 2}   # gac.h GAC_OBSTACLE_*
 OBSTACLE_NSHAPE = 16                                                      # gac.h GAC_OBSTACLE_NSHAPE
+# An obstacle's geometry as runtime parameters (kind_<name>, after every obstacle's e and friction), per kind in the
+# order of its shape row (gac.h obstacle_shapes, after the kind code; a sphere's centre standing for both ends):
+_XYZ = ("x", "y", "z")
+OBSTACLE_PARAMETERS = {
+    "sphere": tuple(f"center_{c}" for c in _XYZ) + ("radius",),
+    "capsule": tuple(f"a_{c}" for c in _XYZ) + tuple(f"b_{c}" for c in _XYZ) + ("radius",),
+    "box": tuple(f"center_{c}" for c in _XYZ) + tuple(f"half_{c}" for c in _XYZ)
+           + tuple(f"rotation_{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)),
+    "plane": tuple(f"point_{c}" for c in _XYZ) + tuple(f"normal_{c}" for c in _XYZ),
+}
+OBSTACLE_GEOMETRY_KINDS = tuple(dict.fromkeys(k for kinds in OBSTACLE_PARAMETERS.values() for k in kinds))
 ROTATION_TOL = 1e-9          # a box's rotation: orthonormal with det +1 within it; a plane's normal: unit within it
 _OBSTACLE_NAME_RE = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,22}[A-Za-z_]$|^[A-Za-z]$")
 
@@ -394,16 +405,45 @@ class Obstacle:
 
     @property
     def shape(self) -> tuple[float, ...]:
-        """The model's shape row (gac.h obstacle_shapes, OBSTACLE_NSHAPE numbers): kind code, then a box's centre,
-        half extents and rotation (row-major) or a plane's point and normal."""
+        """The model's shape row (gac.h obstacle_shapes, OBSTACLE_NSHAPE numbers): kind code, then a sphere's or a
+        bar's segment a, b (a sphere: its centre twice) and radius, a box's centre, half extents and rotation
+        (row-major) or a plane's point and normal."""
         if self.kind == "box":
             values = [*self.a, *self.half_extents, *(x for row in self.box_rotation for x in row)]
         elif self.kind == "plane":
             values = [*self.a, *self.normal]
         else:
-            values = []
+            a, b = self.segment
+            values = [*a, *b, self.radius]
         values = [float(OBSTACLE_SHAPE_CODES[self.kind]), *map(float, values)]
         return tuple(values + [0.0] * (OBSTACLE_NSHAPE - len(values)))
+
+    @property
+    def geometry_names(self) -> list[str]:
+        """The names of its geometry's runtime parameters: 'center_x_ball', ..., 'radius_ball' (OBSTACLE_PARAMETERS)."""
+        return [parameter_name(kind, self.name) for kind in OBSTACLE_PARAMETERS[self.kind]]
+
+    @property
+    def geometry_values(self) -> list[float]:
+        """Its geometry in the order of geometry_names."""
+        if self.kind == "sphere":
+            return [*map(float, self.a), float(self.radius)]
+        if self.kind == "capsule":
+            return [*map(float, self.a), *map(float, self.b), float(self.radius)]
+        return list(self.shape[1:1 + len(OBSTACLE_PARAMETERS[self.kind])])
+
+    def with_geometry(self, values) -> "Obstacle":
+        """The same obstacle (name, kind, e, friction, links) with its geometry from ``values`` (geometry_names' order,
+        unchecked: Scene checks it)."""
+        v = [float(x) for x in values]
+        if self.kind == "sphere":
+            return replace(self, a=tuple(v[0:3]), radius=v[3])
+        if self.kind == "capsule":
+            return replace(self, a=tuple(v[0:3]), b=tuple(v[3:6]), radius=v[6])
+        if self.kind == "box":
+            return replace(self, a=tuple(v[0:3]), half_extents=tuple(v[3:6]),
+                           rotation=(tuple(v[6:9]), tuple(v[9:12]), tuple(v[12:15])))
+        return replace(self, a=tuple(v[0:3]), normal=tuple(v[3:6]))
 
     @property
     def box_rotation(self) -> tuple:
@@ -832,8 +872,9 @@ WALL_KINDS = ("wall", "e", "friction")      # a wall's parameters, named by the 
 
 def parameter_name(kind: str, owner: int | str | None = None) -> str:
     """The name of one runtime parameter: its kind ('l', 'mu', 'Ixx', 'wall', 'e', 'friction', 'stiffness',
-    'rest_angle', 'damping', 'lower', 'upper', 'e_limit') and its owner, a link or joint number or a wall's name:
-    'l_3', 'wall_x1_max', 'friction_x2_min', 'e_limit_2', 'stiffness_2'; 'g' has no owner."""
+    'rest_angle', 'damping', 'lower', 'upper', 'e_limit', an obstacle's geometry: OBSTACLE_PARAMETERS) and its owner,
+    a link or joint number or a wall's or obstacle's name: 'l_3', 'wall_x1_max', 'friction_x2_min', 'e_limit_2',
+    'stiffness_2', 'center_x_ball', 'rotation_12_crate'; 'g' has no owner."""
     return kind if owner is None else f"{kind}_{owner}"
 
 
@@ -844,7 +885,7 @@ def split_parameter_name(name: str) -> tuple[str, int | str | None]:
     if name[-1].isdigit():
         kind, owner = name.rsplit("_", 1)
         return kind, int(owner)
-    for kind in WALL_KINDS:
+    for kind in WALL_KINDS + OBSTACLE_GEOMETRY_KINDS:     # a wall's, an obstacle's ('radius_ball')
         if name.startswith(kind + "_"):
             return kind, name[len(kind) + 1:]
     return name, None
@@ -1193,6 +1234,7 @@ class Scene:
                 names.append(parameter_name("e_limit", k))
         names += [parameter_name("e", o.name) for o in self.obstacles]
         names += [parameter_name("friction", o.name) for o in self.obstacles if o.friction > 0.0]
+        names += [name for o in self.obstacles for name in o.geometry_names]
         return names
 
     def parameter_index(self, kind: str, owner: int | str | None = None) -> int:
@@ -1223,6 +1265,7 @@ class Scene:
                 values.append(joint.limit_restitution)
         values += [o.restitution for o in self.obstacles]
         values += [o.friction for o in self.obstacles if o.friction > 0.0]
+        values += [x for o in self.obstacles for x in o.geometry_values]
         return np.array(values, dtype=float)
 
     @property
@@ -1846,7 +1889,7 @@ def _walls_from_data(walls, restitution, contacts, friction=0.0) -> tuple[Wall, 
 #
 # Capsule links of different chains strike each other (every pair whose radii add up to more than 0), with the box's
 # ``restitution.links``.  Within a chain nothing changes (docs/scenes.md, "Several chains").
-BOX_KINDS = ("g", "wall", "friction")      # parameters of the box, shared by every chain (and every e but e_limit)
+BOX_KINDS = ("g", "wall", "friction", *OBSTACLE_GEOMETRY_KINDS)      # parameters of the box, shared by every chain (and every e but e_limit)
 MAX_CHAINS = 16
 
 

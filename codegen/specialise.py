@@ -22,8 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scene import (JointStop, RigidLink, Scene, SceneError, contact_points, coordinate_names, frames,
-                    split_parameter_name, stop_rows)
+from .scene import (OBSTACLE_GEOMETRY_KINDS, JointStop, RigidLink, Scene, SceneError, contact_points,
+                    coordinate_names, frames, parameter_name, split_parameter_name, stop_rows)
 
 ANGLE_SNAP = 1e-12       # an angle within this of a multiple of pi/2 counts as exactly that multiple
 
@@ -38,6 +38,7 @@ class Layout:
     notes: tuple[str, ...]                      # what was left out and why (--explain)
     planar_normal: int | None = None            # 0 or 2 for a planar model, else None
     held: tuple[int, ...] = ()                  # full-state indices the base holds (scene.base; among ``fixed``)
+    held_params: tuple[str, ...] = ()           # obstacle geometry a planar model holds at the scene's values
 
     @property
     def nq(self) -> int:
@@ -118,14 +119,42 @@ def layout_for(scene: Scene, specialise: bool = True) -> Layout:
         rows += tuple(stop_rows(stops))
         notes.append(f"joint stops: {len(stops)} ({', '.join(stop.name for _, stop in stops)}), after the walls' "
                      "contacts, with a row of the identity each joint")
+    library = ("wall", "e", "e_limit", "friction", *OBSTACLE_GEOMETRY_KINDS)     # read by the C library, not kernels
     zero_params = tuple(name for name, value in zip(scene.parameter_names(), scene.parameter_vector())
-                        if value == 0.0 and split_parameter_name(name)[0] not in ("wall", "e", "e_limit", "friction"))
+                        if value == 0.0 and split_parameter_name(name)[0] not in library)
     if zero_params:
         notes.append(f"zero parameters built in (their terms vanish; they cannot be changed at run time): "
                      f"{', '.join(zero_params)}")
     else:
         notes.append("no parameter is zero: all stay in the runtime array p")
-    return Layout(free, fixed, contacts, rows, zero_params, tuple(notes), normal, tuple(held))
+    held_params = () if normal is None else planar_obstacle_params(scene, normal)
+    if held_params:
+        notes.append(f"obstacle geometry held at the scene's values (the obstacles stay symmetric about the chain's "
+                     f"plane; the rest of their geometry stays in p): {', '.join(held_params)}")
+    return Layout(free, fixed, contacts, rows, zero_params, tuple(notes), normal, tuple(held), held_params)
+
+
+def planar_obstacle_params(scene: Scene, normal: int) -> tuple[str, ...]:
+    """The obstacles' geometry parameters a planar model (normal axis X_normal+1) holds at the scene's values, so
+    that every obstacle stays symmetric about the chain's plane (obstacle_in_plane): a sphere's centre and a bar's
+    ends along the normal, a box's centre along it and the row and column of its rotation that map an axis of the
+    box onto the normal, a plane's normal's component along it."""
+    axis = "xyz"[normal]
+    names = []
+    for o in scene.obstacles:
+        if o.kind == "sphere":
+            kinds = [f"center_{axis}"]
+        elif o.kind == "capsule":
+            kinds = [f"a_{axis}", f"b_{axis}"]
+        elif o.kind == "box":
+            R = np.array(o.box_rotation)
+            k = int(np.argmax(np.abs(R[normal])))               # the box's axis along the normal
+            kinds = [f"center_{axis}"] + [f"rotation_{normal + 1}{j + 1}" for j in range(3)] \
+                + [f"rotation_{i + 1}{k + 1}" for i in range(3) if i != normal]
+        else:
+            kinds = [f"normal_{axis}"]
+        names += [parameter_name(kind, o.name) for kind in kinds]
+    return tuple(names)
 
 
 def _base_note(scene: Scene, held: dict[int, float], names: list[str]) -> tuple[str, ...]:
@@ -219,7 +248,7 @@ def check_not_singular(scene: Scene, layout: Layout) -> None:
 def chains_layout(scene, specialise: bool = True) -> Layout:
     """The combined model's layout: each chain's (codegen.specialise.layout_for) shifted into the stacked full
     layout; its contacts' points (walls) and joints (stops) in global numbers."""
-    free, fixed, contacts, rows, zeros, notes, held = [], [], [], [], [], [], []
+    free, fixed, contacts, rows, zeros, notes, held, held_params = [], [], [], [], [], [], [], []
     normals = set()
     for k, chain in enumerate(scene.chains, start=1):
         layout = layout_for(chain, specialise)
@@ -230,11 +259,12 @@ def chains_layout(scene, specialise: bool = True) -> Layout:
         contacts += [(_shift_contact(point, wall, off, poff)) for point, wall in layout.contacts]
         rows += [(off + point, axis) if axis == "theta" else (poff + point, axis) for point, axis in layout.contact_rows]
         zeros += [scene.combined_name(k, name) for name in layout.zero_params]
+        held_params += [scene.combined_name(k, name) for name in layout.held_params]
         notes += [f"chain {k}: {note}" for note in layout.notes]
         normals.add(layout.planar_normal)
     normal = normals.pop() if len(normals) == 1 else None
     return Layout(tuple(free), tuple(fixed), tuple(contacts), tuple(rows), tuple(dict.fromkeys(zeros)), tuple(notes),
-                  normal, tuple(held))
+                  normal, tuple(held), tuple(dict.fromkeys(held_params)))
 
 
 def _shift_contact(point, wall, off: int, poff: int):

@@ -228,19 +228,24 @@ typedef int (*gac_progress)(double t, long n_steps, long n_impacts, void *user);
  * their direction g and its bias dg(qd) . qd (not where g has no derivative), rough ones stuck or sliding along the
  * frame's tangents as a rough wall's point (see "Sticking").
  * Or a link and a fixed obstacle (kind GAC_CONTACT_OBSTACLE: link point, 1-based, and obstacle coordinate,
- * 0-based into m->obstacles; gap = the distance of the link's segment from the obstacle's, less its
- * m->link_radius entry (the link's radius plus the obstacle's), gac_obstacle_gap): handled as a link pair whose
- * second side never moves.  Obstacle contacts come after the link pairs. */
+ * 0-based into m->obstacle_shapes; gap = the distance of the link's segment from the obstacle, less its
+ * m->link_radius entry (the link's radius) and the obstacle's radius, gac_obstacle_gap, the obstacle's geometry read
+ * from p, gac_obstacle_shape): handled as a link pair whose second side never moves.  Obstacle contacts come after
+ * the link pairs. */
 #define GAC_CONTACT_WALL 0
 #define GAC_CONTACT_STOP 1
 #define GAC_CONTACT_LINK 2
 #define GAC_CONTACT_OBSTACLE 3
 
-/* The kinds of a fixed obstacle (gac_model.obstacle_shapes): the capsule about a segment (a sphere or a bar), an
- * oriented box, a half-space bounded by a plane; each shape GAC_OBSTACLE_NSHAPE doubles. */
+/* The kinds of a fixed obstacle (gac_model.obstacle_shapes): the capsule about a segment (a bar), an oriented box,
+ * a half-space bounded by a plane, a sphere (the capsule about a point); each shape GAC_OBSTACLE_NSHAPE doubles.
+ * The geometry's runtime parameters (gac_model.obstacle_params), in this order from the obstacle's first: a bar's
+ * ends a, b (m) and radius (7), a box's centre, half extents (m) and rotation (row-major) (15), a plane's point (m)
+ * and unit normal (6), a sphere's centre (m) and radius (4). */
 #define GAC_OBSTACLE_SEGMENT 0
 #define GAC_OBSTACLE_BOX 1
 #define GAC_OBSTACLE_PLANE 2
+#define GAC_OBSTACLE_SPHERE 3
 #define GAC_OBSTACLE_NSHAPE 16
 typedef struct {
     int point;            /* wall: the point O_point, 1-based (1..npoint); its coordinates are
@@ -373,19 +378,22 @@ struct gac_model {
     gac_kernel_qv_ld generalized_momentum_ld;      /* q, qd, p -> I_f qd (nq) */
     gac_kernel_qv_ld contact_generalized_force_ld; /* q, f (njrow), p -> J^T f (nq) */
     gac_kernel_qv_ld energy_ld;                    /* q, qd, p -> E[0] kinetic, E[1] potential energy (J) */
-    const double *link_radius;         /* r_i + r_j (m, >= 0) of each link contact (GAC_CONTACT_LINK), then r_i + r_o
-                                          of each obstacle contact (GAC_CONTACT_OBSTACLE), in table order
-                                          (link_radius[0]: the first after the kernel's contacts); NULL when the
-                                          model has none */
+    const double *link_radius;         /* r_i + r_j (m, >= 0) of each link contact (GAC_CONTACT_LINK), then the
+                                          link's r_i of each obstacle contact (GAC_CONTACT_OBSTACLE; the obstacle's
+                                          own radius is part of its geometry), in table order (link_radius[0]: the
+                                          first after the kernel's contacts); NULL when the model has none */
     int nobstacle;                     /* fixed obstacles (>= 0) */
-    const double *obstacles;           /* [6 nobstacle]: each obstacle's segment a, b (m, box frame; a sphere has
-                                          a = b); its radius is in the link_radius entries of its contacts */
     const char *const *obstacle_names; /* [nobstacle]: each obstacle's name (contacts are named L<i>/<name>) */
-    const double *obstacle_shapes;     /* [GAC_OBSTACLE_NSHAPE nobstacle] or NULL (every obstacle a segment's
-                                          capsule): each obstacle's kind (GAC_OBSTACLE_*), then a box's centre,
-                                          half extents (m) and rotation (row-major 3x3, columns its axes), or a
-                                          plane's point (m) and unit normal (into the free side); a box's or
-                                          plane's segment in `obstacles` is its centre or point twice, unused */
+    const double *obstacle_shapes;     /* [GAC_OBSTACLE_NSHAPE nobstacle] (nobstacle > 0): each obstacle's kind
+                                          (GAC_OBSTACLE_*), then a bar's or sphere's ends a, b (box frame, m; a
+                                          sphere's a = b, its centre) and radius, a box's centre, half extents (m)
+                                          and rotation (row-major 3x3, columns its axes), or a plane's point (m) and
+                                          unit normal (into the free side): the kind always, the geometry where
+                                          obstacle_params gives none (gac_obstacle_shape) */
+    const int *obstacle_params;        /* [nobstacle] or NULL: the index in p of obstacle o's first geometry
+                                          parameter (the order of GAC_OBSTACLE_*), -1 where its geometry is the
+                                          constants of obstacle_shapes (a model built with bake_params; NULL: every
+                                          obstacle's) */
     /* several chains, several of which turn their base in 3D (docs/simulation.md, "Several chains"): each turning
        chain has its own base chart, switched on its own */
     int nbase;                         /* turning bases (>= 2); 0: the one base `base` (measure `chart`), as a
@@ -419,6 +427,13 @@ int gac_in_range(double value, double lo, double hi);
  * moments a <= b <= c (eigenvalues by cyclic Jacobi rotations) have a >= -tol and a + b >= c - tol,
  * tol = 1e-12 max(1, c), the scene loader's test; else 0.  The six entries must be finite. */
 int gac_inertia_admissible(const double *I);
+
+/* 1 if R (row-major 3x3, finite) is a proper rotation: |R^T R - I| <= 1e-9 entrywise and |det R - 1| <= 1e-9, the
+ * scene loader's test of a box's rotation; else 0. */
+int gac_rotation_admissible(const double *R);
+
+/* 1 if n (3, finite) is a unit vector: | |n| - 1 | <= 1e-9, the scene loader's test of a plane's normal; else 0. */
+int gac_unit_admissible(const double *n);
 
 /* y = [qdd (nq), T, V] at (q, qd): m->forward_dynamics_energy, or where the model has none (its forward dynamics
  * rolled code) m->forward_dynamics and m->energy. */
@@ -591,14 +606,20 @@ double gac_link_direction(const gac_model *m, const double *q, const double *p, 
 int gac_link_impact(const gac_model *m, const double *q, const double *qd, const double *p, int i, int j,
                     double radius, double e, double *qd_plus, double *impulse, double *v_normal);
 
-/* Link i (1-based) and fixed obstacle o (0-based, m->obstacles) whose radii add up to `radius` (m): geometry
- * (GAC_LINK_NGEOMETRY doubles) as gac_link_gap's, t along the obstacle's segment and n from the obstacle's closest
- * point to the link's.  A box or a plane (m->obstacle_shapes, gac_obstacle.c): the least signed distance (negative
- * inside) of the link's segment from it less `radius`, s* along the link, t = 0, n the signed distance's gradient
- * at that point.  The gap's rate is n . v_P (the obstacle does not move).  Returns GAC_OK or
- * GAC_ERR_BAD_CONTACT. */
+/* Link i (1-based) of radius `radius` (m; the link's own) and fixed obstacle o (0-based), its geometry at the
+ * parameters p (gac_obstacle_shape): geometry (GAC_LINK_NGEOMETRY doubles) as gac_link_gap's for the sum of the two
+ * radii, t along the obstacle's segment and n from the obstacle's closest point to the link's.  A box or a plane
+ * (gac_obstacle.c): the least signed distance (negative inside) of the link's segment from it less `radius`, s*
+ * along the link, t = 0, n the signed distance's gradient at that point.  The gap's rate is n . v_P (the obstacle
+ * does not move).  Returns GAC_OK or GAC_ERR_BAD_CONTACT. */
 int gac_obstacle_gap(const gac_model *m, const double *q, const double *p, int i, int o, double radius,
                      double *geometry);
+/* Obstacle o's shape row at the parameters p (GAC_OBSTACLE_NSHAPE doubles, the layout of m->obstacle_shapes): its
+ * geometry from p where m->obstacle_params gives its place, else the model's constants.  Returns GAC_OK or
+ * GAC_ERR_BAD_CONTACT (o out of range) or GAC_ERR_NULL_ARGUMENT. */
+int gac_obstacle_shape(const gac_model *m, const double *p, int o, double *shape);
+/* The obstacle (0..nobstacle-1) whose geometry parameter p[index] is, or -1 (not an obstacle's geometry). */
+int gac_obstacle_parameter(const gac_model *m, int index);
 /* g (nq) = J^T n of contact c (0..ncontact-1, any kind): the generalised force of a unit push along its normal (a
  * wall's or stop's signed Jacobian row; a link pair's or obstacle's at the closest points), so that the gap's rate
  * is g . qd.  Returns GAC_OK or GAC_ERR_BAD_CONTACT (c out of range, or a link contact's geometry failed). */
@@ -1220,8 +1241,9 @@ long gac_sens_ndouble(const gac_model *m, int k);
 /* Attach sensitivities along k directions to sim from its current time on: S = seed_x (k x nx, direction-major),
  * dp = seed_p (k x nparam; NULL: 0).  The loop then carries them (sim.sens); sens and dwork owned by the caller for
  * the life of the run.  sens NULL detaches.  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT (sim, seed_x or dwork NULL),
- * GAC_ERR_BAD_OPTION (k < 1, a seed not finite) or GAC_ERR_BAD_MODEL (the model has no tangent kernels: rolled
- * forward dynamics, or built with tangent=False). */
+ * GAC_ERR_BAD_OPTION (k < 1, a seed not finite, or a seed_p along an obstacle's geometry parameter: the
+ * sensitivities hold obstacles fixed, gac_obstacle_parameter) or GAC_ERR_BAD_MODEL (the model has no tangent kernels:
+ * rolled forward dynamics, or built with tangent=False). */
 int gac_sens_attach(gac_sim *sim, gac_sens *sens, int k, const double *seed_x, const double *seed_p, double *dwork);
 
 /* S (k x nx) at sim.t in chart A's coordinates, whichever chart is integrated (as gac_sim_state gives the state):

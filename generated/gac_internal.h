@@ -123,18 +123,22 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r);
 /* gac_model.c */
 int gac_has_friction(const gac_model *m);
 
-/* gac_obstacle.c: boxes and planes as fixed obstacles.  The kind of obstacle o (GAC_OBSTACLE_*); for a box or a
- * plane, the contact geometry (GAC_LINK_NGEOMETRY doubles, as gac_obstacle_gap's, t = 0) of segment a0-a1 of
- * radius `radius` and obstacle o, returning 1 (0: a segment's capsule, nothing written); GAC_OK if obstacle o's
- * shape is well formed (else GAC_ERR_BAD_MODEL). */
+/* gac_obstacle.c: boxes and planes as fixed obstacles.  The kind of obstacle o (GAC_OBSTACLE_*); whether a kind is
+ * a capsule about a segment (a bar or a sphere: gac_link.c's distance); how many runtime parameters a kind's geometry
+ * takes (0: not a kind); for a box's or a plane's shape row (gac_obstacle_shape), the contact geometry
+ * (GAC_LINK_NGEOMETRY doubles, as gac_obstacle_gap's, t = 0) of segment a0-a1 of radius `radius`, returning 1 (0: a
+ * capsule's row, nothing written); GAC_OK if obstacle o's constant shape is well formed and its parameters' place
+ * fits p (else GAC_ERR_BAD_MODEL). */
 int gac_obstacle_kind(const gac_model *m, int o);
-int gac_obstacle_shape_contact(const gac_model *m, int o, const double *a0, const double *a1, double radius,
+int gac_obstacle_round(int kind);
+int gac_obstacle_nparam(int kind);
+int gac_obstacle_shape_contact(const double *shape, const double *a0, const double *a1, double radius,
                                double *geometry);
 int gac_obstacle_shape_check(const gac_model *m, int o);
-/* The part of box or plane obstacle o nearest to the point x (a link's closest point): 0 a face (the plane's, or a
- * box's with x over it or inside: a constant normal), 1 a box's edge, its ends in b0, b1, 2 a box's corner,
+/* The part of a box's or plane's shape row nearest to the point x (a link's closest point): 0 a face (the plane's,
+ * or a box's with x over it or inside: a constant normal), 1 a box's edge, its ends in b0, b1, 2 a box's corner,
  * b0 = b1 (the normal then turns with x, as against a segment's capsule) */
-int gac_obstacle_feature(const gac_model *m, int o, const double *x, double *b0, double *b1);
+int gac_obstacle_feature(const double *shape, const double *x, double *b0, double *b1);
 
 /* gac_link.c: link pairs and obstacles as contacts of the loop (kinds GAC_CONTACT_LINK, GAC_CONTACT_OBSTACLE, the
  * last entries of m->contacts: no Jacobian row; Coulomb friction along their contact frame, at impacts and at rest,

@@ -194,13 +194,12 @@ int gac_obstacle_gap(const gac_model *m, const double *q, const double *p, int i
                      double *geometry)
 {
     const int npoint = m->npoint;
-    double r[3 * GAC_AT_LEAST_1(npoint)];
-    if (i < 1 || i + 1 > npoint || o < 0 || o >= m->nobstacle || m->obstacles == 0 || !(radius >= 0.0))
+    double r[3 * GAC_AT_LEAST_1(npoint)], shape[GAC_OBSTACLE_NSHAPE];
+    if (i < 1 || i + 1 > npoint || !(radius >= 0.0) || gac_obstacle_shape(m, p, o, shape) != GAC_OK)
         return GAC_ERR_BAD_CONTACT;
     m->contact_points(q, p, r);
-    if (gac_obstacle_shape_contact(m, o, r + 3 * (i - 1), r + 3 * i, radius, geometry)) return GAC_OK;  /* box, plane */
-    gac_segment_contact(r + 3 * (i - 1), r + 3 * i, m->obstacles + 6 * o, m->obstacles + 6 * o + 3, radius,
-                        geometry);
+    if (gac_obstacle_shape_contact(shape, r + 3 * (i - 1), r + 3 * i, radius, geometry)) return GAC_OK;  /* box, plane */
+    gac_segment_contact(r + 3 * (i - 1), r + 3 * i, shape + 1, shape + 4, radius + shape[7], geometry);  /* bar, sphere */
     return GAC_OK;
 }
 
@@ -352,10 +351,10 @@ int gac_line_contact(const gac_model *m, const double *x0, const double *x1, con
     for (a = 0; a < n; ++a) {
         const gac_contact *c = &m->contacts[set[a]];
         const double *A0, *A1, *B0, *B1, *seg[4];
-        double s0, t0, s1, t1, x[3], d[3], reach, held, other;
+        double s0, t0, s1, t1, x[3], d[3], reach, held, other, shape[GAC_OBSTACLE_NSHAPE];
         int flat, end;
         if (!gac_rowless(m, set[a])) continue;
-        if (c->kind == GAC_CONTACT_OBSTACLE && gac_obstacle_kind(m, c->coordinate) != GAC_OBSTACLE_SEGMENT) continue;
+        if (c->kind == GAC_CONTACT_OBSTACLE && !gac_obstacle_round(gac_obstacle_kind(m, c->coordinate))) continue;
         if (!loaded) {
             m->contact_points(x0, p, r0);
             m->contact_points(x1, p, r1);
@@ -367,7 +366,8 @@ int gac_line_contact(const gac_model *m, const double *x0, const double *x1, con
             seg[2 * end + 1] = r + 3 * c->point;
         }
         if (c->kind == GAC_CONTACT_OBSTACLE) {
-            B0 = m->obstacles + 6 * c->coordinate, B1 = B0 + 3;
+            if (gac_obstacle_shape(m, p, c->coordinate, shape) != GAC_OK) continue;
+            B0 = shape + 1, B1 = shape + 4;
         } else {
             B0 = r0 + 3 * (c->coordinate - 1), B1 = r0 + 3 * c->coordinate;
         }
@@ -683,7 +683,7 @@ static int gac_normal_tangent(const gac_model *m, const double *q, const double 
     double geometry[GAC_LINK_NGEOMETRY], r[3 * GAC_AT_LEAST_1(m != 0 ? m->npoint : 1)];
     double dr[3 * GAC_AT_LEAST_1(m != 0 ? m->npoint : 1)], zero[3] = {0.0, 0.0, 0.0}, change[3 * GAC_AT_LEAST_1(nq)];
     double d1[3], d2[3], D[3], dd1[3], dd2[3], dD[3], dn[3], a, b, e, dist, s, t, ds = 0.0, dt = 0.0, along;
-    double end0[3], end1[3];
+    double end0[3], end1[3], shape[GAC_OBSTACLE_NSHAPE];
     const double *a0, *a1, *b0, *b1, *da0, *da1, *db0, *db1;
     int i, j, k, code, s_inside, t_inside, face = 0;
     if (m == 0 || q == 0 || p == 0 || dq == 0 || dp == 0 || dgap == 0 || g == 0 || dg == 0)
@@ -700,11 +700,12 @@ static int gac_normal_tangent(const gac_model *m, const double *q, const double 
         b0 = r + 3 * (j - 1), b1 = r + 3 * j, db0 = dr + 3 * (j - 1), db1 = dr + 3 * j;
     } else {                                             /* a fixed obstacle: its segment does not move */
         const int o = m->contacts[c].coordinate;
-        b0 = m->obstacles + 6 * o, b1 = b0 + 3, db0 = db1 = zero;
-        if (gac_obstacle_kind(m, o) != GAC_OBSTACLE_SEGMENT) {   /* a box or a plane: the part nearest */
+        if (gac_obstacle_shape(m, p, o, shape) != GAC_OK) return GAC_ERR_BAD_CONTACT;
+        b0 = shape + 1, b1 = shape + 4, db0 = db1 = zero;
+        if (!gac_obstacle_round((int)shape[0])) {        /* a box or a plane: the part nearest */
             double x[3], span = 0.0;
             for (k = 0; k < 3; ++k) x[k] = (1.0 - s) * a0[k] + s * a1[k];
-            face = gac_obstacle_feature(m, o, x, end0, end1) == 0;
+            face = gac_obstacle_feature(shape, x, end0, end1) == 0;
             b0 = face ? x : end0, b1 = face ? x : end1, t = 0.0;
             for (k = 0; k < 3; ++k) span += (b1[k] - b0[k]) * (b1[k] - b0[k]);
             if (span > 0.0) {                            /* an edge: the foot of x on it */

@@ -9,7 +9,9 @@
  *
  * A shape is GAC_OBSTACLE_NSHAPE doubles (m->obstacle_shapes): kind, then a box's centre c, half extents h and
  * rotation R (row-major, its columns the box's axes in the box frame: x = c + R y, y in the box's own frame), or a
- * plane's point and unit normal.
+ * plane's point and unit normal (or a bar's or sphere's ends and radius, for gac_link.c).  Every obstacle's geometry
+ * may be runtime parameters (m->obstacle_params): gac_obstacle_shape gathers the row at the parameters p, and the
+ * parameter check refuses what cannot be a shape (gac_rotation_admissible, gac_unit_admissible).
  */
 #include "gac_internal.h"
 
@@ -24,6 +26,75 @@ int gac_obstacle_kind(const gac_model *m, int o)
 {
     if (m->obstacle_shapes == 0) return GAC_OBSTACLE_SEGMENT;
     return (int)m->obstacle_shapes[GAC_OBSTACLE_NSHAPE * o];
+}
+
+int gac_obstacle_round(int kind)
+{
+    return kind == GAC_OBSTACLE_SEGMENT || kind == GAC_OBSTACLE_SPHERE;
+}
+
+int gac_obstacle_shape(const gac_model *m, const double *p, int o, double *shape)
+{
+    const double *row;
+    int k, at;
+    if (m == 0 || shape == 0) return GAC_ERR_NULL_ARGUMENT;
+    if (o < 0 || o >= m->nobstacle || m->obstacle_shapes == 0) return GAC_ERR_BAD_CONTACT;
+    row = m->obstacle_shapes + GAC_OBSTACLE_NSHAPE * o;
+    for (k = 0; k < GAC_OBSTACLE_NSHAPE; ++k) shape[k] = row[k];
+    at = m->obstacle_params != 0 ? m->obstacle_params[o] : -1;
+    if (at < 0) return GAC_OK;                           /* the model's constants */
+    if (p == 0) return GAC_ERR_NULL_ARGUMENT;
+    switch ((int)row[0]) {
+    case GAC_OBSTACLE_SPHERE:                            /* centre, radius: the segment's two ends the centre */
+        for (k = 0; k < 3; ++k) shape[1 + k] = shape[4 + k] = p[at + k];
+        shape[7] = p[at + 3];
+        break;
+    case GAC_OBSTACLE_SEGMENT: for (k = 0; k < 7; ++k) shape[1 + k] = p[at + k]; break;     /* a, b, radius */
+    case GAC_OBSTACLE_BOX: for (k = 0; k < 15; ++k) shape[1 + k] = p[at + k]; break;        /* c, h, R */
+    default: for (k = 0; k < 6; ++k) shape[1 + k] = p[at + k]; break;                       /* point, normal */
+    }
+    return GAC_OK;
+}
+
+int gac_obstacle_nparam(int kind)
+{
+    switch (kind) {
+    case GAC_OBSTACLE_SPHERE: return 4;
+    case GAC_OBSTACLE_SEGMENT: return 7;
+    case GAC_OBSTACLE_BOX: return 15;
+    case GAC_OBSTACLE_PLANE: return 6;
+    default: return 0;
+    }
+}
+
+int gac_obstacle_parameter(const gac_model *m, int index)
+{
+    int o;
+    for (o = 0; m != 0 && m->obstacle_params != 0 && o < m->nobstacle; ++o) {
+        const int at = m->obstacle_params[o];
+        if (at >= 0 && index >= at && index < at + gac_obstacle_nparam(gac_obstacle_kind(m, o))) return o;
+    }
+    return -1;
+}
+
+int gac_rotation_admissible(const double *R)
+{
+    double det;
+    int i, j, k;
+    for (i = 0; i < 3; ++i) {                            /* R^T R = I */
+        for (j = 0; j < 3; ++j) {
+            double dot = 0.0;
+            for (k = 0; k < 3; ++k) dot += R[3 * k + i] * R[3 * k + j];
+            if (!(fabs(dot - (i == j ? 1.0 : 0.0)) <= 1e-9)) return 0;
+        }
+    }
+    det = R[0] * (R[4] * R[8] - R[5] * R[7]) - R[1] * (R[3] * R[8] - R[5] * R[6]) + R[2] * (R[3] * R[7] - R[4] * R[6]);
+    return fabs(det - 1.0) <= 1e-9;
+}
+
+int gac_unit_admissible(const double *n)
+{
+    return fabs(sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) - 1.0) <= 1e-9;
 }
 
 /* sd of the box at y (its own frame), and n_local, the gradient there (when n is not NULL) */
@@ -213,23 +284,22 @@ static void gac_obst_plane_contact(const double *shape, const double *a0, const 
     for (k = 0; k < 3; ++k) geometry[3 + k] = n[k];
 }
 
-int gac_obstacle_shape_contact(const gac_model *m, int o, const double *a0, const double *a1, double radius,
+int gac_obstacle_shape_contact(const double *shape, const double *a0, const double *a1, double radius,
                                double *geometry)
 {
-    const double *shape = m->obstacle_shapes + GAC_OBSTACLE_NSHAPE * o;
-    switch (gac_obstacle_kind(m, o)) {
+    switch ((int)shape[0]) {
     case GAC_OBSTACLE_BOX: gac_obst_box_contact(shape, a0, a1, radius, geometry); return 1;
     case GAC_OBSTACLE_PLANE: gac_obst_plane_contact(shape, a0, a1, radius, geometry); return 1;
     default: return 0;
     }
 }
 
-int gac_obstacle_feature(const gac_model *m, int o, const double *x, double *b0, double *b1)
+int gac_obstacle_feature(const double *shape, const double *x, double *b0, double *b1)
 {
-    const double *shape = m->obstacle_shapes + GAC_OBSTACLE_NSHAPE * o, *c = shape + 1, *h = shape + 4, *R = shape + 7;
+    const double *c = shape + 1, *h = shape + 4, *R = shape + 7;
     double y[3], lo[3], hi[3];
     int k, j, outside = 0;
-    if (gac_obstacle_kind(m, o) != GAC_OBSTACLE_BOX) return 0;          /* a plane: its one face */
+    if ((int)shape[0] != GAC_OBSTACLE_BOX) return 0;                     /* a plane: its one face */
     for (k = 0; k < 3; ++k) {                            /* y = R^T (x - c), then the box's closest point's stretch */
         y[k] = 0.0;
         for (j = 0; j < 3; ++j) y[k] += R[3 * j + k] * (x[j] - c[j]);
@@ -255,8 +325,7 @@ int gac_obstacle_shape_check(const gac_model *m, int o)
     if (m->obstacle_shapes == 0) return GAC_OK;
     shape = m->obstacle_shapes + GAC_OBSTACLE_NSHAPE * o;
     kind = gac_obstacle_kind(m, o);
-    if (kind != GAC_OBSTACLE_SEGMENT && kind != GAC_OBSTACLE_BOX && kind != GAC_OBSTACLE_PLANE)
-        return GAC_ERR_BAD_MODEL;
+    if (gac_obstacle_nparam(kind) == 0) return GAC_ERR_BAD_MODEL;
     for (k = 0; k < GAC_OBSTACLE_NSHAPE; ++k) {
         if (!isfinite(shape[k])) return GAC_ERR_BAD_MODEL;
     }
@@ -264,9 +333,13 @@ int gac_obstacle_shape_check(const gac_model *m, int o)
         for (k = 4; k < 7; ++k) {
             if (!(shape[k] > 0.0)) return GAC_ERR_BAD_MODEL;
         }
+        if (!gac_rotation_admissible(shape + 7)) return GAC_ERR_BAD_MODEL;
     } else if (kind == GAC_OBSTACLE_PLANE) {
-        const double len = sqrt(shape[4] * shape[4] + shape[5] * shape[5] + shape[6] * shape[6]);
-        if (!(fabs(len - 1.0) <= 1e-9)) return GAC_ERR_BAD_MODEL;
+        if (!gac_unit_admissible(shape + 4)) return GAC_ERR_BAD_MODEL;
+    } else if (!(shape[7] > 0.0)) {                      /* a bar's or sphere's radius */
+        return GAC_ERR_BAD_MODEL;
     }
+    if (m->obstacle_params != 0 && m->obstacle_params[o] >= 0
+        && (m->obstacle_params[o] + gac_obstacle_nparam(kind) > m->nparam)) return GAC_ERR_BAD_MODEL;
     return GAC_OK;
 }

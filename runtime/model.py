@@ -256,7 +256,8 @@ class CompiledModel:
     def obstacle_gap(self, q, i: int, obstacle: str, p=None) -> tuple[float, float, float, np.ndarray]:
         """The contact of link i and the fixed obstacle named ``obstacle`` (gac_obstacle_gap): (gap, s, t, n) with gap
         the distance of the link's segment from the obstacle's less their radii (m), s and t the closest points'
-        fractions along the link and the obstacle's segment, n the unit normal from the obstacle to the link."""
+        fractions along the link and the obstacle's segment, n the unit normal from the obstacle to the link.  The
+        obstacle's geometry is p's (its parameters center_x_<name>, ..., radius_<name>: parameter_names)."""
         names = [o.name for o in self.scene.obstacles]
         if obstacle not in names:
             raise ValueError(f"obstacle: one of this scene's obstacles ({', '.join(names) or 'none'}), got {obstacle!r}")
@@ -264,7 +265,7 @@ class CompiledModel:
         if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 1 <= i <= last:
             raise ValueError(f"i: a link index in 1..{last}, got {i!r}")
         o = names.index(obstacle)
-        radius = self.scene.capsule_radius(i) + self.scene.obstacles[o].radius
+        radius = self.scene.capsule_radius(i)           # the link's; the obstacle's is its geometry, read from p
         out = np.zeros(6)
         code = self.lib.gac_obstacle_gap(self.ffi.addressof(self.c.model), self._ptr(self._vec(q, self.nq, "q")),
                                          self._ptr(self._params(p)), int(i), o, radius, self._ptr(out))

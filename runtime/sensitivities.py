@@ -19,6 +19,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from codegen.scene import OBSTACLE_GEOMETRY_KINDS, split_parameter_name
+
 
 # gac.h's GAC_SENS_* status codes, in words
 STATUS_WORDS = {
@@ -71,6 +73,10 @@ def directions(model, names) -> tuple[list[str], np.ndarray, np.ndarray]:
                 raise ValueError(f"sensitivities[{j}] = {name!r}: not a coordinate of this model; allowed: {allowed}")
             seed_x[j, free.index(index) + (nq if which == "qd0" else 0)] = 1.0
         elif name in model.parameter_names:
+            if split_parameter_name(name)[0] in OBSTACLE_GEOMETRY_KINDS:
+                raise ValueError(f"sensitivities[{j}] = {name!r}: an obstacle's geometry is not differentiated (the "
+                                 "sensitivities hold every obstacle fixed); move it by finite differences of two runs "
+                                 "instead")
             seed_p[j, model.parameter_names.index(name)] = 1.0
         else:
             raise ValueError(f"sensitivities[{j}] = {name!r}: unknown direction; allowed: {allowed}")

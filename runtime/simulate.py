@@ -895,6 +895,10 @@ def _check_parameters(model: CompiledModel, p: np.ndarray) -> None:
             raise ValueError(f"p[{name}]: this model has every parameter built in as a constant (bake_params=True), "
                              f"so {float(p[k])!r} instead of {float(model.p[k])!r} would be ignored; load the "
                              "model with bake_params=False to change parameters at run time")
+        if name in model.layout.held_params and p[k] != model.p[k]:
+            raise ValueError(f"p[{name}]: this planar model holds {name} = {float(model.p[k])!r} (the obstacle stays "
+                             f"symmetric about the chain's plane), so {float(p[k])!r} is refused; to move it out of "
+                             "the plane, load the general model (load_model(scene, specialise=False))")
         if name in model.layout.zero_params and p[k] != 0.0:
             raise ValueError(f"p[{name}]: this model has {name} = 0 built in (the scene's value is 0, so its "
                              f"terms were left out), so {float(p[k])!r} would be ignored; to vary it, load the "
@@ -910,9 +914,12 @@ def _check_inside(model: CompiledModel, q: np.ndarray, p: np.ndarray, name: str)
     points = model.contact_points(q, p)
     for c in np.flatnonzero(gaps < -1e-12 * max(1.0, float(np.abs(points).max()))):
         point, wall = model.contacts[c]
-        if isinstance(wall, ObstacleContact):
-            raise ValueError(f"{name}: link {wall.i} overlaps the obstacle {wall.obstacle.name}: its segment is "
-                             f"{gaps[c] + wall.radius:.6g} m from the obstacle's, less than their radii {wall.radius:g} "
+        if isinstance(wall, ObstacleContact):           # the obstacle's geometry (its radius too) is p's
+            o = wall.obstacle
+            radius = model.scene.capsule_radius(wall.i) + (
+                float(p[model.parameter_names.index(f"radius_{o.name}")]) if not o.bounded_by_planes else 0.0)
+            raise ValueError(f"{name}: link {wall.i} overlaps the obstacle {o.name}: its segment is "
+                             f"{gaps[c] + radius:.6g} m from the obstacle's, less than their radii {radius:g} "
                              f"m together (gap {gaps[c]:.3g} m)")
         if isinstance(wall, LinkPair):
             raise ValueError(f"{name}: links {wall.i} and {wall.j} overlap as capsules: their segments are "

@@ -19,7 +19,8 @@ margins add the largest radius and the start is redrawn until no pair overlaps);
 of a fifth of the structures (has_obstacle_runs, from the stream [seed, structure, OBSTACLE_STREAM]; per run, from
 [seed, structure, OBSTACLE_STREAM, run], after the run is drawn: one or two spheres, bars or boxes of 1e-2 ... 0.3 of
 the chain's extent, centred inside the run's box and clear of its start, restitution 0, 1 or uniform; the structure
-is compiled with them for that run, an obstacle's place being a constant of the model); several chains in one box
+is compiled once per set of obstacles' names and kinds, with the obstacles parked far away (obstacle_structure), and
+each run sets its obstacles' places and sizes through the parameter vector); several chains in one box
 for a tenth of the study's structures (has_chain_runs, from the stream [seed, structure, CHAINS_STREAM], the
 structure and its runs from [seed, structure, CHAINS_STREAM, 1], so every other structure and its runs are as they
 were; run_structure draws them only when the study asks, as it does obstacles): two chains, three in a quarter of
@@ -93,6 +94,7 @@ OBSTACLE_SHARE = 0.2      # structures whose runs have fixed obstacles in the bo
 OBSTACLE_STREAM = 7       # the random stream [seed, structure, OBSTACLE_STREAM(, run)] that decides it and draws them
 OBSTACLE_TRIES = 50       # placements drawn per obstacle before it is left out
 OBSTACLE_CLEAR = 1e-2     # an obstacle's least gap to every link at the start, per m of the chain's extent
+OBSTACLE_PARKED = 1e6     # m: where the obstacles of an obstacle model's own scene sit (every run moves them via p)
 CHAINS_SHARE = 0.1        # structures drawn as several chains in one box (the study's; see draw_structure)
 CHAINS_STREAM = 23        # the random stream [seed, structure, CHAINS_STREAM(, 1)] that decides it and draws them
 
@@ -434,19 +436,35 @@ def random_obstacles(rng, scene: Scene, model, run: Run) -> tuple[Obstacle, ...]
     return tuple(obstacles)
 
 
+def obstacle_structure(obstacles) -> tuple[Obstacle, ...]:
+    """The obstacles with their names, kinds, links and restitutions but a fixed geometry, parked OBSTACLE_PARKED m
+    out along every axis with unit sizes: the scene of a structure with these is the same for every run that draws
+    obstacles of the same names and kinds, so its model is compiled (and cached) once; each run moves the obstacles
+    to its own places through the parameter vector (obstacle_run)."""
+    far = [OBSTACLE_PARKED] * 3
+    parked = {"sphere": far + [1.0], "capsule": far + [OBSTACLE_PARKED + 1.0, OBSTACLE_PARKED, OBSTACLE_PARKED, 1.0],
+              "box": far + [1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]}
+    return tuple(o.with_geometry(parked[o.kind]) for o in obstacles)
+
+
 def obstacle_run(rng, scene: Scene, model, run: Run, obstacles, load) -> tuple[Scene, object, Run]:
-    """The structure with the run's obstacles, its model (``load``: scene -> compiled model; an obstacle's position
-    is a constant of the model) and the run with the obstacles' restitutions (0, 1 or uniform) after its parameters."""
+    """The structure with the run's obstacles, the model of the structure with obstacles of those names and kinds
+    (``load``: scene -> compiled model, given the parked obstacle_structure: an obstacle's geometry is a runtime
+    parameter) and the run with the obstacles' restitutions (0, 1 or uniform) and geometry after its parameters."""
     before = scene.parameter_names()
-    scene = replace(scene, obstacles=tuple(obstacles))
-    model = load(scene)
+    structure = replace(scene, obstacles=obstacle_structure(obstacles))
+    scene = replace(scene, obstacles=tuple(obstacles))           # validated: the structure's own start is clear
+    model = load(structure)
     names = model.parameter_names
-    if names[:len(run.p)] != before:
+    if names[:len(run.p)] != before or names != scene.parameter_names():
         raise AssertionError("obstacles changed the order of the structure's parameters")
     p = model.p.copy()
     p[:len(run.p)] = run.p
     for o in obstacles:
         p[names.index(f"e_{o.name}")] = float(rng.choice([0.0, 1.0, rng.uniform()]))
+    for o in scene.obstacles:                                     # the run's places and sizes
+        for name, value in zip(o.geometry_names, o.geometry_values):
+            p[names.index(name)] = value
     return scene, model, replace(run, p=p)
 
 
@@ -581,8 +599,10 @@ def obstacle_gaps(points: np.ndarray, radii, obstacles) -> list[float]:
 
 
 def check_obstacles(model, run: Run, states, pen_tol: float) -> list[str]:
-    """No link inside a fixed obstacle beyond pen_tol on full-layout states (obstacle_gaps)."""
-    obstacles = model.scene.obstacles
+    """No link inside a fixed obstacle beyond pen_tol on full-layout states (obstacle_gaps), each obstacle where the
+    run's parameters put it."""
+    names = model.parameter_names
+    obstacles = [o.with_geometry([run.p[names.index(name)] for name in o.geometry_names]) for o in model.scene.obstacles]
     if not obstacles:
         return []
     radii = [link.radius for link in model.scene.links]
@@ -683,7 +703,8 @@ def check_run(model, run: Run, result, seconds: float, budget: float) -> list[st
 def run_structure(args) -> list[Outcome]:
     """Compile one structure and run its runs (one worker's job).  args: (seed, index, runs, budget, n_max[,
     obstacles[, chains]]); obstacles True (the study's runs): a structure that has_obstacle_runs puts each run's
-    random_obstacles into the box, compiling the structure with them for that run (False: the runs as drawn);
+    random_obstacles into the box, the structure compiled once per obstacles' names and kinds and the run's obstacles
+    set through p (obstacle_run; False: the runs as drawn);
     chains True (the study's runs): a structure that has_chain_runs is drawn as several chains (random_chains, no
     obstacles; False: random_structure's chain)."""
     seed, index, runs, budget, n_max = args[:5]

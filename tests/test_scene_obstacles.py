@@ -19,7 +19,11 @@ def test_defaults_the_scenes_restitution_and_every_link():
     ball, bar = s.obstacles
     assert (ball.kind, ball.segment, ball.restitution, ball.links) == ("sphere", ((0.5, -1.0, 0.0),) * 2, 0.7, (1, 2))
     assert (bar.segment, bar.restitution, bar.links) == (((0.0, 2.5, -1.0), (0.0, 2.5, 1.0)), 0.3, (2,))
-    assert s.parameter_names()[-2:] == ["e_ball", "e_bar"] and s.parameter_vector()[-2:].tolist() == [0.7, 0.3]
+    names, values = s.parameter_names(), s.parameter_vector().tolist()
+    assert names[-13:-11] == ["e_ball", "e_bar"] and values[-13:-11] == [0.7, 0.3]
+    assert names[-11:] == ["center_x_ball", "center_y_ball", "center_z_ball", "radius_ball", "a_x_bar", "a_y_bar",
+                           "a_z_bar", "b_x_bar", "b_y_bar", "b_z_bar", "radius_bar"]       # the geometry, after e
+    assert values[-11:] == [0.5, -1.0, 0.0, ball.radius, 0.0, 2.5, -1.0, 0.0, 2.5, 1.0, 0.1]
     assert [c.name for c in s.obstacle_contacts()] == ["L1/ball", "L2/ball", "L2/bar"]
 
 
@@ -77,7 +81,7 @@ def test_a_box_and_a_plane_take_their_own_fields():
     assert (roof.kind, roof.a, roof.normal, roof.restitution) == ("plane", (0.0, 3.0, 0.0), (0.6, -0.8, 0.0), 0.7)
     assert roof.shape[:7] == (2.0, 0.0, 3.0, 0.0, 0.6, -0.8, 0.0)
     assert scene(BOX).obstacles[0].box_rotation == ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
-    assert s.parameter_names()[-2:] == ["e_block", "e_roof"]
+    assert s.parameter_names()[-23:-21] == ["e_block", "e_roof"]              # then the geometry: 15 + 6 entries
     assert [c.radius for c in s.obstacle_contacts()] == [0.05] * 4      # the links' radii alone
 
 

@@ -40,9 +40,9 @@ def obstacle_gap(points, contact: ObstacleContact) -> float:
 def test_the_obstacles_are_contacts_of_the_model(model):
     names = [(point, c.name) for point, c in model.contacts]
     assert names == [(1, "L1/ball"), (2, "L2/ball"), (3, "L3/ball"), (1, "L1/bar"), (2, "L2/bar"), (3, "L3/bar")]
-    assert model.parameter_names[-2:] == ["e_ball", "e_bar"]
-    assert model.parameters()[-2:].tolist() == [1.0, 1.0]
-    assert "e_ball" in model.parameter_problem(np.r_[model.parameters()[:-2], 1.5, 1.0])
+    assert model.parameter_names[-13:-11] == ["e_ball", "e_bar"]         # then the geometry (4 + 7)
+    assert model.parameters()[-13:-11].tolist() == [1.0, 1.0]
+    assert "e_ball" in model.parameter_problem(model.parameters({"e_ball": 1.5}))
 
 
 def test_gaps_and_directions_against_an_independent_computation(model):

@@ -363,3 +363,33 @@ def test_command_line(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "runtime", "fmu", "--scene", "paper-case1", "--out", str(tmp_path),
                           "--step", "-1"], capture_output=True, text=True, cwd=ROOT)
     assert bad.returncode == 2 and "--step: must be a finite time > 0 s, got -1.0" in bad.stderr
+
+
+def test_an_obstacles_geometry_is_a_parameter_of_the_fmu(tmp_path, capsys):
+    """arm-obstacle's ball: its centre and radius are parameters p.center_x_ball ... p.radius_ball with the scene's
+    starts (center_z_ball held by the planar model: min = max = its value); the ball moved out of the arm's way
+    through them runs as simulate() with the same p, and a radius of 0 is refused, naming it and its range."""
+    from fmpy.fmi1 import FMICallException
+    path = build_fmu("arm-obstacle", tmp_path)
+    slave = Slave(path)
+    ball = {name: slave.vars[f"p.{name}"] for name in ("center_x_ball", "center_y_ball", "center_z_ball",
+                                                        "radius_ball")}
+    assert [float(v.start) for v in ball.values()] == [1.8, 0.95, 0.0, 0.1]
+    assert (ball["center_z_ball"].min, ball["center_z_ball"].max) == ("0.0", "0.0")
+    q = coordinate_names(slave, "q")
+    slave.start({"p.center_y_ball": 3.0, "solver.rtol": 1e-10, "solver.atol": 1e-12})
+    rows, _ = run_fmu(slave, 1.0, 0.1, q)
+    slave.close()
+    model = load_model("arm-obstacle")
+    result = simulate(model, 1.0, rtol=1e-10, atol=1e-12, t_eval=rows[:, 0], p={"center_y_ball": 3.0})
+    assert result.success and not any(c.wall.endswith("/ball") for i in result.impacts for c in i.contacts)
+    assert np.max(np.abs(rows[:, 1:] - result.q[:, list(model.layout.free)])) < 1e-8
+
+    slave = Slave(path)
+    slave.fmu.instantiate()
+    slave.fmu.setupExperiment(startTime=0.0)
+    slave.fmu.enterInitializationMode()
+    with pytest.raises(FMICallException):
+        slave.fmu.setReal(slave.refs(["p.radius_ball"]), [0.0])
+    assert "p.radius_ball = 0: must be in [1e-09, 1e+09] m (> 0)" in capsys.readouterr().out
+    slave.fmu.freeInstance()

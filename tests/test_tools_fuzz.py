@@ -324,7 +324,12 @@ def test_obstacles_leave_the_structures_and_their_runs_as_they_were(compiled):
     with_obstacles, obstacle_model, obstacle_run = fuzz.obstacle_run(obstacle_rng, scene, model, run, obstacles,
                                                                      compiled)
     assert with_obstacles.links == scene.links and with_obstacles.obstacles[0].name == obstacles[0].name
-    assert np.array_equal(obstacle_run.p[:len(run.p)], run.p) and len(obstacle_run.p) == len(run.p) + len(obstacles)
+    geometry = sum(len(o.geometry_names) for o in obstacles)                  # each one's e, then the geometry
+    assert np.array_equal(obstacle_run.p[:len(run.p)], run.p) and len(obstacle_run.p) == len(run.p) + len(obstacles) \
+        + geometry
+    assert obstacle_run.p[len(run.p) + len(obstacles):].tolist() == [x for o in obstacles for x in o.geometry_values]
+    assert with_obstacles.obstacles == tuple(o.with_geometry(o.geometry_values) for o in with_obstacles.obstacles)
+    assert [o.segment[0] for o in obstacle_model.scene.obstacles] == [(fuzz.OBSTACLE_PARKED,) * 3] * len(obstacles)
     names = scene.parameter_names()
     points = model.contact_points(model.layout.reduce(run.q0), run.p)
     radii = [link.radius for link in scene.links]
@@ -338,8 +343,9 @@ def test_obstacles_leave_the_structures_and_their_runs_as_they_were(compiled):
 
 def test_the_obstacle_check_can_fail_and_its_box_distance_is_right(compiled):
     """The independent box distance against a dense search along the segment (inside the box too) and the scene's own;
-    a link moved into a sphere, a bar and a box in turn: check_run reports it on its obstacle check; clear, it
-    passes."""
+    a link moved into a sphere, a bar and a box in turn (named as the study names them, so that their models are the
+    study's): check_run reports it on its obstacle check, the obstacle where the run's p puts it; clear, it passes.
+    The sphere moved elsewhere runs on the same compiled model."""
     from codegen.scene import Obstacle
     rng = np.random.default_rng(4)
     for _ in range(30):
@@ -366,9 +372,11 @@ def test_the_obstacle_check_can_fail_and_its_box_distance_is_right(compiled):
     sunk = q.copy()
     sunk[-3:] += centre - mid                      # the free base's position: the whole chain translated
     bar = np.array([run.extent * 0.1, 0.0, 0.0])
-    for obstacle in (Obstacle.sphere("ball", tuple(centre), size),
-                     Obstacle.bar("bar", tuple(centre - bar), tuple(centre + bar), size),
-                     Obstacle.box("block", tuple(centre), (size,) * 3, fuzz._rotation(rng))):
+    models = []
+    for obstacle in (Obstacle.sphere("sphere_a", tuple(centre), size),
+                     Obstacle.sphere("sphere_a", tuple(centre + 0.5 * size), 0.5 * size),
+                     Obstacle.bar("bar_a", tuple(centre - bar), tuple(centre + bar), size),
+                     Obstacle.box("box_a", tuple(centre), (size,) * 3, fuzz._rotation(rng))):
         _, obstacle_model, obstacle_run = fuzz.obstacle_run(np.random.default_rng(0), scene, model, run, (obstacle,),
                                                             compiled)
         moved = obstacle_model.contact_points(obstacle_model.layout.reduce(sunk), obstacle_run.p)
@@ -378,6 +386,8 @@ def test_the_obstacle_check_can_fail_and_its_box_distance_is_right(compiled):
         doctored = FakeResult(np.array([q, sunk]), np.array([qd, qd]), q, qd)
         violations = fuzz.check_run(obstacle_model, obstacle_run, doctored, 0.1, 20.0)
         assert any(v.startswith("obstacle penetrated by a link by") for v in violations), (obstacle.kind, violations)
+        models.append(obstacle_model)
+    assert models[0] is models[1] and len({id(m) for m in models}) == 3       # one model per obstacle structure
 
 
 CHAINS_CASE = (11, 21, 2)      # seed, structure, n_max: three planar chains of 1, 1 and 2 links in one box

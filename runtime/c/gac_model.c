@@ -70,17 +70,13 @@ int gac_model_check(const gac_model *m)
             continue;
         }
         if (k->kind == GAC_CONTACT_OBSTACLE) {            /* a link and an obstacle, after the link pairs, no row */
-            const double *o = m->obstacles + 6 * k->coordinate;
-            int a;
             if (k->point < 1 || k->point > m->npoint - 1 || k->coordinate < 0 || k->coordinate >= m->nobstacle
-                || m->obstacles == 0 || m->link_radius == 0 || !(m->link_radius[c - gac_kernel_contacts(m)] >= 0.0)
+                || m->obstacle_shapes == 0 || m->link_radius == 0
+                || !(m->link_radius[c - gac_kernel_contacts(m)] >= 0.0)
                 || k->normal_sign != 1 || k->e_index >= m->nparam || k->friction_index >= m->nparam
                 || (k->has_friction && !(k->friction_index >= 0 || k->friction_value >= 0.0))
                 || (c + 1 < m->ncontact && m->contacts[c + 1].kind != GAC_CONTACT_OBSTACLE))
                 return GAC_ERR_BAD_MODEL;
-            for (a = 0; a < 6; ++a) {
-                if (!isfinite(o[a])) return GAC_ERR_BAD_MODEL;
-            }
             if (gac_obstacle_shape_check(m, k->coordinate) != GAC_OK) return GAC_ERR_BAD_MODEL;
             continue;
         }

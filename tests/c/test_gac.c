@@ -824,6 +824,17 @@ static void test_parameters(void)
     CHECK(gac_inertia_admissible(within_tol) && !gac_inertia_admissible(beyond_tol), "the tolerance 1e-12 c");
     CHECK(gac_inertia_admissible(huge) && !gac_inertia_admissible(huge_bad), "large entries");
 
+    {   /* an obstacle's geometry as parameters: a box's rotation and a plane's normal */
+        const double c = cos(0.3), s = sin(0.3), turn[9] = {c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0};
+        const double mirror[9] = {c, s, 0.0, s, -c, 0.0, 0.0, 0.0, 1.0};            /* orthonormal, det -1 */
+        const double off[9] = {c, -s, 0.0, s, c, 2e-9, 0.0, 0.0, 1.0}, near[9] = {c, -s, 0.0, s, c, 5e-10, 0.0, 0.0, 1.0};
+        const double unit[3] = {0.6, -0.8, 0.0}, scaled[3] = {0.6, -0.8, 2e-4}, close[3] = {0.6, -0.8, 4e-5};
+        CHECK(gac_rotation_admissible(turn) && gac_rotation_admissible(near), "a rotation, within 1e-9");
+        CHECK(!gac_rotation_admissible(mirror) && !gac_rotation_admissible(off), "a reflection, not orthonormal");
+        CHECK(gac_unit_admissible(unit) && gac_unit_admissible(close) && !gac_unit_admissible(scaled),
+              "a unit normal within 1e-9");
+    }
+
     CHECK(gac_model_check(&checked) == GAC_OK, "model with a parameter table");
     CHECK(gac_check_parameters(&checked, good, &bad) == GAC_OK && bad == -1, "good parameters");
     CHECK(gac_check_parameters(&checked, bad_e, &bad) == GAC_ERR_BAD_PARAMETER && bad == 2

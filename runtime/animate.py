@@ -31,8 +31,25 @@ def animation_problem(path: str) -> str:
     return ""
 
 
-def _shapes(result, scene: Scene) -> np.ndarray:
-    return np.array([contact_points(scene, q) for q in result.q])
+def _shapes(result, scene: Scene, run=None) -> np.ndarray:
+    """The points O_1..O_{n+1} at every sample: from the run's model at its parameters where given (a length set
+    through p), else from the scene."""
+    if run is None:
+        return np.array([contact_points(scene, q) for q in result.q])
+    return np.array([_points(q, run) for q in result.q])
+
+
+def _points(q, run) -> np.ndarray:
+    model, p = run
+    return model.contact_points(model.layout.reduce(q), p)
+
+
+def _run_values(model, p) -> dict | None:
+    """The run's parameters by name, for drawing the walls and obstacles where the run had them (their places are
+    runtime parameters); None: the scene's."""
+    if model is None:
+        return None
+    return dict(zip(model.parameter_names, (model.parameters() if p is None else np.asarray(p, float)).tolist()))
 
 
 def _lines(shape: np.ndarray, scene) -> np.ndarray:
@@ -109,11 +126,14 @@ def _draw_planes_obstacle(ax, scene: Scene, o, planar: bool) -> None:
         ax.plot(square[:, 0], square[:, 2], square[:, 1], color="0.4", lw=1.5)
 
 
-def draw_obstacles(ax, scene: Scene, planar: bool) -> None:
+def draw_obstacles(ax, scene: Scene, planar: bool, values: dict | None = None) -> None:
     """Each fixed obstacle, grey: in the plane its outline there (a disc for a sphere, a stadium for a bar: the
     capsule's section by the chain's plane X3 = const when both ends lie in it; a box's outline projected on it; a
-    plane's trace), in space a capsule's axis as a thick line with its ends, a box's edges, a square of a plane."""
+    plane's trace), in space a capsule's axis as a thick line with its ends, a box's edges, a square of a plane.
+    values: the run's parameters by name (_run_values), whose geometry entries place the obstacles."""
     for o in scene.obstacles:
+        if values is not None:
+            o = o.with_geometry([values.get(name, v) for name, v in zip(o.geometry_names, o.geometry_values)])
         if o.bounded_by_planes:
             _draw_planes_obstacle(ax, scene, o, planar)
             continue
@@ -130,11 +150,11 @@ def draw_obstacles(ax, scene: Scene, planar: bool) -> None:
             ax.plot([a[0], b[0]], [a[2], b[2]], [a[1], b[1]], "o", color="0.4", ms=5)
 
 
-def draw_box(ax, scene: Scene, planar: bool) -> None:
+def draw_box(ax, scene: Scene, planar: bool, values: dict | None = None) -> None:
     """The walls (in the plane: the rectangle if all four exist, else each wall as a line), the fixed obstacles and
-    axis labels."""
-    draw_obstacles(ax, scene, planar)
-    walls = {w.name: w.position for w in scene.walls}
+    axis labels; values: the run's parameters by name (their walls' places and obstacles' geometry)."""
+    draw_obstacles(ax, scene, planar, values)
+    walls = _walls(scene, values)
     if planar:
         lo1, hi1 = walls.get("x1_min"), walls.get("x1_max")
         lo2, hi2 = walls.get("x2_min"), walls.get("x2_max")
@@ -159,8 +179,13 @@ def draw_box(ax, scene: Scene, planar: bool) -> None:
         ax.set_zlabel("X2 (m)")
 
 
-def _limits(ax, shapes: np.ndarray, scene: Scene, planar: bool) -> None:
-    walls = {w.name: w.position for w in scene.walls}
+def _walls(scene: Scene, values: dict | None) -> dict:
+    """Each wall's place: the run's parameter wall_<name> where given, else the scene's."""
+    return {w.name: (values or {}).get(f"wall_{w.name}", w.position) for w in scene.walls}
+
+
+def _limits(ax, shapes: np.ndarray, scene: Scene, planar: bool, values: dict | None = None) -> None:
+    walls = _walls(scene, values)
     margin = 0.05 * max(float(np.ptp(shapes[..., :2])), 1e-3)
     for axis, setter in ((0, ax.set_xlim), (1, ax.set_ylim if planar else ax.set_zlim), (2, None if planar else ax.set_ylim)):
         if setter is None:
@@ -176,21 +201,24 @@ def _draw(ax, shape, planar: bool, **style):
     return ax.plot(shape[:, 0], shape[:, 2], shape[:, 1], **style)[0]
 
 
-def animate(result, scene: Scene, path, fps: int = 30, max_frames: int = MAX_FRAMES, progress=None) -> int:
-    """Write the run as an animation; returns the number of frames."""
+def animate(result, scene: Scene, path, fps: int = 30, max_frames: int = MAX_FRAMES, progress=None, model=None,
+            p=None) -> int:
+    """Write the run as an animation; returns the number of frames.  model, p: the run's model and parameters (the
+    links, walls and obstacles then drawn as the run had them, where p moved them); None: the scene's values."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib import animation
     if len(result.t) == 0:
         raise ValueError("--animate: the run has no samples to draw")
-    shapes = _shapes(result, scene)
+    run, values = (None if model is None else (model, p)), _run_values(model, p)
+    shapes = _shapes(result, scene, run)
     frames = np.unique(np.linspace(0, len(result.t) - 1, min(max_frames, len(result.t))).round().astype(int))
     planar = _planar(shapes)
     fig = plt.figure(figsize=(6.4, 4.8))
     ax = fig.add_subplot(111) if planar else fig.add_subplot(111, projection="3d")
-    draw_box(ax, scene, planar)
-    _limits(ax, shapes, scene, planar)
+    draw_box(ax, scene, planar, values)
+    _limits(ax, shapes, scene, planar, values)
     chain = _draw(ax, _lines(shapes[0], scene), planar, color="tab:blue", marker="o", ms=4, lw=2)
     stars = _draw(ax, shapes[0][:0], planar, color="r", marker="*", ms=12, ls="none")
     label = ax.set_title("")
@@ -205,8 +233,8 @@ def animate(result, scene: Scene, path, fps: int = 30, max_frames: int = MAX_FRA
             chain.set_data_3d(shape[:, 0], shape[:, 2], shape[:, 1])
         t_prev = result.t[frames[k - 1]] if k > 0 else -np.inf
         hits = [imp for imp, t in zip(result.impacts, impact_t) if t_prev < t <= result.t[i]]
-        points = np.array([contact_points(scene, imp.q)[c.point - 1] for imp in hits for c in imp.contacts
-                           if c.kind == "wall"]).reshape(-1, 3)
+        points = np.array([(contact_points(scene, imp.q) if run is None else _points(imp.q, run))[c.point - 1]
+                           for imp in hits for c in imp.contacts if c.kind == "wall"]).reshape(-1, 3)
         if planar:
             stars.set_data(points[:, 0], points[:, 1])
         else:
@@ -223,19 +251,21 @@ def animate(result, scene: Scene, path, fps: int = 30, max_frames: int = MAX_FRA
     return len(frames)
 
 
-def film_strip(result, scene: Scene, path, times) -> None:
-    """The chain at the chosen times, side by side (as the paper's Fig. 14 A-E), from the nearest samples."""
+def film_strip(result, scene: Scene, path, times, model=None, p=None) -> None:
+    """The chain at the chosen times, side by side (as the paper's Fig. 14 A-E), from the nearest samples; model, p
+    as animate's."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    shapes = _shapes(result, scene)
+    run, values = (None if model is None else (model, p)), _run_values(model, p)
+    shapes = _shapes(result, scene, run)
     planar = _planar(shapes)
     fig = plt.figure(figsize=(3.0 * len(times), 3.2))
     for k, t in enumerate(times):
         i = int(np.argmin(np.abs(result.t - t)))
         ax = fig.add_subplot(1, len(times), k + 1, **({} if planar else {"projection": "3d"}))
-        draw_box(ax, scene, planar)
-        _limits(ax, shapes, scene, planar)
+        draw_box(ax, scene, planar, values)
+        _limits(ax, shapes, scene, planar, values)
         for piece, color in zip(_pieces(shapes[i], scene), CHAIN_COLORS * len(shapes[i])):
             _draw(ax, piece, planar, color=color, marker="o", ms=3, lw=2)
         ax.set_title(f"{chr(ord('A') + k) if k < 26 else k}: t = {result.t[i]:.3f} s", fontsize=9)

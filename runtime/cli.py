@@ -298,13 +298,14 @@ def main(argv=None) -> int:
     if args.animate:
         from .animate import animate
         frames = animate(result, scene, args.animate, fps=args.fps,
-                         progress=lambda m: print(f"  animate: {m}", file=sys.stderr, flush=True))
+                         progress=lambda m: print(f"  animate: {m}", file=sys.stderr, flush=True),
+                         model=model, p=model.parameters(p))
         print(f"wrote {args.animate} ({frames} frames)")
     if args.film_strip:
         from .animate import film_strip
         times = ([float(x) for x in args.film_times.split(",")] if args.film_times
                  else list(np.linspace(0.0, result.t[-1] if len(result.t) else 0.0, 5)))
-        film_strip(result, scene, args.film_strip, times)
+        film_strip(result, scene, args.film_strip, times, model=model, p=model.parameters(p))
         print(f"wrote {args.film_strip}")
     for option, writer in (("csv", "write_csv"), ("npz", "write_npz")):
         if getattr(args, option):

@@ -52,3 +52,31 @@ def test_bad_animation_arguments(tmp_path, args, message):
                           cwd=tmp_path, capture_output=True, text=True)
     assert done.returncode == 2 and message in done.stderr, done.stderr
     assert not list(tmp_path.iterdir())
+
+
+def test_a_run_is_drawn_where_its_parameters_put_it(tmp_path):
+    """Link lengths, walls' places and obstacles' geometry are runtime parameters: a run with them moved through p
+    is drawn with them there (the points from the model at p, the walls and obstacles from p), not at the scene's."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from codegen.scene import load_scene
+    from runtime.animate import _run_values, _shapes, _walls, draw_obstacles, film_strip
+    model = quick_model("paper-case1")
+    names = model.parameter_names
+    l_1 = 0.8 * model.parameters()[names.index("l_1")]
+    p = model.parameters({"l_1": l_1, "wall_x2_min": -0.3})
+    result = simulate(model, 0.2, p=p, t_eval=np.linspace(0, 0.2, 5))
+    shapes = _shapes(result, model.scene, (model, p))
+    assert np.linalg.norm(shapes[:, 1] - shapes[:, 0], axis=1) == pytest.approx(l_1, rel=1e-12)
+    assert _walls(model.scene, _run_values(model, p))["x2_min"] == -0.3
+    assert _walls(model.scene, None)["x2_min"] == model.scene.wall("x2_min").position
+    film_strip(result, model.scene, tmp_path / "s.png", [0.0, 0.2], model=model, p=p)
+    assert (tmp_path / "s.png").stat().st_size > 0
+    scene = load_scene("arm-obstacle")
+    ball = scene.obstacles[0]
+    fig, ax = plt.subplots()
+    draw_obstacles(ax, scene, True, {f"center_x_{ball.name}": ball.a[0] + 1.0})
+    outline = ax.patches[0].get_path().vertices
+    assert outline[:, 0].mean() == pytest.approx(ball.a[0] + 1.0, abs=0.2 * ball.radius)
+    plt.close(fig)

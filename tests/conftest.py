@@ -189,6 +189,20 @@ SANITIZE = ("-std=c99", "-g", "-O1", "-Wall", "-Wextra", "-pedantic", "-Werror",
             "-fno-sanitize-recover=all", "-fno-omit-frame-pointer")
 
 
+def perturbed_start(model, direction: str, h: float, p, q0, qd0):
+    """Copies of (p, q0, qd0) moved by h along a sensitivity direction's name: 'q0[NAME]' or 'qd0[NAME]' (NAME a
+    coordinate of the full layout) or a parameter's name, for central differences of whole runs."""
+    p1, q1, qd1 = np.array(p, dtype=float), np.array(q0, dtype=float), np.array(qd0, dtype=float)
+    full = model.scene.full_coordinate_names()
+    if direction.startswith("q0["):
+        q1[full.index(direction[3:-1])] += h
+    elif direction.startswith("qd0["):
+        qd1[full.index(direction[4:-1])] += h
+    else:
+        p1[model.parameter_names.index(direction)] += h
+    return p1, q1, qd1
+
+
 def cache_with_library(folder: Path) -> Path:
     """A new model cache at ``folder`` holding only the C library's object (and its sidecar), copied from the suite's
     cache: a test about generating or compiling a model into an empty cache need not recompile the library, which

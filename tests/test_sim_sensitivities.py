@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from codegen.scene import Joint, coordinate_names, scene_from_dict
-from conftest import chain
+from conftest import chain, perturbed_start
 from runtime import simulate
 
 TIGHT = dict(rtol=1e-12, atol=1e-14)
@@ -116,16 +116,9 @@ def central_differences(model, t_end, p, q0, qd0, directions, matrix, step=1e-6,
     state's size), where the perturbed runs meet the same impacts (contacts, in order) as the nominal one."""
     nominal = simulate(model, t_end, p=p, q0=q0, qd0=qd0, **options)
     sequence = [tuple(c.label for c in i.contacts) for i in nominal.impacts]
-    full = model.scene.full_coordinate_names()
 
     def final(h, direction):
-        p1, q1, qd1 = p.copy(), q0.copy(), qd0.copy()
-        if direction.startswith("q0["):
-            q1[full.index(direction[3:-1])] += h
-        elif direction.startswith("qd0["):
-            qd1[full.index(direction[4:-1])] += h
-        else:
-            p1[model.parameter_names.index(direction)] += h
+        p1, q1, qd1 = perturbed_start(model, direction, h, p, q0, qd0)
         run = simulate(model, t_end, p=p1, q0=q1, qd0=qd1, **options)
         assert run.success and [tuple(c.label for c in i.contacts) for i in run.impacts] == sequence, direction
         return np.concatenate([model.layout.reduce(run.q_final), model.layout.reduce(run.qd_final)])

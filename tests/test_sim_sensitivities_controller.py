@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from codegen.scene import Joint, scene_from_dict
+from conftest import perturbed_start
 from runtime import simulate
 from runtime.inputs import Controller, pd
 
@@ -151,16 +152,9 @@ def test_a_nonlinear_controller_matches_central_differences(models, e, t_end, di
     sequence = [tuple(c.label for c in i.contacts) for i in nominal.impacts]
     kinds = [event.kind for event in nominal.contact_events]
     assert len(sequence) >= 4 and (e > 0 or "release" in kinds)
-    full = driven.scene.full_coordinate_names()
 
     def final(h, direction):
-        p1, q1, qd1 = p.copy(), q0.copy(), qd0.copy()
-        if direction.startswith("q0["):
-            q1[full.index(direction[3:-1])] += h
-        elif direction.startswith("qd0["):
-            qd1[full.index(direction[4:-1])] += h
-        else:
-            p1[driven.parameter_names.index(direction)] += h
+        p1, q1, qd1 = perturbed_start(driven, direction, h, p, q0, qd0)
         run = simulate(driven, t_end, p=p1, q0=q1, qd0=qd1, u=u.function, **TIGHT)
         assert [tuple(c.label for c in i.contacts) for i in run.impacts] == sequence, direction
         assert [event.kind for event in run.contact_events] == kinds, direction
@@ -193,16 +187,9 @@ def test_a_nonlinear_controller_through_stick_and_slip_matches_central_differenc
     kinds = [event.kind for event in nominal.contact_events]
     assert kinds == ["rest", "stick", "slip"]
     slip = nominal.contact_events[2]
-    full = driven.scene.full_coordinate_names()
 
     def final(h, direction):
-        p1, q1, qd1 = p.copy(), q0.copy(), qd0.copy()
-        if direction.startswith("q0["):
-            q1[full.index(direction[3:-1])] += h
-        elif direction.startswith("qd0["):
-            qd1[full.index(direction[4:-1])] += h
-        else:
-            p1[driven.parameter_names.index(direction)] += h
+        p1, q1, qd1 = perturbed_start(driven, direction, h, p, q0, qd0)
         run = simulate(driven, t_end, p=p1, q0=q1, qd0=qd1, u=u.function, **TIGHT)
         assert [event.kind for event in run.contact_events] == kinds, direction
         return np.concatenate([driven.layout.reduce(run.q_final), driven.layout.reduce(run.qd_final),

@@ -12,7 +12,8 @@ import math
 import numpy as np
 import pytest
 
-from codegen.scene import LineLink, Scene, Wall, coordinate_names, scene_from_dict
+from codegen.scene import LineLink, Scene, Wall, scene_from_dict
+from conftest import perturbed_start
 from runtime import simulate
 
 TIGHT = dict(rtol=1e-12, atol=1e-14)
@@ -53,16 +54,9 @@ def central_differences(model, t_end, directions, matrix, step=1e-6, p=None, q0=
     q0 = model.layout.expand(model.q0) if q0 is None else np.array(q0, dtype=float)
     qd0 = model.layout.expand(model.qd0, velocity=True) if qd0 is None else np.array(qd0, dtype=float)
     nominal = sequence(simulate(model, t_end, p=p, q0=q0, qd0=qd0, **options))
-    full = coordinate_names(model.n)
 
     def final(h, direction):
-        p1, q1, qd1 = p.copy(), q0.copy(), qd0.copy()
-        if direction.startswith("q0["):
-            q1[full.index(direction[3:-1])] += h
-        elif direction.startswith("qd0["):
-            qd1[full.index(direction[4:-1])] += h
-        else:
-            p1[model.parameter_names.index(direction)] += h
+        p1, q1, qd1 = perturbed_start(model, direction, h, p, q0, qd0)
         run = simulate(model, t_end, p=p1, q0=q1, qd0=qd1, check_start=False, **options)
         assert run.success and sequence(run) == nominal, direction
         return np.concatenate([model.layout.reduce(run.q_final), model.layout.reduce(run.qd_final)])

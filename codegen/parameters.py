@@ -26,7 +26,7 @@ import numpy as np
 
 from .scene import (COORDINATE_MAX, FRICTION_MAX, GRAVITY_MAX, INERTIA_MAX, LENGTH_RANGE, MASS_RANGE,
                     OBSTACLE_PARAMETERS, ROTATION_TOL, STIFFNESS_MAX, RigidLink, Scene, SceneError, parameter_name,
-                    split_parameter_name)
+                    rotation_defects, split_parameter_name)
 
 
 @dataclass(frozen=True)
@@ -196,13 +196,11 @@ def check_vector(rules: list[Rule], p, changed=None) -> None:
 def check_rotation(entries, prefix: str, obstacle: str) -> None:
     """A box's rotation (row-major) a proper rotation, the scene loader's test (codegen.scene._rotation), or
     SceneError naming its parameters (``prefix``: a chain's, none for one chain)."""
-    R = np.array(entries, dtype=float).reshape(3, 3)
     names = f"p[{prefix}{parameter_name('rotation_11', obstacle)} .. {prefix}{parameter_name('rotation_33', obstacle)}]"
-    off = float(np.abs(R.T @ R - np.eye(3)).max())
+    off, det = rotation_defects(entries)
     if not off <= ROTATION_TOL:
         raise SceneError(f"{names}: the rotation of box {obstacle} must be {ROTATION_WORDS}; R^T R departs from I by "
                          f"{off:.3g}")
-    det = float(np.linalg.det(R))
     if not abs(det - 1.0) <= ROTATION_TOL:
         raise SceneError(f"{names}: the rotation of box {obstacle} must be {ROTATION_WORDS}; got det {det:.6g} "
                          "(a reflection: swap two columns)")

@@ -572,6 +572,13 @@ class Obstacle:
         return float(e), links, float(c_f)
 
 
+def rotation_defects(R) -> tuple[float, float]:
+    """How far a 3 x 3 matrix is from a proper rotation: the largest entry of R^T R - I, and det R (each held to
+    ROTATION_TOL by the scene's loader and by the runtime parameters' check)."""
+    M = np.array(R, dtype=float).reshape(3, 3)
+    return float(np.abs(M.T @ M - np.eye(3)).max()), float(np.linalg.det(M))
+
+
 def _rotation(value, fieldname: str) -> tuple:
     """A box's rotation: 3 rows of 3 numbers, orthonormal with det +1 within ROTATION_TOL."""
     rows = value.tolist() if isinstance(value, np.ndarray) else value
@@ -580,12 +587,10 @@ def _rotation(value, fieldname: str) -> tuple:
                          f"axes), got {value!r}")
     R = tuple(_vector(list(r) if isinstance(r, (list, tuple)) else r, 3, f"{fieldname}[{k}]", largest=1e3)
               for k, r in enumerate(rows))
-    M = np.array(R)
-    off = float(np.abs(M.T @ M - np.eye(3)).max())
+    off, det = rotation_defects(R)
     if not off <= ROTATION_TOL:
         raise SceneError(f"{fieldname}: must be orthonormal (R^T R = I within {ROTATION_TOL:g}), got a departure "
                          f"of {off:.3g}")
-    det = float(np.linalg.det(M))
     if not abs(det - 1.0) <= ROTATION_TOL:
         raise SceneError(f"{fieldname}: must be a proper rotation (det +1 within {ROTATION_TOL:g}), got det "
                          f"{det:.6g} (a reflection: swap two columns)")

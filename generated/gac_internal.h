@@ -212,6 +212,18 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
 int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                       const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
                       int *rounds, int *plastic);
+/* What gac_impact_rounds_traced records of each round (for the sensitivities' differential of the rounds): the
+ * contacts of round j's complementarity problem, k[j] of them, at positions idx[j n + i] of the law's list, hit[j n +
+ * i] = 1 where struck with its own e (approaching; 0: at rest in that round, or the plastic round), F[j n + i] their
+ * impulses in that round.  The caller's arrays, room for cap rounds (nround > cap: more rounds than recorded). */
+typedef struct {
+    int cap, n, nround;
+    int *k, *idx, *hit;
+    double *F;
+} gac_rounds_trace;
+int gac_impact_rounds_traced(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                             const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
+                             int *rounds, int *plastic, gac_rounds_trace *trace);
 
 
 /* gac_impact_accuracy.c: the impact's accuracy, measured after its law, and iterative refinement */

@@ -6,7 +6,8 @@
  * Runge-Kutta formula over the state's own steps and stages (gac_sens_flight), the derivative of the projection onto
  * the resting contacts after each step (gac_sens_project), the jump of the sensitivities at an impact by the
  * frictionless law -- of one contact or several, walls, joint stops, link pairs and links on obstacles, landings
- * among them, the set of pushing contacts held fixed -- the saltation
+ * among them, the set of pushing contacts held fixed, in one round or several (the chain of the rounds' laws,
+ * gac_sens_rounds_at) -- the saltation
  * matrix of Hiskens & Pai (2000) (gac_sens_impact), the release of a resting contact (gac_sens_release), a stuck
  * point's slip (gac_sens_slip) and a sliding point's coming to stick (gac_sens_stick), contacts at rest at the start
  * (gac_sens_attach), a switch of base chart (gac_sens_switch; S is in the coordinates of the chart integrated now,
@@ -1152,6 +1153,185 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
     return n;
 }
 
+/* ---- an impact the law solved in several rounds ---- */
+
+#define GAC_SENS_ROUNDS_ROOM 65536L   /* doubles the rounds' laws may take (the stack's): more ends the sensitivities */
+
+/* The rounds of an impact as a chain of Newton laws (gac_impact_rounds: qd+ = R_K(...R_1(qd-)) at fixed q), round j
+ * Newton's law on its active set S_j (the contacts that took an impulse in it) with e_a for a contact struck in it
+ * (approaching) and 0 for one at rest in it or in the plastic round: law[j] at the velocities qd + j nq before it
+ * (qd + nround nq: the law's velocities after the last).  The arrays: R rounds of n contacts (the record's). */
+typedef struct {
+    int R, n, nround;
+    int *k, *idx, *hit, *active, *landing, *normal;   /* trace (R, R n, R n), then R n each */
+    double *Ft, *f, *W, *Y, *LD, *F, *v, *e, *qd;      /* R n, R n nr, R n nq, R n nq, R n n, R n, R n, R n,
+                                                          (R + 1) nq */
+    gac_sens_law *law;                                 /* R */
+} gac_sens_rounds;
+
+#define GAC_SENS_ROUNDS_DOUBLES(R, n, nq, nr) \
+    ((long)(R) * (n) * (2L * (nq) + (nr) + (n) + 4) + ((long)(R) + 1) * (nq))
+
+/* Round j's differential chained: d qd after round j from d qd before it (gac_impact_differential on law[j]), over
+ * every round; dq (the perturbed configuration's direction) passes through unchanged. */
+static void gac_sens_rounds_differential(const gac_sim *s, const gac_sens_rounds *C, const double *q,
+                                         const double *dq, const double *dqd, const double *dp, double *dqd_plus)
+{
+    const int nq = s->model->nq;
+    double in[nq];
+    int j;
+    gac_copy(in, dqd, nq);
+    for (j = 0; j < C->nround; ++j) {
+        gac_impact_differential(s, &C->law[j], q, C->qd + (long)j * nq, dq, in, dp, dqd_plus, 0);
+        gac_copy(in, dqd_plus, nq);
+    }
+    gac_copy(dqd_plus, in, nq);
+}
+
+/* The rounds of the impact of record r (located by c_event; before_set[0..nbefore-1] resting before it) into C: the
+ * law re-run on the record's contacts (those that took an impulse or approached; the others took none in any round,
+ * so each round's solution is the same without them) with each round recorded (gac_impact_rounds_traced), each
+ * contact's e its wall's, or, failing that, 0 for those that landed (struck with e = 0); the re-run must give the
+ * record's rounds and impulses (to 1e-6 of the largest), else GAC_SENS_SIMULTANEOUS.  Then each round's law: its
+ * active rows W (gac_sens_row), Y = I_f^-1 W, A = W Y factored, its impulses and velocities.  A round is
+ * differentiable where its set is strict; a contact at its bound ends the sensitivities (GAC_SENS_BOUNDARY, its index
+ * in *contact): one that meets a round with normal velocity ~0 (below 1e-9 of the chain's speed scale times its
+ * lever) not held at 0 by the rounds before (resting before the impact, or struck with e = 0 in the round before),
+ * one in a round's problem that took impulse ~0 (1e-9 of the largest) and leaves at the round's bound
+ * (v+ + e v- ~ 0), or one left at ~0 by the last round, unless resting before or held after the impact (the hold's
+ * derivative follows those, as for one round).  A link pair or an obstacle whose closest points have no derivative:
+ * GAC_SENS_LINK.  Returns GAC_SENS_VALID or the verdict. */
+static int gac_sens_rounds_at(gac_sim *s, const gac_impact_record *r, int c_event, int nbefore,
+                              const int *before_set, gac_sens_rounds *C, int *contact)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow), n = r->ncontact, R = C->R;
+    const double *q = s->xs, *qdm = s->xs + nq;
+    double fall[n * nr], Wall[n * nq], e_list[n], Ftot[n], qd_plus[nq], vb[n], va[n];
+    double speed = 0.0, largest = 0.0, thr;
+    int zero[n], exempt[n], first = -1, found = 0, attempt, a, b, i, j;
+    gac_rounds_trace trace;
+    *contact = c_event;
+    trace.cap = R, trace.n = n, trace.k = C->k, trace.idx = C->idx, trace.hit = C->hit, trace.F = C->Ft;
+    for (i = 0; i < nq; ++i) {
+        if (fabs(qdm[i]) > speed) speed = fabs(qdm[i]);
+    }
+    thr = 1e-9 * speed * s->lever;
+    for (a = 0; a < n; ++a) {
+        const int c = r->contact[a];
+        int held_after = 0;
+        if (r->impulse[a] > largest) largest = r->impulse[a];
+        if (c == c_event) first = a;
+        zero[a] = 0;
+        for (b = 0; b < nbefore; ++b) zero[a] |= before_set[b] == c;
+        for (b = 0; b < s->nresting; ++b) held_after |= s->resting[b] == c;
+        exempt[a] = zero[a] || held_after;
+        gac_sens_row(s, c, q, fall + (long)a * nr, Wall + (long)a * nq);
+        if (gac_rowless(md, c)) {                            /* its row's derivative exists here (or none) */
+            double zero_q[nq], zero_p[GAC_AT_LEAST_1(md->nparam)], dw[nq];
+            for (i = 0; i < nq; ++i) zero_q[i] = 0.0;
+            for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+            if (gac_sens_row_tangent(s, c, fall + (long)a * nr, q, zero_q, zero_p, dw, 0) != 0) {
+                *contact = c;
+                return GAC_SENS_LINK;
+            }
+        }
+    }
+    for (attempt = 0; attempt < 2; ++attempt) {              /* each contact's e: its wall's, or 0 where it landed */
+        int changed = 0, rounds = 0, plastic = 0, ok;
+        for (a = 0; a < n; ++a) {
+            int landed = 0;
+            e_list[a] = gac_restitution(md, s->p, r->contact[a]);
+            for (b = 0; b < r->nlanded && attempt == 1 && !zero[a]; ++b) landed |= r->landed[b] == r->contact[a];
+            if (landed && e_list[a] != 0.0) {
+                e_list[a] = 0.0;
+                changed = 1;
+            }
+        }
+        if (attempt == 1 && !changed) break;
+        trace.nround = 0;
+        ok = gac_impact_rounds_traced(md, q, qdm, s->p, n, r->contact, e_list, first, qd_plus, Ftot, s->work,
+                                      &rounds, &plastic, &trace) == GAC_OK
+             && rounds == r->rounds && plastic == r->plastic && trace.nround == rounds && rounds <= R;
+        for (a = 0; ok && a < n; ++a) ok = fabs(Ftot[a] - r->impulse[a]) <= 1e-6 * largest;
+        if ((found = ok)) break;
+    }
+    if (!found) return GAC_SENS_SIMULTANEOUS;             /* not the record's rounds */
+    gac_copy(C->qd, qdm, nq);
+    C->nround = 0;
+    for (j = 0; j < R; ++j) {                                /* round j: its law, its set's strictness */
+        const double *qd = C->qd + (long)C->nround * nq;
+        double *qd_next = C->qd + (long)(C->nround + 1) * nq;
+        const long o = (long)C->nround * n;
+        gac_sens_law *L = &C->law[C->nround];
+        int m = 0, zero_next[n];
+        for (a = 0; a < n; ++a) {
+            vb[a] = gac_dot(nq, Wall + (long)a * nq, qd);
+            zero_next[a] = 0;
+            if (!zero[a] && !(fabs(vb[a]) > thr)) {          /* meets the round at rest, not held there */
+                *contact = r->contact[a];
+                return GAC_SENS_BOUNDARY;
+            }
+        }
+        for (b = 0; b < C->k[j]; ++b) {                      /* the active rows: those that took an impulse */
+            const int pos = C->idx[j * n + b], hit = C->hit[j * n + b];
+            if (!(C->Ft[j * n + b] > 1e-9 * largest)) continue;
+            C->active[o + m] = r->contact[pos];
+            C->e[o + m] = hit ? e_list[pos] : 0.0;
+            C->landing[o + m] = !hit || e_list[pos] != gac_restitution(md, s->p, r->contact[pos]);
+            C->normal[o + m] = -1;
+            C->F[o + m] = C->Ft[j * n + b];
+            C->v[o + m] = vb[pos];
+            gac_copy(C->f + (o + m) * nr, fall + (long)pos * nr, nr);
+            gac_copy(C->W + (o + m) * nq, Wall + (long)pos * nq, nq);
+            md->inertia_solve(q, C->W + (o + m) * nq, s->p, C->Y + (o + m) * nq);
+            zero_next[pos] = C->e[o + m] == 0.0;
+            ++m;
+        }
+        for (i = 0; i < nq; ++i) {                           /* the velocities after the round */
+            double value = qd[i];
+            for (a = 0; a < m; ++a) value += C->Y[(o + a) * nq + i] * C->F[o + a];
+            qd_next[i] = value;
+        }
+        for (a = 0; a < n; ++a) va[a] = gac_dot(nq, Wall + (long)a * nq, qd_next);
+        for (b = 0; b < C->k[j]; ++b) {                      /* the others of its problem: clear of their bound */
+            const int pos = C->idx[j * n + b];
+            const double bound = va[pos] + (C->hit[j * n + b] ? e_list[pos] * vb[pos] : 0.0);
+            if (C->Ft[j * n + b] > 1e-9 * largest || bound > thr) continue;
+            if (!exempt[pos]) {
+                *contact = r->contact[pos];
+                return GAC_SENS_BOUNDARY;
+            }
+            zero_next[pos] = zero[pos];
+        }
+        for (a = 0; a < n; ++a) zero[a] = zero_next[a];
+        if (m == 0) continue;                                /* (no impulse: the round leaves qd as it is) */
+        {
+            double *LD = C->LD + (long)C->nround * n * n;
+            for (a = 0; a < m; ++a) {
+                for (b = 0; b <= a; ++b)
+                    LD[a * m + b] = LD[b * m + a] = gac_dot(nq, C->W + (o + a) * nq, C->Y + (o + b) * nq);
+            }
+            if (gac_ldlt(m, LD, 1e-12) != 0) return GAC_SENS_SIMULTANEOUS;   /* dependent rows */
+            L->m = m, L->active = C->active + o, L->landing = C->landing + o, L->f = C->f + o * nr;
+            L->W = C->W + o * nq, L->Y = C->Y + o * nq, L->LD = LD, L->F = C->F + o, L->v = C->v + o;
+            L->e = C->e + o, L->nslide = 0, L->normal = C->normal + o, L->u = 0, L->xi_T_norm = 0, L->cf = 0;
+            L->cf_index = 0;
+        }
+        C->nround++;
+    }
+    {
+        const double *qd = C->qd + (long)C->nround * nq;     /* after the last round: none left at ~0 unheld */
+        for (a = 0; a < n; ++a) {
+            if (!zero[a] && !exempt[a] && !(gac_dot(nq, Wall + (long)a * nq, qd) > thr)) {
+                *contact = r->contact[a];
+                return GAC_SENS_BOUNDARY;
+            }
+        }
+    }
+    return C->nround > 0 ? GAC_SENS_VALID : GAC_SENS_SIMULTANEOUS;
+}
+
 /* The jump at the impact record r just resolved (state before it s->xs, after it s->x), located by contact
  * c_event's gap: for each direction j, dt*_j = -dg_j / (w_c . qd-) and S+_j = D Delta (S-_j + f- dt*_j, dp_j)
  * - f+ dt*_j, Delta the map of the contacts that took an impulse (a wall's or a joint stop's alike: a stop's row is
@@ -1161,7 +1341,11 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
  * derivative of that projection (gac_sens_hold_tangent, on the resting set and the impact's other contacts left at
  * rest), and a landing contact is held at the gap it had at the event (dgap_held from S-_j + f- dt*_j).  A contact
  * of the record that took no impulse stays out of Delta if it leaves the impact separating or is held; one with
- * impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).  On rough walls the
+ * impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).  An impact the
+ * frictionless law solved in several rounds (or closed with a plastic round) takes for Delta the chain of its rounds'
+ * Newton laws, each on its own active set (gac_sens_rounds_at, gac_sens_rounds_differential), a contact at its bound
+ * in one of them ending the sensitivities (GAC_SENS_BOUNDARY, one-sided or not); the frictional law's rounds end them
+ * (GAC_SENS_SIMULTANEOUS).  On rough walls the
  * stuck points are held along every axis: those before (was_stuck, per contact, or NULL: none) in f-, those after
  * (s->is_stuck, as gac_restick re-decided them: called after it, the state after in s->x) in f+ and in the hold,
  * which brings the law's velocities onto their tangential rows too (a landing that sticks); the others on rough
@@ -1205,7 +1389,9 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                       r->ncontact > 0 ? r->contact[0] : -1);
         return;
     }
-    if (r->ncontact < 1 || r->rounds != 1 || r->plastic) {
+    if (r->ncontact < 1 || r->rounds < 1
+        || ((r->rounds > 1 || r->plastic) && r->law != GAC_IMPACT_LAW_FRICTIONLESS)) {   /* (the frictional law's
+                                                                                          rounds: not followed) */
         gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, r->ncontact > 0 ? r->contact[0] : c_event);
         return;
     }
@@ -1243,11 +1429,27 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         double fb[n * nr], Wb[n * nq], vb[n], eb[n];         /* the boundary contacts' rows (one_sided) */
         int active[n3], landing[n3], before_set[nq + nc1], at_rest[nq], m = 0, nbefore, nheld = 0, a, b, i, j;
         int boundary[n], nb = 0;
+        const int several = r->rounds > 1 || r->plastic;   /* the rounds' chain (gac_sens_rounds_at) */
+        const int R = several ? r->rounds : 1, nR = several ? n : 1;
+        int Ck[R], Cidx[R * nR], Chit[R * nR], Cactive[R * nR], Clanding[R * nR], Cnormal[R * nR];
+        const long Csize = several ? GAC_SENS_ROUNDS_DOUBLES(R, n, nq, nr) : 1;
+        double Cbuf[Csize <= GAC_SENS_ROUNDS_ROOM ? Csize : 1];
+        gac_sens_law Claw[R];
+        gac_sens_rounds C;
         gac_sens_law law;
         GAC_SENS_SET_ARRAYS(nq, nr);
         gac_sens_set H;
         GAC_SENS_SET_BIND(H);
         nbefore = gac_sens_set_before(s, r, before_set);
+        if (several && Csize > GAC_SENS_ROUNDS_ROOM) {        /* too many rounds to keep */
+            gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
+            return;
+        }
+        C.R = R, C.n = n, C.nround = 0, C.k = Ck, C.idx = Cidx, C.hit = Chit, C.active = Cactive;
+        C.landing = Clanding, C.normal = Cnormal, C.law = Claw;
+        C.Ft = Cbuf, C.f = C.Ft + (long)R * n, C.W = C.f + (long)R * n * nr, C.Y = C.W + (long)R * n * nq;
+        C.LD = C.Y + (long)R * n * nq, C.F = C.LD + (long)R * n * n, C.v = C.F + (long)R * n, C.e = C.v + (long)R * n;
+        C.qd = C.e + (long)R * n;
         for (i = 0; i < nq; ++i) {
             if (fabs(xm[nq + i]) > speed) speed = fabs(xm[nq + i]);
         }
@@ -1263,7 +1465,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 return;
             }
         }
-        for (a = 0; a < n; ++a) {                            /* the active set, and the mode boundaries */
+        for (a = 0; a < n && !several; ++a) {               /* the active set, and the mode boundaries */
             const int c = r->contact[a];
             const gac_contact *ct = md->contacts + c;
             double *fa = f + (long)m * nr, *wa = W + (long)m * nq, before = 0.0, after = 0.0;
@@ -1357,9 +1559,18 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 }
             }
         }
-        if (m == 0 || (nb > 0 && nslide > 0)) {             /* (boundaries beside slides: not followed) */
+        if (!several && (m == 0 || (nb > 0 && nslide > 0))) {   /* (boundaries beside slides: not followed) */
             gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, nb > 0 ? boundary[0] : c_event);
             return;
+        }
+        if (several) {                                       /* the rounds' laws, and the law's velocities */
+            int c_stop;
+            const int verdict = gac_sens_rounds_at(s, r, c_event, nbefore, before_set, &C, &c_stop);
+            if (verdict != GAC_SENS_VALID) {
+                gac_sens_stop(s, verdict, r->t, c_stop);
+                return;
+            }
+            gac_copy(qd_law, C.qd + (long)C.nround * nq, nq);
         }
         for (a = 0; a < m; ++a) {
             md->inertia_solve(q, W + (long)a * nq, s->p, Y + (long)a * nq);
@@ -1369,7 +1580,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 LD[a * m + b] = LD[b * m + a] = sum;
             }
         }
-        {
+        if (!several) {
             double factor[m * m];
             gac_copy(factor, LD, m * m);
             if (gac_ldlt(m, factor, 1e-12) != 0) {           /* dependent rows: no unique differential */
@@ -1383,7 +1594,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             }                                                /* with slides: the law's impulses (the record's),
                                                                 and LD keeps A for the differential */
         }
-        for (i = 0; i < nq; ++i) {                           /* the law's velocities, before any hold */
+        for (i = 0; i < nq && !several; ++i) {              /* the law's velocities, before any hold */
             double value = xm[nq + i];
             for (a = 0; a < m; ++a) value += Y[(long)a * nq + i] * F[a];
             qd_law[i] = value;
@@ -1429,7 +1640,9 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             }
             tau = -dgap[c_event] / v_event;                  /* dt*_j: the gap stays 0 at the event */
             for (i = 0; i < nx; ++i) dx[i] = S[i] + fm[i] * tau; /* the perturbed state at the perturbed t* */
-            if (nb == 0)
+            if (several)                                     /* the rounds' differentials, chained */
+                gac_sens_rounds_differential(s, &C, q, dx, dx + nq, dp, dqd_plus);
+            else if (nb == 0)
                 gac_impact_differential(s, &law, q, xm + nq, dx, dx + nq, dp, dqd_plus, 0);
             else                                             /* this column's side of the boundary */
                 gac_sens_boundary_column(s, &law, nb, qd_law, q, xm + nq, dx, dp, dqd_plus);

@@ -6,7 +6,8 @@
  * Runge-Kutta formula over the state's own steps and stages (gac_sens_flight), the derivative of the projection onto
  * the resting contacts after each step (gac_sens_project), the jump of the sensitivities at an impact by the
  * frictionless law -- of one contact or several, walls, joint stops, link pairs and links on obstacles, landings
- * among them, the set of pushing contacts held fixed -- the saltation
+ * among them, the set of pushing contacts held fixed, in one round or several (the chain of the rounds' laws,
+ * gac_sens_rounds_at) -- the saltation
  * matrix of Hiskens & Pai (2000) (gac_sens_impact), the release of a resting contact (gac_sens_release), a stuck
  * point's slip (gac_sens_slip) and a sliding point's coming to stick (gac_sens_stick), contacts at rest at the start
  * (gac_sens_attach), a switch of base chart (gac_sens_switch; S is in the coordinates of the chart integrated now,
@@ -1340,7 +1341,11 @@ static int gac_sens_rounds_at(gac_sim *s, const gac_impact_record *r, int c_even
  * derivative of that projection (gac_sens_hold_tangent, on the resting set and the impact's other contacts left at
  * rest), and a landing contact is held at the gap it had at the event (dgap_held from S-_j + f- dt*_j).  A contact
  * of the record that took no impulse stays out of Delta if it leaves the impact separating or is held; one with
- * impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).  On rough walls the
+ * impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).  An impact the
+ * frictionless law solved in several rounds (or closed with a plastic round) takes for Delta the chain of its rounds'
+ * Newton laws, each on its own active set (gac_sens_rounds_at, gac_sens_rounds_differential), a contact at its bound
+ * in one of them ending the sensitivities (GAC_SENS_BOUNDARY, one-sided or not); the frictional law's rounds end them
+ * (GAC_SENS_SIMULTANEOUS).  On rough walls the
  * stuck points are held along every axis: those before (was_stuck, per contact, or NULL: none) in f-, those after
  * (s->is_stuck, as gac_restick re-decided them: called after it, the state after in s->x) in f+ and in the hold,
  * which brings the law's velocities onto their tangential rows too (a landing that sticks); the others on rough

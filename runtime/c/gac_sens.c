@@ -1426,10 +1426,10 @@ static int gac_sens_rounds_at(gac_sim *s, const gac_impact_record *r, int c_even
  * rest), and a landing contact is held at the gap it had at the event (dgap_held from S-_j + f- dt*_j).  A contact
  * of the record that took no impulse stays out of Delta if it leaves the impact separating or is held; one with
  * impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).  An impact the
- * frictionless law solved in several rounds (or closed with a plastic round) takes for Delta the chain of its rounds'
- * Newton laws, each on its own active set (gac_sens_rounds_at, gac_sens_rounds_differential), a contact at its bound
- * in one of them ending the sensitivities (GAC_SENS_BOUNDARY, one-sided or not); the frictional law's rounds end them
- * (GAC_SENS_SIMULTANEOUS).  On rough walls the
+ * law solved in several rounds (or closed with a plastic round) takes for Delta the chain of its rounds'
+ * laws, each on its own active set (gac_sens_rounds_at, gac_sens_rounds_differential; the GDI law's rounds with
+ * their rough contacts' tangential rows, stuck or sliding, as for one round), a contact at its bound in one of them
+ * ending the sensitivities (GAC_SENS_BOUNDARY, one-sided or not).  On rough walls the
  * stuck points are held along every axis: those before (was_stuck, per contact, or NULL: none) in f-, those after
  * (s->is_stuck, as gac_restick re-decided them: called after it, the state after in s->x) in f+ and in the hold,
  * which brings the law's velocities onto their tangential rows too (a landing that sticks); the others on rough

@@ -212,6 +212,22 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
 int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                       const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
                       int *rounds, int *plastic);
+/* What gac_impact_rounds_traced records of each round (for the sensitivities' differential of the rounds): the
+ * contacts of round j's complementarity problem, k[j] of them, at positions idx[j n + i] of the law's list, hit[j n +
+ * i] = 1 where struck with its own e (approaching; 0: at rest in that round, or the plastic round), F[j n + i] their
+ * impulses in that round.  The caller's arrays, room for cap rounds (nround > cap: more rounds than recorded).
+ * gac_impact_rounds_friction_traced records the same and, per contact i of round j, its rows dim[j n + i] (its normal,
+ * then its tangential axes') and their impulses L[j 3n + 3i + r] (F then holds the normal ones). */
+typedef struct {
+    int cap, n, nround;
+    int *k, *idx, *hit;
+    double *F;
+    int *dim;
+    double *L;
+} gac_rounds_trace;
+int gac_impact_rounds_traced(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                             const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
+                             int *rounds, int *plastic, gac_rounds_trace *trace);
 
 
 /* gac_impact_accuracy.c: the impact's accuracy, measured after its law, and iterative refinement */
@@ -232,6 +248,10 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
                                const int *list, const double *e, int first, int law, double *qd_plus, double *F,
                                double *Ft, double *work, int *rounds, int *plastic, int *law_used, double *residual,
                                double *tangential_parts);
+int gac_impact_rounds_friction_traced(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                                      const int *list, const double *e, int first, int law, double *qd_plus,
+                                      double *F, double *Ft, double *work, int *rounds, int *plastic, int *law_used,
+                                      double *residual, double *tangential_parts, gac_rounds_trace *trace);
 /* The tangential impact at the contacts list[0..n-1] (n <= 6), resting at their walls (normal velocities 0) with some
  * sliding where their sliding system is no P-matrix: the frictional impact law (GDI, e = 0 at a contact at rest) on
  * their normal and tangential rows, its non-trivial solution (some L_N > 0; the first of the contacts' modes from all

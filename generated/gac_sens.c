@@ -6,7 +6,8 @@
  * Runge-Kutta formula over the state's own steps and stages (gac_sens_flight), the derivative of the projection onto
  * the resting contacts after each step (gac_sens_project), the jump of the sensitivities at an impact by the
  * frictionless law -- of one contact or several, walls, joint stops, link pairs and links on obstacles, landings
- * among them, the set of pushing contacts held fixed -- the saltation
+ * among them, the set of pushing contacts held fixed, in one round or several (the chain of the rounds' laws,
+ * gac_sens_rounds_at) -- the saltation
  * matrix of Hiskens & Pai (2000) (gac_sens_impact), the release of a resting contact (gac_sens_release), a stuck
  * point's slip (gac_sens_slip) and a sliding point's coming to stick (gac_sens_stick), contacts at rest at the start
  * (gac_sens_attach), a switch of base chart (gac_sens_switch; S is in the coordinates of the chart integrated now,
@@ -1152,6 +1153,269 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
     return n;
 }
 
+/* ---- an impact the law solved in several rounds ---- */
+
+#define GAC_SENS_ROUNDS_ROOM 65536L   /* doubles the rounds' laws may take (the stack's): more ends the sensitivities */
+
+/* The rounds of an impact as a chain of impact laws (qd+ = R_K(...R_1(qd-)) at fixed q), round j the law on its
+ * active set S_j (the contacts that took an impulse in it) with e_a for a contact struck in it (approaching) and 0 for
+ * one at rest in it or in the plastic round: law[j] (gac_sens_law, up to nrow rows: n, or 3 n for the frictional law's
+ * tangential rows) at the velocities qd + j nq before it (qd + nround nq: the law's velocities after the last).  The
+ * arrays: R rounds of n contacts (the record's). */
+typedef struct {
+    int R, n, nrow, nround;
+    int *k, *idx, *hit, *dim;                          /* the trace: R, R n each */
+    int *active, *landing, *normal, *cf_index;         /* R nrow each */
+    double *Ft, *L;                                    /* the trace: R n, R 3n */
+    double *f, *W, *Y, *LD;                            /* R nrow nr, R nrow nq, R nrow nq, R nrow nrow */
+    double *F, *v, *e, *u, *xi_norm, *cf;              /* R nrow each */
+    double *qd;                                        /* (R + 1) nq */
+    gac_sens_law *law;                                 /* R */
+} gac_sens_rounds;
+
+#define GAC_SENS_ROUNDS_DOUBLES(R, n, nrow, nq, nr) \
+    ((long)(R) * (4L * (n) + (long)(nrow) * ((nr) + 2L * (nq) + (nrow) + 6)) + ((long)(R) + 1) * (nq))
+
+/* C's arrays carved from ibuf (8 R nrow ints... as laid out above) and dbuf (GAC_SENS_ROUNDS_DOUBLES). */
+static void gac_sens_rounds_bind(gac_sens_rounds *C, int R, int n, int nrow, int nq, int nr, int *ibuf, double *dbuf,
+                                 gac_sens_law *law)
+{
+    const long Rn = (long)R * n, Rr = (long)R * nrow;
+    C->R = R, C->n = n, C->nrow = nrow, C->nround = 0, C->law = law;
+    C->k = ibuf, C->idx = C->k + R, C->hit = C->idx + Rn, C->dim = C->hit + Rn, C->active = C->dim + Rn;
+    C->landing = C->active + Rr, C->normal = C->landing + Rr, C->cf_index = C->normal + Rr;
+    C->Ft = dbuf, C->L = C->Ft + Rn, C->f = C->L + 3 * Rn, C->W = C->f + Rr * nr, C->Y = C->W + Rr * nq;
+    C->LD = C->Y + Rr * nq, C->F = C->LD + Rr * nrow, C->v = C->F + Rr, C->e = C->v + Rr, C->u = C->e + Rr;
+    C->xi_norm = C->u + Rr, C->cf = C->xi_norm + Rr, C->qd = C->cf + Rr;
+}
+
+/* Round j's differential chained: d qd after round j from d qd before it (gac_impact_differential on law[j]), over
+ * every round; dq (the perturbed configuration's direction) passes through unchanged. */
+static void gac_sens_rounds_differential(const gac_sim *s, const gac_sens_rounds *C, const double *q,
+                                         const double *dq, const double *dqd, const double *dp, double *dqd_plus)
+{
+    const int nq = s->model->nq;
+    double in[nq];
+    int j;
+    gac_copy(in, dqd, nq);
+    for (j = 0; j < C->nround; ++j) {
+        gac_impact_differential(s, &C->law[j], q, C->qd + (long)j * nq, dq, in, dp, dqd_plus, 0);
+        gac_copy(in, dqd_plus, nq);
+    }
+    gac_copy(dqd_plus, in, nq);
+}
+
+/* The law of record r re-run on the record's contacts with each round recorded (gac_impact_rounds_traced, or
+ * gac_impact_rounds_friction_traced for the frictional law), each contact's e e_list; 1 if it gives the record's
+ * rounds, plastic round, law and impulses (normal and tangential, to 1e-6 of the largest). */
+static int gac_sens_rounds_rerun(gac_sim *s, const gac_impact_record *r, int first, const double *e_list,
+                                 double largest, gac_rounds_trace *trace)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, n = r->ncontact;
+    double F[n], Ft[2 * n], qd_plus[nq], residual, parts;
+    int rounds = 0, plastic = 0, law = GAC_IMPACT_LAW_FRICTIONLESS, ok, a;
+    trace->nround = 0;
+    if (r->law == GAC_IMPACT_LAW_FRICTIONLESS) {
+        for (a = 0; a < 2 * n; ++a) Ft[a] = 0.0;
+        ok = gac_impact_rounds_traced(md, s->xs, s->xs + nq, s->p, n, r->contact, e_list, first, qd_plus, F, s->work,
+                                      &rounds, &plastic, trace) == GAC_OK;
+    } else {
+        ok = gac_impact_rounds_friction_traced(md, s->xs, s->xs + nq, s->p, n, r->contact, e_list, first,
+                                               s->opt.impact_law, qd_plus, F, Ft, s->work, &rounds, &plastic, &law,
+                                               &residual, &parts, trace) == GAC_OK;
+    }
+    ok = ok && law == r->law && rounds == r->rounds && plastic == r->plastic && trace->nround == rounds
+         && rounds <= trace->cap;
+    for (a = 0; ok && a < n; ++a) {
+        ok = fabs(F[a] - r->impulse[a]) <= 1e-6 * largest && fabs(Ft[2 * a] - r->impulse_t[2 * a]) <= 1e-6 * largest
+             && fabs(Ft[2 * a + 1] - r->impulse_t[2 * a + 1]) <= 1e-6 * largest;
+    }
+    return ok;
+}
+
+/* The rounds of the impact of record r (located by c_event; before_set[0..nbefore-1] resting before it) into C: the
+ * law re-run on the record's contacts (those that took an impulse or approached; the others took none in any round,
+ * so each round's solution is the same without them; gac_sens_rounds_rerun), each contact's e its wall's, or,
+ * failing that, 0 for those that landed (struck with e = 0); a re-run that does not give the record's rounds and
+ * impulses: GAC_SENS_SIMULTANEOUS.  Then each round's law: its active rows W (gac_sens_row; a rough contact's
+ * tangential rows under the frictional law after its normal one, stuck -- xi_T = gamma+_T + e gamma-_T = 0 -- or
+ * sliding on the cone, as for one round), Y = I_f^-1 W, A = W Y (factored without slides), its impulses and
+ * velocities.  A round is differentiable where its set is strict; a contact at its bound ends the sensitivities
+ * (GAC_SENS_BOUNDARY, its index in *contact): one that meets a round with normal velocity ~0 (below 1e-9 of the
+ * chain's speed scale times its lever) not held at 0 by the rounds before (resting before the impact, or struck with
+ * e = 0 in the round before), one in a round's problem that took impulse ~0 (1e-9 of the largest) and leaves at the
+ * round's bound (v+ + e v- ~ 0), one sliding on the cone with xi_T ~ 0, or one left at ~0 by the last round, unless
+ * resting before or held after the impact (the hold's derivative follows those, as for one round).  A link pair or
+ * an obstacle whose closest points have no derivative: GAC_SENS_LINK.  Returns GAC_SENS_VALID or the verdict. */
+static int gac_sens_rounds_at(gac_sim *s, const gac_impact_record *r, int c_event, int nbefore,
+                              const int *before_set, gac_sens_rounds *C, int *contact)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow), n = r->ncontact, R = C->R, nrow = C->nrow;
+    const double *q = s->xs, *qdm = s->xs + nq;
+    double fall[n * nr], Wall[n * nq], e_list[n], vb[n], va[n];
+    double speed = 0.0, largest = 0.0, thr;
+    int zero[n], exempt[n], first = -1, found = 0, attempt, a, b, i, j, t;
+    gac_rounds_trace trace;
+    *contact = c_event;
+    trace.cap = R, trace.n = n, trace.k = C->k, trace.idx = C->idx, trace.hit = C->hit, trace.F = C->Ft;
+    trace.dim = C->dim, trace.L = C->L;
+    for (i = 0; i < nq; ++i) {
+        if (fabs(qdm[i]) > speed) speed = fabs(qdm[i]);
+    }
+    thr = 1e-9 * speed * s->lever;
+    for (a = 0; a < n; ++a) {
+        const int c = r->contact[a];
+        int held_after = 0;
+        if (r->impulse[a] > largest) largest = r->impulse[a];
+        if (c == c_event) first = a;
+        zero[a] = 0;
+        for (b = 0; b < nbefore; ++b) zero[a] |= before_set[b] == c;
+        for (b = 0; b < s->nresting; ++b) held_after |= s->resting[b] == c;
+        exempt[a] = zero[a] || held_after;
+        gac_sens_row(s, c, q, fall + (long)a * nr, Wall + (long)a * nq);
+        if (gac_rowless(md, c)) {                            /* its row's derivative exists here (or none) */
+            double zero_q[nq], zero_p[GAC_AT_LEAST_1(md->nparam)], dw[nq];
+            for (i = 0; i < nq; ++i) zero_q[i] = 0.0;
+            for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+            if (gac_sens_row_tangent(s, c, fall + (long)a * nr, q, zero_q, zero_p, dw, 0) != 0) {
+                *contact = c;
+                return GAC_SENS_LINK;
+            }
+        }
+    }
+    for (attempt = 0; attempt < 2 && !found; ++attempt) {   /* each contact's e: its wall's, or 0 where it landed */
+        int changed = 0;
+        for (a = 0; a < n; ++a) {
+            int landed = 0;
+            e_list[a] = gac_restitution(md, s->p, r->contact[a]);
+            for (b = 0; b < r->nlanded && attempt == 1 && !zero[a]; ++b) landed |= r->landed[b] == r->contact[a];
+            if (landed && e_list[a] != 0.0) {
+                e_list[a] = 0.0;
+                changed = 1;
+            }
+        }
+        if (attempt == 0 || changed) found = gac_sens_rounds_rerun(s, r, first, e_list, largest, &trace);
+    }
+    if (!found) return GAC_SENS_SIMULTANEOUS;             /* not the record's rounds */
+    gac_copy(C->qd, qdm, nq);
+    C->nround = 0;
+    for (j = 0; j < R; ++j) {                                /* round j: its law, its set's strictness */
+        const double *qd = C->qd + (long)C->nround * nq;
+        double *qd_next = C->qd + (long)(C->nround + 1) * nq;
+        const long o = (long)C->nround * nrow;
+        gac_sens_law *L = &C->law[C->nround];
+        int m = 0, nslide = 0, zero_next[n];
+        for (a = 0; a < n; ++a) {
+            vb[a] = gac_dot(nq, Wall + (long)a * nq, qd);
+            zero_next[a] = 0;
+            if (!zero[a] && !(fabs(vb[a]) > thr)) {          /* meets the round at rest, not held there */
+                *contact = r->contact[a];
+                return GAC_SENS_BOUNDARY;
+            }
+        }
+        for (b = 0; b < C->k[j]; ++b) {                      /* the active rows: those that took an impulse */
+            const int pos = C->idx[j * n + b], hit = C->hit[j * n + b], c = r->contact[pos];
+            const double *Lb = C->L + 3L * (j * n + b), LN = C->Ft[j * n + b];
+            const gac_contact *ct = md->contacts + c;
+            const long row_n = o + m;
+            if (!(LN > 1e-9 * largest)) continue;
+            C->active[row_n] = c;
+            C->e[row_n] = hit ? e_list[pos] : 0.0;
+            C->landing[row_n] = !hit || e_list[pos] != gac_restitution(md, s->p, c);
+            C->normal[row_n] = -1;
+            C->F[row_n] = LN;
+            C->v[row_n] = vb[pos];
+            gac_copy(C->f + row_n * nr, fall + (long)pos * nr, nr);
+            gac_copy(C->W + row_n * nq, Wall + (long)pos * nq, nq);
+            zero_next[pos] = C->e[row_n] == 0.0;
+            ++m;
+            if (r->law != GAC_IMPACT_LAW_FRICTIONLESS && C->dim[j * n + b] > 1) {   /* its tangential rows */
+                const double cf = gac_friction_coefficient(md, s->p, c);
+                const double tangential = hypot(Lb[1], C->dim[j * n + b] > 2 ? Lb[2] : 0.0);
+                const int slides = !(tangential < (1.0 - 1e-6) * cf * LN);
+                int row = 1;
+                nslide += slides;
+                for (t = 0; t < 2; ++t) {
+                    const long rt = o + m;
+                    double *ft = C->f + rt * nr;
+                    if (ct->trow[t] < 0) continue;
+                    for (i = 0; i < nr; ++i) ft[i] = 0.0;
+                    ft[ct->trow[t]] = 1.0;
+                    md->contact_generalized_force(q, ft, s->p, C->W + rt * nq);
+                    C->active[rt] = c, C->e[rt] = C->e[row_n], C->landing[rt] = C->landing[row_n];
+                    C->F[rt] = Lb[row++];
+                    C->v[rt] = gac_dot(nq, C->W + rt * nq, qd);
+                    C->normal[rt] = slides ? (int)(row_n - o) : -1;
+                    C->u[rt] = slides ? -C->F[rt] / (cf * LN) : 0.0;
+                    C->cf[rt] = cf, C->cf_index[rt] = ct->friction_index;
+                    ++m;
+                }
+            }
+        }
+        for (a = 0; a < m; ++a) md->inertia_solve(q, C->W + (o + a) * nq, s->p, C->Y + (o + a) * nq);
+        for (i = 0; i < nq; ++i) {                           /* the velocities after the round */
+            double value = qd[i];
+            for (a = 0; a < m; ++a) value += C->Y[(o + a) * nq + i] * C->F[o + a];
+            qd_next[i] = value;
+        }
+        for (a = 0; a < m; ++a) {                            /* a slide's xi_T = gamma+_T + e gamma-_T, off 0 */
+            double xi2 = 0.0;
+            int last;
+            if (C->normal[o + a] < 0) continue;
+            for (last = a; last < m && C->normal[o + last] == C->normal[o + a]; ++last) {
+                const double xi = gac_dot(nq, C->W + (o + last) * nq, qd_next) + C->e[o + last] * C->v[o + last];
+                xi2 += xi * xi;
+            }
+            if (!(sqrt(xi2) > thr)) {                        /* on the cone with xi_T ~ 0: stick or slide */
+                *contact = C->active[o + a];
+                return GAC_SENS_BOUNDARY;
+            }
+            for (b = a; b < last; ++b) C->xi_norm[o + b] = sqrt(xi2);
+            a = last - 1;
+        }
+        for (a = 0; a < n; ++a) va[a] = gac_dot(nq, Wall + (long)a * nq, qd_next);
+        for (b = 0; b < C->k[j]; ++b) {                      /* the others of its problem: clear of their bound */
+            const int pos = C->idx[j * n + b];
+            const double bound = va[pos] + (C->hit[j * n + b] ? e_list[pos] * vb[pos] : 0.0);
+            if (C->Ft[j * n + b] > 1e-9 * largest || bound > thr) continue;
+            if (!exempt[pos]) {
+                *contact = r->contact[pos];
+                return GAC_SENS_BOUNDARY;
+            }
+            zero_next[pos] = zero[pos];
+        }
+        for (a = 0; a < n; ++a) zero[a] = zero_next[a];
+        if (m == 0) continue;                                /* (no impulse: the round leaves qd as it is) */
+        {
+            double *LD = C->LD + o * nrow, factor[m * m];
+            for (a = 0; a < m; ++a) {
+                for (b = 0; b <= a; ++b)
+                    LD[a * m + b] = LD[b * m + a] = gac_dot(nq, C->W + (o + a) * nq, C->Y + (o + b) * nq);
+            }
+            gac_copy(factor, LD, m * m);
+            if (gac_ldlt(m, factor, 1e-12) != 0) return GAC_SENS_SIMULTANEOUS;   /* dependent rows */
+            if (nslide == 0) gac_copy(LD, factor, m * m);    /* (with slides LD keeps A: gac_impact_differential) */
+            L->m = m, L->active = C->active + o, L->landing = C->landing + o, L->f = C->f + o * nr;
+            L->W = C->W + o * nq, L->Y = C->Y + o * nq, L->LD = LD, L->F = C->F + o, L->v = C->v + o;
+            L->e = C->e + o, L->nslide = nslide, L->normal = C->normal + o, L->u = C->u + o;
+            L->xi_T_norm = C->xi_norm + o, L->cf = C->cf + o, L->cf_index = C->cf_index + o;
+        }
+        C->nround++;
+    }
+    {
+        const double *qd = C->qd + (long)C->nround * nq;     /* after the last round: none left at ~0 unheld */
+        for (a = 0; a < n; ++a) {
+            if (!zero[a] && !exempt[a] && !(gac_dot(nq, Wall + (long)a * nq, qd) > thr)) {
+                *contact = r->contact[a];
+                return GAC_SENS_BOUNDARY;
+            }
+        }
+    }
+    return C->nround > 0 ? GAC_SENS_VALID : GAC_SENS_SIMULTANEOUS;
+}
+
 /* The jump at the impact record r just resolved (state before it s->xs, after it s->x), located by contact
  * c_event's gap: for each direction j, dt*_j = -dg_j / (w_c . qd-) and S+_j = D Delta (S-_j + f- dt*_j, dp_j)
  * - f+ dt*_j, Delta the map of the contacts that took an impulse (a wall's or a joint stop's alike: a stop's row is
@@ -1161,7 +1425,11 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
  * derivative of that projection (gac_sens_hold_tangent, on the resting set and the impact's other contacts left at
  * rest), and a landing contact is held at the gap it had at the event (dgap_held from S-_j + f- dt*_j).  A contact
  * of the record that took no impulse stays out of Delta if it leaves the impact separating or is held; one with
- * impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).  On rough walls the
+ * impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).  An impact the
+ * law solved in several rounds (or closed with a plastic round) takes for Delta the chain of its rounds'
+ * laws, each on its own active set (gac_sens_rounds_at, gac_sens_rounds_differential; the GDI law's rounds with
+ * their rough contacts' tangential rows, stuck or sliding, as for one round), a contact at its bound in one of them
+ * ending the sensitivities (GAC_SENS_BOUNDARY, one-sided or not).  On rough walls the
  * stuck points are held along every axis: those before (was_stuck, per contact, or NULL: none) in f-, those after
  * (s->is_stuck, as gac_restick re-decided them: called after it, the state after in s->x) in f+ and in the hold,
  * which brings the law's velocities onto their tangential rows too (a landing that sticks); the others on rough
@@ -1205,7 +1473,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                       r->ncontact > 0 ? r->contact[0] : -1);
         return;
     }
-    if (r->ncontact < 1 || r->rounds != 1 || r->plastic) {
+    if (r->ncontact < 1 || r->rounds < 1) {
         gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, r->ncontact > 0 ? r->contact[0] : c_event);
         return;
     }
@@ -1243,11 +1511,25 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         double fb[n * nr], Wb[n * nq], vb[n], eb[n];         /* the boundary contacts' rows (one_sided) */
         int active[n3], landing[n3], before_set[nq + nc1], at_rest[nq], m = 0, nbefore, nheld = 0, a, b, i, j;
         int boundary[n], nb = 0;
+        const int several = r->rounds > 1 || r->plastic;   /* the rounds' chain (gac_sens_rounds_at) */
+        const int R = several ? r->rounds : 1, nR = several ? n : 1;
+        const int nrow = r->law == GAC_IMPACT_LAW_FRICTIONLESS ? nR : 3 * nR;   /* a round's rows at most */
+        const long Csize = GAC_SENS_ROUNDS_DOUBLES(R, nR, nrow, nq, nr);
+        const int fits = Csize <= GAC_SENS_ROUNDS_ROOM;
+        int Cint[fits ? R + 3L * R * nR + 4L * R * nrow : 1];
+        double Cbuf[fits ? Csize : 1];
+        gac_sens_law Claw[R];
+        gac_sens_rounds C = {0};
         gac_sens_law law;
         GAC_SENS_SET_ARRAYS(nq, nr);
         gac_sens_set H;
         GAC_SENS_SET_BIND(H);
         nbefore = gac_sens_set_before(s, r, before_set);
+        if (several && Csize > GAC_SENS_ROUNDS_ROOM) {        /* too many rounds to keep */
+            gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
+            return;
+        }
+        if (fits) gac_sens_rounds_bind(&C, R, nR, nrow, nq, nr, Cint, Cbuf, Claw);
         for (i = 0; i < nq; ++i) {
             if (fabs(xm[nq + i]) > speed) speed = fabs(xm[nq + i]);
         }
@@ -1263,7 +1545,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 return;
             }
         }
-        for (a = 0; a < n; ++a) {                            /* the active set, and the mode boundaries */
+        for (a = 0; a < n && !several; ++a) {               /* the active set, and the mode boundaries */
             const int c = r->contact[a];
             const gac_contact *ct = md->contacts + c;
             double *fa = f + (long)m * nr, *wa = W + (long)m * nq, before = 0.0, after = 0.0;
@@ -1357,9 +1639,18 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 }
             }
         }
-        if (m == 0 || (nb > 0 && nslide > 0)) {             /* (boundaries beside slides: not followed) */
+        if (!several && (m == 0 || (nb > 0 && nslide > 0))) {   /* (boundaries beside slides: not followed) */
             gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, nb > 0 ? boundary[0] : c_event);
             return;
+        }
+        if (several) {                                       /* the rounds' laws, and the law's velocities */
+            int c_stop;
+            const int verdict = gac_sens_rounds_at(s, r, c_event, nbefore, before_set, &C, &c_stop);
+            if (verdict != GAC_SENS_VALID) {
+                gac_sens_stop(s, verdict, r->t, c_stop);
+                return;
+            }
+            gac_copy(qd_law, C.qd + (long)C.nround * nq, nq);
         }
         for (a = 0; a < m; ++a) {
             md->inertia_solve(q, W + (long)a * nq, s->p, Y + (long)a * nq);
@@ -1369,7 +1660,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 LD[a * m + b] = LD[b * m + a] = sum;
             }
         }
-        {
+        if (!several) {
             double factor[m * m];
             gac_copy(factor, LD, m * m);
             if (gac_ldlt(m, factor, 1e-12) != 0) {           /* dependent rows: no unique differential */
@@ -1383,7 +1674,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             }                                                /* with slides: the law's impulses (the record's),
                                                                 and LD keeps A for the differential */
         }
-        for (i = 0; i < nq; ++i) {                           /* the law's velocities, before any hold */
+        for (i = 0; i < nq && !several; ++i) {              /* the law's velocities, before any hold */
             double value = xm[nq + i];
             for (a = 0; a < m; ++a) value += Y[(long)a * nq + i] * F[a];
             qd_law[i] = value;
@@ -1429,7 +1720,9 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             }
             tau = -dgap[c_event] / v_event;                  /* dt*_j: the gap stays 0 at the event */
             for (i = 0; i < nx; ++i) dx[i] = S[i] + fm[i] * tau; /* the perturbed state at the perturbed t* */
-            if (nb == 0)
+            if (several)                                     /* the rounds' differentials, chained */
+                gac_sens_rounds_differential(s, &C, q, dx, dx + nq, dp, dqd_plus);
+            else if (nb == 0)
                 gac_impact_differential(s, &law, q, xm + nq, dx, dx + nq, dp, dqd_plus, 0);
             else                                             /* this column's side of the boundary */
                 gac_sens_boundary_column(s, &law, nb, qd_law, q, xm + nq, dx, dp, dqd_plus);

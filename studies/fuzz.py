@@ -700,6 +700,13 @@ def check_run(model, run: Run, result, seconds: float, budget: float) -> list[st
     return violations
 
 
+def study_model(scene):
+    """The study's compiled model of a scene (cached): the general layout, so that every structure keeps the
+    coordinates it was drawn with, with both base charts and the long-double kernels of the impact's accuracy."""
+    from runtime.model import load_model
+    return load_model(scene, specialise=False)
+
+
 def run_structure(args) -> list[Outcome]:
     """Compile one structure and run its runs (one worker's job).  args: (seed, index, runs, budget, n_max[,
     obstacles[, chains]]); obstacles True (the study's runs): a structure that has_obstacle_runs puts each run's
@@ -710,7 +717,6 @@ def run_structure(args) -> list[Outcome]:
     seed, index, runs, budget, n_max = args[:5]
     obstacle_runs = bool(args[5]) if len(args) > 5 else False
     chain_runs = bool(args[6]) if len(args) > 6 else False
-    from runtime.model import load_model
     from runtime.simulate import accuracy_cause, impact_contact_indices, simulate
     scene, rng = draw_structure(seed, index, n_max, chain_runs)
     count = len(chains_of(scene))
@@ -719,7 +725,7 @@ def run_structure(args) -> list[Outcome]:
     capsules = has_capsules(scene)
     outcomes = []
     try:
-        model = load_model(scene, specialise=False)
+        model = study_model(scene)
     except Exception as exc:                           # noqa: BLE001 - reported as an outcome
         return [Outcome(f"{seed}-{index}/{k}", scene.n, False, "-", -1, f"exception: {classify(str(exc))}", True,
                         message=str(exc), capsules=capsules, chains=count) for k in range(runs)]
@@ -738,7 +744,7 @@ def run_structure(args) -> list[Outcome]:
         if obstacles:
             try:
                 _, run_model, run = obstacle_run(obstacle_rng, scene, model, run, obstacles,
-                                                 lambda s: load_model(s, specialise=False))
+                                                 study_model)
             except Exception as exc:                   # noqa: BLE001 - reported as an outcome
                 outcomes.append(Outcome(case, scene.n, planar, run.options["method"], -1,
                                         f"exception: {classify(str(exc))}", True, message=str(exc),
@@ -883,9 +889,8 @@ def _rerun(case: str, budget: float, n_max: int) -> int:
         print(f"error: --case: expected SEED-STRUCTURE/RUN (e.g. 0-12/3), got {case!r}", file=sys.stderr)
         return 2
     seed, index, k = map(int, match.groups())
-    from runtime.model import load_model
     scene, rng = draw_structure(seed, index, n_max, True)
-    model = load_model(scene, specialise=False)
+    model = study_model(scene)
     for _ in range(k + 1):
         run = draw_run(rng, scene, model)
     if not isinstance(scene, Chains) and has_obstacle_runs(seed, index):   # the run's obstacles, as run_structure's
@@ -893,7 +898,7 @@ def _rerun(case: str, budget: float, n_max: int) -> int:
         obstacles = random_obstacles(obstacle_rng, scene, model, run)
         if obstacles:
             scene, model, run = obstacle_run(obstacle_rng, scene, model, run, obstacles,
-                                             lambda s: load_model(s, specialise=False))
+                                             study_model)
     print(f"scene: {scene}")
     print(f"simulate(model, {run.t_end!r}, p={run.p.tolist()!r}, q0={run.q0.tolist()!r}, "
           f"qd0={run.qd0.tolist()!r}, **{run.options!r})")

@@ -20,7 +20,8 @@ plastic round (record.plastic), which leaves both ends at rest, held.
 
 The paths off the strike's: with both walls rough, the friction coefficient (common to both) where one end's impulse
 in one of the rounds just leaves the cone's edge (found by bisection) puts that end at the stick/slide boundary inside
-the impact, which ends the sensitivities there (a mode boundary naming the impact and the end); with a rest height of
+the impact, which ends the sensitivities there (a mode boundary naming the impact and the end), as does, frictionless,
+the restitution where the upper end leaves a round at rest (the rounds' count changing); with a rest height of
 0.1 m the lower end lands (struck with e = 0, its wall's e not read: the sensitivities' re-run of the rounds takes e =
 0 for it after the wall's e does not reproduce them) in an impact of two rounds; and with the side wall replaced by a
 plane obstacle at the same place (a link on an obstacle: its row J^T n, no Jacobian row) the strike takes the same
@@ -248,3 +249,37 @@ def test_an_impact_of_three_rounds_on_an_obstacle_matches_central_differences(pl
     assert all(c.impulse > 0.1 for c in r.impacts[0].contacts)
     assert r.sensitivities.valid and r.sensitivities.n_impacts == 1, r.sensitivity_message
     check_central_differences(model, t_end, p, q0, qd0, directions, r.sensitivities.matrix)
+
+
+def test_an_end_at_rest_between_rounds_ends_the_sensitivities(model):
+    """Frictionless, with e = 0.1 on the side wall: at e_x2_min = 0.3 the strike takes four rounds (the upper end
+    struck again in the fourth), at 0.4 three; bisected to where the count changes, the upper end leaves round 3 at
+    rest (normal velocity ~0 after it).  On the side of four rounds it meets round 4 at ~0, on the side of three the
+    last round leaves it at ~0, unheld: either way the sensitivities end at the impact with a mode boundary (status
+    10) naming that end; 1e-6 (relative) to either side they are carried through."""
+    t_end = T_STRIKE + 5e-4
+    q0, qd0 = np.array(model.scene.q0), np.array(model.scene.qd0)
+
+    def run(e_floor, sensitivities=None):
+        p = model.parameters({**FRICTIONLESS, "e_x2_min": e_floor, "e_x1_min": 0.1})
+        r = simulate(model, t_end, p=p, q0=q0, qd0=qd0, sensitivities=sensitivities, **OPTIONS)
+        assert r.success and [s[0] for s in sequence(r)] == [("O1/x2_min", "O2/x1_min")], r.message
+        return r
+
+    low, high = 0.3, 0.4
+    assert run(low).impacts[0].rounds == 4 and run(high).impacts[0].rounds == 3
+    while high - low > 1e-15:
+        middle = 0.5 * (low + high)
+        if run(middle).impacts[0].rounds == 4:
+            low = middle
+        else:
+            high = middle
+    for e_floor, rounds in ((low, 4), (high, 3)):
+        r = run(e_floor, DIRECTIONS)
+        assert sequence(r) == [(("O1/x2_min", "O2/x1_min"), rounds, False)] and not r.contact_events
+        s = r.sensitivities
+        assert s.code == 10 and "mode boundary" in s.message and "at O2/x1_min" in s.message, (rounds, s.message)
+        assert s.t_event == pytest.approx(T_STRIKE, abs=1e-12) and np.isnan(s.matrix).all()
+    for e_floor in (low * (1.0 - 1e-6), high * (1.0 + 1e-6)):
+        r = run(e_floor, DIRECTIONS)
+        assert r.sensitivities.valid and r.sensitivities.n_impacts == 1, (e_floor, r.sensitivity_message)

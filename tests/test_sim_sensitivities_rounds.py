@@ -29,6 +29,10 @@ three rounds.  The last two against central differences."""
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -67,18 +71,32 @@ def strike_start(phi: float, rate: float):
             np.array([0.0, 0.0, rate, v_o1[0], v_o1[1], 0.0]), wall)
 
 
-@pytest.fixture(scope="module")
-def model(compiled):
+def rod_scene() -> Scene:
     """The rod as a rigid link (its inertia a parameter: Ixx small, Iyy = Izz = m L^2 / 12 by default), the floor
     (e = 0.5) and the wall x1_min (e = 0.7), both rough (c_f = 0.3, a parameter: 0 for the frictionless law), placed
     for the three-round strike at elevation 0.5 rad, turning at 2 rad/s."""
     q0, qd0, wall = strike_start(0.5, 2.0)
     inertia = L ** 2 / 12
-    scene = Scene(name="sens_rounds",
-                  links=(RigidLink(L, 1.0, (L / 2, 0.0, 0.0), ((1e-3, 0, 0), (0, inertia, 0), (0, 0, inertia))),),
-                  walls=(Wall("x2_min", 0.0, 0.5, friction=0.3), Wall("x1_min", wall, 0.7, friction=0.3)),
-                  q0=tuple(q0), qd0=tuple(qd0), gravity=G)
-    return compiled(scene, tangent=True)
+    return Scene(name="sens_rounds",
+                 links=(RigidLink(L, 1.0, (L / 2, 0.0, 0.0), ((1e-3, 0, 0), (0, inertia, 0), (0, 0, inertia))),),
+                 walls=(Wall("x2_min", 0.0, 0.5, friction=0.3), Wall("x1_min", wall, 0.7, friction=0.3)),
+                 q0=tuple(q0), qd0=tuple(qd0), gravity=G)
+
+
+@pytest.fixture(scope="module")
+def model(compiled):
+    """The rod (rod_scene) with the tangent kernels."""
+    return compiled(rod_scene(), tangent=True)
+
+
+def plastic_start(model):
+    """(p, q0, qd0) of the strike closed by the plastic round: 45 degrees, Izz = m (L/2)^2 / 400, e = 0.3 on both
+    walls, frictionless."""
+    q0, qd0, wall = strike_start(math.pi / 4, 2.0)
+    izz = 0.25 / 400
+    p = model.parameters({"Izz_1": izz, "Iyy_1": izz, "Ixx_1": 1e-5, "wall_x1_min": wall, "e_x2_min": 0.3,
+                          "e_x1_min": 0.3, **FRICTIONLESS})
+    return p, q0, qd0
 
 
 def sequence(run):
@@ -130,10 +148,7 @@ def test_an_impact_closed_by_the_plastic_round_matches_central_differences(model
     until GAC_MAX_ROUNDS, then the plastic round leaves both at rest (held after it): 257 rounds chained, against
     central differences shortly after (the rod then slides down the corner, both ends held)."""
     t_end = 0.055
-    q0, qd0, wall = strike_start(math.pi / 4, 2.0)
-    izz = 0.25 / 400
-    p = model.parameters({"Izz_1": izz, "Iyy_1": izz, "Ixx_1": 1e-5, "wall_x1_min": wall, "e_x2_min": 0.3,
-                          "e_x1_min": 0.3, **FRICTIONLESS})
+    p, q0, qd0 = plastic_start(model)
     r = simulate(model, t_end, p=p, q0=q0, qd0=qd0, sensitivities=DIRECTIONS, **OPTIONS)
     assert r.success, r.message
     assert sequence(r) == [(("O1/x2_min", "O2/x1_min"), 257, True)]
@@ -283,3 +298,28 @@ def test_an_end_at_rest_between_rounds_ends_the_sensitivities(model):
     for e_floor in (low * (1.0 - 1e-6), high * (1.0 + 1e-6)):
         r = run(e_floor, DIRECTIONS)
         assert r.sensitivities.valid and r.sensitivities.n_impacts == 1, (e_floor, r.sensitivity_message)
+
+
+def test_the_stack_of_257_rounds_fits_a_small_thread(model):
+    """The strike closed by the plastic round (257 rounds chained) with sensitivities, run in a thread of 64 kB of
+    stack (below musl's 128 kB default for threads): the sensitivities keep only the rounds' trace (9.3 kB here) and
+    one round's law at a time, so their stack does not grow with the rounds (docs/generated-c.md, the stack table).
+    In a child process, where an overflow ends only the child."""
+    tests = Path(__file__).resolve().parent
+    script = textwrap.dedent(f"""
+        import sys, threading
+        sys.path[:0] = [{str(tests.parent)!r}, {str(tests)!r}]
+        from runtime import load_model, simulate
+        import test_sim_sensitivities_rounds as T
+        model = load_model(T.rod_scene(), tangent=True)
+        p, q0, qd0 = T.plastic_start(model)
+        def run():
+            r = simulate(model, 0.055, p=p, q0=q0, qd0=qd0, sensitivities=T.DIRECTIONS, **T.OPTIONS)
+            print(r.impacts[0].rounds, r.sensitivities.valid)
+        threading.stack_size(64 * 1024)
+        thread = threading.Thread(target=run)
+        thread.start()
+        thread.join()
+    """)
+    child = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
+    assert child.returncode == 0 and child.stdout.split() == ["257", "True"], (child.returncode, child.stderr[-2000:])

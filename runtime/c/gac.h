@@ -1161,7 +1161,7 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
 #define GAC_SENS_STOP          3   /* (not raised since joint stops are differentiated; the code stays reserved) */
 #define GAC_SENS_SIMULTANEOUS  4   /* an impact whose active contacts' rows are dependent (in one of its rounds), one
                                       that applied no impulse, or one of several rounds whose rounds the
-                                      sensitivities could not reproduce from its record (or too many to keep:
+                                      sensitivities could not reproduce from its record (or too many to trace:
                                       gac_sens.c); the rounds of the frictionless and GDI laws are differentiated,
                                       as the chain of the rounds' laws */
 #define GAC_SENS_GRAZING       5   /* a contact met its wall with normal velocity ~ 0 (|w . qd-| below 1e-9 of the

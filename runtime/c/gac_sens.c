@@ -1155,54 +1155,43 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
 
 /* ---- an impact the law solved in several rounds ---- */
 
-#define GAC_SENS_ROUNDS_ROOM 65536L   /* doubles the rounds' laws may take (the stack's): more ends the sensitivities */
+#define GAC_SENS_TRACE_ROOM 24576L   /* bytes the rounds' trace may take (on the stack): more ends the sensitivities */
+
+/* The rounds' trace for R rounds of n contacts (gac_rounds_trace): k (R ints), idx and hit (R n ints each), F (R n
+ * doubles), and under the frictional law (rough) dim (R n ints) and L (3 R n doubles).  257 rounds of two contacts
+ * take 9,252 bytes frictionless, 23,644 rough. */
+#define GAC_SENS_TRACE_INTS(R, n, rough) ((long)(R) * (1L + ((rough) ? 3L : 2L) * (n)))
+#define GAC_SENS_TRACE_DOUBLES(R, n, rough) ((long)(R) * ((rough) ? 4L : 1L) * (n))
+#define GAC_SENS_TRACE_BYTES(R, n, rough) \
+    (GAC_SENS_TRACE_INTS(R, n, rough) * (long)sizeof(int) + GAC_SENS_TRACE_DOUBLES(R, n, rough) * (long)sizeof(double))
 
 /* The rounds of an impact as a chain of impact laws (qd+ = R_K(...R_1(qd-)) at fixed q), round j the law on its
  * active set S_j (the contacts that took an impulse in it) with e_a for a contact struck in it (approaching) and 0 for
- * one at rest in it or in the plastic round: law[j] (gac_sens_law, up to nrow rows: n, or 3 n for the frictional law's
- * tangential rows) at the velocities qd + j nq before it (qd + nround nq: the law's velocities after the last).  The
- * arrays: R rounds of n contacts (the record's). */
+ * one at rest in it or in the plastic round, at the velocities qd_j before it.  Of the rounds only their trace is kept
+ * (each round's problem and impulses); a walk through them (gac_sens_round) rebuilds round j's law (gac_sens_law, up
+ * to 3 n rows: n, or the frictional law's tangential rows too) from the trace and qd_j in the caller's arrays for one
+ * round's law, and gives qd_j+1.  The stack the rounds take: the trace (at most GAC_SENS_TRACE_ROOM bytes), one
+ * round's law and the record's n contacts' rows, whatever the number of rounds. */
 typedef struct {
-    int R, n, nrow, nround;
-    int *k, *idx, *hit, *dim;                          /* the trace: R, R n each */
-    int *active, *landing, *normal, *cf_index;         /* R nrow each */
-    double *Ft, *L;                                    /* the trace: R n, R 3n */
-    double *f, *W, *Y, *LD;                            /* R nrow nr, R nrow nq, R nrow nq, R nrow nrow */
-    double *F, *v, *e, *u, *xi_norm, *cf;              /* R nrow each */
-    double *qd;                                        /* (R + 1) nq */
-    gac_sens_law *law;                                 /* R */
+    int n, nround;                                     /* the record's contacts; rounds with an impulse walked */
+    gac_rounds_trace trace;
+    double *fall, *Wall, *e_list;                      /* each contact's row f (n nr) and w (n nq), its e (n) */
+    int *zero_start, *zero, *exempt;                   /* n each: held at 0 before the impact, before round j; exempt
+                                                          from the bounds (resting before or held after) */
+    double thr, largest;                               /* ~0 of a normal velocity; the largest impulse */
+    double *qd, *qd_next;                              /* nq each: the velocities before round j, after it */
+    gac_sens_law law;                                  /* round j's, in the arrays below */
+    int *active, *landing, *normal, *cf_index;         /* 3 n rows each */
+    double *f, *W, *Y, *LD, *F, *v, *e, *u, *xi_norm, *cf;   /* 3 n rows of nr, nq, nq, 3 n, 1... */
 } gac_sens_rounds;
 
-#define GAC_SENS_ROUNDS_DOUBLES(R, n, nrow, nq, nr) \
-    ((long)(R) * (4L * (n) + (long)(nrow) * ((nr) + 2L * (nq) + (nrow) + 6)) + ((long)(R) + 1) * (nq))
-
-/* C's arrays carved from ibuf (8 R nrow ints... as laid out above) and dbuf (GAC_SENS_ROUNDS_DOUBLES). */
-static void gac_sens_rounds_bind(gac_sens_rounds *C, int R, int n, int nrow, int nq, int nr, int *ibuf, double *dbuf,
-                                 gac_sens_law *law)
+/* The walk's start: the velocities before the impact, the contacts held at 0 before it. */
+static void gac_sens_rounds_start(const gac_sim *s, gac_sens_rounds *C)
 {
-    const long Rn = (long)R * n, Rr = (long)R * nrow;
-    C->R = R, C->n = n, C->nrow = nrow, C->nround = 0, C->law = law;
-    C->k = ibuf, C->idx = C->k + R, C->hit = C->idx + Rn, C->dim = C->hit + Rn, C->active = C->dim + Rn;
-    C->landing = C->active + Rr, C->normal = C->landing + Rr, C->cf_index = C->normal + Rr;
-    C->Ft = dbuf, C->L = C->Ft + Rn, C->f = C->L + 3 * Rn, C->W = C->f + Rr * nr, C->Y = C->W + Rr * nq;
-    C->LD = C->Y + Rr * nq, C->F = C->LD + Rr * nrow, C->v = C->F + Rr, C->e = C->v + Rr, C->u = C->e + Rr;
-    C->xi_norm = C->u + Rr, C->cf = C->xi_norm + Rr, C->qd = C->cf + Rr;
-}
-
-/* Round j's differential chained: d qd after round j from d qd before it (gac_impact_differential on law[j]), over
- * every round; dq (the perturbed configuration's direction) passes through unchanged. */
-static void gac_sens_rounds_differential(const gac_sim *s, const gac_sens_rounds *C, const double *q,
-                                         const double *dq, const double *dqd, const double *dp, double *dqd_plus)
-{
-    const int nq = s->model->nq;
-    double in[nq];
-    int j;
-    gac_copy(in, dqd, nq);
-    for (j = 0; j < C->nround; ++j) {
-        gac_impact_differential(s, &C->law[j], q, C->qd + (long)j * nq, dq, in, dp, dqd_plus, 0);
-        gac_copy(in, dqd_plus, nq);
-    }
-    gac_copy(dqd_plus, in, nq);
+    int a;
+    gac_copy(C->qd, s->xs + s->model->nq, s->model->nq);
+    for (a = 0; a < C->n; ++a) C->zero[a] = C->zero_start[a];
+    C->nround = 0;
 }
 
 /* The law of record r re-run on the record's contacts with each round recorded (gac_impact_rounds_traced, or
@@ -1234,186 +1223,221 @@ static int gac_sens_rounds_rerun(gac_sim *s, const gac_impact_record *r, int fir
     return ok;
 }
 
-/* The rounds of the impact of record r (located by c_event; before_set[0..nbefore-1] resting before it) into C: the
- * law re-run on the record's contacts (those that took an impulse or approached; the others took none in any round,
- * so each round's solution is the same without them; gac_sens_rounds_rerun), each contact's e its wall's, or,
- * failing that, 0 for those that landed (struck with e = 0); a re-run that does not give the record's rounds and
- * impulses: GAC_SENS_SIMULTANEOUS.  Then each round's law: its active rows W (gac_sens_row; a rough contact's
+/* Round j of the walk: its law into C->law (m = 0: it took no impulse) at the velocities C->qd before it, the
+ * velocities after it into C->qd_next, and its set's strictness.  Its active rows W (gac_sens_row; a rough contact's
  * tangential rows under the frictional law after its normal one, stuck -- xi_T = gamma+_T + e gamma-_T = 0 -- or
- * sliding on the cone, as for one round), Y = I_f^-1 W, A = W Y (factored without slides), its impulses and
- * velocities.  A round is differentiable where its set is strict; a contact at its bound ends the sensitivities
- * (GAC_SENS_BOUNDARY, its index in *contact): one that meets a round with normal velocity ~0 (below 1e-9 of the
- * chain's speed scale times its lever) not held at 0 by the rounds before (resting before the impact, or struck with
- * e = 0 in the round before), one in a round's problem that took impulse ~0 (1e-9 of the largest) and leaves at the
- * round's bound (v+ + e v- ~ 0), one sliding on the cone with xi_T ~ 0, or one left at ~0 by the last round, unless
- * resting before or held after the impact (the hold's derivative follows those, as for one round).  A link pair or
- * an obstacle whose closest points have no derivative: GAC_SENS_LINK.  Returns GAC_SENS_VALID or the verdict. */
+ * sliding on the cone, as for one round), Y = I_f^-1 W, A = W Y (factored without slides), its impulses (the trace's)
+ * and velocities.  A contact at its bound: GAC_SENS_BOUNDARY, its index in *contact (gac_sens_rounds_at). */
+static int gac_sens_round(const gac_sim *s, const gac_impact_record *r, gac_sens_rounds *C, int j, int *contact)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow), n = C->n;
+    const double *q = s->xs, *qd = C->qd, *Wall = C->Wall, thr = C->thr, largest = C->largest;
+    const gac_rounds_trace *T = &C->trace;
+    double *qd_next = C->qd_next, vb[n], va[n];
+    gac_sens_law *L = &C->law;
+    int m = 0, nslide = 0, zero_next[n], a, b, i, t;
+    L->m = 0;
+    for (a = 0; a < n; ++a) {
+        vb[a] = gac_dot(nq, Wall + (long)a * nq, qd);
+        zero_next[a] = 0;
+        if (!C->zero[a] && !(fabs(vb[a]) > thr)) {           /* meets the round at rest, not held there */
+            *contact = r->contact[a];
+            return GAC_SENS_BOUNDARY;
+        }
+    }
+    for (b = 0; b < T->k[j]; ++b) {                          /* the active rows: those that took an impulse */
+        const int pos = T->idx[j * n + b], hit = T->hit[j * n + b], c = r->contact[pos];
+        const double LN = T->F[j * n + b];
+        const gac_contact *ct = md->contacts + c;
+        const int row_n = m;
+        if (!(LN > 1e-9 * largest)) continue;
+        C->active[row_n] = c;
+        C->e[row_n] = hit ? C->e_list[pos] : 0.0;
+        C->landing[row_n] = !hit || C->e_list[pos] != gac_restitution(md, s->p, c);
+        C->normal[row_n] = -1;
+        C->F[row_n] = LN;
+        C->v[row_n] = vb[pos];
+        gac_copy(C->f + (long)row_n * nr, C->fall + (long)pos * nr, nr);
+        gac_copy(C->W + (long)row_n * nq, Wall + (long)pos * nq, nq);
+        zero_next[pos] = C->e[row_n] == 0.0;
+        ++m;
+        if (r->law != GAC_IMPACT_LAW_FRICTIONLESS && T->dim[j * n + b] > 1) {   /* its tangential rows */
+            const double *Lb = T->L + 3L * (j * n + b);
+            const double cf = gac_friction_coefficient(md, s->p, c);
+            const double tangential = hypot(Lb[1], T->dim[j * n + b] > 2 ? Lb[2] : 0.0);
+            const int slides = !(tangential < (1.0 - 1e-6) * cf * LN);
+            int row = 1;
+            nslide += slides;
+            for (t = 0; t < 2; ++t) {
+                const int rt = m;
+                double *ft = C->f + (long)rt * nr;
+                if (ct->trow[t] < 0) continue;
+                for (i = 0; i < nr; ++i) ft[i] = 0.0;
+                ft[ct->trow[t]] = 1.0;
+                md->contact_generalized_force(q, ft, s->p, C->W + (long)rt * nq);
+                C->active[rt] = c, C->e[rt] = C->e[row_n], C->landing[rt] = C->landing[row_n];
+                C->F[rt] = Lb[row++];
+                C->v[rt] = gac_dot(nq, C->W + (long)rt * nq, qd);
+                C->normal[rt] = slides ? row_n : -1;
+                C->u[rt] = slides ? -C->F[rt] / (cf * LN) : 0.0;
+                C->cf[rt] = cf, C->cf_index[rt] = ct->friction_index;
+                ++m;
+            }
+        }
+    }
+    for (a = 0; a < m; ++a) md->inertia_solve(q, C->W + (long)a * nq, s->p, C->Y + (long)a * nq);
+    for (i = 0; i < nq; ++i) {                               /* the velocities after the round */
+        double value = qd[i];
+        for (a = 0; a < m; ++a) value += C->Y[(long)a * nq + i] * C->F[a];
+        qd_next[i] = value;
+    }
+    for (a = 0; a < m; ++a) {                                /* a slide's xi_T = gamma+_T + e gamma-_T, off 0 */
+        double xi2 = 0.0;
+        int last;
+        if (C->normal[a] < 0) continue;
+        for (last = a; last < m && C->normal[last] == C->normal[a]; ++last) {
+            const double xi = gac_dot(nq, C->W + (long)last * nq, qd_next) + C->e[last] * C->v[last];
+            xi2 += xi * xi;
+        }
+        if (!(sqrt(xi2) > thr)) {                            /* on the cone with xi_T ~ 0: stick or slide */
+            *contact = C->active[a];
+            return GAC_SENS_BOUNDARY;
+        }
+        for (b = a; b < last; ++b) C->xi_norm[b] = sqrt(xi2);
+        a = last - 1;
+    }
+    for (a = 0; a < n; ++a) va[a] = gac_dot(nq, Wall + (long)a * nq, qd_next);
+    for (b = 0; b < T->k[j]; ++b) {                          /* the others of its problem: clear of their bound */
+        const int pos = T->idx[j * n + b];
+        const double bound = va[pos] + (T->hit[j * n + b] ? C->e_list[pos] * vb[pos] : 0.0);
+        if (T->F[j * n + b] > 1e-9 * largest || bound > thr) continue;
+        if (!C->exempt[pos]) {
+            *contact = r->contact[pos];
+            return GAC_SENS_BOUNDARY;
+        }
+        zero_next[pos] = C->zero[pos];
+    }
+    for (a = 0; a < n; ++a) C->zero[a] = zero_next[a];
+    if (m == 0) return GAC_SENS_VALID;                      /* (no impulse: the round leaves qd as it is) */
+    {
+        double factor[m * m];
+        for (a = 0; a < m; ++a) {
+            for (b = 0; b <= a; ++b)
+                C->LD[a * m + b] = C->LD[b * m + a] = gac_dot(nq, C->W + (long)a * nq, C->Y + (long)b * nq);
+        }
+        gac_copy(factor, C->LD, m * m);
+        if (gac_ldlt(m, factor, 1e-12) != 0) return GAC_SENS_SIMULTANEOUS;   /* dependent rows */
+        if (nslide == 0) gac_copy(C->LD, factor, m * m);    /* (with slides LD keeps A: gac_impact_differential) */
+    }
+    L->m = m, L->active = C->active, L->landing = C->landing, L->f = C->f, L->W = C->W, L->Y = C->Y, L->LD = C->LD;
+    L->F = C->F, L->v = C->v, L->e = C->e, L->nslide = nslide, L->normal = C->normal, L->u = C->u;
+    L->xi_T_norm = C->xi_norm, L->cf = C->cf, L->cf_index = C->cf_index;
+    C->nround++;
+    return GAC_SENS_VALID;
+}
+
+/* The rounds of the impact of record r (located by c_event; before_set[0..nbefore-1] resting before it) walked once
+ * (gac_sens_round), C->qd then the law's velocities: the law re-run on the record's contacts (those that took an
+ * impulse or approached; the others took none in any round, so each round's solution is the same without them;
+ * gac_sens_rounds_rerun) into C's trace, each contact's e its wall's, or, failing that, 0 for those that landed
+ * (struck with e = 0); a re-run that does not give the record's rounds and impulses: GAC_SENS_SIMULTANEOUS.  A round
+ * is differentiable where its set is strict; a contact at its bound ends the sensitivities (GAC_SENS_BOUNDARY, its
+ * index in *contact): one that meets a round with normal velocity ~0 (below 1e-9 of the chain's speed scale times its
+ * lever) not held at 0 by the rounds before (resting before the impact, or struck with e = 0 in the round before),
+ * one in a round's problem that took impulse ~0 (1e-9 of the largest) and leaves at the round's bound (v+ + e v- ~
+ * 0), one sliding on the cone with xi_T ~ 0, or one left at ~0 by the last round, unless resting before or held after
+ * the impact (the hold's derivative follows those, as for one round).  A link pair or an obstacle whose closest
+ * points have no derivative: GAC_SENS_LINK.  Returns GAC_SENS_VALID or the verdict. */
 static int gac_sens_rounds_at(gac_sim *s, const gac_impact_record *r, int c_event, int nbefore,
                               const int *before_set, gac_sens_rounds *C, int *contact)
 {
     const gac_model *md = s->model;
-    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow), n = r->ncontact, R = C->R, nrow = C->nrow;
+    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow), n = r->ncontact;
     const double *q = s->xs, *qdm = s->xs + nq;
-    double fall[n * nr], Wall[n * nq], e_list[n], vb[n], va[n];
-    double speed = 0.0, largest = 0.0, thr;
-    int zero[n], exempt[n], first = -1, found = 0, attempt, a, b, i, j, t;
-    gac_rounds_trace trace;
+    double speed = 0.0, largest = 0.0;
+    int first = -1, found = 0, attempt, a, b, i, j;
     *contact = c_event;
-    trace.cap = R, trace.n = n, trace.k = C->k, trace.idx = C->idx, trace.hit = C->hit, trace.F = C->Ft;
-    trace.dim = C->dim, trace.L = C->L;
     for (i = 0; i < nq; ++i) {
         if (fabs(qdm[i]) > speed) speed = fabs(qdm[i]);
     }
-    thr = 1e-9 * speed * s->lever;
+    C->thr = 1e-9 * speed * s->lever;
     for (a = 0; a < n; ++a) {
         const int c = r->contact[a];
         int held_after = 0;
         if (r->impulse[a] > largest) largest = r->impulse[a];
         if (c == c_event) first = a;
-        zero[a] = 0;
-        for (b = 0; b < nbefore; ++b) zero[a] |= before_set[b] == c;
+        C->zero_start[a] = 0;
+        for (b = 0; b < nbefore; ++b) C->zero_start[a] |= before_set[b] == c;
         for (b = 0; b < s->nresting; ++b) held_after |= s->resting[b] == c;
-        exempt[a] = zero[a] || held_after;
-        gac_sens_row(s, c, q, fall + (long)a * nr, Wall + (long)a * nq);
+        C->exempt[a] = C->zero_start[a] || held_after;
+        gac_sens_row(s, c, q, C->fall + (long)a * nr, C->Wall + (long)a * nq);
         if (gac_rowless(md, c)) {                            /* its row's derivative exists here (or none) */
             double zero_q[nq], zero_p[GAC_AT_LEAST_1(md->nparam)], dw[nq];
             for (i = 0; i < nq; ++i) zero_q[i] = 0.0;
             for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
-            if (gac_sens_row_tangent(s, c, fall + (long)a * nr, q, zero_q, zero_p, dw, 0) != 0) {
+            if (gac_sens_row_tangent(s, c, C->fall + (long)a * nr, q, zero_q, zero_p, dw, 0) != 0) {
                 *contact = c;
                 return GAC_SENS_LINK;
             }
         }
     }
+    C->largest = largest;
     for (attempt = 0; attempt < 2 && !found; ++attempt) {   /* each contact's e: its wall's, or 0 where it landed */
         int changed = 0;
         for (a = 0; a < n; ++a) {
             int landed = 0;
-            e_list[a] = gac_restitution(md, s->p, r->contact[a]);
-            for (b = 0; b < r->nlanded && attempt == 1 && !zero[a]; ++b) landed |= r->landed[b] == r->contact[a];
-            if (landed && e_list[a] != 0.0) {
-                e_list[a] = 0.0;
+            C->e_list[a] = gac_restitution(md, s->p, r->contact[a]);
+            for (b = 0; b < r->nlanded && attempt == 1 && !C->zero_start[a]; ++b)
+                landed |= r->landed[b] == r->contact[a];
+            if (landed && C->e_list[a] != 0.0) {
+                C->e_list[a] = 0.0;
                 changed = 1;
             }
         }
-        if (attempt == 0 || changed) found = gac_sens_rounds_rerun(s, r, first, e_list, largest, &trace);
+        if (attempt == 0 || changed) found = gac_sens_rounds_rerun(s, r, first, C->e_list, largest, &C->trace);
     }
     if (!found) return GAC_SENS_SIMULTANEOUS;             /* not the record's rounds */
-    gac_copy(C->qd, qdm, nq);
-    C->nround = 0;
-    for (j = 0; j < R; ++j) {                                /* round j: its law, its set's strictness */
-        const double *qd = C->qd + (long)C->nround * nq;
-        double *qd_next = C->qd + (long)(C->nround + 1) * nq;
-        const long o = (long)C->nround * nrow;
-        gac_sens_law *L = &C->law[C->nround];
-        int m = 0, nslide = 0, zero_next[n];
-        for (a = 0; a < n; ++a) {
-            vb[a] = gac_dot(nq, Wall + (long)a * nq, qd);
-            zero_next[a] = 0;
-            if (!zero[a] && !(fabs(vb[a]) > thr)) {          /* meets the round at rest, not held there */
-                *contact = r->contact[a];
-                return GAC_SENS_BOUNDARY;
-            }
-        }
-        for (b = 0; b < C->k[j]; ++b) {                      /* the active rows: those that took an impulse */
-            const int pos = C->idx[j * n + b], hit = C->hit[j * n + b], c = r->contact[pos];
-            const double *Lb = C->L + 3L * (j * n + b), LN = C->Ft[j * n + b];
-            const gac_contact *ct = md->contacts + c;
-            const long row_n = o + m;
-            if (!(LN > 1e-9 * largest)) continue;
-            C->active[row_n] = c;
-            C->e[row_n] = hit ? e_list[pos] : 0.0;
-            C->landing[row_n] = !hit || e_list[pos] != gac_restitution(md, s->p, c);
-            C->normal[row_n] = -1;
-            C->F[row_n] = LN;
-            C->v[row_n] = vb[pos];
-            gac_copy(C->f + row_n * nr, fall + (long)pos * nr, nr);
-            gac_copy(C->W + row_n * nq, Wall + (long)pos * nq, nq);
-            zero_next[pos] = C->e[row_n] == 0.0;
-            ++m;
-            if (r->law != GAC_IMPACT_LAW_FRICTIONLESS && C->dim[j * n + b] > 1) {   /* its tangential rows */
-                const double cf = gac_friction_coefficient(md, s->p, c);
-                const double tangential = hypot(Lb[1], C->dim[j * n + b] > 2 ? Lb[2] : 0.0);
-                const int slides = !(tangential < (1.0 - 1e-6) * cf * LN);
-                int row = 1;
-                nslide += slides;
-                for (t = 0; t < 2; ++t) {
-                    const long rt = o + m;
-                    double *ft = C->f + rt * nr;
-                    if (ct->trow[t] < 0) continue;
-                    for (i = 0; i < nr; ++i) ft[i] = 0.0;
-                    ft[ct->trow[t]] = 1.0;
-                    md->contact_generalized_force(q, ft, s->p, C->W + rt * nq);
-                    C->active[rt] = c, C->e[rt] = C->e[row_n], C->landing[rt] = C->landing[row_n];
-                    C->F[rt] = Lb[row++];
-                    C->v[rt] = gac_dot(nq, C->W + rt * nq, qd);
-                    C->normal[rt] = slides ? (int)(row_n - o) : -1;
-                    C->u[rt] = slides ? -C->F[rt] / (cf * LN) : 0.0;
-                    C->cf[rt] = cf, C->cf_index[rt] = ct->friction_index;
-                    ++m;
-                }
-            }
-        }
-        for (a = 0; a < m; ++a) md->inertia_solve(q, C->W + (o + a) * nq, s->p, C->Y + (o + a) * nq);
-        for (i = 0; i < nq; ++i) {                           /* the velocities after the round */
-            double value = qd[i];
-            for (a = 0; a < m; ++a) value += C->Y[(o + a) * nq + i] * C->F[o + a];
-            qd_next[i] = value;
-        }
-        for (a = 0; a < m; ++a) {                            /* a slide's xi_T = gamma+_T + e gamma-_T, off 0 */
-            double xi2 = 0.0;
-            int last;
-            if (C->normal[o + a] < 0) continue;
-            for (last = a; last < m && C->normal[o + last] == C->normal[o + a]; ++last) {
-                const double xi = gac_dot(nq, C->W + (o + last) * nq, qd_next) + C->e[o + last] * C->v[o + last];
-                xi2 += xi * xi;
-            }
-            if (!(sqrt(xi2) > thr)) {                        /* on the cone with xi_T ~ 0: stick or slide */
-                *contact = C->active[o + a];
-                return GAC_SENS_BOUNDARY;
-            }
-            for (b = a; b < last; ++b) C->xi_norm[o + b] = sqrt(xi2);
-            a = last - 1;
-        }
-        for (a = 0; a < n; ++a) va[a] = gac_dot(nq, Wall + (long)a * nq, qd_next);
-        for (b = 0; b < C->k[j]; ++b) {                      /* the others of its problem: clear of their bound */
-            const int pos = C->idx[j * n + b];
-            const double bound = va[pos] + (C->hit[j * n + b] ? e_list[pos] * vb[pos] : 0.0);
-            if (C->Ft[j * n + b] > 1e-9 * largest || bound > thr) continue;
-            if (!exempt[pos]) {
-                *contact = r->contact[pos];
-                return GAC_SENS_BOUNDARY;
-            }
-            zero_next[pos] = zero[pos];
-        }
-        for (a = 0; a < n; ++a) zero[a] = zero_next[a];
-        if (m == 0) continue;                                /* (no impulse: the round leaves qd as it is) */
-        {
-            double *LD = C->LD + o * nrow, factor[m * m];
-            for (a = 0; a < m; ++a) {
-                for (b = 0; b <= a; ++b)
-                    LD[a * m + b] = LD[b * m + a] = gac_dot(nq, C->W + (o + a) * nq, C->Y + (o + b) * nq);
-            }
-            gac_copy(factor, LD, m * m);
-            if (gac_ldlt(m, factor, 1e-12) != 0) return GAC_SENS_SIMULTANEOUS;   /* dependent rows */
-            if (nslide == 0) gac_copy(LD, factor, m * m);    /* (with slides LD keeps A: gac_impact_differential) */
-            L->m = m, L->active = C->active + o, L->landing = C->landing + o, L->f = C->f + o * nr;
-            L->W = C->W + o * nq, L->Y = C->Y + o * nq, L->LD = LD, L->F = C->F + o, L->v = C->v + o;
-            L->e = C->e + o, L->nslide = nslide, L->normal = C->normal + o, L->u = C->u + o;
-            L->xi_T_norm = C->xi_norm + o, L->cf = C->cf + o, L->cf_index = C->cf_index + o;
-        }
-        C->nround++;
+    gac_sens_rounds_start(s, C);
+    for (j = 0; j < r->rounds; ++j) {                        /* round j: its law, its set's strictness */
+        const int verdict = gac_sens_round(s, r, C, j, contact);
+        if (verdict != GAC_SENS_VALID) return verdict;
+        gac_copy(C->qd, C->qd_next, nq);
     }
-    {
-        const double *qd = C->qd + (long)C->nround * nq;     /* after the last round: none left at ~0 unheld */
-        for (a = 0; a < n; ++a) {
-            if (!zero[a] && !exempt[a] && !(gac_dot(nq, Wall + (long)a * nq, qd) > thr)) {
-                *contact = r->contact[a];
-                return GAC_SENS_BOUNDARY;
-            }
+    for (a = 0; a < n; ++a) {                                /* after the last round: none left at ~0 unheld */
+        if (!C->zero[a] && !C->exempt[a] && !(gac_dot(nq, C->Wall + (long)a * nq, C->qd) > C->thr)) {
+            *contact = r->contact[a];
+            return GAC_SENS_BOUNDARY;
         }
     }
     return C->nround > 0 ? GAC_SENS_VALID : GAC_SENS_SIMULTANEOUS;
+}
+
+/* The rounds' differentials chained, walking the rounds again (each rebuilt as gac_sens_rounds_at found it): round
+ * j's (gac_impact_differential on its law at qd_j) applied to every column's d qd in turn before round j + 1 is
+ * built.  Each column S_j holds (dq, d qd) at the event (S-_j + f- dt*_j), its d qd replaced by d qd after the
+ * rounds; dq passes through unchanged.  Returns GAC_SENS_VALID (or the first walk's verdict, not met again). */
+static int gac_sens_rounds_differential(gac_sim *s, const gac_impact_record *r, gac_sens_rounds *C, int *contact)
+{
+    const gac_sens *z = s->sens;
+    const gac_model *md = s->model;
+    const int nq = md->nq, nx = md->nx;
+    double zero_p[GAC_AT_LEAST_1(md->nparam)], out[nq];
+    int i, j, col;
+    for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+    gac_sens_rounds_start(s, C);
+    for (j = 0; j < r->rounds; ++j) {
+        const int verdict = gac_sens_round(s, r, C, j, contact);
+        if (verdict != GAC_SENS_VALID) return verdict;
+        for (col = 0; col < z->k && C->law.m > 0; ++col) {
+            double *S = z->S + (long)col * nx;
+            const double *dp = md->nparam > 0 ? z->dp + (long)col * md->nparam : zero_p;
+            gac_impact_differential(s, &C->law, s->xs, C->qd, S, S + nq, dp, out, 0);
+            gac_copy(S + nq, out, nq);
+        }
+        gac_copy(C->qd, C->qd_next, nq);
+    }
+    return GAC_SENS_VALID;
 }
 
 /* The jump at the impact record r just resolved (state before it s->xs, after it s->x), located by contact
@@ -1512,24 +1536,28 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         int active[n3], landing[n3], before_set[nq + nc1], at_rest[nq], m = 0, nbefore, nheld = 0, a, b, i, j;
         int boundary[n], nb = 0;
         const int several = r->rounds > 1 || r->plastic;   /* the rounds' chain (gac_sens_rounds_at) */
-        const int R = several ? r->rounds : 1, nR = several ? n : 1;
-        const int nrow = r->law == GAC_IMPACT_LAW_FRICTIONLESS ? nR : 3 * nR;   /* a round's rows at most */
-        const long Csize = GAC_SENS_ROUNDS_DOUBLES(R, nR, nrow, nq, nr);
-        const int fits = Csize <= GAC_SENS_ROUNDS_ROOM;
-        int Cint[fits ? R + 3L * R * nR + 4L * R * nrow : 1];
-        double Cbuf[fits ? Csize : 1];
-        gac_sens_law Claw[R];
-        gac_sens_rounds C = {0};
+        const int R = several ? r->rounds : 1, nR = several ? n : 1, rough = r->law != GAC_IMPACT_LAW_FRICTIONLESS;
+        const int fits = GAC_SENS_TRACE_BYTES(R, nR, rough) <= GAC_SENS_TRACE_ROOM;   /* the rounds' trace */
+        int Tint[fits ? GAC_SENS_TRACE_INTS(R, nR, rough) : 1], zero_start[nR], zero_round[nR], exempt[nR];
+        double Tdouble[fits ? GAC_SENS_TRACE_DOUBLES(R, nR, rough) : 1], fall[nR * nr], Wall[nR * nq], e_list[nR];
+        double qd_round[nq], qd_next[nq];
+        gac_sens_rounds C;                                   /* (a round's law in f, W, Y, ... above) */
         gac_sens_law law;
         GAC_SENS_SET_ARRAYS(nq, nr);
         gac_sens_set H;
         GAC_SENS_SET_BIND(H);
         nbefore = gac_sens_set_before(s, r, before_set);
-        if (several && Csize > GAC_SENS_ROUNDS_ROOM) {        /* too many rounds to keep */
+        if (several && !fits) {                              /* too many rounds to trace */
             gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
             return;
         }
-        if (fits) gac_sens_rounds_bind(&C, R, nR, nrow, nq, nr, Cint, Cbuf, Claw);
+        C.n = nR, C.trace.cap = R, C.trace.n = nR, C.trace.k = Tint, C.trace.idx = Tint + R;
+        C.trace.hit = C.trace.idx + (long)R * nR, C.trace.F = Tdouble;
+        C.trace.dim = rough ? C.trace.hit + (long)R * nR : 0, C.trace.L = rough ? Tdouble + (long)R * nR : 0;
+        C.fall = fall, C.Wall = Wall, C.e_list = e_list, C.zero_start = zero_start, C.zero = zero_round;
+        C.exempt = exempt, C.qd = qd_round, C.qd_next = qd_next;
+        C.active = active, C.landing = landing, C.normal = normal, C.cf_index = cf_index, C.f = f, C.W = W, C.Y = Y;
+        C.LD = LD, C.F = F, C.v = v, C.e = e, C.u = u, C.xi_norm = xi_norm, C.cf = cf_row;
         for (i = 0; i < nq; ++i) {
             if (fabs(xm[nq + i]) > speed) speed = fabs(xm[nq + i]);
         }
@@ -1650,7 +1678,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 gac_sens_stop(s, verdict, r->t, c_stop);
                 return;
             }
-            gac_copy(qd_law, C.qd + (long)C.nround * nq, nq);
+            gac_copy(qd_law, C.qd, nq);
         }
         for (a = 0; a < m; ++a) {
             md->inertia_solve(q, W + (long)a * nq, s->p, Y + (long)a * nq);
@@ -1709,7 +1737,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             }
         }
         for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
-        for (j = 0; j < z->k; ++j) {
+        for (j = 0; j < z->k; ++j) {                         /* each column's dt*_j, and its state at the event */
             double *S = z->S + (long)j * nx;
             const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
             double tau;
@@ -1719,9 +1747,25 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 (void)gac_sens_row_tangent(s, c_event, f, q, S, dp, dw, dgap + c_event);
             }
             tau = -dgap[c_event] / v_event;                  /* dt*_j: the gap stays 0 at the event */
-            for (i = 0; i < nx; ++i) dx[i] = S[i] + fm[i] * tau; /* the perturbed state at the perturbed t* */
-            if (several)                                     /* the rounds' differentials, chained */
-                gac_sens_rounds_differential(s, &C, q, dx, dx + nq, dp, dqd_plus);
+            for (i = 0; i < nx; ++i) S[i] = S[i] + fm[i] * tau;  /* the perturbed state at the perturbed t* */
+            z->dt_impact[j] = tau;
+        }
+        if (several) {                                       /* the rounds' differentials, chained, every column's
+                                                                d qd through round j before round j + 1 */
+            int c_stop;
+            const int verdict = gac_sens_rounds_differential(s, r, &C, &c_stop);
+            if (verdict != GAC_SENS_VALID) {
+                gac_sens_stop(s, verdict, r->t, c_stop);
+                return;
+            }
+        }
+        for (j = 0; j < z->k; ++j) {                         /* D Delta, the hold, back to the nominal t* */
+            double *S = z->S + (long)j * nx;
+            const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
+            const double tau = z->dt_impact[j];
+            gac_copy(dx, S, nx);
+            if (several)                                     /* (the rounds' chain, above) */
+                gac_copy(dqd_plus, dx + nq, nq);
             else if (nb == 0)
                 gac_impact_differential(s, &law, q, xm + nq, dx, dx + nq, dp, dqd_plus, 0);
             else                                             /* this column's side of the boundary */
@@ -1738,7 +1782,6 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 S[i] = dx[i] - fp[i] * tau;                      /* back to the nominal t*: minus f+ dt*_j */
                 S[nq + i] = dqd_plus[i] - fp[nq + i] * tau;
             }
-            z->dt_impact[j] = tau;
         }
         z->n_impacts++;
         if (nb > 0 && z->n_boundaries++ == 0) {

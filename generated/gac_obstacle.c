@@ -234,10 +234,11 @@ static int gac_obst_box_edge_normal(const double *h, const double *y, const doub
  * is at a breakpoint, an end or one of those vertices; every candidate's sd is evaluated at its point.  Where that
  * least is positive (beyond the tie) it is the distance (its gradient n at s*); where it is not, the segment touches
  * or reaches into the box, and the gap is the depth along its separating axis instead (gac_obst_box_depth), 0 with
- * the distance where they touch (within the tie the two differ by less than it; the axis is there the direction
- * that the distance's gradient, from a difference of round-off size, cannot resolve).  Writes gap (without a radius), s*, 0 and n (the box's frame turned to the world's) into
- * geometry, and returns the part of the box the gap is measured from: 0 a face (a constant normal), 1 an edge, 2 a
- * corner, the part's stretch in the box's frame in [lo, hi] (a corner's lo = hi). */
+ * the distance where they touch (within the tie the two differ by less than it, and the axis is a direction the
+ * distance's gradient, from a difference of round-off size, cannot resolve).  Writes gap (without a radius), s*, 0
+ * and n (the box's frame turned to the world's) into geometry, and returns the part of the box the gap is measured
+ * from: 0 a face (a constant normal), 1 an edge, 2 a corner, the part's stretch in the box's frame in [lo, hi] (a
+ * corner's lo = hi). */
 static int gac_obst_box_solve(const double *shape, const double *a0, const double *a1, double *geometry, double *lo,
                               double *hi)
 {

@@ -1,10 +1,11 @@
 """Boxes and a plane as fixed obstacles (gac_obstacle.c): a free rod among a flat slab, a box turned to stand on an
 edge (a ridge), a cube standing on a corner, a box turned at random and a slanted roof plane.  The gaps against an
 independent numpy signed distance minimised over the rod by a dense search and golden section (inside a box minus
-the depth, from the faces of its Minkowski sum with the rod), on random states (inside the obstacles too); J^T n against central differences of that gap (outside); the rod falling flat onto the
-slab (v+ = -e v-, no rotation: the stretch of the rod on the face strikes at its middle, the centre of mass) and
-onto the ridge and the corner off-centre (the velocities after it those of an independent numpy Newton's law with
-the mass matrix and the gap's gradient)."""
+the depth, from the faces of its Minkowski sum with the rod), on random states (inside the obstacles too); J^T n
+against central differences of that gap (outside); the rod falling flat onto the slab (v+ = -e v-, no rotation: the
+stretch of the rod on the face strikes at its middle, the centre of mass) and onto the ridge and the corner
+off-centre (the velocities after it those of an independent numpy Newton's law with the mass matrix and the gap's
+gradient)."""
 import math
 
 import numpy as np

@@ -609,9 +609,11 @@ int gac_link_impact(const gac_model *m, const double *q, const double *qd, const
 /* Link i (1-based) of radius `radius` (m; the link's own) and fixed obstacle o (0-based), its geometry at the
  * parameters p (gac_obstacle_shape): geometry (GAC_LINK_NGEOMETRY doubles) as gac_link_gap's for the sum of the two
  * radii, t along the obstacle's segment and n from the obstacle's closest point to the link's.  A box or a plane
- * (gac_obstacle.c): the least signed distance (negative inside) of the link's segment from it less `radius`, s*
- * along the link, t = 0, n the signed distance's gradient at that point.  The gap's rate is n . v_P (the obstacle
- * does not move).  Returns GAC_OK or GAC_ERR_BAD_CONTACT. */
+ * (gac_obstacle.c): the least signed distance of the link's segment from it less `radius`, s* along the link, t = 0,
+ * n the signed distance's gradient at that point; a link touching or reaching into a box: minus its depth (the
+ * least translation parting them) less `radius`, n the depth's direction (a face's normal, or across the link and
+ * an edge) and s* the link's point it is measured at.  The gap's rate is n . v_P either way (the obstacle does not
+ * move).  Returns GAC_OK or GAC_ERR_BAD_CONTACT. */
 int gac_obstacle_gap(const gac_model *m, const double *q, const double *p, int i, int o, double radius,
                      double *geometry);
 /* Obstacle o's shape row at the parameters p (GAC_OBSTACLE_NSHAPE doubles, the layout of m->obstacle_shapes): its

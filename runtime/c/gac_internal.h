@@ -135,10 +135,11 @@ int gac_obstacle_nparam(int kind);
 int gac_obstacle_shape_contact(const double *shape, const double *a0, const double *a1, double radius,
                                double *geometry);
 int gac_obstacle_shape_check(const gac_model *m, int o);
-/* The part of a box's or plane's shape row nearest to the point x (a link's closest point): 0 a face (the plane's,
- * or a box's with x over it or inside: a constant normal), 1 a box's edge, its ends in b0, b1, 2 a box's corner,
- * b0 = b1 (the normal then turns with x, as against a segment's capsule) */
-int gac_obstacle_feature(const double *shape, const double *x, double *b0, double *b1);
+/* The part of a box's or plane's shape row that segment a0-a1's gap is measured from (gac_obstacle_shape_contact):
+ * 0 a face (the plane's, or a box's that the link's closest point is over or reaches in through: a constant
+ * normal), 1 a box's edge (the link's closest point by it outside, or the link reaching in across it), its ends in
+ * b0, b1, 2 a box's corner, b0 = b1 (the normal then turns with the link, as against a segment's capsule) */
+int gac_obstacle_feature(const double *shape, const double *a0, const double *a1, double *b0, double *b1);
 
 /* gac_link.c: link pairs and obstacles as contacts of the loop (kinds GAC_CONTACT_LINK, GAC_CONTACT_OBSTACLE, the
  * last entries of m->contacts: no Jacobian row; Coulomb friction along their contact frame, at impacts and at rest,

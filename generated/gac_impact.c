@@ -221,7 +221,10 @@ static int gac_lcp(int max_lcp, int n, const double *A, const double *q, double 
 
 /* The impact law for the contacts list[0..n-1] (at their walls), from the velocities qd, with restitution
  * e[a] for contact list[a].  Newton's law (Eq. 47) with complementarity, in rounds:
- *   round: the contacts that approach their wall (v_a < 0) or rest on it (v_a = 0) take part;
+ *   round: the contacts that approach their wall (v_a < 0) or rest on it (v_a = 0: |v_a| below 1e-11 of the
+ *          fastest approach before, or below the round-off v_a has gathered from the updates v += A F of the
+ *          rounds, 4 (k + 1) eps sum (|v_a| + sum_b |A_ab F_b|), which over nearly dependent rows with large
+ *          impulses exceeds the first and would strike a resting contact on noise, round after round) take part;
  *          0 <= F  _|_  v+ + e v- >= 0 on them (e = 0 for a resting one), the others untouched;
  *          then the velocities are updated, v += A F.
  * until no contact approaches.  A contact separating from its wall takes no impulse unless the impulses
@@ -239,7 +242,7 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
                       int *rounds, int *plastic)
 {
     const int nq = m->nq, max_lcp = GAC_MAX_LCP(m);
-    double v[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)], scale = 0.0, v_tol;
+    double v[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)], noise[GAC_AT_LEAST_1(nq)], scale = 0.0, v_tol;
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work);
     int a, b, i, round, code;
     *rounds = *plastic = 0;
@@ -247,6 +250,7 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
     if (code != GAC_OK) return code;
     for (a = 0; a < n; ++a) {
         F[a] = 0.0;
+        noise[a] = 0.0;
         if (fabs(v[a]) > scale) scale = fabs(v[a]);
     }
     v_tol = 1e-11 * scale;                 /* a normal velocity below this is round-off: at rest */
@@ -255,9 +259,10 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
         int idx[GAC_AT_LEAST_1(nq)], k = 0, approaching = 0;
         const int last = round >= GAC_MAX_ROUNDS;
         for (a = 0; a < n; ++a) {
-            const int struck = v[a] < -v_tol || (round == 0 && a == first && v[a] < 0.0);
+            const double tol = v_tol > noise[a] ? v_tol : noise[a];   /* at rest to round-off */
+            const int struck = v[a] < -tol || (round == 0 && a == first && v[a] < 0.0);
             if (struck) approaching = 1;
-            if (last || struck || v[a] <= v_tol) {
+            if (last || struck || v[a] <= tol) {
                 qsub[k] = !last && struck ? (1.0 + e[a]) * v[a] : v[a];
                 idx[k++] = a;
             }
@@ -271,7 +276,12 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
         if (code != GAC_OK) return code;
         for (a = 0; a < k; ++a) F[idx[a]] += Fsub[a];
         for (a = 0; a < n; ++a) {
-            for (b = 0; b < k; ++b) v[a] += A[a*n + idx[b]] * Fsub[b];
+            double size = fabs(v[a]);
+            for (b = 0; b < k; ++b) {
+                v[a] += A[a*n + idx[b]] * Fsub[b];
+                size += fabs(A[a*n + idx[b]] * Fsub[b]);
+            }
+            noise[a] += 4.0 * (k + 1) * GAC_EPS * size;  /* the update's round-off, summed over the rounds */
         }
         *rounds = round + 1;
         if (last) {

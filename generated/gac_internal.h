@@ -220,10 +220,17 @@ void gac_refine_response(const gac_model *m, const double *q, const double *p, c
 int gac_impact_system_refined(const gac_model *m, const double *q, const double *qd, const double *p,
                               int ncontact_set, const int *contact_set, double *work, double *v, double *e);
 double gac_refine_impulses(const gac_model *m, const double *q, const double *p, int n, const int *list,
-                           const double *e, int rounds, double *F, const double *qd, double *qd_plus, double *work);
+                           const double *e, int rounds, double *F, const double *qd, double *qd_plus, double *work,
+                           double *targets);
+void gac_close_approach(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                        double *F, const double *qd, double *qd_plus, double v_tol, double *work);
+double gac_frictionless_law_work(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                                 const double *e, const double *F, int rounds, int plastic, const double *targets,
+                                 const double *qd, const double *qd_plus);
 double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                            const double *e, double *F, double *Ft, int law, int rounds, int plastic,
-                           const double *qd, double *qd_plus, double T, double *work, double *v_acc);
+                           const double *qd, double *qd_plus, double T, double *work, double *v_acc,
+                           const double *targets);
 
 /* gac_impact_friction.c */
 double gac_friction_coefficient(const gac_model *m, const double *p, int c);

@@ -82,23 +82,45 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
 {
     const int nq = s->model->nq;
     const int refine = ev->rounds >= 1 && ev->law == GAC_IMPACT_LAW_FRICTIONLESS;
-    double b = 0.0, v = 0.0;
-    int pass;
+    double b = 0.0, v = 0.0, targets[GAC_AT_LEAST_1(nq)];
+    int pass, a;
+    for (a = 0; a < ev->n; ++a) targets[a] = NAN;       /* the rounds' velocities, from their own impulses */
     if (gac_has_link(s->model, ev->n, ev->list)) {      /* a link pair has no Jacobian row: the velocities refined
                                                            against the momentum balance alone, then measured */
-        if (refine)
+        if (refine) {                                    /* the impulses against the law's velocities first */
+            gac_refine_impulses(s->model, ev->x, s->p, ev->n, ev->list, e, ev->rounds, ev->F, ev->x + nq,
+                                ev->qd_plus, s->work, targets);
             gac_link_refine(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->x + nq, ev->qd_plus, s->work);
+        }
         b = gac_link_law_accuracy(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->Ft, ev->x + nq, ev->qd_plus,
                                   ev->T_before);
+        if (refine)                                      /* and what the law's conditions leave */
+            b += gac_frictionless_law_work(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->rounds, ev->plastic,
+                                           targets, ev->x + nq, ev->qd_plus) / (ev->T_before > 0.0 ? ev->T_before : 1e-300);
         return b > 1e-10 ? b : 1e-10;
+    }
+    if (!refine && ev->plastic) {                       /* a frictional law's plastic closing round that left a
+                                                           contact approaching beyond round-off (nearly dependent
+                                                           rows): struck by plastic normal impulses of its own, which
+                                                           take energy and keep every impulse in its cone */
+        double vel[3 * GAC_AT_LEAST_1(s->model->npoint)];
+        s->model->contact_velocities(ev->x, ev->qd_plus, s->p, vel);
+        for (a = 0; a < ev->n; ++a) {
+            if (gac_normal_value(s->model, ev->x, s->p, ev->list[a], ev->qd_plus, vel) < -1e-9 * ev->scale) {
+                gac_close_approach(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->x + nq, ev->qd_plus,
+                                   1e-11 * ev->scale, s->work);
+                break;
+            }
+        }
     }
     for (pass = 0; pass < (refine ? 2 : 1); ++pass) {   /* the impulses against the velocities, then the velocities
                                                            against the impulses (the momentum balance), twice */
         if (refine)
             gac_refine_impulses(s->model, ev->x, s->p, ev->n, ev->list, e, ev->rounds, ev->F, ev->x + nq,
-                                ev->qd_plus, s->work);
+                                ev->qd_plus, s->work, targets);
         b = gac_impact_accuracy(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->Ft, ev->law, ev->rounds,
-                                ev->plastic, ev->x + nq, ev->qd_plus, ev->T_before, s->work, &v);
+                                ev->plastic, ev->x + nq, ev->qd_plus, ev->T_before, s->work, &v,
+                                refine ? targets : 0);
     }
     if (v > ev->v_acc) ev->v_acc = v;
     return b > 1e-10 ? b : 1e-10;
@@ -157,7 +179,7 @@ static double gac_held_accuracy(gac_sim *s, gac_impact_event *ev, int nset, cons
         return b > 1e-10 ? b : 1e-10;
     }
     b = gac_impact_accuracy(md, ev->x, s->p, ev->n, ev->list, ev->e, F, Ft, ev->law, 0, 0, ev->x + nq,
-                            s->x1 + nq, ev->T_before, s->work, &v);
+                            s->x1 + nq, ev->T_before, s->work, &v, 0);
     if (v > ev->v_acc) ev->v_acc = v;
     return b > 1e-10 ? b : 1e-10;
 }
@@ -454,9 +476,21 @@ static int gac_hold_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *se
     ev->held = *nset > 0;
     if (*nset > 0) {
         const double held = gac_held_accuracy(s, ev, *nset, set);
+        int c;
         if (held > ev->bound) ev->bound = r->roundoff = held;
         if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;
         gac_normal_velocities(md, s->x1, s->p, ev->vn);   /* (the refined velocities) */
+        for (c = 0; c < md->ncontact; ++c) {             /* the refinement, along rows nearly dependent on the held
+                                                            ones, left a contact at its wall approaching: the law's
+                                                            velocities stand, nothing held */
+            if (ev->gaps[c] <= s->opt.contact_tol && ev->vn[c] < -gac_approach_tolerance(ev)) {
+                for (i = 0; i < nq; ++i) s->x1[nq + i] = ev->qd_plus[i];
+                *nset = 0;
+                ev->held = 0;
+                gac_normal_velocities(md, s->x1, s->p, ev->vn);
+                break;
+            }
+        }
     }
     return GAC_OK;
 }

@@ -533,14 +533,16 @@ static double gac_rounds_residual(const gac_model *m, const double *q, const dou
 
 /* The energy the law's rest rule can add (J): a contact whose normal velocity before is below v_tol = 1e-11 of the
  * fastest is at rest to the law (e = 0, gamma+ >= 0), also when it separates that slowly; a push F_a on it then
- * does the work 1/2 F_a gamma-_a > 0 (the energy identity's term), which no condition of the law measures.  In one
- * round the sum of 1/2 F_a max(gamma-_a, 0); after several rounds each round's resting contacts do likewise with
- * that round's velocities, at most v_tol: 1/2 v_tol sum_a F_a bounds them. */
+ * does the work 1/2 F_a gamma-_a > 0 (the energy identity's term), which no condition of the law measures.  known:
+ * the rounds' own sum of it (gac_impact_rounds_work), used when >= 0; else, in one round, the sum of 1/2 F_a
+ * max(gamma-_a, 0), and after several rounds (each round's resting contacts pushing with that round's velocities,
+ * at most v_tol) the bound 1/2 v_tol sum_a F_a. */
 static double gac_rest_work(const gac_model *m, const double *q, const double *p, int n, const int *list,
-                            const double *F, int rounds, const double *qd)
+                            const double *F, int rounds, const double *qd, double known)
 {
     double before[3 * GAC_AT_LEAST_1(m->npoint)], v[GAC_AT_LEAST_1(m->nq)], scale = 0.0, work = 0.0;
     int a;
+    if (known >= 0.0) return known;
     m->contact_velocities(q, qd, p, before);
     for (a = 0; a < n; ++a) {
         v[a] = gac_normal_value(m, q, p, list[a], qd, before);
@@ -557,10 +559,10 @@ static double gac_rest_work(const gac_model *m, const double *q, const double *p
 /* A frictionless law's residual as energy (J) for contacts that may include link pairs and obstacles (their normal
  * rates by gac_normal_value): solved in one round, sum_a |F_a (gamma+_a + e_a gamma-_a)| (e_a = 0 for a contact at
  * rest, |gamma-| <= 1e-11 of the fastest); after several rounds, against the rounds' velocities (gac_rounds_residual,
- * targets may be NULL: none); and what the rest rule can add (gac_rest_work). */
+ * targets may be NULL: none); and what the rest rule can add (gac_rest_work; rest_work: the rounds' own, or < 0). */
 double gac_frictionless_law_work(const gac_model *m, const double *q, const double *p, int n, const int *list,
                                  const double *e, const double *F, int rounds, int plastic, const double *targets,
-                                 const double *qd, const double *qd_plus)
+                                 double rest_work, const double *qd, const double *qd_plus)
 {
     double before[3 * GAC_AT_LEAST_1(m->npoint)], after[3 * GAC_AT_LEAST_1(m->npoint)], scale = 0.0, work = 0.0;
     int a;
@@ -580,7 +582,7 @@ double gac_frictionless_law_work(const gac_model *m, const double *q, const doub
     } else if (rounds > 1 && targets) {
         work += gac_rounds_residual(m, q, p, n, list, F, targets, qd_plus);
     }
-    return work + gac_rest_work(m, q, p, n, list, F, rounds, qd);
+    return work + gac_rest_work(m, q, p, n, list, F, rounds, qd, rest_work);
 }
 
 /* The impact's accuracy, measured after its law (relative to T, the kinetic energy before), with qd_plus refined
@@ -609,7 +611,7 @@ double gac_frictionless_law_work(const gac_model *m, const double *q, const doub
 double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                            const double *e, double *F, double *Ft, int law, int rounds, int plastic,
                            const double *qd, double *qd_plus, double T, double *work, double *v_acc,
-                           const double *targets)
+                           const double *targets, double rest_work)
 {
     const int nq = m->nq;
     double f[GAC_AT_LEAST_1(m->njrow)], r[GAC_AT_LEAST_1(nq)], bound_now[GAC_AT_LEAST_1(nq)];
@@ -803,7 +805,7 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     if (rounds > 1 && targets)                           /* after several rounds: against the rounds' velocities */
         law_work = gac_rounds_residual(m, q, p, n, list, Fs, targets, qd_plus);
     if (rounds >= 1)                                     /* what the law's rest rule can add */
-        law_work += gac_rest_work(m, q, p, n, list, Fs, rounds, qd);
+        law_work += gac_rest_work(m, q, p, n, list, Fs, rounds, qd, rest_work);
     if (extended && m->energy_ld != 0) {                 /* in long double */
         gac_impulse_rows(m, n, list, Fs, Fts, f);
         identity = gac_energy_identity_ld(m, q, p, f, qd, qd_plus);

@@ -72,6 +72,7 @@ typedef struct {
     double E_plus[2];      /* T and V at (x, qd_plus), kept with qd_plus (J) */
     int held;              /* 1 once gac_hold_resting changed the velocities after the law */
     int rounds, plastic;
+    double rest_work;      /* the work of the law's rest rule (J; gac_impact_rounds_work), or -1: not known */
 } gac_impact_event;
 
 /* The accuracy of the law just solved (ev->qd_plus, ev->F, ev->Ft with restitutions e), relative to T before, at
@@ -96,7 +97,8 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
                                   ev->T_before);
         if (refine)                                      /* and what the law's conditions leave */
             b += gac_frictionless_law_work(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->rounds, ev->plastic,
-                                           targets, ev->x + nq, ev->qd_plus) / (ev->T_before > 0.0 ? ev->T_before : 1e-300);
+                                           targets, ev->rest_work, ev->x + nq, ev->qd_plus)
+                 / (ev->T_before > 0.0 ? ev->T_before : 1e-300);
         return b > 1e-10 ? b : 1e-10;
     }
     if (!refine && ev->plastic) {                       /* a frictional law's plastic closing round that left a
@@ -120,7 +122,7 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
                                 ev->qd_plus, s->work, targets);
         b = gac_impact_accuracy(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->Ft, ev->law, ev->rounds,
                                 ev->plastic, ev->x + nq, ev->qd_plus, ev->T_before, s->work, &v,
-                                refine ? targets : 0);
+                                refine ? targets : 0, ev->rest_work);
     }
     if (v > ev->v_acc) ev->v_acc = v;
     return b > 1e-10 ? b : 1e-10;
@@ -179,7 +181,7 @@ static double gac_held_accuracy(gac_sim *s, gac_impact_event *ev, int nset, cons
         return b > 1e-10 ? b : 1e-10;
     }
     b = gac_impact_accuracy(md, ev->x, s->p, ev->n, ev->list, ev->e, F, Ft, ev->law, 0, 0, ev->x + nq,
-                            s->x1 + nq, ev->T_before, s->work, &v, 0);
+                            s->x1 + nq, ev->T_before, s->work, &v, 0, -1.0);
     if (v > ev->v_acc) ev->v_acc = v;
     return b > 1e-10 ? b : 1e-10;
 }
@@ -295,6 +297,7 @@ static int gac_law(gac_sim *s, gac_impact_event *ev, const double *e)
     const gac_model *md = s->model;
     const double *x = ev->x;
     int k;
+    ev->rest_work = -1.0;
     if (ev->friction)
         return gac_impact_rounds_friction(md, x, x + md->nq, s->p, ev->n, ev->list, e, ev->first, s->opt.impact_law,
                                           ev->qd_plus, ev->F, ev->Ft, s->work, &ev->rounds, &ev->plastic, &ev->law,
@@ -302,8 +305,8 @@ static int gac_law(gac_sim *s, gac_impact_event *ev, const double *e)
     ev->law = GAC_IMPACT_LAW_FRICTIONLESS;
     ev->residual = ev->parts = 0.0;
     for (k = 0; k < 2 * ev->n; ++k) ev->Ft[k] = 0.0;
-    return gac_impact_rounds(md, x, x + md->nq, s->p, ev->n, ev->list, e, ev->first, ev->qd_plus, ev->F, s->work,
-                             &ev->rounds, &ev->plastic);
+    return gac_impact_rounds_work(md, x, x + md->nq, s->p, ev->n, ev->list, e, ev->first, ev->qd_plus, ev->F,
+                                  s->work, &ev->rounds, &ev->plastic, &ev->rest_work);
 }
 
 /* 1 if the law gave some contact a tangential impulse (then e = 1 need not keep the energy: friction took some). */
@@ -558,6 +561,7 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     s->energy_x1_valid = 0;                              /* set again by gac_finish, for the state it leaves */
     ev.gaps = gaps, ev.vn = vn, ev.an = an, ev.e = e, ev.e_law = e_law, ev.qd_plus = qd_plus, ev.F = F, ev.Ft = Ft;
     ev.friction = 0, ev.law = GAC_IMPACT_LAW_FRICTIONLESS, ev.residual = ev.parts = 0.0, ev.v_acc = 0.0;
+    ev.rest_work = -1.0;
     gac_contact_gaps(md, ev.x, s->p, gaps);
     gac_normal_velocities(md, ev.x, s->p, vn);
     r->ncontact = 0;

@@ -241,11 +241,24 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
                       const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
                       int *rounds, int *plastic)
 {
+    double rest_work;
+    return gac_impact_rounds_work(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, &rest_work);
+}
+
+/* gac_impact_rounds, with *rest_work (J) the energy its rounds gained: the sum over the rounds of each round's
+ * change 1/2 sum_a F_a (v-_a + v+_a) in its contact-space velocities where that is > 0.  A round changes the energy
+ * by 1/2 sum (1 - e_a) F_a v-_a <= 0 over its struck contacts plus 1/2 F_a v-_a over those at rest, which may push
+ * while separating below the rest threshold: the gain of the rest rule, which no condition of the law measures. */
+int gac_impact_rounds_work(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                           const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
+                           int *rounds, int *plastic, double *rest_work)
+{
     const int nq = m->nq, max_lcp = GAC_MAX_LCP(m);
-    double v[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)], noise[GAC_AT_LEAST_1(nq)], scale = 0.0, v_tol;
+    double v[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)], noise[GAC_AT_LEAST_1(nq)], scale = 0.0, v_tol, gain;
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work);
     int a, b, i, round, code;
     *rounds = *plastic = 0;
+    *rest_work = 0.0;
     code = gac_impact_system_refined(m, q, qd, p, n, list, work, v, e_wall);   /* Y_a refined (gac_impact_accuracy.c) */
     if (code != GAC_OK) return code;
     for (a = 0; a < n; ++a) {
@@ -274,7 +287,11 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
         }
         code = gac_lcp(max_lcp, k, Asub, qsub, 1e-10 * scale, Fsub);
         if (code != GAC_OK) return code;
-        for (a = 0; a < k; ++a) F[idx[a]] += Fsub[a];
+        gain = 0.0;
+        for (a = 0; a < k; ++a) {
+            F[idx[a]] += Fsub[a];
+            gain += 0.5 * Fsub[a] * v[idx[a]];           /* 1/2 F (v- + v+) with v+ = A F + v-, below */
+        }
         for (a = 0; a < n; ++a) {
             double size = fabs(v[a]);
             for (b = 0; b < k; ++b) {
@@ -283,6 +300,8 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
             }
             noise[a] += 4.0 * (k + 1) * GAC_EPS * size;  /* the update's round-off, summed over the rounds */
         }
+        for (a = 0; a < k; ++a) gain += 0.5 * Fsub[a] * v[idx[a]];
+        if (gain > 0.0) *rest_work += gain;              /* the round gained energy (its contacts at rest) */
         *rounds = round + 1;
         if (last) {
             *plastic = 1;

@@ -212,6 +212,9 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
 int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                       const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
                       int *rounds, int *plastic);
+int gac_impact_rounds_work(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                           const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
+                           int *rounds, int *plastic, double *rest_work);
 
 
 /* gac_impact_accuracy.c: the impact's accuracy, measured after its law, and iterative refinement */
@@ -226,11 +229,11 @@ void gac_close_approach(const gac_model *m, const double *q, const double *p, in
                         double *F, const double *qd, double *qd_plus, double v_tol, double *work);
 double gac_frictionless_law_work(const gac_model *m, const double *q, const double *p, int n, const int *list,
                                  const double *e, const double *F, int rounds, int plastic, const double *targets,
-                                 const double *qd, const double *qd_plus);
+                                 double rest_work, const double *qd, const double *qd_plus);
 double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                            const double *e, double *F, double *Ft, int law, int rounds, int plastic,
                            const double *qd, double *qd_plus, double T, double *work, double *v_acc,
-                           const double *targets);
+                           const double *targets, double rest_work);
 
 /* gac_impact_friction.c */
 double gac_friction_coefficient(const gac_model *m, const double *p, int c);

@@ -88,17 +88,26 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
     for (a = 0; a < ev->n; ++a) targets[a] = NAN;       /* the rounds' velocities, from their own impulses */
     if (gac_has_link(s->model, ev->n, ev->list)) {      /* a link pair has no Jacobian row: the velocities refined
                                                            against the momentum balance alone, then measured */
-        if (refine) {                                    /* the impulses against the law's velocities first */
-            gac_refine_impulses(s->model, ev->x, s->p, ev->n, ev->list, e, ev->rounds, ev->F, ev->x + nq,
-                                ev->qd_plus, s->work, targets);
+        const double T = ev->T_before > 0.0 ? ev->T_before : 1e-300;
+        double law = 0.0;
+        if (refine) {                                    /* the law's conditions, and where they leave more than
+                                                            1e-11 of T the impulses refined against them first */
+            double v[GAC_AT_LEAST_1(nq)];
+            if (ev->rounds > 1 && gac_rounds_velocities(s->model, ev->x, ev->x + nq, s->p, ev->n, ev->list, ev->F,
+                                                        s->work, v) == GAC_OK) {
+                for (a = 0; a < ev->n; ++a) targets[a] = ev->F[a] > 0.0 ? v[a] : NAN;   /* the rounds' own */
+            }
+            law = gac_frictionless_law_work(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->rounds,
+                                            ev->plastic, targets, ev->rest_work, ev->x + nq, ev->qd_plus);
+            if (law > 1e-11 * T)
+                gac_refine_impulses(s->model, ev->x, s->p, ev->n, ev->list, e, ev->rounds, ev->F, ev->x + nq,
+                                    ev->qd_plus, s->work, targets);
             gac_link_refine(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->x + nq, ev->qd_plus, s->work);
+            law = gac_frictionless_law_work(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->rounds,
+                                            ev->plastic, targets, ev->rest_work, ev->x + nq, ev->qd_plus);
         }
         b = gac_link_law_accuracy(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->Ft, ev->x + nq, ev->qd_plus,
-                                  ev->T_before);
-        if (refine)                                      /* and what the law's conditions leave */
-            b += gac_frictionless_law_work(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->rounds, ev->plastic,
-                                           targets, ev->rest_work, ev->x + nq, ev->qd_plus)
-                 / (ev->T_before > 0.0 ? ev->T_before : 1e-300);
+                                  ev->T_before) + law / T;
         return b > 1e-10 ? b : 1e-10;
     }
     if (!refine && ev->plastic) {                       /* a frictional law's plastic closing round that left a

@@ -242,14 +242,30 @@ static void gac_impulse_rows(const gac_model *m, int n, const int *list, const d
     }
 }
 
+/* v = v- + A F (n): the contacts' velocities that the impulses F give in contact space (the rounds' own when F are
+ * the rounds' impulses), A from refined responses (gac_impact_system_refined, into work). */
+int gac_rounds_velocities(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                          const int *list, const double *F, double *work, double *v)
+{
+    double e_unused[GAC_AT_LEAST_1(m->nq)];
+    const double *A = GAC_WORK_A(m, work);
+    int a, b;
+    const int code = gac_impact_system_refined(m, q, qd, p, n, list, work, v, e_unused);
+    if (code != GAC_OK) return code;
+    for (a = 0; a < n; ++a) {
+        for (b = 0; b < n; ++b) v[a] += A[a * n + b] * F[b];
+    }
+    return GAC_OK;
+}
+
 /* The impulses of a frictionless law solved in one round, refined against the velocities they give (iterative
  * refinement of the whole impact, not only of I_f's solves): the contacts that push (F > 0) must end with
  * gamma+ + e gamma- = 0 (e = 0 for a contact that rested: |gamma-| <= 1e-11 of the fastest; after several rounds,
  * with the velocities v- + A F the law's impulses give in contact space: where rows are nearly dependent the
- * impulses can be large, and their responses' round-off moves the model's velocities far from them; kept[a] holds
- * them: computed from the impulses the rounds gave on the first call (kept[a] NaN), they are reused as they are on
- * a later call, since v- + A F of impulses refined since, by as little as 1e-9 of themselves, can stand far from
- * the rounds' velocities when A is ill-conditioned and the impulses large), gamma+ read off qd_plus
+ * impulses can be large, and their responses' round-off moves the model's velocities far from them; targets[a]
+ * keeps them as the rounds' impulses gave them on the first call (targets[a] NaN until then), reused as they are on
+ * a later call: v- + A F of impulses refined since, by as little as 1e-9 of themselves, can stand far from the
+ * rounds' velocities when A is ill-conditioned and the impulses large), gamma+ read off qd_plus
  * with the model's contact velocities.  Their miss d is removed by F_S += A_SS^-1 (-d), qd_plus += Y_S (that change),
  * A_SS = N_S I_f^-1 N_S^T from refined responses (gac_impact_system_refined), while max|d| falls by half; a step
  * that would pull (F < 0) or not improve is not taken.  Returns the contacts' largest miss left (m/s). */
@@ -271,16 +287,11 @@ static double gac_refine_targets(const gac_model *m, const double *q, const doub
     v_tol = 1e-11 * scale;
     if (rounds > 1) {                                    /* several rounds: the velocities the law's impulses give
                                                             in contact space, v- + A F, are its own */
-        double v0[GAC_AT_LEAST_1(nq)];
-        if (gac_impact_system_refined(m, q, qd, p, n, list, work, v0, e_unused) != GAC_OK) return 0.0;
+        double v[GAC_AT_LEAST_1(nq)];
+        if (gac_rounds_velocities(m, q, qd, p, n, list, F, work, v) != GAC_OK) return 0.0;
         for (a = 0; a < n; ++a) {
-            int b;
-            double v = v0[a];
             if (!(F[a] > 0.0)) continue;
-            if (isnan(targets[a])) {                     /* the rounds' own, once */
-                for (b = 0; b < n; ++b) v += A[a * n + b] * F[b];
-                targets[a] = v;
-            }
+            if (isnan(targets[a])) targets[a] = v[a];    /* the rounds' own, once */
             target[ns] = targets[a];
             pos[ns] = a;
             set[ns++] = list[a];

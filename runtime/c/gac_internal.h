@@ -225,6 +225,8 @@ int gac_impact_system_refined(const gac_model *m, const double *q, const double 
 double gac_refine_impulses(const gac_model *m, const double *q, const double *p, int n, const int *list,
                            const double *e, int rounds, double *F, const double *qd, double *qd_plus, double *work,
                            double *targets);
+int gac_rounds_velocities(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                          const int *list, const double *F, double *work, double *v);
 void gac_close_approach(const gac_model *m, const double *q, const double *p, int n, const int *list,
                         double *F, const double *qd, double *qd_plus, double v_tol, double *work);
 double gac_frictionless_law_work(const gac_model *m, const double *q, const double *p, int n, const int *list,

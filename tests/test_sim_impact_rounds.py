@@ -12,11 +12,19 @@ from studies import fuzz
 
 
 def _fuzz_model(compiled, index: int, run: int):
-    """The fuzz study's structure ``index`` (seed 0) as the study builds it (load_model's defaults) and its run."""
+    """The fuzz study's structure ``index`` (seed 0) as the study builds it (load_model's defaults) and its run, with
+    the run's obstacles where the study draws them (as its --case does)."""
+    def build(scene):
+        return compiled(scene, chart_b=True, extended=True)
     scene, rng = fuzz.draw_structure(0, index, 8, True)
-    model = compiled(scene, chart_b=True, extended=True)
+    model = build(scene)
     for _ in range(run + 1):
         case = fuzz.draw_run(rng, scene, model)
+    if not isinstance(scene, fuzz.Chains) and fuzz.has_obstacle_runs(0, index):
+        obstacle_rng = np.random.default_rng([0, index, fuzz.OBSTACLE_STREAM, run])
+        obstacles = fuzz.random_obstacles(obstacle_rng, scene, model, case)
+        if obstacles:
+            scene, model, case = fuzz.obstacle_run(obstacle_rng, scene, model, case, obstacles, build)
     return model, case
 
 
@@ -145,14 +153,23 @@ STOPPED = [
     # velocities missed their targets by 1e-5 m/s (a gain of 3.4e-10 of T, stated 1e-10; stopped at 0.170 s); the
     # impulses are refined against them for link pairs too
     pytest.param(27, 3, 0.2, id="0-27/3-link-targets"),
+    # 7 links and a box obstacle, frictional law: a wall and the obstacle whose rows meet at 1 degree in the metric
+    # A (cond 3e4) strike each other in turn, rounds that 3,000 exact ones do not end; the plastic round that closes
+    # them left the obstacle's contact approaching at 2.3e-5 m/s (stopped at 0.0573 s): plastic normal strikes of
+    # its own close it.  (Run to its own t_end, the steps as the study's: 4e-4 s later the frictional solve stops
+    # it, GAC_ERR_FRICTION's residual, another matter.)
+    pytest.param(33, 6, None, id="0-33/6-frictional-plastic"),
 ]
 
 
 @pytest.mark.parametrize("index, run, t_end", STOPPED)
 def test_fuzz_runs_that_stopped_at_an_impact_go_on_with_every_impact_checked(compiled, index, run, t_end):
     model, case = _fuzz_model(compiled, index, run)
-    result = simulate(model, t_end, p=case.p, q0=case.q0, qd0=case.qd0, **case.options)
-    assert result.status == 0, result.message
+    result = simulate(model, t_end or case.t_end, p=case.p, q0=case.q0, qd0=case.qd0, **case.options)
+    if t_end is None:
+        assert result.t_final > 0.0574 and "impact law could not be solved" not in result.message, result.message
+    else:
+        assert result.status == 0, result.message
     layout = model.layout
     for impact in result.impacts:                        # the energy, from the dense M: never above the stated bound
         q, before, after = (layout.reduce(x) for x in (impact.q, impact.qd_before, impact.qd_after))

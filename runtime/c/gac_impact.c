@@ -219,6 +219,10 @@ static int gac_lcp(int max_lcp, int n, const double *A, const double *q, double 
     return GAC_ERR_LCP;
 }
 
+static int gac_rounds(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                      const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
+                      int *rounds, int *plastic, gac_rounds_trace *trace, double *rest_work);
+
 /* The impact law for the contacts list[0..n-1] (at their walls), from the velocities qd, with restitution
  * e[a] for contact list[a].  Newton's law (Eq. 47) with complementarity, in rounds:
  *   round: the contacts that approach their wall (v_a < 0) or rest on it (v_a = 0: |v_a| below 1e-11 of the
@@ -242,7 +246,32 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
                       int *rounds, int *plastic)
 {
     double rest_work;
-    return gac_impact_rounds_work(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, &rest_work);
+    return gac_rounds(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, 0, &rest_work);
+}
+
+/* Round `round`'s problem (its k contacts at positions idx, hit: struck with their own e) and impulses Fsub into
+ * the trace, while it has room. */
+static void gac_trace_round(gac_rounds_trace *trace, int round, int k, const int *idx, const int *hit,
+                            const double *Fsub)
+{
+    int a;
+    trace->nround = round + 1;
+    if (round >= trace->cap) return;
+    trace->k[round] = k;
+    for (a = 0; a < k; ++a) {
+        trace->idx[round * trace->n + a] = idx[a];
+        trace->hit[round * trace->n + a] = hit[a];
+        trace->F[round * trace->n + a] = Fsub[a];
+    }
+}
+
+/* gac_impact_rounds, each round recorded in trace (NULL: none) as well. */
+int gac_impact_rounds_traced(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                             const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
+                             int *rounds, int *plastic, gac_rounds_trace *trace)
+{
+    double rest_work;
+    return gac_rounds(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, trace, &rest_work);
 }
 
 /* gac_impact_rounds, with *rest_work (J) the energy its rounds gained: the sum over the rounds of each round's
@@ -252,6 +281,14 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
 int gac_impact_rounds_work(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                            const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
                            int *rounds, int *plastic, double *rest_work)
+{
+    return gac_rounds(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, 0, rest_work);
+}
+
+/* The rounds of gac_impact_rounds, traced (trace: NULL for none), with the energy they gained (rest_work). */
+static int gac_rounds(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                      const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
+                      int *rounds, int *plastic, gac_rounds_trace *trace, double *rest_work)
 {
     const int nq = m->nq, max_lcp = GAC_MAX_LCP(m);
     double v[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)], noise[GAC_AT_LEAST_1(nq)], scale = 0.0, v_tol, gain;
@@ -269,7 +306,7 @@ int gac_impact_rounds_work(const gac_model *m, const double *q, const double *qd
     v_tol = 1e-11 * scale;                 /* a normal velocity below this is round-off: at rest */
     for (round = 0; ; ++round) {
         double Asub[GAC_LCP_CAP * GAC_LCP_CAP], qsub[GAC_AT_LEAST_1(nq)], Fsub[GAC_LCP_CAP];
-        int idx[GAC_AT_LEAST_1(nq)], k = 0, approaching = 0;
+        int idx[GAC_AT_LEAST_1(nq)], hit[GAC_AT_LEAST_1(nq)], k = 0, approaching = 0;
         const int last = round >= GAC_MAX_ROUNDS;
         for (a = 0; a < n; ++a) {
             const double tol = v_tol > noise[a] ? v_tol : noise[a];   /* at rest to round-off */
@@ -277,6 +314,7 @@ int gac_impact_rounds_work(const gac_model *m, const double *q, const double *qd
             if (struck) approaching = 1;
             if (last || struck || v[a] <= tol) {
                 qsub[k] = !last && struck ? (1.0 + e[a]) * v[a] : v[a];
+                hit[k] = !last && struck;
                 idx[k++] = a;
             }
         }
@@ -287,6 +325,7 @@ int gac_impact_rounds_work(const gac_model *m, const double *q, const double *qd
         }
         code = gac_lcp(max_lcp, k, Asub, qsub, 1e-10 * scale, Fsub);
         if (code != GAC_OK) return code;
+        if (trace != 0) gac_trace_round(trace, round, k, idx, hit, Fsub);
         gain = 0.0;
         for (a = 0; a < k; ++a) {
             F[idx[a]] += Fsub[a];

@@ -219,9 +219,16 @@ static int gac_lcp(int max_lcp, int n, const double *A, const double *q, double 
     return GAC_ERR_LCP;
 }
 
+static int gac_rounds(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                      const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
+                      int *rounds, int *plastic, gac_rounds_trace *trace, double *rest_work);
+
 /* The impact law for the contacts list[0..n-1] (at their walls), from the velocities qd, with restitution
  * e[a] for contact list[a].  Newton's law (Eq. 47) with complementarity, in rounds:
- *   round: the contacts that approach their wall (v_a < 0) or rest on it (v_a = 0) take part;
+ *   round: the contacts that approach their wall (v_a < 0) or rest on it (v_a = 0: |v_a| below 1e-11 of the
+ *          fastest approach before, or below the round-off v_a has gathered from the updates v += A F of the
+ *          rounds, 4 (k + 1) eps sum (|v_a| + sum_b |A_ab F_b|), which over nearly dependent rows with large
+ *          impulses exceeds the first and would strike a resting contact on noise, round after round) take part;
  *          0 <= F  _|_  v+ + e v- >= 0 on them (e = 0 for a resting one), the others untouched;
  *          then the velocities are updated, v += A F.
  * until no contact approaches.  A contact separating from its wall takes no impulse unless the impulses
@@ -238,7 +245,8 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
                       const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
                       int *rounds, int *plastic)
 {
-    return gac_impact_rounds_traced(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, 0);
+    double rest_work;
+    return gac_rounds(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, 0, &rest_work);
 }
 
 /* Round `round`'s problem (its k contacts at positions idx, hit: struck with their own e) and impulses Fsub into
@@ -262,15 +270,37 @@ int gac_impact_rounds_traced(const gac_model *m, const double *q, const double *
                              const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
                              int *rounds, int *plastic, gac_rounds_trace *trace)
 {
+    double rest_work;
+    return gac_rounds(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, trace, &rest_work);
+}
+
+/* gac_impact_rounds, with *rest_work (J) the energy its rounds gained: the sum over the rounds of each round's
+ * change 1/2 sum_a F_a (v-_a + v+_a) in its contact-space velocities where that is > 0.  A round changes the energy
+ * by 1/2 sum (1 - e_a) F_a v-_a <= 0 over its struck contacts plus 1/2 F_a v-_a over those at rest, which may push
+ * while separating below the rest threshold: the gain of the rest rule, which no condition of the law measures. */
+int gac_impact_rounds_work(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                           const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
+                           int *rounds, int *plastic, double *rest_work)
+{
+    return gac_rounds(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, 0, rest_work);
+}
+
+/* The rounds of gac_impact_rounds, traced (trace: NULL for none), with the energy they gained (rest_work). */
+static int gac_rounds(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                      const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
+                      int *rounds, int *plastic, gac_rounds_trace *trace, double *rest_work)
+{
     const int nq = m->nq, max_lcp = GAC_MAX_LCP(m);
-    double v[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)], scale = 0.0, v_tol;
+    double v[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)], noise[GAC_AT_LEAST_1(nq)], scale = 0.0, v_tol, gain;
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work);
     int a, b, i, round, code;
     *rounds = *plastic = 0;
+    *rest_work = 0.0;
     code = gac_impact_system_refined(m, q, qd, p, n, list, work, v, e_wall);   /* Y_a refined (gac_impact_accuracy.c) */
     if (code != GAC_OK) return code;
     for (a = 0; a < n; ++a) {
         F[a] = 0.0;
+        noise[a] = 0.0;
         if (fabs(v[a]) > scale) scale = fabs(v[a]);
     }
     v_tol = 1e-11 * scale;                 /* a normal velocity below this is round-off: at rest */
@@ -279,9 +309,10 @@ int gac_impact_rounds_traced(const gac_model *m, const double *q, const double *
         int idx[GAC_AT_LEAST_1(nq)], hit[GAC_AT_LEAST_1(nq)], k = 0, approaching = 0;
         const int last = round >= GAC_MAX_ROUNDS;
         for (a = 0; a < n; ++a) {
-            const int struck = v[a] < -v_tol || (round == 0 && a == first && v[a] < 0.0);
+            const double tol = v_tol > noise[a] ? v_tol : noise[a];   /* at rest to round-off */
+            const int struck = v[a] < -tol || (round == 0 && a == first && v[a] < 0.0);
             if (struck) approaching = 1;
-            if (last || struck || v[a] <= v_tol) {
+            if (last || struck || v[a] <= tol) {
                 qsub[k] = !last && struck ? (1.0 + e[a]) * v[a] : v[a];
                 hit[k] = !last && struck;
                 idx[k++] = a;
@@ -295,10 +326,21 @@ int gac_impact_rounds_traced(const gac_model *m, const double *q, const double *
         code = gac_lcp(max_lcp, k, Asub, qsub, 1e-10 * scale, Fsub);
         if (code != GAC_OK) return code;
         if (trace != 0) gac_trace_round(trace, round, k, idx, hit, Fsub);
-        for (a = 0; a < k; ++a) F[idx[a]] += Fsub[a];
-        for (a = 0; a < n; ++a) {
-            for (b = 0; b < k; ++b) v[a] += A[a*n + idx[b]] * Fsub[b];
+        gain = 0.0;
+        for (a = 0; a < k; ++a) {
+            F[idx[a]] += Fsub[a];
+            gain += 0.5 * Fsub[a] * v[idx[a]];           /* 1/2 F (v- + v+) with v+ = A F + v-, below */
         }
+        for (a = 0; a < n; ++a) {
+            double size = fabs(v[a]);
+            for (b = 0; b < k; ++b) {
+                v[a] += A[a*n + idx[b]] * Fsub[b];
+                size += fabs(A[a*n + idx[b]] * Fsub[b]);
+            }
+            noise[a] += 4.0 * (k + 1) * GAC_EPS * size;  /* the update's round-off, summed over the rounds */
+        }
+        for (a = 0; a < k; ++a) gain += 0.5 * Fsub[a] * v[idx[a]];
+        if (gain > 0.0) *rest_work += gain;              /* the round gained energy (its contacts at rest) */
         *rounds = round + 1;
         if (last) {
             *plastic = 1;

@@ -242,17 +242,36 @@ static void gac_impulse_rows(const gac_model *m, int n, const int *list, const d
     }
 }
 
+/* v = v- + A F (n): the contacts' velocities that the impulses F give in contact space (the rounds' own when F are
+ * the rounds' impulses), A from refined responses (gac_impact_system_refined, into work). */
+int gac_rounds_velocities(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                          const int *list, const double *F, double *work, double *v)
+{
+    double e_unused[GAC_AT_LEAST_1(m->nq)];
+    const double *A = GAC_WORK_A(m, work);
+    int a, b;
+    const int code = gac_impact_system_refined(m, q, qd, p, n, list, work, v, e_unused);
+    if (code != GAC_OK) return code;
+    for (a = 0; a < n; ++a) {
+        for (b = 0; b < n; ++b) v[a] += A[a * n + b] * F[b];
+    }
+    return GAC_OK;
+}
+
 /* The impulses of a frictionless law solved in one round, refined against the velocities they give (iterative
  * refinement of the whole impact, not only of I_f's solves): the contacts that push (F > 0) must end with
  * gamma+ + e gamma- = 0 (e = 0 for a contact that rested: |gamma-| <= 1e-11 of the fastest; after several rounds,
  * with the velocities v- + A F the law's impulses give in contact space: where rows are nearly dependent the
- * impulses can be large, and their responses' round-off moves the model's velocities far from them), gamma+ read off qd_plus
+ * impulses can be large, and their responses' round-off moves the model's velocities far from them; targets[a]
+ * keeps them as the rounds' impulses gave them on the first call (targets[a] NaN until then), reused as they are on
+ * a later call: v- + A F of impulses refined since, by as little as 1e-9 of themselves, can stand far from the
+ * rounds' velocities when A is ill-conditioned and the impulses large), gamma+ read off qd_plus
  * with the model's contact velocities.  Their miss d is removed by F_S += A_SS^-1 (-d), qd_plus += Y_S (that change),
  * A_SS = N_S I_f^-1 N_S^T from refined responses (gac_impact_system_refined), while max|d| falls by half; a step
  * that would pull (F < 0) or not improve is not taken.  Returns the contacts' largest miss left (m/s). */
 static double gac_refine_targets(const gac_model *m, const double *q, const double *p, int n, const int *list,
                                  const double *e, int rounds, double *F, const double *qd, double *qd_plus,
-                                 double *work)
+                                 double *work, double *targets)
 {
     const int nq = m->nq;
     double before[3 * GAC_AT_LEAST_1(m->npoint)], after[3 * GAC_AT_LEAST_1(m->npoint)], scale = 0.0, v_tol;
@@ -262,26 +281,24 @@ static double gac_refine_targets(const gac_model *m, const double *q, const doub
     int set[GAC_AT_LEAST_1(nq)], pos[GAC_AT_LEAST_1(nq)], ns = 0, a, i, it, built = 0;
     m->contact_velocities(q, qd, p, before);
     for (a = 0; a < n; ++a) {
-        const double v = m->contacts[list[a]].normal_sign * gac_row_value(m, list[a], qd, before);
+        const double v = gac_normal_value(m, q, p, list[a], qd, before);
         scale = fabs(v) > scale ? fabs(v) : scale;
     }
     v_tol = 1e-11 * scale;
     if (rounds > 1) {                                    /* several rounds: the velocities the law's impulses give
                                                             in contact space, v- + A F, are its own */
-        double v0[GAC_AT_LEAST_1(nq)];
-        if (gac_impact_system_refined(m, q, qd, p, n, list, work, v0, e_unused) != GAC_OK) return 0.0;
+        double v[GAC_AT_LEAST_1(nq)];
+        if (gac_rounds_velocities(m, q, qd, p, n, list, F, work, v) != GAC_OK) return 0.0;
         for (a = 0; a < n; ++a) {
-            int b;
-            double v = v0[a];
             if (!(F[a] > 0.0)) continue;
-            for (b = 0; b < n; ++b) v += A[a * n + b] * F[b];
-            target[ns] = v;
+            if (isnan(targets[a])) targets[a] = v[a];    /* the rounds' own, once */
+            target[ns] = targets[a];
             pos[ns] = a;
             set[ns++] = list[a];
         }
     } else {
         for (a = 0; a < n; ++a) {
-            const double v = m->contacts[list[a]].normal_sign * gac_row_value(m, list[a], qd, before);
+            const double v = gac_normal_value(m, q, p, list[a], qd, before);
             if (!(F[a] > 0.0)) continue;
             target[ns] = v < -v_tol ? -e[a] * v : 0.0;   /* gamma+ wanted */
             pos[ns] = a;
@@ -294,7 +311,7 @@ static double gac_refine_targets(const gac_model *m, const double *q, const doub
         int j;
         m->contact_velocities(q, qd_plus, p, after);
         for (a = 0; a < ns; ++a) {
-            d[a] = m->contacts[set[a]].normal_sign * gac_row_value(m, set[a], qd_plus, after) - target[a];
+            d[a] = gac_normal_value(m, q, p, set[a], qd_plus, after) - target[a];
             miss = fabs(d[a]) > miss ? fabs(d[a]) : miss;
         }
         if (!(miss < previous)) {                        /* the last step did not improve: undo it */
@@ -336,8 +353,8 @@ static double gac_refine_targets(const gac_model *m, const double *q, const doub
  * qd+ += Y_a of that (Gauss-Seidel over such contacts, a few sweeps, each taking energy: dT = 1/2 dF_a v_a < 0), as
  * the law would strike it were its velocities exact.  A joint solve over them would ask nearly dependent rows for
  * independent velocities: impulses of the rows' condition number, and round-off of their energy. */
-static void gac_close_approach(const gac_model *m, const double *q, const double *p, int n, const int *list,
-                               double *F, const double *qd, double *qd_plus, double v_tol, double *work)
+void gac_close_approach(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                        double *F, const double *qd, double *qd_plus, double v_tol, double *work)
 {
     const int nq = m->nq;
     double v[GAC_AT_LEAST_1(nq)], e_unused[GAC_AT_LEAST_1(nq)], vel[3 * GAC_AT_LEAST_1(m->npoint)];
@@ -346,7 +363,7 @@ static void gac_close_approach(const gac_model *m, const double *q, const double
     for (sweep = 0; sweep < 4; ++sweep) {
         int struck = 0;
         m->contact_velocities(q, qd_plus, p, vel);
-        for (a = 0; a < n; ++a) v[a] = m->contacts[list[a]].normal_sign * gac_row_value(m, list[a], qd_plus, vel);
+        for (a = 0; a < n; ++a) v[a] = gac_normal_value(m, q, p, list[a], qd_plus, vel);
         for (a = 0; a < n; ++a) {
             double dF;
             if (!(v[a] < -v_tol)) continue;
@@ -366,18 +383,20 @@ static void gac_close_approach(const gac_model *m, const double *q, const double
     }
 }
 
-/* The impulses of a frictionless law refined against the velocities they give (gac_refine_targets), then, after
+/* The impulses of a frictionless law refined against the velocities they give (gac_refine_targets; targets[n]: the
+ * several rounds' velocities of the contacts that push, NaN until the first call computes them), then, after
  * several rounds, the approach left closed (gac_close_approach).  Returns the contacts' largest miss left (m/s). */
 double gac_refine_impulses(const gac_model *m, const double *q, const double *p, int n, const int *list,
-                           const double *e, int rounds, double *F, const double *qd, double *qd_plus, double *work)
+                           const double *e, int rounds, double *F, const double *qd, double *qd_plus, double *work,
+                           double *targets)
 {
-    const double miss = gac_refine_targets(m, q, p, n, list, e, rounds, F, qd, qd_plus, work);
+    const double miss = gac_refine_targets(m, q, p, n, list, e, rounds, F, qd, qd_plus, work, targets);
     if (rounds > 1) {
         double vel[3 * GAC_AT_LEAST_1(m->npoint)], scale = 0.0;
         int a;
         m->contact_velocities(q, qd, p, vel);
         for (a = 0; a < n; ++a) {
-            const double v = fabs(gac_row_value(m, list[a], qd, vel));
+            const double v = fabs(gac_normal_value(m, q, p, list[a], qd, vel));
             scale = v > scale ? v : scale;
         }
         gac_close_approach(m, q, p, n, list, F, qd, qd_plus, 1e-11 * scale, work);
@@ -503,6 +522,80 @@ static double gac_velocity_accuracy(const gac_model *m, const double *q, const d
     return worst;
 }
 
+/* The law's residual after several rounds, as energy (J): sum_a |Lambda_a (gamma+_a - target_a)| over the contacts
+ * that push, target_a the velocity the rounds left them with (targets, gac_refine_impulses; 0 for one without, struck
+ * by the plastic round that closes an approach), gamma+ read off qd_plus with the model's contact velocities: the
+ * work that the velocities' miss of the rounds' own leaves.  (The rounds' conditions hold in their contact-space
+ * velocities v- + A F; on nearly dependent rows with large impulses the model's velocities can miss them by A's
+ * round-off times the impulses, a pushing contact then left separating, F gamma+ > 0: energy gained.) */
+static double gac_rounds_residual(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                                  const double *F, const double *targets, const double *qd_plus)
+{
+    double after[3 * GAC_AT_LEAST_1(m->npoint)], work = 0.0;
+    int a;
+    m->contact_velocities(q, qd_plus, p, after);
+    for (a = 0; a < n; ++a) {
+        const double target = isnan(targets[a]) ? 0.0 : targets[a];
+        if (!(F[a] > 0.0)) continue;
+        work += fabs(F[a] * (gac_normal_value(m, q, p, list[a], qd_plus, after) - target));
+    }
+    return work;
+}
+
+/* The energy the law's rest rule can add (J): a contact whose normal velocity before is below v_tol = 1e-11 of the
+ * fastest is at rest to the law (e = 0, gamma+ >= 0), also when it separates that slowly; a push F_a on it then
+ * does the work 1/2 F_a gamma-_a > 0 (the energy identity's term), which no condition of the law measures.  known:
+ * the rounds' own sum of it (gac_impact_rounds_work), used when >= 0; else, in one round, the sum of 1/2 F_a
+ * max(gamma-_a, 0), and after several rounds (each round's resting contacts pushing with that round's velocities,
+ * at most v_tol) the bound 1/2 v_tol sum_a F_a. */
+static double gac_rest_work(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                            const double *F, int rounds, const double *qd, double known)
+{
+    double before[3 * GAC_AT_LEAST_1(m->npoint)], v[GAC_AT_LEAST_1(m->nq)], scale = 0.0, work = 0.0;
+    int a;
+    if (known >= 0.0) return known;
+    m->contact_velocities(q, qd, p, before);
+    for (a = 0; a < n; ++a) {
+        v[a] = gac_normal_value(m, q, p, list[a], qd, before);
+        scale = fabs(v[a]) > scale ? fabs(v[a]) : scale;
+    }
+    for (a = 0; a < n; ++a) {
+        if (!(F[a] > 0.0)) continue;
+        if (rounds > 1) work += 0.5 * F[a] * 1e-11 * scale;
+        else if (v[a] > 0.0 && v[a] <= 1e-11 * scale) work += 0.5 * F[a] * v[a];
+    }
+    return work;
+}
+
+/* A frictionless law's residual as energy (J) for contacts that may include link pairs and obstacles (their normal
+ * rates by gac_normal_value): solved in one round, sum_a |F_a (gamma+_a + e_a gamma-_a)| (e_a = 0 for a contact at
+ * rest, |gamma-| <= 1e-11 of the fastest); after several rounds, against the rounds' velocities (gac_rounds_residual,
+ * targets may be NULL: none); and what the rest rule can add (gac_rest_work; rest_work: the rounds' own, or < 0). */
+double gac_frictionless_law_work(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                                 const double *e, const double *F, int rounds, int plastic, const double *targets,
+                                 double rest_work, const double *qd, const double *qd_plus)
+{
+    double before[3 * GAC_AT_LEAST_1(m->npoint)], after[3 * GAC_AT_LEAST_1(m->npoint)], scale = 0.0, work = 0.0;
+    int a;
+    if (rounds < 1) return 0.0;
+    m->contact_velocities(q, qd, p, before);
+    m->contact_velocities(q, qd_plus, p, after);
+    for (a = 0; a < n; ++a) {
+        const double v = fabs(gac_normal_value(m, q, p, list[a], qd, before));
+        scale = v > scale ? v : scale;
+    }
+    if (rounds == 1 && !plastic) {
+        for (a = 0; a < n; ++a) {
+            const double vm = gac_normal_value(m, q, p, list[a], qd, before);
+            const double vp = gac_normal_value(m, q, p, list[a], qd_plus, after);
+            if (F[a] > 0.0) work += fabs(F[a] * (vp + (vm < -1e-11 * scale ? e[a] : 0.0) * vm));
+        }
+    } else if (rounds > 1 && targets) {
+        work += gac_rounds_residual(m, q, p, n, list, F, targets, qd_plus);
+    }
+    return work + gac_rest_work(m, q, p, n, list, F, rounds, qd, rest_work);
+}
+
 /* The impact's accuracy, measured after its law (relative to T, the kinetic energy before), with qd_plus refined
  * in place, and the impulses with it (F, Ft in place).  Lambda: the law's impulses F (along the inward normals) and Ft
  * (along the tangential axes); g = J^T Lambda.  Momentum balance: r = I_f (qd+ - qd-) - g; were qd+ moved to the velocities that balance exactly,
@@ -528,7 +621,8 @@ static double gac_velocity_accuracy(const gac_model *m, const double *q, const d
  * identity's residual, gac_energy_identity) / T. */
 double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                            const double *e, double *F, double *Ft, int law, int rounds, int plastic,
-                           const double *qd, double *qd_plus, double T, double *work, double *v_acc)
+                           const double *qd, double *qd_plus, double T, double *work, double *v_acc,
+                           const double *targets, double rest_work)
 {
     const int nq = m->nq;
     double f[GAC_AT_LEAST_1(m->njrow)], r[GAC_AT_LEAST_1(nq)], bound_now[GAC_AT_LEAST_1(nq)];
@@ -719,6 +813,10 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         for (a = 0; a < n; ++a) e_common[a] = e_round;
         law_work = gac_law_residual(m, q, p, n, list, e_common, Fs, Fts, GAC_IMPACT_LAW_GDI, qd, qd_plus);
     }
+    if (rounds > 1 && targets)                           /* after several rounds: against the rounds' velocities */
+        law_work = gac_rounds_residual(m, q, p, n, list, Fs, targets, qd_plus);
+    if (rounds >= 1)                                     /* what the law's rest rule can add */
+        law_work += gac_rest_work(m, q, p, n, list, Fs, rounds, qd, rest_work);
     if (extended && m->energy_ld != 0) {                 /* in long double */
         gac_impulse_rows(m, n, list, Fs, Fts, f);
         identity = gac_energy_identity_ld(m, q, p, f, qd, qd_plus);

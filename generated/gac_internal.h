@@ -229,6 +229,9 @@ typedef struct {
 int gac_impact_rounds_traced(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                              const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
                              int *rounds, int *plastic, gac_rounds_trace *trace);
+int gac_impact_rounds_work(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                           const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
+                           int *rounds, int *plastic, double *rest_work);
 
 
 /* gac_impact_accuracy.c: the impact's accuracy, measured after its law, and iterative refinement */
@@ -237,10 +240,19 @@ void gac_refine_response(const gac_model *m, const double *q, const double *p, c
 int gac_impact_system_refined(const gac_model *m, const double *q, const double *qd, const double *p,
                               int ncontact_set, const int *contact_set, double *work, double *v, double *e);
 double gac_refine_impulses(const gac_model *m, const double *q, const double *p, int n, const int *list,
-                           const double *e, int rounds, double *F, const double *qd, double *qd_plus, double *work);
+                           const double *e, int rounds, double *F, const double *qd, double *qd_plus, double *work,
+                           double *targets);
+int gac_rounds_velocities(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                          const int *list, const double *F, double *work, double *v);
+void gac_close_approach(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                        double *F, const double *qd, double *qd_plus, double v_tol, double *work);
+double gac_frictionless_law_work(const gac_model *m, const double *q, const double *p, int n, const int *list,
+                                 const double *e, const double *F, int rounds, int plastic, const double *targets,
+                                 double rest_work, const double *qd, const double *qd_plus);
 double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                            const double *e, double *F, double *Ft, int law, int rounds, int plastic,
-                           const double *qd, double *qd_plus, double T, double *work, double *v_acc);
+                           const double *qd, double *qd_plus, double T, double *work, double *v_acc,
+                           const double *targets, double rest_work);
 
 /* gac_impact_friction.c */
 double gac_friction_coefficient(const gac_model *m, const double *p, int c);

@@ -72,6 +72,7 @@ typedef struct {
     double E_plus[2];      /* T and V at (x, qd_plus), kept with qd_plus (J) */
     int held;              /* 1 once gac_hold_resting changed the velocities after the law */
     int rounds, plastic;
+    double rest_work;      /* the work of the law's rest rule (J; gac_impact_rounds_work), or -1: not known */
 } gac_impact_event;
 
 /* The accuracy of the law just solved (ev->qd_plus, ev->F, ev->Ft with restitutions e), relative to T before, at
@@ -82,23 +83,55 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
 {
     const int nq = s->model->nq;
     const int refine = ev->rounds >= 1 && ev->law == GAC_IMPACT_LAW_FRICTIONLESS;
-    double b = 0.0, v = 0.0;
-    int pass;
+    double b = 0.0, v = 0.0, targets[GAC_AT_LEAST_1(nq)];
+    int pass, a;
+    for (a = 0; a < ev->n; ++a) targets[a] = NAN;       /* the rounds' velocities, from their own impulses */
     if (gac_has_link(s->model, ev->n, ev->list)) {      /* a link pair has no Jacobian row: the velocities refined
                                                            against the momentum balance alone, then measured */
-        if (refine)
+        const double T = ev->T_before > 0.0 ? ev->T_before : 1e-300;
+        double law = 0.0;
+        if (refine) {                                    /* the law's conditions, and where they leave more than
+                                                            1e-11 of T the impulses refined against them first */
+            double v[GAC_AT_LEAST_1(nq)];
+            if (ev->rounds > 1 && gac_rounds_velocities(s->model, ev->x, ev->x + nq, s->p, ev->n, ev->list, ev->F,
+                                                        s->work, v) == GAC_OK) {
+                for (a = 0; a < ev->n; ++a) targets[a] = ev->F[a] > 0.0 ? v[a] : NAN;   /* the rounds' own */
+            }
+            law = gac_frictionless_law_work(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->rounds,
+                                            ev->plastic, targets, ev->rest_work, ev->x + nq, ev->qd_plus);
+            if (law > 1e-11 * T)
+                gac_refine_impulses(s->model, ev->x, s->p, ev->n, ev->list, e, ev->rounds, ev->F, ev->x + nq,
+                                    ev->qd_plus, s->work, targets);
             gac_link_refine(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->x + nq, ev->qd_plus, s->work);
+            law = gac_frictionless_law_work(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->rounds,
+                                            ev->plastic, targets, ev->rest_work, ev->x + nq, ev->qd_plus);
+        }
         b = gac_link_law_accuracy(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->Ft, ev->x + nq, ev->qd_plus,
-                                  ev->T_before);
+                                  ev->T_before) + law / T;
         return b > 1e-10 ? b : 1e-10;
+    }
+    if (!refine && ev->plastic) {                       /* a frictional law's plastic closing round that left a
+                                                           contact approaching beyond round-off (nearly dependent
+                                                           rows): struck by plastic normal impulses of its own, which
+                                                           take energy and keep every impulse in its cone */
+        double vel[3 * GAC_AT_LEAST_1(s->model->npoint)];
+        s->model->contact_velocities(ev->x, ev->qd_plus, s->p, vel);
+        for (a = 0; a < ev->n; ++a) {
+            if (gac_normal_value(s->model, ev->x, s->p, ev->list[a], ev->qd_plus, vel) < -1e-9 * ev->scale) {
+                gac_close_approach(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->x + nq, ev->qd_plus,
+                                   1e-11 * ev->scale, s->work);
+                break;
+            }
+        }
     }
     for (pass = 0; pass < (refine ? 2 : 1); ++pass) {   /* the impulses against the velocities, then the velocities
                                                            against the impulses (the momentum balance), twice */
         if (refine)
             gac_refine_impulses(s->model, ev->x, s->p, ev->n, ev->list, e, ev->rounds, ev->F, ev->x + nq,
-                                ev->qd_plus, s->work);
+                                ev->qd_plus, s->work, targets);
         b = gac_impact_accuracy(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->Ft, ev->law, ev->rounds,
-                                ev->plastic, ev->x + nq, ev->qd_plus, ev->T_before, s->work, &v);
+                                ev->plastic, ev->x + nq, ev->qd_plus, ev->T_before, s->work, &v,
+                                refine ? targets : 0, ev->rest_work);
     }
     if (v > ev->v_acc) ev->v_acc = v;
     return b > 1e-10 ? b : 1e-10;
@@ -157,7 +190,7 @@ static double gac_held_accuracy(gac_sim *s, gac_impact_event *ev, int nset, cons
         return b > 1e-10 ? b : 1e-10;
     }
     b = gac_impact_accuracy(md, ev->x, s->p, ev->n, ev->list, ev->e, F, Ft, ev->law, 0, 0, ev->x + nq,
-                            s->x1 + nq, ev->T_before, s->work, &v);
+                            s->x1 + nq, ev->T_before, s->work, &v, 0, -1.0);
     if (v > ev->v_acc) ev->v_acc = v;
     return b > 1e-10 ? b : 1e-10;
 }
@@ -273,6 +306,7 @@ static int gac_law(gac_sim *s, gac_impact_event *ev, const double *e)
     const gac_model *md = s->model;
     const double *x = ev->x;
     int k;
+    ev->rest_work = -1.0;
     if (ev->friction)
         return gac_impact_rounds_friction(md, x, x + md->nq, s->p, ev->n, ev->list, e, ev->first, s->opt.impact_law,
                                           ev->qd_plus, ev->F, ev->Ft, s->work, &ev->rounds, &ev->plastic, &ev->law,
@@ -280,8 +314,8 @@ static int gac_law(gac_sim *s, gac_impact_event *ev, const double *e)
     ev->law = GAC_IMPACT_LAW_FRICTIONLESS;
     ev->residual = ev->parts = 0.0;
     for (k = 0; k < 2 * ev->n; ++k) ev->Ft[k] = 0.0;
-    return gac_impact_rounds(md, x, x + md->nq, s->p, ev->n, ev->list, e, ev->first, ev->qd_plus, ev->F, s->work,
-                             &ev->rounds, &ev->plastic);
+    return gac_impact_rounds_work(md, x, x + md->nq, s->p, ev->n, ev->list, e, ev->first, ev->qd_plus, ev->F,
+                                  s->work, &ev->rounds, &ev->plastic, &ev->rest_work);
 }
 
 /* 1 if the law gave some contact a tangential impulse (then e = 1 need not keep the energy: friction took some). */
@@ -454,9 +488,21 @@ static int gac_hold_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *se
     ev->held = *nset > 0;
     if (*nset > 0) {
         const double held = gac_held_accuracy(s, ev, *nset, set);
+        int c;
         if (held > ev->bound) ev->bound = r->roundoff = held;
         if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;
         gac_normal_velocities(md, s->x1, s->p, ev->vn);   /* (the refined velocities) */
+        for (c = 0; c < md->ncontact; ++c) {             /* the refinement, along rows nearly dependent on the held
+                                                            ones, left a contact at its wall approaching: the law's
+                                                            velocities stand, nothing held */
+            if (ev->gaps[c] <= s->opt.contact_tol && ev->vn[c] < -gac_approach_tolerance(ev)) {
+                for (i = 0; i < nq; ++i) s->x1[nq + i] = ev->qd_plus[i];
+                *nset = 0;
+                ev->held = 0;
+                gac_normal_velocities(md, s->x1, s->p, ev->vn);
+                break;
+            }
+        }
     }
     return GAC_OK;
 }
@@ -524,6 +570,7 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     s->energy_x1_valid = 0;                              /* set again by gac_finish, for the state it leaves */
     ev.gaps = gaps, ev.vn = vn, ev.an = an, ev.e = e, ev.e_law = e_law, ev.qd_plus = qd_plus, ev.F = F, ev.Ft = Ft;
     ev.friction = 0, ev.law = GAC_IMPACT_LAW_FRICTIONLESS, ev.residual = ev.parts = 0.0, ev.v_acc = 0.0;
+    ev.rest_work = -1.0;
     gac_contact_gaps(md, ev.x, s->p, gaps);
     gac_normal_velocities(md, ev.x, s->p, vn);
     r->ncontact = 0;

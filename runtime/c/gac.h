@@ -527,8 +527,13 @@ int gac_impact(const gac_model *m, const double *GAC_RESTRICT q, const double *G
  *     0 <= F  _|_  v+ + e v- >= 0         (Newton's law, Eq. 47, with complementarity; e = 0 at rest),
  * until none approaches; a separating contact takes no impulse unless the others drive it into its wall,
  * and is then struck by its own law in the next round.  When every approaching contact pushes, one round
- * is Eq. 47 exactly (same result as gac_impact).  After GAC_MAX_ROUNDS rounds a plastic round over all
- * contacts ends the sequence.  impulse[k]: total impulse of contact contact_set[k] (N s, >= 0).  Same arguments
+ * is Eq. 47 exactly (same result as gac_impact).  A contact is at rest in a round when |v| is below 1e-11 of the
+ * fastest approach before, or below the round-off its velocity has gathered over the rounds (4 (k + 1) eps of the
+ * sum of |v| and |A_ab F_b| of each update), so that rounds over nearly dependent rows, whose velocities carry
+ * A's round-off times large impulses, neither strike a resting contact on noise nor go on for it.  After
+ * GAC_MAX_ROUNDS rounds a plastic round over all contacts ends the sequence (rounds that cycle: contacts whose
+ * rows meet at a sharp angle in the metric A, like a ball in a narrow wedge, strike each other in turn with
+ * velocities that fall only slowly; at e < 1 the sequence converges to the plastic projection).  impulse[k]: total impulse of contact contact_set[k] (N s, >= 0).  Same arguments
  * as gac_impact; at most min(nq, GAC_LCP_CAP) contacts take part in one round (solved exactly by
  * enumerating the pushing sets; more: GAC_ERR_LCP). */
 int gac_impact_complementarity(const gac_model *m, const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd,

@@ -26,7 +26,8 @@
  * are enumerated exactly (up to GAC_ENUM_MAX contacts).  Where that leaves a round above its tolerance (dependent
  * rows: W singular, the impulses not unique), a later round whose approach is within the tolerance of the
  * velocities the motion can have ends the rounds, and any other is solved by the proximal point method
- * (gac_round_proximal); rounds the plain solve meets are untouched.  Its residual is reported, and a round still
+ * (gac_round_proximal), else with every pushing contact held at rest (gac_round_stick); rounds the plain solve
+ * meets are untouched.  Its residual is reported, and a round still
  * left above GAC_FRICTION_RESIDUAL_MAX (or 16 eps cond W) is GAC_ERR_IMPACT_FRICTION.
  */
 #include "gac_internal.h"
@@ -765,8 +766,86 @@ static void gac_round_proximal(int nd, const double *W, int ncon, const int *sta
     }
 }
 
+/* Every contact of the round that pushes in L held at rest, xi = 0 on its rows (the others at L = 0), with impulses
+ * in the cones: a point of the cones' product on the affine set W_S L_S = -q_S, by alternating projections from L
+ * (onto the set: the least-norm change W_S (W_S W_S + 1e-13 max diag I)^-1 (-(W_S L_S + q_S)); onto each cone
+ * |L_T| <= c_f L_N: Euclidean, in closed form), ending on the set.  The impulses are not unique where the rows
+ * are dependent (W_S singular), and such a point exists where the round's solution sticks everywhere it pushes.
+ * L and *residual are replaced if that lowers the round's residual. */
+static void gac_round_stick(int nd, const double *W, int ncon, const int *start, const int *dim, const double *cf,
+                            const int *rows, const double *q, double *L, double *residual)
+{
+    const int nr = start[ncon - 1] + dim[ncon - 1];
+    double G[GAC_AT_LEAST_1(nr * nr)], cur[GAC_AT_LEAST_1(nr)], r[GAC_AT_LEAST_1(nr)], y[GAC_AT_LEAST_1(nr)];
+    double gmax = 0.0, res;
+    int held[GAC_AT_LEAST_1(nr)], i, j, c, k, it;
+    for (k = 0; k < ncon; ++k) {
+        for (i = 0; i < dim[k]; ++i) held[start[k] + i] = L[start[k]] > 0.0;
+    }
+    for (i = 0; i < nr; ++i) {                   /* G = W_S W_S (+ the identity on the rows not held) */
+        cur[i] = held[i] ? L[i] : 0.0;
+        for (j = 0; j < nr; ++j) {
+            double v = 0.0;
+            for (c = 0; c < nr; ++c) {
+                if (held[i] && held[j] && held[c]) v += W[rows[i] * nd + rows[c]] * W[rows[c] * nd + rows[j]];
+            }
+            G[i * nr + j] = v;
+        }
+        gmax = G[i * nr + i] > gmax ? G[i * nr + i] : gmax;
+    }
+    if (!(gmax > 0.0)) return;
+    for (i = 0; i < nr; ++i) G[i * nr + i] += held[i] ? 1e-13 * gmax : 1.0;
+    if (gac_ldlt(nr, G, 1e-300) != 0) return;
+    for (it = 0; it < 2000; ++it) {
+        double change = 0.0, size = 0.0;
+        for (i = 0; i < nr; ++i) {               /* onto the set */
+            double v = q[i];
+            for (j = 0; j < nr; ++j) v += held[j] ? W[rows[i] * nd + rows[j]] * cur[j] : 0.0;
+            y[i] = held[i] ? -v : 0.0;
+        }
+        gac_ldlt_solve(nr, G, y);
+        for (i = 0; i < nr; ++i) {
+            double v = 0.0;
+            for (j = 0; j < nr; ++j) v += held[i] && held[j] ? W[rows[i] * nd + rows[j]] * y[j] : 0.0;
+            r[i] = cur[i] + v;
+        }
+        if (it == 1999) break;
+        for (k = 0; k < ncon; ++k) {             /* onto the cones */
+            const int s = start[k], d = dim[k];
+            double n = r[s], t = 0.0, mu = cf[k];
+            if (!held[s]) continue;
+            for (i = 1; i < d; ++i) t += r[s + i] * r[s + i];
+            t = sqrt(t);
+            if (d == 1 || !(mu > 0.0)) {
+                n = n > 0.0 ? n : 0.0;
+                for (i = 1; i < d; ++i) r[s + i] = 0.0;
+            } else if (t <= mu * n) {
+            } else if (mu * t <= -n) {
+                n = 0.0;
+                for (i = 1; i < d; ++i) r[s + i] = 0.0;
+            } else {
+                n = (n + mu * t) / (1.0 + mu * mu);
+                for (i = 1; i < d; ++i) r[s + i] *= mu * n / t;
+            }
+            r[s] = n;
+        }
+        for (i = 0; i < nr; ++i) {
+            change = fabs(r[i] - cur[i]) > change ? fabs(r[i] - cur[i]) : change;
+            size = fabs(r[i]) > size ? fabs(r[i]) : size;
+            cur[i] = r[i];
+        }
+        if (change <= 4.0 * GAC_EPS * size) it = 1998;   /* in both: once more onto the set */
+    }
+    res = gac_round_residual(nd, W, ncon, start, dim, cf, rows, q, r);
+    if (res < *residual) {
+        *residual = res;
+        for (i = 0; i < nr; ++i) L[i] = r[i];
+    }
+}
+
 /* The round's problem (gac_round_solve); with proximal set, where that leaves the residual above accept, the
- * proximal point method from its impulses (gac_round_proximal). */
+ * proximal point method from its impulses (gac_round_proximal), and where that too is left above accept, every
+ * pushing contact held at rest (gac_round_stick). */
 static void gac_round_friction(int nd, const double *W, int ncon, const int *start, const int *dim,
                                const double *cf, const int *rows, const double *q, int proximal, double accept,
                                double *L, double *residual)
@@ -774,6 +853,7 @@ static void gac_round_friction(int nd, const double *W, int ncon, const int *sta
     gac_round_solve(nd, W, ncon, start, dim, cf, rows, q, 0, L, residual);
     if (proximal && *residual > accept)
         gac_round_proximal(nd, W, ncon, start, dim, cf, rows, q, 1e-3 * accept, L, residual);
+    if (proximal && *residual > accept) gac_round_stick(nd, W, ncon, start, dim, cf, rows, q, L, residual);
 }
 
 /* The velocities of the system's rows (gac_friction_system: each contact's normal, then its tangential axes) at

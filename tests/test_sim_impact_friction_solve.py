@@ -20,6 +20,11 @@ CASES = [
      [-0.14861109699847297, -0.16638788686817416, 0.007741947102724809, 0.008454394059979322,
       -0.04970860739987965, 0.14697675553570702, 0.13604563873626965, -0.08366558230968912,
       1.3834595014149173e-05]),
+    ("0-19/5", [9, 29],              # the same corner 9 ms later: it sticks at both walls, impulses in both cones
+     [4.589781985603231, 0.6165221157931636, -4.111837579085692, -0.24237778403087576, 3.598264847932847,
+      1.317098924824036, 0.06142577068191012, -0.038437084298188456, -0.0014071606490854694],
+     [97.64463635492942, -126.12406709705685, -56.269576260569075, 36.185726402326395, 120.25352853635671,
+      -216.50758320315623, 0.10175988643450355, -0.042490726066021424, 0.05930875997891301]),
     ("0-35/2", [14, 16, 15],          # points 3, 4, 5 on x2_min: W 9 x 9 of rank 7
      [0.11454806813325406, -3.8801251097216056, 1.3098450744103858, -11.599690826617227, -1.8837807395387558,
       1.1534205296131286, 3.1377522542707457, -0.00252455249795683, -0.029873919176309827, 0.01064204751799374],
@@ -50,7 +55,7 @@ def point_jacobian(model, q, p):
     return np.column_stack([model.contact_velocities(q, np.eye(model.nq)[j], p).ravel() for j in range(model.nq)])
 
 
-@pytest.mark.parametrize("case, contacts, q, qd", CASES, ids=[c[0] for c in CASES])
+@pytest.mark.parametrize("case, contacts, q, qd", CASES, ids=[f"{c[0]}:{c[1]}" for c in CASES])
 def test_rounds_with_dependent_contact_rows_are_solved(compiled, case, contacts, q, qd):
     """Before, the round's residual stayed at 0.06 - 0.4 (the law refused the impact); now the law meets its
     conditions: velocity change = I_f^-1 J^T Lambda, cones, no approach after, e = 0 contacts that push at rest,

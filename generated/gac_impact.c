@@ -238,6 +238,30 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
                       const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
                       int *rounds, int *plastic)
 {
+    return gac_impact_rounds_traced(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, 0);
+}
+
+/* Round `round`'s problem (its k contacts at positions idx, hit: struck with their own e) and impulses Fsub into
+ * the trace, while it has room. */
+static void gac_trace_round(gac_rounds_trace *trace, int round, int k, const int *idx, const int *hit,
+                            const double *Fsub)
+{
+    int a;
+    trace->nround = round + 1;
+    if (round >= trace->cap) return;
+    trace->k[round] = k;
+    for (a = 0; a < k; ++a) {
+        trace->idx[round * trace->n + a] = idx[a];
+        trace->hit[round * trace->n + a] = hit[a];
+        trace->F[round * trace->n + a] = Fsub[a];
+    }
+}
+
+/* gac_impact_rounds, each round recorded in trace (NULL: none) as well. */
+int gac_impact_rounds_traced(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                             const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
+                             int *rounds, int *plastic, gac_rounds_trace *trace)
+{
     const int nq = m->nq, max_lcp = GAC_MAX_LCP(m);
     double v[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)], scale = 0.0, v_tol;
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work);
@@ -252,13 +276,14 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
     v_tol = 1e-11 * scale;                 /* a normal velocity below this is round-off: at rest */
     for (round = 0; ; ++round) {
         double Asub[GAC_LCP_CAP * GAC_LCP_CAP], qsub[GAC_AT_LEAST_1(nq)], Fsub[GAC_LCP_CAP];
-        int idx[GAC_AT_LEAST_1(nq)], k = 0, approaching = 0;
+        int idx[GAC_AT_LEAST_1(nq)], hit[GAC_AT_LEAST_1(nq)], k = 0, approaching = 0;
         const int last = round >= GAC_MAX_ROUNDS;
         for (a = 0; a < n; ++a) {
             const int struck = v[a] < -v_tol || (round == 0 && a == first && v[a] < 0.0);
             if (struck) approaching = 1;
             if (last || struck || v[a] <= v_tol) {
                 qsub[k] = !last && struck ? (1.0 + e[a]) * v[a] : v[a];
+                hit[k] = !last && struck;
                 idx[k++] = a;
             }
         }
@@ -269,6 +294,7 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
         }
         code = gac_lcp(max_lcp, k, Asub, qsub, 1e-10 * scale, Fsub);
         if (code != GAC_OK) return code;
+        if (trace != 0) gac_trace_round(trace, round, k, idx, hit, Fsub);
         for (a = 0; a < k; ++a) F[idx[a]] += Fsub[a];
         for (a = 0; a < n; ++a) {
             for (b = 0; b < k; ++b) v[a] += A[a*n + idx[b]] * Fsub[b];

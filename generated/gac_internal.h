@@ -135,10 +135,11 @@ int gac_obstacle_nparam(int kind);
 int gac_obstacle_shape_contact(const double *shape, const double *a0, const double *a1, double radius,
                                double *geometry);
 int gac_obstacle_shape_check(const gac_model *m, int o);
-/* The part of a box's or plane's shape row nearest to the point x (a link's closest point): 0 a face (the plane's,
- * or a box's with x over it or inside: a constant normal), 1 a box's edge, its ends in b0, b1, 2 a box's corner,
- * b0 = b1 (the normal then turns with x, as against a segment's capsule) */
-int gac_obstacle_feature(const double *shape, const double *x, double *b0, double *b1);
+/* The part of a box's or plane's shape row that segment a0-a1's gap is measured from (gac_obstacle_shape_contact):
+ * 0 a face (the plane's, or a box's that the link's closest point is over or reaches in through: a constant
+ * normal), 1 a box's edge (the link's closest point by it outside, or the link reaching in across it), its ends in
+ * b0, b1, 2 a box's corner, b0 = b1 (the normal then turns with the link, as against a segment's capsule) */
+int gac_obstacle_feature(const double *shape, const double *a0, const double *a1, double *b0, double *b1);
 
 /* gac_link.c: link pairs and obstacles as contacts of the loop (kinds GAC_CONTACT_LINK, GAC_CONTACT_OBSTACLE, the
  * last entries of m->contacts: no Jacobian row; Coulomb friction along their contact frame, at impacts and at rest,
@@ -212,6 +213,22 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
 int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                       const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
                       int *rounds, int *plastic);
+/* What gac_impact_rounds_traced records of each round (for the sensitivities' differential of the rounds): the
+ * contacts of round j's complementarity problem, k[j] of them, at positions idx[j n + i] of the law's list, hit[j n +
+ * i] = 1 where struck with its own e (approaching; 0: at rest in that round, or the plastic round), F[j n + i] their
+ * impulses in that round.  The caller's arrays, room for cap rounds (nround > cap: more rounds than recorded).
+ * gac_impact_rounds_friction_traced records the same and, per contact i of round j, its rows dim[j n + i] (its normal,
+ * then its tangential axes') and their impulses L[j 3n + 3i + r] (F then holds the normal ones). */
+typedef struct {
+    int cap, n, nround;
+    int *k, *idx, *hit;
+    double *F;
+    int *dim;
+    double *L;
+} gac_rounds_trace;
+int gac_impact_rounds_traced(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                             const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
+                             int *rounds, int *plastic, gac_rounds_trace *trace);
 
 
 /* gac_impact_accuracy.c: the impact's accuracy, measured after its law, and iterative refinement */
@@ -232,6 +249,10 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
                                const int *list, const double *e, int first, int law, double *qd_plus, double *F,
                                double *Ft, double *work, int *rounds, int *plastic, int *law_used, double *residual,
                                double *tangential_parts);
+int gac_impact_rounds_friction_traced(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                                      const int *list, const double *e, int first, int law, double *qd_plus,
+                                      double *F, double *Ft, double *work, int *rounds, int *plastic, int *law_used,
+                                      double *residual, double *tangential_parts, gac_rounds_trace *trace);
 /* The tangential impact at the contacts list[0..n-1] (n <= 6), resting at their walls (normal velocities 0) with some
  * sliding where their sliding system is no P-matrix: the frictional impact law (GDI, e = 0 at a contact at rest) on
  * their normal and tangential rows, its non-trivial solution (some L_N > 0; the first of the contacts' modes from all

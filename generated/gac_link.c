@@ -669,10 +669,12 @@ static void gac_link_points_change(const gac_model *m, const double *q, const do
  * (J_k = (1 - s) V_a0,k + s V_a1,k - (1 - t) V_b0,k - t V_b1,k, V the points' Jacobian columns) changes by
  *   dg_k = dn . J_k + n . (ds (V_a1,k - V_a0,k) - dt (V_b1,k - V_b0,k)) + n . dJ_k[dq, dp]
  * (the last term: gac_link_row_change; the points' motion: gac_link_points_change, both exact with the model's
- * tangents of contact_points and contact_velocities).  A box's edge or corner nearest to the link's closest point
- * (gac_obstacle_feature) is a fixed segment or point as a bar's or a sphere's; a plane's or a box's face has a
- * constant normal: the closest point is an end of the link (ds = 0; one inside, the link lies parallel to the face
- * and a whole stretch is closest: no derivative), so d gap = n . dP0, dn = 0. */
+ * tangents of contact_points and contact_velocities).  The box's edge or corner the gap is measured from
+ * (gac_obstacle_feature) is a fixed segment or point as a bar's or a sphere's; across an edge (both fractions
+ * interior, outside the box or reaching into it) n is the lines' common normal +-(d1 x d2) / |d1 x d2| and
+ * dn = +-(I - n n^T)(dd1 x d2 + d1 x dd2) / |d1 x d2|, the same as above where dist > 0 and defined at dist <= 0;
+ * a plane's or a box's face has a constant normal: the closest point is an end of the link (ds = 0; one inside,
+ * the link lies parallel to the face and a whole stretch is closest: no derivative), so d gap = n . dP0, dn = 0. */
 static int gac_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
                               const double *dp, int held, double *dgap, double *g, double *dg, double *gt,
                               double *dgt)
@@ -685,7 +687,7 @@ static int gac_normal_tangent(const gac_model *m, const double *q, const double 
     double d1[3], d2[3], D[3], dd1[3], dd2[3], dD[3], dn[3], a, b, e, dist, s, t, ds = 0.0, dt = 0.0, along;
     double end0[3], end1[3], shape[GAC_OBSTACLE_NSHAPE];
     const double *a0, *a1, *b0, *b1, *da0, *da1, *db0, *db1;
-    int i, j, k, code, s_inside, t_inside, face = 0;
+    int i, j, k, code, s_inside, t_inside, face = 0, edge = 0;
     if (m == 0 || q == 0 || p == 0 || dq == 0 || dp == 0 || dgap == 0 || g == 0 || dg == 0)
         return GAC_ERR_NULL_ARGUMENT;
     if (c < 0 || c >= m->ncontact || !gac_rowless(m, c)) return GAC_ERR_BAD_CONTACT;
@@ -702,10 +704,11 @@ static int gac_normal_tangent(const gac_model *m, const double *q, const double 
         const int o = m->contacts[c].coordinate;
         if (gac_obstacle_shape(m, p, o, shape) != GAC_OK) return GAC_ERR_BAD_CONTACT;
         b0 = shape + 1, b1 = shape + 4, db0 = db1 = zero;
-        if (!gac_obstacle_round((int)shape[0])) {        /* a box or a plane: the part nearest */
+        if (!gac_obstacle_round((int)shape[0])) {        /* a box or a plane: the part the gap is measured from */
             double x[3], span = 0.0;
+            const int feature = gac_obstacle_feature(shape, a0, a1, end0, end1);
             for (k = 0; k < 3; ++k) x[k] = (1.0 - s) * a0[k] + s * a1[k];
-            face = gac_obstacle_feature(shape, x, end0, end1) == 0;
+            face = feature == 0, edge = feature == 1;
             b0 = face ? x : end0, b1 = face ? x : end1, t = 0.0;
             for (k = 0; k < 3; ++k) span += (b1[k] - b0[k]) * (b1[k] - b0[k]);
             if (span > 0.0) {                            /* an edge: the foot of x on it */
@@ -726,6 +729,26 @@ static int gac_normal_tangent(const gac_model *m, const double *q, const double 
         if (!(a > 0.0) || (s_inside && !held)) return GAC_ERR_LINK_CONTACT;   /* parallel: a stretch closest */
         along = gac_dot3(geometry + 3, dD);
         for (k = 0; k < 3; ++k) dn[k] = 0.0;
+    } else if (edge && s_inside && t_inside && a * e - b * b > 1e-8 * a * e) {
+        /* a box's edge across the link (outside it, or reaching in: D = gap n either way, of any sign or 0): the
+           lines' common normal n = +-w / |w|, w = d1 x d2, turns by dn = +-(I - n n^T) dw / |w|, dw = dd1 x d2 +
+           d1 x dd2, free of the distance's round-off where it is ~0 (a link held on the edge) */
+        const double r1 = -(gac_dot3(dd1, D) + gac_dot3(d1, dD)), r2 = -(gac_dot3(dd2, D) + gac_dot3(d2, dD));
+        const double det = b * b - a * e;
+        double w[3], dw[3], len, side, ndw;
+        ds = (b * r2 - e * r1) / det;
+        dt = (a * r2 - b * r1) / det;
+        for (k = 0; k < 3; ++k) {
+            const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+            w[k] = d1[k1] * d2[k2] - d1[k2] * d2[k1];
+            dw[k] = dd1[k1] * d2[k2] - dd1[k2] * d2[k1] + d1[k1] * dd2[k2] - d1[k2] * dd2[k1];
+            dD[k] += ds * d1[k] - dt * d2[k];
+        }
+        len = sqrt(gac_dot3(w, w));
+        side = gac_dot3(w, geometry + 3) < 0.0 ? -1.0 : 1.0;
+        ndw = gac_dot3(geometry + 3, dw);
+        along = gac_dot3(geometry + 3, dD);
+        for (k = 0; k < 3; ++k) dn[k] = side * (dw[k] - ndw * geometry[3 + k]) / len;
     } else {
         if (!(dist > 0.0) || !(a > 0.0)) return GAC_ERR_LINK_CONTACT;   /* crossing axes: n has no derivative */
         {

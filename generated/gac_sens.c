@@ -6,7 +6,8 @@
  * Runge-Kutta formula over the state's own steps and stages (gac_sens_flight), the derivative of the projection onto
  * the resting contacts after each step (gac_sens_project), the jump of the sensitivities at an impact by the
  * frictionless law -- of one contact or several, walls, joint stops, link pairs and links on obstacles, landings
- * among them, the set of pushing contacts held fixed -- the saltation
+ * among them, the set of pushing contacts held fixed, in one round or several (the chain of the rounds' laws,
+ * gac_sens_rounds_at) -- the saltation
  * matrix of Hiskens & Pai (2000) (gac_sens_impact), the release of a resting contact (gac_sens_release), a stuck
  * point's slip (gac_sens_slip) and a sliding point's coming to stick (gac_sens_stick), contacts at rest at the start
  * (gac_sens_attach), a switch of base chart (gac_sens_switch; S is in the coordinates of the chart integrated now,
@@ -1152,6 +1153,293 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
     return n;
 }
 
+/* ---- an impact the law solved in several rounds ---- */
+
+#define GAC_SENS_TRACE_ROOM 24576L   /* bytes the rounds' trace may take (on the stack): more ends the sensitivities */
+
+/* The rounds' trace for R rounds of n contacts (gac_rounds_trace): k (R ints), idx and hit (R n ints each), F (R n
+ * doubles), and under the frictional law (rough) dim (R n ints) and L (3 R n doubles).  257 rounds of two contacts
+ * take 9,252 bytes frictionless, 23,644 rough. */
+#define GAC_SENS_TRACE_INTS(R, n, rough) ((long)(R) * (1L + ((rough) ? 3L : 2L) * (n)))
+#define GAC_SENS_TRACE_DOUBLES(R, n, rough) ((long)(R) * ((rough) ? 4L : 1L) * (n))
+#define GAC_SENS_TRACE_BYTES(R, n, rough) \
+    (GAC_SENS_TRACE_INTS(R, n, rough) * (long)sizeof(int) + GAC_SENS_TRACE_DOUBLES(R, n, rough) * (long)sizeof(double))
+
+/* The rounds of an impact as a chain of impact laws (qd+ = R_K(...R_1(qd-)) at fixed q), round j the law on its
+ * active set S_j (the contacts that took an impulse in it) with e_a for a contact struck in it (approaching) and 0 for
+ * one at rest in it or in the plastic round, at the velocities qd_j before it.  Of the rounds only their trace is kept
+ * (each round's problem and impulses); a walk through them (gac_sens_round) rebuilds round j's law (gac_sens_law, up
+ * to 3 n rows: n, or the frictional law's tangential rows too) from the trace and qd_j in the caller's arrays for one
+ * round's law, and gives qd_j+1.  The stack the rounds take: the trace (at most GAC_SENS_TRACE_ROOM bytes), one
+ * round's law and the record's n contacts' rows, whatever the number of rounds. */
+typedef struct {
+    int n, nround;                                     /* the record's contacts; rounds with an impulse walked */
+    gac_rounds_trace trace;
+    double *fall, *Wall, *e_list;                      /* each contact's row f (n nr) and w (n nq), its e (n) */
+    int *zero_start, *zero, *exempt;                   /* n each: held at 0 before the impact, before round j; exempt
+                                                          from the bounds (resting before or held after) */
+    double thr, largest;                               /* ~0 of a normal velocity; the largest impulse */
+    double *qd, *qd_next;                              /* nq each: the velocities before round j, after it */
+    gac_sens_law law;                                  /* round j's, in the arrays below */
+    int *active, *landing, *normal, *cf_index;         /* 3 n rows each */
+    double *f, *W, *Y, *LD, *F, *v, *e, *u, *xi_norm, *cf;   /* 3 n rows of nr, nq, nq, 3 n, 1... */
+} gac_sens_rounds;
+
+/* The walk's start: the velocities before the impact, the contacts held at 0 before it. */
+static void gac_sens_rounds_start(const gac_sim *s, gac_sens_rounds *C)
+{
+    int a;
+    gac_copy(C->qd, s->xs + s->model->nq, s->model->nq);
+    for (a = 0; a < C->n; ++a) C->zero[a] = C->zero_start[a];
+    C->nround = 0;
+}
+
+/* The law of record r re-run on the record's contacts with each round recorded (gac_impact_rounds_traced, or
+ * gac_impact_rounds_friction_traced for the frictional law), each contact's e e_list; 1 if it gives the record's
+ * rounds, plastic round, law and impulses (normal and tangential, to 1e-6 of the largest). */
+static int gac_sens_rounds_rerun(gac_sim *s, const gac_impact_record *r, int first, const double *e_list,
+                                 double largest, gac_rounds_trace *trace)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, n = r->ncontact;
+    double F[n], Ft[2 * n], qd_plus[nq], residual, parts;
+    int rounds = 0, plastic = 0, law = GAC_IMPACT_LAW_FRICTIONLESS, ok, a;
+    trace->nround = 0;
+    if (r->law == GAC_IMPACT_LAW_FRICTIONLESS) {
+        for (a = 0; a < 2 * n; ++a) Ft[a] = 0.0;
+        ok = gac_impact_rounds_traced(md, s->xs, s->xs + nq, s->p, n, r->contact, e_list, first, qd_plus, F, s->work,
+                                      &rounds, &plastic, trace) == GAC_OK;
+    } else {
+        ok = gac_impact_rounds_friction_traced(md, s->xs, s->xs + nq, s->p, n, r->contact, e_list, first,
+                                               s->opt.impact_law, qd_plus, F, Ft, s->work, &rounds, &plastic, &law,
+                                               &residual, &parts, trace) == GAC_OK;
+    }
+    ok = ok && law == r->law && rounds == r->rounds && plastic == r->plastic && trace->nround == rounds
+         && rounds <= trace->cap;
+    for (a = 0; ok && a < n; ++a) {
+        ok = fabs(F[a] - r->impulse[a]) <= 1e-6 * largest && fabs(Ft[2 * a] - r->impulse_t[2 * a]) <= 1e-6 * largest
+             && fabs(Ft[2 * a + 1] - r->impulse_t[2 * a + 1]) <= 1e-6 * largest;
+    }
+    return ok;
+}
+
+/* Round j of the walk: its law into C->law (m = 0: it took no impulse) at the velocities C->qd before it, the
+ * velocities after it into C->qd_next, and its set's strictness.  Its active rows W (gac_sens_row; a rough contact's
+ * tangential rows under the frictional law after its normal one, stuck -- xi_T = gamma+_T + e gamma-_T = 0 -- or
+ * sliding on the cone, as for one round), Y = I_f^-1 W, A = W Y (factored without slides), its impulses (the trace's)
+ * and velocities.  A contact at its bound: GAC_SENS_BOUNDARY, its index in *contact (gac_sens_rounds_at). */
+static int gac_sens_round(const gac_sim *s, const gac_impact_record *r, gac_sens_rounds *C, int j, int *contact)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow), n = C->n;
+    const double *q = s->xs, *qd = C->qd, *Wall = C->Wall, thr = C->thr, largest = C->largest;
+    const gac_rounds_trace *T = &C->trace;
+    double *qd_next = C->qd_next, vb[n], va[n];
+    gac_sens_law *L = &C->law;
+    int m = 0, nslide = 0, zero_next[n], a, b, i, t;
+    L->m = 0;
+    for (a = 0; a < n; ++a) {
+        vb[a] = gac_dot(nq, Wall + (long)a * nq, qd);
+        zero_next[a] = 0;
+        if (!C->zero[a] && !(fabs(vb[a]) > thr)) {           /* meets the round at rest, not held there */
+            *contact = r->contact[a];
+            return GAC_SENS_BOUNDARY;
+        }
+    }
+    for (b = 0; b < T->k[j]; ++b) {                          /* the active rows: those that took an impulse */
+        const int pos = T->idx[j * n + b], hit = T->hit[j * n + b], c = r->contact[pos];
+        const double LN = T->F[j * n + b];
+        const gac_contact *ct = md->contacts + c;
+        const int row_n = m;
+        if (!(LN > 1e-9 * largest)) continue;
+        C->active[row_n] = c;
+        C->e[row_n] = hit ? C->e_list[pos] : 0.0;
+        C->landing[row_n] = !hit || C->e_list[pos] != gac_restitution(md, s->p, c);
+        C->normal[row_n] = -1;
+        C->F[row_n] = LN;
+        C->v[row_n] = vb[pos];
+        gac_copy(C->f + (long)row_n * nr, C->fall + (long)pos * nr, nr);
+        gac_copy(C->W + (long)row_n * nq, Wall + (long)pos * nq, nq);
+        zero_next[pos] = C->e[row_n] == 0.0;
+        ++m;
+        if (r->law != GAC_IMPACT_LAW_FRICTIONLESS && T->dim[j * n + b] > 1) {   /* its tangential rows */
+            const double *Lb = T->L + 3L * (j * n + b);
+            const double cf = gac_friction_coefficient(md, s->p, c);
+            const double tangential = hypot(Lb[1], T->dim[j * n + b] > 2 ? Lb[2] : 0.0);
+            const int slides = !(tangential < (1.0 - 1e-6) * cf * LN);
+            int row = 1;
+            nslide += slides;
+            for (t = 0; t < 2; ++t) {
+                const int rt = m;
+                double *ft = C->f + (long)rt * nr;
+                if (ct->trow[t] < 0) continue;
+                for (i = 0; i < nr; ++i) ft[i] = 0.0;
+                ft[ct->trow[t]] = 1.0;
+                md->contact_generalized_force(q, ft, s->p, C->W + (long)rt * nq);
+                C->active[rt] = c, C->e[rt] = C->e[row_n], C->landing[rt] = C->landing[row_n];
+                C->F[rt] = Lb[row++];
+                C->v[rt] = gac_dot(nq, C->W + (long)rt * nq, qd);
+                C->normal[rt] = slides ? row_n : -1;
+                C->u[rt] = slides ? -C->F[rt] / (cf * LN) : 0.0;
+                C->cf[rt] = cf, C->cf_index[rt] = ct->friction_index;
+                ++m;
+            }
+        }
+    }
+    for (a = 0; a < m; ++a) md->inertia_solve(q, C->W + (long)a * nq, s->p, C->Y + (long)a * nq);
+    for (i = 0; i < nq; ++i) {                               /* the velocities after the round */
+        double value = qd[i];
+        for (a = 0; a < m; ++a) value += C->Y[(long)a * nq + i] * C->F[a];
+        qd_next[i] = value;
+    }
+    for (a = 0; a < m; ++a) {                                /* a slide's xi_T = gamma+_T + e gamma-_T, off 0 */
+        double xi2 = 0.0;
+        int last;
+        if (C->normal[a] < 0) continue;
+        for (last = a; last < m && C->normal[last] == C->normal[a]; ++last) {
+            const double xi = gac_dot(nq, C->W + (long)last * nq, qd_next) + C->e[last] * C->v[last];
+            xi2 += xi * xi;
+        }
+        if (!(sqrt(xi2) > thr)) {                            /* on the cone with xi_T ~ 0: stick or slide */
+            *contact = C->active[a];
+            return GAC_SENS_BOUNDARY;
+        }
+        for (b = a; b < last; ++b) C->xi_norm[b] = sqrt(xi2);
+        a = last - 1;
+    }
+    for (a = 0; a < n; ++a) va[a] = gac_dot(nq, Wall + (long)a * nq, qd_next);
+    for (b = 0; b < T->k[j]; ++b) {                          /* the others of its problem: clear of their bound */
+        const int pos = T->idx[j * n + b];
+        const double bound = va[pos] + (T->hit[j * n + b] ? C->e_list[pos] * vb[pos] : 0.0);
+        if (T->F[j * n + b] > 1e-9 * largest || bound > thr) continue;
+        if (!C->exempt[pos]) {
+            *contact = r->contact[pos];
+            return GAC_SENS_BOUNDARY;
+        }
+        zero_next[pos] = C->zero[pos];
+    }
+    for (a = 0; a < n; ++a) C->zero[a] = zero_next[a];
+    if (m == 0) return GAC_SENS_VALID;                      /* (no impulse: the round leaves qd as it is) */
+    {
+        double factor[m * m];
+        for (a = 0; a < m; ++a) {
+            for (b = 0; b <= a; ++b)
+                C->LD[a * m + b] = C->LD[b * m + a] = gac_dot(nq, C->W + (long)a * nq, C->Y + (long)b * nq);
+        }
+        gac_copy(factor, C->LD, m * m);
+        if (gac_ldlt(m, factor, 1e-12) != 0) return GAC_SENS_SIMULTANEOUS;   /* dependent rows */
+        if (nslide == 0) gac_copy(C->LD, factor, m * m);    /* (with slides LD keeps A: gac_impact_differential) */
+    }
+    L->m = m, L->active = C->active, L->landing = C->landing, L->f = C->f, L->W = C->W, L->Y = C->Y, L->LD = C->LD;
+    L->F = C->F, L->v = C->v, L->e = C->e, L->nslide = nslide, L->normal = C->normal, L->u = C->u;
+    L->xi_T_norm = C->xi_norm, L->cf = C->cf, L->cf_index = C->cf_index;
+    C->nround++;
+    return GAC_SENS_VALID;
+}
+
+/* The rounds of the impact of record r (located by c_event; before_set[0..nbefore-1] resting before it) walked once
+ * (gac_sens_round), C->qd then the law's velocities: the law re-run on the record's contacts (those that took an
+ * impulse or approached; the others took none in any round, so each round's solution is the same without them;
+ * gac_sens_rounds_rerun) into C's trace, each contact's e its wall's, or, failing that, 0 for those that landed
+ * (struck with e = 0); a re-run that does not give the record's rounds and impulses: GAC_SENS_SIMULTANEOUS.  A round
+ * is differentiable where its set is strict; a contact at its bound ends the sensitivities (GAC_SENS_BOUNDARY, its
+ * index in *contact): one that meets a round with normal velocity ~0 (below 1e-9 of the chain's speed scale times its
+ * lever) not held at 0 by the rounds before (resting before the impact, or struck with e = 0 in the round before),
+ * one in a round's problem that took impulse ~0 (1e-9 of the largest) and leaves at the round's bound (v+ + e v- ~
+ * 0), one sliding on the cone with xi_T ~ 0, or one left at ~0 by the last round, unless resting before or held after
+ * the impact (the hold's derivative follows those, as for one round).  A link pair or an obstacle whose closest
+ * points have no derivative: GAC_SENS_LINK.  Returns GAC_SENS_VALID or the verdict. */
+static int gac_sens_rounds_at(gac_sim *s, const gac_impact_record *r, int c_event, int nbefore,
+                              const int *before_set, gac_sens_rounds *C, int *contact)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow), n = r->ncontact;
+    const double *q = s->xs, *qdm = s->xs + nq;
+    double speed = 0.0, largest = 0.0;
+    int first = -1, found = 0, attempt, a, b, i, j;
+    *contact = c_event;
+    for (i = 0; i < nq; ++i) {
+        if (fabs(qdm[i]) > speed) speed = fabs(qdm[i]);
+    }
+    C->thr = 1e-9 * speed * s->lever;
+    for (a = 0; a < n; ++a) {
+        const int c = r->contact[a];
+        int held_after = 0;
+        if (r->impulse[a] > largest) largest = r->impulse[a];
+        if (c == c_event) first = a;
+        C->zero_start[a] = 0;
+        for (b = 0; b < nbefore; ++b) C->zero_start[a] |= before_set[b] == c;
+        for (b = 0; b < s->nresting; ++b) held_after |= s->resting[b] == c;
+        C->exempt[a] = C->zero_start[a] || held_after;
+        gac_sens_row(s, c, q, C->fall + (long)a * nr, C->Wall + (long)a * nq);
+        if (gac_rowless(md, c)) {                            /* its row's derivative exists here (or none) */
+            double zero_q[nq], zero_p[GAC_AT_LEAST_1(md->nparam)], dw[nq];
+            for (i = 0; i < nq; ++i) zero_q[i] = 0.0;
+            for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+            if (gac_sens_row_tangent(s, c, C->fall + (long)a * nr, q, zero_q, zero_p, dw, 0) != 0) {
+                *contact = c;
+                return GAC_SENS_LINK;
+            }
+        }
+    }
+    C->largest = largest;
+    for (attempt = 0; attempt < 2 && !found; ++attempt) {   /* each contact's e: its wall's, or 0 where it landed */
+        int changed = 0;
+        for (a = 0; a < n; ++a) {
+            int landed = 0;
+            C->e_list[a] = gac_restitution(md, s->p, r->contact[a]);
+            for (b = 0; b < r->nlanded && attempt == 1 && !C->zero_start[a]; ++b)
+                landed |= r->landed[b] == r->contact[a];
+            if (landed && C->e_list[a] != 0.0) {
+                C->e_list[a] = 0.0;
+                changed = 1;
+            }
+        }
+        if (attempt == 0 || changed) found = gac_sens_rounds_rerun(s, r, first, C->e_list, largest, &C->trace);
+    }
+    if (!found) return GAC_SENS_SIMULTANEOUS;             /* not the record's rounds */
+    gac_sens_rounds_start(s, C);
+    for (j = 0; j < r->rounds; ++j) {                        /* round j: its law, its set's strictness */
+        const int verdict = gac_sens_round(s, r, C, j, contact);
+        if (verdict != GAC_SENS_VALID) return verdict;
+        gac_copy(C->qd, C->qd_next, nq);
+    }
+    for (a = 0; a < n; ++a) {                                /* after the last round: none left at ~0 unheld */
+        if (!C->zero[a] && !C->exempt[a] && !(gac_dot(nq, C->Wall + (long)a * nq, C->qd) > C->thr)) {
+            *contact = r->contact[a];
+            return GAC_SENS_BOUNDARY;
+        }
+    }
+    return C->nround > 0 ? GAC_SENS_VALID : GAC_SENS_SIMULTANEOUS;
+}
+
+/* The rounds' differentials chained, walking the rounds again (each rebuilt as gac_sens_rounds_at found it): round
+ * j's (gac_impact_differential on its law at qd_j) applied to every column's d qd in turn before round j + 1 is
+ * built.  Each column S_j holds (dq, d qd) at the event (S-_j + f- dt*_j), its d qd replaced by d qd after the
+ * rounds; dq passes through unchanged.  Returns GAC_SENS_VALID (or the first walk's verdict, not met again). */
+static int gac_sens_rounds_differential(gac_sim *s, const gac_impact_record *r, gac_sens_rounds *C, int *contact)
+{
+    const gac_sens *z = s->sens;
+    const gac_model *md = s->model;
+    const int nq = md->nq, nx = md->nx;
+    double zero_p[GAC_AT_LEAST_1(md->nparam)], out[nq];
+    int i, j, col;
+    for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+    gac_sens_rounds_start(s, C);
+    for (j = 0; j < r->rounds; ++j) {
+        const int verdict = gac_sens_round(s, r, C, j, contact);
+        if (verdict != GAC_SENS_VALID) return verdict;
+        for (col = 0; col < z->k && C->law.m > 0; ++col) {
+            double *S = z->S + (long)col * nx;
+            const double *dp = md->nparam > 0 ? z->dp + (long)col * md->nparam : zero_p;
+            gac_impact_differential(s, &C->law, s->xs, C->qd, S, S + nq, dp, out, 0);
+            gac_copy(S + nq, out, nq);
+        }
+        gac_copy(C->qd, C->qd_next, nq);
+    }
+    return GAC_SENS_VALID;
+}
+
 /* The jump at the impact record r just resolved (state before it s->xs, after it s->x), located by contact
  * c_event's gap: for each direction j, dt*_j = -dg_j / (w_c . qd-) and S+_j = D Delta (S-_j + f- dt*_j, dp_j)
  * - f+ dt*_j, Delta the map of the contacts that took an impulse (a wall's or a joint stop's alike: a stop's row is
@@ -1161,7 +1449,11 @@ static int gac_sens_set_before(const gac_sim *s, const gac_impact_record *r, int
  * derivative of that projection (gac_sens_hold_tangent, on the resting set and the impact's other contacts left at
  * rest), and a landing contact is held at the gap it had at the event (dgap_held from S-_j + f- dt*_j).  A contact
  * of the record that took no impulse stays out of Delta if it leaves the impact separating or is held; one with
- * impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).  On rough walls the
+ * impulse ~0 and leaving at the law's bound is a mode boundary inside the impact (the verdict).  An impact the
+ * law solved in several rounds (or closed with a plastic round) takes for Delta the chain of its rounds'
+ * laws, each on its own active set (gac_sens_rounds_at, gac_sens_rounds_differential; the GDI law's rounds with
+ * their rough contacts' tangential rows, stuck or sliding, as for one round), a contact at its bound in one of them
+ * ending the sensitivities (GAC_SENS_BOUNDARY, one-sided or not).  On rough walls the
  * stuck points are held along every axis: those before (was_stuck, per contact, or NULL: none) in f-, those after
  * (s->is_stuck, as gac_restick re-decided them: called after it, the state after in s->x) in f+ and in the hold,
  * which brings the law's velocities onto their tangential rows too (a landing that sticks); the others on rough
@@ -1205,7 +1497,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                       r->ncontact > 0 ? r->contact[0] : -1);
         return;
     }
-    if (r->ncontact < 1 || r->rounds != 1 || r->plastic) {
+    if (r->ncontact < 1 || r->rounds < 1) {
         gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, r->ncontact > 0 ? r->contact[0] : c_event);
         return;
     }
@@ -1243,11 +1535,29 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         double fb[n * nr], Wb[n * nq], vb[n], eb[n];         /* the boundary contacts' rows (one_sided) */
         int active[n3], landing[n3], before_set[nq + nc1], at_rest[nq], m = 0, nbefore, nheld = 0, a, b, i, j;
         int boundary[n], nb = 0;
+        const int several = r->rounds > 1 || r->plastic;   /* the rounds' chain (gac_sens_rounds_at) */
+        const int R = several ? r->rounds : 1, nR = several ? n : 1, rough = r->law != GAC_IMPACT_LAW_FRICTIONLESS;
+        const int fits = GAC_SENS_TRACE_BYTES(R, nR, rough) <= GAC_SENS_TRACE_ROOM;   /* the rounds' trace */
+        int Tint[fits ? GAC_SENS_TRACE_INTS(R, nR, rough) : 1], zero_start[nR], zero_round[nR], exempt[nR];
+        double Tdouble[fits ? GAC_SENS_TRACE_DOUBLES(R, nR, rough) : 1], fall[nR * nr], Wall[nR * nq], e_list[nR];
+        double qd_round[nq], qd_next[nq];
+        gac_sens_rounds C;                                   /* (a round's law in f, W, Y, ... above) */
         gac_sens_law law;
         GAC_SENS_SET_ARRAYS(nq, nr);
         gac_sens_set H;
         GAC_SENS_SET_BIND(H);
         nbefore = gac_sens_set_before(s, r, before_set);
+        if (several && !fits) {                              /* too many rounds to trace */
+            gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
+            return;
+        }
+        C.n = nR, C.trace.cap = R, C.trace.n = nR, C.trace.k = Tint, C.trace.idx = Tint + R;
+        C.trace.hit = C.trace.idx + (long)R * nR, C.trace.F = Tdouble;
+        C.trace.dim = rough ? C.trace.hit + (long)R * nR : 0, C.trace.L = rough ? Tdouble + (long)R * nR : 0;
+        C.fall = fall, C.Wall = Wall, C.e_list = e_list, C.zero_start = zero_start, C.zero = zero_round;
+        C.exempt = exempt, C.qd = qd_round, C.qd_next = qd_next;
+        C.active = active, C.landing = landing, C.normal = normal, C.cf_index = cf_index, C.f = f, C.W = W, C.Y = Y;
+        C.LD = LD, C.F = F, C.v = v, C.e = e, C.u = u, C.xi_norm = xi_norm, C.cf = cf_row;
         for (i = 0; i < nq; ++i) {
             if (fabs(xm[nq + i]) > speed) speed = fabs(xm[nq + i]);
         }
@@ -1263,7 +1573,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 return;
             }
         }
-        for (a = 0; a < n; ++a) {                            /* the active set, and the mode boundaries */
+        for (a = 0; a < n && !several; ++a) {               /* the active set, and the mode boundaries */
             const int c = r->contact[a];
             const gac_contact *ct = md->contacts + c;
             double *fa = f + (long)m * nr, *wa = W + (long)m * nq, before = 0.0, after = 0.0;
@@ -1357,9 +1667,18 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 }
             }
         }
-        if (m == 0 || (nb > 0 && nslide > 0)) {             /* (boundaries beside slides: not followed) */
+        if (!several && (m == 0 || (nb > 0 && nslide > 0))) {   /* (boundaries beside slides: not followed) */
             gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, nb > 0 ? boundary[0] : c_event);
             return;
+        }
+        if (several) {                                       /* the rounds' laws, and the law's velocities */
+            int c_stop;
+            const int verdict = gac_sens_rounds_at(s, r, c_event, nbefore, before_set, &C, &c_stop);
+            if (verdict != GAC_SENS_VALID) {
+                gac_sens_stop(s, verdict, r->t, c_stop);
+                return;
+            }
+            gac_copy(qd_law, C.qd, nq);
         }
         for (a = 0; a < m; ++a) {
             md->inertia_solve(q, W + (long)a * nq, s->p, Y + (long)a * nq);
@@ -1369,7 +1688,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 LD[a * m + b] = LD[b * m + a] = sum;
             }
         }
-        {
+        if (!several) {
             double factor[m * m];
             gac_copy(factor, LD, m * m);
             if (gac_ldlt(m, factor, 1e-12) != 0) {           /* dependent rows: no unique differential */
@@ -1383,7 +1702,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             }                                                /* with slides: the law's impulses (the record's),
                                                                 and LD keeps A for the differential */
         }
-        for (i = 0; i < nq; ++i) {                           /* the law's velocities, before any hold */
+        for (i = 0; i < nq && !several; ++i) {              /* the law's velocities, before any hold */
             double value = xm[nq + i];
             for (a = 0; a < m; ++a) value += Y[(long)a * nq + i] * F[a];
             qd_law[i] = value;
@@ -1418,7 +1737,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             }
         }
         for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
-        for (j = 0; j < z->k; ++j) {
+        for (j = 0; j < z->k; ++j) {                         /* each column's dt*_j, and its state at the event */
             double *S = z->S + (long)j * nx;
             const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
             double tau;
@@ -1428,8 +1747,26 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 (void)gac_sens_row_tangent(s, c_event, f, q, S, dp, dw, dgap + c_event);
             }
             tau = -dgap[c_event] / v_event;                  /* dt*_j: the gap stays 0 at the event */
-            for (i = 0; i < nx; ++i) dx[i] = S[i] + fm[i] * tau; /* the perturbed state at the perturbed t* */
-            if (nb == 0)
+            for (i = 0; i < nx; ++i) S[i] = S[i] + fm[i] * tau;  /* the perturbed state at the perturbed t* */
+            z->dt_impact[j] = tau;
+        }
+        if (several) {                                       /* the rounds' differentials, chained, every column's
+                                                                d qd through round j before round j + 1 */
+            int c_stop;
+            const int verdict = gac_sens_rounds_differential(s, r, &C, &c_stop);
+            if (verdict != GAC_SENS_VALID) {
+                gac_sens_stop(s, verdict, r->t, c_stop);
+                return;
+            }
+        }
+        for (j = 0; j < z->k; ++j) {                         /* D Delta, the hold, back to the nominal t* */
+            double *S = z->S + (long)j * nx;
+            const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
+            const double tau = z->dt_impact[j];
+            gac_copy(dx, S, nx);
+            if (several)                                     /* (the rounds' chain, above) */
+                gac_copy(dqd_plus, dx + nq, nq);
+            else if (nb == 0)
                 gac_impact_differential(s, &law, q, xm + nq, dx, dx + nq, dp, dqd_plus, 0);
             else                                             /* this column's side of the boundary */
                 gac_sens_boundary_column(s, &law, nb, qd_law, q, xm + nq, dx, dp, dqd_plus);
@@ -1445,7 +1782,6 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 S[i] = dx[i] - fp[i] * tau;                      /* back to the nominal t*: minus f+ dt*_j */
                 S[nq + i] = dqd_plus[i] - fp[nq + i] * tau;
             }
-            z->dt_impact[j] = tau;
         }
         z->n_impacts++;
         if (nb > 0 && z->n_boundaries++ == 0) {

@@ -29,7 +29,7 @@ STATUS_WORDS = {
        "or slower than friction_velocity at an impact (its friction there is not differentiated)",
     2: "an impact by a frictional law with a common e, or by Newton + Coulomb",
     3: "an impact at a joint stop",
-    4: "an impact of several rounds (or with dependent contact rows)",
+    4: "an impact with dependent contact rows, or of several rounds that were not reproduced or too many to trace",
     5: "a grazing contact (normal velocity ~ 0 at the wall)",
     6: "a tangential impact (Painleve)",
     7: "a switch to a base chart without tangent kernels (or at its own lock)",

@@ -11,8 +11,9 @@ joint axes, start in the X1-X2 plane) and spatial ones with random twists; gravi
 the start, often cramped (margins 1e-3 ... 1 of the chain's extent, so that a side can be shorter than the
 chain); restitution per wall 0, 1 or uniform in [0, 1]; Coulomb friction on the walls of 30 % of the structures
 (c_f uniform in [0, 1.5] per wall and run, drawn so that the other structures' runs are unchanged); capsule links
-on a quarter of the structures, all frictionless ones (each link a capsule with probability 0.7, at least one;
-radius r log-uniform in 5e-5 ... 5e-2 m; every link's length, capsule or not, log-uniform in 20 R ... 2e4 R
+on a quarter of the structures, all frictionless ones, and on a third of the rough ones (capsules on rough walls,
+from a stream of their own: the frictionless structures are unchanged) (each link a capsule with probability 0.7,
+at least one; radius r log-uniform in 5e-5 ... 5e-2 m; every link's length, capsule or not, log-uniform in 20 R ... 2e4 R
 (at most 1e2 m) with R the chain's largest radius, so that a capsule is thin against every link; every
 non-adjacent pair of links with a capsule strikes the other, restitution 0, 1 or uniform in [0, 1]; the box
 margins add the largest radius and the start is redrawn until no pair overlaps); fixed obstacles in the study's runs
@@ -86,6 +87,8 @@ ROUGH_SHARE = 0.3         # structures whose walls have Coulomb friction (c_f un
 ROUGH_STREAM = 7919       # the random stream that decides it, apart from the structure's own
 CAPSULE_SHARE = 0.25      # structures with capsule links (drawn among the frictionless ones)
 CAPSULE_STREAM = 104729   # the child stream of the structure's seed that decides it and draws the radii
+ROUGH_CAPSULE_SHARE = 1 / 3  # rough structures with capsule links (a tenth of all), capsules on rough walls
+ROUGH_CAPSULE_STREAM = 130363  # the child stream that decides it and draws their radii
 CAPSULE_LINK = 0.7        # probability that a link of a capsule structure is a capsule
 RADIUS_RANGE = (5e-5, 5e-2)       # m, log-uniform
 LENGTH_PER_RADIUS = (20.0, 2e4)   # a capsule structure's link lengths / its largest radius, log-uniform
@@ -161,16 +164,27 @@ def random_structure(rng, index: int, n_max: int = 8, capsules: bool = True) -> 
     side = _child_stream(rng, CAPSULE_STREAM)
     link_e = None
     if capsules and not rough and side.uniform() < CAPSULE_SHARE / (1.0 - ROUGH_SHARE):
-        capsule = side.uniform(size=n) < CAPSULE_LINK
-        capsule[int(side.integers(n))] |= not capsule.any()
-        radii = [_log_uniform(side, *RADIUS_RANGE) if c else 0.0 for c in capsule]
-        links = tuple(replace(link, radius=r) for link, r in zip(links, radii))
-        link_e = float(side.choice([0.0, 1.0, side.uniform()]))
+        links, link_e = _capsules(side, links)
+    # and on some rough ones, from a stream of their own (the frictionless structures stay as drawn above)
+    rough_side = _child_stream(rng, ROUGH_CAPSULE_STREAM)
+    if capsules and rough and rough_side.uniform() < ROUGH_CAPSULE_SHARE:
+        links, link_e = _capsules(rough_side, links)
     walls = tuple(Wall(name, -1e3 if name.endswith("min") else 1e3, 1.0, friction=0.5 if rough else 0.0)
                   for name in WALL_NAMES if not (planar and name.startswith("x3")))
     q0 = [-math.pi / 2, 0.0] + [0.0] * n + [0.0, 0.0, 0.0]
     return Scene(name=f"fuzz{index}", links=links, twists=twists, gravity=gravity, walls=walls, q0=tuple(q0),
                  link_restitution=link_e)
+
+
+def _capsules(side, links):
+    """Capsules drawn from the stream side: each link one with probability CAPSULE_LINK (at least one), radius
+    log-uniform in RADIUS_RANGE; and the link pairs' restitution (0, 1 or uniform)."""
+    n = len(links)
+    capsule = side.uniform(size=n) < CAPSULE_LINK
+    capsule[int(side.integers(n))] |= not capsule.any()
+    radii = [_log_uniform(side, *RADIUS_RANGE) if c else 0.0 for c in capsule]
+    return (tuple(replace(link, radius=r) for link, r in zip(links, radii)),
+            float(side.choice([0.0, 1.0, side.uniform()])))
 
 
 def _child_stream(rng, key: int):
@@ -700,6 +714,13 @@ def check_run(model, run: Run, result, seconds: float, budget: float) -> list[st
     return violations
 
 
+def study_model(scene):
+    """The study's compiled model of a scene (cached): the general layout, so that every structure keeps the
+    coordinates it was drawn with, with both base charts and the long-double kernels of the impact's accuracy."""
+    from runtime.model import load_model
+    return load_model(scene, specialise=False)
+
+
 def run_structure(args) -> list[Outcome]:
     """Compile one structure and run its runs (one worker's job).  args: (seed, index, runs, budget, n_max[,
     obstacles[, chains]]); obstacles True (the study's runs): a structure that has_obstacle_runs puts each run's
@@ -710,7 +731,6 @@ def run_structure(args) -> list[Outcome]:
     seed, index, runs, budget, n_max = args[:5]
     obstacle_runs = bool(args[5]) if len(args) > 5 else False
     chain_runs = bool(args[6]) if len(args) > 6 else False
-    from runtime.model import load_model
     from runtime.simulate import accuracy_cause, impact_contact_indices, simulate
     scene, rng = draw_structure(seed, index, n_max, chain_runs)
     count = len(chains_of(scene))
@@ -719,7 +739,7 @@ def run_structure(args) -> list[Outcome]:
     capsules = has_capsules(scene)
     outcomes = []
     try:
-        model = load_model(scene, specialise=False)
+        model = study_model(scene)
     except Exception as exc:                           # noqa: BLE001 - reported as an outcome
         return [Outcome(f"{seed}-{index}/{k}", scene.n, False, "-", -1, f"exception: {classify(str(exc))}", True,
                         message=str(exc), capsules=capsules, chains=count) for k in range(runs)]
@@ -738,7 +758,7 @@ def run_structure(args) -> list[Outcome]:
         if obstacles:
             try:
                 _, run_model, run = obstacle_run(obstacle_rng, scene, model, run, obstacles,
-                                                 lambda s: load_model(s, specialise=False))
+                                                 study_model)
             except Exception as exc:                   # noqa: BLE001 - reported as an outcome
                 outcomes.append(Outcome(case, scene.n, planar, run.options["method"], -1,
                                         f"exception: {classify(str(exc))}", True, message=str(exc),
@@ -883,9 +903,8 @@ def _rerun(case: str, budget: float, n_max: int) -> int:
         print(f"error: --case: expected SEED-STRUCTURE/RUN (e.g. 0-12/3), got {case!r}", file=sys.stderr)
         return 2
     seed, index, k = map(int, match.groups())
-    from runtime.model import load_model
     scene, rng = draw_structure(seed, index, n_max, True)
-    model = load_model(scene, specialise=False)
+    model = study_model(scene)
     for _ in range(k + 1):
         run = draw_run(rng, scene, model)
     if not isinstance(scene, Chains) and has_obstacle_runs(seed, index):   # the run's obstacles, as run_structure's
@@ -893,7 +912,7 @@ def _rerun(case: str, budget: float, n_max: int) -> int:
         obstacles = random_obstacles(obstacle_rng, scene, model, run)
         if obstacles:
             scene, model, run = obstacle_run(obstacle_rng, scene, model, run, obstacles,
-                                             lambda s: load_model(s, specialise=False))
+                                             study_model)
     print(f"scene: {scene}")
     print(f"simulate(model, {run.t_end!r}, p={run.p.tolist()!r}, q0={run.q0.tolist()!r}, "
           f"qd0={run.qd0.tolist()!r}, **{run.options!r})")

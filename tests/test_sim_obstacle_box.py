@@ -1,10 +1,11 @@
 """Boxes and a plane as fixed obstacles (gac_obstacle.c): a free rod among a flat slab, a box turned to stand on an
 edge (a ridge), a cube standing on a corner, a box turned at random and a slanted roof plane.  The gaps against an
-independent numpy signed distance minimised over the rod by a dense search and golden section, on random states
-(inside the obstacles too); J^T n against central differences of that gap (outside); the rod falling flat onto the
-slab (v+ = -e v-, no rotation: the stretch of the rod on the face strikes at its middle, the centre of mass) and
-onto the ridge and the corner off-centre (the velocities after it those of an independent numpy Newton's law with
-the mass matrix and the gap's gradient)."""
+independent numpy signed distance minimised over the rod by a dense search and golden section (inside a box minus
+the depth, from the faces of its Minkowski sum with the rod), on random states (inside the obstacles too); J^T n
+against central differences of that gap (outside); the rod falling flat onto the slab (v+ = -e v-, no rotation: the
+stretch of the rod on the face strikes at its middle, the centre of mass) and onto the ridge and the corner
+off-centre (the velocities after it those of an independent numpy Newton's law with the mass matrix and the gap's
+gradient)."""
 import math
 
 import numpy as np
@@ -57,9 +58,29 @@ def box_sd(o: Obstacle, x) -> float:
     return outside if outside > 0.0 else -np.min(h - np.abs(y))
 
 
+def box_depth(o: Obstacle, p0, p1) -> float:
+    """Independent, in the world's frame: minus the least translation of segment p0-p1 that parts it from the box,
+    the greatest separation of the two projections over the normals of the faces of the box's Minkowski sum with
+    the segment (the cross products of every pair of its generators, the box's three edges and the segment)."""
+    R, h, c = np.array(o.box_rotation), np.array(o.half_extents), np.array(o.a)
+    generators = [R[:, 0], R[:, 1], R[:, 2], np.asarray(p1) - np.asarray(p0)]
+    best = -math.inf
+    for i in range(4):
+        for j in range(i + 1, 4):
+            n = np.cross(generators[i], generators[j])
+            if np.linalg.norm(n) < 1e-9 * np.linalg.norm(generators[3]):
+                continue
+            n /= np.linalg.norm(n)
+            reach = h @ np.abs(R.T @ n)
+            ends = sorted([n @ (np.asarray(p0) - c), n @ (np.asarray(p1) - c)])
+            best = max(best, ends[0] - reach, -reach - ends[1])
+    return best
+
+
 def independent_gap(o: Obstacle, p0, p1, radius: float = R_LINK) -> float:
     """min over s of sd(p0 + s (p1 - p0)) - r: a plane at the ends (its formula); a box by a dense search over s,
-    then golden section in the bracket of the best sample."""
+    then golden section in the bracket of the best sample, and where that is not positive (the rod touching or in
+    the box) minus the depth instead (box_depth)."""
     if o.kind == "plane":
         n = np.array(o.normal)
         return min(n @ (p0 - np.array(o.a)), n @ (p1 - np.array(o.a))) - radius
@@ -71,7 +92,8 @@ def independent_gap(o: Obstacle, p0, p1, radius: float = R_LINK) -> float:
     while hi - lo > 1e-14:
         m1, m2 = hi - golden * (hi - lo), lo + golden * (hi - lo)
         lo, hi = (lo, m2) if f(m1) <= f(m2) else (m1, hi)
-    return min(f(0.0), f(1.0), f(lo), f(hi)) - radius
+    distance = min(f(0.0), f(1.0), f(lo), f(hi))
+    return (distance if distance > 0.0 else box_depth(o, p0, p1)) - radius
 
 
 def gap_of(model, q, o: Obstacle) -> float:

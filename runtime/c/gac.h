@@ -609,9 +609,11 @@ int gac_link_impact(const gac_model *m, const double *q, const double *qd, const
 /* Link i (1-based) of radius `radius` (m; the link's own) and fixed obstacle o (0-based), its geometry at the
  * parameters p (gac_obstacle_shape): geometry (GAC_LINK_NGEOMETRY doubles) as gac_link_gap's for the sum of the two
  * radii, t along the obstacle's segment and n from the obstacle's closest point to the link's.  A box or a plane
- * (gac_obstacle.c): the least signed distance (negative inside) of the link's segment from it less `radius`, s*
- * along the link, t = 0, n the signed distance's gradient at that point.  The gap's rate is n . v_P (the obstacle
- * does not move).  Returns GAC_OK or GAC_ERR_BAD_CONTACT. */
+ * (gac_obstacle.c): the least signed distance of the link's segment from it less `radius`, s* along the link, t = 0,
+ * n the signed distance's gradient at that point; a link touching or reaching into a box: minus its depth (the
+ * least translation parting them) less `radius`, n the depth's direction (a face's normal, or across the link and
+ * an edge) and s* the link's point it is measured at.  The gap's rate is n . v_P either way (the obstacle does not
+ * move).  Returns GAC_OK or GAC_ERR_BAD_CONTACT. */
 int gac_obstacle_gap(const gac_model *m, const double *q, const double *p, int i, int o, double radius,
                      double *geometry);
 /* Obstacle o's shape row at the parameters p (GAC_OBSTACLE_NSHAPE doubles, the layout of m->obstacle_shapes): its
@@ -1159,8 +1161,11 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       contact's own e (a round with a common e, Newton + Coulomb): the GDI law's
                                       stuck and sliding contacts are differentiated */
 #define GAC_SENS_STOP          3   /* (not raised since joint stops are differentiated; the code stays reserved) */
-#define GAC_SENS_SIMULTANEOUS  4   /* an impact of more than one round or a plastic round, or whose active contacts'
-                                      rows are dependent */
+#define GAC_SENS_SIMULTANEOUS  4   /* an impact whose active contacts' rows are dependent (in one of its rounds), one
+                                      that applied no impulse, or one of several rounds whose rounds the
+                                      sensitivities could not reproduce from its record (or too many to trace:
+                                      gac_sens.c); the rounds of the frictionless and GDI laws are differentiated,
+                                      as the chain of the rounds' laws */
 #define GAC_SENS_GRAZING       5   /* a contact met its wall with normal velocity ~ 0 (|w . qd-| below 1e-9 of the
                                       chain's speed scale), or touched it without an impact: t* not differentiable */
 #define GAC_SENS_TANGENTIAL    6   /* a tangential impact (record.law GAC_IMPACT_LAW_GDI_TANGENTIAL) */
@@ -1175,7 +1180,11 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       ~0 and leaves at the law's bound (w . qd+ + e w . qd- ~ 0), so a perturbation
                                       may add it to the active set or drop it (with sens.one_sided = 1 each column
                                       takes its own side instead, where the law is frictionless on those contacts
-                                      and none slides: n_boundaries counts them); or resting contacts released together
+                                      and none slides: n_boundaries counts them); in an impact of several rounds a
+                                      contact at its bound in one of them (impulse ~0 and leaving at that round's
+                                      bound, meeting a round at rest without being held there, left at rest by the
+                                      last round, or on the cone with xi_T ~ 0), one-sided or not; or resting
+                                      contacts released together
                                       (their forces ~0 at once), a slip with another slip or a release, or points
                                       that stick at one step's end at different speeds */
 #define GAC_SENS_LINK         11   /* an impact of two links or of a link on a fixed obstacle (GAC_CONTACT_LINK,

@@ -1023,6 +1023,17 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
                                double *Ft, double *work, int *rounds, int *plastic, int *law_used, double *residual,
                                double *tangential_parts)
 {
+    return gac_impact_rounds_friction_traced(m, q, qd, p, n, list, e, first, law, qd_plus, F, Ft, work, rounds,
+                                             plastic, law_used, residual, tangential_parts, 0);
+}
+
+/* gac_impact_rounds_friction, each round recorded in trace (NULL: none) as well: its contacts (positions in list),
+ * whether struck with their own e, their rows and impulses. */
+int gac_impact_rounds_friction_traced(const gac_model *m, const double *q, const double *qd, const double *p, int n,
+                                      const int *list, const double *e, int first, int law, double *qd_plus,
+                                      double *F, double *Ft, double *work, int *rounds, int *plastic, int *law_used,
+                                      double *residual, double *tangential_parts, gac_rounds_trace *trace)
+{
     const int nq = m->nq, nd_max = 3 * n;
     double *W = GAC_WORK_W(m, work);
     double cf[GAC_AT_LEAST_1(nq)], gam[nd_max], total[nd_max], scale = 0.0, v_tol, v_solved = 0.0;
@@ -1047,7 +1058,7 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
         int rows[nd_max], st[GAC_AT_LEAST_1(nq)], dm[GAC_AT_LEAST_1(nq)];
         double ek[GAC_AT_LEAST_1(nq)], cfk[GAC_AT_LEAST_1(nq)], qv[nd_max], L[nd_max], res = 0.0, res_max = 0.0;
         double ek_own[GAC_AT_LEAST_1(nq)];
-        int k = 0, nr = 0, approaching = 0, pass, attempt, quiet = 0;
+        int k = 0, nr = 0, approaching = 0, pass, attempt, quiet = 0, who[GAC_AT_LEAST_1(nq)], hit[GAC_AT_LEAST_1(nq)];
         const int law_before = *law_used;
         const int last = round >= GAC_MAX_ROUNDS;
         for (a = 0; a < n; ++a) {
@@ -1060,7 +1071,8 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
                 st[k] = nr;
                 dm[k] = dim[a];
                 for (i = 0; i < dim[a]; ++i) rows[nr++] = start[a] + i;
-                ++k;
+                hit[k] = !last && struck;
+                who[k++] = a;
             }
         }
         if (!approaching) break;
@@ -1130,6 +1142,15 @@ int gac_impact_rounds_friction(const gac_model *m, const double *q, const double
         if (quiet) break;
         if (res > *residual) *residual = res;
         if (res > res_max) return GAC_ERR_IMPACT_FRICTION;
+        if (trace != 0 && (trace->nround = round + 1) <= trace->cap) {   /* the round, recorded */
+            trace->k[round] = k;
+            for (b = 0; b < k; ++b) {
+                const int o = round * trace->n + b;
+                trace->idx[o] = who[b], trace->hit[o] = hit[b];
+                trace->dim[o] = dm[b], trace->F[o] = L[st[b]];
+                for (i = 0; i < dm[b]; ++i) trace->L[3 * o + i] = L[st[b] + i];
+            }
+        }
         if (round == 0) {                        /* the first round, for gac_refine_round */
             k0 = k;
             for (b = 0; b < k; ++b) st0[b] = st[b], dm0[b] = dm[b], ek0[b] = ek[b], cf0[b] = cfk[b];

@@ -136,25 +136,33 @@ static void gac_obst_sort(double *list, int count)
     }
 }
 
-/* A segment y(s) = y0 + s e (the box's frame) touching or reaching into the box (sd <= 0 somewhere along it) across
- * one of its edges: sd's nearest face (the inside rule) is then not the direction that separates them, and an impact
- * along it leaves the link approaching across the edge.  The separating axes of a segment and a box are the 3 face
- * normals E_k and the 3 directions u_k = e x E_k across the segment and an edge, and along each the two overlap by
- * the distance of the segment's projection into the box's, [-sum_j h_j |u_j|, +same] (the separation, negative
- * when they overlap).  The axis of least overlap is the direction of the depth; when it is an edge's (by more than
- * tie over every face) the contact is the link across that edge: n = +-u_k unit (from the box to the link; the limit
- * of the outside normal, from the edge's nearest point, as the gap closes) in *n, and in *s the link's point nearest
- * to the edge's line.  Otherwise (a face's depth) *s and *n are left as sd gives them. */
-static void gac_obst_box_edge_cut(const double *h, const double *y0, const double *e, double tie, double *s,
-                                  double *n)
+/* The depth of a segment y(s) = y0 + s e (the box's frame) touching or reaching into the box (sd <= 0 somewhere
+ * along it).  The set of the segment's translations t that make it meet the box is the box's Minkowski sum with the
+ * reversed segment, a zonotope whose faces' normals are the 3 face normals E_k and the 3 directions u_k = e x E_k
+ * across the segment and an edge (every pair of the generators E_1, E_2, E_3, e); the segment and the box are thus
+ * separated along one of these axes, and along each they overlap by the distance of the segment's projection into
+ * the box's [-sum_j h_j |u_j|, +same] (the separation, negative when they overlap).  The gap is the greatest
+ * separation (minus the depth: the least translation that parts them), the signed distance of t = 0 from the
+ * zonotope, 0 where they touch as the distance outside is, and its axis the normal n (from the box to the link):
+ *   a face's, +-E_k: separation min_s (+-y_k(s)) - h_k, reached at the segment's end lowest along n (its gradient
+ *     that end's motion along n); where the segment lies parallel to the face (|e_k| within tie) every point is, and
+ *     *s is left as sd gives it (the middle of the stretch over the face);
+ *   an edge's, +-u_k (by more than tie over every face: the segment across that edge): u . y(s) is the same for every
+ *     s (u is normal to e), the separation u . y0 - sum_j h_j |u_j|, and its gradient is u . v at the segment's
+ *     point nearest to the edge's line (where the two lines' common normal is u, so u's turning with e moves the
+ *     separation by nothing), *s.
+ * Returns the separation, its axis in n, 1 with the edge's axis in *axis (-1: a face's). */
+static double gac_obst_box_depth(const double *h, const double *y0, const double *e, double tie, double *s,
+                                 double *n, int *axis)
 {
-    double face = -INFINITY, edge = -INFINITY, best[3] = {0.0, 0.0, 0.0}, size = 0.0;
-    int k, j, axis = -1;
-    for (k = 0; k < 3; ++k) {
+    double face = -INFINITY, edge = -INFINITY, best[3] = {0.0, 0.0, 0.0}, size = 0.0, end = -1.0;
+    int k, j, which = 0;
+    *axis = -1;
+    for (k = 0; k < 3; ++k) size += e[k] * e[k];
+    for (k = 0; k < 3; ++k) {                            /* the faces +E_k (lowest end) and -E_k (highest end) */
         const double lo = e[k] < 0.0 ? y0[k] + e[k] : y0[k], hi = e[k] < 0.0 ? y0[k] : y0[k] + e[k];
-        const double sep = lo - h[k] > -h[k] - hi ? lo - h[k] : -h[k] - hi;
-        if (sep > face) face = sep;
-        size += e[k] * e[k];
+        if (lo - h[k] > face) face = lo - h[k], which = k + 1, end = e[k] < 0.0 ? 1.0 : 0.0;
+        if (-h[k] - hi > face) face = -h[k] - hi, which = -(k + 1), end = e[k] < 0.0 ? 0.0 : 1.0;
     }
     for (k = 0; k < 3; ++k) {                            /* u_k = e x E_k */
         const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
@@ -171,31 +179,73 @@ static void gac_obst_box_edge_cut(const double *h, const double *y0, const doubl
         lo = p0 < p1 ? p0 : p1, hi = p0 < p1 ? p1 : p0;
         if (lo - r > edge || -r - hi > edge) {
             const double sign = lo - r >= -r - hi ? 1.0 : -1.0;
-            edge = sign > 0.0 ? lo - r : -r - hi, axis = k;
+            edge = sign > 0.0 ? lo - r : -r - hi, *axis = k;
             for (j = 0; j < 3; ++j) best[j] = sign * u[j];
         }
     }
-    if (axis < 0 || !(edge > face + tie)) return;
+    if (*axis < 0 || !(edge > face + tie)) {             /* a face's */
+        k = (which > 0 ? which : -which) - 1;
+        for (j = 0; j < 3; ++j) n[j] = 0.0;
+        n[k] = which > 0 ? 1.0 : -1.0;
+        if (fabs(e[k]) > tie) *s = end;
+        *axis = -1;
+        return face;
+    }
     {                                                    /* the edge: y_j = h_j sign(n_j) off its axis */
-        const int k1 = (axis + 1) % 3, k2 = (axis + 2) % 3;
+        const int k1 = (*axis + 1) % 3, k2 = (*axis + 2) % 3;
         const double w1 = y0[k1] - (best[k1] < 0.0 ? -h[k1] : h[k1]), w2 = y0[k2] - (best[k2] < 0.0 ? -h[k2] : h[k2]);
         const double at = -(w1 * e[k1] + w2 * e[k2]) / (e[k1] * e[k1] + e[k2] * e[k2]);
         *s = at < 0.0 ? 0.0 : (at > 1.0 ? 1.0 : at);
     }
     for (k = 0; k < 3; ++k) n[k] = best[k];
+    return edge;
+}
+
+/* Outside the box, the segment's closest point y* = y0 + s* e inside it (0 < s* < 1, its piece's vertex) by an
+ * edge (two coordinates beyond their faces, k the one between): the closest points of the segment's line and the
+ * edge's, whose difference is normal to both, so n = +-(e x E_k) / |e x E_k|, the sign the outward one
+ * (sigma_j n_j >= 0 for the two coordinates beyond, on the sides sigma_j).  Equal to (y* - clamp(y*)) / |...| to
+ * round-off, and free of its cancellation where the distance is of round-off size (a link held on the edge).
+ * Returns 0 (n untouched) elsewhere. */
+static int gac_obst_box_edge_normal(const double *h, const double *y, const double *e, double s, double *n)
+{
+    double u[3], len, out = 0.0;
+    int k, j, beyond = 0, along = -1;
+    if (!(s > 0.0 && s < 1.0)) return 0;
+    for (k = 0; k < 3; ++k) {
+        if (y[k] > h[k] || y[k] < -h[k]) ++beyond;
+        else along = k;
+    }
+    if (beyond != 2) return 0;
+    {
+        const int k1 = (along + 1) % 3, k2 = (along + 2) % 3;
+        u[along] = 0.0, u[k1] = e[k2], u[k2] = -e[k1];
+        len = sqrt(u[k1] * u[k1] + u[k2] * u[k2]);
+        if (!(len > 0.0)) return 0;
+        out = (y[k1] > 0.0 ? u[k1] : -u[k1]) + (y[k2] > 0.0 ? u[k2] : -u[k2]);
+    }
+    for (j = 0; j < 3; ++j) n[j] = (out < 0.0 ? -u[j] : u[j]) / len;
+    return 1;
 }
 
 /* Along y(s) = y0 + s e (the box's frame), sd is, between two consecutive breakpoints (where a coordinate crosses
  * a face's plane +-h_k or 0, or two faces' distances |y_k| - h_k cross), either outside sqrt of a quadratic in s,
  * least at its vertex or an end, or inside the maximum of linear functions, least at a breakpoint.  So the minimum
- * is at a breakpoint, an end or one of those vertices; every candidate's sd is evaluated at its point. */
-static void gac_obst_box_contact(const double *shape, const double *a0, const double *a1, double radius,
-                                 double *geometry)
+ * is at a breakpoint, an end or one of those vertices; every candidate's sd is evaluated at its point.  Where that
+ * least is positive (beyond the tie) it is the distance (its gradient n at s*); where it is not, the segment touches
+ * or reaches into the box, and the gap is the depth along its separating axis instead (gac_obst_box_depth), 0 with
+ * the distance where they touch (within the tie the two differ by less than it, and the axis is a direction the
+ * distance's gradient, from a difference of round-off size, cannot resolve).  Writes gap (without a radius), s*, 0
+ * and n (the box's frame turned to the world's) into geometry, and returns the part of the box the gap is measured
+ * from: 0 a face (a constant normal), 1 an edge, 2 a corner, the part's stretch in the box's frame in [lo, hi] (a
+ * corner's lo = hi). */
+static int gac_obst_box_solve(const double *shape, const double *a0, const double *a1, double *geometry, double *lo,
+                              double *hi)
 {
     const double *c = shape + 1, *h = shape + 4, *R = shape + 7;
     double y0[3], e[3], list[GAC_OBST_NCANDIDATE], f[GAC_OBST_NCANDIDATE], y[3], nl[3], best = INFINITY;
-    double lo = 1.0, hi = 0.0, tie, size = 0.0, s;
-    int count = 0, k, j, a, b, base, at = 0, vertex[GAC_OBST_NCANDIDATE] = {0};
+    double first = 1.0, last = 0.0, tie, size = 0.0, s;
+    int count = 0, k, j, a, b, base, at = 0, feature = 0, vertex[GAC_OBST_NCANDIDATE] = {0};
     for (k = 0; k < 3; ++k) {                            /* y = R^T (x - c) */
         y0[k] = e[k] = 0.0;
         for (j = 0; j < 3; ++j) {
@@ -249,19 +299,50 @@ static void gac_obst_box_contact(const double *shape, const double *a0, const do
     tie = GAC_OBST_TIE * (sqrt(size) + fabs(h[0]) + fabs(h[1]) + fabs(h[2]) + fabs(best));
     for (a = 0; a < count; ++a) {                        /* the stretch of (near) minimisers: its middle */
         if (f[a] <= best + tie) {
-            if (list[a] < lo) lo = list[a];
-            if (list[a] > hi) hi = list[a];
+            if (list[a] < first) first = list[a];
+            if (list[a] > last) last = list[a];
         }
     }
     /* the least a vertex inside its stretch: sd strictly convex there, the minimiser unique (a breakpoint next to
        it ties within round-off only by (s - s*)^2, which the middle would turn into an error of sqrt(tie)) */
-    s = vertex[at] ? list[at] : 0.5 * (lo + hi);
+    s = vertex[at] ? list[at] : 0.5 * (first + last);
     for (k = 0; k < 3; ++k) y[k] = y0[k] + s * e[k];
-    geometry[0] = gac_obst_box_sd(h, y, nl) - radius;
-    if (best <= 0.0) gac_obst_box_edge_cut(h, y0, e, tie, &s, nl);     /* on or inside: across an edge? */
+    if (best > tie) {                                    /* apart: the distance, from the box's nearest part */
+        int beyond = 0;
+        geometry[0] = gac_obst_box_sd(h, y, nl);
+        if (vertex[at]) (void)gac_obst_box_edge_normal(h, y, e, s, nl);     /* strictly convex: lines' closest */
+        for (k = 0; k < 3; ++k) {
+            if (y[k] > h[k] || y[k] < -h[k]) {           /* beyond a face's plane: the closest point on it */
+                lo[k] = hi[k] = y[k] > h[k] ? h[k] : -h[k];
+                ++beyond;
+            } else {                                     /* between the two: along the whole edge */
+                lo[k] = -h[k], hi[k] = h[k];
+            }
+        }
+        feature = beyond < 2 ? 0 : beyond - 1;
+    } else {                                             /* touching or overlapping: the depth along its axis */
+        int axis;
+        geometry[0] = gac_obst_box_depth(h, y0, e, tie, &s, nl, &axis);
+        if (axis >= 0) {                                 /* across an edge: y_j = h_j sign(n_j) off its axis */
+            for (k = 0; k < 3; ++k) {
+                lo[k] = k == axis ? -h[k] : (nl[k] < 0.0 ? -h[k] : h[k]);
+                hi[k] = k == axis ? h[k] : lo[k];
+            }
+            feature = 1;
+        }
+    }
     geometry[1] = s;
     geometry[2] = 0.0;
     for (k = 0; k < 3; ++k) geometry[3 + k] = R[3 * k] * nl[0] + R[3 * k + 1] * nl[1] + R[3 * k + 2] * nl[2];
+    return feature;
+}
+
+static void gac_obst_box_contact(const double *shape, const double *a0, const double *a1, double radius,
+                                 double *geometry)
+{
+    double lo[3], hi[3];
+    (void)gac_obst_box_solve(shape, a0, a1, geometry, lo, hi);
+    geometry[0] -= radius;
 }
 
 /* sd = n . (x - point), linear along the segment: least at an end, or (parallel) the middle */
@@ -294,28 +375,19 @@ int gac_obstacle_shape_contact(const double *shape, const double *a0, const doub
     }
 }
 
-int gac_obstacle_feature(const double *shape, const double *x, double *b0, double *b1)
+int gac_obstacle_feature(const double *shape, const double *a0, const double *a1, double *b0, double *b1)
 {
-    const double *c = shape + 1, *h = shape + 4, *R = shape + 7;
-    double y[3], lo[3], hi[3];
-    int k, j, outside = 0;
+    const double *c = shape + 1, *R = shape + 7;
+    double geometry[GAC_LINK_NGEOMETRY], lo[3], hi[3];
+    int k, feature;
     if ((int)shape[0] != GAC_OBSTACLE_BOX) return 0;                     /* a plane: its one face */
-    for (k = 0; k < 3; ++k) {                            /* y = R^T (x - c), then the box's closest point's stretch */
-        y[k] = 0.0;
-        for (j = 0; j < 3; ++j) y[k] += R[3 * j + k] * (x[j] - c[j]);
-        if (y[k] > h[k] || y[k] < -h[k]) {               /* beyond a face's plane: the closest point on it */
-            lo[k] = hi[k] = y[k] > h[k] ? h[k] : -h[k];
-            ++outside;
-        } else {                                         /* between the two: along the whole edge */
-            lo[k] = -h[k], hi[k] = h[k];
-        }
-    }
-    if (outside < 2) return 0;                           /* inside, or over a face */
+    feature = gac_obst_box_solve(shape, a0, a1, geometry, lo, hi);
+    if (feature == 0) return 0;
     for (k = 0; k < 3; ++k) {                            /* x = c + R y */
         b0[k] = c[k] + R[3 * k] * lo[0] + R[3 * k + 1] * lo[1] + R[3 * k + 2] * lo[2];
         b1[k] = c[k] + R[3 * k] * hi[0] + R[3 * k + 1] * hi[1] + R[3 * k + 2] * hi[2];
     }
-    return outside - 1;
+    return feature;
 }
 
 int gac_obstacle_shape_check(const gac_model *m, int o)

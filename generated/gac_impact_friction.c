@@ -23,8 +23,12 @@
  * or rest, solved by projected Gauss-Seidel over the contacts, each contact's own problem solved exactly
  * (separate, stick, or slide: a sign for one tangential axis, for two every direction in which it can slide, the
  * real roots of a quartic; with W positive definite one of them always solves it); where the sweeps stall (coupled contacts with friction are not a monotone problem), the contacts' modes
- * are enumerated exactly (up to GAC_ENUM_MAX contacts).  Its residual is reported, and a round left above
- * GAC_FRICTION_RESIDUAL_MAX is GAC_ERR_IMPACT_FRICTION.
+ * are enumerated exactly (up to GAC_ENUM_MAX contacts).  Where that leaves a round above its tolerance (dependent
+ * rows: W singular, the impulses not unique), a later round whose approach is within the tolerance of the
+ * velocities the motion can have ends the rounds, and any other is solved by the proximal point method
+ * (gac_round_proximal), else with every pushing contact held at rest (gac_round_stick); rounds the plain solve
+ * meets are untouched.  Its residual is reported, and a round still
+ * left above GAC_FRICTION_RESIDUAL_MAX (or 16 eps cond W) is GAC_ERR_IMPACT_FRICTION.
  */
 #include "gac_internal.h"
 
@@ -33,6 +37,7 @@
 #define GAC_PGS_SWEEPS 20000      /* Gauss-Seidel sweeps allowed for one round */
 #define GAC_ENUM_MAX 6            /* contacts of a round whose modes are enumerated where Gauss-Seidel stalls */
 #define GAC_SLIDE_STARTS 144      /* starts on a grid of the slide angles for Newton's method, per combination */
+#define GAC_PROX_STEPS 40         /* proximal point steps for a round the plain solve leaves unsolved */
 
 /* Coulomb coefficient of contact c's wall, at rest and at impacts: its c_f (0 for a frictionless wall, a stop, a
  * link pair or an obstacle: those have no Jacobian rows; their coefficient is gac_contact_friction's, at rest
@@ -540,9 +545,12 @@ static void gac_round_mode_of(int nd, const double *W, int ncon, const int *star
  * u the sliding direction: fixed for one tangential axis (and at the stick's edge), else u = xi_T / |xi_T| with
  * its derivative (I - u u^T) W_T / |xi_T| in the Jacobian (the equations on L scaled by W's largest diagonal to
  * velocities).  Steps are taken while the round's residual (gac_round_residual) falls; L and *residual are
- * replaced only if it ends below where it started. */
-static void gac_round_refine(int nd, const double *W, int ncon, const int *start, const int *dim, const double *cf,
-                             const int *rows, const double *q, double *L, double *residual)
+ * replaced only if it ends below where it started.  least: each step the least change of L that meets the
+ * linearised equations, J^T (J J^T + 1e-13 max diag(J J^T) I)^-1 (-F) (dependent rows: J singular, the equations
+ * consistent), else J^-1 (-F). */
+static void gac_round_refine_by(int nd, const double *W, int ncon, const int *start, const int *dim,
+                                const double *cf, const int *rows, const double *q, int least, double *L,
+                                double *residual)
 {
     const int nr = start[ncon - 1] + dim[ncon - 1];
     double vscale = 0.0, lscale = 0.0, wscale = 0.0, best = *residual, dir[2 * GAC_AT_LEAST_1(ncon)];
@@ -605,7 +613,30 @@ static void gac_round_refine(int nd, const double *W, int ncon, const int *start
             }
         }
         for (i = 0; i < nr; ++i) F[i] = -F[i];
-        if (gac_lu_solve(nr, J, F, 1e-16) != 0 || !gac_finite(F, nr)) break;
+        if (least) {                             /* the least-norm step */
+            double G[GAC_AT_LEAST_1(nr * nr)], y[GAC_AT_LEAST_1(nr)], gmax = 0.0;
+            int c;
+            for (i = 0; i < nr; ++i) {
+                for (j = 0; j < nr; ++j) {
+                    double v = 0.0;
+                    for (c = 0; c < nr; ++c) v += J[i * nr + c] * J[j * nr + c];
+                    G[i * nr + j] = v;
+                }
+                gmax = G[i * nr + i] > gmax ? G[i * nr + i] : gmax;
+                y[i] = F[i];
+            }
+            for (i = 0; i < nr; ++i) G[i * nr + i] += 1e-13 * gmax;
+            if (gac_ldlt(nr, G, 1e-300) != 0) break;
+            gac_ldlt_solve(nr, G, y);
+            for (i = 0; i < nr; ++i) {
+                double v = 0.0;
+                for (c = 0; c < nr; ++c) v += J[c * nr + i] * y[c];
+                F[i] = v;
+            }
+            if (!gac_finite(F, nr)) break;
+        } else if (gac_lu_solve(nr, J, F, 1e-16) != 0 || !gac_finite(F, nr)) {
+            break;
+        }
         for (i = 0; i < nr; ++i) cur[i] += F[i];
         for (k = 0; k < ncon; ++k) {             /* the separating contacts exactly at 0 */
             if (mode[k] == 0) {
@@ -621,18 +652,27 @@ static void gac_round_refine(int nd, const double *W, int ncon, const int *start
     *residual = best;
 }
 
+static void gac_round_refine(int nd, const double *W, int ncon, const int *start, const int *dim, const double *cf,
+                             const int *rows, const double *q, double *L, double *residual)
+{
+    gac_round_refine_by(nd, W, ncon, start, dim, cf, rows, q, 0, L, residual);
+}
+
 /* The frictional contact problem of one round: rows rows[0..nr-1] of the full system (W, nd x nd), grouped by
  * contact (contact k's rows at start[k] .. start[k] + dim[k] - 1, its normal first), xi = W L + q, the cone of
  * coefficient cf[k].  Projected Gauss-Seidel over the contacts with each one's exact solve; where that leaves the
  * law's conditions violated by more than round-off, the contacts' modes are enumerated (gac_round_enumerate).  L
- * (nr) out, the residual (gac_round_residual) through *residual. */
-static void gac_round_friction(int nd, const double *W, int ncon, const int *start, const int *dim,
-                               const double *cf, const int *rows, const double *q, double *L, double *residual)
+ * (nr) out, the residual (gac_round_residual) through *residual.  quick: Gauss-Seidel starts from L's impulses,
+ * for at most GAC_PGS_SWEEPS / 20 sweeps, and no enumeration (else from 0). */
+static void gac_round_solve(int nd, const double *W, int ncon, const int *start, const int *dim,
+                            const double *cf, const int *rows, const double *q, int quick, double *L, double *residual)
 {
     const int nr = start[ncon - 1] + dim[ncon - 1];
     int k, i, j, sweep;
-    for (i = 0; i < nr; ++i) L[i] = 0.0;
-    for (sweep = 0; sweep < GAC_PGS_SWEEPS; ++sweep) {
+    if (!quick) {
+        for (i = 0; i < nr; ++i) L[i] = 0.0;
+    }
+    for (sweep = 0; sweep < (quick ? GAC_PGS_SWEEPS / 20 : GAC_PGS_SWEEPS); ++sweep) {
         double change = 0.0, size = 0.0;
         for (k = 0; k < ncon; ++k) {
             const int s = start[k], d = dim[k];
@@ -656,7 +696,7 @@ static void gac_round_friction(int nd, const double *W, int ncon, const int *sta
     }
     *residual = gac_round_residual(nd, W, ncon, start, dim, cf, rows, q, L);
     if (*residual > 4.0 * GAC_EPS) gac_round_refine(nd, W, ncon, start, dim, cf, rows, q, L, residual);
-    if (*residual > 1e-12) {
+    if (*residual > 1e-12 && !quick) {
         double exact[3 * GAC_ENUM_MAX], res;
         for (i = 0; i < nr && i < 3 * GAC_ENUM_MAX; ++i) exact[i] = L[i];
         if (gac_round_enumerate(nd, W, ncon, start, dim, cf, rows, q, 0, GAC_FRICTION_RESIDUAL_MAX * 1e-3, exact, &res)
@@ -666,6 +706,154 @@ static void gac_round_friction(int nd, const double *W, int ncon, const int *sta
         }
     }
     if (*residual > 4.0 * GAC_EPS) gac_round_refine(nd, W, ncon, start, dim, cf, rows, q, L, residual);
+}
+
+/* The round's problem solved by the proximal point method, where the plain solve (gac_round_solve) leaves it
+ * above accept: contacts whose rows are dependent (two walls at one point, a link held at both ends: W singular,
+ * the impulses not unique) or nearly so, where Gauss-Seidel cycles and the modes' linear systems are singular.
+ * Each step solves the problem regularised about the last impulses L_k,
+ *     xi = (W + delta I) L + q - delta L_k     (the same law; W + delta I positive definite),
+ * from L_k: Newton's method on L_k's modes (gac_round_refine), else a short Gauss-Seidel started there
+ * (gac_round_solve, quick); its fixed points L_k+1 = L_k are the round's solutions.  Each step's impulses are then
+ * refined on the round's own W by least-norm Newton steps (gac_round_refine_by: the modes' equations of dependent
+ * rows are consistent but singular).  delta starts at 1e-2 of W's largest diagonal and shrinks by 0.3 a step (the
+ * steps then converge superlinearly); a step whose regularised problem is left above GAC_FRICTION_RESIDUAL_MAX and
+ * above a tenth of the best residual yet is taken again with delta ten times larger.  L and *residual (the round's
+ * own residual, gac_round_residual, on W and q) are replaced by the best step's; it stops below accept, after
+ * GAC_PROX_STEPS steps, or when the best residual has not halved in 20 steps. */
+static void gac_round_proximal(int nd, const double *W, int ncon, const int *start, const int *dim,
+                               const double *cf, const int *rows, const double *q, double accept, double *L,
+                               double *residual)
+{
+    const int nr = start[ncon - 1] + dim[ncon - 1];
+    double Wd[GAC_AT_LEAST_1(nr * nr)], qk[GAC_AT_LEAST_1(nr)], cur[GAC_AT_LEAST_1(nr)], next[GAC_AT_LEAST_1(nr)];
+    double wmax = 0.0, rel = 1e-2, inner, res, mark = *residual;
+    int idx[GAC_AT_LEAST_1(nr)], i, j, step, since = 0;
+    for (i = 0; i < nr; ++i) {
+        wmax = W[rows[i] * nd + rows[i]] > wmax ? W[rows[i] * nd + rows[i]] : wmax;
+        idx[i] = i;
+        cur[i] = L[i];
+    }
+    if (!(wmax > 0.0)) return;
+    for (step = 0; step < GAC_PROX_STEPS && since < 20 && rel <= 1e2; ++step, ++since) {
+        const double delta = rel * wmax;
+        for (i = 0; i < nr; ++i) {
+            for (j = 0; j < nr; ++j) Wd[i * nr + j] = W[rows[i] * nd + rows[j]];
+            Wd[i * nr + i] += delta;
+            qk[i] = q[i] - delta * cur[i];
+            next[i] = cur[i];
+        }
+        inner = gac_round_residual(nr, Wd, ncon, start, dim, cf, idx, qk, next);   /* Newton from L_k's modes, */
+        gac_round_refine(nr, Wd, ncon, start, dim, cf, idx, qk, next, &inner);
+        if (inner > GAC_FRICTION_RESIDUAL_MAX) {                                    /* else the plain solve */
+            for (i = 0; i < nr; ++i) next[i] = cur[i];
+            gac_round_solve(nr, Wd, ncon, start, dim, cf, idx, qk, 1, next, &inner);
+        }
+        if (inner > GAC_FRICTION_RESIDUAL_MAX && inner > 0.1 * *residual) {   /* unsolved: more regularisation */
+            rel *= 10.0;
+            continue;
+        }
+        res = gac_round_residual(nd, W, ncon, start, dim, cf, rows, q, next);
+        gac_round_refine_by(nd, W, ncon, start, dim, cf, rows, q, 1, next, &res);   /* on the round's own W */
+        if (res < *residual) {
+            *residual = res;
+            for (i = 0; i < nr; ++i) L[i] = next[i];
+        }
+        if (*residual <= accept) break;
+        if (*residual <= 0.5 * mark) mark = *residual, since = 0;
+        for (i = 0; i < nr; ++i) cur[i] = next[i];
+        rel *= 0.3;
+    }
+}
+
+/* Every contact of the round that pushes in L held at rest, xi = 0 on its rows (the others at L = 0), with impulses
+ * in the cones: a point of the cones' product on the affine set W_S L_S = -q_S, by alternating projections from L
+ * (onto the set: the least-norm change W_S (W_S W_S + 1e-13 max diag I)^-1 (-(W_S L_S + q_S)); onto each cone
+ * |L_T| <= c_f L_N: Euclidean, in closed form), ending on the set.  The impulses are not unique where the rows
+ * are dependent (W_S singular), and such a point exists where the round's solution sticks everywhere it pushes.
+ * L and *residual are replaced if that lowers the round's residual. */
+static void gac_round_stick(int nd, const double *W, int ncon, const int *start, const int *dim, const double *cf,
+                            const int *rows, const double *q, double *L, double *residual)
+{
+    const int nr = start[ncon - 1] + dim[ncon - 1];
+    double G[GAC_AT_LEAST_1(nr * nr)], cur[GAC_AT_LEAST_1(nr)], r[GAC_AT_LEAST_1(nr)], y[GAC_AT_LEAST_1(nr)];
+    double gmax = 0.0, res;
+    int held[GAC_AT_LEAST_1(nr)], i, j, c, k, it;
+    for (k = 0; k < ncon; ++k) {
+        for (i = 0; i < dim[k]; ++i) held[start[k] + i] = L[start[k]] > 0.0;
+    }
+    for (i = 0; i < nr; ++i) {                   /* G = W_S W_S (+ the identity on the rows not held) */
+        cur[i] = held[i] ? L[i] : 0.0;
+        for (j = 0; j < nr; ++j) {
+            double v = 0.0;
+            for (c = 0; c < nr; ++c) {
+                if (held[i] && held[j] && held[c]) v += W[rows[i] * nd + rows[c]] * W[rows[c] * nd + rows[j]];
+            }
+            G[i * nr + j] = v;
+        }
+        gmax = G[i * nr + i] > gmax ? G[i * nr + i] : gmax;
+    }
+    if (!(gmax > 0.0)) return;
+    for (i = 0; i < nr; ++i) G[i * nr + i] += held[i] ? 1e-13 * gmax : 1.0;
+    if (gac_ldlt(nr, G, 1e-300) != 0) return;
+    for (it = 0; it < 2000; ++it) {
+        double change = 0.0, size = 0.0;
+        for (i = 0; i < nr; ++i) {               /* onto the set */
+            double v = q[i];
+            for (j = 0; j < nr; ++j) v += held[j] ? W[rows[i] * nd + rows[j]] * cur[j] : 0.0;
+            y[i] = held[i] ? -v : 0.0;
+        }
+        gac_ldlt_solve(nr, G, y);
+        for (i = 0; i < nr; ++i) {
+            double v = 0.0;
+            for (j = 0; j < nr; ++j) v += held[i] && held[j] ? W[rows[i] * nd + rows[j]] * y[j] : 0.0;
+            r[i] = cur[i] + v;
+        }
+        if (it == 1999) break;
+        for (k = 0; k < ncon; ++k) {             /* onto the cones */
+            const int s = start[k], d = dim[k];
+            double n = r[s], t = 0.0, mu = cf[k];
+            if (!held[s]) continue;
+            for (i = 1; i < d; ++i) t += r[s + i] * r[s + i];
+            t = sqrt(t);
+            if (d == 1 || !(mu > 0.0)) {
+                n = n > 0.0 ? n : 0.0;
+                for (i = 1; i < d; ++i) r[s + i] = 0.0;
+            } else if (t <= mu * n) {
+            } else if (mu * t <= -n) {
+                n = 0.0;
+                for (i = 1; i < d; ++i) r[s + i] = 0.0;
+            } else {
+                n = (n + mu * t) / (1.0 + mu * mu);
+                for (i = 1; i < d; ++i) r[s + i] *= mu * n / t;
+            }
+            r[s] = n;
+        }
+        for (i = 0; i < nr; ++i) {
+            change = fabs(r[i] - cur[i]) > change ? fabs(r[i] - cur[i]) : change;
+            size = fabs(r[i]) > size ? fabs(r[i]) : size;
+            cur[i] = r[i];
+        }
+        if (change <= 4.0 * GAC_EPS * size) it = 1998;   /* in both: once more onto the set */
+    }
+    res = gac_round_residual(nd, W, ncon, start, dim, cf, rows, q, r);
+    if (res < *residual) {
+        *residual = res;
+        for (i = 0; i < nr; ++i) L[i] = r[i];
+    }
+}
+
+/* The round's problem (gac_round_solve); with proximal set, where that leaves the residual above accept, the
+ * proximal point method from its impulses (gac_round_proximal), and where that too is left above accept, every
+ * pushing contact held at rest (gac_round_stick). */
+static void gac_round_friction(int nd, const double *W, int ncon, const int *start, const int *dim,
+                               const double *cf, const int *rows, const double *q, int proximal, double accept,
+                               double *L, double *residual)
+{
+    gac_round_solve(nd, W, ncon, start, dim, cf, rows, q, 0, L, residual);
+    if (proximal && *residual > accept)
+        gac_round_proximal(nd, W, ncon, start, dim, cf, rows, q, 1e-3 * accept, L, residual);
+    if (proximal && *residual > accept) gac_round_stick(nd, W, ncon, start, dim, cf, rows, q, L, residual);
 }
 
 /* The velocities of the system's rows (gac_friction_system: each contact's normal, then its tangential axes) at
@@ -848,7 +1036,7 @@ int gac_impact_rounds_friction_traced(const gac_model *m, const double *q, const
 {
     const int nq = m->nq, nd_max = 3 * n;
     double *W = GAC_WORK_W(m, work);
-    double cf[GAC_AT_LEAST_1(nq)], gam[nd_max], total[nd_max], scale = 0.0, v_tol;
+    double cf[GAC_AT_LEAST_1(nq)], gam[nd_max], total[nd_max], scale = 0.0, v_tol, v_solved = 0.0;
     int start[GAC_AT_LEAST_1(nq)], dim[GAC_AT_LEAST_1(nq)], axis_of[nd_max];
     const double *resp[nd_max];
     double gam0[nd_max], ek0[GAC_AT_LEAST_1(nq)], cf0[GAC_AT_LEAST_1(nq)], L0[nd_max];
@@ -869,7 +1057,9 @@ int gac_impact_rounds_friction_traced(const gac_model *m, const double *q, const
     for (round = 0; ; ++round) {
         int rows[nd_max], st[GAC_AT_LEAST_1(nq)], dm[GAC_AT_LEAST_1(nq)];
         double ek[GAC_AT_LEAST_1(nq)], cfk[GAC_AT_LEAST_1(nq)], qv[nd_max], L[nd_max], res = 0.0, res_max = 0.0;
-        int k = 0, nr = 0, approaching = 0, pass, who[GAC_AT_LEAST_1(nq)], hit[GAC_AT_LEAST_1(nq)];
+        double ek_own[GAC_AT_LEAST_1(nq)];
+        int k = 0, nr = 0, approaching = 0, pass, attempt, quiet = 0, who[GAC_AT_LEAST_1(nq)], hit[GAC_AT_LEAST_1(nq)];
+        const int law_before = *law_used;
         const int last = round >= GAC_MAX_ROUNDS;
         for (a = 0; a < n; ++a) {
             const double v = gam[start[a]];
@@ -901,31 +1091,55 @@ int gac_impact_rounds_friction_traced(const gac_model *m, const double *q, const
             }
             if (!(res_max > GAC_FRICTION_RESIDUAL_MAX)) res_max = GAC_FRICTION_RESIDUAL_MAX;
         }
-        for (pass = 0; pass < 2; ++pass) {
-            double dT = 0.0, size = 0.0;
-            for (b = 0; b < k; ++b) {           /* q = (1 + e) gamma- (GDI); Newton + Coulomb: e on the normal only */
-                for (i = 0; i < dm[b]; ++i) {
-                    const double gm = gam[rows[st[b] + i]];
-                    const int restitutes = i == 0 || law != GAC_IMPACT_LAW_NEWTON_COULOMB;
-                    qv[st[b] + i] = restitutes ? (1.0 + ek[b]) * gm : gm;
+        for (b = 0; b < k; ++b) ek_own[b] = ek[b];
+        for (attempt = 0; attempt < 2; ++attempt) {  /* the plain solve; where it fails, the proximal one */
+            if (attempt == 1 && round > 0) {     /* the round's approach, what the earlier rounds left, against */
+                double left = 0.0, E[2], v_motion = 0.0;   /* the contact velocities the motion can have */
+                m->energy(q, qd, p, E);
+                for (b = 0; b < k; ++b) left = -gam[rows[st[b]]] > left ? -gam[rows[st[b]]] : left;
+                for (a = 0; a < nd; ++a) {       /* |d_r . qd| <= sqrt(2 T W_rr) */
+                    const double v = sqrt(2.0 * fabs(E[0]) * W[a * nd + a]);
+                    v_motion = v > v_motion ? v : v_motion;
+                }
+                v_motion = v_motion > v_solved ? v_motion : v_solved;
+                if (left <= res_max * v_motion) {
+                    quiet = 1;                   /* within the law's tolerance: the rounds end */
+                    if (left / v_motion > *residual) *residual = left / v_motion;
+                    break;
                 }
             }
-            gac_round_friction(nd, W, k, st, dm, cfk, rows, qv, L, &res);
-            if (law == GAC_IMPACT_LAW_NEWTON_COULOMB || pass == 1) break;
-            for (i = 0; i < nr; ++i) {           /* dT = L . gamma- + L W L / 2 over the round's rows */
-                double wl = 0.0;
-                for (j = 0; j < nr; ++j) wl += W[rows[i] * nd + rows[j]] * L[j];
-                dT += L[i] * (gam[rows[i]] + 0.5 * wl);
-                size += fabs(L[i]) * (fabs(gam[rows[i]]) + 0.5 * fabs(wl));
+            if (attempt == 1) {
+                for (b = 0; b < k; ++b) ek[b] = ek_own[b];
+                *law_used = law_before;
             }
-            if (dT <= 1e-12 * size && res <= res_max) break;      /* solved, no gain */
-            {                                    /* else a common restitution, the smallest of the round's */
-                double e_min = 1.0;
-                for (b = 0; b < k; ++b) e_min = ek[b] < e_min ? ek[b] : e_min;
-                for (b = 0; b < k; ++b) ek[b] = e_min;
-                *law_used = GAC_IMPACT_LAW_GDI_COMMON_E;
+            for (pass = 0; pass < 2; ++pass) {
+                double dT = 0.0, size = 0.0;
+                for (b = 0; b < k; ++b) {       /* q = (1 + e) gamma- (GDI); Newton + Coulomb: e on the normal only */
+                    for (i = 0; i < dm[b]; ++i) {
+                        const double gm = gam[rows[st[b] + i]];
+                        const int restitutes = i == 0 || law != GAC_IMPACT_LAW_NEWTON_COULOMB;
+                        qv[st[b] + i] = restitutes ? (1.0 + ek[b]) * gm : gm;
+                    }
+                }
+                gac_round_friction(nd, W, k, st, dm, cfk, rows, qv, attempt, res_max, L, &res);
+                if (law == GAC_IMPACT_LAW_NEWTON_COULOMB || pass == 1) break;
+                for (i = 0; i < nr; ++i) {           /* dT = L . gamma- + L W L / 2 over the round's rows */
+                    double wl = 0.0;
+                    for (j = 0; j < nr; ++j) wl += W[rows[i] * nd + rows[j]] * L[j];
+                    dT += L[i] * (gam[rows[i]] + 0.5 * wl);
+                    size += fabs(L[i]) * (fabs(gam[rows[i]]) + 0.5 * fabs(wl));
+                }
+                if (dT <= 1e-12 * size && res <= res_max) break;      /* solved, no gain */
+                {                                    /* else a common restitution, the smallest of the round's */
+                    double e_min = 1.0;
+                    for (b = 0; b < k; ++b) e_min = ek[b] < e_min ? ek[b] : e_min;
+                    for (b = 0; b < k; ++b) ek[b] = e_min;
+                    *law_used = GAC_IMPACT_LAW_GDI_COMMON_E;
+                }
             }
+            if (res <= res_max) break;
         }
+        if (quiet) break;
         if (res > *residual) *residual = res;
         if (res > res_max) return GAC_ERR_IMPACT_FRICTION;
         if (trace != 0 && (trace->nround = round + 1) <= trace->cap) {   /* the round, recorded */
@@ -942,7 +1156,10 @@ int gac_impact_rounds_friction_traced(const gac_model *m, const double *q, const
             for (b = 0; b < k; ++b) st0[b] = st[b], dm0[b] = dm[b], ek0[b] = ek[b], cf0[b] = cfk[b];
             for (i = 0; i < nr; ++i) rows0[i] = rows[i], L0[i] = L[i];
         }
-        for (i = 0; i < nr; ++i) total[rows[i]] += L[i];
+        for (i = 0; i < nr; ++i) {
+            total[rows[i]] += L[i];
+            v_solved = fabs(qv[i]) > v_solved ? fabs(qv[i]) : v_solved;   /* the velocities solved so far */
+        }
         for (a = 0; a < nd; ++a) {
             for (i = 0; i < nr; ++i) gam[a] += W[a*nd + rows[i]] * L[i];
         }

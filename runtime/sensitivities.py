@@ -19,7 +19,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from codegen.scene import OBSTACLE_GEOMETRY_KINDS, split_parameter_name
+from codegen.scene import OBSTACLE_PARAMETERS, split_parameter_name
+
+# an obstacle's geometry entries that are not directions of their own: a box's rotation stays orthonormal and a
+# plane's normal unit, so no single entry can move alone (gac_obstacle_held_parameter)
+HELD_GEOMETRY_KINDS = OBSTACLE_PARAMETERS["box"][6:] + OBSTACLE_PARAMETERS["plane"][3:]
 
 
 # gac.h's GAC_SENS_* status codes, in words
@@ -73,10 +77,11 @@ def directions(model, names) -> tuple[list[str], np.ndarray, np.ndarray]:
                 raise ValueError(f"sensitivities[{j}] = {name!r}: not a coordinate of this model; allowed: {allowed}")
             seed_x[j, free.index(index) + (nq if which == "qd0" else 0)] = 1.0
         elif name in model.parameter_names:
-            if split_parameter_name(name)[0] in OBSTACLE_GEOMETRY_KINDS:
-                raise ValueError(f"sensitivities[{j}] = {name!r}: an obstacle's geometry is not differentiated (the "
-                                 "sensitivities hold every obstacle fixed); move it by finite differences of two runs "
-                                 "instead")
+            if split_parameter_name(name)[0] in HELD_GEOMETRY_KINDS:
+                raise ValueError(f"sensitivities[{j}] = {name!r}: a box's rotation entry or a plane's normal entry is "
+                                 "not a direction (the rotation stays orthonormal, the normal unit, so no entry moves "
+                                 "alone); an obstacle's position and size are (center_*, half_*, a_*, b_*, radius_*, "
+                                 "point_*); turn it by finite differences of two runs instead")
             seed_p[j, model.parameter_names.index(name)] = 1.0
         else:
             raise ValueError(f"sensitivities[{j}] = {name!r}: unknown direction; allowed: {allowed}")

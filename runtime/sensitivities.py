@@ -6,7 +6,9 @@ matrix, the verdict).  The C library carries them along the run (runtime/c/gac_s
 A direction is named
     q0[NAME] / qd0[NAME]   an initial coordinate or velocity, NAME a coordinate of the full layout of Eq. 13
                            ("theta_1", "X2") or its index there ("q0[8]"); only the model's own (free) coordinates
-    PARAMETER              a runtime parameter by its name in model.parameter_names ("e_x2_min", "g", "l_1")
+    PARAMETER              a runtime parameter by its name in model.parameter_names ("e_x2_min", "g", "l_1"), an
+                           obstacle's position and size among them ("center_x_ball", "radius_bar", "half_y_box",
+                           "point_y_floor"); not a box's rotation entry nor a plane's normal entry
 
 One-sided derivatives (simulate(..., one_sided=True)): the C loop carries each direction twice, seeded with +e_j
 and -e_j, and at a mode boundary inside an impact each column takes the side its own direction leads to

@@ -4,7 +4,8 @@
  * one such pair.  Everything comes from the joint points' positions and velocities (contact_points,
  * contact_velocities): a point at fraction s along link i moves with (1 - s) v_O_i + s v_O_i+1, the link being
  * rigid.  A link and a fixed obstacle (a sphere or a bar, a capsule about a fixed segment) are the same contact with
- * the second segment fixed in the box: its closest point does not move.
+ * the second segment fixed in the box: its closest point does not move (in time; its geometry among the parameters
+ * moves it along a direction dp of the sensitivities, gac_normal_tangent).
  */
 #include "gac_internal.h"
 

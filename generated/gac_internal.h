@@ -140,6 +140,20 @@ int gac_obstacle_shape_check(const gac_model *m, int o);
  * normal), 1 a box's edge (the link's closest point by it outside, or the link reaching in across it), its ends in
  * b0, b1, 2 a box's corner, b0 = b1 (the normal then turns with the link, as against a segment's capsule) */
 int gac_obstacle_feature(const double *shape, const double *a0, const double *a1, double *b0, double *b1);
+/* The motion of that part along the change dshape of the obstacle's geometry (its position and size; a box's
+ * rotation and a plane's normal held, gac_obstacle_held_parameter): an edge's or a corner's ends b0, b1, each
+ * coordinate of them in the box's frame +-h_k, move by dc + R dy, dy_k = +-dh_k; a box's face (n its outward normal,
+ * R^T n = +-E_k) by dc + dh_k n, a plane's by its point's motion, into db0 = db1.  Returns the part as
+ * gac_obstacle_feature. */
+int gac_obstacle_feature_change(const double *shape, const double *dshape, const double *a0, const double *a1,
+                                const double *n, double *db0, double *db1);
+/* Obstacle o's geometry's change along dp (GAC_OBSTACLE_NSHAPE doubles, the kind first as gac_obstacle_shape's, the
+ * rest the entries' changes; 0 for an obstacle whose geometry is the model's constants).  GAC_OK or as
+ * gac_obstacle_shape. */
+int gac_obstacle_shape_change(const gac_model *m, const double *dp, int o, double *dshape);
+/* 1 if p[index] is a box's rotation entry or a plane's normal entry: constrained (orthonormal, unit), no entry a
+ * direction of its own, so the sensitivities do not take it; else 0. */
+int gac_obstacle_held_parameter(const gac_model *m, int index);
 
 /* gac_link.c: link pairs and obstacles as contacts of the loop (kinds GAC_CONTACT_LINK, GAC_CONTACT_OBSTACLE, the
  * last entries of m->contacts: no Jacobian row; Coulomb friction along their contact frame, at impacts and at rest,

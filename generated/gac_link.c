@@ -4,7 +4,8 @@
  * one such pair.  Everything comes from the joint points' positions and velocities (contact_points,
  * contact_velocities): a point at fraction s along link i moves with (1 - s) v_O_i + s v_O_i+1, the link being
  * rigid.  A link and a fixed obstacle (a sphere or a bar, a capsule about a fixed segment) are the same contact with
- * the second segment fixed in the box: its closest point does not move.
+ * the second segment fixed in the box: its closest point does not move (in time; its geometry among the parameters
+ * moves it along a direction dp of the sensitivities, gac_normal_tangent).
  */
 #include "gac_internal.h"
 
@@ -674,7 +675,14 @@ static void gac_link_points_change(const gac_model *m, const double *q, const do
  * interior, outside the box or reaching into it) n is the lines' common normal +-(d1 x d2) / |d1 x d2| and
  * dn = +-(I - n n^T)(dd1 x d2 + d1 x dd2) / |d1 x d2|, the same as above where dist > 0 and defined at dist <= 0;
  * a plane's or a box's face has a constant normal: the closest point is an end of the link (ds = 0; one inside,
- * the link lies parallel to the face and a whole stretch is closest: no derivative), so d gap = n . dP0, dn = 0. */
+ * the link lies parallel to the face and a whole stretch is closest: no derivative), so d gap = n . (dP0 - dQ),
+ * dn = 0, dQ the face's plane's motion.
+ * An obstacle's geometry among the parameters moves its side along dp (the second segment of the above, fixed in
+ * the box otherwise): a bar's ends db0, db1 and a sphere's centre (db0 = db1) as a link's would, its radius R
+ * lowering the gap by dR (n unchanged); a box's edge or corner by dc + R dy (each of its coordinates in the box's
+ * frame +-h_k, dy_k = +-dh_k), a box's face by dQ = dc + dh_k n, a plane's by its point's motion
+ * (gac_obstacle_feature_change).  The obstacle's J stays 0: its motion reaches the row through the closest point's
+ * fraction s and the normal alone.  A box's rotation and a plane's normal are not directions (GAC_ERR_BAD_OPTION). */
 static int gac_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
                               const double *dp, int held, double *dgap, double *g, double *dg, double *gt,
                               double *dgt)
@@ -683,9 +691,10 @@ static int gac_normal_tangent(const gac_model *m, const double *q, const double 
     double axes[3][3], daxes[3][3];
     int naxis;
     double geometry[GAC_LINK_NGEOMETRY], r[3 * GAC_AT_LEAST_1(m != 0 ? m->npoint : 1)];
-    double dr[3 * GAC_AT_LEAST_1(m != 0 ? m->npoint : 1)], zero[3] = {0.0, 0.0, 0.0}, change[3 * GAC_AT_LEAST_1(nq)];
+    double dr[3 * GAC_AT_LEAST_1(m != 0 ? m->npoint : 1)], change[3 * GAC_AT_LEAST_1(nq)];
     double d1[3], d2[3], D[3], dd1[3], dd2[3], dD[3], dn[3], a, b, e, dist, s, t, ds = 0.0, dt = 0.0, along;
-    double end0[3], end1[3], shape[GAC_OBSTACLE_NSHAPE];
+    double end0[3], end1[3], shape[GAC_OBSTACLE_NSHAPE], dshape[GAC_OBSTACLE_NSHAPE], dend0[3], dend1[3];
+    double grow = 0.0;                                   /* a bar's or a sphere's radius' change */
     const double *a0, *a1, *b0, *b1, *da0, *da1, *db0, *db1;
     int i, j, k, code, s_inside, t_inside, face = 0, edge = 0;
     if (m == 0 || q == 0 || p == 0 || dq == 0 || dp == 0 || dgap == 0 || g == 0 || dg == 0)
@@ -700,16 +709,24 @@ static int gac_normal_tangent(const gac_model *m, const double *q, const double 
     s = geometry[1], t = geometry[2];
     if (j > 0) {
         b0 = r + 3 * (j - 1), b1 = r + 3 * j, db0 = dr + 3 * (j - 1), db1 = dr + 3 * j;
-    } else {                                             /* a fixed obstacle: its segment does not move */
+    } else {                                             /* a fixed obstacle: its segment moves with dp alone */
         const int o = m->contacts[c].coordinate;
-        if (gac_obstacle_shape(m, p, o, shape) != GAC_OK) return GAC_ERR_BAD_CONTACT;
-        b0 = shape + 1, b1 = shape + 4, db0 = db1 = zero;
+        if (gac_obstacle_shape(m, p, o, shape) != GAC_OK || gac_obstacle_shape_change(m, dp, o, dshape) != GAC_OK)
+            return GAC_ERR_BAD_CONTACT;
+        for (k = 0; k < m->nparam; ++k) {                /* a box's rotation, a plane's normal: not directions */
+            if (dp[k] != 0.0 && gac_obstacle_parameter(m, k) == o && gac_obstacle_held_parameter(m, k))
+                return GAC_ERR_BAD_OPTION;
+        }
+        b0 = shape + 1, b1 = shape + 4, db0 = dshape + 1, db1 = dshape + 4;   /* a bar's ends (a sphere's centre) */
+        grow = dshape[7];
         if (!gac_obstacle_round((int)shape[0])) {        /* a box or a plane: the part the gap is measured from */
             double x[3], span = 0.0;
             const int feature = gac_obstacle_feature(shape, a0, a1, end0, end1);
+            (void)gac_obstacle_feature_change(shape, dshape, a0, a1, geometry + 3, dend0, dend1);
             for (k = 0; k < 3; ++k) x[k] = (1.0 - s) * a0[k] + s * a1[k];
-            face = feature == 0, edge = feature == 1;
+            face = feature == 0, edge = feature == 1, grow = 0.0;
             b0 = face ? x : end0, b1 = face ? x : end1, t = 0.0;
+            db0 = dend0, db1 = dend1;                    /* (a face: its plane's motion, at x) */
             for (k = 0; k < 3; ++k) span += (b1[k] - b0[k]) * (b1[k] - b0[k]);
             if (span > 0.0) {                            /* an edge: the foot of x on it */
                 for (k = 0; k < 3; ++k) t += (x[k] - b0[k]) * (b1[k] - b0[k]) / span;
@@ -771,7 +788,7 @@ static int gac_normal_tangent(const gac_model *m, const double *q, const double 
         along = gac_dot3(geometry + 3, dD);
         for (k = 0; k < 3; ++k) dn[k] = (dD[k] - along * geometry[3 + k]) / dist;
     }
-    *dgap = along;
+    *dgap = along - grow;
     naxis = 1;
     for (k = 0; k < 3; ++k) axes[0][k] = geometry[3 + k], daxes[0][k] = dn[k];
     if (dgt != 0) {                                      /* the frame's t1, t2 and their turning */

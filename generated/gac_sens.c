@@ -6,7 +6,8 @@
  * Runge-Kutta formula over the state's own steps and stages (gac_sens_flight), the derivative of the projection onto
  * the resting contacts after each step (gac_sens_project), the jump of the sensitivities at an impact by the
  * frictionless law -- of one contact or several, walls, joint stops, link pairs and links on obstacles, landings
- * among them, the set of pushing contacts held fixed, in one round or several (the chain of the rounds' laws,
+ * among them (an obstacle's position and size among the directions), the set of pushing contacts held fixed, in
+ * one round or several (the chain of the rounds' laws,
  * gac_sens_rounds_at) -- the saltation
  * matrix of Hiskens & Pai (2000) (gac_sens_impact), the release of a resting contact (gac_sens_release), a stuck
  * point's slip (gac_sens_slip) and a sliding point's coming to stick (gac_sens_stick), contacts at rest at the start
@@ -51,8 +52,8 @@ int gac_sens_attach(gac_sim *s, gac_sens *sens, int k, const double *seed_x, con
     if (!gac_sens_has_tangents(md)) return GAC_ERR_BAD_MODEL;
     if (!gac_finite(seed_x, k * md->nx) || (seed_p != 0 && !gac_finite(seed_p, k * md->nparam)))
         return GAC_ERR_BAD_OPTION;
-    for (i = 0; seed_p != 0 && i < k * md->nparam; ++i) {  /* obstacles are held fixed: no derivative along them */
-        if (seed_p[i] != 0.0 && gac_obstacle_parameter(md, i % md->nparam) >= 0) return GAC_ERR_BAD_OPTION;
+    for (i = 0; seed_p != 0 && i < k * md->nparam; ++i) {  /* a box's rotation, a plane's normal: not directions */
+        if (seed_p[i] != 0.0 && gac_obstacle_held_parameter(md, i % md->nparam)) return GAC_ERR_BAD_OPTION;
     }
     sens->k = k;
     sens->S = dwork;                              /* dwork: S | dp | dt_impact | dgap_held | dslip | slip_known |

@@ -6,7 +6,9 @@ matrix, the verdict).  The C library carries them along the run (runtime/c/gac_s
 A direction is named
     q0[NAME] / qd0[NAME]   an initial coordinate or velocity, NAME a coordinate of the full layout of Eq. 13
                            ("theta_1", "X2") or its index there ("q0[8]"); only the model's own (free) coordinates
-    PARAMETER              a runtime parameter by its name in model.parameter_names ("e_x2_min", "g", "l_1")
+    PARAMETER              a runtime parameter by its name in model.parameter_names ("e_x2_min", "g", "l_1"), an
+                           obstacle's position and size among them ("center_x_ball", "radius_bar", "half_y_box",
+                           "point_y_floor"); not a box's rotation entry nor a plane's normal entry
 
 One-sided derivatives (simulate(..., one_sided=True)): the C loop carries each direction twice, seeded with +e_j
 and -e_j, and at a mode boundary inside an impact each column takes the side its own direction leads to
@@ -19,7 +21,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from codegen.scene import OBSTACLE_GEOMETRY_KINDS, split_parameter_name
+from codegen.scene import OBSTACLE_PARAMETERS, split_parameter_name
+
+# an obstacle's geometry entries that are not directions of their own: a box's rotation stays orthonormal and a
+# plane's normal unit, so no single entry can move alone (gac_obstacle_held_parameter)
+HELD_GEOMETRY_KINDS = OBSTACLE_PARAMETERS["box"][6:] + OBSTACLE_PARAMETERS["plane"][3:]
 
 
 # gac.h's GAC_SENS_* status codes, in words
@@ -73,10 +79,11 @@ def directions(model, names) -> tuple[list[str], np.ndarray, np.ndarray]:
                 raise ValueError(f"sensitivities[{j}] = {name!r}: not a coordinate of this model; allowed: {allowed}")
             seed_x[j, free.index(index) + (nq if which == "qd0" else 0)] = 1.0
         elif name in model.parameter_names:
-            if split_parameter_name(name)[0] in OBSTACLE_GEOMETRY_KINDS:
-                raise ValueError(f"sensitivities[{j}] = {name!r}: an obstacle's geometry is not differentiated (the "
-                                 "sensitivities hold every obstacle fixed); move it by finite differences of two runs "
-                                 "instead")
+            if split_parameter_name(name)[0] in HELD_GEOMETRY_KINDS:
+                raise ValueError(f"sensitivities[{j}] = {name!r}: a box's rotation entry or a plane's normal entry is "
+                                 "not a direction (the rotation stays orthonormal, the normal unit, so no entry moves "
+                                 "alone); an obstacle's position and size are (center_*, half_*, a_*, b_*, radius_*, "
+                                 "point_*); turn it by finite differences of two runs instead")
             seed_p[j, model.parameter_names.index(name)] = 1.0
         else:
             raise ValueError(f"sensitivities[{j}] = {name!r}: unknown direction; allowed: {allowed}")

@@ -3,7 +3,8 @@
 box and plane moved (and the box and the plane turned) through p gives bit for bit what a model built with them
 there gives; the values no obstacle can have are refused by simulate() and by the C parameter check, each naming the
 parameter and its range; a planar model holds the geometry that keeps an obstacle symmetric about its plane; the
-sensitivities refuse an obstacle's geometry as a direction; the scene's defaults are the model's p."""
+sensitivities take an obstacle's position and size as directions but not a box's rotation or a plane's normal; the
+scene's defaults are the model's p."""
 import math
 
 import numpy as np
@@ -177,12 +178,19 @@ def test_a_reflection_and_an_overlapping_start_are_refused(model):
         simulate(model, 0.1, p=ball)
 
 
-def test_sensitivities_refuse_an_obstacles_geometry(model):
-    with pytest.raises(ValueError, match=r"sensitivities\[1\] = 'radius_ball': an obstacle's geometry is not "
-                                         r"differentiated"):
-        directions(model, ["e_ball", "radius_ball"])
-    names, _, seed_p = directions(model, ["e_ball"])
-    assert seed_p[0, model.parameter_names.index("e_ball")] == 1.0
+def test_sensitivities_take_an_obstacles_place_and_size_but_not_its_turning(model):
+    """A box's rotation entries and a plane's normal entries are refused as directions (each naming itself: no entry
+    moves alone); the position and size of every kind are directions."""
+    for name in ("rotation_12_block", "normal_y_roof"):
+        with pytest.raises(ValueError, match=rf"sensitivities\[1\] = '{name}': a box's rotation entry or a plane's "
+                                             r"normal entry is not a direction"):
+            directions(model, ["e_ball", name])
+    taken = ["e_ball", "radius_ball", "center_x_ball", "a_y_bar", "b_z_bar", "radius_bar", "center_y_block",
+             "half_x_block", "point_y_roof"]
+    names, _, seed_p = directions(model, taken)
+    assert names == taken
+    for j, name in enumerate(taken):
+        assert seed_p[j, model.parameter_names.index(name)] == 1.0 and seed_p[j].sum() == 1.0
 
 
 def test_a_planar_model_holds_the_geometry_that_keeps_an_obstacle_in_its_plane():

@@ -642,7 +642,11 @@ int gac_contact_normal(const gac_model *m, const double *q, const double *p, int
  * they have no derivative: the axes crossing (distance 0), or parallel with both closest points inside.  A box's or
  * plane's face has a constant normal and the link's closest point at one of its ends (a link parallel to the face,
  * a whole stretch closest: GAC_ERR_LINK_CONTACT); a box's edge or corner nearest is a fixed segment or point, as a
- * bar's or a sphere's. */
+ * bar's or a sphere's.  dp may move an obstacle whose geometry is among the parameters: a sphere's centre and
+ * radius, a bar's ends and radius, a box's centre and half extents, a plane's point (the part of it the gap is
+ * measured from moves, a radius lowers the gap; the obstacle's own J stays 0); along a box's rotation entry or a
+ * plane's normal entry (no direction of its own: the rotation stays orthonormal, the normal unit) it returns
+ * GAC_ERR_BAD_OPTION. */
 int gac_contact_normal_tangent(const gac_model *m, const double *q, const double *p, int c, const double *dq,
                                const double *dp, double *dgap, double *g, double *dg);
 /* A link pair's or an obstacle contact's frame rows and their derivatives along (dq (nq), dp (nparam)): axes (9)
@@ -1255,9 +1259,9 @@ long gac_sens_ndouble(const gac_model *m, int k);
 /* Attach sensitivities along k directions to sim from its current time on: S = seed_x (k x nx, direction-major),
  * dp = seed_p (k x nparam; NULL: 0).  The loop then carries them (sim.sens); sens and dwork owned by the caller for
  * the life of the run.  sens NULL detaches.  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT (sim, seed_x or dwork NULL),
- * GAC_ERR_BAD_OPTION (k < 1, a seed not finite, or a seed_p along an obstacle's geometry parameter: the
- * sensitivities hold obstacles fixed, gac_obstacle_parameter) or GAC_ERR_BAD_MODEL (the model has no tangent kernels:
- * rolled forward dynamics, or built with tangent=False). */
+ * GAC_ERR_BAD_OPTION (k < 1, a seed not finite, or a seed_p along a box's rotation entry or a plane's normal entry:
+ * constrained, no entry a direction of its own; an obstacle's position and size are directions) or
+ * GAC_ERR_BAD_MODEL (the model has no tangent kernels: rolled forward dynamics, or built with tangent=False). */
 int gac_sens_attach(gac_sim *sim, gac_sens *sens, int k, const double *seed_x, const double *seed_p, double *dwork);
 
 /* S (k x nx) at sim.t in chart A's coordinates, whichever chart is integrated (as gac_sim_state gives the state):

@@ -77,6 +77,31 @@ int gac_obstacle_parameter(const gac_model *m, int index)
     return -1;
 }
 
+int gac_obstacle_held_parameter(const gac_model *m, int index)
+{
+    const int o = gac_obstacle_parameter(m, index);
+    int kind, at;
+    if (o < 0) return 0;
+    kind = gac_obstacle_kind(m, o), at = index - m->obstacle_params[o];
+    return (kind == GAC_OBSTACLE_BOX && at >= 6) || (kind == GAC_OBSTACLE_PLANE && at >= 3);
+}
+
+int gac_obstacle_shape_change(const gac_model *m, const double *dp, int o, double *dshape)
+{
+    double row[GAC_OBSTACLE_NSHAPE];
+    int k, used, code;
+    if (m == 0 || dshape == 0) return GAC_ERR_NULL_ARGUMENT;
+    if (o < 0 || o >= m->nobstacle || m->obstacle_shapes == 0) return GAC_ERR_BAD_CONTACT;
+    for (k = 0; k < GAC_OBSTACLE_NSHAPE; ++k) dshape[k] = 0.0;
+    dshape[0] = m->obstacle_shapes[GAC_OBSTACLE_NSHAPE * o];
+    if (m->obstacle_params == 0 || m->obstacle_params[o] < 0) return GAC_OK;   /* constants: it does not move */
+    code = gac_obstacle_shape(m, dp, o, row);            /* the same gathering, of dp (linear in it) */
+    if (code != GAC_OK) return code;
+    used = (int)row[0] == GAC_OBSTACLE_BOX ? 15 : ((int)row[0] == GAC_OBSTACLE_PLANE ? 6 : 7);
+    for (k = 1; k <= used; ++k) dshape[k] = row[k];
+    return GAC_OK;
+}
+
 int gac_rotation_admissible(const double *R)
 {
     double det;
@@ -386,6 +411,37 @@ int gac_obstacle_feature(const double *shape, const double *a0, const double *a1
     for (k = 0; k < 3; ++k) {                            /* x = c + R y */
         b0[k] = c[k] + R[3 * k] * lo[0] + R[3 * k + 1] * lo[1] + R[3 * k + 2] * lo[2];
         b1[k] = c[k] + R[3 * k] * hi[0] + R[3 * k + 1] * hi[1] + R[3 * k + 2] * hi[2];
+    }
+    return feature;
+}
+
+int gac_obstacle_feature_change(const double *shape, const double *dshape, const double *a0, const double *a1,
+                                const double *n, double *db0, double *db1)
+{
+    const double *R = shape + 7, *dc = dshape + 1, *dh = dshape + 4;
+    double geometry[GAC_LINK_NGEOMETRY], lo[3], hi[3], dlo[3], dhi[3];
+    int k, feature, face = 0;
+    if ((int)shape[0] != GAC_OBSTACLE_BOX) {             /* a plane: its point's motion */
+        for (k = 0; k < 3; ++k) db0[k] = db1[k] = dshape[1 + k];
+        return 0;
+    }
+    feature = gac_obst_box_solve(shape, a0, a1, geometry, lo, hi);
+    if (feature == 0) {                                  /* a face: the axis n lies along, R^T n = +-E_face */
+        double best = -1.0;
+        for (k = 0; k < 3; ++k) {
+            const double along = fabs(R[k] * n[0] + R[3 + k] * n[1] + R[6 + k] * n[2]);
+            if (along > best) best = along, face = k;
+        }
+        for (k = 0; k < 3; ++k) db0[k] = db1[k] = dc[k] + dh[face] * n[k];
+        return 0;
+    }
+    for (k = 0; k < 3; ++k) {                            /* each coordinate of the part +-h_k */
+        dlo[k] = lo[k] < 0.0 ? -dh[k] : dh[k];
+        dhi[k] = hi[k] < 0.0 ? -dh[k] : dh[k];
+    }
+    for (k = 0; k < 3; ++k) {
+        db0[k] = dc[k] + R[3 * k] * dlo[0] + R[3 * k + 1] * dlo[1] + R[3 * k + 2] * dlo[2];
+        db1[k] = dc[k] + R[3 * k] * dhi[0] + R[3 * k + 1] * dhi[1] + R[3 * k + 2] * dhi[2];
     }
     return feature;
 }

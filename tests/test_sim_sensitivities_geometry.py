@@ -1,0 +1,150 @@
+"""Forward sensitivities along an obstacle's geometry (gac_contact_normal_tangent, gac_obstacle_feature_change): a
+sphere's centre and radius, a bar's ends and radius, a box's centre and half extents and a plane's point as
+directions.  One model holds a ball, a bar, a box turned to stand on an edge (a ridge) and a slanted floor plane
+below them all.  The gap's and the row J^T n's derivatives along random directions of those parameters (and of q with
+them) against sixth-order central differences of the model's own gap and gac_contact_normal; a rod dropped onto
+each obstacle (inside its length onto the ball, across the bar, across the ridge's edge and onto its end, a corner,
+end first onto the ridge's face and onto the floor), its final state's and its impact time's sensitivities along the obstacle's geometry
+against central differences of whole runs (the same impacts across the stencil); a box's rotation entries and a
+plane's normal entries are no directions (the C functions refuse them)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from codegen.scene import LineLink, Obstacle, Scene, split_parameter_name
+from runtime import load_model, simulate
+from runtime.sensitivities import HELD_GEOMETRY_KINDS
+from tests.conftest import perturbed_start
+from tests.test_sim_obstacle_box import RIDGE_R
+from tests.test_sim_sensitivities_obstacle import central
+
+TIGHT = dict(rtol=1e-12, atol=1e-14)
+R_LINK = 0.02
+FLOOR_N = np.array([0.1, 1.0, 0.05]) / np.linalg.norm([0.1, 1.0, 0.05])
+OBSTACLES = (
+    Obstacle.sphere("ball", (0.0, 0.5, 0.0), 0.1),
+    Obstacle.bar("bar", (3.0, 0.5, -0.5), (3.2, 0.45, 0.5), 0.05),
+    Obstacle.box("ridge", (6.0, 0.3, 0.0), (0.2, 0.25, 0.5), RIDGE_R),     # its top edge along X3 at (5.965, 0.618)
+    Obstacle.plane("floor", (0.0, -5.0, 0.0), tuple(FLOOR_N)),
+)
+NEAR = [np.array(o.a) for o in OBSTACLES[:3]] + [np.array((0.0, -4.6, 0.0))]
+
+
+@pytest.fixture(scope="module")
+def model():
+    """A free rod of 1 m (capsule radius 0.02 m) among the four obstacles, with the tangent kernels."""
+    scene = Scene(name="sens_obstacle_geometry", links=(LineLink(1.0, 1.0, radius=R_LINK),), gravity=9.81,
+                  q0=(-math.pi / 2, 0.0, math.pi / 2, 0.5, 1.0, 0.0), obstacles=OBSTACLES)
+    return load_model(scene, tangent=True)
+
+
+def geometry(name: str) -> list[str]:
+    """The obstacle's geometry parameters that are directions (not a box's rotation nor a plane's normal)."""
+    obstacle = next(o for o in OBSTACLES if o.name == name)
+    return [n for n in obstacle.geometry_names if split_parameter_name(n)[0] not in HELD_GEOMETRY_KINDS]
+
+
+def normal_tangent(model, q, c, dq, dp):
+    """(code, d gap, J^T n, d(J^T n)) of contact c along (dq, dp) by gac_contact_normal_tangent."""
+    dgap, g, dg = model.ffi.new("double *"), np.zeros(model.nq), np.zeros(model.nq)
+    q, dq, dp = (np.ascontiguousarray(x, dtype=float) for x in (q, dq, dp))
+    code = model.lib.gac_contact_normal_tangent(model.ffi.addressof(model.c.model), model._ptr(q),
+                                                model._ptr(model.p), c, model._ptr(dq), model._ptr(dp), dgap,
+                                                model._ptr(g), model._ptr(dg))
+    return code, dgap[0], g, dg
+
+
+@pytest.mark.parametrize("c", range(4), ids=[o.name for o in OBSTACLES])
+def test_the_gap_and_row_derivatives_along_the_geometry_match_central_differences(model, c):
+    """Random states of the rod clear of the obstacle (gap > 0.02 m; its closest point at an end or inside, a box's
+    face, edge or corner nearest), along a random direction of the obstacle's geometry alone and with a random dq:
+    d gap and d(J^T n) against sixth-order central differences (step 1e-4) of the gap and of gac_contact_normal with
+    p moved, to 1e-9 of their size (seen ~1e-11)."""
+    rng = np.random.default_rng(11 + c)
+    name = OBSTACLES[c].name
+    index = [model.parameter_names.index(n) for n in geometry(name)]
+    checked, turning = 0, 0
+    while checked < 12:
+        q = np.concatenate([rng.uniform(-math.pi, math.pi, 3), NEAR[c] + rng.uniform(-0.9, 0.9, 3)])
+        q[1] = rng.uniform(-1.2, 1.2)                             # theta_0 away from the base chart's lock
+        if model.obstacle_gap(q, 1, name)[0] < 0.02:              # inside or near: the gap may have a kink
+            continue
+        for with_q in (False, True):
+            dq = rng.normal(size=model.nq) if with_q else np.zeros(model.nq)
+            dp = np.zeros(len(model.p))
+            dp[index] = rng.normal(size=len(index))
+            code, dgap, g, dg = normal_tangent(model, q, c, dq, dp)
+            assert code == model.lib.GAC_OK
+
+            def at(h):
+                p = model.p + h * dp
+                return np.concatenate([[model.contact_gaps(q + h * dq, p)[c]], model.contact_normal(q + h * dq, c, p)])
+
+            fd = central(at)
+            assert abs(dgap - fd[0]) <= 1e-9 * max(1.0, abs(fd[0])), (name, with_q)
+            assert np.abs(dg - fd[1:]).max() <= 1e-9 * max(1.0, np.abs(fd[1:]).max()), (name, with_q)
+            turning += not with_q and np.abs(dg).max() > 1e-3
+        checked += 1
+    assert turning >= (0 if name == "floor" else 4)               # the row turns with the obstacle's motion
+
+
+def test_a_box_rotation_or_a_plane_normal_is_refused_by_the_c_functions(model):
+    """gac_contact_normal_tangent along a box's rotation entry or a plane's normal entry: GAC_ERR_BAD_OPTION, as
+    gac_sens_attach's seeds along them (simulate() refuses them by name: tests/test_sim_obstacle_params.py)."""
+    q = np.array([0.0, 0.3, 0.2, 6.0, 1.2, 0.0])
+    for c, name in ((2, "rotation_21_ridge"), (3, "normal_y_floor")):
+        dp = np.zeros(len(model.p))
+        dp[model.parameter_names.index(name)] = 1.0
+        assert normal_tangent(model, q, c, np.zeros(model.nq), dp)[0] == model.lib.GAC_ERR_BAD_OPTION
+    with pytest.raises(ValueError, match=r"'rotation_21_ridge': a box's rotation entry or a plane's normal entry"):
+        simulate(model, 0.1, sensitivities=["radius_ball", "rotation_21_ridge"])
+
+
+# (obstacle, O_1's X1, X2, the rod's tilt from the horizontal (O_2 lower), X3, the closest point on the rod)
+STRIKES = {
+    "ball": ("ball", 0.65, 1.0, 0.15, 0.0, "inside"),                 # inside its length, off its centre of mass
+    "bar": ("bar", 3.6, 0.8, 0.1, 0.05, "inside"),                    # across the bar: both fractions inside
+    "edge": ("ridge", 6.785, 0.738, 0.0, 0.1, "inside"),              # level, across the ridge's top edge
+    "corner": ("ridge", 6.785, 0.738, 0.0, 0.51, "inside"),          # level, onto the top edge's end (a corner)
+    "face": ("ridge", 6.2 + math.cos(0.3), 0.583 + math.sin(0.3), 0.3, 0.05, "end"),   # O_2 onto the ridge's face
+    "floor": ("floor", 0.5, -4.5, 0.2, 0.1, "end"),                   # O_2 onto the slanted floor
+}
+
+
+@pytest.mark.parametrize("case", STRIKES)
+def test_a_rod_striking_an_obstacle_matches_central_differences_along_its_geometry(model, case):
+    """The rod dropped from rest strikes the obstacle once (e = 0.6): the sensitivities are carried through (valid,
+    the impact differentiated) and the final state's at T = 0.25 s and the impact time's along each of the
+    obstacle's geometry parameters (and q0[X2]) match central differences of whole runs (step 1e-6; the same impacts
+    across the stencil) to 1e-6 of their size (seen 1e-10-1.4e-8 for the state, ~1e-10 for the time)."""
+    name, x1, x2, tilt, x3, where = STRIKES[case]
+    q0, qd0 = np.array([-math.pi / 2, 0.0, math.pi / 2 + tilt, x1, x2, x3]), np.zeros(6)
+    p = model.parameters({f"e_{name}": 0.6})
+    directions, t_end, step = geometry(name) + ["q0[X2]"], 0.25, 1e-6
+    r = simulate(model, t_end, p=p, q0=q0, qd0=qd0, sensitivities=directions, **TIGHT)
+    sequence = [[c.label for c in i.contacts] for i in r.impacts]
+    assert r.success and sequence == [[f"L1/{name}"]], r.message
+    assert r.sensitivities.valid and r.sensitivities.n_impacts == 1, r.sensitivity_message
+    impact = r.impacts[0]
+    s = model.obstacle_gap(model.layout.reduce(impact.q), 1, name)[1]
+    assert (0.0 < s < 1.0) == (where == "inside")
+
+    def run(direction, h):
+        p1, q1, qd1 = perturbed_start(model, direction, h, p, q0, qd0)
+        other = simulate(model, t_end, p=p1, q0=q1, qd0=qd1, **TIGHT)
+        assert other.success and [[c.label for c in i.contacts] for i in other.impacts] == sequence, direction
+        final = np.concatenate([model.layout.reduce(other.q_final), model.layout.reduce(other.qd_final)])
+        return final, other.impacts[0].t
+
+    moved = 0
+    for j, direction in enumerate(directions):
+        (x_plus, t_plus), (x_minus, t_minus) = run(direction, step), run(direction, -step)
+        fd, fd_t = (x_plus - x_minus) / (2 * step), (t_plus - t_minus) / (2 * step)
+        column = r.sensitivities.matrix[:, j]
+        assert np.abs(fd - column).max() <= 1e-6 * max(1.0, np.abs(fd).max()), direction
+        assert abs(impact.dt_dp[direction] - fd_t) <= 1e-6 * max(1.0, abs(fd_t)), direction
+        moved += abs(fd_t) > 1e-2
+    assert moved >= 2                                               # the strike's time moves with the obstacle

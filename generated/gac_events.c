@@ -194,6 +194,18 @@ static int gac_dip_candidates(gac_sim *s, double t1, int *cand, double *speed, d
     return n;
 }
 
+/* Record a lost contact for the run's message (GAC_ERR_LOST_CONTACT): contact c at time t, its gap there and the
+ * depth allowed, and the step searched (the dense output's). */
+void gac_note_lost(gac_sim *s, int c, double t, double gap, double depth)
+{
+    s->lost_contact = c;
+    s->lost_t = t;
+    s->lost_gap = gap;
+    s->lost_depth = depth;
+    s->lost_step[0] = s->t0_step;
+    s->lost_step[1] = s->t0_step + s->h_step;
+}
+
 /* 1 if at the sample state s->xs a free contact lies beyond its wall by more than contact_tol plus the
  * simultaneity window (the depth gac_resolve refuses at an impact) while no crossing was located before it: a
  * crossing was missed (the motion too fast, or I_f too ill-conditioned, for the tolerance).  g: the event values
@@ -210,7 +222,10 @@ static int gac_lost_contact(gac_sim *s, double t, const double *g)
             gac_dense(s, t, s->xs);
             depth = s->opt.contact_tol + gac_simultaneity_window(s, s->xs);
         }
-        if (g[c] < -depth) return 1;
+        if (g[c] < -depth) {
+            gac_note_lost(s, c, t, g[c], depth);
+            return 1;
+        }
     }
     return 0;
 }
@@ -317,7 +332,7 @@ int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
     for (j = 1; j <= m && !found; ++j) {
         double tj = j == m ? t1 : s->t + (t1 - s->t) * (double)j / (double)m;
         double gj[nc1], vj[nc1], qsum = 0.0, t_lost = 0.0;
-        int have_v = 0, deep = 0, lost = 0;
+        int have_v = 0, deep = 0, lost = 0, c_lost = 0;
         gac_dense(s, tj, s->xs);
         for (k = 0; k < md->nq; ++k) qsum += fabs(s->xs[md->nq + k]);
         gac_events(s, tj, s->xs, gj);
@@ -377,6 +392,7 @@ int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
             code = gac_tunnel(s, c, t_prev, s->eprev[c], tj, gj[c], &tc);
             if (code == 2 && (!lost || tc < t_lost)) {
                 t_lost = tc;
+                c_lost = c;
                 lost = 1;
             }
             if (code != 1) continue;
@@ -388,6 +404,9 @@ int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
         }
         if (lost && (!found || t_lost < *t_event)) {      /* inside a body on its way through: a missed crossing */
             if (s->fail == 0) s->fail = GAC_ERR_LOST_CONTACT;
+            gac_dense(s, t_lost, s->xs);
+            gac_contact_gaps(md, s->xs, s->p, s->es);
+            gac_note_lost(s, c_lost, t_lost, s->es[c_lost], s->opt.contact_tol + gac_simultaneity_window(s, s->xs));
             *t_event = t_lost;
             *c_event = 0;
             return 1;

@@ -87,3 +87,23 @@ def test_a_crossing_once_missed_is_located(case, t_end, t_stop, window):
     simultaneity = 100 * (run.options["atol"] + run.options["rtol"] * run.extent)
     tolerance = fuzz.PEN_TOL * max(1.0, run.extent) + simultaneity           # the study's, as check_run's
     assert deepest(model, run, states) >= -tolerance
+
+
+def test_a_run_that_still_stops_names_the_contact_the_depth_the_step_and_cond_I_f():
+    """RK4 at dt = 0.95 ms (fuzz case 0-12/1, 8 links): point O4 is found beyond wall x1_max, and the message says
+    which contact, how deep against the depth allowed, in which step, and that cond(I_f) (about 1e8) cannot explain
+    it while the fixed step can."""
+    model, run = rebuild("0-12/1")
+    r = simulate(model, run.t_end, p=run.p, q0=run.q0, qd0=run.qd0, t_eval=[], **run.options)
+    assert r.status == -1 and "a point lies beyond its wall" in r.message
+    detail = re.search(r"\((O\d+/x\d_m..): gap (\S+) m at t = (\S+) s, deeper than the (\S+) m allowed .* in the step "
+                       r"from (\S+) s to (\S+) s \(h = (\S+) s\); cond\(I_f\) = (\S+) at its start: not I_f's "
+                       r"conditioning .*: the fixed step dt = (\S+) s too long for the motion\)$", r.message)
+    assert detail, r.message
+    label, gap, t, depth, t0, t1, h, cond, dt = detail.groups()
+    assert label == "O4/x1_max" and -float(gap) > float(depth) > 0.0
+    assert float(t0) == pytest.approx(r.t_final) and float(t0) < float(t) <= float(t1)
+    assert float(h) == pytest.approx(run.options["dt"], rel=1e-3) and float(dt) == pytest.approx(run.options["dt"],
+                                                                                                  rel=1e-5)
+    assert float(cond) == pytest.approx(np.linalg.cond(model.mass_matrix(model.layout.reduce(r.q_final), run.p)),
+                                        rel=1e-2)

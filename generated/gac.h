@@ -967,6 +967,11 @@ typedef struct {
                                     gac_sim_state, the samples and the impact records are always in chart A's */
     long n_chart_switches;       /* switches of a base between its charts since gac_sim_init (the start on B
                                     included; two bases switched at once count two) */
+    int lost_contact;            /* GAC_ERR_LOST_CONTACT: the contact found beyond its wall (-1: none so far) */
+    double lost_t, lost_gap;     /* s, m: where it was found (an event sample, a pass-through's point inside the
+                                    body, or an impact) and its gap there */
+    double lost_depth;           /* m: the depth allowed there, contact_tol + the simultaneity window */
+    double lost_step[2];         /* s: the start and end of the step in which it was found */
     /* private: the model, integrator state and scratch (pointers into dwork / iwork) */
     const gac_model *model;      /* the model integrated now: model_a, model_a->chart_b, or chart_models[chart] */
     const gac_model *model_a;    /* the model given to gac_sim_init (chart A) */

@@ -93,6 +93,7 @@ double gac_graze_depth(const gac_sim *s, const double *x);
 int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event);
 double gac_chart_floor(const gac_sim *s);
 double gac_simultaneity_window(const gac_sim *s, const double *x);
+void gac_note_lost(gac_sim *s, int c, double t, double gap, double depth);
 
 /* gac_rest.c: resting contact */
 double gac_total_energy(const gac_model *md, const double *x, const double *p);

@@ -187,6 +187,8 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     s->t_slow_sliding = 0.0;
     for (i = 0; i < md->nx; ++i) s->x[i] = x[i];
     s->n_chart_switches = 0;
+    s->lost_contact = -1;
+    s->lost_t = s->lost_gap = s->lost_depth = s->lost_step[0] = s->lost_step[1] = 0.0;
     for (i = 0; i < 3 * GAC_CHART_BASES_MAX; ++i) {
         const gac_base *base = i / 3 < gac_nbase(md) ? gac_model_base(md, i / 3) : 0;
         s->near_a[i] = base != 0 && base->index[i % 3] >= 0 ? x[base->index[i % 3]] : 0.0;

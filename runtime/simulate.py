@@ -544,17 +544,16 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         break
     if source.error is not None:          # the input function (a bad value: GAC_ERR_BAD_INPUT) or its Jacobian
         raise source.error
+    # the result, in the full layout of Eq. 13 and chart A's coordinates, whichever base chart was integrated
+    x_final = np.zeros(nx)
+    c.sim_state(sim, ffi.NULL, model._ptr(x_final[:nq]), model._ptr(x_final[nq:]))
     status, message = (0, "reached t_end") if code == lib.GAC_SIM_END else \
-        (-1, _end_message(model, state, code, segment_t, segment_steps, len(impacts), rec))
+        (-1, _end_message(model, state, code, segment_t, segment_steps, len(impacts), rec, x_stop=x_final))
     if status == 0 and int(state.n_chart_switches):
         message += f"; {int(state.n_chart_switches)} chart switch(es)"
     if int(state.n_tangential_impacts):
         message += (f"; {int(state.n_tangential_impacts)} tangential impact(s): sliding friction in the Painleve "
                     "paradox (the resting contacts' system no P-matrix) stopped by an impact without collision")
-
-    # the result, in the full layout of Eq. 13 and chart A's coordinates, whichever base chart was integrated
-    x_final = np.zeros(nx)
-    c.sim_state(sim, ffi.NULL, model._ptr(x_final[:nq]), model._ptr(x_final[nq:]))
     n = i_eval[0]
     accuracy = impact_warnings(impacts, model, p) if keep_impacts else []
     warnings = model.scene.warnings + accuracy + friction_warnings(model, p, state, method)
@@ -954,8 +953,39 @@ def _step_diagnosis(model: CompiledModel, sim, t_from: float, steps: int) -> str
             "max_steps / max_wall_time or loosen rtol/atol")
 
 
+def _lost_contact_detail(model: CompiledModel, sim, x) -> str:
+    """Which contact the loop found beyond its wall (GAC_ERR_LOST_CONTACT), how deep against the depth allowed, in
+    which step, and whether I_f's conditioning can explain it: accelerations from I_f carry a relative error of about
+    cond(I_f) eps, so over the step the points stray by about cond(I_f) eps v h (v their fastest speed at the step's
+    start x, chart A): I_f is the cause if that reaches a tenth of the depth, else a crossing missed inside the step
+    (for RK4: its fixed step too long for the motion)."""
+    c = int(sim.lost_contact)
+    if not 0 <= c < len(model.contacts):
+        return ""
+    point, wall = model.contacts[c]
+    label = wall.name if isinstance(wall, (JointStop, LinkPair, ObstacleContact)) else f"O{point}/{wall.name}"
+    nq, eps = model.nq, float(np.finfo(float).eps)
+    p = np.array(model.ffi.unpack(sim.p, len(model.parameters())))
+    cond = float(np.linalg.cond(model.mass_matrix(x[:nq], p)))
+    t0, t1, gap = float(sim.lost_step[0]), float(sim.lost_step[1]), float(sim.lost_gap)
+    travel = float(np.abs(model.contact_velocities(x[:nq], x[nq:], p)).max(initial=0.0)) * (t1 - t0)
+    stray = cond * eps * travel
+    if stray >= 0.1 * abs(gap):
+        cause = f"I_f too ill-conditioned for the tolerance (cond(I_f) eps v h = {stray:.3g} m)"
+    else:
+        remedy = (f"the fixed step dt = {float(sim.opt.dt):g} s too long for the motion"
+                  if int(sim.opt.method) == model.lib.GAC_METHOD_RK4 else
+                  "a crossing the event search missed inside the step")
+        cause = (f"not I_f's conditioning (cond(I_f) eps v h = {stray:.3g} m, the points' travel v h = "
+                 f"{travel:.3g} m): {remedy}")
+    return (f" ({label}: gap {gap:.3g} m at t = {float(sim.lost_t):.12g} s, deeper than the "
+            f"{float(sim.lost_depth):.3g} m allowed (contact_tol + the simultaneity window), in the step from "
+            f"{t0:.12g} s to {t1:.12g} s "
+            f"(h = {t1 - t0:.3g} s); cond(I_f) = {cond:.3g} at its start: {cause})")
+
+
 def _end_message(model: CompiledModel, sim, code: int, segment_t: float, segment_steps: int, n_impacts: int,
-                  record=None) -> str:
+                  record=None, x_stop=None) -> str:
     """The result's message for a run the C loop stopped with ``code``: the loop's reason, and for the budgets,
     RK4's stability rule, the energy balance and an impact's accuracy what the run was doing (the loop decided;
     this only reports its numbers; record: the C impact record, for the impact's round-off bound)."""
@@ -1004,6 +1034,8 @@ def _end_message(model: CompiledModel, sim, code: int, segment_t: float, segment
         held = [model.contacts[c][1].name for c in range(len(model.contacts))
                 if int(sim.is_resting[c]) and isinstance(model.contacts[c][1], (LinkPair, ObstacleContact))]
         message += f" (held at the stop: {', '.join(held)})"
+    if code == lib.GAC_ERR_LOST_CONTACT and x_stop is not None:
+        message += _lost_contact_detail(model, sim, x_stop)
     if code == lib.GAC_ERR_NONFINITE and sim.opt.method == lib.GAC_METHOD_RK4:
         message += f" (rk4 with dt = {dt:g} s is unstable on this motion: reduce dt, or use an adaptive method)"
     return message

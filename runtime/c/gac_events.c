@@ -80,6 +80,18 @@ static double gac_locate_return(gac_sim *s, int c, double t_a, double t_b, doubl
     return g_apex > 0.0 ? gac_locate(s, 0, c, t_apex, g_apex, t_b, g_b) : t_apex;
 }
 
+/* 1 if contact c lies beyond its wall at time t of the step by more than the depth gac_resolve refuses at an impact
+ * (contact_tol plus the simultaneity window there; the interpolated state is left in s->xs).  A return located on a
+ * finite contact that ends this deep is no return: inside a finite body (two capsule segments that intersect) the
+ * gap is flat at minus the radii and its normal velocity has no meaning, so its apex and approach mislead. */
+static int gac_inside_at(gac_sim *s, int c, double t)
+{
+    const gac_model *md = s->model;
+    gac_dense(s, t, s->xs);
+    gac_contact_gaps(md, s->xs, s->p, s->es);
+    return s->es[c] < -(s->opt.contact_tol + gac_simultaneity_window(s, s->xs));
+}
+
 /* The largest |coordinate| of the contact points at state x (m). */
 double gac_extent(const gac_sim *s, const double *x)
 {
@@ -182,6 +194,18 @@ static int gac_dip_candidates(gac_sim *s, double t1, int *cand, double *speed, d
     return n;
 }
 
+/* Record a lost contact for the run's message (GAC_ERR_LOST_CONTACT): contact c at time t, its gap there and the
+ * depth allowed, and the step searched (the dense output's). */
+void gac_note_lost(gac_sim *s, int c, double t, double gap, double depth)
+{
+    s->lost_contact = c;
+    s->lost_t = t;
+    s->lost_gap = gap;
+    s->lost_depth = depth;
+    s->lost_step[0] = s->t0_step;
+    s->lost_step[1] = s->t0_step + s->h_step;
+}
+
 /* 1 if at the sample state s->xs a free contact lies beyond its wall by more than contact_tol plus the
  * simultaneity window (the depth gac_resolve refuses at an impact) while no crossing was located before it: a
  * crossing was missed (the motion too fast, or I_f too ill-conditioned, for the tolerance).  g: the event values
@@ -198,7 +222,10 @@ static int gac_lost_contact(gac_sim *s, double t, const double *g)
             gac_dense(s, t, s->xs);
             depth = s->opt.contact_tol + gac_simultaneity_window(s, s->xs);
         }
-        if (g[c] < -depth) return 1;
+        if (g[c] < -depth) {
+            gac_note_lost(s, c, t, g[c], depth);
+            return 1;
+        }
     }
     return 0;
 }
@@ -223,8 +250,8 @@ static int gac_lost_contact(gac_sim *s, double t, const double *g)
 static int gac_tunnel(gac_sim *s, int c, double t_a, double g_a, double t_b, double g_b, double *t_cross)
 {
     const gac_model *md = s->model;
-    double right[GAC_TUNNEL_DEPTH][3], tl = t_a, gl = g_a, wl, delta, lost;
-    int top = 0, evals = 0;
+    double right[GAC_TUNNEL_DEPTH][3], tl = t_a, gl = g_a, wl, delta, lost, t_inside = 0.0;
+    int top = 0, evals = 0, inside = 0;
     gac_dense(s, t_a, s->xs);
     wl = gac_finite_speed(md, s->xs, s->p, c);
     delta = gac_graze_depth(s, s->xs);
@@ -236,10 +263,18 @@ static int gac_tunnel(gac_sim *s, int c, double t_a, double g_a, double t_b, dou
         const double tr = right[top][0], gr = right[top][1], wr = right[top][2];
         const double travel = 2.0 * (wl > wr ? wl : wr) * (tr - tl);
         double tm, gm;
-        if (travel <= gl + gr + 2.0 * delta || tr - tl <= s->opt.event_tol + 4.0 * GAC_EPS * fabs(tr)
+        const int far = travel <= gl + gr + 2.0 * delta;
+        if (far || tr - tl <= s->opt.event_tol + 4.0 * GAC_EPS * fabs(tr)
             || top + 1 == GAC_TUNNEL_DEPTH || evals == GAC_TUNNEL_EVALS) {   /* no pass-through: on to the next */
+            if (!far && gl > 0.0 && gr <= 0.0) {        /* a limit reached on a sign change: the crossing is there */
+                *t_cross = gac_locate(s, 0, c, tl, gl, tr, gr);
+                return 1;
+            }
             tl = tr, gl = gr, wl = wr;
-            if (top-- == 0) return 0;
+            if (top-- == 0 || (inside && tl >= t_inside)) {   /* (everything before the point inside searched) */
+                *t_cross = t_inside;
+                return inside ? 2 : 0;
+            }
             continue;
         }
         tm = 0.5 * (tl + tr);
@@ -251,14 +286,19 @@ static int gac_tunnel(gac_sim *s, int c, double t_a, double g_a, double t_b, dou
         }
         if (gm < -delta) {                               /* from gap <= 0: back beyond the wall by more than delta
                                                             (a shallower return is the samples' to find) */
+            int deep = gm < -lost;
             gac_normal_velocities(md, s->xs, s->p, s->es);
             if (s->es[c] < -gac_v_round(md, s->es)) {
                 *t_cross = gac_locate_return(s, c, tl, tm, gm);
-                return 1;
+                if (!gac_inside_at(s, c, *t_cross)) return 1;
+                deep = 1;                                /* no return: inside the body */
             }
-            if (gm < -lost) {
-                *t_cross = tm;
-                return 2;
+            if (deep) {                                  /* inside the body (deeper than the lost-contact depth,
+                                                            not approaching, or no return): the crossing before it,
+                                                            if any, is the event; the halves to its left are taken
+                                                            first, so each such point is earlier than the last */
+                t_inside = tm;
+                inside = 1;
             }
             gac_dense(s, tm, s->xs);
         }
@@ -292,7 +332,7 @@ int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
     for (j = 1; j <= m && !found; ++j) {
         double tj = j == m ? t1 : s->t + (t1 - s->t) * (double)j / (double)m;
         double gj[nc1], vj[nc1], qsum = 0.0, t_lost = 0.0;
-        int have_v = 0, deep = 0, lost = 0;
+        int have_v = 0, deep = 0, lost = 0, c_lost = 0;
         gac_dense(s, tj, s->xs);
         for (k = 0; k < md->nq; ++k) qsum += fabs(s->xs[md->nq + k]);
         gac_events(s, tj, s->xs, gj);
@@ -311,6 +351,8 @@ int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
                 }
                 if (!(vj[c] < -gac_v_round(md, vj))) continue;
                 tc = gac_locate_return(s, c, t_prev, tj, gj[c]);
+                if (c >= nk && gac_finite_contact(md, c) && gac_inside_at(s, c, tc)) continue;   /* no return: inside
+                                                                                  the body (gac_tunnel searches) */
             }
             if (!found || tc < *t_event) {
                 *t_event = tc;
@@ -350,6 +392,7 @@ int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
             code = gac_tunnel(s, c, t_prev, s->eprev[c], tj, gj[c], &tc);
             if (code == 2 && (!lost || tc < t_lost)) {
                 t_lost = tc;
+                c_lost = c;
                 lost = 1;
             }
             if (code != 1) continue;
@@ -361,6 +404,9 @@ int gac_find_event(gac_sim *s, double t1, double *t_event, int *c_event)
         }
         if (lost && (!found || t_lost < *t_event)) {      /* inside a body on its way through: a missed crossing */
             if (s->fail == 0) s->fail = GAC_ERR_LOST_CONTACT;
+            gac_dense(s, t_lost, s->xs);
+            gac_contact_gaps(md, s->xs, s->p, s->es);
+            gac_note_lost(s, c_lost, t_lost, s->es[c_lost], s->opt.contact_tol + gac_simultaneity_window(s, s->xs));
             *t_event = t_lost;
             *c_event = 0;
             return 1;

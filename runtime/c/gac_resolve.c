@@ -219,7 +219,7 @@ static int gac_is_impact(const gac_sim *s, gac_impact_event *ev)
  * (at most nq: more approaching ones is GAC_ERR_TOO_MANY_CONTACTS; resting or leaving ones beyond nq are held by the
  * others).  Before that, every other point must be on the right side of its wall to the event search's tolerance
  * (GAC_ERR_LOST_CONTACT) and the base chart usable (GAC_ERR_GIMBAL_LOCK). */
-static int gac_gather(const gac_sim *s, gac_impact_event *ev)
+static int gac_gather(gac_sim *s, gac_impact_event *ev)
 {
     const gac_model *md = s->model;
     const double v_rest = gac_v_round(md, ev->vn);
@@ -227,7 +227,10 @@ static int gac_gather(const gac_sim *s, gac_impact_event *ev)
     const double window = gac_simultaneity_window(s, ev->x);
     int c, pass;
     for (c = 0; c < md->ncontact; ++c) {
-        if (ev->gaps[c] < -depth) return GAC_ERR_LOST_CONTACT;
+        if (ev->gaps[c] < -depth) {
+            gac_note_lost(s, c, ev->t, ev->gaps[c], depth);
+            return GAC_ERR_LOST_CONTACT;
+        }
     }
     if (gac_chart_measure(md, ev->x) < gac_chart_floor(s)) return GAC_ERR_GIMBAL_LOCK;
     ev->n = 0;

@@ -943,6 +943,9 @@ typedef struct {
     long n_tangential_impacts;   /* tangential impacts (record.law GAC_IMPACT_LAW_GDI_TANGENTIAL) since gac_sim_init:
                                     the Painleve paradox of sliding resting contacts resolved by an impact (also
                                     counted in n_impacts) */
+    long n_painleve_choices;     /* slow resting points that could not stick and whose slip direction had no
+                                    consistent normal forces (the Painleve paradox at zero speed, where the direction
+                                    is free): each rejected direction, the next one taken (gac_try_stick) */
     double energy_initial;       /* J: T + V at gac_sim_init */
     double loss_impacts;         /* J: energy the impacts took since gac_sim_init, sum of energy_before - energy_after */
     double energy_roundoff;      /* J: what the impacts' energies are known to, sum of roundoff x T before each */

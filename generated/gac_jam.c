@@ -15,6 +15,108 @@
 
 #include <math.h>
 
+/* At (nearly) zero sliding speed the paradox is one of the slip's direction, not of an impact: a resting point
+ * sliding slower than friction_velocity with a slip direction d (phi = v_t / v_s + (1 - |v_t| / v_s) d: a slip that
+ * began against the full Coulomb force) whose normal force has no consistent value along d has a tangential velocity
+ * too small for any impulse to stop (the impact law's solution is trivial to round-off).  There its direction is
+ * dropped (phi = v_t / v_s: the friction grows with the speed from 0, dissipative, and B is the frictionless N I_f^-1
+ * N^T to O(|v_t| / v_s)), counted in n_painleve_choices.  Returns GAC_OK where that leaves consistent forces at s->x,
+ * else GAC_ERR_FRICTION with the directions as they were. */
+static int gac_jam_slow(gac_sim *s)
+{
+    const gac_model *md = s->model;
+    const int nc1 = GAC_AT_LEAST_1(md->ncontact);
+    double vt[2 * nc1], slip[2 * nc1];
+    int a, c, changed = 0;
+    gac_tangential_speeds(s, s->x, vt);
+    gac_copy(slip, s->slip, 2 * md->ncontact);
+    for (a = 0; a < s->nresting; ++a) {
+        c = s->resting[a];
+        if (s->is_stuck[c] || !(gac_rest_friction(md, s->p, c) > 0.0)) continue;
+        if (!(sqrt(vt[2*c] * vt[2*c] + vt[2*c + 1] * vt[2*c + 1]) < md->friction_velocity)) continue;
+        if (!(fabs(s->slip[2*c]) + fabs(s->slip[2*c + 1]) > 0.0)) continue;
+        s->slip[2 * c] = s->slip[2 * c + 1] = 0.0;
+        changed++;
+    }
+    if (changed == 0) return GAC_ERR_FRICTION;
+    s->fail = 0;
+    gac_events(s, s->t, s->x, s->ev);
+    if (s->fail) {                                   /* still none: the tangential impact decides */
+        if (s->fail != GAC_ERR_FRICTION) return s->fail;
+        s->fail = 0;
+        gac_copy(s->slip, slip, 2 * md->ncontact);
+        return GAC_ERR_FRICTION;
+    }
+    s->n_painleve_choices += changed;
+    s->f_valid = s->vn_valid = 0;
+    return GAC_OK;
+}
+
+/* Indeterminacy: where the resting contacts' forces at s->x have no consistent solution with all of them held (B no
+ * P-matrix), some of them may leave their walls instead: a subset S held with consistent forces (its own B accepted,
+ * every lambda >= 0) while every contact released has a normal acceleration >= 0 (it leaves, or stays at its wall
+ * without a force) solves the contact problem 0 <= lambda _|_ a_N >= 0 as well.  Of those, the one with the least
+ * total normal force is taken (the first in the subsets' order on ties; up to GAC_JAM_SUBSETS contacts), the others
+ * released: recorded as a release (GAC_SIM_CONTACT), counted in n_painleve_choices.  GAC_ERR_FRICTION where no subset
+ * solves it (inconsistency: the tangential impact's case) or the resting contacts' forces exist at s->x (the dynamic
+ * jam, reached by the steps). */
+#define GAC_JAM_SUBSETS 10
+static int gac_jam_release(gac_sim *s, gac_impact_record *r)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nc1 = GAC_AT_LEAST_1(md->ncontact), n = s->nresting;
+    const double *x = s->x;
+    double qdd[GAC_AT_LEAST_1(nq)], lambda[GAC_AT_LEAST_1(nq)], bias[GAC_AT_LEAST_1(md->njrow)], best_sum = 0.0;
+    double *vel = GAC_WORK_VEL(md, s->work);
+    int set[GAC_AT_LEAST_1(nq)], best[GAC_AT_LEAST_1(nq)], held[nc1], nbest = -1, a, c, code;
+    unsigned long mask;
+    if (n < 1 || n > GAC_JAM_SUBSETS) return GAC_ERR_FRICTION;
+    code = gac_rest_forces(s, s->t, x, qdd, lambda, 0, 0);
+    if (s->fail) return s->fail;
+    if (code != GAC_ERR_FRICTION) return GAC_ERR_FRICTION;   /* consistent here: the jam, not a choice */
+    md->contact_bias(x, x + nq, s->p, bias);
+    for (mask = 0; mask + 1 < (1UL << n); ++mask) {   /* every proper subset held (the full set has no forces) */
+        const double *u = gac_input(s, s->t, x);
+        double sum = 0.0;
+        int m = 0, ok = 1;
+        for (c = 0; c < md->ncontact; ++c) held[c] = 0;
+        for (a = 0; a < n; ++a) {
+            if (mask & (1UL << a)) {
+                set[m++] = s->resting[a];
+                held[s->resting[a]] = 1;
+            }
+        }
+        if (gac_constrained_dynamics_friction(md, x, x + nq, u, s->p, m, set, s->is_stuck, s->slip, qdd, lambda, 0,
+                                              s->work, 0) != GAC_OK) continue;
+        for (a = 0; a < m; ++a) {
+            if (!(lambda[a] >= 0.0)) ok = 0;
+            sum += lambda[a];
+        }
+        if (!ok || (nbest >= 0 && !(sum < best_sum))) continue;
+        md->contact_velocities(x, qdd, s->p, vel);    /* the released contacts' normal accelerations */
+        for (a = 0; a < n && ok; ++a) {
+            double b;
+            c = s->resting[a];
+            if (held[c]) continue;
+            if (gac_normal_bias(md, x, x + nq, s->p, c, bias, &b) != GAC_OK) ok = 0;
+            else if (!(b + gac_normal_value(md, x, s->p, c, qdd, vel) >= 0.0)) ok = 0;
+        }
+        if (!ok) continue;
+        nbest = m;
+        best_sum = sum;
+        for (a = 0; a < m; ++a) best[a] = set[a];
+    }
+    if (nbest < 0) return GAC_ERR_FRICTION;
+    r->nstuck = r->nslipped = 0;
+    gac_contact_record(s, s->t, x, r);
+    gac_set_resting(s, nbest, best, r);
+    s->n_painleve_choices++;
+    s->f_valid = s->vn_valid = 0;
+    gac_events(s, s->t, s->x, s->ev);
+    if (s->fail) return s->fail;
+    return gac_report(s, r, GAC_SIM_CONTACT);
+}
+
 /* The tangential impact at s->x (time s->t) on the resting contacts, and the resting set after it: contacts left at
  * rest (normal velocity within round-off of 0) stay and stick where they can (gac_restick), the others are released.
  * The record says so (law GAC_IMPACT_LAW_GDI_TANGENTIAL, impulses, released contacts); the loop re-checks the resting
@@ -59,6 +161,10 @@ int gac_jam(gac_sim *s, gac_impact_record *r)
         }
     }
     if (!(scale > 0.0)) return GAC_ERR_FRICTION;    /* nothing slides: no paradox of sliding friction here */
+    code = gac_jam_slow(s);                          /* at (nearly) zero speed: the slip's direction dropped */
+    if (code != GAC_ERR_FRICTION) return code;
+    code = gac_jam_release(s, r);                    /* some contacts may leave instead: the least force */
+    if (code != GAC_ERR_FRICTION) return code;
     code = gac_impact_tangential(md, x, x + nq, s->p, n, list, qd_plus, F, Ft, s->work, &residual, &parts);
     r->residual = residual;
     if (code != GAC_OK) return code;

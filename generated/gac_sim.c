@@ -219,7 +219,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
     }
     while (s->t < t_end) {
         double h, t1, t_event = 0.0, err = 0.0, vt_start[2 * GAC_AT_LEAST_1(md->ncontact)];
-        int c_event = -1, last, sticking, stuck_report = 0;
+        int c_event = -1, last, sticking, stuck_report = 0, found;
         if (!s->f_valid) {
             gac_f(s, s->t, s->x, s->f);
             s->f_valid = 1;
@@ -328,7 +328,21 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         if (!gac_finite(s->x1, md->nx)) return GAC_ERR_NONFINITE;
         t1 = last ? t_end : s->t + h;
         gac_prepare_dense(s, h);
-        if (gac_find_event(s, t1, &t_event, &c_event)) {
+        found = gac_find_event(s, t1, &t_event, &c_event);
+        if (s->fail == GAC_ERR_FRICTION && s->nresting > 0) {   /* the dense output passes where the resting forces */
+            s->fail_seen = s->fail;                              /* do not exist (the jam within the step): as a */
+            s->fail = 0;                                         /* stage beyond it, reject and shrink onto it */
+            s->n_steps--;
+            s->n_rejected++;
+            if (gac_slow_sliding(s, s->x)) {
+                s->n_slow_sliding--;
+                s->t_slow_sliding -= h;
+            }
+            s->h = 0.5 * h;
+            fac_max = 1.0;
+            continue;
+        }
+        if (found) {
             int code, released = s->is_resting[c_event], was_stuck[GAC_AT_LEAST_1(md->ncontact)];
             if (s->fail) return s->fail;
             gac_add_work(s, t_event);

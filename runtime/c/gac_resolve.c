@@ -233,7 +233,10 @@ static int gac_who_lands(gac_sim *s, gac_impact_event *ev)
     ev->height = 0.0;
     if (s->rest_height > 0.0 || s->opt.zeno_impacts > 0) {
         const double floor = gac_graze_depth(s, ev->x) + 16.0 * GAC_EPS * gac_extent(s, ev->x);
-        const int code = gac_normal_accelerations(s, ev->t, ev->x, s->nresting, s->resting, ev->an);
+        int code = gac_normal_accelerations(s, ev->t, ev->x, s->nresting, s->resting, ev->an);
+        if (code == GAC_ERR_FRICTION)        /* the resting contacts slide in the Painleve paradox (resolved after the
+                                                impact): the free accelerations */
+            code = gac_normal_accelerations(s, ev->t, ev->x, 0, 0, ev->an);
         if (code != GAC_OK) return code;
         ev->height = s->rest_height > floor ? s->rest_height : floor;
     }

@@ -105,3 +105,14 @@ def test_a_step_whose_dense_output_passes_the_jam_is_shrunk_onto_it():
                       t_eval=np.linspace(0.0, run.t_end, 201), **run.options)
     check_physics(scene, model, run, result)
     assert any(e.kind == "release" and e.t > 1.4232 for e in result.contact_events)
+
+
+def test_one_contact_whose_law_has_no_tangential_impact_takes_the_cones_most_dissipative_impulse():
+    """A 7-link chain (0-88/1): one point slides on a rough wall (3D) into a state without consistent forces where
+    the frictional law (GDI, e = 0) has no non-trivial solution (before: GAC_ERR_FRICTION at t = 0.0304 s).  The
+    impulse of Coulomb's cone that takes the most kinetic energy stops or turns the slip there, and the run reaches
+    its end with the physics intact."""
+    scene, model, run, result = run_case("0-88/1")
+    check_physics(scene, model, run, result)
+    assert result.n_tangential_impacts >= 1
+    assert any(i.law == "gdi-tangential" and i.energy_after < i.energy_before for i in result.impacts)

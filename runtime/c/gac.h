@@ -785,8 +785,10 @@ int gac_chart_convert_tangent(const gac_base *from, const gac_base *to, int nq, 
  * leave (held on a subset with consistent forces >= 0, every released contact's normal acceleration >= 0: the
  * indeterminacy), the subset of least total normal force is kept and the others released (GAC_SIM_CONTACT).  A step
  * whose dense output passes a state without consistent forces is rejected and shrunk like a failed stage.
- * GAC_ERR_FRICTION stops the run only where none of these applies and the law has no non-trivial solution (or more
- * than 6 contacts), or the state after it still has no consistent forces.
+ * Where one contact's law has no non-trivial solution, the impulse of its cone that takes the most kinetic energy
+ * (min L.gamma- + L W L / 2 over |L_T| <= c_f L_N) is taken instead.  GAC_ERR_FRICTION stops the run only where none
+ * of these applies (several contacts, more than 6, or a trivial impulse), or the state after it still has no
+ * consistent forces.
  *
  * Inputs.  The inputs u (nu) are held over each gac_sim_advance call (a zero-order hold, the convention of
  * FMI co-simulation): change them between calls with gac_sim_set_input, so that a change falls on a step

@@ -15,6 +15,228 @@
 
 #include <math.h>
 
+/* At (nearly) zero sliding speed the paradox is one of the slip's direction, not of an impact: a resting point
+ * sliding slower than friction_velocity with a slip direction d (phi = v_t / v_s + (1 - |v_t| / v_s) d: a slip that
+ * began against the full Coulomb force) whose normal force has no consistent value along d has a tangential velocity
+ * too small for any impulse to stop (the impact law's solution is trivial to round-off).  There its direction is
+ * dropped (phi = v_t / v_s: the friction grows with the speed from 0, dissipative, and B is the frictionless N I_f^-1
+ * N^T to O(|v_t| / v_s)), counted in n_painleve_choices.  Returns GAC_OK where that leaves consistent forces at s->x,
+ * else GAC_ERR_FRICTION with the directions as they were. */
+static int gac_jam_slow(gac_sim *s)
+{
+    const gac_model *md = s->model;
+    const int nc1 = GAC_AT_LEAST_1(md->ncontact);
+    double vt[2 * nc1], slip[2 * nc1];
+    int a, c, changed = 0;
+    gac_tangential_speeds(s, s->x, vt);
+    gac_copy(slip, s->slip, 2 * md->ncontact);
+    for (a = 0; a < s->nresting; ++a) {
+        c = s->resting[a];
+        if (s->is_stuck[c] || !(gac_rest_friction(md, s->p, c) > 0.0)) continue;
+        if (!(sqrt(vt[2*c] * vt[2*c] + vt[2*c + 1] * vt[2*c + 1]) < md->friction_velocity)) continue;
+        if (!(fabs(s->slip[2*c]) + fabs(s->slip[2*c + 1]) > 0.0)) continue;
+        s->slip[2 * c] = s->slip[2 * c + 1] = 0.0;
+        changed++;
+    }
+    if (changed == 0) return GAC_ERR_FRICTION;
+    s->fail = 0;
+    gac_events(s, s->t, s->x, s->ev);
+    if (s->fail) {                                   /* still none: the tangential impact decides */
+        if (s->fail != GAC_ERR_FRICTION) return s->fail;
+        s->fail = 0;
+        gac_copy(s->slip, slip, 2 * md->ncontact);
+        return GAC_ERR_FRICTION;
+    }
+    s->n_painleve_choices += changed;
+    s->f_valid = s->vn_valid = 0;
+    return GAC_OK;
+}
+
+/* Indeterminacy: where the resting contacts' forces at s->x have no consistent solution with all of them held (B no
+ * P-matrix), some of them may leave their walls instead: a subset S held with consistent forces (its own B accepted,
+ * every lambda >= 0) while every contact released has a normal acceleration >= 0 (it leaves, or stays at its wall
+ * without a force) solves the contact problem 0 <= lambda _|_ a_N >= 0 as well.  Of those, the one with the least
+ * total normal force is taken (the first in the subsets' order on ties; up to GAC_JAM_SUBSETS contacts), the others
+ * released: recorded as a release (GAC_SIM_CONTACT), counted in n_painleve_choices.  GAC_ERR_FRICTION where no subset
+ * solves it (inconsistency: the tangential impact's case) or the resting contacts' forces exist at s->x (the dynamic
+ * jam, reached by the steps). */
+#define GAC_JAM_SUBSETS 10
+static int gac_jam_release(gac_sim *s, gac_impact_record *r)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nc1 = GAC_AT_LEAST_1(md->ncontact), n = s->nresting;
+    const double *x = s->x;
+    double qdd[GAC_AT_LEAST_1(nq)], lambda[GAC_AT_LEAST_1(nq)], bias[GAC_AT_LEAST_1(md->njrow)], best_sum = 0.0;
+    double *vel = GAC_WORK_VEL(md, s->work);
+    int set[GAC_AT_LEAST_1(nq)], best[GAC_AT_LEAST_1(nq)], held[nc1], nbest = -1, a, c, code;
+    unsigned long mask;
+    if (n < 1 || n > GAC_JAM_SUBSETS) return GAC_ERR_FRICTION;
+    code = gac_rest_forces(s, s->t, x, qdd, lambda, 0, 0);
+    if (s->fail) return s->fail;
+    if (code != GAC_ERR_FRICTION) return GAC_ERR_FRICTION;   /* consistent here: the jam, not a choice */
+    md->contact_bias(x, x + nq, s->p, bias);
+    for (mask = 0; mask + 1 < (1UL << n); ++mask) {   /* every proper subset held (the full set has no forces) */
+        const double *u = gac_input(s, s->t, x);
+        double sum = 0.0;
+        int m = 0, ok = 1;
+        for (c = 0; c < md->ncontact; ++c) held[c] = 0;
+        for (a = 0; a < n; ++a) {
+            if (mask & (1UL << a)) {
+                set[m++] = s->resting[a];
+                held[s->resting[a]] = 1;
+            }
+        }
+        if (gac_constrained_dynamics_friction(md, x, x + nq, u, s->p, m, set, s->is_stuck, s->slip, qdd, lambda, 0,
+                                              s->work, 0) != GAC_OK) continue;
+        for (a = 0; a < m; ++a) {
+            if (!(lambda[a] >= 0.0)) ok = 0;
+            sum += lambda[a];
+        }
+        if (!ok || (nbest >= 0 && !(sum < best_sum))) continue;
+        md->contact_velocities(x, qdd, s->p, vel);    /* the released contacts' normal accelerations */
+        for (a = 0; a < n && ok; ++a) {
+            double b;
+            c = s->resting[a];
+            if (held[c]) continue;
+            if (gac_normal_bias(md, x, x + nq, s->p, c, bias, &b) != GAC_OK) ok = 0;
+            else if (!(b + gac_normal_value(md, x, s->p, c, qdd, vel) >= 0.0)) ok = 0;
+        }
+        if (!ok) continue;
+        nbest = m;
+        best_sum = sum;
+        for (a = 0; a < m; ++a) best[a] = set[a];
+    }
+    if (nbest < 0) return GAC_ERR_FRICTION;
+    r->nstuck = r->nslipped = 0;
+    gac_contact_record(s, s->t, x, r);
+    gac_set_resting(s, nbest, best, r);
+    s->n_painleve_choices++;
+    s->f_valid = s->vn_valid = 0;
+    gac_events(s, s->t, s->x, s->ev);
+    if (s->fail) return s->fail;
+    return gac_report(s, r, GAC_SIM_CONTACT);
+}
+
+/* The tangential impact of one resting contact c where the frictional law (GDI) has no non-trivial solution (in 3D,
+ * the stick impulse outside the cone and no slide that keeps the normal velocity at 0): the impulse of Coulomb's cone
+ * that takes the most kinetic energy, L = argmin over |L_T| <= c_f L_N of f(L) = L . gamma- + L W L / 2 (= T+ - T-,
+ * W the contact-space inverse inertia of its normal and tangential directions; the maximal-dissipation impact, a
+ * convex problem that has a solution).  While the contact slides, L . gamma- < 0 along the cone's edge against the
+ * slip, so the minimum is not trivial: inside the cone it is the stick impulse -W^-1 gamma-, else on the cone's
+ * surface, L = t (1, -c_f cos phi, -c_f sin phi) with t = -g / h (g = u . gamma-, h = u W u), phi by a grid and
+ * golden sections.  qd_plus, F[0], Ft[0..1] as gac_impact_tangential.  GAC_ERR_FRICTION if it is trivial. */
+static int gac_jam_cone(gac_sim *s, int c, double *qd_plus, double *F, double *Ft)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq;
+    const double *x = s->x, cf = gac_rest_friction(md, s->p, c);
+    double resp[3][GAC_AT_LEAST_1(nq)], W[3][3], gam[3], v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)];
+    double vel[3 * GAC_AT_LEAST_1(md->npoint)], L[3] = {0.0, 0.0, 0.0}, best = 0.0;
+    double *Y = GAC_WORK_Y(md, s->work), *f = GAC_WORK_F(md, s->work), *g = GAC_WORK_G(md, s->work);
+    int axis[3], d = 1, a, b, i, j, k;
+    gac_tangents tg;
+    if (!(cf > 0.0) || gac_impact_system(md, x, x + nq, s->p, 1, &c, s->work, v, e) != GAC_OK) return GAC_ERR_FRICTION;
+    gac_copy(resp[0], Y, nq);
+    if (gac_tangents_at(md, x, s->p, c, &tg) != GAC_OK) return GAC_ERR_FRICTION;
+    for (j = 0; j < 2; ++j) {                      /* the tangential directions' responses */
+        double phi[2] = {0.0, 0.0};
+        if (!tg.has[j]) continue;
+        phi[j] = 1.0;
+        gac_tangent_force(md, x, s->p, &tg, phi, f, g);
+        md->inertia_solve(x, g, s->p, resp[d]);
+        axis[d++] = j;
+    }
+    if (d == 1) return GAC_ERR_FRICTION;
+    for (b = 0; b <= d; ++b) {                     /* W (columns: the responses) and gamma- (qd) */
+        const double *w = b < d ? resp[b] : x + nq;
+        md->contact_velocities(x, w, s->p, vel);
+        for (a = 0; a < d; ++a) {
+            const double value = a == 0 ? gac_normal_value(md, x, s->p, c, w, vel) : gac_tangent_value(&tg, axis[a], vel);
+            if (b < d) W[a][b] = value;
+            else gam[a] = value;
+        }
+    }
+    for (a = 0; a < d; ++a) {
+        for (b = 0; b < a; ++b) W[a][b] = W[b][a] = 0.5 * (W[a][b] + W[b][a]);
+    }
+    {                                              /* the cone's surface: phi on a grid, then golden sections */
+        const int grid = d == 2 ? 2 : 720;
+        double phi_best = 0.0, lo, hi;
+        for (k = 0; k < grid; ++k) {
+            const double phi = d == 2 ? (k == 0 ? 0.0 : 3.14159265358979323846) : 6.283185307179586 * k / grid;
+            double u[3], gg = 0.0, hh = 0.0;
+            u[0] = 1.0, u[1] = -cf * cos(phi), u[2] = -cf * sin(phi);
+            for (a = 0; a < d; ++a) {
+                gg += u[a] * gam[a];
+                for (b = 0; b < d; ++b) hh += u[a] * W[a][b] * u[b];
+            }
+            if (gg < 0.0 && hh > 0.0 && -gg * gg / (2.0 * hh) < best) best = -gg * gg / (2.0 * hh), phi_best = phi;
+        }
+        lo = phi_best - 6.283185307179586 / grid, hi = phi_best + 6.283185307179586 / grid;
+        for (k = 0; d == 3 && k < 80; ++k) {
+            const double m1 = hi - 0.6180339887498949 * (hi - lo), m2 = lo + 0.6180339887498949 * (hi - lo);
+            double fm[2];
+            for (i = 0; i < 2; ++i) {
+                const double phi = i == 0 ? m1 : m2;
+                double u[3], gg = 0.0, hh = 0.0;
+                u[0] = 1.0, u[1] = -cf * cos(phi), u[2] = -cf * sin(phi);
+                for (a = 0; a < d; ++a) {
+                    gg += u[a] * gam[a];
+                    for (b = 0; b < d; ++b) hh += u[a] * W[a][b] * u[b];
+                }
+                fm[i] = gg < 0.0 && hh > 0.0 ? -gg * gg / (2.0 * hh) : 0.0;
+            }
+            if (fm[0] < fm[1]) hi = m2;
+            else lo = m1;
+        }
+        if (best < 0.0) {
+            const double phi = d == 3 ? 0.5 * (lo + hi) : phi_best;
+            double u[3], gg = 0.0, hh = 0.0, value;
+            u[0] = 1.0, u[1] = -cf * cos(phi), u[2] = -cf * sin(phi);
+            for (a = 0; a < d; ++a) {
+                gg += u[a] * gam[a];
+                for (b = 0; b < d; ++b) hh += u[a] * W[a][b] * u[b];
+            }
+            value = gg < 0.0 && hh > 0.0 ? -gg * gg / (2.0 * hh) : 0.0;
+            if (!(value <= best)) {
+                u[1] = -cf * cos(phi_best), u[2] = -cf * sin(phi_best);
+                gg = hh = 0.0;
+                for (a = 0; a < d; ++a) {
+                    gg += u[a] * gam[a];
+                    for (b = 0; b < d; ++b) hh += u[a] * W[a][b] * u[b];
+                }
+            }
+            for (a = 0; a < d; ++a) L[a] = -gg / hh * u[a];
+            best = -gg * gg / (2.0 * hh);
+        }
+    }
+    {                                              /* inside the cone: the stick impulse, where it lies there */
+        double A[9], Ls[3], t2 = 0.0, value = 0.0;
+        for (a = 0; a < d; ++a) {
+            Ls[a] = -gam[a];
+            for (b = 0; b < d; ++b) A[a * d + b] = W[a][b];
+        }
+        if (gac_lu_solve(d, A, Ls, 1e-13) == 0 && Ls[0] > 0.0) {
+            for (a = 1; a < d; ++a) t2 += Ls[a] * Ls[a];
+            for (a = 0; a < d; ++a) value += 0.5 * Ls[a] * gam[a];           /* f = -gamma W^-1 gamma / 2 */
+            if (sqrt(t2) <= cf * Ls[0] && value < best) {
+                for (a = 0; a < d; ++a) L[a] = Ls[a];
+                best = value;
+            }
+        }
+    }
+    if (!(best < 0.0) || !(L[0] > 0.0)) return GAC_ERR_FRICTION;
+    for (i = 0; i < nq; ++i) {
+        double value = x[nq + i];
+        for (a = 0; a < d; ++a) value += resp[a][i] * L[a];
+        qd_plus[i] = value;
+    }
+    F[0] = L[0];
+    Ft[0] = Ft[1] = 0.0;
+    for (a = 1; a < d; ++a) Ft[axis[a]] = L[a];
+    return GAC_OK;
+}
+
 /* The tangential impact at s->x (time s->t) on the resting contacts, and the resting set after it: contacts left at
  * rest (normal velocity within round-off of 0) stay and stick where they can (gac_restick), the others are released.
  * The record says so (law GAC_IMPACT_LAW_GDI_TANGENTIAL, impulses, released contacts); the loop re-checks the resting
@@ -59,7 +281,15 @@ int gac_jam(gac_sim *s, gac_impact_record *r)
         }
     }
     if (!(scale > 0.0)) return GAC_ERR_FRICTION;    /* nothing slides: no paradox of sliding friction here */
+    code = gac_jam_slow(s);                          /* at (nearly) zero speed: the slip's direction dropped */
+    if (code != GAC_ERR_FRICTION) return code;
+    code = gac_jam_release(s, r);                    /* some contacts may leave instead: the least force */
+    if (code != GAC_ERR_FRICTION) return code;
     code = gac_impact_tangential(md, x, x + nq, s->p, n, list, qd_plus, F, Ft, s->work, &residual, &parts);
+    if (code == GAC_ERR_FRICTION && n == 1) {        /* the law has none: the cone's most dissipative impulse */
+        code = gac_jam_cone(s, list[0], qd_plus, F, Ft);
+        residual = 0.0;
+    }
     r->residual = residual;
     if (code != GAC_OK) return code;
     for (a = 0; a < n; ++a) {                        /* the contacts that took an impulse */

@@ -269,7 +269,10 @@ static int gac_who_lands(gac_sim *s, gac_impact_event *ev)
     ev->height = 0.0;
     if (s->rest_height > 0.0 || s->opt.zeno_impacts > 0) {
         const double floor = gac_graze_depth(s, ev->x) + 16.0 * GAC_EPS * gac_extent(s, ev->x);
-        const int code = gac_normal_accelerations(s, ev->t, ev->x, s->nresting, s->resting, ev->an);
+        int code = gac_normal_accelerations(s, ev->t, ev->x, s->nresting, s->resting, ev->an);
+        if (code == GAC_ERR_FRICTION)        /* the resting contacts slide in the Painleve paradox (resolved after the
+                                                impact): the free accelerations */
+            code = gac_normal_accelerations(s, ev->t, ev->x, 0, 0, ev->an);
         if (code != GAC_OK) return code;
         ev->height = s->rest_height > floor ? s->rest_height : floor;
     }
@@ -451,9 +454,10 @@ static int gac_choose_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *
             for (a = 0; a < s->nresting; ++a) {
                 if (s->resting[a] != c) others[m++] = s->resting[a];
             }
-            code = gac_normal_accelerations(s, ev->t, s->x1, m, others, a_free);
-            if (code != GAC_OK) return code;
-            held_lift = a_free[c] < 0.0 && ev->vn[c] * ev->vn[c] <= 2.0 * (-a_free[c]) * ev->height;
+            code = gac_normal_accelerations(s, ev->t, s->x1, m, others, a_free);   /* (none where the others
+                slide in the Painleve paradox: not held, and the loop resolves the paradox after the impact) */
+            if (code != GAC_OK && code != GAC_ERR_FRICTION) return code;
+            held_lift = code == GAC_OK && a_free[c] < 0.0 && ev->vn[c] * ev->vn[c] <= 2.0 * (-a_free[c]) * ev->height;
         }
         if ((ev->landing[k] && ev->vn[c] <= v_hold) || held_lift || left_at_rest) {
             code = gac_add_independent(s, s->x1, nset, set, c);

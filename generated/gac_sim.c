@@ -167,6 +167,20 @@ int gac_sim_advance(gac_sim *s, double t_end, const double *t_eval, int n_eval, 
     }
 }
 
+/* The resting contacts re-checked where their forces changed at a fixed state (the inputs changed, or a slow point's
+ * slip direction was dropped at the Painleve paradox, gac_jam): stuck points pushed beyond their cones slip, contacts
+ * pulled off their walls are released (gac_recheck_rest).  0 (nothing to report) or the code to return. */
+static int gac_recheck(gac_sim *s, gac_impact_record *record)
+{
+    int code;
+    record->nstuck = record->nslipped = 0;
+    code = gac_recheck_rest(s, record);
+    if (code == 1 && s->sens != 0 && (record->nreleased > 0 || record->nslipped > 0))
+        gac_sens_fixed_release(s);                               /* at a fixed time */
+    if (code != 0) return code < 0 ? code : gac_report(s, record, GAC_SIM_CONTACT);
+    return 0;
+}
+
 /* The loop from s->t to t_end (no breakpoint inside): flight steps up to the next event. */
 static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_eval, int *i_eval,
                           double *x_eval, gac_impact_record *record)
@@ -196,12 +210,8 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         return gac_report(s, record, GAC_SIM_CONTACT);
     }
     if (s->input_changed) {
-        int code;
-        record->nstuck = record->nslipped = 0;
-        code = gac_recheck_rest(s, record);
-        if (code == 1 && s->sens != 0 && (record->nreleased > 0 || record->nslipped > 0))
-            gac_sens_fixed_release(s);                               /* at the inputs' change: a fixed time */
-        if (code != 0) return code < 0 ? code : gac_report(s, record, GAC_SIM_CONTACT);
+        const int code = gac_recheck(s, record);
+        if (code != 0) return code;
     }
     if (s->t < t_end) {                           /* the budget and the progress callback, once per call ... */
         const int code = gac_look(s);
@@ -209,13 +219,18 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
     }
     while (s->t < t_end) {
         double h, t1, t_event = 0.0, err = 0.0, vt_start[2 * GAC_AT_LEAST_1(md->ncontact)];
-        int c_event = -1, last, sticking, stuck_report = 0;
+        int c_event = -1, last, sticking, stuck_report = 0, found;
         if (!s->f_valid) {
             gac_f(s, s->t, s->x, s->f);
             s->f_valid = 1;
         }
-        if (s->fail == GAC_ERR_FRICTION && s->nresting > 0)   /* sliding with no consistent forces here (the start, */
-            return gac_jam(s, record);                       /* a landing): the tangential impact */
+        if (s->fail == GAC_ERR_FRICTION && s->nresting > 0) {   /* sliding with no consistent forces here (the */
+            const int code = gac_jam(s, record);                 /* start, a landing): the tangential impact, or */
+            const int again = code == GAC_OK ? gac_recheck(s, record) : 0;   /* at zero speed the slip's */
+            if (code != GAC_OK) return code;                     /* direction dropped and the resting contacts */
+            if (again != 0) return again;                        /* re-checked */
+            continue;
+        }
         if (s->fail) return s->fail;
         if (s->opt.max_steps > 0 && steps >= s->opt.max_steps) return GAC_ERR_MAX_STEPS;
         if (++s->n_look >= GAC_LOOK_STEPS) {      /* ... and every GAC_LOOK_STEPS steps, at a step end */
@@ -231,7 +246,14 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             if (last) { s->t = t_end; break; }
             if (s->nresting > 0) {              /* the steps shrank onto the dynamic jam, beyond which B is no */
                 const long before = s->n_tangential_impacts;      /* P-matrix, if the tangential impact has a */
-                const int code = gac_jam(s, record);              /* non-trivial solution here */
+                const int code = gac_jam(s, record);              /* non-trivial solution here (at zero speed: */
+                if (code == GAC_OK) {                             /* the slip's direction dropped, and on) */
+                    const int again = gac_recheck(s, record);      /* the resting contacts re-checked */
+                    s->fail_seen = 0;
+                    s->h = s->opt.method == GAC_METHOD_RK4 ? s->opt.dt : 0.0;
+                    if (again != 0) return again;
+                    continue;
+                }
                 if (code != GAC_ERR_FRICTION || s->n_tangential_impacts != before) return code;
             }
             return s->fail_seen ? s->fail_seen : GAC_ERR_STEP_SIZE;
@@ -306,7 +328,21 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         if (!gac_finite(s->x1, md->nx)) return GAC_ERR_NONFINITE;
         t1 = last ? t_end : s->t + h;
         gac_prepare_dense(s, h);
-        if (gac_find_event(s, t1, &t_event, &c_event)) {
+        found = gac_find_event(s, t1, &t_event, &c_event);
+        if (s->fail == GAC_ERR_FRICTION && s->nresting > 0) {   /* the dense output passes where the resting forces */
+            s->fail_seen = s->fail;                              /* do not exist (the jam within the step): as a */
+            s->fail = 0;                                         /* stage beyond it, reject and shrink onto it */
+            s->n_steps--;
+            s->n_rejected++;
+            if (gac_slow_sliding(s, s->x)) {
+                s->n_slow_sliding--;
+                s->t_slow_sliding -= h;
+            }
+            s->h = 0.5 * h;
+            fac_max = 1.0;
+            continue;
+        }
+        if (found) {
             int code, released = s->is_resting[c_event], was_stuck[GAC_AT_LEAST_1(md->ncontact)];
             if (s->fail) return s->fail;
             gac_add_work(s, t_event);

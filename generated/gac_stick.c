@@ -457,6 +457,29 @@ static int gac_tangent_axes(const gac_model *m, const double *q, const double *p
     return count;
 }
 
+/* The slip direction of the slow resting contact c that cannot stick (s->slip): d, the direction its stuck solve
+ * would slip in, where the resting contacts' sliding forces exist with it; else -d (3D: then the two directions
+ * across d) where they exist with that; else none (phi = v_t / v_s: the friction grows with the speed from 0, and
+ * the loop meets the paradox, if at all, at a speed the tangential impact can stop).  At zero speed the slip's
+ * direction is free: a direction with no consistent normal force (Painleve) is not the one the point takes. */
+static void gac_slide_direction(gac_sim *s, int c, const double *d)
+{
+    const gac_model *md = s->model;
+    const int nq1 = GAC_AT_LEAST_1(md->nq);
+    const double tries[4][2] = {{d[0], d[1]}, {-d[0], -d[1]}, {-d[1], d[0]}, {d[1], -d[0]}};
+    double qdd[nq1], lambda[nq1];
+    int k;
+    for (k = 0; k < 4; ++k) {
+        if (k == 2 && gac_tangent_axes(md, s->x, s->p, c) < 2) break;
+        s->slip[2 * c] = tries[k][0];
+        s->slip[2 * c + 1] = tries[k][1];
+        if (!(fabs(d[0]) + fabs(d[1]) > 0.0)) return;
+        if (gac_rest_forces(s, s->t, s->x, qdd, lambda, 0, 0) != GAC_ERR_FRICTION) return;
+        s->n_painleve_choices++;
+    }
+    s->slip[2 * c] = s->slip[2 * c + 1] = 0.0;
+}
+
 /* Sliding -> stuck at s->x (a step's end, after an impact, at the start): each resting point on a rough wall that is
  * not stuck, slower than friction_velocity along its wall or (one tangential axis) whose velocity changed sign since
  * vt_start (2 per contact, the step's start; NULL: no such test), sticks if the stuck solve keeps every stuck point
@@ -490,8 +513,7 @@ int gac_try_stick(gac_sim *s, const double *vt_start, int count_loss, const int 
         code = gac_project_stuck(s, x, s->nresting, s->resting);
         if (code != GAC_OK || !gac_stuck_feasible(s, x, c, d)) {           /* it slides on: along the way its load drives it */
             s->is_stuck[c] = 0;
-            s->slip[2 * c] = d[0];
-            s->slip[2 * c + 1] = d[1];
+            gac_slide_direction(s, c, d);
             continue;
         }
         s->slip[2 * c] = s->slip[2 * c + 1] = 0.0;

@@ -137,6 +137,9 @@ class SimulationResult:
     n_slips: int = 0                   # stuck points that began to slip: the 'slip' events
     n_tangential_impacts: int = 0      # tangential impacts (law 'gdi-tangential', also in impacts): sliding resting
                                        # contacts with no consistent forces (Painleve paradox, the dynamic jam)
+    n_painleve_choices: int = 0        # choices the Painleve paradox left open (gac_sim.n_painleve_choices): a slow
+                                       # point's slip direction without consistent forces set aside, resting
+                                       # contacts released where they may leave instead (the least normal force)
     sensitivities: "sensitivity.Sensitivities | None" = None   # simulate(sensitivities=...): d x(t_final)/d(direction)
 
     @property
@@ -232,7 +235,7 @@ class SimulationResult:
             "loss_friction": self.loss_friction,
             "n_rhs": self.n_rhs, "n_steps": self.n_steps, "n_rejected": self.n_rejected,
             "n_chart_switches": self.n_chart_switches, "n_sticks": self.n_sticks, "n_slips": self.n_slips,
-            "n_tangential_impacts": self.n_tangential_impacts,
+            "n_tangential_impacts": self.n_tangential_impacts, "n_painleve_choices": self.n_painleve_choices,
             "status": self.status, "message": self.message, "method": self.method, "options": self.options,
             "contact_events": [{"t": e.t, "point": e.point, "wall": e.wall, "kind": e.kind}
                                for e in self.contact_events],
@@ -554,6 +557,10 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     if int(state.n_tangential_impacts):
         message += (f"; {int(state.n_tangential_impacts)} tangential impact(s): sliding friction in the Painleve "
                     "paradox (the resting contacts' system no P-matrix) stopped by an impact without collision")
+    if int(state.n_painleve_choices):
+        message += (f"; {int(state.n_painleve_choices)} Painleve choice(s): resting contacts without consistent "
+                    "sliding forces where another solution exists (a slow point's slip direction set aside, or "
+                    "contacts released that may leave their walls: the least normal force)")
     n = i_eval[0]
     accuracy = impact_warnings(impacts, model, p) if keep_impacts else []
     warnings = model.scene.warnings + accuracy + friction_warnings(model, p, state, method)
@@ -579,7 +586,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
         options={"t_end": t_end, **{name: _option_value(opt, name) for name in LOOP_OPTIONS},
                  "chart_switch": float(opt.chart_switch)},
         n_chart_switches=int(state.n_chart_switches), n_sticks=int(state.n_sticks), n_slips=int(state.n_slips),
-        n_tangential_impacts=int(state.n_tangential_impacts),
+        n_tangential_impacts=int(state.n_tangential_impacts), n_painleve_choices=int(state.n_painleve_choices),
         sensitivities=None if sens is None else sensitivity.read(model, sim, sens, directions, status == 0, message,
                                                                  None if s_eval is None else s_eval[:n]))
 

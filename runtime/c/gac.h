@@ -786,8 +786,18 @@ int gac_chart_convert_tangent(const gac_base *from, const gac_base *to, int nq, 
  * smoothly towards B_aa = 0 the normal force grows without bound, the trial stages beyond fail (GAC_ERR_FRICTION
  * in a stage rejects the step; RK4 halves it), and where the steps underflow onto that instant the impact is taken
  * if it has a non-trivial solution there.  The record's law is GAC_IMPACT_LAW_GDI_TANGENTIAL (complementarity 1);
- * sim.n_tangential_impacts counts them (within n_impacts).  GAC_ERR_FRICTION stops the run only where the law has
- * no non-trivial solution (or more than 6 contacts), or the state after it still has no consistent forces.
+ * sim.n_tangential_impacts counts them (within n_impacts).  Before the impact, two other solutions of the paradox
+ * are taken where they exist (sim.n_painleve_choices counts them): at (nearly) zero speed, a point slower than
+ * friction_velocity whose slip direction has no consistent forces slides without one (phi = v_t / v_s; a slow point
+ * that cannot stick takes its stuck solve's slip direction d only where the forces exist with it, else -d, else, in
+ * 3D, the directions across d, else none), and where the state itself has no consistent forces but some contacts may
+ * leave (held on a subset with consistent forces >= 0, every released contact's normal acceleration >= 0: the
+ * indeterminacy), the subset of least total normal force is kept and the others released (GAC_SIM_CONTACT).  A step
+ * whose dense output passes a state without consistent forces is rejected and shrunk like a failed stage.
+ * Where one contact's law has no non-trivial solution, the impulse of its cone that takes the most kinetic energy
+ * (min L.gamma- + L W L / 2 over |L_T| <= c_f L_N) is taken instead.  GAC_ERR_FRICTION stops the run only where none
+ * of these applies (several contacts, more than 6, or a trivial impulse), or the state after it still has no
+ * consistent forces.
  *
  * Inputs.  The inputs u (nu) are held over each gac_sim_advance call (a zero-order hold, the convention of
  * FMI co-simulation): change them between calls with gac_sim_set_input, so that a change falls on a step
@@ -952,6 +962,9 @@ typedef struct {
     long n_tangential_impacts;   /* tangential impacts (record.law GAC_IMPACT_LAW_GDI_TANGENTIAL) since gac_sim_init:
                                     the Painleve paradox of sliding resting contacts resolved by an impact (also
                                     counted in n_impacts) */
+    long n_painleve_choices;     /* slow resting points that could not stick and whose slip direction had no
+                                    consistent normal forces (the Painleve paradox at zero speed, where the direction
+                                    is free): each rejected direction, the next one taken (gac_try_stick) */
     double energy_initial;       /* J: T + V at gac_sim_init */
     double loss_impacts;         /* J: energy the impacts took since gac_sim_init, sum of energy_before - energy_after */
     double energy_roundoff;      /* J: what the impacts' energies are known to, sum of roundoff x T before each */

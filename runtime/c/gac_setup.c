@@ -183,7 +183,7 @@ static int gac_sim_start(gac_sim *s, const gac_model *md, double *dwork, int *iw
     s->input_changed = 0;
     s->work_input = s->loss_damping = s->loss_friction = 0.0;
     s->n_slow_sliding = 0;
-    s->n_sticks = s->n_slips = s->n_tangential_impacts = 0;
+    s->n_sticks = s->n_slips = s->n_tangential_impacts = s->n_painleve_choices = 0;
     s->t_slow_sliding = 0.0;
     for (i = 0; i < md->nx; ++i) s->x[i] = x[i];
     s->n_chart_switches = 0;

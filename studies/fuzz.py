@@ -144,10 +144,11 @@ def _random_link(rng, kind: str, planar: bool, radius: float = 0.0, reach: float
     return RigidLink(length, mass, com, tuple(map(tuple, inertia)), radius)
 
 
-def random_structure(rng, index: int, n_max: int = 8, capsules: bool = True) -> Scene:
+def random_structure(rng, index: int, n_max: int = 8, capsules: bool = True, rough_capsules: bool = True) -> Scene:
     """A compiled model's worth of randomness: n, link kinds, twists, planar or spatial, gravity, capsule radii.  The
     numbers (lengths, masses, walls, start) are redrawn per run.  capsules=False: the structure as drawn before
-    capsules were part of the distribution (the same draws without the radii)."""
+    capsules were part of the distribution (the same draws without the radii); rough_capsules=False: as drawn before
+    capsules joined the rough structures."""
     n = int(rng.integers(1, n_max + 1))
     planar = rng.uniform() < 0.35
     kinds = [str(rng.choice(["line", "rigid"])) for _ in range(n)]
@@ -167,7 +168,7 @@ def random_structure(rng, index: int, n_max: int = 8, capsules: bool = True) -> 
         links, link_e = _capsules(side, links)
     # and on some rough ones, from a stream of their own (the frictionless structures stay as drawn above)
     rough_side = _child_stream(rng, ROUGH_CAPSULE_STREAM)
-    if capsules and rough and rough_side.uniform() < ROUGH_CAPSULE_SHARE:
+    if capsules and rough_capsules and rough and rough_side.uniform() < ROUGH_CAPSULE_SHARE:
         links, link_e = _capsules(rough_side, links)
     walls = tuple(Wall(name, -1e3 if name.endswith("min") else 1e3, 1.0, friction=0.5 if rough else 0.0)
                   for name in WALL_NAMES if not (planar and name.startswith("x3")))
@@ -394,14 +395,15 @@ def random_chains_run(rng, scene: Chains, model) -> Run:
     return Run(p, q, qd, t_end, options, extent)
 
 
-def draw_structure(seed: int, index: int, n_max: int, chains: bool):
+def draw_structure(seed: int, index: int, n_max: int, chains: bool, rough_capsules: bool = True):
     """The study's structure ``index`` and the stream its runs are drawn from: several chains where ``chains`` and
-    has_chain_runs say so, else random_structure's chain."""
+    has_chain_runs say so, else random_structure's chain (rough_capsules=False: as drawn before capsules joined the
+    rough structures)."""
     if chains and has_chain_runs(seed, index):
         rng = chains_stream(seed, index)
         return random_chains(rng, index, n_max), rng
     rng = np.random.default_rng([seed, index])
-    return random_structure(rng, index, n_max), rng
+    return random_structure(rng, index, n_max, rough_capsules=rough_capsules), rng
 
 
 def draw_run(rng, scene, model) -> Run:

@@ -183,7 +183,7 @@ class Run:
     qd: np.ndarray
     counts: tuple | None = None      # (steps, rejected, rhs)
     resting: int | None = None
-    transitions: tuple | None = None  # (points that came to stick, began to slip, tangential impacts)
+    transitions: tuple | None = None  # (points that came to stick, began to slip, tangential impacts, Painleve choices)
 
 
 def python_run(model, row: Row) -> Run:
@@ -195,7 +195,8 @@ def python_run(model, row: Row) -> Run:
                 for e in result.contact_events],
                result.t_final, layout.reduce(result.q_final), layout.reduce(result.qd_final),
                (result.n_steps, result.n_rejected, result.n_rhs), len(result.resting_final),
-               (result.n_sticks, result.n_slips, result.n_tangential_impacts))
+               (result.n_sticks, result.n_slips, result.n_tangential_impacts,
+                result.n_painleve_choices))
 
 
 def example_arguments(row: Row) -> list[str]:
@@ -258,7 +259,7 @@ def fmu_run(path: Path, row: Row, interval: float) -> Run:
     try:
         result = simulate_fmu(str(path), stop_time=row.t_end, output_interval=interval, start_values=start,
                               output=[*q_names, *qd_names, "impacts", "resting_contacts", "sticks", "slips",
-                                      "tangential_impacts"], debug_logging=True,
+                                      "tangential_impacts", "painleve_choices"], debug_logging=True,
                               logger=logger)
     finally:
         _restore_printing_logger()
@@ -278,7 +279,7 @@ def fmu_run(path: Path, row: Row, interval: float) -> Run:
     assert last["impacts"] == len(impacts)
     return Run(impacts, events, float(last["time"]), np.array([last[n] for n in q_names]),
                np.array([last[n] for n in qd_names]), None, int(last["resting_contacts"]),
-               tuple(int(last[n]) for n in ("sticks", "slips", "tangential_impacts")))
+               tuple(int(last[n]) for n in ("sticks", "slips", "tangential_impacts", "painleve_choices")))
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -372,7 +373,7 @@ def test_standalone_program_runs_as_the_python_runtime(row, front_ends):
     assert [(k, n) for k, _, n in c.events] == [(k, n) for k, _, n in python.events], "resting contacts differ"
     close([t for _, t, _ in c.events], [t for _, t, _ in python.events], RELATIVE, "resting-contact times")
     assert c.counts == python.counts, "the step counters differ"
-    assert c.transitions == python.transitions, "the stick, slip and tangential-impact counts differ"
+    assert c.transitions == python.transitions, "the stick, slip, tangential-impact and Painleve-choice counts differ"
     assert c.transitions[:2] == tuple(sum(k == kind for k, _, _ in c.events) for kind in ("stick", "slip")), \
         "the stick and slip counts are not the program's stick and slip records"
 

@@ -509,6 +509,7 @@ GAC_FMI2_EXPORT fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueRefere
         else if (vr[k] == GAC_FMI2_STICKS) value[k] = stepping ? (fmi2Integer)in->sim.n_sticks : 0;
         else if (vr[k] == GAC_FMI2_SLIPS) value[k] = stepping ? (fmi2Integer)in->sim.n_slips : 0;
         else if (vr[k] == GAC_FMI2_TANGENTIAL_IMPACTS) value[k] = stepping ? (fmi2Integer)in->sim.n_tangential_impacts : 0;
+        else if (vr[k] == GAC_FMI2_PAINLEVE_CHOICES) value[k] = stepping ? (fmi2Integer)in->sim.n_painleve_choices : 0;
         else return fail(in, "fmi2GetInteger", "no Integer variable has this value reference");
     }
     return fmi2OK;

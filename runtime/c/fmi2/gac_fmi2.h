@@ -71,9 +71,11 @@
       "points resting on rough walls that came to stick (sliding -> stuck) since the start") \
     X(SLIPS, "slips", 1, "output", "discrete", "", 0, "stuck points that began to slip since the start") \
     X(TANGENTIAL_IMPACTS, "tangential_impacts", 1, "output", "discrete", "", 0, \
-      "tangential impacts (sliding resting contacts in the Painleve paradox) since the start, within impacts")
+      "tangential impacts (sliding resting contacts in the Painleve paradox) since the start, within impacts") \
+    X(PAINLEVE_CHOICES, "painleve_choices", 1, "output", "discrete", "", 0, \
+      "Painleve choices since the start: resting contacts without consistent sliding forces where another solution exists")
 
-/* The rows' ids: GAC_FMI2_Q .. GAC_FMI2_LOSS_FRICTION (Real rows), GAC_FMI2_METHOD .. GAC_FMI2_TANGENTIAL_IMPACTS (Integer rows,
+/* The rows' ids: GAC_FMI2_Q .. GAC_FMI2_LOSS_FRICTION (Real rows), GAC_FMI2_METHOD .. GAC_FMI2_PAINLEVE_CHOICES (Integer rows,
  * which are their value references). */
 #define GAC_FMI2_ROW_ID(id, name, count, causality, variability, unit, start, what) GAC_FMI2_##id,
 enum { GAC_FMI2_REALS(GAC_FMI2_ROW_ID) GAC_FMI2_NREAL_ROWS };

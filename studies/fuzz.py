@@ -899,12 +899,10 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _rerun(case: str, budget: float, n_max: int) -> int:
-    match = re.fullmatch(r"(\d+)-(\d+)/(\d+)", case)
-    if not match:
-        print(f"error: --case: expected SEED-STRUCTURE/RUN (e.g. 0-12/3), got {case!r}", file=sys.stderr)
-        return 2
-    seed, index, k = map(int, match.groups())
+def rebuild_case(case: str, n_max: int = 8):
+    """The scene, model and run of one case 'SEED-STRUCTURE/RUN' of the study, drawn as run_structure draws it
+    (its obstacles too)."""
+    seed, index, k = map(int, re.fullmatch(r"(\d+)-(\d+)/(\d+)", case).groups())
     scene, rng = draw_structure(seed, index, n_max, True)
     model = study_model(scene)
     for _ in range(k + 1):
@@ -913,8 +911,17 @@ def _rerun(case: str, budget: float, n_max: int) -> int:
         obstacle_rng = np.random.default_rng([seed, index, OBSTACLE_STREAM, k])
         obstacles = random_obstacles(obstacle_rng, scene, model, run)
         if obstacles:
-            scene, model, run = obstacle_run(obstacle_rng, scene, model, run, obstacles,
-                                             study_model)
+            scene, model, run = obstacle_run(obstacle_rng, scene, model, run, obstacles, study_model)
+    return scene, model, run
+
+
+def _rerun(case: str, budget: float, n_max: int) -> int:
+    match = re.fullmatch(r"(\d+)-(\d+)/(\d+)", case)
+    if not match:
+        print(f"error: --case: expected SEED-STRUCTURE/RUN (e.g. 0-12/3), got {case!r}", file=sys.stderr)
+        return 2
+    seed, index, k = map(int, match.groups())
+    scene, model, run = rebuild_case(case, n_max)
     print(f"scene: {scene}")
     print(f"simulate(model, {run.t_end!r}, p={run.p.tolist()!r}, q0={run.q0.tolist()!r}, "
           f"qd0={run.qd0.tolist()!r}, **{run.options!r})")

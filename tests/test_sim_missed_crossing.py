@@ -23,23 +23,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from codegen.scene import Chains
 from runtime.simulate import simulate
 from studies import fuzz
 
 
 def rebuild(case: str):
-    """The scene, model and run of a fuzz case 'seed-structure/run', as ``python -m studies fuzz --case`` draws it."""
-    seed, index, k = map(int, re.fullmatch(r"(\d+)-(\d+)/(\d+)", case).groups())
-    scene, rng = fuzz.draw_structure(seed, index, 8, True)
-    model = fuzz.study_model(scene)
-    for _ in range(k + 1):
-        run = fuzz.draw_run(rng, scene, model)
-    if not isinstance(scene, Chains) and fuzz.has_obstacle_runs(seed, index):
-        obstacle_rng = np.random.default_rng([seed, index, fuzz.OBSTACLE_STREAM, k])
-        obstacles = fuzz.random_obstacles(obstacle_rng, scene, model, run)
-        if obstacles:
-            scene, model, run = fuzz.obstacle_run(obstacle_rng, scene, model, run, obstacles, fuzz.study_model)
+    """The model and run of a fuzz case 'seed-structure/run', as ``python -m studies fuzz --case`` draws it."""
+    _, model, run = fuzz.rebuild_case(case)
     return model, run
 
 

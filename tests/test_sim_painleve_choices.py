@@ -18,14 +18,11 @@ from runtime.simulate import simulate
 
 
 def rebuild(case: str):
-    """The model and run of a fuzz case 'SEED-STRUCTURE/RUN' (no obstacles in these structures), as the study draws
-    them."""
-    seed, index, k = map(int, re.fullmatch(r"(\d+)-(\d+)/(\d+)", case).groups())
-    scene, rng = fuzz.draw_structure(seed, index, 8, True)
+    """The scene, model and run of a fuzz case 'SEED-STRUCTURE/RUN' (no obstacles in these structures), as the study
+    draws them."""
+    seed, index, _ = map(int, re.fullmatch(r"(\d+)-(\d+)/(\d+)", case).groups())
+    scene, model, run = fuzz.rebuild_case(case)
     assert not fuzz.has_obstacle_runs(seed, index) or isinstance(scene, fuzz.Chains)
-    model = fuzz.study_model(scene)
-    for _ in range(k + 1):
-        run = fuzz.draw_run(rng, scene, model)
     return scene, model, run
 
 

@@ -181,6 +181,17 @@ static int gac_recheck(gac_sim *s, gac_impact_record *record)
     return 0;
 }
 
+/* 1 if a resting contact's event value at s->x (its normal force; a stuck point's, its force less |lambda_T| / c_f)
+ * is <= 0: a contact that pulls, or a stuck point beyond its cone. */
+static int gac_pulling(const gac_sim *s)
+{
+    int a;
+    for (a = 0; a < s->nresting; ++a) {
+        if (s->ev[s->resting[a]] <= 0.0) return 1;
+    }
+    return 0;
+}
+
 /* The loop from s->t to t_end (no breakpoint inside): flight steps up to the next event. */
 static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_eval, int *i_eval,
                           double *x_eval, gac_impact_record *record)
@@ -188,7 +199,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
     const gac_model *md;
     long steps = 0;
     double fac_max = 10.0;
-    int i;
+    int i, rechecked = 0;
     md = s->model;
     if (s->pending) {                                        /* the contacts gac_sim_init puts at rest */
         s->pending = 0;
@@ -232,6 +243,12 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             continue;
         }
         if (s->fail) return s->fail;
+        if (!rechecked && gac_pulling(s)) {       /* a transition (a landing, a stick) left a resting contact */
+            const int again = gac_recheck(s, record);    /* pulling: released, or a stuck point slipped, before */
+            rechecked = 1;                               /* a step integrates a pulling force (once a call: each */
+            if (again != 0) return again;                /* transition returns to the caller) */
+            continue;
+        }
         if (s->opt.max_steps > 0 && steps >= s->opt.max_steps) return GAC_ERR_MAX_STEPS;
         if (++s->n_look >= GAC_LOOK_STEPS) {      /* ... and every GAC_LOOK_STEPS steps, at a step end */
             const int code = gac_look(s);

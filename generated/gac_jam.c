@@ -117,98 +117,48 @@ static int gac_jam_release(gac_sim *s, gac_impact_record *r)
     return gac_report(s, r, GAC_SIM_CONTACT);
 }
 
-/* The tangential impact of one resting contact c where the frictional law (GDI) has no non-trivial solution (in 3D,
- * the stick impulse outside the cone and no slide that keeps the normal velocity at 0): the impulse of Coulomb's cone
- * that takes the most kinetic energy, L = argmin over |L_T| <= c_f L_N of f(L) = L . gamma- + L W L / 2 (= T+ - T-,
- * W the contact-space inverse inertia of its normal and tangential directions; the maximal-dissipation impact, a
- * convex problem that has a solution).  While the contact slides, L . gamma- < 0 along the cone's edge against the
- * slip, so the minimum is not trivial: inside the cone it is the stick impulse -W^-1 gamma-, else on the cone's
- * surface, L = t (1, -c_f cos phi, -c_f sin phi) with t = -g / h (g = u . gamma-, h = u W u), phi by a grid and
- * golden sections.  qd_plus, F[0], Ft[0..1] as gac_impact_tangential.  GAC_ERR_FRICTION if it is trivial. */
-static int gac_jam_cone(gac_sim *s, int c, double *qd_plus, double *F, double *Ft)
+/* f(L) = L . gam + L W L / 2 along the ray L = t u of the cone's surface, u = (1, -c_f cos phi, -c_f sin phi):
+ * its least value over t >= 0, -g^2 / (2 h) (g = u . gam < 0, h = u W u > 0), else 0; *t_best the t there. */
+static double gac_cone_ray(int d, double W[3][3], const double *gam, double cf, double phi, double *t_best)
 {
-    const gac_model *md = s->model;
-    const int nq = md->nq;
-    const double *x = s->x, cf = gac_rest_friction(md, s->p, c);
-    double resp[3][GAC_AT_LEAST_1(nq)], W[3][3], gam[3], v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)];
-    double vel[3 * GAC_AT_LEAST_1(md->npoint)], L[3] = {0.0, 0.0, 0.0}, best = 0.0;
-    double *Y = GAC_WORK_Y(md, s->work), *f = GAC_WORK_F(md, s->work), *g = GAC_WORK_G(md, s->work);
-    int axis[3], d = 1, a, b, i, j, k;
-    gac_tangents tg;
-    if (!(cf > 0.0) || gac_impact_system(md, x, x + nq, s->p, 1, &c, s->work, v, e) != GAC_OK) return GAC_ERR_FRICTION;
-    gac_copy(resp[0], Y, nq);
-    if (gac_tangents_at(md, x, s->p, c, &tg) != GAC_OK) return GAC_ERR_FRICTION;
-    for (j = 0; j < 2; ++j) {                      /* the tangential directions' responses */
-        double phi[2] = {0.0, 0.0};
-        if (!tg.has[j]) continue;
-        phi[j] = 1.0;
-        gac_tangent_force(md, x, s->p, &tg, phi, f, g);
-        md->inertia_solve(x, g, s->p, resp[d]);
-        axis[d++] = j;
-    }
-    if (d == 1) return GAC_ERR_FRICTION;
-    for (b = 0; b <= d; ++b) {                     /* W (columns: the responses) and gamma- (qd) */
-        const double *w = b < d ? resp[b] : x + nq;
-        md->contact_velocities(x, w, s->p, vel);
-        for (a = 0; a < d; ++a) {
-            const double value = a == 0 ? gac_normal_value(md, x, s->p, c, w, vel) : gac_tangent_value(&tg, axis[a], vel);
-            if (b < d) W[a][b] = value;
-            else gam[a] = value;
-        }
-    }
+    double u[3], g = 0.0, h = 0.0;
+    int a, b;
+    u[0] = 1.0, u[1] = -cf * cos(phi), u[2] = -cf * sin(phi);
     for (a = 0; a < d; ++a) {
-        for (b = 0; b < a; ++b) W[a][b] = W[b][a] = 0.5 * (W[a][b] + W[b][a]);
+        g += u[a] * gam[a];
+        for (b = 0; b < d; ++b) h += u[a] * W[a][b] * u[b];
     }
-    {                                              /* the cone's surface: phi on a grid, then golden sections */
-        const int grid = d == 2 ? 2 : 720;
-        double phi_best = 0.0, lo, hi;
-        for (k = 0; k < grid; ++k) {
-            const double phi = d == 2 ? (k == 0 ? 0.0 : 3.14159265358979323846) : 6.283185307179586 * k / grid;
-            double u[3], gg = 0.0, hh = 0.0;
-            u[0] = 1.0, u[1] = -cf * cos(phi), u[2] = -cf * sin(phi);
-            for (a = 0; a < d; ++a) {
-                gg += u[a] * gam[a];
-                for (b = 0; b < d; ++b) hh += u[a] * W[a][b] * u[b];
-            }
-            if (gg < 0.0 && hh > 0.0 && -gg * gg / (2.0 * hh) < best) best = -gg * gg / (2.0 * hh), phi_best = phi;
-        }
-        lo = phi_best - 6.283185307179586 / grid, hi = phi_best + 6.283185307179586 / grid;
-        for (k = 0; d == 3 && k < 80; ++k) {
-            const double m1 = hi - 0.6180339887498949 * (hi - lo), m2 = lo + 0.6180339887498949 * (hi - lo);
-            double fm[2];
-            for (i = 0; i < 2; ++i) {
-                const double phi = i == 0 ? m1 : m2;
-                double u[3], gg = 0.0, hh = 0.0;
-                u[0] = 1.0, u[1] = -cf * cos(phi), u[2] = -cf * sin(phi);
-                for (a = 0; a < d; ++a) {
-                    gg += u[a] * gam[a];
-                    for (b = 0; b < d; ++b) hh += u[a] * W[a][b] * u[b];
-                }
-                fm[i] = gg < 0.0 && hh > 0.0 ? -gg * gg / (2.0 * hh) : 0.0;
-            }
-            if (fm[0] < fm[1]) hi = m2;
-            else lo = m1;
-        }
-        if (best < 0.0) {
-            const double phi = d == 3 ? 0.5 * (lo + hi) : phi_best;
-            double u[3], gg = 0.0, hh = 0.0, value;
-            u[0] = 1.0, u[1] = -cf * cos(phi), u[2] = -cf * sin(phi);
-            for (a = 0; a < d; ++a) {
-                gg += u[a] * gam[a];
-                for (b = 0; b < d; ++b) hh += u[a] * W[a][b] * u[b];
-            }
-            value = gg < 0.0 && hh > 0.0 ? -gg * gg / (2.0 * hh) : 0.0;
-            if (!(value <= best)) {
-                u[1] = -cf * cos(phi_best), u[2] = -cf * sin(phi_best);
-                gg = hh = 0.0;
-                for (a = 0; a < d; ++a) {
-                    gg += u[a] * gam[a];
-                    for (b = 0; b < d; ++b) hh += u[a] * W[a][b] * u[b];
-                }
-            }
-            for (a = 0; a < d; ++a) L[a] = -gg / hh * u[a];
-            best = -gg * gg / (2.0 * hh);
-        }
+    *t_best = g < 0.0 && h > 0.0 ? -g / h : 0.0;
+    return g < 0.0 && h > 0.0 ? -g * g / (2.0 * h) : 0.0;
+}
+
+/* The least f(L) = L . gam + L W L / 2 over Coulomb's cone |L_T| <= c_f L_N of one contact (d = 2: one tangential
+ * direction, 3: two; W its d x d contact-space inverse inertia, symmetric positive definite): at the apex L = 0
+ * (f = 0), at the stick impulse -W^-1 gam where it lies inside the cone, or on the cone's surface, L = t u(phi) with
+ * t = -g / h, phi by a grid and golden sections (d = 3; d = 2: the cone's two edges).  L (d) and the value. */
+static double gac_cone_min(int d, double W[3][3], const double *gam, double cf, double *L)
+{
+    const int grid = d == 2 ? 2 : 720;
+    double best = 0.0, phi_best = 0.0, t, lo, hi;
+    int a, b, k;
+    for (a = 0; a < 3; ++a) L[a] = 0.0;
+    for (k = 0; k < grid; ++k) {                   /* the cone's surface: phi on a grid ... */
+        const double phi = d == 2 ? (k == 0 ? 0.0 : 3.14159265358979323846) : 6.283185307179586 * k / grid;
+        const double value = gac_cone_ray(d, W, gam, cf, phi, &t);
+        if (value < best) best = value, phi_best = phi;
+    }
+    lo = phi_best - 6.283185307179586 / grid, hi = phi_best + 6.283185307179586 / grid;
+    for (k = 0; d == 3 && best < 0.0 && k < 80; ++k) {   /* ... then golden sections */
+        const double m1 = hi - 0.6180339887498949 * (hi - lo), m2 = lo + 0.6180339887498949 * (hi - lo);
+        if (gac_cone_ray(d, W, gam, cf, m1, &t) < gac_cone_ray(d, W, gam, cf, m2, &t)) hi = m2;
+        else lo = m1;
+    }
+    if (best < 0.0) {
+        const double phi = d == 3 ? 0.5 * (lo + hi) : phi_best;
+        const double value = gac_cone_ray(d, W, gam, cf, phi, &t);
+        const double use = value <= best ? phi : phi_best;
+        best = gac_cone_ray(d, W, gam, cf, use, &t);
+        L[0] = t, L[1] = -cf * cos(use) * t, L[2] = -cf * sin(use) * t;
     }
     {                                              /* inside the cone: the stick impulse, where it lies there */
         double A[9], Ls[3], t2 = 0.0, value = 0.0;
@@ -218,40 +168,242 @@ static int gac_jam_cone(gac_sim *s, int c, double *qd_plus, double *F, double *F
         }
         if (gac_lu_solve(d, A, Ls, 1e-13) == 0 && Ls[0] > 0.0) {
             for (a = 1; a < d; ++a) t2 += Ls[a] * Ls[a];
-            for (a = 0; a < d; ++a) value += 0.5 * Ls[a] * gam[a];           /* f = -gamma W^-1 gamma / 2 */
+            for (a = 0; a < d; ++a) value += 0.5 * Ls[a] * gam[a];           /* f = -gam W^-1 gam / 2 */
             if (sqrt(t2) <= cf * Ls[0] && value < best) {
                 for (a = 0; a < d; ++a) L[a] = Ls[a];
                 best = value;
             }
         }
     }
-    if (!(best < 0.0) || !(L[0] > 0.0)) return GAC_ERR_FRICTION;
+    for (a = d; a < 3; ++a) L[a] = 0.0;
+    return best;
+}
+
+/* The tangential impact of the resting contacts list[0..n-1] (n <= GAC_JAM_SUBSETS) where the frictional law (GDI)
+ * has no non-trivial solution (the stick impulse outside the cone and no slide that keeps the normal velocities at
+ * 0): the impulses in Coulomb's cones that take the most kinetic energy, Lambda = argmin over the cones of
+ * f(Lambda) = Lambda . gamma- + Lambda W Lambda / 2 (= T+ - T-, W the contact-space inverse inertia of the contacts'
+ * normal and tangential directions; the maximal-dissipation impact, a convex problem with a solution).  Its optimum
+ * has gamma+ = gamma- + W Lambda in the dual cones, gamma+_N >= c_f |gamma+_T| >= 0 (no contact approaches), and
+ * Lambda . gamma+ = 0 per contact.  While a contact slides, f < 0 along its cone's edge against the slip, so the
+ * minimum is not trivial.  Solved by block coordinate descent (each contact's block by gac_cone_min with the others'
+ * impulses in its gamma; f falls at every block, and for a strictly convex f over a product of closed convex sets
+ * the sweeps converge to the optimum), until no impulse moves by 1e-12 of the largest, at most GAC_JAM_SWEEPS
+ * sweeps.  One contact: one block, one sweep.  qd_plus, F (n), Ft (2 n, per contact along its wall's axes) as
+ * gac_impact_tangential.  GAC_ERR_FRICTION if the minimum is trivial or a contact has no tangential direction. */
+#define GAC_JAM_SWEEPS 500
+static int gac_jam_cones(gac_sim *s, int n, const int *list, double *qd_plus, double *F, double *Ft)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nd = 3 * GAC_AT_LEAST_1(n);
+    const double *x = s->x;
+    double resp[nd][GAC_AT_LEAST_1(nq)], v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)], W[nd][nd], gam[nd], L[nd];
+    double cf[GAC_AT_LEAST_1(n)], vel[3 * GAC_AT_LEAST_1(md->npoint)], total;
+    double *Y = GAC_WORK_Y(md, s->work), *f = GAC_WORK_F(md, s->work), *g = GAC_WORK_G(md, s->work);
+    int first[GAC_AT_LEAST_1(n) + 1], axis[nd], owner[nd], sweep, a, b, i, j, k, D = 0;
+    gac_tangents tg[GAC_AT_LEAST_1(n)];
+    if (n < 1 || n > GAC_JAM_SUBSETS) return GAC_ERR_FRICTION;
+    if (gac_impact_system(md, x, x + nq, s->p, n, list, s->work, v, e) != GAC_OK) return GAC_ERR_FRICTION;
+    for (a = 0; a < n; ++a) {                      /* per contact: its normal's, then its tangents' responses */
+        cf[a] = gac_rest_friction(md, s->p, list[a]);
+        if (cf[a] > 0.0 && gac_tangents_at(md, x, s->p, list[a], &tg[a]) != GAC_OK) return GAC_ERR_FRICTION;
+        first[a] = D;
+        gac_copy(resp[D], Y + (long)a * nq, nq);
+        axis[D] = -1, owner[D++] = a;
+        for (j = 0; j < 2 && cf[a] > 0.0; ++j) {
+            double phi[2] = {0.0, 0.0};
+            if (!tg[a].has[j]) continue;
+            phi[j] = 1.0;
+            gac_tangent_force(md, x, s->p, &tg[a], phi, f, g);
+            md->inertia_solve(x, g, s->p, resp[D]);
+            axis[D] = j, owner[D++] = a;
+        }
+    }
+    first[n] = D;
+    for (b = 0; b <= D; ++b) {                     /* W (columns: the responses) and gamma- (qd) */
+        const double *w = b < D ? resp[b] : x + nq;
+        md->contact_velocities(x, w, s->p, vel);
+        for (k = 0; k < D; ++k) {
+            const int c = list[owner[k]];
+            const double value = axis[k] < 0 ? gac_normal_value(md, x, s->p, c, w, vel)
+                                             : gac_tangent_value(&tg[owner[k]], axis[k], vel);
+            if (b < D) W[k][b] = value;
+            else gam[k] = value;
+        }
+    }
+    for (k = 0; k < D; ++k) {
+        L[k] = 0.0;
+        for (b = 0; b < k; ++b) W[k][b] = W[b][k] = 0.5 * (W[k][b] + W[b][k]);
+    }
+    for (sweep = 0; sweep < GAC_JAM_SWEEPS; ++sweep) {   /* block coordinate descent over the contacts */
+        double moved = 0.0, size = 0.0;
+        for (a = 0; a < n; ++a) {
+            const int d = first[a + 1] - first[a], o = first[a];
+            double Wa[3][3], ga[3], La[3];
+            for (i = 0; i < d; ++i) {                 /* its block, the others' impulses in its gamma */
+                ga[i] = gam[o + i];
+                for (k = 0; k < D; ++k) {
+                    if (k < o || k >= o + d) ga[i] += W[o + i][k] * L[k];
+                }
+                for (j = 0; j < d; ++j) Wa[i][j] = W[o + i][o + j];
+            }
+            if (d == 1) {                             /* a smooth wall: the normal impulse alone, >= 0 */
+                La[0] = Wa[0][0] > 0.0 && ga[0] < 0.0 ? -ga[0] / Wa[0][0] : 0.0;
+            } else {
+                gac_cone_min(d, Wa, ga, cf[a], La);
+            }
+            for (i = 0; i < d; ++i) {
+                if (fabs(La[i] - L[o + i]) > moved) moved = fabs(La[i] - L[o + i]);
+                L[o + i] = La[i];
+            }
+        }
+        for (k = 0; k < D; ++k) size = fabs(L[k]) > size ? fabs(L[k]) : size;
+        if (!(moved > 1e-12 * size)) break;
+    }
+    total = 0.0;                                   /* f(Lambda) = T+ - T-: it must fall */
+    for (k = 0; k < D; ++k) {
+        total += L[k] * gam[k];
+        for (b = 0; b < D; ++b) total += 0.5 * L[k] * W[k][b] * L[b];
+    }
+    if (!(total < 0.0)) return GAC_ERR_FRICTION;
     for (i = 0; i < nq; ++i) {
         double value = x[nq + i];
-        for (a = 0; a < d; ++a) value += resp[a][i] * L[a];
+        for (k = 0; k < D; ++k) value += resp[k][i] * L[k];
         qd_plus[i] = value;
     }
-    F[0] = L[0];
-    Ft[0] = Ft[1] = 0.0;
-    for (a = 1; a < d; ++a) Ft[axis[a]] = L[a];
+    for (a = 0; a < n; ++a) {
+        F[a] = L[first[a]];
+        Ft[2 * a] = Ft[2 * a + 1] = 0.0;
+        for (k = first[a] + 1; k < first[a + 1]; ++k) Ft[2 * a + axis[k]] = L[k];
+    }
     return GAC_OK;
 }
 
-/* The tangential impact at s->x (time s->t) on the resting contacts, and the resting set after it: contacts left at
- * rest (normal velocity within round-off of 0) stay and stick where they can (gac_restick), the others are released.
- * The record says so (law GAC_IMPACT_LAW_GDI_TANGENTIAL, impulses, released contacts); the loop re-checks the resting
- * contacts at the next advance (those the new state pulls off their walls are released, as after a change of the
- * inputs).  Post-conditions: every impulse >= 0, no kinetic energy gained beyond the law's round-off (1e-10 of T).
- * Returns GAC_SIM_IMPACT (the record reported) or an error: GAC_ERR_FRICTION when no resting contact slides on a
- * rough wall, the law has no non-trivial solution, or the state after it still has no consistent forces (the first
+/* What a tangential impact may change in s, kept to undo an impulse whose state after it still has no consistent
+ * forces. */
+typedef struct {
+    long n_landings, n_releases, n_sticks, n_slips;
+    int nresting;
+} gac_jam_saved;
+
+static void gac_jam_save(const gac_sim *s, gac_jam_saved *k, double *qd, int *resting, int *flags, double *slip)
+{
+    const gac_model *md = s->model;
+    int c;
+    k->n_landings = s->n_landings, k->n_releases = s->n_releases, k->n_sticks = s->n_sticks, k->n_slips = s->n_slips;
+    k->nresting = s->nresting;
+    gac_copy(qd, s->x + md->nq, md->nq);
+    for (c = 0; c < s->nresting; ++c) resting[c] = s->resting[c];
+    for (c = 0; c < md->ncontact; ++c) flags[2 * c] = s->is_resting[c], flags[2 * c + 1] = s->is_stuck[c];
+    gac_copy(slip, s->slip, 2 * md->ncontact);
+}
+
+static void gac_jam_restore(gac_sim *s, const gac_jam_saved *k, const double *qd, const int *resting, const int *flags,
+                            const double *slip)
+{
+    const gac_model *md = s->model;
+    int c;
+    s->n_landings = k->n_landings, s->n_releases = k->n_releases, s->n_sticks = k->n_sticks, s->n_slips = k->n_slips;
+    s->nresting = k->nresting;
+    gac_copy(s->x + md->nq, qd, md->nq);
+    for (c = 0; c < k->nresting; ++c) s->resting[c] = resting[c];
+    for (c = 0; c < md->ncontact; ++c) s->is_resting[c] = flags[2 * c], s->is_stuck[c] = flags[2 * c + 1];
+    gac_copy(s->slip, slip, 2 * md->ncontact);
+    s->fail = 0;
+    s->f_valid = s->vn_valid = 0;
+}
+
+/* The tangential impact's impulses (F, Ft per contact of list[0..n-1]) and velocities after (qd_plus) applied at s->x,
+ * and the resting set after them: contacts left at rest (normal velocity within round-off of 0, v_hold) stay and
+ * stick where they can (gac_restick), the others are released.  E: T and V before.  Returns GAC_SIM_IMPACT (the
+ * record reported), GAC_ERR_FRICTION where the state after still has no consistent forces (s then to be restored by
+ * the caller), or another error. */
+static int gac_jam_apply(gac_sim *s, gac_impact_record *r, int n, const int *list, const double *qd_plus,
+                         const double *F, const double *Ft, const double *E, double v_hold)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, nc1 = GAC_AT_LEAST_1(md->ncontact);
+    double *x = s->x, vn[nc1];
+    int set[GAC_AT_LEAST_1(nq)], was_stuck[nc1], nset = 0, a, c, i, code;
+    r->ncontact = 0;
+    for (a = 0; a < n; ++a) {                        /* the contacts that took an impulse */
+        if (F[a] < 0.0) return GAC_ERR_IMPACT_ACCURACY;
+        if (!(F[a] > 0.0)) continue;
+        r->contact[r->ncontact] = list[a];
+        r->impulse[r->ncontact] = F[a];
+        r->impulse_t[2 * r->ncontact] = Ft[2 * a];
+        r->impulse_t[2 * r->ncontact + 1] = Ft[2 * a + 1];
+        r->ncontact++;
+    }
+    {
+        double E_plus[2];
+        md->energy(x, qd_plus, s->p, E_plus);
+        if (!(E_plus[0] <= E[0] * (1.0 + r->roundoff))) return GAC_ERR_IMPACT_ACCURACY;    /* T+ <= T- */
+    }
+    for (i = 0; i < nq; ++i) x[nq + i] = qd_plus[i];
+    gac_normal_velocities(md, x, s->p, vn);          /* who stays at rest: lifted by round-off at most */
+    for (a = 0; a < n; ++a) {
+        if (vn[list[a]] <= v_hold) {
+            code = gac_add_independent(s, x, &nset, set, list[a]);
+            if (code != GAC_OK) return code;
+        }
+    }
+    for (c = 0; c < md->ncontact; ++c) {            /* the stuck points before (the record's transitions) */
+        was_stuck[c] = s->is_stuck[c];
+        s->is_stuck[c] = 0;
+    }
+    if (nset > 0) {                                  /* their normal velocities to 0: round-off, never a gain */
+        code = gac_project(s, x, nset, set, 0);
+        if (code != GAC_OK) return code;
+    }
+    gac_set_resting(s, nset, set, r);
+    code = gac_restick(s, 0, was_stuck, r);          /* stopped: stuck where the cone holds it */
+    if (code < 0) return code;
+    s->f_valid = s->vn_valid = 0;
+    gac_events(s, s->t, x, s->ev);
+    if (s->fail) return s->fail;                     /* still no consistent forces: GAC_ERR_FRICTION */
+    md->energy(x, x + nq, s->p, s->energy_x1);
+    r->energy_after = s->energy_x1[0] + s->energy_x1[1];
+    if (!(s->energy_x1[0] <= E[0] * (1.0 + r->roundoff))) return GAC_ERR_IMPACT_ACCURACY;
+    for (i = 0; i < nq; ++i) r->qd_after[i] = x[nq + i];
+    gac_normal_velocities(md, x, s->p, vn);
+    {
+        double gaps[nc1];
+        gac_contact_gaps(md, x, s->p, gaps);
+        r->approach_after = 0.0;
+        for (c = 0; c < md->ncontact; ++c) {
+            if (gaps[c] <= s->opt.contact_tol && -vn[c] > r->approach_after) r->approach_after = -vn[c];
+        }
+    }
+    s->loss_impacts += r->energy_before - r->energy_after;
+    s->energy_roundoff += r->roundoff * E[0];
+    s->n_impacts++;
+    s->n_tangential_impacts++;
+    s->input_changed = 1;                            /* the next advance re-checks the resting contacts */
+    code = gac_energy_check(s, s->energy_x1);
+    if (code != GAC_OK) return GAC_ERR_DRIFT;
+    s->h = s->opt.method == GAC_METHOD_RK4 ? s->opt.dt : 0.0;   /* the steps shrank onto the jam: start afresh */
+    return gac_report(s, r, GAC_SIM_IMPACT);
+}
+
+/* The tangential impact at s->x (time s->t) on the resting contacts, and the resting set after it (gac_jam_apply).
+ * The impulses: the frictional law's (GDI with e = 0, gac_impact_tangential), or where it has no non-trivial solution
+ * or its state after still has no consistent forces (it is then undone), the cones' most dissipative ones
+ * (gac_jam_cones; for one contact the two agree wherever the law has a solution: the stick impulse inside the cone).
+ * The record says so (law GAC_IMPACT_LAW_GDI_TANGENTIAL, impulses, released contacts); the loop re-checks the
+ * resting contacts at the next advance (those the new state pulls off their walls are released, as after a change
+ * of the inputs).  Post-conditions: every impulse >= 0, no kinetic energy gained beyond the law's round-off (1e-10
+ * of T).  Returns GAC_SIM_IMPACT (the record reported) or an error: GAC_ERR_FRICTION when no resting contact slides
+ * on a rough wall, neither has a non-trivial solution, or the state after still has no consistent forces (the first
  * two leave the state as it was). */
 int gac_jam(gac_sim *s, gac_impact_record *r)
 {
     const gac_model *md = s->model;
     const int nq = md->nq, nc1 = GAC_AT_LEAST_1(md->ncontact), n = s->nresting;
     double *x = s->x, qd_plus[nq], F[nq], Ft[2 * nq], E[2], vn[nc1], vt[2 * nc1];
-    double residual, parts, scale = 0.0, v_hold;
-    int list[nq], set[nq], was_stuck[nc1], nset = 0, a, c, i, code;
+    double residual, parts, scale = 0.0, qd_saved[nq], slip_saved[2 * nc1];
+    int list[nq], resting_saved[nq], flags_saved[2 * nc1], a, c, i, code;
+    gac_jam_saved saved;
     s->fail = 0;
     for (a = 0; a < n; ++a) list[a] = s->resting[a];
     md->energy(x, x + nq, s->p, E);
@@ -286,69 +438,16 @@ int gac_jam(gac_sim *s, gac_impact_record *r)
     code = gac_jam_release(s, r);                    /* some contacts may leave instead: the least force */
     if (code != GAC_ERR_FRICTION) return code;
     code = gac_impact_tangential(md, x, x + nq, s->p, n, list, qd_plus, F, Ft, s->work, &residual, &parts);
-    if (code == GAC_ERR_FRICTION && n == 1) {        /* the law has none: the cone's most dissipative impulse */
-        code = gac_jam_cone(s, list[0], qd_plus, F, Ft);
-        residual = 0.0;
+    if (code == GAC_OK) {                            /* the law's impulses, undone if they leave the paradox */
+        r->residual = residual;
+        gac_jam_save(s, &saved, qd_saved, resting_saved, flags_saved, slip_saved);
+        code = gac_jam_apply(s, r, n, list, qd_plus, F, Ft, E, 1e-9 * scale + 1e-15);
+        if (code != GAC_ERR_FRICTION) return code;
+        gac_jam_restore(s, &saved, qd_saved, resting_saved, flags_saved, slip_saved);
     }
-    r->residual = residual;
+    if (code != GAC_ERR_FRICTION) return code;
+    code = gac_jam_cones(s, n, list, qd_plus, F, Ft);   /* the cones' most dissipative impulses */
     if (code != GAC_OK) return code;
-    for (a = 0; a < n; ++a) {                        /* the contacts that took an impulse */
-        if (F[a] < 0.0) return GAC_ERR_IMPACT_ACCURACY;
-        if (!(F[a] > 0.0)) continue;
-        r->contact[r->ncontact] = list[a];
-        r->impulse[r->ncontact] = F[a];
-        r->impulse_t[2 * r->ncontact] = Ft[2 * a];
-        r->impulse_t[2 * r->ncontact + 1] = Ft[2 * a + 1];
-        r->ncontact++;
-    }
-    {
-        double E_plus[2];
-        md->energy(x, qd_plus, s->p, E_plus);
-        if (!(E_plus[0] <= E[0] * (1.0 + r->roundoff))) return GAC_ERR_IMPACT_ACCURACY;    /* T+ <= T- */
-    }
-    for (i = 0; i < nq; ++i) x[nq + i] = qd_plus[i];
-    gac_normal_velocities(md, x, s->p, vn);          /* who stays at rest: lifted by round-off at most */
-    v_hold = 1e-9 * scale + 1e-15;
-    for (a = 0; a < n; ++a) {
-        if (vn[list[a]] <= v_hold) {
-            code = gac_add_independent(s, x, &nset, set, list[a]);
-            if (code != GAC_OK) return code;
-        }
-    }
-    for (c = 0; c < md->ncontact; ++c) {            /* the stuck points before (the record's transitions) */
-        was_stuck[c] = s->is_stuck[c];
-        s->is_stuck[c] = 0;
-    }
-    if (nset > 0) {                                  /* their normal velocities to 0: round-off, never a gain */
-        code = gac_project(s, x, nset, set, 0);
-        if (code != GAC_OK) return code;
-    }
-    gac_set_resting(s, nset, set, r);
-    code = gac_restick(s, 0, was_stuck, r);          /* stopped: stuck where the cone holds it */
-    if (code < 0) return code;
-    md->energy(x, x + nq, s->p, s->energy_x1);
-    r->energy_after = s->energy_x1[0] + s->energy_x1[1];
-    if (!(s->energy_x1[0] <= E[0] * (1.0 + r->roundoff))) return GAC_ERR_IMPACT_ACCURACY;
-    for (i = 0; i < nq; ++i) r->qd_after[i] = x[nq + i];
-    gac_normal_velocities(md, x, s->p, vn);
-    {
-        double gaps[nc1];
-        gac_contact_gaps(md, x, s->p, gaps);
-        r->approach_after = 0.0;
-        for (c = 0; c < md->ncontact; ++c) {
-            if (gaps[c] <= s->opt.contact_tol && -vn[c] > r->approach_after) r->approach_after = -vn[c];
-        }
-    }
-    s->loss_impacts += r->energy_before - r->energy_after;
-    s->energy_roundoff += r->roundoff * E[0];
-    s->n_impacts++;
-    s->n_tangential_impacts++;
-    s->f_valid = s->vn_valid = 0;
-    s->input_changed = 1;                            /* the next advance re-checks the resting contacts */
-    gac_events(s, s->t, x, s->ev);
-    if (s->fail) return s->fail;                     /* still no consistent forces: GAC_ERR_FRICTION */
-    code = gac_energy_check(s, s->energy_x1);
-    if (code != GAC_OK) return GAC_ERR_DRIFT;
-    s->h = s->opt.method == GAC_METHOD_RK4 ? s->opt.dt : 0.0;   /* the steps shrank onto the jam: start afresh */
-    return gac_report(s, r, GAC_SIM_IMPACT);
+    r->residual = 0.0;
+    return gac_jam_apply(s, r, n, list, qd_plus, F, Ft, E, 1e-9 * scale + 1e-15);
 }

@@ -5,6 +5,7 @@ the start.  Everything is checked against an independent derivation of the rod's
 closed form of the impact law for one contact (the 2x2 contact-space inverse inertia)."""
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -188,3 +189,30 @@ def test_a_start_inside_the_paradox_takes_the_tangential_impact_at_once(v, stick
     else:
         assert lam_n < 0
         assert [(e.kind, e.t) for e in result.contact_events] == [("rest", 0.0), ("release", 0.0)]
+
+
+def test_an_indeterminate_start_leaves_the_floor_with_the_least_normal_force():
+    """Glocker's rod at 60 deg (B = 1 + 3 (cos^2 - 5/3 sin cos) = -0.415 < 0), its lower end sliding at 3 m/s ahead
+    of it and at rest along the normal, the rod turning at theta' = 4 rad/s.  Its end's normal acceleration without a
+    force is a_N = -g + s sin(theta) theta'^2 = +3.86 m/s^2 (theta'' = 0 free: gravity acts at the centre), and held
+    sliding, B lambda = g - s sin(theta) theta'^2 gives lambda = 9.30 N > 0: the contact problem 0 <= lambda _|_
+    a_N >= 0 has two solutions (indeterminacy, not inconsistency).  The run takes the one with the least normal
+    force, lambda = 0, from the start (the start's rest rule holds only contacts pressed into their walls): no
+    impact, no tangential impact, and the rod flies freely, its end's height y = s sin(theta0) + s cos(theta0)
+    theta' t - g t^2 / 2 - s sin(theta0 + theta' t) > 0 in closed form (held with lambda = 9.30 N it would stay 0)."""
+    theta, w, v = math.radians(60.0), 4.0, -3.0
+    B = compliance(theta)
+    a_free = -G_ROD + S * math.sin(theta) * w * w
+    lam = (G_ROD - S * math.sin(theta) * w * w) / B
+    assert B < 0 and a_free > 0 and lam > 0                   # indeterminate: lift-off and sliding both solve it
+    scene = dataclasses.replace(lean_scene("painleve_indeterminate", 2 * S, M, G_ROD, C_F, theta, v),
+                                qd0=(0.0, 0.0, w, v, 0.0, 0.0))
+    t = np.array([0.01, 0.03, 0.05])
+    result = simulate(quick_model(scene), 0.05, t_eval=t, rtol=1e-11, atol=1e-12)
+    assert result.success, result.message
+    assert result.n_tangential_impacts == 0 and not result.impacts
+    assert all(e.kind != "rest" for e in result.contact_events)
+    for k, tk in enumerate(t):
+        height = S * math.sin(theta) + S * math.cos(theta) * w * tk - 0.5 * G_ROD * tk * tk - S * math.sin(theta + w * tk)
+        assert height > 1e-4
+        assert result.q[k][4] == pytest.approx(height, abs=1e-9)

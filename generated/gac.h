@@ -103,12 +103,13 @@
                                           of the two lengths): a line contact, which the pair's one-point contact
                                           cannot hold; the run stops at the start of that step, before the other
                                           end passes through */
-#define GAC_ERR_PAINLEVE_STALL   -35   /* the steps of one stretch between events met GAC_PAINLEVE_STALL states
-                                          where the resting contacts' forces do not exist (the Painleve paradox:
-                                          a trial stage or the dense output beyond a boundary where the normal
-                                          force grows without bound) without ever shrinking onto that boundary,
-                                          where the tangential impact is taken: the motion follows it with
-                                          unbounded forces, at steps of its scale */
+#define GAC_ERR_PAINLEVE_STALL   -35   /* the steps of one stretch between events (or resolutions of the
+                                          paradox) met GAC_PAINLEVE_STALL states where the resting contacts'
+                                          forces do not exist (the Painleve paradox: a trial stage or the dense
+                                          output beyond a boundary where the normal force grows without bound)
+                                          without ever shrinking onto that boundary, where the tangential impact
+                                          is taken: the motion follows it with unbounded forces, at steps of its
+                                          scale */
 
 /* ---- how gac_sim_advance ends: the run's budgets (< 0) and status (> 0) ------------------------ */
 #define GAC_ERR_WALL_TIME        -25   /* the run used opt.max_wall_time seconds of its clock (gac_sim_set_clock)

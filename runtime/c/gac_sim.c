@@ -241,6 +241,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             const int again = code == GAC_OK ? gac_recheck(s, record) : 0;   /* at zero speed the slip's */
             if (code != GAC_OK) return code;                     /* direction dropped and the resting contacts */
             if (again != 0) return again;                        /* re-checked */
+            painleve = 0;
             continue;
         }
         if (s->fail) return s->fail;
@@ -270,6 +271,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
                     s->fail_seen = 0;
                     s->h = s->opt.method == GAC_METHOD_RK4 ? s->opt.dt : 0.0;
                     if (again != 0) return again;
+                    painleve = 0;
                     continue;
                 }
                 if (code != GAC_ERR_FRICTION || s->n_tangential_impacts != before) return code;

@@ -4,13 +4,13 @@ forces stops being a P-matrix.  Taken for a zero, that pole released the point, 
 (its free acceleration drives it into its wall), stuck the other one, and so on: a chatter of releases and landings
 at 0.1 microsecond intervals that burnt the run's budget.
 
-The case is fuzz run 0-33/4: eight links with capsules on rough walls; from t = 0.24678 s link 5 is wedged between
-the two x1 walls (O5 on x1_max stuck, O6 on x1_min sliding slower than friction_velocity).  Before the paradox was
-tested with stuck points, the run released and landed O5 / O6 about 20 times in 2e-6 s and used its 20 s budget at
-t = 0.2468 s.  Now no contact is released there; the steps keep meeting the paradox's edge without reaching it (the
-motion follows it with unbounded forces), and the run stops with GAC_ERR_PAINLEVE_STALL within seconds.  The checks
-on the way are the study's own (fuzz.check_run, in numpy from the samples: no penetration beyond tolerance, the
-energy balance, friction only taking energy)."""
+The case is fuzz run 0-33/4: eight links with capsules on rough walls; from t = 0.24678 s link 5 is wedged between the
+two x1 walls (O5 on x1_max stuck, O6 on x1_min sliding slower than friction_velocity). Before the paradox was tested
+with stuck points, the run released and landed O5 / O6 56 times in 8e-6 s (O5 37, O6 19) and used its 20 s budget at t
+= 0.2468 s. Now no contact is released there; the steps keep meeting the paradox's edge without reaching it (the
+motion follows it with unbounded forces), and the run stops with GAC_ERR_PAINLEVE_STALL within seconds. The checks on
+the way are the study's own (fuzz.check_run, in numpy from the samples: no penetration beyond tolerance, the energy
+balance, friction only taking energy)."""
 from __future__ import annotations
 
 import time

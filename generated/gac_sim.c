@@ -200,6 +200,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
     long steps = 0;
     double fac_max = 10.0;
     int i, rechecked = 0;
+    long painleve = 0;                            /* rejections at the Painleve paradox in this stretch */
     md = s->model;
     if (s->pending) {                                        /* the contacts gac_sim_init puts at rest */
         s->pending = 0;
@@ -240,6 +241,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             const int again = code == GAC_OK ? gac_recheck(s, record) : 0;   /* at zero speed the slip's */
             if (code != GAC_OK) return code;                     /* direction dropped and the resting contacts */
             if (again != 0) return again;                        /* re-checked */
+            painleve = 0;
             continue;
         }
         if (s->fail) return s->fail;
@@ -269,6 +271,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
                     s->fail_seen = 0;
                     s->h = s->opt.method == GAC_METHOD_RK4 ? s->opt.dt : 0.0;
                     if (again != 0) return again;
+                    painleve = 0;
                     continue;
                 }
                 if (code != GAC_ERR_FRICTION || s->n_tangential_impacts != before) return code;
@@ -280,6 +283,7 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
              * beyond its stability */
             const double h_rho = s->rk4_h_rho = gac_rk4_step(s, h);
             if (s->fail == GAC_ERR_FRICTION && s->nresting > 0) {   /* a stage beyond the jam: halve the step */
+                if (++painleve >= GAC_PAINLEVE_STALL) return GAC_ERR_PAINLEVE_STALL;
                 s->fail_seen = s->fail;                            /* onto it (restored after the impact) */
                 s->fail = 0;
                 s->n_rejected++;
@@ -297,6 +301,8 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
             err = eighth ? gac_dop853_step(s, h) : gac_dopri5_step(s, h);
             if (s->fail == GAC_ERR_BAD_INPUT) return s->fail;
             if (s->fail) {                  /* a trial stage the constraints cannot hold: reject and shrink */
+                if (s->fail == GAC_ERR_FRICTION && s->nresting > 0 && ++painleve >= GAC_PAINLEVE_STALL)
+                    return GAC_ERR_PAINLEVE_STALL;
                 s->fail_seen = s->fail;
                 s->fail = 0;
                 err = 1e10;
@@ -347,7 +353,8 @@ static int gac_advance_to(gac_sim *s, double t_end, const double *t_eval, int n_
         gac_prepare_dense(s, h);
         found = gac_find_event(s, t1, &t_event, &c_event);
         if (s->fail == GAC_ERR_FRICTION && s->nresting > 0) {   /* the dense output passes where the resting forces */
-            s->fail_seen = s->fail;                              /* do not exist (the jam within the step): as a */
+            if (++painleve >= GAC_PAINLEVE_STALL) return GAC_ERR_PAINLEVE_STALL;   /* do not exist (the jam */
+            s->fail_seen = s->fail;                              /* within the step): as a */
             s->fail = 0;                                         /* stage beyond it, reject and shrink onto it */
             s->n_steps--;
             s->n_rejected++;

@@ -220,6 +220,34 @@ static void gac_held_gram(const gac_model *m, const double *q, const double *p, 
     }
 }
 
+/* 1 if the held system G (nr x nr, row-major: the n normal rows first, then the stuck points' tangential rows; the
+ * sliding points' normal columns bent by their friction) gives the normal forces unique, bounded values: with the
+ * stuck rows held (G_TT, untouched by friction, is symmetric positive definite), the normal forces solve
+ * S lambda_N = b_N - G_NT G_TT^-1 b_T with the Schur complement S = G_NN - G_NT G_TT^-1 G_TN, which must pass the
+ * sliding system's test (gac_friction_consistent): where it fails, the stuck points wedge a sliding one in the
+ * Painleve paradox, and its normal force passes through a pole (changing sign there, as a release would) instead
+ * of a zero. */
+static int gac_held_consistent(int n, int nr, const double *G)
+{
+    const int nt = nr - n;
+    double T[GAC_AT_LEAST_1(nt * nt)], S[GAC_AT_LEAST_1(n * n)], col[GAC_AT_LEAST_1(nt)];
+    int a, b, r, c;
+    for (r = 0; r < nt; ++r) {
+        for (c = 0; c < nt; ++c) T[r*nt + c] = G[(n + r)*nr + n + c];
+    }
+    if (nt > 0 && gac_ldlt(nt, T, 1e-12) != 0) return 1;       /* (dependent stuck rows: judged by the solve) */
+    for (b = 0; b < n; ++b) {                                   /* column b of S */
+        for (r = 0; r < nt; ++r) col[r] = G[(n + r)*nr + b];
+        if (nt > 0) gac_ldlt_solve(nt, T, col);
+        for (a = 0; a < n; ++a) {
+            double sum = G[a*nr + b];
+            for (r = 0; r < nt; ++r) sum -= G[a*nr + n + r] * col[r];
+            S[a*n + b] = sum;
+        }
+    }
+    return gac_friction_consistent(n, S, 1e-8);
+}
+
 /* The constrained dynamics with some of the resting contacts stuck (stuck[c] = 1): the rows R (normal rows of all,
  * tangential rows of the stuck ones) held, R qdd + Rdot qd = 0, with qdd = qdd_free + I_f^-1 sum_r d_r lambda_r,
  * d_r the row itself, or for the normal row of a sliding point on a rough wall n_a + c_f J_t^T(-phi_a).  So
@@ -285,6 +313,7 @@ int gac_stuck_dynamics(const gac_model *m, const double *q, const double *qd, co
     if (dropped == 0 && !any_sliding) {
         gac_ldlt_solve(nr, L, lam);
     } else if (dropped == 0) {
+        if (!gac_held_consistent(n, nr, G)) return GAC_ERR_FRICTION;
         if (gac_lu_solve(nr, G, lam, 1e-12) != 0) return GAC_ERR_FRICTION;
     } else {                                      /* least-norm forces of the independent rows' equations */
         double y[cap];

@@ -103,6 +103,13 @@
                                           of the two lengths): a line contact, which the pair's one-point contact
                                           cannot hold; the run stops at the start of that step, before the other
                                           end passes through */
+#define GAC_ERR_PAINLEVE_STALL   -35   /* the steps of one stretch between events (or resolutions of the
+                                          paradox) met GAC_PAINLEVE_STALL states where the resting contacts'
+                                          forces do not exist (the Painleve paradox: a trial stage or the dense
+                                          output beyond a boundary where the normal force grows without bound)
+                                          without ever shrinking onto that boundary, where the tangential impact
+                                          is taken: the motion follows it with unbounded forces, at steps of its
+                                          scale */
 
 /* ---- how gac_sim_advance ends: the run's budgets (< 0) and status (> 0) ------------------------ */
 #define GAC_ERR_WALL_TIME        -25   /* the run used opt.max_wall_time seconds of its clock (gac_sim_set_clock)
@@ -217,6 +224,7 @@ typedef double (*gac_clock)(void *user);
  * run (GAC_ERR_STOPPED) at that step end, from which a later gac_sim_advance may go on.  user: passed through. */
 typedef int (*gac_progress)(double t, long n_steps, long n_impacts, void *user);
 #define GAC_LOOK_STEPS 64      /* steps between two looks at the clock and the progress callback */
+#define GAC_PAINLEVE_STALL 1000 /* rejections at the Painleve paradox in one stretch that stop the run */
 
 /* One contact: a point of the chain and a wall (kind GAC_CONTACT_WALL), or a joint and its stop (kind
  * GAC_CONTACT_STOP: a unilateral constraint on the coordinate q[coordinate], gap = normal_sign (q - limit) in

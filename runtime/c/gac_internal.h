@@ -221,6 +221,7 @@ int gac_row_response(const gac_model *m, const double *q, const double *p, int r
                      double *out);
 int gac_impact_system(const gac_model *m, const double *q, const double *qd, const double *p, int ncontact_set,
                       const int *contact_set, double *work, double *v, double *e);
+int gac_friction_consistent(int n, const double *B, double tol);
 int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const double *qd, const double *u,
                                       const double *p, int nresting, const int *resting, const int *stuck,
                                       const double *slip, double *qdd, double *lambda, double *lambda_t, double *work,

@@ -476,6 +476,20 @@ static int gac_is_p_matrix(int n, const double *B, double tol)
     return 1;
 }
 
+/* 1 if the n x n row-major B of the normal forces of sliding resting contacts (bent by their friction) gives them
+ * unique, bounded forces: B + B^T positive definite (LDL^T to tol), else (up to GAC_PMATRIX_MAX contacts) B a
+ * P-matrix, every principal minor above tol of its diagonal's scale.  0 where friction is strong enough for the
+ * Painleve paradox.  B is left as it was. */
+int gac_friction_consistent(int n, const double *B, double tol)
+{
+    double S[GAC_AT_LEAST_1(n * n)];
+    int a, b;
+    for (a = 0; a < n; ++a) {
+        for (b = 0; b < n; ++b) S[a*n + b] = 0.5 * (B[a*n + b] + B[b*n + a]);
+    }
+    return gac_ldlt(n, S, tol) == 0 || gac_is_p_matrix(n, B, tol);
+}
+
 /* The constrained dynamics of the contacts held at their walls (resting), with Coulomb friction on the walls
  * that have it: a held point with velocity v_t along its wall takes the force -c_f lambda phi, phi = v_t /
  * max(|v_t|, v_s) (v_s = m->friction_velocity), lambda >= 0 its normal force.  With d_a = n_a + mu_a J^T(-phi_a)
@@ -553,10 +567,7 @@ int gac_constrained_dynamics_friction(const gac_model *m, const double *q, const
          * positive definite (checked by LDL^T in A's place, which is no longer needed) ensures it; where that
          * fails, up to GAC_PMATRIX_MAX contacts are checked exactly, minor by minor.  Where B is no P-matrix the
          * friction is strong enough for the Painleve paradox (one contact: B_aa <= 0), and the model stops. */
-        for (a = 0; a < nresting; ++a) {
-            for (b = 0; b < nresting; ++b) A[a*nresting + b] = 0.5 * (B[a*nresting + b] + B[b*nresting + a]);
-        }
-        if (gac_ldlt(nresting, A, 1e-8) != 0 && !gac_is_p_matrix(nresting, B, 1e-8)) return GAC_ERR_FRICTION;
+        if (!gac_friction_consistent(nresting, B, 1e-8)) return GAC_ERR_FRICTION;
         if (gac_lu_solve(nresting, B, lambda, 1e-12) != 0) return GAC_ERR_FRICTION;
         for (a = 0; a < nresting; ++a) {
             if (!(cf[a] > 0.0)) continue;

@@ -93,8 +93,8 @@ def test_an_elastic_corner_struck_for_155_rounds_keeps_its_energy():
 
 def test_a_frictional_round_ended_at_its_tolerance_leaves_no_approach():
     """0-80/3 (2 links, planar, rough walls, RK4): three frictional rounds left O1 on x1_min (e = 0) pushing with
-    461 N s yet approaching at 7.9e-10 m/s, within the rounds' tolerance (1e-9 of the velocities the motion can
-    have) but above the approach the post-conditions allow (7.9e-10 m/s; GAC_ERR_IMPACT_ACCURACY at t = 1.212 s).
+    461 N s yet approaching at 7.95e-10 m/s, within the rounds' tolerance (1e-9 of the velocities the motion can
+    have) but just above the approach the post-conditions allow (7.94e-10 m/s; GAC_ERR_IMPACT_ACCURACY at 1.212 s).
     The approach is closed by a plastic normal strike of its own, which takes energy and keeps the cone."""
     scene, model, run, result = run_case("0-80/3", 1.3)
     assert result.status == 0, result.message
@@ -126,7 +126,7 @@ def test_a_point_chattering_in_a_rough_corner_reaches_t_end():
 
 def test_a_link_pair_left_approaching_by_a_plastic_closing_round_is_closed():
     """0-33/6 (8 links, capsules, a sphere obstacle, rough walls): O1 on x3_max and the link pair L1-L3 strike each
-    other in turn for 256 rounds; the plastic round that closes them left the pair approaching at 1.5e-4 m/s
+    other in turn for 256 rounds; the plastic 257th that closes them left the pair approaching at 1.5e-4 m/s
     (GAC_ERR_IMPACT_ACCURACY at t = 0.858 s): the closing plastic normal strikes now reach link pairs too."""
     scene, model, run, result = run_case("0-33/6", 0.9)
     assert result.status == 0, result.message

@@ -164,16 +164,53 @@ int gac_impact(const gac_model *m, const double *GAC_RESTRICT q, const double *G
     return GAC_OK;
 }
 
+/* In-place LDL^T of a symmetric positive definite n x n row-major matrix in long double (as gac_ldlt): 0, or -1
+ * when a pivot is not above tol * max|A_ii|.  Then x = A^-1 b in place (gac_ldlt_ld_solve). */
+static int gac_ldlt_ld(int n, long double *A, double tol)
+{
+    long double scale = 0.0L;
+    int i, j, k;
+    for (i = 0; i < n; ++i) {
+        if (fabsl(A[i*n + i]) > scale) scale = fabsl(A[i*n + i]);
+    }
+    if (!(scale > 0.0L)) return -1;
+    for (j = 0; j < n; ++j) {
+        long double d = A[j*n + j];
+        for (k = 0; k < j; ++k) d -= A[j*n + k] * A[j*n + k] * A[k*n + k];
+        if (!(d > tol * scale)) return -1;
+        A[j*n + j] = d;
+        for (i = j + 1; i < n; ++i) {
+            long double sum = A[i*n + j];
+            for (k = 0; k < j; ++k) sum -= A[i*n + k] * A[j*n + k] * A[k*n + k];
+            A[i*n + j] = sum / d;
+        }
+    }
+    return 0;
+}
+
+static void gac_ldlt_ld_solve(int n, const long double *LD, long double *b)
+{
+    int i, k;
+    for (i = 0; i < n; ++i) {
+        for (k = 0; k < i; ++k) b[i] -= LD[i*n + k] * b[k];
+    }
+    for (i = 0; i < n; ++i) b[i] /= LD[i*n + i];
+    for (i = n - 1; i >= 0; --i) {
+        for (k = i + 1; k < n; ++k) b[i] -= LD[k*n + i] * b[k];
+    }
+}
+
 /* The linear complementarity problem  0 <= F  _|_  w = A F + q >= 0  for an n x n symmetric positive
  * (semi)definite A (row-major), n <= max_lcp (<= GAC_LCP_CAP): F is the impulse of each contact along its
  * inward normal, w its normal velocity after (or its excess over the law's bound).  Solved exactly by
  * enumerating the sets S of pushing contacts (A_SS F_S = -q_S, F_S >= 0, w >= 0 elsewhere): first
  * S = {q_a < 0}, then every set, largest first.  A set whose A_SS is singular is skipped (a solution on
  * independent rows exists).  Round-off floors: F_S >= -1e-10 max|F_S| (then clipped to 0), w >= -w_tol.
+ * In long double (q, F and the solves; A as given): the rounds' energy balance rests on each solve (below).
  * Returns GAC_OK or GAC_ERR_LCP. */
-static int gac_lcp(int max_lcp, int n, const double *A, const double *q, double w_tol, double *F)
+static int gac_lcp(int max_lcp, int n, const double *A, const long double *q, double w_tol, long double *F)
 {
-    double Asub[GAC_LCP_CAP * GAC_LCP_CAP], rhs[GAC_LCP_CAP];
+    long double Asub[GAC_LCP_CAP * GAC_LCP_CAP], rhs[GAC_LCP_CAP];
     unsigned long mask, guess = 0UL, full;
     int a, b, tries;
     if (n > max_lcp) return GAC_ERR_LCP;
@@ -184,7 +221,7 @@ static int gac_lcp(int max_lcp, int n, const double *A, const double *q, double 
     for (tries = 0, mask = full; ; ++tries) {
         const unsigned long set = tries == 0 ? guess : mask;
         int idx[GAC_LCP_CAP], k = 0, ok = 1;
-        double fmax = 0.0;
+        long double fmax = 0.0L;
         for (a = 0; a < n; ++a) {
             if (set & (1UL << a)) idx[k++] = a;
         }
@@ -192,10 +229,10 @@ static int gac_lcp(int max_lcp, int n, const double *A, const double *q, double 
             for (b = 0; b < k; ++b) Asub[a*k + b] = A[idx[a]*n + idx[b]];
             rhs[a] = -q[idx[a]];
         }
-        if (k > 0 && gac_ldlt(k, Asub, 1e-12) != 0) ok = 0;
-        if (ok && k > 0) gac_ldlt_solve(k, Asub, rhs);
+        if (k > 0 && gac_ldlt_ld(k, Asub, 1e-12) != 0) ok = 0;
+        if (ok && k > 0) gac_ldlt_ld_solve(k, Asub, rhs);
         for (a = 0; ok && a < k; ++a) {
-            if (fabs(rhs[a]) > fmax) fmax = fabs(rhs[a]);
+            if (fabsl(rhs[a]) > fmax) fmax = fabsl(rhs[a]);
         }
         for (a = 0; ok && a < k; ++a) {
             if (rhs[a] < -1e-10 * fmax) ok = 0;
@@ -204,7 +241,7 @@ static int gac_lcp(int max_lcp, int n, const double *A, const double *q, double 
             for (a = 0; a < n; ++a) F[a] = 0.0;
             for (a = 0; a < k; ++a) F[idx[a]] = rhs[a] > 0.0 ? rhs[a] : 0.0;
             for (a = 0; ok && a < n; ++a) {
-                double w = q[a];
+                long double w = q[a];
                 if (set & (1UL << a)) continue;
                 for (b = 0; b < n; ++b) w += A[a*n + b] * F[b];
                 if (w < -w_tol) ok = 0;
@@ -239,7 +276,10 @@ static int gac_rounds(const gac_model *m, const double *q, const double *qd, con
  * remaining approach is removed by one plastic round over every listed contact (the projection of qd onto
  * {N qd >= 0} in the mass metric, which cannot gain energy either); *plastic is then 1.
  * Contact list[first] (first >= 0), the one whose crossing was located, is struck in the first round
- * whenever it approaches, however slowly.
+ * whenever it approaches, however slowly.  The rounds' velocities, impulses and solves are carried in long double
+ * (A as computed): a round keeps the energy only as far as its solve and its update v += A F hold, each to about
+ * eps |A| |F| in double, and over many rounds with large impulses (a point struck back and forth in a corner, one
+ * wall elastic) that adds F eps |A| |F| per round, beyond the energy's round-off.
  * Returns qd_plus, the total impulses F (>= 0, N s along the inward normals) and the number of rounds. */
 int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                       const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
@@ -291,21 +331,24 @@ static int gac_rounds(const gac_model *m, const double *q, const double *qd, con
                       int *rounds, int *plastic, gac_rounds_trace *trace, double *rest_work)
 {
     const int nq = m->nq, max_lcp = GAC_MAX_LCP(m);
-    double v[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)], noise[GAC_AT_LEAST_1(nq)], scale = 0.0, v_tol, gain;
+    double v0[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)], noise[GAC_AT_LEAST_1(nq)], scale = 0.0, v_tol;
+    long double v[GAC_AT_LEAST_1(nq)], total[GAC_AT_LEAST_1(nq)], gain;
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work);
     int a, b, i, round, code;
     *rounds = *plastic = 0;
     *rest_work = 0.0;
-    code = gac_impact_system_refined(m, q, qd, p, n, list, work, v, e_wall);   /* Y_a refined (gac_impact_accuracy.c) */
+    code = gac_impact_system_refined(m, q, qd, p, n, list, work, v0, e_wall);   /* Y_a refined (gac_impact_accuracy.c) */
     if (code != GAC_OK) return code;
     for (a = 0; a < n; ++a) {
-        F[a] = 0.0;
+        v[a] = v0[a];
+        total[a] = 0.0L;
         noise[a] = 0.0;
-        if (fabs(v[a]) > scale) scale = fabs(v[a]);
+        if (fabs(v0[a]) > scale) scale = fabs(v0[a]);
     }
     v_tol = 1e-11 * scale;                 /* a normal velocity below this is round-off: at rest */
     for (round = 0; ; ++round) {
-        double Asub[GAC_LCP_CAP * GAC_LCP_CAP], qsub[GAC_AT_LEAST_1(nq)], Fsub[GAC_LCP_CAP];
+        double Asub[GAC_LCP_CAP * GAC_LCP_CAP];
+        long double qsub[GAC_AT_LEAST_1(nq)], Fsub[GAC_LCP_CAP];
         int idx[GAC_AT_LEAST_1(nq)], hit[GAC_AT_LEAST_1(nq)], k = 0, approaching = 0;
         const int last = round >= GAC_MAX_ROUNDS;
         for (a = 0; a < n; ++a) {
@@ -325,32 +368,38 @@ static int gac_rounds(const gac_model *m, const double *q, const double *qd, con
         }
         code = gac_lcp(max_lcp, k, Asub, qsub, 1e-10 * scale, Fsub);
         if (code != GAC_OK) return code;
-        if (trace != 0) gac_trace_round(trace, round, k, idx, hit, Fsub);
-        gain = 0.0;
+        if (trace != 0) {
+            double Ftrace[GAC_LCP_CAP];
+            for (a = 0; a < k; ++a) Ftrace[a] = (double)Fsub[a];
+            gac_trace_round(trace, round, k, idx, hit, Ftrace);
+        }
+        gain = 0.0L;
         for (a = 0; a < k; ++a) {
-            F[idx[a]] += Fsub[a];
-            gain += 0.5 * Fsub[a] * v[idx[a]];           /* 1/2 F (v- + v+) with v+ = A F + v-, below */
+            total[idx[a]] += Fsub[a];
+            gain += 0.5L * Fsub[a] * v[idx[a]];          /* 1/2 F (v- + v+) with v+ = A F + v-, below */
         }
         for (a = 0; a < n; ++a) {
-            double size = fabs(v[a]);
+            double size = fabs((double)v[a]);
             for (b = 0; b < k; ++b) {
                 v[a] += A[a*n + idx[b]] * Fsub[b];
-                size += fabs(A[a*n + idx[b]] * Fsub[b]);
+                size += fabs(A[a*n + idx[b]] * (double)Fsub[b]);
             }
-            noise[a] += 4.0 * (k + 1) * GAC_EPS * size;  /* the update's round-off, summed over the rounds */
+            noise[a] += 4.0 * (k + 1) * GAC_EPS * size;  /* A's round-off times the impulses, summed over the
+                                                            rounds (the updates themselves in long double) */
         }
-        for (a = 0; a < k; ++a) gain += 0.5 * Fsub[a] * v[idx[a]];
-        if (gain > 0.0) *rest_work += gain;              /* the round gained energy (its contacts at rest) */
+        for (a = 0; a < k; ++a) gain += 0.5L * Fsub[a] * v[idx[a]];
+        if (gain > 0.0L) *rest_work += (double)gain;     /* the round gained energy (its contacts at rest) */
         *rounds = round + 1;
         if (last) {
             *plastic = 1;
             break;
         }
     }
+    for (a = 0; a < n; ++a) F[a] = (double)total[a];
     for (i = 0; i < nq; ++i) {
-        double value = qd[i];
-        for (a = 0; a < n; ++a) value += Y[a*nq + i] * F[a];
-        qd_plus[i] = value;
+        long double value = qd[i];
+        for (a = 0; a < n; ++a) value += Y[a*nq + i] * total[a];
+        qd_plus[i] = (double)value;
     }
     return GAC_OK;
 }

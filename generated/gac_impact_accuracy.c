@@ -465,16 +465,6 @@ static void gac_balance_residual(const gac_model *m, const double *q, const doub
     b->moved = fabs((double)work_m);
 }
 
-/* 1 if adding dLambda along the held directions would make a contact's normal impulse pull (F < 0). */
-static int gac_held_would_pull(int nh, const gac_held *held, const double *F, const double *dl)
-{
-    int a;
-    for (a = 0; a < nh; ++a) {
-        if (held[a].tangent < 0 && F[held[a].contact] + dl[a] < 0.0) return 1;
-    }
-    return 0;
-}
-
 /* Lambda += dLambda along the held directions (a slide's direction adds to its tangential impulses in ratio). */
 static void gac_held_add(const gac_model *m, const int *list, int nh, const gac_held *held, const double *dl,
                          double *F, double *Ft)
@@ -490,6 +480,28 @@ static void gac_held_add(const gac_model *m, const int *list, int nh, const gac_
         F[c] += dl[a];
         for (k = 1; k < held[a].nrow; ++k) Ft[2*c + (held[a].row[k] == kc->trow[0] ? 0 : 1)] += held[a].coef[k] * dl[a];
     }
+}
+
+/* 1 if adding dLambda along the held directions would make a contact's normal impulse pull (F < 0) or take a stuck
+ * contact's tangential impulse out of its Coulomb cone (|Lambda_T| > c_f Lambda_N, its ratio to Lambda_N growing: a
+ * slide's direction moves its impulses in ratio, along the cone). */
+static int gac_held_would_pull(const gac_model *m, const double *p, const int *list, int n, int nh,
+                               const gac_held *held, const double *F, const double *Ft, const double *dl)
+{
+    double F2[GAC_AT_LEAST_1(m->nq)], Ft2[2 * GAC_AT_LEAST_1(m->nq)];
+    int a;
+    for (a = 0; a < nh; ++a) {
+        if (held[a].tangent < 0 && F[held[a].contact] + dl[a] < 0.0) return 1;
+    }
+    gac_copy(F2, F, n);
+    gac_copy(Ft2, Ft, 2 * n);
+    gac_held_add(m, list, nh, held, dl, F2, Ft2);
+    for (a = 0; a < n; ++a) {
+        const double cf = gac_friction_coefficient(m, p, list[a]);
+        const double before = hypot(Ft[2*a], Ft[2*a + 1]), after = hypot(Ft2[2*a], Ft2[2*a + 1]);
+        if (after > cf * F2[a] && after * F[a] > (1.0 + 1e-12) * before * F2[a]) return 1;   /* |L_T| / L_N grows */
+    }
+    return 0;
 }
 
 /* How accurately the contacts' normal velocities after the impact are known (m/s), the largest over list[0..n-1]:
@@ -767,7 +779,7 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         for (a = 0; a < nh; ++a) dl[a] -= miss[a];
         if (nh > 0) gac_ldlt_solve(nh, GAC_WORK_A(m, work), dl);   /* A_HH dLambda_H = N_H I_f^-1 r - miss_H */
         if (nh > 0 && !gac_finite(dl, nh)) break;
-        if (gac_held_would_pull(nh, held, Fs, dl)) break;   /* keep the impulses as they are */
+        if (gac_held_would_pull(m, p, list, n, nh, held, Fs, Fts, dl)) break;   /* keep the impulses as they are */
         for (i = 0; i < nq; ++i) {
             double s = -dq[i];
             for (a = 0; a < nh; ++a) s += Y[(long)a * nq + i] * dl[a];
@@ -790,7 +802,7 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         }
         gac_ldlt_solve(nh, GAC_WORK_A(m, work), dl);
         if (!gac_finite(dl, nh)) break;
-        if (gac_held_would_pull(nh, held, Fs, dl)) break;
+        if (gac_held_would_pull(m, p, list, n, nh, held, Fs, Fts, dl)) break;
         gac_copy(F_kept, Fs, n);
         gac_copy(Ft_kept, Fts, 2 * n);
         gac_held_add(m, list, nh, held, dl, Fs, Fts);

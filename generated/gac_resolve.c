@@ -86,6 +86,24 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
     double b = 0.0, v = 0.0, targets[GAC_AT_LEAST_1(nq)];
     int pass, a;
     for (a = 0; a < ev->n; ++a) targets[a] = NAN;       /* the rounds' velocities, from their own impulses */
+    if (!refine && ev->rounds >= 1) {                   /* a frictional law that left a contact approaching beyond
+                                                           round-off: its plastic closing round (nearly dependent
+                                                           rows), or a round it ended as solved to its tolerance
+                                                           (GAC_FRICTION_RESIDUAL_MAX of the velocities the motion can
+                                                           have, above the approach gac_finish allows): struck by
+                                                           plastic normal impulses of its own, which take energy and
+                                                           keep every impulse in its cone (a link pair's or
+                                                           obstacle's too: its normal J^T n) */
+        double vel[3 * GAC_AT_LEAST_1(s->model->npoint)];
+        s->model->contact_velocities(ev->x, ev->qd_plus, s->p, vel);
+        for (a = 0; a < ev->n; ++a) {
+            if (gac_normal_value(s->model, ev->x, s->p, ev->list[a], ev->qd_plus, vel) < -1e-9 * ev->scale) {
+                gac_close_approach(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->x + nq, ev->qd_plus,
+                                   1e-11 * ev->scale, s->work);
+                break;
+            }
+        }
+    }
     if (gac_has_link(s->model, ev->n, ev->list)) {      /* a link pair has no Jacobian row: the velocities refined
                                                            against the momentum balance alone, then measured */
         const double T = ev->T_before > 0.0 ? ev->T_before : 1e-300;
@@ -109,20 +127,6 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
         b = gac_link_law_accuracy(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->Ft, ev->x + nq, ev->qd_plus,
                                   ev->T_before) + law / T;
         return b > 1e-10 ? b : 1e-10;
-    }
-    if (!refine && ev->plastic) {                       /* a frictional law's plastic closing round that left a
-                                                           contact approaching beyond round-off (nearly dependent
-                                                           rows): struck by plastic normal impulses of its own, which
-                                                           take energy and keep every impulse in its cone */
-        double vel[3 * GAC_AT_LEAST_1(s->model->npoint)];
-        s->model->contact_velocities(ev->x, ev->qd_plus, s->p, vel);
-        for (a = 0; a < ev->n; ++a) {
-            if (gac_normal_value(s->model, ev->x, s->p, ev->list[a], ev->qd_plus, vel) < -1e-9 * ev->scale) {
-                gac_close_approach(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->x + nq, ev->qd_plus,
-                                   1e-11 * ev->scale, s->work);
-                break;
-            }
-        }
     }
     for (pass = 0; pass < (refine ? 2 : 1); ++pass) {   /* the impulses against the velocities, then the velocities
                                                            against the impulses (the momentum balance), twice */

@@ -24,8 +24,10 @@
  * (separate, stick, or slide: a sign for one tangential axis, for two every direction in which it can slide, the
  * real roots of a quartic; with W positive definite one of them always solves it); where the sweeps stall (coupled contacts with friction are not a monotone problem), the contacts' modes
  * are enumerated exactly (up to GAC_ENUM_MAX contacts).  Where that leaves a round above its tolerance (dependent
- * rows: W singular, the impulses not unique), a later round whose approach is within the tolerance of the
- * velocities the motion can have ends the rounds, and any other is solved by the proximal point method
+ * rows: W singular, the impulses not unique), a round whose approach is within the tolerance of the velocities
+ * the motion can have ends the rounds (a later one, whose approach left is closed by plastic normal strikes after
+ * the law, gac_close_approach; or a first one, contacts touching at rest at round-off speed: no impulse), and any
+ * other is solved by the proximal point method
  * (gac_round_proximal), else with every pushing contact held at rest (gac_round_stick); rounds the plain solve
  * meets are untouched.  Its residual is reported, and a round still
  * left above GAC_FRICTION_RESIDUAL_MAX (or 16 eps cond W) is GAC_ERR_IMPACT_FRICTION.
@@ -1093,8 +1095,10 @@ int gac_impact_rounds_friction_traced(const gac_model *m, const double *q, const
         }
         for (b = 0; b < k; ++b) ek_own[b] = ek[b];
         for (attempt = 0; attempt < 2; ++attempt) {  /* the plain solve; where it fails, the proximal one */
-            if (attempt == 1 && round > 0) {     /* the round's approach, what the earlier rounds left, against */
-                double left = 0.0, E[2], v_motion = 0.0;   /* the contact velocities the motion can have */
+            if (attempt == 1) {                  /* the round's approach (what the earlier rounds left, or a
+                                                    first round's at round-off: contacts touching at rest, rows
+                                                    dependent) against the contact velocities the motion can have */
+                double left = 0.0, E[2], v_motion = 0.0;
                 m->energy(q, qd, p, E);
                 for (b = 0; b < k; ++b) left = -gam[rows[st[b]]] > left ? -gam[rows[st[b]]] : left;
                 for (a = 0; a < nd; ++a) {       /* |d_r . qd| <= sqrt(2 T W_rr) */

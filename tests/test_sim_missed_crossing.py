@@ -14,6 +14,10 @@ an impact" and now runs on:
     change that the search's limits leave unsplit is now located as the crossing it holds;
   * 0-74/6 (7 links, resting link pairs): all three, with contacts held.
 
+Since the impact law's rounds are carried in long double, 0-10/9, 0-49/0 and 0-74/6 take other paths by round-off
+and meet no crossing near their former stops; they are kept as runs checked for penetration, and 0-27/9 still strikes
+its crossing in the window.
+
 Each run is checked independently: from model.contact_points at the samples (dense around the former stop) and at
 the impact states, numpy segment distances (studies.fuzz.segment_distance) less the radii for every link pair and the
 points' and capsules' distances to the walls at the run's positions, against the study's position tolerance."""
@@ -59,11 +63,12 @@ def deepest(model, run, states) -> float:
 
 
 CASES = [   # case, t_end (past the former stop and the misses after it), the former stop's time, a window after it
-    ("0-10/9", 0.3, 0.238896075723, 2e-5),            # holding the crossing it missed (401 samples there)
-    ("0-27/9", 0.05, 0.0366792565713, 1e-6),
+    ("0-10/9", 0.3, 0.238896075723, None),            # holding the crossing it missed (401 samples there) until
+                                                      # the impact law's rounds went to long double: another path
+    ("0-27/9", 0.05, 0.0366792565713, 1e-6),          # the crossing it missed, still struck in its window
     pytest.param("0-49/0", 0.09, 0.0815170988835, None,   # its impacts' rounds refined since: another path, no
-                 marks=pytest.mark.slow),              # crossing left there to find (0-74/6 keeps the unsplit one)
-    ("0-74/6", 1.41, 1.36677079333, 5e-3),
+                 marks=pytest.mark.slow),              # crossing left there to find
+    ("0-74/6", 1.41, 1.36677079333, None),            # the same since the long-double rounds
 ]
 
 

@@ -10,12 +10,12 @@ from runtime.simulate import accuracy_cause, simulate
 from studies import fuzz
 
 
-def _fuzz_case(compiled, index: int, run: int, extended: bool = False):
+def _fuzz_case(compiled, index: int, run: int, extended: bool = False, chart_b: bool = False):
     """The fuzz study's scene ``index`` (seed 0) and its run ``run``: the model (with the long-double kernels of
-    the accuracy's residuals if ``extended``) and the run."""
+    the accuracy's residuals if ``extended``, with a free base's second chart if ``chart_b``) and the run."""
     rng = np.random.default_rng([0, index])
     scene = fuzz.random_structure(rng, index)
-    model = compiled(scene, extended=extended)
+    model = compiled(scene, chart_b=chart_b, extended=extended)
     for _ in range(run + 1):
         case = fuzz.random_run(rng, scene, model)
     return model, case
@@ -202,8 +202,9 @@ def test_residuals_in_long_double_resolve_an_ill_conditioned_chains_impacts_to_1
     # identity resolve its impacts' energy only to about 2e-9 of T (E0 = 4 (nq + 1) eps sum |qd+_i| (|(I_f dqd)_i| +
     # |g_i|), the velocities' components cancelling along a soft direction of I_f), although the law is solved to
     # round-off; with the long-double kernels (generalized_momentum_ld, contact_generalized_force_ld, energy_ld)
-    # the same measure states every impact at 1e-10 or better
-    model, case = _fuzz_case(compiled, 6, 3, extended=extended)
+    # the same measure states every impact at 1e-10 or better.  With both charts, as the study builds it: the
+    # model test_sim_impact_rounds.py takes for the same structure (one build)
+    model, case = _fuzz_case(compiled, 6, 3, extended=extended, chart_b=True)
     assert model.options.extended == extended
     assert (model.c.model.energy_ld != model.ffi.NULL) == extended
     result = simulate(model, case.t_end, p=case.p, q0=case.q0, qd0=case.qd0, **case.options)

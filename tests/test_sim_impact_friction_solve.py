@@ -40,11 +40,13 @@ CASES = [
 
 
 def fuzz_model_and_p(compiled, case: str):
-    """The fuzz study's model (as load_model builds it) and parameters of a run "seed-structure/run"."""
+    """The fuzz study's model and parameters of a run "seed-structure/run": its general layout and long-double kernels
+    as load_model builds it, without the free base's second chart (the law is applied here at states of the first
+    chart, whose kernels are the same; half the derivation)."""
     from studies.fuzz import draw_run, draw_structure
     seed, index, k = (int(x) for x in case.replace("/", "-").split("-"))
     scene, rng = draw_structure(seed, index, 8, True)
-    model = compiled(scene, specialise=False, chart_b=True, extended=True)
+    model = compiled(scene, specialise=False, chart_b=False, extended=True)
     for _ in range(k + 1):
         run = draw_run(rng, scene, model)
     return model, np.asarray(run.p, dtype=float)

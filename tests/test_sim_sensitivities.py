@@ -70,14 +70,28 @@ def test_the_saltation_term_is_what_gives_the_closed_form(free_rod):
     assert abs(s["q[X2]", "q0[X2]"] - without_saltation) > 1.0
 
 
+def falling_rod(compiled):
+    """The rod under gravity (g = 9.81), dropped from rest: one model for every restitution and drop height (e_x2_min is
+    in p, the height in q0; rod_start)."""
+    return compiled(rod_scene(9.81, E, H0, 0.0), specialise=True, tangent=True)
+
+
+def rod_start(model, h0: float) -> np.ndarray:
+    """The rod's start (full layout) with its lower end at height h0."""
+    q0 = np.array(model.scene.q0)
+    q0[coordinate_names(model.n).index("X2")] = h0
+    return q0
+
+
 def test_bouncing_rod_impact_times_match_the_closed_form(compiled):
     """Dropped from rest at h0 under g: t1 = sqrt(2 h0 / g), t2 = t1 (1 + 2 e), so dt1/dh0 = t1 / (2 h0),
     dt1/dg = -t1 / (2 g), dt1/de = 0, dt2 = (1 + 2 e) dt1 along h0 and g, dt2/de = 2 t1."""
     e, h0, g = 0.8, 1.0, 9.81
-    model = compiled(rod_scene(g, e, h0, 0.0), specialise=True, tangent=True)
+    model = falling_rod(compiled)
+    p, q0 = model.parameters({"e_x2_min": e}), rod_start(model, h0)
     t1 = math.sqrt(2 * h0 / g)
     t2 = t1 * (1 + 2 * e)
-    r = simulate(model, t2 + 0.05, sensitivities=["q0[X2]", "e_x2_min", "g"], **TIGHT)
+    r = simulate(model, t2 + 0.05, p=p, q0=q0, sensitivities=["q0[X2]", "e_x2_min", "g"], **TIGHT)
     assert r.success and len(r.impacts) == 2 and r.sensitivities.valid
     first, second = r.impacts[0].dt_dp, r.impacts[1].dt_dp
     assert r.impacts[0].t == pytest.approx(t1, rel=1e-10) and r.impacts[1].t == pytest.approx(t2, rel=1e-10)
@@ -182,8 +196,9 @@ def test_a_landing_is_differentiated(compiled):
     """A rod dropped with e = 0.05 bounces once, then lands (its next bounce below the rest height): both impacts
     and the resting contact after them are differentiated (tests/test_sim_sensitivities_rest.py checks the numbers);
     the landing's event carries its impact's time derivatives."""
-    model = compiled(rod_scene(9.81, 0.05, 0.3, 0.0), specialise=True, tangent=True)
-    r = simulate(model, 0.5, sensitivities=["q0[X2]", "e_x2_min"])
+    model = falling_rod(compiled)
+    r = simulate(model, 0.5, p=model.parameters({"e_x2_min": 0.05}), q0=rod_start(model, 0.3),
+                 sensitivities=["q0[X2]", "e_x2_min"])
     assert r.success
     s = r.sensitivities
     assert s.valid, s.message
@@ -197,7 +212,7 @@ def test_a_landing_is_differentiated(compiled):
 def rough_rod(friction: float):
     """The rod tilted 0.7 rad from the vertical, thrown down and sideways and turning, onto a floor with e = 0.8 and
     the given Coulomb coefficient: it strikes with O_1, then O_2, then O_1 again within 0.5 s."""
-    return scene_from_dict({"name": f"sens_rough_rod{int(10 * friction)}", "gravity": 9.81,
+    return scene_from_dict({"name": "sens_rough_rod", "gravity": 9.81,
                             "links": [{"length": 1.0, "mu": 1.0, "J": [0.0, 0.0, 0.0]}],
                             "walls": {"x2_min": 0.0}, "restitution": 0.8, "friction": friction,
                             "initial": {"q": [-math.pi / 2, 0.0, 0.7, 0.0, 0.3, 0.0],
@@ -246,13 +261,14 @@ def test_impacts_that_slide_on_a_rough_floor_match_central_differences(compiled)
 
 def test_a_sliding_impact_in_the_plane_matches_central_differences(compiled):
     """The planar rod on a floor with c_f = 0.2: three impacts, each sliding along the one tangential axis."""
-    model = compiled(rough_rod(0.2), specialise=True, tangent=True)
+    model = compiled(rough_rod(2.0), specialise=True, tangent=True)     # the rough rod's model, c_f = 0.2 through p
+    p = model.parameters({"friction_x2_min": 0.2})
     names = ["q0[X2]", "qd0[X1]", "qd0[theta_1]", "e_x2_min", "friction_x2_min"]
-    r = simulate(model, 0.5, sensitivities=names, **TIGHT)
+    r = simulate(model, 0.5, p=p, sensitivities=names, **TIGHT)
     assert r.sensitivity_status == "valid" and len(r.impacts) == 3
     contact = r.impacts[0].contacts[0]
     assert abs(contact.impulse_t[0]) == pytest.approx(0.2 * contact.impulse, rel=1e-9)   # on the cone: sliding
-    p, q0, qd0 = model.p.copy(), np.array(model.scene.q0), np.array(model.scene.qd0)
+    q0, qd0 = np.array(model.scene.q0), np.array(model.scene.qd0)
     central_differences(model, 0.5, p, q0, qd0, names, r.sensitivities.matrix, **TIGHT)
 
 

@@ -50,12 +50,18 @@ def test_capsules_leave_the_other_structures_and_their_runs_as_they_were():
             assert [link.length for link in scene.links] == [link.length for link in old.links]
 
 
+def small_structure():
+    """A structure of up to 3 links (structure 0 of seed 3), its compiled model and the stream its runs come from: the
+    tests below that need some compiled structure share it (one build)."""
+    rng = np.random.default_rng(3)
+    scene = fuzz.random_structure(rng, 0, n_max=3)
+    return rng, scene, fuzz.study_model(scene)
+
+
 def test_runs_start_strictly_inside_their_box_with_every_restitution_kind():
     """Runs of one compiled structure: new numbers each time, every contact point strictly inside its
     box, restitutions 0, 1 and in between, all three integrators."""
-    rng = np.random.default_rng(3)
-    scene = fuzz.random_structure(rng, 0, n_max=3)
-    model = fuzz.study_model(scene)
+    rng, scene, model = small_structure()
     runs = [fuzz.random_run(rng, scene, model) for _ in range(60)]
     names = scene.parameter_names()
     restitutions = set()
@@ -83,9 +89,7 @@ class FakeResult:
 def test_each_independent_check_can_fail():
     """Doctored results: a sample beyond a wall, a NaN, an impact that gains energy, an elastic impact that
     loses it, a run over its budget: check_run reports each; the untouched result passes."""
-    rng = np.random.default_rng(5)
-    scene = fuzz.random_structure(rng, 0, n_max=2)
-    model = fuzz.study_model(scene)
+    rng, scene, model = small_structure()
     run = fuzz.random_run(rng, scene, model)
     run.options = {"method": "dopri5", "rtol": 1e-10, "atol": 1e-12}
     names = scene.parameter_names()

@@ -164,42 +164,6 @@ int gac_impact(const gac_model *m, const double *GAC_RESTRICT q, const double *G
     return GAC_OK;
 }
 
-/* In-place LDL^T of a symmetric positive definite n x n row-major matrix in long double (as gac_ldlt): 0, or -1
- * when a pivot is not above tol * max|A_ii|.  Then x = A^-1 b in place (gac_ldlt_ld_solve). */
-static int gac_ldlt_ld(int n, long double *A, double tol)
-{
-    long double scale = 0.0L;
-    int i, j, k;
-    for (i = 0; i < n; ++i) {
-        if (fabsl(A[i*n + i]) > scale) scale = fabsl(A[i*n + i]);
-    }
-    if (!(scale > 0.0L)) return -1;
-    for (j = 0; j < n; ++j) {
-        long double d = A[j*n + j];
-        for (k = 0; k < j; ++k) d -= A[j*n + k] * A[j*n + k] * A[k*n + k];
-        if (!(d > tol * scale)) return -1;
-        A[j*n + j] = d;
-        for (i = j + 1; i < n; ++i) {
-            long double sum = A[i*n + j];
-            for (k = 0; k < j; ++k) sum -= A[i*n + k] * A[j*n + k] * A[k*n + k];
-            A[i*n + j] = sum / d;
-        }
-    }
-    return 0;
-}
-
-static void gac_ldlt_ld_solve(int n, const long double *LD, long double *b)
-{
-    int i, k;
-    for (i = 0; i < n; ++i) {
-        for (k = 0; k < i; ++k) b[i] -= LD[i*n + k] * b[k];
-    }
-    for (i = 0; i < n; ++i) b[i] /= LD[i*n + i];
-    for (i = n - 1; i >= 0; --i) {
-        for (k = i + 1; k < n; ++k) b[i] -= LD[k*n + i] * b[k];
-    }
-}
-
 /* The linear complementarity problem  0 <= F  _|_  w = A F + q >= 0  for an n x n symmetric positive
  * (semi)definite A (row-major), n <= max_lcp (<= GAC_LCP_CAP): F is the impulse of each contact along its
  * inward normal, w its normal velocity after (or its excess over the law's bound).  Solved exactly by

@@ -206,6 +206,8 @@ double gac_frame_direction(const gac_model *m, const double *q, const double *p,
 int gac_lu_solve(int n, double *A, double *b, double tol);
 int gac_ldlt(int n, double *A, double tol);
 void gac_ldlt_solve(int n, const double *LD, double *b);
+int gac_ldlt_ld(int n, long double *A, double tol);
+void gac_ldlt_ld_solve(int n, const long double *LD, long double *b);
 int gac_ldlt_drop(int n, double *A, double tol);
 
 /* gac_impact.c */

@@ -238,3 +238,9 @@ def quick_model(scene, specialise: bool = True, **options):
     options.setdefault("tangent", False)
     options.setdefault("extended", False)
     return load_model(scene, specialise=specialise, **options)
+
+
+def wall_friction(scene, p) -> dict:
+    """Each rough wall's Coulomb coefficient in the parameter vector p, by wall name ('x2_min': c_f)."""
+    names = scene.parameter_names()
+    return {name[len("friction_"):]: float(p[i]) for i, name in enumerate(names) if name.startswith("friction_")}

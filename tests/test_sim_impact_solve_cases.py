@@ -13,6 +13,7 @@ import pytest
 
 from runtime.simulate import simulate
 from studies import fuzz
+from conftest import wall_friction
 
 EPS = np.finfo(float).eps
 
@@ -39,16 +40,11 @@ def _normal(model, q, p, c) -> np.ndarray:
     return model.contact_normal(q, c, p)
 
 
-def _friction(scene, p) -> dict:
-    names = scene.parameter_names()
-    return {name[len("friction_"):]: float(p[i]) for i, name in enumerate(names) if name.startswith("friction_")}
-
-
 def check_impacts(scene, model, run, result, t_stop: float) -> int:
     """Every impact's physics from the dense M and the contacts' normals; returns how many impacts came after the
     time the run used to stop at."""
     layout, p = model.layout, run.p
-    friction = _friction(scene, p)
+    friction = wall_friction(scene, p)
     later = 0
     for impact in result.impacts:
         q, before, after = (layout.reduce(x) for x in (impact.q, impact.qd_before, impact.qd_after))
@@ -76,7 +72,7 @@ def check_impacts(scene, model, run, result, t_stop: float) -> int:
 def run_case(case: str, t_end: float | None = None):
     scene, model, run = fuzz.rebuild_case(case)
     result = simulate(model, run.t_end if t_end is None else t_end, p=run.p, q0=run.q0, qd0=run.qd0,
-                      max_wall_time=60, **run.options)
+                      max_wall_time=600, **run.options)
     return scene, model, run, result
 
 

@@ -15,6 +15,7 @@ import pytest
 
 from studies import fuzz
 from runtime.simulate import simulate
+from conftest import wall_friction
 
 
 def rebuild(case: str):
@@ -35,8 +36,7 @@ def kinetic(model, q, qd, p) -> tuple[float, float]:
 
 def check_physics(scene, model, run, result):
     layout, p = model.layout, run.p
-    names = scene.parameter_names()
-    friction = {name[len("friction_"):]: float(p[i]) for i, name in enumerate(names) if name.startswith("friction_")}
+    friction = wall_friction(scene, p)
     assert result.status == 0 and result.t_final == pytest.approx(run.t_end, abs=1e-12), result.message
     for impact in result.impacts:                       # T from the mass matrix: never more after than before
         q = layout.reduce(impact.q)
@@ -132,8 +132,7 @@ def test_several_contacts_in_the_paradox_take_the_cones_most_dissipative_impulse
     (gamma_N >= c_f |gamma_T|: none approaches) and is orthogonal to its impulse."""
     scene, model, run, result = run_case("0-19/1")
     check_physics(scene, model, run, result)
-    names = scene.parameter_names()
-    friction = {name[len("friction_"):]: float(run.p[i]) for i, name in enumerate(names) if name.startswith("friction_")}
+    friction = wall_friction(scene, run.p)
     impact = next(i for i in result.impacts if i.law == "gdi-tangential" and len(i.contacts) == 2)
     assert impact.t == pytest.approx(0.0635433, abs=1e-6)
     q, qd = model.layout.reduce(impact.q), model.layout.reduce(impact.qd_after)

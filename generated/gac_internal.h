@@ -292,6 +292,12 @@ int gac_impact_rounds_friction_traced(const gac_model *m, const double *q, const
 int gac_impact_tangential(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                           const int *list, double *qd_plus, double *F, double *Ft, double *work, double *residual,
                           double *tangential_parts);
+/* Where that has none: the impulses in the contacts' Coulomb cones (n <= GAC_JAM_CONTACTS) that take the most
+ * kinetic energy (the maximal-dissipation impact, a convex problem; its optimum leaves no contact approaching),
+ * qd_plus, F, Ft as gac_impact_tangential.  GAC_ERR_FRICTION where the least energy change is not negative. */
+#define GAC_JAM_CONTACTS 10
+int gac_impact_cones(const gac_model *m, const double *q, const double *qd, const double *p, int n, const int *list,
+                     double *qd_plus, double *F, double *Ft, double *work);
 
 /* gac_setup.c */
 double gac_clock_now(const gac_sim *s);          /* the run's clock (s): the embedder's, or C's processor time */

@@ -117,168 +117,6 @@ static int gac_jam_release(gac_sim *s, gac_impact_record *r)
     return gac_report(s, r, GAC_SIM_CONTACT);
 }
 
-/* f(L) = L . gam + L W L / 2 along the ray L = t u of the cone's surface, u = (1, -c_f cos phi, -c_f sin phi):
- * its least value over t >= 0, -g^2 / (2 h) (g = u . gam < 0, h = u W u > 0), else 0; *t_best the t there. */
-static double gac_cone_ray(int d, double W[3][3], const double *gam, double cf, double phi, double *t_best)
-{
-    double u[3], g = 0.0, h = 0.0;
-    int a, b;
-    u[0] = 1.0, u[1] = -cf * cos(phi), u[2] = -cf * sin(phi);
-    for (a = 0; a < d; ++a) {
-        g += u[a] * gam[a];
-        for (b = 0; b < d; ++b) h += u[a] * W[a][b] * u[b];
-    }
-    *t_best = g < 0.0 && h > 0.0 ? -g / h : 0.0;
-    return g < 0.0 && h > 0.0 ? -g * g / (2.0 * h) : 0.0;
-}
-
-/* The least f(L) = L . gam + L W L / 2 over Coulomb's cone |L_T| <= c_f L_N of one contact (d = 2: one tangential
- * direction, 3: two; W its d x d contact-space inverse inertia, symmetric positive definite): at the apex L = 0
- * (f = 0), at the stick impulse -W^-1 gam where it lies inside the cone, or on the cone's surface, L = t u(phi) with
- * t = -g / h, phi by a grid and golden sections (d = 3; d = 2: the cone's two edges).  L (d) and the value. */
-static double gac_cone_min(int d, double W[3][3], const double *gam, double cf, double *L)
-{
-    const int grid = d == 2 ? 2 : 720;
-    double best = 0.0, phi_best = 0.0, t, lo, hi;
-    int a, b, k;
-    for (a = 0; a < 3; ++a) L[a] = 0.0;
-    for (k = 0; k < grid; ++k) {                   /* the cone's surface: phi on a grid ... */
-        const double phi = d == 2 ? (k == 0 ? 0.0 : 3.14159265358979323846) : 6.283185307179586 * k / grid;
-        const double value = gac_cone_ray(d, W, gam, cf, phi, &t);
-        if (value < best) best = value, phi_best = phi;
-    }
-    lo = phi_best - 6.283185307179586 / grid, hi = phi_best + 6.283185307179586 / grid;
-    for (k = 0; d == 3 && best < 0.0 && k < 80; ++k) {   /* ... then golden sections */
-        const double m1 = hi - 0.6180339887498949 * (hi - lo), m2 = lo + 0.6180339887498949 * (hi - lo);
-        if (gac_cone_ray(d, W, gam, cf, m1, &t) < gac_cone_ray(d, W, gam, cf, m2, &t)) hi = m2;
-        else lo = m1;
-    }
-    if (best < 0.0) {
-        const double phi = d == 3 ? 0.5 * (lo + hi) : phi_best;
-        const double value = gac_cone_ray(d, W, gam, cf, phi, &t);
-        const double use = value <= best ? phi : phi_best;
-        best = gac_cone_ray(d, W, gam, cf, use, &t);
-        L[0] = t, L[1] = -cf * cos(use) * t, L[2] = -cf * sin(use) * t;
-    }
-    {                                              /* inside the cone: the stick impulse, where it lies there */
-        double A[9], Ls[3], t2 = 0.0, value = 0.0;
-        for (a = 0; a < d; ++a) {
-            Ls[a] = -gam[a];
-            for (b = 0; b < d; ++b) A[a * d + b] = W[a][b];
-        }
-        if (gac_lu_solve(d, A, Ls, 1e-13) == 0 && Ls[0] > 0.0) {
-            for (a = 1; a < d; ++a) t2 += Ls[a] * Ls[a];
-            for (a = 0; a < d; ++a) value += 0.5 * Ls[a] * gam[a];           /* f = -gam W^-1 gam / 2 */
-            if (sqrt(t2) <= cf * Ls[0] && value < best) {
-                for (a = 0; a < d; ++a) L[a] = Ls[a];
-                best = value;
-            }
-        }
-    }
-    for (a = d; a < 3; ++a) L[a] = 0.0;
-    return best;
-}
-
-/* The tangential impact of the resting contacts list[0..n-1] (n <= GAC_JAM_SUBSETS) where the frictional law (GDI)
- * has no non-trivial solution (the stick impulse outside the cone and no slide that keeps the normal velocities at
- * 0): the impulses in Coulomb's cones that take the most kinetic energy, Lambda = argmin over the cones of
- * f(Lambda) = Lambda . gamma- + Lambda W Lambda / 2 (= T+ - T-, W the contact-space inverse inertia of the contacts'
- * normal and tangential directions; the maximal-dissipation impact, a convex problem with a solution).  Its optimum
- * has gamma+ = gamma- + W Lambda in the dual cones, gamma+_N >= c_f |gamma+_T| >= 0 (no contact approaches), and
- * Lambda . gamma+ = 0 per contact.  While a contact slides, f < 0 along its cone's edge against the slip, so the
- * minimum is not trivial.  Solved by block coordinate descent (each contact's block by gac_cone_min with the others'
- * impulses in its gamma; f falls at every block, and for a strictly convex f over a product of closed convex sets
- * the sweeps converge to the optimum), until no impulse moves by 1e-12 of the largest, at most GAC_JAM_SWEEPS
- * sweeps.  One contact: one block, one sweep.  qd_plus, F (n), Ft (2 n, per contact along its wall's axes) as
- * gac_impact_tangential.  GAC_ERR_FRICTION if the minimum is trivial or a contact has no tangential direction. */
-#define GAC_JAM_SWEEPS 500
-static int gac_jam_cones(gac_sim *s, int n, const int *list, double *qd_plus, double *F, double *Ft)
-{
-    const gac_model *md = s->model;
-    const int nq = md->nq, nd = 3 * GAC_AT_LEAST_1(n);
-    const double *x = s->x;
-    double resp[nd][GAC_AT_LEAST_1(nq)], v[GAC_AT_LEAST_1(nq)], e[GAC_AT_LEAST_1(nq)], W[nd][nd], gam[nd], L[nd];
-    double cf[GAC_AT_LEAST_1(n)], vel[3 * GAC_AT_LEAST_1(md->npoint)], total;
-    double *Y = GAC_WORK_Y(md, s->work), *f = GAC_WORK_F(md, s->work), *g = GAC_WORK_G(md, s->work);
-    int first[GAC_AT_LEAST_1(n) + 1], axis[nd], owner[nd], sweep, a, b, i, j, k, D = 0;
-    gac_tangents tg[GAC_AT_LEAST_1(n)];
-    if (n < 1 || n > GAC_JAM_SUBSETS) return GAC_ERR_FRICTION;
-    if (gac_impact_system(md, x, x + nq, s->p, n, list, s->work, v, e) != GAC_OK) return GAC_ERR_FRICTION;
-    for (a = 0; a < n; ++a) {                      /* per contact: its normal's, then its tangents' responses */
-        cf[a] = gac_rest_friction(md, s->p, list[a]);
-        if (cf[a] > 0.0 && gac_tangents_at(md, x, s->p, list[a], &tg[a]) != GAC_OK) return GAC_ERR_FRICTION;
-        first[a] = D;
-        gac_copy(resp[D], Y + (long)a * nq, nq);
-        axis[D] = -1, owner[D++] = a;
-        for (j = 0; j < 2 && cf[a] > 0.0; ++j) {
-            double phi[2] = {0.0, 0.0};
-            if (!tg[a].has[j]) continue;
-            phi[j] = 1.0;
-            gac_tangent_force(md, x, s->p, &tg[a], phi, f, g);
-            md->inertia_solve(x, g, s->p, resp[D]);
-            axis[D] = j, owner[D++] = a;
-        }
-    }
-    first[n] = D;
-    for (b = 0; b <= D; ++b) {                     /* W (columns: the responses) and gamma- (qd) */
-        const double *w = b < D ? resp[b] : x + nq;
-        md->contact_velocities(x, w, s->p, vel);
-        for (k = 0; k < D; ++k) {
-            const int c = list[owner[k]];
-            const double value = axis[k] < 0 ? gac_normal_value(md, x, s->p, c, w, vel)
-                                             : gac_tangent_value(&tg[owner[k]], axis[k], vel);
-            if (b < D) W[k][b] = value;
-            else gam[k] = value;
-        }
-    }
-    for (k = 0; k < D; ++k) {
-        L[k] = 0.0;
-        for (b = 0; b < k; ++b) W[k][b] = W[b][k] = 0.5 * (W[k][b] + W[b][k]);
-    }
-    for (sweep = 0; sweep < GAC_JAM_SWEEPS; ++sweep) {   /* block coordinate descent over the contacts */
-        double moved = 0.0, size = 0.0;
-        for (a = 0; a < n; ++a) {
-            const int d = first[a + 1] - first[a], o = first[a];
-            double Wa[3][3], ga[3], La[3];
-            for (i = 0; i < d; ++i) {                 /* its block, the others' impulses in its gamma */
-                ga[i] = gam[o + i];
-                for (k = 0; k < D; ++k) {
-                    if (k < o || k >= o + d) ga[i] += W[o + i][k] * L[k];
-                }
-                for (j = 0; j < d; ++j) Wa[i][j] = W[o + i][o + j];
-            }
-            if (d == 1) {                             /* a smooth wall: the normal impulse alone, >= 0 */
-                La[0] = Wa[0][0] > 0.0 && ga[0] < 0.0 ? -ga[0] / Wa[0][0] : 0.0;
-            } else {
-                gac_cone_min(d, Wa, ga, cf[a], La);
-            }
-            for (i = 0; i < d; ++i) {
-                if (fabs(La[i] - L[o + i]) > moved) moved = fabs(La[i] - L[o + i]);
-                L[o + i] = La[i];
-            }
-        }
-        for (k = 0; k < D; ++k) size = fabs(L[k]) > size ? fabs(L[k]) : size;
-        if (!(moved > 1e-12 * size)) break;
-    }
-    total = 0.0;                                   /* f(Lambda) = T+ - T-: it must fall */
-    for (k = 0; k < D; ++k) {
-        total += L[k] * gam[k];
-        for (b = 0; b < D; ++b) total += 0.5 * L[k] * W[k][b] * L[b];
-    }
-    if (!(total < 0.0)) return GAC_ERR_FRICTION;
-    for (i = 0; i < nq; ++i) {
-        double value = x[nq + i];
-        for (k = 0; k < D; ++k) value += resp[k][i] * L[k];
-        qd_plus[i] = value;
-    }
-    for (a = 0; a < n; ++a) {
-        F[a] = L[first[a]];
-        Ft[2 * a] = Ft[2 * a + 1] = 0.0;
-        for (k = first[a] + 1; k < first[a + 1]; ++k) Ft[2 * a + axis[k]] = L[k];
-    }
-    return GAC_OK;
-}
-
 /* What a tangential impact may change in s, kept to undo an impulse whose state after it still has no consistent
  * forces. */
 typedef struct {
@@ -389,7 +227,7 @@ static int gac_jam_apply(gac_sim *s, gac_impact_record *r, int n, const int *lis
 /* The tangential impact at s->x (time s->t) on the resting contacts, and the resting set after it (gac_jam_apply).
  * The impulses: the frictional law's (GDI with e = 0, gac_impact_tangential), or where it has no non-trivial solution
  * or its state after still has no consistent forces (it is then undone), the cones' most dissipative ones
- * (gac_jam_cones; for one contact the two agree wherever the law has a solution: the stick impulse inside the cone).
+ * (gac_impact_cones; for one contact the two agree wherever the law has a solution: the stick impulse inside the cone).
  * The record says so (law GAC_IMPACT_LAW_GDI_TANGENTIAL, impulses, released contacts); the loop re-checks the
  * resting contacts at the next advance (those the new state pulls off their walls are released, as after a change
  * of the inputs).  Post-conditions: every impulse >= 0, no kinetic energy gained beyond the law's round-off (1e-10
@@ -446,7 +284,8 @@ int gac_jam(gac_sim *s, gac_impact_record *r)
         gac_jam_restore(s, &saved, qd_saved, resting_saved, flags_saved, slip_saved);
     }
     if (code != GAC_ERR_FRICTION) return code;
-    code = gac_jam_cones(s, n, list, qd_plus, F, Ft);   /* the cones' most dissipative impulses */
+    code = gac_impact_cones(md, x, x + nq, s->p, n, list, qd_plus, F, Ft, s->work);   /* the cones' most
+                                                                                         dissipative impulses */
     if (code != GAC_OK) return code;
     r->residual = 0.0;
     return gac_jam_apply(s, r, n, list, qd_plus, F, Ft, E, 1e-9 * scale + 1e-15);

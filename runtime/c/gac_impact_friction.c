@@ -1270,3 +1270,132 @@ int gac_impact_tangential(const gac_model *m, const double *q, const double *qd,
     return GAC_OK;
 }
 
+/* f(L) = L . gam + L W L / 2 along the ray L = t u of the cone's surface, u = (1, -c_f cos phi, -c_f sin phi):
+ * its least value over t >= 0, -g^2 / (2 h) (g = u . gam < 0, h = u W u > 0), else 0; *t_best the t there. */
+static double gac_cone_ray(int d, double W[3][3], const double *gam, double cf, double phi, double *t_best)
+{
+    double u[3], g = 0.0, h = 0.0;
+    int a, b;
+    u[0] = 1.0, u[1] = -cf * cos(phi), u[2] = -cf * sin(phi);
+    for (a = 0; a < d; ++a) {
+        g += u[a] * gam[a];
+        for (b = 0; b < d; ++b) h += u[a] * W[a][b] * u[b];
+    }
+    *t_best = g < 0.0 && h > 0.0 ? -g / h : 0.0;
+    return g < 0.0 && h > 0.0 ? -g * g / (2.0 * h) : 0.0;
+}
+
+/* The least f(L) = L . gam + L W L / 2 over Coulomb's cone |L_T| <= c_f L_N of one contact (d = 2: one tangential
+ * direction, 3: two; W its d x d contact-space inverse inertia, symmetric positive definite): at the apex L = 0
+ * (f = 0), at the stick impulse -W^-1 gam where it lies inside the cone, or on the cone's surface, L = t u(phi) with
+ * t = -g / h, phi by a grid and golden sections (d = 3; d = 2: the cone's two edges).  L (d) and the value. */
+static double gac_cone_min(int d, double W[3][3], const double *gam, double cf, double *L)
+{
+    const int grid = d == 2 ? 2 : 720;
+    double best = 0.0, phi_best = 0.0, t, lo, hi;
+    int a, b, k;
+    for (a = 0; a < 3; ++a) L[a] = 0.0;
+    for (k = 0; k < grid; ++k) {                   /* the cone's surface: phi on a grid ... */
+        const double phi = d == 2 ? (k == 0 ? 0.0 : 3.14159265358979323846) : 6.283185307179586 * k / grid;
+        const double value = gac_cone_ray(d, W, gam, cf, phi, &t);
+        if (value < best) best = value, phi_best = phi;
+    }
+    lo = phi_best - 6.283185307179586 / grid, hi = phi_best + 6.283185307179586 / grid;
+    for (k = 0; d == 3 && best < 0.0 && k < 80; ++k) {   /* ... then golden sections */
+        const double m1 = hi - 0.6180339887498949 * (hi - lo), m2 = lo + 0.6180339887498949 * (hi - lo);
+        if (gac_cone_ray(d, W, gam, cf, m1, &t) < gac_cone_ray(d, W, gam, cf, m2, &t)) hi = m2;
+        else lo = m1;
+    }
+    if (best < 0.0) {
+        const double phi = d == 3 ? 0.5 * (lo + hi) : phi_best;
+        const double value = gac_cone_ray(d, W, gam, cf, phi, &t);
+        const double use = value <= best ? phi : phi_best;
+        best = gac_cone_ray(d, W, gam, cf, use, &t);
+        L[0] = t, L[1] = -cf * cos(use) * t, L[2] = -cf * sin(use) * t;
+    }
+    {                                              /* inside the cone: the stick impulse, where it lies there */
+        double A[9], Ls[3], t2 = 0.0, value = 0.0;
+        for (a = 0; a < d; ++a) {
+            Ls[a] = -gam[a];
+            for (b = 0; b < d; ++b) A[a * d + b] = W[a][b];
+        }
+        if (gac_lu_solve(d, A, Ls, 1e-13) == 0 && Ls[0] > 0.0) {
+            for (a = 1; a < d; ++a) t2 += Ls[a] * Ls[a];
+            for (a = 0; a < d; ++a) value += 0.5 * Ls[a] * gam[a];           /* f = -gam W^-1 gam / 2 */
+            if (sqrt(t2) <= cf * Ls[0] && value < best) {
+                for (a = 0; a < d; ++a) L[a] = Ls[a];
+                best = value;
+            }
+        }
+    }
+    for (a = d; a < 3; ++a) L[a] = 0.0;
+    return best;
+}
+
+/* The impulses in the Coulomb cones of the resting contacts list[0..n-1] (n <= GAC_JAM_CONTACTS) that take the most
+ * kinetic energy: Lambda = argmin over the cones of f(Lambda) = Lambda . gamma- + Lambda W Lambda / 2 (= T+ - T-, W
+ * the contact-space inverse inertia of the contacts' normal and tangential directions, gac_friction_system; the
+ * maximal-dissipation impact, a convex problem with a solution).  Its optimum has gamma+ = gamma- + W Lambda in the
+ * dual cones, gamma+_N >= c_f |gamma+_T| >= 0 (no contact approaches), and Lambda . gamma+ = 0 per contact.  While a
+ * contact slides, f < 0 along its cone's edge against the slip, so the minimum is not trivial.  Solved by block
+ * coordinate descent (each contact's block by gac_cone_min, a smooth contact's alone, with the others' impulses in
+ * its gamma; f falls at every block, and for a strictly convex f over a product of closed convex sets the sweeps
+ * converge to the optimum), until no impulse moves by 1e-12 of the largest, at most GAC_CONE_SWEEPS sweeps; one
+ * contact: one block, one sweep.  qd_plus (nq), F (n), Ft (2 n) as gac_impact_tangential.  GAC_ERR_FRICTION if the
+ * minimum is trivial (f not below 0), or the error of gac_friction_system. */
+#define GAC_CONE_SWEEPS 500
+int gac_impact_cones(const gac_model *m, const double *q, const double *qd, const double *p, int n, const int *list,
+                     double *qd_plus, double *F, double *Ft, double *work)
+{
+    const int nq = m->nq, nd_max = 3 * GAC_AT_LEAST_1(n);
+    double cf[GAC_AT_LEAST_1(nq)], gam[nd_max], L[nd_max], total = 0.0;
+    int start[GAC_AT_LEAST_1(nq)], dim[GAC_AT_LEAST_1(nq)], axis_of[nd_max];
+    const double *resp[nd_max];
+    const double *W = GAC_WORK_W(m, work);
+    int sweep, a, b, i, j, k, nd = 0, code;
+    if (n < 1 || n > GAC_JAM_CONTACTS) return GAC_ERR_FRICTION;
+    code = gac_friction_system(m, q, qd, p, n, list, GAC_IMPACT_LAW_GDI, work, cf, start, dim, axis_of, resp, gam, &nd);
+    if (code != GAC_OK) return code;
+    for (k = 0; k < nd; ++k) L[k] = 0.0;
+    for (sweep = 0; sweep < GAC_CONE_SWEEPS; ++sweep) {   /* block coordinate descent over the contacts */
+        double moved = 0.0, size = 0.0;
+        for (a = 0; a < n; ++a) {
+            const int d = dim[a], o = start[a];
+            double Wa[3][3], ga[3], La[3];
+            for (i = 0; i < d; ++i) {                 /* its block, the others' impulses in its gamma */
+                ga[i] = gam[o + i];
+                for (k = 0; k < nd; ++k) {
+                    if (k < o || k >= o + d) ga[i] += W[(o + i)*nd + k] * L[k];
+                }
+                for (j = 0; j < d; ++j) Wa[i][j] = W[(o + i)*nd + o + j];
+            }
+            if (d == 1) {                             /* a smooth contact: the normal impulse alone, >= 0 */
+                La[0] = Wa[0][0] > 0.0 && ga[0] < 0.0 ? -ga[0] / Wa[0][0] : 0.0;
+            } else {
+                gac_cone_min(d, Wa, ga, cf[a], La);
+            }
+            for (i = 0; i < d; ++i) {
+                if (fabs(La[i] - L[o + i]) > moved) moved = fabs(La[i] - L[o + i]);
+                L[o + i] = La[i];
+            }
+        }
+        for (k = 0; k < nd; ++k) size = fabs(L[k]) > size ? fabs(L[k]) : size;
+        if (!(moved > 1e-12 * size)) break;
+    }
+    for (k = 0; k < nd; ++k) {                   /* f(Lambda) = T+ - T-: it must fall */
+        total += L[k] * gam[k];
+        for (b = 0; b < nd; ++b) total += 0.5 * L[k] * W[k*nd + b] * L[b];
+    }
+    if (!(total < 0.0)) return GAC_ERR_FRICTION;
+    for (i = 0; i < nq; ++i) {
+        double value = qd[i];
+        for (k = 0; k < nd; ++k) value += resp[k][i] * L[k];
+        qd_plus[i] = value;
+    }
+    for (a = 0; a < n; ++a) {
+        F[a] = L[start[a]];
+        Ft[2*a] = Ft[2*a + 1] = 0.0;
+        for (i = 1; i < dim[a]; ++i) Ft[2*a + axis_of[start[a] + i]] = L[start[a] + i];
+    }
+    return GAC_OK;
+}

@@ -408,10 +408,13 @@ double gac_refine_impulses(const gac_model *m, const double *q, const double *p,
  * long double, when the model has the long-double kernels; NULL: in double), with what it moves: balance = |qd+ . r|
  * (T's change were qd+ moved to balance), moved = |qd- . r| (with it, the energy identity's miss for these
  * impulses: T+ - T- - 1/2 Lambda . (gamma+ + gamma-) = 1/2 (qd+ + qd-) . r), the floors of what evaluating r
- * resolves (and, for balance, storing qd+ in doubles), and each component's bound (|r_i| and its evaluation). */
+ * resolves, stored = eps/2 sum_i |qd+_i| |(I_f qd+)_i| (what rounding qd+ to doubles can move T by: no refinement of
+ * qd+ gets below it), and each component's bound (|r_i| and its evaluation).  In long double r is evaluated from
+ * the stored qd+ itself, so balance already measures what storing it moved, and stored only ends the refinement;
+ * in double qd+ - qd- is rounded before I_f applies to it, so floor carries stored too. */
 typedef struct {
     double *r, *bound;                                   /* nq each, the caller's */
-    double balance, floor, moved, moved_floor;
+    double balance, floor, stored, moved, moved_floor;
 } gac_balance;
 
 static void gac_balance_residual(const gac_model *m, const double *q, const double *p, int n, const int *list,
@@ -440,7 +443,8 @@ static void gac_balance_residual(const gac_model *m, const double *q, const doub
             b->bound[i] = (double)(fabsl(ri) + 4.0L * (nq + 1) * LDBL_EPSILON * evaluated
                                    + 0.5L * GAC_EPS * fabsl(h_plus[i]));
         }
-        b->floor = (double)(4.0L * (nq + 1) * LDBL_EPSILON * size + 0.5L * GAC_EPS * stored);
+        b->floor = (double)(4.0L * (nq + 1) * LDBL_EPSILON * size);
+        b->stored = (double)(0.5L * GAC_EPS * stored);
         b->moved_floor = (double)(4.0L * (nq + 1) * LDBL_EPSILON * size_m);
     } else {
         m->contact_generalized_force(q, f, p, g);
@@ -459,6 +463,7 @@ static void gac_balance_residual(const gac_model *m, const double *q, const doub
                           + 0.5 * GAC_EPS * fabs(p_plus[i]);
         }
         b->floor = 4.0 * (nq + 1) * GAC_EPS * (double)size + 0.5 * GAC_EPS * (double)stored;
+        b->stored = 0.0;
         b->moved_floor = 4.0 * (nq + 1) * GAC_EPS * (double)size_m;
     }
     b->balance = fabs((double)work_r);
@@ -625,9 +630,10 @@ double gac_frictionless_law_work(const gac_model *m, const double *q, const doub
  * (about 8 (nq + 1) eps T when the velocities' components do not cancel; large where they do, along a soft
  * direction of I_f or near the base chart's singular pose).  With the model's long-double kernels r is evaluated
  * in long double as the difference of two evaluations, r = I_f qd+ - I_f qd- - g (qd+ - qd- is not exact in
- * double), and the evaluation part of E0 is 4 (nq + 1) eps_L sum_i |qd+_i| (|(I_f qd+)_i| + |(I_f qd-)_i| + |g_i|),
- * eps_L = LDBL_EPSILON; the second part, storing qd+ in doubles, stays eps/2 ... with eps the double's (the energy
- * identity likewise with energy_ld, gac_energy_identity_ld).  The accuracy is (|qd+ . r| + E0 + the contact law's
+ * double), and E0 is 4 (nq + 1) eps_L sum_i |qd+_i| (|(I_f qd+)_i| + |(I_f qd-)_i| + |g_i|), eps_L = LDBL_EPSILON:
+ * the stored qd+ is what r is evaluated at, so |qd+ . r| measures what rounding qd+ to doubles moved, and the
+ * second part (its a-priori bound) only ends the refinement (the energy identity likewise with energy_ld,
+ * gac_energy_identity_ld).  The accuracy is (|qd+ . r| + E0 + the contact law's
  * residual work, gac_law_residual, for a law solved in one round (after several rounds the law's conditions are
  * the rounds'; a round solved with a common e, its contacts' smallest, is measured with that e) + the energy
  * identity's residual, gac_energy_identity) / T. */
@@ -754,7 +760,7 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         }
         gac_copy(bound_kept, bound_now, nq);
         if (it == GAC_REFINE_STEPS
-            || ((balance <= floor || balance > 0.5 * previous_balance)          /* neither part still halving */
+            || ((balance <= floor + res.stored || balance > 0.5 * previous_balance)          /* neither part still halving */
                 && (missed == 0.0 || missed > 0.5 * previous_missed))) break;
         previous = balance + missed;
         previous_balance = balance;
@@ -794,7 +800,7 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     if (nh > 0) gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, extended ? h_minus : 0, &res);
     for (it = 0; nh > 0 && it < GAC_REFINE_BALANCE_STEPS; ++it) {
         const double now = res.balance + res.moved;
-        if (now <= 2.0 * (res.floor + res.moved_floor)) break;
+        if (now <= 2.0 * (res.floor + res.stored + res.moved_floor)) break;
         for (a = 0; a < nh; ++a) {                       /* N_H I_f^-1 r = Y_H . r */
             double sum = 0.0;
             for (i = 0; i < nq; ++i) sum += Y[(long)a * nq + i] * res.r[i];

@@ -242,18 +242,37 @@ static void gac_impulse_rows(const gac_model *m, int n, const int *list, const d
     }
 }
 
-/* v = v- + A F (n): the contacts' velocities that the impulses F give in contact space (the rounds' own when F are
- * the rounds' impulses), A from refined responses (gac_impact_system_refined, into work). */
+/* The velocities the law's rounds leave the contacts with, as the targets of the refinement after several rounds
+ * (n): v = v- + A F in contact space, A from refined responses (gac_impact_system_refined, into work), except that
+ * a contact the rounds leave at rest is at rest to the law, target 0: one approaching within the rounds' rest
+ * tolerance (gac_rounds: the larger of 1e-11 of the fastest approach and the contact's round-off in v, 4 (k + 1)
+ * eps (|v_a| + sum_b |A_ab F_b|) summed over the rounds, k the round's contacts; here 4 (n + 1) eps (rounds |v-_a|
+ * + sum_b |A_ab| F_b), the rounds' impulses being >= 0), which the rounds did not strike, or one separating slower
+ * than 1e-11 of the fastest approach (the law's rest rule; a faster separation within the round-off stays a target:
+ * holding it at 0 would take a pull).  On nearly dependent rows with large impulses that round-off reaches 1e-10
+ * m/s where the fastest approach is 1 m/s, and the refinement aimed at such a v would move the impulses by it:
+ * energy of F times that, not the law's. */
 int gac_rounds_velocities(const gac_model *m, const double *q, const double *qd, const double *p, int n,
-                          const int *list, const double *F, double *work, double *v)
+                          const int *list, const double *F, int rounds, double *work, double *v)
 {
-    double e_unused[GAC_AT_LEAST_1(m->nq)];
+    double e_unused[GAC_AT_LEAST_1(m->nq)], v_minus[GAC_AT_LEAST_1(m->nq)], scale = 0.0;
     const double *A = GAC_WORK_A(m, work);
     int a, b;
     const int code = gac_impact_system_refined(m, q, qd, p, n, list, work, v, e_unused);
     if (code != GAC_OK) return code;
     for (a = 0; a < n; ++a) {
-        for (b = 0; b < n; ++b) v[a] += A[a * n + b] * F[b];
+        v_minus[a] = v[a];
+        scale = fabs(v[a]) > scale ? fabs(v[a]) : scale;
+    }
+    for (a = 0; a < n; ++a) {
+        double size = rounds * fabs(v_minus[a]), tol;
+        for (b = 0; b < n; ++b) {
+            v[a] += A[a * n + b] * F[b];
+            size += fabs(A[a * n + b]) * fabs(F[b]);
+        }
+        tol = 4.0 * (n + 1) * GAC_EPS * size;
+        if (tol < 1e-11 * scale) tol = 1e-11 * scale;
+        if ((v[a] < 0.0 && -v[a] <= tol) || (v[a] > 0.0 && v[a] <= 1e-11 * scale)) v[a] = 0.0;
     }
     return GAC_OK;
 }
@@ -268,14 +287,18 @@ int gac_rounds_velocities(const gac_model *m, const double *q, const double *qd,
  * rounds' velocities when A is ill-conditioned and the impulses large), gamma+ read off qd_plus
  * with the model's contact velocities.  Their miss d is removed by F_S += A_SS^-1 (-d), qd_plus += Y_S (that change),
  * A_SS = N_S I_f^-1 N_S^T from refined responses (gac_impact_system_refined), while max|d| falls by half; a step
- * that would pull (F < 0) or not improve is not taken.  Returns the contacts' largest miss left (m/s). */
+ * that would pull (F < 0) or not improve is not taken.  Each step's length is then set by the misses it made (the
+ * model's velocities are linear in the impulses): alpha = -d . Dd / |Dd|^2, Dd the change the full step made to d,
+ * where alpha is in (0, 4) and the step so scaled does not pull (on nearly dependent rows A_SS is known only to a
+ * fraction of itself along its smallest eigenvector, and the full step overshoots or falls short by that fraction).
+ * Returns the contacts' largest miss left (m/s). */
 static double gac_refine_targets(const gac_model *m, const double *q, const double *p, int n, const int *list,
                                  const double *e, int rounds, double *F, const double *qd, double *qd_plus,
                                  double *work, double *targets)
 {
     const int nq = m->nq;
     double before[3 * GAC_AT_LEAST_1(m->npoint)], after[3 * GAC_AT_LEAST_1(m->npoint)], scale = 0.0, v_tol;
-    double target[GAC_AT_LEAST_1(nq)], d[GAC_AT_LEAST_1(nq)], v_unused[GAC_AT_LEAST_1(nq)], e_unused[GAC_AT_LEAST_1(nq)];
+    double target[GAC_AT_LEAST_1(nq)], d[GAC_AT_LEAST_1(nq)], d_kept[GAC_AT_LEAST_1(nq)], v_unused[GAC_AT_LEAST_1(nq)], e_unused[GAC_AT_LEAST_1(nq)];
     double previous = INFINITY, trial[GAC_AT_LEAST_1(nq)], kept_F[GAC_AT_LEAST_1(nq)], kept[GAC_AT_LEAST_1(nq)];
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work);
     int set[GAC_AT_LEAST_1(nq)], pos[GAC_AT_LEAST_1(nq)], ns = 0, a, i, it, built = 0;
@@ -288,7 +311,7 @@ static double gac_refine_targets(const gac_model *m, const double *q, const doub
     if (rounds > 1) {                                    /* several rounds: the velocities the law's impulses give
                                                             in contact space, v- + A F, are its own */
         double v[GAC_AT_LEAST_1(nq)];
-        if (gac_rounds_velocities(m, q, qd, p, n, list, F, work, v) != GAC_OK) return 0.0;
+        if (gac_rounds_velocities(m, q, qd, p, n, list, F, rounds, work, v) != GAC_OK) return 0.0;
         for (a = 0; a < n; ++a) {
             if (!(F[a] > 0.0)) continue;
             if (isnan(targets[a])) targets[a] = v[a];    /* the rounds' own, once */
@@ -310,10 +333,26 @@ static double gac_refine_targets(const gac_model *m, const double *q, const doub
         double miss = 0.0;
         int j;
         m->contact_velocities(q, qd_plus, p, after);
-        for (a = 0; a < ns; ++a) {
-            d[a] = gac_normal_value(m, q, p, set[a], qd_plus, after) - target[a];
-            miss = fabs(d[a]) > miss ? fabs(d[a]) : miss;
+        for (a = 0; a < ns; ++a) d[a] = gac_normal_value(m, q, p, set[a], qd_plus, after) - target[a];
+        if (it > 0) {                                    /* the step's length that the misses it made call for */
+            double dd = 0.0, dchange = 0.0, length;
+            for (a = 0; a < ns; ++a) {
+                dd += (d[a] - d_kept[a]) * (d[a] - d_kept[a]);
+                dchange += d_kept[a] * (d[a] - d_kept[a]);
+            }
+            length = dd > 0.0 ? -dchange / dd : 1.0;
+            if (length > 0.0 && length < 4.0 && fabs(length - 1.0) > 1e-3) {
+                int pulls = 0;
+                for (a = 0; a < ns; ++a) pulls |= kept_F[a] + length * (F[pos[a]] - kept_F[a]) < 0.0;
+                if (!pulls) {
+                    for (a = 0; a < ns; ++a) F[pos[a]] = kept_F[a] + length * (F[pos[a]] - kept_F[a]);
+                    for (i = 0; i < nq; ++i) qd_plus[i] = kept[i] + length * (qd_plus[i] - kept[i]);
+                    m->contact_velocities(q, qd_plus, p, after);
+                    for (a = 0; a < ns; ++a) d[a] = gac_normal_value(m, q, p, set[a], qd_plus, after) - target[a];
+                }
+            }
         }
+        for (a = 0; a < ns; ++a) miss = fabs(d[a]) > miss ? fabs(d[a]) : miss;
         if (!(miss < previous)) {                        /* the last step did not improve: undo it */
             for (a = 0; a < ns; ++a) F[pos[a]] = kept_F[a];
             gac_copy(qd_plus, kept, nq);
@@ -334,6 +373,7 @@ static double gac_refine_targets(const gac_model *m, const double *q, const doub
         }
         for (a = 0; a < ns; ++a) {
             kept_F[a] = F[pos[a]];
+            d_kept[a] = d[a];
             F[pos[a]] += trial[a];
         }
         gac_copy(kept, qd_plus, nq);

@@ -261,7 +261,7 @@ double gac_refine_impulses(const gac_model *m, const double *q, const double *p,
                            const double *e, int rounds, double *F, const double *qd, double *qd_plus, double *work,
                            double *targets);
 int gac_rounds_velocities(const gac_model *m, const double *q, const double *qd, const double *p, int n,
-                          const int *list, const double *F, double *work, double *v);
+                          const int *list, const double *F, int rounds, double *work, double *v);
 void gac_close_approach(const gac_model *m, const double *q, const double *p, int n, const int *list,
                         double *F, const double *qd, double *qd_plus, double v_tol, double *work);
 double gac_frictionless_law_work(const gac_model *m, const double *q, const double *p, int n, const int *list,

@@ -131,7 +131,7 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
                                                             1e-11 of T the impulses refined against them first */
             double v[GAC_AT_LEAST_1(nq)];
             if (ev->rounds > 1 && gac_rounds_velocities(s->model, ev->x, ev->x + nq, s->p, ev->n, ev->list, ev->F,
-                                                        s->work, v) == GAC_OK) {
+                                                        ev->rounds, s->work, v) == GAC_OK) {
                 for (a = 0; a < ev->n; ++a) targets[a] = ev->F[a] > 0.0 ? v[a] : NAN;   /* the rounds' own */
             }
             law = gac_frictionless_law_work(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->rounds,

@@ -3,7 +3,7 @@ struck back and forth for 155 rounds (the rounds' arithmetic, now in long double
 rounds that ended within their own tolerance but left a contact approaching beyond what the post-conditions allow (a
 wall, and a link pair after a plastic closing round: now closed by plastic normal strikes), and a first frictional
 round at round-off speed over dependent rows (a point in a corner, 9 rows for 6 coordinates) that no solve met to
-GAC_FRICTION_RESIDUAL_MAX.  Each run is rebuilt from its case as the study draws it, and every impact's physics is
+GAC_FRICTION_RESIDUAL_MAX, and an impulse left below zero by round-off.  Each run is rebuilt from its case as the study draws it, and every impact's physics is
 checked here from the model's mass matrix and contact Jacobian, independently of the library's own measures: the
 kinetic energy does not grow, the impulses push and lie in Coulomb's cone, and no contact is left approaching."""
 from __future__ import annotations
@@ -85,6 +85,16 @@ def test_an_elastic_corner_struck_for_155_rounds_keeps_its_energy():
     scene, model, run, result = run_case("0-28/6", 0.01)
     assert result.status == 0, result.message
     assert check_impacts(scene, model, run, result, 0.00298) > 0
+
+
+def test_an_impulse_left_below_zero_by_round_off_is_taken_out():
+    """0-44/7 (one link on rough walls, T = 5e-6 J): a four-contact frictional impact whose solve and refinements
+    left one contact's impulse at -3.6e-21 N s; the post-condition 'no impulse pulls' refused it
+    (GAC_ERR_IMPACT_ACCURACY at t = 0.5763 s).  An impulse below zero by at most 1e-12 of the largest is taken out
+    with its tangential impulses and the velocities they gave."""
+    scene, model, run, result = run_case("0-44/7", 0.58)
+    assert result.status == 0, result.message
+    assert check_impacts(scene, model, run, result, 0.5763) > 0
 
 
 def test_a_frictional_round_ended_at_its_tolerance_leaves_no_approach():

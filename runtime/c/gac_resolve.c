@@ -447,12 +447,13 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
 /* The record's contacts (those that approached or took an impulse) and the law's post-conditions at the impact
  * configuration, to its round-off bound b: every impulse >= 0, the kinetic energy not grown by more than b T and,
  * when every contact that takes an impulse has e = 1 and no plastic round closed the rounds, changed by at most
- * b T.  The state after the law is in s->x1. */
+ * b T (each beyond eps times the run's energy scale, what its energy balance resolves: a chain nearly at rest, T
+ * of 1e-27 J, is struck at round-off speeds).  The state after the law is in s->x1. */
 static int gac_check_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
 {
     const gac_model *md = s->model;
     const int nq = md->nq;
-    double T_after, change;
+    double T_after, change, resolved;
     int i, k, elastic = 1;
     for (i = 0; i < nq; ++i) {
         s->x1[i] = ev->x[i];
@@ -474,9 +475,11 @@ static int gac_check_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
         if (ev->F[k] < 0.0) return GAC_ERR_IMPACT_ACCURACY;
     }
     change = gac_kinetic_change(md, ev->x, ev->x + nq, ev->qd_plus, s->p);
-    if (change > ev->bound * ev->T_before + 1e-300)
+    resolved = ev->bound * ev->T_before + GAC_EPS * s->energy_scale + 1e-300;   /* (a chain nearly at rest: its
+                                                           T far below what the run's energy resolves) */
+    if (change > resolved)
         return ev->law == GAC_IMPACT_LAW_NEWTON_COULOMB ? GAC_ERR_IMPACT_ENERGY : GAC_ERR_IMPACT_ACCURACY;
-    if (elastic && !ev->plastic && !gac_tangential(ev) && fabs(change) > ev->bound * ev->T_before)
+    if (elastic && !ev->plastic && !gac_tangential(ev) && fabs(change) > resolved)
         return GAC_ERR_IMPACT_ACCURACY;
     return GAC_OK;
 }

@@ -289,8 +289,9 @@ int gac_rounds_velocities(const gac_model *m, const double *q, const double *qd,
  * A_SS = N_S I_f^-1 N_S^T from refined responses (gac_impact_system_refined), while max|d| falls by half; a step
  * that would pull (F < 0) or not improve is not taken.  Each step's length is then set by the misses it made (the
  * model's velocities are linear in the impulses): alpha = -d . Dd / |Dd|^2, Dd the change the full step made to d,
- * where alpha is in (0, 4) and the step so scaled does not pull (on nearly dependent rows A_SS is known only to a
- * fraction of itself along its smallest eigenvector, and the full step overshoots or falls short by that fraction).
+ * where alpha is in (0, 4), the misses before the step were above 1,000 times the stopping miss 4 eps (fastest
+ * approach) and the step so scaled does not pull (on nearly dependent rows A_SS is known only to a fraction of itself
+ * along its smallest eigenvector, and the full step overshoots or falls short by that fraction).
  * Returns the contacts' largest miss left (m/s). */
 static double gac_refine_targets(const gac_model *m, const double *q, const double *p, int n, const int *list,
                                  const double *e, int rounds, double *F, const double *qd, double *qd_plus,
@@ -334,7 +335,9 @@ static double gac_refine_targets(const gac_model *m, const double *q, const doub
         int j;
         m->contact_velocities(q, qd_plus, p, after);
         for (a = 0; a < ns; ++a) d[a] = gac_normal_value(m, q, p, set[a], qd_plus, after) - target[a];
-        if (it > 0) {                                    /* the step's length that the misses it made call for */
+        if (it > 0 && previous > 4e3 * GAC_EPS * scale) {   /* the step's length that the misses it made call
+                                                            for (misses well above round-off: near it, their
+                                                            quantisation would set the length) */
             double dd = 0.0, dchange = 0.0, length;
             for (a = 0; a < ns; ++a) {
                 dd += (d[a] - d_kept[a]) * (d[a] - d_kept[a]);

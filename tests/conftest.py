@@ -244,3 +244,17 @@ def wall_friction(scene, p) -> dict:
     """Each rough wall's Coulomb coefficient in the parameter vector p, by wall name ('x2_min': c_f)."""
     names = scene.parameter_names()
     return {name[len("friction_"):]: float(p[i]) for i, name in enumerate(names) if name.startswith("friction_")}
+
+
+def mpmath_program(kernel):
+    """The kernel's straight-line program (the expressions its C is printed from) as a Python function of (q, p),
+    lists of mpmath numbers, evaluated in mpmath's working precision: the kernel's outputs, independently of C."""
+    import mpmath
+    from sympy.printing.pycode import MpmathPrinter
+    printer = MpmathPrinter({"fully_qualified_modules": True})
+    lines = ["def kernel(q, p):"]
+    lines += [f"    {printer.doprint(symbol)} = {printer.doprint(expr)}" for symbol, expr in kernel.tape.assignments]
+    lines.append("    return [" + ", ".join(printer.doprint(value) for value in kernel.values) + "]")
+    namespace = {"mpmath": mpmath}
+    exec("\n".join(lines), namespace)
+    return namespace["kernel"]

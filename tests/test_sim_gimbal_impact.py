@@ -9,29 +9,21 @@ must either agree to the bound 16 eps / chi^2 (<= 1e-6 where it answers) or refu
 import mpmath as mp
 import numpy as np
 import pytest
-import sympy as sp
 
-from codegen.kinematics import ChainSymbols
 from codegen.kernels import contact_jacobian_kernel, mass_matrix_kernel
+from codegen.kinematics import ChainSymbols
 from codegen.scene import load_scene
+from conftest import mpmath_program
 from runtime import ImpactError, simulate
 
 EPS = 2.220446049250313e-16
 
 
 def evaluate(kernel, q, digits=40):
-    """The kernel's outputs at q (float64 values taken exactly), in `digits`-digit arithmetic."""
+    """The kernel's outputs at q (float64 values taken exactly), in `digits`-digit arithmetic (its parameters
+    baked in)."""
     mp.mp.dps = digits
-    values = {sp.Symbol(f"q[{j}]", real=True): mp.mpf(float(x)) for j, x in enumerate(q)}
-
-    def value(expr):
-        expr = sp.sympify(expr)
-        symbols = sorted(expr.free_symbols, key=lambda s: s.name)
-        return sp.lambdify(symbols, expr, modules="mpmath")(*[values[s] for s in symbols])
-
-    for symbol, expr in kernel.tape.assignments:
-        values[symbol] = value(expr)
-    return [value(v) for v in kernel.values]
+    return mpmath_program(kernel)([mp.mpf(float(x)) for x in q], [])
 
 
 @pytest.fixture(scope="module")

@@ -5,11 +5,10 @@ import math
 import mpmath
 import numpy as np
 import pytest
-from sympy.printing.pycode import MpmathPrinter
 
 from codegen.kernels import contact_jacobian_kernel, mass_matrix_kernel
 from codegen.kinematics import ChainSymbols
-from conftest import chain, random_parameters
+from conftest import chain, mpmath_program, random_parameters
 from runtime.simulate import accuracy_cause, simulate
 from studies import fuzz
 
@@ -220,18 +219,6 @@ def test_residuals_in_long_double_resolve_an_ill_conditioned_chains_impacts_to_1
         assert worst > 1e-10, worst
 
 
-def _program_40_digits(kernel):
-    """The kernel's straight-line program (the expressions the C is printed from) as a Python function of (q, p)
-    lists of mpmath numbers, evaluated in mpmath's working precision."""
-    printer = MpmathPrinter({"fully_qualified_modules": True})
-    lines = ["def kernel(q, p):"]
-    lines += [f"    {printer.doprint(symbol)} = {printer.doprint(expr)}" for symbol, expr in kernel.tape.assignments]
-    lines.append("    return [" + ", ".join(printer.doprint(value) for value in kernel.values) + "]")
-    namespace = {"mpmath": mpmath}
-    exec("\n".join(lines), namespace)
-    return namespace["kernel"]
-
-
 def test_the_stated_accuracy_bounds_the_error_of_the_energy_after(compiled):
     # the fuzz study's 8-link chain 0-20, run 4 (cond(I_f) ~ 1e13; its velocities along a soft direction of I_f:
     # sum_i |qd_i| |(I_f qd)_i| ~ 1e6 T), chattering at a wall from 0.0325 s: each one-contact frictionless impact
@@ -245,8 +232,8 @@ def test_the_stated_accuracy_bounds_the_error_of_the_energy_after(compiled):
     result = simulate(model, 0.033, p=case.p, q0=case.q0, qd0=case.qd0, **case.options)
     assert result.status == 0, result.message
     symbols = ChainSymbols(model.scene, layout=model.layout)
-    mass = _program_40_digits(mass_matrix_kernel(symbols))
-    jacobian = _program_40_digits(contact_jacobian_kernel(symbols))
+    mass = mpmath_program(mass_matrix_kernel(symbols))
+    jacobian = mpmath_program(contact_jacobian_kernel(symbols))
     names, nq, layout = model.scene.parameter_names(), model.nq, model.layout
     checked, errors = 0, []
     with mpmath.workdps(40):

@@ -83,14 +83,14 @@ def generate_chains(scene: Chains, options: BuildOptions, name: str, progress, w
     scenes_b = [chart_b_scene(scene.chains[k - 1], layouts[k - 1]) for k in turning] \
         if options.chart_b and 1 <= len(turning) <= MAX_SWITCHED else []
     if scenes_b and all(s is not None for s in scenes_b):
-        # each turning chain's chart B, derived as its own one-chain scene (no long-double kernels, as
-        # codegen.pipeline's chart B), then the wrappers of every combination of the chains' charts
+        # each turning chain's chart B, derived as its own one-chain scene (with the long-double kernels where chart
+        # A has them, as codegen.pipeline's chart B), then the wrappers of every combination of the chains' charts
         start = time.perf_counter()
         on_b = dict(zip(turning, scenes_b))
         b_blocks = {}
         for k, scene_b in on_b.items():
             progress(f"chain {k}, chart B")
-            b_blocks[k] = derive(scene_b, f"{name}_c{k}_b", replace(own, extended=False), progress, workers,
+            b_blocks[k] = derive(scene_b, f"{name}_c{k}_b", own, progress, workers,
                                  layouts[k - 1]).functions
             chains.append(dict(prefix=f"{name}_c{k}_b", functions=b_blocks[k], pmap=scene.parameter_map(k),
                                parameters=False))
@@ -127,8 +127,8 @@ _OUTPUT_SPLIT = {"forward_dynamics": "q", "inertia_solve": "q", "generalized_mom
 
 def wrap_kernels(name: str, blocks: list[list[RenderedFunction]], sizes: list[dict],
                  prefixes: list[str]) -> list[RenderedFunction]:
-    """The model's kernels as wrappers over the chains' (in the interface's order): those every chain has (a chain
-    on its chart B has no long-double kernels); ``sizes``: each chain's block sizes (chain_sizes); ``prefixes``:
+    """The model's kernels as wrappers over the chains' (in the interface's order): those every chain has;
+    ``sizes``: each chain's block sizes (chain_sizes); ``prefixes``:
     each chain's kernels' prefix (NAME_cK, or NAME_cK_b on chart B)."""
     by_name = [{f.name: f for f in functions} for functions in blocks]
     names = [f.name for f in min(blocks, key=len)]

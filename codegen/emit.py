@@ -433,7 +433,8 @@ def _check_kernels(functions: list[RenderedFunction]) -> bool:
 def _chart_model_context(suffix: str, scene, functions: list[RenderedFunction], layout) -> dict:
     """One model on other base charts (NAME_model_<suffix>): its loop kernels, its bases and its start."""
     return dict(suffix=suffix, functions=functions, fused=any(f.name in interface.FUSED_KERNELS for f in functions),
-                tangent=any(f.name in interface.TANGENT_KERNELS for f in functions), base=_base_context(scene, layout),
+                tangent=any(f.name in interface.TANGENT_KERNELS for f in functions),
+                extended=any(f.name in interface.EXTENDED_KERNELS for f in functions), base=_base_context(scene, layout),
                 bases=_bases_context(scene, layout),
                 rows=[[_double_literal(float(x)) for x in row] for row in scene.base_twists[0]]
                 if isinstance(scene, Scene) else None,

@@ -46,12 +46,12 @@ def generate(scene: Scene, options: BuildOptions | None = None, *, name: str | N
     if scene_b is None:
         return model
     # chart B: the same chain with T_-1 turned a right angle (codegen.charts), its loop kernels only (no dense
-    # ones) and their tangents where chart A has them (the sensitivities go on through a switch), in the same NAME.c
-    # as NAME_b_* and the descriptor NAME_model_b (the impact's accuracy is measured on chart A: no long-double
-    # kernels)
+    # ones), their tangents where chart A has them (the sensitivities go on through a switch) and their long-double
+    # variants where chart A has them (an impact on chart B measures its accuracy with them), in the same NAME.c as
+    # NAME_b_* and the descriptor NAME_model_b
     start = time.perf_counter()
     progress("chart B")
-    model_b = _generate(scene_b, f"{name}_b", replace(options, dense=False, extended=False), progress, workers,
+    model_b = _generate(scene_b, f"{name}_b", replace(options, dense=False), progress, workers,
                         model.layout)
     return assemble_model(scene, name, model.functions, options, model.layout, chart_b=(scene_b, model_b.functions),
                           timings=dict(model.timings, chart_b=time.perf_counter() - start))

@@ -18,6 +18,9 @@ void paper_case2_b_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRI
 void paper_case2_b_contact_bias(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, double *GAC_RESTRICT a);
 void paper_case2_b_power(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT P);
 void paper_case2_b_forward_dynamics_energy(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT u, const double *GAC_RESTRICT p, double *GAC_RESTRICT y);
+void paper_case2_b_generalized_momentum_ld(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, long double *GAC_RESTRICT h);
+void paper_case2_b_contact_generalized_force_ld(const double *GAC_RESTRICT q, const double *GAC_RESTRICT f, const double *GAC_RESTRICT p, long double *GAC_RESTRICT Q);
+void paper_case2_b_energy_ld(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, long double *GAC_RESTRICT E);
 
 /* ---- kernel mass_matrix ---- */
 /* Flight inertia matrix I_f(Theta) (Eq. 12, Fig. 2), full, row-major.  58 ops (10 add, 42 mul, 0 div, 6 calls) */
@@ -1757,6 +1760,136 @@ void paper_case2_b_forward_dynamics_energy(const double *GAC_RESTRICT q, const d
     y[7] = p[0]*(href_1_y + B0_1*q[4]);
 }
 
+/* ---- kernel generalized_momentum_ld ---- */
+/* generalized_momentum in long double: I_f qd.  87 ops (24 add, 57 mul, 0 div, 6 calls) */
+void paper_case2_b_generalized_momentum_ld(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, long double *GAC_RESTRICT h)
+{
+    (void)q;
+    (void)qd;
+    (void)p;
+    const long double c_m1 = cosl((long double)q[0]);
+    const long double s_m1 = sinl((long double)q[0]);
+    const long double c_0 = cosl((long double)q[1]);
+    const long double s_0 = sinl((long double)q[1]);
+    const long double c_1 = cosl((long double)q[2]);
+    const long double s_1 = sinl((long double)q[2]);
+    const long double B0_1 = (long double)p[1]*(long double)p[2];
+    const long double h_1_x = 0.5L*(long double)p[2]*((long double)p[1]*(long double)p[1]);
+    const long double B2_1 = 0.333333333333333333333L*(long double)p[2]*((long double)p[1]*(long double)p[1]*(long double)p[1]);
+    const long double K_1_xx = (long double)p[1]*(long double)p[3];
+    const long double K_1_yy = B2_1 + (long double)p[1]*(long double)p[4];
+    const long double K_1_zz = B2_1 + (long double)p[1]*(long double)p[5];
+    const long double vl_m1_x = c_m1*(long double)qd[3] - (long double)qd[4]*s_m1;
+    const long double vl_m1_y = -c_m1*(long double)qd[4] - (long double)qd[3]*s_m1;
+    const long double vl_0_x = c_0*vl_m1_x - (long double)qd[5]*s_0;
+    const long double vl_0_y = -c_0*(long double)qd[5] - s_0*vl_m1_x;
+    const long double wl_0_x = (long double)qd[0]*s_0;
+    const long double wl_0_y = c_0*(long double)qd[0];
+    const long double vl_1_x = c_1*vl_0_y - s_1*vl_m1_y;
+    const long double vl_1_y = -c_1*vl_m1_y - s_1*vl_0_y;
+    const long double wl_1_x = c_1*wl_0_y + (long double)qd[1]*s_1;
+    const long double wl_1_y = c_1*(long double)qd[1] - s_1*wl_0_y;
+    const long double wl_1_z = (long double)qd[2] + wl_0_x;
+    const long double Hm_1_x = K_1_xx*wl_1_x;
+    const long double Hm_1_y = K_1_yy*wl_1_y - h_1_x*vl_0_x;
+    const long double Hm_1_z = K_1_zz*wl_1_z + h_1_x*vl_1_y;
+    const long double Lm_1_x = B0_1*vl_1_x;
+    const long double Lm_1_y = B0_1*vl_1_y + h_1_x*wl_1_z;
+    const long double Lm_1_z = B0_1*vl_0_x - h_1_x*wl_1_y;
+    const long double pF_1_y = Lm_1_x*c_1 - Lm_1_y*s_1;
+    const long double pF_1_z = Lm_1_x*s_1 + Lm_1_y*c_1;
+    const long double pN_1_y = Hm_1_x*c_1 - Hm_1_y*s_1;
+    const long double pN_1_z = Hm_1_x*s_1 + Hm_1_y*c_1;
+    const long double pF_0_x = Lm_1_z*c_0 - pF_1_y*s_0;
+    const long double pF_0_z = Lm_1_z*s_0 + c_0*pF_1_y;
+    const long double pN_0_z = Hm_1_z*s_0 + c_0*pN_1_y;
+    h[0] = pN_0_z;
+    h[1] = pN_1_z;
+    h[2] = Hm_1_z;
+    h[3] = c_m1*pF_0_x + pF_1_z*s_m1;
+    h[4] = c_m1*pF_1_z - pF_0_x*s_m1;
+    h[5] = -pF_0_z;
+}
+
+/* ---- kernel contact_generalized_force_ld ---- */
+/* contact_generalized_force in long double: J^T f.  42 ops (11 add, 25 mul, 0 div, 6 calls) */
+void paper_case2_b_contact_generalized_force_ld(const double *GAC_RESTRICT q, const double *GAC_RESTRICT f, const double *GAC_RESTRICT p, long double *GAC_RESTRICT Q)
+{
+    (void)q;
+    (void)f;
+    (void)p;
+    const long double c_m1 = cosl((long double)q[0]);
+    const long double s_m1 = sinl((long double)q[0]);
+    const long double c_0 = cosl((long double)q[1]);
+    const long double s_0 = sinl((long double)q[1]);
+    const long double c_1 = cosl((long double)q[2]);
+    const long double s_1 = sinl((long double)q[2]);
+    const long double Rref_0_00 = c_0*c_m1;
+    const long double Rref_0_01 = -c_m1*s_0;
+    const long double Rref_0_10 = -c_0*s_m1;
+    const long double Rref_0_11 = s_0*s_m1;
+    const long double Rref_1_00 = Rref_0_01*c_1 + s_1*s_m1;
+    const long double Rref_1_10 = Rref_0_11*c_1 + c_m1*s_1;
+    const long double Rref_1_20 = -c_0*c_1;
+    const long double x0 = (long double)f[5]*(long double)p[1];
+    const long double Mf_1_x = Rref_1_10*x0 - Rref_1_20*(long double)f[4]*(long double)p[1];
+    const long double Mf_1_y = -Rref_1_00*x0 + Rref_1_20*(long double)f[3]*(long double)p[1];
+    const long double Mf_1_z = Rref_1_00*(long double)f[4]*(long double)p[1] - Rref_1_10*(long double)f[3]*(long double)p[1];
+    const long double Ff_1_x = (long double)f[0] + (long double)f[3];
+    const long double Ff_1_y = (long double)f[1] + (long double)f[4];
+    const long double Ff_1_z = (long double)f[2] + (long double)f[5];
+    Q[0] = -Mf_1_z;
+    Q[1] = Mf_1_x*s_m1 + Mf_1_y*c_m1;
+    Q[2] = Mf_1_x*Rref_0_00 + Mf_1_y*Rref_0_10 - Mf_1_z*s_0;
+    Q[3] = Ff_1_x;
+    Q[4] = Ff_1_y;
+    Q[5] = Ff_1_z;
+}
+
+/* ---- kernel energy_ld ---- */
+/* energy in long double: kinetic and potential energy.  100 ops (27 add, 67 mul, 0 div, 6 calls) */
+void paper_case2_b_energy_ld(const double *GAC_RESTRICT q, const double *GAC_RESTRICT qd, const double *GAC_RESTRICT p, long double *GAC_RESTRICT E)
+{
+    (void)q;
+    (void)qd;
+    (void)p;
+    const long double c_m1 = cosl((long double)q[0]);
+    const long double s_m1 = sinl((long double)q[0]);
+    const long double c_0 = cosl((long double)q[1]);
+    const long double s_0 = sinl((long double)q[1]);
+    const long double c_1 = cosl((long double)q[2]);
+    const long double s_1 = sinl((long double)q[2]);
+    const long double B0_1 = (long double)p[1]*(long double)p[2];
+    const long double h_1_x = 0.5L*(long double)p[2]*((long double)p[1]*(long double)p[1]);
+    const long double B2_1 = 0.333333333333333333333L*(long double)p[2]*((long double)p[1]*(long double)p[1]*(long double)p[1]);
+    const long double K_1_xx = (long double)p[1]*(long double)p[3];
+    const long double K_1_yy = B2_1 + (long double)p[1]*(long double)p[4];
+    const long double K_1_zz = B2_1 + (long double)p[1]*(long double)p[5];
+    const long double Rref_0_00 = c_0*c_m1;
+    const long double Rref_0_01 = -c_m1*s_0;
+    const long double Rref_0_10 = -c_0*s_m1;
+    const long double Rref_0_11 = s_0*s_m1;
+    const long double Rref_1_00 = Rref_0_01*c_1 + s_1*s_m1;
+    const long double Rref_1_01 = c_1*s_m1 - Rref_0_01*s_1;
+    const long double Rref_1_10 = Rref_0_11*c_1 + c_m1*s_1;
+    const long double Rref_1_11 = c_1*c_m1 - Rref_0_11*s_1;
+    const long double Rref_1_20 = -c_0*c_1;
+    const long double Rref_1_21 = c_0*s_1;
+    const long double wref_0_x = (long double)qd[1]*s_m1;
+    const long double wref_0_y = c_m1*(long double)qd[1];
+    const long double wref_1_x = wref_0_x + Rref_0_00*(long double)qd[2];
+    const long double wref_1_y = wref_0_y + Rref_0_10*(long double)qd[2];
+    const long double wref_1_z = -(long double)qd[0] - (long double)qd[2]*s_0;
+    const long double href_1_x = Rref_1_00*h_1_x;
+    const long double href_1_y = Rref_1_10*h_1_x;
+    const long double href_1_z = Rref_1_20*h_1_x;
+    const long double wloc_1_x = Rref_1_00*wref_1_x + Rref_1_10*wref_1_y + Rref_1_20*wref_1_z;
+    const long double wloc_1_y = Rref_1_01*wref_1_x + Rref_1_11*wref_1_y + Rref_1_21*wref_1_z;
+    const long double wloc_1_z = Rref_0_00*wref_1_x + Rref_0_10*wref_1_y - s_0*wref_1_z;
+    E[0] = (long double)qd[3]*(href_1_z*wref_1_y - href_1_y*wref_1_z) + (long double)qd[4]*(href_1_x*wref_1_z - href_1_z*wref_1_x) + (long double)qd[5]*(href_1_y*wref_1_x - href_1_x*wref_1_y) + 0.5L*B0_1*((long double)qd[3]*(long double)qd[3] + (long double)qd[4]*(long double)qd[4] + (long double)qd[5]*(long double)qd[5]) + 0.5L*K_1_xx*(wloc_1_x*wloc_1_x) + 0.5L*K_1_yy*(wloc_1_y*wloc_1_y) + 0.5L*K_1_zz*(wloc_1_z*wloc_1_z);
+    E[1] = (long double)p[0]*(href_1_y + B0_1*(long double)q[4]);
+}
+
 /* ---- end of kernels ---- */
 /* Directional derivative of forward_dynamics (forward mode, exact: the tangent of its tape).  Not generated for this model (its forward dynamics is rolled code, or it was built with
  * tangent=False): every output is NaN, and paper_case2_model.forward_dynamics_tangent is NULL. */
@@ -2002,7 +2135,9 @@ static const gac_model paper_case2_model_b = {
     .contact_bias_tangent = 0,
     .contact_points_tangent = 0,
     .contact_velocities_tangent = 0,
-    .generalized_momentum_ld = 0, .contact_generalized_force_ld = 0, .energy_ld = 0,   /* accuracy: on chart A */
+    .generalized_momentum_ld = paper_case2_b_generalized_momentum_ld,
+    .contact_generalized_force_ld = paper_case2_b_contact_generalized_force_ld,
+    .energy_ld = paper_case2_b_energy_ld,
 };
 
 const gac_model paper_case2_model = {

@@ -13,6 +13,7 @@
  */
 #include "gac_internal.h"
 
+#include <fenv.h>
 #include <float.h>
 #include <math.h>
 
@@ -447,14 +448,72 @@ double gac_refine_impulses(const gac_model *m, const double *q, const double *p,
     return miss;
 }
 
-/* The momentum balance's residual r = I_f (qd+ - qd-) - J^T Lambda for the impulses F, Ft (h_minus: I_f qd- in
- * long double, when the model has the long-double kernels; NULL: in double), with what it moves: balance = |qd+ . r|
- * (T's change were qd+ moved to balance), moved = |qd- . r| (with it, the energy identity's miss for these
- * impulses: T+ - T- - 1/2 Lambda . (gamma+ + gamma-) = 1/2 (qd+ + qd-) . r), the floors of what evaluating r
- * resolves, stored = eps/2 sum_i |qd+_i| |(I_f qd+)_i| (what rounding qd+ to doubles can move T by: no refinement of
- * qd+ gets below it), and each component's bound (|r_i| and its evaluation).  In long double r is evaluated from
- * the stored qd+ itself, so balance already measures what storing it moved, and stored only ends the refinement;
- * in double qd+ - qd- is rounded before I_f applies to it, so floor carries stored too. */
+/* The momentum before the impact, I_f qd-, evaluated once: in long double, and in double under each sampling
+ * rounding mode (gac_sampled_momentum). */
+typedef struct {
+    long double *ld;                                     /* nq, or NULL: no long-double kernels */
+    double *sampled;                                     /* GAC_ROUNDING_SAMPLES x nq */
+} gac_momentum_before;
+
+/* The rounding modes the double kernels are evaluated under to sample their evaluation error: to nearest, and
+ * upward and downward where the platform has them (Kahan's test of rerunning a computation under each rounding
+ * mode: directed rounding biases every operation's error, so a sample cannot come out small by chance). */
+#if defined(FE_UPWARD) && defined(FE_DOWNWARD) && LDBL_MANT_DIG > DBL_MANT_DIG
+#define GAC_ROUNDING_SAMPLES 3
+static const int gac_rounding_modes[GAC_ROUNDING_SAMPLES] = {FE_TONEAREST, FE_UPWARD, FE_DOWNWARD};
+#else
+#define GAC_ROUNDING_SAMPLES 1
+static const int gac_rounding_modes[GAC_ROUNDING_SAMPLES] = {0};
+#endif
+#define GAC_SAMPLED_FLOOR (LDBL_MANT_DIG > DBL_MANT_DIG)   /* long double is wider: its error is double's scaled */
+#define GAC_SAMPLED_SAFETY 4.0L   /* the floor is this many times the sampled estimate */
+
+/* h = I_f v in double under sampling rounding mode k (the caller's mode restored after). */
+static void gac_sampled_momentum(const gac_model *m, const double *q, const double *v, const double *p, int k,
+                                 double *h)
+{
+    const int mode = fegetround();
+    if (GAC_ROUNDING_SAMPLES > 1) fesetround(gac_rounding_modes[k]);
+    m->generalized_momentum(q, v, p, h);
+    if (GAC_ROUNDING_SAMPLES > 1) fesetround(mode);
+}
+
+/* g = J^T f in double under sampling rounding mode k. */
+static void gac_sampled_force(const gac_model *m, const double *q, const double *f, const double *p, int k,
+                              double *g)
+{
+    const int mode = fegetround();
+    if (GAC_ROUNDING_SAMPLES > 1) fesetround(gac_rounding_modes[k]);
+    m->contact_generalized_force(q, f, p, g);
+    if (GAC_ROUNDING_SAMPLES > 1) fesetround(mode);
+}
+
+/* I_f qd- once: in long double where the model has the kernels (with its double samples), else nothing. */
+static void gac_momentum_before_eval(const gac_model *m, const double *q, const double *qd, const double *p,
+                                     gac_momentum_before *before)
+{
+    int k;
+    if (!before->ld) return;
+    m->generalized_momentum_ld(q, qd, p, before->ld);
+    for (k = 0; k < GAC_ROUNDING_SAMPLES; ++k) gac_sampled_momentum(m, q, qd, p, k, before->sampled + (long)k * m->nq);
+}
+
+/* The momentum balance's residual r = I_f (qd+ - qd-) - J^T Lambda for the impulses F, Ft (before: I_f qd- in long
+ * double, when the model has the long-double kernels; its ld NULL: in double), with what it moves:
+ * balance = |qd+ . r| (T's change were qd+ moved to balance), moved = |qd- . r| (with it, the energy identity's miss
+ * for these impulses: T+ - T- - 1/2 Lambda . (gamma+ + gamma-) = 1/2 (qd+ + qd-) . r), the floors of what
+ * evaluating r resolves, stored = eps/2 sum_i |qd+_i| |(I_f qd+)_i| (what rounding qd+ to doubles can move T by: no
+ * refinement of qd+ gets below it), and each component's bound (|r_i| and its evaluation).  In long double r is
+ * evaluated from the stored qd+ itself, so balance already measures what storing it moved, and stored only ends the
+ * refinement; in double qd+ - qd- is rounded before I_f applies to it, so floor carries stored too.
+ * The long-double evaluation's error is measured, not bounded a priori: the same kernels evaluated in double
+ * (h+, h-, g under each sampling rounding mode k, gac_rounding_modes) give r_d,k, and qd+ . (r_d,k - r) is double's
+ * error in the measure qd+ . r; the kernels being the same straight-line programs, long double's is that scaled by
+ * eps_L / eps (their unit round-offs), and the floor is 4 eps_L / eps max_k |qd+ . (r_d,k - r)| (moved's with qd-),
+ * plus eps_L sum_i |qd+_i| (|(I_f qd+)_i| + |(I_f qd-)_i| + |g_i|), the rounding of the outputs themselves.  (The
+ * measure is signed: along a soft direction of I_f, qd+'s components are large and the rounding errors of I_f qd+
+ * lie mostly along I_f's stiff directions, which they do not move T along; sum_i |qd+_i| |delta_i| would count them.)
+ * Where long double is no wider than double, the a-priori 4 (nq + 1) eps_L sum_i |qd+_i| (...). */
 typedef struct {
     double *r, *bound;                                   /* nq each, the caller's */
     double balance, floor, stored, moved, moved_floor;
@@ -462,18 +521,35 @@ typedef struct {
 
 static void gac_balance_residual(const gac_model *m, const double *q, const double *p, int n, const int *list,
                                  const double *F, const double *Ft, const double *qd, const double *qd_plus,
-                                 const long double *h_minus, gac_balance *b)
+                                 const gac_momentum_before *before, gac_balance *b)
 {
     const int nq = m->nq;
     double f[GAC_AT_LEAST_1(m->njrow)], g[GAC_AT_LEAST_1(nq)], change[GAC_AT_LEAST_1(nq)];
     double p_change[GAC_AT_LEAST_1(nq)], p_plus[GAC_AT_LEAST_1(nq)];
     long double h_plus[GAC_AT_LEAST_1(nq)], g_ld[GAC_AT_LEAST_1(nq)];
     long double work_r = 0.0L, work_m = 0.0L, size = 0.0L, size_m = 0.0L, stored = 0.0L;
-    int i;
+    int i, k;
     gac_impulse_rows(m, n, list, F, Ft, f);              /* Lambda in the Jacobian's rows */
-    if (h_minus) {                                       /* r = I_f qd+ - I_f qd- - g, all in long double */
+    if (before && before->ld) {                          /* r = I_f qd+ - I_f qd- - g, all in long double */
+        const long double *h_minus = before->ld;
+        long double sampled = 0.0L, sampled_m = 0.0L;
         m->contact_generalized_force_ld(q, f, p, g_ld);
         m->generalized_momentum_ld(q, qd_plus, p, h_plus);
+        for (k = 0; k < GAC_ROUNDING_SAMPLES && GAC_SAMPLED_FLOOR; ++k) {   /* double's evaluation error of the
+                                                                               measures qd+ . r and qd- . r */
+            const double *h_minus_d = before->sampled + (long)k * nq;
+            long double d_plus = 0.0L, d_minus = 0.0L;
+            gac_sampled_momentum(m, q, qd_plus, p, k, p_plus);
+            gac_sampled_force(m, q, f, p, k, g);
+            for (i = 0; i < nq; ++i) {
+                const long double delta = (((long double)p_plus[i] - h_minus_d[i]) - g[i])
+                                          - ((h_plus[i] - h_minus[i]) - g_ld[i]);
+                d_plus += qd_plus[i] * delta;
+                d_minus += qd[i] * delta;
+            }
+            sampled = fabsl(d_plus) > sampled ? fabsl(d_plus) : sampled;
+            sampled_m = fabsl(d_minus) > sampled_m ? fabsl(d_minus) : sampled_m;
+        }
         for (i = 0; i < nq; ++i) {
             const long double ri = (h_plus[i] - h_minus[i]) - g_ld[i];
             const long double evaluated = fabsl(h_plus[i]) + fabsl(h_minus[i]) + fabsl(g_ld[i]);
@@ -486,9 +562,15 @@ static void gac_balance_residual(const gac_model *m, const double *q, const doub
             b->bound[i] = (double)(fabsl(ri) + 4.0L * (nq + 1) * LDBL_EPSILON * evaluated
                                    + 0.5L * GAC_EPS * fabsl(h_plus[i]));
         }
-        b->floor = (double)(4.0L * (nq + 1) * LDBL_EPSILON * size);
+        if (GAC_SAMPLED_FLOOR) {
+            const long double scale = GAC_SAMPLED_SAFETY * LDBL_EPSILON / DBL_EPSILON;
+            b->floor = (double)(scale * sampled + LDBL_EPSILON * size);
+            b->moved_floor = (double)(scale * sampled_m + LDBL_EPSILON * size_m);
+        } else {
+            b->floor = (double)(4.0L * (nq + 1) * LDBL_EPSILON * size);
+            b->moved_floor = (double)(4.0L * (nq + 1) * LDBL_EPSILON * size_m);
+        }
         b->stored = (double)(0.5L * GAC_EPS * stored);
-        b->moved_floor = (double)(4.0L * (nq + 1) * LDBL_EPSILON * size_m);
     } else {
         m->contact_generalized_force(q, f, p, g);
         for (i = 0; i < nq; ++i) change[i] = qd_plus[i] - qd[i];
@@ -673,8 +755,9 @@ double gac_frictionless_law_work(const gac_model *m, const double *q, const doub
  * (about 8 (nq + 1) eps T when the velocities' components do not cancel; large where they do, along a soft
  * direction of I_f or near the base chart's singular pose).  With the model's long-double kernels r is evaluated
  * in long double as the difference of two evaluations, r = I_f qd+ - I_f qd- - g (qd+ - qd- is not exact in
- * double), and E0 is 4 (nq + 1) eps_L sum_i |qd+_i| (|(I_f qd+)_i| + |(I_f qd-)_i| + |g_i|), eps_L = LDBL_EPSILON:
- * the stored qd+ is what r is evaluated at, so |qd+ . r| measures what rounding qd+ to doubles moved, and the
+ * double), and E0 is measured (gac_balance_residual): 4 eps_L / eps times double's error in qd+ . r, the same
+ * kernels evaluated in double under each rounding mode, plus eps_L sum_i |qd+_i| (|(I_f qd+)_i| + |(I_f qd-)_i| +
+ * |g_i|), eps_L = LDBL_EPSILON: the stored qd+ is what r is evaluated at, so |qd+ . r| measures what rounding qd+ to doubles moved, and the
  * second part (its a-priori bound) only ends the refinement (the energy identity likewise with energy_ld,
  * gac_energy_identity_ld).  The accuracy is (|qd+ . r| + E0 + the contact law's
  * residual work, gac_law_residual, for a law solved in one round (after several rounds the law's conditions are
@@ -698,6 +781,8 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     gac_held held[GAC_AT_LEAST_1(nq)];
     const int extended = m->generalized_momentum_ld != 0 && m->contact_generalized_force_ld != 0;
     long double h_minus[GAC_AT_LEAST_1(nq)];
+    double h_minus_sampled[GAC_ROUNDING_SAMPLES * GAC_AT_LEAST_1(nq)];
+    gac_momentum_before before_impact;
     double miss[GAC_AT_LEAST_1(nq)], before[3 * GAC_AT_LEAST_1(m->npoint)], after[3 * GAC_AT_LEAST_1(m->npoint)];
     double scale = 0.0, v_tol, e_round = 1.0;
     const int aims = rounds == 1 && !plastic && (law == GAC_IMPACT_LAW_FRICTIONLESS || law == GAC_IMPACT_LAW_GDI
@@ -781,10 +866,12 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         gac_held_system(m, q, p, nh, held, work);
         if (gac_ldlt_drop(nh, GAC_WORK_A(m, work), 1e-13) < 0) nh = 0;   /* none to hold: free steps */
     }
-    if (extended) m->generalized_momentum_ld(q, qd, p, h_minus);    /* I_f qd-, once */
+    before_impact.ld = extended ? h_minus : 0;           /* I_f qd-, once */
+    before_impact.sampled = h_minus_sampled;
+    gac_momentum_before_eval(m, q, qd, p, &before_impact);
     for (it = 0; ; ++it) {
         double missed = 0.0;
-        gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, extended ? h_minus : 0, &res);
+        gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, &before_impact, &res);
         balance = res.balance;
         floor = res.floor;
         m->contact_velocities(q, qd_plus, p, after);
@@ -840,7 +927,7 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
      * rounds' impulses can stand far from those that balance the velocities, r then lying along the held rows,
      * where it moves no velocity, qd+ . r ~ 0, but the energy identity by qd- . r): Lambda_H += dLambda_H,
      * A_HH dLambda_H = N_H I_f^-1 r, while |qd+ . r| + |qd- . r| falls by half above its floor; never a pull. */
-    if (nh > 0) gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, extended ? h_minus : 0, &res);
+    if (nh > 0) gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, &before_impact, &res);
     for (it = 0; nh > 0 && it < GAC_REFINE_BALANCE_STEPS; ++it) {
         const double now = res.balance + res.moved;
         if (now <= 2.0 * (res.floor + res.stored + res.moved_floor)) break;
@@ -855,11 +942,11 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         gac_copy(F_kept, Fs, n);
         gac_copy(Ft_kept, Fts, 2 * n);
         gac_held_add(m, list, nh, held, dl, Fs, Fts);
-        gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, extended ? h_minus : 0, &res);
+        gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, &before_impact, &res);
         if (!(res.balance + res.moved <= 0.5 * now)) {   /* not halving: undo the step */
             gac_copy(Fs, F_kept, n);
             gac_copy(Fts, Ft_kept, 2 * n);
-            gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, extended ? h_minus : 0, &res);
+            gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, &before_impact, &res);
             break;
         }
         balance = res.balance;

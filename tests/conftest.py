@@ -247,12 +247,13 @@ def wall_friction(scene, p) -> dict:
 
 
 def mpmath_program(kernel):
-    """The kernel's straight-line program (the expressions its C is printed from) as a Python function of (q, p),
-    lists of mpmath numbers, evaluated in mpmath's working precision: the kernel's outputs, independently of C."""
+    """The kernel's straight-line program (the expressions its C is printed from) as a Python function of (q, p)
+    and any further input by keyword (qd=..., f=...), lists of mpmath numbers, evaluated in mpmath's working
+    precision: the kernel's outputs, independently of C."""
     import mpmath
     from sympy.printing.pycode import MpmathPrinter
     printer = MpmathPrinter({"fully_qualified_modules": True})
-    lines = ["def kernel(q, p):"]
+    lines = ["def kernel(q, p, qd=None, f=None):"]
     lines += [f"    {printer.doprint(symbol)} = {printer.doprint(expr)}" for symbol, expr in kernel.tape.assignments]
     lines.append("    return [" + ", ".join(printer.doprint(value) for value in kernel.values) + "]")
     namespace = {"mpmath": mpmath}

@@ -6,10 +6,10 @@ import mpmath
 import numpy as np
 import pytest
 
-from codegen.kernels import contact_jacobian_kernel, mass_matrix_kernel
+from codegen.kernels import contact_jacobian_kernel, generalized_momentum_kernel, mass_matrix_kernel
 from codegen.kinematics import ChainSymbols
 from conftest import chain, mpmath_program, random_parameters
-from runtime.simulate import accuracy_cause, simulate
+from runtime.simulate import accuracy_cause, chart_measure, simulate
 from studies import fuzz
 
 
@@ -264,6 +264,55 @@ def test_the_stated_accuracy_bounds_the_error_of_the_energy_after(compiled):
             checked += 1
     assert checked >= 500
     assert max(errors) > 3e-11          # the bound is tested where storing qd+ matters (6.8e-11 seen)
+
+
+def test_the_measured_evaluation_floor_bounds_the_error_on_both_charts(compiled):
+    # the fuzz study's 5-link chain 0-36, run 2 (joint axes drawn at random: decimal constants, so I_f's programs
+    # differ by ~1e-17 of its entries from one route to another), nine switches between the base charts: its impacts
+    # stated up to 3.2e-10 of T, the long-double residual's evaluation floor bounded a priori as 4 (nq + 1) eps_L
+    # sum_i |qd+_i| |(I_f qd)_i|, and in double on chart B (no long-double kernels there); measured from the double
+    # kernels' error under each rounding mode, the floor is 1e-13 of T or less and every impact states 1e-10.  The
+    # impacts integrated on chart A (its measure above 0.6: the loop is back on A there) are checked against the law
+    # solved in 40 digits with the model's own I_f (generalized_momentum's program, which the balance evaluates)
+    model, case = _fuzz_case(compiled, 36, 2, extended=True, chart_b=True)
+    result = simulate(model, case.t_end, p=case.p, q0=case.q0, qd0=case.qd0, **case.options)
+    assert result.status == 0, result.message
+    assert result.n_chart_switches > 0
+    assert max(impact.roundoff for impact in result.impacts) <= 1e-10
+    symbols = ChainSymbols(model.scene, layout=model.layout)
+    momentum = mpmath_program(generalized_momentum_kernel(symbols))
+    jacobian = mpmath_program(contact_jacobian_kernel(symbols))
+    names, nq, layout = model.scene.parameter_names(), model.nq, model.layout
+    checked, errors = 0, []
+    with mpmath.workdps(40):
+        p = [mpmath.mpf(float(x)) for x in case.p]
+        for impact in result.impacts:
+            q = layout.reduce(impact.q)
+            if len(impact.contacts) != 1 or impact.law != "frictionless" or impact.rounds != 1 or impact.plastic \
+                    or chart_measure(model, q) < 0.6 or _resting_at(result, impact.t):
+                continue
+            before, after = (layout.reduce(x) for x in (impact.qd_before, impact.qd_after))
+            q_mp = [mpmath.mpf(float(x)) for x in q]
+            columns = [momentum(q_mp, p, qd=[mpmath.mpf(int(i == j)) for i in range(nq)]) for j in range(nq)]
+            M = mpmath.matrix([[columns[j][i] for j in range(nq)] for i in range(nq)])
+            J = jacobian(q_mp, p)
+            contact = impact.contacts[0]
+            wall = next(w for w in model.scene.walls if w.name == contact.wall)
+            row = model.contact_rows.index((contact.point, wall.axis))
+            n = mpmath.matrix([(1 if wall.name.endswith("min") else -1) * J[row * nq + i] for i in range(nq)])
+            qd_m, qd_p = (mpmath.matrix([mpmath.mpf(float(x)) for x in v]) for v in (before, after))
+            T_before, T_after = ((v.T * M * v)[0] / 2 for v in (qd_m, qd_p))
+            Y = mpmath.lu_solve(M, n)
+            exact = []
+            for e in (case.p[names.index(f"e_{contact.wall}")], 0.0):     # Eq. 47, or e = 0 where it landed
+                qd_exact = qd_m - Y * ((1 + e) * (n.T * qd_m)[0] / (n.T * Y)[0])
+                exact.append((qd_exact.T * M * qd_exact)[0] / 2)
+            error = min(abs(T_after - T_exact) / T_before for T_exact in exact)
+            assert error <= impact.roundoff, (impact.t, float(error), impact.roundoff)
+            errors.append(float(error))
+            checked += 1
+    assert checked >= 10
+    assert max(errors) > 1e-12          # the bound is tested where round-off shows
 
 
 def test_impulses_after_several_rounds_balance_the_velocities(compiled):

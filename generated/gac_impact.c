@@ -222,7 +222,7 @@ static int gac_lcp(int max_lcp, int n, const double *A, const long double *q, do
 
 static int gac_rounds(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                       const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
-                      int *rounds, int *plastic, gac_rounds_trace *trace, double *rest_work);
+                      int *rounds, int *plastic, gac_rounds_trace *trace, double *rest_work, double *law_change);
 
 /* The impact law for the contacts list[0..n-1] (at their walls), from the velocities qd, with restitution
  * e[a] for contact list[a].  Newton's law (Eq. 47) with complementarity, in rounds:
@@ -249,8 +249,8 @@ int gac_impact_rounds(const gac_model *m, const double *q, const double *qd, con
                       const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
                       int *rounds, int *plastic)
 {
-    double rest_work;
-    return gac_rounds(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, 0, &rest_work);
+    double rest_work, law_change;
+    return gac_rounds(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, 0, &rest_work, &law_change);
 }
 
 /* Round `round`'s problem (its k contacts at positions idx, hit: struck with their own e) and impulses Fsub into
@@ -274,33 +274,40 @@ int gac_impact_rounds_traced(const gac_model *m, const double *q, const double *
                              const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
                              int *rounds, int *plastic, gac_rounds_trace *trace)
 {
-    double rest_work;
-    return gac_rounds(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, trace, &rest_work);
+    double rest_work, law_change;
+    return gac_rounds(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, trace, &rest_work,
+                      &law_change);
 }
 
 /* gac_impact_rounds, with *rest_work (J) the energy its rounds gained: the sum over the rounds of each round's
  * change 1/2 sum_a F_a (v-_a + v+_a) in its contact-space velocities where that is > 0.  A round changes the energy
  * by 1/2 sum (1 - e_a) F_a v-_a <= 0 over its struck contacts plus 1/2 F_a v-_a over those at rest, which may push
- * while separating below the rest threshold: the gain of the rest rule, which no condition of the law measures. */
+ * while separating below the rest threshold: the gain of the rest rule, which no condition of the law measures.
+ * *law_change (J): the kinetic energy's change the law solved without round-off gives, where the law alone fixes it:
+ * 0 when every contact that pushes in any round is struck with e = 1 (each such round keeps T exactly, whatever its
+ * impulses), NaN otherwise (the change then depends on the impulses, which over nearly dependent rows are known far
+ * less accurately than the velocities they give). */
 int gac_impact_rounds_work(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                            const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
-                           int *rounds, int *plastic, double *rest_work)
+                           int *rounds, int *plastic, double *rest_work, double *law_change)
 {
-    return gac_rounds(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, 0, rest_work);
+    return gac_rounds(m, q, qd, p, n, list, e, first, qd_plus, F, work, rounds, plastic, 0, rest_work, law_change);
 }
 
-/* The rounds of gac_impact_rounds, traced (trace: NULL for none), with the energy they gained (rest_work). */
+/* The rounds of gac_impact_rounds, traced (trace: NULL for none), with the energy they gained (rest_work) and the
+ * energy change their conditions give (law_change). */
 static int gac_rounds(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                       const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
-                      int *rounds, int *plastic, gac_rounds_trace *trace, double *rest_work)
+                      int *rounds, int *plastic, gac_rounds_trace *trace, double *rest_work, double *law_change)
 {
     const int nq = m->nq, max_lcp = GAC_MAX_LCP(m);
     double v0[GAC_AT_LEAST_1(nq)], e_wall[GAC_AT_LEAST_1(nq)], noise[GAC_AT_LEAST_1(nq)], scale = 0.0, v_tol;
     long double v[GAC_AT_LEAST_1(nq)], total[GAC_AT_LEAST_1(nq)], gain;
+    int elastic = 1;                       /* every contact that pushed was struck with e = 1 */
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work);
     int a, b, i, round, code;
     *rounds = *plastic = 0;
-    *rest_work = 0.0;
+    *rest_work = *law_change = 0.0;
     code = gac_impact_system_refined(m, q, qd, p, n, list, work, v0, e_wall);   /* Y_a refined (gac_impact_accuracy.c) */
     if (code != GAC_OK) return code;
     for (a = 0; a < n; ++a) {
@@ -341,6 +348,7 @@ static int gac_rounds(const gac_model *m, const double *q, const double *qd, con
         for (a = 0; a < k; ++a) {
             total[idx[a]] += Fsub[a];
             gain += 0.5L * Fsub[a] * v[idx[a]];          /* 1/2 F (v- + v+) with v+ = A F + v-, below */
+            if (Fsub[a] > 0.0L && !(hit[a] && e[idx[a]] == 1.0)) elastic = 0;
         }
         for (a = 0; a < n; ++a) {
             double size = fabs((double)v[a]);
@@ -359,6 +367,7 @@ static int gac_rounds(const gac_model *m, const double *q, const double *qd, con
             break;
         }
     }
+    *law_change = elastic && !*plastic ? 0.0 : NAN;
     for (a = 0; a < n; ++a) F[a] = (double)total[a];
     for (i = 0; i < nq; ++i) {
         long double value = qd[i];

@@ -527,24 +527,27 @@ void gac_link_refine(const gac_model *m, const double *q, const double *p, int n
 }
 
 /* The accuracy of an impact law whose contacts include a link pair (relative to T, the kinetic energy before):
- * the momentum balance r = I_f (qd+ - qd-) - sum_a (F_a n_a + Ft_a . t_a) (n_a = J^T n of each contact,
+ * the momentum balance r = I_f (qd+ - qd-) - g, g = sum_a (F_a n_a + Ft_a . t_a) (n_a = J^T n of each contact,
  * gac_contact_direction; t_a its tangential directions where it took a tangential impulse Ft (2 per contact): a
  * wall's J^T e_trow, a link pair's or an obstacle's J^T t1, J^T t2 of its frame), |qd+ . r| the energy a velocity
- * that balanced exactly would differ by, with what evaluating r resolves,
- *   4 (nq + 1) eps sum_i |qd+_i| (|(I_f (qd+ - qd-))_i| + |g_i|) + eps/2 sum_i |qd+_i| |(I_f qd+)_i|,
- * and the energy identity's residual |T+ - T- - 1/2 sum_a Lambda_a . (gamma-_a + gamma+_a)| over every direction.
- * Nothing is refined here (the refinement of gac_impact_accuracy works in the Jacobian's rows, which a link pair has
- * none of; gac_link_refine refines a frictionless law's velocities before).  Ft may be NULL (no tangential
- * impulses). */
+ * that balanced exactly would differ by, with what evaluating r resolves, and the energy identity's residual
+ * |T+ - T- - 1/2 sum_a Lambda_a . (gamma-_a + gamma+_a)| over every direction.  With the model's long-double kernels
+ * (as gac_impact_accuracy): r in long double (gac_momentum_balance_ld, g summed in long double) with its measured
+ * floor, T+ - T- by energy_ld, plus eps sum_i |qd+_i| |g_i| for the directions n_a, t_a themselves, computed in
+ * double from the contact's geometry (the law applied them as computed; the exact ones differ by that round-off);
+ * without them in double, with the floor 4 (nq + 1) eps sum_i |qd+_i| (|(I_f (qd+ - qd-))_i| + |g_i|) + eps/2
+ * sum_i |qd+_i| |(I_f qd+)_i|.  Nothing is refined here (the refinement of gac_impact_accuracy works in the
+ * Jacobian's rows, which a link pair has none of; gac_link_refine refines a frictionless law's velocities before).
+ * Ft may be NULL (no tangential impulses). */
 double gac_link_law_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                              const double *F, const double *Ft, const double *qd, const double *qd_plus, double T)
 {
     const int nq = m->nq;
-    double g[GAC_AT_LEAST_1(nq)], n_a[GAC_AT_LEAST_1(nq)], change[GAC_AT_LEAST_1(nq)], p_change[GAC_AT_LEAST_1(nq)];
-    double p_plus[GAC_AT_LEAST_1(nq)], f[GAC_AT_LEAST_1(m->njrow)], E0[2], E1[2];
-    long double balance = 0.0L, size = 0.0L, stored = 0.0L, work = 0.0L;
+    double n_a[GAC_AT_LEAST_1(nq)], change[GAC_AT_LEAST_1(nq)], p_change[GAC_AT_LEAST_1(nq)];
+    double p_plus[GAC_AT_LEAST_1(nq)], f[GAC_AT_LEAST_1(m->njrow)], E0[2], E1[2], balance_ld, floor_ld;
+    long double g[GAC_AT_LEAST_1(nq)], balance = 0.0L, size = 0.0L, stored = 0.0L, work = 0.0L, given = 0.0L;
     int a, i, j;
-    for (i = 0; i < nq; ++i) g[i] = 0.0;
+    for (i = 0; i < nq; ++i) g[i] = 0.0L;
     for (a = 0; a < n; ++a) {
         const gac_contact *k = &m->contacts[list[a]];
         gac_contact_frame frame;
@@ -567,19 +570,27 @@ double gac_link_law_accuracy(const gac_model *m, const double *q, const double *
                 m->contact_generalized_force(q, f, p, n_a);
             }
             for (i = 0; i < nq; ++i) {
-                g[i] += L * n_a[i];
+                g[i] += (long double)L * n_a[i];
                 vm += (long double)n_a[i] * qd[i];
                 vp += (long double)n_a[i] * qd_plus[i];
             }
             work += (long double)L * (vm + vp);
         }
     }
+    for (i = 0; i < nq; ++i) given += fabsl((long double)qd_plus[i]) * fabsl(g[i]);
+    if (m->energy_ld && gac_momentum_balance_ld(m, q, p, g, qd, qd_plus, &balance_ld, &floor_ld)) {
+        long double L0[2], L1[2];
+        m->energy_ld(q, qd, p, L0);
+        m->energy_ld(q, qd_plus, p, L1);
+        return (balance_ld + floor_ld + GAC_EPS * (double)given + fabs((double)((L1[0] - L0[0]) - 0.5L * work)))
+               / (T > 0.0 ? T : 1e-300);
+    }
     for (i = 0; i < nq; ++i) change[i] = qd_plus[i] - qd[i];
     m->generalized_momentum(q, change, p, p_change);
     m->generalized_momentum(q, qd_plus, p, p_plus);
     for (i = 0; i < nq; ++i) {
         balance += qd_plus[i] * ((long double)p_change[i] - g[i]);
-        size += fabsl((long double)qd_plus[i]) * (fabs(p_change[i]) + fabs(g[i]));
+        size += fabsl((long double)qd_plus[i]) * (fabs(p_change[i]) + fabsl(g[i]));
         stored += fabsl((long double)qd_plus[i]) * fabs(p_plus[i]);
     }
     m->energy(q, qd, p, E0);

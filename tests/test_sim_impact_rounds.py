@@ -149,6 +149,11 @@ STOPPED = [
     # of 4e-8 of T, stopped at 0.553 s); later impacts cycle (257 rounds), and a hold of the resting contacts
     # refined along nearly dependent rows left one approaching at 3e-8 m/s: the law's velocities then stand
     pytest.param(47, 1, 0.8, id="0-47/1-targets-hold"),
+    # the same run further: rounds with e = 1 only over nearly dependent rows, whose refinement met the rounds'
+    # velocities with impulses that differ from the rounds' along a direction those rows barely feel, left T gained by
+    # up to 2.9e-10 with a stated 1e-10 (stopped at 1.0515 s, then at 1.1512 s on the elastic law's energy check): the
+    # accuracy includes the model's energy change against the one the law's conditions give
+    pytest.param(47, 1, 1.2, id="0-47/1-rounds-energy"),
     # two chains of capsules: a link pair and a wall at once, one round, cond(A) 5e4 with 2.2e3 N s: the law's
     # velocities missed their targets by 1e-5 m/s (a gain of 3.4e-10 of T, stated 1e-10; stopped at 0.170 s); the
     # impulses are refined against them for link pairs too

@@ -595,6 +595,41 @@ static void gac_balance_residual(const gac_model *m, const double *q, const doub
     b->moved = fabs((double)work_m);
 }
 
+/* The momentum balance of velocities qd -> qd_plus against a generalized impulse g (nq, long double: its terms
+ * summed without rounding to double), in long double with the model's long-double kernels: r = I_f qd+ - I_f qd- - g;
+ * *balance = |qd+ . r| (J) and *floor what evaluating r resolves, measured as in gac_balance_residual (the double
+ * kernels under each rounding mode: 4 eps_L / eps max_k |qd+ . (r_d,k - r)| + eps_L sum_i |qd+_i| (|(I_f qd+)_i| +
+ * |(I_f qd-)_i| + |g_i|)).  Returns 0 (nothing written) for a model without the long-double kernels. */
+int gac_momentum_balance_ld(const gac_model *m, const double *q, const double *p, const long double *g,
+                            const double *qd, const double *qd_plus, double *balance, double *floor)
+{
+    const int nq = m->nq;
+    long double h_minus[GAC_AT_LEAST_1(nq)], h_plus[GAC_AT_LEAST_1(nq)], work = 0.0L, size = 0.0L, sampled = 0.0L;
+    double d_minus[GAC_AT_LEAST_1(nq)], d_plus[GAC_AT_LEAST_1(nq)];
+    int i, k;
+    if (!m->generalized_momentum_ld) return 0;
+    m->generalized_momentum_ld(q, qd, p, h_minus);
+    m->generalized_momentum_ld(q, qd_plus, p, h_plus);
+    for (i = 0; i < nq; ++i) {
+        const long double ri = (h_plus[i] - h_minus[i]) - g[i];
+        work += qd_plus[i] * ri;
+        size += fabsl((long double)qd_plus[i]) * (fabsl(h_plus[i]) + fabsl(h_minus[i]) + fabsl(g[i]));
+    }
+    for (k = 0; k < GAC_ROUNDING_SAMPLES && GAC_SAMPLED_FLOOR; ++k) {
+        long double d = 0.0L;
+        gac_sampled_momentum(m, q, qd, p, k, d_minus);
+        gac_sampled_momentum(m, q, qd_plus, p, k, d_plus);
+        for (i = 0; i < nq; ++i)
+            d += qd_plus[i] * (((long double)d_plus[i] - d_minus[i]) - (h_plus[i] - h_minus[i]));
+        sampled = fabsl(d) > sampled ? fabsl(d) : sampled;
+    }
+    *balance = fabs((double)work);
+    *floor = GAC_SAMPLED_FLOOR ? (double)(GAC_SAMPLED_SAFETY * LDBL_EPSILON / DBL_EPSILON * sampled
+                                          + LDBL_EPSILON * size)
+                               : (double)(4.0L * (nq + 1) * LDBL_EPSILON * size);
+    return 1;
+}
+
 /* Lambda += dLambda along the held directions (a slide's direction adds to its tangential impulses in ratio). */
 static void gac_held_add(const gac_model *m, const int *list, int nh, const gac_held *held, const double *dl,
                          double *F, double *Ft)

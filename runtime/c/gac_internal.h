@@ -249,10 +249,17 @@ int gac_impact_rounds_traced(const gac_model *m, const double *q, const double *
                              int *rounds, int *plastic, gac_rounds_trace *trace);
 int gac_impact_rounds_work(const gac_model *m, const double *q, const double *qd, const double *p, int n,
                            const int *list, const double *e, int first, double *qd_plus, double *F, double *work,
-                           int *rounds, int *plastic, double *rest_work);
+                           int *rounds, int *plastic, double *rest_work, double *law_change);
 
 
 /* gac_impact_accuracy.c: the impact's accuracy, measured after its law, and iterative refinement */
+/* gac_resolve.c: a wall's impulse left below zero by round-off (<= 1e-12 of the largest) taken out with its velocities */
+void gac_drop_roundoff_pulls(const gac_model *md, const double *x, const double *p, int n, const int *list,
+                             double *F, double *Ft, double *qd_plus);
+/* gac_impact_accuracy.c: the momentum balance against a generalized impulse g, in long double with its measured
+ * evaluation floor (0: the model has no long-double kernels) */
+int gac_momentum_balance_ld(const gac_model *m, const double *q, const double *p, const long double *g,
+                            const double *qd, const double *qd_plus, double *balance, double *floor);
 void gac_refine_response(const gac_model *m, const double *q, const double *p, const double *g, double *y,
                          double *r, double *dy);
 int gac_impact_system_refined(const gac_model *m, const double *q, const double *qd, const double *p,

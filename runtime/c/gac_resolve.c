@@ -73,6 +73,9 @@ typedef struct {
     int held;              /* 1 once gac_hold_resting changed the velocities after the law */
     int rounds, plastic;
     double rest_work;      /* the work of the law's rest rule (J; gac_impact_rounds_work), or -1: not known */
+    double law_change;     /* the kinetic energy's change the law gives without round-off (J; gac_impact_rounds_work:
+                              0 for rounds with e = 1 only), or NaN: not known (impulses with e < 1, a plastic round,
+                              a frictional law) */
 } gac_impact_event;
 
 /* T(qd_to) - T(qd_from) at the configuration x (J), what an impact's energy checks compare with its accuracy: with
@@ -97,28 +100,47 @@ static double gac_kinetic_change(const gac_model *md, const double *x, const dou
 /* An impulse at a wall that the law's solve and refinements leave below zero by round-off (at most 1e-12 of the
  * largest impulse; a larger one stays, and the law's post-conditions refuse it) is taken out, with its tangential
  * impulses and the velocities they gave: qd+ -= I_f^-1 J^T f, f that contact's impulses in the Jacobian's rows.
- * No impulse pulls, and the velocities still balance the impulses. */
-static void gac_drop_roundoff_pulls(const gac_sim *s, gac_impact_event *ev)
+ * No impulse pulls, and the velocities still balance the impulses.  F, Ft (2 per contact) and qd_plus in place, of
+ * the contacts list[0..n-1] at the configuration x. */
+void gac_drop_roundoff_pulls(const gac_model *md, const double *x, const double *p, int n, const int *list,
+                             double *F, double *Ft, double *qd_plus)
 {
-    const gac_model *md = s->model;
     const int nq = md->nq;
     double largest = 0.0, f[GAC_AT_LEAST_1(md->njrow)], g[GAC_AT_LEAST_1(nq)], dq[GAC_AT_LEAST_1(nq)];
     int k, i, j;
-    for (k = 0; k < ev->n; ++k) largest = ev->F[k] > largest ? ev->F[k] : largest;
-    for (k = 0; k < ev->n; ++k) {
-        const gac_contact *c = &md->contacts[ev->list[k]];
-        if (!(ev->F[k] < 0.0) || -ev->F[k] > 1e-12 * largest || c->kind != GAC_CONTACT_WALL) continue;
+    for (k = 0; k < n; ++k) largest = F[k] > largest ? F[k] : largest;
+    for (k = 0; k < n; ++k) {
+        const gac_contact *c = &md->contacts[list[k]];
+        if (!(F[k] < 0.0) || -F[k] > 1e-12 * largest || c->kind != GAC_CONTACT_WALL) continue;
         for (i = 0; i < md->njrow; ++i) f[i] = 0.0;
-        f[c->row] = c->normal_sign * ev->F[k];
+        f[c->row] = c->normal_sign * F[k];
         for (j = 0; j < 2; ++j) {
-            if (c->trow[j] >= 0) f[c->trow[j]] = ev->Ft[2 * k + j];
+            if (c->trow[j] >= 0) f[c->trow[j]] = Ft[2 * k + j];
         }
-        md->contact_generalized_force(ev->x, f, s->p, g);
-        md->inertia_solve(ev->x, g, s->p, dq);
+        md->contact_generalized_force(x, f, p, g);
+        md->inertia_solve(x, g, p, dq);
         if (!gac_finite(dq, nq)) continue;
-        for (i = 0; i < nq; ++i) ev->qd_plus[i] -= dq[i];
-        ev->F[k] = ev->Ft[2 * k] = ev->Ft[2 * k + 1] = 0.0;
+        for (i = 0; i < nq; ++i) qd_plus[i] -= dq[i];
+        F[k] = Ft[2 * k] = Ft[2 * k + 1] = 0.0;
     }
+}
+
+/* After several frictionless rounds, how far the model's kinetic energy change dT = T(qd+) - T(qd-) (in long double:
+ * gac_kinetic_change) stands beyond what the law solved without round-off can give (relative to T before): with
+ * e = 1 only (ev->law_change 0) the law keeps T, and |dT| is off; else no round gains energy but by the rest rule
+ * (its work ev->rest_work, known from the rounds), and max(0, dT - rest_work) is off.  The refinement brings the
+ * model's velocities to the rounds' own (gac_refine_impulses) by impulses that differ from the rounds' where their
+ * rows are nearly dependent, and such a change of the impulses along a direction that barely moves the contacts'
+ * velocities still moves T by its work against them, which no other term measures.  0 for one round (its law
+ * residual measures it) or a frictional law. */
+static double gac_rounds_energy_miss(const gac_sim *s, const gac_impact_event *ev)
+{
+    const double T = ev->T_before > 0.0 ? ev->T_before : 1e-300;
+    double change;
+    if (ev->rounds <= 1 || ev->friction || (isnan(ev->law_change) && ev->rest_work < 0.0)) return 0.0;
+    change = gac_kinetic_change(s->model, ev->x, ev->x + s->model->nq, ev->qd_plus, s->p);
+    if (!isnan(ev->law_change)) return fabs(change - ev->law_change) / T;
+    return change > ev->rest_work ? (change - ev->rest_work) / T : 0.0;
 }
 
 /* The accuracy of the law just solved (ev->qd_plus, ev->F, ev->Ft with restitutions e), relative to T before, at
@@ -171,7 +193,7 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
                                             ev->plastic, targets, ev->rest_work, ev->x + nq, ev->qd_plus);
         }
         b = gac_link_law_accuracy(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->Ft, ev->x + nq, ev->qd_plus,
-                                  ev->T_before) + law / T;
+                                  ev->T_before) + law / T + gac_rounds_energy_miss(s, ev);
         return b > 1e-10 ? b : 1e-10;
     }
     for (pass = 0; pass < (refine ? 2 : 1); ++pass) {   /* the impulses against the velocities, then the velocities
@@ -183,8 +205,9 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
                                 ev->plastic, ev->x + nq, ev->qd_plus, ev->T_before, s->work, &v,
                                 refine ? targets : 0, ev->rest_work);
     }
-    gac_drop_roundoff_pulls(s, ev);
+    gac_drop_roundoff_pulls(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->Ft, ev->qd_plus);
     if (v > ev->v_acc) ev->v_acc = v;
+    b += gac_rounds_energy_miss(s, ev);
     return b > 1e-10 ? b : 1e-10;
 }
 
@@ -364,6 +387,7 @@ static int gac_law(gac_sim *s, gac_impact_event *ev, const double *e)
     const double *x = ev->x;
     int k;
     ev->rest_work = -1.0;
+    ev->law_change = NAN;
     if (ev->friction)
         return gac_impact_rounds_friction(md, x, x + md->nq, s->p, ev->n, ev->list, e, ev->first, s->opt.impact_law,
                                           ev->qd_plus, ev->F, ev->Ft, s->work, &ev->rounds, &ev->plastic, &ev->law,
@@ -372,7 +396,7 @@ static int gac_law(gac_sim *s, gac_impact_event *ev, const double *e)
     ev->residual = ev->parts = 0.0;
     for (k = 0; k < 2 * ev->n; ++k) ev->Ft[k] = 0.0;
     return gac_impact_rounds_work(md, x, x + md->nq, s->p, ev->n, ev->list, e, ev->first, ev->qd_plus, ev->F,
-                                  s->work, &ev->rounds, &ev->plastic, &ev->rest_work);
+                                  s->work, &ev->rounds, &ev->plastic, &ev->rest_work, &ev->law_change);
 }
 
 /* 1 if the law gave some contact a tangential impulse (then e = 1 need not keep the energy: friction took some). */

@@ -27,6 +27,7 @@
  * purpose, and the program must fail (the checks can fail).
  */
 #include "gac.h"
+#include "gac_internal.h"   /* the library's internal steps tested on their own */
 
 #include <math.h>
 #include <stdio.h>
@@ -1367,6 +1368,23 @@ static void test_charts(void)
     }
 }
 
+/* An impulse left below zero by round-off (<= 1e-12 of the largest) is taken out with the velocities it gave; a
+ * larger one stays (the law's post-conditions refuse it). */
+static void test_roundoff_pulls(void)
+{
+    const double x[4] = {1.0, 1.0, 0.0, 0.0};
+    const int list[2] = {0, 2};                           /* the box's point on x_min and y_min */
+    double F[2] = {1.0, -1e-13}, Ft[4] = {0.0, 0.0, 0.0, 0.0}, qd_plus[2] = {2.0, 0.5};
+    gac_drop_roundoff_pulls(&box, x, box_p, 2, list, F, Ft, qd_plus);
+    CHECK(F[0] == 1.0 && F[1] == 0.0, "round-off pull taken out: F %g %g", F[0], F[1]);
+    CHECK(qd_plus[0] == 2.0 && NEAR(qd_plus[1], 0.5 + 1e-13 / box_p[1], 1e-16),
+          "its velocity change undone (qd+ += m^-1 1e-13): %.17g", qd_plus[1]);
+    F[1] = -1e-11;
+    qd_plus[1] = 0.5;
+    gac_drop_roundoff_pulls(&box, x, box_p, 2, list, F, Ft, qd_plus);
+    CHECK(F[1] == -1e-11 && qd_plus[1] == 0.5, "a pull above round-off stays: F %g", F[1]);
+}
+
 int main(int argc, char **argv)
 {
     broken = argc > 1 && strcmp(argv[1], "--break") == 0;
@@ -1388,6 +1406,7 @@ int main(int argc, char **argv)
     test_events();
     test_resting_contact();
     test_impact_law();
+    test_roundoff_pulls();
     test_extended_accuracy();
     test_loop_rules();
     test_charts();

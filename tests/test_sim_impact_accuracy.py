@@ -219,6 +219,43 @@ def test_residuals_in_long_double_resolve_an_ill_conditioned_chains_impacts_to_1
         assert worst > 1e-10, worst
 
 
+def _mass_from_program(mass, q, p, nq: int):
+    """I_f at q from the mass matrix kernel's program (mpmath numbers)."""
+    values = mass(q, p)
+    return mpmath.matrix([[values[i * nq + j] for j in range(nq)] for i in range(nq)])
+
+
+def _mass_from_momentum(momentum, q, p, nq: int):
+    """I_f at q from generalized_momentum's program, column by column (I_f e_j)."""
+    columns = [momentum(q, p, qd=[mpmath.mpf(int(i == j)) for i in range(nq)]) for j in range(nq)]
+    return mpmath.matrix([[columns[j][i] for j in range(nq)] for i in range(nq)])
+
+
+def _exact_law_error(model, case, impact, inertia, jacobian) -> float:
+    """|T(qd+ stored) - T(the law's qd+)| / T- for a one-contact frictionless impact, the law (Eq. 47) solved in 40
+    digits from the record's q and qd- with I_f = inertia(q, p) and the contact Jacobian's program: with the wall's e,
+    or e = 0 where the contact landed (the rest-height rule), the nearer of the two (the other misses by a large
+    fraction of T)."""
+    names, nq, layout = model.scene.parameter_names(), model.nq, model.layout
+    with mpmath.workdps(40):
+        p = [mpmath.mpf(float(x)) for x in case.p]
+        q, before, after = ([mpmath.mpf(float(x)) for x in layout.reduce(v)]
+                            for v in (impact.q, impact.qd_before, impact.qd_after))
+        M, J = inertia(q, p), jacobian(q, p)
+        contact = impact.contacts[0]
+        wall = next(w for w in model.scene.walls if w.name == contact.wall)
+        row = model.contact_rows.index((contact.point, wall.axis))
+        n = mpmath.matrix([(1 if wall.name.endswith("min") else -1) * J[row * nq + i] for i in range(nq)])
+        qd_m, qd_p = mpmath.matrix(before), mpmath.matrix(after)
+        T_before, T_after = ((v.T * M * v)[0] / 2 for v in (qd_m, qd_p))
+        Y = mpmath.lu_solve(M, n)
+        exact = []
+        for e in (case.p[names.index(f"e_{contact.wall}")], 0.0):
+            qd_exact = qd_m - Y * ((1 + e) * (n.T * qd_m)[0] / (n.T * Y)[0])
+            exact.append((qd_exact.T * M * qd_exact)[0] / 2)
+        return float(min(abs(T_after - T_exact) / T_before for T_exact in exact))
+
+
 def test_the_stated_accuracy_bounds_the_error_of_the_energy_after(compiled):
     # the fuzz study's 8-link chain 0-20, run 4 (cond(I_f) ~ 1e13; its velocities along a soft direction of I_f:
     # sum_i |qd_i| |(I_f qd)_i| ~ 1e6 T), chattering at a wall from 0.0325 s: each one-contact frictionless impact
@@ -234,34 +271,14 @@ def test_the_stated_accuracy_bounds_the_error_of_the_energy_after(compiled):
     symbols = ChainSymbols(model.scene, layout=model.layout)
     mass = mpmath_program(mass_matrix_kernel(symbols))
     jacobian = mpmath_program(contact_jacobian_kernel(symbols))
-    names, nq, layout = model.scene.parameter_names(), model.nq, model.layout
-    checked, errors = 0, []
-    with mpmath.workdps(40):
-        p = [mpmath.mpf(float(x)) for x in case.p]
-        for impact in result.impacts[-600:]:         # the chatter's last 600 (3,300 in all), the largest errors
-            if len(impact.contacts) != 1 or impact.law != "frictionless" or impact.rounds != 1 or impact.plastic:
-                continue
-            q, before, after = (layout.reduce(x) for x in (impact.q, impact.qd_before, impact.qd_after))
-            values = mass([mpmath.mpf(float(x)) for x in q], p)
-            M = mpmath.matrix([[values[i * nq + j] for j in range(nq)] for i in range(nq)])
-            J = jacobian([mpmath.mpf(float(x)) for x in q], p)
-            contact = impact.contacts[0]
-            wall = next(w for w in model.scene.walls if w.name == contact.wall)
-            row = model.contact_rows.index((contact.point, wall.axis))
-            n = mpmath.matrix([(1 if wall.name.endswith("min") else -1) * J[row * nq + i] for i in range(nq)])
-            qd_m, qd_p = (mpmath.matrix([mpmath.mpf(float(x)) for x in v]) for v in (before, after))
-            T_before, T_after = ((v.T * M * v)[0] / 2 for v in (qd_m, qd_p))
-            Y = mpmath.lu_solve(M, n)
-            # Eq. 47 with the wall's e, or e = 0 where the contact landed (the rest-height rule): the nearer of the two
-            # (the other misses by a large fraction of T)
-            exact = []
-            for e in (case.p[names.index(f"e_{contact.wall}")], 0.0):
-                qd_exact = qd_m - Y * ((1 + e) * (n.T * qd_m)[0] / (n.T * Y)[0])
-                exact.append((qd_exact.T * M * qd_exact)[0] / 2)
-            error = min(abs(T_after - T_exact) / T_before for T_exact in exact)
-            assert error <= impact.roundoff, (impact.t, float(error), impact.roundoff)
-            errors.append(float(error))
-            checked += 1
+    errors = []
+    for impact in result.impacts[-600:]:                 # the chatter's last 600 (3,300 in all), the largest errors
+        if len(impact.contacts) != 1 or impact.law != "frictionless" or impact.rounds != 1 or impact.plastic:
+            continue
+        error = _exact_law_error(model, case, impact, lambda q, p: _mass_from_program(mass, q, p, model.nq), jacobian)
+        assert error <= impact.roundoff, (impact.t, error, impact.roundoff)
+        errors.append(error)
+    checked = len(errors)
     assert checked >= 500
     assert max(errors) > 3e-11          # the bound is tested where storing qd+ matters (6.8e-11 seen)
 
@@ -282,35 +299,16 @@ def test_the_measured_evaluation_floor_bounds_the_error_on_both_charts(compiled)
     symbols = ChainSymbols(model.scene, layout=model.layout)
     momentum = mpmath_program(generalized_momentum_kernel(symbols))
     jacobian = mpmath_program(contact_jacobian_kernel(symbols))
-    names, nq, layout = model.scene.parameter_names(), model.nq, model.layout
-    checked, errors = 0, []
-    with mpmath.workdps(40):
-        p = [mpmath.mpf(float(x)) for x in case.p]
-        for impact in result.impacts:
-            q = layout.reduce(impact.q)
-            if len(impact.contacts) != 1 or impact.law != "frictionless" or impact.rounds != 1 or impact.plastic \
-                    or chart_measure(model, q) < 0.6 or _resting_at(result, impact.t):
-                continue
-            before, after = (layout.reduce(x) for x in (impact.qd_before, impact.qd_after))
-            q_mp = [mpmath.mpf(float(x)) for x in q]
-            columns = [momentum(q_mp, p, qd=[mpmath.mpf(int(i == j)) for i in range(nq)]) for j in range(nq)]
-            M = mpmath.matrix([[columns[j][i] for j in range(nq)] for i in range(nq)])
-            J = jacobian(q_mp, p)
-            contact = impact.contacts[0]
-            wall = next(w for w in model.scene.walls if w.name == contact.wall)
-            row = model.contact_rows.index((contact.point, wall.axis))
-            n = mpmath.matrix([(1 if wall.name.endswith("min") else -1) * J[row * nq + i] for i in range(nq)])
-            qd_m, qd_p = (mpmath.matrix([mpmath.mpf(float(x)) for x in v]) for v in (before, after))
-            T_before, T_after = ((v.T * M * v)[0] / 2 for v in (qd_m, qd_p))
-            Y = mpmath.lu_solve(M, n)
-            exact = []
-            for e in (case.p[names.index(f"e_{contact.wall}")], 0.0):     # Eq. 47, or e = 0 where it landed
-                qd_exact = qd_m - Y * ((1 + e) * (n.T * qd_m)[0] / (n.T * Y)[0])
-                exact.append((qd_exact.T * M * qd_exact)[0] / 2)
-            error = min(abs(T_after - T_exact) / T_before for T_exact in exact)
-            assert error <= impact.roundoff, (impact.t, float(error), impact.roundoff)
-            errors.append(float(error))
-            checked += 1
+    errors = []
+    for impact in result.impacts:
+        if len(impact.contacts) != 1 or impact.law != "frictionless" or impact.rounds != 1 or impact.plastic \
+                or chart_measure(model, model.layout.reduce(impact.q)) < 0.6 or _resting_at(result, impact.t):
+            continue
+        error = _exact_law_error(model, case, impact, lambda q, p: _mass_from_momentum(momentum, q, p, model.nq),
+                                 jacobian)
+        assert error <= impact.roundoff, (impact.t, error, impact.roundoff)
+        errors.append(error)
+    checked = len(errors)
     assert checked >= 10
     assert max(errors) > 1e-12          # the bound is tested where round-off shows
 

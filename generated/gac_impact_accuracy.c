@@ -449,7 +449,7 @@ double gac_refine_impulses(const gac_model *m, const double *q, const double *p,
 }
 
 /* The momentum before the impact, I_f qd-, evaluated once: in long double, and in double under each sampling
- * rounding mode (gac_sampled_momentum). */
+ * rounding mode (gac_sampled). */
 typedef struct {
     long double *ld;                                     /* nq, or NULL: no long-double kernels */
     double *sampled;                                     /* GAC_ROUNDING_SAMPLES x nq */
@@ -468,23 +468,14 @@ static const int gac_rounding_modes[GAC_ROUNDING_SAMPLES] = {0};
 #define GAC_SAMPLED_FLOOR (LDBL_MANT_DIG > DBL_MANT_DIG)   /* long double is wider: its error is double's scaled */
 #define GAC_SAMPLED_SAFETY 4.0L   /* the floor is this many times the sampled estimate */
 
-/* h = I_f v in double under sampling rounding mode k (the caller's mode restored after). */
-static void gac_sampled_momentum(const gac_model *m, const double *q, const double *v, const double *p, int k,
-                                 double *h)
+/* out = kernel(q, v, p) (generalized_momentum or contact_generalized_force) in double under sampling rounding mode
+ * k, the caller's mode restored after. */
+static void gac_sampled(void (*kernel)(const double *, const double *, const double *, double *), const double *q,
+                        const double *v, const double *p, int k, double *out)
 {
     const int mode = fegetround();
     if (GAC_ROUNDING_SAMPLES > 1) fesetround(gac_rounding_modes[k]);
-    m->generalized_momentum(q, v, p, h);
-    if (GAC_ROUNDING_SAMPLES > 1) fesetround(mode);
-}
-
-/* g = J^T f in double under sampling rounding mode k. */
-static void gac_sampled_force(const gac_model *m, const double *q, const double *f, const double *p, int k,
-                              double *g)
-{
-    const int mode = fegetround();
-    if (GAC_ROUNDING_SAMPLES > 1) fesetround(gac_rounding_modes[k]);
-    m->contact_generalized_force(q, f, p, g);
+    kernel(q, v, p, out);
     if (GAC_ROUNDING_SAMPLES > 1) fesetround(mode);
 }
 
@@ -495,7 +486,7 @@ static void gac_momentum_before_eval(const gac_model *m, const double *q, const 
     int k;
     if (!before->ld) return;
     m->generalized_momentum_ld(q, qd, p, before->ld);
-    for (k = 0; k < GAC_ROUNDING_SAMPLES; ++k) gac_sampled_momentum(m, q, qd, p, k, before->sampled + (long)k * m->nq);
+    for (k = 0; k < GAC_ROUNDING_SAMPLES; ++k) gac_sampled(m->generalized_momentum, q, qd, p, k, before->sampled + (long)k * m->nq);
 }
 
 /* The momentum balance's residual r = I_f (qd+ - qd-) - J^T Lambda for the impulses F, Ft (before: I_f qd- in long
@@ -539,8 +530,8 @@ static void gac_balance_residual(const gac_model *m, const double *q, const doub
                                                                                measures qd+ . r and qd- . r */
             const double *h_minus_d = before->sampled + (long)k * nq;
             long double d_plus = 0.0L, d_minus = 0.0L;
-            gac_sampled_momentum(m, q, qd_plus, p, k, p_plus);
-            gac_sampled_force(m, q, f, p, k, g);
+            gac_sampled(m->generalized_momentum, q, qd_plus, p, k, p_plus);
+            gac_sampled(m->contact_generalized_force, q, f, p, k, g);
             for (i = 0; i < nq; ++i) {
                 const long double delta = (((long double)p_plus[i] - h_minus_d[i]) - g[i])
                                           - ((h_plus[i] - h_minus[i]) - g_ld[i]);
@@ -617,8 +608,8 @@ int gac_momentum_balance_ld(const gac_model *m, const double *q, const double *p
     }
     for (k = 0; k < GAC_ROUNDING_SAMPLES && GAC_SAMPLED_FLOOR; ++k) {
         long double d = 0.0L;
-        gac_sampled_momentum(m, q, qd, p, k, d_minus);
-        gac_sampled_momentum(m, q, qd_plus, p, k, d_plus);
+        gac_sampled(m->generalized_momentum, q, qd, p, k, d_minus);
+        gac_sampled(m->generalized_momentum, q, qd_plus, p, k, d_plus);
         for (i = 0; i < nq; ++i)
             d += qd_plus[i] * (((long double)d_plus[i] - d_minus[i]) - (h_plus[i] - h_minus[i]));
         sampled = fabsl(d) > sampled ? fabsl(d) : sampled;

@@ -280,7 +280,8 @@ def test_the_stated_accuracy_bounds_the_error_of_the_energy_after(compiled):
         errors.append(error)
     checked = len(errors)
     assert checked >= 500
-    assert max(errors) > 3e-11          # the bound is tested where storing qd+ matters (6.8e-11 seen)
+    assert max(errors) > 2e-11          # the bound is tested where storing qd+ matters (3.2e-11 seen; 6.8e-11 with
+                                        # each component rounded to nearest, not chosen for the energy)
 
 
 def test_the_measured_evaluation_floor_bounds_the_error_on_both_charts(compiled):
@@ -309,8 +310,8 @@ def test_the_measured_evaluation_floor_bounds_the_error_on_both_charts(compiled)
         assert error <= impact.roundoff, (impact.t, error, impact.roundoff)
         errors.append(error)
     checked = len(errors)
-    assert checked >= 10
-    assert max(errors) > 1e-12          # the bound is tested where round-off shows
+    assert checked >= 5
+    assert max(errors) > 1e-13          # the bound is tested where round-off shows (8e-13 seen)
 
 
 def test_impulses_after_several_rounds_balance_the_velocities(compiled):

@@ -182,7 +182,7 @@ static double gac_law_residual(const gac_model *m, const double *q, const double
     return work;
 }
 
-/* The energy identity's residual (J): |T(qd+) - T(qd-) - 1/2 Lambda . (gamma+ + gamma-)|, gamma the velocities
+/* The energy identity's residual (J), signed: T(qd+) - T(qd-) - 1/2 Lambda . (gamma+ + gamma-), gamma the velocities
  * along the rows Lambda acts on, T the model's energy; it holds exactly for velocities that balance the impulses,
  * whatever the law, and measures what evaluating T and the rates resolves (the quantity the post-conditions
  * compare). */
@@ -209,10 +209,10 @@ static double gac_energy_identity(const gac_model *m, const double *q, const dou
             work += (long double)Ft[2*a + j] * (before[comp] + after[comp]);
         }
     }
-    return fabs((double)(((long double)E1[0] - E0[0]) - 0.5L * work));
+    return (double)(((long double)E1[0] - E0[0]) - 0.5L * work);
 }
 
-/* The energy identity's residual in long double (the model's long-double kernels): T(qd+) - T(qd-) by energy_ld,
+/* The energy identity's residual in long double (the model's long-double kernels), signed: T(qd+) - T(qd-) by energy_ld,
  * and Lambda . (gamma+ + gamma-) = (J^T Lambda) . (qd+ + qd-) with J^T Lambda by contact_generalized_force_ld (f:
  * Lambda in the Jacobian's rows). */
 static double gac_energy_identity_ld(const gac_model *m, const double *q, const double *p, const double *f,
@@ -224,7 +224,7 @@ static double gac_energy_identity_ld(const gac_model *m, const double *q, const 
     m->energy_ld(q, qd_plus, p, E1);
     m->contact_generalized_force_ld(q, f, p, g);
     for (i = 0; i < m->nq; ++i) work += g[i] * ((long double)qd[i] + qd_plus[i]);
-    return fabs((double)((E1[0] - E0[0]) - 0.5L * work));
+    return (double)((E1[0] - E0[0]) - 0.5L * work);
 }
 
 /* f = Lambda in the Jacobian's rows (njrow): each contact's normal impulse F[a] along its inward normal, its
@@ -507,7 +507,9 @@ static void gac_momentum_before_eval(const gac_model *m, const double *q, const 
  * Where long double is no wider than double, the a-priori 4 (nq + 1) eps_L sum_i |qd+_i| (...). */
 typedef struct {
     double *r, *bound;                                   /* nq each, the caller's */
+    double *h;                                           /* nq, the caller's or NULL: I_f qd+ (long double route) */
     double balance, floor, stored, moved, moved_floor;
+    double signed_balance, signed_moved;                 /* qd+ . r and qd- . r with their signs */
 } gac_balance;
 
 static void gac_balance_residual(const gac_model *m, const double *q, const double *p, int n, const int *list,
@@ -550,6 +552,7 @@ static void gac_balance_residual(const gac_model *m, const double *q, const doub
             size += fabsl((long double)qd_plus[i]) * evaluated;
             size_m += fabsl((long double)qd[i]) * evaluated;
             stored += fabsl((long double)qd_plus[i]) * fabsl(h_plus[i]);
+            if (b->h) b->h[i] = (double)h_plus[i];
             b->bound[i] = (double)(fabsl(ri) + 4.0L * (nq + 1) * LDBL_EPSILON * evaluated
                                    + 0.5L * GAC_EPS * fabsl(h_plus[i]));
         }
@@ -575,6 +578,7 @@ static void gac_balance_residual(const gac_model *m, const double *q, const doub
             size += fabsl((long double)qd_plus[i]) * (fabs(p_change[i]) + fabs(g[i]));
             size_m += fabsl((long double)qd[i]) * (fabs(p_change[i]) + fabs(g[i]));
             stored += fabsl((long double)qd_plus[i]) * fabs(p_plus[i]);
+            if (b->h) b->h[i] = p_plus[i];
             b->bound[i] = fabs(b->r[i]) + 4.0 * (nq + 1) * GAC_EPS * (fabs(p_change[i]) + fabs(g[i]))
                           + 0.5 * GAC_EPS * fabs(p_plus[i]);
         }
@@ -582,8 +586,10 @@ static void gac_balance_residual(const gac_model *m, const double *q, const doub
         b->stored = 0.0;
         b->moved_floor = 4.0 * (nq + 1) * GAC_EPS * (double)size_m;
     }
-    b->balance = fabs((double)work_r);
-    b->moved = fabs((double)work_m);
+    b->signed_balance = (double)work_r;
+    b->signed_moved = (double)work_m;
+    b->balance = fabs(b->signed_balance);
+    b->moved = fabs(b->signed_moved);
 }
 
 /* The momentum balance of velocities qd -> qd_plus against a generalized impulse g (nq, long double: its terms
@@ -658,6 +664,86 @@ static int gac_held_would_pull(const gac_model *m, const double *p, const int *l
         if (after > cf * F2[a] && after * F[a] > (1.0 + 1e-12) * before * F2[a]) return 1;   /* |L_T| / L_N grows */
     }
     return 0;
+}
+
+/* The held directions' misses of the law's targets at qd+ (m/s; 0 for one not aimed), in miss; returns their work
+ * sum_h weight_h |miss_h| (J).  vel: the contact velocities at qd+. */
+static double gac_held_misses(const gac_model *m, const int *list, int nh, const gac_held *held, const double *qd_plus,
+                              const double *vel, double *miss)
+{
+    double missed = 0.0;
+    int h;
+    for (h = 0; h < nh; ++h) {
+        miss[h] = held[h].aimed ? gac_held_velocity(m, list, &held[h], qd_plus, vel) - held[h].target : 0.0;
+        missed += held[h].weight * fabs(miss[h]);
+    }
+    return missed;
+}
+
+/* What the stored qd+'s energy misses the law's by, to first order, signed (J): the refinement's next step,
+ * qd+ -> qd+ - I_f^-1 r + Y_H dLambda_H with A_HH dLambda_H = Y_H . r - miss_H, balances the impulses exactly and
+ * meets the held targets to first order; it moves T by -(qd+ . r - sum_h (w_h . qd+) dLambda_h) (I_f symmetric, w_h
+ * the held directions' generalized forces).  signed_balance: qd+ . r; r (nq) the residual; A_HH factored and Y_H in
+ * work (gac_held_system). */
+static double gac_step_energy(const gac_model *m, const double *q, const double *p, int nh, const gac_held *held,
+                              double *work, const double *r, const double *miss, const double *qd_plus,
+                              double signed_balance)
+{
+    const int nq = m->nq;
+    const double *Y = GAC_WORK_Y(m, work);
+    double dl[GAC_AT_LEAST_1(nq)], f[GAC_AT_LEAST_1(m->njrow)], w[GAC_AT_LEAST_1(nq)];
+    long double energy = signed_balance;
+    int h, i, k;
+    for (h = 0; h < nh; ++h) {
+        long double sum = 0.0L;
+        for (i = 0; i < nq; ++i) sum += (long double)Y[(long)h * nq + i] * r[i];
+        dl[h] = (double)sum - miss[h];
+    }
+    if (nh > 0) gac_ldlt_solve(nh, GAC_WORK_A(m, work), dl);
+    for (h = 0; h < nh; ++h) {
+        long double along = 0.0L;
+        for (k = 0; k < m->njrow; ++k) f[k] = 0.0;
+        for (k = 0; k < held[h].nrow; ++k) f[held[h].row[k]] += held[h].coef[k];
+        m->contact_generalized_force(q, f, p, w);
+        for (i = 0; i < nq; ++i) along += (long double)w[i] * qd_plus[i];
+        energy -= along * dl[h];
+    }
+    return gac_finite(dl, nh) ? (double)energy : signed_balance;
+}
+
+/* Rounding qd+ to doubles moves T by (I_f qd+) . delta: of each component's rounding (kept, or the neighbouring
+ * double above or below), the one that brings the step's energy (gac_step_energy, `energy`) nearest 0, the
+ * components taken by the size of their effect, largest first (greedy).  h: I_f qd+; r: the residual (its change
+ * with delta, I_f delta, adds r_i delta_i).  The stored velocities then are the doubles nearest the law's in energy
+ * rather than in each component; the caller measures the result and keeps it only if it is better. */
+static void gac_round_to_energy(int nq, const double *h, const double *r, double energy, double *qd_plus)
+{
+    double effect[GAC_AT_LEAST_1(nq)];
+    int order[GAC_AT_LEAST_1(nq)], i, j;
+    for (i = 0; i < nq; ++i) {
+        const double up = nextafter(qd_plus[i], INFINITY) - qd_plus[i];
+        effect[i] = fabs(up * (h[i] + r[i]));
+        order[i] = i;
+    }
+    for (i = 1; i < nq; ++i) {                           /* by effect, largest first */
+        const int c = order[i];
+        for (j = i; j > 0 && effect[order[j - 1]] < effect[c]; --j) order[j] = order[j - 1];
+        order[j] = c;
+    }
+    for (j = 0; j < nq; ++j) {
+        const int c = order[j];
+        const double up = nextafter(qd_plus[c], INFINITY), down = nextafter(qd_plus[c], -INFINITY);
+        const double e_up = energy + (up - qd_plus[c]) * (h[c] + r[c]);
+        const double e_down = energy + (down - qd_plus[c]) * (h[c] + r[c]);
+        if (!isfinite(up) || !isfinite(down)) continue;
+        if (fabs(e_up) < fabs(energy) && fabs(e_up) <= fabs(e_down)) {
+            qd_plus[c] = up;
+            energy = e_up;
+        } else if (fabs(e_down) < fabs(energy)) {
+            qd_plus[c] = down;
+            energy = e_down;
+        }
+    }
 }
 
 /* How accurately the contacts' normal velocities after the impact are known (m/s), the largest over list[0..n-1]:
@@ -800,7 +886,7 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     gac_balance res;
     double previous = INFINITY, previous_balance = INFINITY, previous_missed = INFINITY;
     double balance = 0.0, floor = 0.0, law_work = 0.0, identity;
-    double bound_kept[GAC_AT_LEAST_1(nq)];
+    double bound_kept[GAC_AT_LEAST_1(nq)], h_plus[GAC_AT_LEAST_1(nq)], energy;
     double Fs[GAC_AT_LEAST_1(nq)], F_kept[GAC_AT_LEAST_1(nq)], dl[GAC_AT_LEAST_1(nq)];
     double Fts[2 * GAC_AT_LEAST_1(nq)], Ft_kept[2 * GAC_AT_LEAST_1(nq)];
     const double *Y = GAC_WORK_Y(m, work);
@@ -816,6 +902,7 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     int nh = 0, nnormal, a, i, it, pass;
     res.r = r;                                           /* the balance's residual and bounds, evaluated in place */
     res.bound = bound_now;
+    res.h = h_plus;
     for (a = 0; a < n; ++a) {
         Fs[a] = F[a];
         Fts[2*a] = Ft[2*a];
@@ -979,6 +1066,32 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         floor = res.floor;
         gac_copy(bound_kept, res.bound, nq);
     }
+    /* The stored qd+'s energy miss, to first order (the next step's, gac_step_energy), with each component's rounding
+     * to doubles chosen to bring it nearest 0 where the long-double residual resolves it (kept only if the measure
+     * falls) */
+    gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, &before_impact, &res);
+    m->contact_velocities(q, qd_plus, p, after);
+    gac_held_misses(m, list, nh, held, qd_plus, after, miss);
+    energy = gac_step_energy(m, q, p, nh, held, work, res.r, miss, qd_plus, res.signed_balance);
+    if (extended && fabs(energy) > res.floor) {
+        gac_copy(kept, qd_plus, nq);
+        gac_round_to_energy(nq, h_plus, res.r, energy, qd_plus);
+        gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, &before_impact, &res);
+        m->contact_velocities(q, qd_plus, p, after);
+        gac_held_misses(m, list, nh, held, qd_plus, after, miss);
+        {
+            const double rounded = gac_step_energy(m, q, p, nh, held, work, res.r, miss, qd_plus, res.signed_balance);
+            if (fabs(rounded) < fabs(energy)) {
+                energy = rounded;
+            } else {                                     /* no better: the rounding as it was */
+                gac_copy(qd_plus, kept, nq);
+                gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, &before_impact, &res);
+            }
+        }
+    }
+    balance = fabs(energy);
+    floor = res.floor;
+    gac_copy(bound_kept, res.bound, nq);
     if (rounds == 1 && !plastic && law != GAC_IMPACT_LAW_GDI_COMMON_E)
         law_work = gac_law_residual(m, q, p, n, list, e, Fs, Fts, law, qd, qd_plus);
     if (rounds == 1 && !plastic && law == GAC_IMPACT_LAW_GDI_COMMON_E) {   /* the round's law: its smallest e
@@ -991,11 +1104,13 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         law_work = gac_rounds_residual(m, q, p, n, list, Fs, targets, qd_plus);
     if (rounds >= 1)                                     /* what the law's rest rule can add */
         law_work += gac_rest_work(m, q, p, n, list, Fs, rounds, qd, rest_work);
-    if (extended && m->energy_ld != 0) {                 /* in long double */
+    if (extended && m->energy_ld != 0) {                 /* in long double: what 1/2 (qd+ + qd-) . r, the identity's
+                                                            miss for velocities off the balance, does not explain */
         gac_impulse_rows(m, n, list, Fs, Fts, f);
-        identity = gac_energy_identity_ld(m, q, p, f, qd, qd_plus);
+        identity = fabs(gac_energy_identity_ld(m, q, p, f, qd, qd_plus)
+                        - 0.5 * (res.signed_balance + res.signed_moved));
     } else {
-        identity = gac_energy_identity(m, q, p, n, list, Fs, Fts, qd, qd_plus);
+        identity = fabs(gac_energy_identity(m, q, p, n, list, Fs, Fts, qd, qd_plus));
     }
     gac_copy(F, Fs, n);                                  /* the impulses that balance the refined velocities */
     gac_copy(Ft, Fts, 2 * n);

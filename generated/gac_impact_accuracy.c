@@ -878,7 +878,7 @@ double gac_frictionless_law_work(const gac_model *m, const double *q, const doub
 double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                            const double *e, double *F, double *Ft, int law, int rounds, int plastic,
                            const double *qd, double *qd_plus, double T, double *work, double *v_acc,
-                           const double *targets, double rest_work)
+                           const double *targets, double rest_work, int *part)
 {
     const int nq = m->nq;
     double f[GAC_AT_LEAST_1(m->njrow)], r[GAC_AT_LEAST_1(nq)], bound_now[GAC_AT_LEAST_1(nq)];
@@ -1115,6 +1115,13 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     gac_copy(F, Fs, n);                                  /* the impulses that balance the refined velocities */
     gac_copy(Ft, Fts, 2 * n);
     if (v_acc) *v_acc = gac_velocity_accuracy(m, q, p, n, list, qd, qd_plus, bound_kept, work);
+    if (part) {                                          /* the largest part */
+        const double parts[4] = {balance, floor, law_work, identity};
+        const int names[4] = {GAC_ROUNDOFF_STORED, GAC_ROUNDOFF_EVALUATION, GAC_ROUNDOFF_LAW, GAC_ROUNDOFF_IDENTITY};
+        int k, largest = 0;
+        for (k = 1; k < 4; ++k) largest = parts[k] > parts[largest] ? k : largest;
+        *part = names[largest];
+    }
     return (balance + floor + law_work + identity) / (T > 0.0 ? T : 1e-300);
 }
 

@@ -68,6 +68,7 @@ typedef struct {
     double scale;          /* the largest |normal velocity| before (m/s) */
     double height;         /* the rest height in force (m; 0: no landings by it) */
     double T_before, T_law, bound;
+    int cause;             /* bound's largest part (GAC_ROUNDOFF_*) */
     double v_acc;          /* how accurately the normal velocities after are known (m/s; gac_impact_accuracy) */
     double E_plus[2];      /* T and V at (x, qd_plus), kept with qd_plus (J) */
     int held;              /* 1 once gac_hold_resting changed the velocities after the law */
@@ -192,8 +193,15 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
             law = gac_frictionless_law_work(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->rounds,
                                             ev->plastic, targets, ev->rest_work, ev->x + nq, ev->qd_plus);
         }
-        b = gac_link_law_accuracy(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->Ft, ev->x + nq, ev->qd_plus,
-                                  ev->T_before) + law / T + gac_rounds_energy_miss(s, ev);
+        {
+            const double balance = gac_link_law_accuracy(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->Ft,
+                                                         ev->x + nq, ev->qd_plus, ev->T_before);
+            const double miss = gac_rounds_energy_miss(s, ev);
+            b = balance + law / T + miss;
+            ev->cause = balance >= law / T && balance >= miss ? GAC_ROUNDOFF_LINK
+                        : law / T >= miss ? GAC_ROUNDOFF_LAW : GAC_ROUNDOFF_ROUNDS_ENERGY;
+        }
+        if (!(b > 1e-10)) ev->cause = GAC_ROUNDOFF_FLOOR;
         return b > 1e-10 ? b : 1e-10;
     }
     for (pass = 0; pass < (refine ? 2 : 1); ++pass) {   /* the impulses against the velocities, then the velocities
@@ -203,11 +211,16 @@ static double gac_law_accuracy(const gac_sim *s, gac_impact_event *ev, const dou
                                 ev->qd_plus, s->work, targets);
         b = gac_impact_accuracy(s->model, ev->x, s->p, ev->n, ev->list, e, ev->F, ev->Ft, ev->law, ev->rounds,
                                 ev->plastic, ev->x + nq, ev->qd_plus, ev->T_before, s->work, &v,
-                                refine ? targets : 0, ev->rest_work);
+                                refine ? targets : 0, ev->rest_work, &ev->cause);
     }
     gac_drop_roundoff_pulls(s->model, ev->x, s->p, ev->n, ev->list, ev->F, ev->Ft, ev->qd_plus);
     if (v > ev->v_acc) ev->v_acc = v;
-    b += gac_rounds_energy_miss(s, ev);
+    {
+        const double miss = gac_rounds_energy_miss(s, ev);
+        if (miss > b) ev->cause = GAC_ROUNDOFF_ROUNDS_ENERGY;
+        b += miss;
+    }
+    if (!(b > 1e-10)) ev->cause = GAC_ROUNDOFF_FLOOR;
     return b > 1e-10 ? b : 1e-10;
 }
 
@@ -264,7 +277,7 @@ static double gac_held_accuracy(gac_sim *s, gac_impact_event *ev, int nset, cons
         return b > 1e-10 ? b : 1e-10;
     }
     b = gac_impact_accuracy(md, ev->x, s->p, ev->n, ev->list, ev->e, F, Ft, ev->law, 0, 0, ev->x + nq,
-                            s->x1 + nq, ev->T_before, s->work, &v, 0, -1.0);
+                            s->x1 + nq, ev->T_before, s->work, &v, 0, -1.0, 0);
     if (v > ev->v_acc) ev->v_acc = v;
     return b > 1e-10 ? b : 1e-10;
 }
@@ -429,6 +442,7 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
     r->residual = ev->residual;
     if (code != GAC_OK) return code;
     ev->bound = r->roundoff = gac_law_accuracy(s, ev, ev->e_law);
+    r->roundoff_cause = ev->cause;
     if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;   /* no useful accuracy left */
     for (k = 0; k < ev->n; ++k) all_elastic &= ev->e_law[k] == 1.0;
     if (ev->plastic && all_elastic && !ev->friction) return GAC_ERR_IMPACT_ACCURACY;   /* the plastic closing round
@@ -449,7 +463,10 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
         if (ev->residual > r->residual) r->residual = ev->residual;
         if (code != GAC_OK) return code;
         accuracy = gac_law_accuracy(s, ev, ev->e);
-        if (accuracy > ev->bound) ev->bound = r->roundoff = accuracy;
+        if (accuracy > ev->bound) {
+            ev->bound = r->roundoff = accuracy;
+            r->roundoff_cause = ev->cause;
+        }
         if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;
         md->energy(x, ev->qd_plus, s->p, ev->E_plus);
         for (k = 0; k < ev->n; ++k) {
@@ -578,7 +595,10 @@ static int gac_hold_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *se
     if (ev->held) {
         const double held = gac_held_accuracy(s, ev, *nset, set);
         int c;
-        if (held > ev->bound) ev->bound = r->roundoff = held;
+        if (held > ev->bound) {
+            ev->bound = r->roundoff = held;
+            r->roundoff_cause = GAC_ROUNDOFF_HOLD;
+        }
         if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;
         gac_normal_velocities(md, s->x1, s->p, ev->vn);   /* (the refined velocities) */
         for (c = 0; c < md->ncontact; ++c) {             /* the refinement, along rows nearly dependent on the held
@@ -654,6 +674,7 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     ev.t = t;
     ev.x = s->xs;
     ev.c_event = c_event;
+    ev.cause = GAC_ROUNDOFF_FLOOR;
     ev.list = list, ev.landing = landing, ev.shrinking = shrinking;
     ev.held = 0;
     s->energy_x1_valid = 0;                              /* set again by gac_finish, for the state it leaves */
@@ -667,6 +688,7 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     r->rounds = r->plastic = r->law_elastic = 0;
     r->energy_rest = 0.0;
     r->roundoff = 1e-10;
+    r->roundoff_cause = GAC_ROUNDOFF_FLOOR;
     r->law = GAC_IMPACT_LAW_FRICTIONLESS;
     r->residual = 0.0;
     if (!gac_is_impact(s, &ev)) return 0;                /* grazing touch: nothing to resolve */

@@ -32,6 +32,12 @@ class ImpactError(RuntimeError):
 IMPACT_LAWS = {"frictionless": "GAC_IMPACT_LAW_FRICTIONLESS", "gdi": "GAC_IMPACT_LAW_GDI",
                "newton-coulomb": "GAC_IMPACT_LAW_NEWTON_COULOMB", "gdi-common-e": "GAC_IMPACT_LAW_GDI_COMMON_E",
                "gdi-tangential": "GAC_IMPACT_LAW_GDI_TANGENTIAL"}
+# The parts an impact's measured accuracy is made of by name (Impact.roundoff_cause), and the library's constant of
+# each (gac.h, GAC_ROUNDOFF_*)
+ROUNDOFF_CAUSES = {"floor": "GAC_ROUNDOFF_FLOOR", "stored": "GAC_ROUNDOFF_STORED",
+                   "evaluation": "GAC_ROUNDOFF_EVALUATION", "law": "GAC_ROUNDOFF_LAW",
+                   "identity": "GAC_ROUNDOFF_IDENTITY", "rounds-energy": "GAC_ROUNDOFF_ROUNDS_ENERGY",
+                   "hold": "GAC_ROUNDOFF_HOLD", "link": "GAC_ROUNDOFF_LINK"}
 CHOSEN_LAWS = ("gdi", "newton-coulomb", "frictionless")     # what a user may ask for; gdi-common-e and
                                                             # gdi-tangential: a record's only
 
@@ -435,6 +441,10 @@ class CompiledModel:
     def impact_law_name(self, code: int) -> str:
         """The name (IMPACT_LAWS) of a library impact-law code."""
         return next(name for name in IMPACT_LAWS if self.impact_law_code(name) == code)
+
+    def roundoff_cause_name(self, code: int) -> str:
+        """The name (ROUNDOFF_CAUSES) of a library code GAC_ROUNDOFF_*: an impact's accuracy's largest part."""
+        return next(name for name, constant in ROUNDOFF_CAUSES.items() if int(getattr(self.lib, constant)) == code)
 
     def impact_friction(self, q, qd, contact_set, p=None, law: str = "gdi") -> FrictionalImpact:
         """The impact law at walls with Coulomb friction (gac_impact_friction): the rounds of the complementarity

@@ -80,6 +80,12 @@ class Impact:
                                         # 'gdi-tangential' (a tangential impact: sliding resting contacts in the
                                         # Painleve paradox stopped by an impact without collision)
     residual: float = 0.0               # the frictional law's largest relative violation of its conditions
+    roundoff_cause: str = "floor"       # roundoff's largest part: 'floor' (none above 1e-10), 'stored' (the stored
+                                        # velocities' energy miss: their rounding to doubles), 'evaluation' (what
+                                        # evaluating the momentum balance resolves), 'law' (the contact law's
+                                        # residual), 'identity' (evaluating T), 'rounds-energy' (T's change after
+                                        # several rounds beyond the law's), 'hold' (holding resting contacts after
+                                        # the law), 'link' (a law with link pairs or obstacles)
     dt_dp: dict | None = None           # simulate(sensitivities=...): d t_impact / d(direction) by direction name
                                         # (NaN from the first event not differentiated on)
 
@@ -226,6 +232,7 @@ class SimulationResult:
                                                 for c in i.contacts],
                          "energy_before": i.energy_before, "energy_after": i.energy_after,
                          "complementarity": i.complementarity, "law": i.law, "residual": i.residual,
+                         "roundoff_cause": i.roundoff_cause,
                          "roundoff": i.roundoff} for i in self.impacts],
             "t_final": self.t_final, "q_final": self.q_final.tolist(), "qd_final": self.qd_final.tolist(),
             "energy_initial": self.energy_initial, "energy_final": self.energy_final,
@@ -630,7 +637,7 @@ def impact_warnings(impacts: list[Impact], model: CompiledModel | None = None, p
     layout = model.layout
     return [f"impact at t = {i.t:.9g} s: its energy is accurate only to {i.roundoff:.2g} (relative): "
             + accuracy_cause(model, p, layout.reduce(i.q), layout.reduce(i.qd_before),
-                             impact_contact_indices(model, i), i.law, i.residual)
+                             impact_contact_indices(model, i), i.law, i.residual, i.roundoff_cause)
             for i in flagged]
 
 
@@ -652,19 +659,40 @@ DEPENDENT_CONTACTS = 1e8   # cond(J I_f^-1 J^T) over an impact's contacts above 
 CANCELLING = 1e3           # sum |qd_i| |(I_f qd)_i| / 2T above which the velocities' components cancel
 
 
+# What each part of an impact's measured accuracy stands for (Impact.roundoff_cause, its largest part), as the lead
+# of its cause
+ROUNDOFF_PARTS = {
+    "stored": "the velocities after, stored as doubles, miss the law's energy by that much (each component's "
+              "rounding chosen to bring it nearest)",
+    "evaluation": "evaluating the momentum balance resolves no more",
+    "law": "the contact law's residual",
+    "identity": "evaluating the kinetic energy resolves no more",
+    "rounds-energy": "after its rounds the kinetic energy changed beyond what the law gives",
+    "hold": "holding the resting contacts after the law",
+    "link": "the momentum balance of its law with link pairs or obstacles",
+}
+
+
 def accuracy_cause(model: CompiledModel, p, q, qd, contacts: list, law: str = "frictionless",
-                   residual: float = 0.0) -> str:
+                   residual: float = 0.0, part: str = "floor") -> str:
     """Why an impact at (q, qd) (the model's coordinates; contacts: the model's contact indices) could not be solved
-    more accurately, as a phrase: the first that applies of the frictional law's own residual, the base chart near
-    its singular pose (chi = |det E| below CHART_NEAR: I_f's smallest eigenvalue falls like chi^2), contacts whose
-    rows are nearly dependent (cond(J I_f^-1 J^T) above DEPENDENT_CONTACTS), velocities whose components cancel in
-    the energy (along a soft direction of I_f), and else I_f's condition with the chain's most extreme ratio
-    (ill_conditioning)."""
+    more accurately, as a phrase: what its accuracy is made of (part: the record's largest part, ROUNDOFF_PARTS;
+    'floor': not known) and why the chain makes it so, the first that applies of the frictional law's own residual
+    (where part is the law's or not known), the base chart near its singular pose (chi = |det E| below CHART_NEAR:
+    I_f's smallest eigenvalue falls like chi^2), contacts whose rows are nearly dependent (cond(J I_f^-1 J^T) above
+    DEPENDENT_CONTACTS), velocities whose components cancel in the energy (along a soft direction of I_f), and else
+    I_f's condition with the chain's most extreme ratio (ill_conditioning)."""
     p = model.parameters() if p is None else np.asarray(p, dtype=float)
-    planar = model.layout.planar_normal is not None
-    if law != "frictionless" and residual > 1e-11:
+    if part in ("floor", "law") and law != "frictionless" and residual > 1e-11:
         return f"the frictional law's solve left its conditions at {residual:.2g} (relative; " + \
             _friction_residual_cause(model, p, q, [c for c in contacts if c is not None]) + ")"
+    why = _conditioning_cause(model, p, q, qd, contacts)
+    return why if part not in ROUNDOFF_PARTS else f"{ROUNDOFF_PARTS[part]}: {why}"
+
+
+def _conditioning_cause(model: CompiledModel, p, q, qd, contacts: list) -> str:
+    """What in the chain at (q, qd) makes an impact's residuals large, as a phrase (accuracy_cause's order)."""
+    planar = model.layout.planar_normal is not None
     chi = chart_measure(model, q)
     if chi < CHART_NEAR:
         return (f"the base chart is near its singular pose: its measure chi = |det E| = {chi:.2g} (I_f's "
@@ -841,7 +869,7 @@ def _read_impact(model: CompiledModel, r) -> Impact:
                   layout.expand(unpack(r.q, nq)), layout.expand(unpack(r.qd_before, nq), velocity=True),
                   layout.expand(unpack(r.qd_after, nq), velocity=True), int(r.rounds), bool(r.plastic),
                   float(r.energy_rest), float(r.roundoff), bool(r.law_elastic), model.impact_law_name(int(r.law)),
-                  float(r.residual))
+                  float(r.residual), model.roundoff_cause_name(int(r.roundoff_cause)))
 
 
 def _read_contact_events(model: CompiledModel, r) -> list[ContactEvent]:
@@ -1026,7 +1054,8 @@ def _end_message(model: CompiledModel, sim, code: int, segment_t: float, segment
         cause = accuracy_cause(model, p, np.array(unpack(record.q, nq)),
                                np.array(unpack(record.qd_before, nq)),
                                [int(record.contact[k]) for k in range(int(record.ncontact))],
-                               model.impact_law_name(int(record.law)), float(record.residual))
+                               model.impact_law_name(int(record.law)), float(record.residual),
+                               model.roundoff_cause_name(int(record.roundoff_cause)))
         message += (f" (this impact's energy is known only to {float(record.roundoff):.3g} relative, its measured "
                     f"accuracy: {cause})")
     if code == lib.GAC_ERR_LINK_REST:

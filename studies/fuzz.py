@@ -794,7 +794,8 @@ def run_structure(args) -> list[Outcome]:
             worst = max(result.impacts, key=lambda i: i.roundoff)
             reduce = run_model.layout.reduce
             cause = accuracy_cause(run_model, run.p, reduce(worst.q), reduce(worst.qd_before),
-                                   impact_contact_indices(run_model, worst), worst.law, worst.residual)
+                                   impact_contact_indices(run_model, worst), worst.law, worst.residual,
+                                   worst.roundoff_cause)
         outcomes.append(Outcome(case, scene.n, planar, run.options["method"], result.status, text, failed,
                                 violations, len(result.impacts), seconds, result.message, roundoff, inaccurate,
                                 cause, capsules, len(obstacles), count, strikes))

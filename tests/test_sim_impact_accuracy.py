@@ -79,6 +79,13 @@ def test_the_cause_of_an_inaccurate_impact_is_named(compiled):
     assert "frictional law's solve" in cause and "its contact-space inverse inertia" in cause
     cause = accuracy_cause(model, p, q, qd, [0, 1], law="gdi", residual=3e-10)
     assert "friction cones interact strongly; cond(W) = " in cause
+    # the record's largest part leads (its frictional residual then is not the cause unless the part is the law's)
+    cause = accuracy_cause(model, p, q, qd, [0], law="gdi", residual=3e-10, part="stored")
+    assert cause.startswith("the velocities after, stored as doubles, miss the law's energy") and "cond(I_f)" in cause
+    cause = accuracy_cause(model, p, q, qd, [0], law="gdi", residual=3e-10, part="law")
+    assert "frictional law's solve" in cause
+    cause = accuracy_cause(model, p, q, qd, [0], part="hold")
+    assert cause.startswith("holding the resting contacts after the law: ") and "cond(I_f)" in cause
 
 
 def _normal_and_tangential(model, q, qd, p, contacts):

@@ -168,6 +168,20 @@
                                          16 eps cond(W) of a round's contact-space W (its LDL^T pivots' spread)
                                          where that is larger, the impact is refused (GAC_ERR_IMPACT_FRICTION); the
                                          residual left counts in the impact's accuracy (record.roundoff) */
+/* What an impact's measured accuracy (record.roundoff) is made of: its largest part (record.roundoff_cause) */
+#define GAC_ROUNDOFF_FLOOR          0   /* none above the 1e-10 every record states at least */
+#define GAC_ROUNDOFF_STORED         1   /* the stored velocities' energy miss: the first-order change of T to the
+                                           velocities that balance the impulses exactly and meet the law's targets
+                                           (rounding the velocities to doubles, along a soft direction of I_f) */
+#define GAC_ROUNDOFF_EVALUATION     2   /* what evaluating the momentum balance resolves (its measured floor) */
+#define GAC_ROUNDOFF_LAW            3   /* the contact law's residual: its conditions solved in one round (the
+                                           frictional law's cone and complementarity), or the velocities' miss of
+                                           the rounds' own after several, and the rest rule's work */
+#define GAC_ROUNDOFF_IDENTITY       4   /* the energy identity's residual that the momentum balance does not explain
+                                           (evaluating T) */
+#define GAC_ROUNDOFF_ROUNDS_ENERGY  5   /* after several rounds, T's change beyond what the law gives */
+#define GAC_ROUNDOFF_HOLD           6   /* holding the resting contacts after the law */
+#define GAC_ROUNDOFF_LINK           7   /* the balance of a law with link pairs or obstacles */
 #define GAC_SLOW_SLIDING 4         /* a resting point sliding slower than this many friction_velocity is in (or
                                       near) the regularised friction's stiff, viscous regime: sim.n_slow_sliding */
 
@@ -929,6 +943,7 @@ typedef struct {
                                     of its post-conditions: the solves' error on the velocity change, holding
                                     landed contacts included, and the error of evaluating T itself (grows with
                                     cond(I_f) and with velocities along its soft directions) */
+    int roundoff_cause;          /* roundoff's largest part (GAC_ROUNDOFF_*) */
     double approach_before;      /* largest |normal velocity| of any contact before (m/s) */
     double approach_after;       /* fastest approach of a contact within contact_tol after (m/s) */
     int nlanded, *landed;        /* contacts come to rest at this event */

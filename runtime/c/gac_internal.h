@@ -277,7 +277,7 @@ double gac_frictionless_law_work(const gac_model *m, const double *q, const doub
 double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                            const double *e, double *F, double *Ft, int law, int rounds, int plastic,
                            const double *qd, double *qd_plus, double T, double *work, double *v_acc,
-                           const double *targets, double rest_work);
+                           const double *targets, double rest_work, int *part);
 
 /* gac_impact_friction.c */
 double gac_friction_coefficient(const gac_model *m, const double *p, int c);

@@ -253,6 +253,7 @@ int gac_jam(gac_sim *s, gac_impact_record *r)
     r->complementarity = 1;                          /* no contact approached: not Eq. 47 */
     r->energy_rest = 0.0;
     r->roundoff = 1e-10;
+    r->roundoff_cause = GAC_ROUNDOFF_FLOOR;
     r->law = GAC_IMPACT_LAW_GDI_TANGENTIAL;
     r->energy_before = E[0] + E[1];
     for (i = 0; i < nq; ++i) {

@@ -123,7 +123,10 @@ def test_a_point_chattering_in_a_rough_corner_reaches_t_end():
 def test_a_link_pair_left_approaching_by_a_plastic_closing_round_is_closed():
     """0-33/6 (8 links, capsules, a sphere obstacle, rough walls): O1 on x3_max and the link pair L1-L3 strike each
     other in turn for 256 rounds; the plastic 257th that closes them left the pair approaching at 1.5e-4 m/s
-    (GAC_ERR_IMPACT_ACCURACY at t = 0.858 s): the closing plastic normal strikes now reach link pairs too."""
+    (GAC_ERR_IMPACT_ACCURACY at t = 0.858 s): the closing plastic normal strikes now reach link pairs too.  (The
+    trajectory has since moved: such closing rounds now come at 0.785 s and 0.841 s.)"""
     scene, model, run, result = run_case("0-33/6", 0.9)
     assert result.status == 0, result.message
-    assert check_impacts(scene, model, run, result, 0.858) > 0
+    closing = [i for i in result.impacts if i.plastic and any(c.kind == "link" for c in i.contacts)]
+    assert closing
+    assert check_impacts(scene, model, run, result, closing[0].t - 1e-9) > 0

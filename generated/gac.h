@@ -1238,12 +1238,12 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       (their forces ~0 at once), a slip with another slip or a release, or points
                                       that stick at one step's end at different speeds */
 #define GAC_SENS_LINK         11   /* an impact of two links or of a link on a fixed obstacle (GAC_CONTACT_LINK,
-                                      GAC_CONTACT_OBSTACLE) with contacts at rest before or after it, or by a
-                                      frictional law (a rough one: its tangential impulse), such a contact held
-                                      at rest (its constrained flight is not differentiated), or where their
-                                      closest points have no derivative (crossing or parallel axes, a link
-                                      parallel to a box's or plane's face); one struck in flight, alone or with
-                                      other contacts, by Newton's law is differentiated */
+                                      GAC_CONTACT_OBSTACLE) with contacts at rest before or after it, or rough
+                                      under a frictional law in several rounds, such a contact held at rest (its
+                                      constrained flight is not differentiated), or where their closest points or
+                                      frame have no derivative (crossing or parallel axes, a link parallel to a
+                                      box's or plane's face); one struck in flight, alone or with other contacts,
+                                      by Newton's law or, in one round, by the frictional law is differentiated */
 #define GAC_SENS_STICK        12   /* a stick-slip transition on a rough wall not differentiated: a stuck point that
                                       left the wall (its force reaching 0 while stuck), a stuck point that slipped
                                       at an impact, or one that came to stick at an impact without taking its

@@ -199,19 +199,18 @@ def test_a_run_striking_the_rough_ball_balances_momentum_along_n_t1_t2(model):
     assert impact.energy_after < impact.energy_before
 
 
-def test_sensitivities_stop_at_a_rough_strike(model):
-    """Sensitivities through the rough ball's impact are not derived: the run goes on, the sensitivities stop with
-    the link status at that impact, its message naming friction; with friction_ball = 0 they go through it."""
-    tangent = model
+def test_sensitivities_pass_a_rough_strike(model):
+    """Sensitivities through the rough ball's impact (the frictional law along the contact frame's rows,
+    tests/test_sim_sensitivities_rough_rowless.py): valid through the spinning rod's oblique strike, and the final
+    state's against central differences of whole runs."""
+    from tests.test_sim_sensitivities import central_differences
     q0, qd0 = strike_start()
-    r = simulate(tangent, 0.6, p=tangent.parameters({"e_ball": 0.6}), q0=q0, qd0=qd0, sensitivities=["qd0[X1]"],
-                 **TIGHT)
-    assert r.success and len(r.impacts) >= 1
-    assert not r.sensitivities.valid and "friction" in r.sensitivity_message
-    assert r.sensitivity_message.count("t = ") == 1 and f"{r.impacts[0].t:.9g}" in r.sensitivity_message
-    smooth = simulate(tangent, 0.6, p=tangent.parameters({"e_ball": 0.6, "friction_ball": 0.0}), q0=q0, qd0=qd0,
-                      sensitivities=["qd0[X1]"], **TIGHT)
-    assert smooth.sensitivities.valid, smooth.sensitivity_message
+    p = model.parameters({"e_ball": 0.6})
+    directions = ["qd0[X1]", "q0[theta_1]", "friction_ball"]
+    r = simulate(model, 0.6, p=p, q0=q0, qd0=qd0, sensitivities=directions, **TIGHT)
+    assert r.success and len(r.impacts) == 1 and r.impacts[0].law == "gdi"
+    assert r.sensitivities.valid and r.sensitivities.n_impacts == 1, r.sensitivity_message
+    central_differences(model, 0.6, p, q0, qd0, directions, r.sensitivities.matrix, **TIGHT)
 
 
 def test_a_rod_landing_on_the_rough_ball_rests_on_it_held_by_its_friction(model):

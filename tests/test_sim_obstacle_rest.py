@@ -98,7 +98,7 @@ def test_sensitivities_end_with_the_link_status_where_the_rod_comes_to_rest(mode
     assert r.resting_final == [(1, "L1/slab")]
     assert not r.sensitivities.valid
     assert r.sensitivities.status == "an impact of two links or of a link on an obstacle with contacts at rest, or " \
-        "with friction (a rough link pair or obstacle under a frictional impact law), a link resting on another " \
-        "link or on an obstacle, or where their closest points have no derivative (crossing or parallel axes, a " \
-        "link parallel to a face)"
+        "with friction in several rounds (a rough link pair or obstacle under a frictional impact law), a link " \
+        "resting on another link or on an obstacle, or where their closest points have no derivative (crossing or " \
+        "parallel axes, a link parallel to a face)"
     assert np.isnan(r.sensitivities.matrix).all()

@@ -981,6 +981,9 @@ typedef struct {
     const int *normal;
     const double *u, *xi_T_norm, *cf;
     const int *cf_index;
+    /* a link pair's or an obstacle's tangential rows (the frictional law along its contact frame): frame[a] = k > 0
+       for row a = J^T t_k (gac_contact_frame_tangent's row k, f left 0); 0 elsewhere; NULL: none */
+    const int *frame;
 } gac_sens_law;
 
 static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, const double *q, const double *qd,
@@ -992,7 +995,15 @@ static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, con
     double dW[m * nq], dY[m * nq], dF[m];
     int a, b, i;
     for (a = 0; a < m; ++a) {
-        if (gac_sens_row_tangent(s, L->active[a], L->f + (long)a * nr, q, dq, dp, dW + (long)a * nq, 0) != 0) {
+        if (L->frame != 0 && L->frame[a] > 0) {         /* d(J^T t_k): the frame's turning and the points' motion */
+            double axes[9], g[3 * nq], dg[3 * nq];
+            if (gac_contact_frame_tangent(md, q, s->p, L->active[a], dq, dp, axes, g, dg) != GAC_OK) {
+                for (i = 0; i < nq; ++i) dqd_plus[i] = NAN;
+                for (b = 0; b < m && dF_out != 0; ++b) dF_out[b] = NAN;
+                return;
+            }
+            gac_copy(dW + (long)a * nq, dg + (long)L->frame[a] * nq, nq);
+        } else if (gac_sens_row_tangent(s, L->active[a], L->f + (long)a * nr, q, dq, dp, dW + (long)a * nq, 0) != 0) {
             for (i = 0; i < nq; ++i) dqd_plus[i] = NAN;  /* (a rowless row without a derivative: checked before) */
             for (b = 0; b < m && dF_out != 0; ++b) dF_out[b] = NAN;
             return;
@@ -1333,7 +1344,7 @@ static int gac_sens_round(const gac_sim *s, const gac_impact_record *r, gac_sens
     }
     L->m = m, L->active = C->active, L->landing = C->landing, L->f = C->f, L->W = C->W, L->Y = C->Y, L->LD = C->LD;
     L->F = C->F, L->v = C->v, L->e = C->e, L->nslide = nslide, L->normal = C->normal, L->u = C->u;
-    L->xi_T_norm = C->xi_norm, L->cf = C->cf, L->cf_index = C->cf_index;
+    L->xi_T_norm = C->xi_norm, L->cf = C->cf, L->cf_index = C->cf_index, L->frame = 0;
     C->nround++;
     return GAC_SENS_VALID;
 }
@@ -1474,12 +1485,13 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
     {
         int a;
         if (gac_has_link(md, r->ncontact, r->contact) || (c_event >= 0 && gac_rowless(md, c_event))) {
-            /* a link pair or an obstacle among several contacts: Newton's law on its row J^T n like a wall's; one
-               rough under the frictional law, or one resting before or after, ends them */
+            /* a link pair or an obstacle among several contacts: Newton's law on its row J^T n like a wall's, and
+               rough under the frictional law Coulomb's cone along its contact frame's rows J^T t1, J^T t2; one rough
+               in an impact of several rounds, or one resting before or after, ends them */
             int before_set[md->nq + GAC_AT_LEAST_1(md->ncontact)], nbefore = gac_sens_set_before(s, r, before_set);
             for (a = 0; a < r->ncontact; ++a) {
                 if (gac_rowless(md, r->contact[a]) && r->law != GAC_IMPACT_LAW_FRICTIONLESS
-                    && gac_contact_friction(md, s->p, r->contact[a]) > 0.0) {
+                    && gac_contact_friction(md, s->p, r->contact[a]) > 0.0 && (r->rounds > 1 || r->plastic)) {
                     gac_sens_stop(s, GAC_SENS_LINK, r->t, r->contact[a]);
                     return;
                 }
@@ -1535,6 +1547,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         double speed = 0.0, largest = 0.0, v_event = 0.0;
         double fb[n * nr], Wb[n * nq], vb[n], eb[n];         /* the boundary contacts' rows (one_sided) */
         int active[n3], landing[n3], before_set[nq + nc1], at_rest[nq], m = 0, nbefore, nheld = 0, a, b, i, j;
+        int frame[n3], nframe = 0;                           /* rows along a rowless contact's frame (law.frame) */
         int boundary[n], nb = 0;
         const int several = r->rounds > 1 || r->plastic;   /* the rounds' chain (gac_sens_rounds_at) */
         const int R = several ? r->rounds : 1, nR = several ? n : 1, rough = r->law != GAC_IMPACT_LAW_FRICTIONLESS;
@@ -1607,24 +1620,49 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                     e[m] = 0.0;
                 }
                 v[m] = before;
+                frame[m] = 0;
                 active[m++] = c;
                 normal[m - 1] = -1;
                 F[m - 1] = r->impulse[a];
-                if (r->law == GAC_IMPACT_LAW_GDI && ct->kind == GAC_CONTACT_WALL
-                    && gac_friction_coefficient(md, s->p, c) > 0.0) {   /* a rough contact: stuck or sliding */
-                    const double cf = gac_friction_coefficient(md, s->p, c);
+                if (r->law == GAC_IMPACT_LAW_GDI && gac_contact_friction(md, s->p, c) > 0.0) {   /* a rough contact
+                                                                                                  (a wall, a link
+                                                                                                  pair, an obstacle):
+                                                                                                  stuck or sliding */
+                    const double cf = gac_contact_friction(md, s->p, c);
                     const double tangential = hypot(r->impulse_t[2 * a], r->impulse_t[2 * a + 1]);
-                    const int row_n = m - 1, first = m;
+                    const int row_n = m - 1, first = m, rowless = gac_rowless(md, c);
                     const int slides = !(tangential < (1.0 - 1e-6) * cf * r->impulse[a]);
-                    double xi2 = 0.0;
+                    double xi2 = 0.0, axes[9], g_frame[3 * nq], dg_unused[3 * nq], zero_q[nq], g_dir[nq];
+                    gac_contact_frame frame_c;
                     int t;
+                    if (rowless) {                           /* its frame's rows J^T n, J^T t1, J^T t2 */
+                        for (i = 0; i < nq; ++i) zero_q[i] = 0.0;
+                        for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+                        if (gac_contact_frame_tangent(md, q, s->p, c, zero_q, zero_p, axes, g_frame, dg_unused)
+                            != GAC_OK || gac_rowless_frame(md, q, s->p, c, &frame_c) != GAC_OK) {
+                            gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
+                            return;
+                        }
+                    }
                     for (t = 0; t < 2; ++t) {                /* its tangential rows: stuck, xi_T = gamma+_T + e gamma-_T
                                                                 = 0, the normal's law along them; sliding, on the cone */
                         double *ft = f + (long)m * nr, *wt = W + (long)m * nq, vt = 0.0, vt_after = 0.0;
-                        if (ct->trow[t] < 0) continue;
+                        if (!rowless && ct->trow[t] < 0) continue;
+                        if (rowless) {                       /* a direction no motion takes (a planar model's t2)
+                                                                is left out, as the law leaves it */
+                            const double scale = gac_frame_direction(md, q, s->p, &frame_c, t + 1, g_dir);
+                            if (!(sqrt(gac_dot(nq, g_dir, g_dir)) > 1e-10 * scale)) continue;
+                        }
                         for (i = 0; i < nr; ++i) ft[i] = 0.0;
-                        ft[ct->trow[t]] = 1.0;
-                        md->contact_generalized_force(q, ft, s->p, wt);
+                        if (rowless) {
+                            gac_copy(wt, g_frame + (long)(1 + t) * nq, nq);
+                            frame[m] = 1 + t;
+                            ++nframe;
+                        } else {
+                            ft[ct->trow[t]] = 1.0;
+                            md->contact_generalized_force(q, ft, s->p, wt);
+                            frame[m] = 0;
+                        }
                         for (i = 0; i < nq; ++i) {
                             vt += wt[i] * xm[nq + i];
                             vt_after += wt[i] * xp[nq + i];
@@ -1654,8 +1692,8 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             } else if (!held_after && !was_resting) {       /* no impulse: out of Delta if it leaves clear of */
                 const double bound = after + (before < 0.0 ? e[m] * before : 0.0);   /* the law's bound */
                 if (!(bound > 1e-9 * speed * s->lever)) {    /* at it: a mode boundary */
-                    const int frictionless = r->law == GAC_IMPACT_LAW_FRICTIONLESS || ct->kind != GAC_CONTACT_WALL
-                                             || !(gac_friction_coefficient(md, s->p, c) > 0.0);
+                    const int frictionless = r->law == GAC_IMPACT_LAW_FRICTIONLESS
+                                             || !(gac_contact_friction(md, s->p, c) > 0.0);
                     if (!z->one_sided || !frictionless || !(before < 0.0) || nb == GAC_SENS_MAX_BOUNDARY) {
                         gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, c);
                         return;
@@ -1668,7 +1706,9 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 }
             }
         }
-        if (!several && (m == 0 || (nb > 0 && nslide > 0))) {   /* (boundaries beside slides: not followed) */
+        if (!several && (m == 0 || (nb > 0 && (nslide > 0 || nframe > 0)))) {   /* (boundaries beside slides or
+                                                                                   a rowless contact's frame rows:
+                                                                                   not followed) */
             gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, nb > 0 ? boundary[0] : c_event);
             return;
         }
@@ -1712,6 +1752,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         law.F = F, law.v = v, law.e = e;
         law.nslide = nslide, law.normal = normal, law.u = u, law.xi_T_norm = xi_norm, law.cf = cf_row;
         law.cf_index = cf_index;
+        law.frame = nframe > 0 ? frame : 0;
         for (b = 0; b < nb; ++b) {                           /* the boundary rows after the active ones, F = 0 */
             gac_copy(f + (long)(m + b) * nr, fb + (long)b * nr, nr);
             gac_copy(W + (long)(m + b) * nq, Wb + (long)b * nq, nq);

@@ -141,10 +141,12 @@ static double gac_held_velocity(const gac_model *m, const int *list, const gac_h
  * nor for the law with a common e).  At contact a with normal velocities gamma-/+ (xi_N = gamma+ + e gamma-, e = 0
  * for a contact that rested: |gamma-| <= 1e-11 of the fastest), |Lambda_N xi_N| (complementarity), and on a
  * rough wall |Lambda_T . xi_T + c_f Lambda_N |xi_T|| (Coulomb's maximal dissipation: 0 when sliding against xi_T,
- * and at the stick |xi_T| = 0), xi_T = gamma+_T + e gamma-_T (GDI) or gamma+_T (Newton + Coulomb). */
+ * and at the stick |xi_T| = 0), xi_T = gamma+_T + e gamma-_T (GDI) or gamma+_T (Newton + Coulomb).  covered[a]
+ * (or NULL): bit 1, contact a's normal condition, bit 2, its stuck tangents', are left out (the refinement holds and
+ * aims them: their misses are in the step's energy, gac_step_energy). */
 static double gac_law_residual(const gac_model *m, const double *q, const double *p, int n, const int *list,
                                const double *e, const double *F, const double *Ft, int law, const double *qd,
-                               const double *qd_plus)
+                               const double *qd_plus, const int *covered)
 {
     double before[3 * GAC_AT_LEAST_1(m->npoint)], after[3 * GAC_AT_LEAST_1(m->npoint)], scale = 0.0, v_tol, work = 0.0;
     int a;
@@ -162,7 +164,9 @@ static double gac_law_residual(const gac_model *m, const double *q, const double
         const double vp = sign * gac_row_value(m, list[a], qd_plus, after);
         const double ea = vm < -v_tol ? e[a] : 0.0;
         const double cf = law == GAC_IMPACT_LAW_FRICTIONLESS ? 0.0 : gac_friction_coefficient(m, p, list[a]);
-        work += fabs(F[a] * (vp + ea * vm));
+        if (covered && (covered[a] & 1)) {}              /* its normal's miss: in the step's energy */
+        else work += fabs(F[a] * (vp + ea * vm));
+        if (covered && (covered[a] & 2)) continue;       /* its stuck tangents' miss: likewise */
         if (cf > 0.0 && k->kind == GAC_CONTACT_WALL) {
             double xi2 = 0.0, power = 0.0;
             int j, axis = 0;
@@ -711,11 +715,13 @@ static double gac_step_energy(const gac_model *m, const double *q, const double 
     return gac_finite(dl, nh) ? (double)energy : signed_balance;
 }
 
-/* Rounding qd+ to doubles moves T by (I_f qd+) . delta: of each component's rounding (kept, or the neighbouring
- * double above or below), the one that brings the step's energy (gac_step_energy, `energy`) nearest 0, the
- * components taken by the size of their effect, largest first (greedy).  h: I_f qd+; r: the residual (its change
- * with delta, I_f delta, adds r_i delta_i).  The stored velocities then are the doubles nearest the law's in energy
- * rather than in each component; the caller measures the result and keeps it only if it is better. */
+/* Rounding qd+ to doubles moves T by (I_f qd+) . delta: each component is moved by whole units in its last place
+ * (at most GAC_ROUND_ULPS, 4096, either way: 1e-12 of it) to bring the step's energy (gac_step_energy, `energy`) nearest 0, the
+ * components taken by the size of a unit's effect, largest first (greedy: the coarse ones first, the fine ones then
+ * take up what is left).  h: I_f qd+; r: the residual (its change with delta, I_f delta, adds r_i delta_i).  The
+ * stored velocities then are the doubles nearest the law's in energy, within a few units in the last place of each
+ * component, rather than the nearest in each; the caller measures the result and keeps it only if it is better. */
+#define GAC_ROUND_ULPS 4096.0
 static void gac_round_to_energy(int nq, const double *h, const double *r, double energy, double *qd_plus)
 {
     double effect[GAC_AT_LEAST_1(nq)];
@@ -732,16 +738,33 @@ static void gac_round_to_energy(int nq, const double *h, const double *r, double
     }
     for (j = 0; j < nq; ++j) {
         const int c = order[j];
-        const double up = nextafter(qd_plus[c], INFINITY), down = nextafter(qd_plus[c], -INFINITY);
-        const double e_up = energy + (up - qd_plus[c]) * (h[c] + r[c]);
-        const double e_down = energy + (down - qd_plus[c]) * (h[c] + r[c]);
-        if (!isfinite(up) || !isfinite(down)) continue;
-        if (fabs(e_up) < fabs(energy) && fabs(e_up) <= fabs(e_down)) {
-            qd_plus[c] = up;
-            energy = e_up;
-        } else if (fabs(e_down) < fabs(energy)) {
-            qd_plus[c] = down;
-            energy = e_down;
+        const double g = h[c] + r[c], toward = -energy * g > 0.0 ? INFINITY : -INFINITY;
+        const double unit = nextafter(qd_plus[c], toward) - qd_plus[c];
+        double units, moved, next;
+        int k;
+        if (!(effect[c] > 0.0) || !isfinite(unit) || unit == 0.0) continue;
+        units = floor(-energy / (unit * g) + 0.5);       /* the whole units that bring it nearest 0 */
+        units = units > GAC_ROUND_ULPS ? GAC_ROUND_ULPS : units;
+        if (units >= 1.0) {
+            next = qd_plus[c] + units * unit;
+            moved = energy + (next - qd_plus[c]) * g;
+            if (isfinite(next) && fabs(moved) < fabs(energy)) {
+                qd_plus[c] = next;
+                energy = moved;
+            }
+        }
+        for (k = 0; k < 2; ++k) {                        /* and a unit more either way where that is nearer */
+            const double up = nextafter(qd_plus[c], INFINITY), down = nextafter(qd_plus[c], -INFINITY);
+            const double e_up = energy + (up - qd_plus[c]) * g, e_down = energy + (down - qd_plus[c]) * g;
+            if (isfinite(up) && fabs(e_up) < fabs(energy) && fabs(e_up) <= fabs(e_down)) {
+                qd_plus[c] = up;
+                energy = e_up;
+            } else if (isfinite(down) && fabs(e_down) < fabs(energy)) {
+                qd_plus[c] = down;
+                energy = e_down;
+            } else {
+                break;
+            }
         }
     }
 }
@@ -887,6 +910,7 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     double previous = INFINITY, previous_balance = INFINITY, previous_missed = INFINITY;
     double balance = 0.0, floor = 0.0, law_work = 0.0, identity;
     double bound_kept[GAC_AT_LEAST_1(nq)], h_plus[GAC_AT_LEAST_1(nq)], energy;
+    int covered[GAC_AT_LEAST_1(nq)];
     double Fs[GAC_AT_LEAST_1(nq)], F_kept[GAC_AT_LEAST_1(nq)], dl[GAC_AT_LEAST_1(nq)];
     double Fts[2 * GAC_AT_LEAST_1(nq)], Ft_kept[2 * GAC_AT_LEAST_1(nq)];
     const double *Y = GAC_WORK_Y(m, work);
@@ -1092,13 +1116,19 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     balance = fabs(energy);
     floor = res.floor;
     gac_copy(bound_kept, res.bound, nq);
+    for (a = 0; a < n; ++a) covered[a] = 0;
+    for (a = 0; a < nh; ++a) {                           /* the held, aimed directions: in the step's energy (not
+                                                            one dependent on the others: no multiplier, no step) */
+        if (!held[a].aimed || !(GAC_WORK_A(m, work)[a * nh + a] < 1e299)) continue;
+        covered[held[a].contact] |= held[a].tangent < 0 ? 1 : 2;
+    }
     if (rounds == 1 && !plastic && law != GAC_IMPACT_LAW_GDI_COMMON_E)
-        law_work = gac_law_residual(m, q, p, n, list, e, Fs, Fts, law, qd, qd_plus);
+        law_work = gac_law_residual(m, q, p, n, list, e, Fs, Fts, law, qd, qd_plus, covered);
     if (rounds == 1 && !plastic && law == GAC_IMPACT_LAW_GDI_COMMON_E) {   /* the round's law: its smallest e
                                                                              (e_round, as the targets used it) */
         double e_common[GAC_AT_LEAST_1(nq)];
         for (a = 0; a < n; ++a) e_common[a] = e_round;
-        law_work = gac_law_residual(m, q, p, n, list, e_common, Fs, Fts, GAC_IMPACT_LAW_GDI, qd, qd_plus);
+        law_work = gac_law_residual(m, q, p, n, list, e_common, Fs, Fts, GAC_IMPACT_LAW_GDI, qd, qd_plus, covered);
     }
     if (rounds > 1 && targets)                           /* after several rounds: against the rounds' velocities */
         law_work = gac_rounds_residual(m, q, p, n, list, Fs, targets, qd_plus);

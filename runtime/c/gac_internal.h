@@ -254,7 +254,7 @@ int gac_impact_rounds_work(const gac_model *m, const double *q, const double *qd
 
 /* gac_impact_accuracy.c: the impact's accuracy, measured after its law, and iterative refinement */
 /* gac_resolve.c: a wall's impulse left below zero by round-off (<= 1e-12 of the largest) taken out with its velocities */
-void gac_drop_roundoff_pulls(const gac_model *md, const double *x, const double *p, int n, const int *list,
+void gac_drop_roundoff_pulls(const gac_model *md, const double *x, const double *p, int n, const int *list, double T,
                              double *F, double *Ft, double *qd_plus);
 /* gac_impact_accuracy.c: the momentum balance against a generalized impulse g, in long double with its measured
  * evaluation floor (0: the model has no long-double kernels) */

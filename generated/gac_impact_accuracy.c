@@ -894,10 +894,14 @@ double gac_frictionless_law_work(const gac_model *m, const double *q, const doub
  * kernels evaluated in double under each rounding mode, plus eps_L sum_i |qd+_i| (|(I_f qd+)_i| + |(I_f qd-)_i| +
  * |g_i|), eps_L = LDBL_EPSILON: the stored qd+ is what r is evaluated at, so |qd+ . r| measures what rounding qd+ to doubles moved, and the
  * second part (its a-priori bound) only ends the refinement (the energy identity likewise with energy_ld,
- * gac_energy_identity_ld).  The accuracy is (|qd+ . r| + E0 + the contact law's
- * residual work, gac_law_residual, for a law solved in one round (after several rounds the law's conditions are
- * the rounds'; a round solved with a common e, its contacts' smallest, is measured with that e) + the energy
- * identity's residual, gac_energy_identity) / T. */
+ * gac_energy_identity_ld).  Then the stored qd+'s energy miss to first order, the energy the refinement's next step
+ * would move (gac_step_energy: dE = qd+ . r - sum_h (w_h . qd+) dLambda_h), is brought nearest 0 by moving each
+ * component by whole units in its last place (gac_round_to_energy; kept if the measured dE falls).  The accuracy
+ * is (|dE| + E0 + the contact law's residual work, gac_law_residual, for a law solved in one round, without the
+ * conditions the held and aimed directions cover (their misses are in dE; after several rounds the law's conditions
+ * are the rounds'; a round solved with a common e, its contacts' smallest, is measured with that e) + the energy
+ * identity's residual less 1/2 (qd+ + qd-) . r, which dE counts, gac_energy_identity) / T; *part names the largest
+ * of the four (GAC_ROUNDOFF_*). */
 double gac_impact_accuracy(const gac_model *m, const double *q, const double *p, int n, const int *list,
                            const double *e, double *F, double *Ft, int law, int rounds, int plastic,
                            const double *qd, double *qd_plus, double T, double *work, double *v_acc,

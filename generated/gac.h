@@ -182,6 +182,14 @@
 #define GAC_ROUNDOFF_ROUNDS_ENERGY  5   /* after several rounds, T's change beyond what the law gives */
 #define GAC_ROUNDOFF_HOLD           6   /* holding the resting contacts after the law */
 #define GAC_ROUNDOFF_LINK           7   /* the balance of a law with link pairs or obstacles */
+/* Which of an impact's checks refused it (record.refusal, with GAC_ERR_IMPACT_ACCURACY) */
+#define GAC_REFUSED_NONE        0
+#define GAC_REFUSED_ACCURACY    1   /* its measured accuracy above GAC_IMPACT_ROUNDOFF_MAX: its energy not known */
+#define GAC_REFUSED_ELASTIC_ROUNDS 2   /* elastic rounds (every contact e = 1) that did not end */
+#define GAC_REFUSED_ELASTIC_CHANGE 3   /* an elastic law that changed the kinetic energy beyond its accuracy */
+#define GAC_REFUSED_PULL        4   /* an impulse < 0 beyond round-off */
+#define GAC_REFUSED_GAIN        5   /* the kinetic energy grew beyond the accuracy */
+#define GAC_REFUSED_APPROACH    6   /* a contact left approaching its wall faster than the accuracy allows */
 #define GAC_SLOW_SLIDING 4         /* a resting point sliding slower than this many friction_velocity is in (or
                                       near) the regularised friction's stiff, viscous regime: sim.n_slow_sliding */
 
@@ -944,6 +952,7 @@ typedef struct {
                                     landed contacts included, and the error of evaluating T itself (grows with
                                     cond(I_f) and with velocities along its soft directions) */
     int roundoff_cause;          /* roundoff's largest part (GAC_ROUNDOFF_*) */
+    int refusal;                 /* with GAC_ERR_IMPACT_ACCURACY: the check that refused it (GAC_REFUSED_*) */
     double approach_before;      /* largest |normal velocity| of any contact before (m/s) */
     double approach_after;       /* fastest approach of a contact within contact_tol after (m/s) */
     int nlanded, *landed;        /* contacts come to rest at this event */

@@ -130,3 +130,14 @@ def test_a_link_pair_left_approaching_by_a_plastic_closing_round_is_closed():
     closing = [i for i in result.impacts if i.plastic and any(c.kind == "link" for c in i.contacts)]
     assert closing
     assert check_impacts(scene, model, run, result, closing[0].t - 1e-9) > 0
+
+
+def test_an_impact_its_checks_refuse_names_the_check_and_the_dominating_part():
+    """0-44/7 (one free link wedged between the rough walls x1_min and x1_max): the frictional law's impulses meet
+    neither stick nor slide there, and the impact's measured accuracy (4e3 of T) is refused: the run stops saying which
+    check refused it (record.refusal) and what dominates the accuracy (record.roundoff_cause: the contact law's
+    residual)."""
+    scene, model, run, result = run_case("0-44/7")
+    assert result.status != 0 and result.t_final == pytest.approx(0.02609318, abs=1e-6), result.message
+    assert "(refused: its measured accuracy is above GAC_IMPACT_ROUNDOFF_MAX; " in result.message
+    assert "its measured accuracy: the contact law's residual: " in result.message

@@ -165,7 +165,10 @@ static int gac_jam_apply(gac_sim *s, gac_impact_record *r, int n, const int *lis
     int set[GAC_AT_LEAST_1(nq)], was_stuck[nc1], nset = 0, a, c, i, code;
     r->ncontact = 0;
     for (a = 0; a < n; ++a) {                        /* the contacts that took an impulse */
-        if (F[a] < 0.0) return GAC_ERR_IMPACT_ACCURACY;
+        if (F[a] < 0.0) {
+            r->refusal = GAC_REFUSED_PULL;
+            return GAC_ERR_IMPACT_ACCURACY;
+        }
         if (!(F[a] > 0.0)) continue;
         r->contact[r->ncontact] = list[a];
         r->impulse[r->ncontact] = F[a];
@@ -176,7 +179,10 @@ static int gac_jam_apply(gac_sim *s, gac_impact_record *r, int n, const int *lis
     {
         double E_plus[2];
         md->energy(x, qd_plus, s->p, E_plus);
-        if (!(E_plus[0] <= E[0] * (1.0 + r->roundoff))) return GAC_ERR_IMPACT_ACCURACY;    /* T+ <= T- */
+        if (!(E_plus[0] <= E[0] * (1.0 + r->roundoff))) {                               /* T+ <= T- */
+            r->refusal = GAC_REFUSED_GAIN;
+            return GAC_ERR_IMPACT_ACCURACY;
+        }
     }
     for (i = 0; i < nq; ++i) x[nq + i] = qd_plus[i];
     gac_normal_velocities(md, x, s->p, vn);          /* who stays at rest: lifted by round-off at most */
@@ -202,7 +208,10 @@ static int gac_jam_apply(gac_sim *s, gac_impact_record *r, int n, const int *lis
     if (s->fail) return s->fail;                     /* still no consistent forces: GAC_ERR_FRICTION */
     md->energy(x, x + nq, s->p, s->energy_x1);
     r->energy_after = s->energy_x1[0] + s->energy_x1[1];
-    if (!(s->energy_x1[0] <= E[0] * (1.0 + r->roundoff))) return GAC_ERR_IMPACT_ACCURACY;
+    if (!(s->energy_x1[0] <= E[0] * (1.0 + r->roundoff))) {
+        r->refusal = GAC_REFUSED_GAIN;
+        return GAC_ERR_IMPACT_ACCURACY;
+    }
     for (i = 0; i < nq; ++i) r->qd_after[i] = x[nq + i];
     gac_normal_velocities(md, x, s->p, vn);
     {
@@ -254,6 +263,7 @@ int gac_jam(gac_sim *s, gac_impact_record *r)
     r->energy_rest = 0.0;
     r->roundoff = 1e-10;
     r->roundoff_cause = GAC_ROUNDOFF_FLOOR;
+    r->refusal = GAC_REFUSED_NONE;
     r->law = GAC_IMPACT_LAW_GDI_TANGENTIAL;
     r->energy_before = E[0] + E[1];
     for (i = 0; i < nq; ++i) {

@@ -447,6 +447,13 @@ static int gac_tangential(const gac_impact_event *ev)
     return 0;
 }
 
+/* GAC_ERR_IMPACT_ACCURACY, the check that refused the impact recorded (r->refusal, GAC_REFUSED_*). */
+static int gac_refuse(gac_impact_record *r, int check)
+{
+    r->refusal = check;
+    return GAC_ERR_IMPACT_ACCURACY;
+}
+
 /* The law (gac_impact_rounds: Newton's law, Eq. 47, with complementarity, in rounds) with every contact's own e,
  * its round-off bound and its own verdict (refused: a bound gac_impact_inaccurate refuses, a plastic closing round
  * when every contact has e = 1, an elastic law that changed the energy beyond its bound); then, if some contact
@@ -468,9 +475,10 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
     if (code != GAC_OK) return code;
     ev->bound = r->roundoff = gac_law_accuracy(s, ev, ev->e_law);
     r->roundoff_cause = ev->cause;
-    if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;   /* no useful accuracy left */
+    if (gac_impact_inaccurate(s, ev->bound)) return gac_refuse(r, GAC_REFUSED_ACCURACY);   /* no useful accuracy
+                                                                                               left */
     for (k = 0; k < ev->n; ++k) all_elastic &= ev->e_law[k] == 1.0;
-    if (ev->plastic && all_elastic && !ev->friction) return GAC_ERR_IMPACT_ACCURACY;   /* the plastic closing round
+    if (ev->plastic && all_elastic && !ev->friction) return gac_refuse(r, GAC_REFUSED_ELASTIC_ROUNDS);   /* the plastic closing round
                                                                                          takes energy */
     md->energy(x, ev->qd_plus, s->p, ev->E_plus);
     ev->T_law = ev->E_plus[0];
@@ -480,7 +488,7 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
         if (ev->F[k] > 0.0 && ev->e_law[k] != 1.0) r->law_elastic = 0;
     }
     if (r->law_elastic && fabs(gac_kinetic_change(md, x, x + md->nq, ev->qd_plus, s->p)) > ev->bound * ev->T_before)
-        return GAC_ERR_IMPACT_ACCURACY;
+        return gac_refuse(r, GAC_REFUSED_ELASTIC_CHANGE);
     for (k = 0; k < ev->n; ++k) changed |= ev->e[k] != ev->e_law[k];
     for (pass = 0; changed && pass < 2; ++pass) {
         int elastic_landing = 0;
@@ -492,7 +500,7 @@ static int gac_apply_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
             ev->bound = r->roundoff = accuracy;
             r->roundoff_cause = ev->cause;
         }
-        if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;
+        if (gac_impact_inaccurate(s, ev->bound)) return gac_refuse(r, GAC_REFUSED_ACCURACY);
         md->energy(x, ev->qd_plus, s->p, ev->E_plus);
         for (k = 0; k < ev->n; ++k) {
             if (ev->landing[k] && !s->is_resting[ev->list[k]] && ev->e_law[k] == 1.0
@@ -538,15 +546,15 @@ static int gac_check_law(gac_sim *s, gac_impact_event *ev, gac_impact_record *r)
             if (!(ev->F[k] > 0.0) || !(ev->vn[c] < 0.0)) r->complementarity = 1;
             if (ev->F[k] > 0.0 && ev->e[k] != 1.0) elastic = 0;
         }
-        if (ev->F[k] < 0.0) return GAC_ERR_IMPACT_ACCURACY;
+        if (ev->F[k] < 0.0) return gac_refuse(r, GAC_REFUSED_PULL);
     }
     change = gac_kinetic_change(md, ev->x, ev->x + nq, ev->qd_plus, s->p);
     resolved = ev->bound * ev->T_before + GAC_EPS * s->energy_scale + 1e-300;   /* (a chain nearly at rest: its
                                                            T far below what the run's energy resolves) */
     if (change > resolved)
-        return ev->law == GAC_IMPACT_LAW_NEWTON_COULOMB ? GAC_ERR_IMPACT_ENERGY : GAC_ERR_IMPACT_ACCURACY;
+        return ev->law == GAC_IMPACT_LAW_NEWTON_COULOMB ? GAC_ERR_IMPACT_ENERGY : gac_refuse(r, GAC_REFUSED_GAIN);
     if (elastic && !ev->plastic && !gac_tangential(ev) && fabs(change) > resolved)
-        return GAC_ERR_IMPACT_ACCURACY;
+        return gac_refuse(r, GAC_REFUSED_ELASTIC_CHANGE);
     return GAC_OK;
 }
 
@@ -624,7 +632,7 @@ static int gac_hold_resting(gac_sim *s, gac_impact_event *ev, int *nset, int *se
             ev->bound = r->roundoff = held;
             r->roundoff_cause = GAC_ROUNDOFF_HOLD;
         }
-        if (gac_impact_inaccurate(s, ev->bound)) return GAC_ERR_IMPACT_ACCURACY;
+        if (gac_impact_inaccurate(s, ev->bound)) return gac_refuse(r, GAC_REFUSED_ACCURACY);
         gac_normal_velocities(md, s->x1, s->p, ev->vn);   /* (the refined velocities) */
         for (c = 0; c < md->ncontact; ++c) {             /* the refinement, along rows nearly dependent on the held
                                                             ones, left a contact at its wall approaching: the law's
@@ -665,7 +673,7 @@ static int gac_finish(gac_sim *s, gac_impact_event *ev, int nset, const int *set
         if (ev->gaps[c] <= s->opt.contact_tol && -ev->vn[c] > r->approach_after) r->approach_after = -ev->vn[c];
     }
     r->approach_before = ev->scale;
-    if (r->approach_after > gac_approach_tolerance(ev)) return GAC_ERR_IMPACT_ACCURACY;
+    if (r->approach_after > gac_approach_tolerance(ev)) return gac_refuse(r, GAC_REFUSED_APPROACH);
     for (k = 0; k < r->ncontact; ++k) {                    /* impact history of each new contact */
         c = r->contact[k];
         if (s->is_resting[c]) continue;
@@ -714,6 +722,7 @@ int gac_resolve(gac_sim *s, double t, int c_event, gac_impact_record *r)
     r->energy_rest = 0.0;
     r->roundoff = 1e-10;
     r->roundoff_cause = GAC_ROUNDOFF_FLOOR;
+    r->refusal = GAC_REFUSED_NONE;
     r->law = GAC_IMPACT_LAW_FRICTIONLESS;
     r->residual = 0.0;
     if (!gac_is_impact(s, &ev)) return 0;                /* grazing touch: nothing to resolve */

@@ -38,6 +38,10 @@ ROUNDOFF_CAUSES = {"floor": "GAC_ROUNDOFF_FLOOR", "stored": "GAC_ROUNDOFF_STORED
                    "evaluation": "GAC_ROUNDOFF_EVALUATION", "law": "GAC_ROUNDOFF_LAW",
                    "identity": "GAC_ROUNDOFF_IDENTITY", "rounds-energy": "GAC_ROUNDOFF_ROUNDS_ENERGY",
                    "hold": "GAC_ROUNDOFF_HOLD", "link": "GAC_ROUNDOFF_LINK"}
+# The checks that can refuse an impact by name (record.refusal), and the library's constant of each (GAC_REFUSED_*)
+REFUSALS = {"none": "GAC_REFUSED_NONE", "accuracy": "GAC_REFUSED_ACCURACY", "elastic-rounds": "GAC_REFUSED_ELASTIC_ROUNDS",
+            "elastic-change": "GAC_REFUSED_ELASTIC_CHANGE", "pull": "GAC_REFUSED_PULL", "gain": "GAC_REFUSED_GAIN",
+            "approach": "GAC_REFUSED_APPROACH"}
 CHOSEN_LAWS = ("gdi", "newton-coulomb", "frictionless")     # what a user may ask for; gdi-common-e and
                                                             # gdi-tangential: a record's only
 
@@ -445,6 +449,10 @@ class CompiledModel:
     def roundoff_cause_name(self, code: int) -> str:
         """The name (ROUNDOFF_CAUSES) of a library code GAC_ROUNDOFF_*: an impact's accuracy's largest part."""
         return next(name for name, constant in ROUNDOFF_CAUSES.items() if int(getattr(self.lib, constant)) == code)
+
+    def refusal_name(self, code: int) -> str:
+        """The name (REFUSALS) of a library code GAC_REFUSED_*: the check that refused an impact."""
+        return next(name for name, constant in REFUSALS.items() if int(getattr(self.lib, constant)) == code)
 
     def impact_friction(self, q, qd, contact_set, p=None, law: str = "gdi") -> FrictionalImpact:
         """The impact law at walls with Coulomb friction (gac_impact_friction): the rounds of the complementarity

@@ -659,14 +659,14 @@ DEPENDENT_CONTACTS = 1e8   # cond(J I_f^-1 J^T) over an impact's contacts above 
 CANCELLING = 1e3           # sum |qd_i| |(I_f qd)_i| / 2T above which the velocities' components cancel
 
 
-# Which of an impact's checks refused it (record.refusal, gac.h GAC_REFUSED_*), as a phrase
-REFUSALS = {"GAC_REFUSED_ACCURACY": "its measured accuracy is above GAC_IMPACT_ROUNDOFF_MAX",
-            "GAC_REFUSED_ELASTIC_ROUNDS": "its elastic rounds (every contact e = 1) did not end, and a plastic round "
-                                          "would take energy",
-            "GAC_REFUSED_ELASTIC_CHANGE": "its elastic law changed the kinetic energy beyond its accuracy",
-            "GAC_REFUSED_PULL": "an impulse pulls beyond round-off",
-            "GAC_REFUSED_GAIN": "the kinetic energy grew beyond its accuracy",
-            "GAC_REFUSED_APPROACH": "a contact is left approaching its wall faster than its accuracy allows"}
+# Which of an impact's checks refused it (record.refusal by name, model.REFUSALS), as a phrase
+REFUSED = {"accuracy": "its measured accuracy is above GAC_IMPACT_ROUNDOFF_MAX",
+           "elastic-rounds": "its elastic rounds (every contact e = 1) did not end, and a plastic round would take "
+                             "energy",
+           "elastic-change": "its elastic law changed the kinetic energy beyond its accuracy",
+           "pull": "an impulse pulls beyond round-off",
+           "gain": "the kinetic energy grew beyond its accuracy",
+           "approach": "a contact is left approaching its wall faster than its accuracy allows"}
 
 
 # What each part of an impact's measured accuracy stands for (Impact.roundoff_cause, its largest part), as the lead
@@ -1066,8 +1066,7 @@ def _end_message(model: CompiledModel, sim, code: int, segment_t: float, segment
                                [int(record.contact[k]) for k in range(int(record.ncontact))],
                                model.impact_law_name(int(record.law)), float(record.residual),
                                model.roundoff_cause_name(int(record.roundoff_cause)))
-        refused = next((phrase for name, phrase in REFUSALS.items() if int(getattr(lib, name)) == int(record.refusal)),
-                       None)
+        refused = REFUSED.get(model.refusal_name(int(record.refusal)))
         message += (f" ({'refused: ' + refused + '; ' if refused else ''}this impact's energy is known only to "
                     f"{float(record.roundoff):.3g} relative, its measured accuracy: {cause})")
     if code == lib.GAC_ERR_LINK_REST:

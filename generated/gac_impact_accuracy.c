@@ -102,6 +102,17 @@ typedef struct {
     double target, weight; /* m/s; N s (the impulse that a miss of the target costs work against) */
 } gac_held;
 
+/* w = W^T f of held direction h: f (njrow, scratch) its rows with their coefficients, w (nq) their generalized
+ * force. */
+static void gac_held_force(const gac_model *m, const double *q, const double *p, const gac_held *h, double *f,
+                           double *w)
+{
+    int k;
+    for (k = 0; k < m->njrow; ++k) f[k] = 0.0;
+    for (k = 0; k < h->nrow; ++k) f[h->row[k]] += h->coef[k];
+    m->contact_generalized_force(q, f, p, w);
+}
+
 /* The system of nh held directions, responses refined: Y_h = I_f^-1 w_h (gac_refine_response), A = W I_f^-1 W^T from
  * them, in work's Y and A. */
 static void gac_held_system(const gac_model *m, const double *q, const double *p, int nh, const gac_held *held,
@@ -110,12 +121,10 @@ static void gac_held_system(const gac_model *m, const double *q, const double *p
     const int nq = m->nq;
     double *Y = GAC_WORK_Y(m, work), *A = GAC_WORK_A(m, work), *g = GAC_WORK_G(m, work), *f = GAC_WORK_F(m, work);
     double r[GAC_AT_LEAST_1(nq)], dy[GAC_AT_LEAST_1(nq)];
-    int h, c, i, k;
+    int h, c, i;
     for (h = 0; h < nh; ++h) {
         double *Yh = Y + (long)h * nq;
-        for (k = 0; k < m->njrow; ++k) f[k] = 0.0;
-        for (k = 0; k < held[h].nrow; ++k) f[held[h].row[k]] += held[h].coef[k];
-        m->contact_generalized_force(q, f, p, g);        /* w_h */
+        gac_held_force(m, q, p, &held[h], f, g);         /* w_h */
         m->inertia_solve(q, g, p, Yh);
         gac_refine_response(m, q, p, g, Yh, r, dy);
         for (c = 0; c <= h; ++c) {
@@ -164,8 +173,8 @@ static double gac_law_residual(const gac_model *m, const double *q, const double
         const double vp = sign * gac_row_value(m, list[a], qd_plus, after);
         const double ea = vm < -v_tol ? e[a] : 0.0;
         const double cf = law == GAC_IMPACT_LAW_FRICTIONLESS ? 0.0 : gac_friction_coefficient(m, p, list[a]);
-        if (covered && (covered[a] & 1)) {}              /* its normal's miss: in the step's energy */
-        else work += fabs(F[a] * (vp + ea * vm));
+        if (!covered || !(covered[a] & 1)) work += fabs(F[a] * (vp + ea * vm));   /* (else its miss is in the
+                                                                                   step's energy) */
         if (covered && (covered[a] & 2)) continue;       /* its stuck tangents' miss: likewise */
         if (cf > 0.0 && k->kind == GAC_CONTACT_WALL) {
             double xi2 = 0.0, power = 0.0;
@@ -697,7 +706,7 @@ static double gac_step_energy(const gac_model *m, const double *q, const double 
     const double *Y = GAC_WORK_Y(m, work);
     double dl[GAC_AT_LEAST_1(nq)], f[GAC_AT_LEAST_1(m->njrow)], w[GAC_AT_LEAST_1(nq)];
     long double energy = signed_balance;
-    int h, i, k;
+    int h, i;
     for (h = 0; h < nh; ++h) {
         long double sum = 0.0L;
         for (i = 0; i < nq; ++i) sum += (long double)Y[(long)h * nq + i] * r[i];
@@ -706,9 +715,7 @@ static double gac_step_energy(const gac_model *m, const double *q, const double 
     if (nh > 0) gac_ldlt_solve(nh, GAC_WORK_A(m, work), dl);
     for (h = 0; h < nh; ++h) {
         long double along = 0.0L;
-        for (k = 0; k < m->njrow; ++k) f[k] = 0.0;
-        for (k = 0; k < held[h].nrow; ++k) f[held[h].row[k]] += held[h].coef[k];
-        m->contact_generalized_force(q, f, p, w);
+        gac_held_force(m, q, p, &held[h], f, w);
         for (i = 0; i < nq; ++i) along += (long double)w[i] * qd_plus[i];
         energy -= along * dl[h];
     }
@@ -1011,15 +1018,12 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
     before_impact.sampled = h_minus_sampled;
     gac_momentum_before_eval(m, q, qd, p, &before_impact);
     for (it = 0; ; ++it) {
-        double missed = 0.0;
+        double missed;
         gac_balance_residual(m, q, p, n, list, Fs, Fts, qd, qd_plus, &before_impact, &res);
         balance = res.balance;
         floor = res.floor;
         m->contact_velocities(q, qd_plus, p, after);
-        for (a = 0; a < nh; ++a) {                       /* the held directions' misses of the law's targets */
-            miss[a] = held[a].aimed ? gac_held_velocity(m, list, &held[a], qd_plus, after) - held[a].target : 0.0;
-            missed += held[a].weight * fabs(miss[a]);
-        }
+        missed = gac_held_misses(m, list, nh, held, qd_plus, after, miss);   /* of the law's targets */
         if (!(balance + missed < previous)) {            /* the last step did not improve: undo it */
             if (it > 0) {
                 gac_copy(qd_plus, kept, nq);
@@ -1045,11 +1049,8 @@ double gac_impact_accuracy(const gac_model *m, const double *q, const double *p,
         for (a = 0; a < nh; ++a) {                       /* W_H dq: what the free step does to H's velocities (the
                                                             step taken, rather than Y_H . r, its image through the
                                                             responses, which differ along I_f's soft directions) */
-            int k;
             double s = 0.0;
-            for (k = 0; k < m->njrow; ++k) f[k] = 0.0;
-            for (k = 0; k < held[a].nrow; ++k) f[held[a].row[k]] += held[a].coef[k];
-            m->contact_generalized_force(q, f, p, scratch);   /* w_a */
+            gac_held_force(m, q, p, &held[a], f, scratch);   /* w_a */
             for (i = 0; i < nq; ++i) s += scratch[i] * dq[i];
             dl[a] = s;
         }

@@ -1632,17 +1632,12 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                     const double tangential = hypot(r->impulse_t[2 * a], r->impulse_t[2 * a + 1]);
                     const int row_n = m - 1, first = m, rowless = gac_rowless(md, c);
                     const int slides = !(tangential < (1.0 - 1e-6) * cf * r->impulse[a]);
-                    double xi2 = 0.0, axes[9], g_frame[3 * nq], dg_unused[3 * nq], zero_q[nq], g_dir[nq];
-                    gac_contact_frame frame_c;
+                    double xi2 = 0.0;
+                    gac_contact_frame frame_c;               /* a link pair's or an obstacle's: rows J^T t1, J^T t2 */
                     int t;
-                    if (rowless) {                           /* its frame's rows J^T n, J^T t1, J^T t2 */
-                        for (i = 0; i < nq; ++i) zero_q[i] = 0.0;
-                        for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
-                        if (gac_contact_frame_tangent(md, q, s->p, c, zero_q, zero_p, axes, g_frame, dg_unused)
-                            != GAC_OK || gac_rowless_frame(md, q, s->p, c, &frame_c) != GAC_OK) {
-                            gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
-                            return;
-                        }
+                    if (rowless && gac_rowless_frame(md, q, s->p, c, &frame_c) != GAC_OK) {
+                        gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
+                        return;
                     }
                     for (t = 0; t < 2; ++t) {                /* its tangential rows: stuck, xi_T = gamma+_T + e gamma-_T
                                                                 = 0, the normal's law along them; sliding, on the cone */
@@ -1650,12 +1645,11 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                         if (!rowless && ct->trow[t] < 0) continue;
                         if (rowless) {                       /* a direction no motion takes (a planar model's t2)
                                                                 is left out, as the law leaves it */
-                            const double scale = gac_frame_direction(md, q, s->p, &frame_c, t + 1, g_dir);
-                            if (!(sqrt(gac_dot(nq, g_dir, g_dir)) > 1e-10 * scale)) continue;
+                            const double scale = gac_frame_direction(md, q, s->p, &frame_c, t + 1, wt);
+                            if (!(sqrt(gac_dot(nq, wt, wt)) > 1e-10 * scale)) continue;
                         }
                         for (i = 0; i < nr; ++i) ft[i] = 0.0;
                         if (rowless) {
-                            gac_copy(wt, g_frame + (long)(1 + t) * nq, nq);
                             frame[m] = 1 + t;
                             ++nframe;
                         } else {

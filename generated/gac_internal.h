@@ -72,6 +72,8 @@ void gac_sens_sample(gac_sim *s, double t, double *out);  /* S at a sample time 
 void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event,
                      const int *was_stuck);     /* the jump at an impact just resolved (was_stuck: before it) */
 void gac_sens_stop(gac_sim *s, int status, double t, int contact);    /* an event not differentiated */
+void gac_sens_rest_set(gac_sim *s, double t);   /* the resting set changed: a held link or obstacle not followed
+                                                   (rough, or its normal without a derivative) ends them */
 void gac_sens_project(gac_sim *s, const double *x_pre, const double *x_post); /* a step's projection onto the rest */
 void gac_sens_release(gac_sim *s, const gac_impact_record *r, int c_event);  /* the release of a resting contact */
 void gac_sens_slip(gac_sim *s, const gac_impact_record *r, int c_event);   /* a stuck point's slip at its event */
@@ -180,6 +182,10 @@ double gac_link_contact_rate(const gac_model *m, const double *q, const double *
 /* a held link or obstacle contact c's bias dg(qd) . qd (its normal acceleration less g . qdd) into *b: GAC_OK, or
  * GAC_ERR_LINK_CONTACT where its normal has no derivative */
 int gac_rowless_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, double *b);
+/* its derivative along (dq, dqd, dp) into *db: exact along dqd, a fourth-order central difference of it along
+ * (dq, dp) (~1e-12 of its size): GAC_OK, or GAC_ERR_LINK_CONTACT where the normal has no derivative */
+int gac_rowless_bias_tangent(const gac_model *m, const double *q, const double *qd, const double *p, int c,
+                             const double *dq, const double *dqd, const double *dp, double *db);
 /* the biases b (3) of a held link or obstacle contact c's frame rows J^T n, J^T t1, J^T t2 (b[0] gac_rowless_bias's):
  * GAC_OK, or GAC_ERR_LINK_CONTACT where its frame has no derivative */
 int gac_rowless_frame_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, double *b);

@@ -898,6 +898,45 @@ int gac_rowless_bias(const gac_model *m, const double *q, const double *qd, cons
     return GAC_OK;
 }
 
+/* The derivative of a held contact's bias b(q, qd, p) = dg(qd) . qd (gac_rowless_bias) along (dq, dqd, dp), into *db.
+ * b is a quadratic form in qd, so along dqd it is dg(dqd) . qd + dg(qd) . dqd, exact (two normal tangents); its change
+ * with q and p at fixed qd (the gap's third derivatives, which no kernel gives) is the fourth-order central difference
+ * 8 (b(h) - b(-h)) - (b(2h) - b(-2h)) over 12 h of b at (q + h dq, qd, p + h dp), h = 1e-3 over the largest entry
+ * of (dq, dp) (truncation ~h^4, round-off ~eps / h: ~1e-12 of b's size, as gac_link_row_change's).  GAC_OK, or
+ * GAC_ERR_LINK_CONTACT where the normal has no derivative at one of those points. */
+int gac_rowless_bias_tangent(const gac_model *m, const double *q, const double *qd, const double *p, int c,
+                             const double *dq, const double *dqd, const double *dp, double *db)
+{
+    const int nq = m->nq, np = m->nparam;
+    double zero_p[GAC_AT_LEAST_1(np)], g[GAC_AT_LEAST_1(nq)], dg[GAC_AT_LEAST_1(nq)], qh[GAC_AT_LEAST_1(nq)];
+    double ph[GAC_AT_LEAST_1(np)], dgap, sum = 0.0, change = 0.0, size = 0.0, h, b;
+    static const double step[4] = {1.0, -1.0, 2.0, -2.0}, weight[4] = {8.0, -8.0, -1.0, 1.0};
+    int i, l, code;
+    for (i = 0; i < GAC_AT_LEAST_1(np); ++i) zero_p[i] = 0.0;
+    code = gac_normal_tangent(m, q, p, c, qd, zero_p, 1, &dgap, g, dg, 0, 0);   /* dg(qd) . dqd */
+    if (code != GAC_OK) return code;
+    for (i = 0; i < nq; ++i) sum += dg[i] * dqd[i];
+    code = gac_normal_tangent(m, q, p, c, dqd, zero_p, 1, &dgap, g, dg, 0, 0);  /* dg(dqd) . qd */
+    if (code != GAC_OK) return code;
+    for (i = 0; i < nq; ++i) sum += dg[i] * qd[i];
+    for (i = 0; i < nq; ++i) size = fabs(dq[i]) > size ? fabs(dq[i]) : size;
+    for (i = 0; i < np; ++i) size = fabs(dp[i]) > size ? fabs(dp[i]) : size;
+    if (size > 0.0) {
+        h = 1e-3 / size;
+        for (l = 0; l < 4; ++l) {
+            for (i = 0; i < nq; ++i) qh[i] = q[i] + step[l] * h * dq[i];
+            for (i = 0; i < np; ++i) ph[i] = p[i] + step[l] * h * dp[i];
+            code = gac_rowless_bias(m, qh, qd, ph, c, &b);
+            if (code != GAC_OK) return code;
+            change += weight[l] * b;
+        }
+        sum += change / (12.0 * h);
+    }
+    if (!isfinite(sum)) return GAC_ERR_LINK_CONTACT;
+    *db = sum;
+    return GAC_OK;
+}
+
 /* The biases of a held contact's three frame rows (n, t1, t2 of gac_rowless_frame), b[k] = dg_k(dq = qd) . qd with
  * g_k = J^T a_k: d/dt (g_k . qd) = g_k . qdd + b[k], the points taken as fixed on the links where a whole stretch is
  * closest (as gac_rowless_bias, whose b b[0] is).  GAC_OK, or GAC_ERR_LINK_CONTACT where the frame has no

@@ -156,6 +156,35 @@ void gac_sens_stop(gac_sim *s, int status, double t, int contact)
     for (i = 0; i < z->k; ++i) z->dt_impact[i] = nan;
 }
 
+/* The first link pair or obstacle of set[0..n-1] held at state x whose rest the sensitivities do not follow, or -1:
+ * a rough one (Coulomb's friction along its frame, stuck or sliding), or one whose normal has no derivative there
+ * (crossing axes, a link parallel to a face or to another link: gac_contact_normal_tangent).  A smooth one is
+ * followed as a wall's point: its row J^T n, its bias and their derivatives from gac_link.c. */
+static int gac_sens_rowless_check(const gac_sim *s, const double *x, int n, const int *set)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq;
+    double zero_p[GAC_AT_LEAST_1(md->nparam)], g[GAC_AT_LEAST_1(nq)], dg[GAC_AT_LEAST_1(nq)], dgap;
+    int a, i;
+    for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
+    for (a = 0; a < n; ++a) {
+        const int c = set[a];
+        if (!gac_rowless(md, c)) continue;
+        if (gac_contact_friction(md, s->p, c) > 0.0
+            || gac_contact_normal_tangent(md, x, s->p, c, x + nq, zero_p, &dgap, g, dg) != GAC_OK)
+            return c;
+    }
+    return -1;
+}
+
+void gac_sens_rest_set(gac_sim *s, double t)
+{
+    int c;
+    if (s->sens == 0 || s->sens->status != GAC_SENS_VALID) return;
+    c = gac_sens_rowless_check(s, s->x, s->nresting, s->resting);
+    if (c >= 0) gac_sens_stop(s, GAC_SENS_LINK, t, c);
+}
+
 /* The inputs' derivative is taken as 0: held inputs and schedules are functions of t alone, a controller may not be. */
 static int gac_sens_inputs_fixed(const gac_sim *s)
 {
@@ -237,11 +266,69 @@ static void gac_sens_input_rate(gac_sim *s, const double *J, double t, const dou
 
 /* ---- contacts held at their walls: the constrained dynamics and the projections, and their tangents ---- */
 
+/* Contact c's row at q as an impact's law takes it: a wall's or a stop's unit signed row f (nr) of J and
+ * w = J^T f; a link pair's or an obstacle's w = J^T n (gac_link_contact_direction, the gap's gradient), f left 0. */
+static void gac_sens_row(const gac_sim *s, int c, const double *q, double *f, double *w)
+{
+    const gac_model *md = s->model;
+    const gac_contact *ct = md->contacts + c;
+    int i;
+    for (i = 0; i < GAC_AT_LEAST_1(md->njrow); ++i) f[i] = 0.0;
+    if (gac_rowless(md, c)) {
+        gac_link_contact_direction(md, q, s->p, c, w);
+        return;
+    }
+    f[ct->row] = ct->normal_sign;
+    md->contact_generalized_force(q, f, s->p, w);
+}
+
+/* The derivative dw of contact c's row (gac_sens_row, f its row of J) along (dq, dp): d(J^T f) by
+ * contact_generalized_force_tangent, or for a link pair or an obstacle d(J^T n) with the closest points' motion and
+ * the normal's rotation (gac_contact_normal_tangent).  Returns 0, or 1 where the latter has none (crossing axes,
+ * a link parallel to a face or to another link). */
+static int gac_sens_row_tangent(const gac_sim *s, int c, const double *f, const double *q, const double *dq,
+                                const double *dp, double *dw)
+{
+    const gac_model *md = s->model;
+    if (gac_rowless(md, c)) {
+        double g[md->nq], dgap;
+        return gac_contact_normal_tangent(md, q, s->p, c, dq, dp, &dgap, g, dw) != GAC_OK;
+    }
+    {
+        double df[GAC_AT_LEAST_1(md->njrow)];
+        int i;
+        for (i = 0; i < GAC_AT_LEAST_1(md->njrow); ++i) df[i] = 0.0;
+        md->contact_generalized_force_tangent(q, f, s->p, dq, df, dp, dw);
+    }
+    return 0;
+}
+
+/* The gaps' derivatives dgap (ncontact) along (dq, dp) at q: the walls' and stops' by contact_gaps_tangent, and
+ * those of the link pairs and obstacles among set[0..n-1] (gac_contact_normal_tangent: n . dD, the closest points'
+ * relative motion along the normal); the other link pairs' and obstacles' entries NaN. */
+static void gac_sens_gaps_tangent(const gac_sim *s, const double *q, const double *dq, const double *dp, int n,
+                                  const int *set, double *dgap)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq;
+    double g[GAC_AT_LEAST_1(nq)], dw[GAC_AT_LEAST_1(nq)];
+    int a, c;
+    md->contact_gaps_tangent(q, s->p, dq, dp, dgap);
+    for (c = gac_kernel_contacts(md); c < md->ncontact; ++c) dgap[c] = NAN;
+    for (a = 0; a < n; ++a) {
+        if (gac_rowless(md, set[a])
+            && gac_contact_normal_tangent(md, q, s->p, set[a], dq, dp, dgap + set[a], g, dw) != GAC_OK)
+            dgap[set[a]] = NAN;
+    }
+}
+
 /* A set of contacts held at their walls (resting, or brought to rest by an impact) at a configuration q, as rows:
  * first each contact's normal row, then the two tangential rows of each one stuck on a rough wall (gac_held_rows'
  * order; a stuck point is a bilateral constraint along all three axes).  Row a: its unit signed row f_a (nr) of J,
  * brow[a] (its row of J and of contact_bias) and sgn[a] (the normal's sign, 1 along a tangential axis); W_a = J^T f_a
- * (its generalised normal), Y_a = I_f^-1 W_a and A = W Y, factored in LD (gac_ldlt).  The arrays are the caller's,
+ * (its generalised normal), Y_a = I_f^-1 W_a and A = W Y, factored in LD (gac_ldlt).  A smooth link pair or
+ * obstacle held (no row of J) has brow[a] = -1, f_a = 0 and W_a = J^T n at its closest points (the gap's gradient,
+ * gac_link_contact_direction), its bias and their derivatives from gac_link.c.  The arrays are the caller's,
  * sized for m <= 3 nq rows. */
 typedef struct {
     int m;                       /* rows (the first n the normal rows of set's contacts) */
@@ -319,10 +406,11 @@ static int gac_sens_set_at(const gac_sim *s, const double *q, int n, const int *
     H->set = set;
     H->n = n;
     H->nslide = 0;
-    for (a = 0; a < n; ++a) {                     /* the normal rows */
+    for (a = 0; a < n; ++a) {                     /* the normal rows (a link pair's or an obstacle's: brow -1) */
         const gac_contact *ct = md->contacts + set[a];
-        H->brow[m] = ct->row;
-        H->sgn[m++] = ct->normal_sign;
+        const int rowless = gac_rowless(md, set[a]);
+        H->brow[m] = rowless ? -1 : ct->row;
+        H->sgn[m++] = rowless ? 1.0 : ct->normal_sign;
     }
     for (a = 0; a < n && stuck != 0; ++a) {       /* the stuck points' tangential rows, along +X_axis */
         const gac_contact *ct = md->contacts + set[a];
@@ -338,9 +426,13 @@ static int gac_sens_set_at(const gac_sim *s, const double *q, int n, const int *
     H->m = m;                                     /* (more than nq rows: some depend on the others) */
     for (a = 0; a < m; ++a) {
         double *fa = H->f + (long)a * nr;
-        for (i = 0; i < nr; ++i) fa[i] = 0.0;
-        fa[H->brow[a]] = H->sgn[a];
-        md->contact_generalized_force(q, fa, s->p, H->W + (long)a * nq);
+        if (a < n) {                              /* a normal row: a wall's, or a link pair's or obstacle's J^T n */
+            gac_sens_row(s, set[a], q, fa, H->W + (long)a * nq);
+        } else {                                  /* a stuck point's tangential row */
+            for (i = 0; i < nr; ++i) fa[i] = 0.0;
+            fa[H->brow[a]] = H->sgn[a];
+            md->contact_generalized_force(q, fa, s->p, H->W + (long)a * nq);
+        }
         md->inertia_solve(q, H->W + (long)a * nq, s->p, H->Y + (long)a * nq);
     }
     for (a = 0; a < m; ++a) {
@@ -449,7 +541,10 @@ static void gac_sens_held_forces(const gac_sim *s, const double *x, const double
     md->contact_bias(x, x + nq, s->p, bias);
     if (lambda_ref != 0) *lambda_ref = 0.0;
     for (a = 0; a < m; ++a) {
-        lambda[a] = -(H->sgn[a] * bias[H->brow[a]] + gac_dot(nq, H->W + (long)a * nq, qdd_free));
+        double b = NAN;
+        if (H->brow[a] >= 0) b = H->sgn[a] * bias[H->brow[a]];
+        else (void)gac_rowless_bias(md, x, x + nq, s->p, H->set[a], &b);
+        lambda[a] = -(b + gac_dot(nq, H->W + (long)a * nq, qdd_free));
         if (lambda_ref != 0) {
             const double A_aa = gac_dot(nq, H->W + (long)a * nq, H->Y + (long)a * nq);
             if (fabs(lambda[a]) / A_aa > *lambda_ref) *lambda_ref = fabs(lambda[a]) / A_aa;
@@ -473,7 +568,11 @@ static void gac_sens_set_tangent(const gac_sim *s, const double *q, const gac_se
     int a, i;
     for (i = 0; i < nr; ++i) df[i] = 0.0;
     for (a = 0; a < H->m; ++a) {
-        md->contact_generalized_force_tangent(q, H->f + (long)a * nr, s->p, dq, df, dp, dW + (long)a * nq);
+        if (H->brow[a] >= 0) {
+            md->contact_generalized_force_tangent(q, H->f + (long)a * nr, s->p, dq, df, dp, dW + (long)a * nq);
+        } else if (gac_sens_row_tangent(s, H->set[a], H->f + (long)a * nr, q, dq, dp, dW + (long)a * nq) != 0) {
+            for (i = 0; i < nq; ++i) dW[(long)a * nq + i] = NAN;   /* (gac_sens_rowless_check tells it before) */
+        }
         if (dY != 0)
             md->inertia_solve_tangent(q, H->W + (long)a * nq, s->p, dq, dW + (long)a * nq, dp, dY + (long)a * nq);
     }
@@ -571,9 +670,12 @@ static void gac_sens_held_tangent(const gac_sim *s, const double *x, const gac_s
         qdd[i] = value;
         v[i] = dvalue;
     }
-    for (a = 0; a < m; ++a)
-        r[a] = -(H->sgn[a] * dbias[H->brow[a]] + gac_dot(nq, dW + (long)a * nq, qdd)
-                 + gac_dot(nq, H->W + (long)a * nq, v));
+    for (a = 0; a < m; ++a) {
+        double db = NAN;
+        if (H->brow[a] >= 0) db = H->sgn[a] * dbias[H->brow[a]];
+        else (void)gac_rowless_bias_tangent(md, x, x + nq, s->p, H->set[a], dq, dqd, dp, &db);
+        r[a] = -(db + gac_dot(nq, dW + (long)a * nq, qdd) + gac_dot(nq, H->W + (long)a * nq, v));
+    }
     gac_sens_set_solve(H, r);
     for (i = 0; i < nq; ++i) {
         for (a = 0; a < m; ++a) v[i] += Yd[(long)a * nq + i] * r[a];
@@ -582,21 +684,30 @@ static void gac_sens_held_tangent(const gac_sim *s, const double *x, const gac_s
     if (dlambda != 0) gac_copy(dlambda, r, m);
 }
 
-/* d(Y c) along (dq, dp) for fixed weights c (m): Y c = I_f^-1 J^T (sum_a c_a f_a), one tangent of each operator. */
+/* d(Y c) along (dq, dp) for fixed weights c (m): Y c = I_f^-1 J^T (sum_a c_a f_a), one tangent of each operator
+ * (a link pair's or an obstacle's row adds c_a d(J^T n)). */
 static void gac_sens_Yc_tangent(const gac_sim *s, const double *q, const gac_sens_set *H, const double *c,
                                 const double *dq, const double *dp, double *out)
 {
     const gac_model *md = s->model;
     const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow);
-    double fc[GAC_AT_LEAST_1(md->njrow)], df[GAC_AT_LEAST_1(md->njrow)], Wc[nq], dWc[nq];
-    int a, i;
+    double fc[GAC_AT_LEAST_1(md->njrow)], df[GAC_AT_LEAST_1(md->njrow)], Wc[nq], dWc[nq], dw[nq];
+    int a, i, rowless = 0;
     for (i = 0; i < nr; ++i) fc[i] = df[i] = 0.0;
     for (i = 0; i < nq; ++i) Wc[i] = 0.0;
     for (a = 0; a < H->m; ++a) {
         for (i = 0; i < nr; ++i) fc[i] += c[a] * H->f[(long)a * nr + i];
         for (i = 0; i < nq; ++i) Wc[i] += c[a] * H->W[(long)a * nq + i];
+        rowless |= H->brow[a] < 0;
     }
     md->contact_generalized_force_tangent(q, fc, s->p, dq, df, dp, dWc);
+    for (a = 0; a < H->m && rowless; ++a) {
+        if (H->brow[a] >= 0) continue;
+        if (gac_sens_row_tangent(s, H->set[a], H->f + (long)a * nr, q, dq, dp, dw) != 0) {
+            for (i = 0; i < nq; ++i) dw[i] = NAN;
+        }
+        for (i = 0; i < nq; ++i) dWc[i] += c[a] * dw[i];
+    }
     md->inertia_solve_tangent(q, Wc, s->p, dq, dWc, dp, out);
 }
 
@@ -691,11 +802,10 @@ static void gac_sens_start_rest(gac_sim *s)
     gac_sens_set H2;                              /* the held rows with the stuck points' tangential ones */
     GAC_SENS_SET_BIND(H);
     GAC_SENS_SET_BIND_OF(H2, H2);
-    for (a = 0; a < s->nresting; ++a) {           /* a link or an obstacle at rest: not differentiated */
-        if (gac_rowless(md, s->resting[a])) {
-            gac_sens_stop(s, GAC_SENS_LINK, s->t, s->resting[a]);
-            return;
-        }
+    a = gac_sens_rowless_check(s, s->x, s->nresting, s->resting);   /* a rough link or obstacle at rest */
+    if (a >= 0) {
+        gac_sens_stop(s, GAC_SENS_LINK, s->t, a);
+        return;
     }
     for (a = 0; a < md->ncontact; ++a) all[a] = a;
     for (a = 0; a < GAC_AT_LEAST_1(md->nparam); ++a) zero_p[a] = 0.0;
@@ -717,7 +827,7 @@ static void gac_sens_start_rest(gac_sim *s)
     for (j = 0; j < z->k; ++j) {
         double *S = z->S + (long)j * nx;
         const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
-        md->contact_gaps_tangent(s->x, s->p, S, dp, dgap);
+        gac_sens_gaps_tangent(s, s->x, S, dp, s->nresting, s->resting, dgap);
         for (a = 0; a < md->ncontact; ++a) z->dgap_held[(long)j * nc1 + a] = dgap[a];
         gac_sens_hold_tangent(s, s->x, &H, qd_pre, qd_mid, S, S + nq, dp, out);
         gac_copy(S + nq, out, nq);
@@ -771,7 +881,7 @@ void gac_sens_project(gac_sim *s, const double *x_pre, const double *x_post)
         if (moved) gac_sens_Yc_tangent(s, x_post, &H, c, S, dp, dq);
         else for (i = 0; i < nq; ++i) dq[i] = 0.0;
         for (i = 0; i < nq; ++i) dq[i] += S[i];
-        md->contact_gaps_tangent(x_post, s->p, dq, dp, dgap);
+        gac_sens_gaps_tangent(s, x_post, dq, dp, m, s->resting, dgap);
         for (a = 0; a < m; ++a) dc[a] = z->dgap_held[(long)j * nc1 + s->resting[a]] - dgap[s->resting[a]];
         gac_ldlt_solve(m, H.LD, dc);
         for (i = 0; i < nq; ++i) {
@@ -814,6 +924,11 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
             gac_sens_stop(s, GAC_SENS_RESTING, s->t, s->resting[i]);
             return;
         }
+    }
+    i = gac_sens_rowless_check(s, x, s->nresting, s->resting);   /* a link or an obstacle held there */
+    if (i >= 0) {
+        gac_sens_stop(s, GAC_SENS_LINK, s->t, i);
+        return;
     }
     if (!gac_sens_inputs_known(s)) {
         gac_sens_stop(s, GAC_SENS_CONTROLLER, s->t, -1);
@@ -921,45 +1036,6 @@ void gac_sens_sample(gac_sim *s, double t, double *out)
     gac_copy(out, z->S, size);                           /* (NaN where they ended) */
 }
 
-/* Contact c's row at q as an impact's law takes it: a wall's or a stop's unit signed row f (nr) of J and
- * w = J^T f; a link pair's or an obstacle's w = J^T n (gac_link_contact_direction, the gap's gradient), f left 0. */
-static void gac_sens_row(const gac_sim *s, int c, const double *q, double *f, double *w)
-{
-    const gac_model *md = s->model;
-    const gac_contact *ct = md->contacts + c;
-    int i;
-    for (i = 0; i < GAC_AT_LEAST_1(md->njrow); ++i) f[i] = 0.0;
-    if (gac_rowless(md, c)) {
-        gac_link_contact_direction(md, q, s->p, c, w);
-        return;
-    }
-    f[ct->row] = ct->normal_sign;
-    md->contact_generalized_force(q, f, s->p, w);
-}
-
-/* The derivative dw of contact c's row (gac_sens_row, f its row of J) along (dq, dp): d(J^T f) by
- * contact_generalized_force_tangent, or for a link pair or an obstacle d(J^T n) with the closest points' motion and
- * the normal's rotation (gac_contact_normal_tangent; its gap's derivative in *dgap where dgap is not NULL).  Returns
- * 0, or 1 where the latter has none (crossing axes, a link parallel to a face or to another link). */
-static int gac_sens_row_tangent(const gac_sim *s, int c, const double *f, const double *q, const double *dq,
-                                const double *dp, double *dw, double *dgap)
-{
-    const gac_model *md = s->model;
-    if (gac_rowless(md, c)) {
-        double g[md->nq], gap_change;
-        const int code = gac_contact_normal_tangent(md, q, s->p, c, dq, dp, &gap_change, g, dw);
-        if (dgap != 0) *dgap = gap_change;
-        return code != GAC_OK;
-    }
-    {
-        double df[GAC_AT_LEAST_1(md->njrow)];
-        int i;
-        for (i = 0; i < GAC_AT_LEAST_1(md->njrow); ++i) df[i] = 0.0;
-        md->contact_generalized_force_tangent(q, f, s->p, dq, df, dp, dw);
-    }
-    return 0;
-}
-
 /* The impact map of the active contacts a = 1..m (those that took an impulse) by Newton's law, Eq. 47, with the
  * set fixed: W (m x nq) their signed normal rows w_a = J^T (sign e_row_a) (a link pair's or an obstacle's J^T n:
  * gac_sens_row), Y_a = I_f^-1 w_a, A = W Y (m x m), v = W qd, A F = -(1 + E) v, qd+ = qd + Y F.  Its differential
@@ -1003,7 +1079,7 @@ static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, con
                 return;
             }
             gac_copy(dW + (long)a * nq, dg + (long)L->frame[a] * nq, nq);
-        } else if (gac_sens_row_tangent(s, L->active[a], L->f + (long)a * nr, q, dq, dp, dW + (long)a * nq, 0) != 0) {
+        } else if (gac_sens_row_tangent(s, L->active[a], L->f + (long)a * nr, q, dq, dp, dW + (long)a * nq) != 0) {
             for (i = 0; i < nq; ++i) dqd_plus[i] = NAN;  /* (a rowless row without a derivative: checked before) */
             for (b = 0; b < m && dF_out != 0; ++b) dF_out[b] = NAN;
             return;
@@ -1115,7 +1191,7 @@ static void gac_sens_boundary_column(const gac_sim *s, const gac_sens_law *base,
                 for (b = 0; row[b] != a; ++b) continue;
                 cond = dF[b] * gac_dot(nq, wb, base->Y + (long)a * nq);
             } else {                                         /* out: dxi_b >= 0 */
-                if (gac_sens_row_tangent(s, base->active[a], base->f + (long)a * nr, q, dx, dp, dw, 0) != 0)
+                if (gac_sens_row_tangent(s, base->active[a], base->f + (long)a * nr, q, dx, dp, dw) != 0)
                     for (i = 0; i < nq; ++i) dw[i] = NAN;
                 cond = (ct->e_index >= 0 ? dp[ct->e_index] : 0.0) * base->v[a];
                 for (i = 0; i < nq; ++i)
@@ -1388,7 +1464,7 @@ static int gac_sens_rounds_at(gac_sim *s, const gac_impact_record *r, int c_even
             double zero_q[nq], zero_p[GAC_AT_LEAST_1(md->nparam)], dw[nq];
             for (i = 0; i < nq; ++i) zero_q[i] = 0.0;
             for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
-            if (gac_sens_row_tangent(s, c, C->fall + (long)a * nr, q, zero_q, zero_p, dw, 0) != 0) {
+            if (gac_sens_row_tangent(s, c, C->fall + (long)a * nr, q, zero_q, zero_p, dw) != 0) {
                 *contact = c;
                 return GAC_SENS_LINK;
             }
@@ -1496,12 +1572,11 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                     return;
                 }
             }
-            for (a = 0; a < nbefore + s->nresting; ++a) {
-                const int c = a < nbefore ? before_set[a] : s->resting[a - nbefore];
-                if (gac_rowless(md, c)) {
-                    gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
-                    return;
-                }
+            a = gac_sens_rowless_check(s, s->xs, nbefore, before_set);   /* held before it, or after */
+            if (a < 0) a = gac_sens_rowless_check(s, s->x, s->nresting, s->resting);
+            if (a >= 0) {
+                gac_sens_stop(s, GAC_SENS_LINK, r->t, a);
+                return;
             }
         }
     }
@@ -1599,7 +1674,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 double zero_q[nq], zero_p[GAC_AT_LEAST_1(md->nparam)], dw[nq];
                 for (i = 0; i < nq; ++i) zero_q[i] = 0.0;
                 for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
-                if (gac_sens_row_tangent(s, c, fa, q, zero_q, zero_p, dw, 0) != 0) {
+                if (gac_sens_row_tangent(s, c, fa, q, zero_q, zero_p, dw) != 0) {
                     gac_sens_stop(s, GAC_SENS_LINK, r->t, c);
                     return;
                 }
@@ -1761,11 +1836,10 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         }
         if (s->nresting > 0) {                               /* the hold after the law: the set at rest */
             nheld = gac_sens_at_rest(s, xp, s->nresting, s->resting, n, r->contact, at_rest);
-            for (a = 0; a < nheld; ++a) {                    /* a link pair or an obstacle left at rest */
-                if (gac_rowless(md, at_rest[a])) {
-                    gac_sens_stop(s, GAC_SENS_LINK, r->t, at_rest[a]);
-                    return;
-                }
+            a = gac_sens_rowless_check(s, xp, nheld, at_rest);   /* a rough link pair or obstacle left at rest */
+            if (a >= 0) {
+                gac_sens_stop(s, GAC_SENS_LINK, r->t, a);
+                return;
             }
             if (gac_sens_set_at(s, xp, nheld, at_rest, s->is_stuck, &H) != 0) {
                 gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
@@ -1777,11 +1851,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             double *S = z->S + (long)j * nx;
             const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
             double tau;
-            md->contact_gaps_tangent(q, s->p, S, dp, dgap);
-            if (gac_rowless(md, c_event)) {                  /* its gap's gradient is its row J^T n */
-                double dw[nq];
-                (void)gac_sens_row_tangent(s, c_event, f, q, S, dp, dw, dgap + c_event);
-            }
+            gac_sens_gaps_tangent(s, q, S, dp, 1, &c_event, dgap);
             tau = -dgap[c_event] / v_event;                  /* dt*_j: the gap stays 0 at the event */
             for (i = 0; i < nx; ++i) S[i] = S[i] + fm[i] * tau;  /* the perturbed state at the perturbed t* */
             z->dt_impact[j] = tau;
@@ -1810,7 +1880,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 double held[nq];
                 gac_sens_hold_tangent(s, xp, &H, qd_law, xp + nq, dx, dqd_plus, dp, held);
                 gac_copy(dqd_plus, held, nq);
-                md->contact_gaps_tangent(q, s->p, dx, dp, dgap);
+                gac_sens_gaps_tangent(s, q, dx, dp, r->nlanded, r->landed, dgap);
                 for (b = 0; b < r->nlanded; ++b)             /* held at the gap it had at the event */
                     z->dgap_held[(long)j * nc1 + r->landed[b]] = dgap[r->landed[b]];
             }

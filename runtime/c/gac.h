@@ -1197,7 +1197,8 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * direction leads to, the law's complementarity differentiated: with b pushing, dF_b >= 0; without, dxi_b >= 0
  * (exactly one holds for a generic direction: dF_b = -dxi_b(without) / s_b, s_b > 0 the Schur complement of A);
  * the column is then the derivative from that side (its direction's), sens.n_boundaries counts such impacts.
- * Resting contacts (frictionless walls): in flight the constrained dynamics' tangent (the forces' by
+ * Resting contacts (frictionless walls, and smooth link pairs and obstacles by their rows J^T n, whose bias's change
+ * along q and p is a fourth-order central difference): in flight the constrained dynamics' tangent (the forces' by
  * contact_bias_tangent) and the derivative of the projection after each step; a landing's jump uses the field with
  * the set after held and the hold's projection; a release (its force lambda_c reaching 0) dt*_j = -d lambda_c /
  * lambda_c', S+ = S- + (f- - f+) dt*; contacts at rest at the start: their projection.  On rough walls: a stuck
@@ -1246,13 +1247,14 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       contacts released together
                                       (their forces ~0 at once), a slip with another slip or a release, or points
                                       that stick at one step's end at different speeds */
-#define GAC_SENS_LINK         11   /* an impact of two links or of a link on a fixed obstacle (GAC_CONTACT_LINK,
-                                      GAC_CONTACT_OBSTACLE) with contacts at rest before or after it, or rough
-                                      under a frictional law in several rounds, such a contact held at rest (its
-                                      constrained flight is not differentiated), or where their closest points or
-                                      frame have no derivative (crossing or parallel axes, a link parallel to a
-                                      box's or plane's face); one struck in flight, alone or with other contacts,
-                                      by Newton's law or, in one round, by the frictional law is differentiated */
+#define GAC_SENS_LINK         11   /* two links or a link on a fixed obstacle (GAC_CONTACT_LINK,
+                                      GAC_CONTACT_OBSTACLE) rough under a frictional law in an impact of several
+                                      rounds, such a contact held at rest with friction (stuck or sliding along its
+                                      frame), or where their closest points or frame have no derivative (crossing
+                                      or parallel axes, a link parallel to a box's or plane's face); one struck,
+                                      alone or with other contacts, by Newton's law or, in one round, by the
+                                      frictional law, and a smooth one held at rest (its row J^T n, its bias and
+                                      their derivatives: gac_rowless_bias_tangent) are differentiated */
 #define GAC_SENS_STICK        12   /* a stick-slip transition on a rough wall not differentiated: a stuck point that
                                       left the wall (its force reaching 0 while stuck), a stuck point that slipped
                                       at an impact, or one that came to stick at an impact without taking its

@@ -307,12 +307,7 @@ void gac_set_resting(gac_sim *s, int n, const int *set, gac_impact_record *r)
     }
     for (a = 0; a < n; ++a) s->resting[a] = set[a];
     s->nresting = n;
-    for (a = 0; a < n; ++a) {                         /* a link or an obstacle held: its rest is not differentiated */
-        if (gac_rowless(md, set[a])) {
-            gac_sens_stop(s, GAC_SENS_LINK, r ? r->t : s->t, set[a]);
-            break;
-        }
-    }
+    gac_sens_rest_set(s, r ? r->t : s->t);           /* a rough link or obstacle held: not differentiated */
 }
 
 /* gac_sim_init: contacts that start at their wall (|gap| <= contact_tol) with a normal velocity whose bounce

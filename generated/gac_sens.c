@@ -1062,6 +1062,51 @@ typedef struct {
     const int *frame;
 } gac_sens_law;
 
+/* The matrix M (m x m) of the law's differential with slides (gac_impact_differential, L->nslide > 0): A (L->LD)
+ * with each sliding contact's tangential row a replaced by its cone condition R_a = L_T,a + c_f L_N u_a(xi_T) = 0
+ * differentiated,
+ *     dL_T,a + c_f u_a dL_N + c_f L_N sum_t Du_at (A dL + c)_t = -dc_f L_N u_a,
+ *     Du = (I - u u^T) / |xi_T| over the contact's tangential rows t (0 with one tangential row),
+ * whose right-hand side (the dc_f and c terms) depends on the direction.  Where two tangential rows are the same
+ * (a rod lying flat, sliding at both ends) A is singular but M need not be: the cone fixes each L_T. */
+static void gac_sens_slide_matrix(const gac_sens_law *L, double *M)
+{
+    const int m = L->m;
+    int a, b, t;
+    for (a = 0; a < m * m; ++a) M[a] = L->LD[a];
+    for (a = 0; a < m; ++a) {
+        const int nrm = L->normal[a];
+        if (nrm < 0) continue;
+        for (b = 0; b < m; ++b) M[a * m + b] = (b == a ? 1.0 : 0.0) + (b == nrm ? L->cf[a] * L->u[a] : 0.0);
+        for (t = 0; t < m; ++t) {
+            double Du;
+            if (L->normal[t] != nrm) continue;
+            Du = L->cf[a] * L->F[nrm] * ((t == a ? 1.0 : 0.0) - L->u[a] * L->u[t]) / L->xi_T_norm[a];
+            if (Du == 0.0) continue;
+            for (b = 0; b < m; ++b) M[a * m + b] += Du * L->LD[t * m + b];
+        }
+    }
+}
+
+/* 1 if the law L has a unique differential: without slides A = W Y positive definite (LD, L's own LD holding A, is
+ * then factored in place by gac_ldlt for gac_impact_differential); with them M (gac_sens_slide_matrix) regular, LD
+ * keeping A. */
+static int gac_sens_law_regular(const gac_sens_law *L, double *LD)
+{
+    const int m = L->m;
+    double work[m * m], rhs[m];
+    int a;
+    if (L->nslide == 0) {
+        gac_copy(work, LD, (long)m * m);
+        if (gac_ldlt(m, work, 1e-12) != 0) return 0;
+        gac_copy(LD, work, (long)m * m);
+        return 1;
+    }
+    gac_sens_slide_matrix(L, work);
+    for (a = 0; a < m; ++a) rhs[a] = 1.0;
+    return gac_lu_solve(m, work, rhs, 1e-14) == 0;
+}
+
 static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, const double *q, const double *qd,
                                     const double *dq, const double *dqd, const double *dp, double *dqd_plus,
                                     double *dF_out)
@@ -1105,25 +1150,15 @@ static void gac_impact_differential(const gac_sim *s, const gac_sens_law *L, con
     } else {                                             /* with slides: M dF = rhs, M not symmetric */
         double M[m * m], c[m];
         for (a = 0; a < m; ++a) c[a] = -dF[a];           /* d xi_a = (A dF)_a + c_a; A dF = -c on the other rows */
-        for (a = 0; a < m * m; ++a) M[a] = L->LD[a];     /* A (its slide rows replaced below) */
-        for (a = 0; a < m; ++a) {
+        gac_sens_slide_matrix(L, M);
+        for (a = 0; a < m; ++a) {                        /* the slide rows' right-hand sides (gac_sens_slide_matrix) */
             const int nrm = L->normal[a];
-            double dcf;
             int t;
             if (nrm < 0) continue;
-            dcf = L->cf_index[a] >= 0 ? dp[L->cf_index[a]] : 0.0;
-            /* R_a = L_T,a + c_f L_N u_a(xi_T) = 0, differentiated:
-               dL_T,a + c_f u_a dL_N + c_f L_N sum_t Du_at (A dL + c)_t = -dc_f L_N u_a,
-               Du = (I - u u^T) / |xi_T| over the contact's tangential rows t (0 with one tangential row) */
-            for (b = 0; b < m; ++b) M[a * m + b] = (b == a ? 1.0 : 0.0) + (b == nrm ? L->cf[a] * L->u[a] : 0.0);
-            dF[a] = -dcf * L->F[nrm] * L->u[a];
+            dF[a] = -(L->cf_index[a] >= 0 ? dp[L->cf_index[a]] : 0.0) * L->F[nrm] * L->u[a];
             for (t = 0; t < m; ++t) {
-                double Du;
                 if (L->normal[t] != nrm) continue;
-                Du = L->cf[a] * L->F[nrm] * ((t == a ? 1.0 : 0.0) - L->u[a] * L->u[t]) / L->xi_T_norm[a];
-                if (Du == 0.0) continue;
-                for (b = 0; b < m; ++b) M[a * m + b] += Du * L->LD[t * m + b];
-                dF[a] -= Du * c[t];
+                dF[a] -= L->cf[a] * L->F[nrm] * ((t == a ? 1.0 : 0.0) - L->u[a] * L->u[t]) / L->xi_T_norm[a] * c[t];
             }
         }
         if (gac_lu_solve(m, M, dF, 1e-14) != 0) {
@@ -1408,19 +1443,17 @@ static int gac_sens_round(const gac_sim *s, const gac_impact_record *r, gac_sens
     }
     for (a = 0; a < n; ++a) C->zero[a] = zero_next[a];
     if (m == 0) return GAC_SENS_VALID;                      /* (no impulse: the round leaves qd as it is) */
-    {
-        double factor[m * m];
-        for (a = 0; a < m; ++a) {
-            for (b = 0; b <= a; ++b)
-                C->LD[a * m + b] = C->LD[b * m + a] = gac_dot(nq, C->W + (long)a * nq, C->Y + (long)b * nq);
-        }
-        gac_copy(factor, C->LD, m * m);
-        if (gac_ldlt(m, factor, 1e-12) != 0) return GAC_SENS_SIMULTANEOUS;   /* dependent rows */
-        if (nslide == 0) gac_copy(C->LD, factor, m * m);    /* (with slides LD keeps A: gac_impact_differential) */
+    for (a = 0; a < m; ++a) {
+        for (b = 0; b <= a; ++b)
+            C->LD[a * m + b] = C->LD[b * m + a] = gac_dot(nq, C->W + (long)a * nq, C->Y + (long)b * nq);
     }
     L->m = m, L->active = C->active, L->landing = C->landing, L->f = C->f, L->W = C->W, L->Y = C->Y, L->LD = C->LD;
     L->F = C->F, L->v = C->v, L->e = C->e, L->nslide = nslide, L->normal = C->normal, L->u = C->u;
     L->xi_T_norm = C->xi_norm, L->cf = C->cf, L->cf_index = C->cf_index, L->frame = 0;
+    if (!gac_sens_law_regular(L, C->LD)) {                  /* dependent rows (with slides LD keeps A) */
+        L->m = 0;
+        return GAC_SENS_SIMULTANEOUS;
+    }
     C->nround++;
     return GAC_SENS_VALID;
 }
@@ -1798,15 +1831,17 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 LD[a * m + b] = LD[b * m + a] = sum;
             }
         }
+        law.m = m, law.active = active, law.landing = landing, law.f = f, law.W = W, law.Y = Y, law.LD = LD;
+        law.F = F, law.v = v, law.e = e;
+        law.nslide = nslide, law.normal = normal, law.u = u, law.xi_T_norm = xi_norm, law.cf = cf_row;
+        law.cf_index = cf_index;
+        law.frame = nframe > 0 ? frame : 0;
         if (!several) {
-            double factor[m * m];
-            gac_copy(factor, LD, m * m);
-            if (gac_ldlt(m, factor, 1e-12) != 0) {           /* dependent rows: no unique differential */
+            if (!gac_sens_law_regular(&law, LD)) {           /* dependent rows: no unique differential */
                 gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
                 return;
             }
             if (nslide == 0) {                               /* Newton's law on every row: A F = -(1 + E) v */
-                gac_copy(LD, factor, m * m);
                 for (a = 0; a < m; ++a) F[a] = -(1.0 + e[a]) * v[a];
                 gac_ldlt_solve(m, LD, F);
             }                                                /* with slides: the law's impulses (the record's),
@@ -1817,11 +1852,6 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
             for (a = 0; a < m; ++a) value += Y[(long)a * nq + i] * F[a];
             qd_law[i] = value;
         }
-        law.m = m, law.active = active, law.landing = landing, law.f = f, law.W = W, law.Y = Y, law.LD = LD;
-        law.F = F, law.v = v, law.e = e;
-        law.nslide = nslide, law.normal = normal, law.u = u, law.xi_T_norm = xi_norm, law.cf = cf_row;
-        law.cf_index = cf_index;
-        law.frame = nframe > 0 ? frame : 0;
         for (b = 0; b < nb; ++b) {                           /* the boundary rows after the active ones, F = 0 */
             gac_copy(f + (long)(m + b) * nr, fb + (long)b * nr, nr);
             gac_copy(W + (long)(m + b) * nq, Wb + (long)b * nq, nq);

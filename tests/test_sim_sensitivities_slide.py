@@ -3,17 +3,22 @@ ends resting from the start, pushed along it at V0; it slides, decelerating by c
 sliding friction -c_f lambda_n v_t/|v_t|: lambda_n through B, the direction, c_f), and comes to stick at
 t = V0 / (c_f g) (the transition taken as the event |v_t| = friction_velocity, the velocities' projection onto the
 stuck rows its map).  Against the closed form x(t) = V0 t - c_f g t^2 / 2 while it slides and x = V0^2 / (2 c_f g)
-once stuck, and against central differences (the same contact events across the stencil)."""
+once stuck, and against central differences (the same contact events across the stencil).  At an impact by the
+frictional law: the rod dropped flat while moving along its axis, both ends sliding through the impact on the same
+tangential row (the law's A singular, its differential not), against closed forms; and the shipped incline scene's
+whole run (30 impacts) against central differences."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from codegen.scene import LineLink, Scene, Wall
+from codegen.scene import LineLink, Scene, Wall, load_scene
 from runtime import simulate
 
+from test_sim_sensitivities import central_differences as whole_run_differences
 from test_sim_sensitivities_rest import central_differences
 
 TIGHT = dict(rtol=1e-12, atol=1e-14)
@@ -82,3 +87,50 @@ def test_coming_to_stick_matches_the_closed_form(rod):
     for row in ("qd[X1]", "qd[X2]", "qd[theta_1]"):
         assert np.abs(r.sensitivities.matrix[r.sensitivities.rows.index(row)]).max() < 1e-12
     central_differences(rod, T, NAMES, r.sensitivities.matrix, step=1e-5, **TIGHT)
+
+
+def test_a_rod_landing_flat_and_sliding_at_both_ends_matches_the_closed_form(rod):
+    """The rod dropped flat from h = 0.3 m while moving along its axis at 2 m/s onto the floor with e = 0.5: both
+    ends strike at once and slide through the impact (each tangential impulse c_f times its normal one), so their
+    two tangential rows are the same row (the law's A singular, the cone fixing each tangential impulse); it leaves
+    the floor at e v* up and at vx - c_f (1 + e) v* along it (v* = sqrt(2 g h)).  At T = 0.4 s (before it lands
+    again): X1 = vx T - c_f (1 + e) v* tau, X2 = e v* tau - g tau^2 / 2 (tau = T - t*, t* = v* / g), so
+    dX1/dc_f = -(1 + e) v* tau, dX1/de = -c_f v* tau, dX1/dg = -c_f (1 + e) v* T / (2 g), dX2/de = v* tau and
+    dt*/dh = 1 / v*; against central differences too."""
+    H, VX, E, T = 0.3, 2.0, 0.5, 0.4
+    names = ["q0[X2]", "qd0[X1]", "g", "e_x2_min", "friction_x2_min"]
+    q0 = np.array([-math.pi / 2, 0.0, math.pi / 2, 0.0, H, 0.0])
+    qd0 = np.array([0.0, 0.0, 0.0, VX, 0.0, 0.0])
+    p = rod.parameters({"e_x2_min": E})
+    r = simulate(rod, T, p=p, q0=q0, qd0=qd0, sensitivities=names, **TIGHT)
+    assert r.success and r.sensitivities.valid, r.sensitivity_message
+    (impact,) = r.impacts
+    assert sorted(c.label for c in impact.contacts) == ["O1/x2_min", "O2/x2_min"] and impact.law == "gdi"
+    for contact in impact.contacts:
+        assert contact.impulse_t[0] == pytest.approx(-CF * contact.impulse, rel=1e-9)
+    v, t_hit = math.sqrt(2 * G * H), math.sqrt(2 * H / G)
+    tau = T - t_hit
+    s = r.sensitivities
+    expected = {("q[X1]", "friction_x2_min"): -(1 + E) * v * tau, ("q[X1]", "e_x2_min"): -CF * v * tau,
+                ("q[X1]", "g"): -CF * (1 + E) * v * T / (2 * G), ("q[X1]", "qd0[X1]"): T,
+                ("q[X2]", "e_x2_min"): v * tau, ("qd[X1]", "friction_x2_min"): -(1 + E) * v}
+    for (row, name), value in expected.items():
+        assert s.matrix[s.rows.index(row), names.index(name)] == pytest.approx(value, rel=1e-8), (row, name)
+    assert impact.dt_dp["q0[X2]"] == pytest.approx(1 / v, rel=1e-8)
+    whole_run_differences(rod, T, p, q0, qd0, names, s.matrix, **TIGHT)
+
+
+def test_the_shipped_incline_carries_its_sensitivities_through_its_whole_run(compiled):
+    """The shipped `incline` scene (a 3-link chain thrown down a rough incline, e = 0.3, c_f = 0.6): 30 impacts by the
+    frictional law in 2 s, link 1 landing flat and sliding at both ends at 0.951 s among them, points coming to rest,
+    sliding and leaving; every event differentiated, the final state against central differences."""
+    scene = load_scene(Path(__file__).parents[1] / "codegen" / "scenes" / "incline.toml")
+    model = compiled(scene, tangent=True)
+    names = ["g", "qd0[theta_1]"]
+    q0, qd0 = np.array(scene.q0, dtype=float), np.array(scene.qd0, dtype=float)
+    r = simulate(model, 2.0, q0=q0, qd0=qd0, sensitivities=names, **TIGHT)
+    assert r.success and r.sensitivities.valid, r.sensitivity_message
+    assert len(r.impacts) >= 20 and any(e.kind == "release" for e in r.contact_events)
+    flat = [i for i in r.impacts if sorted(c.label for c in i.contacts) == ["O1/x2_min", "O2/x2_min"]]
+    assert flat and all(abs(c.impulse_t[0]) == pytest.approx(0.6 * c.impulse, rel=1e-9) for c in flat[0].contacts)
+    whole_run_differences(model, 2.0, model.p.copy(), q0, qd0, names, r.sensitivities.matrix, **TIGHT)

@@ -182,9 +182,10 @@ double gac_link_contact_rate(const gac_model *m, const double *q, const double *
 /* a held link or obstacle contact c's bias dg(qd) . qd (its normal acceleration less g . qdd) into *b: GAC_OK, or
  * GAC_ERR_LINK_CONTACT where its normal has no derivative */
 int gac_rowless_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, double *b);
-/* its derivative along (dq, dqd, dp) into *db: exact along dqd, a fourth-order central difference of it along
- * (dq, dp) (~1e-12 of its size): GAC_OK, or GAC_ERR_LINK_CONTACT where the normal has no derivative */
-int gac_rowless_bias_tangent(const gac_model *m, const double *q, const double *qd, const double *p, int c,
+/* the derivative of its row k's bias (0: the normal's, gac_rowless_bias; 1, 2: the frame's t1, t2,
+ * gac_rowless_frame_bias) along (dq, dqd, dp) into *db: exact along dqd, a fourth-order central difference of it along
+ * (dq, dp) (~1e-12 of its size): GAC_OK, or GAC_ERR_LINK_CONTACT where the row has no derivative */
+int gac_rowless_bias_tangent(const gac_model *m, const double *q, const double *qd, const double *p, int c, int k,
                              const double *dq, const double *dqd, const double *dp, double *db);
 /* the biases b (3) of a held link or obstacle contact c's frame rows J^T n, J^T t1, J^T t2 (b[0] gac_rowless_bias's):
  * GAC_OK, or GAC_ERR_LINK_CONTACT where its frame has no derivative */

@@ -157,21 +157,24 @@ void gac_sens_stop(gac_sim *s, int status, double t, int contact)
 }
 
 /* The first link pair or obstacle of set[0..n-1] held at state x whose rest the sensitivities do not follow, or -1:
- * a rough one (Coulomb's friction along its frame, stuck or sliding), or one whose normal has no derivative there
- * (crossing axes, a link parallel to a face or to another link: gac_contact_normal_tangent).  A smooth one is
- * followed as a wall's point: its row J^T n, its bias and their derivatives from gac_link.c. */
-static int gac_sens_rowless_check(const gac_sim *s, const double *x, int n, const int *set)
+ * with friction set, a rough one that slides (not stuck: stuck per contact, or NULL: none is); one whose normal has
+ * no derivative there (crossing axes, a link parallel to a face or to another link: gac_contact_normal_tangent), or,
+ * rough, whose frame has none.  A smooth one is followed as a wall's point (its row J^T n, its bias and their
+ * derivatives from gac_link.c), a stuck one as a wall's stuck point along its frame's rows J^T t1, J^T t2. */
+static int gac_sens_rowless_check(const gac_sim *s, const double *x, int n, const int *set, const int *stuck,
+                                  int friction)
 {
     const gac_model *md = s->model;
     const int nq = md->nq;
-    double zero_p[GAC_AT_LEAST_1(md->nparam)], g[GAC_AT_LEAST_1(nq)], dg[GAC_AT_LEAST_1(nq)], dgap;
+    double zero_p[GAC_AT_LEAST_1(md->nparam)], g[3 * GAC_AT_LEAST_1(nq)], dg[3 * GAC_AT_LEAST_1(nq)], axes[9], dgap;
     int a, i;
     for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
     for (a = 0; a < n; ++a) {
-        const int c = set[a];
+        const int c = set[a], rough = gac_contact_friction(md, s->p, c) > 0.0;
         if (!gac_rowless(md, c)) continue;
-        if (gac_contact_friction(md, s->p, c) > 0.0
-            || gac_contact_normal_tangent(md, x, s->p, c, x + nq, zero_p, &dgap, g, dg) != GAC_OK)
+        if ((friction && rough && (stuck == 0 || !stuck[c]))
+            || gac_contact_normal_tangent(md, x, s->p, c, x + nq, zero_p, &dgap, g, dg) != GAC_OK
+            || (rough && gac_contact_frame_tangent(md, x, s->p, c, x + nq, zero_p, axes, g, dg) != GAC_OK))
             return c;
     }
     return -1;
@@ -181,7 +184,7 @@ void gac_sens_rest_set(gac_sim *s, double t)
 {
     int c;
     if (s->sens == 0 || s->sens->status != GAC_SENS_VALID) return;
-    c = gac_sens_rowless_check(s, s->x, s->nresting, s->resting);
+    c = gac_sens_rowless_check(s, s->x, s->nresting, s->resting, 0, 0);   /* (stuck or sliding: decided after) */
     if (c >= 0) gac_sens_stop(s, GAC_SENS_LINK, t, c);
 }
 
@@ -326,16 +329,17 @@ static void gac_sens_gaps_tangent(const gac_sim *s, const double *q, const doubl
  * first each contact's normal row, then the two tangential rows of each one stuck on a rough wall (gac_held_rows'
  * order; a stuck point is a bilateral constraint along all three axes).  Row a: its unit signed row f_a (nr) of J,
  * brow[a] (its row of J and of contact_bias) and sgn[a] (the normal's sign, 1 along a tangential axis); W_a = J^T f_a
- * (its generalised normal), Y_a = I_f^-1 W_a and A = W Y, factored in LD (gac_ldlt).  A smooth link pair or
- * obstacle held (no row of J) has brow[a] = -1, f_a = 0 and W_a = J^T n at its closest points (the gap's gradient,
- * gac_link_contact_direction), its bias and their derivatives from gac_link.c.  The arrays are the caller's,
- * sized for m <= 3 nq rows. */
+ * (its generalised normal), Y_a = I_f^-1 W_a and A = W Y, factored in LD (gac_ldlt).  A link pair or an obstacle
+ * held (no row of J) has brow[a] = -1, f_a = 0 and W_a = J^T a_k at its closest points along its frame's axis
+ * k = rk[a] (gac_rowless_frame: 0 the normal n, the gap's gradient; 1, 2 the tangents t1, t2 of one stuck there, as
+ * gac_held_rows takes them), its bias and their derivatives from gac_link.c; rk[a] = -1 for a row of J.  rc[a]: row
+ * a's contact.  The arrays are the caller's, sized for m <= 3 nq rows. */
 typedef struct {
     int m;                       /* rows (the first n the normal rows of set's contacts) */
     int n;
     int ndropped;                /* rows dependent on those before them (gac_ldlt_drop: their force 0) */
     const int *set;
-    int *brow;
+    int *brow, *rc, *rk;
     double *sgn, *f, *W, *Y, *LD;
     /* Sliding friction (gac_sens_set_slide; nslide = 0 without): contact a (a < n) sliding on a rough wall has
        cf[a] > 0 and takes -cf lambda_a phi_a along the wall (phi_a = gac_slide_phi of its tangential velocity vt_a):
@@ -351,9 +355,10 @@ typedef struct {
     double P##_f[3 * (nq) * (nr)], P##_W[3 * (nq) * (nq)], P##_Y[3 * (nq) * (nq)], P##_LD[9 * (nq) * (nq)], \
         P##_sgn[3 * (nq)], P##_cf[(nq)], P##_phi[2 * (nq)], P##_vt[2 * (nq)], P##_G[(nq) * (nq)], \
         P##_Wt[2 * (nq) * (nq)], P##_Yd[(nq) * (nq)], P##_B[(nq) * (nq)]; \
-    int P##_brow[3 * (nq)]
+    int P##_brow[3 * (nq)], P##_rc[3 * (nq)], P##_rk[3 * (nq)]
 #define GAC_SENS_SET_BIND_OF(S, P) ((S).f = P##_f, (S).W = P##_W, (S).Y = P##_Y, (S).LD = P##_LD, (S).sgn = P##_sgn, \
-                                    (S).brow = P##_brow, (S).cf = P##_cf, (S).phi = P##_phi, (S).vt = P##_vt, \
+                                    (S).brow = P##_brow, (S).rc = P##_rc, (S).rk = P##_rk, (S).cf = P##_cf, \
+                                    (S).phi = P##_phi, (S).vt = P##_vt, \
                                     (S).G = P##_G, (S).Wt = P##_Wt, (S).Yd = P##_Yd, (S).B = P##_B, (S).nslide = 0)
 #define GAC_SENS_SET_ARRAYS(nq, nr) GAC_SENS_SET_ARRAYS_OF(H, nq, nr)   /* the arrays of a set named H */
 #define GAC_SENS_SET_BIND(S) GAC_SENS_SET_BIND_OF(S, H)
@@ -393,6 +398,38 @@ static int gac_sens_slow_slide(const gac_sim *s, const double *x, int n, const i
     return -1;
 }
 
+static double gac_dot(int n, const double *a, const double *b)
+{
+    double sum = 0.0;
+    int i;
+    for (i = 0; i < n; ++i) sum += a[i] * b[i];
+    return sum;
+}
+
+/* A link pair's or an obstacle's frame row J^T t_k (k = 1, 2; gac_frame_direction) at q into w (nq), NaN where its
+ * frame fails; its return: the columns' size (gac_frame_direction's). */
+static double gac_sens_frame_row(const gac_sim *s, const double *q, int c, int k, double *w)
+{
+    const gac_model *md = s->model;
+    gac_contact_frame frame;
+    int i;
+    if (gac_rowless_frame(md, q, s->p, c, &frame) != GAC_OK) {
+        for (i = 0; i < md->nq; ++i) w[i] = NAN;
+        return 0.0;
+    }
+    return gac_frame_direction(md, q, s->p, &frame, k, w);
+}
+
+/* 1 if some motion of the chain moves contact c's closest points along its frame's tangent k (|J^T t_k| above 1e-10
+ * of its columns' size): the rows gac_held_rows holds for a stuck link pair or obstacle (a planar model's t2 no motion
+ * takes is left out). */
+static int gac_sens_frame_moves(const gac_sim *s, const double *q, int c, int k)
+{
+    double w[GAC_AT_LEAST_1(s->model->nq)];
+    const double scale = gac_sens_frame_row(s, q, c, k, w);
+    return sqrt(gac_dot(s->model->nq, w, w)) > 1e-10 * scale;
+}
+
 /* Fill H for set[0..n-1] at q, with the tangential rows of those stuck (stuck: per contact, or NULL: normal rows
  * only).  A row dependent on those before it (a rod lying flat stuck at both ends holds the same tangential row
  * twice) drops out as in the loop (gac_ldlt_drop: its force 0, the motion the same; counted in H->ndropped).
@@ -410,16 +447,19 @@ static int gac_sens_set_at(const gac_sim *s, const double *q, int n, const int *
         const gac_contact *ct = md->contacts + set[a];
         const int rowless = gac_rowless(md, set[a]);
         H->brow[m] = rowless ? -1 : ct->row;
+        H->rc[m] = set[a], H->rk[m] = rowless ? 0 : -1;
         H->sgn[m++] = rowless ? 1.0 : ct->normal_sign;
     }
-    for (a = 0; a < n && stuck != 0; ++a) {       /* the stuck points' tangential rows, along +X_axis */
+    for (a = 0; a < n && stuck != 0; ++a) {       /* the stuck points' tangential rows, along +X_axis, or a link
+                                                     pair's or an obstacle's along its frame's t1, t2 */
         const gac_contact *ct = md->contacts + set[a];
-        if (!stuck[set[a]] || ct->kind != GAC_CONTACT_WALL || !(gac_friction_coefficient(md, s->p, set[a]) > 0.0))
-            continue;
+        const int rowless = gac_rowless(md, set[a]);
+        if (!stuck[set[a]] || !(gac_rest_friction(md, s->p, set[a]) > 0.0)) continue;
         for (t = 0; t < 2; ++t) {
-            if (ct->trow[t] < 0) continue;
+            if (rowless ? !gac_sens_frame_moves(s, q, set[a], 1 + t) : ct->trow[t] < 0) continue;
             if (m == 3 * nq) return 1;
-            H->brow[m] = ct->trow[t];
+            H->brow[m] = rowless ? -1 : ct->trow[t];
+            H->rc[m] = set[a], H->rk[m] = rowless ? 1 + t : -1;
             H->sgn[m++] = 1.0;
         }
     }
@@ -428,6 +468,9 @@ static int gac_sens_set_at(const gac_sim *s, const double *q, int n, const int *
         double *fa = H->f + (long)a * nr;
         if (a < n) {                              /* a normal row: a wall's, or a link pair's or obstacle's J^T n */
             gac_sens_row(s, set[a], q, fa, H->W + (long)a * nq);
+        } else if (H->rk[a] > 0) {                /* a stuck link pair's or obstacle's J^T t_k */
+            for (i = 0; i < nr; ++i) fa[i] = 0.0;
+            gac_sens_frame_row(s, q, H->rc[a], H->rk[a], H->W + (long)a * nq);
         } else {                                  /* a stuck point's tangential row */
             for (i = 0; i < nr; ++i) fa[i] = 0.0;
             fa[H->brow[a]] = H->sgn[a];
@@ -444,14 +487,6 @@ static int gac_sens_set_at(const gac_sim *s, const double *q, int n, const int *
     }
     H->ndropped = m > 0 ? gac_ldlt_drop(m, H->LD, 1e-12) : 0;
     return H->ndropped < 0;
-}
-
-static double gac_dot(int n, const double *a, const double *b)
-{
-    double sum = 0.0;
-    int i;
-    for (i = 0; i < n; ++i) sum += a[i] * b[i];
-    return sum;
 }
 
 /* The sliding friction of H's contacts that slide on rough walls at state x (stuck: per contact, or NULL: none is;
@@ -541,9 +576,10 @@ static void gac_sens_held_forces(const gac_sim *s, const double *x, const double
     md->contact_bias(x, x + nq, s->p, bias);
     if (lambda_ref != 0) *lambda_ref = 0.0;
     for (a = 0; a < m; ++a) {
-        double b = NAN;
+        double b = NAN, frame[3];
         if (H->brow[a] >= 0) b = H->sgn[a] * bias[H->brow[a]];
-        else (void)gac_rowless_bias(md, x, x + nq, s->p, H->set[a], &b);
+        else if (H->rk[a] == 0) (void)gac_rowless_bias(md, x, x + nq, s->p, H->rc[a], &b);
+        else if (gac_rowless_frame_bias(md, x, x + nq, s->p, H->rc[a], frame) == GAC_OK) b = frame[H->rk[a]];
         lambda[a] = -(b + gac_dot(nq, H->W + (long)a * nq, qdd_free));
         if (lambda_ref != 0) {
             const double A_aa = gac_dot(nq, H->W + (long)a * nq, H->Y + (long)a * nq);
@@ -558,6 +594,24 @@ static void gac_sens_held_forces(const gac_sim *s, const double *x, const double
     }
 }
 
+/* The derivative dw (nq) along (dq, dp) of H's row a of a link pair or an obstacle: d(J^T n) (gac_sens_row_tangent)
+ * or d(J^T t_k) (gac_contact_frame_tangent), NaN where it has none (gac_sens_rowless_check tells it before). */
+static void gac_sens_rowless_tangent(const gac_sim *s, const gac_sens_set *H, int a, const double *q, const double *dq,
+                                     const double *dp, double *dw)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq, k = H->rk[a];
+    int i, failed;
+    if (k == 0) {
+        failed = gac_sens_row_tangent(s, H->rc[a], H->f + (long)a * GAC_AT_LEAST_1(md->njrow), q, dq, dp, dw) != 0;
+    } else {
+        double axes[9], g[3 * nq], dg[3 * nq];
+        failed = gac_contact_frame_tangent(md, q, s->p, H->rc[a], dq, dp, axes, g, dg) != GAC_OK;
+        if (!failed) gac_copy(dw, dg + (long)k * nq, nq);
+    }
+    for (i = 0; failed && i < nq; ++i) dw[i] = NAN;
+}
+
 /* dW_a = d(J^T f_a) and dY_a = d(I_f^-1 W_a) along (dq, dp), a = 0..m-1 (m x nq each). */
 static void gac_sens_set_tangent(const gac_sim *s, const double *q, const gac_sens_set *H, const double *dq,
                                  const double *dp, double *dW, double *dY)
@@ -568,11 +622,10 @@ static void gac_sens_set_tangent(const gac_sim *s, const double *q, const gac_se
     int a, i;
     for (i = 0; i < nr; ++i) df[i] = 0.0;
     for (a = 0; a < H->m; ++a) {
-        if (H->brow[a] >= 0) {
+        if (H->brow[a] >= 0)
             md->contact_generalized_force_tangent(q, H->f + (long)a * nr, s->p, dq, df, dp, dW + (long)a * nq);
-        } else if (gac_sens_row_tangent(s, H->set[a], H->f + (long)a * nr, q, dq, dp, dW + (long)a * nq) != 0) {
-            for (i = 0; i < nq; ++i) dW[(long)a * nq + i] = NAN;   /* (gac_sens_rowless_check tells it before) */
-        }
+        else
+            gac_sens_rowless_tangent(s, H, a, q, dq, dp, dW + (long)a * nq);
         if (dY != 0)
             md->inertia_solve_tangent(q, H->W + (long)a * nq, s->p, dq, dW + (long)a * nq, dp, dY + (long)a * nq);
     }
@@ -673,7 +726,7 @@ static void gac_sens_held_tangent(const gac_sim *s, const double *x, const gac_s
     for (a = 0; a < m; ++a) {
         double db = NAN;
         if (H->brow[a] >= 0) db = H->sgn[a] * dbias[H->brow[a]];
-        else (void)gac_rowless_bias_tangent(md, x, x + nq, s->p, H->set[a], dq, dqd, dp, &db);
+        else (void)gac_rowless_bias_tangent(md, x, x + nq, s->p, H->rc[a], H->rk[a], dq, dqd, dp, &db);
         r[a] = -(db + gac_dot(nq, dW + (long)a * nq, qdd) + gac_dot(nq, H->W + (long)a * nq, v));
     }
     gac_sens_set_solve(H, r);
@@ -703,9 +756,7 @@ static void gac_sens_Yc_tangent(const gac_sim *s, const double *q, const gac_sen
     md->contact_generalized_force_tangent(q, fc, s->p, dq, df, dp, dWc);
     for (a = 0; a < H->m && rowless; ++a) {
         if (H->brow[a] >= 0) continue;
-        if (gac_sens_row_tangent(s, H->set[a], H->f + (long)a * nr, q, dq, dp, dw) != 0) {
-            for (i = 0; i < nq; ++i) dw[i] = NAN;
-        }
+        gac_sens_rowless_tangent(s, H, a, q, dq, dp, dw);
         for (i = 0; i < nq; ++i) dWc[i] += c[a] * dw[i];
     }
     md->inertia_solve_tangent(q, Wc, s->p, dq, dWc, dp, out);
@@ -802,7 +853,7 @@ static void gac_sens_start_rest(gac_sim *s)
     gac_sens_set H2;                              /* the held rows with the stuck points' tangential ones */
     GAC_SENS_SET_BIND(H);
     GAC_SENS_SET_BIND_OF(H2, H2);
-    a = gac_sens_rowless_check(s, s->x, s->nresting, s->resting);   /* a rough link or obstacle at rest */
+    a = gac_sens_rowless_check(s, s->x, s->nresting, s->resting, s->is_stuck, 1);   /* one sliding at rest */
     if (a >= 0) {
         gac_sens_stop(s, GAC_SENS_LINK, s->t, a);
         return;
@@ -925,7 +976,7 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
             return;
         }
     }
-    i = gac_sens_rowless_check(s, x, s->nresting, s->resting);   /* a link or an obstacle held there */
+    i = gac_sens_rowless_check(s, x, s->nresting, s->resting, s->is_stuck, 1);   /* one sliding there */
     if (i >= 0) {
         gac_sens_stop(s, GAC_SENS_LINK, s->t, i);
         return;
@@ -1596,8 +1647,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         if (gac_has_link(md, r->ncontact, r->contact) || (c_event >= 0 && gac_rowless(md, c_event))) {
             /* a link pair or an obstacle among several contacts: Newton's law on its row J^T n like a wall's, and
                rough under the frictional law Coulomb's cone along its contact frame's rows J^T t1, J^T t2; one rough
-               in an impact of several rounds, or one resting before or after, ends them */
-            int before_set[md->nq + GAC_AT_LEAST_1(md->ncontact)], nbefore = gac_sens_set_before(s, r, before_set);
+               in an impact of several rounds ends them */
             for (a = 0; a < r->ncontact; ++a) {
                 if (gac_rowless(md, r->contact[a]) && r->law != GAC_IMPACT_LAW_FRICTIONLESS
                     && gac_contact_friction(md, s->p, r->contact[a]) > 0.0 && (r->rounds > 1 || r->plastic)) {
@@ -1605,8 +1655,11 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                     return;
                 }
             }
-            a = gac_sens_rowless_check(s, s->xs, nbefore, before_set);   /* held before it, or after */
-            if (a < 0) a = gac_sens_rowless_check(s, s->x, s->nresting, s->resting);
+        }
+        {                                                    /* one sliding at rest before it, or after */
+            int before_set[md->nq + GAC_AT_LEAST_1(md->ncontact)], nbefore = gac_sens_set_before(s, r, before_set);
+            a = gac_sens_rowless_check(s, s->xs, nbefore, before_set, was_stuck, 1);
+            if (a < 0) a = gac_sens_rowless_check(s, s->x, s->nresting, s->resting, s->is_stuck, 1);
             if (a >= 0) {
                 gac_sens_stop(s, GAC_SENS_LINK, r->t, a);
                 return;
@@ -1866,7 +1919,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         }
         if (s->nresting > 0) {                               /* the hold after the law: the set at rest */
             nheld = gac_sens_at_rest(s, xp, s->nresting, s->resting, n, r->contact, at_rest);
-            a = gac_sens_rowless_check(s, xp, nheld, at_rest);   /* a rough link pair or obstacle left at rest */
+            a = gac_sens_rowless_check(s, xp, nheld, at_rest, s->is_stuck, 1);   /* one left sliding at rest */
             if (a >= 0) {
                 gac_sens_stop(s, GAC_SENS_LINK, r->t, a);
                 return;
@@ -2023,6 +2076,10 @@ void gac_sens_slip(gac_sim *s, const gac_impact_record *r, int c_event)
     gac_sens_set H;
     if (z == 0 || z->status != GAC_SENS_VALID) return;
     GAC_SENS_SET_BIND(H);
+    if (gac_rowless(md, c_event)) {               /* a stuck link pair or obstacle that slips: not followed */
+        gac_sens_stop(s, GAC_SENS_LINK, r->t, c_event);
+        return;
+    }
     if (r->nslipped != 1 || r->nreleased != 0 || r->slipped[0] != c_event) {
         gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, c_event);
         return;
@@ -2127,6 +2184,12 @@ void gac_sens_stick(gac_sim *s, const double *x_before, const int *stuck_before,
     if (z == 0 || z->status != GAC_SENS_VALID) return;
     GAC_SENS_SET_BIND(H);
     if (r->nstuck < 1) return;
+    for (a = 0; a < r->nstuck; ++a) {                        /* a link pair or an obstacle sliding: not followed */
+        if (gac_rowless(md, r->stuck[a])) {
+            gac_sens_stop(s, GAC_SENS_LINK, s->t, r->stuck[a]);
+            return;
+        }
+    }
     c = r->stuck[0];
     ct = md->contacts + c;
     md->contact_velocities(x_before, x_before + nq, s->p, vq);

@@ -91,11 +91,23 @@ def test_a_growing_push_makes_the_rod_slip_where_it_needs_c_f_N(model):
     assert r.qd_final[3] > 0.0 and abs(r.energy_drift) < 1e-8
 
 
-def test_sensitivities_end_with_the_link_status_on_the_rough_bars(model):
-    r = on_the_bars(model, 0.3, 0.2, sensitivities=["q0[X2]"], t_eval=[0.2])
+def test_sensitivities_hold_the_stuck_rod_and_end_where_it_slides(model):
+    """Stuck on the rough bars (c_f = 0.3; the two contacts' t1 rows, both along the rod, the same row: one drops out
+    as in the loop) the rod does not move, so after 0.5 s its position moves with its start's along the bars (1 on
+    the diagonal) and with nothing else, its velocities with nothing; sliding (c_f = 0.1) the sensitivities end with
+    the link status."""
+    names = ["q0[X1]", "q0[X3]", "g", "friction_bar_a"]
+    r = on_the_bars(model, 0.3, 0.5, sensitivities=names, t_eval=[])
+    assert r.status == 0 and r.n_sticks == 2, r.message
+    assert r.sensitivities.valid, r.sensitivity_message
+    s = r.sensitivities
+    expected = np.zeros((len(s.rows), len(names)))
+    expected[s.rows.index("q[X1]"), 0] = expected[s.rows.index("q[X3]"), 1] = 1.0
+    assert np.abs(s.matrix - expected).max() < 1e-9
+    r = on_the_bars(model, 0.1, 0.2, sensitivities=["q0[X2]"], t_eval=[0.2])
     assert r.status == 0, r.message
-    assert not r.sensitivities.valid and "a link resting with friction on another link or on an obstacle" in \
-        r.sensitivity_message
+    assert not r.sensitivities.valid and "a link resting with friction on another link or on an obstacle and " \
+        "sliding or slipping there" in r.sensitivity_message
     assert np.isnan(r.sensitivities.matrix).all()
 
 

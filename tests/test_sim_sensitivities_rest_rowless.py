@@ -1,13 +1,17 @@
-"""Forward sensitivities through rest on smooth link pairs and obstacles (contacts without a Jacobian row held like a
-wall's point, gac_sens.c): the held row J^T n at the closest points and its derivative (the closest points' motion
-and the normal's turning, gac_contact_normal_tangent), the held gap's derivative n . dD, and the bias dg(qd) . qd's
-derivative (exact along qd, a fourth-order central difference along q and p: gac_rowless_bias_tangent).  A rod lands
+"""Forward sensitivities through rest on link pairs and obstacles (contacts without a Jacobian row held like a wall's
+point, gac_sens.c): the held row J^T n at the closest points and its derivative (the closest points' motion and the
+normal's turning, gac_contact_normal_tangent), the held gap's derivative n . dD, and the bias dg(qd) . qd's derivative
+(exact along qd, a fourth-order central difference along q and p: gac_rowless_bias_tangent); stuck on a rough one,
+the frame's rows J^T t1, J^T t2 held too, with their biases and derivatives (gac_contact_frame_tangent).  A rod lands
 on a smooth ball (e = 0), turns and slides over it and leaves it (a release); a tilted rod lands on one smooth bar and
 tips onto a second; a rod falls across another lying on the floor, lands on it, pivots and lands on the floor with the
-pair held.  The final state's sensitivities and the landings' and releases' event times' match central differences of
-whole runs; the ball's and the crossing rods' runs fail them with the bias's change along q and p left out."""
+pair held; a rod lands on a rough ball and rocks on it, stuck; a rod lands across another with friction between
+them and pivots on it, stuck.  The final state's sensitivities and the landings' and releases' event times' match
+central differences of whole runs; the ball's, the crossing rods' and the rocking rod's runs fail them with the
+bias's change along q and p left out; sliding on a rough one ends them with the link status."""
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -119,3 +123,49 @@ def test_a_rod_falling_across_another_lands_on_it_pivots_and_lands_on_the_floor(
     assert r.sensitivities.valid, r.sensitivity_message
     central_differences(model, 0.6, p, q0, qd0, directions, r.sensitivities.matrix, **TIGHT)
     event_times_match(model, 0.6, p, q0, qd0, directions, events)
+
+
+def rough_crossing_scene(c_f: float) -> Chains:
+    """crossing_scene with Coulomb friction c_f between the two rods (the floor smooth)."""
+    return dataclasses.replace(crossing_scene(), name=f"sens_cross_rough{int(round(100 * c_f))}", link_friction=c_f)
+
+
+def test_a_rod_landing_on_a_rough_ball_sticks_and_rocks_on_it():
+    """tests/test_sim_obstacle_friction.py's rod dropped flat 0.05 m off the centre of a rough ball (c_f = 0.5,
+    e = 0): it lands, sticks and rocks on the ball without slipping (its contact held along n, t1, t2); the final
+    state at 1 s against central differences, the ball's radius and the rod's length among the directions."""
+    ball = Obstacle.sphere("ball", (0.0, 0.0, 0.0), 0.3, friction=0.5)
+    scene = Scene(name="rough_ball", links=(LineLink(1.2, 1.5, (2e-3, 3e-3, 4e-3), 0.02),), gravity=9.81,
+                  q0=(-math.pi / 2, 0.0, math.pi / 2 + 0.3, -0.4, 0.8, 0.1), obstacles=(ball,))
+    model = load_model(scene, tangent=True)
+    q0, qd0 = np.array([-math.pi / 2, 0.0, -math.pi / 2, -0.55, 0.5, 0.0]), np.zeros(6)
+    p = model.parameters({"e_ball": 0.0})
+    directions = ["q0[X1]", "q0[X2]", "q0[theta_1]", "g", "friction_ball", "radius_ball", "l_1"]
+    r = simulate(model, 1.0, p=p, q0=q0, qd0=qd0, sensitivities=directions, **TIGHT)
+    assert r.success and r.n_sticks == 1 and r.n_slips == 0, r.message
+    assert [(e.kind, e.label) for e in r.contact_events] == [("rest", "O1/L1/ball"), ("stick", "O1/L1/ball")]
+    assert r.sensitivities.valid, r.sensitivity_message
+    central_differences(model, 1.0, p, q0, qd0, directions, r.sensitivities.matrix, **TIGHT)
+
+
+def test_a_rod_landing_across_a_rough_rod_pivots_on_it_stuck():
+    """The crossing rods with c_f = 1 between them: rod B lands on rod A and sticks there, pivots on it (the pair's
+    contact held along its frame, both links moving) and its end lands on the smooth floor in an impact with the
+    stuck pair; the final state at 0.6 s against central differences.  With c_f = 0.02 B slides on A, which ends the
+    sensitivities with the link status at the landing."""
+    scene = rough_crossing_scene(1.0)
+    model = load_model(scene, tangent=True, specialise=False)
+    p = model.p.copy()
+    q0 = model.layout.reduce(np.concatenate([np.array(c.q0, dtype=float) for c in scene.chains]))
+    qd0 = np.zeros(model.nq)
+    directions = ["q0[c2.X2]", "q0[c2.theta_1]", "qd0[c2.X1]", "g", "c2.l_1"]
+    r = simulate(model, 0.6, p=p, q0=q0, qd0=qd0, sensitivities=directions, **TIGHT)
+    assert r.success and r.n_sticks == 1 and r.n_slips == 0, r.message
+    assert [(e.kind, e.label) for e in r.contact_events if e.t > 0.0] == \
+        [("rest", "O1/L1-L3"), ("stick", "O1/L1-L3"), ("rest", "O3/x2_min")]
+    assert r.sensitivities.valid, r.sensitivity_message
+    central_differences(model, 0.6, p, q0, qd0, directions, r.sensitivities.matrix, **TIGHT)
+    slippery = load_model(rough_crossing_scene(0.02), tangent=True, specialise=False)
+    r = simulate(slippery, 0.15, p=slippery.p.copy(), q0=q0, qd0=qd0, sensitivities=directions, **TIGHT)
+    assert r.success and not r.sensitivities.valid and "sliding or slipping there" in r.sensitivity_message
+    assert r.sensitivities.t_event == pytest.approx(r.impacts[0].t, abs=1e-12)

@@ -1249,12 +1249,13 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       that stick at one step's end at different speeds */
 #define GAC_SENS_LINK         11   /* two links or a link on a fixed obstacle (GAC_CONTACT_LINK,
                                       GAC_CONTACT_OBSTACLE) rough under a frictional law in an impact of several
-                                      rounds, such a contact held at rest with friction (stuck or sliding along its
-                                      frame), or where their closest points or frame have no derivative (crossing
+                                      rounds, such a contact held at rest sliding along its frame (or slipping
+                                      there), or where their closest points or frame have no derivative (crossing
                                       or parallel axes, a link parallel to a box's or plane's face); one struck,
                                       alone or with other contacts, by Newton's law or, in one round, by the
-                                      frictional law, and a smooth one held at rest (its row J^T n, its bias and
-                                      their derivatives: gac_rowless_bias_tangent) are differentiated */
+                                      frictional law, and one held at rest, smooth or stuck (its rows J^T n and,
+                                      stuck, J^T t1, J^T t2, their biases and derivatives:
+                                      gac_rowless_bias_tangent) are differentiated */
 #define GAC_SENS_STICK        12   /* a stick-slip transition on a rough wall not differentiated: a stuck point that
                                       left the wall (its force reaching 0 while stuck), a stuck point that slipped
                                       at an impact, or one that came to stick at an impact without taking its

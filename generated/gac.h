@@ -1197,12 +1197,12 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * direction leads to, the law's complementarity differentiated: with b pushing, dF_b >= 0; without, dxi_b >= 0
  * (exactly one holds for a generic direction: dF_b = -dxi_b(without) / s_b, s_b > 0 the Schur complement of A);
  * the column is then the derivative from that side (its direction's), sens.n_boundaries counts such impacts.
- * Resting contacts (frictionless walls, and smooth link pairs and obstacles by their rows J^T n, whose bias's change
- * along q and p is a fourth-order central difference): in flight the constrained dynamics' tangent (the forces' by
- * contact_bias_tangent) and the derivative of the projection after each step; a landing's jump uses the field with
- * the set after held and the hold's projection; a release (its force lambda_c reaching 0) dt*_j = -d lambda_c /
- * lambda_c', S+ = S- + (f- - f+) dt*; contacts at rest at the start: their projection.  On rough walls: a stuck
- * point's tangential rows held with its normal one; a sliding point's friction -c_f lambda phi in the flight's tangent
+ * Resting contacts (walls, and link pairs and obstacles by their rows J^T n and frame rows J^T t1, J^T t2, whose
+ * biases' change along q and p is a fourth-order central difference): in flight the constrained dynamics' tangent
+ * (the forces' by contact_bias_tangent) and the derivative of the projection after each step; a landing's jump uses
+ * the field with the set after held and the hold's projection; a release (its force lambda_c reaching 0) dt*_j =
+ * -d lambda_c / lambda_c', S+ = S- + (f- - f+) dt*; contacts at rest at the start: their projection.  On rough walls,
+ * links and obstacles: a stuck point's tangential rows held with its normal one; a sliding point's friction -c_f lambda phi in the flight's tangent
  * (lambda through the unsymmetric B, phi = v_t / max(|v_t|, v_s) and c_f differentiated, and the slip direction's
  * derivative over two tangential axes, sens.dslip); a slip at its event lambda_N = |lambda_T| / c_f by that event's
  * time, S+ = S- + (f- - f+) dt*; sticking at a
@@ -1213,7 +1213,8 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
  * in chart A's (gac_sens_state, the samples).  Events this does not differentiate end the sensitivities (status
  * below): S and dt_impact are then NaN from that event on, the run itself continues.  The status codes: */
 #define GAC_SENS_VALID         0   /* every event so far differentiated */
-#define GAC_SENS_RESTING       1   /* a point sliding at rest on a rough wall where its friction is not followed: with
+#define GAC_SENS_RESTING       1   /* a point sliding at rest on a rough wall, link or obstacle where its friction is
+                                      not followed: with
                                       a slip direction over two tangential axes whose derivative is not known (given
                                       by a stick test at a step's end where other points stuck, or not the direction
                                       the stuck solve gives), or slower than friction_velocity at an impact */
@@ -1249,13 +1250,13 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       that stick at one step's end at different speeds */
 #define GAC_SENS_LINK         11   /* two links or a link on a fixed obstacle (GAC_CONTACT_LINK,
                                       GAC_CONTACT_OBSTACLE) rough under a frictional law in an impact of several
-                                      rounds, such a contact held at rest sliding along its frame (or slipping
-                                      there), or where their closest points or frame have no derivative (crossing
+                                      rounds, or where their closest points or frame have no derivative (crossing
                                       or parallel axes, a link parallel to a box's or plane's face); one struck,
                                       alone or with other contacts, by Newton's law or, in one round, by the
-                                      frictional law, and one held at rest, smooth or stuck (its rows J^T n and,
-                                      stuck, J^T t1, J^T t2, their biases and derivatives:
-                                      gac_rowless_bias_tangent) are differentiated */
+                                      frictional law, and one held at rest, smooth, stuck or sliding (its rows
+                                      J^T n and, rough, J^T t1, J^T t2, their biases and derivatives:
+                                      gac_rowless_bias_tangent, gac_contact_frame_tangent), its slips and sticking
+                                      among them, are differentiated */
 #define GAC_SENS_STICK        12   /* a stick-slip transition on a rough wall not differentiated: a stuck point that
                                       left the wall (its force reaching 0 while stuck), a stuck point that slipped
                                       at an impact, or one that came to stick at an impact without taking its

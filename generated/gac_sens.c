@@ -157,12 +157,11 @@ void gac_sens_stop(gac_sim *s, int status, double t, int contact)
 }
 
 /* The first link pair or obstacle of set[0..n-1] held at state x whose rest the sensitivities do not follow, or -1:
- * with friction set, a rough one that slides (not stuck: stuck per contact, or NULL: none is); one whose normal has
- * no derivative there (crossing axes, a link parallel to a face or to another link: gac_contact_normal_tangent), or,
- * rough, whose frame has none.  A smooth one is followed as a wall's point (its row J^T n, its bias and their
- * derivatives from gac_link.c), a stuck one as a wall's stuck point along its frame's rows J^T t1, J^T t2. */
-static int gac_sens_rowless_check(const gac_sim *s, const double *x, int n, const int *set, const int *stuck,
-                                  int friction)
+ * one whose normal has no derivative there (crossing axes, a link parallel to a face or to another link:
+ * gac_contact_normal_tangent), or, rough, whose frame has none.  The others are followed as a wall's point: a smooth
+ * one by its row J^T n, its bias and their derivatives from gac_link.c; a rough one stuck along its frame's rows
+ * J^T t1, J^T t2 too, or sliding with its friction along them (gac_sens_tangent_rows). */
+static int gac_sens_rowless_check(const gac_sim *s, const double *x, int n, const int *set)
 {
     const gac_model *md = s->model;
     const int nq = md->nq;
@@ -172,8 +171,7 @@ static int gac_sens_rowless_check(const gac_sim *s, const double *x, int n, cons
     for (a = 0; a < n; ++a) {
         const int c = set[a], rough = gac_contact_friction(md, s->p, c) > 0.0;
         if (!gac_rowless(md, c)) continue;
-        if ((friction && rough && (stuck == 0 || !stuck[c]))
-            || gac_contact_normal_tangent(md, x, s->p, c, x + nq, zero_p, &dgap, g, dg) != GAC_OK
+        if (gac_contact_normal_tangent(md, x, s->p, c, x + nq, zero_p, &dgap, g, dg) != GAC_OK
             || (rough && gac_contact_frame_tangent(md, x, s->p, c, x + nq, zero_p, axes, g, dg) != GAC_OK))
             return c;
     }
@@ -184,7 +182,7 @@ void gac_sens_rest_set(gac_sim *s, double t)
 {
     int c;
     if (s->sens == 0 || s->sens->status != GAC_SENS_VALID) return;
-    c = gac_sens_rowless_check(s, s->x, s->nresting, s->resting, 0, 0);   /* (stuck or sliding: decided after) */
+    c = gac_sens_rowless_check(s, s->x, s->nresting, s->resting);
     if (c >= 0) gac_sens_stop(s, GAC_SENS_LINK, t, c);
 }
 
@@ -344,7 +342,8 @@ typedef struct {
     /* Sliding friction (gac_sens_set_slide; nslide = 0 without): contact a (a < n) sliding on a rough wall has
        cf[a] > 0 and takes -cf lambda_a phi_a along the wall (phi_a = gac_slide_phi of its tangential velocity vt_a):
        its force's generalised direction is D_a = W_a + cf_a G_a, G_a = J^T g_a, g_a = -phi_a on its tangential rows
-       (Wt: their J^T e_trow, 2 per contact, 0 for a missing axis).  Yd_r = I_f^-1 D_r (Y_r for the other rows) and
+       (Wt: their J^T e_trow, 2 per contact, 0 for a missing axis; a link pair's or an obstacle's frame rows
+       J^T t1, J^T t2: gac_sens_tangent_rows).  Yd_r = I_f^-1 D_r (Y_r for the other rows) and
        B = W Yd^T (m x m, not symmetric), so B lambda = -(W qdd_free + b) and qdd = qdd_free + Yd lambda. */
     int nslide;
     double *cf, *phi, *vt, *G, *Wt, *Yd, *B;
@@ -363,47 +362,71 @@ typedef struct {
 #define GAC_SENS_SET_ARRAYS(nq, nr) GAC_SENS_SET_ARRAYS_OF(H, nq, nr)   /* the arrays of a set named H */
 #define GAC_SENS_SET_BIND(S) GAC_SENS_SET_BIND_OF(S, H)
 
-/* 1 if contact c rests on a wall with friction without being stuck (stuck: per contact, or NULL: none is): it slides
- * there. */
-static int gac_sens_sliding(const gac_sim *s, const int *stuck, int c)
-{
-    return (stuck == 0 || !stuck[c]) && gac_friction_coefficient(s->model, s->p, c) > 0.0;
-}
-
-/* 1 if resting contact c slides with a slip direction (s->slip, set where a stuck point slipped or a slow point
- * could not stick) over two tangential axes whose derivative is not known: below friction_velocity that direction
- * enters its friction, and its derivative (sens->dslip) is known for the direction sens->slip_known it was found
- * for (gac_sens_slip, gac_sens_reslip).  Along one axis it is +-1, a constant. */
-static int gac_sens_slip_unknown(const gac_sim *s, int c)
-{
-    const gac_contact *ct = s->model->contacts + c;
-    const double *d = s->slip + 2 * c, *known = s->sens->slip_known + 2 * c;
-    return gac_sens_sliding(s, s->is_stuck, c) && ct->trow[0] >= 0 && ct->trow[1] >= 0
-           && (d[0] != 0.0 || d[1] != 0.0) && (d[0] != known[0] || d[1] != known[1]);
-}
-
-/* A contact of set[0..n-1] sliding at state x slower than friction_velocity (stuck: per contact, or NULL: none is),
- * or -1: at an impact the slip directions (s->slip) of the fields before and after are the loop's after it. */
-static int gac_sens_slow_slide(const gac_sim *s, const double *x, int n, const int *set, const int *stuck)
-{
-    const gac_model *md = s->model;
-    double vq[3 * GAC_AT_LEAST_1(md->npoint)], vt[2];
-    int a;
-    md->contact_velocities(x, x + md->nq, s->p, vq);
-    for (a = 0; a < n; ++a) {
-        if (md->contacts[set[a]].kind != GAC_CONTACT_WALL || !gac_sens_sliding(s, stuck, set[a])) continue;
-        gac_tangential_velocity(md, x, s->p, set[a], vq, vt);
-        if (!(hypot(vt[0], vt[1]) > md->friction_velocity)) return set[a];
-    }
-    return -1;
-}
-
 static double gac_dot(int n, const double *a, const double *b)
 {
     double sum = 0.0;
     int i;
     for (i = 0; i < n; ++i) sum += a[i] * b[i];
     return sum;
+}
+
+/* Contact c's two tangential rows at q into wt (2 x nq): a wall's J^T e_trow along +X_axis (0 for an axis without a
+ * row), a link pair's or an obstacle's frame rows J^T t1, J^T t2 (gac_frame_direction; a tangent no motion takes is
+ * ~0); with dq (not NULL) their derivatives along (dq, dp) into dwt (2 x nq): contact_generalized_force_tangent, or
+ * the frame's turning and the closest points' motion (gac_contact_frame_tangent; NaN where it has none). */
+static void gac_sens_tangent_rows(const gac_sim *s, const double *q, int c, const double *dq, const double *dp,
+                                  double *wt, double *dwt)
+{
+    const gac_model *md = s->model;
+    const gac_contact *ct = md->contacts + c;
+    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow);
+    int i, t;
+    if (gac_rowless(md, c)) {
+        double axes[9], g[3 * nq], dg[3 * nq];
+        gac_contact_frame frame;
+        if (gac_rowless_frame(md, q, s->p, c, &frame) != GAC_OK) {
+            for (i = 0; i < 2 * nq; ++i) wt[i] = NAN;
+        } else {
+            for (t = 0; t < 2; ++t) (void)gac_frame_direction(md, q, s->p, &frame, 1 + t, wt + (long)t * nq);
+        }
+        if (dq == 0) return;
+        if (gac_contact_frame_tangent(md, q, s->p, c, dq, dp, axes, g, dg) != GAC_OK) {
+            for (i = 0; i < 2 * nq; ++i) dwt[i] = NAN;
+            return;
+        }
+        gac_copy(dwt, dg + nq, 2L * nq);
+        return;
+    }
+    {
+        double unit[nr], zero[nr];
+        for (i = 0; i < nr; ++i) unit[i] = zero[i] = 0.0;
+        for (t = 0; t < 2; ++t) {
+            for (i = 0; i < nq; ++i) {
+                wt[(long)t * nq + i] = 0.0;
+                if (dq != 0) dwt[(long)t * nq + i] = 0.0;
+            }
+            if (ct->kind != GAC_CONTACT_WALL || ct->trow[t] < 0) continue;
+            unit[ct->trow[t]] = 1.0;
+            md->contact_generalized_force(q, unit, s->p, wt + (long)t * nq);
+            if (dq != 0) md->contact_generalized_force_tangent(q, unit, s->p, dq, zero, dp, dwt + (long)t * nq);
+            unit[ct->trow[t]] = 0.0;
+        }
+    }
+}
+
+/* The row of set H held along contact c's tangential direction t (0, 1): a wall's trow, a link pair's or an
+ * obstacle's frame tangent 1 + t; -1 where it has none (an axis without a row, a tangent no motion takes, or a row
+ * dropped). */
+static int gac_sens_tangent_row(const gac_sim *s, const gac_sens_set *H, int c, int t)
+{
+    const gac_contact *ct = s->model->contacts + c;
+    const int rowless = gac_rowless(s->model, c);
+    int a;
+    for (a = H->n; a < H->m; ++a) {
+        if (H->rc[a] == c && (rowless ? H->rk[a] == 1 + t : ct->trow[t] >= 0 && H->brow[a] == ct->trow[t]))
+            return a;
+    }
+    return -1;
 }
 
 /* A link pair's or an obstacle's frame row J^T t_k (k = 1, 2; gac_frame_direction) at q into w (nq), NaN where its
@@ -428,6 +451,41 @@ static int gac_sens_frame_moves(const gac_sim *s, const double *q, int c, int k)
     double w[GAC_AT_LEAST_1(s->model->nq)];
     const double scale = gac_sens_frame_row(s, q, c, k, w);
     return sqrt(gac_dot(s->model->nq, w, w)) > 1e-10 * scale;
+}
+
+/* 1 if contact c rests on a rough wall, link or obstacle without being stuck (stuck: per contact, or NULL: none is):
+ * it slides there. */
+static int gac_sens_sliding(const gac_sim *s, const int *stuck, int c)
+{
+    return (stuck == 0 || !stuck[c]) && gac_rest_friction(s->model, s->p, c) > 0.0;
+}
+
+/* 1 if resting contact c slides with a slip direction (s->slip, set where a stuck point slipped or a slow point
+ * could not stick) over two tangential axes whose derivative is not known: below friction_velocity that direction
+ * enters its friction, and its derivative (sens->dslip) is known for the direction sens->slip_known it was found
+ * for (gac_sens_slip, gac_sens_reslip).  Along one axis it is +-1, a constant. */
+static int gac_sens_slip_unknown(const gac_sim *s, int c)
+{
+    const gac_contact *ct = s->model->contacts + c;
+    const double *d = s->slip + 2 * c, *known = s->sens->slip_known + 2 * c;
+    return gac_sens_sliding(s, s->is_stuck, c) && (d[0] != 0.0 || d[1] != 0.0) && (d[0] != known[0] || d[1] != known[1])
+           && (gac_rowless(s->model, c) ? gac_sens_frame_moves(s, s->x, c, 2) : ct->trow[0] >= 0 && ct->trow[1] >= 0);
+}
+
+/* A contact of set[0..n-1] sliding at state x slower than friction_velocity (stuck: per contact, or NULL: none is),
+ * or -1: at an impact the slip directions (s->slip) of the fields before and after are the loop's after it. */
+static int gac_sens_slow_slide(const gac_sim *s, const double *x, int n, const int *set, const int *stuck)
+{
+    const gac_model *md = s->model;
+    double vq[3 * GAC_AT_LEAST_1(md->npoint)], vt[2];
+    int a;
+    md->contact_velocities(x, x + md->nq, s->p, vq);
+    for (a = 0; a < n; ++a) {
+        if (md->contacts[set[a]].kind == GAC_CONTACT_STOP || !gac_sens_sliding(s, stuck, set[a])) continue;
+        gac_tangential_velocity(md, x, s->p, set[a], vq, vt);
+        if (!(hypot(vt[0], vt[1]) > md->friction_velocity)) return set[a];
+    }
+    return -1;
 }
 
 /* Fill H for set[0..n-1] at q, with the tangential rows of those stuck (stuck: per contact, or NULL: normal rows
@@ -498,36 +556,30 @@ static int gac_sens_set_slide(const gac_sim *s, const double *x, const int *stuc
                               gac_sens_set *H)
 {
     const gac_model *md = s->model;
-    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow), m = H->m;
-    double vq[3 * GAC_AT_LEAST_1(md->npoint)], unit[GAC_AT_LEAST_1(md->njrow)], D[nq];
+    const int nq = md->nq, m = H->m;
+    double vq[3 * GAC_AT_LEAST_1(md->npoint)], D[nq];
     int a, b, i, t;
     H->nslide = 0;
     H->slip = slip;
     for (a = 0; a < H->n; ++a) {
         const int c = H->set[a];
-        H->cf[a] = md->contacts[c].kind == GAC_CONTACT_WALL && gac_sens_sliding(s, stuck, c)
-                   ? gac_friction_coefficient(md, s->p, c) : 0.0;
+        H->cf[a] = md->contacts[c].kind != GAC_CONTACT_STOP && gac_sens_sliding(s, stuck, c)
+                   ? gac_rest_friction(md, s->p, c) : 0.0;
         H->nslide += H->cf[a] > 0.0;
     }
     if (H->nslide == 0) return 0;
     if (H->ndropped > 0) return 1;            /* B with a dependent row: no unique forces to differentiate */
     md->contact_velocities(x, x + nq, s->p, vq);
-    for (i = 0; i < nr; ++i) unit[i] = 0.0;
     gac_copy(H->Yd, H->Y, (long)m * nq);
     for (a = 0; a < H->n; ++a) {
-        const gac_contact *ct = md->contacts + H->set[a];
         double *G = H->G + (long)a * nq;
         if (!(H->cf[a] > 0.0)) continue;
         gac_tangential_velocity(md, x, s->p, H->set[a], vq, H->vt + 2 * a);
         gac_slide_phi(H->vt + 2 * a, md->friction_velocity, slip + 2 * H->set[a], H->phi + 2 * a);
+        gac_sens_tangent_rows(s, x, H->set[a], 0, 0, H->Wt + (long)(2 * a) * nq, 0);
         for (i = 0; i < nq; ++i) G[i] = 0.0;
         for (t = 0; t < 2; ++t) {                 /* G_a = J^T g_a = -sum_t phi_t Wt_t */
-            double *wt = H->Wt + (long)(2 * a + t) * nq;
-            for (i = 0; i < nq; ++i) wt[i] = 0.0;
-            if (ct->trow[t] < 0) continue;
-            unit[ct->trow[t]] = 1.0;
-            md->contact_generalized_force(x, unit, s->p, wt);
-            unit[ct->trow[t]] = 0.0;
+            const double *wt = H->Wt + (long)(2 * a + t) * nq;
             for (i = 0; i < nq; ++i) G[i] -= H->phi[2 * a + t] * wt[i];
         }
         for (i = 0; i < nq; ++i) D[i] = H->W[(long)a * nq + i] + H->cf[a] * G[i];
@@ -643,12 +695,10 @@ static void gac_sens_slide_tangent(const gac_sim *s, const double *x, const gac_
                                    double *dY)
 {
     const gac_model *md = s->model;
-    const int nq = md->nq, nr = GAC_AT_LEAST_1(md->njrow);
+    const int nq = md->nq;
     const double vs = md->friction_velocity;
-    double g[GAC_AT_LEAST_1(md->njrow)], dg[GAC_AT_LEAST_1(md->njrow)], zero[GAC_AT_LEAST_1(md->njrow)];
-    double dJg[nq], dwt[nq], D[nq], dD[nq];
+    double wt[2 * nq], dwt[2 * nq], dJg[nq], D[nq], dD[nq];
     int a, i, t;
-    for (i = 0; i < nr; ++i) g[i] = dg[i] = zero[i] = 0.0;
     for (a = 0; a < H->n; ++a) {
         const gac_contact *ct = md->contacts + H->set[a];
         const double cf = H->cf[a], *vt = H->vt + 2 * a, *phi = H->phi + 2 * a, *d = H->slip + 2 * H->set[a];
@@ -656,13 +706,9 @@ static void gac_sens_slide_tangent(const gac_sim *s, const double *x, const gac_
         const double dcf = ct->friction_index >= 0 ? dp[ct->friction_index] : 0.0;
         double dvt[2] = {0.0, 0.0}, dphi[2], along = 0.0;
         if (!(cf > 0.0)) continue;
-        for (t = 0; t < 2; ++t) {
-            if (ct->trow[t] < 0) continue;
-            g[ct->trow[t]] = 1.0;
-            md->contact_generalized_force_tangent(x, g, s->p, dq, zero, dp, dwt);
-            g[ct->trow[t]] = 0.0;
-            dvt[t] = gac_dot(nq, dwt, x + nq) + gac_dot(nq, H->Wt + (long)(2 * a + t) * nq, dqd);
-        }
+        gac_sens_tangent_rows(s, x, H->set[a], dq, dp, wt, dwt);
+        for (t = 0; t < 2; ++t)
+            dvt[t] = gac_dot(nq, dwt + (long)t * nq, x + nq) + gac_dot(nq, H->Wt + (long)(2 * a + t) * nq, dqd);
         if (speed > vs) {
             const double pd = phi[0] * dvt[0] + phi[1] * dvt[1];
             for (t = 0; t < 2; ++t) dphi[t] = (dvt[t] - phi[t] * pd) / speed;
@@ -673,14 +719,9 @@ static void gac_sens_slide_tangent(const gac_sim *s, const double *x, const gac_
                 for (t = 0; t < 2; ++t) dphi[t] += (1.0 - speed / vs) * dslip[2 * H->set[a] + t];
             }
         }
-        for (t = 0; t < 2; ++t) {
-            if (ct->trow[t] < 0) continue;
-            g[ct->trow[t]] = -phi[t];
-            dg[ct->trow[t]] = -dphi[t];
-        }
-        md->contact_generalized_force_tangent(x, g, s->p, dq, dg, dp, dJg);
-        for (t = 0; t < 2; ++t) {
-            if (ct->trow[t] >= 0) g[ct->trow[t]] = dg[ct->trow[t]] = 0.0;
+        for (i = 0; i < nq; ++i) {                /* d(J^T g)[dq, dg, dp], g = -phi on the tangential rows */
+            dJg[i] = 0.0;
+            for (t = 0; t < 2; ++t) dJg[i] -= dphi[t] * wt[(long)t * nq + i] + phi[t] * dwt[(long)t * nq + i];
         }
         for (i = 0; i < nq; ++i) {
             D[i] = H->W[(long)a * nq + i] + cf * H->G[(long)a * nq + i];
@@ -853,7 +894,7 @@ static void gac_sens_start_rest(gac_sim *s)
     gac_sens_set H2;                              /* the held rows with the stuck points' tangential ones */
     GAC_SENS_SET_BIND(H);
     GAC_SENS_SET_BIND_OF(H2, H2);
-    a = gac_sens_rowless_check(s, s->x, s->nresting, s->resting, s->is_stuck, 1);   /* one sliding at rest */
+    a = gac_sens_rowless_check(s, s->x, s->nresting, s->resting);   /* a link or obstacle without derivative */
     if (a >= 0) {
         gac_sens_stop(s, GAC_SENS_LINK, s->t, a);
         return;
@@ -976,7 +1017,7 @@ void gac_sens_flight(gac_sim *s, const double *x, double h, int taken)
             return;
         }
     }
-    i = gac_sens_rowless_check(s, x, s->nresting, s->resting, s->is_stuck, 1);   /* one sliding there */
+    i = gac_sens_rowless_check(s, x, s->nresting, s->resting);   /* a link or obstacle without derivative */
     if (i >= 0) {
         gac_sens_stop(s, GAC_SENS_LINK, s->t, i);
         return;
@@ -1656,10 +1697,10 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
                 }
             }
         }
-        {                                                    /* one sliding at rest before it, or after */
+        {                                                    /* one at rest without derivative before, or after */
             int before_set[md->nq + GAC_AT_LEAST_1(md->ncontact)], nbefore = gac_sens_set_before(s, r, before_set);
-            a = gac_sens_rowless_check(s, s->xs, nbefore, before_set, was_stuck, 1);
-            if (a < 0) a = gac_sens_rowless_check(s, s->x, s->nresting, s->resting, s->is_stuck, 1);
+            a = gac_sens_rowless_check(s, s->xs, nbefore, before_set);
+            if (a < 0) a = gac_sens_rowless_check(s, s->x, s->nresting, s->resting);
             if (a >= 0) {
                 gac_sens_stop(s, GAC_SENS_LINK, r->t, a);
                 return;
@@ -1919,7 +1960,7 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         }
         if (s->nresting > 0) {                               /* the hold after the law: the set at rest */
             nheld = gac_sens_at_rest(s, xp, s->nresting, s->resting, n, r->contact, at_rest);
-            a = gac_sens_rowless_check(s, xp, nheld, at_rest, s->is_stuck, 1);   /* one left sliding at rest */
+            a = gac_sens_rowless_check(s, xp, nheld, at_rest);   /* one left at rest without derivative */
             if (a >= 0) {
                 gac_sens_stop(s, GAC_SENS_LINK, r->t, a);
                 return;
@@ -2066,7 +2107,7 @@ void gac_sens_slip(gac_sim *s, const gac_impact_record *r, int c_event)
     const gac_model *md = s->model;
     const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow), nc1 = GAC_AT_LEAST_1(md->ncontact);
     const gac_contact *ct = md->contacts + c_event;
-    const double *x = s->xs, *d = s->slip + 2 * c_event, cf = gac_friction_coefficient(md, s->p, c_event);
+    const double *x = s->xs, *d = s->slip + 2 * c_event, cf = gac_rest_friction(md, s->p, c_event);
     double fm[nx], fp[nx], qdd_free[nq], lambda[3 * nq], dqdd_free[nq], dlambda[3 * nq], qdd_m[nq], lambda_ref, rate;
     double zero_p[GAC_AT_LEAST_1(md->nparam)], lt[2] = {0.0, 0.0}, lt_rate[2] = {0.0, 0.0};
     double norm, du[GAC_AT_LEAST_1(md->nu)], J[2 * GAC_AT_LEAST_1(md->nu) * nq], xa[nx];
@@ -2076,10 +2117,6 @@ void gac_sens_slip(gac_sim *s, const gac_impact_record *r, int c_event)
     gac_sens_set H;
     if (z == 0 || z->status != GAC_SENS_VALID) return;
     GAC_SENS_SET_BIND(H);
-    if (gac_rowless(md, c_event)) {               /* a stuck link pair or obstacle that slips: not followed */
-        gac_sens_stop(s, GAC_SENS_LINK, r->t, c_event);
-        return;
-    }
     if (r->nslipped != 1 || r->nreleased != 0 || r->slipped[0] != c_event) {
         gac_sens_stop(s, GAC_SENS_BOUNDARY, r->t, c_event);
         return;
@@ -2101,13 +2138,8 @@ void gac_sens_slip(gac_sim *s, const gac_impact_record *r, int c_event)
     for (a = 0; a < H.n; ++a) {
         if (H.set[a] == c_event) index = a;
     }
-    for (a = H.n; a < H.m; ++a) {                           /* its tangential rows, by axis */
-        for (t = 0; t < 2; ++t) {
-            if (ct->trow[t] >= 0 && H.brow[a] == ct->trow[t]) row_t[t] = a;
-        }
-    }
-    for (t = 0; t < 2; ++t) {
-        if (ct->trow[t] >= 0 && row_t[t] < 0) index = -1;  /* (a dependent row dropped: not followed) */
+    for (t = 0; t < 2; ++t) {                               /* its tangential rows, by axis */
+        row_t[t] = gac_sens_tangent_row(s, &H, c_event, t);
         if (row_t[t] >= 0) lt[t] = lambda[row_t[t]];
     }
     norm = hypot(lt[0], lt[1]);
@@ -2175,23 +2207,14 @@ void gac_sens_stick(gac_sim *s, const double *x_before, const int *stuck_before,
     const gac_model *md = s->model;
     const int nq = md->nq, nx = md->nx, nr = GAC_AT_LEAST_1(md->njrow);
     double zero_p[GAC_AT_LEAST_1(md->nparam)], out[nq], fm[nx], fp[nx], qdd_free[nq], lambda[3 * nq], dx[nx];
-    double vq[3 * GAC_AT_LEAST_1(md->npoint)], vt[2], wt[2 * nq], unit[GAC_AT_LEAST_1(md->njrow)], dwt[nq];
-    double zero_r[GAC_AT_LEAST_1(md->njrow)], speed, rate = 0.0, amax = 0.0;
-    const gac_contact *ct;
+    double vq[3 * GAC_AT_LEAST_1(md->npoint)], vt[2], wt[2 * nq], dwt[2 * nq], speed, rate = 0.0, amax = 0.0;
     int a, i, j, t, c;
     GAC_SENS_SET_ARRAYS(nq, nr);
     gac_sens_set H;
     if (z == 0 || z->status != GAC_SENS_VALID) return;
     GAC_SENS_SET_BIND(H);
     if (r->nstuck < 1) return;
-    for (a = 0; a < r->nstuck; ++a) {                        /* a link pair or an obstacle sliding: not followed */
-        if (gac_rowless(md, r->stuck[a])) {
-            gac_sens_stop(s, GAC_SENS_LINK, s->t, r->stuck[a]);
-            return;
-        }
-    }
     c = r->stuck[0];
-    ct = md->contacts + c;
     md->contact_velocities(x_before, x_before + nq, s->p, vq);
     gac_tangential_velocity(md, x_before, s->p, c, vq, vt);
     speed = hypot(vt[0], vt[1]);
@@ -2213,17 +2236,10 @@ void gac_sens_stick(gac_sim *s, const double *x_before, const int *stuck_before,
         gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, s->t, c);
         return;
     }
-    for (i = 0; i < nr; ++i) unit[i] = zero_r[i] = 0.0;
     for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
-    for (t = 0; t < 2; ++t) {                                /* e' = v_t . (d v_t / dt) / |v_t| along f- */
-        for (i = 0; i < nq; ++i) wt[t * nq + i] = 0.0;
-        if (ct->trow[t] < 0) continue;
-        unit[ct->trow[t]] = 1.0;
-        md->contact_generalized_force(x_before, unit, s->p, wt + t * nq);
-        md->contact_generalized_force_tangent(x_before, unit, s->p, fm, zero_r, zero_p, dwt);
-        unit[ct->trow[t]] = 0.0;
-        rate += vt[t] * (gac_dot(nq, dwt, x_before + nq) + gac_dot(nq, wt + t * nq, fm + nq));
-    }
+    gac_sens_tangent_rows(s, x_before, c, fm, zero_p, wt, dwt);   /* e' = v_t . (d v_t / dt) / |v_t| along f- */
+    for (t = 0; t < 2; ++t)
+        rate += vt[t] * (gac_dot(nq, dwt + (long)t * nq, x_before + nq) + gac_dot(nq, wt + (long)t * nq, fm + nq));
     rate /= speed;
     for (i = 0; i < nq; ++i) {
         if (fabs(fm[nq + i]) > amax) amax = fabs(fm[nq + i]);
@@ -2235,13 +2251,9 @@ void gac_sens_stick(gac_sim *s, const double *x_before, const int *stuck_before,
     for (j = 0; j < z->k; ++j) {
         double *S = z->S + (long)j * nx, de = 0.0, tau;
         const double *dp = md->nparam > 0 ? z->dp + (long)j * md->nparam : zero_p;
-        for (t = 0; t < 2; ++t) {
-            if (ct->trow[t] < 0) continue;
-            unit[ct->trow[t]] = 1.0;
-            md->contact_generalized_force_tangent(x_before, unit, s->p, S, zero_r, dp, dwt);
-            unit[ct->trow[t]] = 0.0;
-            de += vt[t] * (gac_dot(nq, dwt, x_before + nq) + gac_dot(nq, wt + t * nq, S + nq));
-        }
+        gac_sens_tangent_rows(s, x_before, c, S, dp, wt, dwt);
+        for (t = 0; t < 2; ++t)
+            de += vt[t] * (gac_dot(nq, dwt + (long)t * nq, x_before + nq) + gac_dot(nq, wt + (long)t * nq, S + nq));
         tau = -de / speed / rate;
         for (i = 0; i < nx; ++i) dx[i] = S[i] + fm[i] * tau;  /* the perturbed state at the perturbed t* */
         gac_sens_hold_tangent(s, s->x, &H, x_before + nq, s->x + nq, dx, dx + nq, dp, out);
@@ -2288,7 +2300,8 @@ void gac_sens_reslip(gac_sim *s, const double *slip_before, int nstuck)
         double lt[2] = {0.0, 0.0}, norm;
         const double *u, *Ju;
         if (d[0] == slip_now[2 * c] && d[1] == slip_now[2 * c + 1]) continue;
-        if (ct->trow[0] < 0 || ct->trow[1] < 0 || (d[0] == 0.0 && d[1] == 0.0) || s->is_stuck[c]) {
+        if ((gac_rowless(md, c) ? !gac_sens_frame_moves(s, s->x, c, 2) : ct->trow[0] < 0 || ct->trow[1] < 0)
+            || (d[0] == 0.0 && d[1] == 0.0) || s->is_stuck[c]) {
             slip_now[2 * c] = d[0];                          /* along one axis, forgotten: nothing to carry */
             slip_now[2 * c + 1] = d[1];
             continue;
@@ -2305,11 +2318,7 @@ void gac_sens_reslip(gac_sim *s, const double *slip_before, int nstuck)
             ok = gac_sens_field_slip(s, s->t, xp, s->nresting, s->resting, stuck_c, slip_now, &H2, qdd_free,
                                      lambda, f, 0) == 0 && H2.ndropped == 0;
         }
-        for (b = H2.n; ok && b < H2.m; ++b) {                /* c's tangential rows, by axis */
-            for (t = 0; t < 2; ++t) {
-                if (H2.brow[b] == ct->trow[t]) row_t[t] = b;
-            }
-        }
+        for (t = 0; ok && t < 2; ++t) row_t[t] = gac_sens_tangent_row(s, &H2, c, t);   /* c's tangential rows */
         if (ok && row_t[0] >= 0 && row_t[1] >= 0) {
             lt[0] = lambda[row_t[0]];
             lt[1] = lambda[row_t[1]];

@@ -31,8 +31,9 @@ HELD_GEOMETRY_KINDS = OBSTACLE_PARAMETERS["box"][6:] + OBSTACLE_PARAMETERS["plan
 # gac.h's GAC_SENS_* status codes, in words
 STATUS_WORDS = {
     0: "valid",
-    1: "a point sliding on a rough wall with a slip direction over two tangential axes whose derivative is not known, "
-       "or slower than friction_velocity at an impact (its friction there is not differentiated)",
+    1: "a point sliding at rest with friction (on a wall, a link or an obstacle) with a slip direction over two "
+       "tangential axes whose derivative is not known, or slower than friction_velocity at an impact (its friction "
+       "there is not differentiated)",
     2: "an impact by a frictional law with a common e, or by Newton + Coulomb",
     3: "an impact at a joint stop",
     4: "an impact with dependent contact rows, or of several rounds that were not reproduced or too many to trace",
@@ -44,8 +45,8 @@ STATUS_WORDS = {
     10: "a mode boundary (a contact's impulse ~0 at the law's bound inside an impact, resting contacts released "
         "together, a slip with another slip or a release, or points sticking together at different speeds)",
     11: "a link pair or a link on an obstacle with friction in an impact of several rounds (under a frictional "
-        "impact law), a link resting with friction on another link or on an obstacle and sliding or slipping there, "
-        "or where their closest points have no derivative (crossing or parallel axes, a link parallel to a face)",
+        "impact law), or where their closest points or contact frame have no derivative (crossing or parallel axes, "
+        "a link parallel to a face)",
     12: "a stick-slip transition on a rough wall (a stuck point left the wall or slipped at an impact, or came to "
         "stick at an impact without taking its impulse)",
 }

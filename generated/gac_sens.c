@@ -1396,7 +1396,7 @@ typedef struct {
     double thr, largest;                               /* ~0 of a normal velocity; the largest impulse */
     double *qd, *qd_next;                              /* nq each: the velocities before round j, after it */
     gac_sens_law law;                                  /* round j's, in the arrays below */
-    int *active, *landing, *normal, *cf_index;         /* 3 n rows each */
+    int *active, *landing, *normal, *cf_index, *frame; /* 3 n rows each (frame: gac_sens_law.frame) */
     double *f, *W, *Y, *LD, *F, *v, *e, *u, *xi_norm, *cf;   /* 3 n rows of nr, nq, nq, 3 n, 1... */
 } gac_sens_rounds;
 
@@ -1471,26 +1471,37 @@ static int gac_sens_round(const gac_sim *s, const gac_impact_record *r, gac_sens
         C->e[row_n] = hit ? C->e_list[pos] : 0.0;
         C->landing[row_n] = !hit || C->e_list[pos] != gac_restitution(md, s->p, c);
         C->normal[row_n] = -1;
+        C->frame[row_n] = 0;
         C->F[row_n] = LN;
         C->v[row_n] = vb[pos];
         gac_copy(C->f + (long)row_n * nr, C->fall + (long)pos * nr, nr);
         gac_copy(C->W + (long)row_n * nq, Wall + (long)pos * nq, nq);
         zero_next[pos] = C->e[row_n] == 0.0;
         ++m;
-        if (r->law != GAC_IMPACT_LAW_FRICTIONLESS && T->dim[j * n + b] > 1) {   /* its tangential rows */
+        if (r->law != GAC_IMPACT_LAW_FRICTIONLESS && T->dim[j * n + b] > 1) {   /* its tangential rows: a wall's
+                                                                                   axes, a link pair's or an
+                                                                                   obstacle's frame tangents that
+                                                                                   some motion takes (the law's) */
             const double *Lb = T->L + 3L * (j * n + b);
-            const double cf = gac_friction_coefficient(md, s->p, c);
+            const double cf = gac_contact_friction(md, s->p, c);
             const double tangential = hypot(Lb[1], T->dim[j * n + b] > 2 ? Lb[2] : 0.0);
-            const int slides = !(tangential < (1.0 - 1e-6) * cf * LN);
+            const int slides = !(tangential < (1.0 - 1e-6) * cf * LN), rowless = gac_rowless(md, c);
             int row = 1;
             nslide += slides;
             for (t = 0; t < 2; ++t) {
                 const int rt = m;
                 double *ft = C->f + (long)rt * nr;
-                if (ct->trow[t] < 0) continue;
+                if (rowless ? !gac_sens_frame_moves(s, q, c, 1 + t) : ct->trow[t] < 0) continue;
+                if (row >= T->dim[j * n + b]) break;
                 for (i = 0; i < nr; ++i) ft[i] = 0.0;
-                ft[ct->trow[t]] = 1.0;
-                md->contact_generalized_force(q, ft, s->p, C->W + (long)rt * nq);
+                if (rowless) {
+                    (void)gac_sens_frame_row(s, q, c, 1 + t, C->W + (long)rt * nq);
+                    C->frame[rt] = 1 + t;
+                } else {
+                    ft[ct->trow[t]] = 1.0;
+                    md->contact_generalized_force(q, ft, s->p, C->W + (long)rt * nq);
+                    C->frame[rt] = 0;
+                }
                 C->active[rt] = c, C->e[rt] = C->e[row_n], C->landing[rt] = C->landing[row_n];
                 C->F[rt] = Lb[row++];
                 C->v[rt] = gac_dot(nq, C->W + (long)rt * nq, qd);
@@ -1541,7 +1552,7 @@ static int gac_sens_round(const gac_sim *s, const gac_impact_record *r, gac_sens
     }
     L->m = m, L->active = C->active, L->landing = C->landing, L->f = C->f, L->W = C->W, L->Y = C->Y, L->LD = C->LD;
     L->F = C->F, L->v = C->v, L->e = C->e, L->nslide = nslide, L->normal = C->normal, L->u = C->u;
-    L->xi_T_norm = C->xi_norm, L->cf = C->cf, L->cf_index = C->cf_index, L->frame = 0;
+    L->xi_T_norm = C->xi_norm, L->cf = C->cf, L->cf_index = C->cf_index, L->frame = C->frame;
     if (!gac_sens_law_regular(L, C->LD)) {                  /* dependent rows (with slides LD keeps A) */
         L->m = 0;
         return GAC_SENS_SIMULTANEOUS;
@@ -1589,7 +1600,10 @@ static int gac_sens_rounds_at(gac_sim *s, const gac_impact_record *r, int c_even
             double zero_q[nq], zero_p[GAC_AT_LEAST_1(md->nparam)], dw[nq];
             for (i = 0; i < nq; ++i) zero_q[i] = 0.0;
             for (i = 0; i < GAC_AT_LEAST_1(md->nparam); ++i) zero_p[i] = 0.0;
-            if (gac_sens_row_tangent(s, c, C->fall + (long)a * nr, q, zero_q, zero_p, dw) != 0) {
+            double axes[9], g[3 * nq], dg[3 * nq];
+            if (gac_sens_row_tangent(s, c, C->fall + (long)a * nr, q, zero_q, zero_p, dw) != 0
+                || (r->law != GAC_IMPACT_LAW_FRICTIONLESS && gac_contact_friction(md, s->p, c) > 0.0
+                    && gac_contact_frame_tangent(md, q, s->p, c, zero_q, zero_p, axes, g, dg) != GAC_OK)) {
                 *contact = c;
                 return GAC_SENS_LINK;
             }
@@ -1685,18 +1699,6 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
     if (z == 0 || z->status != GAC_SENS_VALID) return;
     {
         int a;
-        if (gac_has_link(md, r->ncontact, r->contact) || (c_event >= 0 && gac_rowless(md, c_event))) {
-            /* a link pair or an obstacle among several contacts: Newton's law on its row J^T n like a wall's, and
-               rough under the frictional law Coulomb's cone along its contact frame's rows J^T t1, J^T t2; one rough
-               in an impact of several rounds ends them */
-            for (a = 0; a < r->ncontact; ++a) {
-                if (gac_rowless(md, r->contact[a]) && r->law != GAC_IMPACT_LAW_FRICTIONLESS
-                    && gac_contact_friction(md, s->p, r->contact[a]) > 0.0 && (r->rounds > 1 || r->plastic)) {
-                    gac_sens_stop(s, GAC_SENS_LINK, r->t, r->contact[a]);
-                    return;
-                }
-            }
-        }
         {                                                    /* one at rest without derivative before, or after */
             int before_set[md->nq + GAC_AT_LEAST_1(md->ncontact)], nbefore = gac_sens_set_before(s, r, before_set);
             a = gac_sens_rowless_check(s, s->xs, nbefore, before_set);
@@ -1772,7 +1774,8 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         C.trace.dim = rough ? C.trace.hit + (long)R * nR : 0, C.trace.L = rough ? Tdouble + (long)R * nR : 0;
         C.fall = fall, C.Wall = Wall, C.e_list = e_list, C.zero_start = zero_start, C.zero = zero_round;
         C.exempt = exempt, C.qd = qd_round, C.qd_next = qd_next;
-        C.active = active, C.landing = landing, C.normal = normal, C.cf_index = cf_index, C.f = f, C.W = W, C.Y = Y;
+        C.active = active, C.landing = landing, C.normal = normal, C.cf_index = cf_index, C.frame = frame;
+        C.f = f, C.W = W, C.Y = Y;
         C.LD = LD, C.F = F, C.v = v, C.e = e, C.u = u, C.xi_norm = xi_norm, C.cf = cf_row;
         for (i = 0; i < nq; ++i) {
             if (fabs(xm[nq + i]) > speed) speed = fabs(xm[nq + i]);

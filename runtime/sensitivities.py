@@ -44,9 +44,8 @@ STATUS_WORDS = {
     9: "the sensitivities overflowed",
     10: "a mode boundary (a contact's impulse ~0 at the law's bound inside an impact, resting contacts released "
         "together, a slip with another slip or a release, or points sticking together at different speeds)",
-    11: "a link pair or a link on an obstacle with friction in an impact of several rounds (under a frictional "
-        "impact law), or where their closest points or contact frame have no derivative (crossing or parallel axes, "
-        "a link parallel to a face)",
+    11: "a link pair or a link on an obstacle where their closest points or contact frame have no derivative "
+        "(crossing or parallel axes, a link parallel to a face)",
     12: "a stick-slip transition on a rough wall (a stuck point left the wall or slipped at an impact, or came to "
         "stick at an impact without taking its impulse)",
 }

@@ -25,7 +25,8 @@ the restitution where the upper end leaves a round at rest (the rounds' count ch
 0.1 m the lower end lands (struck with e = 0, its wall's e not read: the sensitivities' re-run of the rounds takes e =
 0 for it after the wall's e does not reproduce them) in an impact of two rounds; and with the side wall replaced by a
 plane obstacle at the same place (a link on an obstacle: its row J^T n, no Jacobian row) the strike takes the same
-three rounds.  The last two against central differences."""
+three rounds, and rough (its frame's row J^T t1 in each round's frictional law) three or four.  The last three against
+central differences."""
 from __future__ import annotations
 
 import math
@@ -262,6 +263,38 @@ def test_an_impact_of_three_rounds_on_an_obstacle_matches_central_differences(pl
     assert r.success, r.message
     assert sequence(r) == [(("O1/x2_min", "L1/side"), 3, False)] and r.impacts[0].law == "frictionless"
     assert all(c.impulse > 0.1 for c in r.impacts[0].contacts)
+    assert r.sensitivities.valid and r.sensitivities.n_impacts == 1, r.sensitivity_message
+    check_central_differences(model, t_end, p, q0, qd0, directions, r.sensitivities.matrix)
+
+
+@pytest.fixture(scope="module")
+def rough_plane_model(compiled):
+    """`plane_model` with friction at both contacts: the floor's c_f and the plane's (friction_side) parameters."""
+    q0, qd0, wall = strike_start(0.5, 2.0)
+    inertia = L ** 2 / 12
+    scene = Scene(name="sens_rounds_rough_plane",
+                  links=(RigidLink(L, 1.0, (L / 2, 0.0, 0.0), ((1e-3, 0, 0), (0, inertia, 0), (0, 0, inertia))),),
+                  walls=(Wall("x2_min", 0.0, 0.5, friction=0.3),),
+                  obstacles=(Obstacle.plane("side", (wall, 0.0, 0.0), (1.0, 0.0, 0.0), restitution=0.7,
+                                            friction=0.3),),
+                  q0=tuple(q0), qd0=tuple(qd0), gravity=G)
+    return compiled(scene, tangent=True)
+
+
+@pytest.mark.parametrize("friction,rounds", [(0.3, 3), (1.0, 4), (3.0, 4)])
+def test_frictional_rounds_on_a_rough_obstacle_match_central_differences(rough_plane_model, friction, rounds):
+    """The several-round frictional strike with the side a rough plane obstacle: each round's law takes the link's
+    frame row J^T t1 on the plane (its t2, which no motion of the planar model takes, left out as the law leaves it),
+    stuck or sliding, its derivative the frame's turning and the closest point's motion (gac_sens_law.frame); both
+    friction coefficients among the directions, against central differences."""
+    model, t_end = rough_plane_model, 0.07
+    directions = [d if d != "e_x1_min" else "e_side" for d in DIRECTIONS] + ["friction_x2_min", "friction_side"]
+    q0, qd0 = np.array(model.scene.q0), np.array(model.scene.qd0)
+    p = model.parameters({"friction_x2_min": friction, "friction_side": friction})
+    r = simulate(model, t_end, p=p, q0=q0, qd0=qd0, sensitivities=directions, **OPTIONS)
+    assert r.success, r.message
+    assert sequence(r) == [(("O1/x2_min", "L1/side"), rounds, False)] and r.impacts[0].law == "gdi"
+    assert abs(r.impacts[0].contacts[1].impulse_t[0]) > 0.01
     assert r.sensitivities.valid and r.sensitivities.n_impacts == 1, r.sensitivity_message
     check_central_differences(model, t_end, p, q0, qd0, directions, r.sensitivities.matrix)
 

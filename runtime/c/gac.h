@@ -1249,11 +1249,10 @@ int gac_sim_run(gac_sim *sim, double t_end, gac_impact_record *record, gac_run_s
                                       (their forces ~0 at once), a slip with another slip or a release, or points
                                       that stick at one step's end at different speeds */
 #define GAC_SENS_LINK         11   /* two links or a link on a fixed obstacle (GAC_CONTACT_LINK,
-                                      GAC_CONTACT_OBSTACLE) rough under a frictional law in an impact of several
-                                      rounds, or where their closest points or frame have no derivative (crossing
-                                      or parallel axes, a link parallel to a box's or plane's face); one struck,
-                                      alone or with other contacts, by Newton's law or, in one round, by the
-                                      frictional law, and one held at rest, smooth, stuck or sliding (its rows
+                                      GAC_CONTACT_OBSTACLE) where their closest points or frame have no derivative
+                                      (crossing or parallel axes, a link parallel to a box's or plane's face); one
+                                      struck, alone or with other contacts, by Newton's law or the frictional law,
+                                      in one round or several, and one held at rest, smooth, stuck or sliding (its rows
                                       J^T n and, rough, J^T t1, J^T t2, their biases and derivatives:
                                       gac_rowless_bias_tangent, gac_contact_frame_tangent), its slips and sticking
                                       among them, are differentiated */

@@ -1154,6 +1154,29 @@ typedef struct {
     const int *frame;
 } gac_sens_law;
 
+/* Newton's law (no slides) on dependent rows (a link lying flat with both ends stuck holds one tangential row twice):
+ * the rows dependent on those before drop out as in the held set (gac_ldlt_drop: their impulses 0, the others the
+ * reduced law's), provided every row's condition holds with those impulses, |(A F)_a + (1 + e_a) v_a| <= tol (the
+ * same velocities after, the impulse split another way).  The differential is then the reduced law's: the dependency
+ * lasts along a perturbation that keeps the impact's contacts at their walls (it comes from their geometry).  LD
+ * holds A on entry and the dropped factor on a return of 1 (F the impulses); 0 where the conditions do not hold. */
+static int gac_sens_law_reduce(const gac_sens_law *L, double *LD, double *F, double tol)
+{
+    const int m = L->m;
+    double A[m * m];
+    int a, b;
+    gac_copy(A, LD, (long)m * m);
+    if (gac_ldlt_drop(m, LD, 1e-12) <= 0) return 0;
+    for (a = 0; a < m; ++a) F[a] = -(1.0 + L->e[a]) * L->v[a];
+    gac_ldlt_solve(m, LD, F);
+    for (a = 0; a < m; ++a) {
+        double condition = (1.0 + L->e[a]) * L->v[a];
+        for (b = 0; b < m; ++b) condition += A[a * m + b] * F[b];
+        if (!(fabs(condition) <= tol)) return 0;
+    }
+    return 1;
+}
+
 /* The matrix M (m x m) of the law's differential with slides (gac_impact_differential, L->nslide > 0): A (L->LD)
  * with each sliding contact's tangential row a replaced by its cone condition R_a = L_T,a + c_f L_N u_a(xi_T) = 0
  * differentiated,
@@ -1934,15 +1957,16 @@ void gac_sens_impact(gac_sim *s, const gac_impact_record *r, int c_event, const 
         law.cf_index = cf_index;
         law.frame = nframe > 0 ? frame : 0;
         if (!several) {
-            if (!gac_sens_law_regular(&law, LD)) {           /* dependent rows: no unique differential */
-                gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);
+            if (gac_sens_law_regular(&law, LD)) {
+                if (nslide == 0) {                           /* Newton's law on every row: A F = -(1 + E) v */
+                    for (a = 0; a < m; ++a) F[a] = -(1.0 + e[a]) * v[a];
+                    gac_ldlt_solve(m, LD, F);
+                }                                            /* with slides: the law's impulses (the record's),
+                                                                and LD keeps A for the differential */
+            } else if (nslide > 0 || !gac_sens_law_reduce(&law, LD, F, 1e-9 * speed * s->lever)) {
+                gac_sens_stop(s, GAC_SENS_SIMULTANEOUS, r->t, c_event);   /* dependent rows, no unique differential */
                 return;
             }
-            if (nslide == 0) {                               /* Newton's law on every row: A F = -(1 + E) v */
-                for (a = 0; a < m; ++a) F[a] = -(1.0 + e[a]) * v[a];
-                gac_ldlt_solve(m, LD, F);
-            }                                                /* with slides: the law's impulses (the record's),
-                                                                and LD keeps A for the differential */
         }
         for (i = 0; i < nq && !several; ++i) {              /* the law's velocities, before any hold */
             double value = xm[nq + i];

@@ -5,8 +5,9 @@ t = V0 / (c_f g) (the transition taken as the event |v_t| = friction_velocity, t
 stuck rows its map).  Against the closed form x(t) = V0 t - c_f g t^2 / 2 while it slides and x = V0^2 / (2 c_f g)
 once stuck, and against central differences (the same contact events across the stencil).  At an impact by the
 frictional law: the rod dropped flat while moving along its axis, both ends sliding through the impact on the same
-tangential row (the law's A singular, its differential not), against closed forms; and the shipped incline scene's
-whole run (30 impacts) against central differences."""
+tangential row (the law's A singular, its differential not), and stuck at both ends (the same row twice, the
+dependent one dropped as the held set drops it), against closed forms; and the shipped incline scene's whole run
+(30 impacts) against central differences."""
 from __future__ import annotations
 
 import math
@@ -134,3 +135,31 @@ def test_the_shipped_incline_carries_its_sensitivities_through_its_whole_run(com
     flat = [i for i in r.impacts if sorted(c.label for c in i.contacts) == ["O1/x2_min", "O2/x2_min"]]
     assert flat and all(abs(c.impulse_t[0]) == pytest.approx(0.6 * c.impulse, rel=1e-9) for c in flat[0].contacts)
     whole_run_differences(model, 2.0, model.p.copy(), q0, qd0, names, r.sensitivities.matrix, **TIGHT)
+
+
+def test_a_rod_landing_flat_and_stuck_at_both_ends_matches_the_closed_form(rod):
+    """The rod dropped flat from h = 0.3 m moving along its axis at 0.2 m/s onto the floor with e = 0.5 and c_f = 3:
+    both ends stick through the impact (xi_T = gamma+_T + e gamma-_T = 0 along their one tangential row, the same row
+    twice: the law's rows dependent, no slide to fix the split; the rows dependent on the others drop out, the
+    impulse split another way for the same velocities), so it leaves at e v* up and at -e vx along it.  At T = 0.4 s:
+    X1 = vx t* - e vx tau, so dX1/dvx = t* - e tau and dX1/de = -vx tau - e vx dtau/de (= -vx tau, t* not moving with
+    e), X2 = e v* tau - g tau^2 / 2; against central differences too."""
+    H, VX, E, T, C_F = 0.3, 0.2, 0.5, 0.4, 3.0
+    names = ["q0[X2]", "qd0[X1]", "g", "e_x2_min", "friction_x2_min"]
+    q0 = np.array([-math.pi / 2, 0.0, math.pi / 2, 0.0, H, 0.0])
+    qd0 = np.array([0.0, 0.0, 0.0, VX, 0.0, 0.0])
+    p = rod.parameters({"e_x2_min": E, "friction_x2_min": C_F})
+    r = simulate(rod, T, p=p, q0=q0, qd0=qd0, sensitivities=names, **TIGHT)
+    assert r.success and r.sensitivities.valid, r.sensitivity_message
+    (impact,) = r.impacts
+    assert sorted(c.label for c in impact.contacts) == ["O1/x2_min", "O2/x2_min"] and impact.law == "gdi"
+    assert sum(c.impulse_t[0] for c in impact.contacts) == pytest.approx(-(1 + E) * VX, rel=1e-9)   # m = 1
+    assert all(abs(c.impulse_t[0]) < C_F * c.impulse for c in impact.contacts)
+    v, t_hit = math.sqrt(2 * G * H), math.sqrt(2 * H / G)
+    tau = T - t_hit
+    s = r.sensitivities
+    expected = {("q[X1]", "qd0[X1]"): t_hit - E * tau, ("q[X1]", "e_x2_min"): -VX * tau,
+                ("q[X1]", "friction_x2_min"): 0.0, ("qd[X1]", "qd0[X1]"): -E, ("q[X2]", "e_x2_min"): v * tau}
+    for (row, name), value in expected.items():
+        assert s.matrix[s.rows.index(row), names.index(name)] == pytest.approx(value, rel=1e-8, abs=1e-12), (row, name)
+    whole_run_differences(rod, T, p, q0, qd0, names, s.matrix, **TIGHT)

@@ -1,7 +1,7 @@
 """Fuzz study: random admissible scenes through the hybrid loop, each run checked independently.
 
     python -m studies fuzz [--runs N] [--per-structure K] [--seed S] [--jobs J] [--budget SECONDS]
-                           [--json FILE] [--case ID]
+                           [--json FILE] [--case ID] [--sensitivities]
 
 The distribution (``random_structure`` and ``random_run``): n = 1 ... 8 links; lengths 1e-3 ... 1e2 m and
 masses 1e-4 ... 1e4 kg (log-uniform, per link, so ratios of 1e5 within a chain occur); slender line links
@@ -63,6 +63,7 @@ a physical reason (an RK4 step past stability, the wall-time budget, max_impacts
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import multiprocessing
@@ -507,6 +508,9 @@ class Outcome:
     obstacles: int = 0        # fixed obstacles in the run's box
     chains: int = 1           # chains in the box (random_chains: 2 or 3)
     strikes_across: int = 0   # impacts with a contact between links of two chains (labelled L{i}-L{j}, global links)
+    sensitivities: str = ""   # with --sensitivities: 'valid' (differentiated to the run's end), or the status of the
+                              # first event not differentiated (runtime.sensitivities.STATUS_WORDS)
+    sensitivity_t: float = -1.0   # s: that event's time (-1: none)
 
 
 def classify(message: str) -> str:
@@ -716,11 +720,24 @@ def check_run(model, run: Run, result, seconds: float, budget: float) -> list[st
     return violations
 
 
-def study_model(scene):
+def study_model(scene, tangent: bool = False):
     """The study's compiled model of a scene (cached): the general layout, so that every structure keeps the
-    coordinates it was drawn with, with both base charts and the long-double kernels of the impact's accuracy."""
+    coordinates it was drawn with, with both base charts and the long-double kernels of the impact's accuracy; with
+    ``tangent`` its tangent kernels too (the sensitivities' runs)."""
     from runtime.model import load_model
-    return load_model(scene, specialise=False)
+    return load_model(scene, specialise=False, tangent=tangent)
+
+
+def sensitivity_directions(model) -> list[str]:
+    """The directions a --sensitivities run carries: g (where the scene has gravity among its parameters), the first
+    coordinate's start and start velocity, the first restitution and the first friction coefficient."""
+    names = list(model.parameter_names)
+    first = model.scene.full_coordinate_names()[model.layout.free[0]]
+    directions = [f"q0[{first}]", f"qd0[{first}]"]
+    directions += [name for name in names if name == "g"]
+    directions += [name for name in names if name.split(".")[-1].startswith("e_")][:1]
+    directions += [name for name in names if name.split(".")[-1].startswith("friction_")][:1]
+    return directions
 
 
 def run_structure(args) -> list[Outcome]:
@@ -729,10 +746,14 @@ def run_structure(args) -> list[Outcome]:
     random_obstacles into the box, the structure compiled once per obstacles' names and kinds and the run's obstacles
     set through p (obstacle_run; False: the runs as drawn);
     chains True (the study's runs): a structure that has_chain_runs is drawn as several chains (random_chains, no
-    obstacles; False: random_structure's chain)."""
+    obstacles; False: random_structure's chain); sensitivities True: the models carry tangent kernels and each run
+    its sensitivities along sensitivity_directions (the run itself is the same), the outcome naming how far they
+    went."""
     seed, index, runs, budget, n_max = args[:5]
     obstacle_runs = bool(args[5]) if len(args) > 5 else False
     chain_runs = bool(args[6]) if len(args) > 6 else False
+    with_sensitivities = bool(args[7]) if len(args) > 7 else False
+    load = functools.partial(study_model, tangent=with_sensitivities)
     from runtime.simulate import accuracy_cause, impact_contact_indices, simulate
     scene, rng = draw_structure(seed, index, n_max, chain_runs)
     count = len(chains_of(scene))
@@ -741,7 +762,7 @@ def run_structure(args) -> list[Outcome]:
     capsules = has_capsules(scene)
     outcomes = []
     try:
-        model = study_model(scene)
+        model = load(scene)
     except Exception as exc:                           # noqa: BLE001 - reported as an outcome
         return [Outcome(f"{seed}-{index}/{k}", scene.n, False, "-", -1, f"exception: {classify(str(exc))}", True,
                         message=str(exc), capsules=capsules, chains=count) for k in range(runs)]
@@ -759,17 +780,17 @@ def run_structure(args) -> list[Outcome]:
             obstacles = random_obstacles(obstacle_rng, scene, model, run)
         if obstacles:
             try:
-                _, run_model, run = obstacle_run(obstacle_rng, scene, model, run, obstacles,
-                                                 study_model)
+                _, run_model, run = obstacle_run(obstacle_rng, scene, model, run, obstacles, load)
             except Exception as exc:                   # noqa: BLE001 - reported as an outcome
                 outcomes.append(Outcome(case, scene.n, planar, run.options["method"], -1,
                                         f"exception: {classify(str(exc))}", True, message=str(exc),
                                         capsules=capsules, obstacles=len(obstacles), chains=count))
                 continue
         start = time.perf_counter()
+        extra = {"sensitivities": sensitivity_directions(run_model)} if with_sensitivities else {}
         try:
             result = simulate(run_model, run.t_end, p=run.p, q0=run.q0, qd0=run.qd0, max_wall_time=budget,
-                              t_eval=np.linspace(0.0, run.t_end, 201), **run.options)
+                              t_eval=np.linspace(0.0, run.t_end, 201), **run.options, **extra)
         except ValueError as exc:                      # a refused setting (an RK4 step past stability)
             seconds = time.perf_counter() - start
             outcomes.append(Outcome(case, scene.n, planar, run.options["method"], -1,
@@ -796,21 +817,26 @@ def run_structure(args) -> list[Outcome]:
             cause = accuracy_cause(run_model, run.p, reduce(worst.q), reduce(worst.qd_before),
                                    impact_contact_indices(run_model, worst), worst.law, worst.residual,
                                    worst.roundoff_cause)
+        sens, sens_t = "", -1.0
+        if with_sensitivities and result.sensitivities is not None:
+            sens = "valid" if result.sensitivities.valid else result.sensitivities.status
+            if not result.sensitivities.valid and result.sensitivities.t_event is not None:
+                sens_t = float(result.sensitivities.t_event)
         outcomes.append(Outcome(case, scene.n, planar, run.options["method"], result.status, text, failed,
                                 violations, len(result.impacts), seconds, result.message, roundoff, inaccurate,
-                                cause, capsules, len(obstacles), count, strikes))
+                                cause, capsules, len(obstacles), count, strikes, sens, sens_t))
     return outcomes
 
 
 def fuzz(runs: int = 1000, per_structure: int = 10, seed: int = 0, jobs: int | None = None,
          budget: float = BUDGET, n_max: int = 8, progress=None, obstacles: bool = True,
-         chains: bool = True) -> list[Outcome]:
+         chains: bool = True, sensitivities: bool = False) -> list[Outcome]:
     """Run ``runs`` random runs (``per_structure`` per compiled structure) on ``jobs`` processes; ``obstacles``: fixed
     obstacles in the runs of a share of the structures; ``chains``: a share of the structures drawn as several
-    chains (run_structure)."""
+    chains; ``sensitivities``: each run carries its sensitivities (run_structure)."""
     structures = max(1, math.ceil(runs / per_structure))
-    tasks = [(seed, index, min(per_structure, runs - index * per_structure), budget, n_max, obstacles, chains)
-             for index in range(structures)]
+    tasks = [(seed, index, min(per_structure, runs - index * per_structure), budget, n_max, obstacles, chains,
+              sensitivities) for index in range(structures)]
     outcomes: list[Outcome] = []
     start = time.perf_counter()
     jobs = jobs or multiprocessing.cpu_count()
@@ -845,6 +871,25 @@ def accuracy_summary(outcomes: list[Outcome]) -> str:
     flagged = [f"- {o.case}: {o.roundoff:.2g}, {o.cause}" for o in outcomes if o.roundoff > 1e-10 and o.cause]
     return (f"impact accuracy: {worse_10} of {n} runs state an impact less accurate than 1e-10, {worse_6} than 1e-6; "
             f"{stopped} stop with an impact of useless accuracy" + "".join("\n" + line for line in flagged))
+
+
+def sensitivity_summary(outcomes: list[Outcome]) -> str:
+    """How far the sensitivities of the runs that reached their end went: differentiated to it, or the status of the
+    first event not differentiated (runs that stopped left out: the run itself ended)."""
+    ended = [o for o in outcomes if o.sensitivities and o.status == 0]
+    if not ended:
+        return ""
+    counts: dict[str, int] = {}
+    for o in ended:
+        counts[o.sensitivities] = counts.get(o.sensitivities, 0) + 1
+    valid = counts.get("valid", 0)
+    lines = [f"Sensitivities: {valid} of the {len(ended)} runs that reached t_end ({100 * valid / len(ended):.1f} %) "
+             "differentiated to their end; the others ended by:", "", "| first event not differentiated | runs |",
+             "|---|---|"]
+    for text, count in sorted(counts.items(), key=lambda kv: -kv[1]):
+        if text != "valid":
+            lines.append(f"| {text} | {count} |")
+    return "\n".join(lines) + "\n"
 
 
 def capsule_summary(outcomes: list[Outcome]) -> str:
@@ -897,6 +942,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--n-max", type=int, default=8, help="largest number of links (default 8)")
     parser.add_argument("--json", metavar="FILE", help="write every outcome as JSON")
     parser.add_argument("--case", metavar="SEED-STRUCTURE/RUN", help="rerun one case and print its scene and call")
+    parser.add_argument("--sensitivities", action="store_true",
+                        help="carry sensitivities along g, the first coordinate's start and velocity, a restitution "
+                             "and a friction coefficient in every run (tangent kernels: slower builds), and report "
+                             "how far they went")
     return parser
 
 
@@ -951,7 +1000,7 @@ def main(argv=None) -> int:
             return 2
     start = time.perf_counter()
     outcomes = fuzz(args.runs, args.per_structure, args.seed, args.jobs, args.budget, args.n_max,
-                    progress=lambda m: print(m, file=sys.stderr, flush=True))
+                    progress=lambda m: print(m, file=sys.stderr, flush=True), sensitivities=args.sensitivities)
     print(f"## Fuzz: {len(outcomes)} runs, seed {args.seed}, {time.perf_counter() - start:.0f} s\n")
     print(table(outcomes))
     print()
@@ -959,6 +1008,7 @@ def main(argv=None) -> int:
     print(capsule_summary(outcomes))
     print(obstacle_summary(outcomes))
     print(chains_summary(outcomes))
+    print(sensitivity_summary(outcomes))
     failed = [o for o in outcomes if o.failed]
     for o in failed[:50]:
         several = f", {o.chains} chains" if o.chains > 1 else ""

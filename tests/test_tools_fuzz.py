@@ -464,3 +464,19 @@ def test_the_checks_across_chains_can_fail():
     sunk.p[scene.parameter_names().index("wall_x2_min")] = min(points[link, 1], points[link + 1, 1]) - r / 2
     violations = fuzz.check_run(model, sunk, clean, 0.1, 20.0)
     assert any(v.startswith("a link penetrates a wall by") for v in violations), violations
+
+
+def test_the_sensitivities_mode_says_how_far_each_run_was_differentiated():
+    """With sensitivities (run_structure's eighth argument, --sensitivities): each run that reached its end says
+    'valid' or the status of its first event not differentiated (the library's words) and its time; the summary
+    counts them."""
+    from runtime.sensitivities import STATUS_WORDS
+    outcomes = fuzz.run_structure((11, 4, 3, 60.0, 2, True, True, True))
+    ended = [o for o in outcomes if o.status == 0]
+    assert len(ended) == 2 and not any(o.failed for o in outcomes)
+    assert {o.sensitivities for o in ended} <= set(STATUS_WORDS.values())
+    assert any(o.sensitivities == "valid" and o.sensitivity_t == -1.0 for o in ended)
+    assert any(o.sensitivities != "valid" and 0.0 < o.sensitivity_t for o in ended)
+    summary = fuzz.sensitivity_summary(outcomes)
+    assert summary.startswith("Sensitivities: 1 of the 2 runs that reached t_end (50.0 %)")
+    assert all(o.sensitivities == "" for o in fuzz.run_structure((11, 4, 3, 60.0, 2, True, True)))

@@ -1312,8 +1312,9 @@ long gac_sens_ndouble(const gac_model *m, int k);
 /* Attach sensitivities along k directions to sim from its current time on: S = seed_x (k x nx, direction-major),
  * dp = seed_p (k x nparam; NULL: 0).  The loop then carries them (sim.sens); sens and dwork owned by the caller for
  * the life of the run.  sens NULL detaches.  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT (sim, seed_x or dwork NULL),
- * GAC_ERR_BAD_OPTION (k < 1, a seed not finite, or a seed_p along a box's rotation entry or a plane's normal entry:
- * constrained, no entry a direction of its own; an obstacle's position and size are directions) or
+ * GAC_ERR_BAD_OPTION (k < 1, a seed not finite, a seed_p along a box's rotation entries, or along a plane's normal
+ * entries other than a turn, n . dn = 0: constrained; an obstacle's position and size are directions, and a plane's
+ * normal turned about its point) or
  * GAC_ERR_BAD_MODEL (the model has no tangent kernels: rolled forward dynamics, or built with tangent=False). */
 int gac_sens_attach(gac_sim *sim, gac_sens *sens, int k, const double *seed_x, const double *seed_p, double *dwork);
 

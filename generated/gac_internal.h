@@ -144,7 +144,8 @@ int gac_obstacle_shape_check(const gac_model *m, int o);
  * b0, b1, 2 a box's corner, b0 = b1 (the normal then turns with the link, as against a segment's capsule) */
 int gac_obstacle_feature(const double *shape, const double *a0, const double *a1, double *b0, double *b1);
 /* The motion of that part along the change dshape of the obstacle's geometry (its position and size; a box's
- * rotation and a plane's normal held, gac_obstacle_held_parameter): an edge's or a corner's ends b0, b1, each
+ * rotation held, gac_obstacle_turn_admissible; a plane's normal's turn enters its gap and row in gac_link.c): an
+ * edge's or a corner's ends b0, b1, each
  * coordinate of them in the box's frame +-h_k, move by dc + R dy, dy_k = +-dh_k; a box's face (n its outward normal,
  * R^T n = +-E_k) by dc + dh_k n, a plane's by its point's motion, into db0 = db1.  Returns the part as
  * gac_obstacle_feature. */
@@ -154,9 +155,10 @@ int gac_obstacle_feature_change(const double *shape, const double *dshape, const
  * rest the entries' changes; 0 for an obstacle whose geometry is the model's constants).  GAC_OK or as
  * gac_obstacle_shape. */
 int gac_obstacle_shape_change(const gac_model *m, const double *dp, int o, double *dshape);
-/* 1 if p[index] is a box's rotation entry or a plane's normal entry: constrained (orthonormal, unit), no entry a
- * direction of its own, so the sensitivities do not take it; else 0. */
-int gac_obstacle_held_parameter(const gac_model *m, int index);
+/* 1 if the change dp (nparam) moves obstacle o only along directions the sensitivities take: none of a box's rotation
+ * entries (a rotation's tangent is not followed), a plane's normal only turned, n . dn = 0 (to 1e-12 |dn|), about its
+ * point; else 0. */
+int gac_obstacle_turn_admissible(const gac_model *m, const double *p, const double *dp, int o);
 
 /* gac_link.c: link pairs and obstacles as contacts of the loop (kinds GAC_CONTACT_LINK, GAC_CONTACT_OBSTACLE, the
  * last entries of m->contacts: no Jacobian row; Coulomb friction along their contact frame, at impacts and at rest,

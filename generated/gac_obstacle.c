@@ -77,13 +77,23 @@ int gac_obstacle_parameter(const gac_model *m, int index)
     return -1;
 }
 
-int gac_obstacle_held_parameter(const gac_model *m, int index)
+int gac_obstacle_turn_admissible(const gac_model *m, const double *p, const double *dp, int o)
 {
-    const int o = gac_obstacle_parameter(m, index);
-    int kind, at;
-    if (o < 0) return 0;
-    kind = gac_obstacle_kind(m, o), at = index - m->obstacle_params[o];
-    return (kind == GAC_OBSTACLE_BOX && at >= 6) || (kind == GAC_OBSTACLE_PLANE && at >= 3);
+    const int kind = gac_obstacle_kind(m, o), at = m->obstacle_params != 0 ? m->obstacle_params[o] : -1;
+    double n[3], dn[3], size = 0.0, along = 0.0;
+    int k;
+    if (at < 0 || (kind != GAC_OBSTACLE_BOX && kind != GAC_OBSTACLE_PLANE)) return 1;
+    if (kind == GAC_OBSTACLE_BOX) {                      /* its rotation's entries: not a direction */
+        for (k = 6; k < 15; ++k) {
+            if (dp[at + k] != 0.0) return 0;
+        }
+        return 1;
+    }
+    for (k = 0; k < 3; ++k) {                            /* a plane's normal: turned, not stretched */
+        n[k] = p[at + 3 + k], dn[k] = dp[at + 3 + k];
+        size += dn[k] * dn[k], along += n[k] * dn[k];
+    }
+    return fabs(along) <= 1e-12 * sqrt(size);
 }
 
 int gac_obstacle_shape_change(const gac_model *m, const double *dp, int o, double *dshape)

@@ -52,8 +52,11 @@ int gac_sens_attach(gac_sim *s, gac_sens *sens, int k, const double *seed_x, con
     if (!gac_sens_has_tangents(md)) return GAC_ERR_BAD_MODEL;
     if (!gac_finite(seed_x, k * md->nx) || (seed_p != 0 && !gac_finite(seed_p, k * md->nparam)))
         return GAC_ERR_BAD_OPTION;
-    for (i = 0; seed_p != 0 && i < k * md->nparam; ++i) {  /* a box's rotation, a plane's normal: not directions */
-        if (seed_p[i] != 0.0 && gac_obstacle_held_parameter(md, i % md->nparam)) return GAC_ERR_BAD_OPTION;
+    for (i = 0; seed_p != 0 && i < k * md->nobstacle; ++i) {   /* a box's rotation: not a direction; a plane's
+                                                                  normal only turned (n . dn = 0) */
+        if (!gac_obstacle_turn_admissible(md, s->p, seed_p + (long)(i / md->nobstacle) * md->nparam,
+                                          i % md->nobstacle))
+            return GAC_ERR_BAD_OPTION;
     }
     sens->k = k;
     sens->S = dwork;                              /* dwork: S | dp | dt_impact | dgap_held | dslip | slip_known |

@@ -24,8 +24,11 @@ import numpy as np
 from codegen.scene import OBSTACLE_PARAMETERS, split_parameter_name
 
 # an obstacle's geometry entries that are not directions of their own: a box's rotation stays orthonormal and a
-# plane's normal unit, so no single entry can move alone (gac_obstacle_held_parameter)
+# plane's normal unit, so no single entry can move alone (gac_obstacle_turn_admissible); a plane's normal turns
+# instead, about the box axis X1, X2 or X3 through the plane's point: the direction turn_x_<plane> (y, z) seeds
+# dn = e_k x n on its normal's entries
 HELD_GEOMETRY_KINDS = OBSTACLE_PARAMETERS["box"][6:] + OBSTACLE_PARAMETERS["plane"][3:]
+_TURN = re.compile(r"^turn_([xyz])_(.+)$")
 
 
 # gac.h's GAC_SENS_* status codes, in words
@@ -53,9 +56,9 @@ STATUS_WORDS = {
 _STATE = re.compile(r"^(q0|qd0)\[([^\]]+)\]$")
 
 
-def directions(model, names) -> tuple[list[str], np.ndarray, np.ndarray]:
+def directions(model, names, p=None) -> tuple[list[str], np.ndarray, np.ndarray]:
     """The directions ``names`` as (names, seed_x (k x nx), seed_p (k x nparam)); a bad name is a ValueError naming
-    what is allowed."""
+    what is allowed.  p: the run's parameters (a plane's turn is about its normal there; the model's by default)."""
     if isinstance(names, str):
         names = [names]
     names = list(names)
@@ -66,8 +69,10 @@ def directions(model, names) -> tuple[list[str], np.ndarray, np.ndarray]:
     nq = model.nq
     seed_x = np.zeros((len(names), 2 * nq))
     seed_p = np.zeros((len(names), len(model.parameter_names)))
+    planes = [name[len("normal_x_"):] for name in model.parameter_names if name.startswith("normal_x_")]
     allowed = (", ".join(f"q0[{full[i]}]" for i in free) + ", the same with qd0, or a parameter: "
-               + ", ".join(model.parameter_names))
+               + ", ".join(n for n in model.parameter_names if split_parameter_name(n)[0] not in HELD_GEOMETRY_KINDS)
+               + "".join(f", turn_x_{plane}, turn_y_{plane}, turn_z_{plane}" for plane in planes))
     for j, name in enumerate(names):
         if not isinstance(name, str):
             raise ValueError(f"sensitivities[{j}]: expected a name, got {name!r}; allowed: {allowed}")
@@ -83,13 +88,30 @@ def directions(model, names) -> tuple[list[str], np.ndarray, np.ndarray]:
                 raise ValueError(f"sensitivities[{j}] = {name!r}: a box's rotation entry or a plane's normal entry is "
                                  "not a direction (the rotation stays orthonormal, the normal unit, so no entry moves "
                                  "alone); an obstacle's position and size are (center_*, half_*, a_*, b_*, radius_*, "
-                                 "point_*); turn it by finite differences of two runs instead")
+                                 "point_*), and a plane's normal turns about the box axes (turn_x_<plane>, "
+                                 "turn_y_<plane>, turn_z_<plane>)")
             seed_p[j, model.parameter_names.index(name)] = 1.0
+        elif _TURN.match(name.strip()) and plane_normal(model, _TURN.match(name.strip()).group(2), p) is not None:
+            axis, plane = _TURN.match(name.strip()).groups()
+            names_n, n = plane_normal(model, plane, p)
+            dn = np.cross(np.eye(3)["xyz".index(axis)], n)
+            for k, entry in enumerate(names_n):
+                seed_p[j, model.parameter_names.index(entry)] = dn[k]
         else:
             raise ValueError(f"sensitivities[{j}] = {name!r}: unknown direction; allowed: {allowed}")
     if len(set(names)) != len(names):
         raise ValueError(f"sensitivities: a direction is named twice in {names}")
     return names, seed_x, seed_p
+
+
+def plane_normal(model, plane: str, p=None):
+    """(its normal's parameter names, the normal n in p, the model's by default) of plane obstacle ``plane`` whose
+    geometry is among the model's parameters, or None."""
+    names = [f"{kind}_{plane}" for kind in OBSTACLE_PARAMETERS["plane"][3:]]
+    if not all(name in model.parameter_names for name in names):
+        return None
+    values = model.p if p is None else np.asarray(p, dtype=float)
+    return names, np.array([values[model.parameter_names.index(name)] for name in names], dtype=float)
 
 
 def state_names(model) -> list[str]:

@@ -499,7 +499,7 @@ def simulate(scene: Scene | str | CompiledModel, t_end: float, method: str = "do
     keep_alive = attach(model, sim, source)   # noqa: F841  (the schedule or handle the C loop points at)
     sens = sens_work = directions = None
     if sensitivities is not None:
-        directions, seed_x, seed_p = sensitivity.directions(model, sensitivities)
+        directions, seed_x, seed_p = sensitivity.directions(model, sensitivities, p)
         seed_x, seed_p = sensitivity.seeds(seed_x, seed_p, bool(one_sided))
         k = len(seed_x)                   # one-sided: each direction twice, +e_j then -e_j
         sens = ffi.new("gac_sens *")

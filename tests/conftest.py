@@ -198,6 +198,15 @@ def perturbed_start(model, direction: str, h: float, p, q0, qd0):
         q1[full.index(direction[3:-1])] += h
     elif direction.startswith("qd0["):
         qd1[full.index(direction[4:-1])] += h
+    elif direction.startswith("turn_") and direction not in model.parameter_names:   # a plane's normal turned by h
+        axis, plane = direction[5], direction[7:]                                   # about X1, X2 or X3
+        rows = [model.parameter_names.index(f"normal_{c}_{plane}") for c in "xyz"]
+        k = "xyz".index(axis)
+        c, s = np.cos(h), np.sin(h)
+        turn = np.eye(3)
+        i, j = (k + 1) % 3, (k + 2) % 3
+        turn[i, i], turn[i, j], turn[j, i], turn[j, j] = c, -s, s, c
+        p1[rows] = turn @ p1[rows]
     else:
         p1[model.parameter_names.index(direction)] += h
     return p1, q1, qd1

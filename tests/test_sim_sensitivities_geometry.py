@@ -6,7 +6,8 @@ them) against sixth-order central differences of the model's own gap and gac_con
 each obstacle (inside its length onto the ball, across the bar, across the ridge's edge and onto its end, a corner,
 end first onto the ridge's face and onto the floor), its final state's and its impact time's sensitivities along the obstacle's geometry
 against central differences of whole runs (the same impacts across the stencil); a box's rotation entries and a
-plane's normal entries are no directions (the C functions refuse them)."""
+plane's normal entries are no directions (the C functions refuse them), but the plane's normal turned about its point
+is (turn_x_<plane>, turn_y_<plane>, turn_z_<plane>: dn = e_k x n)."""
 from __future__ import annotations
 
 import math
@@ -91,6 +92,49 @@ def test_the_gap_and_row_derivatives_along_the_geometry_match_central_difference
     assert turning >= (0 if name == "floor" else 4)               # the row turns with the obstacle's motion
 
 
+def rotated(v, omega, angle):
+    """v turned by `angle` about the unit axis omega / |omega| (Rodrigues)."""
+    k = omega / np.linalg.norm(omega)
+    return v * math.cos(angle) + np.cross(k, v) * math.sin(angle) + k * (k @ v) * (1 - math.cos(angle))
+
+
+def test_the_floors_turn_is_a_direction_of_its_gap_and_row(model):
+    """The plane's normal turned about its point, dn = omega x n (omega random, with a random move of its point and a
+    random dq): d gap = n . (dx - dpoint) + dn . (x - point) and d(J^T n) against sixth-order central differences of
+    the gap and gac_contact_normal with the normal turned by |omega| h (Rodrigues: unit at every step), to 1e-9; a
+    change of the normal that stretches it (n . dn != 0) is refused."""
+    rng = np.random.default_rng(29)
+    c, normal = 3, [model.parameter_names.index(f"normal_{x}_floor") for x in "xyz"]
+    point = [model.parameter_names.index(f"point_{x}_floor") for x in "xyz"]
+    checked = 0
+    while checked < 12:
+        q = np.concatenate([rng.uniform(-math.pi, math.pi, 3), NEAR[c] + rng.uniform(-0.9, 0.9, 3)])
+        q[1] = rng.uniform(-1.2, 1.2)
+        if model.obstacle_gap(q, 1, "floor")[0] < 0.02:
+            continue
+        omega, dq, move = rng.normal(size=3), rng.normal(size=model.nq), rng.normal(size=3)
+        dp = np.zeros(len(model.p))
+        dp[point] = move
+        dp[normal] = np.cross(omega, model.p[normal])
+        code, dgap, g, dg = normal_tangent(model, q, c, dq, dp)
+        assert code == model.lib.GAC_OK
+
+        def at(h):
+            p = model.p.copy()
+            p[point] += h * move
+            p[normal] = rotated(model.p[normal], omega, h * np.linalg.norm(omega))
+            return np.concatenate([[model.contact_gaps(q + h * dq, p)[c]], model.contact_normal(q + h * dq, c, p)])
+
+        fd = central(at)
+        assert abs(dgap - fd[0]) <= 1e-9 * max(1.0, abs(fd[0]))
+        assert np.abs(dg - fd[1:]).max() <= 1e-9 * max(1.0, np.abs(fd[1:]).max())
+        assert abs(dgap - (dq @ g + move @ -model.p[normal])) > 1e-6     # the turn's part is there
+        checked += 1
+    dp = np.zeros(len(model.p))
+    dp[normal] = model.p[normal]                                     # along n itself: a stretch
+    assert normal_tangent(model, q, c, np.zeros(model.nq), dp)[0] == model.lib.GAC_ERR_BAD_OPTION
+
+
 def test_a_box_rotation_or_a_plane_normal_is_refused_by_the_c_functions(model):
     """gac_contact_normal_tangent along a box's rotation entry or a plane's normal entry: GAC_ERR_BAD_OPTION, as
     gac_sens_attach's seeds along them (simulate() refuses them by name: tests/test_sim_obstacle_params.py)."""
@@ -148,3 +192,51 @@ def test_a_rod_striking_an_obstacle_matches_central_differences_along_its_geomet
         assert abs(impact.dt_dp[direction] - fd_t) <= 1e-6 * max(1.0, abs(fd_t)), direction
         moved += abs(fd_t) > 1e-2
     assert moved >= 2                                               # the strike's time moves with the obstacle
+
+
+def slope_model(friction: float, specialise: bool = True):
+    """A free rod of 1 m (capsule radius 0.02 m) above a plane slope through the origin tilted 0.3 rad (e 0.7, its
+    friction a parameter where not 0)."""
+    n = (-math.sin(0.3), math.cos(0.3), 0.0)
+    slope = Obstacle.plane("slope", (0.0, 0.0, 0.0), n, restitution=0.7, friction=friction)
+    scene = Scene(name=f"sens_turn_slope{'_rough' if friction else ''}", links=(LineLink(1.0, 1.0, radius=R_LINK),),
+                  gravity=9.81, q0=(-math.pi / 2, 0.0, math.pi / 2 + 0.4, 0.3, 0.8, 0.0), obstacles=(slope,))
+    return load_model(scene, tangent=True, specialise=specialise)
+
+
+@pytest.mark.parametrize("friction, specialise, e, t_end", [
+    (0.0, True, 0.7, 0.8), (0.0, False, 0.7, 0.8), (0.3, True, 0.7, 0.8), (0.0, True, 0.0, 0.36),
+    (0.3, True, 0.0, 0.36)])
+def test_a_slopes_turn_is_a_direction_of_a_whole_run(friction, specialise, e, t_end):
+    """The rod dropped onto the slope: bouncing on it (e = 0.7: five impacts by 0.8 s), in the plane and in 3D (its
+    turn about X1 too), smooth and rough (c_f 0.3, the frame's rows turning with the normal), and landing on it and
+    held there (e = 0, until it comes down flat at 0.364 s); the final state's sensitivities along the slope's turn
+    about X3 (its tilt), its point's height and the start against central differences of whole runs with the normal
+    turned by the step (tests/conftest.perturbed_start)."""
+    model = slope_model(friction, specialise)
+    p = model.parameters({"e_slope": e})
+    q0, qd0 = np.array(model.scene.q0, dtype=float), np.zeros(6)
+    directions = ["turn_z_slope", "point_y_slope", "q0[X2]"] + (["e_slope"] if e > 0 else [])
+    directions += [] if specialise else ["turn_x_slope", "turn_y_slope"]
+    r = simulate(model, t_end, p=p, q0=q0, qd0=qd0, sensitivities=directions, **TIGHT)
+    assert r.success and r.impacts and r.sensitivities.valid, r.sensitivity_message
+    assert (e > 0) == (len(r.impacts) >= 5) and (e > 0) != any(ev.kind == "rest" for ev in r.contact_events)
+    assert abs(r.impacts[0].dt_dp["turn_z_slope"]) > 0.1
+    from tests.test_sim_sensitivities import central_differences
+    central_differences(model, t_end, p, q0, qd0, directions, r.sensitivities.matrix, **TIGHT)
+
+
+def test_a_turn_is_named_and_a_normal_entry_still_refused(model):
+    """turn_x_floor seeds dn = e_x x n on the floor's normal entries (at the run's normal); a normal entry alone is
+    refused, the message naming the turns; a turn of an obstacle that is not a plane is unknown."""
+    from runtime.sensitivities import directions
+    names, _, seed_p = directions(model, ["turn_x_floor", "turn_z_floor"])
+    normal = [model.parameter_names.index(f"normal_{x}_floor") for x in "xyz"]
+    assert np.allclose(seed_p[0, normal], np.cross([1.0, 0.0, 0.0], FLOOR_N), atol=1e-15)
+    assert np.allclose(seed_p[1, normal], np.cross([0.0, 0.0, 1.0], FLOOR_N), atol=1e-15)
+    assert np.count_nonzero(seed_p) == 4                           # (e_x x n has no X1 part, e_z x n no X3 part)
+    with pytest.raises(ValueError, match=r"'normal_y_floor': .* a plane's normal turns about the box axes "
+                                         r"\(turn_x_<plane>, turn_y_<plane>, turn_z_<plane>\)"):
+        directions(model, ["normal_y_floor"])
+    with pytest.raises(ValueError, match=r"'turn_x_ball': unknown direction; allowed: .*turn_z_floor"):
+        directions(model, ["turn_x_ball"])

@@ -706,6 +706,7 @@ static int gac_normal_tangent(const gac_model *m, const double *q, const double 
     double d1[3], d2[3], D[3], dd1[3], dd2[3], dD[3], dn[3], a, b, e, dist, s, t, ds = 0.0, dt = 0.0, along;
     double end0[3], end1[3], shape[GAC_OBSTACLE_NSHAPE], dshape[GAC_OBSTACLE_NSHAPE], dend0[3], dend1[3];
     double grow = 0.0;                                   /* a bar's or a sphere's radius' change */
+    double turn[3] = {0.0, 0.0, 0.0}, offset[3] = {0.0, 0.0, 0.0};   /* a plane's normal turning, x - its point */
     const double *a0, *a1, *b0, *b1, *da0, *da1, *db0, *db1;
     int i, j, k, code, s_inside, t_inside, face = 0, edge = 0;
     if (m == 0 || q == 0 || p == 0 || dq == 0 || dp == 0 || dgap == 0 || g == 0 || dg == 0)
@@ -724,10 +725,7 @@ static int gac_normal_tangent(const gac_model *m, const double *q, const double 
         const int o = m->contacts[c].coordinate;
         if (gac_obstacle_shape(m, p, o, shape) != GAC_OK || gac_obstacle_shape_change(m, dp, o, dshape) != GAC_OK)
             return GAC_ERR_BAD_CONTACT;
-        for (k = 0; k < m->nparam; ++k) {                /* a box's rotation, a plane's normal: not directions */
-            if (dp[k] != 0.0 && gac_obstacle_parameter(m, k) == o && gac_obstacle_held_parameter(m, k))
-                return GAC_ERR_BAD_OPTION;
-        }
+        if (!gac_obstacle_turn_admissible(m, p, dp, o)) return GAC_ERR_BAD_OPTION;   /* a box's rotation */
         b0 = shape + 1, b1 = shape + 4, db0 = dshape + 1, db1 = dshape + 4;   /* a bar's ends (a sphere's centre) */
         grow = dshape[7];
         if (!gac_obstacle_round((int)shape[0])) {        /* a box or a plane: the part the gap is measured from */
@@ -736,6 +734,9 @@ static int gac_normal_tangent(const gac_model *m, const double *q, const double 
             (void)gac_obstacle_feature_change(shape, dshape, a0, a1, geometry + 3, dend0, dend1);
             for (k = 0; k < 3; ++k) x[k] = (1.0 - s) * a0[k] + s * a1[k];
             face = feature == 0, edge = feature == 1, grow = 0.0;
+            if ((int)shape[0] == GAC_OBSTACLE_PLANE) {   /* its normal turning about its point: dn, x - point */
+                for (k = 0; k < 3; ++k) turn[k] = dshape[4 + k], offset[k] = x[k] - shape[1 + k];
+            }
             b0 = face ? x : end0, b1 = face ? x : end1, t = 0.0;
             db0 = dend0, db1 = dend1;                    /* (a face: its plane's motion, at x) */
             for (k = 0; k < 3; ++k) span += (b1[k] - b0[k]) * (b1[k] - b0[k]);
@@ -755,8 +756,8 @@ static int gac_normal_tangent(const gac_model *m, const double *q, const double 
     t_inside = e > 0.0 && t > 0.0 && t < 1.0;
     if (face) {                                          /* a constant normal: the link's end moves along it */
         if (!(a > 0.0) || (s_inside && !held)) return GAC_ERR_LINK_CONTACT;   /* parallel: a stretch closest */
-        along = gac_dot3(geometry + 3, dD);
-        for (k = 0; k < 3; ++k) dn[k] = 0.0;
+        along = gac_dot3(geometry + 3, dD) + gac_dot3(turn, offset);   /* d(n . (x - point)) */
+        for (k = 0; k < 3; ++k) dn[k] = turn[k];
     } else if (edge && s_inside && t_inside && a * e - b * b > 1e-8 * a * e) {
         /* a box's edge across the link (outside it, or reaching in: D = gap n either way, of any sign or 0): the
            lines' common normal n = +-w / |w|, w = d1 x d2, turns by dn = +-(I - n n^T) dw / |w|, dw = dd1 x d2 +

@@ -184,10 +184,11 @@ double gac_link_contact_rate(const gac_model *m, const double *q, const double *
 /* a held link or obstacle contact c's bias dg(qd) . qd (its normal acceleration less g . qdd) into *b: GAC_OK, or
  * GAC_ERR_LINK_CONTACT where its normal has no derivative */
 int gac_rowless_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, double *b);
-/* the derivative of its row k's bias (0: the normal's, gac_rowless_bias; 1, 2: the frame's t1, t2,
- * gac_rowless_frame_bias) along (dq, dqd, dp) into *db: exact along dqd, a fourth-order central difference of it along
- * (dq, dp) (~1e-12 of its size): GAC_OK, or GAC_ERR_LINK_CONTACT where the row has no derivative */
-int gac_rowless_bias_tangent(const gac_model *m, const double *q, const double *qd, const double *p, int c, int k,
+/* the derivatives of its row biases (rows = 1: the normal's, gac_rowless_bias; rows = 3: the normal's and the frame's
+ * t1, t2, gac_rowless_frame_bias) along (dq, dqd, dp) into db (rows): exact along dqd, a fourth-order central
+ * difference of them along (dq, dp) (~1e-12 of their size): GAC_OK, or GAC_ERR_LINK_CONTACT where a row has no
+ * derivative */
+int gac_rowless_bias_tangent(const gac_model *m, const double *q, const double *qd, const double *p, int c, int rows,
                              const double *dq, const double *dqd, const double *dp, double *db);
 /* the biases b (3) of a held link or obstacle contact c's frame rows J^T n, J^T t1, J^T t2 (b[0] gac_rowless_bias's):
  * GAC_OK, or GAC_ERR_LINK_CONTACT where its frame has no derivative */
@@ -213,6 +214,7 @@ double gac_frame_direction(const gac_model *m, const double *q, const double *p,
 
 /* gac_linalg.c */
 int gac_lu_solve(int n, double *A, double *b, double tol);
+double gac_dot(int n, const double *a, const double *b);   /* sum a_i b_i, i < n */
 int gac_ldlt(int n, double *A, double tol);
 void gac_ldlt_solve(int n, const double *LD, double *b);
 int gac_ldlt_ld(int n, long double *A, double tol);

@@ -141,3 +141,11 @@ int gac_lu_solve(int n, double *A, double *b, double tol)
     }
     return 0;
 }
+
+double gac_dot(int n, const double *a, const double *b)
+{
+    double sum = 0.0;
+    int i;
+    for (i = 0; i < n; ++i) sum += a[i] * b[i];
+    return sum;
+}

@@ -899,55 +899,47 @@ int gac_rowless_bias(const gac_model *m, const double *q, const double *qd, cons
     return GAC_OK;
 }
 
-/* Held contact c's row k bias (0: the normal's, gac_rowless_bias; 1, 2: the frame's t1, t2, gac_rowless_frame_bias)
- * into *b; below, the row's derivative along v (nq) at fixed p, dg_k[v] (nq), as the biases take it (held: a whole
- * stretch closest keeps its points on the links). */
-static int gac_rowless_row_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, int k,
-                                double *b)
+/* Held contact c's biases into b: rows = 1, the normal's (gac_rowless_bias); rows = 3, the normal's and the frame's
+ * t1, t2 (gac_rowless_frame_bias). */
+static int gac_rowless_row_biases(const gac_model *m, const double *q, const double *qd, const double *p, int c,
+                                  int rows, double *b)
 {
-    double frame[3];
-    int code;
-    if (k == 0) return gac_rowless_bias(m, q, qd, p, c, b);
-    code = gac_rowless_frame_bias(m, q, qd, p, c, frame);
-    if (code == GAC_OK) *b = frame[k];
-    return code;
+    return rows == 1 ? gac_rowless_bias(m, q, qd, p, c, b) : gac_rowless_frame_bias(m, q, qd, p, c, b);
 }
 
-static int gac_rowless_row_change(const gac_model *m, const double *q, const double *p, int c, int k,
-                                  const double *v, double *dg)
+/* Its rows' derivatives along v (nq) at fixed p, dg_k[v] (rows x nq), as the biases take them (held: a whole stretch
+ * closest keeps its points on the links). */
+static int gac_rowless_row_changes(const gac_model *m, const double *q, const double *p, int c, int rows,
+                                   const double *v, double *dg)
 {
     const int nq = m->nq;
-    double zero_p[GAC_AT_LEAST_1(m->nparam)], g[GAC_AT_LEAST_1(nq)], dn[GAC_AT_LEAST_1(nq)], dgap;
-    double gt[2 * GAC_AT_LEAST_1(nq)], dgt[2 * GAC_AT_LEAST_1(nq)];
-    int i, code;
+    double zero_p[GAC_AT_LEAST_1(m->nparam)], g[3 * GAC_AT_LEAST_1(nq)], dgap;
+    int i;
     for (i = 0; i < GAC_AT_LEAST_1(m->nparam); ++i) zero_p[i] = 0.0;
-    code = gac_normal_tangent(m, q, p, c, v, zero_p, 1, &dgap, g, dn, k > 0 ? gt : 0, k > 0 ? dgt : 0);
-    if (code != GAC_OK) return code;
-    for (i = 0; i < nq; ++i) dg[i] = k == 0 ? dn[i] : dgt[(long)(k - 1) * nq + i];
-    return GAC_OK;
+    return gac_normal_tangent(m, q, p, c, v, zero_p, 1, &dgap, g, dg, rows > 1 ? g + nq : 0, rows > 1 ? dg + nq : 0);
 }
 
-/* The derivative of a held contact's row k bias b(q, qd, p) = dg_k(qd) . qd (k = 0: the normal's, gac_rowless_bias;
- * 1, 2: the frame's tangents', gac_rowless_frame_bias) along (dq, dqd, dp), into *db.  b is a quadratic form in qd, so
- * along dqd it is dg_k(dqd) . qd + dg_k(qd) . dqd, exact (two row tangents); its change with q and p at fixed qd (the
- * gap's and the frame's third derivatives, which no kernel gives) is the fourth-order central difference
- * 8 (b(h) - b(-h)) - (b(2h) - b(-2h)) over 12 h of b at (q + h dq, qd, p + h dp), h = 1e-3 over the largest entry
- * of (dq, dp) (truncation ~h^4, round-off ~eps / h: ~1e-12 of b's size, as gac_link_row_change's).  GAC_OK, or
- * GAC_ERR_LINK_CONTACT where the row has no derivative at one of those points. */
-int gac_rowless_bias_tangent(const gac_model *m, const double *q, const double *qd, const double *p, int c, int k,
+/* The derivatives of a held contact's row biases b_k(q, qd, p) = dg_k(qd) . qd (rows = 1: the normal's,
+ * gac_rowless_bias; rows = 3: the normal's and the frame's tangents', gac_rowless_frame_bias) along (dq, dqd, dp),
+ * into db (rows).  b_k is a quadratic form in qd, so along dqd it is dg_k(dqd) . qd + dg_k(qd) . dqd, exact (two row
+ * tangents); its change with q and p at fixed qd (the gap's and the frame's third derivatives, which no kernel gives)
+ * is the fourth-order central difference 8 (b(h) - b(-h)) - (b(2h) - b(-2h)) over 12 h of b at (q + h dq, qd,
+ * p + h dp), h = 1e-3 over the largest entry of (dq, dp) (truncation ~h^4, round-off ~eps / h: ~1e-12 of b's size,
+ * as gac_link_row_change's).  GAC_OK, or GAC_ERR_LINK_CONTACT where a row has no derivative at one of those points. */
+int gac_rowless_bias_tangent(const gac_model *m, const double *q, const double *qd, const double *p, int c, int rows,
                              const double *dq, const double *dqd, const double *dp, double *db)
 {
     const int nq = m->nq, np = m->nparam;
-    double dg[GAC_AT_LEAST_1(nq)], qh[GAC_AT_LEAST_1(nq)], ph[GAC_AT_LEAST_1(np)];
-    double sum = 0.0, change = 0.0, size = 0.0, h, b;
+    double dg[3 * GAC_AT_LEAST_1(nq)], qh[GAC_AT_LEAST_1(nq)], ph[GAC_AT_LEAST_1(np)];
+    double sum[3] = {0.0, 0.0, 0.0}, b[3], size = 0.0, h;
     static const double step[4] = {1.0, -1.0, 2.0, -2.0}, weight[4] = {8.0, -8.0, -1.0, 1.0};
-    int i, l, code;
-    code = gac_rowless_row_change(m, q, p, c, k, qd, dg);          /* dg_k(qd) . dqd */
+    int i, k, l, code;
+    code = gac_rowless_row_changes(m, q, p, c, rows, qd, dg);      /* dg_k(qd) . dqd */
     if (code != GAC_OK) return code;
-    for (i = 0; i < nq; ++i) sum += dg[i] * dqd[i];
-    code = gac_rowless_row_change(m, q, p, c, k, dqd, dg);         /* dg_k(dqd) . qd */
+    for (k = 0; k < rows; ++k) sum[k] += gac_dot(nq, dg + (long)k * nq, dqd);
+    code = gac_rowless_row_changes(m, q, p, c, rows, dqd, dg);     /* dg_k(dqd) . qd */
     if (code != GAC_OK) return code;
-    for (i = 0; i < nq; ++i) sum += dg[i] * qd[i];
+    for (k = 0; k < rows; ++k) sum[k] += gac_dot(nq, dg + (long)k * nq, qd);
     for (i = 0; i < nq; ++i) size = fabs(dq[i]) > size ? fabs(dq[i]) : size;
     for (i = 0; i < np; ++i) size = fabs(dp[i]) > size ? fabs(dp[i]) : size;
     if (size > 0.0) {
@@ -955,14 +947,13 @@ int gac_rowless_bias_tangent(const gac_model *m, const double *q, const double *
         for (l = 0; l < 4; ++l) {
             for (i = 0; i < nq; ++i) qh[i] = q[i] + step[l] * h * dq[i];
             for (i = 0; i < np; ++i) ph[i] = p[i] + step[l] * h * dp[i];
-            code = gac_rowless_row_bias(m, qh, qd, ph, c, k, &b);
+            code = gac_rowless_row_biases(m, qh, qd, ph, c, rows, b);
             if (code != GAC_OK) return code;
-            change += weight[l] * b;
+            for (k = 0; k < rows; ++k) sum[k] += weight[l] * b[k] / (12.0 * h);
         }
-        sum += change / (12.0 * h);
     }
-    if (!isfinite(sum)) return GAC_ERR_LINK_CONTACT;
-    *db = sum;
+    if (!gac_finite(sum, rows)) return GAC_ERR_LINK_CONTACT;
+    for (k = 0; k < rows; ++k) db[k] = sum[k];
     return GAC_OK;
 }
 

@@ -365,14 +365,6 @@ typedef struct {
 #define GAC_SENS_SET_ARRAYS(nq, nr) GAC_SENS_SET_ARRAYS_OF(H, nq, nr)   /* the arrays of a set named H */
 #define GAC_SENS_SET_BIND(S) GAC_SENS_SET_BIND_OF(S, H)
 
-static double gac_dot(int n, const double *a, const double *b)
-{
-    double sum = 0.0;
-    int i;
-    for (i = 0; i < n; ++i) sum += a[i] * b[i];
-    return sum;
-}
-
 /* Contact c's two tangential rows at q into wt (2 x nq): a wall's J^T e_trow along +X_axis (0 for an axis without a
  * row), a link pair's or an obstacle's frame rows J^T t1, J^T t2 (gac_frame_direction; a tangent no motion takes is
  * ~0); with dq (not NULL) their derivatives along (dq, dp) into dwt (2 x nq): contact_generalized_force_tangent, or
@@ -387,17 +379,17 @@ static void gac_sens_tangent_rows(const gac_sim *s, const double *q, int c, cons
     if (gac_rowless(md, c)) {
         double axes[9], g[3 * nq], dg[3 * nq];
         gac_contact_frame frame;
+        if (dq != 0 && gac_contact_frame_tangent(md, q, s->p, c, dq, dp, axes, g, dg) == GAC_OK) {
+            gac_copy(wt, g + nq, 2L * nq);           /* the rows and their derivatives at once */
+            gac_copy(dwt, dg + nq, 2L * nq);
+            return;
+        }
         if (gac_rowless_frame(md, q, s->p, c, &frame) != GAC_OK) {
             for (i = 0; i < 2 * nq; ++i) wt[i] = NAN;
         } else {
             for (t = 0; t < 2; ++t) (void)gac_frame_direction(md, q, s->p, &frame, 1 + t, wt + (long)t * nq);
         }
-        if (dq == 0) return;
-        if (gac_contact_frame_tangent(md, q, s->p, c, dq, dp, axes, g, dg) != GAC_OK) {
-            for (i = 0; i < 2 * nq; ++i) dwt[i] = NAN;
-            return;
-        }
-        gac_copy(dwt, dg + nq, 2L * nq);
+        for (i = 0; dq != 0 && i < 2 * nq; ++i) dwt[i] = NAN;   /* (its frame has no derivative there) */
         return;
     }
     {
@@ -517,8 +509,13 @@ static int gac_sens_set_at(const gac_sim *s, const double *q, int n, const int *
         const int rowless = gac_rowless(md, set[a]);
         if (!stuck[set[a]] || !(gac_rest_friction(md, s->p, set[a]) > 0.0)) continue;
         for (t = 0; t < 2; ++t) {
-            if (rowless ? !gac_sens_frame_moves(s, q, set[a], 1 + t) : ct->trow[t] < 0) continue;
+            if (!rowless && ct->trow[t] < 0) continue;
             if (m == 3 * nq) return 1;
+            if (rowless) {                        /* J^T t_k formed here; one no motion takes is left out */
+                double *w = H->W + (long)m * nq;
+                const double scale = gac_sens_frame_row(s, q, set[a], 1 + t, w);
+                if (!(sqrt(gac_dot(nq, w, w)) > 1e-10 * scale)) continue;
+            }
             H->brow[m] = rowless ? -1 : ct->trow[t];
             H->rc[m] = set[a], H->rk[m] = rowless ? 1 + t : -1;
             H->sgn[m++] = 1.0;
@@ -529,9 +526,8 @@ static int gac_sens_set_at(const gac_sim *s, const double *q, int n, const int *
         double *fa = H->f + (long)a * nr;
         if (a < n) {                              /* a normal row: a wall's, or a link pair's or obstacle's J^T n */
             gac_sens_row(s, set[a], q, fa, H->W + (long)a * nq);
-        } else if (H->rk[a] > 0) {                /* a stuck link pair's or obstacle's J^T t_k */
+        } else if (H->rk[a] > 0) {                /* a stuck link pair's or obstacle's J^T t_k (W formed above) */
             for (i = 0; i < nr; ++i) fa[i] = 0.0;
-            gac_sens_frame_row(s, q, H->rc[a], H->rk[a], H->W + (long)a * nq);
         } else {                                  /* a stuck point's tangential row */
             for (i = 0; i < nr; ++i) fa[i] = 0.0;
             fa[H->brow[a]] = H->sgn[a];
@@ -614,6 +610,33 @@ static int gac_sens_set_solve(const gac_sens_set *H, double *r)
     return 1;
 }
 
+/* The biases (dq NULL) or their derivatives along (dq, dqd, dp) of H's rows of link pairs and obstacles into out
+ * (H->m; the other rows' entries left as they are; NaN where a row has none): per contact once, its normal row's and,
+ * stuck, its frame rows' together (gac_rowless_frame_bias, gac_rowless_bias_tangent with 3 rows). */
+static void gac_sens_rowless_biases(const gac_sim *s, const double *x, const gac_sens_set *H, const double *dq,
+                                    const double *dqd, const double *dp, double *out)
+{
+    const gac_model *md = s->model;
+    const int nq = md->nq;
+    int a, b;
+    for (a = 0; a < H->n; ++a) {                  /* each contact's normal row, then its frame rows */
+        double value[3] = {NAN, NAN, NAN};
+        int rows = 1, code;
+        if (H->rk[a] != 0) continue;
+        for (b = H->n; b < H->m; ++b) rows = H->rc[b] == H->rc[a] && H->rk[b] > 0 ? 3 : rows;
+        if (dq == 0)
+            code = rows == 1 ? gac_rowless_bias(md, x, x + nq, s->p, H->rc[a], value)
+                             : gac_rowless_frame_bias(md, x, x + nq, s->p, H->rc[a], value);
+        else
+            code = gac_rowless_bias_tangent(md, x, x + nq, s->p, H->rc[a], rows, dq, dqd, dp, value);
+        if (code != GAC_OK) value[0] = value[1] = value[2] = NAN;
+        out[a] = value[0];
+        for (b = H->n; b < H->m; ++b) {
+            if (H->rc[b] == H->rc[a] && H->rk[b] > 0) out[b] = value[H->rk[b]];
+        }
+    }
+}
+
 /* The constrained flight at state x with H held (H at x's q): qdd_free = I_f^-1 R, the forces lambda of
  * A lambda = -(W qdd_free + b), b_a = sign_a (Jdot qd)[row_a], and qdd = qdd_free + Y lambda
  * (gac_constrained_dynamics on a frictionless set); with sliding friction (gac_sens_set_slide) B lambda = the same
@@ -625,16 +648,14 @@ static void gac_sens_held_forces(const gac_sim *s, const double *x, const double
     const gac_model *md = s->model;
     const int nq = md->nq, m = H->m;
     const double *Yd = H->nslide > 0 ? H->Yd : H->Y;
-    double bias[GAC_AT_LEAST_1(md->njrow)];
+    double bias[GAC_AT_LEAST_1(md->njrow)], rowless[GAC_AT_LEAST_1(m)];
     int a, i;
     md->forward_dynamics(x, x + nq, u, s->p, qdd_free);
     md->contact_bias(x, x + nq, s->p, bias);
+    gac_sens_rowless_biases(s, x, H, 0, 0, 0, rowless);
     if (lambda_ref != 0) *lambda_ref = 0.0;
     for (a = 0; a < m; ++a) {
-        double b = NAN, frame[3];
-        if (H->brow[a] >= 0) b = H->sgn[a] * bias[H->brow[a]];
-        else if (H->rk[a] == 0) (void)gac_rowless_bias(md, x, x + nq, s->p, H->rc[a], &b);
-        else if (gac_rowless_frame_bias(md, x, x + nq, s->p, H->rc[a], frame) == GAC_OK) b = frame[H->rk[a]];
+        const double b = H->brow[a] >= 0 ? H->sgn[a] * bias[H->brow[a]] : rowless[a];
         lambda[a] = -(b + gac_dot(nq, H->W + (long)a * nq, qdd_free));
         if (lambda_ref != 0) {
             const double A_aa = gac_dot(nq, H->W + (long)a * nq, H->Y + (long)a * nq);
@@ -767,10 +788,9 @@ static void gac_sens_held_tangent(const gac_sim *s, const double *x, const gac_s
         qdd[i] = value;
         v[i] = dvalue;
     }
+    gac_sens_rowless_biases(s, x, H, dq, dqd, dp, r);     /* (the rows without a row of J: their biases' change) */
     for (a = 0; a < m; ++a) {
-        double db = NAN;
-        if (H->brow[a] >= 0) db = H->sgn[a] * dbias[H->brow[a]];
-        else (void)gac_rowless_bias_tangent(md, x, x + nq, s->p, H->rc[a], H->rk[a], dq, dqd, dp, &db);
+        const double db = H->brow[a] >= 0 ? H->sgn[a] * dbias[H->brow[a]] : r[a];
         r[a] = -(db + gac_dot(nq, dW + (long)a * nq, qdd) + gac_dot(nq, H->W + (long)a * nq, v));
     }
     gac_sens_set_solve(H, r);

@@ -307,8 +307,11 @@ def test_precision_without_scipy_names_the_extra_before_any_work(monkeypatch, ca
 def test_no_text_speaks_of_how_the_project_was_made():
     pattern = re.compile(r"\bissue \d|issue author|the issue asks|as we recall|could not be consulted", re.I)
     offenders = []
+    environments = {p.parent.name for p in ROOT.glob("*/pyvenv.cfg")}   # a virtual environment, whatever its name
     for path in ROOT.rglob("*"):
-        if any(part in (".git", ".venv", "build", "__pycache__") or part.endswith(".egg-info") for part in path.parts):
+        parts = path.relative_to(ROOT).parts
+        if any(part in (".git", ".venv", "build", "__pycache__", "site-packages") or part.endswith(".egg-info")
+               for part in parts) or (parts and parts[0] in environments):
             continue
         if path.suffix in (".py", ".md", ".j2", ".toml", ".c", ".h", ".txt") and path.is_file():
             offenders += [f"{path.relative_to(ROOT)}: {line.strip()}" for line in

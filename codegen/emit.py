@@ -527,7 +527,7 @@ def _contact_entry(c: int, point: int, wall, layout, scene: Scene, bake_params: 
                 has_friction=int(friction > 0.0),
                 friction_index=(-1 if bake_params or friction == 0.0
                                 else scene.parameter_index("friction", wall.name)),
-                friction_value=_double_literal(friction), trow=trow)
+                friction_value=_double_literal(friction), trow=trow, end=0)
 
 
 def _link_entry(c: int, pair, scene: Scene, bake_params: bool) -> dict:
@@ -542,18 +542,19 @@ def _link_entry(c: int, pair, scene: Scene, bake_params: bool) -> dict:
              if friction > 0.0 else "frictionless")
     if isinstance(pair, ObstacleContact):
         o = pair.obstacle
+        part = f"link {pair.i}" if pair.end == 0 else f"O_{pair.joint} (an end of link {pair.i})"
         return dict(c=c, point=pair.i, axis=-1, sign=1, row=0,
                     e_index=-1 if bake_params else scene.parameter_index("e", o.name),
                     e_value=_double_literal(float(o.restitution)), kind="GAC_CONTACT_OBSTACLE", coordinate=pair.index,
-                    label=pair.name, doc=f"link {pair.i} on the fixed {o.kind} {o.name} (radii {pair.radius:g} m "
+                    label=pair.name, doc=f"{part} on the fixed {o.kind} {o.name} (radii {pair.radius:g} m "
                     f"together, e = {o.restitution}), {rough}", has_friction=int(friction > 0.0),
                     friction_index=(-1 if bake_params or friction == 0.0 else scene.parameter_index("friction", o.name)),
-                    friction_value=_double_literal(friction), trow=[-1, -1])
+                    friction_value=_double_literal(friction), trow=[-1, -1], end=pair.end)
     return dict(c=c, point=pair.i, axis=-1, sign=1, row=0, e_index=-1,
                 e_value=_double_literal(float(pair.restitution)), kind="GAC_CONTACT_LINK", coordinate=pair.j,
                 label=pair.name, doc=f"links {pair.i} and {pair.j} as capsules (radii {pair.radius:g} m together, "
                 f"e = {pair.restitution}), {rough}", has_friction=int(friction > 0.0), friction_index=-1,
-                friction_value=_double_literal(friction), trow=[-1, -1])
+                friction_value=_double_literal(friction), trow=[-1, -1], end=0)
 
 
 def macro_name(name: str) -> str:

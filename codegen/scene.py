@@ -618,10 +618,23 @@ class ObstacleContact:
     obstacle: Obstacle
     index: int            # the obstacle's place in Scene.obstacles (0-based): the model's obstacle table
     radius: float         # m, r_i + r_obstacle
+    end: int = 0          # 0: the link's whole segment; 1: its start O_i alone; 2: its end O_i+1 alone (gac.h)
+
+    @property
+    def joint(self) -> int | None:
+        """The joint point O_p the contact is measured from (a plane's contacts), or None for the whole link."""
+        return None if self.end == 0 else self.i + (self.end == 2)
 
     @property
     def name(self) -> str:
-        return f"L{self.i}/{self.obstacle.name}"
+        return f"L{self.i}/{self.obstacle.name}" if self.end == 0 else f"O{self.joint}/{self.obstacle.name}"
+
+    def segment(self, points) -> tuple:
+        """The part of the chain the gap is measured from, as a segment (its two ends; a joint point twice), from
+        the joint points (npoint x 3, O_1 first)."""
+        if self.end == 0:
+            return points[self.i - 1], points[self.i]
+        return points[self.joint - 1], points[self.joint - 1]
 
     @property
     def links(self) -> tuple[int]:
@@ -1163,10 +1176,11 @@ class Scene:
                                      f"{'>=' if w.side < 0 else '<='} {w.position:g}")
         for c in self.obstacle_contacts():
             if c.obstacle.bounded_by_planes:
-                gap = c.obstacle.distance(points[c.i - 1], points[c.i]) - c.radius
+                gap = c.obstacle.distance(*c.segment(points)) - c.radius
                 if gap < 0.0:
-                    raise SceneError(f"initial.q: link {c.i} overlaps the {c.obstacle.kind} {c.obstacle.name} by "
-                                     f"{-gap:.6g} m (its segment reaches {gap + c.radius:.6g} m from the surface, "
+                    part = f"link {c.i}" if c.end == 0 else f"O_{c.joint} (an end of link {c.i})"
+                    raise SceneError(f"initial.q: {part} overlaps the {c.obstacle.kind} {c.obstacle.name} by "
+                                     f"{-gap:.6g} m (it reaches {gap + c.radius:.6g} m from the surface, "
                                      f"less than its radius {c.radius:g} m); allowed: a start with every link "
                                      "clear of it")
                 continue
@@ -1329,10 +1343,21 @@ class Scene:
                 for i, j in self.link_pairs()]
 
     def obstacle_contacts(self) -> list[ObstacleContact]:
-        """The (link, obstacle) pairs as contacts of the loop (after the link pairs), obstacle-major, then link
-        order."""
-        return [ObstacleContact(i, o, k, self.links[i - 1].radius + o.radius)
-                for k, o in enumerate(self.obstacles) for i in o.links]
+        """The contacts of the obstacles (after the link pairs), obstacle-major: a link and a sphere, a bar or a
+        box, in link order; a plane's, one per joint point of the links it touches, in point order.  A plane's
+        signed distance is linear along a link, so a capsule is nearest to it at an end sphere (or all along, lying
+        flat): its joint points are its contacts, each with the larger radius of the listed links ending there
+        (taken on that link), and a link that comes to lie on the plane rests on two of them, a line contact."""
+        out = []
+        for k, o in enumerate(self.obstacles):
+            if o.kind != "plane":
+                out += [ObstacleContact(i, o, k, self.links[i - 1].radius + o.radius) for i in o.links]
+                continue
+            for p in sorted({p for i in o.links for p in (i, i + 1)}):
+                carriers = [i for i in (p - 1, p) if i in o.links]      # the listed links ending at O_p
+                i = max(carriers, key=lambda i: self.links[i - 1].radius)
+                out.append(ObstacleContact(i, o, k, self.links[i - 1].radius + o.radius, end=2 if i == p - 1 else 1))
+        return out
 
     def rowless_contacts(self) -> list:
         """The contacts after the kernel's walls and stops, in the model's table order: each link pair (LinkPair),
@@ -2154,7 +2179,7 @@ class Chains:
             shift = self.point_offset(k)
             pairs += [LinkPair(c.i + shift, c.j + shift, c.radius, c.restitution, c.friction)
                       for c in chain.link_contacts()]
-            obstacles += [ObstacleContact(c.i + shift, c.obstacle, c.index, c.radius)
+            obstacles += [ObstacleContact(c.i + shift, c.obstacle, c.index, c.radius, c.end)
                           for c in chain.obstacle_contacts()]
         return pairs + self.cross_link_pairs() + obstacles
 

@@ -258,10 +258,10 @@ typedef int (*gac_progress)(double t, long n_steps, long n_impacts, void *user);
  * their direction g and its bias dg(qd) . qd (not where g has no derivative), rough ones stuck or sliding along the
  * frame's tangents as a rough wall's point (see "Sticking").
  * Or a link and a fixed obstacle (kind GAC_CONTACT_OBSTACLE: link point, 1-based, and obstacle coordinate,
- * 0-based into m->obstacle_shapes; gap = the distance of the link's segment from the obstacle, less its
- * m->link_radius entry (the link's radius) and the obstacle's radius, gac_obstacle_gap, the obstacle's geometry read
- * from p, gac_obstacle_shape): handled as a link pair whose second side never moves.  Obstacle contacts come after
- * the link pairs. */
+ * 0-based into m->obstacle_shapes; gap = the distance of the link's segment (or, for a plane, of one of its joint
+ * points: field end) from the obstacle, less its m->link_radius entry (the link's radius) and the obstacle's
+ * radius, gac_contact_geometry, the obstacle's geometry read from p, gac_obstacle_shape): handled as a link pair
+ * whose second side never moves.  Obstacle contacts come after the link pairs. */
 #define GAC_CONTACT_WALL 0
 #define GAC_CONTACT_STOP 1
 #define GAC_CONTACT_LINK 2
@@ -298,7 +298,13 @@ typedef struct {
     double friction_value;
     int trow[2];          /* the Jacobian rows of the point along the wall's two tangential axes (ascending), -1 for
                              an axis the model does not move along (the normal of a planar model) */
+    int end;              /* obstacle: the part of link point its gap is measured from: GAC_END_LINK (0, the whole
+                             segment O_i O_i+1), GAC_END_START (1, the joint point O_i alone) or GAC_END_FINISH (2,
+                             O_i+1 alone; a plane's contacts, one per joint point); others: 0 */
 } gac_contact;
+#define GAC_END_LINK 0
+#define GAC_END_START 1
+#define GAC_END_FINISH 2
 
 /* The base chart's measure chi(q) = |a . (e_z x Rz(theta_0) b)| (|det E|; |cos theta_0| for the default
  * twists): a = T_0^T e_z, b = T_1 e_z, only their first two components enter.  chi = 0 is the gimbal lock. */
@@ -651,6 +657,11 @@ int gac_link_impact(const gac_model *m, const double *q, const double *qd, const
  * move).  Returns GAC_OK or GAC_ERR_BAD_CONTACT. */
 int gac_obstacle_gap(const gac_model *m, const double *q, const double *p, int i, int o, double radius,
                      double *geometry);
+/* The geometry (GAC_LINK_NGEOMETRY doubles, as gac_link_gap's and gac_obstacle_gap's) of contact c of the model's
+ * table, a link pair or an obstacle's contact: its gap less its radii, s, t and n, for an obstacle's contact of one
+ * joint point (gac_contact.end) that point's (s = 0 or 1 along its link).  Returns GAC_OK, GAC_ERR_NULL_ARGUMENT or
+ * GAC_ERR_BAD_CONTACT (c outside the table, or a wall's or a stop's). */
+int gac_contact_geometry(const gac_model *m, const double *q, const double *p, int c, double *geometry);
 /* Obstacle o's shape row at the parameters p (GAC_OBSTACLE_NSHAPE doubles, the layout of m->obstacle_shapes): its
  * geometry from p where m->obstacle_params gives its place, else the model's constants.  Returns GAC_OK or
  * GAC_ERR_BAD_CONTACT (o out of range) or GAC_ERR_NULL_ARGUMENT. */

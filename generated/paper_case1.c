@@ -1582,28 +1582,28 @@ void paper_case1_rhs(double t, const double *GAC_RESTRICT x, const double *GAC_R
 
 /* The contacts: point (a stop: its joint), wall axis (-1), inward normal sign, Jacobian row, restitution (p index,
  * or -1: the value), kind, coordinate (a stop: its joint angle's index in q), Coulomb friction (whether, p index or
- * -1: the value) and the tangential Jacobian rows (-1: none). */
+ * -1: the value), the tangential Jacobian rows (-1: none) and an obstacle's part of its link (GAC_END_*). */
 static const gac_contact paper_case1_contacts[PAPER_CASE1_NCONTACT] = {
-    { 1, 0, 1, 0, 25, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 0: O1/x1_min */
-    { 2, 0, 1, 2, 25, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 1: O2/x1_min */
-    { 3, 0, 1, 4, 25, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 2: O3/x1_min */
-    { 4, 0, 1, 6, 25, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 3: O4/x1_min */
-    { 5, 0, 1, 8, 25, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 4: O5/x1_min */
-    { 1, 0, -1, 0, 26, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 5: O1/x1_max */
-    { 2, 0, -1, 2, 26, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 6: O2/x1_max */
-    { 3, 0, -1, 4, 26, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 7: O3/x1_max */
-    { 4, 0, -1, 6, 26, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 8: O4/x1_max */
-    { 5, 0, -1, 8, 26, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 9: O5/x1_max */
-    { 1, 1, 1, 1, 27, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 10: O1/x2_min */
-    { 2, 1, 1, 3, 27, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 11: O2/x2_min */
-    { 3, 1, 1, 5, 27, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 12: O3/x2_min */
-    { 4, 1, 1, 7, 27, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 13: O4/x2_min */
-    { 5, 1, 1, 9, 27, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 14: O5/x2_min */
-    { 1, 1, -1, 1, 28, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 15: O1/x2_max */
-    { 2, 1, -1, 3, 28, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 16: O2/x2_max */
-    { 3, 1, -1, 5, 28, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 17: O3/x2_max */
-    { 4, 1, -1, 7, 28, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 18: O4/x2_max */
-    { 5, 1, -1, 9, 28, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 19: O5/x2_max */
+    { 1, 0, 1, 0, 25, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 0: O1/x1_min */
+    { 2, 0, 1, 2, 25, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 1: O2/x1_min */
+    { 3, 0, 1, 4, 25, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 2: O3/x1_min */
+    { 4, 0, 1, 6, 25, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 3: O4/x1_min */
+    { 5, 0, 1, 8, 25, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 4: O5/x1_min */
+    { 1, 0, -1, 0, 26, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 5: O1/x1_max */
+    { 2, 0, -1, 2, 26, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 6: O2/x1_max */
+    { 3, 0, -1, 4, 26, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 7: O3/x1_max */
+    { 4, 0, -1, 6, 26, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 8: O4/x1_max */
+    { 5, 0, -1, 8, 26, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 9: O5/x1_max */
+    { 1, 1, 1, 1, 27, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 10: O1/x2_min */
+    { 2, 1, 1, 3, 27, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 11: O2/x2_min */
+    { 3, 1, 1, 5, 27, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 12: O3/x2_min */
+    { 4, 1, 1, 7, 27, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 13: O4/x2_min */
+    { 5, 1, 1, 9, 27, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 14: O5/x2_min */
+    { 1, 1, -1, 1, 28, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 15: O1/x2_max */
+    { 2, 1, -1, 3, 28, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 16: O2/x2_max */
+    { 3, 1, -1, 5, 28, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 17: O3/x2_max */
+    { 4, 1, -1, 7, 28, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 18: O4/x2_max */
+    { 5, 1, -1, 9, 28, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 19: O5/x2_max */
 };
 
 static const char paper_case1_contact_names[PAPER_CASE1_NCONTACT][16] = {      /* no pointers: read-only data */

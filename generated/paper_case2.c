@@ -2016,20 +2016,20 @@ void paper_case2_rhs(double t, const double *GAC_RESTRICT x, const double *GAC_R
 
 /* The contacts: point (a stop: its joint), wall axis (-1), inward normal sign, Jacobian row, restitution (p index,
  * or -1: the value), kind, coordinate (a stop: its joint angle's index in q), Coulomb friction (whether, p index or
- * -1: the value) and the tangential Jacobian rows (-1: none). */
+ * -1: the value), the tangential Jacobian rows (-1: none) and an obstacle's part of its link (GAC_END_*). */
 static const gac_contact paper_case2_contacts[PAPER_CASE2_NCONTACT] = {
-    { 1, 0, 1, 0, 12, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 0: O1/x1_min */
-    { 2, 0, 1, 3, 12, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 1: O2/x1_min */
-    { 1, 0, -1, 0, 13, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 2: O1/x1_max */
-    { 2, 0, -1, 3, 13, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 3: O2/x1_max */
-    { 1, 1, 1, 1, 14, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 4: O1/x2_min */
-    { 2, 1, 1, 4, 14, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 5: O2/x2_min */
-    { 1, 1, -1, 1, 15, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 6: O1/x2_max */
-    { 2, 1, -1, 4, 15, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 7: O2/x2_max */
-    { 1, 2, 1, 2, 16, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 8: O1/x3_min */
-    { 2, 2, 1, 5, 16, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 9: O2/x3_min */
-    { 1, 2, -1, 2, 17, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 10: O1/x3_max */
-    { 2, 2, -1, 5, 17, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 } },   /* 11: O2/x3_max */
+    { 1, 0, 1, 0, 12, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 0: O1/x1_min */
+    { 2, 0, 1, 3, 12, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 1: O2/x1_min */
+    { 1, 0, -1, 0, 13, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 2: O1/x1_max */
+    { 2, 0, -1, 3, 13, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 3: O2/x1_max */
+    { 1, 1, 1, 1, 14, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 4: O1/x2_min */
+    { 2, 1, 1, 4, 14, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 5: O2/x2_min */
+    { 1, 1, -1, 1, 15, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 6: O1/x2_max */
+    { 2, 1, -1, 4, 15, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 7: O2/x2_max */
+    { 1, 2, 1, 2, 16, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 8: O1/x3_min */
+    { 2, 2, 1, 5, 16, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 9: O2/x3_min */
+    { 1, 2, -1, 2, 17, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 10: O1/x3_max */
+    { 2, 2, -1, 5, 17, 1.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, { -1, -1 }, 0 },   /* 11: O2/x3_max */
 };
 
 static const char paper_case2_contact_names[PAPER_CASE2_NCONTACT][16] = {      /* no pointers: read-only data */

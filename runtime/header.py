@@ -21,13 +21,14 @@ FMI2_FIELDS = ("id", "name", "count", "causality", "variability", "unit", "start
 
 # The library functions a compiled module offers Python as lib.gac_*: the checks of options, descriptor and inertia,
 # the storage sizes, the frictional impact law, inverse dynamics, the contact of two capsule links and of a link and
-# an obstacle, an obstacle's shape at p and the obstacle a parameter moves (with the checks of a box's rotation and a
+# an obstacle (and of any contact of the table), an obstacle's shape at p and the obstacle a parameter moves (with the checks of a box's rotation and a
 # plane's normal), a contact's J^T n and a link contact's derivative of it and of its frame's rows, the
 # linearisation, the base charts' conversion and its derivative, and the sensitivities of a run (they take the
 # model's descriptor; no per-model wrapper).  Their signatures come from gac.h like everything else.
 PYTHON_FUNCTIONS = ("gac_chart_convert", "gac_chart_convert_tangent", "gac_check_options", "gac_impact_friction",
                     "gac_impact_nwork", "gac_inertia_admissible",
-                    "gac_contact_frame_tangent", "gac_contact_normal", "gac_contact_normal_tangent",
+                    "gac_contact_frame_tangent", "gac_contact_geometry", "gac_contact_normal",
+                    "gac_contact_normal_tangent",
                     "gac_inverse_dynamics", "gac_link_gap", "gac_link_impact", "gac_linearize", "gac_model_check",
                     "gac_obstacle_gap", "gac_obstacle_parameter", "gac_obstacle_shape", "gac_rotation_admissible",
                     "gac_unit_admissible",

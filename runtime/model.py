@@ -19,7 +19,7 @@ from codegen.cache import generate_cached
 from codegen.options import BuildOptions, build_options
 from codegen.artifact import GeneratedModel
 from codegen.scene import Chains
-from codegen.scene import ObstacleContact, Scene, load_scene, scene_file
+from codegen.scene import Scene, load_scene, scene_file
 
 from .compile import compile_model
 
@@ -254,14 +254,26 @@ class CompiledModel:
                           self._vec(qd, self.nq, "qd"), self._params(p))
 
     def contact_gaps(self, q, p=None) -> np.ndarray:
-        """Every contact's gap: the kernel's (walls, stops), then each link pair's (gac_link_gap) and each link and
-        obstacle's (gac_obstacle_gap)."""
+        """Every contact's gap: the kernel's (walls, stops), then each link pair's and each obstacle contact's
+        (gac_contact_geometry)."""
         gaps = self._call("contact_gaps", len(self.contacts), self._vec(q, self.nq, "q"), self._params(p))
         for c in range(len(self.layout.contacts), len(self.contacts)):
-            pair = self.contacts[c][1]
-            gaps[c] = (self.obstacle_gap(q, pair.i, pair.obstacle.name, p)[0] if isinstance(pair, ObstacleContact)
-                       else self.link_gap(q, pair.i, pair.j, p, radius=pair.radius)[0])
+            gaps[c] = self.contact_geometry(q, c, p)[0]
         return gaps
+
+    def contact_geometry(self, q, c: int, p=None) -> tuple[float, float, float, np.ndarray]:
+        """The geometry of contact c, a link pair or an obstacle's contact (gac_contact_geometry): (gap, s, t, n),
+        as link_gap's and obstacle_gap's; a plane's contact of one joint point has s = 0 or 1 along its link."""
+        first = len(self.layout.contacts)
+        if isinstance(c, bool) or not isinstance(c, (int, np.integer)) or not first <= c < len(self.contacts):
+            raise ValueError(f"c: a link pair's or an obstacle's contact index in {first}..{len(self.contacts) - 1}, "
+                             f"got {c!r}")
+        out = np.zeros(6)
+        code = self.lib.gac_contact_geometry(self.ffi.addressof(self.c.model), self._ptr(self._vec(q, self.nq, "q")),
+                                             self._ptr(self._params(p)), int(c), self._ptr(out))
+        if code != self.lib.GAC_OK:
+            raise ImpactError(f"contact {c} ({self.contacts[c][1].name}): {self.error_message(code)}")
+        return float(out[0]), float(out[1]), float(out[2]), out[3:].copy()
 
     def obstacle_gap(self, q, i: int, obstacle: str, p=None) -> tuple[float, float, float, np.ndarray]:
         """The contact of link i and the fixed obstacle named ``obstacle`` (gac_obstacle_gap): (gap, s, t, n) with gap

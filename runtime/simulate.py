@@ -962,6 +962,10 @@ def _check_inside(model: CompiledModel, q: np.ndarray, p: np.ndarray, name: str)
             o = wall.obstacle
             radius = model.scene.capsule_radius(wall.i) + (
                 float(p[model.parameter_names.index(f"radius_{o.name}")]) if not o.bounded_by_planes else 0.0)
+            if wall.end != 0:                           # a joint point on a plane
+                raise ValueError(f"{name}: O_{wall.joint} (an end of link {wall.i}) overlaps the plane {o.name}: it "
+                                 f"is {gaps[c] + radius:.6g} m from the plane, less than its radius {radius:g} m "
+                                 f"(gap {gaps[c]:.3g} m)")
             raise ValueError(f"{name}: link {wall.i} overlaps the obstacle {o.name}: its segment is "
                              f"{gaps[c] + radius:.6g} m from the obstacle's, less than their radii {radius:g} "
                              f"m together (gap {gaps[c]:.3g} m)")
@@ -1074,7 +1078,8 @@ def _end_message(model: CompiledModel, sim, code: int, segment_t: float, segment
         gaps = model.contact_gaps(q, np.array(model.ffi.unpack(sim.p, len(model.parameters()))))
         first = len(model.layout.contacts)
         pair = model.contacts[first + int(np.argmin(gaps[first:]))][1]
-        message += (f" (the contact closest at the stop: link {pair.i} on the obstacle {pair.obstacle.name}, "
+        message += (f" (the contact closest at the stop: "
+                    f"{f'link {pair.i}' if pair.end == 0 else f'O_{pair.joint}'} on the obstacle {pair.obstacle.name}, "
                     f"{pair.name})" if isinstance(pair, ObstacleContact)
                     else f" (the pair closest at the stop: links {pair.i} and {pair.j}, {pair.name})")
     if code == lib.GAC_ERR_LINK_LINE:

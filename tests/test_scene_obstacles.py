@@ -82,7 +82,10 @@ def test_a_box_and_a_plane_take_their_own_fields():
     assert roof.shape[:7] == (2.0, 0.0, 3.0, 0.0, 0.6, -0.8, 0.0)
     assert scene(BOX).obstacles[0].box_rotation == ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
     assert s.parameter_names()[-23:-21] == ["e_block", "e_roof"]              # then the geometry: 15 + 6 entries
-    assert [c.radius for c in s.obstacle_contacts()] == [0.05] * 4      # the links' radii alone
+    assert [c.radius for c in s.obstacle_contacts()] == [0.05] * 5      # the links' radii alone
+    # a box's contacts are its links', a plane's its joint points' (each on the link that carries it)
+    assert [c.name for c in s.obstacle_contacts()] == ["L1/block", "L2/block", "O1/roof", "O2/roof", "O3/roof"]
+    assert [(c.i, c.end) for c in s.obstacle_contacts()[2:]] == [(1, 1), (1, 2), (2, 2)]
 
 
 @pytest.mark.parametrize("obstacle, message", [
@@ -102,7 +105,7 @@ def test_a_box_and_a_plane_take_their_own_fields():
     ({**ROOF, "normal": [0, 0, 0]}, "obstacles[1] (roof).normal: must be a unit vector"),
     ({**ROOF, "center": [0, 1, 0]}, "obstacles[1].center: a plane takes point, normal, not center"),
     ({k: v for k, v in ROOF.items() if k != "normal"}, "obstacles[1].normal: required for a plane"),
-    ({**ROOF, "point": [0.0, 0.5, 0.0]}, "initial.q: link 1 overlaps the plane roof by"),
+    ({**ROOF, "point": [0.0, 0.5, 0.0]}, "initial.q: O_2 (an end of link 1) overlaps the plane roof by"),
     ({**BALL, "normal": [0, 1, 0]}, "obstacles[1].normal: a sphere takes center, radius, not normal"),
 ])
 def test_bad_boxes_and_planes_are_refused_by_field(obstacle, message):

@@ -96,13 +96,16 @@ def independent_gap(o: Obstacle, p0, p1, radius: float = R_LINK) -> float:
     return (distance if distance > 0.0 else box_depth(o, p0, p1)) - radius
 
 
-def gap_of(model, q, o: Obstacle) -> float:
+def gap_of(model, q, o: Obstacle, contact=None) -> float:
+    """The independent gap of the rod (or of the joint point of a plane's `contact`) and obstacle o."""
     points = reference_of(model.scene).points(q)
-    return independent_gap(o, points[0], points[1])
+    return independent_gap(o, *(contact.segment(points) if contact is not None else points[:2]))
 
 
 def test_the_scene_holds_boxes_and_a_plane(model):
-    assert [c.name for _, c in model.contacts] == ["L1/slab", "L1/ridge", "L1/corner", "L1/tilted", "L1/roof"]
+    assert [c.name for _, c in model.contacts] == ["L1/slab", "L1/ridge", "L1/corner", "L1/tilted", "O1/roof",
+                                                   "O2/roof"]                  # a plane's: the joint points'
+    assert [c.end for _, c in model.contacts] == [0, 0, 0, 0, 1, 2]
     geometry = sum(len(o.geometry_names) for o in model.scene.obstacles)    # after every obstacle's e
     assert model.parameter_names[-5 - geometry:-geometry] == ["e_slab", "e_ridge", "e_corner", "e_tilted", "e_roof"]
 
@@ -118,17 +121,23 @@ def test_gaps_and_directions_against_an_independent_computation(model):
         q = np.concatenate([rng.uniform(-math.pi, math.pi, 3), centres[trial % 4] + rng.uniform(-0.9, 0.9, 3)])
         q[1] = rng.uniform(-1.2, 1.2)                         # theta_0 away from the base chart's lock
         gaps = model.contact_gaps(q)
-        for c, o in enumerate(OBSTACLES):
-            expected = gap_of(model, q, o)
-            assert gaps[c] == pytest.approx(expected, abs=1e-11), (trial, o.name)
-            gap, s, t, n = model.obstacle_gap(q, 1, o.name)
+        for c, (_, contact) in enumerate(model.contacts):
+            o = contact.obstacle
+            expected = gap_of(model, q, o, contact)
+            assert gaps[c] == pytest.approx(expected, abs=1e-11), (trial, contact.name)
+            gap, s, t, n = model.contact_geometry(q, c)
             assert gap == gaps[c] and 0.0 <= s <= 1.0 and t == 0.0
+            assert contact.end == 0 or s == contact.end - 1                 # a joint point: its end of the link
+            if contact.end == 0:
+                assert model.obstacle_gap(q, 1, o.name)[:3] == (gap, s, t)
+            else:                                                           # the rod's gap: the least of its ends'
+                assert model.obstacle_gap(q, 1, o.name)[0] == pytest.approx(min(gaps[4:]), abs=1e-15)
             assert np.linalg.norm(n) == pytest.approx(1.0, abs=1e-14)
             if expected < 0.02:                               # inside or near: the gradient may have a kink
                 continue
             g = model.contact_normal(q, c)
             h = 1e-6
-            fd = np.array([(gap_of(model, q + h * d, o) - gap_of(model, q - h * d, o)) / (2 * h)
+            fd = np.array([(gap_of(model, q + h * d, o, contact) - gap_of(model, q - h * d, o, contact)) / (2 * h)
                            for d in np.eye(model.nq)])
             assert g == pytest.approx(fd, abs=2e-6 * max(1.0, np.abs(g).max())), (trial, o.name)
             checked_rows += 1

@@ -62,21 +62,21 @@ def test_a_chain_thrown_at_a_slanted_roof_bounces_without_crossing_it(model, qd0
 @pytest.mark.parametrize("qd0, t_end", [((0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 7.0, 0.0), 0.12),
                                          ((0.0, 0.0, 1.0, -1.0, 2.0, 0.5, 7.0, 0.0), 0.15)])
 def test_sensitivities_through_a_roof_strike(model, qd0, t_end):
-    """The chain's tip strikes the roof alone (link 3 at its end: the plane's constant normal, ds = 0): the
-    sensitivities go through it and match central differences of whole runs; a joint between two links striking
-    it next is two contacts at once with one row (both links' closest point is the joint): one takes the whole
-    impulse and the other none, leaving at the law's bound, a mode boundary that ends them (status 10) there."""
+    """The chain's tip strikes the roof alone (O_4, the plane's constant normal): the sensitivities go through it
+    and match central differences of whole runs; the joints between the links strike it next, each one contact
+    (a plane's contacts are the joint points), and the sensitivities go through those too, to 0.3 s."""
     from tests.test_sim_sensitivities import central_differences
     tangent = load_model(model.scene, tangent=True)
     p = tangent.parameters({"e_roof": 0.8})
     q0, qd0 = np.array(model.scene.q0, dtype=float), np.array(qd0)
     directions = ["qd0[X1]", "g", "q0[theta_2]", "qd0[theta_3]", "l_2", "e_roof"]
     r = simulate(tangent, t_end, p=p, qd0=qd0, sensitivities=directions, **TOL)
-    assert [[c.label for c in i.contacts] for i in r.impacts] == [["L3/roof"]]
+    assert [[c.label for c in i.contacts] for i in r.impacts] == [["O4/roof"]]
     assert r.sensitivities.valid and r.sensitivities.n_impacts == 1, r.sensitivity_message
     central_differences(tangent, t_end, p, q0, qd0, directions, r.sensitivities.matrix, **TOL)
-    r = simulate(tangent, 0.3, p=p, qd0=qd0, sensitivities=directions, **TOL)
-    joint = next(i for i in r.impacts if len(i.contacts) == 2)
-    assert [c.impulse for c in joint.contacts].count(0.0) == 1
-    assert not r.sensitivities.valid and r.sensitivities.code == 10 and "mode boundary" in r.sensitivities.status
-    assert r.sensitivities.t_event == pytest.approx(joint.t, abs=1e-12)
+    tight = dict(rtol=1e-12, atol=1e-14)                          # five impacts: the differences' noise below 1e-5
+    r = simulate(tangent, 0.3, p=p, qd0=qd0, sensitivities=directions, **tight)
+    struck = [c.label for i in r.impacts for c in i.contacts]
+    assert all(len(i.contacts) == 1 for i in r.impacts) and {"O2/roof", "O3/roof"} <= set(struck)
+    assert r.sensitivities.valid and r.sensitivities.n_impacts == len(r.impacts) >= 4, r.sensitivity_message
+    central_differences(tangent, 0.3, p, q0, qd0, directions, r.sensitivities.matrix, **tight)

@@ -242,7 +242,7 @@ def test_a_landing_in_an_impact_of_two_rounds_matches_central_differences(model)
 @pytest.fixture(scope="module")
 def plane_model(compiled):
     """The frictionless rod of `model` with the side wall replaced by a plane obstacle "side" at the same place
-    (normal +X1, e = 0.7): the upper end's contact a link on an obstacle (L1/side)."""
+    (normal +X1, e = 0.7): the upper end's contact a joint point on an obstacle (O2/side)."""
     q0, qd0, wall = strike_start(0.5, 2.0)
     inertia = L ** 2 / 12
     scene = Scene(name="sens_rounds_plane",
@@ -261,7 +261,7 @@ def test_an_impact_of_three_rounds_on_an_obstacle_matches_central_differences(pl
     q0, qd0, p = np.array(model.scene.q0), np.array(model.scene.qd0), model.parameters({})
     r = simulate(model, t_end, p=p, q0=q0, qd0=qd0, sensitivities=directions, **OPTIONS)
     assert r.success, r.message
-    assert sequence(r) == [(("O1/x2_min", "L1/side"), 3, False)] and r.impacts[0].law == "frictionless"
+    assert sequence(r) == [(("O1/x2_min", "O2/side"), 3, False)] and r.impacts[0].law == "frictionless"
     assert all(c.impulse > 0.1 for c in r.impacts[0].contacts)
     assert r.sensitivities.valid and r.sensitivities.n_impacts == 1, r.sensitivity_message
     check_central_differences(model, t_end, p, q0, qd0, directions, r.sensitivities.matrix)
@@ -293,7 +293,7 @@ def test_frictional_rounds_on_a_rough_obstacle_match_central_differences(rough_p
     p = model.parameters({"friction_x2_min": friction, "friction_side": friction})
     r = simulate(model, t_end, p=p, q0=q0, qd0=qd0, sensitivities=directions, **OPTIONS)
     assert r.success, r.message
-    assert sequence(r) == [(("O1/x2_min", "L1/side"), rounds, False)] and r.impacts[0].law == "gdi"
+    assert sequence(r) == [(("O1/x2_min", "O2/side"), rounds, False)] and r.impacts[0].law == "gdi"
     assert abs(r.impacts[0].contacts[1].impulse_t[0]) > 0.01
     assert r.sensitivities.valid and r.sensitivities.n_impacts == 1, r.sensitivity_message
     check_central_differences(model, t_end, p, q0, qd0, directions, r.sensitivities.matrix)

@@ -191,17 +191,29 @@ int gac_link_gap(const gac_model *m, const double *q, const double *p, int i, in
     return GAC_OK;
 }
 
-int gac_obstacle_gap(const gac_model *m, const double *q, const double *p, int i, int o, double radius,
-                     double *geometry)
+/* The contact of the part `end` of link i (GAC_END_*: its segment, or one joint point as a segment of no length)
+ * and obstacle o; s is the fraction along the whole link (0 or 1 for a joint point). */
+static int gac_obstacle_part_gap(const gac_model *m, const double *q, const double *p, int i, int o, int end,
+                                 double radius, double *geometry)
 {
     const int npoint = m->npoint;
     double r[3 * GAC_AT_LEAST_1(npoint)], shape[GAC_OBSTACLE_NSHAPE];
+    const double *a0, *a1;
     if (i < 1 || i + 1 > npoint || !(radius >= 0.0) || gac_obstacle_shape(m, p, o, shape) != GAC_OK)
         return GAC_ERR_BAD_CONTACT;
     m->contact_points(q, p, r);
-    if (gac_obstacle_shape_contact(shape, r + 3 * (i - 1), r + 3 * i, radius, geometry)) return GAC_OK;  /* box, plane */
-    gac_segment_contact(r + 3 * (i - 1), r + 3 * i, shape + 1, shape + 4, radius + shape[7], geometry);  /* bar, sphere */
+    a0 = r + 3 * (end == GAC_END_FINISH ? i : i - 1);
+    a1 = end == GAC_END_LINK ? r + 3 * i : a0;
+    if (!gac_obstacle_shape_contact(shape, a0, a1, radius, geometry))                     /* a box, a plane, */
+        gac_segment_contact(a0, a1, shape + 1, shape + 4, radius + shape[7], geometry);   /* or a bar, a sphere */
+    if (end != GAC_END_LINK) geometry[1] = end == GAC_END_FINISH ? 1.0 : 0.0;
     return GAC_OK;
+}
+
+int gac_obstacle_gap(const gac_model *m, const double *q, const double *p, int i, int o, double radius,
+                     double *geometry)
+{
+    return gac_obstacle_part_gap(m, q, p, i, o, GAC_END_LINK, radius, geometry);
 }
 
 /* n . (v_P - v_Q): the rate of the gap of links i, j with closest points at fractions s, t and normal n, from the
@@ -330,10 +342,18 @@ static int gac_rowless_geometry(const gac_model *m, const double *q, const doubl
     const double radius = m->link_radius[c - gac_kernel_contacts(m)];
     if (k->kind == GAC_CONTACT_OBSTACLE) {
         *second = 0;
-        return gac_obstacle_gap(m, q, p, k->point, k->coordinate, radius, geometry);
+        return gac_obstacle_part_gap(m, q, p, k->point, k->coordinate, k->end, radius, geometry);
     }
     *second = k->coordinate;
     return gac_link_gap(m, q, p, k->point, k->coordinate, radius, geometry);
+}
+
+int gac_contact_geometry(const gac_model *m, const double *q, const double *p, int c, double *geometry)
+{
+    int second;
+    if (m == 0 || q == 0 || p == 0 || geometry == 0) return GAC_ERR_NULL_ARGUMENT;
+    if (c < 0 || c >= m->ncontact || !gac_rowless(m, c)) return GAC_ERR_BAD_CONTACT;
+    return gac_rowless_geometry(m, q, p, c, geometry, &second);
 }
 
 /* A held link pair, or a link held on a bar, touches at one point: an end of one segment on the other, the lines'

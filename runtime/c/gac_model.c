@@ -65,7 +65,7 @@ int gac_model_check(const gac_model *m)
                 || !(m->link_radius[c - gac_kernel_contacts(m)] >= 0.0)
                 || k->normal_sign != 1 || k->e_index >= m->nparam || k->friction_index >= m->nparam
                 || (k->has_friction && !(k->friction_index >= 0 || k->friction_value >= 0.0))
-                || (c + 1 < m->ncontact && !gac_rowless(m, c + 1)))
+                || (c + 1 < m->ncontact && !gac_rowless(m, c + 1)) || k->end != GAC_END_LINK)
                 return GAC_ERR_BAD_MODEL;
             continue;
         }
@@ -78,10 +78,15 @@ int gac_model_check(const gac_model *m)
                 || (c + 1 < m->ncontact && m->contacts[c + 1].kind != GAC_CONTACT_OBSTACLE))
                 return GAC_ERR_BAD_MODEL;
             if (gac_obstacle_shape_check(m, k->coordinate) != GAC_OK) return GAC_ERR_BAD_MODEL;
+            /* a joint point alone: a plane's contacts (a box's features are the whole segment's) */
+            if (k->end != GAC_END_LINK
+                && ((k->end != GAC_END_START && k->end != GAC_END_FINISH)
+                    || gac_obstacle_kind(m, k->coordinate) != GAC_OBSTACLE_PLANE))
+                return GAC_ERR_BAD_MODEL;
             continue;
         }
         if ((k->normal_sign != 1 && k->normal_sign != -1) || k->row < 0 || k->row >= m->njrow
-            || k->e_index >= m->nparam)
+            || k->e_index >= m->nparam || k->end != GAC_END_LINK)
             return GAC_ERR_BAD_MODEL;
         if (k->has_friction) {
             if (k->kind != GAC_CONTACT_WALL || k->friction_index >= m->nparam || !(m->friction_velocity > 0.0)

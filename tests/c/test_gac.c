@@ -92,7 +92,7 @@ static void ball_rhs(double t, const double *x, const double *u, const double *p
     ball_fd(x, x + 1, u, p, xdot + 1);
 }
 
-static const gac_contact ball_contacts[1] = {{1, 1, +1, 0, 2, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}}};   /* O_1 on the floor, e = p[2] */
+static const gac_contact ball_contacts[1] = {{1, 1, +1, 0, 2, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}, GAC_END_LINK}};   /* O_1 on the floor, e = p[2] */
 static const double ball_p[3] = {9.81, 2.0, 0.8};
 static const double ball_q0[1] = {1.0}, ball_qd0[1] = {0.0};
 
@@ -179,8 +179,8 @@ static void box_rhs(double t, const double *x, const double *u, const double *p,
 }
 
 static const gac_contact box_contacts[4] = {
-    {1, 0, +1, 0, 2, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}}, {1, 0, -1, 0, 2, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}},
-    {1, 1, +1, 1, 2, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}}, {1, 1, -1, 1, 2, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}}
+    {1, 0, +1, 0, 2, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}, GAC_END_LINK}, {1, 0, -1, 0, 2, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}, GAC_END_LINK},
+    {1, 1, +1, 1, 2, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}, GAC_END_LINK}, {1, 1, -1, 1, 2, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}, GAC_END_LINK}
 };
 static const double box_p[3] = {9.81, 0.5, 1.0};
 static const double box_q0[2] = {1.0, 1.0}, box_qd0[2] = {1.3, 2.0};
@@ -219,7 +219,7 @@ static void sled_gaps(const double *q, const double *p, double *gap)
     (void)p;
     gap[0] = q[1];
 }
-static const gac_contact sled_contacts[1] = {{1, 1, +1, 1, 2, 0.0, GAC_CONTACT_WALL, -1, 1, 3, 0.0, {0, -1}}};
+static const gac_contact sled_contacts[1] = {{1, 1, +1, 1, 2, 0.0, GAC_CONTACT_WALL, -1, 1, 3, 0.0, {0, -1}, GAC_END_LINK}};
 static const double sled_p[4] = {9.81, 0.5, 0.0, 0.5};
 static const double sled_q0[2] = {0.0, 0.0}, sled_qd0[2] = {3.0, 0.0};
 
@@ -933,7 +933,7 @@ static void skew_rhs(double t, const double *x, const double *u, const double *p
     skew_fd(x, x + 2, u, p, xdot + 2);
 }
 static const gac_contact skew_contacts[2] = {
-    {1, 0, +1, 0, 0, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}}, {1, 1, +1, 1, 0, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}}
+    {1, 0, +1, 0, 0, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}, GAC_END_LINK}, {1, 1, +1, 1, 0, 0.0, GAC_CONTACT_WALL, -1, 0, -1, 0.0, {-1, -1}, GAC_END_LINK}
 };
 static const double skew_p[3] = {0.5, 0.0, 0.0};
 static const double skew_q0[2] = {1.0, 1.0}, skew_qd0[2] = {0.0, 0.0};

@@ -98,7 +98,7 @@
                                           a wall's contact) or at one instant
                                           (within 1e-12 (1 + |t|) s).  Also a held one whose normal loses its
                                           derivative */
-#define GAC_ERR_LINK_LINE        -34   /* a link held on another link (or on a bar) turned parallel to it: its
+#define GAC_ERR_LINK_LINE        -34   /* a link held on another link (or a bar, or a box's face) turned parallel to it: its
                                           other end came closer than the held point by more than round-off (1e-12
                                           of the two lengths): a line contact, which the pair's one-point contact
                                           cannot hold; the run stops at the start of that step, before the other

@@ -363,6 +363,29 @@ int gac_contact_geometry(const gac_model *m, const double *q, const double *p, i
  * from x0 to x1, with the point held at x0: the held end's distance at x1 against the opposite end's (of the same
  * segment), or a held middle's against the least; returns the first contact of set[0..n-1] whose other end (or
  * least) came closer than the held point by more than tol (plus the parallel tie of the lengths), else -1. */
+/* A link held on a box's face (the closest part at x0 a face, held at an end or, lying flat, at the middle of the
+ * stretch over it) whose end came closer to the box than the held point by more than tol plus the parallel tie
+ * over the step to x1 (the joint points r0, r1 at either end): the link turned down to lie along the face.  A
+ * held edge or corner is left out (the link pivots about it). */
+static int gac_box_line_contact(const gac_model *m, const double *r0, const double *r1, const double *p,
+                                const gac_contact *c, double tol)
+{
+    const double *A0 = r0 + 3 * (c->point - 1), *A1 = r0 + 3 * c->point;
+    const double *B0 = r1 + 3 * (c->point - 1), *B1 = r1 + 3 * c->point;
+    double shape[GAC_OBSTACLE_NSHAPE], geometry[GAC_LINK_NGEOMETRY], e0[3], e1[3], x[3], d[3], s, held, end0, end1;
+    int k;
+    if (gac_obstacle_shape(m, p, c->coordinate, shape) != GAC_OK) return 0;
+    if (gac_obstacle_feature(shape, A0, A1, e0, e1) != 0) return 0;          /* an edge or a corner */
+    (void)gac_obstacle_shape_contact(shape, A0, A1, 0.0, geometry);
+    s = geometry[1];
+    for (k = 0; k < 3; ++k) x[k] = B0[k] + s * (B1[k] - B0[k]), d[k] = B1[k] - B0[k];
+    (void)gac_obstacle_shape_contact(shape, x, x, 0.0, geometry), held = geometry[0];
+    (void)gac_obstacle_shape_contact(shape, B0, B0, 0.0, geometry), end0 = geometry[0];
+    (void)gac_obstacle_shape_contact(shape, B1, B1, 0.0, geometry), end1 = geometry[0];
+    tol += GAC_PARALLEL_TIE * (sqrt(gac_dot3(d, d)) + shape[4] + shape[5] + shape[6]);
+    return (s != 0.0 && end0 < held - tol) || (s != 1.0 && end1 < held - tol);
+}
+
 int gac_line_contact(const gac_model *m, const double *x0, const double *x1, const double *p, int n, const int *set,
                      double tol)
 {
@@ -375,11 +398,16 @@ int gac_line_contact(const gac_model *m, const double *x0, const double *x1, con
         double s0, t0, s1, t1, x[3], d[3], reach, held, other, shape[GAC_OBSTACLE_NSHAPE];
         int flat, end;
         if (!gac_rowless(m, set[a])) continue;
-        if (c->kind == GAC_CONTACT_OBSTACLE && !gac_obstacle_round(gac_obstacle_kind(m, c->coordinate))) continue;
+        if (c->kind == GAC_CONTACT_OBSTACLE && !gac_obstacle_round(gac_obstacle_kind(m, c->coordinate))
+            && gac_obstacle_kind(m, c->coordinate) != GAC_OBSTACLE_BOX) continue;   /* a plane: its joint points */
         if (!loaded) {
             m->contact_points(x0, p, r0);
             m->contact_points(x1, p, r1);
             loaded = 1;
+        }
+        if (c->kind == GAC_CONTACT_OBSTACLE && !gac_obstacle_round(gac_obstacle_kind(m, c->coordinate))) {
+            if (gac_box_line_contact(m, r0, r1, p, c, tol)) return set[a];
+            continue;
         }
         for (end = 0; end < 2; ++end) {                  /* the two segments at x0 (end 0) and x1 (end 1) */
             const double *r = end == 0 ? r0 : r1;

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from codegen.scene import OBSTACLE_PARAMETERS, split_parameter_name
+from codegen.scene import OBSTACLE_PARAMETERS, WALL_NAMES, split_parameter_name
 
 # an obstacle's geometry entries that are not directions of their own: a box's rotation stays orthonormal and a
 # plane's normal unit, so no single entry can move alone (gac_obstacle_turn_admissible); a plane's normal turns
@@ -169,7 +169,7 @@ def contact_label(model, contact: int) -> str:
     if contact < 0:
         return ""
     point, wall = model.contacts[contact]
-    return wall.name if wall.name.startswith(("theta_", "L")) else f"O{point}/{wall.name}"
+    return f"O{point}/{wall.name}" if wall.name in WALL_NAMES else wall.name     # a stop, pair, obstacle: its own
 
 
 def seeds(seed_x: np.ndarray, seed_p: np.ndarray, one_sided: bool) -> tuple[np.ndarray, np.ndarray]:

@@ -21,7 +21,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from codegen.scene import JointStop, LinkPair, ObstacleContact, Scene, SceneError, parameter_name, split_parameter_name
+from codegen.scene import WALL_NAMES, JointStop, LinkPair, ObstacleContact, Scene, SceneError, parameter_name, \
+    split_parameter_name
 from codegen.parameters import check_vector, parameter_rules
 from codegen.specialise import coordinate_names
 
@@ -107,7 +108,7 @@ class ContactEvent:
 
     @property
     def label(self) -> str:
-        return self.wall if self.wall.startswith("theta_") else f"O{self.point}/{self.wall}"
+        return f"O{self.point}/{self.wall}" if self.wall in WALL_NAMES else self.wall   # a stop, pair, obstacle: its own
 
 
 @dataclass

@@ -776,6 +776,11 @@ static void test_errors(void)
     bad = box;
     bad.contacts = wrong;
     CHECK(gac_model_check(&bad) == GAC_ERR_BAD_MODEL, "Jacobian row out of range");
+    memcpy(wrong, box_contacts, sizeof wrong);
+    wrong[1].end = GAC_END_FINISH;                          /* a joint point alone: a plane's contacts only */
+    CHECK(gac_model_check(&bad) == GAC_ERR_BAD_MODEL, "a wall's contact of one end refused");
+    wrong[1].end = GAC_END_LINK;
+    CHECK(gac_model_check(&bad) == GAC_OK, "the same table with the whole link accepted");
     memset(&sim, 0xab, sizeof sim);
     memcpy(&before, &sim, sizeof sim);
     CHECK(gac_sim_init(&sim, &ball, dwork, iwork, 0.0, below, ball_qd0, 0, 0) == GAC_ERR_START_OUTSIDE,

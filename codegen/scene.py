@@ -1344,14 +1344,18 @@ class Scene:
 
     def obstacle_contacts(self) -> list[ObstacleContact]:
         """The contacts of the obstacles (after the link pairs), obstacle-major: a link and a sphere, a bar or a
-        box, in link order; a plane's, one per joint point of the links it touches, in point order.  A plane's
-        signed distance is linear along a link, so a capsule is nearest to it at an end sphere (or all along, lying
-        flat): its joint points are its contacts, each with the larger radius of the listed links ending there
-        (taken on that link), and a link that comes to lie on the plane rests on two of them, a line contact."""
+        box, in link order; then a plane's or a box's joint points, in point order.  A plane's signed distance is
+        linear along a link, so a capsule is nearest to it at an end sphere (or all along, lying flat): its joint
+        points are its contacts, each with the larger radius of the listed links ending there (taken on that link),
+        and a link that comes to lie on the plane rests on two of them, a line contact.  A box's face is such a
+        plane where a link lies over it, but an edge or a corner can touch a link anywhere along it: a box has both,
+        each link's contact (where its nearest point is inside it) and the joint points' (which take the link's
+        contact's place where its nearest point is an end: gac_redundant)."""
         out = []
         for k, o in enumerate(self.obstacles):
             if o.kind != "plane":
                 out += [ObstacleContact(i, o, k, self.links[i - 1].radius + o.radius) for i in o.links]
+            if o.kind not in ("plane", "box"):
                 continue
             for p in sorted({p for i in o.links for p in (i, i + 1)}):
                 carriers = [i for i in (p - 1, p) if i in o.links]      # the listed links ending at O_p

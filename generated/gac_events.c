@@ -23,6 +23,35 @@ double gac_v_round(const gac_model *md, const double *vn)
     return GAC_V_FLOOR + 1e-10 * scale;
 }
 
+static double gac_redundant_tie(const gac_sim *s)
+{
+    return 1e-6 * s->opt.contact_tol + 1e-15;
+}
+
+int gac_redundant(const gac_sim *s, int c, const double *gaps)
+{
+    return gac_redundant_depth(s->model, c, gaps) < gac_redundant_tie(s);
+}
+
+double gac_redundant_lift(const gac_sim *s, int c, const double *gaps)
+{
+    const double depth = gac_redundant_depth(s->model, c, gaps), tie = gac_redundant_tie(s);
+    if (!(depth < tie)) return 0.0;
+    return 2.0 * (s->opt.contact_tol + tie) * (depth > 0.0 ? 1.0 - depth / tie : 1.0);
+}
+
+void gac_event_gaps(const gac_sim *s, const double *x, double *gaps)
+{
+    const gac_model *md = s->model;
+    int c;
+    gac_contact_gaps(md, x, s->p, gaps);
+    if (md->nobstacle > 0) {                   /* a link's contact whose joint point's measures the same: none */
+        double lift[GAC_AT_LEAST_1(md->ncontact)];
+        for (c = 0; c < md->ncontact; ++c) lift[c] = gac_redundant_lift(s, c, gaps);
+        for (c = 0; c < md->ncontact; ++c) gaps[c] += lift[c];
+    }
+}
+
 /* Event value (what = 0), normal velocity (what = 1) or normal velocity + gac_v_round (what = 2) of contact c
  * at time t inside the step. */
 static double gac_value_at(gac_sim *s, int what, int c, double t)
@@ -141,7 +170,7 @@ static int gac_dip(gac_sim *s, int c, double t_a, double g_a, double v_a, double
         m = iter < 60 ? (a * fb - b * fa) / (fb - fa) : 0.5 * (a + b);
         if (!(m > a && m < b)) m = 0.5 * (a + b);
         gac_dense(s, m, s->xs);
-        gac_contact_gaps(md, s->xs, s->p, s->es);
+        gac_event_gaps(s, s->xs, s->es);
         gm = s->es[c];
         gac_normal_velocities(md, s->xs, s->p, s->es);
         vm = s->es[c];

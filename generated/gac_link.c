@@ -348,6 +348,22 @@ static int gac_rowless_geometry(const gac_model *m, const double *q, const doubl
     return gac_link_gap(m, q, p, k->point, k->coordinate, radius, geometry);
 }
 
+double gac_redundant_depth(const gac_model *m, int c, const double *gaps)
+{
+    const gac_contact *k = &m->contacts[c];
+    double least = INFINITY;
+    int e;
+    if (k->kind != GAC_CONTACT_OBSTACLE || k->end != GAC_END_LINK) return INFINITY;
+    for (e = gac_kernel_contacts(m); e < m->ncontact; ++e) {   /* its link's joint points on the same obstacle */
+        const gac_contact *f = &m->contacts[e];
+        int joint;
+        if (f->kind != GAC_CONTACT_OBSTACLE || f->end == GAC_END_LINK || f->coordinate != k->coordinate) continue;
+        joint = f->point + (f->end == GAC_END_FINISH);
+        if ((joint == k->point || joint == k->point + 1) && gaps[e] < least) least = gaps[e];
+    }
+    return least - gaps[c];
+}
+
 int gac_contact_geometry(const gac_model *m, const double *q, const double *p, int c, double *geometry)
 {
     int second;
@@ -363,26 +379,33 @@ int gac_contact_geometry(const gac_model *m, const double *q, const double *p, i
  * from x0 to x1, with the point held at x0: the held end's distance at x1 against the opposite end's (of the same
  * segment), or a held middle's against the least; returns the first contact of set[0..n-1] whose other end (or
  * least) came closer than the held point by more than tol (plus the parallel tie of the lengths), else -1. */
-/* A link held on a box's face (the closest part at x0 a face, held at an end or, lying flat, at the middle of the
- * stretch over it) whose end came closer to the box than the held point by more than tol plus the parallel tie
- * over the step to x1 (the joint points r0, r1 at either end): the link turned down to lie along the face.  A
- * held edge or corner is left out (the link pivots about it). */
+/* A link held on a box (the step from x0 to x1, the joint points r0, r1 at either end) that came to lie along it:
+ * held on a face (at an end or, lying flat, at the middle of the stretch over it), an end came closer to the box
+ * than the held point; held on an edge or a corner, the link's least distance from the box came below its
+ * distance from that edge or corner (the nearest part moved to another edge, or down onto a face: the link
+ * pivoted about the held one), by more than tol plus the parallel tie. */
 static int gac_box_line_contact(const gac_model *m, const double *r0, const double *r1, const double *p,
                                 const gac_contact *c, double tol)
 {
     const double *A0 = r0 + 3 * (c->point - 1), *A1 = r0 + 3 * c->point;
     const double *B0 = r1 + 3 * (c->point - 1), *B1 = r1 + 3 * c->point;
-    double shape[GAC_OBSTACLE_NSHAPE], geometry[GAC_LINK_NGEOMETRY], e0[3], e1[3], x[3], d[3], s, held, end0, end1;
+    double shape[GAC_OBSTACLE_NSHAPE], geometry[GAC_LINK_NGEOMETRY], e0[3], e1[3], x[3], d[3], s, t, held, end0, end1;
     int k;
     if (gac_obstacle_shape(m, p, c->coordinate, shape) != GAC_OK) return 0;
-    if (gac_obstacle_feature(shape, A0, A1, e0, e1) != 0) return 0;          /* an edge or a corner */
+    for (k = 0; k < 3; ++k) d[k] = B1[k] - B0[k];
+    tol += GAC_PARALLEL_TIE * (sqrt(gac_dot3(d, d)) + shape[4] + shape[5] + shape[6]);
+    if (gac_obstacle_feature(shape, A0, A1, e0, e1) != 0) {                  /* an edge or a corner */
+        (void)gac_obstacle_shape_contact(shape, B0, B1, 0.0, geometry);      /* the least over the link, at x1 */
+        gac_segment_closest(B0, B1, e0, e1, &s, &t);
+        for (k = 0; k < 3; ++k) x[k] = B0[k] + s * d[k] - e0[k] - t * (e1[k] - e0[k]);
+        return geometry[0] < sqrt(gac_dot3(x, x)) - tol;
+    }
     (void)gac_obstacle_shape_contact(shape, A0, A1, 0.0, geometry);
     s = geometry[1];
-    for (k = 0; k < 3; ++k) x[k] = B0[k] + s * (B1[k] - B0[k]), d[k] = B1[k] - B0[k];
+    for (k = 0; k < 3; ++k) x[k] = B0[k] + s * d[k];
     (void)gac_obstacle_shape_contact(shape, x, x, 0.0, geometry), held = geometry[0];
     (void)gac_obstacle_shape_contact(shape, B0, B0, 0.0, geometry), end0 = geometry[0];
     (void)gac_obstacle_shape_contact(shape, B1, B1, 0.0, geometry), end1 = geometry[0];
-    tol += GAC_PARALLEL_TIE * (sqrt(gac_dot3(d, d)) + shape[4] + shape[5] + shape[6]);
     return (s != 0.0 && end0 < held - tol) || (s != 1.0 && end1 < held - tol);
 }
 
@@ -406,8 +429,8 @@ int gac_line_contact(const gac_model *m, const double *x0, const double *x1, con
             loaded = 1;
         }
         if (c->kind == GAC_CONTACT_OBSTACLE && !gac_obstacle_round(gac_obstacle_kind(m, c->coordinate))) {
-            if (gac_box_line_contact(m, r0, r1, p, c, tol)) return set[a];
-            continue;
+            if (c->end == GAC_END_LINK && gac_box_line_contact(m, r0, r1, p, c, tol)) return set[a];
+            continue;                                    /* (a joint point's contact: a point) */
         }
         for (end = 0; end < 2; ++end) {                  /* the two segments at x0 (end 0) and x1 (end 1) */
             const double *r = end == 0 ? r0 : r1;
@@ -778,8 +801,11 @@ static int gac_normal_tangent(const gac_model *m, const double *q, const double 
         grow = dshape[7];
         if (!gac_obstacle_round((int)shape[0])) {        /* a box or a plane: the part the gap is measured from */
             double x[3], span = 0.0;
-            const int feature = gac_obstacle_feature(shape, a0, a1, end0, end1);
-            (void)gac_obstacle_feature_change(shape, dshape, a0, a1, geometry + 3, dend0, dend1);
+            const int end = m->contacts[c].end;          /* a joint point's contact: the point's part */
+            const double *p0 = end == GAC_END_LINK ? a0 : (end == GAC_END_START ? a0 : a1);
+            const double *p1 = end == GAC_END_LINK ? a1 : p0;
+            const int feature = gac_obstacle_feature(shape, p0, p1, end0, end1);
+            (void)gac_obstacle_feature_change(shape, dshape, p0, p1, geometry + 3, dend0, dend1);
             for (k = 0; k < 3; ++k) x[k] = (1.0 - s) * a0[k] + s * a1[k];
             face = feature == 0, edge = feature == 1, grow = 0.0;
             if ((int)shape[0] == GAC_OBSTACLE_PLANE) {   /* its normal turning about its point: dn, x - point */

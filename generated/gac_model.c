@@ -78,10 +78,10 @@ int gac_model_check(const gac_model *m)
                 || (c + 1 < m->ncontact && m->contacts[c + 1].kind != GAC_CONTACT_OBSTACLE))
                 return GAC_ERR_BAD_MODEL;
             if (gac_obstacle_shape_check(m, k->coordinate) != GAC_OK) return GAC_ERR_BAD_MODEL;
-            /* a joint point alone: a plane's contacts (a box's features are the whole segment's) */
+            /* a joint point alone: a plane's or a box's contacts */
             if (k->end != GAC_END_LINK
                 && ((k->end != GAC_END_START && k->end != GAC_END_FINISH)
-                    || gac_obstacle_kind(m, k->coordinate) != GAC_OBSTACLE_PLANE))
+                    || gac_obstacle_round(gac_obstacle_kind(m, k->coordinate))))
                 return GAC_ERR_BAD_MODEL;
             continue;
         }

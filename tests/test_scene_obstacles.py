@@ -82,10 +82,12 @@ def test_a_box_and_a_plane_take_their_own_fields():
     assert roof.shape[:7] == (2.0, 0.0, 3.0, 0.0, 0.6, -0.8, 0.0)
     assert scene(BOX).obstacles[0].box_rotation == ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
     assert s.parameter_names()[-23:-21] == ["e_block", "e_roof"]              # then the geometry: 15 + 6 entries
-    assert [c.radius for c in s.obstacle_contacts()] == [0.05] * 5      # the links' radii alone
-    # a box's contacts are its links', a plane's its joint points' (each on the link that carries it)
-    assert [c.name for c in s.obstacle_contacts()] == ["L1/block", "L2/block", "O1/roof", "O2/roof", "O3/roof"]
-    assert [(c.i, c.end) for c in s.obstacle_contacts()[2:]] == [(1, 1), (1, 2), (2, 2)]
+    assert [c.radius for c in s.obstacle_contacts()] == [0.05] * 8      # the links' radii alone
+    # a box's contacts are its links' and its joint points', a plane's its joint points' (each on the link that
+    # carries it)
+    assert [c.name for c in s.obstacle_contacts()] == ["L1/block", "L2/block", "O1/block", "O2/block", "O3/block",
+                                                       "O1/roof", "O2/roof", "O3/roof"]
+    assert [(c.i, c.end) for c in s.obstacle_contacts()[2:5]] == [(1, 1), (1, 2), (2, 2)]
 
 
 @pytest.mark.parametrize("obstacle, message", [

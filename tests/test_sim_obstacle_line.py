@@ -148,21 +148,49 @@ def test_a_chain_on_a_tilted_plane_moves_as_on_the_floor_under_tilted_gravity(fl
         assert resting == ["O1/floor", "O2/floor", "O3/floor", "O4/floor"]
 
 
-def test_a_rod_coming_down_along_a_boxs_face_stops_with_the_line_contact_named():
-    """A box's contact is one per link (its face, edges and corners are not joint points' alone): a rod landing end
-    first (e = 0) on the top face of a box turned by ALPHA pivots down about that end until the other reaches the
-    face, and the run stops there with GAC_ERR_LINK_LINE naming the held contact (L1/block), before the other end
-    sinks: no sample inside the box beyond 1e-9 m (the independent signed distance of each end)."""
+def test_a_rod_coming_down_along_a_boxs_face_rests_on_both_ends_and_slides():
+    """A box's contacts are each link's (an edge or a corner can touch it anywhere) and the joint points' (which
+    take its place where the link is nearest at an end, gac_redundant): a rod landing end first (e = 0) on the top
+    face of a box turned by ALPHA pivots down about that end (its joint point's contact) and lands on the other,
+    then slides down the face with g sin a on both ends (every sample's independent signed distance of each end
+    within 1e-9 m of the face, never inside), as on a plane; only the joint points' contacts strike."""
     from codegen.scene import box_signed_distance
     turn = ((math.cos(ALPHA), -math.sin(ALPHA), 0.0), (math.sin(ALPHA), math.cos(ALPHA), 0.0), (0.0, 0.0, 1.0))
     block = Obstacle.box("block", (0.0, -0.5, 0.0), (2.0, 0.5, 1.0), rotation=turn, restitution=0.0)
     scene = Scene(name="line_box_face", links=(LineLink(1.0, 1.0, radius=R_LINK),), gravity=G,
                   q0=(-math.pi / 2, 0.0, math.pi / 2 + 0.4, 0.3, 0.8, 0.0), obstacles=(block,))
     model = load_model(scene)
+    assert [c.name for _, c in model.contacts] == ["L1/block", "O1/block", "O2/block"]
+    t = np.linspace(0.0, 1.0, 201)
+    r = simulate(model, 1.0, t_eval=t, **TIGHT)
+    assert r.status == 0, r.message
+    assert [[c.label for c in i.contacts] for i in r.impacts] == [["O2/block"], ["O1/block", "O2/block"]]
+    assert [(e.label, e.kind) for e in r.contact_events] == [("O2/block", "rest"), ("O1/block", "rest")]
+    flat = r.contact_events[-1].t + 0.05
+    sd = np.array([[box_signed_distance(block, x) - R_LINK for x in model.contact_points(model.layout.reduce(q))]
+                   for q in r.q])
+    assert sd.min() >= -1e-9 and np.abs(sd[t >= flat]).max() <= 1e-9
+    velocities = np.array([model.contact_velocities(model.layout.reduce(q), model.layout.reduce(qd))
+                           for q, qd in zip(r.q, r.qd)])
+    centre_v = 0.5 * (velocities[:, 0] + velocities[:, 1]) @ DOWN
+    a = np.flatnonzero(t >= flat)[0]
+    assert (centre_v[-1] - centre_v[a]) / (t[-1] - t[a]) == pytest.approx(G * math.sin(ALPHA), rel=1e-9)
+
+
+def test_a_rod_tipping_about_its_middle_on_a_narrow_box_stops_with_the_line_contact_named():
+    """A rod longer than the box is wide lies across its top face (both ends over the edges): held at the middle of
+    the stretch over the face (the link's contact, nearest inside), it cannot rest on the two edges at once with one
+    point; dropped tilted, it lands on one edge, pivots about it and comes down onto the other: the run stops there
+    with GAC_ERR_LINK_LINE naming the held contact before the rod sinks into the box."""
+    from codegen.scene import box_signed_distance
+    block = Obstacle.box("post", (0.0, -0.5, 0.0), (0.2, 0.5, 0.5), restitution=0.0)
+    scene = Scene(name="line_box_narrow", links=(LineLink(1.0, 1.0, radius=R_LINK),), gravity=G,
+                  q0=(-math.pi / 2, 0.0, math.pi / 2 + 0.05, 0.5, 0.3, 0.0), obstacles=(block,))
+    model = load_model(scene)
     r = simulate(model, 1.0, t_eval=np.linspace(0.0, 1.0, 201), **TIGHT)
-    assert r.status < 0 and "line contact" in r.message and "L1/block" in r.message, r.message
-    assert [(e.label, e.kind) for e in r.contact_events] == [("L1/block", "rest")]
-    assert 0.35 < r.t_final < 0.37                               # as the rod comes down flat (0.358 s)
+    assert r.status < 0 and "line contact" in r.message and "L1/post" in r.message, r.message
     for q in [*r.q[r.t <= r.t_final], r.q_final]:
         points = model.contact_points(model.layout.reduce(q))
-        assert min(box_signed_distance(block, x) for x in points[:2]) - R_LINK >= -1e-9
+        a, b = points[0], points[1]
+        depth = min(box_signed_distance(block, a + s * (b - a)) for s in np.linspace(0.0, 1.0, 2001))
+        assert depth - R_LINK >= -1e-9

@@ -1,10 +1,9 @@
 """A link at rest on fixed obstacles (contacts of kind GAC_CONTACT_OBSTACLE held like a wall's, by their normal
 g = J^T n and its bias dg(qd) . qd): a rod dropped flat onto a box's top face bounces (e = 0.3), lands and rests
-there, its gap held and its force m g (the constrained dynamics at the final state, independently: the rod's
-weight over its one contact); a rod dropped across two bars lands on both and rests there, each holding half its
-weight, the energy balance closed; sensitivities asked for through the landing on the face end with the link
-status (the rod lies parallel to it: a whole stretch is closest, its normal row has no derivative) instead of going
-on with a derivative that leaves the rest out."""
+there on both ends (the box's joint points' contacts), their gaps held and each end's force m g / 2 (the
+constrained dynamics at the final state, independently); a rod dropped across two bars lands on both and rests
+there, each holding half its weight, the energy balance closed; sensitivities go through the landing on the face
+and the rest on it (each end a point's contact), against central differences of whole runs."""
 import math
 
 import numpy as np
@@ -32,6 +31,11 @@ def model():
     return load_model(scene, tangent=True)
 
 
+def label(model, name: str) -> int:
+    """The index of the contact named `name` in the model's table."""
+    return [contact.name for _, contact in model.contacts].index(name)
+
+
 def drop(model, centre_x: float, height: float, t_end: float, **kwargs):
     """The rod from rest, its centre over X1 = centre_x, its axis `height` above where it touches."""
     q0 = np.array([-math.pi / 2, 0.0, math.pi / 2, centre_x + 0.5, height, 0.0])
@@ -43,22 +47,24 @@ def drop(model, centre_x: float, height: float, t_end: float, **kwargs):
 def test_a_rod_dropped_flat_on_a_box_bounces_lands_and_rests(model):
     r = drop(model, 0.0, TOP + R_LINK + 0.1, 1.5)
     assert r.status == 0, r.message
-    assert len(r.impacts) >= 2 and all([c.wall for c in i.contacts] == ["L1/slab"] for i in r.impacts)
+    ends = ["O1/slab", "O2/slab"]                       # level: both ends strike at once
+    assert len(r.impacts) >= 2 and all(sorted(c.wall for c in i.contacts) == ends for i in r.impacts)
     first = r.impacts[0]
     assert first.qd_after[4] == pytest.approx(-0.3 * first.qd_before[4], rel=1e-9)   # Newton's law, e = 0.3
     landed = [e for e in r.contact_events if e.kind == "rest"]
-    assert [e.wall for e in landed] == ["L1/slab"] and landed[0].t < 0.5
-    assert r.resting_final == [(1, "L1/slab")]
-    # held on the face for the last second: gap within the position tolerance, not moving, not turning
-    held = r.t >= landed[0].t + 1e-9
+    assert sorted(e.wall for e in landed) == ends and landed[0].t < 0.5
+    assert sorted(r.resting_final) == [(1, "O1/slab"), (1, "O2/slab")]
+    # held on the face for the last second: gaps within the position tolerance, not moving, not turning
+    held = r.t >= landed[-1].t + 1e-9
     assert r.t[held][-1] - r.t[held][0] >= 1.0 - 1e-9
-    gaps = np.array([model.contact_gaps(model.layout.reduce(q))[0] for q in r.q[held]])
+    index = [label(model, name) for name in ends]
+    gaps = np.array([model.contact_gaps(model.layout.reduce(q))[index] for q in r.q[held]])
     assert np.abs(gaps).max() <= 1e-9
     assert np.abs(r.qd[held]).max() <= 1e-9 and np.abs(r.q[held][:, 2] - math.pi / 2).max() <= 1e-12
-    # the resting force is the rod's weight
+    # each end holds half the rod's weight
     q, qd = model.layout.reduce(r.q_final), model.layout.reduce(r.qd_final)
-    qdd, lam = model.constrained_dynamics(q, qd, [0])
-    assert lam[0] == pytest.approx(M * G, rel=1e-9) and np.abs(qdd).max() <= 1e-9
+    qdd, lam = model.constrained_dynamics(q, qd, index)
+    assert lam == pytest.approx([M * G / 2, M * G / 2], rel=1e-9) and np.abs(qdd).max() <= 1e-9
     assert abs(r.energy_drift) <= 1e-8
 
 
@@ -72,7 +78,7 @@ def test_a_rod_dropped_across_two_bars_rests_on_both(model):
     q, qd = model.layout.reduce(r.q_final), model.layout.reduce(r.qd_final)
     assert q[4] == pytest.approx(BAR_Y + BAR_R + R_LINK, abs=1e-9)
     assert np.abs(qd).max() <= 1e-9
-    qdd, lam = model.constrained_dynamics(q, qd, [1, 2])
+    qdd, lam = model.constrained_dynamics(q, qd, [label(model, "L1/bar_a"), label(model, "L1/bar_b")])
     assert lam == pytest.approx([M * G / 2, M * G / 2], rel=1e-8) and np.abs(qdd).max() <= 1e-9
     assert abs(r.energy_drift) <= 1e-8
 
@@ -88,16 +94,21 @@ def test_a_tilted_rod_on_the_bars_rolls_onto_both_and_the_energy_balance_closes(
     q, qd = model.layout.reduce(r.q_final), model.layout.reduce(r.qd_final)
     assert q[2] == pytest.approx(math.pi / 2, abs=1e-9) and q[4] == pytest.approx(BAR_Y + BAR_R + R_LINK, abs=1e-9)
     assert np.abs(np.delete(qd, 3)).max() <= 1e-9 and 0.0 < abs(qd[3]) < 0.1
-    qdd, lam = model.constrained_dynamics(q, qd, [1, 2])
+    qdd, lam = model.constrained_dynamics(q, qd, [label(model, "L1/bar_a"), label(model, "L1/bar_b")])
     assert (lam > 0.0).all() and lam.sum() == pytest.approx(M * G, rel=1e-8)
     assert abs(r.energy_drift) <= 1e-8
 
 
-def test_sensitivities_end_with_the_link_status_where_the_rod_comes_to_rest_flat_on_a_face(model):
-    r = drop(model, 0.0, TOP + R_LINK + 0.1, 0.6, sensitivities=["q0[X2]", "e_slab"])
+def test_sensitivities_go_through_the_rod_coming_to_rest_flat_on_a_face(model):
+    """Dropped level onto the slab's face (e = 0.3): it bounces on both ends at once and lands on both; the final
+    state's sensitivities along the drop height, the face's height and e against central differences of whole runs
+    (the rod lying along the face rests on its two ends' contacts, each a point's with a derivative)."""
+    from tests.test_sim_sensitivities import central_differences
+    directions = ["q0[X2]", "center_y_slab", "e_slab"]
+    r = drop(model, 0.0, TOP + R_LINK + 0.1, 0.6, sensitivities=directions)
     assert r.status == 0, r.message
-    assert r.resting_final == [(1, "L1/slab")]
-    assert not r.sensitivities.valid
-    assert r.sensitivities.status == "a link pair or a link on an obstacle where their closest points or contact " \
-        "frame have no derivative (crossing or parallel axes, a link parallel to a face)"
-    assert np.isnan(r.sensitivities.matrix).all()
+    assert sorted(r.resting_final) == [(1, "O1/slab"), (1, "O2/slab")]
+    assert r.sensitivities.valid, r.sensitivity_message
+    q0 = np.array([-math.pi / 2, 0.0, math.pi / 2, 0.5, TOP + R_LINK + 0.1, 0.0])
+    p = model.parameters({"e_slab": 0.3, "e_bar_a": 0.3, "e_bar_b": 0.3})
+    central_differences(model, 0.6, p, q0, np.zeros(6), directions, r.sensitivities.matrix, **RUN)

@@ -58,20 +58,25 @@ def normal_tangent(model, q, c, dq, dp):
     return code, dgap[0], g, dg
 
 
-@pytest.mark.parametrize("c", range(4), ids=[o.name for o in OBSTACLES])
-def test_the_gap_and_row_derivatives_along_the_geometry_match_central_differences(model, c):
+CONTACTS = ["L1/ball", "L1/bar", "L1/ridge", "O1/ridge", "O2/ridge", "O1/floor", "O2/floor"]
+
+
+@pytest.mark.parametrize("label", CONTACTS)
+def test_the_gap_and_row_derivatives_along_the_geometry_match_central_differences(model, label):
     """Random states of the rod clear of the obstacle (gap > 0.02 m; its closest point at an end or inside, a box's
-    face, edge or corner nearest), along a random direction of the obstacle's geometry alone and with a random dq:
-    d gap and d(J^T n) against sixth-order central differences (step 1e-4) of the gap and of gac_contact_normal with
-    p moved, to 1e-9 of their size (seen ~1e-11)."""
+    face, edge or corner nearest; a box's and a plane's joint points' contacts too), along a random direction of the
+    obstacle's geometry alone and with a random dq: d gap and d(J^T n) against sixth-order central differences (step
+    1e-4) of the gap and of gac_contact_normal with p moved, to 1e-9 of their size (seen ~1e-11)."""
+    c = [contact.name for _, contact in model.contacts].index(label)
     rng = np.random.default_rng(11 + c)
-    name = OBSTACLES[c].name
+    name = label.split("/")[1]
+    near = NEAR[[o.name for o in OBSTACLES].index(name)]
     index = [model.parameter_names.index(n) for n in geometry(name)]
     checked, turning = 0, 0
     while checked < 12:
-        q = np.concatenate([rng.uniform(-math.pi, math.pi, 3), NEAR[c] + rng.uniform(-0.9, 0.9, 3)])
+        q = np.concatenate([rng.uniform(-math.pi, math.pi, 3), near + rng.uniform(-0.9, 0.9, 3)])
         q[1] = rng.uniform(-1.2, 1.2)                             # theta_0 away from the base chart's lock
-        if model.obstacle_gap(q, 1, name)[0] < 0.02:              # inside or near: the gap may have a kink
+        if model.contact_gaps(q)[c] < 0.02:                       # inside or near: the gap may have a kink
             continue
         for with_q in (False, True):
             dq = rng.normal(size=model.nq) if with_q else np.zeros(model.nq)
@@ -89,7 +94,7 @@ def test_the_gap_and_row_derivatives_along_the_geometry_match_central_difference
             assert np.abs(dg - fd[1:]).max() <= 1e-9 * max(1.0, np.abs(fd[1:]).max()), (name, with_q)
             turning += not with_q and np.abs(dg).max() > 1e-3
         checked += 1
-    assert turning >= (0 if name == "floor" else 4)               # the row turns with the obstacle's motion
+    assert turning >= (0 if name == "floor" else 4), turning      # the row turns with the obstacle's motion
 
 
 def rotated(v, omega, angle):
@@ -104,11 +109,12 @@ def test_the_floors_turn_is_a_direction_of_its_gap_and_row(model):
     the gap and gac_contact_normal with the normal turned by |omega| h (Rodrigues: unit at every step), to 1e-9; a
     change of the normal that stretches it (n . dn != 0) is refused."""
     rng = np.random.default_rng(29)
-    c, normal = 3, [model.parameter_names.index(f"normal_{x}_floor") for x in "xyz"]
+    c = next(k for k, (_, contact) in enumerate(model.contacts) if contact.name == "O1/floor")   # a joint point's
+    normal = [model.parameter_names.index(f"normal_{x}_floor") for x in "xyz"]
     point = [model.parameter_names.index(f"point_{x}_floor") for x in "xyz"]
     checked = 0
     while checked < 12:
-        q = np.concatenate([rng.uniform(-math.pi, math.pi, 3), NEAR[c] + rng.uniform(-0.9, 0.9, 3)])
+        q = np.concatenate([rng.uniform(-math.pi, math.pi, 3), NEAR[3] + rng.uniform(-0.9, 0.9, 3)])
         q[1] = rng.uniform(-1.2, 1.2)
         if model.obstacle_gap(q, 1, "floor")[0] < 0.02:
             continue
@@ -139,7 +145,9 @@ def test_a_box_rotation_or_a_plane_normal_is_refused_by_the_c_functions(model):
     """gac_contact_normal_tangent along a box's rotation entry or a plane's normal entry: GAC_ERR_BAD_OPTION, as
     gac_sens_attach's seeds along them (simulate() refuses them by name: tests/test_sim_obstacle_params.py)."""
     q = np.array([0.0, 0.3, 0.2, 6.0, 1.2, 0.0])
-    for c, name in ((2, "rotation_21_ridge"), (3, "normal_y_floor")):
+    labels = [contact.name for _, contact in model.contacts]
+    for c, name in ((labels.index("L1/ridge"), "rotation_21_ridge"), (labels.index("O2/ridge"), "rotation_21_ridge"),
+                    (labels.index("O1/floor"), "normal_y_floor")):
         dp = np.zeros(len(model.p))
         dp[model.parameter_names.index(name)] = 1.0
         assert normal_tangent(model, q, c, np.zeros(model.nq), dp)[0] == model.lib.GAC_ERR_BAD_OPTION
@@ -170,7 +178,7 @@ def test_a_rod_striking_an_obstacle_matches_central_differences_along_its_geomet
     directions, t_end, step = geometry(name) + ["q0[X2]"], 0.25, 1e-6
     r = simulate(model, t_end, p=p, q0=q0, qd0=qd0, sensitivities=directions, **TIGHT)
     sequence = [[c.label for c in i.contacts] for i in r.impacts]
-    struck = f"O2/{name}" if name == "floor" else f"L1/{name}"       # a plane's contact: the joint point O_2
+    struck = f"O2/{name}" if where == "end" else f"L1/{name}"      # an end strikes: its joint point's contact
     assert r.success and sequence == [[struck]], r.message
     assert r.sensitivities.valid and r.sensitivities.n_impacts == 1, r.sensitivity_message
     impact = r.impacts[0]

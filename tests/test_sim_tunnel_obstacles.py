@@ -41,9 +41,10 @@ def test_a_rod_dropped_on_a_box_without_a_step_limit_lands_on_it(model):
     q0 = np.array([*FLAT, 0.5, TOP + R_LINK + 0.1, 0.0])
     r = simulate(model, 1.5, q0=q0, qd0=np.zeros(6), t_eval=np.linspace(0.0, 1.5, 3001), p={"e_slab": 0.3})
     assert r.status == 0, r.message
-    assert len(r.impacts) >= 2 and all([c.wall for c in i.contacts] == ["L1/slab"] for i in r.impacts)
+    ends = ["O1/slab", "O2/slab"]                   # level on a face: both ends' contacts at once
+    assert len(r.impacts) >= 2 and all(sorted(c.wall for c in i.contacts) == ends for i in r.impacts)
     assert r.impacts[0].t == pytest.approx(math.sqrt(2 * 0.1 / G), rel=1e-9)
-    assert r.resting_final == [(1, "L1/slab")]
+    assert sorted(r.resting_final) == [(1, "O1/slab"), (1, "O2/slab")]
     assert r.q_final[4] == pytest.approx(TOP + R_LINK, abs=1e-9)
     # independently: the segment never inside the slab by more than the contact tolerance
     depth = [SLAB.distance(p[0], p[1]) - R_LINK for p in segments(model, r)]

@@ -94,7 +94,7 @@ void gac_f_end(gac_sim *s, double t, const double *x, double *f)
 void gac_events(gac_sim *s, double t, const double *x, double *ev)
 {
     const gac_model *md = s->model;
-    gac_contact_gaps(md, x, s->p, ev);
+    gac_event_gaps(s, x, ev);
     if (s->nresting > 0) {
         double qdd[md->nq], lambda[md->nq], lambda_t[2 * md->nq];
         int a, code;

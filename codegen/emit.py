@@ -550,11 +550,13 @@ def _link_entry(c: int, pair, scene: Scene, bake_params: bool) -> dict:
                     f"together, e = {o.restitution}), {rough}", has_friction=int(friction > 0.0),
                     friction_index=(-1 if bake_params or friction == 0.0 else scene.parameter_index("friction", o.name)),
                     friction_value=_double_literal(friction), trow=[-1, -1], end=pair.end)
+    part = f"links {pair.i} and {pair.j}" if pair.end == 0 else \
+        f"O_{pair.joint} (an end of link {pair.i}) and link {pair.j}"
     return dict(c=c, point=pair.i, axis=-1, sign=1, row=0, e_index=-1,
                 e_value=_double_literal(float(pair.restitution)), kind="GAC_CONTACT_LINK", coordinate=pair.j,
-                label=pair.name, doc=f"links {pair.i} and {pair.j} as capsules (radii {pair.radius:g} m together, "
+                label=pair.name, doc=f"{part} as capsules (radii {pair.radius:g} m together, "
                 f"e = {pair.restitution}), {rough}", has_friction=int(friction > 0.0), friction_index=-1,
-                friction_value=_double_literal(friction), trow=[-1, -1], end=0)
+                friction_value=_double_literal(friction), trow=[-1, -1], end=pair.end)
 
 
 def macro_name(name: str) -> str:

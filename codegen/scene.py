@@ -317,14 +317,39 @@ class LinkPair:
     radius: float         # m, r_i + r_j
     restitution: float
     friction: float = 0.0  # Coulomb coefficient at their impacts and at rest (friction.links; 0: frictionless)
+    end: int = 0          # 0: link i's whole segment; 1, 2: its start O_i or end O_i+1 alone against link j (gac.h)
+
+    @property
+    def joint(self) -> int | None:
+        """The joint point O_p measured against link j (a pair's end contact), or None for the whole link i."""
+        return None if self.end == 0 else self.i + (self.end == 2)
 
     @property
     def name(self) -> str:
-        return f"L{self.i}-L{self.j}"
+        return f"L{self.i}-L{self.j}" if self.end == 0 else f"O{self.joint}-L{self.j}"
 
     @property
     def links(self) -> tuple[int, int]:
         return (self.i, self.j)
+
+
+def pair_ends(pairs: list[LinkPair], radius) -> list[LinkPair]:
+    """The end contacts of link pairs: each joint point of a paired link against the other link of the pair, once
+    per (point, other link), on the link of larger radius ending at that point among those paired with it (radius(i):
+    link i's capsule radius).  Two segments are nearest at an end of one of them, along a stretch whose ends are
+    ends (lying parallel), or at a crossing inside both: the pair's own contact measures all of these, but holds one
+    point; where it is nearest at an end (or along a stretch reaching one) the end's contact takes its place
+    (gac_redundant), so a link that comes down along another rests on two points, a line contact."""
+    paired = {(p.i, p.j) for p in pairs} | {(p.j, p.i) for p in pairs}
+    first = {(p.i, p.j): p for p in pairs} | {(p.j, p.i): p for p in pairs}
+    keys = sorted({(point, b) for a, b in paired for point in (a, a + 1)})
+    out = []
+    for point, b in keys:
+        carriers = [a for a in (point - 1, point) if (a, b) in paired]
+        a = max(carriers, key=radius)
+        pair = first[(a, b)]
+        out.append(LinkPair(a, b, radius(a) + radius(b), pair.restitution, pair.friction, end=2 if a == point - 1 else 1))
+    return out
 
 
 OBSTACLE_KINDS = ("sphere", "capsule", "box", "plane")
@@ -1348,14 +1373,15 @@ class Scene:
         linear along a link, so a capsule is nearest to it at an end sphere (or all along, lying flat): its joint
         points are its contacts, each with the larger radius of the listed links ending there (taken on that link),
         and a link that comes to lie on the plane rests on two of them, a line contact.  A box's face is such a
-        plane where a link lies over it, but an edge or a corner can touch a link anywhere along it: a box has both,
-        each link's contact (where its nearest point is inside it) and the joint points' (which take the link's
-        contact's place where its nearest point is an end: gac_redundant)."""
+        plane where a link lies over it, but an edge or a corner can touch a link anywhere along it, as a bar can:
+        a box and a bar have both, each link's contact (where its nearest point is inside it) and the joint
+        points' (which take the link's contact's place where its nearest point is an end: gac_redundant).  A
+        sphere touches a link at one point: the link's contact alone."""
         out = []
         for k, o in enumerate(self.obstacles):
             if o.kind != "plane":
                 out += [ObstacleContact(i, o, k, self.links[i - 1].radius + o.radius) for i in o.links]
-            if o.kind not in ("plane", "box"):
+            if o.kind == "sphere":
                 continue
             for p in sorted({p for i in o.links for p in (i, i + 1)}):
                 carriers = [i for i in (p - 1, p) if i in o.links]      # the listed links ending at O_p
@@ -1365,8 +1391,9 @@ class Scene:
 
     def rowless_contacts(self) -> list:
         """The contacts after the kernel's walls and stops, in the model's table order: each link pair (LinkPair),
-        then each link and obstacle (ObstacleContact)."""
-        return [*self.link_contacts(), *self.obstacle_contacts()]
+        the pairs' end contacts (pair_ends), then each link and obstacle (ObstacleContact)."""
+        pairs = self.link_contacts()
+        return [*pairs, *pair_ends(pairs, self.capsule_radius), *self.obstacle_contacts()]
 
     def radius_owner(self, p: int) -> int | None:
         """The link (1-based) whose radius point_radius(p) takes, or None when it is 0."""
@@ -2176,8 +2203,8 @@ class Chains:
         return pairs
 
     def rowless_contacts(self) -> list:
-        """Each chain's link pairs, then the pairs across chains, then each chain's links on the obstacles (global
-        link numbers): the model's table after the kernels' walls and stops."""
+        """Each chain's link pairs, then the pairs across chains, their end contacts (pair_ends), then each chain's
+        links on the obstacles (global link numbers): the model's table after the kernels' walls and stops."""
         pairs, obstacles = [], []
         for k, chain in enumerate(self.chains, start=1):
             shift = self.point_offset(k)
@@ -2185,7 +2212,8 @@ class Chains:
                       for c in chain.link_contacts()]
             obstacles += [ObstacleContact(c.i + shift, c.obstacle, c.index, c.radius, c.end)
                           for c in chain.obstacle_contacts()]
-        return pairs + self.cross_link_pairs() + obstacles
+        pairs += self.cross_link_pairs()
+        return pairs + pair_ends(pairs, self.capsule_radius) + obstacles
 
 
 def chains_from_dict(data: dict, default_name: str, folder, box_keys: tuple[str, ...]) -> Chains:

@@ -352,7 +352,7 @@ static int gac_gather(gac_sim *s, gac_impact_event *ev)
             const int near = s->is_resting[c] || c == ev->c_event || ev->gaps[c] <= s->opt.contact_tol
                              || (ev->vn[c] < -v_rest && ev->gaps[c] <= window);
             const int kind = ev->vn[c] < 0.0 ? 0 : ev->vn[c] == 0.0 ? 1 : 2;
-            if (!near || kind != pass || gac_redundant(s, c, ev->gaps)) continue;   /* (its joint point's takes
+            if (!near || kind != pass || gac_redundant(s, ev->x, c, ev->gaps)) continue;   /* (its joint point's takes
                                                                                       part instead) */
             if (ev->n == md->nq) {
                 if (pass == 0) return GAC_ERR_TOO_MANY_CONTACTS;

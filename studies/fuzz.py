@@ -507,7 +507,7 @@ class Outcome:
     capsules: bool = False    # the structure has capsule links (and link pairs)
     obstacles: int = 0        # fixed obstacles in the run's box
     chains: int = 1           # chains in the box (random_chains: 2 or 3)
-    strikes_across: int = 0   # impacts with a contact between links of two chains (labelled L{i}-L{j}, global links)
+    strikes_across: int = 0   # impacts with a contact between links of two chains (a pair's or an end's, global links)
     sensitivities: str = ""   # with --sensitivities: 'valid' (differentiated to the run's end), or the status of the
                               # first event not differentiated (runtime.sensitivities.STATUS_WORDS)
     sensitivity_t: float = -1.0   # s: that event's time (-1: none)
@@ -807,8 +807,9 @@ def run_structure(args) -> list[Outcome]:
         text = "ok" if result.status == 0 else classify(result.message)
         failed = bool(violations) or any(pattern in result.message for pattern in FAILURE_PATTERNS)
         roundoff = max([i.roundoff for i in result.impacts], default=0.0)
-        across = {f"L{i}-L{j}" for i, j in pairs_across(scene)}
-        strikes = sum(any(c.wall in across for c in i.contacts) for i in result.impacts)
+        across = set(pairs_across(scene))              # (a pair's contact or an end's: the two links it joins)
+        strikes = sum(any(c.kind == "link" and tuple(sorted(c.links)) in across for c in i.contacts)
+                      for i in result.impacts)
         inaccurate = "could not be solved to round-off" in result.message   # GAC_ERR_IMPACT_ACCURACY
         cause = ""
         if roundoff > 1e-10:                           # the least accurate impact's cause, as the warnings name it

@@ -24,7 +24,7 @@ def test_defaults_the_scenes_restitution_and_every_link():
     assert names[-11:] == ["center_x_ball", "center_y_ball", "center_z_ball", "radius_ball", "a_x_bar", "a_y_bar",
                            "a_z_bar", "b_x_bar", "b_y_bar", "b_z_bar", "radius_bar"]       # the geometry, after e
     assert values[-11:] == [0.5, -1.0, 0.0, ball.radius, 0.0, 2.5, -1.0, 0.0, 2.5, 1.0, 0.1]
-    assert [c.name for c in s.obstacle_contacts()] == ["L1/ball", "L2/ball", "L2/bar"]
+    assert [c.name for c in s.obstacle_contacts()] == ["L1/ball", "L2/ball", "L2/bar", "O2/bar", "O3/bar"]
 
 
 @pytest.mark.parametrize("change, message", [

@@ -94,8 +94,11 @@ def test_gaps_against_an_independent_computation():
         points = reference.points(q)
         expected = [w.normal_sign * (points[p - 1, w.axis] - w.position) - point_radius[p - 1]
                     for p, w in model.layout.contacts]
-        # then the link pair (1, 3) of capsules 0.02 + 0: its segments' distance less 0.02
+        # then the link pair (1, 3) of capsules 0.02 + 0: its segments' distance less 0.02, then its ends' (O_1, O_2
+        # against link 3, O_3, O_4 against link 1): a point's distance from the other segment
         expected.append(closest_distance(*(points[k] for k in (0, 1, 2, 3))) - 0.02)
+        for point, (a, b) in ((0, (2, 3)), (1, (2, 3)), (2, (0, 1)), (3, (0, 1))):
+            expected.append(closest_distance(points[point], points[point], points[a], points[b]) - 0.02)
         assert model.contact_gaps(model.layout.reduce(q)) == pytest.approx(expected, abs=1e-13)
 
 

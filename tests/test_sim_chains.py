@@ -38,7 +38,9 @@ def test_the_chains_strike_once_end_on_when_their_capsules_meet(run):
     hits = [i for i in result.impacts if any(c.kind == "link" for c in i.contacts)]
     assert len(hits) == 1 and len(result.impacts) == 1
     (contact,) = hits[0].contacts
-    assert contact.wall == "L1-L3" and contact.links == (1, 3)       # link 1 of each chain: global links 1 and 3
+    # link 1 of each chain (global links 1 and 3) end to end: link 1's end O_2 against link 3 (the one contact of the
+    # two ends' that measure the same two points)
+    assert contact.wall == "O2-L3" and contact.links == (1, 3)
     gap = 0.3 - (-0.2) - 2 * RADIUS
     assert hits[0].t == pytest.approx(gap / (V1 - V2), rel=1e-9)
 

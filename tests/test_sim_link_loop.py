@@ -51,7 +51,8 @@ def pair_distance(model, q_full, i, j):
 def test_the_link_pair_is_a_contact_of_the_model(folding):
     e, model = folding
     assert [(point, pair.name, pair.links, pair.restitution) for point, pair in model.contacts] == \
-        [(1, "L1-L3", (1, 3), e)]
+        [(1, "L1-L3", (1, 3), e), (1, "O1-L3", (1, 3), e), (1, "O2-L3", (1, 3), e), (3, "O3-L1", (3, 1), e),
+         (3, "O4-L1", (3, 1), e)]                        # the pair's, then each end's against the other link
     gap = model.contact_gaps(model.q0)[0]
     assert gap == pytest.approx(model.link_gap(model.q0, 1, 3)[0]) and gap > 0.0
 
@@ -63,7 +64,7 @@ def test_links_strike_by_newtons_law_keeping_momentum(folding):
     assert len(r.impacts) >= 1
     impact = r.impacts[0]
     (c,) = impact.contacts
-    assert (c.kind, c.wall, c.links) == ("link", "L1-L3", (1, 3)) and c.impulse > 0.0
+    assert (c.kind, c.wall, c.links) == ("link", "O1-L3", (1, 3)) and c.impulse > 0.0   # link 1's end O_1
     exported = r.to_json()["impacts"][0]["contacts"][0]
     assert exported["kind"] == "link" and exported["links"] == [1, 3]
     q, qd_m, qd_p = (model.layout.reduce(x) for x in (impact.q, impact.qd_before, impact.qd_after))
@@ -146,7 +147,7 @@ def test_the_law_with_rounds_takes_a_link_pair_with_a_wall():
                   q0=tuple(q_full), link_restitution=1.0)
     model = load_model(scene)
     kinds = [type(w).__name__ for _, w in model.contacts]
-    assert kinds == ["Wall", "LinkPair"]
+    assert kinds == ["Wall"] + ["LinkPair"] * 5                 # the pair's contact, then its ends
     q = model.q0
     rng = np.random.default_rng(3)
     struck = 0
@@ -169,7 +170,7 @@ def test_the_law_with_rounds_takes_a_link_pair_with_a_wall():
 def test_a_chain_folding_onto_itself_on_the_floor_rests_with_its_links_on_each_other():
     """The shipped capsule-chain without its joint stops folds on the floor until links 1 and 3 press on each other:
     the pair lands like a wall's contact (struck again and again, then held by its normal J^T n and its bias) and the
-    run goes on to t_end with link 1 lying on link 3 and the others on the floor; the pair's gap held (never below
+    run goes on to t_end with link 1 lying on link 3's end O_3 (that end's contact) and the others on the floor; the pair's gap held (never below
     round-off), its force half of link 1's weight (link 1's far end on the floor), the energy balance closed."""
     data = tomllib.loads((Path(__file__).parents[1] / "codegen" / "scenes" / "capsule-chain.toml").read_text())
     for key in ("lower", "upper", "limit_restitution"):
@@ -179,10 +180,11 @@ def test_a_chain_folding_onto_itself_on_the_floor_rests_with_its_links_on_each_o
     r = simulate(model, 8.0, t_eval=np.linspace(0.0, 8.0, 801), **TOL)
     assert r.status == 0, r.message
     assert any(c.kind == "link" for i in r.impacts for c in i.contacts) and len(r.impacts) < 200
-    assert sorted(r.resting_final) == [(1, "L1-L3"), (2, "x2_min"), (3, "x2_min"), (4, "x2_min")]
-    assert any(e.kind == "rest" and e.wall == "L1-L3" for e in r.contact_events)
+    # link 1 lies on O_3, the end of link 3 (the end's contact against link 1 holds it)
+    assert sorted(r.resting_final) == [(2, "x2_min"), (3, "O3-L1"), (3, "x2_min"), (4, "x2_min")]
+    assert any(e.kind == "rest" and e.wall == "O3-L1" for e in r.contact_events)
     names = [(point, contact.name) for point, contact in model.contacts]
-    pair = names.index((1, "L1-L3"))
+    pair = names.index((3, "O3-L1"))
     gaps = np.array([model.contact_gaps(model.layout.reduce(x))[pair] for x in r.q])
     assert gaps.min() >= -1e-12
     resting = [names.index(c) for c in r.resting_final]
@@ -198,7 +200,8 @@ def test_the_shipped_capsule_fold_strikes_its_links_and_comes_to_rest():
     restitution.links, 0.8), its joint springs open it again, and the chain comes to rest on the floor without the pair
     ever pressing together; the energy balance closes."""
     model = load_model("capsule-fold")
-    assert [pair.name for _, pair in model.contacts if isinstance(pair, LinkPair)] == ["L1-L3"]
+    assert [pair.name for _, pair in model.contacts if isinstance(pair, LinkPair)] == \
+        ["L1-L3", "O1-L3", "O2-L3", "O3-L1", "O4-L1"]
     r = simulate(model, 8.0, t_eval=[], **TOL)
     assert r.status == 0, r.message
     strikes = [i for i in r.impacts if any(c.kind == "link" for c in i.contacts)]

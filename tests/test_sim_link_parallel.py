@@ -1,8 +1,9 @@
 """A capsule link lying nearly parallel along a long fixed bar (the same segment geometry as a link pair,
 gac_segment_closest): the gap of nearly parallel segments against an exact minimum distance (mpmath, the candidates
-of the unit square), and a rod dropped flat or nearly flat onto the bar with e = 0: exactly level it rests, held at
-the middle of the overlap; tilted, it lands on its lower end, pivots down about it, and the run stops with
-GAC_ERR_LINK_LINE before the other end passes into the bar (a line contact, which one point cannot hold)."""
+of the unit square), and a rod dropped flat or nearly flat onto the bar with e = 0: exactly level it lands on both
+ends at once and rests on them (the bar's joint points' contacts, which take the link's place where it is nearest at
+an end); tilted, it lands on its lower end, pivots down about it and lands on the other, then rests on both (a line
+contact), no sample inside the bar."""
 import math
 
 import mpmath
@@ -70,27 +71,33 @@ def test_the_gap_of_nearly_parallel_segments_is_the_least_distance(model, angle)
                     assert s == (1.0 if sign > 0 else 0.0)
 
 
-def test_a_level_rod_dropped_on_the_bar_rests_at_the_middle(model):
-    """Dropped exactly level (e = 0), the rod lands on the bar at the middle of the overlap and rests there (its
-    centre of mass over the held point: no torque), its gap held at 0 with no sample inside the bar."""
+def test_a_level_rod_dropped_on_the_bar_rests_on_both_ends(model):
+    """Dropped exactly level (e = 0), the rod lands on the bar with both ends at once (the joint points' contacts;
+    the link's own, nearest along the whole overlap, is theirs: redundant) and rests on them, each holding half its
+    weight, its gaps held at 0 with no sample inside the bar."""
     r = simulate(model, 1.0, p={"e_bar": 0.0}, t_eval=np.linspace(0.0, 1.0, 201), **TOL)
     assert r.status == 0, r.message
-    assert len(r.impacts) == 1 and [x.kind for x in r.contact_events] == ["rest"]
-    assert model.obstacle_gap(model.layout.reduce(r.impacts[0].q), 1, "bar")[1] == 0.5
+    assert len(r.impacts) == 1 and sorted(c.wall for c in r.impacts[0].contacts) == ["O1/bar", "O2/bar"]
+    assert [x.kind for x in r.contact_events] == ["rest", "rest"]
     for q in r.q:
         assert bar_distance(model, model.layout.reduce(q)) - R_ROD - R_BAR >= -1e-9
-    assert r.resting_final == [(1, "L1/bar")]
+    assert sorted(r.resting_final) == [(1, "O1/bar"), (1, "O2/bar")]
+    q, qd = model.layout.reduce(r.q_final), model.layout.reduce(r.qd_final)
+    ends = [[c.name for _, c in model.contacts].index(name) for name in ("O1/bar", "O2/bar")]
+    _, lam = model.constrained_dynamics(q, qd, ends)
+    assert lam == pytest.approx([ROD * 9.81 / 2] * 2, rel=1e-9)                  # mu = 1 kg/m
 
 
 @pytest.mark.parametrize("angle", [1e-7, 1e-4])
-def test_a_tilted_rod_dropped_on_the_bar_stops_before_its_other_end_sinks(model, angle):
-    """Dropped with its far end lower by ROD x angle (e = 0), the rod lands on that end and pivots down about it
-    until the other end reaches the bar: the run stops there with GAC_ERR_LINK_LINE, naming the held contact, and no
-    sample (nor the state at the stop) lies inside the bar beyond contact_tol / 10 (checked exactly)."""
+def test_a_tilted_rod_dropped_on_the_bar_comes_down_on_both_ends(model, angle):
+    """Dropped with its far end lower by ROD x angle (e = 0), the rod lands on that end, pivots down about it until
+    the other end reaches the bar, and lands there too: it rests on both ends (a line contact), and no sample lies
+    inside the bar beyond 1e-9 m (checked exactly)."""
     q0 = np.array([-math.pi / 2, 0.0, math.pi / 2 + angle, ROD / 2, HEIGHT, 0.0])
     r = simulate(model, 1.0, p={"e_bar": 0.0}, q0=q0, t_eval=np.linspace(0.0, 1.0, 401), **TOL)
-    assert r.status < 0 and "line contact" in r.message and "L1/bar" in r.message, r.message
-    assert len(r.impacts) >= 1 and r.impacts[0].contacts[0].wall == "L1/bar"
-    assert model.obstacle_gap(model.layout.reduce(r.impacts[0].q), 1, "bar")[1] == 1.0     # the lower end first
+    assert r.status == 0, r.message
+    assert [c.wall for c in r.impacts[0].contacts] == ["O2/bar"]                  # the lower end first
+    assert sorted(r.resting_final) == [(1, "O1/bar"), (1, "O2/bar")]
     for q in list(r.q) + [r.q_final]:
-        assert bar_distance(model, model.layout.reduce(q)) - R_ROD - R_BAR >= -1e-7
+        assert bar_distance(model, model.layout.reduce(q)) - R_ROD - R_BAR >= -1e-9
+    assert abs(model.layout.reduce(r.q_final)[0] - math.pi / 2) <= 1e-9            # level on the bar

@@ -249,7 +249,8 @@ def test_the_friction_keys_are_checked_and_named():
     scene = scene_from_dict(data)
     assert scene.parameter_names()[-14:-11] == ["e_ball", "e_bar", "friction_ball"]   # then the geometry (4 + 7)
     assert scene.parameter_vector()[-12] == 0.4 and scene.link_friction == 0.2
-    assert [c.friction for c in scene.rowless_contacts()] == [0.2, 0.4, 0.4, 0.4, 0.0, 0.0, 0.0]
+    # the pair and its 4 end contacts, the ball's 3 links, the bar's 3 links and 4 joint points
+    assert [c.friction for c in scene.rowless_contacts()] == [0.2] * 5 + [0.4] * 3 + [0.0] * 7
     for bad, message in ((-1.0, r"obstacles\[1\] \(ball\)\.friction: the Coulomb coefficient must be in \[0, 1000\]"),
                          ("x", r"obstacles\[1\] \(ball\)\.friction: expected a number")):
         with pytest.raises(SceneError, match=message):

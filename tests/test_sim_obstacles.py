@@ -32,14 +32,16 @@ def model():
 
 
 def obstacle_gap(points, contact: ObstacleContact) -> float:
-    """Independent: the fuzz study's segment distance of the link and the obstacle's segment, less the radii."""
+    """Independent: the fuzz study's segment distance of the link (or of a bar's joint point's contact, that point)
+    and the obstacle's segment, less the radii."""
     a, b = (np.array(x, dtype=float) for x in contact.obstacle.segment)
-    return fuzz.segment_distance(points[contact.i - 1], points[contact.i], a, b) - contact.radius
+    return fuzz.segment_distance(*contact.segment(points), a, b) - contact.radius
 
 
 def test_the_obstacles_are_contacts_of_the_model(model):
     names = [(point, c.name) for point, c in model.contacts]
-    assert names == [(1, "L1/ball"), (2, "L2/ball"), (3, "L3/ball"), (1, "L1/bar"), (2, "L2/bar"), (3, "L3/bar")]
+    assert names == [(1, "L1/ball"), (2, "L2/ball"), (3, "L3/ball"), (1, "L1/bar"), (2, "L2/bar"), (3, "L3/bar"),
+                     (1, "O1/bar"), (1, "O2/bar"), (3, "O3/bar"), (3, "O4/bar")]   # a bar's: the joint points' too
     assert model.parameter_names[-13:-11] == ["e_ball", "e_bar"]         # then the geometry (4 + 7)
     assert model.parameters()[-13:-11].tolist() == [1.0, 1.0]
     assert "e_ball" in model.parameter_problem(model.parameters({"e_ball": 1.5}))
@@ -60,8 +62,9 @@ def test_gaps_and_directions_against_an_independent_computation(model):
         for c, (_, contact) in enumerate(model.contacts):
             expected = obstacle_gap(points, contact)
             assert gaps[c] == pytest.approx(expected, abs=1e-12)
-            gap, s, t, n = model.obstacle_gap(q, contact.i, contact.obstacle.name)
+            gap, s, t, n = model.contact_geometry(q, c)
             assert gap == gaps[c] and 0.0 <= s <= 1.0 and 0.0 <= t <= 1.0
+            assert contact.end != 0 or (gap, s, t) == model.obstacle_gap(q, contact.i, contact.obstacle.name)[:3]
             a, b = (np.array(x) for x in contact.obstacle.segment)
             d = points[contact.i - 1] + s * (points[contact.i] - points[contact.i - 1]) - (a + t * (b - a))
             assert n == pytest.approx(d / np.linalg.norm(d), abs=1e-9)

@@ -22,10 +22,11 @@ def model():
     return load_model(folding_scene(1.0), tangent=True)
 
 
-def test_the_rows_derivative_matches_central_differences_of_the_c_functions(model):
+@pytest.mark.parametrize("c", [0, 1], ids=["L1-L3", "O1-L3"])
+def test_the_rows_derivative_matches_central_differences_of_the_c_functions(model, c):
     """Near the strike's configuration, along random directions of q and of link 3's length: d gap and d(J^T n)
     (gac_contact_normal_tangent, exact) against sixth-order central differences (step 1e-4) of the gap and of
-    gac_contact_normal, to 1e-10 of the row's size."""
+    gac_contact_normal, to 1e-10 of the row's size; the pair's contact and its end O_1's against link 3."""
     r = simulate(model, 0.2, **TIGHT)
     q_hit = model.layout.reduce(r.impacts[0].q)
     rng = np.random.default_rng(5)
@@ -38,15 +39,15 @@ def test_the_rows_derivative_matches_central_differences_of_the_c_functions(mode
         dp[index] = rng.normal()
         dgap, g, dg = model.ffi.new("double *"), np.zeros(model.nq), np.zeros(model.nq)
         code = model.lib.gac_contact_normal_tangent(model.ffi.addressof(model.c.model), model._ptr(q),
-                                                    model._ptr(model.p), 0, model._ptr(dq), model._ptr(dp), dgap,
+                                                    model._ptr(model.p), c, model._ptr(dq), model._ptr(dp), dgap,
                                                     model._ptr(g), model._ptr(dg))
         assert code == model.lib.GAC_OK
-        assert np.allclose(g, model.contact_normal(q, 0), rtol=0, atol=1e-14)
+        assert np.allclose(g, model.contact_normal(q, c), rtol=0, atol=1e-14)
 
         def at(h):
             p = model.p.copy()
             p[index] += h * dp[index]
-            return np.concatenate([[model.contact_gaps(q + h * dq, p)[0]], model.contact_normal(q + h * dq, 0, p)])
+            return np.concatenate([[model.contact_gaps(q + h * dq, p)[c]], model.contact_normal(q + h * dq, c, p)])
 
         fd = central(at)
         assert dgap[0] == pytest.approx(fd[0], rel=1e-10)
@@ -58,7 +59,7 @@ def test_a_link_pair_strike_matches_central_differences(model):
     impact differentiated, finite dt*) and match central differences of the final state to 1e-6."""
     q0, qd0, p = np.array(model.scene.q0, dtype=float), np.array(model.scene.qd0, dtype=float), model.p.copy()
     r = simulate(model, 0.5, p=p, q0=q0, qd0=qd0, sensitivities=DIRECTIONS, **TIGHT)
-    assert r.success and [[c.label for c in i.contacts] for i in r.impacts] == [["L1-L3"]], r.message
+    assert r.success and [[c.label for c in i.contacts] for i in r.impacts] == [["O1-L3"]], r.message   # an end
     s = r.sensitivities
     assert s.valid and s.n_impacts == 1 and r.sensitivity_status == "valid", r.sensitivity_message
     assert all(np.isfinite(v) for v in r.impacts[0].dt_dp.values())

@@ -252,7 +252,9 @@ typedef int (*gac_progress)(double t, long n_steps, long n_impacts, void *user);
  * GAC_CONTACT_STOP: a unilateral constraint on the coordinate q[coordinate], gap = normal_sign (q - limit) in
  * rad, its Jacobian row a row of the identity).  Both are handled alike: events, impacts, resting.
  * Or two links as capsules (kind GAC_CONTACT_LINK: links point and coordinate, 1-based, gap = their segments'
- * distance less its m->link_radius entry, gac_link_gap; its direction J^T n from the closest points, gac_link_direction; no Jacobian
+ * distance less its m->link_radius entry, gac_link_gap, or with end != GAC_END_LINK the distance of link point's
+ * joint point O_point or O_point+1 from link coordinate's segment, a pair's end contact; its direction J^T n from
+ * the closest points, gac_link_direction; no Jacobian
  * row).  Link contacts come last in the table, after every contact of the contact_gaps kernel; they take part in
  * events and impacts (with Coulomb friction along their contact frame where rough) and in the resting set, held by
  * their direction g and its bias dg(qd) . qd (not where g has no derivative), rough ones stuck or sliding along the
@@ -291,16 +293,20 @@ typedef struct {
     int kind;             /* GAC_CONTACT_WALL (0), GAC_CONTACT_STOP (1), GAC_CONTACT_LINK (2) or
                              GAC_CONTACT_OBSTACLE (3) */
     int coordinate;       /* stop: the index into q of its joint's angle (0..nq-1); link: the second link j
-                             (> point + 1); obstacle: the obstacle (0..nobstacle-1); wall: unused */
+                             (> point + 1; an end contact: any link two or more from point); obstacle: the obstacle
+                             (0..nobstacle-1); wall: unused */
     int has_friction;     /* wall, link, obstacle: 1 if it has Coulomb friction (0: frictionless; a zero-initialised
                              entry), at impacts and at rest; a link pair's and an obstacle's along its contact frame */
     int friction_index;         /* its friction coefficient c_f: p[friction_index], or friction_value when < 0 */
     double friction_value;
     int trow[2];          /* the Jacobian rows of the point along the wall's two tangential axes (ascending), -1 for
                              an axis the model does not move along (the normal of a planar model) */
-    int end;              /* obstacle: the part of link point its gap is measured from: GAC_END_LINK (0, the whole
-                             segment O_i O_i+1), GAC_END_START (1, the joint point O_i alone) or GAC_END_FINISH (2,
-                             O_i+1 alone; a plane's contacts, one per joint point); others: 0 */
+    int end;              /* link, obstacle: the part of link point its gap is measured from: GAC_END_LINK (0, the
+                             whole segment O_i O_i+1), GAC_END_START (1, the joint point O_i alone) or
+                             GAC_END_FINISH (2, O_i+1 alone: a plane's, a box's and a bar's joint points, a link
+                             pair's ends against the other link); walls, stops: 0.  A link's or a pair's contact
+                             beside such contacts gives way to them where they measure the same (gac_internal.h,
+                             gac_redundant_depth) */
 } gac_contact;
 #define GAC_END_LINK 0
 #define GAC_END_START 1

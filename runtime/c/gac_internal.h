@@ -94,8 +94,8 @@ double gac_v_round(const gac_model *md, const double *vn);
  * impact's contact, not held; and the lift its event value takes so that it locates no crossing while its joint
  * point's contact does, held at a gap down to -contact_tol: 2 (contact_tol + tie) (1 - max(depth, 0) / tie) below the
  * tie, 0 above it (the link nearest inside by more than the tie: its crossing is located where it goes under). */
-int gac_redundant(const gac_sim *s, int c, const double *gaps);
-double gac_redundant_lift(const gac_sim *s, int c, const double *gaps);
+int gac_redundant(const gac_sim *s, const double *x, int c, const double *gaps);
+double gac_redundant_lift(const gac_sim *s, const double *x, int c, const double *gaps);
 /* Every contact's gap at state x, each redundant one lifted (gac_redundant_lift): the event values of the contacts
  * that are not resting (gac_events). */
 void gac_event_gaps(const gac_sim *s, const double *x, double *gaps);
@@ -175,11 +175,13 @@ int gac_obstacle_turn_admissible(const gac_model *m, const double *p, const doub
 int gac_rowless(const gac_model *m, int c);             /* 1 if contact c is a link pair or an obstacle */
 /* The first held link pair or link on a bar of set[0..n-1] whose other end came closer than its held point by more
  * than tol over the step x0 -> x1 (a line contact its one point cannot hold), else -1 (gac_link.c). */
-/* A link's contact with a box beside its joint points' (gac_contact.end): how far its gap (gaps[c], the least over
- * the link) lies below the least of its joint points' on that box, gaps[] every contact's; +inf for any other
- * contact.  Where that is ~0 the link is nearest at an end (or along a stretch reaching one), which the joint
- * point's contact measures as well: the link's contact is then redundant (gac_redundant, gac_events.c). */
-double gac_redundant_depth(const gac_model *m, int c, const double *gaps);
+/* A link's contact with a box beside its joint points' (gac_contact.end), or a link pair's beside its end contacts
+ * (either link's joint points against the other): how far its gap (gaps[c], the least over the link or the pair)
+ * lies below the least of those, gaps[] every contact's; +inf for any other contact.  Where that is ~0 the link is nearest at an end (or along a stretch reaching one), which the joint
+ * point's contact measures as well: the link's contact is then redundant (gac_redundant, gac_events.c).  An end's
+ * contact against a link whose nearest point is that link's own end is redundant too (-inf): that end's contact
+ * against the first link is no farther (two links meeting end to end are one contact, not two). */
+double gac_redundant_depth(const gac_model *m, const double *q, const double *p, int c, const double *gaps);
 int gac_line_contact(const gac_model *m, const double *x0, const double *x1, const double *p, int n, const int *set,
                      double tol);
 int gac_kernel_contacts(const gac_model *m);            /* the contacts before them: those of contact_gaps */

@@ -180,15 +180,27 @@ static void gac_segment_contact(const double *a0, const double *a1, const double
     for (k = 0; k < 3; ++k) geometry[3 + k] = d[k];
 }
 
-int gac_link_gap(const gac_model *m, const double *q, const double *p, int i, int j, double radius,
-                 double *geometry)
+/* The contact of the part `end` of link i (GAC_END_*: its segment, or one joint point as a segment of no length)
+ * and link j; s is the fraction along the whole link i (0 or 1 for a joint point). */
+static int gac_link_part_gap(const gac_model *m, const double *q, const double *p, int i, int j, int end,
+                             double radius, double *geometry)
 {
     const int npoint = m->npoint;
     double r[3 * GAC_AT_LEAST_1(npoint)];
+    const double *a0, *a1;
     if (i < 1 || j < 1 || i + 1 > npoint || j + 1 > npoint || i == j || !(radius >= 0.0)) return GAC_ERR_BAD_CONTACT;
     m->contact_points(q, p, r);
-    gac_segment_contact(r + 3 * (i - 1), r + 3 * i, r + 3 * (j - 1), r + 3 * j, radius, geometry);
+    a0 = r + 3 * (end == GAC_END_FINISH ? i : i - 1);
+    a1 = end == GAC_END_LINK ? r + 3 * i : a0;
+    gac_segment_contact(a0, a1, r + 3 * (j - 1), r + 3 * j, radius, geometry);
+    if (end != GAC_END_LINK) geometry[1] = end == GAC_END_FINISH ? 1.0 : 0.0;
     return GAC_OK;
+}
+
+int gac_link_gap(const gac_model *m, const double *q, const double *p, int i, int j, double radius,
+                 double *geometry)
+{
+    return gac_link_part_gap(m, q, p, i, j, GAC_END_LINK, radius, geometry);
 }
 
 /* The contact of the part `end` of link i (GAC_END_*: its segment, or one joint point as a segment of no length)
@@ -345,21 +357,47 @@ static int gac_rowless_geometry(const gac_model *m, const double *q, const doubl
         return gac_obstacle_part_gap(m, q, p, k->point, k->coordinate, k->end, radius, geometry);
     }
     *second = k->coordinate;
-    return gac_link_gap(m, q, p, k->point, k->coordinate, radius, geometry);
+    return gac_link_part_gap(m, q, p, k->point, k->coordinate, k->end, radius, geometry);
 }
 
-double gac_redundant_depth(const gac_model *m, int c, const double *gaps)
+double gac_redundant_depth(const gac_model *m, const double *q, const double *p, int c, const double *gaps)
 {
     const gac_contact *k = &m->contacts[c];
     double least = INFINITY;
     int e;
-    if (k->kind != GAC_CONTACT_OBSTACLE || k->end != GAC_END_LINK) return INFINITY;
-    for (e = gac_kernel_contacts(m); e < m->ncontact; ++e) {   /* its link's joint points on the same obstacle */
+    if (!gac_rowless(m, c)) return INFINITY;
+    if (k->end != GAC_END_LINK) {                        /* an end against a link whose own end is nearest: that
+                                                            end's contact against this link is no farther */
+        const int joint = k->point + (k->end == GAC_END_FINISH);
+        double geometry[GAC_LINK_NGEOMETRY];
+        int second, other;
+        if (k->kind != GAC_CONTACT_LINK || gac_rowless_geometry(m, q, p, c, geometry, &second) != GAC_OK
+            || (geometry[2] != 0.0 && geometry[2] != 1.0))
+            return INFINITY;
+        other = k->coordinate + (geometry[2] == 1.0);    /* that end, O_j or O_j+1 */
+        for (e = gac_kernel_contacts(m); e < m->ncontact; ++e) {   /* its contact against a link ending at joint */
+            const gac_contact *f = &m->contacts[e];
+            if (f->kind != GAC_CONTACT_LINK || f->end == GAC_END_LINK || f->point + (f->end == GAC_END_FINISH) != other
+                || (f->coordinate != joint && f->coordinate + 1 != joint))
+                continue;
+            if (gac_rowless_geometry(m, q, p, e, geometry, &second) != GAC_OK) return INFINITY;
+            /* nearest inside: that one is the contact; end to end (the same two points): the first of the two */
+            return (geometry[2] != 0.0 && geometry[2] != 1.0) || e < c ? -INFINITY : INFINITY;
+        }
+        return INFINITY;
+    }
+    for (e = gac_kernel_contacts(m); e < m->ncontact; ++e) {
         const gac_contact *f = &m->contacts[e];
         int joint;
-        if (f->kind != GAC_CONTACT_OBSTACLE || f->end == GAC_END_LINK || f->coordinate != k->coordinate) continue;
+        if (f->kind != k->kind || f->end == GAC_END_LINK) continue;
         joint = f->point + (f->end == GAC_END_FINISH);
-        if ((joint == k->point || joint == k->point + 1) && gaps[e] < least) least = gaps[e];
+        if (k->kind == GAC_CONTACT_OBSTACLE) {           /* its link's joint points on the same obstacle */
+            if (f->coordinate != k->coordinate || (joint != k->point && joint != k->point + 1)) continue;
+        } else if (!(f->coordinate == k->coordinate && (joint == k->point || joint == k->point + 1))
+                   && !(f->coordinate == k->point && (joint == k->coordinate || joint == k->coordinate + 1))) {
+            continue;                                    /* a pair's: either link's joint points on the other */
+        }
+        if (gaps[e] < least) least = gaps[e];
     }
     return least - gaps[c];
 }
@@ -420,7 +458,7 @@ int gac_line_contact(const gac_model *m, const double *x0, const double *x1, con
         const double *A0, *A1, *B0, *B1, *seg[4];
         double s0, t0, s1, t1, x[3], d[3], reach, held, other, shape[GAC_OBSTACLE_NSHAPE];
         int flat, end;
-        if (!gac_rowless(m, set[a])) continue;
+        if (!gac_rowless(m, set[a]) || c->end != GAC_END_LINK) continue;   /* (a joint point's: a point, no line) */
         if (c->kind == GAC_CONTACT_OBSTACLE && !gac_obstacle_round(gac_obstacle_kind(m, c->coordinate))
             && gac_obstacle_kind(m, c->coordinate) != GAC_OBSTACLE_BOX) continue;   /* a plane: its joint points */
         if (!loaded) {
@@ -429,8 +467,8 @@ int gac_line_contact(const gac_model *m, const double *x0, const double *x1, con
             loaded = 1;
         }
         if (c->kind == GAC_CONTACT_OBSTACLE && !gac_obstacle_round(gac_obstacle_kind(m, c->coordinate))) {
-            if (c->end == GAC_END_LINK && gac_box_line_contact(m, r0, r1, p, c, tol)) return set[a];
-            continue;                                    /* (a joint point's contact: a point) */
+            if (gac_box_line_contact(m, r0, r1, p, c, tol)) return set[a];
+            continue;
         }
         for (end = 0; end < 2; ++end) {                  /* the two segments at x0 (end 0) and x1 (end 1) */
             const double *r = end == 0 ? r0 : r1;

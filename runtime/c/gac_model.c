@@ -5,6 +5,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdlib.h>
 
 /* b, the model m on other base charts: same sizes and tables, every base's three angles at the same places. */
 static int chart_model_check(const gac_model *m, const gac_model *b)
@@ -61,11 +62,15 @@ int gac_model_check(const gac_model *m)
     for (c = 0; c < m->ncontact; ++c) {
         const gac_contact *k = &m->contacts[c];
         if (k->kind == GAC_CONTACT_LINK) {                /* two links, after every kernel contact, no row */
-            if (k->point < 1 || k->coordinate < k->point + 2 || k->coordinate > m->npoint - 1 || m->link_radius == 0
+            const int apart = k->end == GAC_END_LINK ? k->coordinate - k->point       /* a pair: i < j */
+                                                     : abs(k->coordinate - k->point);  /* an end: either way */
+            if (k->point < 1 || k->coordinate < 1 || apart < 2 || k->point > m->npoint - 1
+                || k->coordinate > m->npoint - 1 || m->link_radius == 0
                 || !(m->link_radius[c - gac_kernel_contacts(m)] >= 0.0)
                 || k->normal_sign != 1 || k->e_index >= m->nparam || k->friction_index >= m->nparam
                 || (k->has_friction && !(k->friction_index >= 0 || k->friction_value >= 0.0))
-                || (c + 1 < m->ncontact && !gac_rowless(m, c + 1)) || k->end != GAC_END_LINK)
+                || (c + 1 < m->ncontact && !gac_rowless(m, c + 1))
+                || (k->end != GAC_END_LINK && k->end != GAC_END_START && k->end != GAC_END_FINISH))
                 return GAC_ERR_BAD_MODEL;
             continue;
         }
@@ -78,10 +83,10 @@ int gac_model_check(const gac_model *m)
                 || (c + 1 < m->ncontact && m->contacts[c + 1].kind != GAC_CONTACT_OBSTACLE))
                 return GAC_ERR_BAD_MODEL;
             if (gac_obstacle_shape_check(m, k->coordinate) != GAC_OK) return GAC_ERR_BAD_MODEL;
-            /* a joint point alone: a plane's or a box's contacts */
+            /* a joint point alone: a plane's, a box's or a bar's contacts (not a sphere's: a point's nearest) */
             if (k->end != GAC_END_LINK
                 && ((k->end != GAC_END_START && k->end != GAC_END_FINISH)
-                    || gac_obstacle_round(gac_obstacle_kind(m, k->coordinate))))
+                    || gac_obstacle_kind(m, k->coordinate) == GAC_OBSTACLE_SPHERE))
                 return GAC_ERR_BAD_MODEL;
             continue;
         }

@@ -334,7 +334,7 @@ int gac_rest_at_start(gac_sim *s)
     for (c = 0; c < md->ncontact; ++c) {
         const int at_rest = gac_restitution(md, s->p, c) < 1.0 ? vn[c] * vn[c] <= 2.0 * a * s->rest_height
                                                                 : fabs(vn[c]) <= gac_v_round(md, vn);
-        if (fabs(gaps[c]) <= s->opt.contact_tol && at_rest && gac_holdable(s, s->x, c) && !gac_redundant(s, c, gaps)) {
+        if (fabs(gaps[c]) <= s->opt.contact_tol && at_rest && gac_holdable(s, s->x, c) && !gac_redundant(s, s->x, c, gaps)) {
             code = gac_add_independent(s, s->x, &n, set, c);
             if (code != GAC_OK) return code;
         }

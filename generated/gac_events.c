@@ -28,14 +28,14 @@ static double gac_redundant_tie(const gac_sim *s)
     return 1e-6 * s->opt.contact_tol + 1e-15;
 }
 
-int gac_redundant(const gac_sim *s, const double *x, int c, const double *gaps)
+int gac_redundant(const gac_sim *s, int c, const double *gaps, const double *geometry)
 {
-    return gac_redundant_depth(s->model, x, s->p, c, gaps) < gac_redundant_tie(s);
+    return gac_redundant_depth(s->model, s->partner, c, gaps, geometry) < gac_redundant_tie(s);
 }
 
-double gac_redundant_lift(const gac_sim *s, const double *x, int c, const double *gaps)
+double gac_redundant_lift(const gac_sim *s, int c, const double *gaps, const double *geometry)
 {
-    const double depth = gac_redundant_depth(s->model, x, s->p, c, gaps), tie = gac_redundant_tie(s);
+    const double depth = gac_redundant_depth(s->model, s->partner, c, gaps, geometry), tie = gac_redundant_tie(s);
     if (!(depth < tie)) return 0.0;
     return 2.0 * (s->opt.contact_tol + tie) * (depth > 0.0 ? 1.0 - depth / tie : 1.0);
 }
@@ -43,13 +43,13 @@ double gac_redundant_lift(const gac_sim *s, const double *x, int c, const double
 void gac_event_gaps(const gac_sim *s, const double *x, double *gaps)
 {
     const gac_model *md = s->model;
+    const int nk = gac_kernel_contacts(md);
+    double geometry[GAC_LINK_NGEOMETRY * GAC_AT_LEAST_1(md->ncontact)], lift[GAC_AT_LEAST_1(md->ncontact)];
     int c;
-    gac_contact_gaps(md, x, s->p, gaps);
-    if (md->ncontact > gac_kernel_contacts(md)) {   /* a link's or a pair's contact that an end's measures: none */
-        double lift[GAC_AT_LEAST_1(md->ncontact)];
-        for (c = 0; c < md->ncontact; ++c) lift[c] = gac_redundant_lift(s, x, c, gaps);
-        for (c = 0; c < md->ncontact; ++c) gaps[c] += lift[c];
-    }
+    gac_contact_gaps_geometry(md, x, s->p, gaps, geometry);   /* a link's or a pair's contact that an end's
+                                                                   measures: lifted */
+    for (c = nk; c < md->ncontact; ++c) lift[c] = gac_redundant_lift(s, c, gaps, geometry);
+    for (c = nk; c < md->ncontact; ++c) gaps[c] += lift[c];
 }
 
 /* Event value (what = 0), normal velocity (what = 1) or normal velocity + gac_v_round (what = 2) of contact c

@@ -23,12 +23,12 @@ void gac_normal_velocities(const gac_model *md, const double *x, const double *p
     int c;
     if (md->ncontact == 0) return;
     md->contact_velocities(x, x + md->nq, p, v);
-    for (c = 0; c < md->ncontact; ++c) {
+    for (c = 0; c < gac_kernel_contacts(md); ++c) {
         const gac_contact *k = &md->contacts[c];
-        vn[c] = gac_rowless(md, c) ? gac_link_contact_rate(md, x, p, c, v)
-                : (double)k->normal_sign * (k->kind == GAC_CONTACT_STOP ? x[md->nq + k->coordinate]
-                                                                        : v[3 * (k->point - 1) + k->axis]);
+        vn[c] = (double)k->normal_sign * (k->kind == GAC_CONTACT_STOP ? x[md->nq + k->coordinate]
+                                                                      : v[3 * (k->point - 1) + k->axis]);
     }
+    gac_link_contact_rates(md, x, p, v, vn);             /* each link pair's and obstacle's */
 }
 
 /* 1 if contact c can be held at its wall at state x: a wall's or a stop's always; a link pair's or an obstacle's
@@ -322,9 +322,9 @@ int gac_rest_at_start(gac_sim *s)
 {
     const gac_model *md = s->model;
     const int nc1 = GAC_AT_LEAST_1(md->ncontact);
-    double gaps[nc1], vn[nc1], an[nc1], a = 0.0;
+    double gaps[nc1], vn[nc1], an[nc1], a = 0.0, geometry[GAC_LINK_NGEOMETRY * nc1];
     int set[md->nq], n = 0, c, code;
-    gac_contact_gaps(md, s->x, s->p, gaps);
+    gac_contact_gaps_geometry(md, s->x, s->p, gaps, geometry);
     gac_normal_velocities(md, s->x, s->p, vn);
     code = gac_normal_accelerations(s, s->t, s->x, 0, 0, an);
     if (code != GAC_OK) return code;
@@ -334,7 +334,7 @@ int gac_rest_at_start(gac_sim *s)
     for (c = 0; c < md->ncontact; ++c) {
         const int at_rest = gac_restitution(md, s->p, c) < 1.0 ? vn[c] * vn[c] <= 2.0 * a * s->rest_height
                                                                 : fabs(vn[c]) <= gac_v_round(md, vn);
-        if (fabs(gaps[c]) <= s->opt.contact_tol && at_rest && gac_holdable(s, s->x, c) && !gac_redundant(s, s->x, c, gaps)) {
+        if (fabs(gaps[c]) <= s->opt.contact_tol && at_rest && gac_holdable(s, s->x, c) && !gac_redundant(s, c, gaps, geometry)) {
             code = gac_add_independent(s, s->x, &n, set, c);
             if (code != GAC_OK) return code;
         }

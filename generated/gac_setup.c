@@ -121,10 +121,12 @@ void gac_sim_bind(gac_sim *s, const gac_model *md, double *dwork, int *iwork)
     s->slip = d;          d += 2 * nc1;        /* | slip (2 per contact) */
     s->work = d;          d += gac_impact_nwork(md);   /* | work | sub */
     s->sub = d;
-    s->resting = iwork;                         /* iwork: resting | is_resting | n_shrink | is_stuck */
+    s->resting = iwork;                         /* iwork: resting | is_resting | n_shrink | is_stuck | partner */
     s->is_resting = iwork + md->nq;
     s->n_shrink = iwork + md->nq + nc1;
     s->is_stuck = iwork + md->nq + 2 * nc1;
+    s->partner = iwork + md->nq + 3 * nc1;
+    gac_redundant_partners(md, s->partner);
 }
 
 /* gac_sim_init once its pointers and the model are checked: the options, the parameters, the state and the start

@@ -536,7 +536,7 @@ int gac_linearize(const gac_model *m, const double *q, const double *qd, const d
 #define GAC_SIM_NDOUBLE(nq, nparam, nu, npoint, ncontact, njrow, friction) \
     (28L * 2 * (nq) + (nparam) + 2L * (nu) + 9L * GAC_AT_LEAST_1(ncontact) \
      + GAC_IMPACT_NWORK(nq, npoint, njrow, friction) + (long)(nq) * (nq))
-#define GAC_SIM_NINT(nq, ncontact) ((long)(nq) + 3L * GAC_AT_LEAST_1(ncontact))
+#define GAC_SIM_NINT(nq, ncontact) ((long)(nq) + 7L * GAC_AT_LEAST_1(ncontact))
 /* Doubles and ints of one impact record (gac_record_bind): dwork = impulse | q | qd_before | qd_after
  * (nq each) | impulse_t (2 nq), iwork = contact | landed | released | stuck | slipped (nq each). */
 #define GAC_RECORD_NDOUBLE(nq) (6L * (nq))
@@ -1066,6 +1066,8 @@ typedef struct {
     double lever;                /* max(1 m, the chain's length): |dO/dq| bound */
     int *is_resting, pending, fail, fail_seen, n_unstable;
     int *is_stuck;               /* per contact: 1 if it rests stuck (its tangential rows held; opt.stick) */
+    int *partner;                /* 4 per contact: the contacts that measure what it does where it is redundant
+                                    (a link's or a pair's ends'), found at init */
     double *slip;                /* 2 per contact: the unit direction a point began to slip in (along its wall's
                                     tangential axes), the friction's direction while it is slower than
                                     friction_velocity; 0 when none */

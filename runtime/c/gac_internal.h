@@ -94,8 +94,8 @@ double gac_v_round(const gac_model *md, const double *vn);
  * impact's contact, not held; and the lift its event value takes so that it locates no crossing while its joint
  * point's contact does, held at a gap down to -contact_tol: 2 (contact_tol + tie) (1 - max(depth, 0) / tie) below the
  * tie, 0 above it (the link nearest inside by more than the tie: its crossing is located where it goes under). */
-int gac_redundant(const gac_sim *s, const double *x, int c, const double *gaps);
-double gac_redundant_lift(const gac_sim *s, const double *x, int c, const double *gaps);
+int gac_redundant(const gac_sim *s, int c, const double *gaps, const double *geometry);
+double gac_redundant_lift(const gac_sim *s, int c, const double *gaps, const double *geometry);
 /* Every contact's gap at state x, each redundant one lifted (gac_redundant_lift): the event values of the contacts
  * that are not resting (gac_events). */
 void gac_event_gaps(const gac_sim *s, const double *x, double *gaps);
@@ -177,11 +177,20 @@ int gac_rowless(const gac_model *m, int c);             /* 1 if contact c is a l
  * than tol over the step x0 -> x1 (a line contact its one point cannot hold), else -1 (gac_link.c). */
 /* A link's contact with a box beside its joint points' (gac_contact.end), or a link pair's beside its end contacts
  * (either link's joint points against the other): how far its gap (gaps[c], the least over the link or the pair)
- * lies below the least of those, gaps[] every contact's; +inf for any other contact.  Where that is ~0 the link is nearest at an end (or along a stretch reaching one), which the joint
+ * lies below the least of those (partner: gac_redundant_partners), gaps[] every contact's and geometry[] the
+ * rowless contacts' (from gac_contact_gaps_geometry); +inf for any other contact.  Where that is ~0 the link is nearest at an end (or along a stretch reaching one), which the joint
  * point's contact measures as well: the link's contact is then redundant (gac_redundant, gac_events.c).  An end's
  * contact against a link whose nearest point is that link's own end is redundant too (-inf): that end's contact
  * against the first link is no farther (two links meeting end to end are one contact, not two). */
-double gac_redundant_depth(const gac_model *m, const double *q, const double *p, int c, const double *gaps);
+double gac_redundant_depth(const gac_model *m, const int *partner, int c, const double *gaps, const double *geometry);
+/* The contacts each contact's redundancy is read from (gac_redundant_depth), GAC_PARTNERS per contact (-1: none),
+ * found once per run (gac_sim_bind, into the sim's iwork): a link's or a pair's contact: its ends' contacts; a
+ * pair's end contact: [0], [1] the other link's start's and end's contacts against a link ending at its point. */
+#define GAC_PARTNERS 4
+void gac_redundant_partners(const gac_model *m, int *partner);
+/* gac_contact_gaps, and each link pair's and obstacle contact's geometry (GAC_LINK_NGEOMETRY doubles each, from the
+ * first contact after the kernel's: gac_contact_geometry's) from one evaluation of the joint points. */
+void gac_contact_gaps_geometry(const gac_model *m, const double *q, const double *p, double *gaps, double *geometry);
 int gac_line_contact(const gac_model *m, const double *x0, const double *x1, const double *p, int n, const int *set,
                      double tol);
 int gac_kernel_contacts(const gac_model *m);            /* the contacts before them: those of contact_gaps */
@@ -197,6 +206,8 @@ double gac_finite_speed(const gac_model *m, const double *x, const double *p, in
 void gac_link_contact_direction(const gac_model *m, const double *q, const double *p, int c, double *g);
 /* link or obstacle contact c's gap rate n . (v_P - v_Q) from the joint points' velocities vel (npoint x 3) at q */
 double gac_link_contact_rate(const gac_model *m, const double *q, const double *p, int c, const double *vel);
+/* every link or obstacle contact's gap rate into vn[c] (from the first after the kernel's), the joint points once */
+void gac_link_contact_rates(const gac_model *m, const double *q, const double *p, const double *vel, double *vn);
 /* a held link or obstacle contact c's bias dg(qd) . qd (its normal acceleration less g . qdd) into *b: GAC_OK, or
  * GAC_ERR_LINK_CONTACT where its normal has no derivative */
 int gac_rowless_bias(const gac_model *m, const double *q, const double *qd, const double *p, int c, double *b);

@@ -182,14 +182,12 @@ static void gac_segment_contact(const double *a0, const double *a1, const double
 
 /* The contact of the part `end` of link i (GAC_END_*: its segment, or one joint point as a segment of no length)
  * and link j; s is the fraction along the whole link i (0 or 1 for a joint point). */
-static int gac_link_part_gap(const gac_model *m, const double *q, const double *p, int i, int j, int end,
-                             double radius, double *geometry)
+static int gac_link_part_gap(const gac_model *m, const double *r, int i, int j, int end, double radius,
+                             double *geometry)
 {
     const int npoint = m->npoint;
-    double r[3 * GAC_AT_LEAST_1(npoint)];
     const double *a0, *a1;
     if (i < 1 || j < 1 || i + 1 > npoint || j + 1 > npoint || i == j || !(radius >= 0.0)) return GAC_ERR_BAD_CONTACT;
-    m->contact_points(q, p, r);
     a0 = r + 3 * (end == GAC_END_FINISH ? i : i - 1);
     a1 = end == GAC_END_LINK ? r + 3 * i : a0;
     gac_segment_contact(a0, a1, r + 3 * (j - 1), r + 3 * j, radius, geometry);
@@ -200,20 +198,21 @@ static int gac_link_part_gap(const gac_model *m, const double *q, const double *
 int gac_link_gap(const gac_model *m, const double *q, const double *p, int i, int j, double radius,
                  double *geometry)
 {
-    return gac_link_part_gap(m, q, p, i, j, GAC_END_LINK, radius, geometry);
+    double r[3 * GAC_AT_LEAST_1(m->npoint)];
+    m->contact_points(q, p, r);
+    return gac_link_part_gap(m, r, i, j, GAC_END_LINK, radius, geometry);
 }
 
 /* The contact of the part `end` of link i (GAC_END_*: its segment, or one joint point as a segment of no length)
  * and obstacle o; s is the fraction along the whole link (0 or 1 for a joint point). */
-static int gac_obstacle_part_gap(const gac_model *m, const double *q, const double *p, int i, int o, int end,
+static int gac_obstacle_part_gap(const gac_model *m, const double *r, const double *p, int i, int o, int end,
                                  double radius, double *geometry)
 {
     const int npoint = m->npoint;
-    double r[3 * GAC_AT_LEAST_1(npoint)], shape[GAC_OBSTACLE_NSHAPE];
+    double shape[GAC_OBSTACLE_NSHAPE];
     const double *a0, *a1;
     if (i < 1 || i + 1 > npoint || !(radius >= 0.0) || gac_obstacle_shape(m, p, o, shape) != GAC_OK)
         return GAC_ERR_BAD_CONTACT;
-    m->contact_points(q, p, r);
     a0 = r + 3 * (end == GAC_END_FINISH ? i : i - 1);
     a1 = end == GAC_END_LINK ? r + 3 * i : a0;
     if (!gac_obstacle_shape_contact(shape, a0, a1, radius, geometry))                     /* a box, a plane, */
@@ -225,7 +224,9 @@ static int gac_obstacle_part_gap(const gac_model *m, const double *q, const doub
 int gac_obstacle_gap(const gac_model *m, const double *q, const double *p, int i, int o, double radius,
                      double *geometry)
 {
-    return gac_obstacle_part_gap(m, q, p, i, o, GAC_END_LINK, radius, geometry);
+    double r[3 * GAC_AT_LEAST_1(m->npoint)];
+    m->contact_points(q, p, r);
+    return gac_obstacle_part_gap(m, r, p, i, o, GAC_END_LINK, radius, geometry);
 }
 
 /* n . (v_P - v_Q): the rate of the gap of links i, j with closest points at fractions s, t and normal n, from the
@@ -302,9 +303,13 @@ int gac_rowless(const gac_model *m, int c)
 
 int gac_kernel_contacts(const gac_model *m)
 {
-    int n = m->ncontact;
-    while (n > 0 && gac_rowless(m, n - 1)) --n;
-    return n;
+    int lo = 0, hi = m->ncontact;                        /* the rowless contacts come last: the first of them */
+    while (lo < hi) {
+        const int mid = lo + (hi - lo) / 2;
+        if (gac_rowless(m, mid)) hi = mid;
+        else lo = mid + 1;
+    }
+    return lo;
 }
 
 int gac_has_link(const gac_model *m, int n, const int *list)
@@ -346,58 +351,83 @@ double gac_finite_speed(const gac_model *m, const double *x, const double *p, in
     return w;
 }
 
-/* Contact c's geometry (a link pair or an obstacle) and its second link (0 for an obstacle: it does not move). */
-static int gac_rowless_geometry(const gac_model *m, const double *q, const double *p, int c, double *geometry,
-                                int *second)
+/* Contact c's geometry (a link pair or an obstacle) from the joint points r (npoint x 3, contact_points), and its
+ * second link (0 for an obstacle: it does not move). */
+static int gac_rowless_geometry_at(const gac_model *m, const double *r, const double *p, int c, double *geometry,
+                                   int *second)
 {
     const gac_contact *k = &m->contacts[c];
     const double radius = m->link_radius[c - gac_kernel_contacts(m)];
     if (k->kind == GAC_CONTACT_OBSTACLE) {
         *second = 0;
-        return gac_obstacle_part_gap(m, q, p, k->point, k->coordinate, k->end, radius, geometry);
+        return gac_obstacle_part_gap(m, r, p, k->point, k->coordinate, k->end, radius, geometry);
     }
     *second = k->coordinate;
-    return gac_link_part_gap(m, q, p, k->point, k->coordinate, k->end, radius, geometry);
+    return gac_link_part_gap(m, r, k->point, k->coordinate, k->end, radius, geometry);
 }
 
-double gac_redundant_depth(const gac_model *m, const double *q, const double *p, int c, const double *gaps)
+static int gac_rowless_geometry(const gac_model *m, const double *q, const double *p, int c, double *geometry,
+                                int *second)
 {
-    const gac_contact *k = &m->contacts[c];
-    double least = INFINITY;
-    int e;
-    if (!gac_rowless(m, c)) return INFINITY;
-    if (k->end != GAC_END_LINK) {                        /* an end against a link whose own end is nearest: that
-                                                            end's contact against this link is no farther */
-        const int joint = k->point + (k->end == GAC_END_FINISH);
-        double geometry[GAC_LINK_NGEOMETRY];
-        int second, other;
-        if (k->kind != GAC_CONTACT_LINK || gac_rowless_geometry(m, q, p, c, geometry, &second) != GAC_OK
-            || (geometry[2] != 0.0 && geometry[2] != 1.0))
-            return INFINITY;
-        other = k->coordinate + (geometry[2] == 1.0);    /* that end, O_j or O_j+1 */
-        for (e = gac_kernel_contacts(m); e < m->ncontact; ++e) {   /* its contact against a link ending at joint */
+    double r[3 * GAC_AT_LEAST_1(m->npoint)];
+    m->contact_points(q, p, r);
+    return gac_rowless_geometry_at(m, r, p, c, geometry, second);
+}
+
+void gac_redundant_partners(const gac_model *m, int *partner)
+{
+    const int nk = gac_kernel_contacts(m);
+    int c, e, a;
+    for (c = 0; c < GAC_PARTNERS * m->ncontact; ++c) partner[c] = -1;
+    for (c = nk; c < m->ncontact; ++c) {
+        const gac_contact *k = &m->contacts[c];
+        int *mine = partner + GAC_PARTNERS * c, n = 0;
+        for (e = nk; e < m->ncontact && n < GAC_PARTNERS; ++e) {
             const gac_contact *f = &m->contacts[e];
-            if (f->kind != GAC_CONTACT_LINK || f->end == GAC_END_LINK || f->point + (f->end == GAC_END_FINISH) != other
-                || (f->coordinate != joint && f->coordinate + 1 != joint))
+            int joint;
+            if (f->kind != k->kind || f->end == GAC_END_LINK) continue;
+            joint = f->point + (f->end == GAC_END_FINISH);
+            if (k->end != GAC_END_LINK) {                /* an end's: the other link's ends against a link ending at
+                                                            this joint, [0] for O_j, [1] for O_j+1 */
+                const int own = k->point + (k->end == GAC_END_FINISH);
+                if (k->kind != GAC_CONTACT_LINK || (f->coordinate != own && f->coordinate + 1 != own)) continue;
+                for (a = 0; a < 2; ++a) {
+                    if (joint == k->coordinate + a && mine[a] < 0) mine[a] = e;
+                }
                 continue;
-            if (gac_rowless_geometry(m, q, p, e, geometry, &second) != GAC_OK) return INFINITY;
-            /* nearest inside: that one is the contact; end to end (the same two points): the first of the two */
-            return (geometry[2] != 0.0 && geometry[2] != 1.0) || e < c ? -INFINITY : INFINITY;
+            }
+            if (k->kind == GAC_CONTACT_OBSTACLE) {       /* a link's: its joint points on the same obstacle */
+                if (f->coordinate != k->coordinate || (joint != k->point && joint != k->point + 1)) continue;
+            } else if (!(f->coordinate == k->coordinate && (joint == k->point || joint == k->point + 1))
+                       && !(f->coordinate == k->point && (joint == k->coordinate || joint == k->coordinate + 1))) {
+                continue;                                /* a pair's: either link's joint points on the other */
+            }
+            mine[n++] = e;
         }
-        return INFINITY;
     }
-    for (e = gac_kernel_contacts(m); e < m->ncontact; ++e) {
-        const gac_contact *f = &m->contacts[e];
-        int joint;
-        if (f->kind != k->kind || f->end == GAC_END_LINK) continue;
-        joint = f->point + (f->end == GAC_END_FINISH);
-        if (k->kind == GAC_CONTACT_OBSTACLE) {           /* its link's joint points on the same obstacle */
-            if (f->coordinate != k->coordinate || (joint != k->point && joint != k->point + 1)) continue;
-        } else if (!(f->coordinate == k->coordinate && (joint == k->point || joint == k->point + 1))
-                   && !(f->coordinate == k->point && (joint == k->coordinate || joint == k->coordinate + 1))) {
-            continue;                                    /* a pair's: either link's joint points on the other */
+}
+
+double gac_redundant_depth(const gac_model *m, const int *partner, int c, const double *gaps, const double *geometry)
+{
+    const int nk = gac_kernel_contacts(m);
+    const int *mine = partner + GAC_PARTNERS * c;
+    double least = INFINITY;
+    int a;
+    if (c < nk) return INFINITY;
+    if (m->contacts[c].end != GAC_END_LINK) {            /* an end against a link whose own end is nearest: that
+                                                            end's contact against this link is no farther */
+        const double t = geometry[GAC_LINK_NGEOMETRY * (c - nk) + 2];
+        int e;
+        if (t != 0.0 && t != 1.0) return INFINITY;
+        e = mine[t == 1.0];
+        if (e < 0) return INFINITY;
+        {   /* nearest inside: that one is the contact; end to end (the same two points): the first of the two */
+            const double t_other = geometry[GAC_LINK_NGEOMETRY * (e - nk) + 2];
+            return (t_other != 0.0 && t_other != 1.0) || e < c ? -INFINITY : INFINITY;
         }
-        if (gaps[e] < least) least = gaps[e];
+    }
+    for (a = 0; a < GAC_PARTNERS && mine[a] >= 0; ++a) {
+        if (gaps[mine[a]] < least) least = gaps[mine[a]];
     }
     return least - gaps[c];
 }
@@ -510,15 +540,25 @@ int gac_line_contact(const gac_model *m, const double *x0, const double *x1, con
     return -1;
 }
 
-void gac_contact_gaps(const gac_model *m, const double *q, const double *p, double *gaps)
+void gac_contact_gaps_geometry(const gac_model *m, const double *q, const double *p, double *gaps, double *geometry)
 {
     const int nk = gac_kernel_contacts(m);
-    double geometry[GAC_LINK_NGEOMETRY];
+    double r[3 * GAC_AT_LEAST_1(m->npoint)];
     int c, second;
     if (m->ncontact == 0) return;
     m->contact_gaps(q, p, gaps);                         /* walls and stops (the kernel's contacts) */
-    for (c = nk; c < m->ncontact; ++c)                   /* then each link pair and obstacle: distance less radius */
-        gaps[c] = gac_rowless_geometry(m, q, p, c, geometry, &second) == GAC_OK ? geometry[0] : NAN;
+    if (nk == m->ncontact) return;
+    m->contact_points(q, p, r);                          /* then each link pair and obstacle: distance less radius */
+    for (c = nk; c < m->ncontact; ++c) {
+        double *g = geometry + GAC_LINK_NGEOMETRY * (c - nk);
+        gaps[c] = gac_rowless_geometry_at(m, r, p, c, g, &second) == GAC_OK ? g[0] : NAN;
+    }
+}
+
+void gac_contact_gaps(const gac_model *m, const double *q, const double *p, double *gaps)
+{
+    double geometry[GAC_LINK_NGEOMETRY * GAC_AT_LEAST_1(m->ncontact)];
+    gac_contact_gaps_geometry(m, q, p, gaps, geometry);
 }
 
 void gac_link_contact_direction(const gac_model *m, const double *q, const double *p, int c, double *g)
@@ -530,6 +570,19 @@ void gac_link_contact_direction(const gac_model *m, const double *q, const doubl
         return;
     }
     (void)gac_link_direction(m, q, p, m->contacts[c].point, second, geometry, g);
+}
+
+void gac_link_contact_rates(const gac_model *m, const double *q, const double *p, const double *vel, double *vn)
+{
+    const int nk = gac_kernel_contacts(m);
+    double r[3 * GAC_AT_LEAST_1(m->npoint)], geometry[GAC_LINK_NGEOMETRY], size;
+    int c, second;
+    if (nk == m->ncontact) return;
+    m->contact_points(q, p, r);                          /* the joint points once for every contact */
+    for (c = nk; c < m->ncontact; ++c) {
+        vn[c] = gac_rowless_geometry_at(m, r, p, c, geometry, &second) == GAC_OK
+                ? gac_link_rate(vel, m->contacts[c].point, second, geometry, &size) : NAN;
+    }
 }
 
 double gac_link_contact_rate(const gac_model *m, const double *q, const double *p, int c, const double *vel)

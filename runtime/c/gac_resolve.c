@@ -337,6 +337,7 @@ static int gac_gather(gac_sim *s, gac_impact_event *ev)
     const double v_rest = gac_v_round(md, ev->vn);
     const double depth = s->opt.contact_tol + gac_simultaneity_window(s, ev->x);
     const double window = gac_simultaneity_window(s, ev->x);
+    double gaps[GAC_AT_LEAST_1(md->ncontact)], geometry[GAC_LINK_NGEOMETRY * GAC_AT_LEAST_1(md->ncontact)];
     int c, pass;
     for (c = 0; c < md->ncontact; ++c) {
         if (ev->gaps[c] < -depth) {
@@ -345,6 +346,7 @@ static int gac_gather(gac_sim *s, gac_impact_event *ev)
         }
     }
     if (gac_chart_measure(md, ev->x) < gac_chart_floor(s)) return GAC_ERR_GIMBAL_LOCK;
+    gac_contact_gaps_geometry(md, ev->x, s->p, gaps, geometry);   /* (the rowless contacts' geometry) */
     ev->n = 0;
     ev->first = -1;
     for (pass = 0; pass < 3; ++pass) {                   /* approaching, then at rest, then separating */
@@ -352,8 +354,8 @@ static int gac_gather(gac_sim *s, gac_impact_event *ev)
             const int near = s->is_resting[c] || c == ev->c_event || ev->gaps[c] <= s->opt.contact_tol
                              || (ev->vn[c] < -v_rest && ev->gaps[c] <= window);
             const int kind = ev->vn[c] < 0.0 ? 0 : ev->vn[c] == 0.0 ? 1 : 2;
-            if (!near || kind != pass || gac_redundant(s, ev->x, c, ev->gaps)) continue;   /* (its joint point's takes
-                                                                                      part instead) */
+            if (!near || kind != pass || gac_redundant(s, c, ev->gaps, geometry)) continue;   /* (an end's takes
+                                                                                        part instead) */
             if (ev->n == md->nq) {
                 if (pass == 0) return GAC_ERR_TOO_MANY_CONTACTS;
                 continue;                                /* resting or leaving: the others hold it */

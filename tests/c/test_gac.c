@@ -290,7 +290,7 @@ static void test_sizes(void)
     CHECK(gac_impact_nwork(&box) == 2 * 4 + 2 + 3 * 1 + 2, "impact work %ld", gac_impact_nwork(&box));
     CHECK(gac_sim_ndouble(&box) == 28 * 4 + 3 + 9 * 4 + gac_impact_nwork(&box) + 4, "sim doubles %ld",
           gac_sim_ndouble(&box));
-    CHECK(gac_sim_nint(&box) == 2 + 3 * 4 && gac_record_ndouble(&box) == 12 && gac_record_nint(&box) == 10, "ints");
+    CHECK(gac_sim_nint(&box) == 2 + 7 * 4 && gac_record_ndouble(&box) == 12 && gac_record_nint(&box) == 10, "ints");
     CHECK(gac_sim_ndouble(&box) <= NDOUBLE && gac_sim_nint(&box) <= NINT, "test arrays large enough");
     CHECK(NEAR(gac_chart_measure(&box, box_q0), 1.0, 0.0), "chart measure 1");
 }

@@ -58,8 +58,9 @@ static double gac_value_at(gac_sim *s, int what, int c, double t)
 {
     const gac_model *md = s->model;
     gac_dense(s, t, s->xs);
-    if (what == 0) {
-        gac_events(s, t, s->xs, s->es);
+    if (what == 0) {                           /* (a contact not resting: its gap alone, no resting forces) */
+        if (s->is_resting[c]) gac_events(s, t, s->xs, s->es);
+        else gac_event_gaps(s, s->xs, s->es);
         return s->es[c];
     }
     gac_normal_velocities(md, s->xs, s->p, s->es);

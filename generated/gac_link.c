@@ -180,6 +180,20 @@ static void gac_segment_contact(const double *a0, const double *a1, const double
     for (k = 0; k < 3; ++k) geometry[3 + k] = d[k];
 }
 
+/* The part `end` of link i (GAC_END_*) as a segment a0-a1 of the joint points r: the link's, or one joint point
+ * as a segment of no length. */
+static void gac_part_segment(const double *r, int i, int end, const double **a0, const double **a1)
+{
+    *a0 = r + 3 * (end == GAC_END_FINISH ? i : i - 1);
+    *a1 = end == GAC_END_LINK ? r + 3 * i : *a0;
+}
+
+/* A part's geometry with s along the whole link (0 or 1 for a joint point). */
+static void gac_part_fraction(int end, double *geometry)
+{
+    if (end != GAC_END_LINK) geometry[1] = end == GAC_END_FINISH ? 1.0 : 0.0;
+}
+
 /* The contact of the part `end` of link i (GAC_END_*: its segment, or one joint point as a segment of no length)
  * and link j; s is the fraction along the whole link i (0 or 1 for a joint point). */
 static int gac_link_part_gap(const gac_model *m, const double *r, int i, int j, int end, double radius,
@@ -188,10 +202,9 @@ static int gac_link_part_gap(const gac_model *m, const double *r, int i, int j, 
     const int npoint = m->npoint;
     const double *a0, *a1;
     if (i < 1 || j < 1 || i + 1 > npoint || j + 1 > npoint || i == j || !(radius >= 0.0)) return GAC_ERR_BAD_CONTACT;
-    a0 = r + 3 * (end == GAC_END_FINISH ? i : i - 1);
-    a1 = end == GAC_END_LINK ? r + 3 * i : a0;
+    gac_part_segment(r, i, end, &a0, &a1);
     gac_segment_contact(a0, a1, r + 3 * (j - 1), r + 3 * j, radius, geometry);
-    if (end != GAC_END_LINK) geometry[1] = end == GAC_END_FINISH ? 1.0 : 0.0;
+    gac_part_fraction(end, geometry);
     return GAC_OK;
 }
 
@@ -213,11 +226,10 @@ static int gac_obstacle_part_gap(const gac_model *m, const double *r, const doub
     const double *a0, *a1;
     if (i < 1 || i + 1 > npoint || !(radius >= 0.0) || gac_obstacle_shape(m, p, o, shape) != GAC_OK)
         return GAC_ERR_BAD_CONTACT;
-    a0 = r + 3 * (end == GAC_END_FINISH ? i : i - 1);
-    a1 = end == GAC_END_LINK ? r + 3 * i : a0;
+    gac_part_segment(r, i, end, &a0, &a1);
     if (!gac_obstacle_shape_contact(shape, a0, a1, radius, geometry))                     /* a box, a plane, */
         gac_segment_contact(a0, a1, shape + 1, shape + 4, radius + shape[7], geometry);   /* or a bar, a sphere */
-    if (end != GAC_END_LINK) geometry[1] = end == GAC_END_FINISH ? 1.0 : 0.0;
+    gac_part_fraction(end, geometry);
     return GAC_OK;
 }
 
@@ -447,6 +459,14 @@ int gac_contact_geometry(const gac_model *m, const double *q, const double *p, i
  * from x0 to x1, with the point held at x0: the held end's distance at x1 against the opposite end's (of the same
  * segment), or a held middle's against the least; returns the first contact of set[0..n-1] whose other end (or
  * least) came closer than the held point by more than tol (plus the parallel tie of the lengths), else -1. */
+/* The signed distance of point x from the box `shape` (minus its depth inside). */
+static double gac_box_point_distance(const double *shape, const double *x)
+{
+    double geometry[GAC_LINK_NGEOMETRY];
+    (void)gac_obstacle_shape_contact(shape, x, x, 0.0, geometry);
+    return geometry[0];
+}
+
 /* A link held on a box (the step from x0 to x1, the joint points r0, r1 at either end) that came to lie along it:
  * held on a face (at an end or, lying flat, at the middle of the stretch over it), an end came closer to the box
  * than the held point; held on an edge or a corner, the link's least distance from the box came below its
@@ -457,7 +477,7 @@ static int gac_box_line_contact(const gac_model *m, const double *r0, const doub
 {
     const double *A0 = r0 + 3 * (c->point - 1), *A1 = r0 + 3 * c->point;
     const double *B0 = r1 + 3 * (c->point - 1), *B1 = r1 + 3 * c->point;
-    double shape[GAC_OBSTACLE_NSHAPE], geometry[GAC_LINK_NGEOMETRY], e0[3], e1[3], x[3], d[3], s, t, held, end0, end1;
+    double shape[GAC_OBSTACLE_NSHAPE], geometry[GAC_LINK_NGEOMETRY], e0[3], e1[3], x[3], d[3], s, t, held;
     int k;
     if (gac_obstacle_shape(m, p, c->coordinate, shape) != GAC_OK) return 0;
     for (k = 0; k < 3; ++k) d[k] = B1[k] - B0[k];
@@ -471,10 +491,9 @@ static int gac_box_line_contact(const gac_model *m, const double *r0, const doub
     (void)gac_obstacle_shape_contact(shape, A0, A1, 0.0, geometry);
     s = geometry[1];
     for (k = 0; k < 3; ++k) x[k] = B0[k] + s * d[k];
-    (void)gac_obstacle_shape_contact(shape, x, x, 0.0, geometry), held = geometry[0];
-    (void)gac_obstacle_shape_contact(shape, B0, B0, 0.0, geometry), end0 = geometry[0];
-    (void)gac_obstacle_shape_contact(shape, B1, B1, 0.0, geometry), end1 = geometry[0];
-    return (s != 0.0 && end0 < held - tol) || (s != 1.0 && end1 < held - tol);
+    held = gac_box_point_distance(shape, x);
+    return (s != 0.0 && gac_box_point_distance(shape, B0) < held - tol)
+           || (s != 1.0 && gac_box_point_distance(shape, B1) < held - tol);
 }
 
 int gac_line_contact(const gac_model *m, const double *x0, const double *x1, const double *p, int n, const int *set,
@@ -489,16 +508,15 @@ int gac_line_contact(const gac_model *m, const double *x0, const double *x1, con
         double s0, t0, s1, t1, x[3], d[3], reach, held, other, shape[GAC_OBSTACLE_NSHAPE];
         int flat, end;
         if (!gac_rowless(m, set[a]) || c->end != GAC_END_LINK) continue;   /* (a joint point's: a point, no line) */
-        if (c->kind == GAC_CONTACT_OBSTACLE && !gac_obstacle_round(gac_obstacle_kind(m, c->coordinate))
-            && gac_obstacle_kind(m, c->coordinate) != GAC_OBSTACLE_BOX) continue;   /* a plane: its joint points */
         if (!loaded) {
             m->contact_points(x0, p, r0);
             m->contact_points(x1, p, r1);
             loaded = 1;
         }
         if (c->kind == GAC_CONTACT_OBSTACLE && !gac_obstacle_round(gac_obstacle_kind(m, c->coordinate))) {
-            if (gac_box_line_contact(m, r0, r1, p, c, tol)) return set[a];
-            continue;
+            if (gac_obstacle_kind(m, c->coordinate) == GAC_OBSTACLE_BOX && gac_box_line_contact(m, r0, r1, p, c, tol))
+                return set[a];
+            continue;                                    /* (a plane's line: its joint points' contacts) */
         }
         for (end = 0; end < 2; ++end) {                  /* the two segments at x0 (end 0) and x1 (end 1) */
             const double *r = end == 0 ? r0 : r1;
@@ -892,10 +910,10 @@ static int gac_normal_tangent(const gac_model *m, const double *q, const double 
         grow = dshape[7];
         if (!gac_obstacle_round((int)shape[0])) {        /* a box or a plane: the part the gap is measured from */
             double x[3], span = 0.0;
-            const int end = m->contacts[c].end;          /* a joint point's contact: the point's part */
-            const double *p0 = end == GAC_END_LINK ? a0 : (end == GAC_END_START ? a0 : a1);
-            const double *p1 = end == GAC_END_LINK ? a1 : p0;
-            const int feature = gac_obstacle_feature(shape, p0, p1, end0, end1);
+            const double *p0, *p1;                       /* the part measured: a joint point's contact, its point */
+            int feature;
+            gac_part_segment(r, i, m->contacts[c].end, &p0, &p1);
+            feature = gac_obstacle_feature(shape, p0, p1, end0, end1);
             (void)gac_obstacle_feature_change(shape, dshape, p0, p1, geometry + 3, dend0, dend1);
             for (k = 0; k < 3; ++k) x[k] = (1.0 - s) * a0[k] + s * a1[k];
             face = feature == 0, edge = feature == 1, grow = 0.0;

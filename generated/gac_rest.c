@@ -20,10 +20,11 @@ double gac_total_energy(const gac_model *md, const double *x, const double *p)
 void gac_normal_velocities(const gac_model *md, const double *x, const double *p, double *vn)
 {
     double v[3 * md->npoint];
-    int c;
+    int c, nk;
     if (md->ncontact == 0) return;
     md->contact_velocities(x, x + md->nq, p, v);
-    for (c = 0; c < gac_kernel_contacts(md); ++c) {
+    nk = gac_kernel_contacts(md);
+    for (c = 0; c < nk; ++c) {
         const gac_contact *k = &md->contacts[c];
         vn[c] = (double)k->normal_sign * (k->kind == GAC_CONTACT_STOP ? x[md->nq + k->coordinate]
                                                                       : v[3 * (k->point - 1) + k->axis]);
